@@ -1,0 +1,291 @@
+//! End-to-end reaction and freshness bounds of pipe chains.
+//!
+//! Both modes compose link by link (Section III-F): a chain's bound is the
+//! head term plus one term per appended consumer, so the same link terms serve
+//! declared chains and the dynamic programme over all paths (`paths.rs`).
+//! docs/analysis.md derives every term.
+
+use crate::sched::TaskTiming;
+use rtpipe_model::{Nanos, Scheduler, Spec};
+
+/// Eq. 1 read with the paper's ε convention: a demand `x` that exactly fills
+/// k budgets completes at (k−1)·T + (x − (k−1)·C), so x ≤ C gives L = x.
+pub fn eq1_single_pipe(x: Nanos, c: Nanos, t: Nanos) -> Nanos {
+    if x <= c {
+        return x;
+    }
+    let k = (x + c - 1) / c; // budgets touched: ⌈x / C⌉
+    (k - 1) * t + (x - (k - 1) * c)
+}
+
+/// What the link terms need to know about a task.
+#[derive(Debug, Clone, Copy)]
+pub struct LinkTask {
+    pub c: Nanos,
+    pub t: Nanos,
+    pub x: Nanos,
+    pub x_min: Nanos,
+    pub delta_out: Nanos,
+    /// Paper Eq. 1.
+    pub l: Nanos,
+    /// Job response time, when it is at most the period.
+    pub r: Option<Nanos>,
+    pub cpu: u32,
+    pub prio: Option<usize>,
+}
+
+impl LinkTask {
+    pub fn new(spec: &Spec, timing: &[TaskTiming], i: usize) -> LinkTask {
+        let tm = &timing[i];
+        LinkTask {
+            c: tm.budget,
+            t: tm.period,
+            x: tm.demand,
+            x_min: tm.demand_min,
+            delta_out: spec.tasks[i].delta_out,
+            l: eq1_single_pipe(tm.demand, tm.budget, tm.period),
+            r: tm.bounded_response(),
+            cpu: tm.cpu,
+            prio: tm.priority,
+        }
+    }
+}
+
+/// Which of the paper's cases a link falls in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Case {
+    /// Consumer has the shorter period / higher priority (Eqs. 2, 3, 12).
+    One,
+    /// Otherwise (Eqs. 4, 5).
+    Two,
+}
+
+/// Paper mode, link p → c: the case by periods, as Eq. 6 splits it.
+pub fn paper_case(p: &LinkTask, c: &LinkTask) -> Case {
+    if c.t < p.t {
+        Case::One
+    } else {
+        Case::Two
+    }
+}
+
+/// Paper mode: what appending c to a chain ending in p adds to reaction,
+/// S(p, c) + L(c), with S from Eq. 2 (Case 1) or Eq. 4 (Case 2) and
+/// Δ = d/W + δ of the data p writes for c (Eq. 6: W = W_o^p = W_i^c).
+pub fn paper_reaction_link(p: &LinkTask, c: &LinkTask) -> Nanos {
+    let s = match paper_case(p, c) {
+        Case::One => c.t - c.c - p.delta_out,
+        Case::Two => p.t - p.c - p.delta_out,
+    };
+    s + c.l
+}
+
+/// Paper mode: what appending c adds to freshness, F(p|c) − L(p), with
+/// F(p|c) from Eq. 12 in Case 1 and Eq. 5 (= reaction) in Case 2.
+pub fn paper_freshness_link(p: &LinkTask, c: &LinkTask) -> Nanos {
+    match paper_case(p, c) {
+        Case::One => 2 * p.t - p.delta_out - p.l,
+        Case::Two => paper_reaction_link(p, c),
+    }
+}
+
+/// Sound mode: may the priority-based arguments be used for this link? Only
+/// when both tasks share a CPU scheduled by fixed priority.
+fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
+    if sched != Scheduler::Rm || p.cpu != c.cpu {
+        return None;
+    }
+    match (p.prio, c.prio) {
+        (Some(pp), Some(cp)) if cp < pp => Some(Case::One),
+        (Some(_), Some(_)) => Some(Case::Two),
+        _ => None,
+    }
+}
+
+/// Sound mode, reaction link p → c: the time from p's publish of a sample to
+/// the first output of c carrying it. `p_distinct`: no two jobs of p carry the
+/// same sample (true at the chain head), which licenses the reachability
+/// arguments. `None` when a response time is unbounded.
+pub fn sound_reaction_link(
+    sched: Scheduler,
+    p: &LinkTask,
+    c: &LinkTask,
+    p_distinct: bool,
+) -> Option<Nanos> {
+    let (rp, rc) = (p.r?, c.r?);
+    // Davare et al.: the first c release after the publish is less than T_c later.
+    let mut l = c.t + rc;
+    let order = fp_order(sched, p, c);
+    if order == Some(Case::One) {
+        // c preempts p: at p's publish c has no pending job, and its last job
+        // (which ran ≥ x_min(c) before the publish) was released ≥ x_min(c) earlier.
+        l = l.min(c.t - c.x_min + rc);
+    }
+    if p_distinct {
+        // Reachability: c must read before p's next publish, ≤ T_p + R_p − x_min(p) later.
+        l = l.min(p.t + rp - p.x_min + rc);
+        if order == Some(Case::Two) {
+            // p preempts c: c must start before p's next release, ≤ T_p − x_min(p) later.
+            l = l.min(p.t - p.x_min + rc);
+        }
+    }
+    Some(l)
+}
+
+/// Sound mode, freshness link p → c, anchored on reads: from the read of the
+/// last p job carrying a sample to the read of the last c job carrying it.
+/// A chain's freshness is the sum of these plus the tail's response time.
+pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    let (rp, _) = (p.r?, c.r?);
+    // That c job reads before p's next publish, which the next p job (released
+    // T_p after the one that read the sample) makes within R_p.
+    Some(match fp_order(sched, p, c) {
+        // c preempts p: that c job has even finished (≥ x_min(c) after its read)
+        // by the time p publishes again.
+        Some(Case::One) => p.t + rp - c.x_min,
+        // p preempts c: that c job started before p's next release.
+        Some(Case::Two) => p.t,
+        None => p.t + rp,
+    })
+}
+
+/// Sound mode: does "each sample is carried by at most one job" pass from p to c?
+/// It does when c's reads are further apart than p's publishes can be.
+pub fn distinct_passes(p: &LinkTask, c: &LinkTask, p_distinct: bool) -> bool {
+    match (p_distinct, p.r, c.r) {
+        (true, Some(rp), Some(rc)) => c.t - rc + c.x > p.t + rp - p.x_min,
+        _ => false,
+    }
+}
+
+/// The bounds of one chain in one metric.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainBound {
+    pub paper: Nanos,
+    /// `None` when some task on the chain has no bounded response time.
+    pub sound: Option<Nanos>,
+    /// Reaction: R_1 + Σ_{i≥2} (T_i + R_i) (Davare et al., DAC 2007);
+    /// freshness: the data-age form Σ_{i<n} (T_i + R_i) + R_n.
+    pub davare: Option<Nanos>,
+    /// From the external event: one sampling delay of the head added.
+    pub from_event_paper: Nanos,
+    pub from_event_sound: Option<Nanos>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainAnalysis {
+    pub reaction: ChainBound,
+    pub freshness: ChainBound,
+    /// The paper's case of each link.
+    pub cases: Vec<Case>,
+}
+
+/// Sampling delay of the head task: the longest gap between two reads.
+/// Paper: T_1 (reads one period apart). Sound: a read happens between the
+/// release and R_1 − x_1 after it, so reads are at most T_1 + R_1 − x_1 apart.
+fn sampling_delay(h: &LinkTask) -> (Nanos, Option<Nanos>) {
+    (h.t, h.r.map(|r| h.t + r - h.x))
+}
+
+pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> ChainAnalysis {
+    let lt: Vec<LinkTask> = path
+        .iter()
+        .map(|&i| LinkTask::new(spec, timing, i))
+        .collect();
+    let sched = spec.scheduler;
+    let head = &lt[0];
+    let tail = &lt[lt.len() - 1];
+    let mut pe = head.l;
+    let mut pf = head.l;
+    // Reaction is anchored on publishes (head: read → publish ≤ R_1), freshness
+    // on reads (tail: read → publish ≤ R_n, added at the end).
+    let mut se = head.r;
+    let mut sf = Some(0);
+    let mut dv_e = head.r;
+    let mut dv_f = Some(0);
+    let mut distinct = true;
+    let mut cases = Vec::new();
+    for w in lt.windows(2) {
+        let (p, c) = (&w[0], &w[1]);
+        cases.push(paper_case(p, c));
+        pe += paper_reaction_link(p, c);
+        pf += paper_freshness_link(p, c);
+        se = se
+            .zip(sound_reaction_link(sched, p, c, distinct))
+            .map(|(a, b)| a + b);
+        sf = sf
+            .zip(sound_freshness_link(sched, p, c))
+            .map(|(a, b)| a + b);
+        dv_e = dv_e.zip(c.r).map(|(a, r)| a + c.t + r);
+        dv_f = dv_f.zip(p.r).map(|(a, r)| a + p.t + r);
+        distinct = distinct_passes(p, c, distinct);
+    }
+    sf = sf.zip(tail.r).map(|(a, r)| a + r);
+    dv_f = dv_f.zip(tail.r).map(|(a, r)| a + r);
+    // Every sample's first output comes no later than its last one.
+    se = match (se, sf) {
+        (Some(e), Some(f)) => Some(e.min(f)),
+        (e, _) => e,
+    };
+    let (sp, ss) = sampling_delay(head);
+    let bound = |paper: Nanos, sound: Option<Nanos>, davare: Option<Nanos>| ChainBound {
+        paper,
+        sound,
+        davare,
+        from_event_paper: paper + sp,
+        from_event_sound: sound.zip(ss).map(|(a, b)| a + b),
+    };
+    ChainAnalysis {
+        reaction: bound(pe, se, dv_e),
+        freshness: bound(pf, sf, dv_f),
+        cases,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: Nanos = 1_000_000;
+
+    #[test]
+    fn eq1_epsilon_convention() {
+        // x ≤ C: runs in one budget, L = x.
+        assert_eq!(eq1_single_pipe(MS, MS, 10 * MS), MS);
+        assert_eq!(eq1_single_pipe(MS / 2, MS, 10 * MS), MS / 2);
+        // x = 2.5 C: two full budgets then 0.5 C → 2·T + 0.5·C.
+        assert_eq!(eq1_single_pipe(5 * MS, 2 * MS, 10 * MS), 2 * 10 * MS + MS);
+        // x = exactly 2 C: (2−1)·T + (2C − C) = T + C, not 2·T + 0.
+        assert_eq!(eq1_single_pipe(4 * MS, 2 * MS, 10 * MS), 10 * MS + 2 * MS);
+    }
+
+    fn lt(c: Nanos, t: Nanos, delta_out: Nanos, r: Nanos, prio: usize) -> LinkTask {
+        LinkTask {
+            c,
+            t,
+            x: c,
+            x_min: c / 2,
+            delta_out,
+            l: c,
+            r: Some(r),
+            cpu: 0,
+            prio: Some(prio),
+        }
+    }
+
+    #[test]
+    fn eq6_cases() {
+        // Producer T = 15, C = 1; consumer T = 10, C = 1.15; Δ = 0.25 (ms, ×1e6 ns).
+        let p = lt(MS, 15 * MS, MS / 4, 2 * MS, 2);
+        let c = lt(1_150_000, 10 * MS, MS / 4, 2 * MS, 1);
+        // Case 1 (Eq. 2): S = T_c − C_c − Δ = 10 − 1.15 − 0.25 = 8.6; + L_c 1.15 = 9.75.
+        assert_eq!(paper_case(&p, &c), Case::One);
+        assert_eq!(paper_reaction_link(&p, &c), 9_750_000);
+        // Eq. 12: F(p|c) = 2·T_p − Δ = 29.75; minus L_p = 1 → 28.75.
+        assert_eq!(paper_freshness_link(&p, &c), 28_750_000);
+        // Case 2 (Eq. 4) for c → p: S = T_c − C_c − Δ_c = 10 − 1.15 − 0.25 = 8.6; + L_p = 9.6.
+        assert_eq!(paper_case(&c, &p), Case::Two);
+        assert_eq!(paper_reaction_link(&c, &p), 9_600_000);
+        assert_eq!(paper_freshness_link(&c, &p), 9_600_000);
+    }
+}

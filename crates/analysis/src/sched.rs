@@ -1,0 +1,261 @@
+//! Priorities, response times and schedulability tests per CPU.
+
+use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec, Task, MAX_TIME};
+
+/// Timing facts of one task that the latency analysis builds on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskTiming {
+    /// C: budget of the pipe terminal.
+    pub budget: Nanos,
+    /// x = Δin + p + Δout: worst-case demand of a job.
+    pub demand: Nanos,
+    /// Best-case demand of a job: Δin + p_min + Δout.
+    pub demand_min: Nanos,
+    /// T.
+    pub period: Nanos,
+    /// Rank on its CPU, 1 = highest; `None` under EDF and for background tasks.
+    pub priority: Option<usize>,
+    pub cpu: u32,
+    /// Worst-case time for the VCPU to deliver its whole budget C after a
+    /// release (exact RTA under RM; T under EDF, which may deliver the budget
+    /// anywhere in the period). `None` when it does not exist (overload) or the
+    /// task is background.
+    pub response_time: Option<Nanos>,
+    /// Worst-case response time of a job of demand x (≤ response_time), the
+    /// figure the latency bounds use.
+    pub job_response_time: Option<Nanos>,
+}
+
+impl TaskTiming {
+    /// A job's latest finish after release, if it finishes within its period.
+    pub fn bounded_response(&self) -> Option<Nanos> {
+        self.job_response_time.filter(|&r| r <= self.period)
+    }
+}
+
+/// The verdict of the chosen test on one CPU.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CpuVerdict {
+    pub cpu: u32,
+    pub tasks: usize,
+    /// Σ C/T over the CPU's guaranteed tasks.
+    pub utilization: f64,
+    /// The quantity compared with the bound: Σ U (Liu–Layland, EDF), Π (U+1)
+    /// (hyperbolic), the largest R/T (RTA).
+    pub value: f64,
+    /// The bound: n(2^{1/n} − 1), 2, 1 or 1.
+    pub bound: f64,
+    pub schedulable: bool,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Schedulability {
+    pub test: SchedTest,
+    pub cpus: Vec<CpuVerdict>,
+    pub schedulable: bool,
+}
+
+/// Interference a higher-priority task imposes per release: its budget when a
+/// server enforces one (it can never take more), its demand otherwise.
+fn interference(t: &Task) -> Nanos {
+    match t.server {
+        Server::Main | Server::Io => t.budget(),
+        Server::None | Server::Background => t.demand(),
+    }
+}
+
+/// Rate-monotonic ranks per CPU: shorter period first, ties by declaration order.
+pub fn rm_priorities(spec: &Spec) -> Vec<Option<usize>> {
+    let mut out = vec![None; spec.tasks.len()];
+    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    for cpu in cpus {
+        let mut ids: Vec<usize> = (0..spec.tasks.len())
+            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+            .collect();
+        ids.sort_by_key(|&i| (spec.tasks[i].fixed_period().unwrap_or(Nanos::MAX), i));
+        for (rank, i) in ids.into_iter().enumerate() {
+            out[i] = Some(rank + 1);
+        }
+    }
+    out
+}
+
+/// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
+/// Audsley et al. 1993). `None` when the higher-priority load (with own) is
+/// 100 % or more, so the iteration would not converge, or on overflow.
+pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
+    // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
+    let u: f64 = hp.iter().map(|&(c, t)| c as f64 / t as f64).sum();
+    if u >= 1.0 {
+        return None;
+    }
+    let mut r = own + hp.iter().map(|&(c, _)| c).sum::<Nanos>();
+    for _ in 0..1_000_000 {
+        let mut next = own as i128;
+        for &(c, t) in hp {
+            next += ((r as i128 + t as i128 - 1) / t as i128) * c as i128;
+        }
+        if next > MAX_TIME as i128 {
+            return None;
+        }
+        let next = next as Nanos;
+        if next == r {
+            return Some(r);
+        }
+        r = next;
+    }
+    None
+}
+
+/// Response times, priorities and the schedulability verdict. Tasks without a
+/// fixed period must not be passed here (the CLI checks first).
+pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
+    let prio = match spec.scheduler {
+        Scheduler::Rm => rm_priorities(spec),
+        Scheduler::Edf => vec![None; spec.tasks.len()],
+    };
+    let period = |t: &Task| t.fixed_period().unwrap_or(MAX_TIME);
+    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    let cpu_util = |cpu: u32| -> f64 {
+        spec.tasks
+            .iter()
+            .filter(|t| t.cpu == cpu && t.server != Server::Background)
+            .map(|t| t.budget() as f64 / period(t) as f64)
+            .sum()
+    };
+    let mut timings = Vec::with_capacity(spec.tasks.len());
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let (rt, jrt) = if t.server == Server::Background {
+            (None, None)
+        } else {
+            match spec.scheduler {
+                Scheduler::Rm => {
+                    let my = prio[i];
+                    let hp: Vec<(Nanos, Nanos)> = spec
+                        .tasks
+                        .iter()
+                        .enumerate()
+                        .filter(|&(j, o)| {
+                            j != i
+                                && o.cpu == t.cpu
+                                && o.server != Server::Background
+                                && prio[j] < my
+                        })
+                        .map(|(_, o)| (interference(o), period(o)))
+                        .collect();
+                    (
+                        response_time(t.budget(), &hp),
+                        response_time(t.demand(), &hp),
+                    )
+                }
+                Scheduler::Edf => {
+                    // EDF with constant-bandwidth servers: every server gets its
+                    // budget by the end of each period when Σ U ≤ 1, but possibly
+                    // at its very end.
+                    if cpu_util(t.cpu) <= 1.0 + 1e-12 {
+                        (Some(period(t)), Some(period(t)))
+                    } else {
+                        (None, None)
+                    }
+                }
+            }
+        };
+        timings.push(TaskTiming {
+            budget: t.budget(),
+            demand: t.demand(),
+            demand_min: t.demand_min(),
+            period: period(t),
+            priority: prio[i],
+            cpu: t.cpu,
+            response_time: rt,
+            job_response_time: jrt,
+        });
+    }
+    let mut verdicts = Vec::new();
+    for cpu in cpus {
+        let ids: Vec<usize> = (0..spec.tasks.len())
+            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+            .collect();
+        let n = ids.len();
+        let us: Vec<f64> = ids
+            .iter()
+            .map(|&i| timings[i].budget as f64 / timings[i].period as f64)
+            .collect();
+        let u: f64 = us.iter().sum();
+        const EPS: f64 = 1e-12;
+        let (value, bound, ok) = match spec.schedulability {
+            SchedTest::LiuLayland => {
+                let b = if n == 0 {
+                    1.0
+                } else {
+                    n as f64 * (2f64.powf(1.0 / n as f64) - 1.0)
+                };
+                (u, b, u <= b + EPS)
+            }
+            SchedTest::Hyperbolic => {
+                let p: f64 = us.iter().map(|x| x + 1.0).product();
+                (p, 2.0, p <= 2.0 + EPS)
+            }
+            SchedTest::Rta => {
+                let mut worst: f64 = 0.0;
+                let mut ok = true;
+                for &i in &ids {
+                    match timings[i].response_time {
+                        Some(r) => {
+                            worst = worst.max(r as f64 / timings[i].period as f64);
+                            ok &= r <= timings[i].period;
+                        }
+                        None => {
+                            worst = f64::INFINITY;
+                            ok = false;
+                        }
+                    }
+                }
+                (worst, 1.0, ok)
+            }
+            SchedTest::Edf => (u, 1.0, u <= 1.0 + EPS),
+        };
+        verdicts.push(CpuVerdict {
+            cpu,
+            tasks: n,
+            utilization: u,
+            value,
+            bound,
+            schedulable: ok,
+        });
+    }
+    let schedulable = verdicts.iter().all(|v| v.schedulable);
+    (
+        timings,
+        Schedulability {
+            test: spec.schedulability,
+            cpus: verdicts,
+            schedulable,
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rta_textbook() {
+        // Liu's classic set (C, T) = (1, 4), (2, 6), (3, 13) — hand iteration for the
+        // third task: 6 → 1·2 + 1·... : R0 = 3+1+2 = 6; R1 = 3 + ⌈6/4⌉·1 + ⌈6/6⌉·2 = 3+2+2 = 7;
+        // R2 = 3 + ⌈7/4⌉·1 + ⌈7/6⌉·2 = 3+2+4 = 9; R3 = 3 + 3·1 + 2·2 = 10;
+        // R4 = 3 + ⌈10/4⌉ + 2·⌈10/6⌉ = 3+3+4 = 10. Fixed point 10.
+        assert_eq!(response_time(3, &[(1, 4), (2, 6)]), Some(10));
+        assert_eq!(response_time(2, &[(1, 4)]), Some(3));
+        assert_eq!(response_time(1, &[]), Some(1));
+    }
+
+    #[test]
+    fn rta_diverges_when_overloaded() {
+        assert_eq!(response_time(1, &[(2, 4), (2, 4)]), None);
+    }
+}

@@ -1,0 +1,360 @@
+//! `rtpipe analyze`.
+
+use crate::table::Table;
+use crate::EXIT_BAD_INPUT;
+use rtpipe_analysis::{AllPaths, Report, Worst};
+use rtpipe_model::{Nanos, Spec};
+use serde_json::{json, Value};
+use std::path::Path;
+use std::process::ExitCode;
+
+/// Loads a spec and checks it can be analysed, printing errors to stderr.
+pub fn load(path: &Path) -> Result<Spec, ExitCode> {
+    let spec = match Spec::load(path) {
+        Ok(s) => s,
+        Err(e) => {
+            eprint!("{e}");
+            return Err(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    let missing = rtpipe_analysis::missing_periods(&spec);
+    if !missing.is_empty() {
+        eprintln!(
+            "{}: error: no fixed period for task{} {}",
+            path.display(),
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", ")
+        );
+        eprintln!("      = help: give each a `period = ...`, or let `rtpipe design` choose them");
+        return Err(ExitCode::from(EXIT_BAD_INPUT));
+    }
+    Ok(spec)
+}
+
+pub fn run(path: &Path, json_out: bool, all_paths: bool) -> ExitCode {
+    let spec = match load(path) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let report = rtpipe_analysis::analyze(&spec);
+    let paths = all_paths.then(|| rtpipe_analysis::all_paths(&spec, &report.timing));
+    if json_out {
+        let mut v = report_json(&spec, &report);
+        if let Some(p) = &paths {
+            v["all_paths"] = paths_json(&spec, p);
+        }
+        match serde_json::to_string_pretty(&v) {
+            Ok(s) => println!("{s}"),
+            Err(e) => {
+                eprintln!("error: cannot encode JSON: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        }
+    } else {
+        print!("{}", report_text(&spec, &report));
+        if let Some(p) = &paths {
+            print!("{}", paths_text(&spec, p));
+        }
+    }
+    if report.all_ok() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    }
+}
+
+fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
+    match ns {
+        Some(n) => json!(spec.in_unit(n)),
+        None => Value::Null,
+    }
+}
+
+fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
+    path.iter().map(|&i| spec.tasks[i].name.clone()).collect()
+}
+
+pub fn report_json(spec: &Spec, r: &Report) -> Value {
+    let tasks: Vec<Value> = spec
+        .tasks
+        .iter()
+        .zip(&r.timing)
+        .map(|(t, tm)| {
+            json!({
+                "name": t.name,
+                "server": t.server.name(),
+                "exec": spec.in_unit(t.exec),
+                "exec_min": spec.in_unit(t.exec_min),
+                "delta_in": spec.in_unit(t.delta_in),
+                "delta_out": spec.in_unit(t.delta_out),
+                "demand": spec.in_unit(tm.demand),
+                "budget": spec.in_unit(tm.budget),
+                "period": spec.in_unit(tm.period),
+                "utilization": tm.budget as f64 / tm.period as f64,
+                "priority": tm.priority,
+                "cpu": tm.cpu,
+                "response_time": num(spec, tm.response_time),
+                "job_response_time": num(spec, tm.job_response_time),
+            })
+        })
+        .collect();
+    let s = &r.schedulability;
+    let total_u: f64 = s.cpus.iter().map(|c| c.utilization).sum();
+    let single = s.cpus.len() == 1;
+    let cpus: Vec<Value> = s
+        .cpus
+        .iter()
+        .map(|c| {
+            json!({"cpu": c.cpu, "tasks": c.tasks, "utilization": c.utilization,
+                   "value": finite(c.value), "bound": c.bound, "schedulable": c.schedulable})
+        })
+        .collect();
+    let chains: Vec<Value> = r
+        .chains
+        .iter()
+        .map(|c| {
+            let ch = &spec.chains[c.chain];
+            json!({
+                "name": ch.name,
+                "path": path_names(spec, &ch.path),
+                "metric": c.metric.name(),
+                "limit": num(spec, c.limit),
+                "paper": spec.in_unit(c.bound.paper),
+                "sound": num(spec, c.bound.sound),
+                "davare": num(spec, c.bound.davare),
+                "ok": c.ok,
+                "paper_ok": c.limit.is_none_or(|l| c.bound.paper <= l),
+                "from_event": {
+                    "paper": spec.in_unit(c.bound.from_event_paper),
+                    "sound": num(spec, c.bound.from_event_sound),
+                },
+                "cases": r.cases[c.chain].iter().map(|k| match k {
+                    rtpipe_analysis::Case::One => 1,
+                    rtpipe_analysis::Case::Two => 2,
+                }).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    json!({
+        "system": spec.name,
+        "time_unit": spec.time_unit.name(),
+        "scheduler": spec.scheduler.name(),
+        "tasks": tasks,
+        "schedulability": {
+            "test": s.test.name(),
+            "utilization": total_u,
+            "bound": if single { json!(s.cpus[0].bound) } else { json!(s.cpus.iter().map(|c| c.bound).collect::<Vec<_>>()) },
+            "schedulable": s.schedulable,
+            "cpus": cpus,
+        },
+        "chains": chains,
+        "ok": r.all_ok(),
+    })
+}
+
+fn finite(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
+    }
+}
+
+fn opt(spec: &Spec, v: Option<Nanos>) -> String {
+    match v {
+        Some(n) => spec.fmt_time(n),
+        None => "unbounded".to_string(),
+    }
+}
+
+pub fn report_text(spec: &Spec, r: &Report) -> String {
+    let mut out = String::new();
+    out.push_str(&format!(
+        "system {}: {} tasks, {} chains; times in {}; scheduler {}\n\n",
+        spec.name,
+        spec.tasks.len(),
+        spec.chains.len(),
+        spec.time_unit,
+        spec.scheduler.name()
+    ));
+    let mut t = Table::new(&[
+        "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T", "C/T",
+        "R(C)", "R(job)",
+    ])
+    .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10, 11]);
+    for (task, tm) in spec.tasks.iter().zip(&r.timing) {
+        t.row(vec![
+            task.name.clone(),
+            task.server.name().to_string(),
+            task.cpu.to_string(),
+            tm.priority
+                .map(|p| p.to_string())
+                .unwrap_or_else(|| "-".into()),
+            spec.fmt_time(task.delta_in),
+            spec.fmt_time(task.exec),
+            spec.fmt_time(task.delta_out),
+            spec.fmt_time(tm.budget),
+            spec.fmt_time(tm.period),
+            format!("{:.4}", tm.budget as f64 / tm.period as f64),
+            opt(spec, tm.response_time),
+            opt(spec, tm.job_response_time),
+        ]);
+    }
+    out.push_str(&t.render());
+    let s = &r.schedulability;
+    out.push_str(&format!("\nschedulability ({}):\n", s.test.name()));
+    for c in &s.cpus {
+        let verdict = if c.schedulable {
+            "schedulable"
+        } else {
+            "NOT schedulable"
+        };
+        let detail = match s.test {
+            rtpipe_model::SchedTest::LiuLayland => format!(
+                "U = {:.4} {} n(2^(1/n)-1) = {:.4}",
+                c.utilization,
+                if c.schedulable { "<=" } else { ">" },
+                c.bound
+            ),
+            rtpipe_model::SchedTest::Hyperbolic => format!(
+                "U = {:.4}, prod(U_i+1) = {:.4} {} 2",
+                c.utilization,
+                c.value,
+                if c.schedulable { "<=" } else { ">" }
+            ),
+            rtpipe_model::SchedTest::Rta => format!(
+                "U = {:.4}, max R/T = {}",
+                c.utilization,
+                if c.value.is_finite() {
+                    format!("{:.4}", c.value)
+                } else {
+                    "unbounded".into()
+                }
+            ),
+            rtpipe_model::SchedTest::Edf => format!(
+                "U = {:.4} {} 1",
+                c.utilization,
+                if c.schedulable { "<=" } else { ">" }
+            ),
+        };
+        out.push_str(&format!(
+            "  cpu {} ({} tasks): {detail} -> {verdict}\n",
+            c.cpu, c.tasks
+        ));
+    }
+    if !spec.chains.is_empty() {
+        out.push_str(
+            "\nchains (worst case, from the head's read; +event adds the head's sampling delay):\n",
+        );
+        let mut t = Table::new(&[
+            "chain",
+            "metric",
+            "limit",
+            "paper",
+            "sound",
+            "davare",
+            "paper+event",
+            "sound+event",
+            "",
+        ])
+        .numeric(&[2, 3, 4, 5, 6, 7]);
+        for c in &r.chains {
+            let ch = &spec.chains[c.chain];
+            let label = match &ch.name {
+                Some(n) => n.clone(),
+                None => path_names(spec, &ch.path).join(">"),
+            };
+            let verdict = match (c.ok, c.limit) {
+                (true, Some(_)) => "ok",
+                (true, None) => "",
+                (false, _) => "FAIL",
+            };
+            t.row(vec![
+                label,
+                c.metric.name().to_string(),
+                c.limit
+                    .map(|l| spec.fmt_time(l))
+                    .unwrap_or_else(|| "-".into()),
+                spec.fmt_time(c.bound.paper),
+                opt(spec, c.bound.sound),
+                opt(spec, c.bound.davare),
+                spec.fmt_time(c.bound.from_event_paper),
+                opt(spec, c.bound.from_event_sound),
+                verdict.to_string(),
+            ]);
+        }
+        out.push_str(&t.render());
+    }
+    let fails = r.chains.iter().filter(|c| !c.ok).count();
+    out.push_str(&format!(
+        "\n{}\n",
+        match (r.schedulability.schedulable, fails) {
+            (true, 0) =>
+                "verdict: every limit holds (sound analysis) and the system is schedulable"
+                    .to_string(),
+            (sched, f) => format!(
+                "verdict: {}{}",
+                if sched { "" } else { "not schedulable; " },
+                if f > 0 {
+                    format!("{f} chain limit(s) fail under the sound analysis")
+                } else {
+                    String::new()
+                }
+            ),
+        }
+    ));
+    out
+}
+
+fn worst_json(spec: &Spec, w: &Worst) -> Value {
+    json!({"path": path_names(spec, &w.path), "bound": num(spec, w.value)})
+}
+
+pub fn paths_json(spec: &Spec, a: &AllPaths) -> Value {
+    let pairs: Vec<Value> = a
+        .pairs
+        .iter()
+        .map(|p| {
+            json!({
+                "source": spec.tasks[p.source].name,
+                "sink": spec.tasks[p.sink].name,
+                "reaction": {"paper": worst_json(spec, &p.reaction_paper), "sound": worst_json(spec, &p.reaction_sound)},
+                "freshness": {"paper": worst_json(spec, &p.freshness_paper), "sound": worst_json(spec, &p.freshness_sound)},
+            })
+        })
+        .collect();
+    let cycles: Vec<Vec<String>> = a.cycles.iter().map(|c| path_names(spec, c)).collect();
+    json!({"pairs": pairs, "skipped_cycles": cycles})
+}
+
+pub fn paths_text(spec: &Spec, a: &AllPaths) -> String {
+    let mut out =
+        String::from("\nall source-to-sink pairs (worst path per metric, sound analysis):\n");
+    let mut t = Table::new(&[
+        "source",
+        "sink",
+        "reaction",
+        "worst path",
+        "freshness",
+        "worst path",
+    ])
+    .numeric(&[2, 4]);
+    for p in &a.pairs {
+        t.row(vec![
+            spec.tasks[p.source].name.clone(),
+            spec.tasks[p.sink].name.clone(),
+            opt(spec, p.reaction_sound.value),
+            path_names(spec, &p.reaction_sound.path).join(">"),
+            opt(spec, p.freshness_sound.value),
+            path_names(spec, &p.freshness_sound.path).join(">"),
+        ]);
+    }
+    out.push_str(&t.render());
+    for c in &a.cycles {
+        out.push_str(&format!(
+            "  skipped cycle (edges inside it are not on any listed path): {}\n",
+            path_names(spec, c).join(", ")
+        ));
+    }
+    out
+}

@@ -1,0 +1,181 @@
+//! Diagnostics that name file, line and column and say how to fix the input.
+
+use std::fmt;
+use std::ops::Range;
+
+/// One problem in a spec, located in its source text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    pub message: String,
+    /// What to change, when we can tell.
+    pub help: Option<String>,
+    /// Byte range in the source, when known.
+    pub span: Option<Range<usize>>,
+}
+
+impl Diagnostic {
+    pub fn new(message: impl Into<String>, span: Option<Range<usize>>) -> Self {
+        Diagnostic {
+            message: message.into(),
+            help: None,
+            span,
+        }
+    }
+
+    pub fn help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+}
+
+/// All problems found in one spec file, with the text needed to show them.
+#[derive(Debug, Clone)]
+pub struct SpecError {
+    pub file: String,
+    pub source: String,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl SpecError {
+    /// 1-based line and column (in characters) of a byte offset.
+    pub fn line_col(&self, offset: usize) -> (usize, usize) {
+        line_col(&self.source, offset)
+    }
+
+    /// The diagnostics as `file:line:col` locations, for tests and JSON.
+    pub fn locations(&self) -> Vec<String> {
+        self.diagnostics
+            .iter()
+            .map(|d| match &d.span {
+                Some(s) => {
+                    let (l, c) = self.line_col(s.start);
+                    format!("{}:{}:{}", self.file, l, c)
+                }
+                None => self.file.clone(),
+            })
+            .collect()
+    }
+}
+
+pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(source.len());
+    let mut line = 1;
+    let mut line_start = 0;
+    for (i, b) in source.bytes().enumerate().take(offset) {
+        if b == b'\n' {
+            line += 1;
+            line_start = i + 1;
+        }
+    }
+    let col = source
+        .get(line_start..offset)
+        .map(|s| s.chars().count())
+        .unwrap_or(0)
+        + 1;
+    (line, col)
+}
+
+impl fmt::Display for SpecError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, d) in self.diagnostics.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            match &d.span {
+                Some(span) => {
+                    let (line, col) = self.line_col(span.start);
+                    writeln!(f, "{}:{}:{}: error: {}", self.file, line, col, d.message)?;
+                    if let Some(text) = self.source.lines().nth(line - 1) {
+                        let width = {
+                            let end = span.end.min(
+                                self.source[..span.start.min(self.source.len())]
+                                    .rfind('\n')
+                                    .map(|p| p + 1)
+                                    .unwrap_or(0)
+                                    + text.len(),
+                            );
+                            self.source
+                                .get(span.start..end.max(span.start))
+                                .map(|s| s.chars().count())
+                                .unwrap_or(1)
+                                .max(1)
+                        };
+                        writeln!(f, "{line:>5} | {text}")?;
+                        writeln!(f, "      | {}{}", " ".repeat(col - 1), "^".repeat(width))?;
+                    }
+                }
+                None => writeln!(f, "{}: error: {}", self.file, d.message)?,
+            }
+            if let Some(h) = &d.help {
+                writeln!(f, "      = help: {h}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SpecError {}
+
+/// The closest candidate by edit distance, if it is close enough to be a typo.
+pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let mut best: Option<(usize, &str)> = None;
+    for c in candidates {
+        let d = edit_distance(word, c);
+        // A typo: a few edits, or one name a prefix of the other ("msec" → "ms").
+        let close = d <= (word.len().max(c.len()) / 3).max(1)
+            || (c.len() >= 2 && (word.starts_with(c) || c.starts_with(word)));
+        if close && best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, c));
+        }
+    }
+    best.map(|(_, c)| c)
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    // Optimal string alignment: insertions, deletions, substitutions and
+    // adjacent transpositions ("exce" is one step from "exec").
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut v = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                v = v.min(d[i - 2][j - 2] + 1);
+            }
+            d[i][j] = v;
+        }
+    }
+    d[a.len()][b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_and_column() {
+        let s = "a\nbc\n\tdé f";
+        assert_eq!(line_col(s, 0), (1, 1));
+        assert_eq!(line_col(s, 2), (2, 1));
+        assert_eq!(line_col(s, 3), (2, 2));
+        // Columns count characters, not bytes: 'é' is two bytes.
+        assert_eq!(line_col(s, s.find('f').unwrap_or(0)), (3, 5));
+    }
+
+    #[test]
+    fn suggestions() {
+        assert_eq!(suggest("exce", ["exec", "period"]), Some("exec"));
+        assert_eq!(suggest("gyr", ["gyro", "accl"]), Some("gyro"));
+        assert_eq!(suggest("zzzz", ["gyro", "accl"]), None);
+    }
+}

@@ -1,0 +1,259 @@
+//! Time: integer nanoseconds inside, human units at the edges.
+//!
+//! Specs accept bare numbers (in the system's `time_unit`) and strings with a
+//! unit suffix (`"250us"`, `"1.5ms"`). Strings are parsed as exact decimals so
+//! `"0.1ms"` is exactly 100000 ns, never 99999.99…
+
+use std::fmt;
+
+/// A duration or instant in integer nanoseconds.
+pub type Nanos = i64;
+
+/// The unit that bare numbers in a spec are expressed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeUnit {
+    Ns,
+    Us,
+    Ms,
+    S,
+}
+
+impl TimeUnit {
+    pub const ALL: [TimeUnit; 4] = [TimeUnit::Ns, TimeUnit::Us, TimeUnit::Ms, TimeUnit::S];
+
+    /// Nanoseconds in one unit.
+    pub fn nanos(self) -> i64 {
+        match self {
+            TimeUnit::Ns => 1,
+            TimeUnit::Us => 1_000,
+            TimeUnit::Ms => 1_000_000,
+            TimeUnit::S => 1_000_000_000,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TimeUnit::Ns => "ns",
+            TimeUnit::Us => "us",
+            TimeUnit::Ms => "ms",
+            TimeUnit::S => "s",
+        }
+    }
+
+    /// Parses a unit name; `µs` is accepted beside `us`.
+    pub fn parse(s: &str) -> Option<TimeUnit> {
+        match s {
+            "ns" => Some(TimeUnit::Ns),
+            "us" | "µs" | "μs" => Some(TimeUnit::Us),
+            "ms" => Some(TimeUnit::Ms),
+            "s" => Some(TimeUnit::S),
+            _ => None,
+        }
+    }
+
+    /// Converts nanoseconds to this unit (for display and JSON).
+    pub fn from_nanos(self, ns: Nanos) -> f64 {
+        ns as f64 / self.nanos() as f64
+    }
+}
+
+impl fmt::Display for TimeUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Largest time we accept: about 106 days, far beyond any period, and small
+/// enough that sums of a few thousand of them cannot overflow an i64.
+pub const MAX_TIME: Nanos = 1 << 53;
+
+/// Why a time could not be read.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TimeError {
+    /// Not a number followed by a known unit.
+    Syntax(String),
+    /// Unknown unit suffix.
+    Unit(String),
+    /// Finer than one nanosecond.
+    SubNanosecond,
+    /// Larger than [`MAX_TIME`] or not finite.
+    TooLarge,
+}
+
+impl fmt::Display for TimeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            TimeError::Syntax(s) => write!(
+                f,
+                "`{s}` is not a time; write a number with a unit, like \"250us\" or \"1.5ms\""
+            ),
+            TimeError::Unit(u) => write!(
+                f,
+                "unknown time unit `{u}`; use one of ns, us, ms, s (for example \"250us\")"
+            ),
+            TimeError::SubNanosecond => {
+                write!(
+                    f,
+                    "time is finer than one nanosecond, the model's resolution"
+                )
+            }
+            TimeError::TooLarge => write!(f, "time is too large (the limit is about 106 days)"),
+        }
+    }
+}
+
+/// Parses `"1.5ms"`, `"250 us"`, `"3s"`, `"100ns"` exactly.
+pub fn parse_time_str(s: &str) -> Result<Nanos, TimeError> {
+    let t = s.trim();
+    let split = t
+        .char_indices()
+        .find(|&(_, c)| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+' || c == '_'))
+        .map(|(i, _)| i)
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let unit = unit.trim();
+    if num.is_empty() {
+        return Err(TimeError::Syntax(s.to_string()));
+    }
+    if unit.is_empty() {
+        return Err(TimeError::Syntax(s.to_string()));
+    }
+    let unit = TimeUnit::parse(unit).ok_or_else(|| TimeError::Unit(unit.to_string()))?;
+    parse_decimal(num, unit.nanos()).ok_or_else(|| TimeError::Syntax(s.to_string()))?
+}
+
+/// Exact decimal × scale → integer, or an error when not a whole number of ns.
+fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
+    let num = num.replace('_', "");
+    let (neg, digits) = match num.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, num.strip_prefix('+').unwrap_or(&num)),
+    };
+    let (int, frac) = match digits.split_once('.') {
+        Some((i, f)) => (i, f),
+        None => (digits, ""),
+    };
+    if int.is_empty() && frac.is_empty() {
+        return None;
+    }
+    if !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let mut value: i128 = 0;
+    for c in int.chars() {
+        value = value * 10 + (c as i128 - '0' as i128);
+        if value > MAX_TIME as i128 {
+            return Some(Err(TimeError::TooLarge));
+        }
+    }
+    value *= scale as i128;
+    // Fractional digits: each must land on a whole nanosecond.
+    let mut place = scale as i128;
+    for c in frac.chars() {
+        let d = c as i128 - '0' as i128;
+        if place % 10 != 0 {
+            if d != 0 {
+                return Some(Err(TimeError::SubNanosecond));
+            }
+            continue;
+        }
+        place /= 10;
+        value += d * place;
+    }
+    if value > MAX_TIME as i128 {
+        return Some(Err(TimeError::TooLarge));
+    }
+    let v = value as i64;
+    Some(Ok(if neg { -v } else { v }))
+}
+
+/// A bare number in `unit` to nanoseconds (rounded to the nearest ns, since
+/// binary floats cannot hold most decimals exactly).
+pub fn number_to_nanos(x: f64, unit: TimeUnit) -> Result<Nanos, TimeError> {
+    if !x.is_finite() {
+        return Err(TimeError::TooLarge);
+    }
+    let ns = x * unit.nanos() as f64;
+    if ns.abs() > MAX_TIME as f64 {
+        return Err(TimeError::TooLarge);
+    }
+    let r = ns.round();
+    if (ns - r).abs() > 1e-6 * ns.abs().max(1.0) {
+        return Err(TimeError::SubNanosecond);
+    }
+    Ok(r as i64)
+}
+
+/// Formats nanoseconds in a unit with up to 6 significant decimals, trimming zeros.
+pub fn format_in(ns: Nanos, unit: TimeUnit) -> String {
+    let whole = ns / unit.nanos();
+    let rem = (ns % unit.nanos()).abs();
+    if rem == 0 {
+        return whole.to_string();
+    }
+    let digits = match unit {
+        TimeUnit::Ns => 0,
+        TimeUnit::Us => 3,
+        TimeUnit::Ms => 6,
+        TimeUnit::S => 9,
+    };
+    let frac = format!("{rem:0digits$}");
+    let frac = frac.trim_end_matches('0');
+    let sign = if ns < 0 && whole == 0 { "-" } else { "" };
+    format!("{sign}{whole}.{frac}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_exact_decimals() {
+        assert_eq!(parse_time_str("1.5ms"), Ok(1_500_000));
+        assert_eq!(parse_time_str("250us"), Ok(250_000));
+        assert_eq!(parse_time_str("0.1ms"), Ok(100_000));
+        assert_eq!(parse_time_str("3 s"), Ok(3_000_000_000));
+        assert_eq!(parse_time_str("100ns"), Ok(100));
+        assert_eq!(parse_time_str("2µs"), Ok(2_000));
+        assert_eq!(parse_time_str("1.2500us"), Ok(1_250));
+    }
+
+    #[test]
+    fn rejects_bad_times() {
+        assert!(matches!(parse_time_str("5"), Err(TimeError::Syntax(_))));
+        assert!(matches!(parse_time_str("5 msec"), Err(TimeError::Unit(_))));
+        assert!(matches!(parse_time_str("ms"), Err(TimeError::Syntax(_))));
+        assert_eq!(parse_time_str("1.5ns"), Err(TimeError::SubNanosecond));
+        assert!(matches!(
+            parse_time_str("1.2.3ms"),
+            Err(TimeError::Syntax(_))
+        ));
+        assert_eq!(
+            parse_time_str("99999999999999999999s"),
+            Err(TimeError::TooLarge)
+        );
+    }
+
+    #[test]
+    fn numbers_round_to_nanoseconds() {
+        assert_eq!(number_to_nanos(0.1, TimeUnit::Ms), Ok(100_000));
+        assert_eq!(number_to_nanos(10.0, TimeUnit::Ms), Ok(10_000_000));
+        assert_eq!(number_to_nanos(0.15, TimeUnit::Ms), Ok(150_000));
+        assert_eq!(
+            number_to_nanos(0.0001, TimeUnit::Ns),
+            Err(TimeError::SubNanosecond)
+        );
+        assert_eq!(
+            number_to_nanos(f64::NAN, TimeUnit::Ms),
+            Err(TimeError::TooLarge)
+        );
+    }
+
+    #[test]
+    fn formats_trimmed() {
+        assert_eq!(format_in(10_900_000, TimeUnit::Ms), "10.9");
+        assert_eq!(format_in(10_000_000, TimeUnit::Ms), "10");
+        assert_eq!(format_in(250, TimeUnit::Us), "0.25");
+        assert_eq!(format_in(-250, TimeUnit::Us), "-0.25");
+    }
+}
