@@ -9,6 +9,7 @@
 //! panics, whatever the input.
 
 mod error;
+pub mod gen;
 mod raw;
 pub mod time;
 
@@ -272,6 +273,32 @@ impl Spec {
 pub fn transfer_time(ch: &Channel, size: f64, unit: TimeUnit) -> Nanos {
     let t = size / ch.bandwidth * unit.nanos() as f64;
     t.round() as Nanos + ch.overhead
+}
+
+/// Fills Δin and Δout of every task from its ports: fan-in aggregates sizes
+/// per channel and each input channel costs its δ once (Section IV-B).
+pub fn compute_transfers(tasks: &mut [Task], channels: &[Channel], unit: TimeUnit) {
+    for ci in 0..tasks.len() {
+        let mut per_channel: BTreeMap<usize, f64> = BTreeMap::new();
+        if let Some(p) = &tasks[ci].input {
+            *per_channel.entry(p.channel).or_default() += p.size;
+        }
+        for k in 0..tasks[ci].reads.len() {
+            let pi = tasks[ci].reads[k];
+            if let Some(o) = &tasks[pi].output {
+                *per_channel.entry(o.channel).or_default() += o.size;
+            }
+        }
+        tasks[ci].delta_in = per_channel
+            .iter()
+            .map(|(&c, &size)| transfer_time(&channels[c], size, unit))
+            .sum();
+        tasks[ci].delta_out = tasks[ci]
+            .output
+            .as_ref()
+            .map(|o| transfer_time(&channels[o.channel], o.size, unit))
+            .unwrap_or(0);
+    }
 }
 
 fn toml_help(msg: &str) -> Option<String> {
@@ -581,28 +608,8 @@ impl Builder {
         if !self.diags.is_empty() {
             return None;
         }
-        // Δin: fan-in aggregates sizes per channel, each channel's δ once (Section IV-B).
         let unit = self.unit();
-        for ci in 0..tasks.len() {
-            let mut per_channel: BTreeMap<usize, f64> = BTreeMap::new();
-            if let Some(p) = &tasks[ci].input {
-                *per_channel.entry(p.channel).or_default() += p.size;
-            }
-            for &pi in &tasks[ci].reads.clone() {
-                if let Some(o) = &tasks[pi].output {
-                    *per_channel.entry(o.channel).or_default() += o.size;
-                }
-            }
-            tasks[ci].delta_in = per_channel
-                .iter()
-                .map(|(&c, &size)| transfer_time(&channels[c], size, unit))
-                .sum();
-            tasks[ci].delta_out = tasks[ci]
-                .output
-                .as_ref()
-                .map(|o| transfer_time(&channels[o.channel], o.size, unit))
-                .unwrap_or(0);
-        }
+        compute_transfers(&mut tasks, &channels, unit);
         // Budgets and periods against the demand.
         for (i, (_, v)) in raw_tasks.iter().enumerate() {
             let t = &tasks[i];
@@ -725,7 +732,6 @@ impl Builder {
                 });
             }
         }
-        let _ = &mut tasks;
         if !self.diags.is_empty() {
             return None;
         }
