@@ -255,7 +255,8 @@ pub fn report_text(spec: &Spec, r: &Report) -> String {
             "davare",
             "paper+event",
             "sound+event",
-            "",
+            "paper verdict",
+            "sound verdict",
         ])
         .numeric(&[2, 3, 4, 5, 6, 7]);
         for c in &r.chains {
@@ -266,8 +267,13 @@ pub fn report_text(spec: &Spec, r: &Report) -> String {
             };
             let verdict = match (c.ok, c.limit) {
                 (true, Some(_)) => "ok",
-                (true, None) => "",
+                (true, None) => "-",
                 (false, _) => "FAIL",
+            };
+            let paper_verdict = match c.limit {
+                Some(l) if c.bound.paper <= l => "ok",
+                Some(_) => "FAIL",
+                None => "-",
             };
             t.row(vec![
                 label,
@@ -280,6 +286,7 @@ pub fn report_text(spec: &Spec, r: &Report) -> String {
                 opt(spec, c.bound.davare),
                 spec.fmt_time(c.bound.from_event_paper),
                 opt(spec, c.bound.from_event_sound),
+                paper_verdict.to_string(),
                 verdict.to_string(),
             ]);
         }

@@ -1,0 +1,164 @@
+//! The `rtpipe` binary end to end: exit codes, JSON shape, error messages.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn example(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+}
+
+fn rtpipe(args: &[&str]) -> Output {
+    match Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(args)
+        .output()
+    {
+        Ok(o) => o,
+        Err(e) => panic!("cannot run rtpipe: {e}"),
+    }
+}
+
+fn json_of(o: &Output) -> Value {
+    match serde_json::from_slice(&o.stdout) {
+        Ok(v) => v,
+        Err(e) => panic!(
+            "stdout is not JSON ({e}): {}",
+            String::from_utf8_lossy(&o.stdout)
+        ),
+    }
+}
+
+fn analyze_json(name: &str) -> (i32, Value) {
+    let p = example(name);
+    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--json"]);
+    (o.status.code().unwrap_or(-1), json_of(&o))
+}
+
+#[test]
+fn json_has_the_documented_shape() {
+    let (code, v) = analyze_json("paper-table2.toml");
+    // Sound reaction limits fail on the published periods: exit 1.
+    assert_eq!(code, 1);
+    assert_eq!(v["system"], "paper-table2");
+    assert_eq!(v["time_unit"], "ms");
+    let tasks = v["tasks"].as_array().map(|a| a.len());
+    assert_eq!(tasks, Some(6));
+    for key in [
+        "name",
+        "exec",
+        "budget",
+        "period",
+        "priority",
+        "cpu",
+        "response_time",
+    ] {
+        assert!(v["tasks"][0].get(key).is_some(), "task key {key}");
+    }
+    let s = &v["schedulability"];
+    assert_eq!(s["test"], "liu-layland");
+    assert_eq!(s["schedulable"], true);
+    assert!(s["utilization"].as_f64().is_some() && s["bound"].as_f64().is_some());
+    let chains = v["chains"].as_array().cloned().unwrap_or_default();
+    // One entry per chain and metric.
+    assert_eq!(chains.len(), 8);
+    let c0 = &chains[0];
+    assert_eq!(c0["path"], serde_json::json!(["t1", "t4"]));
+    assert_eq!(c0["metric"], "reaction");
+    assert_eq!(c0["limit"], 10.0);
+    assert_eq!(c0["paper"], 10.9);
+    assert_eq!(c0["sound"], 14.3);
+    assert_eq!(c0["ok"], false);
+    assert_eq!(c0["from_event"]["paper"], 20.9);
+    assert!(c0["from_event"]["sound"].as_f64().is_some());
+}
+
+#[test]
+fn exit_zero_when_everything_holds() {
+    let (code, v) = analyze_json("paper-table3.toml");
+    assert_eq!(code, 0);
+    assert_eq!(v["ok"], true);
+    assert_eq!(v["chains"][0]["limit"], Value::Null);
+}
+
+#[test]
+fn cleanflight_in_microseconds() {
+    let (code, v) = analyze_json("cleanflight.toml");
+    assert_eq!(code, 1);
+    assert_eq!(v["time_unit"], "us");
+    assert_eq!(v["chains"][0]["paper"], 5756.0);
+    assert_eq!(v["chains"][0]["limit"], 10000.0);
+}
+
+#[test]
+fn all_paths_json_and_text() {
+    let p = example("paper-table2.toml");
+    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--json", "--all-paths"]);
+    let v = json_of(&o);
+    let pairs = v["all_paths"]["pairs"].as_array().map(|a| a.len());
+    assert_eq!(pairs, Some(4));
+    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--all-paths"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("all source-to-sink pairs"), "{text}");
+    assert!(text.contains("t2>t5>t6"), "{text}");
+}
+
+#[test]
+fn table_output_for_people() {
+    let p = example("paper-table2.toml");
+    let o = rtpipe(&["analyze", &p.to_string_lossy()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("schedulability (liu-layland)"), "{text}");
+    assert!(text.contains("t1>t4"), "{text}");
+    assert!(text.contains("FAIL"), "{text}");
+}
+
+#[test]
+fn bad_spec_exits_2_with_location() {
+    let dir = std::env::temp_dir().join(format!("rtpipe-cli-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let f = dir.join("bad.toml");
+    let text = match std::fs::read_to_string(example("paper-table2.toml")) {
+        Ok(t) => t.replace("reads = [\"t1\", \"t2\"]", "reads = [\"t1\", \"tt2\"]"),
+        Err(e) => panic!("{e}"),
+    };
+    if let Err(e) = std::fs::write(&f, text) {
+        panic!("{e}");
+    }
+    let o = rtpipe(&["analyze", &f.to_string_lossy(), "--json"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(o.stdout.is_empty(), "nothing on stdout for bad input");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.toml:41:16: error: unknown task `tt2`"),
+        "{err}"
+    );
+    assert!(err.contains("did you mean `t2`?"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn missing_file_and_flags_exit_2() {
+    let o = rtpipe(&["analyze", "/nonexistent/spec.toml"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot read the spec"));
+    let o = rtpipe(&["analyze", "--bogus"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn missing_period_is_explained() {
+    let dir = std::env::temp_dir().join(format!("rtpipe-cli-np-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let f = dir.join("np.toml");
+    let src = "[system]\nname = \"np\"\n[tasks.a]\nexec = 1\n";
+    if let Err(e) = std::fs::write(&f, src) {
+        panic!("{e}");
+    }
+    let o = rtpipe(&["analyze", &f.to_string_lossy()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no fixed period for task a"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
