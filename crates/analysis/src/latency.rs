@@ -288,4 +288,30 @@ mod tests {
         assert_eq!(paper_reaction_link(&c, &p), 9_600_000);
         assert_eq!(paper_freshness_link(&c, &p), 9_600_000);
     }
+
+    #[test]
+    fn special_cases_eqs_7_to_14() {
+        // Budgets fit the demand (Eq. 7: L = C) and Δ = 0 (Eq. 10).
+        // Producer C = 2, T = 10; consumer C = 3, T = 4 (ms).
+        let p = lt(2 * MS, 10 * MS, 0, 5 * MS, 2);
+        let c = lt(3 * MS, 4 * MS, 0, 3 * MS, 1);
+        // Eq. 10, Case 1 (T_c < T_p): E = T_c + C_p = 4 + 2 = 6.
+        assert_eq!(p.l + paper_reaction_link(&p, &c), 6 * MS);
+        // Eq. 11, Case 1: appending c adds T_c = 4.
+        assert_eq!(paper_reaction_link(&p, &c), 4 * MS);
+        // Eq. 13/14, Case 1: F = 2 T_p = 20.
+        assert_eq!(p.l + paper_freshness_link(&p, &c), 20 * MS);
+        // Swap roles (Case 2: T_p = 4 ≤ T_c = 10):
+        // Eq. 10: E = T_p + C_c = 4 + 2 = 6; Eq. 11 adds T_p − C_p + C_c = 4 − 3 + 2 = 3;
+        // Eq. 14: F = T_p + C_c = 6.
+        assert_eq!(c.l + paper_reaction_link(&c, &p), 6 * MS);
+        assert_eq!(paper_reaction_link(&c, &p), 3 * MS);
+        assert_eq!(c.l + paper_freshness_link(&c, &p), 6 * MS);
+        // Eq. 9 with Δ = 0.5: Case 1 E = T_c + C_p − Δ = 4 + 2 − 0.5 = 5.5.
+        let p2 = LinkTask { delta_out: MS / 2, ..p };
+        assert_eq!(p2.l + paper_reaction_link(&p2, &c), 5 * MS + MS / 2);
+        // Eq. 8 (Case 2, Δ = 0.5): E = T_p + C_c − Δ = 4 + 2 − 0.5 = 5.5.
+        let c2 = LinkTask { delta_out: MS / 2, ..c };
+        assert_eq!(c2.l + paper_reaction_link(&c2, &p), 5 * MS + MS / 2);
+    }
 }
