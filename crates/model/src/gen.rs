@@ -270,6 +270,8 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
             Scheduler::Rm => SchedTest::Rta,
             Scheduler::Edf => SchedTest::Edf,
         },
+        resolution: 1_000_000,
+        harmonic: false,
         channels,
         tasks,
         chains,

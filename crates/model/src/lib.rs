@@ -12,6 +12,8 @@ mod error;
 pub mod gen;
 mod raw;
 pub mod time;
+mod write;
+pub use write::to_toml;
 
 pub use error::{line_col, suggest, Diagnostic, SpecError};
 pub use time::{format_in, parse_time_str, Nanos, TimeUnit, MAX_TIME};
@@ -181,6 +183,10 @@ pub struct Spec {
     pub time_unit: TimeUnit,
     pub scheduler: Scheduler,
     pub schedulability: SchedTest,
+    /// Design: periods are integer multiples of this (default 1 time unit).
+    pub resolution: Nanos,
+    /// Design: every pair of periods divides one another.
+    pub harmonic: bool,
     pub channels: Vec<Channel>,
     pub tasks: Vec<Task>,
     pub chains: Vec<Chain>,
@@ -735,11 +741,17 @@ impl Builder {
         if !self.diags.is_empty() {
             return None;
         }
+        let resolution = match &sys.resolution {
+            Some(r) => self.positive_time(r, "resolution")?,
+            None => unit.nanos(),
+        };
         Some(Spec {
             name,
             time_unit: unit,
             scheduler: scheduler?,
             schedulability: test?,
+            resolution,
+            harmonic: sys.harmonic.as_ref().is_some_and(|h| *h.get_ref()),
             channels,
             tasks,
             chains,

@@ -27,6 +27,8 @@ pub struct RawSystem {
     pub time_unit: Option<S<String>>,
     pub scheduler: Option<S<String>>,
     pub schedulability: Option<S<String>>,
+    pub resolution: Option<S<toml::Value>>,
+    pub harmonic: Option<S<bool>>,
 }
 
 #[derive(Debug, serde::Deserialize)]
