@@ -308,10 +308,16 @@ mod tests {
         assert_eq!(paper_reaction_link(&c, &p), 3 * MS);
         assert_eq!(c.l + paper_freshness_link(&c, &p), 6 * MS);
         // Eq. 9 with Δ = 0.5: Case 1 E = T_c + C_p − Δ = 4 + 2 − 0.5 = 5.5.
-        let p2 = LinkTask { delta_out: MS / 2, ..p };
+        let p2 = LinkTask {
+            delta_out: MS / 2,
+            ..p
+        };
         assert_eq!(p2.l + paper_reaction_link(&p2, &c), 5 * MS + MS / 2);
         // Eq. 8 (Case 2, Δ = 0.5): E = T_p + C_c − Δ = 4 + 2 − 0.5 = 5.5.
-        let c2 = LinkTask { delta_out: MS / 2, ..c };
+        let c2 = LinkTask {
+            delta_out: MS / 2,
+            ..c
+        };
         assert_eq!(c2.l + paper_reaction_link(&c2, &p), 5 * MS + MS / 2);
     }
 }

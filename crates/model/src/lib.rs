@@ -148,11 +148,15 @@ pub struct Task {
 impl Task {
     /// Worst-case demand of one job: Δin + p + Δout.
     pub fn demand(&self) -> Nanos {
-        self.delta_in + self.exec + self.delta_out
+        self.delta_in
+            .saturating_add(self.exec)
+            .saturating_add(self.delta_out)
     }
     /// Best-case demand of one job: Δin + p_min + Δout.
     pub fn demand_min(&self) -> Nanos {
-        self.delta_in + self.exec_min + self.delta_out
+        self.delta_in
+            .saturating_add(self.exec_min)
+            .saturating_add(self.delta_out)
     }
     /// C: the given budget or the demand (Section IV-B, Step 1).
     pub fn budget(&self) -> Nanos {
@@ -201,7 +205,11 @@ impl Spec {
             diagnostics,
         };
         let raw: RawSpec = toml::from_str(source).map_err(|e| {
-            let msg = e.message().trim().to_string();
+            let mut msg = e.message().trim().to_string();
+            if msg.is_empty() {
+                // toml says nothing for e.g. a key without a value (`exec =`).
+                msg = "invalid TOML syntax here (for example a key without a value: write `exec = 0.5`)".to_string();
+            }
             let help = toml_help(&msg);
             let mut d = Diagnostic::new(msg, e.span());
             if let Some(h) = help {
@@ -276,9 +284,16 @@ impl Spec {
 
 /// Transfer time of `size` data units over a channel: d/W + δ (Eq. 1), in ns,
 /// rounded to the nearest nanosecond.
+/// Saturates just above [`MAX_TIME`], so validation can reject it instead of
+/// overflowing.
 pub fn transfer_time(ch: &Channel, size: f64, unit: TimeUnit) -> Nanos {
     let t = size / ch.bandwidth * unit.nanos() as f64;
-    t.round() as Nanos + ch.overhead
+    let t = if t.is_finite() {
+        t.round().min(MAX_TIME as f64 + 1.0)
+    } else {
+        MAX_TIME as f64 + 1.0
+    };
+    (t as Nanos).saturating_add(ch.overhead).min(MAX_TIME + 1)
 }
 
 /// Fills Δin and Δout of every task from its ports: fan-in aggregates sizes
@@ -298,7 +313,7 @@ pub fn compute_transfers(tasks: &mut [Task], channels: &[Channel], unit: TimeUni
         tasks[ci].delta_in = per_channel
             .iter()
             .map(|(&c, &size)| transfer_time(&channels[c], size, unit))
-            .sum();
+            .fold(0, |a: Nanos, b| a.saturating_add(b).min(MAX_TIME + 1));
         tasks[ci].delta_out = tasks[ci]
             .output
             .as_ref()
