@@ -1,0 +1,632 @@
+//! # rtpipe-sim
+//!
+//! A small deterministic discrete-event simulator of pipe systems, used as the
+//! oracle of the latency analysis (Cheng, West, Einstein, EMSOFT 2018).
+//!
+//! For now every task is a plain periodic task. That is exact for the servers
+//! of the model as long as each job's demand fits its budget (the spec
+//! validation guarantees budget ≥ demand) and each job finishes within its
+//! period (the analysis returns no bound otherwise).
+//!
+//! ## Semantics
+//!
+//! - Task i releases jobs at φ_i + k·T_i. A job's demand is drawn in
+//!   [demand_min, demand] according to [`ExecModel`].
+//! - A job READS (copies the latest published value of each producer) at the
+//!   instant it first gets the CPU, and PUBLISHES its output at the instant
+//!   its last unit of execution completes. Register semantics: a value is
+//!   overwritten by the next publish.
+//! - Each CPU is preemptive: RM by the rank of
+//!   [`rtpipe_analysis::sched::rm_priorities`], EDF by absolute deadline
+//!   (release + T) then task index. Jobs of one task run in FIFO order.
+//!   Background tasks run only when nothing else is ready.
+//! - At one instant: (1) completions publish, (2) releases, (3) each CPU picks
+//!   a job, (4) jobs starting now read. So a job that starts when another job
+//!   publishes sees the new value. All CPUs share one timeline.
+//!
+//! ## Measurement (Section III-D and the paper's instrumentation)
+//!
+//! Every job of a chain's head creates a sample stamped with its read instant.
+//! A job at position k of a chain carries the sample carried by the value it
+//! read from position k−1 (provenance follows the chain's edges only, each
+//! chain separately). Per sample, the first and last publish of the tail that
+//! carries it give reaction = first − stamp and freshness = last − stamp. Only
+//! samples that reach the tail count, and only once the tail has published a
+//! newer sample (so the last output is known).
+
+pub mod server;
+
+use rtpipe_analysis::sched::rm_priorities;
+use rtpipe_model::gen::Rng;
+use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use std::collections::VecDeque;
+use std::fmt;
+
+/// Release offsets φ_i of one run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Phasing {
+    /// All tasks release at 0 (the classic critical instant).
+    Sync,
+    /// φ_i uniform in [0, T_i), in nanoseconds.
+    Random,
+    /// φ_i a uniform multiple of the grid in [0, T_i): random phasings that
+    /// still produce simultaneous events, where worst cases tend to hide.
+    Grid(Nanos),
+    /// Explicit offsets, one per task (for hand-made and replayed schedules).
+    Given(Vec<Nanos>),
+}
+
+/// How each job's demand is drawn in [demand_min, demand].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExecModel {
+    /// Always the worst case.
+    Worst,
+    /// Always the best case.
+    Best,
+    /// Uniform integer nanoseconds.
+    Uniform,
+    /// Best or worst case with equal probability (extremes stress the bounds'
+    /// best-case terms).
+    Extremes,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SimConfig {
+    /// Simulated time; events after it are not processed.
+    pub horizon: Nanos,
+    /// Seeds offsets ([`Phasing::Random`], [`Phasing::Grid`]) and demands.
+    pub seed: u64,
+    pub phasing: Phasing,
+    pub exec: ExecModel,
+    /// Keep a [`JobRecord`] of every completed job (memory grows with the horizon).
+    pub log_jobs: bool,
+}
+
+impl SimConfig {
+    /// Synchronous release, worst-case demands, no job log.
+    pub fn new(horizon: Nanos) -> SimConfig {
+        SimConfig {
+            horizon,
+            seed: 0,
+            phasing: Phasing::Sync,
+            exec: ExecModel::Worst,
+            log_jobs: false,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SimError {
+    /// The task has no fixed positive period, so it cannot be released.
+    NoPeriod(String),
+    HorizonNotPositive(Nanos),
+    /// `Phasing::Given` needs one non-negative offset per task.
+    BadOffsets {
+        expected: usize,
+        found: usize,
+    },
+    NegativeOffset(String),
+    GridNotPositive(Nanos),
+    /// A chain names a task index that does not exist.
+    BadChain(usize),
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::NoPeriod(t) => write!(f, "task `{t}` has no fixed positive period"),
+            SimError::HorizonNotPositive(h) => write!(f, "horizon must be positive, found {h} ns"),
+            SimError::BadOffsets { expected, found } => {
+                write!(
+                    f,
+                    "expected {expected} offsets (one per task), found {found}"
+                )
+            }
+            SimError::NegativeOffset(t) => write!(f, "offset of task `{t}` is negative"),
+            SimError::GridNotPositive(g) => {
+                write!(f, "phasing grid must be positive, found {g} ns")
+            }
+            SimError::BadChain(c) => write!(f, "chain {c} names a task that does not exist"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+/// The sample carried for one chain position by a job.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Carried {
+    pub chain: usize,
+    pub pos: usize,
+    /// `None` when the producer had not published yet.
+    pub sample: Option<u64>,
+}
+
+/// One completed job.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct JobRecord {
+    pub task: usize,
+    /// k of the k-th release, from 0.
+    pub index: u64,
+    pub release: Nanos,
+    pub demand: Nanos,
+    /// First got the CPU (read instant).
+    pub read: Nanos,
+    /// Publish instant.
+    pub finish: Nanos,
+    /// One entry per chain position the task occupies.
+    pub carried: Vec<Carried>,
+}
+
+/// The life of one sample at the tail of a chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Witness {
+    pub sample: u64,
+    /// The head's read instant (the sample's stamp).
+    pub read: Nanos,
+    /// First and last tail publishes carrying the sample.
+    pub first: Nanos,
+    pub last: Nanos,
+}
+
+impl Witness {
+    pub fn reaction(&self) -> Nanos {
+        self.first - self.read
+    }
+    pub fn freshness(&self) -> Nanos {
+        self.last - self.read
+    }
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ChainStats {
+    /// Largest reaction over finalised samples.
+    pub reaction_max: Option<Nanos>,
+    /// Largest freshness over finalised samples.
+    pub freshness_max: Option<Nanos>,
+    /// The samples that gave the maxima.
+    pub reaction_witness: Option<Witness>,
+    pub freshness_witness: Option<Witness>,
+    /// Samples created by the head (head reads).
+    pub samples: u64,
+    /// Samples that reached the tail.
+    pub reached: u64,
+    /// Samples that reached the tail and whose last output is known.
+    pub finalised: u64,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TaskStats {
+    pub released: u64,
+    pub completed: u64,
+    /// Largest finish − release over completed jobs.
+    pub max_response: Option<Nanos>,
+    /// Completed jobs that finished after their period (the model's
+    /// assumptions are broken for them).
+    pub late: u64,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SimResult {
+    /// The offsets used (replay a random phasing with [`Phasing::Given`]).
+    pub offsets: Vec<Nanos>,
+    pub tasks: Vec<TaskStats>,
+    /// Indexed like `spec.chains`.
+    pub chains: Vec<ChainStats>,
+    /// Completed jobs in completion order, when `log_jobs` is set.
+    pub jobs: Vec<JobRecord>,
+}
+
+/// Simulates `spec` from 0 to `cfg.horizon`.
+pub fn simulate(spec: &Spec, cfg: &SimConfig) -> Result<SimResult, SimError> {
+    let mut sim = Sim::new(spec, cfg)?;
+    let mut t = 0;
+    loop {
+        sim.instant(t);
+        match sim.next_event(t) {
+            Some(next) if next <= cfg.horizon => {
+                sim.advance(next - t);
+                t = next;
+            }
+            _ => break,
+        }
+    }
+    Ok(sim.finish())
+}
+
+/// A position of a chain occupied by a task.
+#[derive(Debug, Clone, Copy)]
+struct Slot {
+    chain: usize,
+    pos: usize,
+    /// The producer's task and slot index, `None` at the head.
+    src: Option<(usize, usize)>,
+    tail: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Job {
+    index: u64,
+    release: Nanos,
+    demand: Nanos,
+    remaining: Nanos,
+    read: Option<Nanos>,
+}
+
+struct TaskSim {
+    period: Nanos,
+    /// 0 for guaranteed tasks, 1 for background ones.
+    class: u8,
+    /// RM rank (1 = highest); unused under EDF.
+    rank: i64,
+    demand_min: Nanos,
+    demand: Nanos,
+    rng: Rng,
+    next_release: Nanos,
+    next_index: u64,
+    /// Released, unfinished jobs; only the front one may have started.
+    queue: VecDeque<Job>,
+    slots: Vec<Slot>,
+    /// What the front job read, per slot (valid once it has started).
+    carried: Vec<Option<u64>>,
+    /// The latest published value's samples, per slot.
+    published: Vec<Option<u64>>,
+    stats: TaskStats,
+}
+
+/// Per chain: stamps of the samples and the sample the tail currently outputs.
+struct Tracker {
+    stamps: Vec<Nanos>,
+    /// (sample, first, last) of the newest sample seen at the tail.
+    current: Option<(u64, Nanos, Nanos)>,
+    stats: ChainStats,
+}
+
+impl Tracker {
+    fn output(&mut self, sample: u64, t: Nanos) {
+        match self.current {
+            Some((s, first, _)) if s == sample => self.current = Some((s, first, t)),
+            prev => {
+                // Samples reach the tail in order: each task's jobs read in
+                // order and registers only move forward.
+                debug_assert!(!matches!(prev, Some((s, _, _)) if s >= sample));
+                if let Some((s, first, last)) = prev {
+                    self.finalise(s, first, last);
+                }
+                self.stats.reached += 1;
+                self.current = Some((sample, t, t));
+            }
+        }
+    }
+
+    fn finalise(&mut self, sample: u64, first: Nanos, last: Nanos) {
+        let w = Witness {
+            sample,
+            read: self.stamps[sample as usize],
+            first,
+            last,
+        };
+        let st = &mut self.stats;
+        st.finalised += 1;
+        if w.reaction() > st.reaction_max.unwrap_or(Nanos::MIN) {
+            st.reaction_max = Some(w.reaction());
+            st.reaction_witness = Some(w);
+        }
+        if w.freshness() > st.freshness_max.unwrap_or(Nanos::MIN) {
+            st.freshness_max = Some(w.freshness());
+            st.freshness_witness = Some(w);
+        }
+    }
+}
+
+struct Sim {
+    edf: bool,
+    exec: ExecModel,
+    tasks: Vec<TaskSim>,
+    /// Task indices per (dense) CPU.
+    cpu_tasks: Vec<Vec<usize>>,
+    /// The task whose front job holds each CPU.
+    running: Vec<Option<usize>>,
+    chains: Vec<Tracker>,
+    offsets: Vec<Nanos>,
+    log: Option<Vec<JobRecord>>,
+}
+
+impl Sim {
+    fn new(spec: &Spec, cfg: &SimConfig) -> Result<Sim, SimError> {
+        if cfg.horizon <= 0 {
+            return Err(SimError::HorizonNotPositive(cfg.horizon));
+        }
+        let n = spec.tasks.len();
+        let mut periods = Vec::with_capacity(n);
+        for t in &spec.tasks {
+            match t.fixed_period() {
+                Some(p) if p > 0 => periods.push(p),
+                _ => return Err(SimError::NoPeriod(t.name.clone())),
+            }
+        }
+        // Offsets first, then one independent demand stream per task, so the
+        // demands of a task do not depend on the schedule.
+        let mut master = Rng::new(cfg.seed);
+        let offsets: Vec<Nanos> = match &cfg.phasing {
+            Phasing::Sync => vec![0; n],
+            Phasing::Random => periods
+                .iter()
+                .map(|&p| master.range(0, p as u64 - 1) as Nanos)
+                .collect(),
+            Phasing::Grid(g) => {
+                if *g <= 0 {
+                    return Err(SimError::GridNotPositive(*g));
+                }
+                periods
+                    .iter()
+                    .map(|&p| master.range(0, ((p - 1) / g) as u64) as Nanos * g)
+                    .collect()
+            }
+            Phasing::Given(v) => {
+                if v.len() != n {
+                    return Err(SimError::BadOffsets {
+                        expected: n,
+                        found: v.len(),
+                    });
+                }
+                if let Some(i) = v.iter().position(|&o| o < 0) {
+                    return Err(SimError::NegativeOffset(spec.tasks[i].name.clone()));
+                }
+                v.clone()
+            }
+        };
+        let ranks = rm_priorities(spec);
+        let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+        cpu_ids.sort_unstable();
+        cpu_ids.dedup();
+        let mut cpu_tasks = vec![Vec::new(); cpu_ids.len()];
+        let mut tasks = Vec::with_capacity(n);
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let cpu = cpu_ids.binary_search(&t.cpu).unwrap_or(0);
+            cpu_tasks[cpu].push(i);
+            tasks.push(TaskSim {
+                period: periods[i],
+                class: u8::from(t.server == Server::Background),
+                rank: ranks[i].map_or(i as i64, |r| r as i64),
+                // Validated specs have 0 ≤ demand_min ≤ demand; clamp anyway.
+                demand_min: t.demand_min().clamp(0, t.demand().max(0)),
+                demand: t.demand().max(0),
+                rng: Rng::new(master.next_u64()),
+                next_release: offsets[i],
+                next_index: 0,
+                queue: VecDeque::new(),
+                slots: Vec::new(),
+                carried: Vec::new(),
+                published: Vec::new(),
+                stats: TaskStats::default(),
+            });
+        }
+        // Slots: the chain positions each task occupies, linked to the slot
+        // of the previous position (created just before, in path order).
+        for (c, ch) in spec.chains.iter().enumerate() {
+            if ch.path.iter().any(|&i| i >= n) {
+                return Err(SimError::BadChain(c));
+            }
+            let mut prev: Option<(usize, usize)> = None;
+            for (pos, &i) in ch.path.iter().enumerate() {
+                let ts = &mut tasks[i];
+                ts.slots.push(Slot {
+                    chain: c,
+                    pos,
+                    src: prev,
+                    tail: pos + 1 == ch.path.len(),
+                });
+                ts.carried.push(None);
+                ts.published.push(None);
+                prev = Some((i, ts.slots.len() - 1));
+            }
+        }
+        let chains = spec
+            .chains
+            .iter()
+            .map(|_| Tracker {
+                stamps: Vec::new(),
+                current: None,
+                stats: ChainStats::default(),
+            })
+            .collect();
+        Ok(Sim {
+            edf: spec.scheduler == Scheduler::Edf,
+            exec: cfg.exec,
+            tasks,
+            running: vec![None; cpu_tasks.len()],
+            cpu_tasks,
+            chains,
+            offsets,
+            log: cfg.log_jobs.then(Vec::new),
+        })
+    }
+
+    /// Everything that happens at instant t, in the tie order of the model.
+    /// Repeats when a job of zero demand starts, so it reads before it
+    /// publishes (at the same instant).
+    fn instant(&mut self, t: Nanos) {
+        loop {
+            for cpu in 0..self.running.len() {
+                if let Some(i) = self.running[cpu] {
+                    if self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.remaining == 0)
+                    {
+                        self.complete(i, t);
+                        self.running[cpu] = None;
+                    }
+                }
+            }
+            self.release(t);
+            for cpu in 0..self.running.len() {
+                self.running[cpu] = self.pick(cpu);
+            }
+            let mut again = false;
+            for cpu in 0..self.running.len() {
+                if let Some(i) = self.running[cpu] {
+                    if self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.read.is_none())
+                    {
+                        self.read(i, t);
+                    }
+                    again |= self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.remaining == 0);
+                }
+            }
+            if !again {
+                break;
+            }
+        }
+    }
+
+    fn release(&mut self, t: Nanos) {
+        let exec = self.exec;
+        for ts in &mut self.tasks {
+            while ts.next_release <= t {
+                let demand = match exec {
+                    ExecModel::Worst => ts.demand,
+                    ExecModel::Best => ts.demand_min,
+                    ExecModel::Uniform => {
+                        ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos
+                    }
+                    ExecModel::Extremes => {
+                        if ts.rng.chance(0.5) {
+                            ts.demand_min
+                        } else {
+                            ts.demand
+                        }
+                    }
+                };
+                ts.queue.push_back(Job {
+                    index: ts.next_index,
+                    release: ts.next_release,
+                    demand,
+                    remaining: demand,
+                    read: None,
+                });
+                ts.stats.released += 1;
+                ts.next_index += 1;
+                ts.next_release += ts.period;
+            }
+        }
+    }
+
+    /// The ready task of highest priority on a CPU.
+    fn pick(&self, cpu: usize) -> Option<usize> {
+        self.cpu_tasks[cpu]
+            .iter()
+            .filter_map(|&i| {
+                let ts = &self.tasks[i];
+                let job = ts.queue.front()?;
+                let key = if self.edf {
+                    job.release + ts.period
+                } else {
+                    ts.rank
+                };
+                Some(((ts.class, key, i), i))
+            })
+            .min()
+            .map(|(_, i)| i)
+    }
+
+    /// The front job of task i first gets the CPU: copy the producers' values.
+    fn read(&mut self, i: usize, t: Nanos) {
+        for s in 0..self.tasks[i].slots.len() {
+            let slot = self.tasks[i].slots[s];
+            let v = match slot.src {
+                None => {
+                    // Sample ids count head reads per chain; jobs of a task
+                    // read in release order, so the id is the job index.
+                    let tr = &mut self.chains[slot.chain];
+                    tr.stamps.push(t);
+                    tr.stats.samples += 1;
+                    Some(tr.stamps.len() as u64 - 1)
+                }
+                Some((p, ps)) => self.tasks[p].published[ps],
+            };
+            self.tasks[i].carried[s] = v;
+        }
+        if let Some(job) = self.tasks[i].queue.front_mut() {
+            job.read = Some(t);
+        }
+    }
+
+    /// The front job of task i completes at t: publish.
+    fn complete(&mut self, i: usize, t: Nanos) {
+        let ts = &mut self.tasks[i];
+        let Some(job) = ts.queue.pop_front() else {
+            return;
+        };
+        let response = t - job.release;
+        ts.stats.completed += 1;
+        ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
+        if response > ts.period {
+            ts.stats.late += 1;
+        }
+        ts.published.clone_from(&ts.carried);
+        for (slot, v) in ts.slots.iter().zip(&ts.carried) {
+            if let (true, Some(sample)) = (slot.tail, v) {
+                self.chains[slot.chain].output(*sample, t);
+            }
+        }
+        if let Some(log) = &mut self.log {
+            log.push(JobRecord {
+                task: i,
+                index: job.index,
+                release: job.release,
+                demand: job.demand,
+                read: job.read.unwrap_or(t),
+                finish: t,
+                carried: ts
+                    .slots
+                    .iter()
+                    .zip(&ts.carried)
+                    .map(|(s, &sample)| Carried {
+                        chain: s.chain,
+                        pos: s.pos,
+                        sample,
+                    })
+                    .collect(),
+            });
+        }
+        ts.carried.iter_mut().for_each(|v| *v = None);
+    }
+
+    /// The next instant something happens after t: a release or a completion.
+    fn next_event(&self, t: Nanos) -> Option<Nanos> {
+        let releases = self.tasks.iter().map(|ts| ts.next_release);
+        let completions = self.running.iter().filter_map(|r| {
+            let job = self.tasks[(*r)?].queue.front()?;
+            Some(t + job.remaining)
+        });
+        releases.chain(completions).min()
+    }
+
+    /// Runs every CPU's chosen job for dt.
+    fn advance(&mut self, dt: Nanos) {
+        for r in self.running.iter().flatten() {
+            if let Some(job) = self.tasks[*r].queue.front_mut() {
+                job.remaining -= dt;
+            }
+        }
+    }
+
+    fn finish(self) -> SimResult {
+        SimResult {
+            offsets: self.offsets,
+            tasks: self.tasks.into_iter().map(|t| t.stats).collect(),
+            chains: self.chains.into_iter().map(|c| c.stats).collect(),
+            jobs: self.log.unwrap_or_default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,348 @@
+//! Hand-traced schedules. Times are plain nanoseconds (small integers) so the
+//! traces in the comments read directly.
+
+use super::*;
+use rtpipe_model::{Chain, PeriodSpec, Port, SchedTest, Task, TimeUnit};
+
+/// A task with exec = exec_min (no transfer stages), one output, on `cpu`.
+fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
+    Task {
+        name: String::new(),
+        exec,
+        exec_min: exec,
+        input: None,
+        output: Some(Port {
+            channel: 0,
+            size: 0.0,
+        }),
+        reads: reads.to_vec(),
+        period: PeriodSpec::Fixed(period),
+        budget_given: None,
+        server: Server::Main,
+        cpu,
+        delta_in: 0,
+        delta_out: 0,
+    }
+}
+
+fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize]]) -> Spec {
+    for (i, t) in tasks.iter_mut().enumerate() {
+        t.name = format!("t{i}");
+    }
+    // Start from a generated system so that fields the simulator ignores
+    // keep valid defaults.
+    let mut s = rtpipe_model::gen::random_system(0, &rtpipe_model::gen::GenConfig::default());
+    s.name = "hand".into();
+    s.time_unit = TimeUnit::Ns;
+    s.scheduler = scheduler;
+    s.schedulability = match scheduler {
+        Scheduler::Rm => SchedTest::Rta,
+        Scheduler::Edf => SchedTest::Edf,
+    };
+    s.tasks = tasks;
+    s.chains = chains
+        .iter()
+        .map(|p| Chain {
+            name: None,
+            path: p.to_vec(),
+            reaction: None,
+            freshness: None,
+        })
+        .collect();
+    s
+}
+
+fn run(spec: &Spec, horizon: Nanos, phasing: Phasing, exec: ExecModel) -> SimResult {
+    let cfg = SimConfig {
+        horizon,
+        seed: 1,
+        phasing,
+        exec,
+        log_jobs: true,
+    };
+    match simulate(spec, &cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// (read, finish, carried samples) of job `index` of `task`.
+fn job(r: &SimResult, task: usize, index: u64) -> (Nanos, Nanos, Vec<Option<u64>>) {
+    let j = r
+        .jobs
+        .iter()
+        .find(|j| j.task == task && j.index == index)
+        .unwrap_or_else(|| panic!("job {index} of t{task} did not complete"));
+    (
+        j.read,
+        j.finish,
+        j.carried.iter().map(|c| c.sample).collect(),
+    )
+}
+
+/// The simulated maxima never exceed the analysis' sound bounds.
+fn assert_within_sound(spec: &Spec, r: &SimResult) {
+    let report = rtpipe_analysis::analyze(spec);
+    for c in &report.chains {
+        let st = &r.chains[c.chain];
+        let seen = match c.metric {
+            rtpipe_analysis::Metric::Reaction => st.reaction_max,
+            rtpipe_analysis::Metric::Freshness => st.freshness_max,
+        };
+        if let (Some(s), Some(b)) = (seen, c.bound.sound) {
+            assert!(s <= b, "chain {} {:?}: {s} > {b}", c.chain, c.metric);
+        }
+    }
+}
+
+#[test]
+fn slow_consumer_rm() {
+    // t0: T=10, C=2 (rank 1); t1: T=20, C=3 (rank 2), reads t0.
+    // t0 runs [10k, 10k+2], reading at 10k (sample k) and publishing at 10k+2.
+    // t1 job m starts at 20m+2, right when t0 publishes, so it reads sample
+    // 2m; it publishes at 20m+5: reaction = freshness = 5.
+    // Chain [0] alone: 2; chain [1] alone: read 20m+2, publish 20m+5: 3.
+    let s = spec(
+        Scheduler::Rm,
+        vec![task(10, 2, &[], 0), task(20, 3, &[0], 0)],
+        &[&[0, 1], &[0], &[1]],
+    );
+    let r = run(&s, 100, Phasing::Sync, ExecModel::Worst);
+    assert_eq!(job(&r, 0, 0), (0, 2, vec![Some(0), Some(0)]));
+    assert_eq!(job(&r, 1, 0), (2, 5, vec![Some(0), Some(0)]));
+    assert_eq!(job(&r, 1, 1), (22, 25, vec![Some(2), Some(1)]));
+    let c = &r.chains[0];
+    assert_eq!((c.reaction_max, c.freshness_max), (Some(5), Some(5)));
+    // Head reads at 0, 10, …, 100; tail outputs at 5, 25, 45, 65, 85 carry
+    // samples 0, 2, 4, 6, 8; the last is not final.
+    assert_eq!((c.samples, c.reached, c.finalised), (11, 5, 4));
+    assert_eq!(
+        c.freshness_witness,
+        Some(Witness {
+            sample: 0,
+            read: 0,
+            first: 5,
+            last: 5
+        })
+    );
+    assert_eq!(
+        (r.chains[1].reaction_max, r.chains[1].freshness_max),
+        (Some(2), Some(2))
+    );
+    assert_eq!(
+        (r.chains[2].reaction_max, r.chains[2].freshness_max),
+        (Some(3), Some(3))
+    );
+    assert_eq!(r.tasks[0].max_response, Some(2));
+    assert_eq!(r.tasks[1].max_response, Some(5));
+    assert_eq!(r.tasks[1].late, 0);
+    assert_within_sound(&s, &r);
+}
+
+#[test]
+fn fast_consumer_reads_twice() {
+    // t0: T=20, C=3 (rank 2, head); t1: T=10, C=2 (rank 1), reads t0.
+    // t1 runs [10k, 10k+2]; t0 runs [20m+2, 20m+5], reading sample m at 20m+2.
+    // Sample m is read by t1 at 20m+10 and 20m+20 (t0 publishes only at
+    // 20m+25): outputs at 20m+12 and 20m+22, so reaction 10, freshness 20.
+    // t1's job 0 reads at 0, before any publish: it carries nothing.
+    let s = spec(
+        Scheduler::Rm,
+        vec![task(20, 3, &[], 0), task(10, 2, &[0], 0)],
+        &[&[0, 1]],
+    );
+    let r = run(&s, 100, Phasing::Sync, ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (0, 2, vec![None]));
+    assert_eq!(job(&r, 0, 0), (2, 5, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 1), (10, 12, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 2), (20, 22, vec![Some(0)]));
+    assert_eq!(job(&r, 0, 1), (22, 25, vec![Some(1)]));
+    let c = &r.chains[0];
+    assert_eq!((c.reaction_max, c.freshness_max), (Some(10), Some(20)));
+    // Samples stamped 2, 22, 42, 62, 82 (t0's job released at 100 has not
+    // started); tail outputs up to 92 carry samples 0..=4; 4 is not final.
+    assert_eq!((c.samples, c.reached, c.finalised), (5, 5, 4));
+    assert_within_sound(&s, &r);
+}
+
+#[test]
+fn read_happens_when_first_running_not_at_release() {
+    // t0: T=5, C=1, φ=1 (rank 1, head); t1: T=10, C=3, φ=0, reads t0.
+    // t1 job 0 starts at 0 (reads nothing), t0 preempts it over [1, 2], t1
+    // resumes and publishes at 4 without a sample. t1 job 1 reads at 10
+    // sample 1 (stamped 6, published 7), is preempted over [11, 12] and
+    // publishes at 14: reaction = freshness = 14 − 6 = 8.
+    let s = spec(
+        Scheduler::Rm,
+        vec![task(5, 1, &[], 0), task(10, 3, &[0], 0)],
+        &[&[0, 1]],
+    );
+    let r = run(&s, 30, Phasing::Given(vec![1, 0]), ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (0, 4, vec![None]));
+    assert_eq!(job(&r, 0, 0), (1, 2, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 1), (10, 14, vec![Some(1)]));
+    assert_eq!(job(&r, 1, 2), (20, 24, vec![Some(3)]));
+    let c = &r.chains[0];
+    assert_eq!((c.reaction_max, c.freshness_max), (Some(8), Some(8)));
+    assert_eq!((c.samples, c.reached, c.finalised), (6, 2, 1));
+    assert_eq!(r.tasks[1].max_response, Some(4));
+    assert_eq!(r.offsets, vec![1, 0]);
+}
+
+#[test]
+fn publish_precedes_read_at_the_same_instant_across_cpus() {
+    // t0 on CPU 0 publishes sample k at 10k+2. t1 on CPU 1 (φ=2) starts at
+    // that very instant and must see sample k: reaction 10k+4 − 10k = 4.
+    let tasks = vec![task(10, 2, &[], 0), task(10, 2, &[0], 1)];
+    let s = spec(Scheduler::Rm, tasks, &[&[0, 1]]);
+    let r = run(&s, 50, Phasing::Given(vec![0, 2]), ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (2, 4, vec![Some(0)]));
+    assert_eq!(r.chains[0].reaction_max, Some(4));
+    assert_eq!(r.chains[0].freshness_max, Some(4));
+    // One nanosecond earlier (φ=1) it reads the previous sample: 10k+3 − 10(k−1) = 13.
+    let r = run(&s, 50, Phasing::Given(vec![0, 1]), ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (1, 3, vec![None]));
+    assert_eq!(job(&r, 1, 1), (11, 13, vec![Some(0)]));
+    assert_eq!(r.chains[0].reaction_max, Some(13));
+    assert_eq!(r.chains[0].freshness_max, Some(13));
+}
+
+#[test]
+fn edf_and_rm_differ() {
+    // t0: T=10, C=5, φ=0; t1: T=8, C=2, φ=3, reads t0.
+    // RM (t1 rank 1): t1 preempts at 3, reads nothing, publishes at 5; t0 ends at 7.
+    // EDF: t1's deadline 11 is later than t0's 10: t0 runs to 5 and publishes
+    // sample 0 exactly when t1 starts, so t1 reads it and publishes at 7.
+    let tasks = vec![task(10, 5, &[], 0), task(8, 2, &[0], 0)];
+    let rm = spec(Scheduler::Rm, tasks.clone(), &[&[0, 1]]);
+    let r = run(&rm, 9, Phasing::Given(vec![0, 3]), ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (3, 5, vec![None]));
+    assert_eq!(job(&r, 0, 0), (0, 7, vec![Some(0)]));
+    let edf = spec(Scheduler::Edf, tasks, &[&[0, 1]]);
+    let r = run(&edf, 9, Phasing::Given(vec![0, 3]), ExecModel::Worst);
+    assert_eq!(job(&r, 0, 0), (0, 5, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 0), (5, 7, vec![Some(0)]));
+}
+
+#[test]
+fn edf_ties_go_to_the_lower_index() {
+    // Equal deadlines: t0 first, then t1, whatever the declaration of reads.
+    let tasks = vec![task(10, 2, &[1], 0), task(10, 2, &[], 0)];
+    let s = spec(Scheduler::Edf, tasks, &[&[1, 0]]);
+    let r = run(&s, 25, Phasing::Sync, ExecModel::Worst);
+    assert_eq!(job(&r, 0, 0), (0, 2, vec![None]));
+    assert_eq!(job(&r, 1, 0), (2, 4, vec![Some(0)]));
+    assert_eq!(job(&r, 0, 1), (10, 12, vec![Some(0)]));
+    // Sample 0 stamped 2, output at 12; sample 1 (12) at 22: reaction 10.
+    assert_eq!(r.chains[0].reaction_max, Some(10));
+    assert_eq!(r.chains[0].finalised, 1);
+}
+
+#[test]
+fn zero_demand_job_reads_then_publishes_at_once() {
+    // t0's best case is 0: at instant 0 it starts (reads, sample 0) and
+    // completes; t1, same CPU and lower rank, then starts at 0 and sees it.
+    let mut t0 = task(10, 2, &[], 0);
+    t0.exec_min = 0;
+    let s = spec(Scheduler::Rm, vec![t0, task(10, 3, &[0], 0)], &[&[0, 1]]);
+    let r = run(&s, 25, Phasing::Sync, ExecModel::Best);
+    assert_eq!(job(&r, 0, 0), (0, 0, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 0), (0, 3, vec![Some(0)]));
+    assert_eq!(r.chains[0].reaction_max, Some(3));
+    assert_eq!(r.tasks[0].max_response, Some(0));
+}
+
+#[test]
+fn overrun_keeps_jobs_fifo() {
+    // Two tasks of T=10, C=6 on one CPU: 120 % load. t1 gets [6, 10],
+    // [16, 18] (job 0 done at 18), [18, 20], [26, 30] (job 1 done at 30).
+    let s = spec(
+        Scheduler::Rm,
+        vec![task(10, 6, &[], 0), task(10, 6, &[], 0)],
+        &[],
+    );
+    let r = run(&s, 40, Phasing::Sync, ExecModel::Worst);
+    assert_eq!(job(&r, 1, 0), (6, 18, vec![]));
+    assert_eq!(job(&r, 1, 1), (18, 30, vec![]));
+    let t1 = &r.tasks[1];
+    assert_eq!((t1.released, t1.completed, t1.late), (5, 2, 2));
+    assert_eq!(t1.max_response, Some(20));
+}
+
+#[test]
+fn transfer_stages_count_in_the_demand() {
+    // Δin = 1, p = 2, Δout = 1: a job holds the CPU for 4.
+    let mut t0 = task(10, 2, &[], 0);
+    t0.delta_in = 1;
+    t0.delta_out = 1;
+    let s = spec(Scheduler::Rm, vec![t0, task(10, 1, &[0], 0)], &[&[0, 1]]);
+    let r = run(&s, 30, Phasing::Sync, ExecModel::Worst);
+    assert_eq!(job(&r, 0, 0), (0, 4, vec![Some(0)]));
+    assert_eq!(job(&r, 1, 0), (4, 5, vec![Some(0)]));
+    assert_eq!(r.chains[0].reaction_max, Some(5));
+}
+
+#[test]
+fn deterministic_per_seed() {
+    let cfg = rtpipe_model::gen::GenConfig {
+        tasks: 8,
+        cpus: 2,
+        ..Default::default()
+    };
+    let s = rtpipe_model::gen::random_system(3, &cfg);
+    let mk = |seed| SimConfig {
+        horizon: 500_000_000,
+        seed,
+        phasing: Phasing::Random,
+        exec: ExecModel::Uniform,
+        log_jobs: false,
+    };
+    let a = simulate(&s, &mk(5));
+    let b = simulate(&s, &mk(5));
+    let c = simulate(&s, &mk(6));
+    assert!(a.is_ok());
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+    // Grid phasing lands on the grid, within the period.
+    let g = SimConfig {
+        phasing: Phasing::Grid(1_000_000),
+        ..mk(5)
+    };
+    let r = match simulate(&s, &g) {
+        Ok(r) => r,
+        Err(e) => panic!("{e}"),
+    };
+    for (o, t) in r.offsets.iter().zip(&s.tasks) {
+        assert_eq!(o % 1_000_000, 0);
+        assert!(t.fixed_period().is_some_and(|p| *o < p));
+    }
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let mut s = spec(Scheduler::Rm, vec![task(10, 2, &[], 0)], &[]);
+    let mut cfg = SimConfig::new(0);
+    assert_eq!(simulate(&s, &cfg), Err(SimError::HorizonNotPositive(0)));
+    cfg.horizon = 10;
+    cfg.phasing = Phasing::Given(vec![]);
+    assert_eq!(
+        simulate(&s, &cfg),
+        Err(SimError::BadOffsets {
+            expected: 1,
+            found: 0
+        })
+    );
+    cfg.phasing = Phasing::Grid(0);
+    assert_eq!(simulate(&s, &cfg), Err(SimError::GridNotPositive(0)));
+    cfg.phasing = Phasing::Sync;
+    s.chains = vec![Chain {
+        name: None,
+        path: vec![0, 1],
+        reaction: None,
+        freshness: None,
+    }];
+    assert_eq!(simulate(&s, &cfg), Err(SimError::BadChain(0)));
+    s.chains.clear();
+    s.tasks[0].period = PeriodSpec::Free;
+    assert_eq!(simulate(&s, &cfg), Err(SimError::NoPeriod("t0".into())));
+}

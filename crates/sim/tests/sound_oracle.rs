@@ -1,0 +1,523 @@
+//! The simulator as an oracle: on thousands of random systems, no simulated
+//! reaction, freshness or job response time exceeds the analysis' sound bound.
+//!
+//! Each system is simulated with a few fixed phasings and demand models, then
+//! a short hill climb on offsets and demands tries to get closer to a bound.
+//!
+//! `RTPIPE_ORACLE_SYSTEMS` (default 2000) sets the number of systems,
+//! `RTPIPE_ORACLE_FIRST` (default 0) the first seed and
+//! `RTPIPE_ORACLE_SEARCH` (default 4) the hill-climbing steps per system. Run with `--nocapture`
+//! to see the tightness summary; in release mode for large runs:
+//! `RTPIPE_ORACLE_SYSTEMS=10000 cargo test -p rtpipe-sim --release -- --nocapture`.
+
+use rtpipe_analysis::{analyze, sched::rm_priorities, Metric, Report};
+use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult, Witness};
+use std::fmt::Write;
+
+const MS: Nanos = 1_000_000;
+const MAX_HORIZON: Nanos = 5_000 * MS;
+
+/// The generator settings of a seed: tasks 2..=12, 1 or 2 CPUs, RM or EDF,
+/// utilisation 0.3..0.9 per CPU, mixed servers or not, 3 chains.
+fn gen_config(seed: u64) -> GenConfig {
+    let mut r = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xA5A5);
+    GenConfig {
+        tasks: r.range(2, 12) as usize,
+        cpus: r.range(1, 2) as u32,
+        utilization: 0.3 + 0.6 * r.unit(),
+        scheduler: if r.chance(0.5) {
+            Scheduler::Rm
+        } else {
+            Scheduler::Edf
+        },
+        mixed_servers: r.chance(0.5),
+        feedback: if r.chance(0.25) { 0.3 } else { 0.0 },
+        chains: 3,
+        ..GenConfig::default()
+    }
+}
+
+/// Phasings and demand models simulated for every system.
+fn runs() -> [(Phasing, ExecModel); 4] {
+    [
+        (Phasing::Sync, ExecModel::Worst),
+        (Phasing::Random, ExecModel::Uniform),
+        (Phasing::Grid(MS), ExecModel::Extremes),
+        (Phasing::Random, ExecModel::Extremes),
+    ]
+}
+
+/// About twenty of the longest periods, at most 5 s.
+fn horizon(spec: &Spec) -> Nanos {
+    let t_max = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .max()
+        .unwrap_or(MS);
+    (20 * t_max).min(MAX_HORIZON)
+}
+
+#[derive(Default, Clone, Copy)]
+struct Tight {
+    ratio: f64,
+    seed: u64,
+    chain: usize,
+    run: usize,
+    seen: Nanos,
+    bound: Nanos,
+}
+
+#[derive(Default)]
+struct Stats {
+    systems: u64,
+    runs: u64,
+    /// (chain, metric) pairs with a sound bound, per run.
+    checks: u64,
+    /// Finalised samples on chains with a sound bound.
+    samples: u64,
+    jobs_checked: u64,
+    /// Per metric (reaction, freshness) and chain length (1, 2, ≥ 3).
+    tight: [[Tight; 3]; 2],
+    /// Sum of observed/sound, for the mean.
+    ratio_sum: [[f64; 3]; 2],
+    ratio_n: [[u64; 3]; 2],
+    /// (system, chain, metric) triples with a sound bound, and those where
+    /// some run exceeded the paper bound.
+    paper_pairs: [[u64; 3]; 2],
+    paper_violations: [[u64; 3]; 2],
+    davare_violations: [u64; 2],
+    rt_tight: f64,
+    failures: Vec<String>,
+}
+
+impl Stats {
+    fn merge(&mut self, o: Stats) {
+        self.systems += o.systems;
+        self.runs += o.runs;
+        self.checks += o.checks;
+        self.samples += o.samples;
+        self.jobs_checked += o.jobs_checked;
+        for m in 0..2 {
+            for l in 0..3 {
+                if o.tight[m][l].ratio > self.tight[m][l].ratio {
+                    self.tight[m][l] = o.tight[m][l];
+                }
+                self.ratio_sum[m][l] += o.ratio_sum[m][l];
+                self.ratio_n[m][l] += o.ratio_n[m][l];
+                self.paper_violations[m][l] += o.paper_violations[m][l];
+                self.paper_pairs[m][l] += o.paper_pairs[m][l];
+            }
+            self.davare_violations[m] += o.davare_violations[m];
+        }
+        self.rt_tight = self.rt_tight.max(o.rt_tight);
+        self.failures.extend(o.failures);
+    }
+}
+
+fn env_u64(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(default)
+}
+
+fn metric_index(m: Metric) -> usize {
+    match m {
+        Metric::Reaction => 0,
+        Metric::Freshness => 1,
+    }
+}
+
+#[test]
+fn sound_bounds_are_never_exceeded() {
+    let n = env_u64("RTPIPE_ORACLE_SYSTEMS", 2000);
+    let first = env_u64("RTPIPE_ORACLE_FIRST", 0);
+    let steps = env_u64("RTPIPE_ORACLE_SEARCH", 4);
+    let workers = std::thread::available_parallelism()
+        .map(|p| p.get())
+        .unwrap_or(1)
+        .min(n.max(1) as usize) as u64;
+    let mut total = Stats::default();
+    std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                s.spawn(move || {
+                    let mut st = Stats::default();
+                    let mut seed = first + w;
+                    while seed < first + n {
+                        check_system(seed, steps, &mut st);
+                        seed += workers;
+                    }
+                    st
+                })
+            })
+            .collect();
+        for h in handles {
+            match h.join() {
+                Ok(st) => total.merge(st),
+                Err(e) => std::panic::resume_unwind(e),
+            }
+        }
+    });
+    // "run" below: 0..=3 index the fixed runs of `runs()`, 100 + k is step k
+    // of the hill climb.
+    println!(
+        "oracle: {} systems, {} runs, {} chain/metric checks, {} finalised samples, {} task response checks",
+        total.systems, total.runs, total.checks, total.samples, total.jobs_checked
+    );
+    for (m, name) in ["reaction", "freshness"].iter().enumerate() {
+        println!(
+            "  {name}: Davare bound exceeded {} times",
+            total.davare_violations[m]
+        );
+        for (l, len) in ["1", "2", ">=3"].iter().enumerate() {
+            let t = &total.tight[m][l];
+            let k = total.ratio_n[m][l];
+            println!(
+                "    chains of {len} tasks: {k} checks, observed/sound max {:.4} mean {:.4} \
+                 (max at seed {}, chain {}, run {}: {} of {} ns); observed > paper bound for {} of {} system chains",
+                t.ratio,
+                total.ratio_sum[m][l] / k.max(1) as f64,
+                t.seed,
+                t.chain,
+                t.run,
+                t.seen,
+                t.bound,
+                total.paper_violations[m][l],
+                total.paper_pairs[m][l],
+            );
+        }
+    }
+    println!(
+        "  job response: max observed/analysed = {:.4}",
+        total.rt_tight
+    );
+    // Guard against a vacuous pass (say, if the analysis stopped giving bounds).
+    assert!(
+        n == 0 || (total.checks > 0 && total.samples > 0 && total.jobs_checked > 0),
+        "nothing was checked"
+    );
+    if !total.failures.is_empty() {
+        let shown: Vec<&String> = total.failures.iter().take(5).collect();
+        panic!(
+            "{} violations of sound bounds; first ones:\n{}",
+            total.failures.len(),
+            shown
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join("\n")
+        );
+    }
+}
+
+fn check_system(seed: u64, search_steps: u64, st: &mut Stats) {
+    let gen = gen_config(seed);
+    let spec = random_system(seed, &gen);
+    let report = analyze(&spec);
+    let h = horizon(&spec);
+    st.systems += 1;
+    let sys = System {
+        seed,
+        gen: &gen,
+        spec: &spec,
+        report: &report,
+    };
+    let mut paper_exceeded = vec![false; report.chains.len()];
+    let mut best: Option<(f64, SimConfig, Vec<Nanos>)> = None;
+    for (run, (phasing, exec)) in runs().into_iter().enumerate() {
+        let cfg = SimConfig {
+            horizon: h,
+            seed: seed.wrapping_mul(31).wrapping_add(run as u64),
+            phasing,
+            exec,
+            log_jobs: false,
+        };
+        let (score, offsets) = check_run(&sys, &cfg, run, true, &mut paper_exceeded, st);
+        let better = match &best {
+            Some(b) => score > b.0,
+            None => true,
+        };
+        if better {
+            best = Some((score, cfg, offsets));
+        }
+    }
+    search(&sys, best, search_steps, &mut paper_exceeded, st);
+    for (k, c) in report.chains.iter().enumerate() {
+        if c.bound.sound.is_some() {
+            let m = metric_index(c.metric);
+            let l = spec.chains[c.chain].path.len().clamp(1, 3) - 1;
+            st.paper_pairs[m][l] += 1;
+            st.paper_violations[m][l] += u64::from(paper_exceeded[k]);
+        }
+    }
+}
+
+/// Hill climbing on the offsets and demands of the tightest run: keep a
+/// mutation when it brings some observation at least as close to its bound.
+fn search(
+    sys: &System,
+    best: Option<(f64, SimConfig, Vec<Nanos>)>,
+    search_steps: u64,
+    paper_exceeded: &mut [bool],
+    st: &mut Stats,
+) {
+    let (seed, spec) = (sys.seed, sys.spec);
+    let Some((mut score, mut cfg, mut offsets)) = best else {
+        return;
+    };
+    let mut rng = Rng::new(seed ^ 0x005E_A2C4);
+    let periods: Vec<Nanos> = spec
+        .tasks
+        .iter()
+        .map(|t| t.fixed_period().unwrap_or(MS))
+        .collect();
+    for step in 0..search_steps {
+        let mut cand = offsets.clone();
+        let i = rng.range(0, cand.len() as u64 - 1) as usize;
+        let t = periods[i];
+        cand[i] = match rng.range(0, 3) {
+            // Anywhere in the period.
+            0 => rng.range(0, t as u64 - 1) as Nanos,
+            // Release together with another task (a critical-instant candidate).
+            1 => {
+                let j = rng.range(0, cand.len() as u64 - 1) as usize;
+                cand[j] % t
+            }
+            // Release just after another task's job could finish.
+            2 => {
+                let j = rng.range(0, cand.len() as u64 - 1) as usize;
+                (cand[j] + spec.tasks[j].demand()) % t
+            }
+            // Nudge.
+            _ => {
+                let d = spec.tasks[i].demand().max(1) as u64;
+                let dx = rng.range(1, d) as Nanos;
+                let x = if rng.chance(0.5) {
+                    cand[i] + dx
+                } else {
+                    cand[i] - dx
+                };
+                x.rem_euclid(t)
+            }
+        };
+        let mut next = SimConfig {
+            phasing: Phasing::Given(cand),
+            ..cfg.clone()
+        };
+        if rng.chance(0.3) {
+            next.seed = rng.next_u64();
+            next.exec = [ExecModel::Worst, ExecModel::Extremes, ExecModel::Uniform]
+                [rng.range(0, 2) as usize];
+        }
+        let (sc, offs) = check_run(sys, &next, 100 + step as usize, false, paper_exceeded, st);
+        if sc >= score {
+            (score, cfg, offsets) = (sc, next, offs);
+        }
+    }
+}
+
+/// One generated system and its analysis.
+struct System<'a> {
+    seed: u64,
+    gen: &'a GenConfig,
+    spec: &'a Spec,
+    report: &'a Report,
+}
+
+/// Simulates one run and checks every bound. Returns the largest
+/// observed/bound ratio (the search's objective) and the offsets used.
+fn check_run(
+    sys: &System,
+    cfg: &SimConfig,
+    run: usize,
+    count_mean: bool,
+    paper_exceeded: &mut [bool],
+    st: &mut Stats,
+) -> (f64, Vec<Nanos>) {
+    let (seed, spec, report) = (sys.seed, sys.spec, sys.report);
+    let res = match simulate(spec, cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("seed {seed}: simulation refused the system: {e}"),
+    };
+    st.runs += 1;
+    let mut score: f64 = 0.0;
+    for (k, c) in report.chains.iter().enumerate() {
+        let cs = &res.chains[c.chain];
+        let m = metric_index(c.metric);
+        let (seen, witness) = match c.metric {
+            Metric::Reaction => (cs.reaction_max, cs.reaction_witness),
+            Metric::Freshness => (cs.freshness_max, cs.freshness_witness),
+        };
+        let Some(seen) = seen else { continue };
+        if let Some(d) = c.bound.davare {
+            if seen > d {
+                st.davare_violations[m] += 1;
+            }
+        }
+        let Some(bound) = c.bound.sound else { continue };
+        st.checks += 1;
+        st.samples += cs.finalised;
+        let l = spec.chains[c.chain].path.len().clamp(1, 3) - 1;
+        if seen > c.bound.paper {
+            paper_exceeded[k] = true;
+        }
+        let ratio = seen as f64 / bound as f64;
+        // Single-task chains are exactly tight under RM; they would steer the
+        // search away from the links.
+        if l > 0 {
+            score = score.max(ratio);
+        }
+        if count_mean {
+            st.ratio_sum[m][l] += ratio;
+            st.ratio_n[m][l] += 1;
+        }
+        if ratio > st.tight[m][l].ratio {
+            st.tight[m][l] = Tight {
+                ratio,
+                seed,
+                chain: c.chain,
+                run,
+                seen,
+                bound,
+            };
+        }
+        if seen > bound {
+            let what = format!(
+                "chain {} {}: observed {seen} ns > sound bound {bound} ns (paper {} ns)",
+                c.chain,
+                c.metric.name(),
+                c.bound.paper
+            );
+            st.failures
+                .push(reproduction(sys, cfg, &res, c.chain, witness, &what));
+        }
+    }
+    for (i, ts) in res.tasks.iter().enumerate() {
+        let tm = &report.timing[i];
+        let (Some(r), Some(seen)) = (tm.bounded_response(), ts.max_response) else {
+            continue;
+        };
+        st.jobs_checked += 1;
+        if r > 0 {
+            st.rt_tight = st.rt_tight.max(seen as f64 / r as f64);
+        }
+        if seen > r {
+            let what = format!(
+                "task t{i}: observed response {seen} ns > analysed job response time {r} ns"
+            );
+            st.failures
+                .push(reproduction(sys, cfg, &res, usize::MAX, None, &what));
+        }
+    }
+    (score, res.offsets)
+}
+
+/// A self-contained description of a failure: the generator settings, the
+/// tasks, the chain, the run (with its offsets) and the sample's timeline.
+fn reproduction(
+    sys: &System,
+    cfg: &SimConfig,
+    res: &SimResult,
+    chain: usize,
+    witness: Option<Witness>,
+    what: &str,
+) -> String {
+    let (seed, gen, spec, report) = (sys.seed, sys.gen, sys.spec, sys.report);
+    let mut s = String::new();
+    let _ = writeln!(s, "=== seed {seed}: {what}");
+    let _ = writeln!(s, "gen: {gen:?}");
+    let _ = writeln!(
+        s,
+        "sim: horizon {} ns, seed {}, {:?}, {:?}, offsets {:?}",
+        cfg.horizon, cfg.seed, cfg.phasing, cfg.exec, res.offsets
+    );
+    let ranks = rm_priorities(spec);
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let tm = &report.timing[i];
+        let _ = writeln!(
+            s,
+            "  t{i}: T={} demand={} demand_min={} budget={} cpu={} rank={:?} server={} reads={:?} R={:?} observed R={:?}",
+            tm.period,
+            t.demand(),
+            t.demand_min(),
+            t.budget(),
+            t.cpu,
+            ranks[i],
+            t.server.name(),
+            t.reads,
+            tm.job_response_time,
+            res.tasks[i].max_response
+        );
+    }
+    if let Some(ch) = spec.chains.get(chain) {
+        let _ = writeln!(s, "chain {chain}: path {:?}", ch.path);
+        for c in report.chains.iter().filter(|c| c.chain == chain) {
+            let _ = writeln!(s, "  {}: {:?}", c.metric.name(), c.bound);
+        }
+    }
+    let Some(w) = witness else { return s };
+    let _ = writeln!(
+        s,
+        "sample {}: head read {}, first output {}, last output {}",
+        w.sample, w.read, w.first, w.last
+    );
+    // Replay with the job log; the offsets make it independent of the phasing draw.
+    let replay = SimConfig {
+        phasing: Phasing::Given(res.offsets.clone()),
+        log_jobs: true,
+        ..cfg.clone()
+    };
+    let Ok(log) = simulate(spec, &replay) else {
+        return s;
+    };
+    let path = spec
+        .chains
+        .get(chain)
+        .map(|c| c.path.clone())
+        .unwrap_or_default();
+    let cpus: Vec<u32> = path.iter().map(|&i| spec.tasks[i].cpu).collect();
+    let t_max = path
+        .iter()
+        .filter_map(|&i| spec.tasks[i].fixed_period())
+        .max()
+        .unwrap_or(0);
+    let _ = writeln!(
+        s,
+        "jobs on the chain's CPUs in [{}, {}] (* = carries the sample):",
+        w.read - t_max,
+        w.last
+    );
+    let mut lines = 0;
+    for j in &log.jobs {
+        if j.finish < w.read - t_max
+            || j.release > w.last
+            || !cpus.contains(&spec.tasks[j.task].cpu)
+        {
+            continue;
+        }
+        let carries = j
+            .carried
+            .iter()
+            .find(|c| c.chain == chain)
+            .map(|c| (c.pos, c.sample));
+        let mark = match carries {
+            Some((_, Some(x))) if x == w.sample => "*",
+            _ => " ",
+        };
+        let _ = writeln!(
+            s,
+            "  {mark} t{}#{} cpu{} release {} read {} finish {} demand {} chain pos/sample {:?}",
+            j.task, j.index, spec.tasks[j.task].cpu, j.release, j.read, j.finish, j.demand, carries
+        );
+        lines += 1;
+        if lines >= 300 {
+            let _ = writeln!(s, "  …");
+            break;
+        }
+    }
+    s
+}
