@@ -39,6 +39,7 @@ pub mod server;
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_model::gen::Rng;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use server::{Cbs, Pibs, Sporadic};
 use std::collections::VecDeque;
 use std::fmt;
 
@@ -193,6 +194,9 @@ pub struct ChainStats {
     pub reached: u64,
     /// Samples that reached the tail and whose last output is known.
     pub finalised: u64,
+    /// Reaction and freshness of every finalised sample, in sample order.
+    pub reactions: Vec<Nanos>,
+    pub freshnesses: Vec<Nanos>,
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -204,6 +208,23 @@ pub struct TaskStats {
     /// Completed jobs that finished after their period (the model's
     /// assumptions are broken for them).
     pub late: u64,
+    /// Times the server ran out of budget with a job still pending.
+    pub exhaustions: u64,
+    /// CPU time the task's jobs received.
+    pub busy: Nanos,
+}
+
+/// A stretch of CPU time given to one job (logged with `log_jobs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Segment {
+    /// Dense CPU index (CPUs in ascending order of their ids).
+    pub cpu: usize,
+    pub task: usize,
+    pub job: u64,
+    pub start: Nanos,
+    pub end: Nanos,
+    /// Ran in slack at background priority (a sporadic server out of budget).
+    pub background: bool,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -215,6 +236,12 @@ pub struct SimResult {
     pub chains: Vec<ChainStats>,
     /// Completed jobs in completion order, when `log_jobs` is set.
     pub jobs: Vec<JobRecord>,
+    /// CPU time slices in time order, when `log_jobs` is set.
+    pub segments: Vec<Segment>,
+    /// Events processed (instants at which something happened).
+    pub events: u64,
+    /// The simulated span.
+    pub horizon: Nanos,
 }
 
 /// Simulates `spec` from 0 to `cfg.horizon`.
@@ -225,7 +252,7 @@ pub fn simulate(spec: &Spec, cfg: &SimConfig) -> Result<SimResult, SimError> {
         sim.instant(t);
         match sim.next_event(t) {
             Some(next) if next <= cfg.horizon => {
-                sim.advance(next - t);
+                sim.advance(t, next - t);
                 t = next;
             }
             _ => break,
@@ -253,7 +280,64 @@ struct Job {
     read: Option<Nanos>,
 }
 
+/// The budget server a task runs on (Section II-B).
+#[derive(Debug, Clone)]
+enum Budget {
+    /// `server = "none"` or background: no enforcement.
+    Unlimited,
+    /// Main VCPU under RM.
+    Sporadic(Sporadic),
+    /// I/O VCPU under RM.
+    Pibs(Pibs),
+    /// Any server under EDF (SCHED_DEADLINE).
+    Cbs(Cbs),
+}
+
+impl Budget {
+    fn capacity(&self, now: Nanos) -> Nanos {
+        match self {
+            Budget::Unlimited => Nanos::MAX,
+            Budget::Sporadic(s) => s.capacity(now),
+            Budget::Pibs(p) => p.capacity(now),
+            Budget::Cbs(c) => c.capacity(now),
+        }
+    }
+    fn unblock(&mut self, now: Nanos) {
+        match self {
+            Budget::Unlimited => {}
+            Budget::Sporadic(s) => s.unblock(now),
+            Budget::Pibs(p) => p.unblock(now),
+            Budget::Cbs(c) => c.unblock(now),
+        }
+    }
+    fn block(&mut self, now: Nanos) {
+        if let Budget::Sporadic(s) = self {
+            s.block(now);
+        }
+    }
+    fn charge(&mut self, now: Nanos, ran: Nanos) {
+        match self {
+            Budget::Unlimited => {}
+            Budget::Sporadic(s) => s.charge(now, ran),
+            Budget::Pibs(p) => p.charge(now, ran),
+            Budget::Cbs(c) => c.charge(now, ran),
+        }
+    }
+    /// When a server without capacity gets some again.
+    fn refill_at(&self) -> Option<Nanos> {
+        match self {
+            Budget::Unlimited => None,
+            Budget::Sporadic(s) => Some(s.next_refill()),
+            Budget::Pibs(p) => Some(p.next_refill()),
+            Budget::Cbs(c) => c.next_refill(),
+        }
+    }
+}
+
 struct TaskSim {
+    budget: Budget,
+    /// Sporadic servers out of budget may run in slack; others wait.
+    slack_when_empty: bool,
     period: Nanos,
     /// 0 for guaranteed tasks, 1 for background ones.
     class: u8,
@@ -308,6 +392,8 @@ impl Tracker {
         };
         let st = &mut self.stats;
         st.finalised += 1;
+        st.reactions.push(w.reaction());
+        st.freshnesses.push(w.freshness());
         if w.reaction() > st.reaction_max.unwrap_or(Nanos::MIN) {
             st.reaction_max = Some(w.reaction());
             st.reaction_witness = Some(w);
@@ -330,6 +416,12 @@ struct Sim {
     chains: Vec<Tracker>,
     offsets: Vec<Nanos>,
     log: Option<Vec<JobRecord>>,
+    segments: Option<Vec<Segment>>,
+    /// Whether each CPU's running job holds it at background priority.
+    in_slack: Vec<bool>,
+    last_segment: Vec<Option<usize>>,
+    events: u64,
+    horizon: Nanos,
 }
 
 impl Sim {
@@ -385,7 +477,16 @@ impl Sim {
         for (i, t) in spec.tasks.iter().enumerate() {
             let cpu = cpu_ids.binary_search(&t.cpu).unwrap_or(0);
             cpu_tasks[cpu].push(i);
+            let (c, p) = (t.budget(), periods[i]);
+            let budget = match (spec.scheduler, t.server) {
+                (_, Server::None | Server::Background) => Budget::Unlimited,
+                (Scheduler::Edf, _) => Budget::Cbs(Cbs::new(c, p)),
+                (Scheduler::Rm, Server::Main) => Budget::Sporadic(Sporadic::new(c, p, 0)),
+                (Scheduler::Rm, Server::Io) => Budget::Pibs(Pibs::new(c, p)),
+            };
             tasks.push(TaskSim {
+                slack_when_empty: matches!(budget, Budget::Sporadic(_)),
+                budget,
                 period: periods[i],
                 class: u8::from(t.server == Server::Background),
                 rank: ranks[i].map_or(i as i64, |r| r as i64),
@@ -422,6 +523,7 @@ impl Sim {
                 prev = Some((i, ts.slots.len() - 1));
             }
         }
+        let n_cpus = cpu_tasks.len();
         let chains = spec
             .chains
             .iter()
@@ -440,6 +542,11 @@ impl Sim {
             chains,
             offsets,
             log: cfg.log_jobs.then(Vec::new),
+            segments: cfg.log_jobs.then(Vec::new),
+            in_slack: vec![false; n_cpus],
+            last_segment: vec![None; n_cpus],
+            events: 0,
+            horizon: cfg.horizon,
         })
     }
 
@@ -447,6 +554,12 @@ impl Sim {
     /// Repeats when a job of zero demand starts, so it reads before it
     /// publishes (at the same instant).
     fn instant(&mut self, t: Nanos) {
+        self.events += 1;
+        for ts in &mut self.tasks {
+            if let Budget::Cbs(c) = &mut ts.budget {
+                c.replenish(t);
+            }
+        }
         loop {
             for cpu in 0..self.running.len() {
                 if let Some(i) = self.running[cpu] {
@@ -462,7 +575,9 @@ impl Sim {
             }
             self.release(t);
             for cpu in 0..self.running.len() {
-                self.running[cpu] = self.pick(cpu);
+                let picked = self.pick(cpu, t);
+                self.running[cpu] = picked.map(|(i, _)| i);
+                self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
             }
             let mut again = false;
             for cpu in 0..self.running.len() {
@@ -504,6 +619,9 @@ impl Sim {
                         }
                     }
                 };
+                if ts.queue.is_empty() {
+                    ts.budget.unblock(ts.next_release.max(t));
+                }
                 ts.queue.push_back(Job {
                     index: ts.next_index,
                     release: ts.next_release,
@@ -518,22 +636,30 @@ impl Sim {
         }
     }
 
-    /// The ready task of highest priority on a CPU.
-    fn pick(&self, cpu: usize) -> Option<usize> {
+    /// The ready task of highest priority on a CPU, and whether it runs in
+    /// slack (a sporadic server out of budget drops to background priority).
+    fn pick(&self, cpu: usize, t: Nanos) -> Option<(usize, bool)> {
         self.cpu_tasks[cpu]
             .iter()
             .filter_map(|&i| {
                 let ts = &self.tasks[i];
                 let job = ts.queue.front()?;
-                let key = if self.edf {
-                    job.release + ts.period
-                } else {
-                    ts.rank
+                let has_budget = ts.budget.capacity(t) > 0;
+                let class = match (ts.class, has_budget) {
+                    (0, true) => 0,
+                    (0, false) if ts.slack_when_empty => 2,
+                    (0, false) => return None,
+                    _ => 1,
                 };
-                Some(((ts.class, key, i), i))
+                let key = match (&ts.budget, self.edf) {
+                    (Budget::Cbs(c), _) => c.deadline,
+                    (_, true) => job.release + ts.period,
+                    (_, false) => ts.rank,
+                };
+                Some(((class, key, i), (i, class == 2)))
             })
             .min()
-            .map(|(_, i)| i)
+            .map(|(_, v)| v)
     }
 
     /// The front job of task i first gets the CPU: copy the producers' values.
@@ -597,23 +723,75 @@ impl Sim {
             });
         }
         ts.carried.iter_mut().for_each(|v| *v = None);
+        if ts.queue.is_empty() {
+            ts.budget.block(t);
+        }
     }
 
-    /// The next instant something happens after t: a release or a completion.
+    /// The next instant something happens after t: a release, a completion,
+    /// a budget running out, or a budget coming back to a waiting server.
     fn next_event(&self, t: Nanos) -> Option<Nanos> {
         let releases = self.tasks.iter().map(|ts| ts.next_release);
-        let completions = self.running.iter().filter_map(|r| {
-            let job = self.tasks[(*r)?].queue.front()?;
-            Some(t + job.remaining)
+        let running = self.running.iter().enumerate().filter_map(|(cpu, r)| {
+            let ts = &self.tasks[(*r)?];
+            let job = ts.queue.front()?;
+            let mut next = t + job.remaining;
+            if !self.in_slack[cpu] {
+                let cap = ts.budget.capacity(t);
+                if cap < job.remaining {
+                    next = t + cap;
+                }
+            }
+            Some(next)
         });
-        releases.chain(completions).min()
+        let refills = self.tasks.iter().filter_map(|ts| {
+            if ts.queue.is_empty() || ts.budget.capacity(t) > 0 {
+                return None;
+            }
+            ts.budget.refill_at().filter(|&r| r > t)
+        });
+        releases.chain(running).chain(refills).min()
     }
 
-    /// Runs every CPU's chosen job for dt.
-    fn advance(&mut self, dt: Nanos) {
-        for r in self.running.iter().flatten() {
-            if let Some(job) = self.tasks[*r].queue.front_mut() {
-                job.remaining -= dt;
+    /// Runs every CPU's chosen job from t for dt and charges its server.
+    fn advance(&mut self, t: Nanos, dt: Nanos) {
+        for cpu in 0..self.running.len() {
+            let Some(i) = self.running[cpu] else { continue };
+            let slack = self.in_slack[cpu];
+            let ts = &mut self.tasks[i];
+            let Some(job) = ts.queue.front_mut() else {
+                continue;
+            };
+            job.remaining -= dt;
+            let (index, remaining) = (job.index, job.remaining);
+            ts.stats.busy += dt;
+            if !slack {
+                ts.budget.charge(t + dt, dt);
+                if remaining > 0 && ts.budget.capacity(t + dt) == 0 {
+                    ts.stats.exhaustions += 1;
+                }
+            }
+            if let Some(seg) = &mut self.segments {
+                // Extend this CPU's last slice when the same job just goes on.
+                let last = self.last_segment[cpu].and_then(|k| seg.get_mut(k));
+                match last {
+                    Some(s)
+                        if s.task == i && s.job == index && s.end == t && s.background == slack =>
+                    {
+                        s.end = t + dt
+                    }
+                    _ => {
+                        self.last_segment[cpu] = Some(seg.len());
+                        seg.push(Segment {
+                            cpu,
+                            task: i,
+                            job: index,
+                            start: t,
+                            end: t + dt,
+                            background: slack,
+                        });
+                    }
+                }
             }
         }
     }
@@ -624,6 +802,9 @@ impl Sim {
             tasks: self.tasks.into_iter().map(|t| t.stats).collect(),
             chains: self.chains.into_iter().map(|c| c.stats).collect(),
             jobs: self.log.unwrap_or_default(),
+            segments: self.segments.unwrap_or_default(),
+            events: self.events,
+            horizon: self.horizon,
         }
     }
 }

@@ -199,17 +199,18 @@ impl Sporadic {
 }
 
 /// Priority-inheritance bandwidth-preserving server (I/O VCPU, Quest).
+///
+/// The eligibility time advances by usage / U = usage · T / C, a rational
+/// number of nanoseconds; it is kept exactly as e · C so rounding never gives
+/// bandwidth away or takes it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Pibs {
     pub budget: Nanos,
     pub period: Nanos,
-    /// Eligibility time.
-    pub eligible: Nanos,
+    /// Eligibility time × C.
+    eligible_scaled: i128,
     /// Budget left in the current replenishment.
     pub left: Nanos,
-    /// Execution since the eligibility time was last advanced (fractions of
-    /// usage / U carried over so rounding never gives bandwidth away).
-    carry: i128,
 }
 
 impl Pibs {
@@ -217,59 +218,47 @@ impl Pibs {
         Pibs {
             budget,
             period,
-            eligible: 0,
+            eligible_scaled: 0,
             left: budget,
-            carry: 0,
         }
+    }
+
+    /// The eligibility time, rounded up to a whole nanosecond.
+    pub fn eligible(&self) -> Nanos {
+        let c = self.budget as i128;
+        ((self.eligible_scaled + c - 1).div_euclid(c)) as Nanos
     }
 
     /// A request arrives: e = max(e, now), budget C.
     pub fn unblock(&mut self, now: Nanos) {
-        self.eligible = self.eligible.max(now);
+        self.eligible_scaled = self.eligible_scaled.max(now as i128 * self.budget as i128);
         self.left = self.budget;
     }
 
-    /// Budget usable now.
+    /// Budget usable now. A fresh replenishment waits for the eligibility
+    /// time; once started, the server may use it all (running pushes the
+    /// eligibility time ahead, which only bars the next replenishment).
     pub fn capacity(&self, now: Nanos) -> Nanos {
-        if now >= self.eligible_for_run() {
+        if self.left < self.budget || now >= self.eligible() {
             self.left
         } else {
             0
         }
     }
 
-    /// The server may run from the eligibility time of its current
-    /// replenishment: running pushes `eligible` ahead, which only bars the
-    /// next replenishment, not the one in use.
-    fn eligible_for_run(&self) -> Nanos {
-        if self.left == self.budget {
-            self.eligible
-        } else {
-            Nanos::MIN
-        }
-    }
-
-    /// After running `ran`: e += ran / U = ran · T / C (rounded up, with the
-    /// remainder carried, so the long-run rate is exactly U).
+    /// After running `ran`: e += ran / U = ran · T / C.
     pub fn charge(&mut self, _now: Nanos, ran: Nanos) {
         self.left -= ran;
-        let num = ran as i128 * self.period as i128 + self.carry;
-        let adv = num / self.budget as i128;
-        self.carry = num - adv * self.budget as i128;
-        self.eligible += adv as Nanos;
+        self.eligible_scaled += ran as i128 * self.period as i128;
         if self.left <= 0 {
             // Exhausted: the next replenishment comes at the eligibility time.
             self.left = self.budget;
-            if self.carry > 0 {
-                self.eligible += 1;
-                self.carry = 0;
-            }
         }
     }
 
     /// When the server can run again (after an exhaustion).
     pub fn next_refill(&self) -> Nanos {
-        self.eligible
+        self.eligible()
     }
 }
 
@@ -461,15 +450,30 @@ mod tests {
         p.unblock(0);
         assert_eq!(p.capacity(0), 2);
         p.charge(1, 1);
-        assert_eq!(p.eligible, 5);
+        assert_eq!(p.eligible(), 5);
         // Still in the same replenishment: may go on running.
         assert_eq!(p.capacity(1), 1);
         p.charge(2, 1);
         // Exhausted: e = 10, next replenishment only then.
-        assert_eq!(p.eligible, 10);
+        assert_eq!(p.eligible(), 10);
         p.unblock(3);
         assert_eq!(p.capacity(3), 0);
         assert_eq!(p.capacity(10), 2);
+    }
+
+    #[test]
+    fn pibs_keeps_fractions_exact() {
+        // C = 3, T = 10: running 1 advances e by 10/3. Three runs of 1 → exactly 10.
+        let mut p = Pibs::new(3, 10);
+        p.unblock(0);
+        p.charge(1, 1);
+        assert_eq!(p.eligible(), 4); // 3.33… rounded up
+        p.charge(2, 1);
+        p.charge(3, 1);
+        assert_eq!(p.eligible(), 10);
+        // A job arriving exactly at 10 may start at once.
+        p.unblock(10);
+        assert_eq!(p.capacity(10), 3);
     }
 
     #[test]
