@@ -1,6 +1,8 @@
 //! `rtpipe`: analyse pipe systems (Cheng, West, Einstein, EMSOFT 2018).
 
 mod analyze;
+mod plot;
+mod simulate;
 mod table;
 
 use clap::{Parser, Subcommand};
@@ -34,6 +36,12 @@ enum Command {
         #[arg(long)]
         all_paths: bool,
     },
+    /// Simulate the system and hold observed reaction and freshness times
+    /// against the analysis' bounds.
+    ///
+    /// Exit status: 0 when no sample exceeds a sound bound, 1 when one does
+    /// (a bug in the analysis), 2 on bad input.
+    Simulate(simulate::SimulateArgs),
 }
 
 /// Exit status for bad input (clap uses 2 for bad flags too).
@@ -47,5 +55,6 @@ fn main() -> ExitCode {
             json,
             all_paths,
         } => analyze::run(&spec, json, all_paths),
+        Command::Simulate(args) => simulate::run(&args),
     }
 }

@@ -34,7 +34,9 @@
 //! samples that reach the tail count, and only once the tail has published a
 //! newer sample (so the last output is known).
 
+pub mod search;
 pub mod server;
+pub mod trace;
 
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_model::gen::Rng;

@@ -1,0 +1,632 @@
+//! SVG figures of a simulated run: observed vs predicted end-to-end times
+//! (the paper's Fig. 9) and a Gantt chart of the schedule.
+
+use crate::simulate::{chain_label, chain_path, ChainObs};
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use rtpipe_analysis::Metric;
+use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_sim::SimResult;
+
+type Res<T> = Result<T, String>;
+
+fn err<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+const FONT: &str = "sans-serif";
+const MEAN: RGBColor = RGBColor(158, 202, 225);
+const MAX: RGBColor = RGBColor(33, 113, 181);
+const P99: RGBColor = RGBColor(8, 48, 107);
+const PAPER: RGBColor = RGBColor(230, 126, 0);
+const SOUND: RGBColor = RGBColor(203, 24, 29);
+const GREY: RGBColor = RGBColor(110, 110, 110);
+const RELEASE: RGBColor = RGBColor(95, 95, 95);
+
+/// Tableau 10: distinct colours for tasks.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(78, 121, 167),
+    RGBColor(242, 142, 43),
+    RGBColor(225, 87, 89),
+    RGBColor(118, 183, 178),
+    RGBColor(89, 161, 79),
+    RGBColor(237, 201, 72),
+    RGBColor(176, 122, 161),
+    RGBColor(255, 157, 167),
+    RGBColor(156, 117, 95),
+    RGBColor(186, 176, 172),
+];
+
+fn text_style(size: u32, color: RGBColor, h: HPos, v: VPos) -> TextStyle<'static> {
+    TextStyle {
+        font: (FONT, size).into_font(),
+        color: color.to_backend_color(),
+        pos: Pos::new(h, v),
+    }
+}
+
+fn unit_of(spec: &Spec) -> f64 {
+    spec.time_unit.nanos() as f64
+}
+
+/// A short number for labels: 3 significant figures, no trailing zeros.
+fn short(x: f64) -> String {
+    let s = if x.abs() >= 100.0 {
+        format!("{x:.1}")
+    } else if x.abs() >= 10.0 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.3}")
+    };
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Observed mean and max bars against the paper and sound bounds, one panel
+/// per metric and one group of bars per chain.
+pub fn fig9(spec: &Spec, obs: &[ChainObs], subtitle: &str) -> Res<String> {
+    let n_chains = spec.chains.len().max(1);
+    let group_px = 190u32;
+    let panel_w = 110 + group_px * n_chains as u32;
+    let (w, h) = ((2 * panel_w).max(900), 560u32);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        root.draw(&Text::new(
+            format!("{}: observed vs predicted end-to-end times", spec.name),
+            (w as i32 / 2, 12),
+            text_style(20, BLACK, HPos::Center, VPos::Top),
+        ))
+        .map_err(err)?;
+        root.draw(&Text::new(
+            subtitle.to_string(),
+            (w as i32 / 2, 38),
+            text_style(13, GREY, HPos::Center, VPos::Top),
+        ))
+        .map_err(err)?;
+        fig9_legend(&root, w as i32 / 2, 68)?;
+        let body = root.margin(84, 0, 0, 0);
+        let panels = body.split_evenly((1, 2));
+        for (area, metric) in panels.iter().zip([Metric::Reaction, Metric::Freshness]) {
+            let mine: Vec<&ChainObs> = obs.iter().filter(|o| o.metric == metric).collect();
+            panel(spec, &root, area, metric, &mine, n_chains)?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}
+
+type Area<DB> = DrawingArea<DB, plotters::coord::Shift>;
+
+/// The key of Fig. 9, centred on x.
+fn fig9_legend<DB: DrawingBackend>(root: &Area<DB>, x: i32, y: i32) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let items: [(&str, u8); 5] = [
+        ("observed mean", 0),
+        ("observed max", 1),
+        ("observed p99", 2),
+        ("paper bound (Eqs. 1-14)", 3),
+        ("sound bound (never exceeded)", 4),
+    ];
+    let widths: Vec<i32> = items
+        .iter()
+        .map(|(s, _)| 30 + text_px(s, 13) + 20)
+        .collect();
+    let mut x = x - widths.iter().sum::<i32>() / 2;
+    for ((label, kind), wd) in items.iter().zip(&widths) {
+        match kind {
+            0 | 1 => {
+                let c = if *kind == 0 { MEAN } else { MAX };
+                root.draw(&Rectangle::new([(x, y - 6), (x + 22, y + 6)], c.filled()))
+                    .map_err(err)?;
+            }
+            2 => root
+                .draw(&PathElement::new(
+                    vec![(x, y), (x + 22, y)],
+                    P99.stroke_width(2),
+                ))
+                .map_err(err)?,
+            3 => root
+                .draw(&DashedPathElement::new(
+                    vec![(x, y), (x + 22, y)],
+                    6,
+                    4,
+                    PAPER.stroke_width(2),
+                ))
+                .map_err(err)?,
+            _ => root
+                .draw(&PathElement::new(
+                    vec![(x, y), (x + 22, y)],
+                    SOUND.stroke_width(2),
+                ))
+                .map_err(err)?,
+        }
+        root.draw(&Text::new(
+            label.to_string(),
+            (x + 30, y),
+            text_style(13, BLACK, HPos::Left, VPos::Center),
+        ))
+        .map_err(err)?;
+        x += wd;
+    }
+    Ok(())
+}
+
+/// Rough width of a text in pixels (sans-serif).
+fn text_px(s: &str, size: u32) -> i32 {
+    (s.chars().count() as f64 * size as f64 * 0.46).round() as i32
+}
+
+fn panel<DB: DrawingBackend>(
+    spec: &Spec,
+    root: &Area<DB>,
+    area: &Area<DB>,
+    metric: Metric,
+    obs: &[&ChainObs],
+    n: usize,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let u = unit_of(spec);
+    let top = obs
+        .iter()
+        .flat_map(|o| {
+            [
+                o.observed.map(|s| s.max as f64),
+                Some(o.paper as f64),
+                o.sound.map(|s| s as f64),
+            ]
+        })
+        .flatten()
+        .fold(0.0f64, f64::max)
+        / u;
+    let top = if top > 0.0 { top * 1.12 } else { 1.0 };
+    let mut chart = ChartBuilder::on(area)
+        .caption(format!("{} time", metric.name()), (FONT, 18).into_font())
+        .margin_left(10)
+        .margin_right(20)
+        .margin_top(5)
+        .x_label_area_size(56)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..n.max(2) as f64, 0f64..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_label_formatter(&|v| short(*v))
+        .y_desc(format!("{} ({})", metric.name(), spec.time_unit))
+        .axis_desc_style((FONT, 15))
+        .label_style((FONT, 13))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+
+    let bar =
+        |x0: f64, x1: f64, y: f64, c: RGBColor| Rectangle::new([(x0, 0.0), (x1, y)], c.filled());
+    // (x, value) of each bar, labelled once the chart is drawn.
+    let mut bar_labels: Vec<(f64, f64, RGBColor, Option<f64>)> = Vec::new();
+    // (x, value, text, colour) of each bound line: paper at the right end,
+    // sound at the left end, on a light box over whatever is behind.
+    let mut bound_labels: Vec<(f64, f64, String, RGBColor)> = Vec::new();
+    let mut means = Vec::new();
+    let mut maxes = Vec::new();
+    let mut p99s = Vec::new();
+    let mut papers = Vec::new();
+    let mut sounds = Vec::new();
+    let mut labels = Vec::new();
+    // Groups centred when there are fewer than two.
+    let shift = (n.max(2) - n) as f64 / 2.0;
+    for (i, o) in obs.iter().enumerate() {
+        let x = i as f64 + shift;
+        if let Some(s) = o.observed {
+            let (mean, max, p99) = (s.mean / u, s.max as f64 / u, s.p99 as f64 / u);
+            means.push(bar(x + 0.2, x + 0.48, mean, MEAN));
+            maxes.push(bar(x + 0.52, x + 0.8, max, MAX));
+            p99s.push(PathElement::new(
+                vec![(x + 0.52, p99), (x + 0.8, p99)],
+                P99.stroke_width(2),
+            ));
+            bar_labels.push((x + 0.34, mean, P99, None));
+            bar_labels.push((x + 0.66, max, WHITE, Some(p99)));
+        } else {
+            labels.push(Text::new(
+                "no samples".to_string(),
+                (x + 0.5, top * 0.05),
+                text_style(12, GREY, HPos::Center, VPos::Bottom),
+            ));
+        }
+        let paper = o.paper as f64 / u;
+        papers.push(DashedPathElement::new(
+            vec![(x + 0.08, paper), (x + 0.92, paper)],
+            6,
+            4,
+            PAPER.stroke_width(2),
+        ));
+        bound_labels.push((x + 0.92, paper, format!("paper {}", short(paper)), PAPER));
+        match o.sound {
+            Some(s) => {
+                let s = s as f64 / u;
+                sounds.push(PathElement::new(
+                    vec![(x + 0.08, s), (x + 0.92, s)],
+                    SOUND.stroke_width(2),
+                ));
+                bound_labels.push((x + 0.08, s, format!("sound {}", short(s)), SOUND));
+            }
+            None => labels.push(Text::new(
+                "sound: unbounded".to_string(),
+                (x + 0.08, top * 0.97),
+                text_style(11, SOUND, HPos::Left, VPos::Top),
+            )),
+        }
+    }
+    chart.draw_series(means).map_err(err)?;
+    chart.draw_series(maxes).map_err(err)?;
+    chart.draw_series(p99s).map_err(err)?;
+    chart.draw_series(papers).map_err(err)?;
+    chart.draw_series(sounds).map_err(err)?;
+    chart.draw_series(labels).map_err(err)?;
+    // Bar values inside the bar's top (clear of the bound labels above the
+    // lines), or above a bar too short to hold them.
+    for (x, v, inside, tick) in bar_labels {
+        let (px, top_px) = chart.backend_coord(&(x, v));
+        let (_, base_px) = chart.backend_coord(&(x, 0.0));
+        // Below the p99 tick when the tick is where the label would go.
+        let below = tick
+            .map(|t| chart.backend_coord(&(x, t)).1)
+            .filter(|&t| t > top_px + 2 && t < top_px + 20)
+            .map_or(top_px + 5, |t| t + 4);
+        let label = if base_px - below >= 15 {
+            Text::new(
+                short(v),
+                (px, below),
+                text_style(11, inside, HPos::Center, VPos::Top),
+            )
+        } else {
+            Text::new(
+                short(v),
+                (px, top_px - 3),
+                text_style(11, P99, HPos::Center, VPos::Bottom),
+            )
+        };
+        root.draw(&label).map_err(err)?;
+    }
+    for (x, v, text, c) in bound_labels {
+        let (px, py) = chart.backend_coord(&(x, v));
+        let wd = text_px(&text, 11) + 4;
+        let (l, r, h) = if c == PAPER {
+            (px - wd, px, HPos::Right)
+        } else {
+            (px, px + wd, HPos::Left)
+        };
+        root.draw(&Rectangle::new(
+            [(l, py - 15), (r, py - 2)],
+            WHITE.mix(0.85).filled(),
+        ))
+        .map_err(err)?;
+        let tx = if c == PAPER { px - 2 } else { px + 2 };
+        root.draw(&Text::new(
+            text,
+            (tx, py - 3),
+            text_style(11, c, h, VPos::Bottom),
+        ))
+        .map_err(err)?;
+    }
+    // Chain names (and paths) under each group, in root pixels.
+    for (i, o) in obs.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(i as f64 + shift + 0.5, 0.0));
+        let name = chain_label(spec, o.chain);
+        let path = chain_path(spec, o.chain);
+        root.draw(&Text::new(
+            name.clone(),
+            (px, py + 10),
+            text_style(14, BLACK, HPos::Center, VPos::Top),
+        ))
+        .map_err(err)?;
+        if path != name {
+            root.draw(&Text::new(
+                path,
+                (px, py + 30),
+                text_style(11, GREY, HPos::Center, VPos::Top),
+            ))
+            .map_err(err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Mixes a colour with white (t = 0: the colour, 1: white).
+fn lighter(c: RGBColor, t: f64) -> RGBColor {
+    let m = |x: u8| (x as f64 + (255.0 - x as f64) * t).round() as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
+fn darker(c: RGBColor) -> RGBColor {
+    let m = |x: u8| (x as f64 * 0.7).round() as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
+/// The schedule in `window`: one row per task grouped by CPU, CPU slices
+/// coloured per task (background-priority slices light and hatched),
+/// release ticks and publish markers.
+pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String> {
+    let u = unit_of(spec);
+    let (w0, w1) = window;
+    if w1 <= w0 {
+        return Err("empty window".into());
+    }
+    // Rows: tasks grouped by CPU id, declaration order inside a CPU.
+    let mut order: Vec<usize> = (0..spec.tasks.len()).collect();
+    order.sort_by_key(|&i| (spec.tasks[i].cpu, i));
+    let mut row_of = vec![0usize; spec.tasks.len()];
+    let mut groups: Vec<(u32, usize, usize)> = Vec::new(); // (cpu, first row, rows)
+    for (r, &i) in order.iter().enumerate() {
+        row_of[i] = r;
+        let cpu = spec.tasks[i].cpu;
+        match groups.last_mut() {
+            Some(g) if g.0 == cpu => g.2 += 1,
+            _ => groups.push((cpu, r, 1)),
+        }
+    }
+    let rows = order.len().max(1);
+    let row_px = 34u32;
+    let name_w = spec
+        .tasks
+        .iter()
+        .map(|t| t.name.chars().count())
+        .max()
+        .unwrap_or(4) as u32;
+    let label_w = 70 + 8 * name_w;
+    let (w, h) = (1300u32, 130 + row_px * rows as u32 + 60);
+    // Row r is centred at y = rows - r - 0.5 (row 0 on top).
+    let yc = |r: usize| (rows - r) as f64 - 0.5;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        root.draw(&Text::new(
+            format!(
+                "{}: schedule from {} to {} {}",
+                spec.name,
+                spec.fmt_time(w0),
+                spec.fmt_time(w1),
+                spec.time_unit
+            ),
+            (w as i32 / 2, 12),
+            text_style(20, BLACK, HPos::Center, VPos::Top),
+        ))
+        .map_err(err)?;
+        legend_row(&root, w as i32 / 2, 48)?;
+        let (x0, x1) = (w0 as f64 / u, w1 as f64 / u);
+        let mut chart = ChartBuilder::on(&root)
+            .margin_top(80)
+            .margin_right(30)
+            .margin_left(10)
+            .x_label_area_size(50)
+            .y_label_area_size(label_w)
+            .build_cartesian_2d(x0..x1, 0f64..rows as f64)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .y_labels(0)
+            .x_label_formatter(&|v| short(*v))
+            .x_desc(format!("time ({})", spec.time_unit))
+            .axis_desc_style((FONT, 15))
+            .label_style((FONT, 13))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()
+            .map_err(err)?;
+        // CPU bands and labels.
+        for (k, &(cpu, first, n)) in groups.iter().enumerate() {
+            let top = yc(first) + 0.5;
+            let bottom = top - n as f64;
+            if k % 2 == 1 {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x0, bottom), (x1, top)],
+                        RGBColor(246, 246, 250).filled(),
+                    )))
+                    .map_err(err)?;
+            }
+            if k > 0 {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![(x0, top), (x1, top)],
+                        RGBColor(160, 160, 160).stroke_width(1),
+                    )))
+                    .map_err(err)?;
+            }
+            let (_, py) = chart.backend_coord(&(x0, (top + bottom) / 2.0));
+            root.draw(&Text::new(
+                format!("cpu {cpu}"),
+                (14, py),
+                text_style(14, BLACK, HPos::Left, VPos::Center),
+            ))
+            .map_err(err)?;
+        }
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let (px, py) = chart.backend_coord(&(x0, yc(row_of[i])));
+            root.draw(&Text::new(
+                t.name.clone(),
+                (px - 8, py),
+                text_style(13, BLACK, HPos::Right, VPos::Center),
+            ))
+            .map_err(err)?;
+        }
+        // Slices.
+        let half = 0.32;
+        for s in &res.segments {
+            let (a, b) = (s.start.max(w0), s.end.min(w1));
+            if b <= a || s.task >= spec.tasks.len() {
+                continue;
+            }
+            let c = PALETTE[s.task % PALETTE.len()];
+            let y = yc(row_of[s.task]);
+            let bg = s.background || spec.tasks[s.task].server == Server::Background;
+            let fill = if bg { lighter(c, 0.6) } else { c };
+            // In pixels, at least 2 wide so short jobs stay visible.
+            let (l, t) = chart.backend_coord(&(a as f64 / u, y + half));
+            let (r, b) = chart.backend_coord(&(b as f64 / u, y - half));
+            let r = r.max(l + 2);
+            root.draw(&Rectangle::new([(l, t), (r, b)], fill.filled()))
+                .map_err(err)?;
+            if bg {
+                hatch(&root, (l, t), (r, b), c)?;
+            }
+            root.draw(&Rectangle::new([(l, t), (r, b)], darker(c).stroke_width(1)))
+                .map_err(err)?;
+        }
+        // Releases: ticks from the bottom of the row, computed from the offsets.
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let Some(p) = t.fixed_period().filter(|&p| p > 0) else {
+                continue;
+            };
+            let off = res.offsets.get(i).copied().unwrap_or(0);
+            let mut r = if w0 > off {
+                off + (w0 - off + p - 1) / p * p
+            } else {
+                off
+            };
+            let y = yc(row_of[i]);
+            while r <= w1 && r <= res.horizon {
+                let x = r as f64 / u;
+                let (px, pb) = chart.backend_coord(&(x, y - 0.5));
+                let (_, pt) = chart.backend_coord(&(x, y + 0.42));
+                root.draw(&PathElement::new(
+                    vec![(px, pb), (px, pt)],
+                    RELEASE.stroke_width(1),
+                ))
+                .map_err(err)?;
+                root.draw(&Polygon::new(
+                    vec![(px, pt - 1), (px - 4, pt + 6), (px + 4, pt + 6)],
+                    RELEASE.filled(),
+                ))
+                .map_err(err)?;
+                r += p;
+            }
+        }
+        // Publishes: a diamond on the row's top edge at each completion.
+        for j in &res.jobs {
+            if j.finish < w0 || j.finish > w1 || j.task >= spec.tasks.len() {
+                continue;
+            }
+            let (px, py) = chart.backend_coord(&(j.finish as f64 / u, yc(row_of[j.task]) + half));
+            root.draw(&Polygon::new(
+                vec![(px, py - 5), (px + 4, py), (px, py + 5), (px - 4, py)],
+                RGBColor(20, 20, 20).filled(),
+            ))
+            .map_err(err)?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}
+
+/// Diagonal hatching inside the pixel rectangle from p0 (top left) to p1
+/// (bottom right).
+fn hatch<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    p0: (i32, i32),
+    p1: (i32, i32),
+    c: RGBColor,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (l, t, r, b) = (p0.0, p0.1, p1.0, p1.1);
+    let hgt = b - t;
+    let step = 6;
+    // Lines of slope 1 (up and to the right) starting on the bottom edge at
+    // x = a, for a from l − hgt to r.
+    let mut a = l - hgt;
+    while a < r {
+        // Segment (a, b) → (a + hgt, t), clipped to [l, r].
+        let (mut xs, mut ys) = (a, b);
+        let (mut xe, mut ye) = (a + hgt, t);
+        if xs < l {
+            ys -= l - xs;
+            xs = l;
+        }
+        if xe > r {
+            ye += xe - r;
+            xe = r;
+        }
+        if xe > xs {
+            root.draw(&PathElement::new(
+                vec![(xs, ys), (xe, ye)],
+                c.stroke_width(1),
+            ))
+            .map_err(err)?;
+        }
+        a += step;
+    }
+    Ok(())
+}
+
+/// The Gantt chart's key, centred on x.
+fn legend_row<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    x: i32,
+    y: i32,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let c = PALETTE[0];
+    let labels = [
+        "job running",
+        "background priority (background task, or server out of budget)",
+        "release",
+        "publish",
+    ];
+    let total: i32 = labels.iter().map(|l| 30 + text_px(l, 13) + 24).sum();
+    let x = x - total / 2;
+    let t = |s: &str, x: i32| {
+        Text::new(
+            s.to_string(),
+            (x, y),
+            text_style(13, BLACK, HPos::Left, VPos::Center),
+        )
+    };
+    root.draw(&Rectangle::new([(x, y - 7), (x + 24, y + 7)], c.filled()))
+        .map_err(err)?;
+    root.draw(&t(labels[0], x + 30)).map_err(err)?;
+    let x2 = x + 30 + text_px(labels[0], 13) + 24;
+    root.draw(&Rectangle::new(
+        [(x2, y - 7), (x2 + 24, y + 7)],
+        lighter(c, 0.6).filled(),
+    ))
+    .map_err(err)?;
+    hatch(root, (x2, y - 7), (x2 + 24, y + 7), c)?;
+    root.draw(&t(labels[1], x2 + 30)).map_err(err)?;
+    let x3 = x2 + 30 + text_px(labels[1], 13) + 24;
+    root.draw(&PathElement::new(
+        vec![(x3, y + 8), (x3, y - 6)],
+        RELEASE.stroke_width(1),
+    ))
+    .map_err(err)?;
+    root.draw(&Polygon::new(
+        vec![(x3, y - 8), (x3 - 4, y - 1), (x3 + 4, y - 1)],
+        RELEASE.filled(),
+    ))
+    .map_err(err)?;
+    root.draw(&t(labels[2], x3 + 10)).map_err(err)?;
+    let x4 = x3 + 10 + text_px(labels[2], 13) + 24;
+    root.draw(&Polygon::new(
+        vec![(x4, y - 5), (x4 + 4, y), (x4, y + 5), (x4 - 4, y)],
+        RGBColor(20, 20, 20).filled(),
+    ))
+    .map_err(err)?;
+    root.draw(&t(labels[3], x4 + 10)).map_err(err)?;
+    Ok(())
+}

@@ -1,0 +1,168 @@
+//! Simulator throughput and the Table III run.
+//!
+//! `cargo bench -p rtpipe-sim` (a few minutes: 10 samples per benchmark).
+//!
+//! - `events`: simulated events per second on generated systems
+//!   (`rtpipe_model::gen::random_system`, deterministic per seed) of 10 and 50
+//!   tasks on 1 and 2 CPUs under RM and EDF, random phasing, uniform demands,
+//!   2 s of simulated time. Criterion reports the rate as elements/s.
+//! - `table3`: examples/paper-table3.toml simulated until p5 (τ5) and p7 (τ7)
+//!   have each produced 100 000 outputs: 100 000 × 150 ms (p5's period) +
+//!   150 ms, worst-case demands, synchronous release.
+//! - `search`: a short adversarial search (1 restart, 20 steps) on a
+//!   generated system, in simulations per second.
+//!
+//! Each system is described on stderr (events per run, late jobs) before it
+//! is measured.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use rtpipe_analysis::Metric;
+use rtpipe_model::gen::{random_system, GenConfig};
+use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_sim::search::{search, SearchConfig};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const SEED: u64 = 2018;
+const MS: Nanos = 1_000_000;
+
+fn system(tasks: usize, cpus: u32, scheduler: Scheduler) -> Spec {
+    random_system(
+        SEED,
+        &GenConfig {
+            tasks,
+            cpus,
+            utilization: 0.6,
+            scheduler,
+            mixed_servers: true,
+            chains: 3,
+            ..GenConfig::default()
+        },
+    )
+}
+
+fn run(spec: &Spec, cfg: &SimConfig) -> SimResult {
+    match simulate(spec, cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("{}: {e}", spec.name),
+    }
+}
+
+/// One run outside the timed loop: its event count and a description.
+fn describe(label: &str, spec: &Spec, cfg: &SimConfig) -> u64 {
+    let t0 = Instant::now();
+    let r = run(spec, cfg);
+    let wall = t0.elapsed();
+    let late: u64 = r.tasks.iter().map(|t| t.late).sum();
+    let completed: u64 = r.tasks.iter().map(|t| t.completed).sum();
+    eprintln!(
+        "{label}: {} tasks, {} events, {completed} jobs ({late} late) in {} ms simulated; \
+         one run {wall:.2?} ({:.2} M events/s)",
+        spec.tasks.len(),
+        r.events,
+        cfg.horizon / MS,
+        r.events as f64 / wall.as_secs_f64() / 1e6
+    );
+    r.events
+}
+
+fn events(c: &mut Criterion) {
+    let mut group = c.benchmark_group("events");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    for tasks in [10, 50] {
+        for cpus in [1, 2] {
+            for scheduler in [Scheduler::Rm, Scheduler::Edf] {
+                let spec = system(tasks, cpus, scheduler);
+                let cfg = SimConfig {
+                    horizon: 2_000 * MS,
+                    seed: SEED,
+                    phasing: Phasing::Random,
+                    exec: ExecModel::Uniform,
+                    log_jobs: false,
+                };
+                let sched = match scheduler {
+                    Scheduler::Rm => "rm",
+                    Scheduler::Edf => "edf",
+                };
+                let label = format!("{tasks}t-{cpus}cpu-{sched}");
+                let n = describe(&label, &spec, &cfg);
+                group.throughput(Throughput::Elements(n));
+                group.bench_function(BenchmarkId::from_parameter(&label), |b| {
+                    b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+fn table3(c: &mut Criterion) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper-table3.toml");
+    let spec = match rtpipe_model::Spec::load(&path) {
+        Ok(s) => s,
+        Err(e) => panic!("{}: {e:?}", path.display()),
+    };
+    let index = |name: &str| {
+        spec.tasks
+            .iter()
+            .position(|t| t.name == name)
+            .unwrap_or_else(|| panic!("no task {name}"))
+    };
+    let (p5, p7) = (index("p5"), index("p7"));
+    let t5 = spec.tasks[p5].fixed_period().unwrap_or(150 * MS);
+    let cfg = SimConfig::new(100_000 * t5 + t5);
+    let n = describe("table3", &spec, &cfg);
+    let r = run(&spec, &cfg);
+    let (o5, o7) = (r.tasks[p5].completed, r.tasks[p7].completed);
+    assert!(o5 >= 100_000 && o7 >= 100_000, "p5 {o5}, p7 {o7} outputs");
+    for (k, ch) in r.chains.iter().enumerate() {
+        eprintln!(
+            "table3 chain {k}: {} finalised samples, reaction max {:?} ns, freshness max {:?} ns",
+            ch.finalised, ch.reaction_max, ch.freshness_max
+        );
+    }
+    eprintln!("table3: p5 {o5} outputs, p7 {o7} outputs");
+    let mut group = c.benchmark_group("table3");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(10))
+        .throughput(Throughput::Elements(n));
+    group.bench_function("100k-outputs", |b| {
+        b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
+    });
+    group.finish();
+}
+
+fn search_bench(c: &mut Criterion) {
+    let spec = system(10, 1, Scheduler::Rm);
+    let cfg = SearchConfig {
+        restarts: 1,
+        steps: 20,
+        seed: SEED,
+        ..SearchConfig::new(0, Metric::Reaction, 2_000 * MS)
+    };
+    let r = match search(&spec, &cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("{e}"),
+    };
+    eprintln!("search: {r}");
+    let mut group = c.benchmark_group("search");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5))
+        .throughput(Throughput::Elements(r.simulations));
+    group.bench_function("10t-1cpu-rm-20-steps", |b| {
+        b.iter(|| black_box(search(black_box(&spec), black_box(&cfg))))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, events, table3, search_bench);
+criterion_main!(benches);

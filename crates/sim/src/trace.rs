@@ -1,0 +1,378 @@
+//! Chrome trace-event JSON of a simulated run, for the Perfetto UI
+//! (<https://ui.perfetto.dev>) or `chrome://tracing`.
+//!
+//! Needs a run with [`SimConfig::log_jobs`](crate::SimConfig) set: the trace
+//! is built from [`SimResult::segments`] and [`SimResult::jobs`].
+//!
+//! Layout:
+//! - one process per CPU (`pid` = dense CPU index, named `cpu <id>`), one
+//!   thread (track) per task (`tid` = task index + 1, named by the task);
+//! - every CPU slice is a complete event (`"ph": "X"`) named by the task, with
+//!   `args: {job, background}`; inside it, nested complete events `read`,
+//!   `process` and `write` mark which part of the job's demand ran there (the
+//!   first Δin of its execution, the middle, the last Δout);
+//! - releases are instant events (`"ph": "i"`) named `release`;
+//! - data flow along chain edges: a flow start (`"ph": "s"`) at the producer
+//!   job's publish and a flow end (`"ph": "f"`, `"bp": "e"`) at the read of the
+//!   consumer job that copied that value. The producer job is the latest one
+//!   that published at or before the consumer's read (register semantics),
+//!   checked against the samples both jobs carried.
+//!
+//! Times are microseconds (fractional, so nanoseconds survive). Long runs are
+//! cut at [`TraceOptions::max_slices`] CPU slices and
+//! [`TraceOptions::max_flows`] flow arrows so files stay openable.
+
+use crate::{JobRecord, SimResult};
+use rtpipe_model::{Nanos, Spec};
+use serde_json::{json, Value};
+use std::collections::{HashMap, HashSet};
+
+/// Limits that keep traces of long runs reasonable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TraceOptions {
+    /// CPU slices kept; the trace ends at the start of the first slice left out.
+    pub max_slices: usize,
+    /// Flow arrows (producer publish → consumer read) kept, earliest first.
+    pub max_flows: usize,
+}
+
+impl Default for TraceOptions {
+    fn default() -> TraceOptions {
+        TraceOptions {
+            max_slices: 50_000,
+            max_flows: 20_000,
+        }
+    }
+}
+
+/// A rendered trace and what was left out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    pub json: String,
+    /// Trace events written (metadata included).
+    pub events: usize,
+    /// CPU slices written.
+    pub slices: usize,
+    /// Flow arrows written.
+    pub flows: usize,
+    /// When the slice limit cut the trace: no slice, release or flow starting
+    /// at or after this instant is in it (slices begun before it are whole).
+    pub truncated_at: Option<Nanos>,
+    /// Flow arrows left out by the flow limit.
+    pub flows_dropped: usize,
+}
+
+/// Trace events serialised into one buffer, comma-separated.
+#[derive(Default)]
+struct Events {
+    buf: String,
+    count: usize,
+}
+
+impl Events {
+    fn push(&mut self, v: Value) {
+        if self.count > 0 {
+            self.buf.push_str(",\n");
+        }
+        self.buf.push_str(&v.to_string());
+        self.count += 1;
+    }
+}
+
+/// The trace of `result` with the default [`TraceOptions`].
+pub fn chrome_trace(spec: &Spec, result: &SimResult) -> String {
+    chrome_trace_with(spec, result, TraceOptions::default()).json
+}
+
+fn us(ns: Nanos) -> f64 {
+    ns as f64 / 1000.0
+}
+
+/// A time for an event: whole microseconds as an integer (exact in every
+/// reader; Perfetto truncates fractional µs when it converts to ns), else
+/// fractional.
+fn ts(ns: Nanos) -> Value {
+    if ns % 1000 == 0 {
+        json!(ns / 1000)
+    } else {
+        json!(us(ns))
+    }
+}
+
+/// The trace of `result`, with explicit limits and a summary of the cut.
+pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) -> Trace {
+    let n = spec.tasks.len();
+    let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpu_ids.sort_unstable();
+    cpu_ids.dedup();
+    let pid_of: Vec<usize> = spec
+        .tasks
+        .iter()
+        .map(|t| cpu_ids.binary_search(&t.cpu).unwrap_or(0))
+        .collect();
+    let tid = |task: usize| task + 1;
+
+    // The cut: the start of the first slice beyond the limit.
+    let cut: Option<Nanos> = result.segments.get(opts.max_slices).map(|s| s.start);
+    let end = cut.unwrap_or(result.horizon.saturating_add(1));
+
+    let mut ev = Events::default();
+    for (pid, id) in cpu_ids.iter().enumerate() {
+        ev.push(
+            json!({"ph": "M", "name": "process_name", "pid": pid, "tid": 0,
+                       "args": {"name": format!("cpu {id}")}}),
+        );
+        ev.push(
+            json!({"ph": "M", "name": "process_sort_index", "pid": pid, "tid": 0,
+                       "args": {"sort_index": pid}}),
+        );
+    }
+    for (i, t) in spec.tasks.iter().enumerate() {
+        ev.push(
+            json!({"ph": "M", "name": "thread_name", "pid": pid_of[i], "tid": tid(i),
+                       "args": {"name": t.name}}),
+        );
+        ev.push(
+            json!({"ph": "M", "name": "thread_sort_index", "pid": pid_of[i], "tid": tid(i),
+                       "args": {"sort_index": i}}),
+        );
+    }
+
+    let jobs: HashMap<(usize, u64), &JobRecord> =
+        result.jobs.iter().map(|j| ((j.task, j.index), j)).collect();
+    // CPU time each job has received before the slice at hand.
+    let mut done: HashMap<(usize, u64), Nanos> = HashMap::new();
+    let mut slices = 0;
+    for seg in result.segments.iter().take(opts.max_slices) {
+        if seg.task >= n {
+            continue;
+        }
+        let (pid, tid) = (pid_of[seg.task], tid(seg.task));
+        let task = &spec.tasks[seg.task];
+        ev.push(json!({
+            "ph": "X", "cat": "job", "name": task.name, "pid": pid, "tid": tid,
+            "ts": ts(seg.start), "dur": ts(seg.end - seg.start),
+            "args": {"job": seg.job, "background": seg.background},
+        }));
+        slices += 1;
+        let key = (seg.task, seg.job);
+        let before = *done.get(&key).unwrap_or(&0);
+        let ran = seg.end - seg.start;
+        done.insert(key, before + ran);
+        // Stages need the job's demand: only completed jobs have it.
+        let Some(job) = jobs.get(&key) else { continue };
+        let d_in = task.delta_in.clamp(0, job.demand);
+        let d_out = task.delta_out.clamp(0, job.demand - d_in);
+        let stages = [
+            ("read", 0, d_in),
+            ("process", d_in, job.demand - d_out),
+            ("write", job.demand - d_out, job.demand),
+        ];
+        for (name, lo, hi) in stages {
+            // Overlap of [lo, hi) with the execution [before, before + ran).
+            let a = lo.max(before);
+            let b = hi.min(before + ran);
+            if b > a {
+                ev.push(json!({
+                    "ph": "X", "cat": "stage", "name": name, "pid": pid, "tid": tid,
+                    "ts": ts(seg.start + (a - before)), "dur": ts(b - a),
+                    "args": {"job": seg.job},
+                }));
+            }
+        }
+    }
+
+    for j in &result.jobs {
+        if j.release < end && j.task < n {
+            ev.push(
+                json!({"ph": "i", "s": "t", "cat": "release", "name": "release",
+                           "pid": pid_of[j.task], "tid": tid(j.task), "ts": ts(j.release),
+                           "args": {"job": j.index}}),
+            );
+        }
+    }
+
+    // Data flow. Jobs per task in completion (= publish) order.
+    let mut by_task: Vec<Vec<&JobRecord>> = vec![Vec::new(); n];
+    for j in &result.jobs {
+        if j.task < n {
+            by_task[j.task].push(j);
+        }
+    }
+    let mut linked: HashSet<(usize, u64, usize, u64)> = HashSet::new();
+    let (mut flows, mut flows_dropped) = (0usize, 0usize);
+    let mut consumers: Vec<&JobRecord> = result.jobs.iter().filter(|j| j.read < end).collect();
+    consumers.sort_by_key(|j| (j.read, j.task));
+    for cj in consumers {
+        for c in &cj.carried {
+            let (Some(sample), true) = (c.sample, c.pos > 0) else {
+                continue;
+            };
+            let Some(&producer) = spec
+                .chains
+                .get(c.chain)
+                .and_then(|ch| ch.path.get(c.pos - 1))
+            else {
+                continue;
+            };
+            let Some(list) = by_task.get(producer) else {
+                continue;
+            };
+            // Completions publish before reads at one instant: finish ≤ read.
+            let k = list.partition_point(|p| p.finish <= cj.read);
+            let Some(pj) = k.checked_sub(1).and_then(|k| list.get(k)) else {
+                continue;
+            };
+            let same = pj
+                .carried
+                .iter()
+                .any(|pc| pc.chain == c.chain && pc.pos + 1 == c.pos && pc.sample == Some(sample));
+            if !same || !linked.insert((pj.task, pj.index, cj.task, cj.index)) {
+                continue;
+            }
+            if flows >= opts.max_flows {
+                flows_dropped += 1;
+                continue;
+            }
+            flows += 1;
+            let id = flows;
+            // Bind the start inside the producer's last slice (it ends at the
+            // publish instant, and a slice does not enclose its end).
+            let start = if pj.finish > pj.read {
+                pj.finish - 1
+            } else {
+                pj.finish
+            };
+            ev.push(json!({"ph": "s", "cat": "data", "name": "data", "id": id,
+                           "pid": pid_of[pj.task], "tid": tid(pj.task), "ts": ts(start),
+                           "args": {"job": pj.index, "chain": c.chain, "sample": sample}}));
+            ev.push(
+                json!({"ph": "f", "bp": "e", "cat": "data", "name": "data", "id": id,
+                           "pid": pid_of[cj.task], "tid": tid(cj.task), "ts": ts(cj.read),
+                           "args": {"job": cj.index, "chain": c.chain, "sample": sample}}),
+            );
+        }
+    }
+
+    let events = ev.count;
+    let other = json!({
+            "system": spec.name,
+            "time_unit": spec.time_unit.name(),
+            "horizon_us": us(result.horizon),
+            "offsets_us": result.offsets.iter().map(|&o| us(o)).collect::<Vec<_>>(),
+            "truncated_at_us": cut.map(us),
+            "flows_dropped": flows_dropped,
+    });
+    // Events are serialised one by one as they come: a tree of values for
+    // the whole trace would take tens of times the file's size.
+    let mut json = String::with_capacity(ev.buf.len() + 512);
+    json.push_str("{\"traceEvents\":[");
+    json.push_str(&ev.buf);
+    json.push_str("],\"displayTimeUnit\":\"ms\",\"otherData\":");
+    json.push_str(&other.to_string());
+    json.push('}');
+    Trace {
+        json,
+        events,
+        slices,
+        flows,
+        truncated_at: cut,
+        flows_dropped,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{simulate, SimConfig};
+
+    const SPEC: &str = r#"
+[system]
+name = "two"
+time_unit = "ms"
+[channels.m]
+bandwidth = 1
+overhead = 1
+[tasks.a]
+exec = 2
+input = { channel = "m", size = 0 }
+output = { channel = "m", size = 0 }
+period = 10
+[tasks.b]
+exec = 1
+reads = ["a"]
+output = { channel = "m", size = 0 }
+period = 5
+[[chain]]
+path = ["a", "b"]
+"#;
+
+    fn run() -> (Spec, SimResult) {
+        let spec = match Spec::parse("two.toml", SPEC) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        let mut cfg = SimConfig::new(40_000_000);
+        cfg.log_jobs = true;
+        match simulate(&spec, &cfg) {
+            Ok(r) => (spec, r),
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    fn events(json: &str) -> Vec<Value> {
+        match serde_json::from_str::<Value>(json) {
+            Ok(v) => v["traceEvents"].as_array().cloned().unwrap_or_default(),
+            Err(e) => panic!("not JSON: {e}"),
+        }
+    }
+
+    #[test]
+    fn stages_tile_each_job_and_flows_pair_up() {
+        let (spec, res) = run();
+        let ev = events(&chrome_trace(&spec, &res));
+        let of = |ph: &str, name: &str| {
+            ev.iter()
+                .filter(|e| e["ph"] == ph && (name.is_empty() || e["name"] == name))
+                .count()
+        };
+        assert_eq!(of("X", "a") + of("X", "b"), res.segments.len());
+        // Δin = Δout = 1 ms per job: one read and one write piece per job
+        // (no job is preempted inside a 1 ms stage here).
+        assert_eq!(of("X", "read"), res.jobs.len());
+        assert_eq!(of("X", "write"), res.jobs.len());
+        let dur: f64 = ev
+            .iter()
+            .filter(|e| e["cat"] == "stage")
+            .filter_map(|e| e["dur"].as_f64())
+            .sum();
+        let busy: Nanos = res.jobs.iter().map(|j| j.demand).sum();
+        assert!((dur - us(busy)).abs() < 1e-6, "{dur} vs {}", us(busy));
+        assert!(of("s", "data") > 0);
+        assert_eq!(of("s", "data"), of("f", "data"));
+        assert_eq!(of("M", "thread_name"), 2);
+    }
+
+    #[test]
+    fn limits_cut_the_trace() {
+        let (spec, res) = run();
+        let t = chrome_trace_with(
+            &spec,
+            &res,
+            TraceOptions {
+                max_slices: 3,
+                max_flows: 1,
+            },
+        );
+        assert_eq!(t.slices, 3);
+        assert!(t.flows <= 1);
+        assert_eq!(t.truncated_at, Some(res.segments[3].start));
+        let ev = events(&t.json);
+        let late = ev
+            .iter()
+            .filter(|e| e["ph"] != "M")
+            .filter_map(|e| e["ts"].as_f64())
+            .any(|ts| ts >= us(res.segments[3].start) && ts > 0.0);
+        assert!(!late, "nothing after the cut");
+    }
+}
