@@ -1,6 +1,7 @@
 //! `rtpipe`: analyse pipe systems (Cheng, West, Einstein, EMSOFT 2018).
 
 mod analyze;
+mod design;
 mod plot;
 mod simulate;
 mod table;
@@ -42,6 +43,30 @@ enum Command {
     /// Exit status: 0 when no sample exceeds a sound bound, 1 when one does
     /// (a bug in the analysis), 2 on bad input.
     Simulate(simulate::SimulateArgs),
+    /// Choose the free periods so that every limit holds at least utilisation
+    /// (Section IV), and re-check the answer with the analysis.
+    ///
+    /// Exit status: 0 with a verified design, 1 when none exists (or none was
+    /// found in time), 2 on bad input.
+    Design {
+        /// The system spec (TOML); tasks without a fixed period are designed.
+        spec: PathBuf,
+        /// The analysis the chain limits are judged by.
+        #[arg(long, value_enum, default_value = "sound")]
+        mode: design::ModeArg,
+        /// Print one JSON object: the analysis of the design plus "design".
+        #[arg(long)]
+        json: bool,
+        /// Write the complete designed spec here (accepted by `analyze`).
+        #[arg(long, value_name = "OUT.toml")]
+        write: Option<PathBuf>,
+        /// MILP backend; `highs` needs a build with `--features highs`.
+        #[arg(long, value_enum, default_value = "microlp")]
+        solver: design::SolverArg,
+        /// Stop after this many seconds and report the best verified design and its gap.
+        #[arg(long, value_name = "S")]
+        time_limit: Option<f64>,
+    },
 }
 
 /// Exit status for bad input (clap uses 2 for bad flags too).
@@ -56,5 +81,20 @@ fn main() -> ExitCode {
             all_paths,
         } => analyze::run(&spec, json, all_paths),
         Command::Simulate(args) => simulate::run(&args),
+        Command::Design {
+            spec,
+            mode,
+            json,
+            write,
+            solver,
+            time_limit,
+        } => design::run(design::Args {
+            spec: &spec,
+            mode,
+            json,
+            write: write.as_deref(),
+            solver,
+            time_limit,
+        }),
     }
 }

@@ -1,0 +1,176 @@
+//! `rtpipe design`: choose periods that meet every limit at least utilisation.
+
+use crate::analyze::{report_json, report_text};
+use crate::EXIT_BAD_INPUT;
+use rtpipe_design::lp::SolverKind;
+use rtpipe_design::{design, Mode, Options, Outcome, Status};
+use rtpipe_model::Spec;
+use serde_json::json;
+use std::path::Path;
+use std::process::ExitCode;
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum ModeArg {
+    Sound,
+    Paper,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum SolverArg {
+    Microlp,
+    Highs,
+}
+
+pub struct Args<'a> {
+    pub spec: &'a Path,
+    pub mode: ModeArg,
+    pub json: bool,
+    pub write: Option<&'a Path>,
+    pub solver: SolverArg,
+    pub time_limit: Option<f64>,
+}
+
+pub fn run(a: Args) -> ExitCode {
+    let spec = match Spec::load(a.spec) {
+        Ok(s) => s,
+        Err(e) => {
+            eprint!("{e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    if let Some(t) = a.time_limit {
+        if !(t.is_finite() && t > 0.0) {
+            eprintln!("error: --time-limit must be a positive number of seconds, found {t}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
+    let opts = Options {
+        mode: match a.mode {
+            ModeArg::Sound => Mode::Sound,
+            ModeArg::Paper => Mode::Paper,
+        },
+        solver: match a.solver {
+            SolverArg::Microlp => SolverKind::Microlp,
+            SolverArg::Highs => SolverKind::Highs,
+        },
+        time_limit: a.time_limit,
+        ..Options::default()
+    };
+    let out = match design(&spec, &opts) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("{}: error: {e}", a.spec.display());
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    if let (Some(path), Some(s)) = (a.write, &out.spec) {
+        let text = rtpipe_model::to_toml(s);
+        let tmp = path.with_extension("toml.tmp");
+        if let Err(e) = std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)) {
+            let _ = std::fs::remove_file(&tmp);
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
+    if a.json {
+        let mut v = match (&out.spec, &out.report) {
+            (Some(s), Some(r)) => report_json(s, r),
+            _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
+        };
+        v["design"] = design_json(&spec, &out, opts.mode);
+        match serde_json::to_string_pretty(&v) {
+            Ok(s) => println!("{s}"),
+            Err(e) => {
+                eprintln!("error: cannot encode JSON: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        }
+    } else {
+        print!("{}", design_text(&spec, &out, opts.mode));
+    }
+    match out.status {
+        Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
+        _ => ExitCode::from(1),
+    }
+}
+
+fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
+    let periods: serde_json::Map<String, serde_json::Value> = match &o.spec {
+        Some(s) => s
+            .tasks
+            .iter()
+            .map(|t| {
+                (
+                    t.name.clone(),
+                    json!(t.fixed_period().map(|p| spec.in_unit(p))),
+                )
+            })
+            .collect(),
+        None => serde_json::Map::new(),
+    };
+    json!({
+        "mode": mode.name(),
+        "status": o.status.name(),
+        "objective": o.objective,
+        "lower_bound": o.lower_bound,
+        "gap": o.gap,
+        "solver": o.solver.name(),
+        "seconds": o.seconds,
+        "iterations": o.iterations,
+        "periods": periods,
+        "conflicts": o.conflicts.iter().map(|c| json!({"constraint": c.constraint, "fix": c.fix})).collect::<Vec<_>>(),
+        "notes": o.notes,
+    })
+}
+
+fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
+    let mut out = format!(
+        "design of {} ({} analysis, solver {}): {} after {} master solves in {:.2} s\n",
+        spec.name,
+        mode.name(),
+        o.solver.name(),
+        o.status.name(),
+        o.iterations,
+        o.seconds
+    );
+    if let (Some(u), Some(s)) = (o.objective, &o.spec) {
+        out.push_str(&format!("total utilisation {u:.4}"));
+        if let Some(g) = o.gap {
+            out.push_str(&format!(
+                " (lower bound {:.4}, gap {:.2} %)",
+                o.lower_bound.unwrap_or(u),
+                100.0 * g
+            ));
+        }
+        out.push_str("\nperiods:");
+        for (orig, t) in spec.tasks.iter().zip(&s.tasks) {
+            let fixed = orig.fixed_period().is_some();
+            out.push_str(&format!(
+                " {}={}{}",
+                t.name,
+                t.fixed_period()
+                    .map(|p| spec.fmt_time(p))
+                    .unwrap_or_default(),
+                if fixed { "(fixed)" } else { "" }
+            ));
+        }
+        out.push_str("\n\nre-check by the analysis:\n\n");
+        if let Some(r) = &o.report {
+            out.push_str(&report_text(s, r));
+        }
+    }
+    if o.status == Status::Infeasible {
+        out.push_str("no periods can meet these constraints together:\n");
+        for c in &o.conflicts {
+            out.push_str(&format!("  - {}", c.constraint));
+            if let Some(f) = &c.fix {
+                out.push_str(&format!(": {f}"));
+            }
+            out.push('\n');
+        }
+    }
+    for n in &o.notes {
+        out.push_str(&format!("note: {n}\n"));
+    }
+    out
+}

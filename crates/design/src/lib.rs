@@ -1,0 +1,1328 @@
+//! # rtpipe-design
+//!
+//! Section IV of Cheng, West, Einstein (EMSOFT 2018), solved exactly: choose
+//! the free periods so that every chain limit holds under the chosen analysis,
+//! every CPU passes the system's schedulability test, T ≥ C, and the total
+//! utilisation Σ C/T is minimal. docs/design.md explains the formulation.
+//!
+//! Every answer is re-checked by `rtpipe_analysis::analyze` before it is
+//! returned; the [`Outcome`] carries that report.
+
+pub mod lp;
+
+use lp::{Cmp, Lp, LpError, SolverKind};
+use rtpipe_analysis::{Metric, Report};
+use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// Which analysis the chain limits are judged by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// The paper's equations (Eqs. 1–14).
+    Paper,
+    /// The sound, interference-aware bounds.
+    Sound,
+}
+
+impl Mode {
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Paper => "paper",
+            Mode::Sound => "sound",
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub mode: Mode,
+    pub solver: SolverKind,
+    /// Wall-clock limit for the whole search, in seconds.
+    pub time_limit: Option<f64>,
+    /// Upper bound on master solves.
+    pub max_iterations: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            mode: Mode::Sound,
+            solver: SolverKind::Microlp,
+            time_limit: None,
+            max_iterations: 500,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Proven minimal.
+    Optimal,
+    /// Verified, but not proven minimal (see the gap).
+    Feasible,
+    /// Proven impossible (see the conflicts).
+    Infeasible,
+    /// Neither a verified design nor a proof of infeasibility.
+    Unknown,
+}
+
+impl Status {
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Optimal => "optimal",
+            Status::Feasible => "feasible",
+            Status::Infeasible => "infeasible",
+            Status::Unknown => "unknown",
+        }
+    }
+}
+
+/// One constraint of a conflicting set, and how far it would have to move.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Conflict {
+    pub constraint: String,
+    /// What would make the rest of the set feasible, when computed.
+    pub fix: Option<String>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    pub status: Status,
+    /// The spec with every period fixed to the design, when one was found.
+    pub spec: Option<Spec>,
+    /// The analysis of that spec (the re-check).
+    pub report: Option<Report>,
+    /// Σ C/T of the design.
+    pub objective: Option<f64>,
+    /// A proven lower bound on the optimum.
+    pub lower_bound: Option<f64>,
+    /// (objective − lower bound) / objective.
+    pub gap: Option<f64>,
+    pub solver: SolverKind,
+    pub seconds: f64,
+    pub iterations: usize,
+    pub conflicts: Vec<Conflict>,
+    pub notes: Vec<String>,
+}
+
+/// Errors in the input that make designing meaningless.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignError(pub String);
+
+impl std::fmt::Display for DesignError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for DesignError {}
+
+fn gcd(a: i64, b: i64) -> i64 {
+    if b == 0 {
+        a.abs()
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// The period domain of one task, in grid units (g ns).
+#[derive(Debug, Clone)]
+enum Dom {
+    Fixed(i64),
+    /// T = step · k, k ∈ [lo, hi].
+    Grid {
+        step: i64,
+        lo: i64,
+        hi: i64,
+    },
+    Choice(Vec<i64>),
+}
+
+impl Dom {
+    fn min(&self) -> i64 {
+        match self {
+            Dom::Fixed(t) => *t,
+            Dom::Grid { step, lo, .. } => step * lo,
+            Dom::Choice(v) => v.iter().copied().min().unwrap_or(0),
+        }
+    }
+    fn max(&self) -> i64 {
+        match self {
+            Dom::Fixed(t) => *t,
+            Dom::Grid { step, hi, .. } => step * hi,
+            Dom::Choice(v) => v.iter().copied().max().unwrap_or(0),
+        }
+    }
+}
+
+/// A linear expression in grid units: Σ coeff·var + constant.
+#[derive(Debug, Clone, Default)]
+struct Lin {
+    terms: Vec<(usize, f64)>,
+    c: f64,
+}
+
+impl Lin {
+    fn constant(c: f64) -> Lin {
+        Lin {
+            terms: Vec::new(),
+            c,
+        }
+    }
+    fn plus(&self, o: &Lin) -> Lin {
+        let mut terms = self.terms.clone();
+        terms.extend_from_slice(&o.terms);
+        Lin {
+            terms,
+            c: self.c + o.c,
+        }
+    }
+    fn add_c(&self, c: f64) -> Lin {
+        Lin {
+            terms: self.terms.clone(),
+            c: self.c + c,
+        }
+    }
+    fn scale(&self, k: f64) -> Lin {
+        Lin {
+            terms: self.terms.iter().map(|&(v, a)| (v, a * k)).collect(),
+            c: self.c * k,
+        }
+    }
+}
+
+/// A binary that may be a known constant.
+#[derive(Debug, Clone, Copy)]
+enum Bin {
+    Const(bool),
+    Var(usize),
+}
+
+/// The master problem and its bookkeeping.
+struct Master<'a> {
+    spec: &'a Spec,
+    g: i64,
+    dom: Vec<Dom>,
+    lp: Lp,
+    /// Period expression per task (grid units).
+    period: Vec<Lin>,
+    /// Grid variable k per Grid task; choice binaries per Choice task.
+    kvar: Vec<Option<usize>>,
+    yvars: Vec<Vec<usize>>,
+    /// Utilisation (and hyperbolic log term) per task.
+    util: Vec<Lin>,
+    uvar: Vec<Option<usize>>,
+    hlog: Vec<Lin>,
+    hvar: Vec<Option<usize>>,
+    lt_cache: HashMap<(usize, usize, bool), Bin>,
+    big_m: f64,
+    /// Response-time variables (sound mode, RM).
+    rvar: Vec<Option<usize>>,
+}
+
+/// Which constraint groups are active (for the conflict search).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Group {
+    Limit(usize, Metric),
+    Sched(u32),
+}
+
+impl<'a> Master<'a> {
+    fn guaranteed(&self, i: usize) -> bool {
+        self.spec.tasks[i].server != Server::Background
+    }
+
+    fn lt(&mut self, a: usize, b: usize, tie_true: bool) -> Bin {
+        if let Some(&bin) = self.lt_cache.get(&(a, b, tie_true)) {
+            return bin;
+        }
+        let (da, db) = (&self.dom[a], &self.dom[b]);
+        // 1 ⟺ T_a < T_b, or T_a = T_b and tie_true.
+        let bin = if da.max() < db.min() || (tie_true && da.max() <= db.min()) {
+            Bin::Const(true)
+        } else if da.min() > db.max() || (!tie_true && da.min() >= db.max()) {
+            Bin::Const(false)
+        } else {
+            let z = self.lp.binary();
+            let m = self.big_m;
+            let d1 = if tie_true { 0.0 } else { 1.0 };
+            let d0 = if tie_true { 1.0 } else { 0.0 };
+            // z = 1 ⇒ T_a − T_b ≤ −d1;  z = 0 ⇒ T_a − T_b ≥ d0.
+            let diff = self.period[a].plus(&self.period[b].scale(-1.0));
+            let mut t = diff.terms.clone();
+            t.push((z, m));
+            self.lp.row(t, Cmp::Le, -d1 - diff.c + m);
+            let mut t = diff.terms.clone();
+            t.push((z, m));
+            self.lp.row(t, Cmp::Ge, d0 - diff.c);
+            Bin::Var(z)
+        };
+        self.lt_cache.insert((a, b, tie_true), bin);
+        bin
+    }
+
+    /// RM priority: a ≻ b.
+    fn above(&mut self, a: usize, b: usize) -> Bin {
+        self.lt(a, b, a < b)
+    }
+
+    /// Adds `lhs ≥ opt − M·(Σ off)` where `off` are 0/1 expressions that
+    /// switch the option off when 1.
+    fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
+        let m = self.big_m;
+        let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
+        terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
+        let mut rhs = opt.c;
+        for &(b, negate) in off {
+            // negate = false: off when b = 1; negate = true: off when b = 0.
+            match (b, negate) {
+                (Bin::Const(v), false) => {
+                    if v {
+                        return;
+                    }
+                }
+                (Bin::Const(v), true) => {
+                    if !v {
+                        return;
+                    }
+                }
+                (Bin::Var(z), false) => terms.push((z, m)),
+                (Bin::Var(z), true) => {
+                    terms.push((z, -m));
+                    rhs -= m;
+                }
+            }
+        }
+        self.lp.row(terms, Cmp::Ge, rhs);
+    }
+}
+
+/// What a higher-priority task can take per release (its budget when a
+/// server enforces one).
+fn interference(t: &rtpipe_model::Task) -> Nanos {
+    match t.server {
+        Server::Main | Server::Io => t.budget(),
+        _ => t.demand(),
+    }
+}
+
+/// Converts ns to grid units.
+fn gu(ns: Nanos, g: i64) -> f64 {
+    ns as f64 / g as f64
+}
+
+/// Designs the periods of `spec`.
+pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
+    let start = Instant::now();
+    if !opts.solver.available() {
+        return Err(DesignError(
+            LpError::Unavailable(opts.solver.name()).to_string(),
+        ));
+    }
+    let n = spec.tasks.len();
+    // Upper end for periods without a max: the largest limit or fixed period.
+    let mut horizon: i64 = 0;
+    for c in &spec.chains {
+        horizon = horizon
+            .max(c.reaction.unwrap_or(0))
+            .max(c.freshness.unwrap_or(0));
+    }
+    for t in &spec.tasks {
+        if let Some(p) = t.fixed_period() {
+            horizon = horizon.max(p);
+        }
+    }
+    // The grid: periods are multiples of g (resolution, fixed periods, choices).
+    let mut g = spec.resolution;
+    for t in &spec.tasks {
+        match &t.period {
+            PeriodSpec::Fixed(p) => g = gcd(g, *p),
+            PeriodSpec::Choices(v) => v.iter().for_each(|&p| g = gcd(g, p)),
+            _ => {}
+        }
+    }
+    let g = g.max(1);
+    let res = spec.resolution;
+    let mut dom = Vec::with_capacity(n);
+    for t in &spec.tasks {
+        let c = t.budget();
+        let d = match &t.period {
+            PeriodSpec::Fixed(p) => Dom::Fixed(p / g),
+            PeriodSpec::Choices(v) => {
+                let ok: Vec<i64> = v.iter().filter(|&&p| p >= c).map(|&p| p / g).collect();
+                if ok.is_empty() {
+                    return Err(DesignError(format!(
+                        "task `{}`: no period choice is at least its budget {}{}",
+                        t.name,
+                        format_in(c, spec.time_unit),
+                        spec.time_unit
+                    )));
+                }
+                Dom::Choice(ok)
+            }
+            PeriodSpec::Range { min, max } => range_dom(spec, t, *min, *max, c, horizon, res, g)?,
+            PeriodSpec::Free => range_dom(spec, t, None, None, c, horizon, res, g)?,
+        };
+        dom.push(d);
+    }
+    let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
+    let max_limit = gu(horizon, g);
+    let big_m = 4.0 * (max_t + max_limit) + 10.0;
+
+    let mut run = Runner {
+        spec,
+        opts,
+        g,
+        dom,
+        big_m,
+        start,
+        rta_cuts: Vec::new(),
+        oa_points: vec![Vec::new(); n],
+        iterations: 0,
+    };
+    run.solve_all()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn range_dom(
+    spec: &Spec,
+    t: &rtpipe_model::Task,
+    min: Option<Nanos>,
+    max: Option<Nanos>,
+    c: Nanos,
+    horizon: Nanos,
+    res: Nanos,
+    g: i64,
+) -> Result<Dom, DesignError> {
+    let lo_ns = min.unwrap_or(0).max(c);
+    let hi_ns = match max {
+        Some(m) => m,
+        None if horizon > 0 => horizon,
+        None => {
+            return Err(DesignError(format!(
+                "task `{}` has a free period without an upper end and no chain limit bounds it; give period = {{ max = ... }}",
+                t.name
+            )))
+        }
+    };
+    let lo = (lo_ns + res - 1) / res;
+    let hi = hi_ns / res;
+    if lo > hi {
+        return Err(DesignError(format!(
+            "task `{}`: no multiple of the resolution {}{} lies in [{}, {}] {} (the period must also be at least the budget)",
+            t.name,
+            format_in(res, spec.time_unit),
+            spec.time_unit,
+            format_in(lo_ns, spec.time_unit),
+            format_in(hi_ns, spec.time_unit),
+            spec.time_unit
+        )));
+    }
+    Ok(Dom::Grid {
+        step: res / g,
+        lo,
+        hi,
+    })
+}
+
+/// A lazy schedulability cut: task `i` missed its deadline with hp set `hp`
+/// and these periods; some period must grow or the order must change.
+#[derive(Debug, Clone)]
+struct RtaCut {
+    i: usize,
+    hp: Vec<usize>,
+    periods: Vec<(usize, i64)>,
+}
+
+struct Runner<'a> {
+    spec: &'a Spec,
+    opts: &'a Options,
+    g: i64,
+    dom: Vec<Dom>,
+    big_m: f64,
+    start: Instant,
+    rta_cuts: Vec<RtaCut>,
+    /// Outer-approximation points (k values) per Grid task.
+    oa_points: Vec<Vec<i64>>,
+    iterations: usize,
+}
+
+/// What the sound model knows of response times: unconditional lower
+/// bounds, and conditional ones learnt from verified candidates.
+#[derive(Debug, Clone)]
+struct SoundModel {
+    /// R_i ≥ this whatever the periods (grid units).
+    rlow: Vec<f64>,
+    cuts: Vec<RCut>,
+}
+
+/// R_i ≥ r unless some higher-priority task's period grew past its value
+/// then, or left the higher-priority set (RTA is monotone in both).
+#[derive(Debug, Clone)]
+struct RCut {
+    i: usize,
+    r: f64,
+    hp: Vec<usize>,
+    periods: Vec<(usize, i64)>,
+}
+
+enum Solved {
+    Infeasible,
+    /// Periods per task (ns), the model objective, proven optimal, and the
+    /// model's response times (grid units) where it has them.
+    Periods(Vec<Nanos>, f64, bool, Vec<Option<f64>>),
+    Error(String),
+}
+
+impl<'a> Runner<'a> {
+    fn elapsed(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    fn out_of_time(&self) -> bool {
+        self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
+    }
+
+    fn build(
+        &self,
+        groups: &[Group],
+        sound: Option<&SoundModel>,
+    ) -> (Master<'a>, Vec<(usize, f64)>) {
+        let spec = self.spec;
+        let n = spec.tasks.len();
+        let g = self.g;
+        let mut m = Master {
+            spec,
+            g,
+            dom: self.dom.clone(),
+            lp: Lp::default(),
+            period: Vec::with_capacity(n),
+            kvar: vec![None; n],
+            yvars: vec![Vec::new(); n],
+            util: Vec::with_capacity(n),
+            uvar: vec![None; n],
+            hlog: Vec::with_capacity(n),
+            hvar: vec![None; n],
+            lt_cache: HashMap::new(),
+            big_m: self.big_m,
+            rvar: vec![None; n],
+        };
+        let mut objective: Vec<(usize, f64)> = Vec::new();
+        let mut obj_const = 0.0;
+        for i in 0..n {
+            let c = spec.tasks[i].budget() as f64;
+            let d = m.dom[i].clone();
+            match d {
+                Dom::Fixed(t) => {
+                    m.period.push(Lin::constant(t as f64));
+                    let u = c / (t * g) as f64;
+                    m.util.push(Lin::constant(u));
+                    m.hlog.push(Lin::constant((1.0 + u).ln()));
+                }
+                Dom::Choice(v) => {
+                    let ys: Vec<usize> = v.iter().map(|_| m.lp.binary()).collect();
+                    m.lp.row(ys.iter().map(|&y| (y, 1.0)).collect(), Cmp::Eq, 1.0);
+                    m.period.push(Lin {
+                        terms: ys.iter().zip(&v).map(|(&y, &t)| (y, t as f64)).collect(),
+                        c: 0.0,
+                    });
+                    m.util.push(Lin {
+                        terms: ys
+                            .iter()
+                            .zip(&v)
+                            .map(|(&y, &t)| (y, c / (t * g) as f64))
+                            .collect(),
+                        c: 0.0,
+                    });
+                    m.hlog.push(Lin {
+                        terms: ys
+                            .iter()
+                            .zip(&v)
+                            .map(|(&y, &t)| (y, (1.0 + c / (t * g) as f64).ln()))
+                            .collect(),
+                        c: 0.0,
+                    });
+                    m.yvars[i] = ys;
+                }
+                Dom::Grid { step, lo, hi } => {
+                    let k = m.lp.var(lo as f64, hi as f64, true);
+                    m.kvar[i] = Some(k);
+                    m.period.push(Lin {
+                        terms: vec![(k, step as f64)],
+                        c: 0.0,
+                    });
+                    let u = m.lp.var(0.0, 1e6, false);
+                    let h = m.lp.var(0.0, 1e6, false);
+                    m.uvar[i] = Some(u);
+                    m.hvar[i] = Some(h);
+                    m.util.push(Lin {
+                        terms: vec![(u, 1.0)],
+                        c: 0.0,
+                    });
+                    m.hlog.push(Lin {
+                        terms: vec![(h, 1.0)],
+                        c: 0.0,
+                    });
+                    // Outer approximation of U = a / k (a = C / (step·g)) and of
+                    // ln(1 + a/k): tangents, valid since both are convex in k.
+                    let a = c / (step * g) as f64;
+                    let mut pts = vec![lo, hi, (lo + hi) / 2];
+                    let mut x = lo as f64;
+                    while x < hi as f64 {
+                        pts.push(x as i64);
+                        x *= 2.0;
+                    }
+                    pts.extend(self.oa_points[i].iter().copied());
+                    pts.sort_unstable();
+                    pts.dedup();
+                    for k0 in pts {
+                        if k0 < lo.max(1) || k0 > hi {
+                            continue;
+                        }
+                        let k0 = k0 as f64;
+                        // U ≥ 2a/k0 − a·k/k0²
+                        m.lp.row(vec![(u, 1.0), (k, a / (k0 * k0))], Cmp::Ge, 2.0 * a / k0);
+                        // ln(1 + a/k) ≥ ln(1 + a/k0) − a/(k0 (k0 + a))·(k − k0)
+                        let s = a / (k0 * (k0 + a));
+                        m.lp.row(
+                            vec![(h, 1.0), (k, s)],
+                            Cmp::Ge,
+                            (1.0 + a / k0).ln() + s * k0,
+                        );
+                    }
+                }
+            }
+            if m.guaranteed(i) {
+                for &(v, a) in &m.util[i].terms {
+                    objective.push((v, a));
+                }
+                obj_const += m.util[i].c;
+            }
+        }
+        m.lp.obj = objective.clone();
+        m.lp.obj_const = obj_const;
+
+        // Schedulability per CPU.
+        let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+        cpus.sort_unstable();
+        cpus.dedup();
+        for &cpu in &cpus {
+            let ids: Vec<usize> = (0..n)
+                .filter(|&i| spec.tasks[i].cpu == cpu && m.guaranteed(i))
+                .collect();
+            let sched_on = groups.contains(&Group::Sched(cpu));
+            let sum_u = ids
+                .iter()
+                .fold(Lin::default(), |acc, &i| acc.plus(&m.util[i]));
+            // Σ U ≤ 1 is necessary for any test; the group adds the test's bound.
+            let bound = if sched_on {
+                match spec.schedulability {
+                    SchedTest::LiuLayland => {
+                        let k = ids.len().max(1) as f64;
+                        k * (2f64.powf(1.0 / k) - 1.0)
+                    }
+                    _ => 1.0,
+                }
+            } else {
+                1.0
+            };
+            m.lp.row(sum_u.terms.clone(), Cmp::Le, bound - sum_u.c);
+            if sched_on && spec.schedulability == SchedTest::Hyperbolic {
+                let sum_h = ids
+                    .iter()
+                    .fold(Lin::default(), |acc, &i| acc.plus(&m.hlog[i]));
+                m.lp.row(sum_h.terms.clone(), Cmp::Le, 2f64.ln() - sum_h.c);
+            }
+        }
+        if spec.schedulability == SchedTest::Rta {
+            for cut in self.rta_cuts.clone() {
+                if groups.contains(&Group::Sched(spec.tasks[cut.i].cpu)) {
+                    add_rta_cut(&mut m, &cut);
+                }
+            }
+        }
+        // Sound mode: response-time variables with their lower bounds, and
+        // every chain task finishes within its period (T ≥ R).
+        if let (Some(sm), Scheduler::Rm) = (sound, spec.scheduler) {
+            let mut on_chain = vec![false; n];
+            for ch in &spec.chains {
+                for &i in &ch.path {
+                    on_chain[i] = true;
+                }
+            }
+            for i in (0..n).filter(|&i| on_chain[i]) {
+                let r = m.lp.var(sm.rlow[i], self.big_m, false);
+                m.rvar[i] = Some(r);
+                let mut t = m.period[i].terms.clone();
+                t.push((r, -1.0));
+                m.lp.row(t, Cmp::Ge, -m.period[i].c);
+            }
+            // R_i ≥ x_i + Σ_{j ≻ i} C_j: at least one job of each task above.
+            for i in (0..n).filter(|&i| on_chain[i]) {
+                let Some(r) = m.rvar[i] else { continue };
+                let mut terms = vec![(r, 1.0)];
+                let mut rhs = gu(spec.tasks[i].demand(), g);
+                for j in 0..n {
+                    if j == i || spec.tasks[j].cpu != spec.tasks[i].cpu || !m.guaranteed(j) {
+                        continue;
+                    }
+                    let cj = gu(interference(&spec.tasks[j]), g);
+                    match m.above(j, i) {
+                        Bin::Const(true) => rhs += cj,
+                        Bin::Const(false) => {}
+                        Bin::Var(z) => terms.push((z, -cj)),
+                    }
+                }
+                m.lp.row(terms, Cmp::Ge, rhs);
+            }
+            for cut in &sm.cuts {
+                add_r_cut(&mut m, cut);
+            }
+        }
+        // Chain limits.
+        for (k, ch) in spec.chains.iter().enumerate() {
+            for metric in [Metric::Reaction, Metric::Freshness] {
+                let limit = match metric {
+                    Metric::Reaction => ch.reaction,
+                    Metric::Freshness => ch.freshness,
+                };
+                let Some(limit) = limit else { continue };
+                if !groups.contains(&Group::Limit(k, metric)) {
+                    continue;
+                }
+                let l = gu(limit, g);
+                match sound {
+                    None => paper_chain(&mut m, &ch.path, metric, l),
+                    Some(sm) => sound_chain(&mut m, &ch.path, metric, l, sm),
+                }
+            }
+        }
+        (m, objective)
+    }
+
+    fn solve_master(&self, groups: &[Group], sound: Option<&SoundModel>) -> Solved {
+        let (m, _) = self.build(groups, sound);
+        let left = self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01));
+        match lp::solve(&m.lp, self.opts.solver, left) {
+            Err(LpError::Infeasible) => Solved::Infeasible,
+            Err(e) => Solved::Error(e.to_string()),
+            Ok(sol) => {
+                let periods = (0..self.spec.tasks.len())
+                    .map(|i| {
+                        let t: f64 = m.period[i]
+                            .terms
+                            .iter()
+                            .map(|&(v, a)| a * sol.values[v])
+                            .sum::<f64>()
+                            + m.period[i].c;
+                        (t.round() as i64) * self.g
+                    })
+                    .collect();
+                let rv = m.rvar.iter().map(|v| v.map(|v| sol.values[v])).collect();
+                Solved::Periods(periods, sol.objective, sol.optimal, rv)
+            }
+        }
+    }
+
+    fn all_groups(&self) -> Vec<Group> {
+        let mut v = Vec::new();
+        for (k, ch) in self.spec.chains.iter().enumerate() {
+            if ch.reaction.is_some() {
+                v.push(Group::Limit(k, Metric::Reaction));
+            }
+            if ch.freshness.is_some() {
+                v.push(Group::Limit(k, Metric::Freshness));
+            }
+        }
+        let mut cpus: Vec<u32> = self.spec.tasks.iter().map(|t| t.cpu).collect();
+        cpus.sort_unstable();
+        cpus.dedup();
+        v.extend(cpus.into_iter().map(Group::Sched));
+        v
+    }
+
+    /// The spec with these periods fixed.
+    fn with_periods(&self, periods: &[Nanos]) -> Spec {
+        let mut s = self.spec.clone();
+        for (t, &p) in s.tasks.iter_mut().zip(periods) {
+            t.period = PeriodSpec::Fixed(p);
+        }
+        s
+    }
+
+    /// Adds outer-approximation points where the model under-estimated the
+    /// utilisation (or the hyperbolic term); true when nothing was added.
+    fn oa_exact(&mut self, periods: &[Nanos]) -> bool {
+        let mut exact = true;
+        for ((d, pts), &p) in self.dom.iter().zip(self.oa_points.iter_mut()).zip(periods) {
+            if let Dom::Grid { step, .. } = *d {
+                let k = p / (step * self.g);
+                if !pts.contains(&k) {
+                    pts.push(k);
+                    exact = false;
+                }
+            }
+        }
+        exact
+    }
+
+    /// Checks the schedulability test exactly; adds an RTA cut on failure.
+    fn sched_ok(&mut self, spec: &Spec, report: &Report) -> bool {
+        if report.schedulability.schedulable {
+            return true;
+        }
+        if self.spec.schedulability == SchedTest::Rta {
+            let prio = rtpipe_analysis::sched::rm_priorities(spec);
+            for (i, tm) in report.timing.iter().enumerate() {
+                if spec.tasks[i].server == Server::Background {
+                    continue;
+                }
+                let ok = tm.response_time.is_some_and(|r| r <= tm.period);
+                if !ok {
+                    let hp: Vec<usize> = (0..spec.tasks.len())
+                        .filter(|&j| {
+                            j != i
+                                && spec.tasks[j].cpu == spec.tasks[i].cpu
+                                && spec.tasks[j].server != Server::Background
+                                && prio[j] < prio[i]
+                        })
+                        .collect();
+                    let periods = hp
+                        .iter()
+                        .chain(std::iter::once(&i))
+                        .map(|&j| (j, spec.tasks[j].fixed_period().unwrap_or(0) / self.g))
+                        .collect();
+                    self.rta_cuts.push(RtaCut { i, hp, periods });
+                    return false;
+                }
+            }
+        }
+        false
+    }
+
+    fn limits_ok(&self, report: &Report) -> bool {
+        report.chains.iter().all(|c| match self.opts.mode {
+            Mode::Sound => c.ok,
+            Mode::Paper => c.limit.is_none_or(|l| c.bound.paper <= l),
+        })
+    }
+
+    fn solve_all(&mut self) -> Result<Outcome, DesignError> {
+        let groups = self.all_groups();
+        let mut notes = Vec::new();
+        // The master is always a relaxation: utilisation and the hyperbolic
+        // term are under-approximated by tangents, response times by valid
+        // lower bounds. A candidate that the analysis verifies is therefore
+        // optimal; one that fails yields a cut that removes it.
+        let mut sound: Option<SoundModel> = match self.opts.mode {
+            Mode::Paper => None,
+            Mode::Sound => Some(SoundModel {
+                rlow: self.rhat_lower(),
+                cuts: Vec::new(),
+            }),
+        };
+        let mut lower_bound: Option<f64> = None;
+        let mut limited = false;
+        loop {
+            if self.iterations >= self.opts.max_iterations || self.out_of_time() {
+                limited = true;
+                break;
+            }
+            self.iterations += 1;
+            let solved = self.solve_master(&groups, sound.as_ref());
+            if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+                if let Solved::Periods(p, obj, opt, _) = &solved {
+                    eprintln!(
+                        "iteration {}: objective {obj:.6} optimal {opt} periods {:?} ({:.2} s)",
+                        self.iterations,
+                        p,
+                        self.elapsed()
+                    );
+                }
+            }
+            match solved {
+                Solved::Error(e) => return Err(DesignError(e)),
+                Solved::Infeasible => {
+                    let conflicts = self.explain(&groups, sound.as_ref());
+                    return Ok(self.outcome(Status::Infeasible, None, None, conflicts, notes));
+                }
+                Solved::Periods(periods, obj, optimal, rmodel) => {
+                    if optimal {
+                        lower_bound = Some(lower_bound.map_or(obj, |b: f64| b.max(obj)));
+                    } else {
+                        limited = true;
+                    }
+                    let cand = self.with_periods(&periods);
+                    let report = rtpipe_analysis::analyze(&cand);
+                    let oa = self.oa_exact(&periods);
+                    let sched = self.sched_ok(&cand, &report);
+                    if !oa || !sched {
+                        continue;
+                    }
+                    if self.limits_ok(&report) {
+                        let u = utilization(&cand);
+                        let lb = lower_bound.map(|b| b.min(u));
+                        let gap = lb.map(|b| if u > 0.0 { ((u - b) / u).max(0.0) } else { 0.0 });
+                        let status = if optimal && !limited {
+                            Status::Optimal
+                        } else {
+                            Status::Feasible
+                        };
+                        let mut o =
+                            self.outcome(status, Some((cand, report)), lb, Vec::new(), notes);
+                        o.objective = Some(u);
+                        o.gap = if status == Status::Optimal {
+                            Some(0.0)
+                        } else {
+                            gap
+                        };
+                        return Ok(o);
+                    }
+                    let Some(sm) = &mut sound else {
+                        return Err(DesignError(
+                            "internal: the paper-mode model and the analysis disagree on a candidate".into(),
+                        ));
+                    };
+                    // Learn the response times the model under-estimated.
+                    let prio = rtpipe_analysis::sched::rm_priorities(&cand);
+                    let mut learnt = false;
+                    for (i, mv) in rmodel.iter().enumerate() {
+                        let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
+                            continue;
+                        };
+                        let tr = gu(tr, self.g);
+                        if tr > mv + 1e-6 {
+                            let hp: Vec<usize> = (0..cand.tasks.len())
+                                .filter(|&j| {
+                                    j != i
+                                        && cand.tasks[j].cpu == cand.tasks[i].cpu
+                                        && cand.tasks[j].server != Server::Background
+                                        && prio[j] < prio[i]
+                                })
+                                .collect();
+                            let periods = hp.iter().map(|&j| (j, periods[j] / self.g)).collect();
+                            sm.cuts.push(RCut {
+                                i,
+                                r: tr,
+                                hp,
+                                periods,
+                            });
+                            learnt = true;
+                        }
+                    }
+                    if !learnt {
+                        return Err(DesignError(
+                            "internal: the sound model and the analysis disagree on a candidate"
+                                .into(),
+                        ));
+                    }
+                }
+            }
+        }
+        notes.push("stopped by the time or iteration limit before a verified design".into());
+        let _ = limited;
+        let mut o = self.outcome(Status::Unknown, None, lower_bound, Vec::new(), notes);
+        o.lower_bound = lower_bound;
+        Ok(o)
+    }
+
+    fn outcome(
+        &self,
+        status: Status,
+        found: Option<(Spec, Report)>,
+        lower_bound: Option<f64>,
+        conflicts: Vec<Conflict>,
+        notes: Vec<String>,
+    ) -> Outcome {
+        let (spec, report) = match found {
+            Some((s, r)) => (Some(s), Some(r)),
+            None => (None, None),
+        };
+        Outcome {
+            status,
+            spec,
+            report,
+            objective: None,
+            lower_bound,
+            gap: None,
+            solver: self.opts.solver,
+            seconds: self.elapsed(),
+            iterations: self.iterations,
+            conflicts,
+            notes,
+        }
+    }
+
+    /// Lower bounds on job response times that hold for every choice of
+    /// periods: own demand plus one job of each task that has higher
+    /// priority whatever the periods.
+    fn rhat_lower(&self) -> Vec<f64> {
+        let spec = self.spec;
+        let n = spec.tasks.len();
+        (0..n)
+            .map(|i| {
+                let mut r = spec.tasks[i].demand();
+                for j in 0..n {
+                    if j == i
+                        || spec.tasks[j].cpu != spec.tasks[i].cpu
+                        || spec.tasks[j].server == Server::Background
+                    {
+                        continue;
+                    }
+                    let (di, dj) = (&self.dom[i], &self.dom[j]);
+                    let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
+                    if always_above && spec.scheduler == Scheduler::Rm {
+                        r += match spec.tasks[j].server {
+                            Server::Main | Server::Io => spec.tasks[j].budget(),
+                            _ => spec.tasks[j].demand(),
+                        };
+                    }
+                }
+                gu(r, self.g)
+            })
+            .collect()
+    }
+
+    /// A small set of constraint groups that cannot hold together (deletion
+    /// filter) and, for each, how far it would have to move.
+    fn explain(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Vec<Conflict> {
+        let mut core: Vec<Group> = groups.to_vec();
+        let mut k = 0;
+        while k < core.len() {
+            if self.out_of_time() {
+                break;
+            }
+            let mut trial = core.clone();
+            trial.remove(k);
+            match self.solve_master(&trial, sound) {
+                Solved::Infeasible => core = trial,
+                _ => k += 1,
+            }
+        }
+        let spec = self.spec;
+        core.iter()
+            .map(|gr| match *gr {
+                Group::Limit(c, metric) => {
+                    let ch = &spec.chains[c];
+                    let name = ch.name.clone().unwrap_or_else(|| {
+                        ch.path
+                            .iter()
+                            .map(|&i| spec.tasks[i].name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(">")
+                    });
+                    let limit = match metric {
+                        Metric::Reaction => ch.reaction,
+                        Metric::Freshness => ch.freshness,
+                    }
+                    .unwrap_or(0);
+                    let fix = self.min_limit(&core, *gr, sound).map(|need| {
+                        format!(
+                            "raise the {} limit from {} to at least {} {}",
+                            metric.name(),
+                            format_in(limit, spec.time_unit),
+                            format_in(need, spec.time_unit),
+                            spec.time_unit
+                        )
+                    });
+                    Conflict {
+                        constraint: format!(
+                            "chain {name}: {} ≤ {}",
+                            metric.name(),
+                            format_in(limit, spec.time_unit)
+                        ),
+                        fix,
+                    }
+                }
+                Group::Sched(cpu) => Conflict {
+                    constraint: format!("cpu {cpu}: {} schedulability", spec.schedulability.name()),
+                    fix: Some(
+                        "lower the utilisation of its tasks (budgets) or move tasks to another CPU"
+                            .into(),
+                    ),
+                },
+            })
+            .collect()
+    }
+
+    /// The smallest limit of chain group `gr` that makes `core` feasible,
+    /// by bisection on the limit (in grid units).
+    fn min_limit(
+        &mut self,
+        core: &[Group],
+        gr: Group,
+        sound: Option<&SoundModel>,
+    ) -> Option<Nanos> {
+        let Group::Limit(c, metric) = gr else {
+            return None;
+        };
+        let original = self.spec.clone();
+        let get = |s: &Spec| match metric {
+            Metric::Reaction => s.chains[c].reaction,
+            Metric::Freshness => s.chains[c].freshness,
+        };
+        let lo0 = get(&original)?;
+        let mut hi = lo0.max(1);
+        // Find a feasible upper end by doubling.
+        let feasible = |me: &mut Self, l: Nanos| -> bool {
+            let mut s = original.clone();
+            match metric {
+                Metric::Reaction => s.chains[c].reaction = Some(l),
+                Metric::Freshness => s.chains[c].freshness = Some(l),
+            }
+            let sub = Runner {
+                spec: &s,
+                opts: me.opts,
+                g: me.g,
+                dom: me.dom.clone(),
+                big_m: me.big_m.max(4.0 * gu(l, me.g)),
+                start: me.start,
+                rta_cuts: me.rta_cuts.clone(),
+                oa_points: me.oa_points.clone(),
+                iterations: 0,
+            };
+            !matches!(sub.solve_master(core, sound), Solved::Infeasible)
+        };
+        let mut tries = 0;
+        while !feasible(self, hi) {
+            hi = hi.saturating_mul(2);
+            tries += 1;
+            if tries > 20 || self.out_of_time() {
+                return None;
+            }
+        }
+        let mut lo = lo0;
+        let step = self.g.max(1);
+        while hi - lo > step && !self.out_of_time() {
+            let mid = lo + (hi - lo) / 2;
+            if feasible(self, mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(hi)
+    }
+}
+
+fn add_rta_cut(m: &mut Master, cut: &RtaCut) {
+    // Σ [T_j ≥ T*_j + 1] + Σ_{j ∈ hp} [j no longer above i] ≥ 1.
+    let big = m.big_m;
+    let mut sum: Vec<(usize, f64)> = Vec::new();
+    let mut always = false;
+    for &(j, tj) in &cut.periods {
+        if let Dom::Fixed(_) = m.dom[j] {
+            continue;
+        }
+        if m.dom[j].max() <= tj {
+            continue;
+        }
+        let b = m.lp.binary();
+        // b = 1 ⇒ T_j ≥ T*_j + 1.
+        let p = m.period[j].clone();
+        let mut t = p.terms.clone();
+        t.push((b, -big));
+        m.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - big);
+        sum.push((b, 1.0));
+    }
+    for &j in &cut.hp {
+        match m.above(j, cut.i) {
+            Bin::Const(true) => {}
+            Bin::Const(false) => always = true,
+            Bin::Var(z) => {
+                // flip = 1 − z
+                sum.push((z, -1.0));
+                // Σ … + (1 − z) ≥ 1 ⇔ Σ … − z ≥ 0; handled by the rhs below.
+            }
+        }
+    }
+    if always {
+        return;
+    }
+    let flips = sum.iter().filter(|&&(_, a)| a < 0.0).count() as f64;
+    // Σ b + Σ (1 − z) ≥ 1  ⇔  Σ b − Σ z ≥ 1 − flips
+    m.lp.row(sum, Cmp::Ge, 1.0 - flips);
+}
+
+/// Paper mode (Eqs. 2–6, 12 and Section III-F), with the case of each link a
+/// binary: z = 1 ⟺ T_c < T_p.
+fn paper_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64) {
+    let g = m.g;
+    let spec = m.spec;
+    // Budgets cover the demand (validated), so Eq. 1 gives L = x.
+    let l = |i: usize| gu(spec.tasks[i].demand(), g);
+    let mut total = Lin::constant(l(path[0]));
+    let big = m.big_m;
+    for w in path.windows(2) {
+        let (p, c) = (w[0], w[1]);
+        let z = m.lt(c, p, false);
+        let delta = gu(spec.tasks[p].delta_out, g);
+        let cc = gu(spec.tasks[c].budget(), g);
+        let cp = gu(spec.tasks[p].budget(), g);
+        let case1 = match metric {
+            Metric::Reaction => m.period[c].add_c(-cc - delta + l(c)),
+            Metric::Freshness => m.period[p].scale(2.0).add_c(-delta - l(p)),
+        };
+        let case2 = m.period[p].add_c(-cp - delta + l(c));
+        let s = m.lp.var(-big, big, false);
+        m.ge_option(s, &case1, &[(z, true)]);
+        m.ge_option(s, &case2, &[(z, false)]);
+        total = total.plus(&Lin {
+            terms: vec![(s, 1.0)],
+            c: 0.0,
+        });
+    }
+    m.lp.row(total.terms.clone(), Cmp::Le, limit - total.c);
+}
+
+/// R_i ≥ r − M·(Σ [hp period grew] + Σ [left the hp set]).
+fn add_r_cut(m: &mut Master, cut: &RCut) {
+    let Some(rv) = m.rvar[cut.i] else { return };
+    let big = m.big_m;
+    let mut terms: Vec<(usize, f64)> = vec![(rv, 1.0)];
+    let mut rhs = cut.r;
+    for &(j, tj) in &cut.periods {
+        if matches!(m.dom[j], Dom::Fixed(_)) || m.dom[j].max() <= tj {
+            continue;
+        }
+        let b = m.lp.binary();
+        let p = m.period[j].clone();
+        let mut t = p.terms.clone();
+        t.push((b, -big));
+        m.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - big);
+        terms.push((b, big));
+    }
+    for &j in &cut.hp {
+        match m.above(j, cut.i) {
+            Bin::Const(true) => {}
+            Bin::Const(false) => return,
+            Bin::Var(z) => {
+                // (1 − z)·M on the right: R + … − M z ≥ r − M
+                terms.push((z, -big));
+                rhs -= big;
+            }
+        }
+    }
+    m.lp.row(terms, Cmp::Ge, rhs);
+}
+
+/// Sound mode (docs/analysis.md): reaction anchored on publishes, freshness
+/// on reads, each link term the smallest valid option, the priority cases
+/// and the "distinct" property of each stage as binaries.
+fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64, _sm: &SoundModel) {
+    let spec = m.spec;
+    let g = m.g;
+    let edf = spec.scheduler == Scheduler::Edf;
+    let big = m.big_m;
+    let r = |m: &Master, i: usize| -> Lin {
+        match m.rvar[i] {
+            Some(v) if !edf => Lin {
+                terms: vec![(v, 1.0)],
+                c: 0.0,
+            },
+            _ => m.period[i].clone(),
+        }
+    };
+    let xmin = |i: usize| gu(spec.tasks[i].demand_min(), g);
+    let x = |i: usize| gu(spec.tasks[i].demand(), g);
+    let mut e = r(m, path[0]);
+    let mut f = Lin::default();
+    // d = 1: the stage's jobs carry distinct samples (true at the head).
+    let mut d = Bin::Const(true);
+    for w in path.windows(2) {
+        let (p, c) = (w[0], w[1]);
+        let (rp, rc) = (r(m, p), r(m, c));
+        let same = !edf && spec.tasks[p].cpu == spec.tasks[c].cpu;
+        let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
+        let o1 = tc.plus(&rc);
+        let o2 = tc.plus(&rc).add_c(-xmin(c));
+        let o3 = tp.plus(&rp).plus(&rc).add_c(-xmin(p));
+        let o4 = tp.plus(&rc).add_c(-xmin(p));
+        let q1 = tp.plus(&rp);
+        let q2 = tp.plus(&rp).add_c(-xmin(c));
+        let q3 = tp.clone();
+        let l = m.lp.var(-big, big, false);
+        let gq = m.lp.var(-big, big, false);
+        // b = 1 picks a reachability option; allowed only when d = 1.
+        let b = match d {
+            Bin::Const(false) => Bin::Const(false),
+            _ => {
+                let v = m.lp.binary();
+                if let Bin::Var(dv) = d {
+                    m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+                }
+                Bin::Var(v)
+            }
+        };
+        if same {
+            let o = m.above(c, p); // 1: c ≻ p (Case 1)
+            m.ge_option(l, &o2, &[(o, true), (b, false)]);
+            m.ge_option(l, &o3, &[(o, true), (b, true)]);
+            m.ge_option(l, &o1, &[(o, false), (b, false)]);
+            m.ge_option(l, &o4, &[(o, false), (b, true)]);
+            m.ge_option(gq, &q2, &[(o, true)]);
+            m.ge_option(gq, &q3, &[(o, false)]);
+        } else {
+            m.ge_option(l, &o1, &[(b, false)]);
+            m.ge_option(l, &o3, &[(b, true)]);
+            m.ge_option(gq, &q1, &[]);
+        }
+        e = e.plus(&Lin {
+            terms: vec![(l, 1.0)],
+            c: 0.0,
+        });
+        f = f.plus(&Lin {
+            terms: vec![(gq, 1.0)],
+            c: 0.0,
+        });
+        // Distinct passes to c when c's reads are further apart than p's
+        // publishes can be: T_c − R_c + x_c > T_p + R_p − x_min(p).
+        d = match d {
+            Bin::Const(false) => Bin::Const(false),
+            _ => {
+                let dc = m.lp.binary();
+                if let Bin::Var(dv) = d {
+                    m.lp.row(vec![(dc, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+                }
+                let lhs = tc
+                    .plus(&rc.scale(-1.0))
+                    .plus(&tp.scale(-1.0))
+                    .plus(&rp.scale(-1.0));
+                // lhs + x_c + x_min(p) ≥ ε − M(1 − dc), ε = one grid unit's share of a ns
+                let eps = 1.0 / g as f64;
+                let mut t = lhs.terms.clone();
+                t.push((dc, -big));
+                m.lp.row(t, Cmp::Ge, eps - x(c) - xmin(p) - lhs.c - big);
+                Bin::Var(dc)
+            }
+        };
+    }
+    let tail = *path.last().unwrap_or(&0);
+    f = f.plus(&r(m, tail));
+    match metric {
+        Metric::Freshness => m.lp.row(f.terms.clone(), Cmp::Le, limit - f.c),
+        Metric::Reaction => {
+            // The reported reaction is min(E, F): one of them must fit.
+            let w = m.lp.binary();
+            let mut t = e.terms.clone();
+            t.push((w, -big));
+            m.lp.row(t, Cmp::Le, limit - e.c);
+            let mut t = f.terms.clone();
+            t.push((w, big));
+            m.lp.row(t, Cmp::Le, limit - f.c + big);
+        }
+    }
+}
+
+/// Σ C/T over guaranteed tasks.
+pub fn utilization(spec: &Spec) -> f64 {
+    spec.tasks
+        .iter()
+        .filter(|t| t.server != Server::Background)
+        .filter_map(|t| t.fixed_period().map(|p| t.budget() as f64 / p as f64))
+        .sum()
+}
+
+#[cfg(test)]
+mod tests;
