@@ -885,32 +885,7 @@ impl<'a> Runner<'a> {
                         ));
                     };
                     // Learn the response times the model under-estimated.
-                    let prio = rtpipe_analysis::sched::rm_priorities(&cand);
-                    let mut learnt = false;
-                    for (i, mv) in rmodel.iter().enumerate() {
-                        let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
-                            continue;
-                        };
-                        let tr = gu(tr, self.g);
-                        if tr > mv + 1e-6 {
-                            let hp: Vec<usize> = (0..cand.tasks.len())
-                                .filter(|&j| {
-                                    j != i
-                                        && cand.tasks[j].cpu == cand.tasks[i].cpu
-                                        && cand.tasks[j].server != Server::Background
-                                        && prio[j] < prio[i]
-                                })
-                                .collect();
-                            let periods = hp.iter().map(|&j| (j, periods[j] / self.g)).collect();
-                            sm.cuts.push(RCut {
-                                i,
-                                r: tr,
-                                hp,
-                                periods,
-                            });
-                            learnt = true;
-                        }
-                    }
+                    let learnt = learn_r_cuts(self.g, &cand, &report, &periods, &rmodel, sm);
                     if !learnt {
                         return Err(DesignError(
                             "internal: the sound model and the analysis disagree on a candidate"
@@ -984,6 +959,44 @@ impl<'a> Runner<'a> {
             .collect()
     }
 
+    /// Whether `groups` can hold together: the master loop (tangent, RTA and
+    /// response-time cuts) restricted to them, until the master is
+    /// infeasible or a candidate needs no more cuts. Cuts learnt here are
+    /// valid everywhere and kept.
+    fn probe(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> bool {
+        let mut sm = sound.cloned();
+        for _ in 0..100 {
+            if self.out_of_time() {
+                return true; // unknown: keep the group (conservative)
+            }
+            let periods = match self.solve_master(groups, sm.as_ref()) {
+                Solved::Infeasible => return false,
+                Solved::Error(_) => return true,
+                Solved::Periods(p, _, _, rmodel) => {
+                    let cand = self.with_periods(&p);
+                    let report = rtpipe_analysis::analyze(&cand);
+                    let oa = self.oa_exact(&p);
+                    let sched_needed = groups.iter().any(|g| matches!(g, Group::Sched(_)));
+                    let sched = !sched_needed || self.sched_ok(&cand, &report);
+                    if !oa || !sched {
+                        continue;
+                    }
+                    match &mut sm {
+                        None => return true,
+                        Some(m) => {
+                            if !learn_r_cuts(self.g, &cand, &report, &p, &rmodel, m) {
+                                return true;
+                            }
+                        }
+                    }
+                    p
+                }
+            };
+            let _ = periods;
+        }
+        true
+    }
+
     /// A small set of constraint groups that cannot hold together (deletion
     /// filter) and, for each, how far it would have to move.
     fn explain(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Vec<Conflict> {
@@ -995,9 +1008,10 @@ impl<'a> Runner<'a> {
             }
             let mut trial = core.clone();
             trial.remove(k);
-            match self.solve_master(&trial, sound) {
-                Solved::Infeasible => core = trial,
-                _ => k += 1,
+            if self.probe(&trial, sound) {
+                k += 1;
+            } else {
+                core = trial;
             }
         }
         let spec = self.spec;
@@ -1017,9 +1031,9 @@ impl<'a> Runner<'a> {
                         Metric::Freshness => ch.freshness,
                     }
                     .unwrap_or(0);
-                    let fix = self.min_limit(&core, *gr, sound).map(|need| {
+                    let fix = self.min_limit(groups, *gr, sound).map(|need| {
                         format!(
-                            "raise the {} limit from {} to at least {} {}",
+                            "raise the {} limit from {} to {} {} (within a thousandth of the time unit; other constraints unchanged)",
                             metric.name(),
                             format_in(limit, spec.time_unit),
                             format_in(need, spec.time_unit),
@@ -1071,7 +1085,7 @@ impl<'a> Runner<'a> {
                 Metric::Reaction => s.chains[c].reaction = Some(l),
                 Metric::Freshness => s.chains[c].freshness = Some(l),
             }
-            let sub = Runner {
+            let mut sub = Runner {
                 spec: &s,
                 opts: me.opts,
                 g: me.g,
@@ -1082,7 +1096,7 @@ impl<'a> Runner<'a> {
                 oa_points: me.oa_points.clone(),
                 iterations: 0,
             };
-            !matches!(sub.solve_master(core, sound), Solved::Infeasible)
+            sub.probe(core, sound)
         };
         let mut tries = 0;
         while !feasible(self, hi) {
@@ -1093,7 +1107,7 @@ impl<'a> Runner<'a> {
             }
         }
         let mut lo = lo0;
-        let step = self.g.max(1);
+        let step = (self.spec.time_unit.nanos() / 1000).max(1);
         while hi - lo > step && !self.out_of_time() {
             let mid = lo + (hi - lo) / 2;
             if feasible(self, mid) {
@@ -1104,6 +1118,45 @@ impl<'a> Runner<'a> {
         }
         Some(hi)
     }
+}
+
+/// Adds a cut for every chain task whose response time the model
+/// under-estimated at this candidate; false when there was none.
+fn learn_r_cuts(
+    g: i64,
+    cand: &Spec,
+    report: &Report,
+    periods: &[Nanos],
+    rmodel: &[Option<f64>],
+    sm: &mut SoundModel,
+) -> bool {
+    let prio = rtpipe_analysis::sched::rm_priorities(cand);
+    let mut learnt = false;
+    for (i, mv) in rmodel.iter().enumerate() {
+        let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
+            continue;
+        };
+        let tr = gu(tr, g);
+        if tr > mv + 1e-6 {
+            let hp: Vec<usize> = (0..cand.tasks.len())
+                .filter(|&j| {
+                    j != i
+                        && cand.tasks[j].cpu == cand.tasks[i].cpu
+                        && cand.tasks[j].server != Server::Background
+                        && prio[j] < prio[i]
+                })
+                .collect();
+            let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
+            sm.cuts.push(RCut {
+                i,
+                r: tr,
+                hp,
+                periods,
+            });
+            learnt = true;
+        }
+    }
+    learnt
 }
 
 fn add_rta_cut(m: &mut Master, cut: &RtaCut) {
