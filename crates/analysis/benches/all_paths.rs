@@ -29,6 +29,7 @@ fn system(tasks: usize) -> Spec {
             // large output as Δin and the systems end up unschedulable.
             transfers: false,
             mixed_servers: true,
+            inheritance: 0.0,
         },
     )
 }

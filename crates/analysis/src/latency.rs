@@ -31,7 +31,10 @@ pub struct LinkTask {
     /// Job response time, when it is at most the period.
     pub r: Option<Nanos>,
     pub cpu: u32,
+    /// Own RM rank (the lowest priority the task runs at).
     pub prio: Option<usize>,
+    /// Highest rank it can inherit (PIBS).
+    pub top: Option<usize>,
 }
 
 impl LinkTask {
@@ -47,6 +50,7 @@ impl LinkTask {
             r: tm.bounded_response(),
             cpu: tm.cpu,
             prio: tm.priority,
+            top: tm.top_priority,
         }
     }
 }
@@ -95,9 +99,11 @@ fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     if sched != Scheduler::Rm || p.cpu != c.cpu {
         return None;
     }
-    match (p.prio, c.prio) {
-        (Some(pp), Some(cp)) if cp < pp => Some(Case::One),
-        (Some(_), Some(_)) => Some(Case::Two),
+    // "a above b" must hold at every instant: a's lowest priority above b's
+    // highest (inherited) one.
+    match (p.prio, p.top, c.prio, c.top) {
+        (Some(_), Some(pt), Some(cp), Some(_)) if cp < pt => Some(Case::One),
+        (Some(pp), Some(_), Some(_), Some(ct)) if pp < ct => Some(Case::Two),
         _ => None,
     }
 }
@@ -270,6 +276,7 @@ mod tests {
             r: Some(r),
             cpu: 0,
             prio: Some(prio),
+            top: Some(prio),
         }
     }
 

@@ -15,6 +15,9 @@ pub struct TaskTiming {
     pub period: Nanos,
     /// Rank on its CPU, 1 = highest; `None` under EDF and for background tasks.
     pub priority: Option<usize>,
+    /// The highest rank the task can run at: its own, or the rank of the Main
+    /// VCPU it serves (PIBS priority inheritance).
+    pub top_priority: Option<usize>,
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
     /// release (exact RTA under RM; T under EDF, which may deliver the budget
@@ -82,6 +85,19 @@ pub fn rm_priorities(spec: &Spec) -> Vec<Option<usize>> {
     out
 }
 
+/// The highest rank each task can run at: an I/O VCPU that serves a Main
+/// VCPU inherits that one's rank while it has a job pending.
+pub fn top_priorities(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {
+    spec.tasks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| match (prio[i], t.serves.and_then(|m| prio[m])) {
+            (Some(own), Some(served)) => Some(own.min(served)),
+            (own, _) => own,
+        })
+        .collect()
+}
+
 /// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
 /// Audsley et al. 1993). `None` when the higher-priority load (with own) is
 /// 100 % or more, so the iteration would not converge, or on overflow.
@@ -116,6 +132,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
         Scheduler::Rm => rm_priorities(spec),
         Scheduler::Edf => vec![None; spec.tasks.len()],
     };
+    let top = top_priorities(spec, &prio);
     let period = |t: &Task| t.fixed_period().unwrap_or(MAX_TIME);
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
@@ -143,7 +160,9 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                             j != i
                                 && o.cpu == t.cpu
                                 && o.server != Server::Background
-                                && prio[j] < my
+                                // j can run above i (inherited priority counts;
+                                // an equal rank may win the tie).
+                                && top[j] <= my
                         })
                         .map(|(_, o)| (interference(o), period(o)))
                         .collect();
@@ -170,6 +189,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             demand_min: t.demand_min(),
             period: period(t),
             priority: prio[i],
+            top_priority: top[i],
             cpu: t.cpu,
             response_time: rt,
             job_response_time: jrt,
@@ -252,6 +272,22 @@ mod tests {
         assert_eq!(response_time(3, &[(1, 4), (2, 6)]), Some(10));
         assert_eq!(response_time(2, &[(1, 4)]), Some(3));
         assert_eq!(response_time(1, &[]), Some(1));
+    }
+
+    #[test]
+    fn pibs_inheritance_counts_as_interference() {
+        // h (T 5, C 1), m (T 10, C 1), io (T 20, C 2) serving m. io inherits m's
+        // rank while m has a job, so for m: R = 1 + 1 (h) + 2 (io) = 4, not 2.
+        // io itself: 2 + 1 (h) + 1 (m) = 4.
+        let src = "[system]\nname = \"p\"\n[tasks.h]\nexec = 1\nperiod = 5\n[tasks.m]\nexec = 1\nperiod = 10\n[tasks.io]\nexec = 2\nperiod = 20\nserver = \"io\"\nserves = \"m\"\n";
+        let spec = match Spec::parse("p.toml", src) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        let (t, _) = analyze(&spec);
+        assert_eq!(t[1].job_response_time, Some(4_000_000));
+        assert_eq!(t[2].job_response_time, Some(4_000_000));
+        assert_eq!((t[2].priority, t[2].top_priority), (Some(3), Some(2)));
     }
 
     #[test]

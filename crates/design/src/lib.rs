@@ -321,6 +321,12 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         ));
     }
     let n = spec.tasks.len();
+    if let Some(t) = spec.tasks.iter().find(|t| t.serves.is_some()) {
+        return Err(DesignError(format!(
+            "task `{}` uses `serves` (PIBS priority inheritance), which `design` does not model yet; remove it to design, then add it back and check with `analyze`",
+            t.name
+        )));
+    }
     // Upper end for periods without a max: the largest limit or fixed period.
     let mut horizon: i64 = 0;
     for c in &spec.chains {

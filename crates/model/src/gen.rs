@@ -98,6 +98,9 @@ pub struct GenConfig {
     pub transfers: bool,
     /// Draw server kinds among main, io and none (otherwise all main).
     pub mixed_servers: bool,
+    /// Probability that an I/O VCPU serves (inherits the priority of) a Main
+    /// VCPU on its CPU.
+    pub inheritance: f64,
 }
 
 impl Default for GenConfig {
@@ -113,6 +116,7 @@ impl Default for GenConfig {
             chains: 3,
             transfers: true,
             mixed_servers: false,
+            inheritance: 0.0,
         }
     }
 }
@@ -166,6 +170,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
             budget_given: None,
             server,
             cpu: rng.range(0, cpus as u64 - 1) as u32,
+            serves: None,
             delta_in: 0,
             delta_out: 0,
         });
@@ -177,6 +182,19 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
                 if !t.reads.contains(&p) {
                     t.reads.push(p);
                 }
+            }
+        }
+    }
+    if cfg.inheritance > 0.0 {
+        for i in 0..n {
+            if tasks[i].server != Server::Io || !rng.chance(cfg.inheritance) {
+                continue;
+            }
+            let mains: Vec<usize> = (0..n)
+                .filter(|&j| tasks[j].server == Server::Main && tasks[j].cpu == tasks[i].cpu)
+                .collect();
+            if !mains.is_empty() {
+                tasks[i].serves = Some(mains[rng.range(0, mains.len() as u64 - 1) as usize]);
             }
         }
     }

@@ -139,6 +139,9 @@ pub struct Task {
     pub budget_given: Option<Nanos>,
     pub server: Server,
     pub cpu: u32,
+    /// I/O VCPUs only: the Main VCPU this one serves. While that task has a
+    /// job pending, the I/O VCPU inherits its priority (PIBS, Section II-B).
+    pub serves: Option<usize>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -604,6 +607,47 @@ impl Builder {
         }
         let mut tasks: Vec<Task> = tasks.into_iter().collect::<Option<Vec<_>>>()?;
 
+        // PIBS priority inheritance: an I/O VCPU serves a Main VCPU on its CPU.
+        for (i, (_, v)) in raw_tasks.iter().enumerate() {
+            let Some(sv) = &v.get_ref().serves else {
+                continue;
+            };
+            let Some(&m) = task_index.get(sv.get_ref()) else {
+                self.unknown_task(sv, &names);
+                continue;
+            };
+            let problem = if tasks[i].server != Server::Io {
+                Some(format!(
+                    "`serves` is for I/O VCPUs, but `{}` has server \"{}\"",
+                    names[i],
+                    tasks[i].server.name()
+                ))
+            } else if m == i {
+                Some(format!("task `{}` cannot serve itself", names[i]))
+            } else if tasks[m].server != Server::Main {
+                Some(format!(
+                    "`{}` serves `{}`, which is not a Main VCPU (server \"{}\")",
+                    names[i],
+                    names[m],
+                    tasks[m].server.name()
+                ))
+            } else if tasks[m].cpu != tasks[i].cpu {
+                Some(format!(
+                    "`{}` (cpu {}) serves `{}` on another cpu ({})",
+                    names[i], tasks[i].cpu, names[m], tasks[m].cpu
+                ))
+            } else {
+                None
+            };
+            match problem {
+                Some(msg) => self.err(
+                    msg,
+                    span(sv),
+                    "an I/O VCPU (server = \"io\") may serve a Main VCPU (server = \"main\") on the same cpu",
+                ),
+                None => tasks[i].serves = Some(m),
+            }
+        }
         // Producers must write something for consumers to read.
         for (ci, (_, v)) in raw_tasks.iter().enumerate() {
             for r in &v.get_ref().reads {
@@ -927,6 +971,7 @@ impl Builder {
             budget_given: budget?,
             server: server?,
             cpu: cpu?,
+            serves: None,
             delta_in: 0,
             delta_out: 0,
         })

@@ -58,6 +58,7 @@ pub struct RawTask {
     pub budget: Option<S<toml::Value>>,
     pub server: Option<S<String>>,
     pub cpu: Option<S<toml::Value>>,
+    pub serves: Option<S<String>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

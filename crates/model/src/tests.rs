@@ -221,3 +221,24 @@ fn garbage_never_panics() {
         assert!(Spec::parse("x.toml", src).is_err());
     }
 }
+
+#[test]
+fn serves_is_checked() {
+    let base = "[system]\nname = \"s\"\n[tasks.m]\nexec = 1\nperiod = 10\n[tasks.io]\nexec = 1\nperiod = 20\nserver = \"io\"\nserves = \"m\"\n";
+    let s = Spec::parse("s.toml", base).expect("valid");
+    assert_eq!(s.tasks[1].serves, Some(0));
+    let e = err(&base.replace("server = \"io\"\n", ""));
+    assert!(
+        e.diagnostics[0]
+            .message
+            .contains("`serves` is for I/O VCPUs"),
+        "{e}"
+    );
+    let e = err(&base.replace("[tasks.m]\nexec = 1\n", "[tasks.m]\nexec = 1\ncpu = 1\n"));
+    assert!(e.diagnostics[0].message.contains("on another cpu"), "{e}");
+    let e = err(&base.replace("serves = \"m\"", "serves = \"mm\""));
+    assert!(
+        e.diagnostics[0].message.contains("unknown task `mm`"),
+        "{e}"
+    );
+}

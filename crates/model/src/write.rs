@@ -120,6 +120,9 @@ pub fn to_toml(spec: &Spec) -> String {
         }
         let _ = writeln!(o, "server = \"{}\"", t.server.name());
         let _ = writeln!(o, "cpu = {}", t.cpu);
+        if let Some(m) = t.serves {
+            let _ = writeln!(o, "serves = {}", quoted(&spec.tasks[m].name));
+        }
     }
     for c in &spec.chains {
         let _ = writeln!(o, "\n[[chain]]");

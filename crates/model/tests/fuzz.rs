@@ -625,6 +625,7 @@ prop_compose! {
             chains,
             transfers,
             mixed_servers,
+            inheritance: if mixed_servers { 0.3 } else { 0.0 },
         }
     }
 }

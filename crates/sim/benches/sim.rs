@@ -37,6 +37,7 @@ fn system(tasks: usize, cpus: u32, scheduler: Scheduler) -> Spec {
             utilization: 0.6,
             scheduler,
             mixed_servers: true,
+            inheritance: 0.0,
             chains: 3,
             ..GenConfig::default()
         },

@@ -345,6 +345,9 @@ struct TaskSim {
     class: u8,
     /// RM rank (1 = highest); unused under EDF.
     rank: i64,
+    /// PIBS: the Main VCPU this I/O VCPU serves; while it has a job pending,
+    /// this one runs at its rank (priority inheritance).
+    serves: Option<usize>,
     demand_min: Nanos,
     demand: Nanos,
     rng: Rng,
@@ -492,6 +495,11 @@ impl Sim {
                 period: periods[i],
                 class: u8::from(t.server == Server::Background),
                 rank: ranks[i].map_or(i as i64, |r| r as i64),
+                serves: if spec.scheduler == Scheduler::Rm {
+                    t.serves
+                } else {
+                    None
+                },
                 // Validated specs have 0 ≤ demand_min ≤ demand; clamp anyway.
                 demand_min: t.demand_min().clamp(0, t.demand().max(0)),
                 demand: t.demand().max(0),
@@ -656,7 +664,12 @@ impl Sim {
                 let key = match (&ts.budget, self.edf) {
                     (Budget::Cbs(c), _) => c.deadline,
                     (_, true) => job.release + ts.period,
-                    (_, false) => ts.rank,
+                    (_, false) => match ts.serves {
+                        Some(m) if !self.tasks[m].queue.is_empty() => {
+                            ts.rank.min(self.tasks[m].rank)
+                        }
+                        _ => ts.rank,
+                    },
                 };
                 Some(((class, key, i), (i, class == 2)))
             })

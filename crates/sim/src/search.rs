@@ -648,6 +648,7 @@ mod tests {
             budget_given: None,
             server: Server::Main,
             cpu,
+            serves: None,
             delta_in: 0,
             delta_out: 0,
         }

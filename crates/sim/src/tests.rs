@@ -20,6 +20,7 @@ fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
         budget_given: None,
         server: Server::Main,
         cpu,
+        serves: None,
         delta_in: 0,
         delta_out: 0,
     }
@@ -345,4 +346,23 @@ fn bad_inputs_are_errors() {
     s.chains.clear();
     s.tasks[0].period = PeriodSpec::Free;
     assert_eq!(simulate(&s, &cfg), Err(SimError::NoPeriod("t0".into())));
+}
+
+#[test]
+fn pibs_inherits_the_served_priority() {
+    // io (T 20, demand 2) serves m (T 10, demand 1); both released at 0. io
+    // inherits m's rank while m waits, wins the tie (declared first) and runs
+    // [0, 2); m runs [2, 3): m's response 3 = 1 + 2, as the analysis says.
+    let src = "[system]\nname = \"p\"\n[tasks.io]\nexec = 2\nperiod = 20\nserver = \"io\"\nserves = \"m\"\n[tasks.m]\nexec = 1\nperiod = 10\n";
+    let spec = match rtpipe_model::Spec::parse("p.toml", src) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    let res = match simulate(&spec, &SimConfig::new(20_000_000)) {
+        Ok(r) => r,
+        Err(e) => panic!("{e}"),
+    };
+    assert_eq!(res.tasks[1].max_response, Some(3_000_000));
+    let (timing, _) = rtpipe_analysis::sched::analyze(&spec);
+    assert_eq!(timing[1].job_response_time, Some(3_000_000));
 }

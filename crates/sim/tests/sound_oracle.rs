@@ -25,7 +25,8 @@ const MS: Nanos = 1_000_000;
 const MAX_HORIZON: Nanos = 5_000 * MS;
 
 /// The generator settings of a seed: tasks 2..=12, 1 or 2 CPUs, RM or EDF,
-/// utilisation 0.3..0.9 per CPU, mixed servers or not, 3 chains.
+/// utilisation 0.3..0.9 per CPU, mixed servers or not (half of the I/O
+/// VCPUs serving a Main VCPU), 3 chains.
 fn gen_config(seed: u64) -> GenConfig {
     let mut r = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xA5A5);
     GenConfig {
@@ -40,6 +41,8 @@ fn gen_config(seed: u64) -> GenConfig {
         mixed_servers: r.chance(0.5),
         feedback: if r.chance(0.25) { 0.3 } else { 0.0 },
         chains: 3,
+        // I/O VCPUs that inherit the priority of the Main VCPU they serve.
+        inheritance: 0.5,
         ..GenConfig::default()
     }
 }
