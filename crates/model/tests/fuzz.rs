@@ -707,6 +707,9 @@ fn print(spec: &Spec, unit: TimeUnit, style: u64) -> (String, Spec) {
         if t.cpu != 0 || rng.chance(0.3) {
             s += &format!("cpu = {}\n", t.cpu);
         }
+        if let Some(m) = t.serves {
+            s += &format!("serves = \"{}\"\n", spec.tasks[m].name);
+        }
     }
     for (k, c) in spec.chains.iter().enumerate() {
         s += "\n[[chain]]\n";
