@@ -864,6 +864,11 @@ impl<'a> Runner<'a> {
                     let oa = self.oa_exact(&periods);
                     let sched = self.sched_ok(&cand, &report);
                     if !oa || !sched {
+                        // Learn response times from the same candidate now
+                        // rather than after it comes back.
+                        if let Some(sm) = &mut sound {
+                            learn_r_cuts(self.g, &cand, &report, &periods, &rmodel, sm);
+                        }
                         continue;
                     }
                     if self.limits_ok(&report) {

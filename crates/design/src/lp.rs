@@ -188,6 +188,7 @@ fn solve_highs(
     time_limit: Option<f64>,
 ) -> Result<LpSolution, LpError> {
     let mut m = pv.minimise(obj).using(good_lp::highs);
+    m.set_verbose(false);
     if let Some(t) = time_limit {
         m = m.with_time_limit(t.max(0.01));
     }

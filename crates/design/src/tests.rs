@@ -138,3 +138,25 @@ fn infeasible_limits_are_explained() {
         o.conflicts
     );
 }
+
+#[cfg(feature = "highs")]
+#[test]
+fn backends_agree_on_paper_mode() {
+    let spec = table2_free();
+    let mut us = Vec::new();
+    for solver in [SolverKind::Microlp, SolverKind::Highs] {
+        let opts = Options {
+            mode: Mode::Paper,
+            solver,
+            ..Options::default()
+        };
+        match design(&spec, &opts) {
+            Ok(o) => {
+                assert_eq!(o.status, Status::Optimal, "{solver:?}");
+                us.push(o.objective.unwrap_or(f64::NAN));
+            }
+            Err(e) => panic!("{solver:?}: {e}"),
+        }
+    }
+    assert!((us[0] - us[1]).abs() < 1e-9, "{us:?}");
+}
