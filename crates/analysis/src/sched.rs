@@ -98,6 +98,23 @@ pub fn top_priorities(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>>
         .collect()
 }
 
+/// The guaranteed tasks that can run above task `i` on its CPU: rank at or
+/// above i's own (an inherited rank may win the tie).
+pub fn interferers(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    i: usize,
+) -> Vec<usize> {
+    let t = &spec.tasks[i];
+    (0..spec.tasks.len())
+        .filter(|&j| {
+            let o = &spec.tasks[j];
+            j != i && o.cpu == t.cpu && o.server != Server::Background && top[j] <= prio[i]
+        })
+        .collect()
+}
+
 /// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
 /// Audsley et al. 1993). `None` when the higher-priority load (with own) is
 /// 100 % or more, so the iteration would not converge, or on overflow.
@@ -151,20 +168,9 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
         } else {
             match spec.scheduler {
                 Scheduler::Rm => {
-                    let my = prio[i];
-                    let hp: Vec<(Nanos, Nanos)> = spec
-                        .tasks
-                        .iter()
-                        .enumerate()
-                        .filter(|&(j, o)| {
-                            j != i
-                                && o.cpu == t.cpu
-                                && o.server != Server::Background
-                                // j can run above i (inherited priority counts;
-                                // an equal rank may win the tie).
-                                && top[j] <= my
-                        })
-                        .map(|(_, o)| (interference(o), period(o)))
+                    let hp: Vec<(Nanos, Nanos)> = interferers(spec, &prio, &top, i)
+                        .into_iter()
+                        .map(|j| (interference(&spec.tasks[j]), period(&spec.tasks[j])))
                         .collect();
                     (
                         response_time(t.budget(), &hp),

@@ -31,6 +31,20 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
     Ok(spec)
 }
 
+/// Prints a JSON value on stdout; an encoding failure is an error exit.
+pub fn print_json(v: &Value) -> Result<(), ExitCode> {
+    match serde_json::to_string_pretty(v) {
+        Ok(s) => {
+            println!("{s}");
+            Ok(())
+        }
+        Err(e) => {
+            eprintln!("error: cannot encode JSON: {e}");
+            Err(ExitCode::from(EXIT_BAD_INPUT))
+        }
+    }
+}
+
 pub fn run(path: &Path, json_out: bool, all_paths: bool) -> ExitCode {
     let spec = match load(path) {
         Ok(s) => s,
@@ -43,12 +57,8 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool) -> ExitCode {
         if let Some(p) = &paths {
             v["all_paths"] = paths_json(&spec, p);
         }
-        match serde_json::to_string_pretty(&v) {
-            Ok(s) => println!("{s}"),
-            Err(e) => {
-                eprintln!("error: cannot encode JSON: {e}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
+        if let Err(code) = print_json(&v) {
+            return code;
         }
     } else {
         print!("{}", report_text(&spec, &report));

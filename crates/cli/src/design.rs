@@ -78,12 +78,8 @@ pub fn run(a: Args) -> ExitCode {
             _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
         };
         v["design"] = design_json(&spec, &out, opts.mode);
-        match serde_json::to_string_pretty(&v) {
-            Ok(s) => println!("{s}"),
-            Err(e) => {
-                eprintln!("error: cannot encode JSON: {e}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
+        if let Err(code) = crate::analyze::print_json(&v) {
+            return code;
         }
     } else {
         print!("{}", design_text(&spec, &out, opts.mode));

@@ -676,12 +676,8 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         if !searches.is_empty() {
             v["search"] = search_json(&spec, &searches);
         }
-        match serde_json::to_string_pretty(&v) {
-            Ok(s) => println!("{s}"),
-            Err(e) => {
-                eprintln!("error: cannot encode JSON: {e}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
+        if let Err(code) = crate::analyze::print_json(&v) {
+            return code;
         }
     } else {
         print!("{}", to_text(&spec, &report, a, &p, &res, &obs, seconds));

@@ -786,14 +786,8 @@ impl<'a> Runner<'a> {
                 }
                 let ok = tm.response_time.is_some_and(|r| r <= tm.period);
                 if !ok {
-                    let hp: Vec<usize> = (0..spec.tasks.len())
-                        .filter(|&j| {
-                            j != i
-                                && spec.tasks[j].cpu == spec.tasks[i].cpu
-                                && spec.tasks[j].server != Server::Background
-                                && prio[j] < prio[i]
-                        })
-                        .collect();
+                    let top = rtpipe_analysis::sched::top_priorities(spec, &prio);
+                    let hp = rtpipe_analysis::sched::interferers(spec, &prio, &top, i);
                     let periods = hp
                         .iter()
                         .chain(std::iter::once(&i))
@@ -1142,6 +1136,7 @@ fn learn_r_cuts(
     sm: &mut SoundModel,
 ) -> bool {
     let prio = rtpipe_analysis::sched::rm_priorities(cand);
+    let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
     let mut learnt = false;
     for (i, mv) in rmodel.iter().enumerate() {
         let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
@@ -1149,14 +1144,7 @@ fn learn_r_cuts(
         };
         let tr = gu(tr, g);
         if tr > mv + 1e-6 {
-            let hp: Vec<usize> = (0..cand.tasks.len())
-                .filter(|&j| {
-                    j != i
-                        && cand.tasks[j].cpu == cand.tasks[i].cpu
-                        && cand.tasks[j].server != Server::Background
-                        && prio[j] < prio[i]
-                })
-                .collect();
+            let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
             let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
             sm.cuts.push(RCut {
                 i,
