@@ -307,6 +307,10 @@ fn interference(t: &rtpipe_model::Task) -> Nanos {
     }
 }
 
+/// Seconds the exact search may run after the heuristic found a verified
+/// design, when no --time-limit is given.
+const EXACT_PATIENCE: f64 = 20.0;
+
 /// Converts ns to grid units.
 fn gu(ns: Nanos, g: i64) -> f64 {
     ns as f64 / g as f64
@@ -386,6 +390,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         rta_cuts: Vec::new(),
         oa_points: vec![Vec::new(); n],
         iterations: 0,
+        deadline: None,
     };
     run.solve_all()
 }
@@ -452,6 +457,8 @@ struct Runner<'a> {
     /// Outer-approximation points (k values) per Grid task.
     oa_points: Vec<Vec<i64>>,
     iterations: usize,
+    /// No solve may run past this (the patience after a verified design).
+    deadline: Option<Instant>,
 }
 
 /// What the sound model knows of response times: unconditional lower
@@ -461,6 +468,9 @@ struct SoundModel {
     /// R_i ≥ this whatever the periods (grid units).
     rlow: Vec<f64>,
     cuts: Vec<RCut>,
+    /// Heuristic phase: response times pinned to these estimates (not a
+    /// relaxation; its candidates still go through the analysis).
+    fixed: Option<Vec<f64>>,
 }
 
 /// R_i ≥ r unless some higher-priority task's period grew past its value
@@ -475,6 +485,8 @@ struct RCut {
 
 enum Solved {
     Infeasible,
+    /// Stopped by a time limit: nothing proven.
+    TimeLimit,
     /// Periods per task (ns), the model objective, proven optimal, and the
     /// model's response times (grid units) where it has them.
     Periods(Vec<Nanos>, f64, bool, Vec<Option<f64>>),
@@ -658,12 +670,20 @@ impl<'a> Runner<'a> {
                 }
             }
             for i in (0..n).filter(|&i| on_chain[i]) {
-                let r = m.lp.var(sm.rlow[i], self.big_m, false);
+                let r = match &sm.fixed {
+                    Some(f) => m.lp.var(f[i], f[i], false),
+                    None => m.lp.var(sm.rlow[i], self.big_m, false),
+                };
                 m.rvar[i] = Some(r);
                 let mut t = m.period[i].terms.clone();
                 t.push((r, -1.0));
                 m.lp.row(t, Cmp::Ge, -m.period[i].c);
             }
+            let on_chain: Vec<bool> = if sm.fixed.is_some() {
+                vec![false; n]
+            } else {
+                on_chain
+            };
             // R_i ≥ x_i + Σ_{j ≻ i} C_j: at least one job of each task above.
             for i in (0..n).filter(|&i| on_chain[i]) {
                 let Some(r) = m.rvar[i] else { continue };
@@ -682,8 +702,10 @@ impl<'a> Runner<'a> {
                 }
                 m.lp.row(terms, Cmp::Ge, rhs);
             }
-            for cut in &sm.cuts {
-                add_r_cut(&mut m, cut);
+            if sm.fixed.is_none() {
+                for cut in &sm.cuts {
+                    add_r_cut(&mut m, cut);
+                }
             }
         }
         // Chain limits.
@@ -709,9 +731,23 @@ impl<'a> Runner<'a> {
 
     fn solve_master(&self, groups: &[Group], sound: Option<&SoundModel>) -> Solved {
         let (m, _) = self.build(groups, sound);
-        let left = self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01));
-        match lp::solve(&m.lp, self.opts.solver, left) {
+        let mut left = self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01));
+        if let Some(d) = self.deadline {
+            let d = d
+                .saturating_duration_since(Instant::now())
+                .as_secs_f64()
+                .max(0.01);
+            left = Some(left.map_or(d, |l| l.min(d)));
+        }
+        let solved = lp::solve(&m.lp, self.opts.solver, left);
+        if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+            if let Err(e) = &solved {
+                eprintln!("master: {e} (limit {left:?}, {:.2} s)", self.elapsed());
+            }
+        }
+        match solved {
             Err(LpError::Infeasible) => Solved::Infeasible,
+            Err(LpError::TimeLimit) => Solved::TimeLimit,
             Err(e) => Solved::Error(e.to_string()),
             Ok(sol) => {
                 let periods = (0..self.spec.tasks.len())
@@ -820,12 +856,21 @@ impl<'a> Runner<'a> {
             Mode::Sound => Some(SoundModel {
                 rlow: self.rhat_lower(),
                 cuts: Vec::new(),
+                fixed: None,
             }),
         };
         let mut lower_bound: Option<f64> = None;
         let mut limited = false;
+        // A verified design from the heuristic phase (sound mode), and when
+        // the exact search after it started.
+        let mut incumbent: Option<(Spec, Report, f64)> = None;
+        let mut heuristic_tried = false;
+        let mut exact_since: Option<Instant> = None;
         loop {
-            if self.iterations >= self.opts.max_iterations || self.out_of_time() {
+            let patience_out = incumbent.is_some()
+                && self.opts.time_limit.is_none()
+                && exact_since.is_some_and(|t| t.elapsed().as_secs_f64() > EXACT_PATIENCE);
+            if self.iterations >= self.opts.max_iterations || self.out_of_time() || patience_out {
                 limited = true;
                 break;
             }
@@ -843,6 +888,10 @@ impl<'a> Runner<'a> {
             }
             match solved {
                 Solved::Error(e) => return Err(DesignError(e)),
+                Solved::TimeLimit => {
+                    limited = true;
+                    break;
+                }
                 Solved::Infeasible => {
                     let conflicts = self.explain(&groups, sound.as_ref());
                     return Ok(self.outcome(Status::Infeasible, None, None, conflicts, notes));
@@ -855,6 +904,49 @@ impl<'a> Runner<'a> {
                     }
                     let cand = self.with_periods(&periods);
                     let report = rtpipe_analysis::analyze(&cand);
+                    // Any candidate the analysis accepts is a valid design,
+                    // optimal or not: keep the best one.
+                    if report.schedulability.schedulable && self.limits_ok(&report) {
+                        let u = utilization(&cand);
+                        if incumbent.as_ref().is_none_or(|(_, _, b)| u < *b) {
+                            incumbent = Some((cand.clone(), report.clone(), u));
+                        }
+                        exact_since.get_or_insert_with(Instant::now);
+                    }
+                    if let (Some(t), None, None) =
+                        (exact_since, self.opts.time_limit, self.deadline)
+                    {
+                        self.deadline =
+                            Some(t + std::time::Duration::from_secs_f64(EXACT_PATIENCE));
+                    }
+                    if let (false, Some(sm)) = (heuristic_tried, &sound) {
+                        if !self.limits_ok(&report) {
+                            // Look for a verified design quickly: pin response
+                            // times to estimates and raise them until one verifies.
+                            heuristic_tried = true;
+                            let start: Vec<f64> = (0..cand.tasks.len())
+                                .map(|i| {
+                                    let r = report.timing[i]
+                                        .job_response_time
+                                        .map_or(0.0, |r| gu(r, self.g));
+                                    r.max(sm.rlow[i])
+                                })
+                                .collect();
+                            let sm_copy = sm.clone();
+                            if let Some(h) = self.heuristic(&groups, &sm_copy, start) {
+                                if incumbent.as_ref().is_none_or(|(_, _, b)| h.2 < *b) {
+                                    incumbent = Some(h);
+                                }
+                            }
+                            exact_since.get_or_insert_with(Instant::now);
+                            if self.opts.time_limit.is_none() && incumbent.is_some() {
+                                self.deadline.get_or_insert(
+                                    Instant::now()
+                                        + std::time::Duration::from_secs_f64(EXACT_PATIENCE),
+                                );
+                            }
+                        }
+                    }
                     let oa = self.oa_exact(&periods);
                     let sched = self.sched_ok(&cand, &report);
                     if !oa || !sched {
@@ -884,11 +976,12 @@ impl<'a> Runner<'a> {
                         };
                         return Ok(o);
                     }
-                    let Some(sm) = &mut sound else {
+                    let Some(_) = &sound else {
                         return Err(DesignError(
                             "internal: the paper-mode model and the analysis disagree on a candidate".into(),
                         ));
                     };
+                    let Some(sm) = &mut sound else { continue };
                     // Learn the response times the model under-estimated.
                     let learnt = learn_r_cuts(self.g, &cand, &report, &periods, &rmodel, sm);
                     if !learnt {
@@ -900,11 +993,87 @@ impl<'a> Runner<'a> {
                 }
             }
         }
-        notes.push("stopped by the time or iteration limit before a verified design".into());
         let _ = limited;
+        if let Some((cand, report, u)) = incumbent {
+            notes.push(format!(
+                "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
+                if self.opts.time_limit.is_some() { "time limit" } else { "give --time-limit to search longer" }
+            ));
+            let lb = lower_bound.map(|b| b.min(u));
+            let mut o = self.outcome(
+                Status::Feasible,
+                Some((cand, report)),
+                lb,
+                Vec::new(),
+                notes,
+            );
+            o.objective = Some(u);
+            o.gap = lb.map(|b| if u > 0.0 { ((u - b) / u).max(0.0) } else { 0.0 });
+            return Ok(o);
+        }
+        notes.push("stopped by the time or iteration limit before a verified design".into());
         let mut o = self.outcome(Status::Unknown, None, lower_bound, Vec::new(), notes);
         o.lower_bound = lower_bound;
         Ok(o)
+    }
+
+    /// Response times pinned to estimates, raised to the analysed values of
+    /// each failed candidate until a candidate verifies (or the model turns
+    /// infeasible). Fast, not exact: the caller keeps the lower bound.
+    fn heuristic(
+        &mut self,
+        groups: &[Group],
+        sm: &SoundModel,
+        start: Vec<f64>,
+    ) -> Option<(Spec, Report, f64)> {
+        let mut fixed = start;
+        for _ in 0..60 {
+            if self.out_of_time() {
+                return None;
+            }
+            let model = SoundModel {
+                rlow: sm.rlow.clone(),
+                cuts: Vec::new(),
+                fixed: Some(fixed.clone()),
+            };
+            let solved = self.solve_master(groups, Some(&model));
+            if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+                if let Solved::Periods(p, obj, _, _) = &solved {
+                    eprintln!(
+                        "heuristic: objective {obj:.6} periods {p:?} ({:.2} s)",
+                        self.elapsed()
+                    );
+                }
+            }
+            let Solved::Periods(p, _, _, _) = solved else {
+                return None;
+            };
+            let cand = self.with_periods(&p);
+            let report = rtpipe_analysis::analyze(&cand);
+            let oa = self.oa_exact(&p);
+            let sched = self.sched_ok(&cand, &report);
+            if !oa || !sched {
+                continue;
+            }
+            if self.limits_ok(&report) {
+                let u = utilization(&cand);
+                return Some((cand, report, u));
+            }
+            let mut raised = false;
+            for (f, t) in fixed.iter_mut().zip(&report.timing) {
+                if let Some(r) = t.job_response_time {
+                    let r = gu(r, self.g);
+                    if r > *f + 1e-9 {
+                        *f = r;
+                        raised = true;
+                    }
+                }
+            }
+            if !raised {
+                return None;
+            }
+        }
+        None
     }
 
     fn outcome(
@@ -968,15 +1137,16 @@ impl<'a> Runner<'a> {
     /// response-time cuts) restricted to them, until the master is
     /// infeasible or a candidate needs no more cuts. Cuts learnt here are
     /// valid everywhere and kept.
-    fn probe(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> bool {
+    /// `None` when it could not be decided (time or iteration limit).
+    fn probe(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Option<bool> {
         let mut sm = sound.cloned();
         for _ in 0..100 {
             if self.out_of_time() {
-                return true; // unknown: keep the group (conservative)
+                return None;
             }
             let periods = match self.solve_master(groups, sm.as_ref()) {
-                Solved::Infeasible => return false,
-                Solved::Error(_) => return true,
+                Solved::Infeasible => return Some(false),
+                Solved::Error(_) | Solved::TimeLimit => return None,
                 Solved::Periods(p, _, _, rmodel) => {
                     let cand = self.with_periods(&p);
                     let report = rtpipe_analysis::analyze(&cand);
@@ -987,10 +1157,10 @@ impl<'a> Runner<'a> {
                         continue;
                     }
                     match &mut sm {
-                        None => return true,
+                        None => return Some(true),
                         Some(m) => {
                             if !learn_r_cuts(self.g, &cand, &report, &p, &rmodel, m) {
-                                return true;
+                                return Some(true);
                             }
                         }
                     }
@@ -999,7 +1169,7 @@ impl<'a> Runner<'a> {
             };
             let _ = periods;
         }
-        true
+        None
     }
 
     /// A small set of constraint groups that cannot hold together (deletion
@@ -1013,10 +1183,11 @@ impl<'a> Runner<'a> {
             }
             let mut trial = core.clone();
             trial.remove(k);
-            if self.probe(&trial, sound) {
-                k += 1;
-            } else {
+            // Keep the group unless dropping it provably keeps the conflict.
+            if self.probe(&trial, sound) == Some(false) {
                 core = trial;
+            } else {
+                k += 1;
             }
         }
         let spec = self.spec;
@@ -1084,7 +1255,7 @@ impl<'a> Runner<'a> {
         let lo0 = get(&original)?;
         let mut hi = lo0.max(1);
         // Find a feasible upper end by doubling.
-        let feasible = |me: &mut Self, l: Nanos| -> bool {
+        let feasible = |me: &mut Self, l: Nanos| -> Option<bool> {
             let mut s = original.clone();
             match metric {
                 Metric::Reaction => s.chains[c].reaction = Some(l),
@@ -1100,11 +1271,13 @@ impl<'a> Runner<'a> {
                 rta_cuts: me.rta_cuts.clone(),
                 oa_points: me.oa_points.clone(),
                 iterations: 0,
+                deadline: me.deadline,
             };
             sub.probe(core, sound)
         };
+        // Any undecided probe makes the answer unknown: say nothing then.
         let mut tries = 0;
-        while !feasible(self, hi) {
+        while !feasible(self, hi)? {
             hi = hi.saturating_mul(2);
             tries += 1;
             if tries > 20 || self.out_of_time() {
@@ -1113,9 +1286,12 @@ impl<'a> Runner<'a> {
         }
         let mut lo = lo0;
         let step = (self.spec.time_unit.nanos() / 1000).max(1);
-        while hi - lo > step && !self.out_of_time() {
+        while hi - lo > step {
+            if self.out_of_time() {
+                return None;
+            }
             let mid = lo + (hi - lo) / 2;
-            if feasible(self, mid) {
+            if feasible(self, mid)? {
                 hi = mid;
             } else {
                 lo = mid;

@@ -89,6 +89,8 @@ pub struct LpSolution {
 pub enum LpError {
     Infeasible,
     Unbounded,
+    /// Stopped by the time limit before a solution or a proof.
+    TimeLimit,
     /// The solver is not compiled in.
     Unavailable(&'static str),
     Other(String),
@@ -98,6 +100,7 @@ impl fmt::Display for LpError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             LpError::Infeasible => write!(f, "infeasible"),
+            LpError::TimeLimit => write!(f, "time limit reached"),
             LpError::Unbounded => write!(f, "unbounded"),
             LpError::Unavailable(s) => write!(
                 f,
@@ -166,6 +169,23 @@ where
 
 /// Solves with the chosen backend and an optional time limit in seconds.
 pub fn solve(lp: &Lp, solver: SolverKind, time_limit: Option<f64>) -> Result<LpSolution, LpError> {
+    let started = std::time::Instant::now();
+    let r = solve_inner(lp, solver, time_limit);
+    // Backends report a time-limited solve without a solution as
+    // "infeasible"; that is not a proof.
+    match (r, time_limit) {
+        (Err(LpError::Infeasible), Some(t)) if started.elapsed().as_secs_f64() >= 0.5 * t => {
+            Err(LpError::TimeLimit)
+        }
+        (r, _) => r,
+    }
+}
+
+fn solve_inner(
+    lp: &Lp,
+    solver: SolverKind,
+    time_limit: Option<f64>,
+) -> Result<LpSolution, LpError> {
     let (pv, vars, obj) = build(lp);
     match solver {
         SolverKind::Microlp => {
