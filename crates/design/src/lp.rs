@@ -163,6 +163,8 @@ where
         }
         Err(ResolutionError::Infeasible) => Err(LpError::Infeasible),
         Err(ResolutionError::Unbounded) => Err(LpError::Unbounded),
+        // microlp says so in words when its time runs out without a solution.
+        Err(e) if e.to_string().contains("Time limit") => Err(LpError::TimeLimit),
         Err(e) => Err(LpError::Other(e.to_string())),
     }
 }
