@@ -262,6 +262,20 @@ impl<'a> Master<'a> {
         bin
     }
 
+    /// A binary b with b = 1 ⇒ T_j ≥ tj + 1 ("the period of j grew past its
+    /// value in a cut"); `None` when it cannot grow.
+    fn grew(&mut self, j: usize, tj: i64) -> Option<usize> {
+        if matches!(self.dom[j], Dom::Fixed(_)) || self.dom[j].max() <= tj {
+            return None;
+        }
+        let b = self.lp.binary();
+        let p = self.period[j].clone();
+        let mut t = p.terms.clone();
+        t.push((b, -self.big_m));
+        self.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - self.big_m);
+        Some(b)
+    }
+
     /// RM priority: a ≻ b.
     fn above(&mut self, a: usize, b: usize) -> Bin {
         self.lt(a, b, a < b)
@@ -1336,23 +1350,12 @@ fn learn_r_cuts(
 
 fn add_rta_cut(m: &mut Master, cut: &RtaCut) {
     // Σ [T_j ≥ T*_j + 1] + Σ_{j ∈ hp} [j no longer above i] ≥ 1.
-    let big = m.big_m;
     let mut sum: Vec<(usize, f64)> = Vec::new();
     let mut always = false;
     for &(j, tj) in &cut.periods {
-        if let Dom::Fixed(_) = m.dom[j] {
-            continue;
+        if let Some(b) = m.grew(j, tj) {
+            sum.push((b, 1.0));
         }
-        if m.dom[j].max() <= tj {
-            continue;
-        }
-        let b = m.lp.binary();
-        // b = 1 ⇒ T_j ≥ T*_j + 1.
-        let p = m.period[j].clone();
-        let mut t = p.terms.clone();
-        t.push((b, -big));
-        m.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - big);
-        sum.push((b, 1.0));
     }
     for &j in &cut.hp {
         match m.above(j, cut.i) {
@@ -1411,15 +1414,9 @@ fn add_r_cut(m: &mut Master, cut: &RCut) {
     let mut terms: Vec<(usize, f64)> = vec![(rv, 1.0)];
     let mut rhs = cut.r;
     for &(j, tj) in &cut.periods {
-        if matches!(m.dom[j], Dom::Fixed(_)) || m.dom[j].max() <= tj {
-            continue;
+        if let Some(b) = m.grew(j, tj) {
+            terms.push((b, big));
         }
-        let b = m.lp.binary();
-        let p = m.period[j].clone();
-        let mut t = p.terms.clone();
-        t.push((b, -big));
-        m.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - big);
-        terms.push((b, big));
     }
     for &j in &cut.hp {
         match m.above(j, cut.i) {
