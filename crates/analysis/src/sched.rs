@@ -60,7 +60,7 @@ pub struct Schedulability {
 
 /// Interference a higher-priority task imposes per release: its budget when a
 /// server enforces one (it can never take more), its demand otherwise.
-fn interference(t: &Task) -> Nanos {
+pub fn interference(t: &Task) -> Nanos {
     match t.server {
         Server::Main | Server::Io => t.budget(),
         Server::None | Server::Background => t.demand(),

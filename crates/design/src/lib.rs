@@ -11,6 +11,7 @@
 pub mod lp;
 
 use lp::{Cmp, Lp, LpError, SolverKind};
+use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
 use std::collections::HashMap;
@@ -309,15 +310,6 @@ impl<'a> Master<'a> {
             }
         }
         self.lp.row(terms, Cmp::Ge, rhs);
-    }
-}
-
-/// What a higher-priority task can take per release (its budget when a
-/// server enforces one).
-fn interference(t: &rtpipe_model::Task) -> Nanos {
-    match t.server {
-        Server::Main | Server::Io => t.budget(),
-        _ => t.demand(),
     }
 }
 
@@ -1136,10 +1128,7 @@ impl<'a> Runner<'a> {
                     let (di, dj) = (&self.dom[i], &self.dom[j]);
                     let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
                     if always_above && spec.scheduler == Scheduler::Rm {
-                        r += match spec.tasks[j].server {
-                            Server::Main | Server::Io => spec.tasks[j].budget(),
-                            _ => spec.tasks[j].demand(),
-                        };
+                        r += interference(&spec.tasks[j]);
                     }
                 }
                 gu(r, self.g)
