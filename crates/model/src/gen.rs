@@ -6,8 +6,8 @@
 //! Utilisation per CPU is split with UUniFast (Bini and Buttazzo 2005).
 
 use crate::{
-    compute_transfers, Chain, Channel, PeriodSpec, Port, SchedTest, Scheduler, Server, Spec, Task,
-    TimeUnit,
+    compute_transfers, Chain, Channel, Nanos, PeriodSpec, Port, SchedTest, Scheduler, Server, Spec,
+    Task, TimeUnit,
 };
 
 /// SplitMix64: tiny, fast, good enough for test generation, and stable across
@@ -121,6 +121,53 @@ impl Default for GenConfig {
     }
 }
 
+/// Number of source tasks (tasks `0..n_sources` read no other task) that
+/// [`random_system`] makes of `n` tasks.
+fn source_count(n: usize, cfg: &GenConfig) -> usize {
+    ((n as f64 * cfg.source_fraction).ceil() as usize).clamp(1, n)
+}
+
+/// Consumers of every task along forward edges (producer index below the
+/// consumer's), in declaration order.
+fn forward_consumers(tasks: &[Task]) -> Vec<Vec<usize>> {
+    let mut c = vec![Vec::new(); tasks.len()];
+    for (ci, t) in tasks.iter().enumerate() {
+        for &p in &t.reads {
+            if p < ci {
+                c[p].push(ci);
+            }
+        }
+    }
+    c
+}
+
+/// A random walk forward along edges from one of the first `n_sources`
+/// tasks, aiming at 2–15 tasks; `accept(path, next)` filters the next step.
+/// The walk stops early when no consumer is accepted.
+fn random_walk(
+    rng: &mut Rng,
+    consumers: &[Vec<usize>],
+    n_sources: usize,
+    accept: impl Fn(&[usize], usize) -> bool,
+) -> Vec<usize> {
+    let mut cur = rng.range(0, n_sources as u64 - 1) as usize;
+    let len = rng.range(2, 15) as usize;
+    let mut path = vec![cur];
+    while path.len() < len {
+        let next: Vec<usize> = consumers[cur]
+            .iter()
+            .copied()
+            .filter(|&c| accept(&path, c))
+            .collect();
+        if next.is_empty() {
+            break;
+        }
+        cur = next[rng.range(0, next.len() as u64 - 1) as usize];
+        path.push(cur);
+    }
+    path
+}
+
 /// A random valid system. Times are whole microseconds so that every demand,
 /// budget and period is exact.
 pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
@@ -128,7 +175,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
     let n = cfg.tasks.max(1);
     let cpus = cfg.cpus.max(1);
     let mut tasks: Vec<Task> = Vec::with_capacity(n);
-    let n_sources = ((n as f64 * cfg.source_fraction).ceil() as usize).clamp(1, n);
+    let n_sources = source_count(n, cfg);
     for i in 0..n {
         let mut reads = Vec::new();
         if i >= n_sources {
@@ -253,26 +300,10 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         }
     }
     // Chains: random walks forward along edges.
-    let consumers = {
-        let mut c = vec![Vec::new(); n];
-        for (ci, t) in tasks.iter().enumerate() {
-            for &p in &t.reads {
-                if p < ci {
-                    c[p].push(ci);
-                }
-            }
-        }
-        c
-    };
+    let consumers = forward_consumers(&tasks);
     let mut chains = Vec::new();
     for _ in 0..cfg.chains {
-        let mut cur = rng.range(0, n_sources as u64 - 1) as usize;
-        let len = rng.range(2, 15) as usize;
-        let mut path = vec![cur];
-        while path.len() < len && !consumers[cur].is_empty() {
-            cur = consumers[cur][rng.range(0, consumers[cur].len() as u64 - 1) as usize];
-            path.push(cur);
-        }
+        let path = random_walk(&mut rng, &consumers, n_sources, |_, _| true);
         chains.push(Chain {
             name: None,
             path,
@@ -294,6 +325,206 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         tasks,
         chains,
     }
+}
+
+/// What design problem to generate: a random system in the WATERS style (see
+/// [`random_system`]) whose periods become design variables and whose chains
+/// get limits near what the generating design achieves.
+#[derive(Debug, Clone)]
+pub struct DesignGenConfig {
+    pub tasks: usize,
+    pub cpus: u32,
+    /// Total utilisation per CPU of the generating design.
+    pub utilization: f64,
+    pub scheduler: Scheduler,
+    /// Fraction of tasks with no producer (chains start at these).
+    pub source_fraction: f64,
+    /// Each non-source reads 1..=max_fan_in earlier tasks.
+    pub max_fan_in: usize,
+    /// Chains to declare: walks of 2–15 tasks along edges whose tasks use at
+    /// most 3 distinct generating periods. Fewer when the graph offers fewer
+    /// distinct such walks.
+    pub chains: usize,
+    /// Transfer costs on every edge (see [`GenConfig::transfers`]).
+    pub transfers: bool,
+    /// Server kinds among main, io and none (otherwise all main).
+    pub mixed_servers: bool,
+    /// The spec's `resolution`: the grid of designed periods.
+    pub resolution: Nanos,
+    /// Probability that a task gets a choice domain rather than a range.
+    pub choices_fraction: f64,
+    /// Every task gets a choice domain of 2..=max_choices WATERS values
+    /// around its generating period (for brute force).
+    pub choices_only: bool,
+    /// Largest choice domain (at least 2).
+    pub max_choices: usize,
+    /// Ranges end at k × the generating period, k drawn in 1..=max_factor.
+    pub max_factor: u64,
+    /// Probability that a range has a lower end (the generating period
+    /// divided by 2..=4, on the resolution grid).
+    pub min_fraction: f64,
+    /// Every limit is the generating design's sound bound times a factor
+    /// drawn uniformly in [slack.0, slack.1].
+    pub slack: (f64, f64),
+}
+
+impl Default for DesignGenConfig {
+    fn default() -> Self {
+        DesignGenConfig {
+            tasks: 6,
+            cpus: 1,
+            utilization: 0.5,
+            scheduler: Scheduler::Rm,
+            source_fraction: 0.2,
+            max_fan_in: 2,
+            chains: 3,
+            transfers: false,
+            mixed_servers: false,
+            resolution: 1_000_000,
+            choices_fraction: 0.3,
+            choices_only: false,
+            max_choices: 4,
+            max_factor: 4,
+            min_fraction: 0.5,
+            slack: (0.8, 1.5),
+        }
+    }
+}
+
+/// Sound (reaction, freshness) bounds of one chain, when they exist.
+pub type ChainBounds = (Option<Nanos>, Option<Nanos>);
+
+/// Salts that keep the random streams of the generator's stages apart.
+const CHAIN_SALT: u64 = 0x6A09_E667_F3BC_C908;
+const DOMAIN_SALT: u64 = 0xBB67_AE85_84CA_A73B;
+
+/// The generating design of [`design_problem`]: a [`random_system`] with
+/// every period fixed and chains (without limits) that use at most 3
+/// distinct periods each, walked along edges.
+pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
+    let gcfg = GenConfig {
+        tasks: cfg.tasks,
+        cpus: cfg.cpus,
+        utilization: cfg.utilization,
+        scheduler: cfg.scheduler,
+        source_fraction: cfg.source_fraction,
+        max_fan_in: cfg.max_fan_in,
+        feedback: 0.0,
+        chains: 0,
+        transfers: cfg.transfers,
+        mixed_servers: cfg.mixed_servers,
+        inheritance: 0.0,
+    };
+    let mut spec = random_system(seed, &gcfg);
+    spec.name = format!("design-{seed}");
+    spec.resolution = cfg.resolution.max(1);
+    let n = spec.tasks.len();
+    let n_sources = source_count(n, &gcfg);
+    let consumers = forward_consumers(&spec.tasks);
+    let periods: Vec<Nanos> = spec
+        .tasks
+        .iter()
+        .map(|t| t.fixed_period().unwrap_or(0))
+        .collect();
+    let mut rng = Rng::new(seed ^ CHAIN_SALT);
+    // Walks that would add a fourth distinct period are cut short; a walk of
+    // one task or one already declared is drawn again.
+    let at_most_3 = |path: &[usize], next: usize| {
+        let mut seen: Vec<Nanos> = path.iter().map(|&i| periods[i]).collect();
+        seen.push(periods[next]);
+        seen.sort_unstable();
+        seen.dedup();
+        seen.len() <= 3
+    };
+    let mut attempts = 0;
+    while spec.chains.len() < cfg.chains && attempts < 20 * cfg.chains.max(1) {
+        attempts += 1;
+        let path = random_walk(&mut rng, &consumers, n_sources, at_most_3);
+        if path.len() < 2 || spec.chains.iter().any(|c| c.path == path) {
+            continue;
+        }
+        spec.chains.push(Chain {
+            name: None,
+            path,
+            reaction: None,
+            freshness: None,
+        });
+    }
+    spec
+}
+
+/// A random design problem, deterministic per seed: [`design_origin`] with
+/// every period turned into a domain that contains the generating period
+/// (a range `[min?, k·T]` or a choice of nearby WATERS periods) and every
+/// chain limited to its generating sound bound times a slack factor, so
+/// that most instances are feasible and some are not.
+///
+/// `bound` gives the sound (reaction, freshness) bounds of every chain of a
+/// spec whose periods are all fixed, in chain order; pass one that calls
+/// `rtpipe_analysis::analyze` (this crate cannot depend on the analysis). A
+/// missing bound leaves that limit out.
+pub fn design_problem(
+    seed: u64,
+    cfg: &DesignGenConfig,
+    bound: &dyn Fn(&Spec) -> Vec<ChainBounds>,
+) -> Spec {
+    let mut spec = design_origin(seed, cfg);
+    let bounds = bound(&spec);
+    let mut rng = Rng::new(seed ^ DOMAIN_SALT);
+    let res = spec.resolution;
+    for t in &mut spec.tasks {
+        let p = t.fixed_period().unwrap_or(1_000_000);
+        let c = t.budget();
+        if cfg.choices_only || rng.chance(cfg.choices_fraction) {
+            t.period = PeriodSpec::Choices(nearby_choices(&mut rng, p, c, cfg.max_choices));
+        } else {
+            let k = rng.range(1, cfg.max_factor.max(1)) as i64;
+            let min = if rng.chance(cfg.min_fraction) {
+                let d = rng.range(2, 4) as i64;
+                Some((p / d / res * res).max(res).min(p))
+            } else {
+                None
+            };
+            t.period = PeriodSpec::Range {
+                min,
+                max: Some(k * p),
+            };
+        }
+    }
+    let (lo, hi) = cfg.slack;
+    let mut limit = |b: Option<Nanos>| {
+        b.map(|b| {
+            let f = lo + (hi - lo) * rng.unit();
+            // Whole µs, at least 1 µs.
+            ((b as f64 * f / 1000.0).round() as i64).max(1) * 1000
+        })
+    };
+    for (k, ch) in spec.chains.iter_mut().enumerate() {
+        let (r, f) = bounds.get(k).copied().unwrap_or((None, None));
+        ch.reaction = limit(r);
+        ch.freshness = limit(f);
+    }
+    spec
+}
+
+/// 2..=max WATERS periods (and `p` itself) around `p`, all at least `c`,
+/// sorted; always contains `p`.
+fn nearby_choices(rng: &mut Rng, p: Nanos, c: Nanos, max: usize) -> Vec<Nanos> {
+    let mut all: Vec<Nanos> = WATERS_PERIODS_MS
+        .iter()
+        .map(|&(ms, _)| ms * 1_000_000)
+        .chain(std::iter::once(p))
+        .filter(|&x| x >= c)
+        .collect();
+    all.sort_unstable();
+    all.dedup();
+    let at = all.iter().position(|&x| x == p).unwrap_or(0);
+    let size = (rng.range(2, max.max(2) as u64) as usize).min(all.len());
+    // A window of `size` values that contains position `at`.
+    let first_lo = (at + 1).saturating_sub(size);
+    let first_hi = at.min(all.len() - size);
+    let first = rng.range(first_lo as u64, first_hi as u64) as usize;
+    all[first..first + size].to_vec()
 }
 
 #[cfg(test)]
@@ -328,5 +559,137 @@ mod tests {
         let u = uunifast(&mut r, 10, 0.7);
         assert!((u.iter().sum::<f64>() - 0.7).abs() < 1e-9);
         assert!(u.iter().all(|&x| x >= 0.0));
+    }
+
+    /// A stand-in for the analysis: twice the sum of periods on the chain.
+    fn fake_bounds(s: &Spec) -> Vec<ChainBounds> {
+        s.chains
+            .iter()
+            .map(|c| {
+                let sum: Nanos = c
+                    .path
+                    .iter()
+                    .filter_map(|&i| s.tasks[i].fixed_period())
+                    .sum();
+                (Some(2 * sum), Some(3 * sum))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn design_chains_span_at_most_three_periods() {
+        let mut chains = 0;
+        let mut spans = [0usize; 4];
+        for seed in 0..200 {
+            let cfg = DesignGenConfig {
+                tasks: 3 + (seed as usize % 40),
+                cpus: 1 + (seed % 2) as u32,
+                chains: 4,
+                ..DesignGenConfig::default()
+            };
+            let o = design_origin(seed, &cfg);
+            assert_eq!(o, design_origin(seed, &cfg), "deterministic");
+            for c in &o.chains {
+                assert!((2..=15).contains(&c.path.len()), "{:?}", c.path);
+                for w in c.path.windows(2) {
+                    assert!(o.tasks[w[1]].reads.contains(&w[0]));
+                }
+                let mut ps: Vec<Nanos> = c
+                    .path
+                    .iter()
+                    .filter_map(|&i| o.tasks[i].fixed_period())
+                    .collect();
+                assert_eq!(ps.len(), c.path.len());
+                ps.sort_unstable();
+                ps.dedup();
+                assert!((1..=3).contains(&ps.len()), "{ps:?}");
+                spans[ps.len()] += 1;
+                chains += 1;
+            }
+        }
+        // Most systems have a chain; every span occurs.
+        assert!(chains > 400, "{chains}");
+        assert!(spans[1] > 0 && spans[2] > 0 && spans[3] > 0, "{spans:?}");
+    }
+
+    #[test]
+    fn design_domains_contain_the_origin_and_round_trip() {
+        let mut kinds = [0usize; 2];
+        for seed in 0..200 {
+            let cfg = DesignGenConfig {
+                tasks: 2 + (seed as usize % 30),
+                choices_only: seed % 3 == 0,
+                max_choices: 2 + (seed as usize % 3),
+                transfers: seed % 2 == 0,
+                mixed_servers: seed % 4 == 1,
+                scheduler: if seed % 5 == 0 {
+                    Scheduler::Edf
+                } else {
+                    Scheduler::Rm
+                },
+                ..DesignGenConfig::default()
+            };
+            let o = design_origin(seed, &cfg);
+            let s = design_problem(seed, &cfg, &fake_bounds);
+            assert_eq!(s, design_problem(seed, &cfg, &fake_bounds), "deterministic");
+            assert_eq!(o.tasks.len(), s.tasks.len());
+            for (t, ot) in s.tasks.iter().zip(&o.tasks) {
+                let p = ot.fixed_period().unwrap_or(0);
+                assert!(p >= t.budget());
+                match &t.period {
+                    PeriodSpec::Choices(v) => {
+                        kinds[0] += 1;
+                        let n = v.len();
+                        assert!(n >= 1 && n <= cfg.max_choices, "{v:?}");
+                        assert!(v.windows(2).all(|w| w[0] < w[1]), "sorted: {v:?}");
+                        assert!(v.contains(&p), "{v:?} lacks {p}");
+                        assert!(v.iter().all(|&x| x >= t.budget()));
+                    }
+                    PeriodSpec::Range { min, max } => {
+                        assert!(!cfg.choices_only);
+                        kinds[1] += 1;
+                        let max = max.unwrap_or(0);
+                        assert!(max >= p && max % p == 0 && max <= 4 * p, "{max} {p}");
+                        if let Some(m) = min {
+                            assert!(*m > 0 && *m <= p && m % s.resolution == 0, "{m} {p}");
+                        }
+                    }
+                    other => panic!("{other:?}"),
+                }
+            }
+            for (c, (r, f)) in s.chains.iter().zip(fake_bounds(&o)) {
+                for (l, b) in [(c.reaction, r), (c.freshness, f)] {
+                    let (l, b) = (l.unwrap_or(0) as f64, b.unwrap_or(0) as f64);
+                    assert!(l >= 0.8 * b - 1000.0 && l <= 1.5 * b + 1000.0, "{l} {b}");
+                    assert_eq!(l % 1000.0, 0.0);
+                }
+            }
+            let text = crate::write::to_toml(&s);
+            match Spec::parse("gen.toml", &text) {
+                Ok(back) => assert_eq!(back, s, "{text}"),
+                Err(e) => panic!("{e}\n{text}"),
+            }
+        }
+        assert!(kinds[0] > 100 && kinds[1] > 100, "{kinds:?}");
+    }
+
+    #[test]
+    fn choice_domains_have_two_values_when_the_budget_allows() {
+        let mut r = Rng::new(5);
+        for _ in 0..1000 {
+            let v = nearby_choices(&mut r, 10_000_000, 1_000, 4);
+            assert!(
+                (2..=4).contains(&v.len()) && v.contains(&10_000_000),
+                "{v:?}"
+            );
+            let v = nearby_choices(&mut r, 1_000_000_000, 1_000, 3);
+            assert!(
+                (2..=3).contains(&v.len()) && v.contains(&1_000_000_000),
+                "{v:?}"
+            );
+        }
+        // Only the generating period is at least the budget.
+        let v = nearby_choices(&mut r, 1_000_000_000, 900_000_000, 4);
+        assert_eq!(v, vec![1_000_000_000]);
     }
 }
