@@ -185,6 +185,23 @@ impl Lin {
             c: self.c + c,
         }
     }
+    /// The largest and smallest values over the variables' bounds.
+    fn max_in(&self, lp: &Lp) -> f64 {
+        self.c
+            + self
+                .terms
+                .iter()
+                .map(|&(v, a)| (a * lp.vars[v].lo).max(a * lp.vars[v].hi))
+                .sum::<f64>()
+    }
+    fn min_in(&self, lp: &Lp) -> f64 {
+        self.c
+            + self
+                .terms
+                .iter()
+                .map(|&(v, a)| (a * lp.vars[v].lo).min(a * lp.vars[v].hi))
+                .sum::<f64>()
+    }
     fn scale(&self, k: f64) -> Lin {
         Lin {
             terms: self.terms.iter().map(|&(v, a)| (v, a * k)).collect(),
@@ -246,16 +263,19 @@ impl<'a> Master<'a> {
             Bin::Const(false)
         } else {
             let z = self.lp.binary();
-            let m = self.big_m;
             let d1 = if tie_true { 0.0 } else { 1.0 };
             let d0 = if tie_true { 1.0 } else { 0.0 };
-            // z = 1 ⇒ T_a − T_b ≤ −d1;  z = 0 ⇒ T_a − T_b ≥ d0.
+            // z = 1 ⇒ T_a − T_b ≤ −d1;  z = 0 ⇒ T_a − T_b ≥ d0, with the
+            // smallest big-M that the period domains allow.
             let diff = self.period[a].plus(&self.period[b].scale(-1.0));
+            let (hi, lo) = ((da.max() - db.min()) as f64, (da.min() - db.max()) as f64);
+            let m1 = (hi + d1).max(0.0);
+            let m0 = (d0 - lo).max(0.0);
             let mut t = diff.terms.clone();
-            t.push((z, m));
-            self.lp.row(t, Cmp::Le, -d1 - diff.c + m);
+            t.push((z, m1));
+            self.lp.row(t, Cmp::Le, -d1 - diff.c + m1);
             let mut t = diff.terms.clone();
-            t.push((z, m));
+            t.push((z, m0));
             self.lp.row(t, Cmp::Ge, d0 - diff.c);
             Bin::Var(z)
         };
@@ -277,6 +297,66 @@ impl<'a> Master<'a> {
         Some(b)
     }
 
+    /// `r ≥ own + Σ_{j ≻ i} I_j · (jobs of j released in [0, r))`: for the
+    /// m-th job of j (m ≥ 2) a binary b with `b = 0 ⇒ r ≤ (m − 1)·T_j`, so
+    /// b must be 1 once r passes the release. Every r the model allows has
+    /// W(r) ≤ r, hence r ≥ the least fixed point (the RTA response time),
+    /// and the response time itself is allowed: exact when `cap` covers
+    /// every job that can fall below `rmax`, a relaxation otherwise (the
+    /// levels grow lazily, see `Runner::raise_levels`).
+    fn rta_levels(
+        &mut self,
+        i: usize,
+        r: usize,
+        own: f64,
+        rmax: f64,
+        levels: &Levels,
+        budget_level: bool,
+    ) {
+        let spec = self.spec;
+        let g = self.g;
+        let mut terms = vec![(r, 1.0)];
+        let mut rhs = own;
+        for j in 0..spec.tasks.len() {
+            if j == i || spec.tasks[j].cpu != spec.tasks[i].cpu || !self.guaranteed(j) {
+                continue;
+            }
+            let cj = gu(interference(&spec.tasks[j]), g);
+            let a = self.above(j, i);
+            match a {
+                Bin::Const(true) => rhs += cj,
+                Bin::Const(false) => continue,
+                Bin::Var(z) => terms.push((z, -cj)),
+            }
+            let tmin = self.dom[j].min().max(1) as f64;
+            let cap = levels.get(&(budget_level, i, j)).copied().unwrap_or(1);
+            let mut prev: Option<usize> = None;
+            for m in 2..=cap {
+                let rel = (m - 1) as f64;
+                // The m-th job is released at (m − 1)·T_j ≥ (m − 1)·T_min.
+                let big = rmax - rel * tmin;
+                if big <= 0.0 {
+                    break;
+                }
+                let b = self.lp.binary();
+                let mut row = vec![(r, 1.0), (b, -big)];
+                row.extend(self.period[j].terms.iter().map(|&(v, k)| (v, -rel * k)));
+                let mut bound = rel * self.period[j].c;
+                if let Bin::Var(z) = a {
+                    row.push((z, big));
+                    bound += big;
+                }
+                self.lp.row(row, Cmp::Le, bound);
+                if let Some(pb) = prev {
+                    self.lp.row(vec![(b, 1.0), (pb, -1.0)], Cmp::Le, 0.0);
+                }
+                prev = Some(b);
+                terms.push((b, -cj));
+            }
+        }
+        self.lp.row(terms, Cmp::Ge, rhs);
+    }
+
     /// RM priority: a ≻ b.
     fn above(&mut self, a: usize, b: usize) -> Bin {
         self.lt(a, b, a < b)
@@ -285,7 +365,8 @@ impl<'a> Master<'a> {
     /// Adds `lhs ≥ opt − M·(Σ off)` where `off` are 0/1 expressions that
     /// switch the option off when 1.
     fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
-        let m = self.big_m;
+        // Switched off, the row must allow every value: M ≥ max(opt) − min(lhs).
+        let m = (opt.max_in(&self.lp) - self.lp.vars[lhs].lo).clamp(0.0, self.big_m);
         let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
         terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
         let mut rhs = opt.c;
@@ -312,6 +393,9 @@ impl<'a> Master<'a> {
         self.lp.row(terms, Cmp::Ge, rhs);
     }
 }
+
+/// Ranges of at most this many grid steps get every tangent up front.
+const DENSE_TANGENTS: i64 = 128;
 
 /// Seconds the exact search may run after the heuristic found a verified
 /// design, when no --time-limit is given.
@@ -397,6 +481,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         oa_points: vec![Vec::new(); n],
         iterations: 0,
         deadline: None,
+        levels: Levels::new(),
     };
     run.solve_all()
 }
@@ -443,6 +528,10 @@ fn range_dom(
     })
 }
 
+/// Response-time levels per (budget level?, task, higher-priority task): the
+/// jobs of the latter the model counts (at least the first).
+type Levels = HashMap<(bool, usize, usize), usize>;
+
 /// A lazy schedulability cut: task `i` missed its deadline with hp set `hp`
 /// and these periods; some period must grow or the order must change.
 #[derive(Debug, Clone)]
@@ -465,6 +554,7 @@ struct Runner<'a> {
     iterations: usize,
     /// No solve may run past this (the patience after a verified design).
     deadline: Option<Instant>,
+    levels: Levels,
 }
 
 /// What the sound model knows of response times: unconditional lower
@@ -591,7 +681,13 @@ impl<'a> Runner<'a> {
                     // Outer approximation of U = a / k (a = C / (step·g)) and of
                     // ln(1 + a/k): tangents, valid since both are convex in k.
                     let a = c / (step * g) as f64;
-                    let mut pts = vec![lo, hi, (lo + hi) / 2];
+                    // Small ranges get a tangent at every point: the
+                    // objective is then exact from the first solve.
+                    let mut pts = if hi - lo <= DENSE_TANGENTS {
+                        (lo..=hi).collect()
+                    } else {
+                        vec![lo, hi, (lo + hi) / 2]
+                    };
                     let mut x = lo as f64;
                     while x < hi as f64 {
                         pts.push(x as i64);
@@ -660,6 +756,18 @@ impl<'a> Runner<'a> {
             }
         }
         if spec.schedulability == SchedTest::Rta {
+            // Exact RTA where the levels fit: budget-level R_i ≥ W_i(R_i), R_i ≤ T_i.
+            let tested: Vec<bool> = (0..n)
+                .map(|i| m.guaranteed(i) && groups.contains(&Group::Sched(spec.tasks[i].cpu)))
+                .collect();
+            for i in (0..n).filter(|&i| tested[i]) {
+                let rmax = m.dom[i].max() as f64;
+                let r = m.lp.var(0.0, rmax, false);
+                let mut t = m.period[i].terms.clone();
+                t.push((r, -1.0));
+                m.lp.row(t, Cmp::Ge, -m.period[i].c);
+                m.rta_levels(i, r, gu(spec.tasks[i].budget(), g), rmax, &self.levels, true);
+            }
             for cut in self.rta_cuts.clone() {
                 if groups.contains(&Group::Sched(spec.tasks[cut.i].cpu)) {
                     add_rta_cut(&mut m, &cut);
@@ -678,7 +786,10 @@ impl<'a> Runner<'a> {
             for i in (0..n).filter(|&i| on_chain[i]) {
                 let r = match &sm.fixed {
                     Some(f) => m.lp.var(f[i], f[i], false),
-                    None => m.lp.var(sm.rlow[i], self.big_m, false),
+                    None => {
+                        let hi = rmax_of(&m, groups, i).max(sm.rlow[i]);
+                        m.lp.var(sm.rlow[i], hi, false)
+                    }
                 };
                 m.rvar[i] = Some(r);
                 let mut t = m.period[i].terms.clone();
@@ -690,23 +801,12 @@ impl<'a> Runner<'a> {
             } else {
                 on_chain
             };
-            // R_i ≥ x_i + Σ_{j ≻ i} C_j: at least one job of each task above.
+            // R_i ≥ W_i(R_i), the response-time recurrence, with a binary per
+            // job of each higher-priority task (docs/design.md).
             for i in (0..n).filter(|&i| on_chain[i]) {
                 let Some(r) = m.rvar[i] else { continue };
-                let mut terms = vec![(r, 1.0)];
-                let mut rhs = gu(spec.tasks[i].demand(), g);
-                for j in 0..n {
-                    if j == i || spec.tasks[j].cpu != spec.tasks[i].cpu || !m.guaranteed(j) {
-                        continue;
-                    }
-                    let cj = gu(interference(&spec.tasks[j]), g);
-                    match m.above(j, i) {
-                        Bin::Const(true) => rhs += cj,
-                        Bin::Const(false) => {}
-                        Bin::Var(z) => terms.push((z, -cj)),
-                    }
-                }
-                m.lp.row(terms, Cmp::Ge, rhs);
+                let rmax = rmax_of(&m, groups, i);
+                m.rta_levels(i, r, gu(spec.tasks[i].demand(), g), rmax, &self.levels, false);
             }
             if sm.fixed.is_none() {
                 for cut in &sm.cuts {
@@ -744,6 +844,14 @@ impl<'a> Runner<'a> {
                 .as_secs_f64()
                 .max(0.01);
             left = Some(left.map_or(d, |l| l.min(d)));
+        }
+        if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+            let bins = m.lp.vars.iter().filter(|v| v.integer && v.hi <= 1.0).count();
+            eprintln!(
+                "master: {} variables ({bins} binary), {} rows",
+                m.lp.vars.len(),
+                m.lp.rows.len()
+            );
         }
         let solved = lp::solve(&m.lp, self.opts.solver, left);
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
@@ -804,10 +912,21 @@ impl<'a> Runner<'a> {
     fn oa_exact(&mut self, periods: &[Nanos]) -> bool {
         let mut exact = true;
         for ((d, pts), &p) in self.dom.iter().zip(self.oa_points.iter_mut()).zip(periods) {
-            if let Dom::Grid { step, .. } = *d {
+            if let Dom::Grid { step, lo, hi } = *d {
+                if hi - lo <= DENSE_TANGENTS {
+                    continue;
+                }
                 let k = p / (step * self.g);
                 if !pts.contains(&k) {
-                    pts.push(k);
+                    // The tangent at k makes the model exact there; the
+                    // neighbours keep the next solve from stepping aside.
+                    for d in [0, 1, (k / 64).max(1), (k / 16).max(1), (k / 4).max(1)] {
+                        for q in [k - d, k + d] {
+                            if q >= lo && q <= hi && !pts.contains(&q) {
+                                pts.push(q);
+                            }
+                        }
+                    }
                     exact = false;
                 }
             }
@@ -841,6 +960,56 @@ impl<'a> Runner<'a> {
             }
         }
         false
+    }
+
+    /// Counts more jobs of higher-priority tasks where the candidate's
+    /// response times need them: for each modelled R_i (job level for chain
+    /// tasks in sound mode, budget level under the RTA test), every task j
+    /// above i gets levels up to its jobs within the analysed R_i (or T_i
+    /// when R_i diverged) plus one. True when any level was added.
+    fn raise_levels(&mut self, cand: &Spec, report: &Report) -> bool {
+        let spec = self.spec;
+        if spec.scheduler != Scheduler::Rm {
+            return false;
+        }
+        let n = spec.tasks.len();
+        let prio = rtpipe_analysis::sched::rm_priorities(cand);
+        let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
+        let on_chain: Vec<bool> = (0..n)
+            .map(|i| self.opts.mode == Mode::Sound && spec.chains.iter().any(|c| c.path.contains(&i)))
+            .collect();
+        let tested = spec.schedulability == SchedTest::Rta;
+        let mut raised = false;
+        for i in 0..n {
+            if spec.tasks[i].server == Server::Background {
+                continue;
+            }
+            let t = &report.timing[i];
+            let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
+            for (budget_level, on, r) in [
+                (false, on_chain[i], t.job_response_time),
+                (true, tested, t.response_time),
+            ] {
+                if !on {
+                    continue;
+                }
+                let r = r.unwrap_or(t.period).min(t.period.saturating_mul(2));
+                for &j in &hp {
+                    let tj = report.timing[j].period.max(1);
+                    let jobs = ((r + tj - 1) / tj) as usize + 1;
+                    let need = (self.dom[i].max() as f64 / self.dom[j].min().max(1) as f64)
+                        .ceil() as usize
+                        + 1;
+                    let e = self.levels.entry((budget_level, i, j)).or_insert(1);
+                    let want = jobs.min(need);
+                    if want > *e {
+                        *e = want;
+                        raised = true;
+                    }
+                }
+            }
+        }
+        raised
     }
 
     fn limits_ok(&self, report: &Report) -> bool {
@@ -954,6 +1123,11 @@ impl<'a> Runner<'a> {
                         }
                     }
                     let oa = self.oa_exact(&periods);
+                    // Response times the model under-counted: count more jobs.
+                    let verified = report.schedulability.schedulable && self.limits_ok(&report);
+                    if !verified && self.raise_levels(&cand, &report) {
+                        continue;
+                    }
                     let sched = self.sched_ok(&cand, &report);
                     if !oa || !sched {
                         // Learn response times from the same candidate now
@@ -1154,6 +1328,10 @@ impl<'a> Runner<'a> {
                     let cand = self.with_periods(&p);
                     let report = rtpipe_analysis::analyze(&cand);
                     let oa = self.oa_exact(&p);
+                    let verified = report.schedulability.schedulable && self.limits_ok(&report);
+                    if !verified && self.raise_levels(&cand, &report) {
+                        continue;
+                    }
                     let sched_needed = groups.iter().any(|g| matches!(g, Group::Sched(_)));
                     let sched = !sched_needed || self.sched_ok(&cand, &report);
                     if !oa || !sched {
@@ -1275,6 +1453,7 @@ impl<'a> Runner<'a> {
                 oa_points: me.oa_points.clone(),
                 iterations: 0,
                 deadline: me.deadline,
+                levels: me.levels.clone(),
             };
             sub.probe(core, sound)
         };
@@ -1302,6 +1481,22 @@ impl<'a> Runner<'a> {
         }
         Some(hi)
     }
+}
+
+/// An upper end for R_i: T_i (it finishes within its period) and every
+/// active freshness limit of a chain through i (T_p and the tail's R both
+/// appear in the freshness sum).
+fn rmax_of(m: &Master, groups: &[Group], i: usize) -> f64 {
+    let mut r = m.dom[i].max() as f64;
+    for (k, ch) in m.spec.chains.iter().enumerate() {
+        if let (true, Some(l)) = (
+            ch.path.contains(&i) && groups.contains(&Group::Limit(k, Metric::Freshness)),
+            ch.freshness,
+        ) {
+            r = r.min(gu(l, m.g));
+        }
+    }
+    r
 }
 
 /// Adds a cut for every chain task whose response time the model
@@ -1456,8 +1651,16 @@ fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64, _sm: 
         let q1 = tp.plus(&rp);
         let q2 = tp.plus(&rp).add_c(-xmin(c));
         let q3 = tp.clone();
-        let l = m.lp.var(-big, big, false);
-        let gq = m.lp.var(-big, big, false);
+        // Bounded by their options, so that the switches get tight big-Ms.
+        let span = |opts: &[&Lin], lp: &Lp| -> (f64, f64) {
+            let lo = opts.iter().map(|o| o.min_in(lp)).fold(f64::INFINITY, f64::min);
+            let hi = opts.iter().map(|o| o.max_in(lp)).fold(f64::NEG_INFINITY, f64::max);
+            (lo.max(-big), hi.min(big))
+        };
+        let (llo, lhi) = span(&[&o1, &o2, &o3, &o4], &m.lp);
+        let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp);
+        let l = m.lp.var(llo, lhi, false);
+        let gq = m.lp.var(qlo, qhi, false);
         // b = 1 picks a reachability option; allowed only when d = 1.
         let b = match d {
             Bin::Const(false) => Bin::Const(false),

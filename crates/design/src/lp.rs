@@ -165,6 +165,8 @@ where
         Err(ResolutionError::Unbounded) => Err(LpError::Unbounded),
         // microlp says so in words when its time runs out without a solution.
         Err(e) if e.to_string().contains("Time limit") => Err(LpError::TimeLimit),
+        // HiGHS, stopped by its time limit before any solution.
+        Err(e) if e.to_string().contains("NoSolutionFound") => Err(LpError::TimeLimit),
         Err(e) => Err(LpError::Other(e.to_string())),
     }
 }
@@ -211,6 +213,10 @@ fn solve_highs(
 ) -> Result<LpSolution, LpError> {
     let mut m = pv.minimise(obj).using(good_lp::highs);
     m.set_verbose(false);
+    // HiGHS stops at a 1e-4 relative gap by default; "optimal" must mean it.
+    let mut m = m
+        .set_mip_rel_gap(1e-9)
+        .map_err(|e| LpError::Other(e.to_string()))?;
     if let Some(t) = time_limit {
         m = m.with_time_limit(t.max(0.01));
     }
