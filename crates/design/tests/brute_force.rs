@@ -1,0 +1,395 @@
+//! `design` against brute force on small random design problems.
+//!
+//! Each instance comes from `rtpipe_model::gen::design_problem` with choice
+//! domains only (3–5 tasks, 2–4 choices each, at most a few hundred period
+//! assignments), deterministic per seed. Every assignment is analysed; the
+//! verdict of `design` must agree:
+//!
+//! - a returned design (optimal or feasible) passes the analysis under the
+//!   mode's judgement and takes every period from its domain;
+//! - `infeasible`: no assignment passes;
+//! - `optimal`: its utilisation is the least of all passing assignments
+//!   (1e-9 relative); any reported lower bound is at most that least value;
+//! - `unknown` (time limit) is allowed, up to 10 % of the instances.
+//!
+//! `RTPIPE_DESIGN_CASES=N` sets the number of instances per mode (default
+//! 300 in each mode); `RTPIPE_DESIGN_VERBOSE=1` prints
+//! every instance. Run with `--nocapture` to see the tallies.
+
+use rtpipe_analysis::{analyze, Metric, Report};
+use rtpipe_design::lp::SolverKind;
+use rtpipe_design::{design, utilization, Mode, Options, Outcome, Status};
+use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, Rng};
+use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Sound bounds of every chain, for the generator's limits.
+fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
+    let report = analyze(spec);
+    let mut out = vec![(None, None); spec.chains.len()];
+    for c in &report.chains {
+        match c.metric {
+            Metric::Reaction => out[c.chain].0 = c.bound.sound,
+            Metric::Freshness => out[c.chain].1 = c.bound.sound,
+        }
+    }
+    out
+}
+
+/// Paper bounds of every chain: limits for paper-mode instances (the sound
+/// bound's limits leave many of them infeasible under the paper's equations,
+/// whose freshness can exceed the sound bound).
+fn paper_bounds(spec: &Spec) -> Vec<ChainBounds> {
+    let report = analyze(spec);
+    let mut out = vec![(None, None); spec.chains.len()];
+    for c in &report.chains {
+        match c.metric {
+            Metric::Reaction => out[c.chain].0 = Some(c.bound.paper),
+            Metric::Freshness => out[c.chain].1 = Some(c.bound.paper),
+        }
+    }
+    out
+}
+
+/// Instance `seed`: 3–5 tasks on one CPU (two for some), 1–3 chains, choice
+/// domains; most systems use RM with exact RTA, some Liu–Layland,
+/// hyperbolic or EDF. Limits come from the sound bounds of the generating
+/// design, or in paper mode for every other seed from its paper bounds.
+fn instance(seed: u64, mode: Mode) -> Spec {
+    let mut r = Rng::new(seed.wrapping_mul(0x2545_F491_4F6C_DD1D));
+    let tasks = r.range(3, 5) as usize;
+    let scheduler = if r.chance(0.15) {
+        Scheduler::Edf
+    } else {
+        Scheduler::Rm
+    };
+    let cfg = DesignGenConfig {
+        tasks,
+        cpus: if r.chance(0.15) { 2 } else { 1 },
+        utilization: 0.3 + 0.4 * r.unit(),
+        scheduler,
+        source_fraction: 0.2,
+        max_fan_in: 2,
+        chains: r.range(1, 3) as usize,
+        transfers: r.chance(0.3),
+        mixed_servers: r.chance(0.3),
+        choices_only: true,
+        // At most 4^4 = 256 or 3^5 = 243 assignments.
+        max_choices: if tasks <= 4 { 4 } else { 3 },
+        ..DesignGenConfig::default()
+    };
+    let mut spec = if mode == Mode::Paper && seed & 1 == 0 {
+        design_problem(seed, &cfg, &paper_bounds)
+    } else {
+        design_problem(seed, &cfg, &sound_bounds)
+    };
+    if scheduler == Scheduler::Rm {
+        spec.schedulability = match r.range(0, 9) {
+            0 => SchedTest::LiuLayland,
+            1 => SchedTest::Hyperbolic,
+            _ => SchedTest::Rta,
+        };
+    }
+    spec
+}
+
+/// Instance `seed` with some choice domains replaced by small ranges
+/// (`[T − a, T + b]` around a generating period T of at most 20 ms, on the
+/// 1 ms grid) while the brute-force grid stays within 600 assignments:
+/// integer periods go through the outer approximation of C/T.
+fn instance_with_ranges(seed: u64, mode: Mode) -> Spec {
+    let mut spec = instance(seed, mode);
+    let mut r = Rng::new(seed ^ 0x5851_F42D_4C95_7F2D);
+    let ms: Nanos = 1_000_000;
+    spec.resolution = ms;
+    for i in 0..spec.tasks.len() {
+        let PeriodSpec::Choices(v) = &spec.tasks[i].period else {
+            continue;
+        };
+        // The generating period is in the domain; take the one nearest 10 ms.
+        let Some(&t) = v.iter().filter(|&&p| p <= 20 * ms).max() else {
+            continue;
+        };
+        let lo = (t - r.range(0, 5) as Nanos * ms).max(ms);
+        let hi = t + r.range(0, 5) as Nanos * ms;
+        let old = spec.tasks[i].period.clone();
+        spec.tasks[i].period = PeriodSpec::Range {
+            min: if r.chance(0.7) { Some(lo) } else { None },
+            max: Some(hi),
+        };
+        if grid(&spec) > 600 || domain(&spec, i).is_empty() {
+            spec.tasks[i].period = old;
+        }
+    }
+    spec
+}
+
+/// A task's domain as `design` reads it: choices at least the budget, or
+/// the multiples of the resolution in [max(min, C), max].
+fn domain(spec: &Spec, i: usize) -> Vec<Nanos> {
+    let t = &spec.tasks[i];
+    let res = spec.resolution;
+    match &t.period {
+        PeriodSpec::Fixed(p) => vec![*p],
+        PeriodSpec::Choices(v) => v.iter().copied().filter(|&p| p >= t.budget()).collect(),
+        PeriodSpec::Range {
+            min,
+            max: Some(max),
+        } => {
+            let lo = (min.unwrap_or(0).max(t.budget()) + res - 1) / res;
+            (lo..=max / res).map(|k| k * res).collect()
+        }
+        other => panic!("task {}: not a finite domain: {other:?}", t.name),
+    }
+}
+
+/// The number of period assignments.
+fn grid(spec: &Spec) -> usize {
+    (0..spec.tasks.len())
+        .map(|i| domain(spec, i).len())
+        .product()
+}
+
+/// The judgement of `design` in each mode: the schedulability test, and
+/// every limit against the sound bound (sound) or the paper's (paper).
+fn passes(report: &Report, mode: Mode) -> bool {
+    report.schedulability.schedulable
+        && report.chains.iter().all(|c| match mode {
+            Mode::Sound => c.ok,
+            Mode::Paper => c.limit.is_none_or(|l| c.bound.paper <= l),
+        })
+}
+
+/// The least utilisation over all passing assignments (None: none passes),
+/// with one assignment that reaches it, and the number of assignments.
+fn brute_force(spec: &Spec, mode: Mode) -> (Option<(f64, Vec<Nanos>)>, usize) {
+    let doms: Vec<Vec<Nanos>> = (0..spec.tasks.len()).map(|i| domain(spec, i)).collect();
+    let mut s = spec.clone();
+    let mut idx = vec![0usize; doms.len()];
+    let mut best: Option<(f64, Vec<Nanos>)> = None;
+    let mut count = 0;
+    if doms.iter().any(|d| d.is_empty()) {
+        return (None, 0);
+    }
+    loop {
+        for (i, t) in s.tasks.iter_mut().enumerate() {
+            t.period = PeriodSpec::Fixed(doms[i][idx[i]]);
+        }
+        count += 1;
+        if passes(&analyze(&s), mode) {
+            let u = utilization(&s);
+            if best.as_ref().is_none_or(|(b, _)| u < *b) {
+                best = Some((u, s.tasks.iter().filter_map(|t| t.fixed_period()).collect()));
+            }
+        }
+        // Next assignment (odometer).
+        let mut k = 0;
+        loop {
+            if k == idx.len() {
+                return (best, count);
+            }
+            idx[k] += 1;
+            if idx[k] < doms[k].len() {
+                break;
+            }
+            idx[k] = 0;
+            k += 1;
+        }
+    }
+}
+
+/// Writes a reproducer and returns its path.
+fn save_bug(spec: &Spec, seed: u64, mode: Mode) -> String {
+    let path = format!("/tmp/design-bug-{}-{seed}.toml", mode.name());
+    let text = format!(
+        "# design brute-force mismatch: seed {seed}, mode {}\n{}",
+        mode.name(),
+        rtpipe_model::to_toml(spec)
+    );
+    if let Err(e) = std::fs::write(&path, text) {
+        eprintln!("cannot write {path}: {e}");
+    }
+    path
+}
+
+/// Checks one instance; `Err` describes a disagreement.
+fn check(spec: &Spec, o: &Outcome, mode: Mode) -> Result<(), String> {
+    let (best, _) = brute_force(spec, mode);
+    match o.status {
+        Status::Optimal | Status::Feasible => {
+            let d = o.spec.as_ref().ok_or("a design without a spec")?;
+            let report = analyze(d);
+            if !passes(&report, mode) {
+                return Err(format!(
+                    "{:?} design fails the analysis: periods {:?}",
+                    o.status,
+                    periods(d)
+                ));
+            }
+            if mode == Mode::Sound && !report.all_ok() {
+                return Err("sound design: all_ok() is false".into());
+            }
+            for (i, t) in d.tasks.iter().enumerate() {
+                let p = t.fixed_period().ok_or("a designed period is not fixed")?;
+                if !domain(spec, i).contains(&p) {
+                    return Err(format!("task {}: period {p} not in its domain", t.name));
+                }
+            }
+            let u = utilization(d);
+            let obj = o.objective.ok_or("a design without an objective")?;
+            if (u - obj).abs() > 1e-9 * u.max(1e-12) {
+                return Err(format!(
+                    "objective {obj} but the design's utilisation is {u}"
+                ));
+            }
+            let Some((bu, bp)) = best else {
+                return Err("a design where brute force finds none".into());
+            };
+            if u < bu * (1.0 - 1e-9) {
+                return Err(format!("design {u} below the brute-force minimum {bu}"));
+            }
+            if let Some(lb) = o.lower_bound {
+                if lb > bu * (1.0 + 1e-9) {
+                    return Err(format!(
+                        "lower bound {lb} above the brute-force minimum {bu} at {bp:?}"
+                    ));
+                }
+            }
+            if o.status == Status::Optimal && (u - bu).abs() > 1e-9 * bu {
+                return Err(format!(
+                    "optimal {u} at {:?}, brute force {bu} at {bp:?}",
+                    periods(d)
+                ));
+            }
+        }
+        Status::Infeasible => {
+            if let Some((bu, bp)) = best {
+                return Err(format!(
+                    "infeasible, but {bp:?} passes with utilisation {bu}"
+                ));
+            }
+        }
+        Status::Unknown => {}
+    }
+    Ok(())
+}
+
+fn periods(s: &Spec) -> Vec<Nanos> {
+    s.tasks.iter().filter_map(|t| t.fixed_period()).collect()
+}
+
+fn cases(default: usize) -> usize {
+    std::env::var("RTPIPE_DESIGN_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn run(mode: Mode, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
+    let verbose = std::env::var_os("RTPIPE_DESIGN_VERBOSE").is_some();
+    let mut tally: BTreeMap<&'static str, usize> = BTreeMap::new();
+    let mut failures = Vec::new();
+    let mut slowest = (0.0f64, 0u64);
+    let start = Instant::now();
+    for seed in first_seed..first_seed + n as u64 {
+        let spec = if ranges {
+            instance_with_ranges(seed, mode)
+        } else {
+            instance(seed, mode)
+        };
+        let opts = Options {
+            mode,
+            solver: SolverKind::Microlp,
+            time_limit: Some(time_limit),
+            ..Options::default()
+        };
+        let t0 = Instant::now();
+        let outcome = design(&spec, &opts);
+        let secs = t0.elapsed().as_secs_f64();
+        if secs > slowest.0 {
+            slowest = (secs, seed);
+        }
+        let o = match outcome {
+            Ok(o) => o,
+            Err(e) => {
+                *tally.entry("error").or_default() += 1;
+                let path = save_bug(&spec, seed, mode);
+                failures.push(format!("seed {seed}: design error: {e} ({path})"));
+                continue;
+            }
+        };
+        *tally.entry(o.status.name()).or_default() += 1;
+        if verbose {
+            eprintln!(
+                "{} seed {seed}: {} tasks {} chains, grid {}, {} obj {:?} in {secs:.2} s",
+                mode.name(),
+                spec.tasks.len(),
+                spec.chains.len(),
+                grid(&spec),
+                o.status.name(),
+                o.objective
+            );
+        }
+        if let Err(e) = check(&spec, &o, mode) {
+            let path = save_bug(&spec, seed, mode);
+            failures.push(format!("seed {seed}: {e} ({path})"));
+        }
+    }
+    let unknown = tally.get("unknown").copied().unwrap_or(0);
+    eprintln!(
+        "{} mode{}: {n} instances {tally:?} in {:.1} s (slowest: seed {} {:.2} s)",
+        mode.name(),
+        if ranges { ", with ranges" } else { "" },
+        start.elapsed().as_secs_f64(),
+        slowest.1,
+        slowest.0
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(
+        unknown * 10 <= n,
+        "{unknown} of {n} instances unknown (more than 10 %)"
+    );
+}
+
+#[test]
+fn sound_mode_agrees_with_brute_force() {
+    run(Mode::Sound, 0, cases(300), 3.0, false);
+}
+
+#[test]
+fn paper_mode_agrees_with_brute_force() {
+    run(Mode::Paper, 100_000, cases(300), 3.0, false);
+}
+
+#[test]
+fn ranges_agree_with_brute_force() {
+    let n = cases(300) / 3;
+    run(Mode::Sound, 200_000, n, 3.0, true);
+    run(Mode::Paper, 300_000, n, 3.0, true);
+}
+
+#[test]
+fn instances_are_small_and_varied() {
+    let mut feasible = 0;
+    let mut ranged = 0;
+    for seed in 0..100 {
+        let spec = instance(seed, Mode::Sound);
+        let g = grid(&spec);
+        assert!(g <= 256, "seed {seed}: {g} assignments");
+        let with_ranges = instance_with_ranges(seed, Mode::Sound);
+        assert!(grid(&with_ranges) <= 600);
+        ranged += with_ranges
+            .tasks
+            .iter()
+            .filter(|t| matches!(t.period, PeriodSpec::Range { .. }))
+            .count();
+        assert!(!spec.chains.is_empty(), "seed {seed}: no chain");
+        if brute_force(&spec, Mode::Sound).0.is_some() {
+            feasible += 1;
+        }
+    }
+    // Most instances are feasible, some are not.
+    assert!((50..100).contains(&feasible), "{feasible} of 100 feasible");
+    assert!(ranged > 50, "{ranged} range domains in 100 instances");
+}
