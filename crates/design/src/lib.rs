@@ -237,6 +237,10 @@ struct Master<'a> {
     big_m: f64,
     /// Response-time variables (sound mode, RM).
     rvar: Vec<Option<usize>>,
+    /// Valid lower ends of option variables (for their big-Ms).
+    floor: HashMap<usize, f64>,
+    /// Declare the option variables' bounds (see `sound_chain`).
+    tight_bounds: bool,
 }
 
 /// Which constraint groups are active (for the conflict search).
@@ -366,7 +370,9 @@ impl<'a> Master<'a> {
     /// switch the option off when 1.
     fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
         // Switched off, the row must allow every value: M ≥ max(opt) − min(lhs).
-        let m = (opt.max_in(&self.lp) - self.lp.vars[lhs].lo).clamp(0.0, self.big_m);
+        // (One grid unit of slack keeps microlp's pivots away from degenerate ties.)
+        let lo = self.floor.get(&lhs).copied().unwrap_or(self.lp.vars[lhs].lo);
+        let m = (opt.max_in(&self.lp) - lo + 1.0).clamp(1.0, self.big_m);
         let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
         terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
         let mut rhs = opt.c;
@@ -466,6 +472,10 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         };
         dom.push(d);
     }
+    let mut notes = Vec::new();
+    if spec.harmonic {
+        harmonic_domains(spec, &mut dom, &mut notes)?;
+    }
     let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
     let max_limit = gu(horizon, g);
     let big_m = 4.0 * (max_t + max_limit) + 10.0;
@@ -483,7 +493,79 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         deadline: None,
         levels: Levels::new(),
     };
-    run.solve_all()
+    let mut o = run.solve_all()?;
+    o.notes.splice(0..0, notes);
+    Ok(o)
+}
+
+/// Most candidate periods a free task keeps under `harmonic = true` before
+/// its domain is thinned to 5-smooth multiples of the grid.
+const HARMONIC_CANDIDATES: usize = 256;
+
+/// Harmonic periods (every pair divides one way): each free domain becomes
+/// a choice among the values that divide or are divided by every fixed
+/// period; `build` then forbids every non-harmonic pair of choices. Large
+/// ranges keep only the values g·2^a·3^b·5^c (said in a note).
+fn harmonic_domains(
+    spec: &Spec,
+    dom: &mut [Dom],
+    notes: &mut Vec<String>,
+) -> Result<(), DesignError> {
+    let fixed: Vec<i64> = dom
+        .iter()
+        .filter_map(|d| match d {
+            Dom::Fixed(t) => Some(*t),
+            _ => None,
+        })
+        .collect();
+    for (a, &p) in fixed.iter().enumerate() {
+        for &q in &fixed[a + 1..] {
+            if !harmonic_pair(p, q) {
+                return Err(DesignError(
+                    "harmonic = true, but the fixed periods are not harmonic (one of each pair must divide the other)".into(),
+                ));
+            }
+        }
+    }
+    let smooth = |mut v: i64| {
+        for f in [2, 3, 5] {
+            while v % f == 0 {
+                v /= f;
+            }
+        }
+        v == 1
+    };
+    for (i, d) in dom.iter_mut().enumerate() {
+        let values: Vec<i64> = match d {
+            Dom::Fixed(_) => continue,
+            Dom::Choice(v) => v.clone(),
+            Dom::Grid { step, lo, hi } => (*lo..=*hi).map(|k| k * *step).collect(),
+        };
+        let mut ok: Vec<i64> = values
+            .into_iter()
+            .filter(|&v| fixed.iter().all(|&f| harmonic_pair(v, f)))
+            .collect();
+        if ok.len() > HARMONIC_CANDIDATES {
+            ok.retain(|&v| smooth(v));
+            notes.push(format!(
+                "harmonic: task `{}` chooses among the {} periods of its range that are 2^a·3^b·5^c grid steps (optimal among those)",
+                spec.tasks[i].name,
+                ok.len()
+            ));
+        }
+        if ok.is_empty() {
+            return Err(DesignError(format!(
+                "harmonic = true: no period in the range of task `{}` divides or is a multiple of every fixed period",
+                spec.tasks[i].name
+            )));
+        }
+        *d = Dom::Choice(ok);
+    }
+    Ok(())
+}
+
+fn harmonic_pair(a: i64, b: i64) -> bool {
+    a > 0 && b > 0 && (a % b == 0 || b % a == 0)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -621,6 +703,8 @@ impl<'a> Runner<'a> {
             lt_cache: HashMap::new(),
             big_m: self.big_m,
             rvar: vec![None; n],
+            floor: HashMap::new(),
+            tight_bounds: self.opts.solver == SolverKind::Highs,
         };
         let mut objective: Vec<(usize, f64)> = Vec::new();
         let mut obj_const = 0.0;
@@ -722,6 +806,24 @@ impl<'a> Runner<'a> {
         }
         m.lp.obj = objective.clone();
         m.lp.obj_const = obj_const;
+        if spec.harmonic {
+            // No two choices that are not harmonic (fixed ones are filtered).
+            for a in 0..n {
+                for b in a + 1..n {
+                    let (Dom::Choice(va), Dom::Choice(vb)) = (&m.dom[a], &m.dom[b]) else {
+                        continue;
+                    };
+                    for (x, &p) in va.iter().enumerate() {
+                        for (y, &q) in vb.iter().enumerate() {
+                            if !harmonic_pair(p, q) {
+                                let (ya, yb) = (m.yvars[a][x], m.yvars[b][y]);
+                                m.lp.row(vec![(ya, 1.0), (yb, 1.0)], Cmp::Le, 1.0);
+                            }
+                        }
+                    }
+                }
+            }
+        }
 
         // Schedulability per CPU.
         let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
@@ -847,6 +949,11 @@ impl<'a> Runner<'a> {
         }
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
             let bins = m.lp.vars.iter().filter(|v| v.integer && v.hi <= 1.0).count();
+            for (k, v) in m.lp.vars.iter().enumerate() {
+                if v.hi - v.lo < 1e-6 {
+                    eprintln!("fixed var {k}: {v:?}");
+                }
+            }
             eprintln!(
                 "master: {} variables ({bins} binary), {} rows",
                 m.lp.vars.len(),
@@ -1035,7 +1142,6 @@ impl<'a> Runner<'a> {
             }),
         };
         let mut lower_bound: Option<f64> = None;
-        let mut limited = false;
         // A verified design from the heuristic phase (sound mode), and when
         // the exact search after it started.
         let mut incumbent: Option<(Spec, Report, f64)> = None;
@@ -1046,7 +1152,6 @@ impl<'a> Runner<'a> {
                 && self.opts.time_limit.is_none()
                 && exact_since.is_some_and(|t| t.elapsed().as_secs_f64() > EXACT_PATIENCE);
             if self.iterations >= self.opts.max_iterations || self.out_of_time() || patience_out {
-                limited = true;
                 break;
             }
             self.iterations += 1;
@@ -1064,7 +1169,6 @@ impl<'a> Runner<'a> {
             match solved {
                 Solved::Error(e) => return Err(DesignError(e)),
                 Solved::TimeLimit => {
-                    limited = true;
                     break;
                 }
                 Solved::Infeasible => {
@@ -1075,7 +1179,6 @@ impl<'a> Runner<'a> {
                     if optimal {
                         lower_bound = Some(lower_bound.map_or(obj, |b: f64| b.max(obj)));
                     } else {
-                        limited = true;
                     }
                     let cand = self.with_periods(&periods);
                     let report = rtpipe_analysis::analyze(&cand);
@@ -1141,7 +1244,10 @@ impl<'a> Runner<'a> {
                         let u = utilization(&cand);
                         let lb = lower_bound.map(|b| b.min(u));
                         let gap = lb.map(|b| if u > 0.0 { ((u - b) / u).max(0.0) } else { 0.0 });
-                        let status = if optimal && !limited {
+                        // An optimal solve of any master is a lower bound (every
+                        // master is a relaxation), earlier time-outs or not.
+                        let closed = gap.is_some_and(|g| g <= 1e-9);
+                        let status = if optimal || closed {
                             Status::Optimal
                         } else {
                             Status::Feasible
@@ -1173,7 +1279,6 @@ impl<'a> Runner<'a> {
                 }
             }
         }
-        let _ = limited;
         if let Some((cand, report, u)) = incumbent {
             notes.push(format!(
                 "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
@@ -1189,6 +1294,10 @@ impl<'a> Runner<'a> {
             );
             o.objective = Some(u);
             o.gap = lb.map(|b| if u > 0.0 { ((u - b) / u).max(0.0) } else { 0.0 });
+            if o.gap.is_some_and(|g| g <= 1e-9) {
+                o.status = Status::Optimal;
+                o.notes.pop();
+            }
             return Ok(o);
         }
         notes.push("stopped by the time or iteration limit before a verified design".into());
@@ -1659,8 +1768,16 @@ fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64, _sm: 
         };
         let (llo, lhi) = span(&[&o1, &o2, &o3, &o4], &m.lp);
         let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp);
-        let l = m.lp.var(llo, lhi, false);
-        let gq = m.lp.var(qlo, qhi, false);
+        // HiGHS gets the bounds declared; microlp's basis can go singular
+        // when both the bounds and the big-Ms are tight, so there they are
+        // only known (used for the big-Ms).
+        let (l, gq) = if m.tight_bounds {
+            (m.lp.var(llo, lhi, false), m.lp.var(qlo, qhi, false))
+        } else {
+            (m.lp.var(-big, big, false), m.lp.var(-big, big, false))
+        };
+        m.floor.insert(l, llo);
+        m.floor.insert(gq, qlo);
         // b = 1 picks a reachability option; allowed only when d = 1.
         let b = match d {
             Bin::Const(false) => Bin::Const(false),

@@ -113,8 +113,11 @@ impl fmt::Display for LpError {
 
 fn expr(vars: &[Variable], terms: &[(usize, f64)]) -> Expression {
     let mut e = Expression::from(0.0);
+    // Zero coefficients (a big-M the domains made 0) upset microlp's pivoting.
     for &(i, c) in terms {
-        e += c * vars[i];
+        if c != 0.0 {
+            e += c * vars[i];
+        }
     }
     e
 }
@@ -143,6 +146,18 @@ where
 {
     let mut model = model;
     for r in &lp.rows {
+        if r.terms.iter().all(|&(_, c)| c == 0.0) {
+            // A row without variables: decide it here (microlp cannot).
+            let ok = match r.cmp {
+                Cmp::Le => 0.0 <= r.rhs + 1e-9,
+                Cmp::Ge => 0.0 >= r.rhs - 1e-9,
+                Cmp::Eq => r.rhs.abs() <= 1e-9,
+            };
+            if ok {
+                continue;
+            }
+            return Err(LpError::Infeasible);
+        }
         let e = expr(vars, &r.terms);
         let c = match r.cmp {
             Cmp::Le => constraint::leq(e, r.rhs),
