@@ -43,6 +43,9 @@ pub struct Options {
     pub time_limit: Option<f64>,
     /// Upper bound on master solves.
     pub max_iterations: usize,
+    /// Without a time limit: seconds the exact search may go on after a
+    /// verified design is found (`None`: until it is proven optimal).
+    pub patience: Option<f64>,
 }
 
 impl Default for Options {
@@ -52,6 +55,7 @@ impl Default for Options {
             solver: SolverKind::Microlp,
             time_limit: None,
             max_iterations: 500,
+            patience: Some(EXACT_PATIENCE),
         }
     }
 }
@@ -371,7 +375,11 @@ impl<'a> Master<'a> {
     fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
         // Switched off, the row must allow every value: M ≥ max(opt) − min(lhs).
         // (One grid unit of slack keeps microlp's pivots away from degenerate ties.)
-        let lo = self.floor.get(&lhs).copied().unwrap_or(self.lp.vars[lhs].lo);
+        let lo = self
+            .floor
+            .get(&lhs)
+            .copied()
+            .unwrap_or(self.lp.vars[lhs].lo);
         let m = (opt.max_in(&self.lp) - lo + 1.0).clamp(1.0, self.big_m);
         let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
         terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
@@ -868,7 +876,14 @@ impl<'a> Runner<'a> {
                 let mut t = m.period[i].terms.clone();
                 t.push((r, -1.0));
                 m.lp.row(t, Cmp::Ge, -m.period[i].c);
-                m.rta_levels(i, r, gu(spec.tasks[i].budget(), g), rmax, &self.levels, true);
+                m.rta_levels(
+                    i,
+                    r,
+                    gu(spec.tasks[i].budget(), g),
+                    rmax,
+                    &self.levels,
+                    true,
+                );
             }
             for cut in self.rta_cuts.clone() {
                 if groups.contains(&Group::Sched(spec.tasks[cut.i].cpu)) {
@@ -908,7 +923,14 @@ impl<'a> Runner<'a> {
             for i in (0..n).filter(|&i| on_chain[i]) {
                 let Some(r) = m.rvar[i] else { continue };
                 let rmax = rmax_of(&m, groups, i);
-                m.rta_levels(i, r, gu(spec.tasks[i].demand(), g), rmax, &self.levels, false);
+                m.rta_levels(
+                    i,
+                    r,
+                    gu(spec.tasks[i].demand(), g),
+                    rmax,
+                    &self.levels,
+                    false,
+                );
             }
             if sm.fixed.is_none() {
                 for cut in &sm.cuts {
@@ -948,7 +970,11 @@ impl<'a> Runner<'a> {
             left = Some(left.map_or(d, |l| l.min(d)));
         }
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
-            let bins = m.lp.vars.iter().filter(|v| v.integer && v.hi <= 1.0).count();
+            let bins =
+                m.lp.vars
+                    .iter()
+                    .filter(|v| v.integer && v.hi <= 1.0)
+                    .count();
             for (k, v) in m.lp.vars.iter().enumerate() {
                 if v.hi - v.lo < 1e-6 {
                     eprintln!("fixed var {k}: {v:?}");
@@ -1083,7 +1109,9 @@ impl<'a> Runner<'a> {
         let prio = rtpipe_analysis::sched::rm_priorities(cand);
         let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
         let on_chain: Vec<bool> = (0..n)
-            .map(|i| self.opts.mode == Mode::Sound && spec.chains.iter().any(|c| c.path.contains(&i)))
+            .map(|i| {
+                self.opts.mode == Mode::Sound && spec.chains.iter().any(|c| c.path.contains(&i))
+            })
             .collect();
         let tested = spec.schedulability == SchedTest::Rta;
         let mut raised = false;
@@ -1104,8 +1132,8 @@ impl<'a> Runner<'a> {
                 for &j in &hp {
                     let tj = report.timing[j].period.max(1);
                     let jobs = ((r + tj - 1) / tj) as usize + 1;
-                    let need = (self.dom[i].max() as f64 / self.dom[j].min().max(1) as f64)
-                        .ceil() as usize
+                    let need = (self.dom[i].max() as f64 / self.dom[j].min().max(1) as f64).ceil()
+                        as usize
                         + 1;
                     let e = self.levels.entry((budget_level, i, j)).or_insert(1);
                     let want = jobs.min(need);
@@ -1150,7 +1178,10 @@ impl<'a> Runner<'a> {
         loop {
             let patience_out = incumbent.is_some()
                 && self.opts.time_limit.is_none()
-                && exact_since.is_some_and(|t| t.elapsed().as_secs_f64() > EXACT_PATIENCE);
+                && self
+                    .opts
+                    .patience
+                    .is_some_and(|p| exact_since.is_some_and(|t| t.elapsed().as_secs_f64() > p));
             if self.iterations >= self.opts.max_iterations || self.out_of_time() || patience_out {
                 break;
             }
@@ -1191,11 +1222,13 @@ impl<'a> Runner<'a> {
                         }
                         exact_since.get_or_insert_with(Instant::now);
                     }
-                    if let (Some(t), None, None) =
-                        (exact_since, self.opts.time_limit, self.deadline)
-                    {
-                        self.deadline =
-                            Some(t + std::time::Duration::from_secs_f64(EXACT_PATIENCE));
+                    if let (Some(t), None, None, Some(p)) = (
+                        exact_since,
+                        self.opts.time_limit,
+                        self.deadline,
+                        self.opts.patience,
+                    ) {
+                        self.deadline = Some(t + std::time::Duration::from_secs_f64(p));
                     }
                     if let (false, Some(sm)) = (heuristic_tried, &sound) {
                         if !self.limits_ok(&report) {
@@ -1217,10 +1250,11 @@ impl<'a> Runner<'a> {
                                 }
                             }
                             exact_since.get_or_insert_with(Instant::now);
-                            if self.opts.time_limit.is_none() && incumbent.is_some() {
+                            if let (None, Some(_), Some(p)) =
+                                (self.opts.time_limit, &incumbent, self.opts.patience)
+                            {
                                 self.deadline.get_or_insert(
-                                    Instant::now()
-                                        + std::time::Duration::from_secs_f64(EXACT_PATIENCE),
+                                    Instant::now() + std::time::Duration::from_secs_f64(p),
                                 );
                             }
                         }
@@ -1762,8 +1796,14 @@ fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64, _sm: 
         let q3 = tp.clone();
         // Bounded by their options, so that the switches get tight big-Ms.
         let span = |opts: &[&Lin], lp: &Lp| -> (f64, f64) {
-            let lo = opts.iter().map(|o| o.min_in(lp)).fold(f64::INFINITY, f64::min);
-            let hi = opts.iter().map(|o| o.max_in(lp)).fold(f64::NEG_INFINITY, f64::max);
+            let lo = opts
+                .iter()
+                .map(|o| o.min_in(lp))
+                .fold(f64::INFINITY, f64::min);
+            let hi = opts
+                .iter()
+                .map(|o| o.max_in(lp))
+                .fold(f64::NEG_INFINITY, f64::max);
             (lo.max(-big), hi.min(big))
         };
         let (llo, lhi) = span(&[&o1, &o2, &o3, &o4], &m.lp);
