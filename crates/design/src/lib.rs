@@ -1115,14 +1115,14 @@ impl<'a> Runner<'a> {
             .collect();
         let tested = spec.schedulability == SchedTest::Rta;
         let mut raised = false;
-        for i in 0..n {
+        for (i, &chain_task) in on_chain.iter().enumerate() {
             if spec.tasks[i].server == Server::Background {
                 continue;
             }
             let t = &report.timing[i];
             let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
             for (budget_level, on, r) in [
-                (false, on_chain[i], t.job_response_time),
+                (false, chain_task, t.job_response_time),
                 (true, tested, t.response_time),
             ] {
                 if !on {
@@ -1209,7 +1209,6 @@ impl<'a> Runner<'a> {
                 Solved::Periods(periods, obj, optimal, rmodel) => {
                     if optimal {
                         lower_bound = Some(lower_bound.map_or(obj, |b: f64| b.max(obj)));
-                    } else {
                     }
                     let cand = self.with_periods(&periods);
                     let report = rtpipe_analysis::analyze(&cand);
