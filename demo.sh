@@ -15,4 +15,11 @@ for spec in examples/paper-table2.toml examples/cleanflight.toml examples/paper-
 done
 echo "\$ rtpipe analyze examples/paper-table2.toml --all-paths  (worst path per source/sink pair)"
 ./target/release/rtpipe analyze examples/paper-table2.toml --all-paths | sed -n '/all source-to-sink/,$p'
+for spec in examples/table2-design.toml examples/cleanflight-design.toml; do
+  echo
+  echo "\$ rtpipe design $spec --mode paper"
+  ./target/release/rtpipe design "$spec" --mode paper | sed -n '1,3p'
+  code=${PIPESTATUS[0]}
+  [ "$code" -ge 2 ] && status=$code
+done
 exit $status
