@@ -228,9 +228,11 @@ fn solve_highs(
 ) -> Result<LpSolution, LpError> {
     let mut m = pv.minimise(obj).using(good_lp::highs);
     m.set_verbose(false);
-    // HiGHS stops at a 1e-4 relative gap by default; "optimal" must mean it.
+    // HiGHS stops at a 1e-4 relative and 1e-6 absolute gap by default (the
+    // objective is a utilisation, so 1e-6 is not small); "optimal" must mean it.
     let mut m = m
         .set_mip_rel_gap(1e-9)
+        .and_then(|m| m.set_mip_abs_gap(1e-12))
         .map_err(|e| LpError::Other(e.to_string()))?;
     if let Some(t) = time_limit {
         m = m.with_time_limit(t.max(0.01));

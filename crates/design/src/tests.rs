@@ -241,3 +241,29 @@ fn backends_agree_on_paper_mode() {
     }
     assert!((us[0] - us[1]).abs() < 1e-9, "{us:?}");
 }
+
+#[cfg(feature = "highs")]
+#[test]
+fn backends_agree_on_cleanflight() {
+    // µs periods up to 44 ms: the optima agree to the solvers' tolerances
+    // (HiGHS: 1.3e-7 relative above microlp's 0.14207450).
+    let spec = load_with("cleanflight-design.toml", |t| t.to_string());
+    let mut us = Vec::new();
+    for solver in [SolverKind::Microlp, SolverKind::Highs] {
+        let opts = Options {
+            mode: Mode::Paper,
+            solver,
+            patience: None,
+            ..Options::default()
+        };
+        match design(&spec, &opts) {
+            Ok(o) => {
+                assert_eq!(o.status, Status::Optimal, "{solver:?}");
+                us.push(o.objective.unwrap_or(f64::NAN));
+            }
+            Err(e) => panic!("{solver:?}: {e}"),
+        }
+    }
+    assert!((us[0] - us[1]).abs() / us[0] < 1e-6, "{us:?}");
+    assert!((us[0] - 0.142_074_5).abs() < 1e-7, "{us:?}");
+}
