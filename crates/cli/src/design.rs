@@ -26,7 +26,7 @@ pub struct Args<'a> {
     pub mode: ModeArg,
     pub json: bool,
     pub write: Option<&'a Path>,
-    pub solver: SolverArg,
+    pub solver: Option<SolverArg>,
     pub time_limit: Option<f64>,
 }
 
@@ -50,8 +50,11 @@ pub fn run(a: Args) -> ExitCode {
             ModeArg::Paper => Mode::Paper,
         },
         solver: match a.solver {
-            SolverArg::Microlp => SolverKind::Microlp,
-            SolverArg::Highs => SolverKind::Highs,
+            Some(SolverArg::Microlp) => SolverKind::Microlp,
+            Some(SolverArg::Highs) => SolverKind::Highs,
+            // The faster backend when it is built in.
+            None if SolverKind::Highs.available() => SolverKind::Highs,
+            None => SolverKind::Microlp,
         },
         time_limit: a.time_limit,
         ..Options::default()

@@ -60,9 +60,10 @@ enum Command {
         /// Write the complete designed spec here (accepted by `analyze`).
         #[arg(long, value_name = "OUT.toml")]
         write: Option<PathBuf>,
-        /// MILP backend; `highs` needs a build with `--features highs`.
-        #[arg(long, value_enum, default_value = "microlp")]
-        solver: design::SolverArg,
+        /// MILP backend [default: highs when built with `--features highs`,
+        /// else microlp].
+        #[arg(long, value_enum)]
+        solver: Option<design::SolverArg>,
         /// Stop after this many seconds and report the best verified design and its gap.
         #[arg(long, value_name = "S")]
         time_limit: Option<f64>,

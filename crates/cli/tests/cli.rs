@@ -162,3 +162,49 @@ fn missing_period_is_explained() {
     assert!(err.contains("no fixed period for task a"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn design_writes_a_spec_that_analyze_accepts() {
+    let dir = std::env::temp_dir().join(format!("rtpipe-design-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let out = dir.join("designed.toml");
+    let spec = example("table2-design.toml");
+    let o = rtpipe(&[
+        "design",
+        &spec.to_string_lossy(),
+        "--mode",
+        "paper",
+        "--json",
+        "--write",
+        &out.to_string_lossy(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v = json_of(&o);
+    assert_eq!(v["design"]["status"], "optimal");
+    let u = v["design"]["objective"].as_f64().unwrap_or(f64::NAN);
+    // Hand check: 1/9 + 1/14 + 1/5 + 1.15/50 + 1/12 + 1.15/50 = 0.511873…
+    assert!((u - 0.511_873_015_873).abs() < 1e-9, "{u}");
+    // The written spec has every period fixed and passes the paper limits;
+    // `analyze` exits 1 because the sound analysis still fails three of them.
+    let a = rtpipe(&["analyze", &out.to_string_lossy(), "--json"]);
+    let r = json_of(&a);
+    assert_eq!(a.status.code(), Some(1));
+    let chains = r["chains"].as_array().cloned().unwrap_or_default();
+    assert!(!chains.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn design_rejects_bad_flags_with_exit_2() {
+    let spec = example("table2-design.toml");
+    let o = rtpipe(&["design", &spec.to_string_lossy(), "--time-limit", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--time-limit"));
+    let o = rtpipe(&["design", &spec.to_string_lossy(), "--mode", "fast"]);
+    assert_eq!(o.status.code(), Some(2));
+}
