@@ -8,6 +8,9 @@ use rtpipe_model::Spec;
 use serde_json::json;
 use std::path::Path;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum ModeArg {
@@ -57,9 +60,10 @@ pub fn run(a: Args) -> ExitCode {
             None => SolverKind::Microlp,
         },
         time_limit: a.time_limit,
+        progress: Some(Arc::new(Mutex::new(String::new()))),
         ..Options::default()
     };
-    let out = match design(&spec, &opts) {
+    let out = match with_progress(&spec, &opts) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("{}: error: {e}", a.spec.display());
@@ -91,6 +95,37 @@ pub fn run(a: Args) -> ExitCode {
         Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
         _ => ExitCode::from(1),
     }
+}
+
+/// Runs the design with a spinner on stderr that shows what the search is
+/// doing (hidden when stderr is not a terminal).
+fn with_progress(spec: &Spec, opts: &Options) -> Result<Outcome, rtpipe_design::DesignError> {
+    let pb = crate::spinner(format!(
+        "designing {} ({} mode)",
+        spec.name,
+        opts.mode.name()
+    ));
+    let done = AtomicBool::new(false);
+    let out = std::thread::scope(|s| {
+        if let Some(status) = &opts.progress {
+            let (pb, done) = (&pb, &done);
+            s.spawn(move || {
+                while !done.load(Ordering::Relaxed) {
+                    if let Ok(g) = status.lock() {
+                        if !g.is_empty() {
+                            pb.set_message(g.clone());
+                        }
+                    }
+                    std::thread::sleep(Duration::from_millis(200));
+                }
+            });
+        }
+        let out = design(spec, opts);
+        done.store(true, Ordering::Relaxed);
+        out
+    });
+    pb.finish_and_clear();
+    out
 }
 
 fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {

@@ -70,6 +70,21 @@ enum Command {
     },
 }
 
+/// A spinner with a message and the elapsed time on stderr (hidden when
+/// stderr is not a terminal).
+pub fn spinner(msg: String) -> indicatif::ProgressBar {
+    let pb =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}]")
+    {
+        pb.set_style(style);
+    }
+    pb.set_message(msg);
+    pb.enable_steady_tick(std::time::Duration::from_millis(100));
+    pb
+}
+
 /// Exit status for bad input (clap uses 2 for bad flags too).
 pub const EXIT_BAD_INPUT: u8 = 2;
 

@@ -6,7 +6,6 @@ use crate::plot;
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
@@ -17,7 +16,7 @@ use serde_json::{json, Value};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Tail outputs simulated when neither `--outputs` nor `--duration` is given.
 pub const DEFAULT_OUTPUTS: u64 = 10_000;
@@ -390,12 +389,7 @@ fn run_simulation(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<SimResult, 
 /// Runs `f` with a spinner and the elapsed time on stderr (hidden when stderr
 /// is not a terminal).
 fn with_spinner<T>(msg: String, f: impl FnOnce() -> T) -> T {
-    let pb = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
-    if let Ok(style) = ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}]") {
-        pb.set_style(style);
-    }
-    pb.set_message(msg);
-    pb.enable_steady_tick(Duration::from_millis(100));
+    let pb = crate::spinner(msg);
     let out = f();
     pb.finish_and_clear();
     out

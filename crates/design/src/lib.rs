@@ -15,6 +15,7 @@ use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// Which analysis the chain limits are judged by.
@@ -46,6 +47,8 @@ pub struct Options {
     /// Without a time limit: seconds the exact search may go on after a
     /// verified design is found (`None`: until it is proven optimal).
     pub patience: Option<f64>,
+    /// Where the search says what it is doing, for a progress display.
+    pub progress: Option<Arc<Mutex<String>>>,
 }
 
 impl Default for Options {
@@ -56,6 +59,7 @@ impl Default for Options {
             time_limit: None,
             max_iterations: 500,
             patience: Some(EXACT_PATIENCE),
+            progress: None,
         }
     }
 }
@@ -684,6 +688,14 @@ impl<'a> Runner<'a> {
         self.start.elapsed().as_secs_f64()
     }
 
+    fn say(&self, what: impl FnOnce() -> String) {
+        if let Some(p) = &self.opts.progress {
+            if let Ok(mut g) = p.lock() {
+                *g = what();
+            }
+        }
+    }
+
     fn out_of_time(&self) -> bool {
         self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
     }
@@ -1186,6 +1198,13 @@ impl<'a> Runner<'a> {
                 break;
             }
             self.iterations += 1;
+            self.say(|| {
+                let best = incumbent.as_ref().map_or(String::new(), |(_, _, u)| {
+                    format!(", best verified U = {u:.4}")
+                });
+                let lb = lower_bound.map_or(String::new(), |b| format!(", lower bound {b:.4}"));
+                format!("master problem {}{lb}{best}", self.iterations)
+            });
             let solved = self.solve_master(&groups, sound.as_ref());
             if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
                 if let Solved::Periods(p, obj, opt, _) = &solved {
@@ -1504,6 +1523,13 @@ impl<'a> Runner<'a> {
             if self.out_of_time() {
                 break;
             }
+            self.say(|| {
+                format!(
+                    "infeasible; finding the conflicting constraints ({} of {} left to test)",
+                    core.len() - k,
+                    groups.len()
+                )
+            });
             let mut trial = core.clone();
             trial.remove(k);
             // Keep the group unless dropping it provably keeps the conflict.
@@ -1530,6 +1556,7 @@ impl<'a> Runner<'a> {
                         Metric::Freshness => ch.freshness,
                     }
                     .unwrap_or(0);
+                    self.say(|| format!("infeasible; how far must {name} move"));
                     let fix = self.min_limit(groups, *gr, sound).map(|need| {
                         format!(
                             "raise the {} limit from {} to {} {} (within a thousandth of the time unit; other constraints unchanged)",
