@@ -412,6 +412,9 @@ impl<'a> Master<'a> {
     }
 }
 
+/// The conflict search may take this many times the patience.
+const EXPLAIN_EFFORT: f64 = 3.0;
+
 /// Ranges of at most this many grid steps get every tangent up front.
 const DENSE_TANGENTS: i64 = 128;
 
@@ -698,6 +701,7 @@ impl<'a> Runner<'a> {
 
     fn out_of_time(&self) -> bool {
         self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
+            || self.deadline.is_some_and(|d| Instant::now() >= d)
     }
 
     fn build(
@@ -987,11 +991,6 @@ impl<'a> Runner<'a> {
                     .iter()
                     .filter(|v| v.integer && v.hi <= 1.0)
                     .count();
-            for (k, v) in m.lp.vars.iter().enumerate() {
-                if v.hi - v.lo < 1e-6 {
-                    eprintln!("fixed var {k}: {v:?}");
-                }
-            }
             eprintln!(
                 "master: {} variables ({bins} binary), {} rows",
                 m.lp.vars.len(),
@@ -1222,7 +1221,20 @@ impl<'a> Runner<'a> {
                     break;
                 }
                 Solved::Infeasible => {
+                    // Infeasibility is proven; explaining it gets a bounded
+                    // effort unless a time limit says otherwise.
+                    if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
+                        self.deadline = Some(
+                            Instant::now() + std::time::Duration::from_secs_f64(EXPLAIN_EFFORT * p),
+                        );
+                    }
                     let conflicts = self.explain(&groups, sound.as_ref());
+                    if self.out_of_time() {
+                        notes.push(
+                            "the conflict search ran out of time: the set may not be minimal and fixes may be missing (give --time-limit to search longer)"
+                                .into(),
+                        );
+                    }
                     return Ok(self.outcome(Status::Infeasible, None, None, conflicts, notes));
                 }
                 Solved::Periods(periods, obj, optimal, rmodel) => {
