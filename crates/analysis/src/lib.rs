@@ -76,6 +76,23 @@ pub fn missing_periods(spec: &Spec) -> Vec<&str> {
         .collect()
 }
 
+/// (reaction, freshness) of every declared chain, in chain order, as
+/// `pick` reads them off the bounds (e.g. `|b| b.sound`). For generators
+/// that set limits from a design's own bounds.
+pub fn bounds_per_chain(
+    spec: &Spec,
+    pick: impl Fn(&ChainBound) -> Option<Nanos>,
+) -> Vec<(Option<Nanos>, Option<Nanos>)> {
+    let mut out = vec![(None, None); spec.chains.len()];
+    for c in analyze(spec).chains {
+        match c.metric {
+            Metric::Reaction => out[c.chain].0 = pick(&c.bound),
+            Metric::Freshness => out[c.chain].1 = pick(&c.bound),
+        }
+    }
+    out
+}
+
 /// Runs the schedulability test and bounds every declared chain.
 pub fn analyze(spec: &Spec) -> Report {
     let (timing, schedulability) = sched::analyze(spec);

@@ -19,10 +19,10 @@
 //! (comma-separated names) restricts the backends.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
-use rtpipe_analysis::{analyze, Metric};
+use rtpipe_analysis::{analyze, bounds_per_chain};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Mode, Options, Outcome};
-use rtpipe_model::gen::{design_origin, design_problem, ChainBounds, DesignGenConfig};
+use rtpipe_model::gen::{design_origin, design_problem, ChainBounds, DesignGenConfig, GenConfig};
 use rtpipe_model::{PeriodSpec, Spec};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -30,15 +30,7 @@ use std::time::{Duration, Instant};
 const SEED: u64 = 2018;
 
 fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    let report = analyze(spec);
-    let mut out = vec![(None, None); spec.chains.len()];
-    for c in &report.chains {
-        match c.metric {
-            Metric::Reaction => out[c.chain].0 = c.bound.sound,
-            Metric::Freshness => out[c.chain].1 = c.bound.sound,
-        }
-    }
-    out
+    bounds_per_chain(spec, |b| b.sound)
 }
 
 fn config(tasks: usize) -> DesignGenConfig {
@@ -49,10 +41,13 @@ fn config(tasks: usize) -> DesignGenConfig {
         _ => (8, 10),
     };
     DesignGenConfig {
-        tasks,
-        cpus,
-        utilization: 0.5,
-        chains,
+        system: GenConfig {
+            tasks,
+            cpus,
+            utilization: 0.5,
+            chains,
+            ..DesignGenConfig::default().system
+        },
         choices_fraction: 0.0,
         ..DesignGenConfig::default()
     }
@@ -86,7 +81,7 @@ fn problem(tasks: usize) -> Spec {
          {paper} (paper)",
         spec.name,
         spec.tasks.len(),
-        cfg.cpus,
+        cfg.system.cpus,
         spec.chains.len(),
         spec.chains.iter().map(|c| c.path.len()).sum::<usize>(),
         utilization(&origin),

@@ -16,40 +16,24 @@
 //! 300 in each mode); `RTPIPE_DESIGN_VERBOSE=1` prints
 //! every instance. Run with `--nocapture` to see the tallies.
 
-use rtpipe_analysis::{analyze, Metric, Report};
+use rtpipe_analysis::{analyze, bounds_per_chain, Report};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Mode, Options, Outcome, Status};
-use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, Rng};
+use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
 /// Sound bounds of every chain, for the generator's limits.
 fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    let report = analyze(spec);
-    let mut out = vec![(None, None); spec.chains.len()];
-    for c in &report.chains {
-        match c.metric {
-            Metric::Reaction => out[c.chain].0 = c.bound.sound,
-            Metric::Freshness => out[c.chain].1 = c.bound.sound,
-        }
-    }
-    out
+    bounds_per_chain(spec, |b| b.sound)
 }
 
 /// Paper bounds of every chain: limits for paper-mode instances (the sound
 /// bound's limits leave many of them infeasible under the paper's equations,
 /// whose freshness can exceed the sound bound).
 fn paper_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    let report = analyze(spec);
-    let mut out = vec![(None, None); spec.chains.len()];
-    for c in &report.chains {
-        match c.metric {
-            Metric::Reaction => out[c.chain].0 = Some(c.bound.paper),
-            Metric::Freshness => out[c.chain].1 = Some(c.bound.paper),
-        }
-    }
-    out
+    bounds_per_chain(spec, |b| Some(b.paper))
 }
 
 /// Instance `seed`: 3–5 tasks on one CPU (two for some), 1–3 chains, choice
@@ -65,15 +49,18 @@ fn instance(seed: u64, mode: Mode) -> Spec {
         Scheduler::Rm
     };
     let cfg = DesignGenConfig {
-        tasks,
-        cpus: if r.chance(0.15) { 2 } else { 1 },
-        utilization: 0.3 + 0.4 * r.unit(),
-        scheduler,
-        source_fraction: 0.2,
-        max_fan_in: 2,
-        chains: r.range(1, 3) as usize,
-        transfers: r.chance(0.3),
-        mixed_servers: r.chance(0.3),
+        system: GenConfig {
+            tasks,
+            cpus: if r.chance(0.15) { 2 } else { 1 },
+            utilization: 0.3 + 0.4 * r.unit(),
+            scheduler,
+            source_fraction: 0.2,
+            max_fan_in: 2,
+            chains: r.range(1, 3) as usize,
+            transfers: r.chance(0.3),
+            mixed_servers: r.chance(0.3),
+            ..GenConfig::default()
+        },
         choices_only: true,
         // At most 4^4 = 256 or 3^5 = 243 assignments.
         max_choices: if tasks <= 4 { 4 } else { 3 },

@@ -332,23 +332,11 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
 /// get limits near what the generating design achieves.
 #[derive(Debug, Clone)]
 pub struct DesignGenConfig {
-    pub tasks: usize,
-    pub cpus: u32,
-    /// Total utilisation per CPU of the generating design.
-    pub utilization: f64,
-    pub scheduler: Scheduler,
-    /// Fraction of tasks with no producer (chains start at these).
-    pub source_fraction: f64,
-    /// Each non-source reads 1..=max_fan_in earlier tasks.
-    pub max_fan_in: usize,
-    /// Chains to declare: walks of 2–15 tasks along edges whose tasks use at
-    /// most 3 distinct generating periods. Fewer when the graph offers fewer
-    /// distinct such walks.
-    pub chains: usize,
-    /// Transfer costs on every edge (see [`GenConfig::transfers`]).
-    pub transfers: bool,
-    /// Server kinds among main, io and none (otherwise all main).
-    pub mixed_servers: bool,
+    /// The generating system ([`random_system`]); its `chains` is how many
+    /// chains to declare: walks of 2–15 tasks along edges whose tasks use at
+    /// most 3 distinct generating periods (fewer when the graph offers fewer
+    /// such walks). Feedback edges and inheritance are not generated.
+    pub system: GenConfig,
     /// The spec's `resolution`: the grid of designed periods.
     pub resolution: Nanos,
     /// Probability that a task gets a choice domain rather than a range.
@@ -371,15 +359,12 @@ pub struct DesignGenConfig {
 impl Default for DesignGenConfig {
     fn default() -> Self {
         DesignGenConfig {
-            tasks: 6,
-            cpus: 1,
-            utilization: 0.5,
-            scheduler: Scheduler::Rm,
-            source_fraction: 0.2,
-            max_fan_in: 2,
-            chains: 3,
-            transfers: false,
-            mixed_servers: false,
+            system: GenConfig {
+                tasks: 6,
+                utilization: 0.5,
+                transfers: false,
+                ..GenConfig::default()
+            },
             resolution: 1_000_000,
             choices_fraction: 0.3,
             choices_only: false,
@@ -403,17 +388,10 @@ const DOMAIN_SALT: u64 = 0xBB67_AE85_84CA_A73B;
 /// distinct periods each, walked along edges.
 pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
     let gcfg = GenConfig {
-        tasks: cfg.tasks,
-        cpus: cfg.cpus,
-        utilization: cfg.utilization,
-        scheduler: cfg.scheduler,
-        source_fraction: cfg.source_fraction,
-        max_fan_in: cfg.max_fan_in,
         feedback: 0.0,
         chains: 0,
-        transfers: cfg.transfers,
-        mixed_servers: cfg.mixed_servers,
         inheritance: 0.0,
+        ..cfg.system.clone()
     };
     let mut spec = random_system(seed, &gcfg);
     spec.name = format!("design-{seed}");
@@ -437,7 +415,7 @@ pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
         seen.len() <= 3
     };
     let mut attempts = 0;
-    while spec.chains.len() < cfg.chains && attempts < 20 * cfg.chains.max(1) {
+    while spec.chains.len() < cfg.system.chains && attempts < 20 * cfg.system.chains.max(1) {
         attempts += 1;
         let path = random_walk(&mut rng, &consumers, n_sources, at_most_3);
         if path.len() < 2 || spec.chains.iter().any(|c| c.path == path) {
@@ -582,9 +560,12 @@ mod tests {
         let mut spans = [0usize; 4];
         for seed in 0..200 {
             let cfg = DesignGenConfig {
-                tasks: 3 + (seed as usize % 40),
-                cpus: 1 + (seed % 2) as u32,
-                chains: 4,
+                system: GenConfig {
+                    tasks: 3 + (seed as usize % 40),
+                    cpus: 1 + (seed % 2) as u32,
+                    chains: 4,
+                    ..DesignGenConfig::default().system
+                },
                 ..DesignGenConfig::default()
             };
             let o = design_origin(seed, &cfg);
@@ -617,16 +598,19 @@ mod tests {
         let mut kinds = [0usize; 2];
         for seed in 0..200 {
             let cfg = DesignGenConfig {
-                tasks: 2 + (seed as usize % 30),
+                system: GenConfig {
+                    tasks: 2 + (seed as usize % 30),
+                    transfers: seed % 2 == 0,
+                    mixed_servers: seed % 4 == 1,
+                    scheduler: if seed % 5 == 0 {
+                        Scheduler::Edf
+                    } else {
+                        Scheduler::Rm
+                    },
+                    ..DesignGenConfig::default().system
+                },
                 choices_only: seed % 3 == 0,
                 max_choices: 2 + (seed as usize % 3),
-                transfers: seed % 2 == 0,
-                mixed_servers: seed % 4 == 1,
-                scheduler: if seed % 5 == 0 {
-                    Scheduler::Edf
-                } else {
-                    Scheduler::Rm
-                },
                 ..DesignGenConfig::default()
             };
             let o = design_origin(seed, &cfg);
