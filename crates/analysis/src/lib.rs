@@ -51,6 +51,13 @@ pub struct ChainResult {
     pub ok: bool,
 }
 
+impl ChainResult {
+    /// The paper's bound is within the limit (or there is no limit).
+    pub fn paper_ok(&self) -> bool {
+        self.limit.is_none_or(|l| self.bound.paper <= l)
+    }
+}
+
 /// Everything `rtpipe analyze` reports.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Report {
@@ -64,6 +71,12 @@ impl Report {
     /// Every limit and the schedulability test hold.
     pub fn all_ok(&self) -> bool {
         self.schedulability.schedulable && self.chains.iter().all(|c| c.ok)
+    }
+
+    /// Every limit holds under the paper's equations, and the
+    /// schedulability test.
+    pub fn all_ok_paper(&self) -> bool {
+        self.schedulability.schedulable && self.chains.iter().all(|c| c.paper_ok())
     }
 }
 

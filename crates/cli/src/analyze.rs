@@ -45,7 +45,29 @@ pub fn print_json(v: &Value) -> Result<(), ExitCode> {
     }
 }
 
-pub fn run(path: &Path, json_out: bool, all_paths: bool) -> ExitCode {
+/// Which analysis the verdict (and the exit status) of `analyze` follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Judge {
+    Sound,
+    Paper,
+}
+
+impl Judge {
+    fn name(self) -> &'static str {
+        match self {
+            Judge::Sound => "sound",
+            Judge::Paper => "paper",
+        }
+    }
+    fn holds(self, r: &Report) -> bool {
+        match self {
+            Judge::Sound => r.all_ok(),
+            Judge::Paper => r.all_ok_paper(),
+        }
+    }
+}
+
+pub fn run(path: &Path, json_out: bool, all_paths: bool, judge: Judge) -> ExitCode {
     let spec = match load(path) {
         Ok(s) => s,
         Err(code) => return code,
@@ -61,12 +83,12 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool) -> ExitCode {
             return code;
         }
     } else {
-        print!("{}", report_text(&spec, &report));
+        print!("{}", report_text(&spec, &report, judge));
         if let Some(p) = &paths {
             print!("{}", paths_text(&spec, p));
         }
     }
-    if report.all_ok() {
+    if judge.holds(&report) {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
@@ -133,7 +155,7 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
                 "sound": num(spec, c.bound.sound),
                 "davare": num(spec, c.bound.davare),
                 "ok": c.ok,
-                "paper_ok": c.limit.is_none_or(|l| c.bound.paper <= l),
+                "paper_ok": c.paper_ok(),
                 "from_event": {
                     "paper": spec.in_unit(c.bound.from_event_paper),
                     "sound": num(spec, c.bound.from_event_sound),
@@ -159,6 +181,7 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
         },
         "chains": chains,
         "ok": r.all_ok(),
+        "paper_ok": r.all_ok_paper(),
     })
 }
 
@@ -177,7 +200,7 @@ fn opt(spec: &Spec, v: Option<Nanos>) -> String {
     }
 }
 
-pub fn report_text(spec: &Spec, r: &Report) -> String {
+pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
     let mut out = String::new();
     out.push_str(&format!(
         "system {}: {} tasks, {} chains; times in {}; scheduler {}\n\n",
@@ -280,10 +303,10 @@ pub fn report_text(spec: &Spec, r: &Report) -> String {
                 (true, None) => "-",
                 (false, _) => "FAIL",
             };
-            let paper_verdict = match c.limit {
-                Some(l) if c.bound.paper <= l => "ok",
-                Some(_) => "FAIL",
-                None => "-",
+            let paper_verdict = match (c.paper_ok(), c.limit) {
+                (true, Some(_)) => "ok",
+                (true, None) => "-",
+                (false, _) => "FAIL",
             };
             t.row(vec![
                 label,
@@ -302,18 +325,26 @@ pub fn report_text(spec: &Spec, r: &Report) -> String {
         }
         out.push_str(&t.render());
     }
-    let fails = r.chains.iter().filter(|c| !c.ok).count();
+    let fails = r
+        .chains
+        .iter()
+        .filter(|c| match judge {
+            Judge::Sound => !c.ok,
+            Judge::Paper => !c.paper_ok(),
+        })
+        .count();
+    let name = judge.name();
     out.push_str(&format!(
         "\n{}\n",
         match (r.schedulability.schedulable, fails) {
-            (true, 0) =>
-                "verdict: every limit holds (sound analysis) and the system is schedulable"
-                    .to_string(),
+            (true, 0) => format!(
+                "verdict: every limit holds ({name} analysis) and the system is schedulable"
+            ),
             (sched, f) => format!(
                 "verdict: {}{}",
                 if sched { "" } else { "not schedulable; " },
                 if f > 0 {
-                    format!("{f} chain limit(s) fail under the sound analysis")
+                    format!("{f} chain limit(s) fail under the {name} analysis")
                 } else {
                     String::new()
                 }

@@ -1,6 +1,6 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-use crate::analyze::{report_json, report_text};
+use crate::analyze::{report_json, report_text, Judge};
 use crate::EXIT_BAD_INPUT;
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, Mode, Options, Outcome, Status};
@@ -190,7 +190,11 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
         }
         out.push_str("\n\nre-check by the analysis:\n\n");
         if let Some(r) = &o.report {
-            out.push_str(&report_text(s, r));
+            let judge = match mode {
+                Mode::Sound => Judge::Sound,
+                Mode::Paper => Judge::Paper,
+            };
+            out.push_str(&report_text(s, r, judge));
         }
     }
     if o.status == Status::Infeasible {

@@ -189,13 +189,28 @@ fn design_writes_a_spec_that_analyze_accepts() {
     let u = v["design"]["objective"].as_f64().unwrap_or(f64::NAN);
     // Hand check: 1/9 + 1/14 + 1/5 + 1.15/50 + 1/12 + 1.15/50 = 0.511873…
     assert!((u - 0.511_873_015_873).abs() < 1e-9, "{u}");
-    // The written spec has every period fixed and passes the paper limits;
-    // `analyze` exits 1 because the sound analysis still fails three of them.
-    let a = rtpipe(&["analyze", &out.to_string_lossy(), "--json"]);
+    // The written spec has every period fixed and passes `analyze --mode
+    // paper`; the default (sound) verdict fails three reaction limits.
+    let a = rtpipe(&[
+        "analyze",
+        &out.to_string_lossy(),
+        "--mode",
+        "paper",
+        "--json",
+    ]);
     let r = json_of(&a);
+    assert_eq!(a.status.code(), Some(0));
+    assert_eq!(
+        (r["paper_ok"].as_bool(), r["ok"].as_bool()),
+        (Some(true), Some(false))
+    );
+    let a = rtpipe(&["analyze", &out.to_string_lossy()]);
     assert_eq!(a.status.code(), Some(1));
-    let chains = r["chains"].as_array().cloned().unwrap_or_default();
-    assert!(!chains.is_empty());
+    let text = String::from_utf8_lossy(&a.stdout);
+    assert!(
+        text.contains("3 chain limit(s) fail under the sound analysis"),
+        "{text}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1161,7 +1161,7 @@ impl<'a> Runner<'a> {
     fn limits_ok(&self, report: &Report) -> bool {
         report.chains.iter().all(|c| match self.opts.mode {
             Mode::Sound => c.ok,
-            Mode::Paper => c.limit.is_none_or(|l| c.bound.paper <= l),
+            Mode::Paper => c.paper_ok(),
         })
     }
 
