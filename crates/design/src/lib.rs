@@ -1042,6 +1042,142 @@ impl<'a> Runner<'a> {
         v
     }
 
+    /// A verified design by local search on the analysis alone: chain tasks
+    /// start at their shortest period, the others at their longest; then
+    /// every task in turn lengthens its period (largest utilisation first,
+    /// in growing jumps) while the design still verifies. Cheap and often
+    /// good; it proves nothing, so it only seeds the incumbent.
+    fn descent(&mut self) -> Option<(Spec, Report, f64)> {
+        let spec = self.spec;
+        let n = spec.tasks.len();
+        // Candidate values per task (ns): every choice, or a geometric ladder
+        // over a range (about 10 % apart, both ends included).
+        let values: Vec<Vec<Nanos>> = self
+            .dom
+            .iter()
+            .map(|d| match d {
+                Dom::Fixed(t) => vec![*t * self.g],
+                Dom::Choice(v) => {
+                    let mut v: Vec<Nanos> = v.iter().map(|&t| t * self.g).collect();
+                    v.sort_unstable();
+                    v.dedup();
+                    v
+                }
+                Dom::Grid { step, lo, hi } => {
+                    let mut ks = vec![*lo];
+                    let mut k = *lo;
+                    while k < *hi {
+                        k = (((k as f64) * 1.1).ceil() as i64).max(k + 1).min(*hi);
+                        ks.push(k);
+                    }
+                    ks.iter().map(|k| k * step * self.g).collect()
+                }
+            })
+            .collect();
+        let on_chain: Vec<bool> = (0..n)
+            .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
+            .collect();
+        let periods = |idx: &[usize]| -> Vec<Nanos> { (0..n).map(|i| values[i][idx[i]]).collect() };
+        let check = |me: &Self, idx: &[usize]| -> Option<(Spec, Report)> {
+            let cand = me.with_periods(&periods(idx));
+            let report = rtpipe_analysis::analyze(&cand);
+            (report.schedulability.schedulable && me.limits_ok(&report)).then_some((cand, report))
+        };
+        // Starts: chain tasks as fast as a per-CPU utilisation share u allows
+        // (each of k tasks on the CPU gets u/k), the others at their longest
+        // period; the first start that verifies wins.
+        let per_cpu = |i: usize| {
+            (0..n)
+                .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu && on_chain[j])
+                .count()
+                .max(1) as f64
+        };
+        let start = |u: f64| -> Vec<usize> {
+            (0..n)
+                .map(|i| {
+                    if !on_chain[i] {
+                        return values[i].len() - 1;
+                    }
+                    let want = spec.tasks[i].budget() as f64 * per_cpu(i) / u;
+                    values[i]
+                        .iter()
+                        .position(|&t| t as f64 >= want)
+                        .unwrap_or(values[i].len() - 1)
+                })
+                .collect()
+        };
+        // From a start that is schedulable but misses limits, speed up the
+        // tasks of every failing chain one step at a time.
+        let repair = |me: &Self, mut idx: Vec<usize>| -> Option<(Vec<usize>, (Spec, Report))> {
+            for _ in 0..4 * values.iter().map(Vec::len).max().unwrap_or(1) {
+                let cand = me.with_periods(&periods(&idx));
+                let report = rtpipe_analysis::analyze(&cand);
+                if !report.schedulability.schedulable || me.out_of_time() {
+                    return None;
+                }
+                if me.limits_ok(&report) {
+                    return Some((idx, (cand, report)));
+                }
+                let mut changed = false;
+                for c in &report.chains {
+                    let ok = match me.opts.mode {
+                        Mode::Sound => c.ok,
+                        Mode::Paper => c.paper_ok(),
+                    };
+                    // Not the tail: its period does not enter its chain's
+                    // bounds (its response time does), and speeding it up
+                    // only adds load.
+                    let path = &spec.chains[c.chain].path;
+                    if !ok {
+                        for &i in &path[..path.len() - 1] {
+                            if idx[i] > 0 {
+                                idx[i] -= 1;
+                                changed = true;
+                            }
+                        }
+                    }
+                }
+                if !changed {
+                    return None;
+                }
+            }
+            None
+        };
+        let (mut idx, mut best) = [1.0, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1]
+            .iter()
+            .find_map(|&u| repair(self, start(u)))?;
+        self.say(|| "a first verified design by local search".into());
+        loop {
+            let mut moved = false;
+            let mut order: Vec<usize> = (0..n).filter(|&i| idx[i] + 1 < values[i].len()).collect();
+            order.sort_by(|&a, &b| {
+                let u = |i: usize| spec.tasks[i].budget() as f64 / values[i][idx[i]] as f64;
+                u(b).total_cmp(&u(a))
+            });
+            for i in order {
+                let mut jump = 1;
+                while idx[i] + jump < values[i].len() && !self.out_of_time() {
+                    let mut trial = idx.clone();
+                    trial[i] += jump;
+                    match check(self, &trial) {
+                        Some(found) => {
+                            idx = trial;
+                            best = found;
+                            moved = true;
+                            jump *= 2;
+                        }
+                        None => break,
+                    }
+                }
+            }
+            if !moved || self.out_of_time() {
+                break;
+            }
+        }
+        let u = utilization(&best.0);
+        Some((best.0, best.1, u))
+    }
+
     /// The spec with these periods fixed.
     fn with_periods(&self, periods: &[Nanos]) -> Spec {
         let mut s = self.spec.clone();
@@ -1180,10 +1316,18 @@ impl<'a> Runner<'a> {
                 fixed: None,
             }),
         };
-        let mut lower_bound: Option<f64> = None;
+        // Every period at its longest: a lower bound before any master ends.
+        let mut lower_bound: Option<f64> = Some(
+            (0..self.spec.tasks.len())
+                .filter(|&i| self.spec.tasks[i].server != Server::Background)
+                .map(|i| self.spec.tasks[i].budget() as f64 / (self.dom[i].max() * self.g) as f64)
+                .sum(),
+        );
         // A verified design from the heuristic phase (sound mode), and when
         // the exact search after it started.
-        let mut incumbent: Option<(Spec, Report, f64)> = None;
+        // A quick verified design, if there is an easy one: reported when
+        // the exact search runs out of time (it does not start the patience).
+        let mut incumbent: Option<(Spec, Report, f64)> = self.descent();
         let mut heuristic_tried = false;
         let mut exact_since: Option<Instant> = None;
         loop {
@@ -1305,6 +1449,11 @@ impl<'a> Runner<'a> {
                         continue;
                     }
                     if self.limits_ok(&report) {
+                        // A stopped solve's candidate may be worse than the incumbent.
+                        let (cand, report) = match incumbent.take() {
+                            Some((c, r, u0)) if !optimal && u0 < utilization(&cand) => (c, r),
+                            _ => (cand, report),
+                        };
                         let u = utilization(&cand);
                         let lb = lower_bound.map(|b| b.min(u));
                         let gap = lb.map(|b| if u > 0.0 { ((u - b) / u).max(0.0) } else { 0.0 });
