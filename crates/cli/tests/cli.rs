@@ -1,38 +1,12 @@
 //! The `rtpipe` binary end to end: exit codes, JSON shape, error messages.
 
+mod common;
+
+use common::{example, json_of, rtpipe, scratch};
 use serde_json::Value;
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn example(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-}
-
-fn rtpipe(args: &[&str]) -> Output {
-    match Command::new(env!("CARGO_BIN_EXE_rtpipe"))
-        .args(args)
-        .output()
-    {
-        Ok(o) => o,
-        Err(e) => panic!("cannot run rtpipe: {e}"),
-    }
-}
-
-fn json_of(o: &Output) -> Value {
-    match serde_json::from_slice(&o.stdout) {
-        Ok(v) => v,
-        Err(e) => panic!(
-            "stdout is not JSON ({e}): {}",
-            String::from_utf8_lossy(&o.stdout)
-        ),
-    }
-}
 
 fn analyze_json(name: &str) -> (i32, Value) {
-    let p = example(name);
-    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--json"]);
+    let o = rtpipe(&["analyze", &example(name), "--json"]);
     (o.status.code().unwrap_or(-1), json_of(&o))
 }
 
@@ -94,11 +68,11 @@ fn cleanflight_in_microseconds() {
 #[test]
 fn all_paths_json_and_text() {
     let p = example("paper-table2.toml");
-    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--json", "--all-paths"]);
+    let o = rtpipe(&["analyze", &p, "--json", "--all-paths"]);
     let v = json_of(&o);
     let pairs = v["all_paths"]["pairs"].as_array().map(|a| a.len());
     assert_eq!(pairs, Some(4));
-    let o = rtpipe(&["analyze", &p.to_string_lossy(), "--all-paths"]);
+    let o = rtpipe(&["analyze", &p, "--all-paths"]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("all source-to-sink pairs"), "{text}");
     assert!(text.contains("t2>t5>t6"), "{text}");
@@ -107,7 +81,7 @@ fn all_paths_json_and_text() {
 #[test]
 fn table_output_for_people() {
     let p = example("paper-table2.toml");
-    let o = rtpipe(&["analyze", &p.to_string_lossy()]);
+    let o = rtpipe(&["analyze", &p]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("schedulability (liu-layland)"), "{text}");
     assert!(text.contains("t1>t4"), "{text}");
@@ -116,8 +90,7 @@ fn table_output_for_people() {
 
 #[test]
 fn bad_spec_exits_2_with_location() {
-    let dir = std::env::temp_dir().join(format!("rtpipe-cli-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
+    let dir = scratch("cli");
     let f = dir.join("bad.toml");
     let text = match std::fs::read_to_string(example("paper-table2.toml")) {
         Ok(t) => t.replace("reads = [\"t1\", \"t2\"]", "reads = [\"t1\", \"tt2\"]"),
@@ -149,8 +122,7 @@ fn missing_file_and_flags_exit_2() {
 
 #[test]
 fn missing_period_is_explained() {
-    let dir = std::env::temp_dir().join(format!("rtpipe-cli-np-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
+    let dir = scratch("cli-np");
     let f = dir.join("np.toml");
     let src = "[system]\nname = \"np\"\n[tasks.a]\nexec = 1\n";
     if let Err(e) = std::fs::write(&f, src) {
@@ -165,13 +137,12 @@ fn missing_period_is_explained() {
 
 #[test]
 fn design_writes_a_spec_that_analyze_accepts() {
-    let dir = std::env::temp_dir().join(format!("rtpipe-design-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
+    let dir = scratch("design");
     let out = dir.join("designed.toml");
     let spec = example("table2-design.toml");
     let o = rtpipe(&[
         "design",
-        &spec.to_string_lossy(),
+        &spec,
         "--mode",
         "paper",
         "--json",
@@ -217,9 +188,9 @@ fn design_writes_a_spec_that_analyze_accepts() {
 #[test]
 fn design_rejects_bad_flags_with_exit_2() {
     let spec = example("table2-design.toml");
-    let o = rtpipe(&["design", &spec.to_string_lossy(), "--time-limit", "0"]);
+    let o = rtpipe(&["design", &spec, "--time-limit", "0"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--time-limit"));
-    let o = rtpipe(&["design", &spec.to_string_lossy(), "--mode", "fast"]);
+    let o = rtpipe(&["design", &spec, "--mode", "fast"]);
     assert_eq!(o.status.code(), Some(2));
 }

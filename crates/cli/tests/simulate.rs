@@ -1,48 +1,11 @@
 //! `rtpipe simulate` end to end: JSON shape, soundness on the examples, the
 //! trace and SVG outputs, bad flags, determinism.
 
+mod common;
+
+use common::{example, json_of, rtpipe, scratch};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn example(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
-fn rtpipe(args: &[&str]) -> Output {
-    match Command::new(env!("CARGO_BIN_EXE_rtpipe"))
-        .args(args)
-        .output()
-    {
-        Ok(o) => o,
-        Err(e) => panic!("cannot run rtpipe: {e}"),
-    }
-}
-
-fn json_of(o: &Output) -> Value {
-    match serde_json::from_slice(&o.stdout) {
-        Ok(v) => v,
-        Err(e) => panic!(
-            "stdout is not JSON ({e}): {}\nstderr: {}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    }
-}
-
-/// A fresh, empty scratch directory per test.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rtpipe-sim-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    if let Err(e) = std::fs::create_dir_all(&dir) {
-        panic!("cannot create {}: {e}", dir.display());
-    }
-    dir
-}
+use std::path::Path;
 
 fn files_in(dir: &Path) -> Vec<String> {
     match std::fs::read_dir(dir) {
@@ -195,7 +158,7 @@ fn table_output_for_people() {
 
 #[test]
 fn trace_parses_with_slices_on_every_task_track() {
-    let dir = scratch("trace");
+    let dir = scratch("sim-trace");
     let f = dir.join("run.json");
     let o = rtpipe(&[
         "simulate",
@@ -277,7 +240,7 @@ fn trace_parses_with_slices_on_every_task_track() {
 
 #[test]
 fn plot_and_gantt_are_svg_naming_the_chains() {
-    let dir = scratch("svg");
+    let dir = scratch("sim-svg");
     let (plot, gantt) = (dir.join("fig9.svg"), dir.join("gantt.svg"));
     let o = rtpipe(&[
         "simulate",
@@ -327,7 +290,7 @@ fn plot_and_gantt_are_svg_naming_the_chains() {
 
 #[test]
 fn bad_flags_exit_2_and_write_nothing() {
-    let dir = scratch("bad");
+    let dir = scratch("sim-bad");
     let out = dir.join("out.svg").to_string_lossy().into_owned();
     let trace = dir.join("t.json").to_string_lossy().into_owned();
     let spec = example("paper-table3.toml");

@@ -223,31 +223,13 @@ fn infeasible_limits_are_explained() {
 #[cfg(feature = "highs")]
 #[test]
 fn backends_agree_on_paper_mode() {
-    let spec = table2_free();
-    let mut us = Vec::new();
-    for solver in [SolverKind::Microlp, SolverKind::Highs] {
-        let opts = Options {
-            mode: Mode::Paper,
-            solver,
-            ..Options::default()
-        };
-        match design(&spec, &opts) {
-            Ok(o) => {
-                assert_eq!(o.status, Status::Optimal, "{solver:?}");
-                us.push(o.objective.unwrap_or(f64::NAN));
-            }
-            Err(e) => panic!("{solver:?}: {e}"),
-        }
-    }
+    let us = paper_optimum_per_backend(&table2_free());
     assert!((us[0] - us[1]).abs() < 1e-9, "{us:?}");
 }
 
+/// The proven paper-mode optimum with microlp and with HiGHS.
 #[cfg(feature = "highs")]
-#[test]
-fn backends_agree_on_cleanflight() {
-    // µs periods up to 44 ms: the optima agree to the solvers' tolerances
-    // (HiGHS: 1.3e-7 relative above microlp's 0.14207450).
-    let spec = load_with("cleanflight-design.toml", |t| t.to_string());
+fn paper_optimum_per_backend(spec: &Spec) -> Vec<f64> {
     let mut us = Vec::new();
     for solver in [SolverKind::Microlp, SolverKind::Highs] {
         let opts = Options {
@@ -256,7 +238,7 @@ fn backends_agree_on_cleanflight() {
             patience: None,
             ..Options::default()
         };
-        match design(&spec, &opts) {
+        match design(spec, &opts) {
             Ok(o) => {
                 assert_eq!(o.status, Status::Optimal, "{solver:?}");
                 us.push(o.objective.unwrap_or(f64::NAN));
@@ -264,6 +246,15 @@ fn backends_agree_on_cleanflight() {
             Err(e) => panic!("{solver:?}: {e}"),
         }
     }
+    us
+}
+
+#[cfg(feature = "highs")]
+#[test]
+fn backends_agree_on_cleanflight() {
+    // µs periods up to 44 ms: the optima agree to the solvers' tolerances
+    // (HiGHS: 1.3e-7 relative above microlp's 0.14207450).
+    let us = paper_optimum_per_backend(&load_with("cleanflight-design.toml", |t| t.to_string()));
     assert!((us[0] - us[1]).abs() / us[0] < 1e-6, "{us:?}");
     assert!((us[0] - 0.142_074_5).abs() < 1e-7, "{us:?}");
 }

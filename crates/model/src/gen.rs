@@ -196,9 +196,10 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         } else {
             Server::Main
         };
+        // The period is drawn before the CPU (the streams stay as they were).
+        let period = waters_period(&mut rng);
         tasks.push(Task {
             name: format!("t{i}"),
-            exec: 1,
             exec_min: 0,
             input: if i < n_sources {
                 Some(Port {
@@ -208,18 +209,10 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
             } else {
                 None
             },
-            output: Some(Port {
-                channel: 0,
-                size: 0.0,
-            }),
             reads,
-            period: PeriodSpec::Fixed(waters_period(&mut rng)),
-            budget_given: None,
             server,
             cpu: rng.range(0, cpus as u64 - 1) as u32,
-            serves: None,
-            delta_in: 0,
-            delta_out: 0,
+            ..Task::periodic(1, period)
         });
     }
     if cfg.feedback > 0.0 {

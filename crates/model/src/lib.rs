@@ -149,6 +149,31 @@ pub struct Task {
 }
 
 impl Task {
+    /// A plain periodic task on a Main VCPU of CPU 0: one output of size 0 on
+    /// channel 0, no input, no transfer cost, `exec_min = exec`, budget from
+    /// Step 1. A building block for generated and hand-written systems; set
+    /// other fields with struct update (`Task { cpu: 1, ..Task::periodic(..) }`).
+    pub fn periodic(exec: Nanos, period: Nanos) -> Task {
+        Task {
+            name: String::new(),
+            exec,
+            exec_min: exec,
+            input: None,
+            output: Some(Port {
+                channel: 0,
+                size: 0.0,
+            }),
+            reads: Vec::new(),
+            period: PeriodSpec::Fixed(period),
+            budget_given: None,
+            server: Server::Main,
+            cpu: 0,
+            serves: None,
+            delta_in: 0,
+            delta_out: 0,
+        }
+    }
+
     /// Worst-case demand of one job: Δin + p + Δout.
     pub fn demand(&self) -> Nanos {
         self.delta_in

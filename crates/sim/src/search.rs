@@ -631,26 +631,14 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rtpipe_model::{Chain, PeriodSpec, Port, Scheduler, Server, Task, TimeUnit};
+    use rtpipe_model::{Chain, Scheduler, Task, TimeUnit};
 
     fn task(period: Nanos, exec: Nanos, exec_min: Nanos, reads: &[usize], cpu: u32) -> Task {
         Task {
-            name: String::new(),
-            exec,
             exec_min,
-            input: None,
-            output: Some(Port {
-                channel: 0,
-                size: 0.0,
-            }),
             reads: reads.to_vec(),
-            period: PeriodSpec::Fixed(period),
-            budget_given: None,
-            server: Server::Main,
             cpu,
-            serves: None,
-            delta_in: 0,
-            delta_out: 0,
+            ..Task::periodic(exec, period)
         }
     }
 

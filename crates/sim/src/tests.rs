@@ -2,27 +2,14 @@
 //! traces in the comments read directly.
 
 use super::*;
-use rtpipe_model::{Chain, PeriodSpec, Port, SchedTest, Task, TimeUnit};
+use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
 
 /// A task with exec = exec_min (no transfer stages), one output, on `cpu`.
 fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
     Task {
-        name: String::new(),
-        exec,
-        exec_min: exec,
-        input: None,
-        output: Some(Port {
-            channel: 0,
-            size: 0.0,
-        }),
         reads: reads.to_vec(),
-        period: PeriodSpec::Fixed(period),
-        budget_given: None,
-        server: Server::Main,
         cpu,
-        serves: None,
-        delta_in: 0,
-        delta_out: 0,
+        ..Task::periodic(exec, period)
     }
 }
 
