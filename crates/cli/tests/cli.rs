@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{example, json_of, rtpipe, scratch};
+use common::{assert_exit, example, json_of, rtpipe, scratch};
 use serde_json::Value;
 
 fn analyze_json(name: &str) -> (i32, Value) {
@@ -149,12 +149,7 @@ fn design_writes_a_spec_that_analyze_accepts() {
         "--write",
         &out.to_string_lossy(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_exit(&o, 0);
     let v = json_of(&o);
     assert_eq!(v["design"]["status"], "optimal");
     let u = v["design"]["objective"].as_f64().unwrap_or(f64::NAN);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{example, json_of, rtpipe, scratch};
+use common::{assert_exit, example, json_of, rtpipe, scratch};
 use serde_json::Value;
 use std::path::Path;
 
@@ -33,12 +33,7 @@ fn json_has_the_documented_shape() {
         "50",
         "--json",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_exit(&o, 0);
     let v = json_of(&o);
     // The analyze report is all there.
     assert_eq!(v["system"], "paper-table3");
@@ -168,12 +163,7 @@ fn trace_parses_with_slices_on_every_task_track() {
         "--trace",
         &f.to_string_lossy(),
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_exit(&o, 0);
     let v: Value = match serde_json::from_str(&read(&f)) {
         Ok(v) => v,
         Err(e) => panic!("trace is not JSON: {e}"),
@@ -254,12 +244,7 @@ fn plot_and_gantt_are_svg_naming_the_chains() {
         "--window",
         "0,300ms",
     ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert_exit(&o, 0);
     let p = read(&plot);
     assert!(
         p.starts_with("<svg") || p.starts_with("<?xml"),

@@ -46,3 +46,13 @@ pub fn scratch(tag: &str) -> PathBuf {
     }
     dir
 }
+
+/// The exit status is `code`; the test shows stderr otherwise.
+pub fn assert_exit(o: &Output, code: i32) {
+    assert_eq!(
+        o.status.code(),
+        Some(code),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
