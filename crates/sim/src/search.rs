@@ -631,38 +631,18 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rtpipe_model::{Chain, Scheduler, Task, TimeUnit};
+    use rtpipe_model::{Scheduler, Task};
 
+    /// The hand-traced tests' task, with a best-case demand.
     fn task(period: Nanos, exec: Nanos, exec_min: Nanos, reads: &[usize], cpu: u32) -> Task {
         Task {
             exec_min,
-            reads: reads.to_vec(),
-            cpu,
-            ..Task::periodic(exec, period)
+            ..crate::tests::task(period, exec, reads, cpu)
         }
     }
 
     fn spec(tasks: Vec<Task>, chains: &[&[usize]]) -> Spec {
-        // Start from a generated system so that the fields the simulator
-        // ignores keep valid values.
-        let mut s = rtpipe_model::gen::random_system(0, &rtpipe_model::gen::GenConfig::default());
-        s.name = "search".into();
-        s.time_unit = TimeUnit::Ns;
-        s.scheduler = Scheduler::Rm;
-        s.tasks = tasks;
-        for (i, t) in s.tasks.iter_mut().enumerate() {
-            t.name = format!("t{i}");
-        }
-        s.chains = chains
-            .iter()
-            .map(|p| Chain {
-                name: None,
-                path: p.to_vec(),
-                reaction: None,
-                freshness: None,
-            })
-            .collect();
-        s
+        crate::tests::spec(Scheduler::Rm, tasks, chains)
     }
 
     /// Producer t0 (T = 10 000, demand 500..=2000, CPU 0) → consumer t1

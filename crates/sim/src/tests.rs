@@ -5,7 +5,7 @@ use super::*;
 use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
 
 /// A task with exec = exec_min (no transfer stages), one output, on `cpu`.
-fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
+pub(crate) fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
     Task {
         reads: reads.to_vec(),
         cpu,
@@ -13,7 +13,7 @@ fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {
     }
 }
 
-fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize]]) -> Spec {
+pub(crate) fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize]]) -> Spec {
     for (i, t) in tasks.iter_mut().enumerate() {
         t.name = format!("t{i}");
     }
