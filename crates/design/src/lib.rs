@@ -12,7 +12,7 @@ pub mod lp;
 
 use lp::{Cmp, Lp, LpError, SolverKind};
 use rtpipe_analysis::sched::interference;
-use rtpipe_analysis::{Metric, Report};
+use rtpipe_analysis::{ChainResult, Metric, Report};
 use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -507,6 +507,9 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         iterations: 0,
         deadline: None,
         levels: Levels::new(),
+        on_chain: (0..n)
+            .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
+            .collect(),
     };
     let mut o = run.solve_all()?;
     o.notes.splice(0..0, notes);
@@ -652,6 +655,8 @@ struct Runner<'a> {
     /// No solve may run past this (the patience after a verified design).
     deadline: Option<Instant>,
     levels: Levels,
+    /// Task i lies on some declared chain.
+    on_chain: Vec<bool>,
 }
 
 /// What the sound model knows of response times: unconditional lower
@@ -910,13 +915,7 @@ impl<'a> Runner<'a> {
         // Sound mode: response-time variables with their lower bounds, and
         // every chain task finishes within its period (T ≥ R).
         if let (Some(sm), Scheduler::Rm) = (sound, spec.scheduler) {
-            let mut on_chain = vec![false; n];
-            for ch in &spec.chains {
-                for &i in &ch.path {
-                    on_chain[i] = true;
-                }
-            }
-            for i in (0..n).filter(|&i| on_chain[i]) {
+            for i in (0..n).filter(|&i| self.on_chain[i]) {
                 let r = match &sm.fixed {
                     Some(f) => m.lp.var(f[i], f[i], false),
                     None => {
@@ -929,14 +928,11 @@ impl<'a> Runner<'a> {
                 t.push((r, -1.0));
                 m.lp.row(t, Cmp::Ge, -m.period[i].c);
             }
-            let on_chain: Vec<bool> = if sm.fixed.is_some() {
-                vec![false; n]
-            } else {
-                on_chain
-            };
             // R_i ≥ W_i(R_i), the response-time recurrence, with a binary per
-            // job of each higher-priority task (docs/design.md).
-            for i in (0..n).filter(|&i| on_chain[i]) {
+            // job of each higher-priority task (docs/design.md); not when the
+            // response times are pinned.
+            let levels_on = sm.fixed.is_none();
+            for i in (0..n).filter(|&i| levels_on && self.on_chain[i]) {
                 let Some(r) = m.rvar[i] else { continue };
                 let rmax = rmax_of(&m, groups, i);
                 m.rta_levels(
@@ -1074,9 +1070,7 @@ impl<'a> Runner<'a> {
                 }
             })
             .collect();
-        let on_chain: Vec<bool> = (0..n)
-            .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
-            .collect();
+        let on_chain = &self.on_chain;
         let periods = |idx: &[usize]| -> Vec<Nanos> { (0..n).map(|i| values[i][idx[i]]).collect() };
         let check = |me: &Self, idx: &[usize]| -> Option<(Spec, Report)> {
             let cand = me.with_periods(&periods(idx));
@@ -1120,10 +1114,7 @@ impl<'a> Runner<'a> {
                 }
                 let mut changed = false;
                 for c in &report.chains {
-                    let ok = match me.opts.mode {
-                        Mode::Sound => c.ok,
-                        Mode::Paper => c.paper_ok(),
-                    };
+                    let ok = me.chain_ok(c);
                     // Not the tail: its period does not enter its chain's
                     // bounds (its response time does), and speeding it up
                     // only adds load.
@@ -1255,14 +1246,11 @@ impl<'a> Runner<'a> {
         let n = spec.tasks.len();
         let prio = rtpipe_analysis::sched::rm_priorities(cand);
         let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
-        let on_chain: Vec<bool> = (0..n)
-            .map(|i| {
-                self.opts.mode == Mode::Sound && spec.chains.iter().any(|c| c.path.contains(&i))
-            })
-            .collect();
+        let sound = self.opts.mode == Mode::Sound;
         let tested = spec.schedulability == SchedTest::Rta;
         let mut raised = false;
-        for (i, &chain_task) in on_chain.iter().enumerate() {
+        for i in 0..n {
+            let chain_task = sound && self.on_chain[i];
             if spec.tasks[i].server == Server::Background {
                 continue;
             }
@@ -1294,11 +1282,16 @@ impl<'a> Runner<'a> {
         raised
     }
 
-    fn limits_ok(&self, report: &Report) -> bool {
-        report.chains.iter().all(|c| match self.opts.mode {
+    /// One chain limit holds under the mode's analysis.
+    fn chain_ok(&self, c: &ChainResult) -> bool {
+        match self.opts.mode {
             Mode::Sound => c.ok,
             Mode::Paper => c.paper_ok(),
-        })
+        }
+    }
+
+    fn limits_ok(&self, report: &Report) -> bool {
+        report.chains.iter().all(|c| self.chain_ok(c))
     }
 
     fn solve_all(&mut self) -> Result<Outcome, DesignError> {
@@ -1784,6 +1777,7 @@ impl<'a> Runner<'a> {
                 iterations: 0,
                 deadline: me.deadline,
                 levels: me.levels.clone(),
+                on_chain: me.on_chain.clone(),
             };
             sub.probe(core, sound)
         };
