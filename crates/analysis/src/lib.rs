@@ -15,7 +15,7 @@ pub mod latency;
 pub mod paths;
 pub mod sched;
 
-pub use latency::{analyze_chain, eq1_single_pipe, Case, ChainAnalysis, ChainBound};
+pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Case, ChainAnalysis, ChainBound};
 pub use paths::{all_paths, AllPaths, PairBounds, Worst};
 pub use sched::{analyze as schedulability, CpuVerdict, Schedulability, TaskTiming};
 

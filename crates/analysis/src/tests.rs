@@ -142,8 +142,14 @@ fn table2_sound_mode() {
     assert_eq!(bounds(&r, 3).3, Some(ms(13.65)));
     // Davare: t1 → t4 reaction R1 + T4 + R4 = 2.15 + 10 + 4.3 = 16.45.
     assert_eq!(r.chains[0].bound.davare, Some(ms(16.45)));
-    // From the event: t2 → t4 sampling delay T2 + R2 − x2 = 15 + 6.45 − 1 = 20.45.
-    assert_eq!(r.chains[2].bound.from_event_sound, Some(ms(20.1 + 20.45)));
+    // From the event, reaction t2 → t4: the first t2 job reading after the
+    // event publishes within T2 + R2 = 21.45; t4 preempts t2 (Case 1), so the
+    // first t4 job reading after that publishes within
+    // min(T4 + R4, T4 − x_min4 + R4) = min(14.3, 13.65): 35.1 (Davare 35.75).
+    assert_eq!(r.chains[2].bound.from_event_sound, Some(ms(35.1)));
+    // Freshness t2 → t4 from the event: the read before the sample's is at
+    // most T2 + R2 − x2 = 15 + 6.45 − 1 = 20.45 earlier: 25.1 + 20.45.
+    assert_eq!(r.chains[3].bound.from_event_sound, Some(ms(25.1 + 20.45)));
 }
 
 #[test]

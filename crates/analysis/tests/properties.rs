@@ -160,11 +160,33 @@ fn sound_within_davare() {
                 if sched_ok {
                     prop_assert!(dv.is_some() && re.sound.is_some() && fr.sound.is_some());
                 }
-                for (b, what) in [(re, "reaction"), (fr, "freshness")] {
+                // From the event, Davare's reaction is Σ (T_i + R_i) and the
+                // data age waits at most T_1 + R_1 more for the head's read.
+                let head = ch.path[0];
+                let t1r1 = period(&spec, head) + rep.timing[head].job_response_time.unwrap_or(0);
+                let dv_event = dv.map(|(e, f)| (e + period(&spec, head), f + t1r1));
+                let event = [
+                    (re.from_event_sound, dv_event.map(|d| d.0)),
+                    (fr.from_event_sound, dv_event.map(|d| d.1)),
+                ];
+                for ((b, what), (ev, dv_ev)) in
+                    [(re, "reaction"), (fr, "freshness")].into_iter().zip(event)
+                {
                     // Both exist exactly when every task on the chain has R ≤ T.
                     prop_assert_eq!(b.sound.is_some(), b.davare.is_some(), "{}", what);
                     if let (Some(s), Some(d)) = (b.sound, b.davare) {
                         prop_assert!(s <= d, "{} chain {}: sound {} > davare {}", what, k, s, d);
+                    }
+                    prop_assert_eq!(ev.is_some(), dv_ev.is_some(), "{} from the event", what);
+                    if let (Some(s), Some(d)) = (ev, dv_ev) {
+                        prop_assert!(
+                            s <= d,
+                            "{} chain {} from the event: sound {} > davare {}",
+                            what,
+                            k,
+                            s,
+                            d
+                        );
                     }
                 }
             }

@@ -277,7 +277,7 @@ pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
     }
     if !spec.chains.is_empty() {
         out.push_str(
-            "\nchains (worst case, from the head's read; +event adds the head's sampling delay):\n",
+            "\nchains (worst case from the head's read; +event: from the event in the world, see docs/analysis.md):\n",
         );
         let mut t = Table::new(&[
             "chain",

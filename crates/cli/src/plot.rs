@@ -180,9 +180,9 @@ where
         .iter()
         .flat_map(|o| {
             [
-                o.observed.map(|s| s.max as f64),
-                Some(o.paper as f64),
-                o.sound.map(|s| s as f64),
+                o.read.observed.map(|s| s.max as f64),
+                Some(o.read.paper as f64),
+                o.read.sound.map(|s| s as f64),
             ]
         })
         .flatten()
@@ -227,7 +227,7 @@ where
     let shift = (n.max(2) - n) as f64 / 2.0;
     for (i, o) in obs.iter().enumerate() {
         let x = i as f64 + shift;
-        if let Some(s) = o.observed {
+        if let Some(s) = o.read.observed {
             let (mean, max, p99) = (s.mean / u, s.max as f64 / u, s.p99 as f64 / u);
             means.push(bar(x + 0.2, x + 0.48, mean, MEAN));
             maxes.push(bar(x + 0.52, x + 0.8, max, MAX));
@@ -244,7 +244,7 @@ where
                 text_style(12, GREY, HPos::Center, VPos::Bottom),
             ));
         }
-        let paper = o.paper as f64 / u;
+        let paper = o.read.paper as f64 / u;
         papers.push(DashedPathElement::new(
             vec![(x + 0.08, paper), (x + 0.92, paper)],
             6,
@@ -252,7 +252,7 @@ where
             PAPER.stroke_width(2),
         ));
         bound_labels.push((x + 0.92, paper, format!("paper {}", short(paper)), PAPER));
-        match o.sound {
+        match o.read.sound {
             Some(s) => {
                 let s = s as f64 / u;
                 sounds.push(PathElement::new(

@@ -6,7 +6,7 @@ use crate::plot;
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
 use clap::{Args, ValueEnum};
-use rtpipe_analysis::{Metric, Report};
+use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
@@ -426,18 +426,53 @@ impl Observed {
     }
 }
 
-/// One chain and metric: observations against the analysis.
+/// Observations of one quantity against its bounds.
+#[derive(Debug, Clone)]
+pub struct Judged {
+    pub observed: Option<Observed>,
+    pub paper: Nanos,
+    pub sound: Option<Nanos>,
+    /// Observations above the paper bound.
+    pub over_paper: usize,
+    /// Observations above the sound bound (`None` without a sound bound).
+    pub over_sound: Option<usize>,
+}
+
+impl Judged {
+    fn of(values: &[Nanos], paper: Nanos, sound: Option<Nanos>) -> Judged {
+        Judged {
+            observed: Observed::of(values),
+            paper,
+            sound,
+            over_paper: values.iter().filter(|&&x| x > paper).count(),
+            over_sound: sound.map(|s| values.iter().filter(|&&x| x > s).count()),
+        }
+    }
+}
+
+/// One chain and metric: observations against the analysis, measured from
+/// the head's read and from the event.
 #[derive(Debug, Clone)]
 pub struct ChainObs {
     pub chain: usize,
     pub metric: Metric,
-    pub observed: Option<Observed>,
-    pub paper: Nanos,
-    pub sound: Option<Nanos>,
-    /// Samples above the paper bound.
-    pub over_paper: usize,
-    /// Samples above the sound bound (`None` without a sound bound).
-    pub over_sound: Option<usize>,
+    pub read: Judged,
+    pub event: Judged,
+}
+
+impl ChainObs {
+    /// The observations measured from `a`.
+    pub fn from(&self, a: Anchor) -> &Judged {
+        match a {
+            Anchor::Read => &self.read,
+            Anchor::Event => &self.event,
+        }
+    }
+
+    /// Observations above a sound bound, from either anchor.
+    pub fn over_sound(&self) -> usize {
+        self.read.over_sound.unwrap_or(0) + self.event.over_sound.unwrap_or(0)
+    }
 }
 
 fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
@@ -445,22 +480,18 @@ fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
         .chains
         .iter()
         .map(|c| {
-            let empty = Vec::new();
-            let samples = res.chains.get(c.chain).map_or(&empty, |cs| match c.metric {
-                Metric::Reaction => &cs.reactions,
-                Metric::Freshness => &cs.freshnesses,
-            });
+            let judge = |a: Anchor| {
+                let values = res
+                    .chains
+                    .get(c.chain)
+                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
+                Judged::of(values, c.bound.paper_from(a), c.bound.sound_from(a))
+            };
             ChainObs {
                 chain: c.chain,
                 metric: c.metric,
-                observed: Observed::of(samples),
-                paper: c.bound.paper,
-                sound: c.bound.sound,
-                over_paper: samples.iter().filter(|&&x| x > c.bound.paper).count(),
-                over_sound: c
-                    .bound
-                    .sound
-                    .map(|s| samples.iter().filter(|&&x| x > s).count()),
+                read: judge(Anchor::Read),
+                event: judge(Anchor::Event),
             }
         })
         .collect()
@@ -663,7 +694,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         return fail(b);
     }
     let late_rt = response_violations(&report, &res);
-    let over_sound: usize = obs.iter().filter_map(|o| o.over_sound).sum();
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let over_search = searches.iter().filter(|r| r.exceeds_sound()).count();
     if a.json {
         let mut v = to_json(&spec, &report, a, &res, &obs, seconds);
@@ -725,7 +756,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// One adversarial search per chain and metric (`--phasing search`).
+/// One adversarial search per chain, metric and anchor (`--phasing search`).
 fn run_searches(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<Vec<SearchResult>, SimError> {
     let longest = spec
         .tasks
@@ -737,11 +768,14 @@ fn run_searches(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<Vec<SearchRes
     let horizon = p.horizon.min(40 * longest);
     let mut out = Vec::new();
     for chain in 0..spec.chains.len() {
-        for metric in [Metric::Reaction, Metric::Freshness] {
-            let mut cfg = SearchConfig::new(chain, metric, horizon);
-            cfg.steps = a.search_steps;
-            cfg.seed = a.seed;
-            out.push(search(spec, &cfg)?);
+        for anchor in Anchor::ALL {
+            for metric in [Metric::Reaction, Metric::Freshness] {
+                let mut cfg = SearchConfig::new(chain, metric, horizon);
+                cfg.anchor = anchor;
+                cfg.steps = a.search_steps;
+                cfg.seed = a.seed;
+                out.push(search(spec, &cfg)?);
+            }
         }
     }
     Ok(out)
@@ -754,6 +788,7 @@ fn search_json(spec: &Spec, rs: &[SearchResult]) -> Value {
                 json!({
                     "chain": spec.chains[r.chain].name.clone().unwrap_or_else(|| chain_path(spec, r.chain)),
                     "metric": r.metric.name(),
+                    "from": r.anchor.name(),
                     "found": num(spec, r.value),
                     "paper": num(spec, r.paper),
                     "sound": num(spec, r.sound),
@@ -772,6 +807,7 @@ fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
     let mut t = Table::new(&[
         "chain",
         "metric",
+        "from",
         "found",
         "paper",
         "sound",
@@ -779,12 +815,13 @@ fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
         "above paper",
         "simulations",
     ])
-    .numeric(&[2, 3, 4, 5, 7]);
+    .numeric(&[3, 4, 5, 6, 8]);
     for r in rs {
         let f = |v: Option<Nanos>| v.map_or("-".to_string(), |n| spec.fmt_time(n));
         t.row(vec![
             chain_label(spec, r.chain),
             r.metric.name().to_string(),
+            r.anchor.name().to_string(),
             f(r.value),
             f(r.paper),
             f(r.sound),
@@ -815,20 +852,13 @@ fn to_json(
     seconds: f64,
 ) -> Value {
     let mut v = analyze::report_json(spec, report);
-    let unit = spec.time_unit.nanos() as f64;
     if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
         for (entry, o) in chains.iter_mut().zip(obs) {
-            entry["observed"] = match o.observed {
-                Some(s) => json!({
-                    "count": s.count,
-                    "min": spec.in_unit(s.min),
-                    "mean": s.mean / unit,
-                    "p99": spec.in_unit(s.p99),
-                    "max": spec.in_unit(s.max),
-                }),
-                None => json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null}),
-            };
-            entry["violations"] = json!({"paper": o.over_paper, "sound": o.over_sound});
+            entry["observed"] = observed_json(spec, &o.read);
+            entry["violations"] = json!({"paper": o.read.over_paper, "sound": o.read.over_sound});
+            entry["observed_from_event"] = observed_json(spec, &o.event);
+            entry["violations_from_event"] =
+                json!({"paper": o.event.over_paper, "sound": o.event.over_sound});
         }
     }
     if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
@@ -859,6 +889,21 @@ fn to_json(
         "seconds": seconds,
     });
     v
+}
+
+/// {count, min, mean, p99, max} in the spec's unit.
+fn observed_json(spec: &Spec, j: &Judged) -> Value {
+    let unit = spec.time_unit.nanos() as f64;
+    match j.observed {
+        Some(s) => json!({
+            "count": s.count,
+            "min": spec.in_unit(s.min),
+            "mean": s.mean / unit,
+            "p99": spec.in_unit(s.p99),
+            "max": spec.in_unit(s.max),
+        }),
+        None => json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null}),
+    }
 }
 
 /// A mean in the spec's unit, to a thousandth of the unit.
@@ -893,6 +938,65 @@ fn si(x: f64) -> String {
         x if x >= 1e3 => format!("{:.1}k", x / 1e3),
         x => format!("{x:.0}"),
     }
+}
+
+/// One row per chain and metric: the observations from `a` against the
+/// bounds from `a`.
+fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
+    let mut t = Table::new(&[
+        "chain",
+        "metric",
+        "count",
+        "min",
+        "mean",
+        "p99",
+        "max",
+        "paper",
+        "sound",
+        ">paper",
+        ">sound",
+        "max/sound",
+    ])
+    .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10, 11]);
+    for o in obs {
+        let j = o.from(a);
+        let dash = || "-".to_string();
+        let (count, min, mean, p99, max) = match j.observed {
+            Some(s) => (
+                s.count.to_string(),
+                spec.fmt_time(s.min),
+                fmt_mean(spec, s.mean),
+                spec.fmt_time(s.p99),
+                spec.fmt_time(s.max),
+            ),
+            None => ("0".into(), dash(), dash(), dash(), dash()),
+        };
+        let ratio = match (j.observed, j.sound) {
+            (Some(s), Some(b)) if b > 0 => format!("{:.3}", s.max as f64 / b as f64),
+            _ => dash(),
+        };
+        let over_sound = match j.over_sound {
+            Some(0) => "0".to_string(),
+            Some(n) => format!("{n} !!"),
+            None => dash(),
+        };
+        t.row(vec![
+            chain_label(spec, o.chain),
+            o.metric.name().to_string(),
+            count,
+            min,
+            mean,
+            p99,
+            max,
+            spec.fmt_time(j.paper),
+            j.sound
+                .map_or_else(|| "unbounded".into(), |s| spec.fmt_time(s)),
+            j.over_paper.to_string(),
+            over_sound,
+            ratio,
+        ]);
+    }
+    t.render()
 }
 
 fn to_text(
@@ -937,59 +1041,12 @@ fn to_text(
         out.push_str(
             "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
         );
-        let mut t = Table::new(&[
-            "chain",
-            "metric",
-            "count",
-            "min",
-            "mean",
-            "p99",
-            "max",
-            "paper",
-            "sound",
-            ">paper",
-            ">sound",
-            "max/sound",
-        ])
-        .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10, 11]);
-        for o in obs {
-            let dash = || "-".to_string();
-            let (count, min, mean, p99, max) = match o.observed {
-                Some(s) => (
-                    s.count.to_string(),
-                    spec.fmt_time(s.min),
-                    fmt_mean(spec, s.mean),
-                    spec.fmt_time(s.p99),
-                    spec.fmt_time(s.max),
-                ),
-                None => ("0".into(), dash(), dash(), dash(), dash()),
-            };
-            let ratio = match (o.observed, o.sound) {
-                (Some(s), Some(b)) if b > 0 => format!("{:.3}", s.max as f64 / b as f64),
-                _ => dash(),
-            };
-            let over_sound = match o.over_sound {
-                Some(0) => "0".to_string(),
-                Some(n) => format!("{n} !!"),
-                None => dash(),
-            };
-            t.row(vec![
-                chain_label(spec, o.chain),
-                o.metric.name().to_string(),
-                count,
-                min,
-                mean,
-                p99,
-                max,
-                spec.fmt_time(o.paper),
-                o.sound
-                    .map_or_else(|| "unbounded".into(), |s| spec.fmt_time(s)),
-                o.over_paper.to_string(),
-                over_sound,
-                ratio,
-            ]);
-        }
-        out.push_str(&t.render());
+        out.push_str(&chain_table(spec, obs, Anchor::Read));
+        out.push_str(
+            "\nfrom the event (an event just after each head read, to the first output \
+             reflecting it / the last output of the next sample; bounds +event):\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Event));
     }
     out.push_str("\ntasks (R(job): the analysed worst-case job response time):\n");
     let mut t = Table::new(&[
@@ -1032,8 +1089,11 @@ fn to_text(
         res.events,
         si(eps)
     ));
-    let over_sound: usize = obs.iter().filter_map(|o| o.over_sound).sum();
-    let over_paper: usize = obs.iter().map(|o| o.over_paper).sum();
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
+    let over_paper: usize = obs
+        .iter()
+        .map(|o| o.read.over_paper + o.event.over_paper)
+        .sum();
     let late_rt = response_violations(report, res).len();
     // Background tasks have no deadline: their backlog is not a miss.
     let late: u64 = res
@@ -1161,12 +1221,17 @@ mod tests {
             events: 0,
             horizon: 1,
         };
-        res.chains[0].reactions = vec![1, paper + 1, sound + 1, sound];
+        res.chains[0].reaction.values = vec![1, paper + 1, sound + 1, sound];
+        let event = report.chains[0].bound.from_event_sound.unwrap_or(0);
+        res.chains[0].event_reaction.values = vec![event, event + 1, event + 2];
         let obs = observe(&report, &res);
         assert_eq!(obs[0].metric, Metric::Reaction);
-        assert_eq!(obs[0].over_sound, Some(1));
-        assert_eq!(obs[0].over_paper, 2 + usize::from(sound > paper));
-        assert_eq!(obs[1].observed, None);
-        assert_eq!(obs[1].over_sound, Some(0));
+        assert_eq!(obs[0].read.over_sound, Some(1));
+        assert_eq!(obs[0].read.over_paper, 2 + usize::from(sound > paper));
+        assert_eq!(obs[0].event.over_sound, Some(2));
+        assert_eq!(obs[0].over_sound(), 3);
+        assert_eq!(obs[1].read.observed, None);
+        assert_eq!(obs[1].read.over_sound, Some(0));
+        assert_eq!(obs[1].event.over_sound, Some(0));
     }
 }

@@ -124,7 +124,7 @@ fn table3(c: &mut Criterion) {
     for (k, ch) in r.chains.iter().enumerate() {
         eprintln!(
             "table3 chain {k}: {} finalised samples, reaction max {:?} ns, freshness max {:?} ns",
-            ch.finalised, ch.reaction_max, ch.freshness_max
+            ch.finalised, ch.reaction.max, ch.freshness.max
         );
     }
     eprintln!("table3: p5 {o5} outputs, p7 {o7} outputs");

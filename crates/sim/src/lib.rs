@@ -3,10 +3,9 @@
 //! A small deterministic discrete-event simulator of pipe systems, used as the
 //! oracle of the latency analysis (Cheng, West, Einstein, EMSOFT 2018).
 //!
-//! For now every task is a plain periodic task. That is exact for the servers
-//! of the model as long as each job's demand fits its budget (the spec
-//! validation guarantees budget ≥ demand) and each job finishes within its
-//! period (the analysis returns no bound otherwise).
+//! Each task runs on the server its spec names ([`server`]): Main VCPUs as
+//! sporadic servers and I/O VCPUs as PIBS under `rm`, constant-bandwidth
+//! servers under `edf`, plain and background tasks without enforcement.
 //!
 //! ## Semantics
 //!
@@ -30,15 +29,24 @@
 //! A job at position k of a chain carries the sample carried by the value it
 //! read from position k−1 (provenance follows the chain's edges only, each
 //! chain separately). Per sample, the first and last publish of the tail that
-//! carries it give reaction = first − stamp and freshness = last − stamp. Only
-//! samples that reach the tail count, and only once the tail has published a
-//! newer sample (so the last output is known).
+//! carries it give reaction = first − stamp (counted at the first output) and
+//! freshness = last − stamp (counted once the tail has published a newer
+//! sample, so the last output is known). Only samples that reach the tail
+//! count.
+//!
+//! From the event (the cause-effect-chain literature's quantities, what the
+//! analysis' `from_event` bounds bound): for each head read but the first, an
+//! event just after the previous head read. Its reaction ends at the first
+//! tail output carrying a sample read at or after the event, which need not
+//! be the event's own sample (it may be overwritten before it is used); its
+//! freshness is the previous head read to the sample's last tail output.
 
 pub mod search;
 pub mod server;
 pub mod trace;
 
 use rtpipe_analysis::sched::rm_priorities;
+use rtpipe_analysis::{Anchor, Metric};
 use rtpipe_model::gen::Rng;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 use server::{Cbs, Pibs, Sporadic};
@@ -161,13 +169,16 @@ pub struct JobRecord {
     pub carried: Vec<Carried>,
 }
 
-/// The life of one sample at the tail of a chain.
+/// The life of one sample at the tail of a chain, as one observation saw it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Witness {
     pub sample: u64,
-    /// The head's read instant (the sample's stamp).
+    /// The instant the latency is measured from: the head's read of the
+    /// sample (from-read quantities), or the head read before it (from-event
+    /// quantities: the event came just after that read).
     pub read: Nanos,
-    /// First and last tail publishes carrying the sample.
+    /// First and last tail publishes of the observation. From-event
+    /// reaction: the first tail publish carrying `sample` or a newer one.
     pub first: Nanos,
     pub last: Nanos,
 }
@@ -181,24 +192,62 @@ impl Witness {
     }
 }
 
+/// Every observation of one quantity of one chain.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Observed {
+    /// The largest value.
+    pub max: Option<Nanos>,
+    /// The observation that gave it (the first one, on ties).
+    pub witness: Option<Witness>,
+    /// Every value, in sample order.
+    pub values: Vec<Nanos>,
+}
+
+impl Observed {
+    fn push(&mut self, value: Nanos, w: Witness) {
+        debug_assert!(value >= 0, "a latency is never negative: {w:?}");
+        self.values.push(value);
+        if self.max.is_none_or(|m| value > m) {
+            self.max = Some(value);
+            self.witness = Some(w);
+        }
+    }
+}
+
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ChainStats {
-    /// Largest reaction over finalised samples.
-    pub reaction_max: Option<Nanos>,
-    /// Largest freshness over finalised samples.
-    pub freshness_max: Option<Nanos>,
-    /// The samples that gave the maxima.
-    pub reaction_witness: Option<Witness>,
-    pub freshness_witness: Option<Witness>,
     /// Samples created by the head (head reads).
     pub samples: u64,
     /// Samples that reached the tail.
     pub reached: u64,
     /// Samples that reached the tail and whose last output is known.
     pub finalised: u64,
-    /// Reaction and freshness of every finalised sample, in sample order.
-    pub reactions: Vec<Nanos>,
-    pub freshnesses: Vec<Nanos>,
+    /// From the head's read to the sample's first tail output: every sample
+    /// that reached the tail.
+    pub reaction: Observed,
+    /// From the head's read to the sample's last tail output: every finalised
+    /// sample.
+    pub freshness: Observed,
+    /// From an event just after a head read to the first tail output
+    /// carrying a sample read after it: one per head sample (but the first)
+    /// whose such output came before the horizon, whether or not the sample
+    /// itself reached the tail.
+    pub event_reaction: Observed,
+    /// From the head read before a sample's read to the sample's last tail
+    /// output: every finalised sample but the first.
+    pub event_freshness: Observed,
+}
+
+impl ChainStats {
+    /// The observations of one metric measured from one anchor.
+    pub fn observed(&self, metric: Metric, anchor: Anchor) -> &Observed {
+        match (metric, anchor) {
+            (Metric::Reaction, Anchor::Read) => &self.reaction,
+            (Metric::Freshness, Anchor::Read) => &self.freshness,
+            (Metric::Reaction, Anchor::Event) => &self.event_reaction,
+            (Metric::Freshness, Anchor::Event) => &self.event_freshness,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -368,10 +417,23 @@ struct Tracker {
     stamps: Vec<Nanos>,
     /// (sample, first, last) of the newest sample seen at the tail.
     current: Option<(u64, Nanos, Nanos)>,
+    /// The smallest sample whose from-event reaction is not known yet:
+    /// the first tail output carrying it or a newer one has not happened.
+    event_pending: u64,
     stats: ChainStats,
 }
 
 impl Tracker {
+    fn new() -> Tracker {
+        Tracker {
+            stamps: Vec::new(),
+            current: None,
+            // Sample 0 has no head read before it, so no event window.
+            event_pending: 1,
+            stats: ChainStats::default(),
+        }
+    }
+
     fn output(&mut self, sample: u64, t: Nanos) {
         match self.current {
             Some((s, first, _)) if s == sample => self.current = Some((s, first, t)),
@@ -384,8 +446,35 @@ impl Tracker {
                 }
                 self.stats.reached += 1;
                 self.current = Some((sample, t, t));
+                self.first_output(sample, t);
             }
         }
+    }
+
+    /// The first tail output of `sample`, at t: its reaction from the read,
+    /// and the from-event reaction of every sample up to it that was still
+    /// waiting (samples between the previous one to reach the tail and this
+    /// one never reach it; this is the first output that reflects them).
+    fn first_output(&mut self, sample: u64, t: Nanos) {
+        let stamp = self.stamps[sample as usize];
+        let w = Witness {
+            sample,
+            read: stamp,
+            first: t,
+            last: t,
+        };
+        self.stats.reaction.push(t - stamp, w);
+        for s in self.event_pending..=sample {
+            let event = self.stamps[s as usize - 1];
+            let w = Witness {
+                sample: s,
+                read: event,
+                first: t,
+                last: t,
+            };
+            self.stats.event_reaction.push(t - event, w);
+        }
+        self.event_pending = self.event_pending.max(sample + 1);
     }
 
     fn finalise(&mut self, sample: u64, first: Nanos, last: Nanos) {
@@ -397,15 +486,13 @@ impl Tracker {
         };
         let st = &mut self.stats;
         st.finalised += 1;
-        st.reactions.push(w.reaction());
-        st.freshnesses.push(w.freshness());
-        if w.reaction() > st.reaction_max.unwrap_or(Nanos::MIN) {
-            st.reaction_max = Some(w.reaction());
-            st.reaction_witness = Some(w);
-        }
-        if w.freshness() > st.freshness_max.unwrap_or(Nanos::MIN) {
-            st.freshness_max = Some(w.freshness());
-            st.freshness_witness = Some(w);
+        st.freshness.push(w.freshness(), w);
+        if sample > 0 {
+            let event = Witness {
+                read: self.stamps[sample as usize - 1],
+                ..w
+            };
+            st.event_freshness.push(event.freshness(), event);
         }
     }
 }
@@ -534,15 +621,7 @@ impl Sim {
             }
         }
         let n_cpus = cpu_tasks.len();
-        let chains = spec
-            .chains
-            .iter()
-            .map(|_| Tracker {
-                stamps: Vec::new(),
-                current: None,
-                stats: ChainStats::default(),
-            })
-            .collect();
+        let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
         Ok(Sim {
             edf: spec.scheduler == Scheduler::Edf,
             exec: cfg.exec,

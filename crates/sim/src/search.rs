@@ -30,7 +30,7 @@
 //! above 1 is a soundness bug of the analysis (or of the simulator).
 
 use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
-use rtpipe_analysis::{analyze, Metric};
+use rtpipe_analysis::{analyze, Anchor, Metric};
 use rtpipe_model::gen::Rng;
 use rtpipe_model::{Nanos, Spec};
 use std::fmt;
@@ -72,6 +72,8 @@ pub struct SearchConfig {
     /// Index into `spec.chains` of the chain whose latency is maximised.
     pub chain: usize,
     pub metric: Metric,
+    /// Measured from the head's read or from the event.
+    pub anchor: Anchor,
     /// Local searches, each from its own starting point.
     pub restarts: u32,
     /// Candidates tried per local search (after its starting point).
@@ -85,11 +87,12 @@ pub struct SearchConfig {
 }
 
 impl SearchConfig {
-    /// 4 restarts of 50 steps, seed 0, no given starting point.
+    /// 4 restarts of 50 steps, seed 0, no given starting point, from the read.
     pub fn new(chain: usize, metric: Metric, horizon: Nanos) -> SearchConfig {
         SearchConfig {
             chain,
             metric,
+            anchor: Anchor::Read,
             restarts: 4,
             steps: 50,
             horizon,
@@ -112,6 +115,7 @@ pub struct Progress {
 pub struct SearchResult {
     pub chain: usize,
     pub metric: Metric,
+    pub anchor: Anchor,
     /// The longest latency found; `None` when no run finalised a sample of
     /// the chain (the horizon is too short).
     pub value: Option<Nanos>,
@@ -128,7 +132,7 @@ pub struct SearchResult {
     pub events: u64,
     /// Every improvement of the best value, in order.
     pub trajectory: Vec<Progress>,
-    /// The analysis' bounds for this chain and metric.
+    /// The analysis' bounds for this chain, metric and anchor.
     pub sound: Option<Nanos>,
     pub paper: Option<Nanos>,
 }
@@ -152,7 +156,13 @@ impl SearchResult {
 
 impl fmt::Display for SearchResult {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "chain {} {}: ", self.chain, self.metric.name())?;
+        write!(
+            f,
+            "chain {} {} from the {}: ",
+            self.chain,
+            self.metric.name(),
+            self.anchor.name()
+        )?;
         match self.value {
             Some(v) => write!(f, "found {v} ns")?,
             None => write!(f, "no finalised sample")?,
@@ -247,7 +257,10 @@ pub fn search_with(
         .chains
         .iter()
         .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
-        .map_or((None, None), |c| (c.bound.sound, Some(c.bound.paper)));
+        .map_or((None, None), |c| {
+            let a = cfg.anchor;
+            (c.bound.sound_from(a), Some(c.bound.paper_from(a)))
+        });
     let (best, value, witness) = match s.best {
         Some(b) => (b.cand, b.value, b.witness),
         // No restart at all: report the synchronous worst case, unevaluated.
@@ -264,6 +277,7 @@ pub fn search_with(
     Ok(SearchResult {
         chain: cfg.chain,
         metric: cfg.metric,
+        anchor: cfg.anchor,
         value,
         config: best.config(cfg.horizon),
         best,
@@ -370,10 +384,8 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
         self.events += res.events;
         (self.observe)(&sim_cfg, &res);
         let cs = &res.chains[self.cfg.chain];
-        let (value, witness) = match self.cfg.metric {
-            Metric::Reaction => (cs.reaction_max, cs.reaction_witness),
-            Metric::Freshness => (cs.freshness_max, cs.freshness_witness),
-        };
+        let seen = cs.observed(self.cfg.metric, self.cfg.anchor);
+        let (value, witness) = (seen.max, seen.witness);
         let scored = Scored {
             cand,
             value,
@@ -699,11 +711,8 @@ mod tests {
             assert_eq!((o[1] - o[0]).rem_euclid(t), 1_999);
             let replay = simulate(&s, &r.config).unwrap_or_else(|e| panic!("{e}"));
             let c = &replay.chains[0];
-            let seen = match metric {
-                Metric::Reaction => (c.reaction_max, c.reaction_witness),
-                Metric::Freshness => (c.freshness_max, c.freshness_witness),
-            };
-            assert_eq!(seen, (r.value, r.witness));
+            let seen = c.observed(metric, Anchor::Read);
+            assert_eq!((seen.max, seen.witness), (r.value, r.witness));
         }
     }
 

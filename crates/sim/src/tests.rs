@@ -74,8 +74,8 @@ fn assert_within_sound(spec: &Spec, r: &SimResult) {
     for c in &report.chains {
         let st = &r.chains[c.chain];
         let seen = match c.metric {
-            rtpipe_analysis::Metric::Reaction => st.reaction_max,
-            rtpipe_analysis::Metric::Freshness => st.freshness_max,
+            rtpipe_analysis::Metric::Reaction => st.reaction.max,
+            rtpipe_analysis::Metric::Freshness => st.freshness.max,
         };
         if let (Some(s), Some(b)) = (seen, c.bound.sound) {
             assert!(s <= b, "chain {} {:?}: {s} > {b}", c.chain, c.metric);
@@ -100,12 +100,25 @@ fn slow_consumer_rm() {
     assert_eq!(job(&r, 1, 0), (2, 5, vec![Some(0), Some(0)]));
     assert_eq!(job(&r, 1, 1), (22, 25, vec![Some(2), Some(1)]));
     let c = &r.chains[0];
-    assert_eq!((c.reaction_max, c.freshness_max), (Some(5), Some(5)));
+    assert_eq!((c.reaction.max, c.freshness.max), (Some(5), Some(5)));
     // Head reads at 0, 10, …, 100; tail outputs at 5, 25, 45, 65, 85 carry
     // samples 0, 2, 4, 6, 8; the last is not final.
     assert_eq!((c.samples, c.reached, c.finalised), (11, 5, 4));
+    // Reaction counts every sample that reached the tail, the last one too.
+    assert_eq!(c.reaction.values, vec![5; 5]);
+    assert_eq!(c.freshness.values, vec![5; 4]);
+    // From the event just after head read k−1 (at 10(k−1)) to the first tail
+    // output carrying sample k or newer: odd samples never reach the tail, so
+    // their events wait for the next even one: 25 − 0, 25 − 10, 45 − 20, …;
+    // samples 9 and 10 have no such output before the horizon.
     assert_eq!(
-        c.freshness_witness,
+        c.event_reaction.values,
+        vec![25, 15, 25, 15, 25, 15, 25, 15]
+    );
+    // Freshness from the event: read before the sample's to its last output.
+    assert_eq!(c.event_freshness.values, vec![15, 15, 15]);
+    assert_eq!(
+        c.freshness.witness,
         Some(Witness {
             sample: 0,
             read: 0,
@@ -114,11 +127,11 @@ fn slow_consumer_rm() {
         })
     );
     assert_eq!(
-        (r.chains[1].reaction_max, r.chains[1].freshness_max),
+        (r.chains[1].reaction.max, r.chains[1].freshness.max),
         (Some(2), Some(2))
     );
     assert_eq!(
-        (r.chains[2].reaction_max, r.chains[2].freshness_max),
+        (r.chains[2].reaction.max, r.chains[2].freshness.max),
         (Some(3), Some(3))
     );
     assert_eq!(r.tasks[0].max_response, Some(2));
@@ -146,7 +159,7 @@ fn fast_consumer_reads_twice() {
     assert_eq!(job(&r, 1, 2), (20, 22, vec![Some(0)]));
     assert_eq!(job(&r, 0, 1), (22, 25, vec![Some(1)]));
     let c = &r.chains[0];
-    assert_eq!((c.reaction_max, c.freshness_max), (Some(10), Some(20)));
+    assert_eq!((c.reaction.max, c.freshness.max), (Some(10), Some(20)));
     // Samples stamped 2, 22, 42, 62, 82 (t0's job released at 100 has not
     // started); tail outputs up to 92 carry samples 0..=4; 4 is not final.
     assert_eq!((c.samples, c.reached, c.finalised), (5, 5, 4));
@@ -171,7 +184,7 @@ fn read_happens_when_first_running_not_at_release() {
     assert_eq!(job(&r, 1, 1), (10, 14, vec![Some(1)]));
     assert_eq!(job(&r, 1, 2), (20, 24, vec![Some(3)]));
     let c = &r.chains[0];
-    assert_eq!((c.reaction_max, c.freshness_max), (Some(8), Some(8)));
+    assert_eq!((c.reaction.max, c.freshness.max), (Some(8), Some(8)));
     assert_eq!((c.samples, c.reached, c.finalised), (6, 2, 1));
     assert_eq!(r.tasks[1].max_response, Some(4));
     assert_eq!(r.offsets, vec![1, 0]);
@@ -185,14 +198,14 @@ fn publish_precedes_read_at_the_same_instant_across_cpus() {
     let s = spec(Scheduler::Rm, tasks, &[&[0, 1]]);
     let r = run(&s, 50, Phasing::Given(vec![0, 2]), ExecModel::Worst);
     assert_eq!(job(&r, 1, 0), (2, 4, vec![Some(0)]));
-    assert_eq!(r.chains[0].reaction_max, Some(4));
-    assert_eq!(r.chains[0].freshness_max, Some(4));
+    assert_eq!(r.chains[0].reaction.max, Some(4));
+    assert_eq!(r.chains[0].freshness.max, Some(4));
     // One nanosecond earlier (φ=1) it reads the previous sample: 10k+3 − 10(k−1) = 13.
     let r = run(&s, 50, Phasing::Given(vec![0, 1]), ExecModel::Worst);
     assert_eq!(job(&r, 1, 0), (1, 3, vec![None]));
     assert_eq!(job(&r, 1, 1), (11, 13, vec![Some(0)]));
-    assert_eq!(r.chains[0].reaction_max, Some(13));
-    assert_eq!(r.chains[0].freshness_max, Some(13));
+    assert_eq!(r.chains[0].reaction.max, Some(13));
+    assert_eq!(r.chains[0].freshness.max, Some(13));
 }
 
 #[test]
@@ -222,7 +235,7 @@ fn edf_ties_go_to_the_lower_index() {
     assert_eq!(job(&r, 1, 0), (2, 4, vec![Some(0)]));
     assert_eq!(job(&r, 0, 1), (10, 12, vec![Some(0)]));
     // Sample 0 stamped 2, output at 12; sample 1 (12) at 22: reaction 10.
-    assert_eq!(r.chains[0].reaction_max, Some(10));
+    assert_eq!(r.chains[0].reaction.max, Some(10));
     assert_eq!(r.chains[0].finalised, 1);
 }
 
@@ -236,7 +249,7 @@ fn zero_demand_job_reads_then_publishes_at_once() {
     let r = run(&s, 25, Phasing::Sync, ExecModel::Best);
     assert_eq!(job(&r, 0, 0), (0, 0, vec![Some(0)]));
     assert_eq!(job(&r, 1, 0), (0, 3, vec![Some(0)]));
-    assert_eq!(r.chains[0].reaction_max, Some(3));
+    assert_eq!(r.chains[0].reaction.max, Some(3));
     assert_eq!(r.tasks[0].max_response, Some(0));
 }
 
@@ -267,7 +280,7 @@ fn transfer_stages_count_in_the_demand() {
     let r = run(&s, 30, Phasing::Sync, ExecModel::Worst);
     assert_eq!(job(&r, 0, 0), (0, 4, vec![Some(0)]));
     assert_eq!(job(&r, 1, 0), (4, 5, vec![Some(0)]));
-    assert_eq!(r.chains[0].reaction_max, Some(5));
+    assert_eq!(r.chains[0].reaction.max, Some(5));
 }
 
 #[test]

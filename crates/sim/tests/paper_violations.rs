@@ -57,7 +57,7 @@ fn table3_p2_reaction_exceeds_eq5() {
     let (paper, sound) = bounds(&spec, 1, Metric::Reaction);
     assert_eq!(paper, 249 * MS);
     assert_eq!(sound, 364 * MS);
-    let got = res.chains[1].reaction_max.unwrap_or(0);
+    let got = res.chains[1].reaction.max.unwrap_or(0);
     assert_eq!(got, 278_887_857);
     assert!(got > paper && got <= sound);
 }
@@ -96,6 +96,6 @@ path = ["a"]
     };
     let (paper, sound) = bounds(&spec, 0, Metric::Reaction);
     assert_eq!((paper, sound), (MS, 3 * MS));
-    assert_eq!(res.chains[0].reaction_max, Some(3 * MS));
-    assert_eq!(res.chains[0].freshness_max, Some(3 * MS));
+    assert_eq!(res.chains[0].reaction.max, Some(3 * MS));
+    assert_eq!(res.chains[0].freshness.max, Some(3 * MS));
 }
