@@ -1043,8 +1043,8 @@ fn to_text(
         );
         out.push_str(&chain_table(spec, obs, Anchor::Read));
         out.push_str(
-            "\nfrom the event (an event just after each head read, to the first output \
-             reflecting it / the last output of the next sample; bounds +event):\n",
+            "\nfrom the event just after each head read (reaction: to the first output that \
+             reflects it; freshness: to the last output of the next sample), against the +event bounds:\n",
         );
         out.push_str(&chain_table(spec, obs, Anchor::Event));
     }
