@@ -41,9 +41,12 @@
 //! be the event's own sample (it may be overwritten before it is used); its
 //! freshness is the previous head read to the sample's last tail output.
 
+mod bodies;
 pub mod search;
 pub mod server;
 pub mod trace;
+
+pub use bodies::simulate_bodies;
 
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_analysis::{Anchor, Metric};
@@ -295,9 +298,31 @@ pub struct SimResult {
     pub horizon: Nanos,
 }
 
-/// Simulates `spec` from 0 to `cfg.horizon`.
+/// Simulates `spec` from 0 to `cfg.horizon`: the timing alone, no task code
+/// ([`simulate_bodies`] runs task bodies too).
 pub fn simulate(spec: &Spec, cfg: &SimConfig) -> Result<SimResult, SimError> {
-    let mut sim = Sim::new(spec, cfg)?;
+    run(spec, cfg, NoHooks)
+}
+
+/// What the simulator tells the code that runs task bodies: a job reads, a
+/// job publishes. Called in simulated-time order.
+trait Hooks {
+    /// The front job of `job.task` reads at `job.read`.
+    fn read(&mut self, job: &rtpipe_body::Job);
+    /// The front job of `task` publishes at `t`.
+    fn publish(&mut self, task: usize, t: Nanos);
+}
+
+/// Timing only.
+struct NoHooks;
+
+impl Hooks for NoHooks {
+    fn read(&mut self, _job: &rtpipe_body::Job) {}
+    fn publish(&mut self, _task: usize, _t: Nanos) {}
+}
+
+fn run<H: Hooks>(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<SimResult, SimError> {
+    let mut sim = Sim::new(spec, cfg, hooks)?;
     let mut t = 0;
     loop {
         sim.instant(t);
@@ -497,7 +522,8 @@ impl Tracker {
     }
 }
 
-struct Sim {
+struct Sim<H> {
+    hooks: H,
     edf: bool,
     exec: ExecModel,
     tasks: Vec<TaskSim>,
@@ -516,8 +542,8 @@ struct Sim {
     horizon: Nanos,
 }
 
-impl Sim {
-    fn new(spec: &Spec, cfg: &SimConfig) -> Result<Sim, SimError> {
+impl<H: Hooks> Sim<H> {
+    fn new(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<Sim<H>, SimError> {
         if cfg.horizon <= 0 {
             return Err(SimError::HorizonNotPositive(cfg.horizon));
         }
@@ -623,6 +649,7 @@ impl Sim {
         let n_cpus = cpu_tasks.len();
         let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
         Ok(Sim {
+            hooks,
             edf: spec.scheduler == Scheduler::Edf,
             exec: cfg.exec,
             tasks,
@@ -773,9 +800,17 @@ impl Sim {
             };
             self.tasks[i].carried[s] = v;
         }
-        if let Some(job) = self.tasks[i].queue.front_mut() {
-            job.read = Some(t);
-        }
+        let Some(job) = self.tasks[i].queue.front_mut() else {
+            unreachable!("task {i} reads without a pending job");
+        };
+        job.read = Some(t);
+        let job = rtpipe_body::Job {
+            task: i,
+            index: job.index,
+            release: job.release,
+            read: t,
+        };
+        self.hooks.read(&job);
     }
 
     /// The front job of task i completes at t: publish.
@@ -784,6 +819,11 @@ impl Sim {
         let Some(job) = ts.queue.pop_front() else {
             return;
         };
+        debug_assert!(
+            job.read.is_some(),
+            "task {i} publishes a job that never read"
+        );
+        self.hooks.publish(i, t);
         let response = t - job.release;
         ts.stats.completed += 1;
         ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
