@@ -293,11 +293,7 @@ pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
         ])
         .numeric(&[2, 3, 4, 5, 6, 7]);
         for c in &r.chains {
-            let ch = &spec.chains[c.chain];
-            let label = match &ch.name {
-                Some(n) => n.clone(),
-                None => path_names(spec, &ch.path).join(">"),
-            };
+            let label = spec.chain_label(c.chain);
             let verdict = match (c.ok, c.limit) {
                 (true, Some(_)) => "ok",
                 (true, None) => "-",
@@ -392,9 +388,9 @@ pub fn paths_text(spec: &Spec, a: &AllPaths) -> String {
             spec.tasks[p.source].name.clone(),
             spec.tasks[p.sink].name.clone(),
             opt(spec, p.reaction_sound.value),
-            path_names(spec, &p.reaction_sound.path).join(">"),
+            spec.path_label(&p.reaction_sound.path),
             opt(spec, p.freshness_sound.value),
-            path_names(spec, &p.freshness_sound.path).join(">"),
+            spec.path_label(&p.freshness_sound.path),
         ]);
     }
     out.push_str(&t.render());

@@ -1,12 +1,12 @@
 //! SVG figures of a simulated run: observed vs predicted end-to-end times
 //! (the paper's Fig. 9) and a Gantt chart of the schedule.
 
-use crate::simulate::{chain_label, chain_path, ChainObs};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use rtpipe_analysis::Metric;
 use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_sim::observe::ChainObs;
 use rtpipe_sim::SimResult;
 
 type Res<T> = Result<T, String>;
@@ -323,8 +323,8 @@ where
     // Chain names (and paths) under each group, in root pixels.
     for (i, o) in obs.iter().enumerate() {
         let (px, py) = chart.backend_coord(&(i as f64 + shift + 0.5, 0.0));
-        let name = chain_label(spec, o.chain);
-        let path = chain_path(spec, o.chain);
+        let name = spec.chain_label(o.chain);
+        let path = spec.path_label(&spec.chains[o.chain].path);
         root.draw(&Text::new(
             name.clone(),
             (px, py + 10),

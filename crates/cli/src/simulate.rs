@@ -9,6 +9,7 @@ use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
+use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult};
@@ -176,16 +177,13 @@ struct Plan {
     log_jobs: bool,
 }
 
-fn max_period<'a>(spec: &Spec, tasks: impl Iterator<Item = &'a usize>) -> Nanos {
-    tasks
-        .filter_map(|&i| spec.tasks.get(i).and_then(|t| t.fixed_period()))
-        .max()
-        .unwrap_or(0)
-}
-
 fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
-    let all: Vec<usize> = (0..spec.tasks.len()).collect();
-    let t_max = max_period(spec, all.iter());
+    let t_max = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .max()
+        .unwrap_or(0);
     if t_max <= 0 {
         return Err(Bad::new(
             "no task has a fixed period, so nothing is ever released",
@@ -213,25 +211,7 @@ fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
         }
         (None, o) => {
             let n = o.unwrap_or(DEFAULT_OUTPUTS);
-            let tails: Vec<usize> = spec
-                .chains
-                .iter()
-                .filter_map(|c| c.path.last().copied())
-                .collect();
-            let t_tail = if tails.is_empty() {
-                t_max
-            } else {
-                max_period(spec, tails.iter())
-            };
-            // Tails release one job per period and (when schedulable) finish
-            // it within the period, so N periods of the slowest tail plus one
-            // largest period cover N outputs of every tail.
-            let h = i64::try_from(n)
-                .ok()
-                .and_then(|n| n.checked_mul(t_tail))
-                .and_then(|h| h.checked_add(t_max))
-                .filter(|&h| h <= MAX_TIME);
-            match h {
+            match horizon_for_outputs(spec, n) {
                 Some(h) => (h, Some(n)),
                 None => {
                     return Err(Bad::new(
@@ -393,144 +373,6 @@ fn with_spinner<T>(msg: String, f: impl FnOnce() -> T) -> T {
     let out = f();
     pb.finish_and_clear();
     out
-}
-
-/// Summary of the samples of one chain and metric.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Observed {
-    pub count: usize,
-    pub min: Nanos,
-    /// In nanoseconds, not rounded.
-    pub mean: f64,
-    /// Nearest-rank 99th percentile.
-    pub p99: Nanos,
-    pub max: Nanos,
-}
-
-impl Observed {
-    pub fn of(samples: &[Nanos]) -> Option<Observed> {
-        if samples.is_empty() {
-            return None;
-        }
-        let mut s = samples.to_vec();
-        s.sort_unstable();
-        let n = s.len();
-        let rank = (n * 99).div_ceil(100).clamp(1, n);
-        Some(Observed {
-            count: n,
-            min: s[0],
-            mean: s.iter().map(|&x| x as f64).sum::<f64>() / n as f64,
-            p99: s[rank - 1],
-            max: s[n - 1],
-        })
-    }
-}
-
-/// Observations of one quantity against its bounds.
-#[derive(Debug, Clone)]
-pub struct Judged {
-    pub observed: Option<Observed>,
-    pub paper: Nanos,
-    pub sound: Option<Nanos>,
-    /// Observations above the paper bound.
-    pub over_paper: usize,
-    /// Observations above the sound bound (`None` without a sound bound).
-    pub over_sound: Option<usize>,
-}
-
-impl Judged {
-    fn of(values: &[Nanos], paper: Nanos, sound: Option<Nanos>) -> Judged {
-        Judged {
-            observed: Observed::of(values),
-            paper,
-            sound,
-            over_paper: values.iter().filter(|&&x| x > paper).count(),
-            over_sound: sound.map(|s| values.iter().filter(|&&x| x > s).count()),
-        }
-    }
-}
-
-/// One chain and metric: observations against the analysis, measured from
-/// the head's read and from the event.
-#[derive(Debug, Clone)]
-pub struct ChainObs {
-    pub chain: usize,
-    pub metric: Metric,
-    pub read: Judged,
-    pub event: Judged,
-}
-
-impl ChainObs {
-    /// The observations measured from `a`.
-    pub fn from(&self, a: Anchor) -> &Judged {
-        match a {
-            Anchor::Read => &self.read,
-            Anchor::Event => &self.event,
-        }
-    }
-
-    /// Observations above a sound bound, from either anchor.
-    pub fn over_sound(&self) -> usize {
-        self.read.over_sound.unwrap_or(0) + self.event.over_sound.unwrap_or(0)
-    }
-}
-
-fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
-    report
-        .chains
-        .iter()
-        .map(|c| {
-            let judge = |a: Anchor| {
-                let values = res
-                    .chains
-                    .get(c.chain)
-                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
-                Judged::of(values, c.bound.paper_from(a), c.bound.sound_from(a))
-            };
-            ChainObs {
-                chain: c.chain,
-                metric: c.metric,
-                read: judge(Anchor::Read),
-                event: judge(Anchor::Event),
-            }
-        })
-        .collect()
-}
-
-/// A chain's label: its name or its path.
-pub fn chain_label(spec: &Spec, chain: usize) -> String {
-    match spec.chains.get(chain) {
-        Some(ch) => match &ch.name {
-            Some(n) => n.clone(),
-            None => chain_path(spec, chain),
-        },
-        None => format!("chain {chain}"),
-    }
-}
-
-pub fn chain_path(spec: &Spec, chain: usize) -> String {
-    spec.chains.get(chain).map_or_else(String::new, |ch| {
-        ch.path
-            .iter()
-            .map(|&i| spec.tasks.get(i).map_or("?", |t| t.name.as_str()))
-            .collect::<Vec<_>>()
-            .join(">")
-    })
-}
-
-/// Tasks whose observed response exceeded the analysed job response time.
-fn response_violations(report: &Report, res: &SimResult) -> Vec<usize> {
-    res.tasks
-        .iter()
-        .zip(&report.timing)
-        .enumerate()
-        .filter_map(
-            |(i, (ts, tm))| match (ts.max_response, tm.bounded_response()) {
-                (Some(seen), Some(r)) if seen > r => Some(i),
-                _ => None,
-            },
-        )
-        .collect()
 }
 
 /// The files to write, rendered in memory first.
@@ -786,7 +628,7 @@ fn search_json(spec: &Spec, rs: &[SearchResult]) -> Value {
         rs.iter()
             .map(|r| {
                 json!({
-                    "chain": spec.chains[r.chain].name.clone().unwrap_or_else(|| chain_path(spec, r.chain)),
+                    "chain": spec.chain_label(r.chain),
                     "metric": r.metric.name(),
                     "from": r.anchor.name(),
                     "found": num(spec, r.value),
@@ -819,7 +661,7 @@ fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
     for r in rs {
         let f = |v: Option<Nanos>| v.map_or("-".to_string(), |n| spec.fmt_time(n));
         t.row(vec![
-            chain_label(spec, r.chain),
+            spec.chain_label(r.chain),
             r.metric.name().to_string(),
             r.anchor.name().to_string(),
             f(r.value),
@@ -981,7 +823,7 @@ fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
             None => dash(),
         };
         t.row(vec![
-            chain_label(spec, o.chain),
+            spec.chain_label(o.chain),
             o.metric.name().to_string(),
             count,
             min,
@@ -1158,18 +1000,6 @@ mod tests {
     }
 
     const MS: Nanos = 1_000_000;
-
-    #[test]
-    fn percentiles_are_nearest_rank() {
-        let xs: Vec<Nanos> = (1..=200).rev().collect();
-        let o = Observed::of(&xs);
-        assert_eq!(
-            o.map(|o| (o.count, o.min, o.p99, o.max)),
-            Some((200, 1, 198, 200))
-        );
-        assert_eq!(Observed::of(&[7]).map(|o| (o.p99, o.mean)), Some((7, 7.0)));
-        assert_eq!(Observed::of(&[]), None);
-    }
 
     #[test]
     fn outputs_set_the_horizon() {

@@ -279,6 +279,24 @@ impl Spec {
         self.tasks.iter().position(|t| t.name == name)
     }
 
+    /// A path of task indices as people read it: names joined by `>`
+    /// (`?` for an index that names no task).
+    pub fn path_label(&self, path: &[usize]) -> String {
+        let names: Vec<&str> = path
+            .iter()
+            .map(|&i| self.tasks.get(i).map_or("?", |t| t.name.as_str()))
+            .collect();
+        names.join(">")
+    }
+
+    /// A declared chain's label: its name, or else its path.
+    pub fn chain_label(&self, chain: usize) -> String {
+        match self.chains.get(chain) {
+            Some(ch) => ch.name.clone().unwrap_or_else(|| self.path_label(&ch.path)),
+            None => format!("chain {chain}"),
+        }
+    }
+
     /// Edges producer → consumer, as (producer, consumer) pairs.
     pub fn edges(&self) -> Vec<(usize, usize)> {
         let mut e = Vec::new();

@@ -42,6 +42,7 @@
 //! freshness is the previous head read to the sample's last tail output.
 
 mod bodies;
+pub mod observe;
 pub mod search;
 pub mod server;
 pub mod trace;

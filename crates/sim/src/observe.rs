@@ -1,0 +1,174 @@
+//! Observations of a run held against the analysis: per chain, metric and
+//! anchor, the distribution of what was measured and how much of it exceeds
+//! each bound; per task, response times above the analysed ones. The CLI's
+//! `simulate` and `fly` report these; the oracle tests check them.
+
+use crate::SimResult;
+use rtpipe_analysis::{Anchor, Metric, Report};
+use rtpipe_model::{Nanos, Spec, MAX_TIME};
+
+/// Distribution of the observations of one quantity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    pub count: usize,
+    pub min: Nanos,
+    /// In nanoseconds, not rounded.
+    pub mean: f64,
+    /// Nearest-rank 99th percentile.
+    pub p99: Nanos,
+    pub max: Nanos,
+}
+
+impl Summary {
+    /// `None` without observations.
+    pub fn of(values: &[Nanos]) -> Option<Summary> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut s = values.to_vec();
+        s.sort_unstable();
+        let n = s.len();
+        let rank = (n * 99).div_ceil(100).clamp(1, n);
+        Some(Summary {
+            count: n,
+            min: s[0],
+            mean: s.iter().map(|&x| x as f64).sum::<f64>() / n as f64,
+            p99: s[rank - 1],
+            max: s[n - 1],
+        })
+    }
+}
+
+/// Observations of one quantity against its bounds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Judged {
+    pub observed: Option<Summary>,
+    pub paper: Nanos,
+    pub sound: Option<Nanos>,
+    /// Observations above the paper bound.
+    pub over_paper: usize,
+    /// Observations above the sound bound (`None` without a sound bound).
+    pub over_sound: Option<usize>,
+}
+
+impl Judged {
+    /// `values` against the two bounds.
+    pub fn of(values: &[Nanos], paper: Nanos, sound: Option<Nanos>) -> Judged {
+        Judged {
+            observed: Summary::of(values),
+            paper,
+            sound,
+            over_paper: values.iter().filter(|&&x| x > paper).count(),
+            over_sound: sound.map(|s| values.iter().filter(|&&x| x > s).count()),
+        }
+    }
+}
+
+/// One chain and metric: observations against the analysis, measured from
+/// the head's read and from the event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainObs {
+    pub chain: usize,
+    pub metric: Metric,
+    pub read: Judged,
+    pub event: Judged,
+}
+
+impl ChainObs {
+    /// The observations measured from `a`.
+    pub fn from(&self, a: Anchor) -> &Judged {
+        match a {
+            Anchor::Read => &self.read,
+            Anchor::Event => &self.event,
+        }
+    }
+
+    /// Observations above a sound bound, from either anchor.
+    pub fn over_sound(&self) -> usize {
+        self.read.over_sound.unwrap_or(0) + self.event.over_sound.unwrap_or(0)
+    }
+}
+
+/// Every chain and metric of `report`, in its order, judged on `res`.
+pub fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
+    report
+        .chains
+        .iter()
+        .map(|c| {
+            let judge = |a: Anchor| {
+                let values = res
+                    .chains
+                    .get(c.chain)
+                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
+                Judged::of(values, c.bound.paper_from(a), c.bound.sound_from(a))
+            };
+            ChainObs {
+                chain: c.chain,
+                metric: c.metric,
+                read: judge(Anchor::Read),
+                event: judge(Anchor::Event),
+            }
+        })
+        .collect()
+}
+
+/// Tasks whose observed response exceeded the analysed job response time.
+pub fn response_violations(report: &Report, res: &SimResult) -> Vec<usize> {
+    res.tasks
+        .iter()
+        .zip(&report.timing)
+        .enumerate()
+        .filter_map(
+            |(i, (ts, tm))| match (ts.max_response, tm.bounded_response()) {
+                (Some(seen), Some(r)) if seen > r => Some(i),
+                _ => None,
+            },
+        )
+        .collect()
+}
+
+fn max_period(spec: &Spec, tasks: impl Iterator<Item = usize>) -> Option<Nanos> {
+    tasks
+        .filter_map(|i| spec.tasks.get(i).and_then(|t| t.fixed_period()))
+        .max()
+}
+
+/// The horizon that gives every chain's tail at least `outputs` outputs:
+/// tails release one job per period and (when schedulable) finish it within
+/// the period, so N periods of the slowest tail plus one longest period
+/// cover N outputs of every tail. `None` when no task has a fixed period or
+/// the span exceeds the longest time the model allows.
+pub fn horizon_for_outputs(spec: &Spec, outputs: u64) -> Option<Nanos> {
+    let t_max = max_period(spec, 0..spec.tasks.len()).filter(|&t| t > 0)?;
+    let tails = spec.chains.iter().filter_map(|c| c.path.last().copied());
+    let t_tail = max_period(spec, tails).unwrap_or(t_max);
+    i64::try_from(outputs)
+        .ok()
+        .and_then(|n| n.checked_mul(t_tail))
+        .and_then(|h| h.checked_add(t_max))
+        .filter(|&h| h <= MAX_TIME)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_are_nearest_rank() {
+        let xs: Vec<Nanos> = (1..=200).rev().collect();
+        let o = Summary::of(&xs);
+        assert_eq!(
+            o.map(|o| (o.count, o.min, o.p99, o.max)),
+            Some((200, 1, 198, 200))
+        );
+        assert_eq!(Summary::of(&[7]).map(|o| (o.p99, o.mean)), Some((7, 7.0)));
+        assert_eq!(Summary::of(&[]), None);
+    }
+
+    #[test]
+    fn judged_counts_strictly_above() {
+        let j = Judged::of(&[1, 5, 6, 9], 5, Some(6));
+        assert_eq!((j.over_paper, j.over_sound), (2, Some(1)));
+        assert_eq!(Judged::of(&[9], 5, None).over_sound, None);
+    }
+}
