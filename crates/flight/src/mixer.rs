@@ -55,7 +55,13 @@ pub fn mix(cmd: &AxisCommand) -> MixOutput {
         (1.0, lo, hi)
     };
     let thr_in = cmd.throttle.clamp(0.0, 1.0);
-    let thr = thr_in.clamp(-lo, 1.0 - hi);
+    // With span = 1 after scaling the window is a single point; rounding
+    // could invert it, so take it directly.
+    let thr = if scale < 1.0 {
+        -lo
+    } else {
+        thr_in.clamp(-lo, 1.0 - hi)
+    };
     saturated |= (thr - thr_in).abs() > 1e-12;
     let mut motors = [0.0; 4];
     for (m, di) in motors.iter_mut().zip(d.iter()) {
