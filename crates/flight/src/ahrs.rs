@@ -160,7 +160,10 @@ impl Mahony {
             }
             w += e * self.kp + self.integral;
         }
-        self.q = self.q.mul(Quat::from_rotation_vector(w * dt)).normalized();
+        self.q = self
+            .q
+            .compose(Quat::from_rotation_vector(w * dt))
+            .normalized();
         self.output(rate, gyro.last_t_ns, use_acc)
     }
 
@@ -195,17 +198,15 @@ mod tests {
         let mut att = Attitude::default();
         // Gyro at 1 kHz, AHRS at 200 Hz as in Table V.
         while (t as f64) * 1e-9 < secs {
-            t += 1_000_000;
-            acc.push(Vec3::ZERO, t);
-            if t % 5_000_000 == 0 {
-                att = ahrs.update(
-                    acc.snapshot(),
-                    AccelSample {
-                        specific_force: up_body,
-                        t_ns: t,
-                    },
-                );
+            for _ in 0..5 {
+                t += 1_000_000;
+                acc.push(Vec3::ZERO, t);
             }
+            let a = AccelSample {
+                specific_force: up_body,
+                t_ns: t,
+            };
+            att = ahrs.update(acc.snapshot(), a);
         }
         att.q.angle_to(truth).to_degrees()
     }

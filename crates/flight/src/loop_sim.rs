@@ -27,6 +27,13 @@ use crate::radio::{
 
 const MS: u64 = 1_000_000;
 
+/// True if `t` is a release instant of a task with period `p` (p > 0).
+// The workspace's rust-version (1.80) predates u64::is_multiple_of (1.87).
+#[allow(clippy::manual_is_multiple_of)]
+fn due(t: u64, p: u64) -> bool {
+    t % p == 0
+}
+
 /// Task periods and the transport delay, ns.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Timing {
@@ -218,7 +225,7 @@ impl LoopSim {
             ("pwm", t.pwm),
             ("radio", t.radio),
         ] {
-            if t.tick == 0 || p == 0 || p % t.tick != 0 || t.delay % t.tick != 0 || t.delay / p >= 7
+            if t.tick == 0 || p == 0 || !due(p, t.tick) || !due(t.delay, t.tick) || t.delay / p >= 7
             {
                 return Err(ConfigError::new(
                     format!("timing.{n}"),
@@ -376,27 +383,27 @@ impl LoopSim {
             .cfg
             .radio_loss
             .is_some_and(|(a, b)| (a..b).contains(&t));
-        if t % tm.radio == 0 && !lost {
+        if due(t, tm.radio) && !lost {
             let v = self.radio_task(t);
             self.r_radio.write(vis, v);
         }
-        if t % tm.gyro == 0 {
+        if due(t, tm.gyro) {
             let v = self.gyro_task(t);
             self.r_gyro.write(vis, v);
         }
-        if t % tm.accel == 0 {
+        if due(t, tm.accel) {
             let v = self.accel_task(t);
             self.r_accel.write(vis, v);
         }
-        if t % tm.ahrs == 0 {
+        if due(t, tm.ahrs) {
             let v = self.ahrs_task();
             self.r_att.write(vis, v);
         }
-        if t % tm.pid == 0 {
+        if due(t, tm.pid) {
             let v = self.pid_task(t);
             self.r_mix.write(vis, v);
         }
-        if t % tm.pwm == 0 {
+        if due(t, tm.pwm) {
             let v = self.pwm_task();
             self.r_motor.write(vis, v);
         }
@@ -429,7 +436,7 @@ impl LoopSim {
             }
         }
         self.release_tasks(t);
-        if t % self.cfg.trace_every_ns.max(1) == 0 {
+        if due(t, self.cfg.trace_every_ns.max(1)) {
             self.record(t);
         }
         let next = t + self.cfg.timing.tick;

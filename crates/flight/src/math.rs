@@ -204,8 +204,8 @@ impl Quat {
         }
     }
 
-    /// Hamilton product `self ⊗ o`.
-    pub fn mul(self, o: Quat) -> Quat {
+    /// Hamilton product `self ⊗ o` (also available as `self * o`).
+    pub fn compose(self, o: Quat) -> Quat {
         Quat::new(
             self.w * o.w - self.x * o.x - self.y * o.y - self.z * o.z,
             self.w * o.x + self.x * o.w + self.y * o.z - self.z * o.y,
@@ -249,7 +249,7 @@ impl Quat {
 
     /// Time derivative for body rate `w`: q̇ = ½ q ⊗ (0, w).
     pub fn derivative(self, w: Vec3) -> Quat {
-        let d = self.mul(Quat::new(0.0, w.x, w.y, w.z));
+        let d = self.compose(Quat::new(0.0, w.x, w.y, w.z));
         Quat::new(0.5 * d.w, 0.5 * d.x, 0.5 * d.y, 0.5 * d.z)
     }
 
@@ -275,8 +275,15 @@ impl Quat {
 
     /// Rotation angle (radians, in [0, π]) between two attitudes.
     pub fn angle_to(self, o: Quat) -> f64 {
-        let d = self.conj().mul(o);
+        let d = self.conj().compose(o);
         2.0 * d.w.abs().clamp(0.0, 1.0).acos()
+    }
+}
+
+impl Mul for Quat {
+    type Output = Quat;
+    fn mul(self, o: Quat) -> Quat {
+        self.compose(o)
     }
 }
 
@@ -358,7 +365,7 @@ mod tests {
     #[test]
     fn rotation_vector_integrates_constant_rate_exactly() {
         // 1 rad/s about z for 0.5 s = a 0.5 rad yaw.
-        let q = Quat::IDENTITY.mul(Quat::from_rotation_vector(Vec3::new(0.0, 0.0, 0.5)));
+        let q = Quat::IDENTITY.compose(Quat::from_rotation_vector(Vec3::new(0.0, 0.0, 0.5)));
         assert!((q.to_euler().yaw - 0.5).abs() < 1e-12);
         assert!((wrap_pi(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);

@@ -167,7 +167,7 @@ pub fn parse_time(s: &str) -> Result<u64, String> {
 }
 
 fn seconds_to_ns(v: f64) -> Option<u64> {
-    (v.is_finite() && v >= 0.0 && v < 1.8e10).then(|| (v * 1e9).round() as u64)
+    (v.is_finite() && (0.0..1.8e10).contains(&v)).then(|| (v * 1e9).round() as u64)
 }
 
 fn check_step(i: usize, f: &StepFile) -> Result<MissionStep, ConfigError> {
