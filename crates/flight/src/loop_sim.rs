@@ -386,26 +386,32 @@ impl LoopSim {
         if due(t, tm.radio) && !lost {
             let v = self.radio_task(t);
             self.r_radio.write(vis, v);
+            self.poll_registers(t);
         }
         if due(t, tm.gyro) {
             let v = self.gyro_task(t);
             self.r_gyro.write(vis, v);
+            self.poll_registers(t);
         }
         if due(t, tm.accel) {
             let v = self.accel_task(t);
             self.r_accel.write(vis, v);
+            self.poll_registers(t);
         }
         if due(t, tm.ahrs) {
             let v = self.ahrs_task();
             self.r_att.write(vis, v);
+            self.poll_registers(t);
         }
         if due(t, tm.pid) {
             let v = self.pid_task(t);
             self.r_mix.write(vis, v);
+            self.poll_registers(t);
         }
         if due(t, tm.pwm) {
             let v = self.pwm_task();
             self.r_motor.write(vis, v);
+            self.poll_registers(t);
         }
     }
 
