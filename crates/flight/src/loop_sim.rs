@@ -179,11 +179,14 @@ impl<T: Copy> Reg<T> {
     }
 }
 
-/// Motor register content.
+/// What the PID task publishes for the motor task (and the motor task for
+/// the ESCs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct MotorDemand {
-    motors: [f64; 4],
-    armed: bool,
+pub struct MotorDemand {
+    /// Motor commands in [0, 1], Betaflight order.
+    pub motors: [f64; 4],
+    /// Armed: motors spin.
+    pub armed: bool,
 }
 
 /// The whole closed loop.
@@ -309,7 +312,7 @@ impl LoopSim {
     }
 
     /// PID task: arming, failsafe, angle/rate PID, mixer.
-    fn pid_task(&mut self, t: u64) -> MotorDemand {
+    pub fn pid_task(&mut self, t: u64) -> MotorDemand {
         let rx = self.r_radio.value;
         let att = self.r_att.value;
         let gyro = self.r_gyro.value.latest;
@@ -347,7 +350,7 @@ impl LoopSim {
     }
 
     /// Motor-output task: encode DShot600 frames; the ESC decodes them.
-    fn pwm_task(&mut self) -> MotorDemand {
+    pub fn pwm_task(&mut self) -> MotorDemand {
         let d = self.r_mix.value;
         let mut out = MotorDemand {
             motors: [0.0; 4],

@@ -75,7 +75,7 @@ impl Failsafe {
             FailsafePhase::Idle => FailsafePhase::Idle,
             FailsafePhase::Descending(_) if !lost => FailsafePhase::Idle,
             FailsafePhase::Descending(t0) => {
-                let timed_out = (now_ns - t0) as f64 * 1e-9 > self.cfg.max_descent_s;
+                let timed_out = now_ns.saturating_sub(t0) as f64 * 1e-9 > self.cfg.max_descent_s;
                 if on_ground || timed_out {
                     FailsafePhase::Disarmed
                 } else {
