@@ -1,0 +1,248 @@
+//! Discrete low-pass and notch filters in Betaflight's forms
+//! (src/main/common/filter.c): PT1 and RBJ-cookbook biquads.
+//!
+//! Every constructor checks the invariant 0 < f < fs/2 (the cut-off must be
+//! below Nyquist — with our slow loop rates, gyro 1 kHz and PID 500 Hz,
+//! Betaflight's 8 kHz defaults such as the 500 Hz gyro LPF2 would violate
+//! it) and returns a [`ConfigError`] otherwise.
+
+use crate::error::ConfigError;
+use crate::math::Vec3;
+use std::f64::consts::PI;
+
+/// Betaflight's gyro LPF1 default, Hz (sensors/gyro.h
+/// `GYRO_LPF1_DYN_MIN_HZ_DEFAULT` = 250, PT1). Below 500 Hz Nyquist at 1 kHz.
+pub const GYRO_LPF_HZ_DEFAULT: f64 = 250.0;
+/// Betaflight's D-term LPF1 default, Hz (flight/pid.h
+/// `DTERM_LPF1_DYN_MIN_HZ_DEFAULT` = 75, PT1).
+pub const DTERM_LPF1_HZ_DEFAULT: f64 = 75.0;
+/// Betaflight's D-term LPF2 default, Hz (flight/pid.h
+/// `DTERM_LPF2_HZ_DEFAULT` = 150, PT1). Below 250 Hz Nyquist at 500 Hz.
+pub const DTERM_LPF2_HZ_DEFAULT: f64 = 150.0;
+/// Butterworth quality factor 1/√2, the biquad low-pass Q Betaflight uses.
+pub const BUTTERWORTH_Q: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+fn check_cutoff(field: &str, f_hz: f64, fs_hz: f64) -> Result<(), ConfigError> {
+    if !(fs_hz.is_finite() && fs_hz > 0.0) {
+        return Err(ConfigError::new(
+            field,
+            format!("sample rate must be > 0 Hz, got {fs_hz}"),
+        ));
+    }
+    if !(f_hz.is_finite() && f_hz > 0.0 && f_hz < 0.5 * fs_hz) {
+        return Err(ConfigError::new(
+            field,
+            format!(
+                "cut-off {f_hz} Hz must be in (0, {} Hz) (Nyquist)",
+                0.5 * fs_hz
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// First-order low-pass: y += k (x − y), k = dt / (RC + dt), RC = 1/(2π f_c).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pt1 {
+    k: f64,
+    state: f64,
+}
+
+impl Pt1 {
+    /// A PT1 with cut-off `f_hz` sampled at `fs_hz`; errors if f ≥ fs/2.
+    pub fn new(f_hz: f64, fs_hz: f64) -> Result<Self, ConfigError> {
+        check_cutoff("pt1.cutoff_hz", f_hz, fs_hz)?;
+        let rc = 1.0 / (2.0 * PI * f_hz);
+        let dt = 1.0 / fs_hz;
+        Ok(Self {
+            k: dt / (rc + dt),
+            state: 0.0,
+        })
+    }
+    /// The gain k.
+    pub fn gain(&self) -> f64 {
+        self.k
+    }
+    /// Filter one sample.
+    pub fn apply(&mut self, x: f64) -> f64 {
+        self.state += self.k * (x - self.state);
+        self.state
+    }
+    /// Set the state (e.g. to the first sample, to avoid a start transient).
+    pub fn reset(&mut self, v: f64) {
+        self.state = v;
+    }
+}
+
+/// A PT1 per axis of a [`Vec3`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pt1Vec3 {
+    f: [Pt1; 3],
+}
+
+impl Pt1Vec3 {
+    /// Three identical PT1s.
+    pub fn new(f_hz: f64, fs_hz: f64) -> Result<Self, ConfigError> {
+        let p = Pt1::new(f_hz, fs_hz)?;
+        Ok(Self { f: [p; 3] })
+    }
+    /// Filter one vector sample.
+    pub fn apply(&mut self, v: Vec3) -> Vec3 {
+        Vec3::new(
+            self.f[0].apply(v.x),
+            self.f[1].apply(v.y),
+            self.f[2].apply(v.z),
+        )
+    }
+}
+
+/// Biquad in transposed direct form II (RBJ audio-EQ-cookbook coefficients).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Biquad {
+    b0: f64,
+    b1: f64,
+    b2: f64,
+    a1: f64,
+    a2: f64,
+    s1: f64,
+    s2: f64,
+}
+
+impl Biquad {
+    fn from_rbj(b: [f64; 3], a: [f64; 3]) -> Self {
+        Self {
+            b0: b[0] / a[0],
+            b1: b[1] / a[0],
+            b2: b[2] / a[0],
+            a1: a[1] / a[0],
+            a2: a[2] / a[0],
+            s1: 0.0,
+            s2: 0.0,
+        }
+    }
+
+    fn omega_alpha(f_hz: f64, fs_hz: f64, q: f64) -> (f64, f64) {
+        let w0 = 2.0 * PI * f_hz / fs_hz;
+        (w0.cos(), w0.sin() / (2.0 * q))
+    }
+
+    /// Low-pass at `f_hz` with quality `q` (use [`BUTTERWORTH_Q`]).
+    pub fn lowpass(f_hz: f64, fs_hz: f64, q: f64) -> Result<Self, ConfigError> {
+        check_cutoff("biquad.cutoff_hz", f_hz, fs_hz)?;
+        crate::error::positive("biquad.q", q)?;
+        let (c, alpha) = Self::omega_alpha(f_hz, fs_hz, q);
+        let b0 = 0.5 * (1.0 - c);
+        Ok(Self::from_rbj(
+            [b0, 1.0 - c, b0],
+            [1.0 + alpha, -2.0 * c, 1.0 - alpha],
+        ))
+    }
+
+    /// Notch at `f_hz` with quality `q` (centre / bandwidth).
+    pub fn notch(f_hz: f64, fs_hz: f64, q: f64) -> Result<Self, ConfigError> {
+        check_cutoff("notch.center_hz", f_hz, fs_hz)?;
+        crate::error::positive("notch.q", q)?;
+        let (c, alpha) = Self::omega_alpha(f_hz, fs_hz, q);
+        Ok(Self::from_rbj(
+            [1.0, -2.0 * c, 1.0],
+            [1.0 + alpha, -2.0 * c, 1.0 - alpha],
+        ))
+    }
+
+    /// Notch Q from a centre and a lower cut-off frequency, as Betaflight's
+    /// `filterGetNotchQ`: Q = f0·fc / (f0² − fc²).
+    pub fn notch_q(center_hz: f64, cutoff_hz: f64) -> f64 {
+        center_hz * cutoff_hz / (center_hz * center_hz - cutoff_hz * cutoff_hz)
+    }
+
+    /// Filter one sample.
+    pub fn apply(&mut self, x: f64) -> f64 {
+        let y = self.b0 * x + self.s1;
+        self.s1 = self.b1 * x - self.a1 * y + self.s2;
+        self.s2 = self.b2 * x - self.a2 * y;
+        y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Steady-state amplitude of `filter` driven by a unit sine at `f`:
+    /// correlate the second half (whole periods) with sin and cos.
+    fn gain(mut filter: impl FnMut(f64) -> f64, f: f64, fs: f64) -> f64 {
+        let per = (fs / f).round() as usize;
+        let n = per * 400;
+        let (mut s, mut c) = (0.0, 0.0);
+        for i in 0..n {
+            let ph = 2.0 * PI * f * i as f64 / fs;
+            let y = filter(ph.sin());
+            if i >= n / 2 {
+                s += y * ph.sin();
+                c += y * ph.cos();
+            }
+        }
+        2.0 * (s * s + c * c).sqrt() / (n / 2) as f64
+    }
+
+    fn db(g: f64) -> f64 {
+        20.0 * g.log10()
+    }
+
+    #[test]
+    fn pt1_is_minus_3db_at_cutoff_and_unity_at_dc() {
+        // Well below Nyquist the discrete PT1 is close to the analog one:
+        // hand-computed |H(e^jω)| at 20 Hz / 1 kHz is −3.27 dB.
+        let mut p = Pt1::new(20.0, 1000.0).unwrap();
+        let g = db(gain(|x| p.apply(x), 20.0, 1000.0));
+        assert!((g + 3.27).abs() < 0.02, "PT1 gain at cut-off {g} dB");
+        assert!((g + 3.01).abs() < 0.5);
+        let mut p = Pt1::new(20.0, 1000.0).unwrap();
+        let mut y = 0.0;
+        for _ in 0..2000 {
+            y = p.apply(1.0);
+        }
+        assert!((y - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn biquad_lowpass_is_minus_3db_at_cutoff_and_unity_at_dc() {
+        // Bilinear RBJ design: exactly −3.01 dB at f_c for Q = 1/√2, even
+        // close to Nyquist (150 Hz at 500 Hz).
+        for (f, fs) in [(20.0, 1000.0), (150.0, 500.0), (75.0, 500.0)] {
+            let mut b = Biquad::lowpass(f, fs, BUTTERWORTH_Q).unwrap();
+            let g = db(gain(|x| b.apply(x), f, fs));
+            assert!((g + 3.0103).abs() < 0.02, "biquad {f}/{fs}: {g} dB");
+        }
+        let mut b = Biquad::lowpass(75.0, 500.0, BUTTERWORTH_Q).unwrap();
+        let mut y = 0.0;
+        for _ in 0..2000 {
+            y = b.apply(1.0);
+        }
+        assert!((y - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn notch_removes_centre_and_passes_dc() {
+        let q = Biquad::notch_q(100.0, 70.0);
+        let mut n = Biquad::notch(100.0, 1000.0, q).unwrap();
+        let g = gain(|x| n.apply(x), 100.0, 1000.0);
+        assert!(g < 1e-3, "notch gain at centre {g}");
+        let mut n = Biquad::notch(100.0, 1000.0, q).unwrap();
+        let mut y = 0.0;
+        for _ in 0..2000 {
+            y = n.apply(1.0);
+        }
+        assert!((y - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cutoff_at_or_above_nyquist_is_rejected() {
+        let e = Pt1::new(500.0, 1000.0).unwrap_err();
+        assert!(e.to_string().contains("Nyquist"), "{e}");
+        assert!(Biquad::lowpass(300.0, 500.0, BUTTERWORTH_Q).is_err());
+        assert!(Biquad::notch(0.0, 500.0, 1.0).is_err());
+        assert!(Pt1::new(GYRO_LPF_HZ_DEFAULT, 1000.0).is_ok());
+        assert!(Pt1::new(DTERM_LPF2_HZ_DEFAULT, 500.0).is_ok());
+    }
+}

@@ -1,0 +1,431 @@
+//! 6-DOF quadrotor plant: rigid body with quaternion attitude, four rotors
+//! with a first-order lag on their speed, thrust k_f·ω², reaction torque
+//! k_m·ω² (sign by spin direction), gravity, linear drag, a small angular
+//! drag, and ground contact. Integrated with RK4 at a fixed sub-step;
+//! [`Plant::advance_to`] reaches any timestamp (partial last step).
+//!
+//! Frames: world z up, body FLU (see the crate docs). Motor commands in
+//! [0, 1] map linearly to a rotor speed target between idle and max while
+//! armed; disarmed rotors spin down to 0.
+
+use crate::error::{in_range, non_negative, positive, ConfigError};
+use crate::math::{Euler, Quat, Vec3, GRAVITY};
+use serde::Deserialize;
+
+/// Rotor spin direction seen from above.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Spin {
+    /// Clockwise: the reaction torque on the body is +z (counter-clockwise).
+    Cw,
+    /// Counter-clockwise: the reaction torque is −z.
+    Ccw,
+}
+
+impl Spin {
+    /// Sign of the reaction torque about body z.
+    pub fn reaction_sign(self) -> f64 {
+        match self {
+            Spin::Cw => 1.0,
+            Spin::Ccw => -1.0,
+        }
+    }
+}
+
+/// Rigid-body parameters (the `[body]` table of a preset).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyParams {
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Principal moments of inertia (x, y, z), kg·m².
+    pub inertia_kg_m2: [f64; 3],
+    /// Linear drag coefficient, N per m/s (world frame, all axes).
+    pub drag_linear: f64,
+    /// Angular drag coefficient, N·m per rad/s.
+    pub drag_angular: f64,
+    /// Touch-down vertical speed above which the landing is a crash, m/s.
+    #[serde(default = "default_crash_speed")]
+    pub crash_speed_mps: f64,
+    /// Tilt on the ground above which the vehicle counts as crashed, deg.
+    #[serde(default = "default_crash_tilt")]
+    pub crash_tilt_deg: f64,
+}
+
+fn default_crash_speed() -> f64 {
+    3.0
+}
+fn default_crash_tilt() -> f64 {
+    80.0
+}
+
+/// Rotor parameters (the `[rotors]` table of a preset).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotorParams {
+    /// Rotor hub positions (x, y) in the body, m, Betaflight motor order.
+    pub positions_m: [[f64; 2]; 4],
+    /// Spin directions, Betaflight motor order.
+    pub spin: [Spin; 4],
+    /// Thrust coefficient: F = k_f·ω², N/(rad/s)².
+    pub k_f: f64,
+    /// Torque coefficient: Q = k_m·ω², N·m/(rad/s)².
+    pub k_m: f64,
+    /// Rotor speed at command 1.0, rad/s.
+    pub omega_max_rad_s: f64,
+    /// Rotor speed at command 0.0 while armed, as a fraction of max.
+    pub idle_fraction: f64,
+    /// First-order time constant of the rotor speed, s.
+    pub time_constant_s: f64,
+}
+
+/// All plant parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlantParams {
+    /// Rigid body.
+    pub body: BodyParams,
+    /// Rotors.
+    pub rotors: RotorParams,
+    /// RK4 sub-step, ns.
+    pub substep_ns: u64,
+}
+
+/// Default RK4 sub-step: 250 µs.
+pub const SUBSTEP_NS_DEFAULT: u64 = 250_000;
+
+impl PlantParams {
+    /// Check every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let b = &self.body;
+        positive("body.mass_kg", b.mass_kg)?;
+        for (i, v) in b.inertia_kg_m2.iter().enumerate() {
+            positive(&format!("body.inertia_kg_m2[{i}]"), *v)?;
+        }
+        non_negative("body.drag_linear", b.drag_linear)?;
+        non_negative("body.drag_angular", b.drag_angular)?;
+        positive("body.crash_speed_mps", b.crash_speed_mps)?;
+        in_range("body.crash_tilt_deg", b.crash_tilt_deg, 0.0, 180.0)?;
+        let r = &self.rotors;
+        for (i, p) in r.positions_m.iter().enumerate() {
+            for (j, v) in p.iter().enumerate() {
+                in_range(&format!("rotors.positions_m[{i}][{j}]"), *v, -10.0, 10.0)?;
+            }
+        }
+        positive("rotors.k_f", r.k_f)?;
+        non_negative("rotors.k_m", r.k_m)?;
+        positive("rotors.omega_max_rad_s", r.omega_max_rad_s)?;
+        in_range("rotors.idle_fraction", r.idle_fraction, 0.0, 0.5)?;
+        positive("rotors.time_constant_s", r.time_constant_s)?;
+        if self.substep_ns == 0 {
+            return Err(ConfigError::new("substep_ns", "must be > 0"));
+        }
+        Ok(())
+    }
+
+    /// Rotor speed target for a command while armed, rad/s.
+    pub fn omega_for_cmd(&self, cmd: f64) -> f64 {
+        let r = &self.rotors;
+        r.omega_max_rad_s * (r.idle_fraction + (1.0 - r.idle_fraction) * cmd.clamp(0.0, 1.0))
+    }
+
+    /// The motor command at which the four rotors together carry the weight.
+    pub fn hover_cmd(&self) -> f64 {
+        let w = (self.body.mass_kg * GRAVITY / (4.0 * self.rotors.k_f)).sqrt();
+        let r = &self.rotors;
+        (w / r.omega_max_rad_s - r.idle_fraction) / (1.0 - r.idle_fraction)
+    }
+
+    /// Total thrust over weight at full command.
+    pub fn thrust_to_weight(&self) -> f64 {
+        4.0 * self.rotors.k_f * self.rotors.omega_max_rad_s.powi(2) / (self.body.mass_kg * GRAVITY)
+    }
+}
+
+/// The integrated state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct State {
+    /// Position (world), m.
+    pub pos: Vec3,
+    /// Velocity (world), m/s.
+    pub vel: Vec3,
+    /// Attitude, body → world.
+    pub q: Quat,
+    /// Body rate, rad/s.
+    pub rate: Vec3,
+    /// Rotor speeds, rad/s.
+    pub omega: [f64; 4],
+}
+
+impl State {
+    fn add_scaled(&self, d: &State, s: f64) -> State {
+        let mut omega = self.omega;
+        for (o, od) in omega.iter_mut().zip(d.omega.iter()) {
+            *o += od * s;
+        }
+        State {
+            pos: self.pos + d.pos * s,
+            vel: self.vel + d.vel * s,
+            q: self.q.add_scaled(d.q, s),
+            rate: self.rate + d.rate * s,
+            omega,
+        }
+    }
+}
+
+/// What the sensors and the tests may observe.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Truth {
+    /// Plant time, ns.
+    pub t_ns: u64,
+    /// Position (world), m.
+    pub pos: Vec3,
+    /// Velocity (world), m/s.
+    pub vel: Vec3,
+    /// Attitude.
+    pub q: Quat,
+    /// Attitude as Euler angles.
+    pub euler: Euler,
+    /// Body rate, rad/s (what an ideal gyro reads).
+    pub rate: Vec3,
+    /// Specific force in the body, m/s² (what an ideal accelerometer reads).
+    pub specific_force: Vec3,
+    /// Angular acceleration in the body, rad/s².
+    pub ang_accel: Vec3,
+    /// Rotor speeds, rad/s.
+    pub omega: [f64; 4],
+    /// Resting on the ground.
+    pub on_ground: bool,
+    /// Hit the ground too fast or tipped over.
+    pub crashed: bool,
+}
+
+/// The quadrotor plant.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    p: PlantParams,
+    s: State,
+    t_ns: u64,
+    target: [f64; 4],
+    ext_torque: Vec3,
+    on_ground: bool,
+    crashed: bool,
+}
+
+/// Forces and torques at a state (shared by the derivative and the truth).
+struct Wrench {
+    accel_world: Vec3,
+    ang_accel: Vec3,
+    thrust: f64,
+}
+
+impl Plant {
+    /// A plant at rest on the ground at the origin, level, rotors stopped.
+    pub fn new(params: PlantParams) -> Result<Self, ConfigError> {
+        params.validate()?;
+        Ok(Self {
+            p: params,
+            s: State {
+                pos: Vec3::ZERO,
+                vel: Vec3::ZERO,
+                q: Quat::IDENTITY,
+                rate: Vec3::ZERO,
+                omega: [0.0; 4],
+            },
+            t_ns: 0,
+            target: [0.0; 4],
+            ext_torque: Vec3::ZERO,
+            on_ground: true,
+            crashed: false,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &PlantParams {
+        &self.p
+    }
+
+    /// Current time, ns.
+    pub fn time_ns(&self) -> u64 {
+        self.t_ns
+    }
+
+    /// The raw state.
+    pub fn state(&self) -> &State {
+        &self.s
+    }
+
+    /// Overwrite the state (tests and scenarios); `on_ground` is re-derived.
+    pub fn set_state(&mut self, s: State) {
+        self.s = s;
+        self.on_ground = s.pos.z <= 0.0 && s.vel.z <= 0.0;
+    }
+
+    /// Apply motor commands in [0, 1] (Betaflight order); held until the
+    /// next call (zero-order hold, as an ESC holds the last pulse).
+    pub fn set_motor_commands(&mut self, cmd: [f64; 4], armed: bool) {
+        for (t, c) in self.target.iter_mut().zip(cmd.iter()) {
+            *t = if armed { self.p.omega_for_cmd(*c) } else { 0.0 };
+        }
+    }
+
+    /// A constant external torque in the body (a disturbance), N·m.
+    pub fn set_external_torque(&mut self, tau: Vec3) {
+        self.ext_torque = tau;
+    }
+
+    /// An instantaneous angular impulse in the body, N·m·s.
+    pub fn apply_torque_impulse(&mut self, j: Vec3) {
+        let i = Vec3::from_array(self.p.body.inertia_kg_m2);
+        self.s.rate += Vec3::new(j.x / i.x, j.y / i.y, j.z / i.z);
+        self.on_ground = false;
+    }
+
+    /// Mechanical shaft power of the four rotors, W (Σ k_m·ω³).
+    pub fn shaft_power(&self) -> f64 {
+        self.s
+            .omega
+            .iter()
+            .map(|w| self.p.rotors.k_m * w.abs().powi(3))
+            .sum()
+    }
+
+    fn wrench(&self, s: &State) -> Wrench {
+        let (b, r) = (&self.p.body, &self.p.rotors);
+        let mut thrust = 0.0;
+        let mut tau = Vec3::ZERO;
+        for i in 0..4 {
+            let w2 = s.omega[i] * s.omega[i];
+            let f = r.k_f * w2;
+            let [x, y] = r.positions_m[i];
+            // r × (0, 0, F) = (y·F, −x·F, 0)
+            tau += Vec3::new(y * f, -x * f, r.spin[i].reaction_sign() * r.k_m * w2);
+            thrust += f;
+        }
+        tau += self.ext_torque - s.rate * b.drag_angular;
+        let inertia = Vec3::from_array(b.inertia_kg_m2);
+        let gyro = s.rate.cross(s.rate.hadamard(inertia));
+        let t = tau - gyro;
+        let ang_accel = Vec3::new(t.x / inertia.x, t.y / inertia.y, t.z / inertia.z);
+        let f_world = s.q.rotate(Vec3::new(0.0, 0.0, thrust)) - s.vel * b.drag_linear;
+        let accel_world = f_world / b.mass_kg - Vec3::new(0.0, 0.0, GRAVITY);
+        Wrench {
+            accel_world,
+            ang_accel,
+            thrust,
+        }
+    }
+
+    fn derivative(&self, s: &State) -> State {
+        let tau_m = self.p.rotors.time_constant_s;
+        let mut domega = [0.0; 4];
+        for (i, d) in domega.iter_mut().enumerate() {
+            *d = (self.target[i] - s.omega[i]) / tau_m;
+        }
+        if self.on_ground || self.crashed {
+            // Held by the ground: only the rotors move.
+            let zero = State {
+                pos: Vec3::ZERO,
+                vel: Vec3::ZERO,
+                q: Quat::new(0.0, 0.0, 0.0, 0.0),
+                rate: Vec3::ZERO,
+                omega: domega,
+            };
+            return zero;
+        }
+        let w = self.wrench(s);
+        State {
+            pos: s.vel,
+            vel: w.accel_world,
+            q: s.q.derivative(s.rate),
+            rate: w.ang_accel,
+            omega: domega,
+        }
+    }
+
+    fn rk4(&mut self, h: f64) {
+        let s = self.s;
+        let k1 = self.derivative(&s);
+        let k2 = self.derivative(&s.add_scaled(&k1, 0.5 * h));
+        let k3 = self.derivative(&s.add_scaled(&k2, 0.5 * h));
+        let k4 = self.derivative(&s.add_scaled(&k3, h));
+        let mut n = s;
+        n = n.add_scaled(&k1, h / 6.0);
+        n = n.add_scaled(&k2, h / 3.0);
+        n = n.add_scaled(&k3, h / 3.0);
+        n = n.add_scaled(&k4, h / 6.0);
+        n.q = n.q.normalized();
+        self.s = n;
+    }
+
+    /// Ground contact after a step: no penetration; a touch-down faster
+    /// than `crash_speed_mps` or a tilt beyond `crash_tilt_deg` is a crash;
+    /// otherwise the vehicle rests level (legs) while thrust < weight.
+    fn ground_contact(&mut self) {
+        let b = self.p.body;
+        if self.crashed {
+            return;
+        }
+        if self.on_ground {
+            let w = self.wrench(&self.s);
+            if w.thrust * self.s.q.body_z_world().z > b.mass_kg * GRAVITY {
+                self.on_ground = false; // lift-off
+            }
+            return;
+        }
+        if self.s.pos.z > 0.0 {
+            return;
+        }
+        let tilt = self.s.q.tilt().to_degrees();
+        if -self.s.vel.z > b.crash_speed_mps || tilt > b.crash_tilt_deg {
+            self.crashed = true;
+        }
+        let yaw = self.s.q.to_euler().yaw;
+        self.s.pos.z = 0.0;
+        self.s.vel = Vec3::ZERO;
+        self.s.rate = Vec3::ZERO;
+        if !self.crashed {
+            self.s.q = Quat::from_euler(Euler {
+                roll: 0.0,
+                pitch: 0.0,
+                yaw,
+            });
+        }
+        self.on_ground = true;
+    }
+
+    /// Integrate to `t_ns` in fixed sub-steps, the last one partial.
+    /// Times before the current time are ignored (the plant never rewinds).
+    pub fn advance_to(&mut self, t_ns: u64) {
+        while self.t_ns < t_ns {
+            let h_ns = (t_ns - self.t_ns).min(self.p.substep_ns);
+            self.rk4(h_ns as f64 * 1e-9);
+            self.t_ns += h_ns;
+            self.ground_contact();
+        }
+    }
+
+    /// The observable truth at the current time.
+    pub fn truth(&self) -> Truth {
+        let s = &self.s;
+        let (accel, ang_accel) = if self.on_ground || self.crashed {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            let w = self.wrench(s);
+            (w.accel_world, w.ang_accel)
+        };
+        let sf = s.q.rotate_inv(accel + Vec3::new(0.0, 0.0, GRAVITY));
+        Truth {
+            t_ns: self.t_ns,
+            pos: s.pos,
+            vel: s.vel,
+            q: s.q,
+            euler: s.q.to_euler(),
+            rate: s.rate,
+            specific_force: sf,
+            ang_accel,
+            omega: s.omega,
+            on_ground: self.on_ground,
+            crashed: self.crashed,
+        }
+    }
+}

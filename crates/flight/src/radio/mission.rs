@@ -1,0 +1,296 @@
+//! Missions: a TOML time line of pilot intents.
+//!
+//! ```toml
+//! name = "example"
+//! [[step]]
+//! at = "0.5s"          # or "500ms", or a number of seconds: at = 0.5
+//! arm = true
+//! [[step]]
+//! at = 1.0
+//! altitude_m = 1.0     # altitude hold (autopilot) to 1 m
+//! hold_position = true # position hold (autopilot); sticks override it
+//! [[step]]
+//! at = "6s"
+//! roll_deg = 20        # roll stick (angle set-point)
+//! [[step]]
+//! at = "12s"
+//! land = true          # descend at the landing speed, disarm on the ground
+//! ```
+//!
+//! Each step changes only the fields it names; later steps win. Fields:
+//! `arm`, `throttle` (manual, ends altitude hold), `altitude_m` (altitude
+//! hold, ends manual throttle and landing), `land`, `roll_deg`,
+//! `pitch_deg`, `yaw_rate_dps`, `yaw_deg` (heading hold target, relative
+//! to the initial heading), `hold_position`.
+
+use crate::error::{in_range, ConfigError};
+use serde::Deserialize;
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+enum TimeSpec {
+    Seconds(f64),
+    Text(String),
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StepFile {
+    at: TimeSpec,
+    arm: Option<bool>,
+    throttle: Option<f64>,
+    altitude_m: Option<f64>,
+    land: Option<bool>,
+    roll_deg: Option<f64>,
+    pitch_deg: Option<f64>,
+    yaw_rate_dps: Option<f64>,
+    yaw_deg: Option<f64>,
+    hold_position: Option<bool>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MissionFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default)]
+    step: Vec<StepFile>,
+}
+
+/// One validated step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MissionStep {
+    /// When it applies, ns from the mission start.
+    pub t_ns: u64,
+    /// Arm switch.
+    pub arm: Option<bool>,
+    /// Manual throttle.
+    pub throttle: Option<f64>,
+    /// Altitude-hold target, m.
+    pub altitude_m: Option<f64>,
+    /// Land.
+    pub land: Option<bool>,
+    /// Roll stick, deg.
+    pub roll_deg: Option<f64>,
+    /// Pitch stick, deg.
+    pub pitch_deg: Option<f64>,
+    /// Yaw stick, deg/s.
+    pub yaw_rate_dps: Option<f64>,
+    /// Heading target, deg.
+    pub yaw_deg: Option<f64>,
+    /// Position hold.
+    pub hold_position: Option<bool>,
+}
+
+/// The pilot's intent at one instant (all steps so far folded together).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PilotIntent {
+    /// Arm switch.
+    pub arm: bool,
+    /// Manual throttle (None: autopilot or zero).
+    pub throttle: Option<f64>,
+    /// Altitude-hold target, m.
+    pub altitude_m: Option<f64>,
+    /// Landing.
+    pub land: bool,
+    /// Roll stick, deg.
+    pub roll_deg: f64,
+    /// Pitch stick, deg.
+    pub pitch_deg: f64,
+    /// Yaw stick, deg/s.
+    pub yaw_rate_dps: f64,
+    /// Heading target, deg.
+    pub yaw_deg: Option<f64>,
+    /// Position hold on.
+    pub hold_position: bool,
+}
+
+impl PilotIntent {
+    fn apply(&mut self, s: &MissionStep) {
+        if let Some(a) = s.arm {
+            self.arm = a;
+        }
+        if let Some(t) = s.throttle {
+            self.throttle = Some(t);
+            self.altitude_m = None;
+            self.land = false;
+        }
+        if let Some(h) = s.altitude_m {
+            self.altitude_m = Some(h);
+            self.throttle = None;
+            self.land = false;
+        }
+        if let Some(l) = s.land {
+            self.land = l;
+        }
+        self.roll_deg = s.roll_deg.unwrap_or(self.roll_deg);
+        self.pitch_deg = s.pitch_deg.unwrap_or(self.pitch_deg);
+        self.yaw_rate_dps = s.yaw_rate_dps.unwrap_or(self.yaw_rate_dps);
+        if s.yaw_deg.is_some() {
+            self.yaw_deg = s.yaw_deg;
+        }
+        self.hold_position = s.hold_position.unwrap_or(self.hold_position);
+    }
+}
+
+/// A parsed mission.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mission {
+    /// Name.
+    pub name: String,
+    /// Free text.
+    pub description: String,
+    /// Steps in time order.
+    pub steps: Vec<MissionStep>,
+}
+
+/// Parse "2.5s", "250ms", "1500us" or "2" (seconds) into ns.
+pub fn parse_time(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, scale) = if let Some(n) = t.strip_suffix("ms") {
+        (n, 1e6)
+    } else if let Some(n) = t.strip_suffix("us") {
+        (n, 1e3)
+    } else if let Some(n) = t.strip_suffix("ns") {
+        (n, 1.0)
+    } else if let Some(n) = t.strip_suffix('s') {
+        (n, 1e9)
+    } else {
+        (t, 1e9)
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a time: {s:?} (use e.g. \"2.5s\" or \"250ms\")"))?;
+    seconds_to_ns(v * scale / 1e9).ok_or_else(|| format!("time must be finite and >= 0, got {s:?}"))
+}
+
+fn seconds_to_ns(v: f64) -> Option<u64> {
+    (v.is_finite() && (0.0..1.8e10).contains(&v)).then(|| (v * 1e9).round() as u64)
+}
+
+fn check_step(i: usize, f: &StepFile) -> Result<MissionStep, ConfigError> {
+    let field = |n: &str| format!("step[{i}].{n}");
+    let t_ns = match &f.at {
+        TimeSpec::Seconds(v) => seconds_to_ns(*v)
+            .ok_or_else(|| ConfigError::new(field("at"), format!("must be >= 0 s, got {v}")))?,
+        TimeSpec::Text(s) => parse_time(s).map_err(|e| ConfigError::new(field("at"), e))?,
+    };
+    let opt = |n: &str, v: Option<f64>, lo: f64, hi: f64| -> Result<Option<f64>, ConfigError> {
+        v.map(|x| in_range(&field(n), x, lo, hi)).transpose()
+    };
+    Ok(MissionStep {
+        t_ns,
+        arm: f.arm,
+        throttle: opt("throttle", f.throttle, 0.0, 1.0)?,
+        altitude_m: opt("altitude_m", f.altitude_m, 0.0, 100.0)?,
+        land: f.land,
+        roll_deg: opt("roll_deg", f.roll_deg, -60.0, 60.0)?,
+        pitch_deg: opt("pitch_deg", f.pitch_deg, -60.0, 60.0)?,
+        yaw_rate_dps: opt("yaw_rate_dps", f.yaw_rate_dps, -1000.0, 1000.0)?,
+        yaw_deg: opt("yaw_deg", f.yaw_deg, -360.0, 360.0)?,
+        hold_position: f.hold_position,
+    })
+}
+
+/// Built-in `hover` mission source.
+pub const HOVER_TOML: &str = include_str!("../../missions/hover.toml");
+/// Built-in `steps` mission source.
+pub const STEPS_TOML: &str = include_str!("../../missions/steps.toml");
+
+impl Mission {
+    /// Parse a mission; errors name the offending field.
+    pub fn from_toml_str(src: &str) -> Result<Self, ConfigError> {
+        let f: MissionFile = toml::from_str(src)
+            .map_err(|e| ConfigError::new("mission", e.message().to_string()))?;
+        let mut steps = Vec::with_capacity(f.step.len());
+        for (i, s) in f.step.iter().enumerate() {
+            let st = check_step(i, s)?;
+            if steps.last().is_some_and(|p: &MissionStep| p.t_ns > st.t_ns) {
+                return Err(ConfigError::new(
+                    format!("step[{i}].at"),
+                    "steps must be in time order",
+                ));
+            }
+            steps.push(st);
+        }
+        Ok(Self {
+            name: f.name,
+            description: f.description,
+            steps,
+        })
+    }
+
+    /// Read and parse a mission file.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
+        let src = std::fs::read_to_string(path)
+            .map_err(|e| ConfigError::new(path.display().to_string(), e.to_string()))?;
+        Self::from_toml_str(&src)
+    }
+
+    /// A built-in mission by name (`hover`, `steps`).
+    pub fn builtin(name: &str) -> Result<Self, ConfigError> {
+        match name {
+            "hover" => Self::from_toml_str(HOVER_TOML),
+            "steps" => Self::from_toml_str(STEPS_TOML),
+            _ => Err(ConfigError::new(
+                "mission",
+                format!("unknown built-in mission {name:?} (hover, steps)"),
+            )),
+        }
+    }
+
+    /// The pilot's intent at `t_ns` (no allocation).
+    pub fn intent_at(&self, t_ns: u64) -> PilotIntent {
+        let mut p = PilotIntent::default();
+        for s in self.steps.iter().take_while(|s| s.t_ns <= t_ns) {
+            p.apply(s);
+        }
+        p
+    }
+
+    /// Time of the last step, ns.
+    pub fn end_ns(&self) -> u64 {
+        self.steps.last().map_or(0, |s| s.t_ns)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn times_parse_in_several_forms() {
+        assert_eq!(parse_time("2.5s"), Ok(2_500_000_000));
+        assert_eq!(parse_time("250ms"), Ok(250_000_000));
+        assert_eq!(parse_time("3"), Ok(3_000_000_000));
+        assert!(parse_time("soon").is_err());
+        assert!(parse_time("-1s").is_err());
+    }
+
+    #[test]
+    fn builtins_parse_and_fold() {
+        let m = Mission::builtin("hover").unwrap();
+        let p = m.intent_at(5_000_000_000);
+        assert!(p.arm && p.altitude_m == Some(1.0) && !p.land);
+        let s = Mission::builtin("steps").unwrap();
+        assert!(s.steps.iter().any(|x| x.roll_deg == Some(20.0)));
+        assert!(Mission::builtin("loop").is_err());
+    }
+
+    #[test]
+    fn bad_missions_name_the_field() {
+        let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = \"2 s\"\nroll_deg = 90\n")
+            .unwrap_err();
+        assert_eq!(e.field, "step[0].roll_deg", "{e}");
+        let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = \"later\"\n").unwrap_err();
+        assert_eq!(e.field, "step[0].at");
+        let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = 2\n[[step]]\nat = 1\n")
+            .unwrap_err();
+        assert_eq!(e.field, "step[1].at");
+        let e =
+            Mission::from_toml_str("name = \"x\"\n[[step]]\nat = 1\nrol_deg = 3\n").unwrap_err();
+        assert!(e.reason.contains("rol_deg"), "{e}");
+    }
+}
