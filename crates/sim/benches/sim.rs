@@ -11,6 +11,9 @@
 //!   150 ms, worst-case demands, synchronous release.
 //! - `search`: a short adversarial search (1 restart, 20 steps) on a
 //!   generated system, in simulations per second.
+//! - `scaling`: events per second against the task count (10, 100, 1,000,
+//!   10,000 tasks on one CPU, RM and EDF), each run about 400,000 events long:
+//!   the cost per event must not grow with the number of tasks.
 //!
 //! Each system is described on stderr (events per run, late jobs) before it
 //! is measured.
@@ -165,5 +168,48 @@ fn search_bench(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, events, table3, search_bench);
+/// A simulated span with about `events` events: two per job (release and
+/// completion) at the system's job rate.
+fn span_for(spec: &Spec, events: f64) -> Nanos {
+    let jobs_per_ns: f64 = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .map(|p| 1.0 / p as f64)
+        .sum();
+    ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
+}
+
+fn scaling(c: &mut Criterion) {
+    let mut group = c.benchmark_group("scaling");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    for tasks in [10, 100, 1_000, 10_000] {
+        for scheduler in [Scheduler::Rm, Scheduler::Edf] {
+            let spec = system(tasks, 1, scheduler);
+            let cfg = SimConfig {
+                horizon: span_for(&spec, 400_000.0),
+                seed: SEED,
+                phasing: Phasing::Random,
+                exec: ExecModel::Uniform,
+                log_jobs: false,
+            };
+            let sched = match scheduler {
+                Scheduler::Rm => "rm",
+                Scheduler::Edf => "edf",
+            };
+            let label = format!("{tasks}t-{sched}");
+            let n = describe(&label, &spec, &cfg);
+            group.throughput(Throughput::Elements(n));
+            group.bench_function(BenchmarkId::from_parameter(&label), |b| {
+                b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, events, table3, search_bench, scaling);
 criterion_main!(benches);
