@@ -40,5 +40,6 @@ pub mod plant;
 pub mod preset;
 pub mod radio;
 pub mod rng;
+pub mod tasks;
 
 pub use error::ConfigError;

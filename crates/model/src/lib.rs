@@ -142,6 +142,9 @@ pub struct Task {
     /// I/O VCPUs only: the Main VCPU this one serves. While that task has a
     /// job pending, the I/O VCPU inherits its priority (PIBS, Section II-B).
     pub serves: Option<usize>,
+    /// The task code that runs its jobs (`rtpipe fly`), by name; the timing
+    /// analysis does not use it.
+    pub body: Option<String>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -169,6 +172,7 @@ impl Task {
             server: Server::Main,
             cpu: 0,
             serves: None,
+            body: None,
             delta_in: 0,
             delta_out: 0,
         }
@@ -1015,6 +1019,7 @@ impl Builder {
             server: server?,
             cpu: cpu?,
             serves: None,
+            body: v.get_ref().body.as_ref().map(|b| b.get_ref().clone()),
             delta_in: 0,
             delta_out: 0,
         })

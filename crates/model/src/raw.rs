@@ -59,6 +59,7 @@ pub struct RawTask {
     pub server: Option<S<String>>,
     pub cpu: Option<S<toml::Value>>,
     pub serves: Option<S<String>>,
+    pub body: Option<S<String>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

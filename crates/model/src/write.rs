@@ -123,6 +123,9 @@ pub fn to_toml(spec: &Spec) -> String {
         if let Some(m) = t.serves {
             let _ = writeln!(o, "serves = {}", quoted(&spec.tasks[m].name));
         }
+        if let Some(b) = &t.body {
+            let _ = writeln!(o, "body = {}", quoted(b));
+        }
     }
     for c in &spec.chains {
         let _ = writeln!(o, "\n[[chain]]");

@@ -1,0 +1,606 @@
+//! Cleanflight's tasks as task bodies on rtpipe's seam (`rtpipe-body`), and
+//! the world they fly in.
+//!
+//! Each task of Fig. 11 (gyro, accelerometer, AHRS, PID, PWM, radio) and
+//! each of the four housekeeping tasks is a [`Body`]: a thin adapter that
+//! takes its job's inputs (the latest value of each producer), calls the
+//! pure algorithms of this crate and returns its output, as PX4 separates a
+//! rate controller from its module glue. Bodies never read a clock: time
+//! comes from the job (its read instant) and from the samples' stamps.
+//!
+//! [`Cosim`] is the [`Environment`]: the quadrotor plant with its IMU and
+//! battery, and the pilot (a mission, flown through an autopilot the way an
+//! on-board companion would, at the radio task's rate). Executors call it at
+//! the instants they choose: a sensor job samples the world at its read
+//! instant, the PWM job's output reaches the motors at its publish instant.
+//! The plant advances to each such instant first, so the simulator's
+//! schedule, not a fixed loop, decides what the controller sees and when.
+
+use crate::ahrs::{AccelSample, Attitude, GyroAccumulator, Mahony, DCM_KP_DEFAULT};
+use crate::battery::{Battery, BatteryAlert, Housekeeping, HousekeepingConfig};
+use crate::error::ConfigError;
+use crate::filter::{Pt1Vec3, GYRO_LPF_HZ_DEFAULT};
+use crate::imu::{Imu, ImuConfig, Reading};
+use crate::loop_sim::{MotorDemand, TracePoint};
+use crate::math::{Euler, Vec3};
+use crate::mixer::mix;
+use crate::motor::{cmd_from_dshot, dshot_decode, dshot_frame, dshot_value};
+use crate::pid::{Controller, Setpoint};
+use crate::plant::Plant;
+use crate::preset::Preset;
+use crate::radio::{
+    ArmState, ArmingChecks, Autopilot, Failsafe, FailsafeAction, FailsafeConfig, Mission,
+    RadioSample, VehicleState,
+};
+use rtpipe_body::{Body, Environment, Job, Nanos, Stamped};
+
+/// What flows between the flight tasks: one register value type for the
+/// whole pipeline (`Copy`, so registers are fixed-size slots).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Value {
+    /// Nothing yet (a task whose inputs have not arrived).
+    #[default]
+    Nothing,
+    /// A raw IMU reading: the device sample of the gyro and accelerometer tasks.
+    Imu(Reading),
+    /// The gyro task's running sums (the AHRS averages the interval).
+    Gyro(crate::ahrs::GyroSnapshot),
+    /// The accelerometer task's sample.
+    Accel(AccelSample),
+    /// The AHRS estimate.
+    Attitude(Attitude),
+    /// A radio frame.
+    Radio(RadioSample),
+    /// The PID task's mixed motor demand.
+    Demand(MotorDemand),
+    /// What the PWM task sent to the ESCs.
+    Motors(MotorDemand),
+    /// A housekeeping figure: battery volts, amps, or load percent.
+    Scalar(f64),
+    /// The low-battery alert level.
+    Alert(BatteryAlert),
+}
+
+/// The job a task does, named by the spec's `body = "..."`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// Samples the gyro, low-pass filters it, accumulates sums.
+    Gyro,
+    /// Samples the accelerometer.
+    Accel,
+    /// Mahony attitude estimate from the gyro sums and the accelerometer.
+    Ahrs,
+    /// Reads the radio receiver.
+    Radio,
+    /// Arming, failsafe, angle/rate PID and the mixer.
+    Pid,
+    /// Motor output (DShot600 frames to the ESCs).
+    Pwm,
+    /// Housekeeping: the system load figure.
+    Load,
+    /// Housekeeping: battery voltage.
+    Vbat,
+    /// Housekeeping: battery current.
+    Current,
+    /// Housekeeping: low-battery alert.
+    Alert,
+}
+
+impl Role {
+    /// Every role, in the order of [`Role::name`]'s list.
+    pub const ALL: [Role; 10] = [
+        Role::Gyro,
+        Role::Accel,
+        Role::Ahrs,
+        Role::Radio,
+        Role::Pid,
+        Role::Pwm,
+        Role::Load,
+        Role::Vbat,
+        Role::Current,
+        Role::Alert,
+    ];
+
+    /// The name a spec uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Gyro => "gyro",
+            Role::Accel => "accel",
+            Role::Ahrs => "ahrs",
+            Role::Radio => "radio",
+            Role::Pid => "pid",
+            Role::Pwm => "pwm",
+            Role::Load => "system_load",
+            Role::Vbat => "battery_voltage",
+            Role::Current => "battery_current",
+            Role::Alert => "battery_alert",
+        }
+    }
+
+    /// The role a spec names, if any.
+    pub fn parse(name: &str) -> Option<Role> {
+        Role::ALL.into_iter().find(|r| r.name() == name)
+    }
+
+    /// The names a spec may use, for error messages.
+    pub fn names() -> String {
+        let v: Vec<&str> = Role::ALL.iter().map(|r| r.name()).collect();
+        v.join(", ")
+    }
+}
+
+/// The value of the first input of a kind, if it has arrived.
+fn input<T>(inputs: &[Option<Stamped<Value>>], pick: impl Fn(Value) -> Option<T>) -> Option<T> {
+    inputs.iter().flatten().find_map(|s| pick(s.value))
+}
+
+/// Samples the gyro, filters it (PT1 at Betaflight's default cut-off) and
+/// publishes running sums and a count: a register holds only the latest
+/// value, so the AHRS differences two snapshots to average every sample of
+/// its interval.
+pub struct GyroTask {
+    lpf: Pt1Vec3,
+    acc: GyroAccumulator,
+}
+
+impl Body<Value> for GyroTask {
+    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+        if let Some(Value::Imu(r)) = device {
+            let rate = self.lpf.apply(r.value);
+            self.acc.push(rate, r.t_ns);
+        }
+        Value::Gyro(self.acc.snapshot())
+    }
+}
+
+/// Samples the accelerometer.
+pub struct AccelTask;
+
+impl Body<Value> for AccelTask {
+    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+        match device {
+            Some(Value::Imu(r)) => Value::Accel(AccelSample {
+                specific_force: r.value,
+                t_ns: r.t_ns,
+            }),
+            _ => Value::Nothing,
+        }
+    }
+}
+
+/// Mahony AHRS over the gyro sums and the latest accelerometer sample.
+pub struct AhrsTask {
+    mahony: Mahony,
+}
+
+impl Body<Value> for AhrsTask {
+    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+        let gyro = input(inputs, |v| match v {
+            Value::Gyro(g) => Some(g),
+            _ => None,
+        });
+        let accel = input(inputs, |v| match v {
+            Value::Accel(a) => Some(a),
+            _ => None,
+        });
+        match (gyro, accel) {
+            (Some(g), Some(a)) => Value::Attitude(self.mahony.update(g, a)),
+            _ => Value::Nothing,
+        }
+    }
+}
+
+/// Reads the radio receiver; with no new frame it republishes the last one
+/// (whose old timestamp lets the PID task's failsafe notice the loss).
+#[derive(Default)]
+pub struct RadioTask {
+    last: Option<RadioSample>,
+}
+
+impl Body<Value> for RadioTask {
+    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+        if let Some(Value::Radio(r)) = device {
+            self.last = Some(r);
+        }
+        self.last.map_or(Value::Nothing, Value::Radio)
+    }
+}
+
+/// Arming, failsafe, the angle/rate controller and the mixer (Cleanflight's
+/// PID task). It sees only its inputs: the attitude estimate (with the mean
+/// gyro rate) and the radio frame.
+pub struct PidTask {
+    ctrl: Controller,
+    arm: ArmState,
+    checks: ArmingChecks,
+    failsafe: Failsafe,
+    last_read: Option<Nanos>,
+}
+
+impl PidTask {
+    /// Arming and failsafe decide; `None` means the motors stop.
+    fn setpoint(&mut self, now: u64, att: &Attitude, rx: &RadioSample) -> Option<Setpoint> {
+        // No landing detector on the controller side: a failsafe descent
+        // disarms after its time-out.
+        let action = self.failsafe.update(now, rx.t_ns, false);
+        let check = self
+            .checks
+            .check(&rx.cmd, att.q.tilt(), false, self.failsafe.active());
+        self.arm.update(&rx.cmd, check);
+        let sp = match action {
+            FailsafeAction::PassThrough => rx.cmd.setpoint(),
+            FailsafeAction::Override(sp) => sp,
+            FailsafeAction::Disarm => {
+                self.arm.disarm();
+                return None;
+            }
+        };
+        self.arm.armed.then_some(sp)
+    }
+}
+
+impl Body<Value> for PidTask {
+    fn run(&mut self, job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+        let dt = self
+            .last_read
+            .map_or(0.0, |p| (job.read - p) as f64 * 1e-9);
+        self.last_read = Some(job.read);
+        let att = input(inputs, |v| match v {
+            Value::Attitude(a) => Some(a),
+            _ => None,
+        });
+        let rx = input(inputs, |v| match v {
+            Value::Radio(r) => Some(r),
+            _ => None,
+        });
+        let (Some(att), Some(rx)) = (att, rx) else {
+            return Value::Demand(MotorDemand::default());
+        };
+        let now = u64::try_from(job.read).unwrap_or(0);
+        let Some(sp) = self.setpoint(now, &att, &rx) else {
+            self.ctrl.reset();
+            return Value::Demand(MotorDemand::default());
+        };
+        if sp.throttle < 0.15 {
+            // Betaflight resets the I term at low throttle (no airmode on the ground).
+            self.ctrl.reset();
+        }
+        let cmd = self.ctrl.update(&sp, &att.euler, att.rate, dt);
+        let m = mix(&cmd);
+        self.ctrl.set_saturated(m.saturated);
+        Value::Demand(MotorDemand {
+            motors: m.motors,
+            armed: true,
+        })
+    }
+}
+
+/// Motor output: DShot600 frames to the ESCs, which decode them (the round
+/// trip quantises the command to the protocol's 11 bits).
+pub struct PwmTask;
+
+impl Body<Value> for PwmTask {
+    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+        let d = input(inputs, |v| match v {
+            Value::Demand(d) => Some(d),
+            _ => None,
+        })
+        .unwrap_or_default();
+        let mut out = MotorDemand {
+            motors: [0.0; 4],
+            armed: d.armed,
+        };
+        for (o, m) in out.motors.iter_mut().zip(d.motors.iter()) {
+            let frame = dshot_frame(dshot_value(*m, d.armed), false);
+            *o = dshot_decode(frame)
+                .and_then(|(v, _)| cmd_from_dshot(v))
+                .unwrap_or(0.0);
+        }
+        Value::Motors(out)
+    }
+}
+
+/// Housekeeping: the system load figure. A background task runs only in
+/// slack, so how long its job waited for the CPU (read − release) against
+/// its period is the load it saw.
+pub struct LoadTask {
+    period: Nanos,
+    hk: Housekeeping,
+}
+
+impl Body<Value> for LoadTask {
+    fn run(&mut self, job: &Job, _inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+        let waited = (job.read - job.release) as f64 / self.period as f64;
+        self.hk.system(100.0 * waited);
+        Value::Scalar(self.hk.load_percent)
+    }
+}
+
+/// Housekeeping: filters the battery voltage.
+pub struct VbatTask {
+    hk: Housekeeping,
+}
+
+impl Body<Value> for VbatTask {
+    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+        if let Some(Value::Scalar(v)) = device {
+            self.hk.battery_voltage(v);
+        }
+        Value::Scalar(self.hk.voltage)
+    }
+}
+
+/// Housekeeping: battery current and the charge drawn.
+pub struct CurrentTask {
+    hk: Housekeeping,
+    last_read: Option<Nanos>,
+}
+
+impl Body<Value> for CurrentTask {
+    fn run(&mut self, job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+        let dt = self
+            .last_read
+            .map_or(0.0, |p| (job.read - p) as f64 * 1e-9);
+        self.last_read = Some(job.read);
+        if let Some(Value::Scalar(a)) = device {
+            self.hk.battery_current(a, dt);
+        }
+        Value::Scalar(self.hk.current)
+    }
+}
+
+/// Housekeeping: the low-battery alert, from the voltage task's output.
+pub struct AlertTask {
+    hk: Housekeeping,
+}
+
+impl Body<Value> for AlertTask {
+    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+        if let Some(v) = input(inputs, |v| match v {
+            Value::Scalar(x) => Some(x),
+            _ => None,
+        }) {
+            self.hk.voltage = v;
+        }
+        Value::Alert(self.hk.battery_alerts())
+    }
+}
+
+/// Builds the body of a task of `role` with period `period` (ns) for the
+/// vehicle `preset`.
+pub fn body(role: Role, period: Nanos, preset: &Preset) -> Result<Box<dyn Body<Value>>, ConfigError> {
+    if period <= 0 {
+        return Err(ConfigError::new("period", "a flight task needs a positive period"));
+    }
+    let hz = 1e9 / period as f64;
+    let hk = || Housekeeping::new(HousekeepingConfig::cleanflight(preset.battery.cells));
+    Ok(match role {
+        Role::Gyro => Box::new(GyroTask {
+            lpf: Pt1Vec3::new(GYRO_LPF_HZ_DEFAULT.min(0.45 * hz), hz)?,
+            acc: GyroAccumulator::new(),
+        }),
+        Role::Accel => Box::new(AccelTask),
+        Role::Ahrs => Box::new(AhrsTask {
+            mahony: Mahony::new(DCM_KP_DEFAULT, 0.0),
+        }),
+        Role::Radio => Box::new(RadioTask::default()),
+        Role::Pid => Box::new(PidTask {
+            ctrl: Controller::new(preset.pid, hz)?,
+            arm: ArmState::default(),
+            checks: ArmingChecks::default(),
+            failsafe: Failsafe::new(failsafe_config(preset)),
+            last_read: None,
+        }),
+        Role::Pwm => Box::new(PwmTask),
+        Role::Load => Box::new(LoadTask { period, hk: hk()? }),
+        Role::Vbat => Box::new(VbatTask { hk: hk()? }),
+        Role::Current => Box::new(CurrentTask {
+            hk: hk()?,
+            last_read: None,
+        }),
+        Role::Alert => Box::new(AlertTask { hk: hk()? }),
+    })
+}
+
+/// Radio loss for 200 ms starts a descent a little below hover throttle;
+/// without a landing detector it disarms after 8 s.
+fn failsafe_config(preset: &Preset) -> FailsafeConfig {
+    FailsafeConfig {
+        timeout_ms: 200,
+        descent_throttle: 0.9 * preset.plant_params().hover_cmd(),
+        max_descent_s: 8.0,
+    }
+}
+
+/// Scenario options of a co-simulated flight.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CosimConfig {
+    /// IMU model (noise on by default).
+    pub imu: ImuConfig,
+    /// Seeds the IMU noise.
+    pub seed: u64,
+    /// An angular impulse (body, N·m·s) at a time (ns): a disturbance.
+    pub impulse: Option<(u64, Vec3)>,
+    /// The radio link is down in [from, to) ns.
+    pub radio_loss: Option<(u64, u64)>,
+    /// Record the state every this many ns.
+    pub trace_every_ns: u64,
+}
+
+impl CosimConfig {
+    /// Noise on, no disturbance, a trace point every 2 ms.
+    pub fn new(seed: u64) -> CosimConfig {
+        CosimConfig {
+            imu: ImuConfig::default(),
+            seed,
+            impulse: None,
+            radio_loss: None,
+            trace_every_ns: 2_000_000,
+        }
+    }
+}
+
+/// What the world saw of the flight controller's outputs, for the trace.
+#[derive(Debug, Clone, Copy, Default)]
+struct Seen {
+    est: Euler,
+    sp: Setpoint,
+    motors: MotorDemand,
+}
+
+/// The world of a co-simulated flight: plant, IMU, battery and the pilot.
+pub struct Cosim {
+    cfg: CosimConfig,
+    plant: Plant,
+    imu: Imu,
+    battery: Battery,
+    mission: Mission,
+    autopilot: Autopilot,
+    roles: Vec<Option<Role>>,
+    now: u64,
+    next_trace: u64,
+    seen: Seen,
+    /// First time each battery alert level was raised, ns.
+    pub alerts: Vec<(u64, BatteryAlert)>,
+    /// The recorded trajectory, one point every `trace_every_ns`.
+    pub trace: Vec<TracePoint>,
+}
+
+impl Cosim {
+    /// The world for tasks of the given roles (indexed like the spec's tasks).
+    pub fn new(
+        preset: &Preset,
+        mission: Mission,
+        roles: Vec<Option<Role>>,
+        cfg: CosimConfig,
+    ) -> Result<Cosim, ConfigError> {
+        let pp = preset.plant_params();
+        let hover = pp.hover_cmd();
+        Ok(Cosim {
+            plant: Plant::new(pp)?,
+            imu: Imu::new(cfg.imu, cfg.seed),
+            battery: Battery::new(preset.battery)?,
+            autopilot: Autopilot::new(preset.autopilot, hover)?,
+            mission,
+            roles,
+            now: 0,
+            next_trace: 0,
+            seen: Seen::default(),
+            alerts: Vec::new(),
+            trace: Vec::new(),
+            cfg,
+        })
+    }
+
+    /// The plant (for checks after a run).
+    pub fn plant(&self) -> &Plant {
+        &self.plant
+    }
+
+    /// The mission flown.
+    pub fn mission(&self) -> &Mission {
+        &self.mission
+    }
+
+    /// Moves the world to `t`, recording trace points and applying the
+    /// disturbance on the way. Executors call in time order; a call for an
+    /// earlier instant is a bug.
+    pub fn advance(&mut self, t: u64) {
+        assert!(t >= self.now, "the world cannot go back from {} to {t} ns", self.now);
+        while self.next_trace <= t {
+            let at = self.next_trace;
+            self.step_to(at);
+            self.record();
+            self.next_trace += self.cfg.trace_every_ns.max(1);
+        }
+        self.step_to(t);
+    }
+
+    fn step_to(&mut self, t: u64) {
+        if let Some((ti, j)) = self.cfg.impulse {
+            if self.now < ti && ti <= t {
+                self.plant.advance_to(ti);
+                self.plant.apply_torque_impulse(j);
+            }
+        }
+        let dt = (t - self.now) as f64 * 1e-9;
+        self.plant.advance_to(t);
+        self.battery.step(self.plant.shaft_power(), dt);
+        self.now = t;
+    }
+
+    fn record(&mut self) {
+        let truth = self.plant.truth();
+        self.trace.push(TracePoint {
+            t_ns: self.now,
+            pos: truth.pos,
+            vel: truth.vel,
+            euler: truth.euler,
+            est: self.seen.est,
+            sp: self.seen.sp,
+            alt_target: self.mission.intent_at(self.now).altitude_m,
+            armed: self.seen.motors.armed,
+            on_ground: truth.on_ground,
+            crashed: truth.crashed,
+            motors: self.seen.motors.motors,
+            voltage: self.battery.voltage(),
+        });
+    }
+
+    /// The pilot's radio frame at `t`: the mission's intent flown by the
+    /// autopilot from the true state (a companion with motion capture).
+    fn radio_frame(&mut self, t: u64) -> Option<Value> {
+        if self.cfg.radio_loss.is_some_and(|(a, b)| (a..b).contains(&t)) {
+            return None;
+        }
+        let truth = self.plant.truth();
+        let st = VehicleState {
+            pos: truth.pos,
+            vel: truth.vel,
+            euler: truth.euler,
+            on_ground: truth.on_ground,
+        };
+        let intent = self.mission.intent_at(t);
+        let cmd = self.autopilot.update(t, &intent, &st);
+        Some(Value::Radio(RadioSample { t_ns: t, cmd }))
+    }
+}
+
+fn ns(t: Nanos) -> u64 {
+    u64::try_from(t).unwrap_or(0)
+}
+
+impl Environment<Value> for Cosim {
+    fn sense(&mut self, task: usize, t: Nanos) -> Option<Value> {
+        let t = ns(t);
+        self.advance(t);
+        let truth = self.plant.truth();
+        match self.roles.get(task).copied().flatten()? {
+            Role::Gyro => Some(Value::Imu(self.imu.read_gyro(t, truth.rate))),
+            Role::Accel => Some(Value::Imu(self.imu.read_accel(t, truth.specific_force))),
+            Role::Radio => self.radio_frame(t),
+            Role::Vbat => Some(Value::Scalar(self.battery.voltage())),
+            Role::Current => Some(Value::Scalar(self.battery.current())),
+            _ => None,
+        }
+    }
+
+    fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {
+        let t = ns(t);
+        self.advance(t);
+        match (self.roles.get(task).copied().flatten(), *value) {
+            (Some(Role::Pwm), Value::Motors(m)) => {
+                self.plant.set_motor_commands(m.motors, m.armed);
+                self.seen.motors = m;
+            }
+            (Some(Role::Ahrs), Value::Attitude(a)) => self.seen.est = a.euler,
+            (Some(Role::Radio), Value::Radio(r)) => self.seen.sp = r.cmd.setpoint(),
+            (Some(Role::Alert), Value::Alert(a)) => {
+                if a != BatteryAlert::Ok && self.alerts.last().is_none_or(|&(_, l)| l != a) {
+                    self.alerts.push((t, a));
+                }
+            }
+            _ => {}
+        }
+    }
+}
