@@ -465,6 +465,10 @@ impl<'a> Master<'a> {
 /// The conflict search may take this many times the patience.
 pub const EXPLAIN_EFFORT: u64 = 3;
 
+/// Whether each conflict probe gets a fair share of the remaining work
+/// (else each may use all that is left, as the time-bounded search did).
+const FAIR_SHARES: bool = false;
+
 /// Ranges of at most this many grid steps get every tangent up front.
 const DENSE_TANGENTS: i64 = 128;
 
@@ -1783,7 +1787,7 @@ impl<'a> Runner<'a> {
                 decided = false;
                 break;
             }
-            if let Some(cap) = budget {
+            if let (Some(cap), true) = (budget, FAIR_SHARES) {
                 let share = cap.saturating_sub(self.work) / (core.len() - k + 1) as u64;
                 self.work_cap = Some(self.work.saturating_add(share.max(1)).min(cap));
             }
