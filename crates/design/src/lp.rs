@@ -250,6 +250,7 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
     use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem, SolveOutcome};
     let mut p = Problem::new(OptimizationDirection::Minimize);
     let mut obj = vec![0.0; lp.vars.len()];
+    // Repeated objective terms add up.
     for &(i, c) in &lp.obj {
         obj[i] += c;
     }
@@ -274,7 +275,12 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
         }
     }
     for r in &lp.rows {
-        if r.terms.iter().all(|&(_, c)| c == 0.0) {
+        // microlp wants each variable once per row: merge repeated terms.
+        let mut merged: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+        for &(i, c) in &r.terms {
+            *merged.entry(i).or_insert(0.0) += c;
+        }
+        if merged.values().all(|&c| c == 0.0) {
             // A row without variables: decide it here.
             let ok = match r.cmp {
                 Cmp::Le => 0.0 <= r.rhs + 1e-9,
@@ -288,7 +294,7 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
         }
         let mut e = LinearExpr::empty();
         // Zero coefficients (a big-M the domains made 0) upset microlp's pivoting.
-        for &(i, c) in &r.terms {
+        for (&i, &c) in &merged {
             if c != 0.0 {
                 e.add(vars[i], c);
             }
