@@ -1,9 +1,10 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
 use crate::analyze::{report_json, report_text, Judge};
-use crate::EXIT_BAD_INPUT;
+use crate::output;
+use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_design::lp::SolverKind;
-use rtpipe_design::{design, Mode, Options, Outcome, Status};
+use rtpipe_design::{design, ErrorKind, Mode, Options, Outcome, Status};
 use rtpipe_model::Spec;
 use serde_json::json;
 use std::path::Path;
@@ -29,8 +30,25 @@ pub struct Args<'a> {
     pub mode: ModeArg,
     pub json: bool,
     pub write: Option<&'a Path>,
+    pub overwrite_spec: bool,
     pub solver: Option<SolverArg>,
     pub time_limit: Option<f64>,
+}
+
+/// The most `--time-limit` accepts, in seconds (about 11.6 days).
+pub const MAX_TIME_LIMIT: f64 = 1e6;
+
+/// `--time-limit`: positive seconds up to [`MAX_TIME_LIMIT`].
+pub fn parse_time_limit(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && t > 0.0 && t <= MAX_TIME_LIMIT => Ok(t),
+        Ok(t) if t.is_finite() && t > MAX_TIME_LIMIT => Err(format!(
+            "at most {MAX_TIME_LIMIT} seconds (about 11.6 days); without --time-limit the search is bounded by work instead"
+        )),
+        _ => Err(format!(
+            "must be a positive number of seconds up to {MAX_TIME_LIMIT}, e.g. --time-limit 60"
+        )),
+    }
 }
 
 pub fn run(a: Args) -> ExitCode {
@@ -42,11 +60,27 @@ pub fn run(a: Args) -> ExitCode {
         }
     };
     if let Some(t) = a.time_limit {
-        if !(t.is_finite() && t > 0.0) {
-            eprintln!("error: --time-limit must be a positive number of seconds, found {t}");
+        if let Err(e) = parse_time_limit(&t.to_string()) {
+            eprintln!("error: --time-limit {t}: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     }
+    // The output path is checked before the (possibly long) search.
+    let write = match a.write.map(|w| {
+        output::prepare(
+            "--write",
+            w,
+            a.spec,
+            Some((a.overwrite_spec, "--overwrite-spec")),
+        )
+    }) {
+        None => None,
+        Some(Ok(o)) => Some(o),
+        Some(Err(e)) => {
+            eprint!("{e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
     let opts = Options {
         mode: match a.mode {
             ModeArg::Sound => Mode::Sound,
@@ -67,17 +101,28 @@ pub fn run(a: Args) -> ExitCode {
         Ok(o) => o,
         Err(e) => {
             eprintln!("{}: error: {e}", a.spec.display());
-            return ExitCode::from(EXIT_BAD_INPUT);
+            if let Some(h) = &e.help {
+                eprintln!("  = help: {h}");
+            }
+            return ExitCode::from(match e.kind {
+                ErrorKind::Input => EXIT_BAD_INPUT,
+                ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
+            });
         }
     };
-    if let (Some(path), Some(s)) = (a.write, &out.spec) {
-        let text = rtpipe_model::to_toml(s);
-        let tmp = path.with_extension("toml.tmp");
-        if let Err(e) = std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, path)) {
-            let _ = std::fs::remove_file(&tmp);
-            eprintln!("error: cannot write {}: {e}", path.display());
-            return ExitCode::from(EXIT_BAD_INPUT);
+    match (&write, &out.spec) {
+        (Some(w), Some(s)) => {
+            let text = rtpipe_model::to_toml(s);
+            if let Err(e) = output::write_all(&[(w, &text)]) {
+                eprint!("{e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
         }
+        (Some(w), None) => eprintln!(
+            "note: nothing written to {}: no verified design",
+            w.given.display()
+        ),
+        _ => {}
     }
     if a.json {
         let mut v = match (&out.spec, &out.report) {
@@ -120,9 +165,20 @@ fn with_progress(spec: &Spec, opts: &Options) -> Result<Outcome, rtpipe_design::
                 }
             });
         }
-        let out = design(spec, opts);
-        done.store(true, Ordering::Relaxed);
-        out
+        // `done` is set however the design ends, a panic included, so the
+        // progress thread always stops (main's panic hook exits anyway).
+        struct Done<'a>(&'a AtomicBool);
+        impl Drop for Done<'_> {
+            fn drop(&mut self) {
+                self.0.store(true, Ordering::Relaxed);
+            }
+        }
+        let _done = Done(&done);
+        if std::env::var_os("RTPIPE_TEST_PANIC").is_some() {
+            // For the tests: a panic in a long command must end the process.
+            panic!("RTPIPE_TEST_PANIC is set");
+        }
+        design(spec, opts)
     });
     pb.finish_and_clear();
     out

@@ -2,11 +2,13 @@
 
 mod analyze;
 mod design;
+mod output;
 mod plot;
 mod simulate;
 mod table;
 
-use clap::{Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -27,7 +29,7 @@ enum Command {
     ///
     /// Exit status: 0 when every limit and the schedulability test hold (under
     /// the analysis --mode names, sound by default), 1 when one fails, 2 on bad
-    /// input.
+    /// input, 3 on an internal error (a bug).
     Analyze {
         /// The system spec (TOML), e.g. examples/paper-table2.toml.
         spec: PathBuf,
@@ -46,13 +48,15 @@ enum Command {
     /// against the analysis' bounds.
     ///
     /// Exit status: 0 when no sample exceeds a sound bound, 1 when one does
-    /// (a bug in the analysis), 2 on bad input.
+    /// (a bug in the analysis), 2 on bad input (flags, spec, output paths), 3
+    /// on an internal error (a bug).
     Simulate(simulate::SimulateArgs),
     /// Choose the free periods so that every limit holds at least utilisation
     /// (Section IV), and re-check the answer with the analysis.
     ///
     /// Exit status: 0 with a verified design, 1 when none exists (or none was
-    /// found in time), 2 on bad input.
+    /// found in time), 2 on bad input (flags, spec, output path), 3 when the
+    /// solver fails or on an internal error (a bug).
     Design {
         /// The system spec (TOML); tasks without a fixed period are designed.
         spec: PathBuf,
@@ -63,14 +67,22 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Write the complete designed spec here (accepted by `analyze`).
+        /// Symlinks are followed; only regular files are replaced, atomically;
+        /// never the input spec unless --overwrite-spec is given.
         #[arg(long, value_name = "OUT.toml")]
         write: Option<PathBuf>,
+        /// Allow --write to replace the input spec (its comments and period
+        /// ranges are lost).
+        #[arg(long, requires = "write")]
+        overwrite_spec: bool,
         /// MILP backend [default: highs when built with `--features highs`,
         /// else microlp].
         #[arg(long, value_enum)]
         solver: Option<design::SolverArg>,
-        /// Stop after this many seconds and report the best verified design and its gap.
-        #[arg(long, value_name = "S")]
+        /// Stop after this many seconds (at most 1000000) and report the best
+        /// verified design and its gap. Without it the search is bounded by
+        /// work, not time, so the answer is the same on every machine.
+        #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
         time_limit: Option<f64>,
     },
 }
@@ -93,8 +105,36 @@ pub fn spinner(msg: String) -> indicatif::ProgressBar {
 /// Exit status for bad input (clap uses 2 for bad flags too).
 pub const EXIT_BAD_INPUT: u8 = 2;
 
+/// Exit status for an internal error: a panic (a bug) or a solver failure.
+pub const EXIT_INTERNAL: u8 = 3;
+
+/// A panic anywhere (any thread) prints its message and ends the process
+/// with [`EXIT_INTERNAL`]: it never leaves a waiting thread behind.
+fn exit_on_panic() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        default(info);
+        eprintln!(
+            "error: internal error (a bug in rtpipe); please report it with the spec and the command line"
+        );
+        std::process::exit(i32::from(EXIT_INTERNAL));
+    }));
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    exit_on_panic();
+    let matches = Cli::command().get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(c) => c,
+        Err(e) => e.exit(),
+    };
+    let given = |name: &str| {
+        matches.subcommand().is_some_and(|(_, m)| {
+            m.try_get_raw(name).is_ok_and(|v| v.is_some())
+                && m.value_source(name) == Some(ValueSource::CommandLine)
+        })
+    };
+    let (seed_given, steps_given) = (given("seed"), given("search_steps"));
     match cli.command {
         Command::Analyze {
             spec,
@@ -102,12 +142,17 @@ fn main() -> ExitCode {
             all_paths,
             mode,
         } => analyze::run(&spec, json, all_paths, mode),
-        Command::Simulate(args) => simulate::run(&args),
+        Command::Simulate(mut args) => {
+            args.seed_given = seed_given;
+            args.search_steps_given = steps_given;
+            simulate::run(&args)
+        }
         Command::Design {
             spec,
             mode,
             json,
             write,
+            overwrite_spec,
             solver,
             time_limit,
         } => design::run(design::Args {
@@ -115,6 +160,7 @@ fn main() -> ExitCode {
             mode,
             json,
             write: write.as_deref(),
+            overwrite_spec,
             solver,
             time_limit,
         }),

@@ -2,6 +2,7 @@
 //! observed reaction and freshness times against the analysis' bounds.
 
 use crate::analyze;
+use crate::output;
 use crate::plot;
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
@@ -74,6 +75,12 @@ pub struct SimulateArgs {
     /// ("0,30ms") [default: the first 3 × the largest period].
     #[arg(long, value_name = "START,END", allow_hyphen_values = true)]
     pub window: Option<String>,
+    /// --seed was given on the command line (set by main).
+    #[arg(skip)]
+    pub seed_given: bool,
+    /// --search-steps was given on the command line (set by main).
+    #[arg(skip)]
+    pub search_steps_given: bool,
 }
 
 /// `--exec`.
@@ -138,6 +145,12 @@ impl Bad {
             msg: msg.into(),
             help: help.into(),
         }
+    }
+}
+
+impl From<output::OutputError> for Bad {
+    fn from(e: output::OutputError) -> Bad {
+        Bad::new(e.msg, e.help)
     }
 }
 
@@ -231,6 +244,24 @@ fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
             ))
         }
     };
+    if a.search_steps_given && a.phasing != PhasingArg::Search {
+        return Err(Bad::new(
+            "--search-steps sets the adversarial search, but --phasing is not search",
+            "add --phasing search, or drop --search-steps",
+        ));
+    }
+    if a.seed_given
+        && a.phasing == PhasingArg::Sync
+        && matches!(a.exec, ExecArg::Worst | ExecArg::Best)
+    {
+        return Err(Bad::new(
+            format!(
+                "--seed has no effect: nothing is random with --phasing sync and --exec {}",
+                flag_name(&a.exec)
+            ),
+            "add --phasing random (or --exec uniform), or drop --seed",
+        ));
+    }
     let window = match &a.window {
         None => (0, (3 * t_max).min(horizon)),
         Some(w) => {
@@ -280,73 +311,22 @@ fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
             (s, e)
         }
     };
-    let mut outs: Vec<(&str, &PathBuf)> = Vec::new();
+    let mut outs = Vec::new();
     for (flag, p) in [
         ("--trace", &a.trace),
         ("--plot", &a.plot),
         ("--gantt", &a.gantt),
     ] {
         let Some(p) = p else { continue };
-        check_output(flag, p)?;
-        if let Some((other, _)) = outs.iter().find(|(_, q)| *q == p) {
-            return Err(Bad::new(
-                format!("{other} and {flag} both write {}", p.display()),
-                "give each output its own file",
-            ));
-        }
-        outs.push((flag, p));
+        outs.push(output::prepare(flag, p, &a.spec, None).map_err(Bad::from)?);
     }
+    output::distinct(&outs).map_err(Bad::from)?;
     Ok(Plan {
         horizon,
         outputs,
         window,
         log_jobs: a.trace.is_some() || a.gantt.is_some(),
     })
-}
-
-fn parent_dir(p: &Path) -> &Path {
-    match p.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    }
-}
-
-fn check_output(flag: &str, p: &Path) -> Result<(), Bad> {
-    if p.as_os_str().is_empty() || p.file_name().is_none() {
-        return Err(Bad::new(
-            format!("{flag} needs a file name, found `{}`", p.display()),
-            format!("write e.g. {flag} out/{}", example_name(flag)),
-        ));
-    }
-    if p.is_dir() {
-        return Err(Bad::new(
-            format!("{flag} {} is a directory", p.display()),
-            format!(
-                "give a file name, e.g. {flag} {}",
-                p.join(example_name(flag)).display()
-            ),
-        ));
-    }
-    let dir = parent_dir(p);
-    if !dir.is_dir() {
-        return Err(Bad::new(
-            format!(
-                "{flag} {}: directory {} does not exist",
-                p.display(),
-                dir.display()
-            ),
-            "create the directory first, or write somewhere else",
-        ));
-    }
-    Ok(())
-}
-
-fn example_name(flag: &str) -> &'static str {
-    match flag {
-        "--trace" => "trace.json",
-        "--plot" => "fig9.svg",
-        _ => "gantt.svg",
-    }
 }
 
 /// Runs the simulator as `--phasing` asks. One simulation per run today; a
@@ -377,7 +357,7 @@ fn with_spinner<T>(msg: String, f: impl FnOnce() -> T) -> T {
 
 /// The files to write, rendered in memory first.
 struct Outputs {
-    files: Vec<(PathBuf, String)>,
+    files: Vec<(&'static str, PathBuf, String)>,
     notes: Vec<String>,
 }
 
@@ -414,7 +394,7 @@ fn render_outputs(
                 t.flows_dropped
             ));
         }
-        out.files.push((path.clone(), t.json));
+        out.files.push(("--trace", path.clone(), t.json));
     }
     if let Some(path) = &a.plot {
         let subtitle = format!(
@@ -428,7 +408,7 @@ fn render_outputs(
         let svg = plot::fig9(spec, obs, &subtitle)
             .map_err(|e| Bad::new(format!("cannot draw --plot {}: {e}", path.display()), ""))?;
         out.notes.push(format!("wrote {}", path.display()));
-        out.files.push((path.clone(), svg));
+        out.files.push(("--plot", path.clone(), svg));
     }
     if let Some(path) = &a.gantt {
         let svg = plot::gantt(spec, res, p.window)
@@ -440,48 +420,24 @@ fn render_outputs(
             spec.fmt_time(p.window.1),
             spec.time_unit
         ));
-        out.files.push((path.clone(), svg));
+        out.files.push(("--gantt", path.clone(), svg));
     }
     Ok(out)
 }
 
-/// Writes every file to a temporary name beside it, then renames them all, so
-/// no half-written file ever carries an output's name. A failed write removes
-/// the temporaries and writes no output; a failed rename (rare: same
-/// directory) keeps the outputs renamed before it.
-fn write_all(files: &[(PathBuf, String)]) -> Result<(), Bad> {
-    let mut temps: Vec<PathBuf> = Vec::new();
-    let cleanup = |temps: &[PathBuf]| {
-        for t in temps {
-            let _ = std::fs::remove_file(t);
-        }
-    };
-    for (path, text) in files {
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
-        if let Err(e) = std::fs::write(&tmp, text) {
-            let _ = std::fs::remove_file(&tmp);
-            cleanup(&temps);
-            return Err(Bad::new(
-                format!("cannot write {}: {e}", path.display()),
-                "check that the directory is writable and the disk not full",
-            ));
-        }
-        temps.push(tmp);
+/// Checks the output paths again (they may have changed during the run) and
+/// writes them all or none (see [`output::write_all`]).
+fn write_all(spec: &Path, files: &[(&'static str, PathBuf, String)]) -> Result<(), Bad> {
+    let mut outs = Vec::new();
+    for (flag, path, _) in files {
+        outs.push(output::prepare(flag, path, spec, None).map_err(Bad::from)?);
     }
-    for (k, ((path, _), tmp)) in files.iter().zip(&temps).enumerate() {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            cleanup(&temps[k..]);
-            return Err(Bad::new(
-                format!("cannot write {}: {e}", path.display()),
-                "check that the directory is writable",
-            ));
-        }
-    }
-    Ok(())
+    let pairs: Vec<(&output::Output, &str)> = outs
+        .iter()
+        .zip(files)
+        .map(|(o, (_, _, text))| (o, text.as_str()))
+        .collect();
+    output::write_all(&pairs).map_err(Bad::from)
 }
 
 pub fn run(a: &SimulateArgs) -> ExitCode {
@@ -532,7 +488,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         Ok(o) => o,
         Err(b) => return fail(b),
     };
-    if let Err(b) = write_all(&outputs.files) {
+    if let Err(b) = write_all(&a.spec, &outputs.files) {
         return fail(b);
     }
     let late_rt = response_violations(&report, &res);

@@ -10,10 +10,10 @@
 
 pub mod lp;
 
-use lp::{Cmp, Lp, LpError, SolverKind};
+use lp::{Cmp, Limits, Lp, LpError, SolverKind};
 use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{ChainResult, Metric, Report};
-use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec, MAX_TIME};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -40,13 +40,18 @@ impl Mode {
 pub struct Options {
     pub mode: Mode,
     pub solver: SolverKind,
-    /// Wall-clock limit for the whole search, in seconds.
+    /// Wall-clock limit for the whole search, in seconds. Without it the
+    /// search is bounded by work only, so its answer is the same on every
+    /// machine.
     pub time_limit: Option<f64>,
     /// Upper bound on master solves.
     pub max_iterations: usize,
-    /// Without a time limit: seconds the exact search may go on after a
-    /// verified design is found (`None`: until it is proven optimal).
-    pub patience: Option<f64>,
+    /// Without a time limit: work (branch-and-bound nodes, plus one per
+    /// master solve) the exact search may spend after a verified design is
+    /// found, and the conflict search spends at most [`EXPLAIN_EFFORT`]
+    /// times this once infeasibility is proven (`None`: no bound, until
+    /// the search is done).
+    pub patience: Option<u64>,
     /// Where the search says what it is doing, for a progress display.
     pub progress: Option<Arc<Mutex<String>>>,
 }
@@ -115,13 +120,58 @@ pub struct Outcome {
     pub notes: Vec<String>,
 }
 
-/// Errors in the input that make designing meaningless.
+/// Whose fault a [`DesignError`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The input makes designing meaningless or impossible to model.
+    Input,
+    /// The solver failed.
+    Solver,
+    /// rtpipe's model and analysis disagree (a bug).
+    Internal,
+}
+
+/// Why no design could be attempted (not an infeasible design: that is an
+/// [`Outcome`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct DesignError(pub String);
+pub struct DesignError {
+    pub kind: ErrorKind,
+    pub message: String,
+    /// What to change, when we can tell.
+    pub help: Option<String>,
+}
+
+impl DesignError {
+    pub fn input(message: impl Into<String>) -> Self {
+        DesignError {
+            kind: ErrorKind::Input,
+            message: message.into(),
+            help: None,
+        }
+    }
+    pub fn solver(message: impl Into<String>) -> Self {
+        DesignError {
+            kind: ErrorKind::Solver,
+            message: message.into(),
+            help: None,
+        }
+    }
+    pub fn internal(message: impl Into<String>) -> Self {
+        DesignError {
+            kind: ErrorKind::Internal,
+            message: message.into(),
+            help: None,
+        }
+    }
+    fn help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+}
 
 impl std::fmt::Display for DesignError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
@@ -413,14 +463,19 @@ impl<'a> Master<'a> {
 }
 
 /// The conflict search may take this many times the patience.
-const EXPLAIN_EFFORT: f64 = 3.0;
+pub const EXPLAIN_EFFORT: u64 = 3;
+
+/// Whether each conflict probe gets a fair share of the remaining work
+/// (else each may use all that is left, as the time-bounded search did).
+const FAIR_SHARES: bool = false;
 
 /// Ranges of at most this many grid steps get every tangent up front.
 const DENSE_TANGENTS: i64 = 128;
 
-/// Seconds the exact search may run after the heuristic found a verified
-/// design, when no --time-limit is given.
-const EXACT_PATIENCE: f64 = 20.0;
+/// Work (branch-and-bound nodes, plus one per master solve) the exact
+/// search may spend after the first verified design, when no time limit is
+/// given; about 20 s of microlp on Table II (6,000 nodes/s).
+pub const EXACT_PATIENCE: u64 = 120_000;
 
 /// Converts ns to grid units.
 fn gu(ns: Nanos, g: i64) -> f64 {
@@ -431,13 +486,13 @@ fn gu(ns: Nanos, g: i64) -> f64 {
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
     if !opts.solver.available() {
-        return Err(DesignError(
+        return Err(DesignError::input(
             LpError::Unavailable(opts.solver.name()).to_string(),
         ));
     }
     let n = spec.tasks.len();
     if let Some(t) = spec.tasks.iter().find(|t| t.serves.is_some()) {
-        return Err(DesignError(format!(
+        return Err(DesignError::input(format!(
             "task `{}` uses `serves` (PIBS priority inheritance), which `design` does not model yet; remove it to design, then add it back and check with `analyze`",
             t.name
         )));
@@ -473,7 +528,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             PeriodSpec::Choices(v) => {
                 let ok: Vec<i64> = v.iter().filter(|&&p| p >= c).map(|&p| p / g).collect();
                 if ok.is_empty() {
-                    return Err(DesignError(format!(
+                    return Err(DesignError::input(format!(
                         "task `{}`: no period choice is at least its budget {}{}",
                         t.name,
                         format_in(c, spec.time_unit),
@@ -486,6 +541,33 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             PeriodSpec::Free => range_dom(spec, t, None, None, c, horizon, res, g)?,
         };
         dom.push(d);
+    }
+    // microlp keeps integers in the i32 range: say which period range and
+    // resolution make the steps too many.
+    for (t, d) in spec.tasks.iter().zip(&dom) {
+        if let Dom::Grid { hi, .. } = d {
+            if *hi > i64::from(i32::MAX) {
+                let mut coarser = res;
+                while coarser < MAX_TIME && (hi.saturating_mul(res)) / coarser > i64::from(i32::MAX)
+                {
+                    coarser = coarser.saturating_mul(10);
+                }
+                return Err(DesignError::input(format!(
+                    "task `{}`: its period range up to {}{u} is {hi} steps of the resolution {}{u}, more than the solver's integers hold ({})",
+                    t.name,
+                    format_in(hi.saturating_mul(res), spec.time_unit),
+                    format_in(res, spec.time_unit),
+                    i32::MAX,
+                    u = spec.time_unit
+                ))
+                .help(format!(
+                    "set a coarser resolution in [system], e.g. resolution = \"{}{}\", or a smaller period max for [tasks.{}]",
+                    format_in(coarser, spec.time_unit),
+                    spec.time_unit,
+                    t.name
+                )));
+            }
+        }
     }
     let mut notes = Vec::new();
     if spec.harmonic {
@@ -505,7 +587,8 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         rta_cuts: Vec::new(),
         oa_points: vec![Vec::new(); n],
         iterations: 0,
-        deadline: None,
+        work: 0,
+        work_cap: None,
         levels: Levels::new(),
         on_chain: (0..n)
             .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
@@ -539,8 +622,8 @@ fn harmonic_domains(
     for (a, &p) in fixed.iter().enumerate() {
         for &q in &fixed[a + 1..] {
             if !harmonic_pair(p, q) {
-                return Err(DesignError(
-                    "harmonic = true, but the fixed periods are not harmonic (one of each pair must divide the other)".into(),
+                return Err(DesignError::input(
+                    "harmonic = true, but the fixed periods are not harmonic (one of each pair must divide the other)",
                 ));
             }
         }
@@ -572,7 +655,7 @@ fn harmonic_domains(
             ));
         }
         if ok.is_empty() {
-            return Err(DesignError(format!(
+            return Err(DesignError::input(format!(
                 "harmonic = true: no period in the range of task `{}` divides or is a multiple of every fixed period",
                 spec.tasks[i].name
             )));
@@ -602,7 +685,7 @@ fn range_dom(
         Some(m) => m,
         None if horizon > 0 => horizon,
         None => {
-            return Err(DesignError(format!(
+            return Err(DesignError::input(format!(
                 "task `{}` has a free period without an upper end and no chain limit bounds it; give period = {{ max = ... }}",
                 t.name
             )))
@@ -611,7 +694,7 @@ fn range_dom(
     let lo = (lo_ns + res - 1) / res;
     let hi = hi_ns / res;
     if lo > hi {
-        return Err(DesignError(format!(
+        return Err(DesignError::input(format!(
             "task `{}`: no multiple of the resolution {}{} lies in [{}, {}] {} (the period must also be at least the budget)",
             t.name,
             format_in(res, spec.time_unit),
@@ -652,8 +735,11 @@ struct Runner<'a> {
     /// Outer-approximation points (k values) per Grid task.
     oa_points: Vec<Vec<i64>>,
     iterations: usize,
-    /// No solve may run past this (the patience after a verified design).
-    deadline: Option<Instant>,
+    /// Work done so far (see [`Options::patience`]).
+    work: u64,
+    /// No solve may run past this much work (the patience after a verified
+    /// design, the conflict search's effort).
+    work_cap: Option<u64>,
     levels: Levels,
     /// Task i lies on some declared chain.
     on_chain: Vec<bool>,
@@ -688,7 +774,7 @@ enum Solved {
     /// Periods per task (ns), the model objective, proven optimal, and the
     /// model's response times (grid units) where it has them.
     Periods(Vec<Nanos>, f64, bool, Vec<Option<f64>>),
-    Error(String),
+    Error(DesignError),
 }
 
 impl<'a> Runner<'a> {
@@ -706,7 +792,7 @@ impl<'a> Runner<'a> {
 
     fn out_of_time(&self) -> bool {
         self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
-            || self.deadline.is_some_and(|d| Instant::now() >= d)
+            || self.work_cap.is_some_and(|c| self.work >= c)
     }
 
     fn build(
@@ -971,16 +1057,12 @@ impl<'a> Runner<'a> {
         (m, objective)
     }
 
-    fn solve_master(&self, groups: &[Group], sound: Option<&SoundModel>) -> Solved {
+    fn solve_master(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Solved {
         let (m, _) = self.build(groups, sound);
-        let mut left = self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01));
-        if let Some(d) = self.deadline {
-            let d = d
-                .saturating_duration_since(Instant::now())
-                .as_secs_f64()
-                .max(0.01);
-            left = Some(left.map_or(d, |l| l.min(d)));
-        }
+        let left = Limits {
+            time: self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01)),
+            nodes: self.work_cap.map(|c| c.saturating_sub(self.work)),
+        };
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
             let bins =
                 m.lp.vars
@@ -994,15 +1076,38 @@ impl<'a> Runner<'a> {
             );
         }
         let solved = lp::solve(&m.lp, self.opts.solver, left);
+        self.work = self.work.saturating_add(match &solved {
+            Ok(s) => s.work,
+            Err(LpError::NodeLimit(w)) => *w,
+            Err(_) => 1,
+        });
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
-            if let Err(e) = &solved {
-                eprintln!("master: {e} (limit {left:?}, {:.2} s)", self.elapsed());
+            match &solved {
+                Err(e) => eprintln!(
+                    "master: {e} (limit {left:?}, work {}, {:.2} s)",
+                    self.work,
+                    self.elapsed()
+                ),
+                Ok(_) => eprintln!(
+                    "master: solved (work {}, {:.2} s)",
+                    self.work,
+                    self.elapsed()
+                ),
             }
         }
         match solved {
             Err(LpError::Infeasible) => Solved::Infeasible,
-            Err(LpError::TimeLimit) => Solved::TimeLimit,
-            Err(e) => Solved::Error(e.to_string()),
+            Err(LpError::TimeLimit | LpError::NodeLimit(_)) => Solved::TimeLimit,
+            Err(LpError::TooLarge { .. }) => Solved::Error(
+                DesignError::solver(format!(
+                    "the solver cannot represent the model: {}",
+                    solved.err().map(|e| e.to_string()).unwrap_or_default()
+                ))
+                .help(
+                    "periods are integers in steps of the resolution: set a coarser `resolution` in [system] (e.g. \"1us\" or \"1ms\") or narrow the period ranges",
+                ),
+            ),
+            Err(e) => Solved::Error(DesignError::solver(e.to_string())),
             Ok(sol) => {
                 let periods = (0..self.spec.tasks.len())
                     .map(|i| {
@@ -1322,14 +1427,15 @@ impl<'a> Runner<'a> {
         // the exact search runs out of time (it does not start the patience).
         let mut incumbent: Option<(Spec, Report, f64)> = self.descent();
         let mut heuristic_tried = false;
-        let mut exact_since: Option<Instant> = None;
+        // Work done when the exact search found its first verified design.
+        let mut exact_since: Option<u64> = None;
         loop {
             let patience_out = incumbent.is_some()
                 && self.opts.time_limit.is_none()
                 && self
                     .opts
                     .patience
-                    .is_some_and(|p| exact_since.is_some_and(|t| t.elapsed().as_secs_f64() > p));
+                    .is_some_and(|p| exact_since.is_some_and(|t| self.work.saturating_sub(t) > p));
             if self.iterations >= self.opts.max_iterations || self.out_of_time() || patience_out {
                 break;
             }
@@ -1353,7 +1459,7 @@ impl<'a> Runner<'a> {
                 }
             }
             match solved {
-                Solved::Error(e) => return Err(DesignError(e)),
+                Solved::Error(e) => return Err(e),
                 Solved::TimeLimit => {
                     break;
                 }
@@ -1361,16 +1467,16 @@ impl<'a> Runner<'a> {
                     // Infeasibility is proven; explaining it gets a bounded
                     // effort unless a time limit says otherwise.
                     if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
-                        self.deadline = Some(
-                            Instant::now() + std::time::Duration::from_secs_f64(EXPLAIN_EFFORT * p),
-                        );
+                        self.work_cap =
+                            Some(self.work.saturating_add(EXPLAIN_EFFORT.saturating_mul(p)));
                     }
-                    let conflicts = self.explain(&groups, sound.as_ref());
-                    if self.out_of_time() {
-                        notes.push(
-                            "the conflict search ran out of time: the set may not be minimal and fixes may be missing (give --time-limit to search longer)"
-                                .into(),
-                        );
+                    let (conflicts, minimal) = self.explain(&groups, sound.as_ref());
+                    if !minimal || self.out_of_time() {
+                        notes.push(if self.opts.time_limit.is_some() {
+                            "the conflict search ran out of time: the set may not be minimal and fixes may be missing".to_string()
+                        } else {
+                            "the conflict search used up its work budget: the set may not be minimal and fixes may be missing (--time-limit S searches for S seconds instead)".to_string()
+                        });
                     }
                     return Ok(self.outcome(Status::Infeasible, None, None, conflicts, notes));
                 }
@@ -1387,15 +1493,15 @@ impl<'a> Runner<'a> {
                         if incumbent.as_ref().is_none_or(|(_, _, b)| u < *b) {
                             incumbent = Some((cand.clone(), report.clone(), u));
                         }
-                        exact_since.get_or_insert_with(Instant::now);
+                        exact_since.get_or_insert(self.work);
                     }
                     if let (Some(t), None, None, Some(p)) = (
                         exact_since,
                         self.opts.time_limit,
-                        self.deadline,
+                        self.work_cap,
                         self.opts.patience,
                     ) {
-                        self.deadline = Some(t + std::time::Duration::from_secs_f64(p));
+                        self.work_cap = Some(t.saturating_add(p));
                     }
                     if let (false, Some(sm)) = (heuristic_tried, &sound) {
                         if !self.limits_ok(&report) {
@@ -1416,13 +1522,11 @@ impl<'a> Runner<'a> {
                                     incumbent = Some(h);
                                 }
                             }
-                            exact_since.get_or_insert_with(Instant::now);
+                            exact_since.get_or_insert(self.work);
                             if let (None, Some(_), Some(p)) =
                                 (self.opts.time_limit, &incumbent, self.opts.patience)
                             {
-                                self.deadline.get_or_insert(
-                                    Instant::now() + std::time::Duration::from_secs_f64(p),
-                                );
+                                self.work_cap.get_or_insert(self.work.saturating_add(p));
                             }
                         }
                     }
@@ -1469,17 +1573,16 @@ impl<'a> Runner<'a> {
                         return Ok(o);
                     }
                     let Some(_) = &sound else {
-                        return Err(DesignError(
-                            "internal: the paper-mode model and the analysis disagree on a candidate".into(),
+                        return Err(DesignError::internal(
+                            "internal: the paper-mode model and the analysis disagree on a candidate",
                         ));
                     };
                     let Some(sm) = &mut sound else { continue };
                     // Learn the response times the model under-estimated.
                     let learnt = learn_r_cuts(self.g, &cand, &report, &periods, &rmodel, sm);
                     if !learnt {
-                        return Err(DesignError(
-                            "internal: the sound model and the analysis disagree on a candidate"
-                                .into(),
+                        return Err(DesignError::internal(
+                            "internal: the sound model and the analysis disagree on a candidate",
                         ));
                     }
                 }
@@ -1488,7 +1591,7 @@ impl<'a> Runner<'a> {
         if let Some((cand, report, u)) = incumbent {
             notes.push(format!(
                 "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
-                if self.opts.time_limit.is_some() { "time limit" } else { "give --time-limit to search longer" }
+                if self.opts.time_limit.is_some() { "time limit" } else { "work budget; --time-limit S searches for S seconds instead" }
             ));
             let lb = lower_bound.map(|b| b.min(u));
             let mut o = self.outcome(
@@ -1670,12 +1773,23 @@ impl<'a> Runner<'a> {
 
     /// A small set of constraint groups that cannot hold together (deletion
     /// filter) and, for each, how far it would have to move.
-    fn explain(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Vec<Conflict> {
+    /// Also says whether every probe was decided (the set is minimal).
+    fn explain(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> (Vec<Conflict>, bool) {
         let mut core: Vec<Group> = groups.to_vec();
         let mut k = 0;
+        let mut decided = true;
+        // Under a work budget each probe gets a fair share of what is left
+        // (one share kept for the fixes), so one hard probe cannot starve
+        // the others.
+        let budget = self.work_cap;
         while k < core.len() {
             if self.out_of_time() {
+                decided = false;
                 break;
+            }
+            if let (Some(cap), true) = (budget, FAIR_SHARES) {
+                let share = cap.saturating_sub(self.work) / (core.len() - k + 1) as u64;
+                self.work_cap = Some(self.work.saturating_add(share.max(1)).min(cap));
             }
             self.say(|| {
                 format!(
@@ -1687,14 +1801,18 @@ impl<'a> Runner<'a> {
             let mut trial = core.clone();
             trial.remove(k);
             // Keep the group unless dropping it provably keeps the conflict.
-            if self.probe(&trial, sound) == Some(false) {
+            let verdict = self.probe(&trial, sound);
+            self.work_cap = budget;
+            decided &= verdict.is_some();
+            if verdict == Some(false) {
                 core = trial;
             } else {
                 k += 1;
             }
         }
         let spec = self.spec;
-        core.iter()
+        let conflicts = core
+            .iter()
             .map(|gr| match *gr {
                 Group::Limit(c, metric) => {
                     let ch = &spec.chains[c];
@@ -1737,7 +1855,8 @@ impl<'a> Runner<'a> {
                     ),
                 },
             })
-            .collect()
+            .collect();
+        (conflicts, decided)
     }
 
     /// The smallest limit of chain group `gr` that makes `core` feasible,
@@ -1775,11 +1894,15 @@ impl<'a> Runner<'a> {
                 rta_cuts: me.rta_cuts.clone(),
                 oa_points: me.oa_points.clone(),
                 iterations: 0,
-                deadline: me.deadline,
+                work: me.work,
+                work_cap: me.work_cap,
                 levels: me.levels.clone(),
                 on_chain: me.on_chain.clone(),
             };
-            sub.probe(core, sound)
+            let r = sub.probe(core, sound);
+            // The sub-search's work counts against the budget.
+            me.work = sub.work;
+            r
         };
         // Any undecided probe makes the answer unknown: say nothing then.
         let mut tries = 0;

@@ -5,10 +5,9 @@
 //! rebuilds the good_lp problem every time; the solver backend is a choice
 //! made at run time.
 
-use good_lp::{
-    constraint, variable, Expression, ProblemVariables, ResolutionError, Solution, SolutionStatus,
-    SolverModel, Variable, WithTimeLimit,
-};
+#[cfg(feature = "highs")]
+use good_lp::{constraint, ResolutionError, Solution, SolutionStatus, SolverModel, WithTimeLimit};
+use good_lp::{variable, Expression, ProblemVariables, Variable};
 use std::fmt;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,6 +82,19 @@ pub struct LpSolution {
     pub objective: f64,
     /// The solver proved optimality (not stopped by a limit).
     pub optimal: bool,
+    /// Work done: branch-and-bound nodes plus one for the solve.
+    pub work: u64,
+}
+
+/// What may stop a solve early. A node limit is deterministic: the same
+/// model and limit give the same answer on any machine.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Limits {
+    /// Wall-clock seconds.
+    pub time: Option<f64>,
+    /// Branch-and-bound nodes (a HiGHS solve stopped by it is charged the
+    /// whole limit; one that finishes counts 1).
+    pub nodes: Option<u64>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -91,6 +103,16 @@ pub enum LpError {
     Unbounded,
     /// Stopped by the time limit before a solution or a proof.
     TimeLimit,
+    /// Stopped by the node limit before a solution or a proof, after this
+    /// much work.
+    NodeLimit(u64),
+    /// An integer variable's bounds exceed what the backend represents
+    /// (microlp: the i32 range).
+    TooLarge {
+        var: usize,
+        lo: f64,
+        hi: f64,
+    },
     /// The solver is not compiled in.
     Unavailable(&'static str),
     Other(String),
@@ -101,6 +123,13 @@ impl fmt::Display for LpError {
         match self {
             LpError::Infeasible => write!(f, "infeasible"),
             LpError::TimeLimit => write!(f, "time limit reached"),
+            LpError::NodeLimit(_) => write!(f, "work limit reached"),
+            LpError::TooLarge { lo, hi, .. } => write!(
+                f,
+                "an integer variable ranges over [{lo}, {hi}], beyond the solver's integer range [{}, {}]",
+                i32::MIN,
+                i32::MAX
+            ),
             LpError::Unbounded => write!(f, "unbounded"),
             LpError::Unavailable(s) => write!(
                 f,
@@ -139,6 +168,7 @@ fn build(lp: &Lp) -> (ProblemVariables, Vec<Variable>, Expression) {
     (pv, vars, obj)
 }
 
+#[cfg(feature = "highs")]
 fn finish<M>(lp: &Lp, vars: &[Variable], model: M) -> Result<LpSolution, LpError>
 where
     M: SolverModel,
@@ -174,6 +204,7 @@ where
                 values,
                 objective,
                 optimal: matches!(sol.status(), SolutionStatus::Optimal),
+                work: 1,
             })
         }
         Err(ResolutionError::Infeasible) => Err(LpError::Infeasible),
@@ -186,35 +217,146 @@ where
     }
 }
 
-/// Solves with the chosen backend and an optional time limit in seconds.
-pub fn solve(lp: &Lp, solver: SolverKind, time_limit: Option<f64>) -> Result<LpSolution, LpError> {
-    let started = std::time::Instant::now();
-    let r = solve_inner(lp, solver, time_limit);
-    // Backends report a time-limited solve without a solution as
-    // "infeasible"; that is not a proof.
-    match (r, time_limit) {
-        (Err(LpError::Infeasible), Some(t)) if started.elapsed().as_secs_f64() >= 0.5 * t => {
-            Err(LpError::TimeLimit)
+/// Solves with the chosen backend within `limits`.
+pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Result<LpSolution, LpError> {
+    match solver {
+        SolverKind::Microlp => solve_microlp(lp, limits),
+        SolverKind::Highs => {
+            let started = std::time::Instant::now();
+            let (pv, vars, obj) = build(lp);
+            let r = solve_highs(lp, pv, vars, obj, limits);
+            // HiGHS reports a time-limited solve without a solution as
+            // "infeasible"; that is not a proof.
+            match (r, limits.time) {
+                (Err(LpError::Infeasible), Some(t))
+                    if started.elapsed().as_secs_f64() >= 0.5 * t =>
+                {
+                    Err(LpError::TimeLimit)
+                }
+                (r, _) => r,
+            }
         }
-        (r, _) => r,
     }
 }
 
-fn solve_inner(
-    lp: &Lp,
-    solver: SolverKind,
-    time_limit: Option<f64>,
-) -> Result<LpSolution, LpError> {
-    let (pv, vars, obj) = build(lp);
-    match solver {
-        SolverKind::Microlp => {
-            let mut m = pv.minimise(obj).using(good_lp::microlp);
-            if let Some(t) = time_limit {
-                m = m.with_time_limit(t.max(0.01));
+/// Nodes per microlp call when a node limit applies: the work of a solve
+/// that ends in a proof of infeasibility (microlp reports no statistics
+/// then) is counted to within this many nodes.
+const NODE_CHUNK: u64 = 64;
+
+/// microlp directly (not through good_lp), for its deterministic node limit
+/// and node count.
+fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
+    use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem, SolveOutcome};
+    let mut p = Problem::new(OptimizationDirection::Minimize);
+    let mut obj = vec![0.0; lp.vars.len()];
+    // Repeated objective terms add up.
+    for &(i, c) in &lp.obj {
+        obj[i] += c;
+    }
+    let mut vars = Vec::with_capacity(lp.vars.len());
+    for (k, d) in lp.vars.iter().enumerate() {
+        if d.integer {
+            let (lo, hi) = (d.lo.ceil(), d.hi.floor());
+            let range = i32::MIN as f64..=i32::MAX as f64;
+            if !range.contains(&lo) || !range.contains(&hi) {
+                return Err(LpError::TooLarge {
+                    var: k,
+                    lo: d.lo,
+                    hi: d.hi,
+                });
             }
-            finish(lp, &vars, m)
+            if lo > hi {
+                return Err(LpError::Infeasible);
+            }
+            vars.push(p.add_integer_var(obj[k], (lo as i32, hi as i32)));
+        } else {
+            vars.push(p.add_var(obj[k], (d.lo, d.hi)));
         }
-        SolverKind::Highs => solve_highs(lp, pv, vars, obj, time_limit),
+    }
+    for r in &lp.rows {
+        // microlp wants each variable once per row: merge repeated terms.
+        let mut merged: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+        for &(i, c) in &r.terms {
+            *merged.entry(i).or_insert(0.0) += c;
+        }
+        if merged.values().all(|&c| c == 0.0) {
+            // A row without variables: decide it here.
+            let ok = match r.cmp {
+                Cmp::Le => 0.0 <= r.rhs + 1e-9,
+                Cmp::Ge => 0.0 >= r.rhs - 1e-9,
+                Cmp::Eq => r.rhs.abs() <= 1e-9,
+            };
+            if ok {
+                continue;
+            }
+            return Err(LpError::Infeasible);
+        }
+        let mut e = LinearExpr::empty();
+        // Zero coefficients (a big-M the domains made 0) upset microlp's pivoting.
+        for (&i, &c) in &merged {
+            if c != 0.0 {
+                e.add(vars[i], c);
+            }
+        }
+        let op = match r.cmp {
+            Cmp::Le => ComparisonOp::Le,
+            Cmp::Ge => ComparisonOp::Ge,
+            Cmp::Eq => ComparisonOp::Eq,
+        };
+        p.add_constraint(e, op, r.rhs);
+    }
+    let mut opts = microlp::SolveOptions::default();
+    opts.time_limit = limits.time.map(|t| {
+        std::time::Duration::try_from_secs_f64(t.max(0.01)).unwrap_or(std::time::Duration::MAX)
+    });
+    let mut left = limits.nodes;
+    let chunk = |left: Option<u64>| left.map(|l| l.min(NODE_CHUNK));
+    opts.node_limit = chunk(left);
+    let map_err = |e: microlp::Error| match e {
+        microlp::Error::Infeasible => LpError::Infeasible,
+        microlp::Error::Unbounded => LpError::Unbounded,
+        other => LpError::Other(other.to_string()),
+    };
+    let mut done: u64 = 0;
+    let mut out = p.solve_with(opts).map_err(map_err)?;
+    loop {
+        let nodes = out.stats().nodes_solved;
+        let by_nodes = out.termination_reason() == microlp::TerminationReason::NodeLimit;
+        if let (true, Some(l)) = (by_nodes, left) {
+            let used = nodes - done;
+            done = nodes;
+            let l = l.saturating_sub(used);
+            left = Some(l);
+            if l > 0 {
+                // Go on with a fresh chunk (counted exactly: a chunk that
+                // ends in a proof of infeasibility is charged in full).
+                let mut r = out.last_resume_options();
+                r.node_limit = chunk(left);
+                out = match out.resume_with(r) {
+                    Ok(o) => o,
+                    Err(microlp::Error::Infeasible) => return Err(LpError::Infeasible),
+                    Err(e) => return Err(map_err(e)),
+                };
+                continue;
+            }
+        }
+        let work = 1 + nodes;
+        return match out {
+            SolveOutcome::Solution(sol) => {
+                let values: Vec<f64> = vars.iter().map(|&v| sol.var_value(v)).collect();
+                let objective =
+                    lp.obj.iter().map(|&(i, c)| c * values[i]).sum::<f64>() + lp.obj_const;
+                Ok(LpSolution {
+                    values,
+                    objective,
+                    optimal: sol.status() == microlp::SolutionStatus::Optimal,
+                    work,
+                })
+            }
+            SolveOutcome::Interrupted(_) if by_nodes => Err(LpError::NodeLimit(work)),
+            SolveOutcome::Interrupted(_) => Err(LpError::TimeLimit),
+        };
     }
 }
 
@@ -224,7 +366,7 @@ fn solve_highs(
     pv: ProblemVariables,
     vars: Vec<Variable>,
     obj: Expression,
-    time_limit: Option<f64>,
+    limits: Limits,
 ) -> Result<LpSolution, LpError> {
     let mut m = pv.minimise(obj).using(good_lp::highs);
     m.set_verbose(false);
@@ -234,10 +376,27 @@ fn solve_highs(
         .set_mip_rel_gap(1e-9)
         .and_then(|m| m.set_mip_abs_gap(1e-12))
         .map_err(|e| LpError::Other(e.to_string()))?;
-    if let Some(t) = time_limit {
+    if let Some(t) = limits.time {
         m = m.with_time_limit(t.max(0.01));
     }
-    finish(lp, &vars, m)
+    if let Some(n) = limits.nodes {
+        m = m.set_option("mip_max_nodes", n.min(i32::MAX as u64) as i32);
+    }
+    // Work: 1 for a finished solve; a solve the node limit stopped is
+    // charged the whole limit (HiGHS reports no node count through good_lp).
+    let charged = 1 + limits.nodes.unwrap_or(0);
+    match finish(lp, &vars, m) {
+        Ok(mut s) => {
+            if !s.optimal && limits.nodes.is_some() {
+                s.work = charged;
+            }
+            Ok(s)
+        }
+        Err(LpError::TimeLimit) if limits.nodes.is_some() && limits.time.is_none() => {
+            Err(LpError::NodeLimit(charged))
+        }
+        Err(e) => Err(e),
+    }
 }
 
 #[cfg(not(feature = "highs"))]
@@ -246,7 +405,7 @@ fn solve_highs(
     _pv: ProblemVariables,
     _vars: Vec<Variable>,
     _obj: Expression,
-    _time_limit: Option<f64>,
+    _limits: Limits,
 ) -> Result<LpSolution, LpError> {
     Err(LpError::Unavailable("highs"))
 }
@@ -265,7 +424,7 @@ mod tests {
         lp.obj = vec![(x, -1.0), (y, -2.0)];
         lp.row(vec![(x, 1.0), (y, 2.0)], Cmp::Le, 4.0);
         lp.row(vec![(x, 3.0), (y, 1.0)], Cmp::Le, 6.0);
-        match solve(&lp, SolverKind::Microlp, None) {
+        match solve(&lp, SolverKind::Microlp, Limits::default()) {
             Ok(s) => {
                 assert!((s.objective + 4.0).abs() < 1e-9);
                 assert!(s.optimal);
@@ -280,7 +439,7 @@ mod tests {
         let x = lp.var(0.0, 1.0, true);
         lp.row(vec![(x, 1.0)], Cmp::Ge, 2.0);
         assert_eq!(
-            solve(&lp, SolverKind::Microlp, None).err(),
+            solve(&lp, SolverKind::Microlp, Limits::default()).err(),
             Some(LpError::Infeasible)
         );
     }

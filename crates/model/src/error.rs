@@ -75,16 +75,38 @@ pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// Text with control characters (terminal escapes; tabs stay) shown escaped, so a
+/// diagnostic never prints them raw.
+pub fn printable(s: &str) -> std::borrow::Cow<'_, str> {
+    let bad = |c: char| c.is_control() && c != '\t';
+    if s.chars().any(bad) {
+        std::borrow::Cow::Owned(
+            s.chars()
+                .map(|c| {
+                    if bad(c) {
+                        c.escape_default().to_string()
+                    } else {
+                        c.to_string()
+                    }
+                })
+                .collect(),
+        )
+    } else {
+        std::borrow::Cow::Borrowed(s)
+    }
+}
+
 impl fmt::Display for SpecError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (i, d) in self.diagnostics.iter().enumerate() {
+            let message = printable(&d.message);
             if i > 0 {
                 writeln!(f)?;
             }
             match &d.span {
                 Some(span) => {
                     let (line, col) = self.line_col(span.start);
-                    writeln!(f, "{}:{}:{}: error: {}", self.file, line, col, d.message)?;
+                    writeln!(f, "{}:{}:{}: error: {message}", self.file, line, col)?;
                     if let Some(text) = self.source.lines().nth(line - 1) {
                         let width = {
                             let end = span.end.min(
@@ -100,14 +122,15 @@ impl fmt::Display for SpecError {
                                 .unwrap_or(1)
                                 .max(1)
                         };
-                        writeln!(f, "{line:>5} | {text}")?;
+                        let (shown, col, width) = window(text, col, width);
+                        writeln!(f, "{line:>5} | {}", printable(&shown))?;
                         writeln!(f, "      | {}{}", " ".repeat(col - 1), "^".repeat(width))?;
                     }
                 }
-                None => writeln!(f, "{}: error: {}", self.file, d.message)?,
+                None => writeln!(f, "{}: error: {message}", self.file)?,
             }
             if let Some(h) = &d.help {
-                writeln!(f, "      = help: {h}")?;
+                writeln!(f, "      = help: {}", printable(h))?;
             }
         }
         Ok(())
@@ -115,6 +138,36 @@ impl fmt::Display for SpecError {
 }
 
 impl std::error::Error for SpecError {}
+
+/// Longest source line shown whole in a diagnostic, in characters.
+pub const MAX_SHOWN_LINE: usize = 120;
+
+/// The part of a source line shown under a diagnostic: the whole line when
+/// short, else a window of [`MAX_SHOWN_LINE`] characters around the error
+/// column with `…` where it was cut. Returns the text and the (1-based)
+/// column and width of the carets in it.
+fn window(text: &str, col: usize, width: usize) -> (String, usize, usize) {
+    let n = text.chars().count();
+    if n <= MAX_SHOWN_LINE {
+        return (text.to_string(), col, width);
+    }
+    let before = 40;
+    let start = col.saturating_sub(1).saturating_sub(before).min(n);
+    let end = (start + MAX_SHOWN_LINE).min(n);
+    let start = end.saturating_sub(MAX_SHOWN_LINE).min(start);
+    let mut shown: String = text.chars().skip(start).take(end - start).collect();
+    let mut col = col - start;
+    if start > 0 {
+        shown.insert(0, '…');
+        col += 1;
+    }
+    if end < n {
+        shown.push('…');
+    }
+    // Carets stay within the shown text.
+    let room = (end - start + 1 + usize::from(start > 0)).saturating_sub(col);
+    (shown, col, width.min(room.max(1)))
+}
 
 /// The closest candidate by edit distance, if it is close enough to be a typo.
 pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
@@ -170,6 +223,36 @@ mod tests {
         assert_eq!(line_col(s, 3), (2, 2));
         // Columns count characters, not bytes: 'é' is two bytes.
         assert_eq!(line_col(s, s.find('f').unwrap_or(0)), (3, 5));
+    }
+
+    #[test]
+    fn long_lines_are_cut_around_the_error() {
+        let long = format!("name = \"{}\" bad", "x".repeat(200_000));
+        let at = long.find("bad").unwrap_or(0);
+        let e = SpecError {
+            file: "f.toml".into(),
+            source: long.clone(),
+            diagnostics: vec![Diagnostic::new("oops", Some(at..at + 3))],
+        };
+        let text = e.to_string();
+        assert!(text.len() < 1000, "{} bytes", text.len());
+        assert!(text.contains("f.toml:1:200011: error: oops"), "{text}");
+        assert!(text.contains("…"), "{text}");
+        // The carets sit under `bad` in the shown window.
+        let lines: Vec<&str> = text.lines().collect();
+        let src = lines[1];
+        let carets = lines[2];
+        let c = carets.chars().position(|c| c == '^').unwrap_or(0);
+        let under: String = src.chars().skip(c).take(3).collect();
+        assert_eq!(under, "bad", "{text}");
+        assert_eq!(carets.matches('^').count(), 3);
+        // Short lines are shown whole.
+        let e = SpecError {
+            file: "f.toml".into(),
+            source: "a = 1".into(),
+            diagnostics: vec![Diagnostic::new("oops", Some(4..5))],
+        };
+        assert!(e.to_string().contains("    1 | a = 1\n      |     ^\n"));
     }
 
     #[test]

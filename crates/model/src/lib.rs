@@ -15,8 +15,11 @@ pub mod time;
 mod write;
 pub use write::to_toml;
 
-pub use error::{line_col, suggest, Diagnostic, SpecError};
+pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
 pub use time::{format_in, parse_time_str, Nanos, TimeUnit, MAX_TIME};
+
+/// The largest spec file `Spec::load` reads: 16 MiB.
+pub const MAX_SPEC_BYTES: u64 = 16 << 20;
 
 use raw::{RawPort, RawSpec, RawTask, S};
 use std::collections::{BTreeMap, HashMap};
@@ -263,19 +266,57 @@ impl Spec {
         Err(fail(b.diags))
     }
 
-    /// Reads and parses a spec file.
+    /// Reads and parses a spec file of at most [`MAX_SPEC_BYTES`]; larger
+    /// files and endless streams (`/dev/zero`) are refused after reading at
+    /// most that much.
     pub fn load(path: &std::path::Path) -> Result<Spec, SpecError> {
         let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
+        let fail = |msg: String, help: &str| SpecError {
+            file: file.clone(),
+            source: String::new(),
+            diagnostics: vec![Diagnostic::new(msg, None).help(help)],
+        };
+        let cap_help = "specs are small TOML files; check the path (a device, log or binary file is not a spec)";
+        let too_big = || {
+            fail(
+                format!(
+                    "the spec is larger than {} MiB, the most rtpipe reads",
+                    MAX_SPEC_BYTES >> 20
+                ),
+                cap_help,
+            )
+        };
+        let read_help = "check the path; specs are TOML files such as examples/paper-table2.toml";
+        let f = std::fs::File::open(path)
+            .map_err(|e| fail(format!("cannot read the spec: {e}"), read_help))?;
+        if let Ok(m) = f.metadata() {
+            if m.is_dir() {
+                return Err(fail(
+                    "cannot read the spec: it is a directory".into(),
+                    read_help,
+                ));
+            }
+            if m.is_file() && m.len() > MAX_SPEC_BYTES {
+                return Err(too_big());
+            }
+        }
+        let mut bytes = Vec::new();
+        use std::io::Read;
+        f.take(MAX_SPEC_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| fail(format!("cannot read the spec: {e}"), read_help))?;
+        if bytes.len() as u64 > MAX_SPEC_BYTES {
+            return Err(too_big());
+        }
+        match String::from_utf8(bytes) {
             Ok(text) => Spec::parse(&file, &text),
-            Err(e) => Err(SpecError {
-                file: file.clone(),
-                source: String::new(),
-                diagnostics: vec![Diagnostic::new(format!("cannot read the spec: {e}"), None)
-                    .help(
-                        "check the path; specs are TOML files such as examples/paper-table2.toml",
-                    )],
-            }),
+            Err(e) => Err(fail(
+                format!(
+                    "cannot read the spec: not UTF-8 text (invalid byte at offset {})",
+                    e.utf8_error().valid_up_to()
+                ),
+                cap_help,
+            )),
         }
     }
 
@@ -377,6 +418,8 @@ fn toml_help(msg: &str) -> Option<String> {
         Some("remove the key or correct its spelling; the expected keys are listed above".into())
     } else if msg.contains("missing field") {
         Some("add the missing key (see the spec format in the README)".into())
+    } else if msg.contains("too large to fit") {
+        Some("whole numbers must fit in 64 bits; times are limited to about 106 days: write a smaller value, or a time with a unit such as \"250us\"".into())
     } else if msg.contains("invalid type") {
         Some("times are numbers in the system's time_unit or strings like \"250us\"".into())
     } else {
@@ -401,6 +444,38 @@ impl Builder {
 
     fn unit(&self) -> TimeUnit {
         self.unit.unwrap_or(TimeUnit::Ms)
+    }
+
+    /// A name must be non-empty and printable; task names must also not
+    /// contain `>`, which joins them in chain labels (`t1>t4`).
+    fn check_name(&mut self, kind: &str, n: &S<String>, example: &str) -> bool {
+        let s = n.get_ref();
+        let problem = if s.trim().is_empty() {
+            Some(format!("{kind} name is empty"))
+        } else if let Some(c) = s.chars().find(|c| c.is_control()) {
+            Some(format!(
+                "{kind} name \"{}\" contains the control character U+{:04X}",
+                s.escape_debug(),
+                c as u32
+            ))
+        } else if kind == "task" && s.contains('>') {
+            Some(format!(
+                "task name \"{s}\" contains `>`, which separates the tasks of chain labels (t1>t4)"
+            ))
+        } else {
+            None
+        };
+        match problem {
+            Some(msg) => {
+                self.err(
+                    msg,
+                    span(n),
+                    format!("use a short printable name without `>`, e.g. {example}"),
+                );
+                false
+            }
+            None => true,
+        }
     }
 
     /// A time: a bare number in the time unit or a string with a unit.
@@ -533,6 +608,8 @@ impl Builder {
                 span(&sys.name),
                 "name the system, e.g. name = \"quad\"",
             );
+        } else {
+            self.check_name("system", &sys.name, "name = \"quad\"");
         }
         if let Some(u) = &sys.time_unit {
             match TimeUnit::parse(u.get_ref()) {
@@ -606,6 +683,7 @@ impl Builder {
         let mut ch_index: HashMap<String, usize> = HashMap::new();
         for (k, v) in &raw.channels.0 {
             let c = v.get_ref();
+            self.check_name("channel", k, "[channels.mem]");
             if ch_index.contains_key(k.get_ref()) {
                 self.err(
                     format!("channel `{}` is declared twice", k.get_ref()),
@@ -631,6 +709,7 @@ impl Builder {
         let mut task_index: HashMap<String, usize> = HashMap::new();
         let raw_tasks = &raw.tasks.0;
         for (i, (k, _)) in raw_tasks.iter().enumerate() {
+            self.check_name("task", k, "[tasks.gyro]");
             if task_index.insert(k.get_ref().clone(), i).is_some() {
                 self.err(
                     format!("task `{}` is declared twice", k.get_ref()),
@@ -778,6 +857,9 @@ impl Builder {
         let mut chains = Vec::new();
         for ch in &raw.chain {
             let c = ch.get_ref();
+            if let Some(n) = &c.name {
+                self.check_name("chain", n, "name = \"gyro to motors\"");
+            }
             let mut path = Vec::new();
             let mut ok = true;
             if c.path.get_ref().is_empty() {
@@ -847,6 +929,13 @@ impl Builder {
         if !self.diags.is_empty() {
             return None;
         }
+        let harmonic = sys.harmonic.as_ref().is_some_and(|h| *h.get_ref());
+        if harmonic {
+            self.check_harmonic(&tasks, raw_tasks);
+            if !self.diags.is_empty() {
+                return None;
+            }
+        }
         let resolution = match &sys.resolution {
             Some(r) => self.positive_time(r, "resolution")?,
             None => unit.nanos(),
@@ -857,11 +946,45 @@ impl Builder {
             scheduler: scheduler?,
             schedulability: test?,
             resolution,
-            harmonic: sys.harmonic.as_ref().is_some_and(|h| *h.get_ref()),
+            harmonic,
             channels,
             tasks,
             chains,
         })
+    }
+
+    /// `harmonic = true`: every pair of fixed periods divides one way.
+    fn check_harmonic(&mut self, tasks: &[Task], raw_tasks: &[(S<String>, S<RawTask>)]) {
+        let unit = self.unit();
+        for b in 0..tasks.len() {
+            let Some(pb) = tasks[b].fixed_period() else {
+                continue;
+            };
+            let clash = (0..b).find(|&a| {
+                tasks[a]
+                    .fixed_period()
+                    .is_some_and(|pa| pa % pb != 0 && pb % pa != 0)
+            });
+            let (Some(a), Some(ps)) = (clash, &raw_tasks[b].1.get_ref().period) else {
+                continue;
+            };
+            let pa = tasks[a].fixed_period().unwrap_or(1).max(1);
+            let up = (pb + pa - 1) / pa * pa;
+            self.err(
+                format!(
+                    "harmonic = true, but the fixed periods of `{}` ({}) and `{}` ({}) do not divide one another",
+                    tasks[a].name,
+                    format_in(pa, unit),
+                    tasks[b].name,
+                    format_in(pb, unit)
+                ),
+                span(ps),
+                format!(
+                    "make one period a multiple of the other (e.g. period = {} here), or drop harmonic = true",
+                    format_in(up, unit)
+                ),
+            );
+        }
     }
 
     fn unknown_task(&mut self, n: &S<String>, names: &[String]) {

@@ -242,3 +242,131 @@ fn serves_is_checked() {
         "{e}"
     );
 }
+
+/// One task `a` with these extra lines; the error text.
+fn err_text(task_lines: &str) -> String {
+    err(&format!(
+        "[system]\nname = \"x\"\n[tasks.a]\nexec = 1\n{task_lines}\n"
+    ))
+    .to_string()
+}
+
+#[test]
+fn bad_names_are_rejected_with_a_place() {
+    let e = err("[system]\nname = \"x\"\n[tasks.\"\"]\nexec = 1\nperiod = 10\n").to_string();
+    assert!(e.contains("x.toml:3:8: error: task name is empty"), "{e}");
+    assert!(e.contains("help: use a short printable name"), "{e}");
+    let e = err("[system]\nname = \"x\"\n[tasks.\"a>b\"]\nexec = 1\nperiod = 10\n").to_string();
+    assert!(
+        e.contains("x.toml:3:8: error: task name \"a>b\" contains `>`"),
+        "{e}"
+    );
+    let e = err("[system]\nname = \"x\"\n[tasks.\"a\\u001b[31m\"]\nexec = 1\nperiod = 10\n");
+    let text = e.to_string();
+    assert!(text.contains("x.toml:3:8: error: task name"), "{text}");
+    assert!(text.contains("control character U+001B"), "{text}");
+    assert!(!text.contains('\u{1b}'), "no raw escape in {text:?}");
+    let e = err("[system]\nname = \"\\u0007\"\n[tasks.a]\nexec = 1\nperiod = 10\n").to_string();
+    assert!(e.contains("system name"), "{e}");
+    let e = err("[system]\nname = \"x\"\n[channels.\"m\\n\"]\nbandwidth = 1\n[tasks.a]\nexec = 1\nperiod = 10\n").to_string();
+    assert!(e.contains("x.toml:3:11: error: channel name"), "{e}");
+    // Reading an unknown task with an escape in its name never prints it raw.
+    let e =
+        err("[system]\nname = \"x\"\n[tasks.a]\nexec = 1\nperiod = 10\nreads = [\"\\u001b[2J\"]\n")
+            .to_string();
+    assert!(e.contains("unknown task"), "{e}");
+    assert!(!e.contains('\u{1b}'), "{e:?}");
+}
+
+#[test]
+fn non_finite_and_tiny_times_say_so() {
+    for v in ["nan", "inf", "-inf", "+nan"] {
+        let e = err_text(&format!("period = {v}"));
+        assert!(
+            e.contains("x.toml:5:10: error: period: not a finite number"),
+            "{v}: {e}"
+        );
+    }
+    let e = err_text("period = 1e-12");
+    assert!(
+        e.contains("period: time is below the model's 1 ns resolution"),
+        "{e}"
+    );
+    assert!(!e.contains("found 0"), "{e}");
+}
+
+#[test]
+fn exponents_in_time_strings_are_times() {
+    let e = err_text("period = \"1e30ms\"");
+    assert!(
+        e.contains("x.toml:5:10: error: period: time is too large"),
+        "{e}"
+    );
+    assert!(!e.contains("unknown time unit"), "{e}");
+    let s = match Spec::parse(
+        "x.toml",
+        "[system]\nname = \"x\"\n[tasks.a]\nexec = \"5e2us\"\nperiod = \"1e1ms\"\n",
+    ) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    };
+    assert_eq!(s.tasks[0].exec, 500_000);
+    assert_eq!(s.tasks[0].fixed_period(), Some(10_000_000));
+}
+
+#[test]
+fn integer_overflow_has_a_place_and_help() {
+    let e = err_text("period = 99999999999999999999");
+    assert!(e.contains("x.toml:5:10: error:"), "{e}");
+    assert!(e.contains("help: whole numbers must fit in 64 bits"), "{e}");
+}
+
+#[test]
+fn harmonic_fixed_periods_are_checked_with_a_place() {
+    let src = "[system]\nname = \"x\"\nharmonic = true\n[tasks.a]\nexec = 1\nperiod = 10\n[tasks.b]\nexec = 1\nperiod = 15\n[tasks.c]\nexec = 1\nperiod = { max = 40 }\n";
+    let e = err(src).to_string();
+    assert!(
+        e.contains("x.toml:9:10: error: harmonic = true, but the fixed periods of `a` (10) and `b` (15) do not divide one another"),
+        "{e}"
+    );
+    assert!(
+        e.contains("help: make one period a multiple of the other (e.g. period = 20 here)"),
+        "{e}"
+    );
+    // Harmonic fixed periods pass.
+    assert!(Spec::parse("x.toml", &src.replace("period = 15", "period = 20")).is_ok());
+}
+
+#[test]
+fn load_caps_the_size() {
+    let dir = std::env::temp_dir().join(format!("rtpipe-model-cap-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let big = dir.join("big.toml");
+    let f = std::fs::File::create(&big).and_then(|f| {
+        f.set_len(MAX_SPEC_BYTES + 1)?;
+        Ok(f)
+    });
+    assert!(f.is_ok(), "{f:?}");
+    let e = match Spec::load(&big) {
+        Ok(_) => panic!("a 16 MiB + 1 file loaded"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        e.contains("big.toml: error: the spec is larger than 16 MiB"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    #[cfg(unix)]
+    {
+        let t = std::time::Instant::now();
+        let e = match Spec::load(std::path::Path::new("/dev/zero")) {
+            Ok(_) => panic!("/dev/zero loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains("/dev/zero: error: the spec is larger than 16 MiB"),
+            "{e}"
+        );
+        assert!(t.elapsed().as_secs() < 5);
+    }
+}

@@ -76,8 +76,10 @@ pub enum TimeError {
     Unit(String),
     /// Finer than one nanosecond.
     SubNanosecond,
-    /// Larger than [`MAX_TIME`] or not finite.
+    /// Larger than [`MAX_TIME`].
     TooLarge,
+    /// NaN or an infinity.
+    NotFinite,
 }
 
 impl fmt::Display for TimeError {
@@ -94,10 +96,11 @@ impl fmt::Display for TimeError {
             TimeError::SubNanosecond => {
                 write!(
                     f,
-                    "time is finer than one nanosecond, the model's resolution"
+                    "time is below the model's 1 ns resolution (not a whole number of nanoseconds)"
                 )
             }
             TimeError::TooLarge => write!(f, "time is too large (the limit is about 106 days)"),
+            TimeError::NotFinite => write!(f, "not a finite number"),
         }
     }
 }
@@ -105,11 +108,7 @@ impl fmt::Display for TimeError {
 /// Parses `"1.5ms"`, `"250 us"`, `"3s"`, `"100ns"` exactly.
 pub fn parse_time_str(s: &str) -> Result<Nanos, TimeError> {
     let t = s.trim();
-    let split = t
-        .char_indices()
-        .find(|&(_, c)| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+' || c == '_'))
-        .map(|(i, _)| i)
-        .unwrap_or(t.len());
+    let split = number_end(t);
     let (num, unit) = t.split_at(split);
     let unit = unit.trim();
     if num.is_empty() {
@@ -122,16 +121,60 @@ pub fn parse_time_str(s: &str) -> Result<Nanos, TimeError> {
     parse_decimal(num, unit.nanos()).ok_or_else(|| TimeError::Syntax(s.to_string()))?
 }
 
-/// Exact decimal × scale → integer, or an error when not a whole number of ns.
+/// Where the number of a time string ends: digits, signs, `.`, `_` and an
+/// exponent (`e`/`E` followed by an optional sign and a digit; no unit starts
+/// with `e`).
+fn number_end(t: &str) -> usize {
+    let b = t.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if c.is_ascii_digit() || c == b'.' || c == b'-' || c == b'+' || c == b'_' {
+            i += 1;
+            continue;
+        }
+        if (c == b'e' || c == b'E') && i > 0 {
+            let mut j = i + 1;
+            if j < b.len() && (b[j] == b'+' || b[j] == b'-') {
+                j += 1;
+            }
+            if j < b.len() && b[j].is_ascii_digit() {
+                i = j;
+                continue;
+            }
+        }
+        break;
+    }
+    i
+}
+
+/// Exact decimal (with an optional exponent) × scale → integer, or an error
+/// when not a whole number of ns.
 fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
     let num = num.replace('_', "");
     let (neg, digits) = match num.strip_prefix('-') {
         Some(rest) => (true, rest),
         None => (false, num.strip_prefix('+').unwrap_or(&num)),
     };
-    let (int, frac) = match digits.split_once('.') {
+    let (mantissa, exp) = match digits.find(['e', 'E']) {
+        Some(k) => {
+            let e = &digits[k + 1..];
+            let e_digits = e.strip_prefix(['+', '-']).unwrap_or(e);
+            if e_digits.is_empty() || !e_digits.chars().all(|c| c.is_ascii_digit()) {
+                return None;
+            }
+            // Exponents beyond a few hundred only decide zero / too large.
+            let v: i64 = e_digits
+                .get(..e_digits.len().min(6))
+                .and_then(|d| d.parse().ok())
+                .unwrap_or(999_999);
+            (&digits[..k], if e.starts_with('-') { -v } else { v })
+        }
+        None => (digits, 0),
+    };
+    let (int, frac) = match mantissa.split_once('.') {
         Some((i, f)) => (i, f),
-        None => (digits, ""),
+        None => (mantissa, ""),
     };
     if int.is_empty() && frac.is_empty() {
         return None;
@@ -139,6 +182,43 @@ fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
     if !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
         return None;
     }
+    // Move the decimal point by the exponent.
+    let shifted;
+    let (int, frac) = if exp == 0 {
+        (int, frac)
+    } else {
+        let all: String = format!("{int}{frac}");
+        let all = all.trim_start_matches('0');
+        if all.is_empty() {
+            return Some(Ok(0));
+        }
+        // Position of the point in `all`, counted from its first digit.
+        let lead_zeros = format!("{int}{frac}").len() - all.len();
+        let point = int.len() as i64 - lead_zeros as i64 + exp;
+        if point > 40 {
+            return Some(Err(TimeError::TooLarge));
+        }
+        if point < -40 {
+            return Some(Err(TimeError::SubNanosecond));
+        }
+        shifted = if point <= 0 {
+            (
+                String::new(),
+                format!("{}{all}", "0".repeat((-point) as usize)),
+            )
+        } else if point as usize >= all.len() {
+            (
+                format!("{all}{}", "0".repeat(point as usize - all.len())),
+                String::new(),
+            )
+        } else {
+            (
+                all[..point as usize].to_string(),
+                all[point as usize..].to_string(),
+            )
+        };
+        (shifted.0.as_str(), shifted.1.as_str())
+    };
     let mut value: i128 = 0;
     for c in int.chars() {
         value = value * 10 + (c as i128 - '0' as i128);
@@ -171,14 +251,15 @@ fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
 /// binary floats cannot hold most decimals exactly).
 pub fn number_to_nanos(x: f64, unit: TimeUnit) -> Result<Nanos, TimeError> {
     if !x.is_finite() {
-        return Err(TimeError::TooLarge);
+        return Err(TimeError::NotFinite);
     }
     let ns = x * unit.nanos() as f64;
     if ns.abs() > MAX_TIME as f64 {
         return Err(TimeError::TooLarge);
     }
     let r = ns.round();
-    if (ns - r).abs() > 1e-6 * ns.abs().max(1.0) {
+    // A non-zero time that rounds to 0 ns is below the resolution, not zero.
+    if (ns - r).abs() > 1e-6 * ns.abs().max(1.0) || (r == 0.0 && x != 0.0) {
         return Err(TimeError::SubNanosecond);
     }
     Ok(r as i64)
@@ -245,8 +326,33 @@ mod tests {
         );
         assert_eq!(
             number_to_nanos(f64::NAN, TimeUnit::Ms),
-            Err(TimeError::TooLarge)
+            Err(TimeError::NotFinite)
         );
+        assert_eq!(
+            number_to_nanos(f64::INFINITY, TimeUnit::Ms),
+            Err(TimeError::NotFinite)
+        );
+        assert_eq!(
+            number_to_nanos(1e-12, TimeUnit::Ms),
+            Err(TimeError::SubNanosecond)
+        );
+    }
+
+    #[test]
+    fn exponents_in_time_strings() {
+        assert_eq!(parse_time_str("1e3us"), Ok(1_000_000));
+        assert_eq!(parse_time_str("2.5E-1ms"), Ok(250_000));
+        assert_eq!(parse_time_str("1e+2ns"), Ok(100));
+        assert_eq!(parse_time_str("0e99s"), Ok(0));
+        assert_eq!(parse_time_str("1e30ms"), Err(TimeError::TooLarge));
+        assert_eq!(parse_time_str("1e999999999s"), Err(TimeError::TooLarge));
+        assert_eq!(parse_time_str("1e-12ms"), Err(TimeError::SubNanosecond));
+        assert_eq!(
+            parse_time_str("1e-99999999s"),
+            Err(TimeError::SubNanosecond)
+        );
+        assert!(matches!(parse_time_str("1e ms"), Err(TimeError::Unit(_))));
+        assert!(matches!(parse_time_str("e3ms"), Err(TimeError::Syntax(_))));
     }
 
     #[test]

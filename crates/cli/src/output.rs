@@ -1,0 +1,327 @@
+//! The files rtpipe writes (`design --write`, `simulate --trace/--plot/--gantt`),
+//! written one way:
+//!
+//! - a symlink is followed and its target written (the link stays a link);
+//! - an existing path must be a regular file: directories, devices, pipes
+//!   and sockets are refused with an error naming the flag and the path
+//!   (rtpipe never replaces them, and never writes into them);
+//! - the input spec is never overwritten unless the command allows it
+//!   (`design --overwrite-spec`);
+//! - the text goes to a fresh temporary file beside the real target, which
+//!   is then renamed over it, so the target holds either its old content or
+//!   the complete new one; on any error the temporaries are removed.
+//!
+//! Paths are checked by [`prepare`] before the command does its work, so a
+//! bad path is reported at once, not after a long solve.
+
+use std::fmt;
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// An output path that cannot be written, or a failed write.
+#[derive(Debug)]
+pub struct OutputError {
+    pub msg: String,
+    pub help: String,
+}
+
+impl fmt::Display for OutputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "error: {}", self.msg)?;
+        if !self.help.is_empty() {
+            writeln!(f, "  = help: {}", self.help)?;
+        }
+        Ok(())
+    }
+}
+
+fn err(msg: String, help: impl Into<String>) -> OutputError {
+    OutputError {
+        msg,
+        help: help.into(),
+    }
+}
+
+/// A checked output: the flag that named it, the path as given and the real
+/// file it writes (symlinks followed, directory canonicalised).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Output {
+    pub flag: &'static str,
+    pub given: PathBuf,
+    pub target: PathBuf,
+}
+
+/// The directory of a path ("." for a bare file name).
+pub fn parent_dir(p: &Path) -> &Path {
+    match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// Follows symlinks (at most 40) to the path that will really be written;
+/// its directory is canonicalised. The file itself need not exist.
+fn resolve(flag: &str, p: &Path) -> Result<PathBuf, OutputError> {
+    let mut cur = p.to_path_buf();
+    let mut hops = 0;
+    while let Ok(m) = fs::symlink_metadata(&cur) {
+        if !m.file_type().is_symlink() {
+            break;
+        }
+        hops += 1;
+        if hops > 40 {
+            return Err(err(
+                format!("{flag} {}: too many levels of symbolic links", p.display()),
+                "point the link at a file",
+            ));
+        }
+        let t = fs::read_link(&cur).map_err(|e| {
+            err(
+                format!("{flag} {}: cannot read the link: {e}", p.display()),
+                "",
+            )
+        })?;
+        cur = if t.is_absolute() {
+            t
+        } else {
+            parent_dir(&cur).join(t)
+        };
+    }
+    let Some(name) = cur.file_name().map(|n| n.to_os_string()) else {
+        return Err(err(
+            format!("{flag} needs a file name, found `{}`", p.display()),
+            format!("write e.g. {flag} out/{}", example_name(flag)),
+        ));
+    };
+    let dir = parent_dir(&cur);
+    match fs::canonicalize(dir) {
+        Ok(d) if d.is_dir() => Ok(d.join(name)),
+        _ => Err(err(
+            format!(
+                "{flag} {}: directory {} does not exist",
+                p.display(),
+                dir.display()
+            ),
+            "create the directory first, or write somewhere else",
+        )),
+    }
+}
+
+fn example_name(flag: &str) -> &'static str {
+    match flag {
+        "--trace" => "trace.json",
+        "--plot" => "fig9.svg",
+        "--write" => "designed.toml",
+        _ => "gantt.svg",
+    }
+}
+
+/// Whether two existing paths are the same file (hard links included).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (fs::metadata(a), fs::metadata(b)) {
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+    }
+    match (fs::canonicalize(a), fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// Checks that `path` (named by `flag`) can be written: see the module
+/// documentation. `input` is the spec the command reads; writing over it
+/// needs `overwrite_input` (the name of the flag that allows it, if any).
+pub fn prepare(
+    flag: &'static str,
+    path: &Path,
+    input: &Path,
+    overwrite_input: Option<(bool, &str)>,
+) -> Result<Output, OutputError> {
+    if path.as_os_str().is_empty() {
+        return Err(err(
+            format!("{flag} needs a file name, found `{}`", path.display()),
+            format!("write e.g. {flag} out/{}", example_name(flag)),
+        ));
+    }
+    let target = resolve(flag, path)?;
+    if let Ok(m) = fs::metadata(&target) {
+        if m.is_dir() {
+            return Err(err(
+                format!("{flag} {} is a directory", path.display()),
+                format!(
+                    "give a file name, e.g. {flag} {}",
+                    path.join(example_name(flag)).display()
+                ),
+            ));
+        }
+        if !m.is_file() {
+            return Err(err(
+                format!(
+                    "{flag} {} is not a regular file (a device, pipe or socket); rtpipe only replaces regular files",
+                    path.display()
+                ),
+                format!(
+                    "write to a file and copy it from there, e.g. {flag} {}",
+                    example_name(flag)
+                ),
+            ));
+        }
+        if same_file(&target, input) {
+            match overwrite_input {
+                Some((true, _)) => {}
+                Some((false, allow)) => {
+                    return Err(err(
+                        format!(
+                            "{flag} {} would overwrite the input spec (its comments and period ranges would be lost)",
+                            path.display()
+                        ),
+                        format!("write to another file, or add {allow} to replace the spec"),
+                    ))
+                }
+                None => {
+                    return Err(err(
+                        format!("{flag} {} would overwrite the input spec", path.display()),
+                        "write to another file",
+                    ))
+                }
+            }
+        }
+    }
+    Ok(Output {
+        flag,
+        given: path.to_path_buf(),
+        target,
+    })
+}
+
+/// Refuses two outputs that write the same file.
+pub fn distinct(outs: &[Output]) -> Result<(), OutputError> {
+    for (k, o) in outs.iter().enumerate() {
+        if let Some(other) = outs[..k].iter().find(|q| q.target == o.target) {
+            return Err(err(
+                format!(
+                    "{} and {} both write {}",
+                    other.flag,
+                    o.flag,
+                    o.target.display()
+                ),
+                "give each output its own file",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes every file to a fresh temporary file beside its real target, then
+/// renames them all over their targets. A failed write removes every
+/// temporary and changes no target; a failed rename (rare: same directory)
+/// keeps the targets renamed before it and removes the other temporaries.
+pub fn write_all(files: &[(&Output, &str)]) -> Result<(), OutputError> {
+    let mut temps: Vec<PathBuf> = Vec::new();
+    let cleanup = |temps: &[PathBuf]| {
+        for t in temps {
+            let _ = fs::remove_file(t);
+        }
+    };
+    for (k, (out, text)) in files.iter().enumerate() {
+        let name = out
+            .target
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = parent_dir(&out.target).join(format!(".{name}.{}.{k}.tmp", std::process::id()));
+        let written = fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+            .and_then(|mut f| {
+                // Keep the permissions of a file being replaced.
+                if let Ok(m) = fs::metadata(&out.target) {
+                    f.set_permissions(m.permissions())?;
+                }
+                f.write_all(text.as_bytes())?;
+                f.sync_all()
+            });
+        if let Err(e) = written {
+            // Only a temporary this call created is removed.
+            if e.kind() != std::io::ErrorKind::AlreadyExists {
+                let _ = fs::remove_file(&tmp);
+            }
+            cleanup(&temps);
+            return Err(err(
+                format!("{} {}: cannot write: {e}", out.flag, out.given.display()),
+                "check that the directory is writable and the disk not full",
+            ));
+        }
+        temps.push(tmp);
+    }
+    for (k, ((out, _), tmp)) in files.iter().zip(&temps).enumerate() {
+        if let Err(e) = fs::rename(tmp, &out.target) {
+            cleanup(&temps[k..]);
+            return Err(err(
+                format!("{} {}: cannot write: {e}", out.flag, out.given.display()),
+                "check that the directory is writable",
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("rtpipe-output-{tag}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        let _ = fs::create_dir_all(&d);
+        d
+    }
+
+    #[test]
+    fn writes_through_a_symlink_and_keeps_it() {
+        let d = scratch("link");
+        let real = d.join("real.svg");
+        let link = d.join("link.svg");
+        let _ = fs::write(&real, "old");
+        #[cfg(unix)]
+        {
+            let _ = std::os::unix::fs::symlink("real.svg", &link);
+            let input = d.join("spec.toml");
+            let o = match prepare("--plot", &link, &input, None) {
+                Ok(o) => o,
+                Err(e) => panic!("{e}"),
+            };
+            assert!(write_all(&[(&o, "new")]).is_ok());
+            assert!(fs::symlink_metadata(&link).is_ok_and(|m| m.file_type().is_symlink()));
+            assert_eq!(fs::read_to_string(&real).ok().as_deref(), Some("new"));
+            // Nothing else is left in the directory.
+            assert_eq!(fs::read_dir(&d).map(|r| r.count()).unwrap_or(0), 2);
+        }
+        let _ = fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn refuses_non_regular_files_and_the_input() {
+        let d = scratch("refuse");
+        let input = d.join("spec.toml");
+        let _ = fs::write(&input, "x");
+        let e = prepare("--write", &d, &input, Some((false, "--overwrite-spec")));
+        assert!(e.is_err_and(|e| e.msg.contains("is a directory")));
+        #[cfg(unix)]
+        {
+            let e = prepare("--write", Path::new("/dev/null"), &input, None);
+            assert!(e.is_err_and(|e| e.msg.contains("not a regular file")));
+        }
+        let e = prepare("--write", &input, &input, Some((false, "--overwrite-spec")));
+        assert!(e.is_err_and(|e| e.help.contains("--overwrite-spec")));
+        assert!(prepare("--write", &input, &input, Some((true, "--overwrite-spec"))).is_ok());
+        let e = prepare("--write", &d.join("no/such/dir/x.toml"), &input, None);
+        assert!(e.is_err_and(|e| e.msg.contains("does not exist")));
+        let _ = fs::remove_dir_all(&d);
+    }
+}
