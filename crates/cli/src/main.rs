@@ -2,6 +2,7 @@
 
 mod analyze;
 mod design;
+mod fly;
 mod output;
 mod plot;
 mod simulate;
@@ -51,6 +52,14 @@ enum Command {
     /// (a bug in the analysis), 2 on bad input (flags, spec, output paths), 3
     /// on an internal error (a bug).
     Simulate(simulate::SimulateArgs),
+    /// Fly a simulated quadrotor with the spec's task code on the simulated
+    /// schedule (software in the loop) and report the flight's quality and
+    /// each chain's observed latencies against the bounds.
+    ///
+    /// Exit status: 0 when the flight meets its criteria and no sample
+    /// exceeds a sound bound, 1 otherwise, 2 on bad input, 3 on an internal
+    /// error.
+    Fly(fly::FlyArgs),
     /// Choose the free periods so that every limit holds at least utilisation
     /// (Section IV), and re-check the answer with the analysis.
     ///
@@ -147,6 +156,7 @@ fn main() -> ExitCode {
             args.search_steps_given = steps_given;
             simulate::run(&args)
         }
+        Command::Fly(args) => fly::run(&args),
         Command::Design {
             spec,
             mode,

@@ -113,6 +113,7 @@ fn example_name(flag: &str) -> &'static str {
         "--trace" => "trace.json",
         "--plot" => "fig9.svg",
         "--write" => "designed.toml",
+        "--log" => "flight.csv",
         _ => "gantt.svg",
     }
 }

@@ -93,7 +93,7 @@ pub enum ExecArg {
 }
 
 impl ExecArg {
-    fn model(self) -> ExecModel {
+    pub(crate) fn model(self) -> ExecModel {
         match self {
             ExecArg::Worst => ExecModel::Worst,
             ExecArg::Uniform => ExecModel::Uniform,
@@ -140,7 +140,7 @@ pub struct Bad {
 }
 
 impl Bad {
-    fn new(msg: impl Into<String>, help: impl Into<String>) -> Bad {
+    pub(crate) fn new(msg: impl Into<String>, help: impl Into<String>) -> Bad {
         Bad {
             msg: msg.into(),
             help: help.into(),
@@ -164,14 +164,14 @@ impl fmt::Display for Bad {
     }
 }
 
-fn fail(b: Bad) -> ExitCode {
+pub(crate) fn fail(b: Bad) -> ExitCode {
     eprint!("{b}");
     ExitCode::from(EXIT_BAD_INPUT)
 }
 
 /// A time from the command line: a bare number in the spec's unit or a
 /// string with a unit.
-fn parse_time(spec: &Spec, s: &str) -> Result<Nanos, String> {
+pub(crate) fn parse_time(spec: &Spec, s: &str) -> Result<Nanos, String> {
     let t = s.trim();
     let r = match t.parse::<f64>() {
         Ok(x) => number_to_nanos(x, spec.time_unit),
@@ -348,7 +348,7 @@ fn run_simulation(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<SimResult, 
 
 /// Runs `f` with a spinner and the elapsed time on stderr (hidden when stderr
 /// is not a terminal).
-fn with_spinner<T>(msg: String, f: impl FnOnce() -> T) -> T {
+pub(crate) fn with_spinner<T>(msg: String, f: impl FnOnce() -> T) -> T {
     let pb = crate::spinner(msg);
     let out = f();
     pb.finish_and_clear();
@@ -427,7 +427,7 @@ fn render_outputs(
 
 /// Checks the output paths again (they may have changed during the run) and
 /// writes them all or none (see [`output::write_all`]).
-fn write_all(spec: &Path, files: &[(&'static str, PathBuf, String)]) -> Result<(), Bad> {
+pub(crate) fn write_all(spec: &Path, files: &[(&'static str, PathBuf, String)]) -> Result<(), Bad> {
     let mut outs = Vec::new();
     for (flag, path, _) in files {
         outs.push(output::prepare(flag, path, spec, None).map_err(Bad::from)?);
@@ -649,16 +649,7 @@ fn to_json(
     obs: &[ChainObs],
     seconds: f64,
 ) -> Value {
-    let mut v = analyze::report_json(spec, report);
-    if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
-        for (entry, o) in chains.iter_mut().zip(obs) {
-            entry["observed"] = observed_json(spec, &o.read);
-            entry["violations"] = json!({"paper": o.read.over_paper, "sound": o.read.over_sound});
-            entry["observed_from_event"] = observed_json(spec, &o.event);
-            entry["violations_from_event"] =
-                json!({"paper": o.event.over_paper, "sound": o.event.over_sound});
-        }
-    }
+    let mut v = observations_json(spec, report, obs);
     if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
         for (entry, ts) in tasks.iter_mut().zip(&res.tasks) {
             entry["observed"] = json!({
@@ -686,6 +677,22 @@ fn to_json(
         "events": res.events,
         "seconds": seconds,
     });
+    v
+}
+
+/// The `analyze --json` report with each chain entry's observations from the
+/// read and from the event.
+pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) -> Value {
+    let mut v = analyze::report_json(spec, report);
+    if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
+        for (entry, o) in chains.iter_mut().zip(obs) {
+            entry["observed"] = observed_json(spec, &o.read);
+            entry["violations"] = json!({"paper": o.read.over_paper, "sound": o.read.over_sound});
+            entry["observed_from_event"] = observed_json(spec, &o.event);
+            entry["violations_from_event"] =
+                json!({"paper": o.event.over_paper, "sound": o.event.over_sound});
+        }
+    }
     v
 }
 
@@ -740,7 +747,7 @@ fn si(x: f64) -> String {
 
 /// One row per chain and metric: the observations from `a` against the
 /// bounds from `a`.
-fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
+pub(crate) fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
     let mut t = Table::new(&[
         "chain",
         "metric",

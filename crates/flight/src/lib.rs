@@ -38,6 +38,7 @@ pub mod motor;
 pub mod pid;
 pub mod plant;
 pub mod preset;
+pub mod quality;
 pub mod radio;
 pub mod rng;
 pub mod tasks;

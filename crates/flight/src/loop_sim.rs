@@ -119,6 +119,8 @@ pub struct TracePoint {
     pub vel: Vec3,
     /// True attitude.
     pub euler: Euler,
+    /// True body rate, rad/s.
+    pub rate: Vec3,
     /// Estimated attitude (AHRS register).
     pub est: Euler,
     /// Set-point the controller is using (radio register).
@@ -425,6 +427,7 @@ impl LoopSim {
             pos: truth.pos,
             vel: truth.vel,
             euler: truth.euler,
+            rate: truth.rate,
             est: self.r_att.value.euler,
             sp: self.r_radio.value.cmd.setpoint(),
             alt_target: self.mission.intent_at(t).altitude_m,

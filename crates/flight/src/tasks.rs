@@ -144,7 +144,12 @@ pub struct GyroTask {
 }
 
 impl Body<Value> for GyroTask {
-    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        device: Option<Value>,
+    ) -> Value {
         if let Some(Value::Imu(r)) = device {
             let rate = self.lpf.apply(r.value);
             self.acc.push(rate, r.t_ns);
@@ -157,7 +162,12 @@ impl Body<Value> for GyroTask {
 pub struct AccelTask;
 
 impl Body<Value> for AccelTask {
-    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        device: Option<Value>,
+    ) -> Value {
         match device {
             Some(Value::Imu(r)) => Value::Accel(AccelSample {
                 specific_force: r.value,
@@ -174,7 +184,12 @@ pub struct AhrsTask {
 }
 
 impl Body<Value> for AhrsTask {
-    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        inputs: &[Option<Stamped<Value>>],
+        _device: Option<Value>,
+    ) -> Value {
         let gyro = input(inputs, |v| match v {
             Value::Gyro(g) => Some(g),
             _ => None,
@@ -198,7 +213,12 @@ pub struct RadioTask {
 }
 
 impl Body<Value> for RadioTask {
-    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        device: Option<Value>,
+    ) -> Value {
         if let Some(Value::Radio(r)) = device {
             self.last = Some(r);
         }
@@ -214,7 +234,9 @@ pub struct PidTask {
     arm: ArmState,
     checks: ArmingChecks,
     failsafe: Failsafe,
-    last_read: Option<Nanos>,
+    /// The attitude sample the controller last ran on: (its time, ns; the
+    /// output it gave).
+    last: Option<(u64, MotorDemand)>,
 }
 
 impl PidTask {
@@ -240,11 +262,16 @@ impl PidTask {
 }
 
 impl Body<Value> for PidTask {
-    fn run(&mut self, job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
-        let dt = self
-            .last_read
-            .map_or(0.0, |p| (job.read - p) as f64 * 1e-9);
-        self.last_read = Some(job.read);
+    /// The controller steps once per new attitude sample, with dt from the
+    /// samples' timestamps: the PID task runs faster than the AHRS, and
+    /// stepping again on the same measurement would turn the D term into
+    /// spikes (zero, then the whole change over one PID period).
+    fn run(
+        &mut self,
+        job: &Job,
+        inputs: &[Option<Stamped<Value>>],
+        _device: Option<Value>,
+    ) -> Value {
         let att = input(inputs, |v| match v {
             Value::Attitude(a) => Some(a),
             _ => None,
@@ -259,8 +286,17 @@ impl Body<Value> for PidTask {
         let now = u64::try_from(job.read).unwrap_or(0);
         let Some(sp) = self.setpoint(now, &att, &rx) else {
             self.ctrl.reset();
+            self.last = None;
             return Value::Demand(MotorDemand::default());
         };
+        if let Some((t, out)) = self.last {
+            if t == att.t_ns {
+                return Value::Demand(out);
+            }
+        }
+        let dt = self
+            .last
+            .map_or(0.0, |(t, _)| att.t_ns.saturating_sub(t) as f64 * 1e-9);
         if sp.throttle < 0.15 {
             // Betaflight resets the I term at low throttle (no airmode on the ground).
             self.ctrl.reset();
@@ -268,10 +304,12 @@ impl Body<Value> for PidTask {
         let cmd = self.ctrl.update(&sp, &att.euler, att.rate, dt);
         let m = mix(&cmd);
         self.ctrl.set_saturated(m.saturated);
-        Value::Demand(MotorDemand {
+        let out = MotorDemand {
             motors: m.motors,
             armed: true,
-        })
+        };
+        self.last = Some((att.t_ns, out));
+        Value::Demand(out)
     }
 }
 
@@ -280,7 +318,12 @@ impl Body<Value> for PidTask {
 pub struct PwmTask;
 
 impl Body<Value> for PwmTask {
-    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        inputs: &[Option<Stamped<Value>>],
+        _device: Option<Value>,
+    ) -> Value {
         let d = input(inputs, |v| match v {
             Value::Demand(d) => Some(d),
             _ => None,
@@ -309,7 +352,12 @@ pub struct LoadTask {
 }
 
 impl Body<Value> for LoadTask {
-    fn run(&mut self, job: &Job, _inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        _device: Option<Value>,
+    ) -> Value {
         let waited = (job.read - job.release) as f64 / self.period as f64;
         self.hk.system(100.0 * waited);
         Value::Scalar(self.hk.load_percent)
@@ -322,7 +370,12 @@ pub struct VbatTask {
 }
 
 impl Body<Value> for VbatTask {
-    fn run(&mut self, _job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        device: Option<Value>,
+    ) -> Value {
         if let Some(Value::Scalar(v)) = device {
             self.hk.battery_voltage(v);
         }
@@ -337,10 +390,13 @@ pub struct CurrentTask {
 }
 
 impl Body<Value> for CurrentTask {
-    fn run(&mut self, job: &Job, _inputs: &[Option<Stamped<Value>>], device: Option<Value>) -> Value {
-        let dt = self
-            .last_read
-            .map_or(0.0, |p| (job.read - p) as f64 * 1e-9);
+    fn run(
+        &mut self,
+        job: &Job,
+        _inputs: &[Option<Stamped<Value>>],
+        device: Option<Value>,
+    ) -> Value {
+        let dt = self.last_read.map_or(0.0, |p| (job.read - p) as f64 * 1e-9);
         self.last_read = Some(job.read);
         if let Some(Value::Scalar(a)) = device {
             self.hk.battery_current(a, dt);
@@ -355,7 +411,12 @@ pub struct AlertTask {
 }
 
 impl Body<Value> for AlertTask {
-    fn run(&mut self, _job: &Job, inputs: &[Option<Stamped<Value>>], _device: Option<Value>) -> Value {
+    fn run(
+        &mut self,
+        _job: &Job,
+        inputs: &[Option<Stamped<Value>>],
+        _device: Option<Value>,
+    ) -> Value {
         if let Some(v) = input(inputs, |v| match v {
             Value::Scalar(x) => Some(x),
             _ => None,
@@ -368,9 +429,16 @@ impl Body<Value> for AlertTask {
 
 /// Builds the body of a task of `role` with period `period` (ns) for the
 /// vehicle `preset`.
-pub fn body(role: Role, period: Nanos, preset: &Preset) -> Result<Box<dyn Body<Value>>, ConfigError> {
+pub fn body(
+    role: Role,
+    period: Nanos,
+    preset: &Preset,
+) -> Result<Box<dyn Body<Value>>, ConfigError> {
     if period <= 0 {
-        return Err(ConfigError::new("period", "a flight task needs a positive period"));
+        return Err(ConfigError::new(
+            "period",
+            "a flight task needs a positive period",
+        ));
     }
     let hz = 1e9 / period as f64;
     let hk = || Housekeeping::new(HousekeepingConfig::cleanflight(preset.battery.cells));
@@ -389,7 +457,7 @@ pub fn body(role: Role, period: Nanos, preset: &Preset) -> Result<Box<dyn Body<V
             arm: ArmState::default(),
             checks: ArmingChecks::default(),
             failsafe: Failsafe::new(failsafe_config(preset)),
-            last_read: None,
+            last: None,
         }),
         Role::Pwm => Box::new(PwmTask),
         Role::Load => Box::new(LoadTask { period, hk: hk()? }),
@@ -506,7 +574,11 @@ impl Cosim {
     /// disturbance on the way. Executors call in time order; a call for an
     /// earlier instant is a bug.
     pub fn advance(&mut self, t: u64) {
-        assert!(t >= self.now, "the world cannot go back from {} to {t} ns", self.now);
+        assert!(
+            t >= self.now,
+            "the world cannot go back from {} to {t} ns",
+            self.now
+        );
         while self.next_trace <= t {
             let at = self.next_trace;
             self.step_to(at);
@@ -536,6 +608,7 @@ impl Cosim {
             pos: truth.pos,
             vel: truth.vel,
             euler: truth.euler,
+            rate: truth.rate,
             est: self.seen.est,
             sp: self.seen.sp,
             alt_target: self.mission.intent_at(self.now).altitude_m,
@@ -550,7 +623,11 @@ impl Cosim {
     /// The pilot's radio frame at `t`: the mission's intent flown by the
     /// autopilot from the true state (a companion with motion capture).
     fn radio_frame(&mut self, t: u64) -> Option<Value> {
-        if self.cfg.radio_loss.is_some_and(|(a, b)| (a..b).contains(&t)) {
+        if self
+            .cfg
+            .radio_loss
+            .is_some_and(|(a, b)| (a..b).contains(&t))
+        {
             return None;
         }
         let truth = self.plant.truth();

@@ -1,0 +1,511 @@
+//! `rtpipe fly`: the flight controller's task code on the simulated
+//! schedule, flying a simulated quadrotor (software in the loop).
+//!
+//! Each task of the spec runs the body its `body = "..."` names
+//! (`rtpipe_flight::tasks`); the simulator decides when every job reads and
+//! publishes, and the co-simulated world (`Cosim`) is sampled and actuated
+//! at exactly those instants. The report holds the flight's quality against
+//! the mission and, as in the paper's Fig. 12, the observed reaction and
+//! freshness of every chain against the bounds.
+
+use crate::analyze;
+use crate::plot;
+use crate::simulate::{self, Bad, ExecArg};
+use crate::table::Table;
+use clap::Args;
+use rtpipe_analysis::{Anchor, Report};
+use rtpipe_body::{Body, Job, Stamped};
+use rtpipe_flight::loop_sim::TracePoint;
+use rtpipe_flight::preset::{Preset, BUILTIN};
+use rtpipe_flight::quality::{assess, Criteria, FlightQuality};
+use rtpipe_flight::radio::Mission;
+use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
+use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_sim::observe::{observe, response_violations, ChainObs};
+use rtpipe_sim::{simulate_bodies, Phasing, SimConfig, SimResult};
+use serde_json::{json, Value as Json};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Time flown after the mission's last step when no `--duration` is given.
+const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
+
+#[derive(Args, Debug)]
+pub struct FlyArgs {
+    /// The system spec (TOML) whose tasks name their `body`, e.g.
+    /// examples/cleanflight.toml.
+    pub spec: PathBuf,
+    /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
+    #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
+    pub vehicle: String,
+    /// The mission: a built-in one (hover, steps) or a mission file.
+    #[arg(long, value_name = "FILE|hover|steps", default_value = "steps")]
+    pub mission: String,
+    /// Flight time: "30s", "2500ms", or a number in the spec's time unit
+    /// [default: 5 s after the mission's last step].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub duration: Option<String>,
+    /// Seeds the sensor noise and the execution times (the same seed gives
+    /// the same flight, bit for bit).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// How each job's demand is drawn (see `simulate --exec`).
+    #[arg(long, value_enum, default_value_t = ExecArg::Uniform)]
+    pub exec: ExecArg,
+    /// Print one JSON object: "flight" and the chains as `simulate --json`.
+    #[arg(long)]
+    pub json: bool,
+    /// Write SVG plots into this directory (created if missing):
+    /// attitude.svg, altitude.svg, motors.svg, latency.svg.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+    /// Write the flight as CSV (one row every 2 ms; the header names every
+    /// column and its unit; readable by PlotJuggler).
+    #[arg(long, value_name = "FILE.csv")]
+    pub log: Option<PathBuf>,
+}
+
+/// Everything a flight needs besides the spec.
+pub struct Setup {
+    pub preset: Preset,
+    pub mission: Mission,
+    pub roles: Vec<Option<Role>>,
+    pub horizon: Nanos,
+}
+
+/// The outcome of one flight.
+pub struct Flight {
+    pub sim: SimResult,
+    pub trace: Vec<TracePoint>,
+    pub quality: FlightQuality,
+}
+
+fn vehicle(v: &str) -> Result<Preset, Bad> {
+    let r = if BUILTIN.contains(&v) {
+        Preset::builtin(v)
+    } else {
+        Preset::from_file(Path::new(v))
+    };
+    r.map_err(|e| {
+        Bad::new(
+            format!("--vehicle {v}: {e}"),
+            format!(
+                "name a built-in preset ({}) or a preset file",
+                BUILTIN.join(", ")
+            ),
+        )
+    })
+}
+
+fn mission(m: &str) -> Result<Mission, Bad> {
+    let r = match m {
+        "hover" | "steps" => Mission::builtin(m),
+        _ => Mission::from_file(Path::new(m)),
+    };
+    r.map_err(|e| {
+        Bad::new(
+            format!("--mission {m}: {e}"),
+            "name a built-in mission (hover, steps) or a mission file",
+        )
+    })
+}
+
+/// The role of every task from its `body`; the pipeline must be complete.
+fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, Bad> {
+    let mut roles = Vec::with_capacity(spec.tasks.len());
+    for t in &spec.tasks {
+        let r = match &t.body {
+            None => None,
+            Some(b) => Some(Role::parse(b).ok_or_else(|| {
+                Bad::new(
+                    format!(
+                        "{}: task `{}` names an unknown body `{b}`",
+                        path.display(),
+                        t.name
+                    ),
+                    format!("use one of: {}", Role::names()),
+                )
+            })?),
+        };
+        roles.push(r);
+    }
+    for need in [
+        Role::Gyro,
+        Role::Accel,
+        Role::Ahrs,
+        Role::Radio,
+        Role::Pid,
+        Role::Pwm,
+    ] {
+        if !roles.contains(&Some(need)) {
+            return Err(Bad::new(
+                format!(
+                    "{}: no task has body = \"{}\", so the flight controller is incomplete",
+                    path.display(),
+                    need.name()
+                ),
+                "give the tasks of the critical path their bodies, as examples/cleanflight.toml does",
+            ));
+        }
+    }
+    Ok(roles)
+}
+
+/// Checks the flags and the spec before anything runs.
+pub fn setup(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
+    let roles = roles(spec, &a.spec)?;
+    let preset = vehicle(&a.vehicle)?;
+    let mission = mission(&a.mission)?;
+    let horizon = match &a.duration {
+        Some(d) => simulate::parse_time(spec, d)
+            .ok()
+            .filter(|&h| h > 0)
+            .ok_or_else(|| {
+                Bad::new(
+                    format!("invalid value `{d}` for --duration"),
+                    "write a positive time like --duration 30s",
+                )
+            })?,
+        None => mission.end_ns() as Nanos + AFTER_LAST_STEP_NS,
+    };
+    Ok(Setup {
+        preset,
+        mission,
+        roles,
+        horizon,
+    })
+}
+
+/// A task without a body: it runs (its timing matters) but computes nothing.
+fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
+    Value::Nothing
+}
+
+/// Flies `spec` as `setup` says: bodies on the simulated schedule, the
+/// world co-simulated at their read and publish instants.
+pub fn fly(spec: &Spec, s: &Setup, seed: u64, exec: ExecArg) -> Result<Flight, Bad> {
+    let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
+    for (t, role) in spec.tasks.iter().zip(&s.roles) {
+        let period = t.fixed_period().unwrap_or(0);
+        bodies.push(match role {
+            Some(r) => body(*r, period, &s.preset).map_err(|e| {
+                Bad::new(
+                    format!("task `{}` (body {}): {e}", t.name, r.name()),
+                    "give it a fixed period the body can run at",
+                )
+            })?,
+            None => Box::new(idle),
+        });
+    }
+    let mut world = Cosim::new(
+        &s.preset,
+        s.mission.clone(),
+        s.roles.clone(),
+        CosimConfig::new(seed),
+    )
+    .map_err(|e| Bad::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    let cfg = SimConfig {
+        horizon: s.horizon,
+        seed,
+        phasing: Phasing::Sync,
+        exec: exec.model(),
+        log_jobs: false,
+    };
+    let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
+        Bad::new(
+            format!("cannot simulate: {e}"),
+            "give every task a fixed positive period",
+        )
+    })?;
+    world.advance(u64::try_from(s.horizon).unwrap_or(0));
+    let quality = assess(&world.trace, &s.mission);
+    Ok(Flight {
+        sim,
+        trace: std::mem::take(&mut world.trace),
+        quality,
+    })
+}
+
+pub fn run(a: &FlyArgs) -> ExitCode {
+    let spec = match analyze::load(&a.spec) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let s = match setup(&spec, a) {
+        Ok(s) => s,
+        Err(b) => return simulate::fail(b),
+    };
+    let msg = format!(
+        "flying {} ({}, mission {}) for {:.1} s",
+        spec.name,
+        s.preset.name,
+        s.mission.name,
+        s.horizon as f64 * 1e-9
+    );
+    let started = std::time::Instant::now();
+    let flight = match simulate::with_spinner(msg, || fly(&spec, &s, a.seed, a.exec)) {
+        Ok(f) => f,
+        Err(b) => return simulate::fail(b),
+    };
+    let seconds = started.elapsed().as_secs_f64();
+    let report = rtpipe_analysis::analyze(&spec);
+    let obs = observe(&report, &flight.sim);
+    if let Err(b) = write_outputs(&spec, a, &flight, &obs) {
+        return simulate::fail(b);
+    }
+    let failures = flight.quality.failures(&Criteria::default());
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
+    let late_rt = response_violations(&report, &flight.sim);
+    if a.json {
+        let v = to_json(&spec, &report, &s, &flight, &obs, &failures, seconds);
+        if let Err(code) = analyze::print_json(&v) {
+            return code;
+        }
+    } else {
+        print!("{}", to_text(&spec, &s, &flight, &obs, &failures, seconds));
+    }
+    if over_sound > 0 || !late_rt.is_empty() {
+        eprintln!("error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound (a bug in the analysis or the simulator)");
+        return ExitCode::from(1);
+    }
+    if failures.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    }
+}
+
+fn f3(x: f64) -> String {
+    format!("{x:.3}")
+}
+
+fn quality_text(q: &FlightQuality, failures: &[String]) -> String {
+    let mut out = format!(
+        "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
+        if q.crashed { "CRASHED" } else { "no crash" },
+        q.airborne_s,
+        q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
+    );
+    out.push_str(&format!(
+        "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
+        q.attitude_error_deg.rms,
+        q.attitude_error_deg.max,
+        q.altitude_error_m.rms,
+        q.altitude_error_m.max,
+        q.drift_m,
+        q.saturation_s
+    ));
+    if !q.steps.is_empty() {
+        let mut t = Table::new(&[
+            "step",
+            "at s",
+            "to°",
+            "rise s",
+            "overshoot %",
+            "settling s",
+            "true rise s",
+            "true overshoot %",
+            "true drift° at release",
+        ])
+        .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+        for st in &q.steps {
+            let (e, r) = (&st.tracked, &st.truth);
+            t.row(vec![
+                st.axis.name().to_string(),
+                format!("{:.1}", st.at_s),
+                format!("{:.0}", st.to_deg),
+                f3(e.rise_s),
+                format!("{:.1}", 100.0 * e.overshoot),
+                f3(e.settling_s),
+                f3(r.rise_s),
+                format!("{:.1}", 100.0 * r.overshoot),
+                format!("{:+.2}", st.drift_deg),
+            ]);
+        }
+        out.push_str("  steps (tracked: the AHRS estimate the controller closes its loop on; true: the plant):\n");
+        out.push_str(&t.render());
+    }
+    out.push_str(&match failures {
+        [] => "  criteria (no crash, hover attitude RMS < 2°, altitude RMS < 0.1 m, roll/pitch steps: true overshoot < 20 %, tracked settling < 0.5 s): met\n".to_string(),
+        f => format!("  criteria NOT met: {}\n", f.join("; ")),
+    });
+    out
+}
+
+fn to_text(
+    spec: &Spec,
+    s: &Setup,
+    f: &Flight,
+    obs: &[ChainObs],
+    failures: &[String],
+    seconds: f64,
+) -> String {
+    let flown = s.horizon as f64 * 1e-9;
+    let mut out = format!(
+        "system {}: {} tasks; vehicle {}; mission {} ({}); {:.1} s flown in {:.2} s ({:.0}× real time)\n\n",
+        spec.name,
+        spec.tasks.len(),
+        s.preset.name,
+        s.mission.name,
+        s.mission.description,
+        flown,
+        seconds,
+        flown / seconds.max(1e-9)
+    );
+    out.push_str(&quality_text(&f.quality, failures));
+    out.push_str(
+        "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
+    );
+    out.push_str(&simulate::chain_table(spec, obs, Anchor::Read));
+    out.push_str("\nfrom the event (see `simulate`), against the +event bounds:\n");
+    out.push_str(&simulate::chain_table(spec, obs, Anchor::Event));
+    let bg: Vec<&str> = spec
+        .tasks
+        .iter()
+        .zip(&f.sim.tasks)
+        .filter(|(t, _)| t.server == Server::Background)
+        .map(|(t, _)| t.name.as_str())
+        .collect();
+    if !bg.is_empty() {
+        let runs: Vec<String> = spec
+            .tasks
+            .iter()
+            .zip(&f.sim.tasks)
+            .filter(|(t, _)| t.server == Server::Background)
+            .map(|(t, r)| format!("{} {}/{}", t.name, r.completed, r.released))
+            .collect();
+        out.push_str(&format!(
+            "\nhousekeeping (background, jobs completed/released): {}\n",
+            runs.join(", ")
+        ));
+    }
+    out
+}
+
+fn to_json(
+    spec: &Spec,
+    report: &Report,
+    s: &Setup,
+    f: &Flight,
+    obs: &[ChainObs],
+    failures: &[String],
+    seconds: f64,
+) -> Json {
+    let mut v = simulate::observations_json(spec, report, obs);
+    let q = &f.quality;
+    let steps: Vec<Json> = q
+        .steps
+        .iter()
+        .map(|st| {
+            let r = |x: &rtpipe_flight::loop_sim::metrics::StepResponse| {
+                json!({"rise_s": x.rise_s, "overshoot": x.overshoot, "settling_s": x.settling_s})
+            };
+            json!({
+                "axis": st.axis.name(),
+                "at_s": st.at_s,
+                "to_deg": st.to_deg,
+                "tracked": r(&st.tracked),
+                "true": r(&st.truth),
+                "drift_deg": st.drift_deg,
+            })
+        })
+        .collect();
+    v["flight"] = json!({
+        "vehicle": s.preset.name,
+        "mission": s.mission.name,
+        "duration_s": s.horizon as f64 * 1e-9,
+        "crashed": q.crashed,
+        "attitude_error_deg": {"rms": q.attitude_error_deg.rms, "max": q.attitude_error_deg.max},
+        "altitude_error_m": {"rms": q.altitude_error_m.rms, "max": q.altitude_error_m.max},
+        "drift_m": q.drift_m,
+        "saturation_s": q.saturation_s,
+        "airborne_s": q.airborne_s,
+        "landed_s": q.landed_s,
+        "steps": steps,
+        "criteria_met": failures.is_empty(),
+        "failures": failures,
+        "seconds": seconds,
+    });
+    v
+}
+
+/// The CSV header: every column with its unit.
+const CSV_HEADER: &str = "time_s,sp_roll_deg,sp_pitch_deg,sp_yaw_rate_dps,sp_throttle,\
+roll_deg,pitch_deg,yaw_deg,est_roll_deg,est_pitch_deg,est_yaw_deg,\
+rate_x_dps,rate_y_dps,rate_z_dps,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,alt_target_m,\
+motor1,motor2,motor3,motor4,armed,on_ground,crashed,battery_v";
+
+fn csv(trace: &[TracePoint]) -> String {
+    let mut out = String::with_capacity(200 * (trace.len() + 1));
+    out.push_str(CSV_HEADER);
+    out.push('\n');
+    for p in trace {
+        let d = f64::to_degrees;
+        let vals = [
+            p.t_ns as f64 * 1e-9,
+            d(p.sp.roll),
+            d(p.sp.pitch),
+            d(p.sp.yaw_rate),
+            p.sp.throttle,
+            d(p.euler.roll),
+            d(p.euler.pitch),
+            d(p.euler.yaw),
+            d(p.est.roll),
+            d(p.est.pitch),
+            d(p.est.yaw),
+            d(p.rate.x),
+            d(p.rate.y),
+            d(p.rate.z),
+            p.pos.x,
+            p.pos.y,
+            p.pos.z,
+            p.vel.x,
+            p.vel.y,
+            p.vel.z,
+        ];
+        for v in vals {
+            out.push_str(&format!("{v:.6},"));
+        }
+        out.push_str(&p.alt_target.map_or(String::new(), |a| format!("{a:.3}")));
+        for m in p.motors {
+            out.push_str(&format!(",{m:.5}"));
+        }
+        out.push_str(&format!(
+            ",{},{},{},{:.4}\n",
+            u8::from(p.armed),
+            u8::from(p.on_ground),
+            u8::from(p.crashed),
+            p.voltage
+        ));
+    }
+    out
+}
+
+/// Renders `--plot` and `--log` and writes them all or none.
+fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Bad> {
+    let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
+    if let Some(dir) = &a.plot {
+        if !dir.is_dir() {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                Bad::new(
+                    format!("--plot {}: cannot create the directory: {e}", dir.display()),
+                    "name a directory you can write",
+                )
+            })?;
+        }
+        let svgs = [
+            ("attitude.svg", plot::flight_attitude(&f.trace)),
+            ("altitude.svg", plot::flight_altitude(&f.trace)),
+            ("motors.svg", plot::flight_motors(&f.trace)),
+            ("latency.svg", plot::fig9(spec, obs, "observed in flight")),
+        ];
+        for (name, svg) in svgs {
+            let svg = svg.map_err(|e| Bad::new(format!("cannot draw {name}: {e}"), ""))?;
+            files.push(("--plot", dir.join(name), svg));
+        }
+    }
+    if let Some(path) = &a.log {
+        files.push(("--log", path.clone(), csv(&f.trace)));
+    }
+    simulate::write_all(&a.spec, &files)
+}

@@ -1,0 +1,331 @@
+//! Flight quality of a recorded trajectory against a mission: what `rtpipe
+//! fly` reports and what its criteria judge.
+//!
+//! Windows: the **hover** samples are those with the vehicle armed and
+//! airborne under an altitude target, from 3 s after the first altitude
+//! target (the climb) until the first stick step or the landing, whichever
+//! comes first: steady hover, before any manoeuvre. Attitude error is the
+//! true roll/pitch against the set-point in use (√(e_roll² + e_pitch²));
+//! altitude error the true height against the target.
+//!
+//! **Steps** away from level (a stick moved from 0) are judged twice, each
+//! until the stick moves again: on the attitude the controller closes its
+//! loop on (the AHRS estimate: how well the control loop tracks), and on the
+//! true attitude (overshoot, rise time, and the drift at the end of the
+//! hold). The two differ because Cleanflight's Mahony filter trusts the
+//! accelerometer within 0.9–1.1 g: in a sustained 20° bank at constant
+//! height the specific force is 1.064 g along the body's z axis, so the
+//! filter pulls its estimate toward level and the true angle drifts away
+//! (docs/flight.md). Returns to level are not judged: the autopilot's
+//! position hold takes over and brakes the sideways speed with its own
+//! set-points.
+
+use crate::loop_sim::metrics::{step_response, StepResponse};
+use crate::loop_sim::TracePoint;
+use crate::radio::Mission;
+
+const CLIMB_S: f64 = 3.0;
+
+/// RMS and maximum of an error.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ErrorStats {
+    /// Root mean square.
+    pub rms: f64,
+    /// Largest magnitude.
+    pub max: f64,
+    /// Samples.
+    pub count: usize,
+}
+
+impl ErrorStats {
+    fn of(errors: impl Iterator<Item = f64>) -> ErrorStats {
+        let (mut s, mut m, mut n) = (0.0, 0.0f64, 0usize);
+        for e in errors {
+            s += e * e;
+            m = m.max(e.abs());
+            n += 1;
+        }
+        ErrorStats {
+            rms: if n == 0 { 0.0 } else { (s / n as f64).sqrt() },
+            max: m,
+            count: n,
+        }
+    }
+}
+
+/// Which angle a stick step moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    /// Roll angle.
+    Roll,
+    /// Pitch angle.
+    Pitch,
+    /// Heading.
+    Yaw,
+}
+
+impl Axis {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Axis::Roll => "roll",
+            Axis::Pitch => "pitch",
+            Axis::Yaw => "yaw",
+        }
+    }
+}
+
+/// The response to one stick step away from level.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// The axis.
+    pub axis: Axis,
+    /// When the stick moved, s.
+    pub at_s: f64,
+    /// The target, degrees.
+    pub to_deg: f64,
+    /// Overshoot, settling (±5 % band) and 10–90 % rise time of the
+    /// estimate the controller tracks, judged until the stick moves again.
+    pub tracked: StepResponse,
+    /// The same on the true attitude.
+    pub truth: StepResponse,
+    /// True angle minus the target when the stick moves again, degrees.
+    pub drift_deg: f64,
+}
+
+/// Everything `rtpipe fly` reports about a flight.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FlightQuality {
+    /// The vehicle hit the ground too hard or tipped over.
+    pub crashed: bool,
+    /// Over the hover samples, degrees.
+    pub attitude_error_deg: ErrorStats,
+    /// Over the hover samples, metres.
+    pub altitude_error_m: ErrorStats,
+    /// Largest horizontal distance from where the first hover window began,
+    /// over that window, metres.
+    pub drift_m: f64,
+    /// Every roll, pitch and heading step of the mission.
+    pub steps: Vec<Step>,
+    /// Time armed with some motor at 0 or 1 (saturated), s.
+    pub saturation_s: f64,
+    /// Time armed and off the ground, s.
+    pub airborne_s: f64,
+    /// When the vehicle was last disarmed on the ground after flying, s.
+    pub landed_s: Option<f64>,
+}
+
+/// A mission stick change: (time s, axis, target deg).
+fn stick_changes(mission: &Mission) -> Vec<(f64, Axis, f64)> {
+    let mut out = Vec::new();
+    let mut prev = mission.intent_at(0);
+    for s in &mission.steps {
+        let now = mission.intent_at(s.t_ns);
+        let t = s.t_ns as f64 * 1e-9;
+        if now.roll_deg != prev.roll_deg {
+            out.push((t, Axis::Roll, now.roll_deg));
+        }
+        if now.pitch_deg != prev.pitch_deg {
+            out.push((t, Axis::Pitch, now.pitch_deg));
+        }
+        if now.yaw_deg != prev.yaw_deg {
+            out.push((t, Axis::Yaw, now.yaw_deg.unwrap_or(0.0)));
+        }
+        prev = now;
+    }
+    out
+}
+
+fn secs(p: &TracePoint) -> f64 {
+    p.t_ns as f64 * 1e-9
+}
+
+/// Rates the flight in `trace` (one point per fixed interval) against the
+/// `mission` it flew.
+pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
+    let changes = stick_changes(mission);
+    let first_alt = mission
+        .steps
+        .iter()
+        .find(|s| s.altitude_m.is_some())
+        .map(|s| s.t_ns as f64 * 1e-9);
+    let land = mission
+        .steps
+        .iter()
+        .find(|s| s.land == Some(true))
+        .map_or(f64::INFINITY, |s| s.t_ns as f64 * 1e-9);
+    let first_step = changes.first().map_or(f64::INFINITY, |c| c.0);
+    let hover = |p: &TracePoint| {
+        let t = secs(p);
+        p.armed
+            && !p.on_ground
+            && p.alt_target.is_some()
+            && first_alt.is_some_and(|a| t >= a + CLIMB_S)
+            && t < land.min(first_step)
+    };
+    let hovering: Vec<&TracePoint> = trace.iter().filter(|p| hover(p)).collect();
+    let dt = match trace {
+        [a, b, ..] => secs(b) - secs(a),
+        _ => 0.0,
+    };
+    FlightQuality {
+        crashed: trace.iter().any(|p| p.crashed),
+        attitude_error_deg: ErrorStats::of(hovering.iter().map(|p| {
+            let (er, ep) = (p.euler.roll - p.sp.roll, p.euler.pitch - p.sp.pitch);
+            (er * er + ep * ep).sqrt().to_degrees()
+        })),
+        altitude_error_m: ErrorStats::of(
+            hovering
+                .iter()
+                .map(|p| p.pos.z - p.alt_target.unwrap_or(p.pos.z)),
+        ),
+        drift_m: first_window_drift(trace, &hover),
+        steps: steps(trace, &changes),
+        saturation_s: dt
+            * trace
+                .iter()
+                .filter(|p| p.armed && p.motors.iter().any(|&m| m <= 0.0 || m >= 1.0))
+                .count() as f64,
+        airborne_s: dt * trace.iter().filter(|p| p.armed && !p.on_ground).count() as f64,
+        landed_s: landed(trace),
+    }
+}
+
+fn first_window_drift(trace: &[TracePoint], hover: &impl Fn(&TracePoint) -> bool) -> f64 {
+    let window = trace
+        .iter()
+        .skip_while(|p| !hover(p))
+        .take_while(|p| hover(p));
+    let mut origin = None;
+    let mut drift = 0.0f64;
+    for p in window {
+        let o = *origin.get_or_insert(p.pos);
+        drift = drift.max(((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt());
+    }
+    drift
+}
+
+fn angle(axis: Axis, e: &crate::math::Euler) -> f64 {
+    match axis {
+        Axis::Roll => e.roll,
+        Axis::Pitch => e.pitch,
+        Axis::Yaw => e.yaw,
+    }
+    .to_degrees()
+}
+
+fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
+    let mut out = Vec::new();
+    for (k, &(t, axis, to)) in changes.iter().enumerate() {
+        let from = changes[..k]
+            .iter()
+            .rev()
+            .find(|c| c.1 == axis)
+            .map_or(0.0, |c| c.2);
+        if from != 0.0 || to == 0.0 {
+            continue;
+        }
+        let end = changes
+            .iter()
+            .skip(k + 1)
+            .map(|c| c.0)
+            .find(|&c| c > t)
+            .unwrap_or(t + 2.0);
+        let judge = |est: bool| {
+            let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
+            step_response(trace, signal, t, end, 0.0, to, 0.05)
+        };
+        let at_end = trace
+            .iter()
+            .take_while(|p| secs(p) < end)
+            .last()
+            .map_or(f64::NAN, |p| angle(axis, &p.euler));
+        out.push(Step {
+            axis,
+            at_s: t,
+            to_deg: to,
+            tracked: judge(true),
+            truth: judge(false),
+            drift_deg: at_end - to,
+        });
+    }
+    out
+}
+
+fn landed(trace: &[TracePoint]) -> Option<f64> {
+    let flew = trace.iter().position(|p| p.armed && !p.on_ground)?;
+    trace[flew..]
+        .iter()
+        .rev()
+        .take_while(|p| !p.armed && p.on_ground)
+        .last()
+        .map(secs)
+}
+
+/// Tolerances a flight must meet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Criteria {
+    /// Hover attitude error RMS, degrees.
+    pub attitude_rms_deg: f64,
+    /// Hover altitude error RMS, metres.
+    pub altitude_rms_m: f64,
+    /// Roll and pitch step overshoot of the true attitude, a fraction.
+    pub overshoot: f64,
+    /// Roll and pitch step settling of the tracked attitude, s.
+    pub settling_s: f64,
+}
+
+impl Default for Criteria {
+    /// No crash, hover attitude error RMS < 2°, altitude error RMS < 0.1 m,
+    /// roll/pitch steps with overshoot < 20 % settling within 0.5 s.
+    fn default() -> Criteria {
+        Criteria {
+            attitude_rms_deg: 2.0,
+            altitude_rms_m: 0.1,
+            overshoot: 0.2,
+            settling_s: 0.5,
+        }
+    }
+}
+
+impl FlightQuality {
+    /// What fails `c`, in words; empty when the flight meets it.
+    pub fn failures(&self, c: &Criteria) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.crashed {
+            out.push("crashed".to_string());
+        }
+        if self.attitude_error_deg.count == 0 {
+            out.push("never hovered (no sample to judge)".to_string());
+        }
+        let a = self.attitude_error_deg.rms;
+        if a >= c.attitude_rms_deg {
+            out.push(format!(
+                "attitude error RMS {a:.2}° ≥ {}°",
+                c.attitude_rms_deg
+            ));
+        }
+        let h = self.altitude_error_m.rms;
+        if h >= c.altitude_rms_m {
+            out.push(format!(
+                "altitude error RMS {h:.3} m ≥ {} m",
+                c.altitude_rms_m
+            ));
+        }
+        for s in self.steps.iter().filter(|s| s.axis != Axis::Yaw) {
+            let (over, settle) = (s.truth.overshoot, s.tracked.settling_s);
+            if over >= c.overshoot || settle >= c.settling_s {
+                out.push(format!(
+                    "{} step at {:.1} s: overshoot {:.1} %, settling {:.3} s (limits {:.0} %, {} s)",
+                    s.axis.name(),
+                    s.at_s,
+                    100.0 * over,
+                    settle,
+                    100.0 * c.overshoot,
+                    c.settling_s
+                ));
+            }
+        }
+        out
+    }
+}
