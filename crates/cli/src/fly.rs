@@ -14,22 +14,14 @@ use crate::simulate::{self, Bad, ExecArg};
 use crate::table::Table;
 use clap::Args;
 use rtpipe_analysis::{Anchor, Report};
-use rtpipe_body::{Body, Job, Stamped};
-use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::loop_sim::TracePoint;
-use rtpipe_flight::preset::{Preset, BUILTIN};
-use rtpipe_flight::quality::{assess, Criteria, FlightQuality};
-use rtpipe_flight::radio::Mission;
-use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
-use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_flight::quality::{Criteria, FlightQuality};
+use rtpipe_fly::{fly, setup, Flight, FlyError, Request, Setup};
+use rtpipe_model::{Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
-use rtpipe_sim::{simulate_bodies, Phasing, SimConfig, SimResult};
 use serde_json::{json, Value as Json};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
-
-/// Time flown after the mission's last step when no `--duration` is given.
-const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
 
 #[derive(Args, Debug)]
 pub struct FlyArgs {
@@ -66,167 +58,36 @@ pub struct FlyArgs {
     pub log: Option<PathBuf>,
 }
 
-/// Everything a flight needs besides the spec.
-pub struct Setup {
-    pub preset: Preset,
-    pub mission: Mission,
-    pub roles: Vec<Option<Role>>,
-    pub horizon: Nanos,
-    /// The world's options (noise, disturbances).
-    pub world: CosimConfig,
-}
-
-/// The outcome of one flight.
-pub struct Flight {
-    pub sim: SimResult,
-    pub trace: Vec<TracePoint>,
-    pub quality: FlightQuality,
-    /// When the housekeeping raised each battery alert level, ns.
-    pub alerts: Vec<(u64, BatteryAlert)>,
-}
-
-fn vehicle(v: &str) -> Result<Preset, Bad> {
-    let r = if BUILTIN.contains(&v) {
-        Preset::builtin(v)
-    } else {
-        Preset::from_file(Path::new(v))
-    };
-    r.map_err(|e| {
-        Bad::new(
-            format!("--vehicle {v}: {e}"),
-            format!(
-                "name a built-in preset ({}) or a preset file",
-                BUILTIN.join(", ")
-            ),
-        )
-    })
-}
-
-fn mission(m: &str) -> Result<Mission, Bad> {
-    let r = match m {
-        "hover" | "steps" => Mission::builtin(m),
-        _ => Mission::from_file(Path::new(m)),
-    };
-    r.map_err(|e| {
-        Bad::new(
-            format!("--mission {m}: {e}"),
-            "name a built-in mission (hover, steps) or a mission file",
-        )
-    })
-}
-
-/// The role of every task from its `body`; the pipeline must be complete.
-fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, Bad> {
-    let mut roles = Vec::with_capacity(spec.tasks.len());
-    for t in &spec.tasks {
-        let r = match &t.body {
-            None => None,
-            Some(b) => Some(Role::parse(b).ok_or_else(|| {
-                Bad::new(
-                    format!(
-                        "{}: task `{}` names an unknown body `{b}`",
-                        path.display(),
-                        t.name
-                    ),
-                    format!("use one of: {}", Role::names()),
-                )
-            })?),
-        };
-        roles.push(r);
+impl From<FlyError> for Bad {
+    fn from(e: FlyError) -> Bad {
+        Bad::new(e.msg, e.help)
     }
-    for need in [
-        Role::Gyro,
-        Role::Accel,
-        Role::Ahrs,
-        Role::Radio,
-        Role::Pid,
-        Role::Pwm,
-    ] {
-        if !roles.contains(&Some(need)) {
-            return Err(Bad::new(
-                format!(
-                    "{}: no task has body = \"{}\", so the flight controller is incomplete",
-                    path.display(),
-                    need.name()
-                ),
-                "give the tasks of the critical path their bodies, as examples/cleanflight.toml does",
-            ));
-        }
-    }
-    Ok(roles)
 }
 
-/// Checks the flags and the spec before anything runs.
-pub fn setup(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
-    let roles = roles(spec, &a.spec)?;
-    let preset = vehicle(&a.vehicle)?;
-    let mission = mission(&a.mission)?;
+/// The flight `a` asks for, checked.
+fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
     let horizon = match &a.duration {
-        Some(d) => simulate::parse_time(spec, d)
-            .ok()
-            .filter(|&h| h > 0)
-            .ok_or_else(|| {
-                Bad::new(
-                    format!("invalid value `{d}` for --duration"),
-                    "write a positive time like --duration 30s",
-                )
-            })?,
-        None => mission.end_ns() as Nanos + AFTER_LAST_STEP_NS,
+        Some(d) => Some(
+            simulate::parse_time(spec, d)
+                .ok()
+                .filter(|&h| h > 0)
+                .ok_or_else(|| {
+                    Bad::new(
+                        format!("invalid value `{d}` for --duration"),
+                        "write a positive time like --duration 30s",
+                    )
+                })?,
+        ),
+        None => None,
     };
-    Ok(Setup {
-        preset,
-        mission,
-        roles,
+    let r = Request {
+        spec_path: &a.spec,
+        vehicle: &a.vehicle,
+        mission: &a.mission,
         horizon,
-        world: CosimConfig::new(a.seed),
-    })
-}
-
-/// A task without a body: it runs (its timing matters) but computes nothing.
-fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
-    Value::Nothing
-}
-
-/// Flies `spec` as `setup` says: bodies on the simulated schedule, the
-/// world co-simulated at their read and publish instants.
-pub fn fly(spec: &Spec, s: &Setup, exec: ExecArg) -> Result<Flight, Bad> {
-    let seed = s.world.seed;
-    let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
-    for (t, role) in spec.tasks.iter().zip(&s.roles) {
-        let period = t.fixed_period().unwrap_or(0);
-        bodies.push(match role {
-            Some(r) => body(*r, period, &s.preset).map_err(|e| {
-                Bad::new(
-                    format!("task `{}` (body {}): {e}", t.name, r.name()),
-                    "give it a fixed period the body can run at",
-                )
-            })?,
-            None => Box::new(idle),
-        });
-    }
-    let mut world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
-        .map_err(|e| Bad::new(format!("--vehicle: {e}"), "check the preset file"))?;
-    let cfg = SimConfig {
-        horizon: s.horizon,
-        seed,
-        phasing: Phasing::Sync,
-        exec: exec.model(),
-        log_jobs: false,
+        seed: a.seed,
     };
-    let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
-        Bad::new(
-            format!("cannot simulate: {e}"),
-            "give every task a fixed positive period",
-        )
-    })?;
-    world.advance(u64::try_from(s.horizon).unwrap_or(0));
-    let quality = assess(&world.trace, &s.mission);
-    Ok(Flight {
-        sim,
-        trace: std::mem::take(&mut world.trace),
-        quality,
-        alerts: std::mem::take(&mut world.alerts),
-    })
+    Ok(setup(spec, &r)?)
 }
 
 pub fn run(a: &FlyArgs) -> ExitCode {
@@ -234,7 +95,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let s = match setup(&spec, a) {
+    let s = match setup_of(&spec, a) {
         Ok(s) => s,
         Err(b) => return simulate::fail(b),
     };
@@ -246,10 +107,11 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         s.horizon as f64 * 1e-9
     );
     let started = std::time::Instant::now();
-    let flight = match simulate::with_spinner(msg, || fly(&spec, &s, a.exec)) {
-        Ok(f) => f,
-        Err(b) => return simulate::fail(b),
-    };
+    let flight =
+        match simulate::with_spinner(msg, || fly(&spec, &s, a.exec.model()).map_err(Bad::from)) {
+            Ok(f) => f,
+            Err(b) => return simulate::fail(b),
+        };
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(&spec);
     let obs = observe(&report, &flight.sim);
@@ -511,193 +373,4 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
         files.push(("--log", path.clone(), csv(&f.trace)));
     }
     simulate::write_all(&a.spec, &files)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use clap::Parser;
-    use rtpipe_flight::math::Vec3;
-    use rtpipe_flight::quality::Axis;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        args: FlyArgs,
-    }
-
-    fn cleanflight() -> (Spec, PathBuf) {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
-        match Spec::load(&p) {
-            Ok(s) => (s, p),
-            Err(e) => panic!("{e}"),
-        }
-    }
-
-    fn setup_of(spec: &Spec, path: &Path, flags: &[&str]) -> Setup {
-        let mut v = vec!["rtpipe".to_string(), path.display().to_string()];
-        v.extend(flags.iter().map(|s| s.to_string()));
-        let a = match Cli::try_parse_from(v) {
-            Ok(c) => c.args,
-            Err(e) => panic!("{e}"),
-        };
-        setup(spec, &a).unwrap_or_else(|b| panic!("{b}"))
-    }
-
-    fn flown(spec: &Spec, s: &Setup) -> Flight {
-        fly(spec, s, ExecArg::Uniform).unwrap_or_else(|b| panic!("{b}"))
-    }
-
-    /// No observation, from the read or from the event, above a sound bound.
-    fn assert_within_sound(spec: &Spec, f: &Flight) {
-        let report = rtpipe_analysis::analyze(spec);
-        let obs = observe(&report, &f.sim);
-        for o in &obs {
-            for a in Anchor::ALL {
-                let j = o.from(a);
-                assert!(j.observed.is_some_and(|x| x.count > 100), "{o:?}");
-                assert_eq!(
-                    j.over_sound,
-                    Some(0),
-                    "{} {:?} {a:?}",
-                    spec.chain_label(o.chain),
-                    o.metric
-                );
-            }
-        }
-        assert!(response_violations(&report, &f.sim).is_empty());
-    }
-
-    #[test]
-    fn table_v_flies_the_steps_mission_with_both_presets() {
-        let (spec, path) = cleanflight();
-        for vehicle in BUILTIN {
-            let s = setup_of(&spec, &path, &["--vehicle", vehicle, "--seed", "7"]);
-            let f = flown(&spec, &s);
-            let q = &f.quality;
-            let failures = q.failures(&Criteria::default());
-            assert!(failures.is_empty(), "{vehicle}: {failures:?}");
-            assert!(!q.crashed && q.landed_s.is_some(), "{vehicle}: {q:?}");
-            assert!(q.attitude_error_deg.rms < 2.0 && q.altitude_error_m.rms < 0.1);
-            let judged: Vec<Axis> = q.steps.iter().map(|s| s.axis).collect();
-            assert_eq!(
-                judged,
-                vec![Axis::Roll, Axis::Pitch, Axis::Yaw],
-                "{vehicle}"
-            );
-            for st in q.steps.iter().filter(|s| s.axis != Axis::Yaw) {
-                assert!(st.truth.overshoot < 0.2, "{vehicle}: {st:?}");
-                assert!(st.tracked.settling_s < 0.5, "{vehicle}: {st:?}");
-                assert!(st.truth.rise_s < 0.3, "{vehicle}: {st:?}");
-            }
-            assert_within_sound(&spec, &f);
-        }
-    }
-
-    #[test]
-    fn table_v_hovers_ten_seconds_with_noise() {
-        let (spec, path) = cleanflight();
-        for vehicle in BUILTIN {
-            let s = setup_of(&spec, &path, &["--vehicle", vehicle, "--mission", "hover"]);
-            assert!(s.world.imu.noise);
-            let f = flown(&spec, &s);
-            let q = &f.quality;
-            // The hover mission holds 1 m from 2 s (climb) to 15 s (land):
-            // from 5 s on, 10 s of steady hover.
-            let hover_s = q.attitude_error_deg.count as f64 * 0.002;
-            assert!(hover_s >= 9.9, "{vehicle}: {hover_s} s");
-            assert!(q.attitude_error_deg.rms < 2.0, "{vehicle}: {q:?}");
-            assert!(q.altitude_error_m.rms < 0.1, "{vehicle}: {q:?}");
-            assert!(q.drift_m < 0.5, "{vehicle}: {q:?}");
-            assert!(
-                q.landed_s.is_some(),
-                "{vehicle}: never disarmed on the ground"
-            );
-        }
-    }
-
-    #[test]
-    fn recovers_from_a_20_degree_disturbance() {
-        let (spec, path) = cleanflight();
-        for (vehicle, kick) in [("racer5", 10.0), ("aero1kg", 6.0)] {
-            let mut s = setup_of(&spec, &path, &["--vehicle", vehicle, "--mission", "hover"]);
-            let j = Vec3::new(s.preset.body.inertia_kg_m2[0] * kick, 0.0, 0.0);
-            s.world.impulse = Some((8_000_000_000, j));
-            let f = flown(&spec, &s);
-            let after = || {
-                f.trace
-                    .iter()
-                    .filter(|p| (8_000_000_000..11_000_000_000).contains(&p.t_ns))
-            };
-            let peak = after()
-                .map(|p| p.euler.roll.to_degrees().abs())
-                .fold(0.0, f64::max);
-            let level = after()
-                .find(|p| p.t_ns > 8_020_000_000 && p.euler.roll.to_degrees().abs() < 2.0)
-                .map_or(f64::INFINITY, |p| (p.t_ns - 8_000_000_000) as f64 * 1e-9);
-            assert!(peak >= 20.0, "{vehicle}: peak {peak}");
-            assert!(level < 0.5, "{vehicle}: back within 2° after {level} s");
-            assert!(!f.quality.crashed && f.quality.landed_s.is_some());
-        }
-    }
-
-    #[test]
-    fn same_seed_same_flight() {
-        let (spec, path) = cleanflight();
-        let s = setup_of(
-            &spec,
-            &path,
-            &["--mission", "hover", "--seed", "3", "--duration", "6s"],
-        );
-        let (a, b) = (flown(&spec, &s), flown(&spec, &s));
-        assert_eq!(a.sim, b.sim);
-        assert!(a.trace == b.trace, "same seed, different flights");
-        let s4 = setup_of(
-            &spec,
-            &path,
-            &["--mission", "hover", "--seed", "4", "--duration", "6s"],
-        );
-        assert!(
-            flown(&spec, &s4).trace != a.trace,
-            "the seed changes nothing"
-        );
-    }
-
-    #[test]
-    fn low_battery_alert_fires_in_flight() {
-        let (spec, path) = cleanflight();
-        let mut s = setup_of(&spec, &path, &["--mission", "hover", "--duration", "8s"]);
-        // A nearly empty pack: the voltage sags below 3.5 V per cell under
-        // the hover current.
-        s.preset.battery.initial_soc = 0.03;
-        let f = flown(&spec, &s);
-        assert!(
-            f.alerts.iter().any(|&(_, a)| a != BatteryAlert::Ok),
-            "no alert: {:?}",
-            f.trace.last().map(|p| p.voltage)
-        );
-        // A full one raises none.
-        let full = setup_of(&spec, &path, &["--mission", "hover", "--duration", "8s"]);
-        assert!(flown(&spec, &full).alerts.is_empty());
-    }
-
-    #[test]
-    fn incomplete_or_unknown_bodies_are_refused() {
-        let (mut spec, path) = cleanflight();
-        spec.tasks[0].body = Some("gyroscope".into());
-        let e = roles(&spec, &path)
-            .err()
-            .map(|b| b.to_string())
-            .unwrap_or_default();
-        assert!(
-            e.contains("unknown body `gyroscope`") && e.contains("battery_alert"),
-            "{e}"
-        );
-        spec.tasks[0].body = None;
-        let e = roles(&spec, &path)
-            .err()
-            .map(|b| b.to_string())
-            .unwrap_or_default();
-        assert!(e.contains("body = \"gyro\""), "{e}");
-    }
 }

@@ -672,10 +672,10 @@ impl Environment<Value> for Cosim {
             }
             (Some(Role::Ahrs), Value::Attitude(a)) => self.seen.est = a.euler,
             (Some(Role::Radio), Value::Radio(r)) => self.seen.sp = r.cmd.setpoint(),
-            (Some(Role::Alert), Value::Alert(a)) => {
-                if a != BatteryAlert::Ok && self.alerts.last().is_none_or(|&(_, l)| l != a) {
-                    self.alerts.push((t, a));
-                }
+            (Some(Role::Alert), Value::Alert(a))
+                if a != BatteryAlert::Ok && self.alerts.last().is_none_or(|&(_, l)| l != a) =>
+            {
+                self.alerts.push((t, a));
             }
             _ => {}
         }

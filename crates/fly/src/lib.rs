@@ -1,0 +1,417 @@
+//! # rtpipe-fly
+//!
+//! The flight controller on the simulated schedule: builds each task's body
+//! from the spec (`body = "..."`, see `rtpipe_flight::tasks`), runs them with
+//! `rtpipe_sim::simulate_bodies` while the co-simulated world (`Cosim`) is
+//! sampled and actuated at exactly the instants the schedule gives, and
+//! rates the flight (`rtpipe_flight::quality`). `rtpipe fly` and the flight
+//! benchmark use it; the analysis and the simulator know nothing of it.
+
+use rtpipe_body::{Body, Job, Stamped};
+use rtpipe_flight::battery::BatteryAlert;
+use rtpipe_flight::loop_sim::TracePoint;
+use rtpipe_flight::preset::{Preset, BUILTIN};
+use rtpipe_flight::quality::{assess, FlightQuality};
+use rtpipe_flight::radio::Mission;
+use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig, SimResult};
+use std::fmt;
+use std::path::Path;
+
+/// Time flown after the mission's last step when no duration is given.
+pub const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
+
+/// Why a flight cannot start: what is wrong and how to fix it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FlyError {
+    pub msg: String,
+    pub help: String,
+}
+
+impl FlyError {
+    fn new(msg: impl Into<String>, help: impl Into<String>) -> FlyError {
+        FlyError {
+            msg: msg.into(),
+            help: help.into(),
+        }
+    }
+}
+
+impl fmt::Display for FlyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.msg)?;
+        if !self.help.is_empty() {
+            write!(f, " ({})", self.help)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for FlyError {}
+
+/// Everything a flight needs besides the spec.
+pub struct Setup {
+    pub preset: Preset,
+    pub mission: Mission,
+    pub roles: Vec<Option<Role>>,
+    pub horizon: Nanos,
+    /// The world's options (noise, disturbances).
+    pub world: CosimConfig,
+}
+
+/// The outcome of one flight.
+pub struct Flight {
+    pub sim: SimResult,
+    pub trace: Vec<TracePoint>,
+    pub quality: FlightQuality,
+    /// When the housekeeping raised each battery alert level, ns.
+    pub alerts: Vec<(u64, BatteryAlert)>,
+}
+
+fn vehicle(v: &str) -> Result<Preset, FlyError> {
+    let r = if BUILTIN.contains(&v) {
+        Preset::builtin(v)
+    } else {
+        Preset::from_file(Path::new(v))
+    };
+    r.map_err(|e| {
+        FlyError::new(
+            format!("--vehicle {v}: {e}"),
+            format!(
+                "name a built-in preset ({}) or a preset file",
+                BUILTIN.join(", ")
+            ),
+        )
+    })
+}
+
+fn mission(m: &str) -> Result<Mission, FlyError> {
+    let r = match m {
+        "hover" | "steps" => Mission::builtin(m),
+        _ => Mission::from_file(Path::new(m)),
+    };
+    r.map_err(|e| {
+        FlyError::new(
+            format!("--mission {m}: {e}"),
+            "name a built-in mission (hover, steps) or a mission file",
+        )
+    })
+}
+
+/// The role of every task from its `body`; the pipeline must be complete.
+pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
+    let mut roles = Vec::with_capacity(spec.tasks.len());
+    for t in &spec.tasks {
+        let r = match &t.body {
+            None => None,
+            Some(b) => Some(Role::parse(b).ok_or_else(|| {
+                FlyError::new(
+                    format!(
+                        "{}: task `{}` names an unknown body `{b}`",
+                        path.display(),
+                        t.name
+                    ),
+                    format!("use one of: {}", Role::names()),
+                )
+            })?),
+        };
+        roles.push(r);
+    }
+    for need in [
+        Role::Gyro,
+        Role::Accel,
+        Role::Ahrs,
+        Role::Radio,
+        Role::Pid,
+        Role::Pwm,
+    ] {
+        if !roles.contains(&Some(need)) {
+            return Err(FlyError::new(
+                format!(
+                    "{}: no task has body = \"{}\", so the flight controller is incomplete",
+                    path.display(),
+                    need.name()
+                ),
+                "give the tasks of the critical path their bodies, as examples/cleanflight.toml does",
+            ));
+        }
+    }
+    Ok(roles)
+}
+
+/// What to fly: the vehicle (a built-in preset name or a preset file), the
+/// mission (`hover`, `steps` or a mission file), how long (default: 5 s after
+/// the mission's last step) and the seed of the noise and execution times.
+pub struct Request<'a> {
+    pub spec_path: &'a Path,
+    pub vehicle: &'a str,
+    pub mission: &'a str,
+    pub horizon: Option<Nanos>,
+    pub seed: u64,
+}
+
+/// Checks the request against the spec before anything runs.
+pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, FlyError> {
+    let roles = roles(spec, r.spec_path)?;
+    let preset = vehicle(r.vehicle)?;
+    let mission = mission(r.mission)?;
+    let horizon = r
+        .horizon
+        .unwrap_or(mission.end_ns() as Nanos + AFTER_LAST_STEP_NS);
+    if horizon <= 0 {
+        return Err(FlyError::new(
+            format!("the flight must last a positive time, found {horizon} ns"),
+            "give a positive duration",
+        ));
+    }
+    Ok(Setup {
+        preset,
+        mission,
+        roles,
+        horizon,
+        world: CosimConfig::new(r.seed),
+    })
+}
+
+/// A task without a body: it runs (its timing matters) but computes nothing.
+fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
+    Value::Nothing
+}
+
+/// Flies `spec` as `setup` says: bodies on the simulated schedule, the
+/// world co-simulated at their read and publish instants.
+pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, FlyError> {
+    let seed = s.world.seed;
+    let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
+    for (t, role) in spec.tasks.iter().zip(&s.roles) {
+        let period = t.fixed_period().unwrap_or(0);
+        bodies.push(match role {
+            Some(r) => body(*r, period, &s.preset).map_err(|e| {
+                FlyError::new(
+                    format!("task `{}` (body {}): {e}", t.name, r.name()),
+                    "give it a fixed period the body can run at",
+                )
+            })?,
+            None => Box::new(idle),
+        });
+    }
+    let mut world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
+        .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    let cfg = SimConfig {
+        horizon: s.horizon,
+        seed,
+        phasing: Phasing::Sync,
+        exec,
+        log_jobs: false,
+    };
+    let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
+        FlyError::new(
+            format!("cannot simulate: {e}"),
+            "give every task a fixed positive period",
+        )
+    })?;
+    world.advance(u64::try_from(s.horizon).unwrap_or(0));
+    let quality = assess(&world.trace, &s.mission);
+    Ok(Flight {
+        sim,
+        trace: std::mem::take(&mut world.trace),
+        quality,
+        alerts: std::mem::take(&mut world.alerts),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rtpipe_analysis::Anchor;
+    use rtpipe_flight::math::Vec3;
+    use rtpipe_flight::quality::Axis;
+    use rtpipe_flight::quality::Criteria;
+    use rtpipe_sim::observe::{observe, response_violations};
+    use std::path::PathBuf;
+
+    fn cleanflight() -> (Spec, PathBuf) {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        match Spec::load(&p) {
+            Ok(s) => (s, p),
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    fn setup_of(spec: &Spec, path: &Path, flags: &[&str]) -> Setup {
+        let flag = |name: &str| {
+            flags
+                .iter()
+                .position(|f| *f == name)
+                .and_then(|k| flags.get(k + 1))
+                .copied()
+        };
+        let r = Request {
+            spec_path: path,
+            vehicle: flag("--vehicle").unwrap_or("racer5"),
+            mission: flag("--mission").unwrap_or("steps"),
+            horizon: flag("--duration")
+                .map(|d| d.trim_end_matches('s').parse::<i64>().unwrap_or(0) * 1_000_000_000),
+            seed: flag("--seed").and_then(|s| s.parse().ok()).unwrap_or(0),
+        };
+        setup(spec, &r).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn flown(spec: &Spec, s: &Setup) -> Flight {
+        fly(spec, s, ExecModel::Uniform).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// No observation, from the read or from the event, above a sound bound.
+    fn assert_within_sound(spec: &Spec, f: &Flight) {
+        let report = rtpipe_analysis::analyze(spec);
+        let obs = observe(&report, &f.sim);
+        for o in &obs {
+            for a in Anchor::ALL {
+                let j = o.from(a);
+                assert!(j.observed.is_some_and(|x| x.count > 100), "{o:?}");
+                assert_eq!(
+                    j.over_sound,
+                    Some(0),
+                    "{} {:?} {a:?}",
+                    spec.chain_label(o.chain),
+                    o.metric
+                );
+            }
+        }
+        assert!(response_violations(&report, &f.sim).is_empty());
+    }
+
+    #[test]
+    fn table_v_flies_the_steps_mission_with_both_presets() {
+        let (spec, path) = cleanflight();
+        for vehicle in BUILTIN {
+            let s = setup_of(&spec, &path, &["--vehicle", vehicle, "--seed", "7"]);
+            let f = flown(&spec, &s);
+            let q = &f.quality;
+            let failures = q.failures(&Criteria::default());
+            assert!(failures.is_empty(), "{vehicle}: {failures:?}");
+            assert!(!q.crashed && q.landed_s.is_some(), "{vehicle}: {q:?}");
+            assert!(q.attitude_error_deg.rms < 2.0 && q.altitude_error_m.rms < 0.1);
+            let judged: Vec<Axis> = q.steps.iter().map(|s| s.axis).collect();
+            assert_eq!(
+                judged,
+                vec![Axis::Roll, Axis::Pitch, Axis::Yaw],
+                "{vehicle}"
+            );
+            for st in q.steps.iter().filter(|s| s.axis != Axis::Yaw) {
+                assert!(st.truth.overshoot < 0.2, "{vehicle}: {st:?}");
+                assert!(st.tracked.settling_s < 0.5, "{vehicle}: {st:?}");
+                assert!(st.truth.rise_s < 0.3, "{vehicle}: {st:?}");
+            }
+            assert_within_sound(&spec, &f);
+        }
+    }
+
+    #[test]
+    fn table_v_hovers_ten_seconds_with_noise() {
+        let (spec, path) = cleanflight();
+        for vehicle in BUILTIN {
+            let s = setup_of(&spec, &path, &["--vehicle", vehicle, "--mission", "hover"]);
+            assert!(s.world.imu.noise);
+            let f = flown(&spec, &s);
+            let q = &f.quality;
+            // The hover mission holds 1 m from 2 s (climb) to 15 s (land):
+            // from 5 s on, 10 s of steady hover.
+            let hover_s = q.attitude_error_deg.count as f64 * 0.002;
+            assert!(hover_s >= 9.9, "{vehicle}: {hover_s} s");
+            assert!(q.attitude_error_deg.rms < 2.0, "{vehicle}: {q:?}");
+            assert!(q.altitude_error_m.rms < 0.1, "{vehicle}: {q:?}");
+            assert!(q.drift_m < 0.5, "{vehicle}: {q:?}");
+            assert!(
+                q.landed_s.is_some(),
+                "{vehicle}: never disarmed on the ground"
+            );
+        }
+    }
+
+    #[test]
+    fn recovers_from_a_20_degree_disturbance() {
+        let (spec, path) = cleanflight();
+        for (vehicle, kick) in [("racer5", 10.0), ("aero1kg", 6.0)] {
+            let mut s = setup_of(&spec, &path, &["--vehicle", vehicle, "--mission", "hover"]);
+            let j = Vec3::new(s.preset.body.inertia_kg_m2[0] * kick, 0.0, 0.0);
+            s.world.impulse = Some((8_000_000_000, j));
+            let f = flown(&spec, &s);
+            let after = || {
+                f.trace
+                    .iter()
+                    .filter(|p| (8_000_000_000..11_000_000_000).contains(&p.t_ns))
+            };
+            let peak = after()
+                .map(|p| p.euler.roll.to_degrees().abs())
+                .fold(0.0, f64::max);
+            let level = after()
+                .find(|p| p.t_ns > 8_020_000_000 && p.euler.roll.to_degrees().abs() < 2.0)
+                .map_or(f64::INFINITY, |p| (p.t_ns - 8_000_000_000) as f64 * 1e-9);
+            assert!(peak >= 20.0, "{vehicle}: peak {peak}");
+            assert!(level < 0.5, "{vehicle}: back within 2° after {level} s");
+            assert!(!f.quality.crashed && f.quality.landed_s.is_some());
+        }
+    }
+
+    #[test]
+    fn same_seed_same_flight() {
+        let (spec, path) = cleanflight();
+        let s = setup_of(
+            &spec,
+            &path,
+            &["--mission", "hover", "--seed", "3", "--duration", "6s"],
+        );
+        let (a, b) = (flown(&spec, &s), flown(&spec, &s));
+        assert_eq!(a.sim, b.sim);
+        assert!(a.trace == b.trace, "same seed, different flights");
+        let s4 = setup_of(
+            &spec,
+            &path,
+            &["--mission", "hover", "--seed", "4", "--duration", "6s"],
+        );
+        assert!(
+            flown(&spec, &s4).trace != a.trace,
+            "the seed changes nothing"
+        );
+    }
+
+    #[test]
+    fn low_battery_alert_fires_in_flight() {
+        let (spec, path) = cleanflight();
+        let mut s = setup_of(&spec, &path, &["--mission", "hover", "--duration", "8s"]);
+        // A nearly empty pack: the voltage sags below 3.5 V per cell under
+        // the hover current.
+        s.preset.battery.initial_soc = 0.03;
+        let f = flown(&spec, &s);
+        assert!(
+            f.alerts.iter().any(|&(_, a)| a != BatteryAlert::Ok),
+            "no alert: {:?}",
+            f.trace.last().map(|p| p.voltage)
+        );
+        // A full one raises none.
+        let full = setup_of(&spec, &path, &["--mission", "hover", "--duration", "8s"]);
+        assert!(flown(&spec, &full).alerts.is_empty());
+    }
+
+    #[test]
+    fn incomplete_or_unknown_bodies_are_refused() {
+        let (mut spec, path) = cleanflight();
+        spec.tasks[0].body = Some("gyroscope".into());
+        let e = roles(&spec, &path)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("unknown body `gyroscope`") && e.contains("battery_alert"),
+            "{e}"
+        );
+        spec.tasks[0].body = None;
+        let e = roles(&spec, &path)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("body = \"gyro\""), "{e}");
+    }
+}
