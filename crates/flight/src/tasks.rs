@@ -527,6 +527,9 @@ pub struct Cosim {
     roles: Vec<Option<Role>>,
     now: u64,
     next_trace: u64,
+    /// Time since the battery last stepped, s (it steps every millisecond:
+    /// its dynamics are slow and its model is costly per call).
+    battery_dt: f64,
     seen: Seen,
     /// First time each battery alert level was raised, ns.
     pub alerts: Vec<(u64, BatteryAlert)>,
@@ -553,6 +556,7 @@ impl Cosim {
             roles,
             now: 0,
             next_trace: 0,
+            battery_dt: 0.0,
             seen: Seen::default(),
             alerts: Vec::new(),
             trace: Vec::new(),
@@ -595,9 +599,12 @@ impl Cosim {
                 self.plant.apply_torque_impulse(j);
             }
         }
-        let dt = (t - self.now) as f64 * 1e-9;
+        self.battery_dt += (t - self.now) as f64 * 1e-9;
         self.plant.advance_to(t);
-        self.battery.step(self.plant.shaft_power(), dt);
+        if self.battery_dt >= 1e-3 {
+            self.battery.step(self.plant.shaft_power(), self.battery_dt);
+            self.battery_dt = 0.0;
+        }
         self.now = t;
     }
 
@@ -651,10 +658,12 @@ impl Environment<Value> for Cosim {
     fn sense(&mut self, task: usize, t: Nanos) -> Option<Value> {
         let t = ns(t);
         self.advance(t);
-        let truth = self.plant.truth();
         match self.roles.get(task).copied().flatten()? {
-            Role::Gyro => Some(Value::Imu(self.imu.read_gyro(t, truth.rate))),
-            Role::Accel => Some(Value::Imu(self.imu.read_accel(t, truth.specific_force))),
+            Role::Gyro => Some(Value::Imu(self.imu.read_gyro(t, self.plant.state().rate))),
+            Role::Accel => {
+                let sf = self.plant.truth().specific_force;
+                Some(Value::Imu(self.imu.read_accel(t, sf)))
+            }
             Role::Radio => self.radio_frame(t),
             Role::Vbat => Some(Value::Scalar(self.battery.voltage())),
             Role::Current => Some(Value::Scalar(self.battery.current())),
