@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The demo: analyse every bundled example. `rtpipe analyze` exits 1 when a
-# limit fails (a finding, shown in the output) and 2 on bad input (an error).
+# The demo: analyse every bundled example, design two, fly one. `rtpipe
+# analyze` exits 1 when a limit fails (a finding, shown in the output) and 2
+# on bad input (an error).
 set -uo pipefail
 cd "$(dirname "$0")"
 cargo build --release -q -p rtpipe || exit 2
@@ -22,4 +23,9 @@ for spec in examples/table2-design.toml examples/cleanflight-design.toml; do
   code=${PIPESTATUS[0]}
   [ "$code" -ge 2 ] && status=$code
 done
+echo
+echo "\$ rtpipe fly examples/cleanflight.toml  (the flight controller on Table V's schedule, flying a simulated quad)"
+./target/release/rtpipe fly examples/cleanflight.toml | sed -n '1,10p'
+code=${PIPESTATUS[0]}
+[ "$code" -ge 2 ] && status=$code
 exit $status
