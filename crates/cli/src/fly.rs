@@ -14,14 +14,15 @@ use crate::simulate::{self, Bad, ExecArg};
 use crate::table::Table;
 use clap::Args;
 use rtpipe_analysis::{Anchor, Report};
-use rtpipe_flight::loop_sim::TracePoint;
 use rtpipe_flight::quality::{Criteria, FlightQuality};
-use rtpipe_fly::{fly, setup, Flight, FlyError, Request, Setup};
+use rtpipe_fly::{fly_with_progress, setup, Flight, FlyError, Request, Setup};
 use rtpipe_model::{Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
 use serde_json::{json, Value as Json};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 #[derive(Args, Debug)]
 pub struct FlyArgs {
@@ -31,8 +32,9 @@ pub struct FlyArgs {
     /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
     #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
     pub vehicle: String,
-    /// The mission: a built-in one (hover, steps) or a mission file.
-    #[arg(long, value_name = "FILE|hover|steps", default_value = "steps")]
+    /// The mission: a built-in one (steps, hover, paper) or a mission file
+    /// (crates/flight/missions/*.toml show the format, `[criteria]` included).
+    #[arg(long, value_name = "FILE|steps|hover|paper", default_value = "steps")]
     pub mission: String,
     /// Flight time: "30s", "2500ms", or a number in the spec's time unit
     /// [default: 5 s after the mission's last step].
@@ -53,7 +55,8 @@ pub struct FlyArgs {
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
     /// Write the flight as CSV (one row every 2 ms; the header names every
-    /// column and its unit; readable by PlotJuggler).
+    /// column and its unit, ending with each chain's latest observed
+    /// reaction and freshness in ms; readable by PlotJuggler).
     #[arg(long, value_name = "FILE.csv")]
     pub log: Option<PathBuf>,
 }
@@ -61,6 +64,50 @@ pub struct FlyArgs {
 impl From<FlyError> for Bad {
     fn from(e: FlyError) -> Bad {
         Bad::new(e.msg, e.help)
+    }
+}
+
+/// Runs `f` in a thread of its own while a progress bar over the simulated
+/// time (`horizon` ns, read from the atomic `f` publishes to) shows the
+/// fraction done and the time left on stderr (hidden when stderr is not a
+/// terminal).
+fn with_progress_bar<T: Send>(
+    msg: String,
+    horizon: i64,
+    f: impl FnOnce(Arc<AtomicU64>) -> T + Send,
+) -> T {
+    let done = Arc::new(AtomicU64::new(0));
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(u64::try_from(horizon).unwrap_or(0) / 1_000_000),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{msg} [{bar:30}] {pos}/{len} ms simulated, {elapsed_precise} elapsed, ETA {eta}",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(msg);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let out = std::thread::scope(|scope| {
+        let for_worker = Arc::clone(&done);
+        scope.spawn(move || {
+            let _ = tx.send(f(for_worker));
+        });
+        loop {
+            match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+                Ok(v) => break Some(v),
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    pb.set_position(done.load(Ordering::Relaxed) / 1_000_000);
+                }
+                // The worker panicked (main's hook ends the process first).
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break None,
+            }
+        }
+    });
+    pb.finish_and_clear();
+    match out {
+        Some(v) => v,
+        None => unreachable!("the flight thread ended without a result"),
     }
 }
 
@@ -107,18 +154,19 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         s.horizon as f64 * 1e-9
     );
     let started = std::time::Instant::now();
-    let flight =
-        match simulate::with_spinner(msg, || fly(&spec, &s, a.exec.model()).map_err(Bad::from)) {
-            Ok(f) => f,
-            Err(b) => return simulate::fail(b),
-        };
+    let flight = match with_progress_bar(msg, s.horizon, |p| {
+        fly_with_progress(&spec, &s, a.exec.model(), Some(p)).map_err(Bad::from)
+    }) {
+        Ok(f) => f,
+        Err(b) => return simulate::fail(b),
+    };
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(&spec);
     let obs = observe(&report, &flight.sim);
     if let Err(b) = write_outputs(&spec, a, &flight, &obs) {
         return simulate::fail(b);
     }
-    let failures = flight.quality.failures(&Criteria::default());
+    let failures = flight.quality.failures(&s.mission.criteria);
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
     if a.json {
@@ -144,22 +192,26 @@ fn f3(x: f64) -> String {
     format!("{x:.3}")
 }
 
-fn quality_text(q: &FlightQuality, failures: &[String]) -> String {
+fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
     let mut out = format!(
         "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
         if q.crashed { "CRASHED" } else { "no crash" },
         q.airborne_s,
         q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
     );
-    out.push_str(&format!(
-        "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
-        q.attitude_error_deg.rms,
-        q.attitude_error_deg.max,
-        q.altitude_error_m.rms,
-        q.altitude_error_m.max,
-        q.drift_m,
-        q.saturation_s
-    ));
+    if q.hovers {
+        out.push_str(&format!(
+            "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
+            q.attitude_error_deg.rms,
+            q.attitude_error_deg.max,
+            q.altitude_error_m.rms,
+            q.altitude_error_m.max,
+            q.drift_m,
+            q.saturation_s
+        ));
+    } else {
+        out.push_str("  hover: none to judge (the mission holds no altitude)\n");
+    }
     if !q.steps.is_empty() {
         let mut t = Table::new(&[
             "step",
@@ -191,7 +243,7 @@ fn quality_text(q: &FlightQuality, failures: &[String]) -> String {
         out.push_str(&t.render());
     }
     out.push_str(&match failures {
-        [] => "  criteria (no crash, hover attitude RMS < 2°, altitude RMS < 0.1 m, roll/pitch steps: true overshoot < 20 %, tracked settling < 0.5 s): met\n".to_string(),
+        [] => format!("  criteria ({}): met\n", c.describe()),
         f => format!("  criteria NOT met: {}\n", f.join("; ")),
     });
     out
@@ -217,7 +269,7 @@ fn to_text(
         seconds,
         flown / seconds.max(1e-9)
     );
-    out.push_str(&quality_text(&f.quality, failures));
+    out.push_str(&quality_text(&f.quality, &s.mission.criteria, failures));
     out.push_str(
         "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
     );
@@ -294,15 +346,50 @@ fn to_json(
     v
 }
 
-/// The CSV header: every column with its unit.
+/// The CSV header: every column with its unit (chain latency columns follow).
 const CSV_HEADER: &str = "time_s,sp_roll_deg,sp_pitch_deg,sp_yaw_rate_dps,sp_throttle,\
 roll_deg,pitch_deg,yaw_deg,est_roll_deg,est_pitch_deg,est_yaw_deg,\
 rate_x_dps,rate_y_dps,rate_z_dps,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,alt_target_m,\
 motor1,motor2,motor3,motor4,armed,on_ground,crashed,battery_v";
 
-fn csv(trace: &[TracePoint]) -> String {
-    let mut out = String::with_capacity(200 * (trace.len() + 1));
+/// A chain's latency as a step function of time: the value of the latest
+/// observation that ended at or before each trace instant.
+struct LatencyColumn<'a> {
+    obs: &'a rtpipe_sim::Observed,
+    next: usize,
+}
+
+impl LatencyColumn<'_> {
+    fn at(&mut self, t: i64) -> Option<i64> {
+        while self.next < self.obs.at.len() && self.obs.at[self.next] <= t {
+            self.next += 1;
+        }
+        self.next.checked_sub(1).map(|k| self.obs.values[k])
+    }
+}
+
+/// A column name from a chain label: letters, digits and `_` only.
+fn column(label: &str, what: &str) -> String {
+    let base: String = label
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    format!("{base}_{what}_ms")
+}
+
+fn csv(spec: &Spec, f: &Flight) -> String {
+    let trace = &f.trace;
+    let mut out = String::with_capacity(240 * (trace.len() + 1));
     out.push_str(CSV_HEADER);
+    let mut cols = Vec::new();
+    for (k, cs) in f.sim.chains.iter().enumerate() {
+        let label = spec.chain_label(k);
+        for (what, obs) in [("reaction", &cs.reaction), ("freshness", &cs.freshness)] {
+            out.push(',');
+            out.push_str(&column(&label, what));
+            cols.push(LatencyColumn { obs, next: 0 });
+        }
+    }
     out.push('\n');
     for p in trace {
         let d = f64::to_degrees;
@@ -336,12 +423,20 @@ fn csv(trace: &[TracePoint]) -> String {
             out.push_str(&format!(",{m:.5}"));
         }
         out.push_str(&format!(
-            ",{},{},{},{:.4}\n",
+            ",{},{},{},{:.4}",
             u8::from(p.armed),
             u8::from(p.on_ground),
             u8::from(p.crashed),
             p.voltage
         ));
+        let t = i64::try_from(p.t_ns).unwrap_or(i64::MAX);
+        for c in &mut cols {
+            out.push(',');
+            if let Some(v) = c.at(t) {
+                out.push_str(&format!("{:.6}", v as f64 * 1e-6));
+            }
+        }
+        out.push('\n');
     }
     out
 }
@@ -370,7 +465,7 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
         }
     }
     if let Some(path) = &a.log {
-        files.push(("--log", path.clone(), csv(&f.trace)));
+        files.push(("--log", path.clone(), csv(spec, f)));
     }
     simulate::write_all(&a.spec, &files)
 }

@@ -113,6 +113,8 @@ pub struct FlightQuality {
     pub airborne_s: f64,
     /// When the vehicle was last disarmed on the ground after flying, s.
     pub landed_s: Option<f64>,
+    /// The mission holds an altitude, so there is a hover to judge.
+    pub hovers: bool,
 }
 
 /// A mission stick change: (time s, axis, target deg).
@@ -188,6 +190,7 @@ pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
                 .count() as f64,
         airborne_s: dt * trace.iter().filter(|p| p.armed && !p.on_ground).count() as f64,
         landed_s: landed(trace),
+        hovers: first_alt.is_some(),
     }
 }
 
@@ -262,8 +265,10 @@ fn landed(trace: &[TracePoint]) -> Option<f64> {
         .map(secs)
 }
 
-/// Tolerances a flight must meet.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Tolerances a flight must meet (a mission's `[criteria]` table; omitted
+/// fields keep the defaults).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Criteria {
     /// Hover attitude error RMS, degrees.
     pub attitude_rms_deg: f64,
@@ -288,6 +293,37 @@ impl Default for Criteria {
     }
 }
 
+impl Criteria {
+    /// Every tolerance positive and finite.
+    pub fn validate(&self) -> Result<(), crate::ConfigError> {
+        for (name, v) in [
+            ("criteria.attitude_rms_deg", self.attitude_rms_deg),
+            ("criteria.altitude_rms_m", self.altitude_rms_m),
+            ("criteria.overshoot", self.overshoot),
+            ("criteria.settling_s", self.settling_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(crate::ConfigError::new(
+                    name,
+                    format!("must be a positive number, found {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The criteria in words.
+    pub fn describe(&self) -> String {
+        format!(
+            "no crash, hover attitude RMS < {}°, altitude RMS < {} m, roll/pitch steps: true overshoot < {} %, tracked settling < {} s",
+            self.attitude_rms_deg,
+            self.altitude_rms_m,
+            100.0 * self.overshoot,
+            self.settling_s
+        )
+    }
+}
+
 impl FlightQuality {
     /// What fails `c`, in words; empty when the flight meets it.
     pub fn failures(&self, c: &Criteria) -> Vec<String> {
@@ -295,7 +331,7 @@ impl FlightQuality {
         if self.crashed {
             out.push("crashed".to_string());
         }
-        if self.attitude_error_deg.count == 0 {
+        if self.hovers && self.attitude_error_deg.count == 0 {
             out.push("never hovered (no sample to judge)".to_string());
         }
         let a = self.attitude_error_deg.rms;
@@ -327,5 +363,91 @@ impl FlightQuality {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MISSION: &str = r#"
+name = "strict"
+[[step]]
+at = "0.5s"
+arm = true
+[criteria]
+attitude_rms_deg = 0.5
+"#;
+
+    #[test]
+    fn missions_state_their_criteria() {
+        let m = Mission::from_toml_str(MISSION).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            m.criteria,
+            Criteria {
+                attitude_rms_deg: 0.5,
+                ..Criteria::default()
+            }
+        );
+        assert_eq!(
+            Mission::builtin("hover").map(|m| m.criteria).ok(),
+            Some(Criteria::default())
+        );
+        let bad = MISSION.replace("0.5\n", "-1\n");
+        let e = Mission::from_toml_str(&bad)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("criteria.attitude_rms_deg"), "{e}");
+        let unknown = MISSION.replace("attitude_rms_deg", "attitude_rms");
+        assert!(Mission::from_toml_str(&unknown).is_err());
+    }
+
+    fn point(t_s: f64, roll_deg: f64, sp_deg: f64) -> TracePoint {
+        let mut p = TracePoint {
+            t_ns: (t_s * 1e9) as u64,
+            armed: true,
+            alt_target: Some(1.0),
+            ..TracePoint::default()
+        };
+        p.pos.z = 1.0;
+        p.euler.roll = roll_deg.to_radians();
+        p.est.roll = roll_deg.to_radians();
+        p.sp.roll = sp_deg.to_radians();
+        p
+    }
+
+    #[test]
+    fn hover_and_steps_are_judged_as_documented() {
+        let m = Mission::builtin("steps").unwrap_or_else(|e| panic!("{e}"));
+        // Steady at 1 m until the 20° roll step at 6 s; then an exact first-
+        // order response with a 0.1 s time constant.
+        let trace: Vec<TracePoint> = (0..3500)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let sp = if t >= 6.0 { 20.0 } else { 0.0 };
+                let roll = if t >= 6.0 {
+                    20.0 * (1.0 - (-(t - 6.0) / 0.1).exp())
+                } else {
+                    0.5
+                };
+                point(t, roll, sp)
+            })
+            .collect();
+        let q = assess(&trace, &m);
+        // Hover: from 1 s (altitude target) + 3 s to the first step at 6 s,
+        // with a constant 0.5° error.
+        assert_eq!(q.attitude_error_deg.count, 1000);
+        assert!((q.attitude_error_deg.rms - 0.5).abs() < 1e-9);
+        let roll = q
+            .steps
+            .iter()
+            .find(|s| s.axis == Axis::Roll)
+            .unwrap_or_else(|| panic!("no roll step"));
+        // Into the 5 % band after −ln(0.05)·τ = 0.2996 s; no overshoot;
+        // 10–90 % rise ln(9)·τ = 0.2197 s (to the 2 ms grid).
+        assert!((roll.tracked.settling_s - 0.2996).abs() < 0.003, "{roll:?}");
+        assert!((roll.truth.rise_s - 0.2197).abs() < 0.003, "{roll:?}");
+        assert_eq!(roll.truth.overshoot, 0.0);
     }
 }

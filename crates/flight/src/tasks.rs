@@ -531,6 +531,8 @@ pub struct Cosim {
     /// its dynamics are slow and its model is costly per call).
     battery_dt: f64,
     seen: Seen,
+    /// Where the world's time is published for a progress display.
+    progress: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
     /// First time each battery alert level was raised, ns.
     pub alerts: Vec<(u64, BatteryAlert)>,
     /// The recorded trajectory, one point every `trace_every_ns`.
@@ -558,10 +560,17 @@ impl Cosim {
             next_trace: 0,
             battery_dt: 0.0,
             seen: Seen::default(),
+            progress: None,
             alerts: Vec::new(),
             trace: Vec::new(),
             cfg,
         })
+    }
+
+    /// Publish the world's time (ns) here as it advances, for a progress
+    /// display in another thread.
+    pub fn report_progress(&mut self, to: std::sync::Arc<std::sync::atomic::AtomicU64>) {
+        self.progress = Some(to);
     }
 
     /// The plant (for checks after a run).
@@ -588,6 +597,9 @@ impl Cosim {
             self.step_to(at);
             self.record();
             self.next_trace += self.cfg.trace_every_ns.max(1);
+            if let Some(p) = &self.progress {
+                p.store(at, std::sync::atomic::Ordering::Relaxed);
+            }
         }
         self.step_to(t);
     }

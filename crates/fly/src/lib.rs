@@ -18,6 +18,8 @@ use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig, SimResult};
 use std::fmt;
 use std::path::Path;
+use std::sync::atomic::AtomicU64;
+use std::sync::Arc;
 
 /// Time flown after the mission's last step when no duration is given.
 pub const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
@@ -88,13 +90,13 @@ fn vehicle(v: &str) -> Result<Preset, FlyError> {
 
 fn mission(m: &str) -> Result<Mission, FlyError> {
     let r = match m {
-        "hover" | "steps" => Mission::builtin(m),
+        "hover" | "steps" | "paper" => Mission::builtin(m),
         _ => Mission::from_file(Path::new(m)),
     };
     r.map_err(|e| {
         FlyError::new(
             format!("--mission {m}: {e}"),
-            "name a built-in mission (hover, steps) or a mission file",
+            "name a built-in mission (hover, steps, paper) or a mission file",
         )
     })
 }
@@ -141,7 +143,7 @@ pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
 }
 
 /// What to fly: the vehicle (a built-in preset name or a preset file), the
-/// mission (`hover`, `steps` or a mission file), how long (default: 5 s after
+/// mission (`hover`, `steps`, `paper` or a mission file), how long (default: 5 s after
 /// the mission's last step) and the seed of the noise and execution times.
 pub struct Request<'a> {
     pub spec_path: &'a Path,
@@ -182,6 +184,16 @@ fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
 /// Flies `spec` as `setup` says: bodies on the simulated schedule, the
 /// world co-simulated at their read and publish instants.
 pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, FlyError> {
+    fly_with_progress(spec, s, exec, None)
+}
+
+/// [`fly`], publishing the simulated time (ns) to `progress` as it goes.
+pub fn fly_with_progress(
+    spec: &Spec,
+    s: &Setup,
+    exec: ExecModel,
+    progress: Option<Arc<AtomicU64>>,
+) -> Result<Flight, FlyError> {
     let seed = s.world.seed;
     let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
     for (t, role) in spec.tasks.iter().zip(&s.roles) {
@@ -198,6 +210,9 @@ pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, FlyError> 
     }
     let mut world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
         .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    if let Some(p) = progress {
+        world.report_progress(p);
+    }
     let cfg = SimConfig {
         horizon: s.horizon,
         seed,

@@ -205,12 +205,17 @@ pub struct Observed {
     pub witness: Option<Witness>,
     /// Every value, in sample order.
     pub values: Vec<Nanos>,
+    /// When each value became known (the tail output that ended it), in
+    /// the same order: a time series of the latency.
+    pub at: Vec<Nanos>,
 }
 
 impl Observed {
-    fn push(&mut self, value: Nanos, w: Witness) {
+    /// A value that ended at `at`.
+    fn push(&mut self, value: Nanos, at: Nanos, w: Witness) {
         debug_assert!(value >= 0, "a latency is never negative: {w:?}");
         self.values.push(value);
+        self.at.push(at);
         if self.max.is_none_or(|m| value > m) {
             self.max = Some(value);
             self.witness = Some(w);
@@ -489,7 +494,7 @@ impl Tracker {
             first: t,
             last: t,
         };
-        self.stats.reaction.push(t - stamp, w);
+        self.stats.reaction.push(t - stamp, t, w);
         for s in self.event_pending..=sample {
             let event = self.stamps[s as usize - 1];
             let w = Witness {
@@ -498,7 +503,7 @@ impl Tracker {
                 first: t,
                 last: t,
             };
-            self.stats.event_reaction.push(t - event, w);
+            self.stats.event_reaction.push(t - event, t, w);
         }
         self.event_pending = self.event_pending.max(sample + 1);
     }
@@ -512,13 +517,13 @@ impl Tracker {
         };
         let st = &mut self.stats;
         st.finalised += 1;
-        st.freshness.push(w.freshness(), w);
+        st.freshness.push(w.freshness(), last, w);
         if sample > 0 {
             let event = Witness {
                 read: self.stamps[sample as usize - 1],
                 ..w
             };
-            st.event_freshness.push(event.freshness(), event);
+            st.event_freshness.push(event.freshness(), last, event);
         }
     }
 }

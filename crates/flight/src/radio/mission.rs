@@ -24,6 +24,7 @@
 //! to the initial heading), `hold_position`.
 
 use crate::error::{in_range, ConfigError};
+use crate::quality::Criteria;
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -56,6 +57,9 @@ struct MissionFile {
     description: String,
     #[serde(default)]
     step: Vec<StepFile>,
+    /// What the flight must meet; omitted fields keep their defaults.
+    #[serde(default)]
+    criteria: Criteria,
 }
 
 /// One validated step.
@@ -143,6 +147,8 @@ pub struct Mission {
     pub description: String,
     /// Steps in time order.
     pub steps: Vec<MissionStep>,
+    /// The tolerances the flight must meet (`[criteria]`, defaults otherwise).
+    pub criteria: Criteria,
 }
 
 /// Parse "2.5s", "250ms", "1500us" or "2" (seconds) into ns.
@@ -198,6 +204,8 @@ fn check_step(i: usize, f: &StepFile) -> Result<MissionStep, ConfigError> {
 pub const HOVER_TOML: &str = include_str!("../../missions/hover.toml");
 /// Built-in `steps` mission source.
 pub const STEPS_TOML: &str = include_str!("../../missions/steps.toml");
+/// Built-in `paper` mission source: the paper's synthetic radio input.
+pub const PAPER_TOML: &str = include_str!("../../missions/paper.toml");
 
 impl Mission {
     /// Parse a mission; errors name the offending field.
@@ -215,10 +223,12 @@ impl Mission {
             }
             steps.push(st);
         }
+        f.criteria.validate()?;
         Ok(Self {
             name: f.name,
             description: f.description,
             steps,
+            criteria: f.criteria,
         })
     }
 
@@ -229,14 +239,15 @@ impl Mission {
         Self::from_toml_str(&src)
     }
 
-    /// A built-in mission by name (`hover`, `steps`).
+    /// A built-in mission by name (`hover`, `steps`, `paper`).
     pub fn builtin(name: &str) -> Result<Self, ConfigError> {
         match name {
             "hover" => Self::from_toml_str(HOVER_TOML),
             "steps" => Self::from_toml_str(STEPS_TOML),
+            "paper" => Self::from_toml_str(PAPER_TOML),
             _ => Err(ConfigError::new(
                 "mission",
-                format!("unknown built-in mission {name:?} (hover, steps)"),
+                format!("unknown built-in mission {name:?} (hover, steps, paper)"),
             )),
         }
     }
