@@ -493,6 +493,12 @@ pub struct CosimConfig {
     pub radio_loss: Option<(u64, u64)>,
     /// Record the state every this many ns.
     pub trace_every_ns: u64,
+    /// A pure delay (ns) on what the gyro, accelerometer and radio tasks
+    /// sample, in that order: the sample a job gets at t is the one the
+    /// world produced at the latest sensing instant at or before t − delay
+    /// (nothing before the first such one). It lengthens the chains that
+    /// start there by exactly the delay.
+    pub sense_delay_ns: [u64; 3],
 }
 
 impl CosimConfig {
@@ -504,6 +510,7 @@ impl CosimConfig {
             impulse: None,
             radio_loss: None,
             trace_every_ns: 2_000_000,
+            sense_delay_ns: [0; 3],
         }
     }
 }
@@ -531,6 +538,8 @@ pub struct Cosim {
     /// its dynamics are slow and its model is costly per call).
     battery_dt: f64,
     seen: Seen,
+    /// The delay lines of the gyro, accelerometer and radio samples.
+    delayed: [DelayLine; 3],
     /// Where the world's time is published for a progress display.
     progress: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
     /// First time each battery alert level was raised, ns.
@@ -561,6 +570,7 @@ impl Cosim {
             battery_dt: 0.0,
             seen: Seen::default(),
             progress: None,
+            delayed: cfg.sense_delay_ns.map(DelayLine::new),
             alerts: Vec::new(),
             trace: Vec::new(),
             cfg,
@@ -662,6 +672,39 @@ impl Cosim {
     }
 }
 
+/// A pure delay on a stream of samples.
+struct DelayLine {
+    delay: u64,
+    /// Samples not yet delivered, oldest first, with when they were taken.
+    queue: std::collections::VecDeque<(u64, Option<Value>)>,
+}
+
+impl DelayLine {
+    fn new(delay: u64) -> DelayLine {
+        DelayLine {
+            delay,
+            queue: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// Takes `fresh` (the sample at `t`) in and gives out the newest one
+    /// taken at or before t − delay.
+    fn pass(&mut self, t: u64, fresh: Option<Value>) -> Option<Value> {
+        if self.delay == 0 {
+            return fresh;
+        }
+        self.queue.push_back((t, fresh));
+        let due = t.checked_sub(self.delay)?;
+        while self.queue.get(1).is_some_and(|&(at, _)| at <= due) {
+            self.queue.pop_front();
+        }
+        match self.queue.front() {
+            Some(&(at, v)) if at <= due => v,
+            _ => None,
+        }
+    }
+}
+
 fn ns(t: Nanos) -> u64 {
     u64::try_from(t).unwrap_or(0)
 }
@@ -670,17 +713,21 @@ impl Environment<Value> for Cosim {
     fn sense(&mut self, task: usize, t: Nanos) -> Option<Value> {
         let t = ns(t);
         self.advance(t);
-        match self.roles.get(task).copied().flatten()? {
-            Role::Gyro => Some(Value::Imu(self.imu.read_gyro(t, self.plant.state().rate))),
+        let (line, fresh) = match self.roles.get(task).copied().flatten()? {
+            Role::Gyro => (
+                0,
+                Some(Value::Imu(self.imu.read_gyro(t, self.plant.state().rate))),
+            ),
             Role::Accel => {
                 let sf = self.plant.truth().specific_force;
-                Some(Value::Imu(self.imu.read_accel(t, sf)))
+                (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
             }
-            Role::Radio => self.radio_frame(t),
-            Role::Vbat => Some(Value::Scalar(self.battery.voltage())),
-            Role::Current => Some(Value::Scalar(self.battery.current())),
-            _ => None,
-        }
+            Role::Radio => (2, self.radio_frame(t)),
+            Role::Vbat => return Some(Value::Scalar(self.battery.voltage())),
+            Role::Current => return Some(Value::Scalar(self.battery.current())),
+            _ => return None,
+        };
+        self.delayed[line].pass(t, fresh)
     }
 
     fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {

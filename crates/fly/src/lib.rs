@@ -7,6 +7,8 @@
 //! rates the flight (`rtpipe_flight::quality`). `rtpipe fly` and the flight
 //! benchmark use it; the analysis and the simulator know nothing of it.
 
+pub mod sweep;
+
 use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::loop_sim::TracePoint;
@@ -53,6 +55,7 @@ impl fmt::Display for FlyError {
 impl std::error::Error for FlyError {}
 
 /// Everything a flight needs besides the spec.
+#[derive(Clone)]
 pub struct Setup {
     pub preset: Preset,
     pub mission: Mission,

@@ -1,0 +1,346 @@
+//! Timing limits from control quality: fly the same mission (same seed, same
+//! noise) while the pipeline's timing gets worse, and find where the flight
+//! stops meeting its criteria.
+//!
+//! Two sweeps, each point a whole flight:
+//! - **period scale**: every guaranteed task's period × k (budgets fixed);
+//!   the analysis gives each chain's sound bounds at that k;
+//! - **pure delay** on one chain's head (gyro, accelerometer or radio
+//!   samples delivered `d` late, everything else nominal): that chain's
+//!   bounds grow by exactly `d`.
+//!
+//! A chain's derived limit is the largest sound bound (reaction, freshness,
+//! from the read) at which the vehicle still met the criteria in every point
+//! up to it: the last passing point before the first failing one.
+
+use crate::{fly, FlyError, Setup};
+use rayon::prelude::*;
+use rtpipe_analysis::{analyze, Metric};
+use rtpipe_flight::quality::{Criteria, FlightQuality};
+use rtpipe_flight::tasks::Role;
+use rtpipe_model::{Nanos, PeriodSpec, Server, Spec};
+use rtpipe_sim::ExecModel;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The sensing roles a pure delay can be put on, in the order of
+/// `CosimConfig::sense_delay_ns`.
+pub const DELAY_LINES: [Role; 3] = [Role::Gyro, Role::Accel, Role::Radio];
+
+/// What one sweep point changes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Variation {
+    /// Every guaranteed task's period × this factor.
+    Scale(f64),
+    /// This delay (ns) on the samples of `DELAY_LINES[line]`.
+    Delay { line: usize, ns: u64 },
+}
+
+/// One flight of a sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    pub variation: Variation,
+    /// Per declared chain: the sound reaction and freshness bounds (from the
+    /// read) of the timing flown, a pure delay included.
+    pub bounds: Vec<(Option<Nanos>, Option<Nanos>)>,
+    /// The timing passes the spec's schedulability test.
+    pub schedulable: bool,
+    /// `None` when the timing could not be flown (a period below its
+    /// budget); the reason is in `failures`.
+    pub quality: Option<FlightQuality>,
+    /// What misses the criteria; empty when the flight meets them.
+    pub failures: Vec<String>,
+}
+
+impl Point {
+    /// The flight met the criteria.
+    pub fn pass(&self) -> bool {
+        self.quality.is_some() && self.failures.is_empty()
+    }
+}
+
+/// `spec` with every guaranteed task's fixed period × `k` (rounded to the
+/// nanosecond); budgets stay. Background tasks keep their periods.
+pub fn scaled(spec: &Spec, k: f64) -> Result<Spec, String> {
+    assert!(
+        k.is_finite() && k > 0.0,
+        "a period scale is positive, found {k}"
+    );
+    let mut s = spec.clone();
+    for t in s
+        .tasks
+        .iter_mut()
+        .filter(|t| t.server != Server::Background)
+    {
+        let Some(p) = t.fixed_period() else { continue };
+        let q = (p as f64 * k).round() as Nanos;
+        if q < t.budget() {
+            return Err(format!(
+                "period of `{}` would be {q} ns, below its budget {} ns",
+                t.name,
+                t.budget()
+            ));
+        }
+        t.period = PeriodSpec::Fixed(q);
+    }
+    Ok(s)
+}
+
+/// Sound (reaction, freshness) of every declared chain, from the read.
+fn sound_bounds(spec: &Spec) -> (Vec<(Option<Nanos>, Option<Nanos>)>, bool) {
+    let rep = analyze(spec);
+    let mut out = vec![(None, None); spec.chains.len()];
+    for c in &rep.chains {
+        match c.metric {
+            Metric::Reaction => out[c.chain].0 = c.bound.sound,
+            Metric::Freshness => out[c.chain].1 = c.bound.sound,
+        }
+    }
+    (out, rep.schedulability.schedulable)
+}
+
+/// The delay line a chain starts at, if any.
+fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
+    let head = *spec.chains.get(chain)?.path.first()?;
+    let role = s.roles.get(head).copied().flatten()?;
+    DELAY_LINES.iter().position(|&r| r == role)
+}
+
+fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) -> Point {
+    let mut setup = s.clone();
+    let timing = match v {
+        Variation::Scale(k) => scaled(spec, k),
+        Variation::Delay { line, ns } => {
+            setup.world.sense_delay_ns[line] = ns;
+            Ok(spec.clone())
+        }
+    };
+    let timing = match timing {
+        Ok(x) => x,
+        Err(why) => {
+            return Point {
+                variation: v,
+                bounds: vec![(None, None); spec.chains.len()],
+                schedulable: false,
+                quality: None,
+                failures: vec![why],
+            }
+        }
+    };
+    let (mut bounds, schedulable) = sound_bounds(&timing);
+    if let Variation::Delay { line, ns } = v {
+        for (k, b) in bounds.iter_mut().enumerate() {
+            if head_line(&timing, s, k) == Some(line) {
+                let d = ns as Nanos;
+                *b = (b.0.map(|x| x + d), b.1.map(|x| x + d));
+            }
+        }
+    }
+    let (quality, failures) = match fly(&timing, &setup, exec) {
+        Ok(f) => {
+            let failures = f.quality.failures(c);
+            (Some(f.quality), failures)
+        }
+        Err(FlyError { msg, .. }) => (None, vec![msg]),
+    };
+    Point {
+        variation: v,
+        bounds,
+        schedulable,
+        quality,
+        failures,
+    }
+}
+
+/// Flies every variation (in parallel; each point is deterministic) and
+/// counts finished points in `done`.
+pub fn sweep(
+    spec: &Spec,
+    s: &Setup,
+    exec: ExecModel,
+    c: &Criteria,
+    variations: &[Variation],
+    done: &AtomicU64,
+) -> Vec<Point> {
+    variations
+        .par_iter()
+        .map(|&v| {
+            let p = flown(spec, s, v, exec, c);
+            done.fetch_add(1, Ordering::Relaxed);
+            p
+        })
+        .collect()
+}
+
+/// The default sweep: period scales 2^(i/3) from `lo` to `hi` (both
+/// included when they are powers of 2^(1/3)), and delays of 0, 2, 4, …,
+/// 128 ms on each delay line the spec uses.
+pub fn default_variations(spec: &Spec, s: &Setup, lo: f64, hi: f64) -> Vec<Variation> {
+    assert!(lo > 0.0 && hi >= lo, "scale range {lo}..{hi}");
+    let first = (3.0 * lo.log2()).round() as i32;
+    let last = (3.0 * hi.log2()).round() as i32;
+    let mut v: Vec<Variation> = (first..=last)
+        .map(|i| Variation::Scale(2f64.powf(f64::from(i) / 3.0)))
+        .collect();
+    for line in 0..DELAY_LINES.len() {
+        if (0..spec.chains.len()).any(|k| head_line(spec, s, k) == Some(line)) {
+            for ms in [0u64, 2, 4, 8, 16, 32, 64, 128] {
+                v.push(Variation::Delay {
+                    line,
+                    ns: ms * 1_000_000,
+                });
+            }
+        }
+    }
+    v
+}
+
+/// Where a one-dimensional sweep stops: the last passing point before the
+/// first failing one (in the order given) and that failing point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Edge<'a> {
+    pub last_pass: Option<&'a Point>,
+    pub first_fail: Option<&'a Point>,
+}
+
+/// The edge of the schedulable points `pick` selects, in order.
+pub fn edge<'a>(points: &'a [Point], pick: impl Fn(&Variation) -> bool) -> Edge<'a> {
+    let mut last_pass = None;
+    for p in points
+        .iter()
+        .filter(|p| pick(&p.variation) && p.schedulable)
+    {
+        if !p.pass() {
+            return Edge {
+                last_pass,
+                first_fail: Some(p),
+            };
+        }
+        last_pass = Some(p);
+    }
+    Edge {
+        last_pass,
+        first_fail: None,
+    }
+}
+
+/// The edge of the period-scale sweep, over the schedulable scales (below
+/// them nothing is guaranteed, so nothing is derived), in increasing order.
+pub fn scale_edge(points: &[Point]) -> Edge<'_> {
+    edge(points, |v| matches!(v, Variation::Scale(_)))
+}
+
+/// Per declared chain, the derived (reaction, freshness) limits: the
+/// smaller of what the period-scale sweep and the delay sweep of the chain's
+/// head allowed (the bounds at each one's last passing point). The scale
+/// sweep slows every chain at once, so its limits hold as a set; the delay
+/// sweep isolates one chain with the others nominal.
+pub fn derived_limits(
+    spec: &Spec,
+    s: &Setup,
+    points: &[Point],
+) -> Vec<(Option<Nanos>, Option<Nanos>)> {
+    let scale = scale_edge(points);
+    (0..spec.chains.len())
+        .map(|k| {
+            let mut lim = scale.last_pass.and_then(|p| p.bounds.get(k).copied());
+            if let Some(line) = head_line(spec, s, k) {
+                let d = edge(
+                    points,
+                    |v| matches!(v, Variation::Delay { line: l, .. } if *l == line),
+                );
+                let by_delay = d.last_pass.and_then(|p| p.bounds.get(k).copied());
+                lim = match (lim, by_delay) {
+                    (Some(a), Some(b)) => Some((min_opt(a.0, b.0), min_opt(a.1, b.1))),
+                    (a, b) => a.or(b),
+                };
+            }
+            lim.unwrap_or((None, None))
+        })
+        .collect()
+}
+
+fn min_opt(a: Option<Nanos>, b: Option<Nanos>) -> Option<Nanos> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, y) => x.or(y),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{setup, Request};
+    use std::path::Path;
+
+    fn cleanflight(vehicle: &str) -> (Spec, Setup) {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let r = Request {
+            spec_path: &p,
+            vehicle,
+            mission: "steps",
+            horizon: None,
+            seed: 1,
+        };
+        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        (spec, s)
+    }
+
+    #[test]
+    fn the_period_sweep_finds_where_the_flight_fails() {
+        let (spec, s) = cleanflight("racer5");
+        let vars = default_variations(&spec, &s, 0.5, 8.0);
+        let done = AtomicU64::new(0);
+        let points = sweep(
+            &spec,
+            &s,
+            ExecModel::Uniform,
+            &s.mission.criteria,
+            &vars,
+            &done,
+        );
+        assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
+        let e = scale_edge(&points);
+        let (Some(last), Some(fail)) = (e.last_pass, e.first_fail) else {
+            panic!("no edge: {e:?}");
+        };
+        let (Variation::Scale(a), Variation::Scale(b)) = (last.variation, fail.variation) else {
+            panic!("not scales");
+        };
+        assert!(1.0 <= a && a < b, "Table V's timing flies: {a} < {b}");
+        let limits = derived_limits(&spec, &s, &points);
+        let nominal = points
+            .iter()
+            .find(|p| p.variation == Variation::Scale(1.0))
+            .unwrap_or_else(|| panic!("no nominal point"));
+        for (k, lim) in limits.iter().enumerate() {
+            // Between the nominal timing's bounds and the last passing
+            // scale's, and below the first failing scale's.
+            for (l, lo, pass, fail) in [
+                (
+                    lim.0,
+                    nominal.bounds[k].0,
+                    last.bounds[k].0,
+                    fail.bounds[k].0,
+                ),
+                (
+                    lim.1,
+                    nominal.bounds[k].1,
+                    last.bounds[k].1,
+                    fail.bounds[k].1,
+                ),
+            ] {
+                assert!(
+                    lo <= l && l <= pass && pass < fail,
+                    "chain {k}: {l:?} {lo:?} {pass:?} {fail:?}"
+                );
+            }
+        }
+        // The gyro path's delay sweep fails too, and its limit is where.
+        let g = edge(&points, |v| matches!(v, Variation::Delay { line: 0, .. }));
+        let (Some(gp), Some(gf)) = (g.last_pass, g.first_fail) else {
+            panic!("the gyro delay sweep never failed: {g:?}");
+        };
+        assert!(gp.bounds[0].0 < gf.bounds[0].0);
+    }
+}
