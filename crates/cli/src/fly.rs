@@ -54,6 +54,21 @@ pub struct FlyArgs {
     /// attitude.svg, altitude.svg, motors.svg, latency.svg.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Sweep instead of one flight: fly the mission over period scales
+    /// (budgets fixed) and over pure delays on each chain's head, and derive
+    /// the chain limits under which the vehicle still meets its criterion.
+    #[arg(long)]
+    pub sweep: bool,
+    /// With --sweep: the period scales, LO..HI (steps of 2^(1/3)).
+    #[arg(long, value_name = "LO..HI", value_parser = crate::sweep::parse_scale, requires = "sweep")]
+    pub scale: Option<(f64, f64)>,
+    /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
+    /// altitude_rms_m, overshoot, settling_s [default: the mission's].
+    #[arg(long, value_name = "FILE", requires = "sweep")]
+    pub criterion: Option<PathBuf>,
+    /// With --sweep: write the spec with the derived chain limits here.
+    #[arg(long, value_name = "OUT.toml", requires = "sweep")]
+    pub write_limits: Option<PathBuf>,
     /// Write the flight as CSV (one row every 2 ms; the header names every
     /// column and its unit, ending with each chain's latest observed
     /// reaction and freshness in ms; readable by PlotJuggler).
@@ -146,6 +161,15 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Ok(s) => s,
         Err(b) => return simulate::fail(b),
     };
+    if a.sweep {
+        if a.plot.is_some() || a.log.is_some() {
+            return simulate::fail(Bad::new(
+                "--plot and --log describe one flight; --sweep flies many",
+                "drop --plot/--log, or drop --sweep",
+            ));
+        }
+        return crate::sweep::run(&spec, &s, a);
+    }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",
         spec.name,

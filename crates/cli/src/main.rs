@@ -6,6 +6,7 @@ mod fly;
 mod output;
 mod plot;
 mod simulate;
+mod sweep;
 mod table;
 
 use clap::parser::ValueSource;

@@ -114,6 +114,7 @@ fn example_name(flag: &str) -> &'static str {
         "--plot" => "fig9.svg",
         "--write" => "designed.toml",
         "--log" => "flight.csv",
+        "--write-limits" => "limits.toml",
         _ => "gantt.svg",
     }
 }

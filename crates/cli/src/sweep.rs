@@ -1,0 +1,266 @@
+//! `rtpipe fly --sweep`: timing limits from control quality. Flies the same
+//! mission over period scales and pure chain delays (rtpipe_fly::sweep) and
+//! reports where the flight stops meeting its criteria, the chain limits
+//! that follow, and optionally writes them into a spec.
+
+use crate::analyze;
+use crate::fly::FlyArgs;
+use crate::simulate::{self, Bad};
+use crate::table::Table;
+use rtpipe_flight::quality::Criteria;
+use rtpipe_fly::sweep::{
+    default_variations, derived_limits, edge, scale_edge, sweep, Point, Variation, DELAY_LINES,
+};
+use rtpipe_fly::Setup;
+use rtpipe_model::{Nanos, Spec};
+use serde_json::{json, Value as Json};
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// `--scale LO..HI`: two positive factors.
+pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("expected LO..HI like 0.5..8, found `{s}`"))?;
+    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0);
+    match (num(a), num(b)) {
+        (Some(lo), Some(hi)) if lo <= hi && hi <= 64.0 => Ok((lo, hi)),
+        _ => Err(format!(
+            "expected two positive factors LO <= HI <= 64, like 0.5..8, found `{s}`"
+        )),
+    }
+}
+
+fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Bad> {
+    let Some(path) = &a.criterion else {
+        return Ok(s.mission.criteria);
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        Bad::new(
+            format!("--criterion {}: {e}", path.display()),
+            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s",
+        )
+    })?;
+    let c: Criteria = toml::from_str(&text).map_err(|e| {
+        Bad::new(
+            format!("--criterion {}: {}", path.display(), e.message()),
+            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s (omitted keys keep their defaults)",
+        )
+    })?;
+    c.validate()
+        .map_err(|e| Bad::new(format!("--criterion {}: {e}", path.display()), ""))?;
+    Ok(c)
+}
+
+fn ms(ns: Option<Nanos>) -> String {
+    ns.map_or("-".into(), |v| format!("{:.3}", v as f64 * 1e-6))
+}
+
+fn what(v: &Variation) -> String {
+    match v {
+        Variation::Scale(k) => format!("periods ×{k:.3}"),
+        Variation::Delay { line, ns } => format!(
+            "{} +{} ms",
+            DELAY_LINES[*line].name(),
+            *ns as f64 * 1e-6
+        ),
+    }
+}
+
+fn verdict(p: &Point) -> String {
+    match (p.schedulable, p.pass()) {
+        (false, _) => "unschedulable".into(),
+        (true, true) => "flies".into(),
+        (true, false) => format!("FAILS: {}", p.failures.join("; ")),
+    }
+}
+
+fn points_table(spec: &Spec, points: &[&Point]) -> String {
+    let mut head = vec!["timing".to_string()];
+    for k in 0..spec.chains.len() {
+        head.push(format!("{} R/F ms", spec.chain_label(k)));
+    }
+    head.push("flight".into());
+    let refs: Vec<&str> = head.iter().map(String::as_str).collect();
+    let mut t = Table::new(&refs);
+    for p in points {
+        let mut row = vec![what(&p.variation)];
+        for b in &p.bounds {
+            row.push(format!("{} / {}", ms(b.0), ms(b.1)));
+        }
+        row.push(verdict(p));
+        t.row(row);
+    }
+    t.render()
+}
+
+fn limits_text(spec: &Spec, limits: &[(Option<Nanos>, Option<Nanos>)]) -> String {
+    let mut t = Table::new(&["chain", "derived reaction", "derived freshness", "spec's reaction", "spec's freshness"])
+        .numeric(&[1, 2, 3, 4]);
+    for (k, l) in limits.iter().enumerate() {
+        let ch = &spec.chains[k];
+        t.row(vec![
+            spec.chain_label(k),
+            ms(l.0),
+            ms(l.1),
+            ms(ch.reaction),
+            ms(ch.freshness),
+        ]);
+    }
+    t.render()
+}
+
+/// The spec with the derived limits as its chain limits.
+fn with_limits(spec: &Spec, limits: &[(Option<Nanos>, Option<Nanos>)]) -> Spec {
+    let mut s = spec.clone();
+    for (ch, l) in s.chains.iter_mut().zip(limits) {
+        if let Some(r) = l.0 {
+            ch.reaction = Some(r);
+        }
+        if let Some(f) = l.1 {
+            ch.freshness = Some(f);
+        }
+    }
+    s
+}
+
+fn point_json(p: &Point) -> Json {
+    let (kind, value) = match p.variation {
+        Variation::Scale(k) => ("scale", json!(k)),
+        Variation::Delay { line, ns } => (DELAY_LINES[line].name(), json!(ns as f64 * 1e-6)),
+    };
+    let q = p.quality.as_ref();
+    json!({
+        "varied": kind,
+        "value": value,
+        "bounds_ms": p.bounds.iter().map(|b| json!({"reaction": b.0.map(|x| x as f64 * 1e-6), "freshness": b.1.map(|x| x as f64 * 1e-6)})).collect::<Vec<_>>(),
+        "schedulable": p.schedulable,
+        "flies": p.pass(),
+        "failures": p.failures,
+        "attitude_error_rms_deg": q.map(|q| q.attitude_error_deg.rms),
+        "altitude_error_rms_m": q.map(|q| q.altitude_error_m.rms),
+        "crashed": q.map(|q| q.crashed),
+    })
+}
+
+/// Runs the sweep `a` asks for on `spec` as set up in `s`.
+pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
+    let c = match criteria(a, s) {
+        Ok(c) => c,
+        Err(b) => return simulate::fail(b),
+    };
+    let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
+    let vars = default_variations(spec, s, lo, hi);
+    if let Some(out) = &a.write_limits {
+        if let Err(b) = crate::output::prepare("--write-limits", out, &a.spec, None) {
+            return simulate::fail(b.into());
+        }
+    }
+    let done = AtomicU64::new(0);
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(vars.len() as u64),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "sweeping {msg} [{bar:30}] {pos}/{len} flights, {elapsed_precise} elapsed, ETA {eta}",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(spec.name.clone());
+    let points = std::thread::scope(|scope| {
+        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), &c, &vars, &done));
+        while !worker.is_finished() {
+            pb.set_position(done.load(Ordering::Relaxed));
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        worker.join()
+    });
+    pb.finish_and_clear();
+    let points = match points {
+        Ok(p) => p,
+        Err(e) => std::panic::resume_unwind(e),
+    };
+    let limits = derived_limits(spec, s, &points);
+    if let Some(out) = &a.write_limits {
+        let text = rtpipe_model::to_toml(&with_limits(spec, &limits));
+        let files = vec![("--write-limits", out.to_path_buf(), text)];
+        if let Err(b) = simulate::write_all(&a.spec, &files) {
+            return simulate::fail(b);
+        }
+    }
+    if a.json {
+        let v = json!({
+            "system": spec.name,
+            "vehicle": s.preset.name,
+            "mission": s.mission.name,
+            "criterion": c.describe(),
+            "points": points.iter().map(point_json).collect::<Vec<_>>(),
+            "limits_ms": limits.iter().enumerate().map(|(k, l)| json!({
+                "chain": spec.chain_label(k),
+                "reaction": l.0.map(|x| x as f64 * 1e-6),
+                "freshness": l.1.map(|x| x as f64 * 1e-6),
+            })).collect::<Vec<_>>(),
+        });
+        if let Err(code) = analyze::print_json(&v) {
+            return code;
+        }
+    } else {
+        print!("{}", text(spec, s, &c, &points, &limits, a.write_limits.as_deref()));
+    }
+    ExitCode::SUCCESS
+}
+
+fn text(
+    spec: &Spec,
+    s: &Setup,
+    c: &Criteria,
+    points: &[Point],
+    limits: &[(Option<Nanos>, Option<Nanos>)],
+    written: Option<&Path>,
+) -> String {
+    let mut out = format!(
+        "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n\nperiod scale (budgets fixed; sound bounds from the read):\n",
+        spec.name,
+        spec.tasks.len(),
+        s.preset.name,
+        s.mission.name,
+        c.describe()
+    );
+    let scales: Vec<&Point> = points
+        .iter()
+        .filter(|p| matches!(p.variation, Variation::Scale(_)))
+        .collect();
+    out.push_str(&points_table(spec, &scales));
+    let e = scale_edge(points);
+    out.push_str(&match (e.last_pass, e.first_fail) {
+        (Some(p), Some(f)) => format!(
+            "the flight stops meeting the criterion between {} (flies) and {} (fails)\n",
+            what(&p.variation),
+            what(&f.variation)
+        ),
+        (Some(p), None) => format!("it flies up to {} (no failure in range)\n", what(&p.variation)),
+        (None, _) => "no schedulable scale flies\n".into(),
+    });
+    for (line, role) in DELAY_LINES.iter().enumerate() {
+        let pts: Vec<&Point> = points
+            .iter()
+            .filter(|p| matches!(p.variation, Variation::Delay { line: l, .. } if l == line))
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        out.push_str(&format!("\npure delay on the {} samples:\n", role.name()));
+        out.push_str(&points_table(spec, &pts));
+        let d = edge(points, |v| matches!(v, Variation::Delay { line: l, .. } if *l == line));
+        if let (Some(p), None) = (d.last_pass, d.first_fail) {
+            out.push_str(&format!("no failure up to {}\n", what(&p.variation)));
+        }
+    }
+    out.push_str("\nderived limits (ms; the smaller of the period-scale and the delay sweep):\n");
+    out.push_str(&limits_text(spec, limits));
+    if let Some(w) = written {
+        out.push_str(&format!("wrote {} with these limits\n", w.display()));
+    }
+    out
+}
