@@ -9,7 +9,8 @@ use crate::simulate::{self, Bad};
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{
-    default_variations, derived_limits, edge, scale_edge, sweep, Point, Variation, DELAY_LINES,
+    default_variations, derived_limits, edge, scale_edge, sweep, ChainPair, Point, Variation,
+    DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Nanos, Spec};
@@ -23,7 +24,12 @@ pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| format!("expected LO..HI like 0.5..8, found `{s}`"))?;
-    let num = |x: &str| x.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0);
+    let num = |x: &str| {
+        x.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0)
+    };
     match (num(a), num(b)) {
         (Some(lo), Some(hi)) if lo <= hi && hi <= 64.0 => Ok((lo, hi)),
         _ => Err(format!(
@@ -60,11 +66,9 @@ fn ms(ns: Option<Nanos>) -> String {
 fn what(v: &Variation) -> String {
     match v {
         Variation::Scale(k) => format!("periods ×{k:.3}"),
-        Variation::Delay { line, ns } => format!(
-            "{} +{} ms",
-            DELAY_LINES[*line].name(),
-            *ns as f64 * 1e-6
-        ),
+        Variation::Delay { line, ns } => {
+            format!("{} +{} ms", DELAY_LINES[*line].name(), *ns as f64 * 1e-6)
+        }
     }
 }
 
@@ -95,9 +99,15 @@ fn points_table(spec: &Spec, points: &[&Point]) -> String {
     t.render()
 }
 
-fn limits_text(spec: &Spec, limits: &[(Option<Nanos>, Option<Nanos>)]) -> String {
-    let mut t = Table::new(&["chain", "derived reaction", "derived freshness", "spec's reaction", "spec's freshness"])
-        .numeric(&[1, 2, 3, 4]);
+fn limits_text(spec: &Spec, limits: &[ChainPair]) -> String {
+    let mut t = Table::new(&[
+        "chain",
+        "derived reaction",
+        "derived freshness",
+        "spec's reaction",
+        "spec's freshness",
+    ])
+    .numeric(&[1, 2, 3, 4]);
     for (k, l) in limits.iter().enumerate() {
         let ch = &spec.chains[k];
         t.row(vec![
@@ -112,7 +122,7 @@ fn limits_text(spec: &Spec, limits: &[(Option<Nanos>, Option<Nanos>)]) -> String
 }
 
 /// The spec with the derived limits as its chain limits.
-fn with_limits(spec: &Spec, limits: &[(Option<Nanos>, Option<Nanos>)]) -> Spec {
+fn with_limits(spec: &Spec, limits: &[ChainPair]) -> Spec {
     let mut s = spec.clone();
     for (ch, l) in s.chains.iter_mut().zip(limits) {
         if let Some(r) = l.0 {
@@ -206,7 +216,10 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
             return code;
         }
     } else {
-        print!("{}", text(spec, s, &c, &points, &limits, a.write_limits.as_deref()));
+        print!(
+            "{}",
+            text(spec, s, &c, &points, &limits, a.write_limits.as_deref())
+        );
     }
     ExitCode::SUCCESS
 }
@@ -216,7 +229,7 @@ fn text(
     s: &Setup,
     c: &Criteria,
     points: &[Point],
-    limits: &[(Option<Nanos>, Option<Nanos>)],
+    limits: &[ChainPair],
     written: Option<&Path>,
 ) -> String {
     let mut out = format!(
@@ -239,7 +252,10 @@ fn text(
             what(&p.variation),
             what(&f.variation)
         ),
-        (Some(p), None) => format!("it flies up to {} (no failure in range)\n", what(&p.variation)),
+        (Some(p), None) => format!(
+            "it flies up to {} (no failure in range)\n",
+            what(&p.variation)
+        ),
         (None, _) => "no schedulable scale flies\n".into(),
     });
     for (line, role) in DELAY_LINES.iter().enumerate() {
@@ -252,7 +268,10 @@ fn text(
         }
         out.push_str(&format!("\npure delay on the {} samples:\n", role.name()));
         out.push_str(&points_table(spec, &pts));
-        let d = edge(points, |v| matches!(v, Variation::Delay { line: l, .. } if *l == line));
+        let d = edge(
+            points,
+            |v| matches!(v, Variation::Delay { line: l, .. } if *l == line),
+        );
         if let (Some(p), None) = (d.last_pass, d.first_fail) {
             out.push_str(&format!("no failure up to {}\n", what(&p.variation)));
         }

@@ -432,4 +432,22 @@ mod tests {
             .unwrap_or_default();
         assert!(e.contains("body = \"gyro\""), "{e}");
     }
+
+    #[test]
+    fn a_design_under_the_derived_limits_flies_the_steps_mission() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/cleanflight-derived-design.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        // It meets its own (derived) limits under the sound analysis ...
+        let rep = rtpipe_analysis::analyze(&spec);
+        assert!(rep.all_ok(), "the design misses its limits");
+        // ... and both vehicles fly it within the criteria.
+        for vehicle in BUILTIN {
+            let s = setup_of(&spec, &p, &["--vehicle", vehicle, "--seed", "2"]);
+            let f = flown(&spec, &s);
+            let failures = f.quality.failures(&s.mission.criteria);
+            assert!(failures.is_empty(), "{vehicle}: {failures:?}");
+            assert_within_sound(&spec, &f);
+        }
+    }
 }

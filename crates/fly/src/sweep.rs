@@ -26,6 +26,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// `CosimConfig::sense_delay_ns`.
 pub const DELAY_LINES: [Role; 3] = [Role::Gyro, Role::Accel, Role::Radio];
 
+/// A chain's (reaction, freshness) bounds or limits, ns.
+pub type ChainPair = (Option<Nanos>, Option<Nanos>);
+
 /// What one sweep point changes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Variation {
@@ -41,7 +44,7 @@ pub struct Point {
     pub variation: Variation,
     /// Per declared chain: the sound reaction and freshness bounds (from the
     /// read) of the timing flown, a pure delay included.
-    pub bounds: Vec<(Option<Nanos>, Option<Nanos>)>,
+    pub bounds: Vec<ChainPair>,
     /// The timing passes the spec's schedulability test.
     pub schedulable: bool,
     /// `None` when the timing could not be flown (a period below its
@@ -86,7 +89,7 @@ pub fn scaled(spec: &Spec, k: f64) -> Result<Spec, String> {
 }
 
 /// Sound (reaction, freshness) of every declared chain, from the read.
-fn sound_bounds(spec: &Spec) -> (Vec<(Option<Nanos>, Option<Nanos>)>, bool) {
+fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, bool) {
     let rep = analyze(spec);
     let mut out = vec![(None, None); spec.chains.len()];
     for c in &rep.chains {

@@ -1,0 +1,136 @@
+//! `rtpipe fly` end to end: one flight, its outputs, the sweep, bad input.
+
+mod common;
+use common::{assert_exit, example, json_of, rtpipe, scratch};
+
+#[test]
+fn a_flight_reports_quality_and_chains_as_json() {
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--mission",
+        "hover",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let f = &v["flight"];
+    assert_eq!(f["crashed"], false);
+    assert_eq!(f["criteria_met"], true);
+    assert!(f["attitude_error_deg"]["rms"]
+        .as_f64()
+        .is_some_and(|x| x < 2.0));
+    assert!(f["altitude_error_m"]["rms"]
+        .as_f64()
+        .is_some_and(|x| x < 0.1));
+    let chains = v["chains"].as_array().map_or(0, |c| c.len());
+    assert_eq!(chains, 6, "three chains, two metrics");
+    for c in v["chains"].as_array().into_iter().flatten() {
+        assert_eq!(c["violations"]["sound"], 0);
+        assert_eq!(c["violations_from_event"]["sound"], 0);
+        assert!(c["observed"]["count"].as_u64().is_some_and(|n| n > 1000));
+    }
+}
+
+#[test]
+fn plots_and_log_are_written_whole() {
+    let dir = scratch("fly-out");
+    let plots = dir.join("plots");
+    let log = dir.join("flight.csv");
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--duration",
+        "6s",
+        "--mission",
+        "hover",
+        "--plot",
+        &plots.to_string_lossy(),
+        "--log",
+        &log.to_string_lossy(),
+    ]);
+    // 6 s of the hover mission: up and hovering within the criteria.
+    assert_exit(&o, 0);
+    for f in ["attitude.svg", "altitude.svg", "motors.svg", "latency.svg"] {
+        let svg = std::fs::read_to_string(plots.join(f)).unwrap_or_default();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{f}"
+        );
+    }
+    let csv = std::fs::read_to_string(&log).unwrap_or_default();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    assert_eq!(header[0], "time_s");
+    assert!(header.contains(&"gyro_path_reaction_ms"));
+    // One row every 2 ms over 6 s, every row as wide as the header.
+    assert_eq!(lines.clone().count(), 3001);
+    assert!(lines.all(|l| l.split(',').count() == header.len()));
+}
+
+#[test]
+fn the_sweep_finds_the_edge_and_writes_the_limits() {
+    let dir = scratch("fly-sweep");
+    let out = dir.join("limits.toml");
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--sweep",
+        "--scale",
+        "1..2.6",
+        "--json",
+        "--write-limits",
+        &out.to_string_lossy(),
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    let scales: Vec<(f64, bool)> = points
+        .iter()
+        .filter(|p| p["varied"] == "scale")
+        .map(|p| (p["value"].as_f64().unwrap_or(0.0), p["flies"] == true))
+        .collect();
+    // ×1, ×1.26, ×1.59 fly; ×2 and ×2.52 do not (docs/flight.md).
+    assert_eq!(
+        scales.iter().map(|s| s.1).collect::<Vec<_>>(),
+        [true, true, true, false, false]
+    );
+    let gyro = &v["limits_ms"][0];
+    assert_eq!(gyro["chain"], "gyro path");
+    let lim = gyro["reaction"].as_f64().unwrap_or(0.0);
+    let at = |k: usize| {
+        points[k]["bounds_ms"][0]["reaction"]
+            .as_f64()
+            .unwrap_or(0.0)
+    };
+    assert!(at(0) <= lim && lim <= at(2) && lim < at(3), "{lim}");
+    // The written spec carries the limits and analyses.
+    let a = rtpipe(&["analyze", &out.to_string_lossy(), "--json"]);
+    let spec = json_of(&a);
+    let written = spec["chains"][0]["limit"].as_f64().unwrap_or(0.0);
+    assert!(
+        (written - lim * 1000.0).abs() < 1e-3,
+        "{written} µs vs {lim} ms"
+    );
+}
+
+#[test]
+fn bad_flight_input_exits_2() {
+    let spec = example("cleanflight.toml");
+    for args in [
+        vec!["fly", &spec, "--vehicle", "zeppelin"],
+        vec!["fly", &spec, "--mission", "loop-the-loop"],
+        vec!["fly", &spec, "--scale", "1..2"],
+        vec!["fly", &spec, "--sweep", "--scale", "2..1"],
+        vec!["fly", &spec, "--sweep", "--plot", "plots"],
+        vec!["fly", &spec, "--duration", "-3s"],
+    ] {
+        let o = rtpipe(&args);
+        assert_exit(&o, 2);
+    }
+    // A spec whose tasks name no bodies cannot fly.
+    let o = rtpipe(&["fly", &example("paper-table2.toml")]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("body = \"gyro\""), "{err}");
+}
