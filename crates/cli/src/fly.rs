@@ -51,7 +51,8 @@ pub struct FlyArgs {
     #[arg(long)]
     pub json: bool,
     /// Write SVG plots into this directory (created if missing):
-    /// attitude.svg, altitude.svg, motors.svg, latency.svg.
+    /// attitude.svg, altitude.svg, motors.svg, latency.svg; with --sweep,
+    /// sweep.svg.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
     /// Sweep instead of one flight: fly the mission over period scales
@@ -162,10 +163,10 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Err(b) => return simulate::fail(b),
     };
     if a.sweep {
-        if a.plot.is_some() || a.log.is_some() {
+        if a.log.is_some() {
             return simulate::fail(Bad::new(
-                "--plot and --log describe one flight; --sweep flies many",
-                "drop --plot/--log, or drop --sweep",
+                "--log describes one flight; --sweep flies many",
+                "drop --log, or drop --sweep (--plot DIR writes sweep.svg)",
             ));
         }
         return crate::sweep::run(&spec, &s, a);
@@ -465,18 +466,24 @@ fn csv(spec: &Spec, f: &Flight) -> String {
     out
 }
 
+/// Creates the `--plot` directory when it is missing.
+pub(crate) fn ensure_dir(dir: &std::path::Path) -> Result<(), Bad> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Bad::new(
+            format!("--plot {}: cannot create the directory: {e}", dir.display()),
+            "name a directory you can write",
+        )
+    })
+}
+
 /// Renders `--plot` and `--log` and writes them all or none.
 fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Bad> {
     let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
     if let Some(dir) = &a.plot {
-        if !dir.is_dir() {
-            std::fs::create_dir_all(dir).map_err(|e| {
-                Bad::new(
-                    format!("--plot {}: cannot create the directory: {e}", dir.display()),
-                    "name a directory you can write",
-                )
-            })?;
-        }
+        ensure_dir(dir)?;
         let svgs = [
             ("attitude.svg", plot::flight_attitude(&f.trace)),
             ("altitude.svg", plot::flight_altitude(&f.trace)),

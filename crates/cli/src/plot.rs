@@ -788,3 +788,109 @@ pub fn flight_motors(trace: &[TracePoint]) -> Res<String> {
         .collect();
     time_plot("motor commands", &[("command (0..1)", lines)])
 }
+
+/// One sweep point for [`sweep_chart`]: the chain's predicted sound reaction
+/// (ms), the worst roll/pitch step's tracked settling (s, capped at the
+/// hold), whether the flight met the criterion, and whether the point came
+/// from the delay sweep (else the period-scale sweep).
+pub struct SweepDot {
+    pub reaction_ms: f64,
+    pub settling_s: f64,
+    pub flies: bool,
+    pub delay: bool,
+}
+
+/// Flight quality against each chain's predicted reaction over a sweep,
+/// one panel per chain, with the spec's reaction limit (dashed) and the
+/// criterion's settling limit (solid) marked.
+pub fn sweep_chart(
+    panels: &[(String, Option<f64>, Vec<SweepDot>)],
+    settling_limit: f64,
+) -> Res<String> {
+    let mut svg = String::new();
+    {
+        let h = 300 * panels.len() as u32 + 40;
+        let root = SVGBackend::with_string(&mut svg, (900, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let root = root
+            .titled(
+                "flight quality against the predicted reaction (sweep)",
+                (FONT, 20).into_font(),
+            )
+            .map_err(err)?;
+        for ((name, limit, dots), area) in panels.iter().zip(root.split_evenly((panels.len(), 1))) {
+            let x_max = dots
+                .iter()
+                .map(|d| d.reaction_ms)
+                .chain(*limit)
+                .fold(1.0, f64::max)
+                * 1.08;
+            let mut chart = ChartBuilder::on(&area)
+                .margin(10)
+                .caption(name, (FONT, 15))
+                .x_label_area_size(34)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..x_max, 0.0..1.05)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("predicted sound reaction (ms)")
+                .y_desc("worst step settling (s)")
+                .label_style((FONT, 12))
+                .draw()
+                .map_err(err)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(0.0, settling_limit), (x_max, settling_limit)],
+                    SOUND.stroke_width(1),
+                )))
+                .map_err(err)?
+                .label(format!("criterion: settling < {settling_limit} s"))
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], SOUND.stroke_width(2)));
+            if let Some(l) = limit {
+                chart
+                    .draw_series(std::iter::once(DashedPathElement::new(
+                        vec![(*l, 0.0), (*l, 1.05)],
+                        6,
+                        4,
+                        PAPER.stroke_width(2),
+                    )))
+                    .map_err(err)?
+                    .label(format!("spec's limit {l} ms"))
+                    .legend(|(x, y)| {
+                        PathElement::new([(x, y), (x + 16, y)], PAPER.stroke_width(2))
+                    });
+            }
+            for (delay, label, color) in [
+                (false, "period scale", MAX),
+                (true, "pure delay", PALETTE[4]),
+            ] {
+                let pts: Vec<&SweepDot> = dots.iter().filter(|d| d.delay == delay).collect();
+                if pts.is_empty() {
+                    continue;
+                }
+                chart
+                    .draw_series(pts.iter().map(|d| {
+                        let style = if d.flies {
+                            color.filled()
+                        } else {
+                            color.stroke_width(2)
+                        };
+                        Circle::new((d.reaction_ms, d.settling_s.min(1.0)), 5, style)
+                    }))
+                    .map_err(err)?
+                    .label(format!("{label} (filled: flies)"))
+                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(GREY)
+                .label_font((FONT, 12))
+                .draw()
+                .map_err(err)?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}

@@ -154,6 +154,48 @@ fn point_json(p: &Point) -> Json {
     })
 }
 
+/// The sweep plot: per chain, every scale point and the chain's own delay
+/// points.
+fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<String, String> {
+    let worst = |p: &Point| {
+        p.quality.as_ref().map_or(1.0, |q| {
+            if q.crashed {
+                return 1.0;
+            }
+            q.steps
+                .iter()
+                .filter(|st| st.axis != rtpipe_flight::quality::Axis::Yaw)
+                .map(|st| st.tracked.settling_s)
+                .fold(0.0, f64::max)
+        })
+    };
+    let panels = (0..spec.chains.len())
+        .map(|k| {
+            let line = rtpipe_fly::sweep::head_line(spec, s, k);
+            let dots = points
+                .iter()
+                .filter(|p| p.schedulable)
+                .filter(|p| match p.variation {
+                    Variation::Scale(_) => true,
+                    Variation::Delay { line: l, .. } => Some(l) == line,
+                })
+                .filter_map(|p| {
+                    let r = p.bounds.get(k)?.0?;
+                    Some(crate::plot::SweepDot {
+                        reaction_ms: r as f64 * 1e-6,
+                        settling_s: worst(p),
+                        flies: p.pass(),
+                        delay: matches!(p.variation, Variation::Delay { .. }),
+                    })
+                })
+                .collect();
+            let limit = spec.chains[k].reaction.map(|l| l as f64 * 1e-6);
+            (spec.chain_label(k), limit, dots)
+        })
+        .collect::<Vec<_>>();
+    crate::plot::sweep_chart(&panels, c.settling_s)
+}
+
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.
 pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
     let c = match criteria(a, s) {
@@ -192,12 +234,22 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
         Err(e) => std::panic::resume_unwind(e),
     };
     let limits = derived_limits(spec, s, &points);
+    let mut files = Vec::new();
     if let Some(out) = &a.write_limits {
         let text = rtpipe_model::to_toml(&with_limits(spec, &limits));
-        let files = vec![("--write-limits", out.to_path_buf(), text)];
-        if let Err(b) = simulate::write_all(&a.spec, &files) {
+        files.push(("--write-limits", out.to_path_buf(), text));
+    }
+    if let Some(dir) = &a.plot {
+        match chart(spec, s, &c, &points) {
+            Ok(svg) => files.push(("--plot", dir.join("sweep.svg"), svg)),
+            Err(e) => return simulate::fail(Bad::new(format!("cannot draw the sweep: {e}"), "")),
+        }
+        if let Err(b) = crate::fly::ensure_dir(dir) {
             return simulate::fail(b);
         }
+    }
+    if let Err(b) = simulate::write_all(&a.spec, &files) {
+        return simulate::fail(b);
     }
     if a.json {
         let v = json!({

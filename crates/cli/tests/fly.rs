@@ -122,7 +122,7 @@ fn bad_flight_input_exits_2() {
         vec!["fly", &spec, "--mission", "loop-the-loop"],
         vec!["fly", &spec, "--scale", "1..2"],
         vec!["fly", &spec, "--sweep", "--scale", "2..1"],
-        vec!["fly", &spec, "--sweep", "--plot", "plots"],
+        vec!["fly", &spec, "--sweep", "--log", "flight.csv"],
         vec!["fly", &spec, "--duration", "-3s"],
     ] {
         let o = rtpipe(&args);

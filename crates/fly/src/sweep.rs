@@ -102,7 +102,7 @@ fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, bool) {
 }
 
 /// The delay line a chain starts at, if any.
-fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
+pub fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
     let head = *spec.chains.get(chain)?.path.first()?;
     let role = s.roles.get(head).copied().flatten()?;
     DELAY_LINES.iter().position(|&r| r == role)
