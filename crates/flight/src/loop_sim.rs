@@ -16,7 +16,7 @@ use crate::filter::{Pt1Vec3, GYRO_LPF_HZ_DEFAULT};
 use crate::imu::{Imu, ImuConfig};
 use crate::math::{Euler, Vec3};
 use crate::mixer::mix;
-use crate::motor::{cmd_from_dshot, dshot_decode, dshot_frame, dshot_value};
+use crate::motor::through_dshot;
 use crate::pid::{Controller, Setpoint};
 use crate::plant::Plant;
 use crate::preset::Preset;
@@ -354,16 +354,10 @@ impl LoopSim {
     /// Motor-output task: encode DShot600 frames; the ESC decodes them.
     pub fn pwm_task(&mut self) -> MotorDemand {
         let d = self.r_mix.value;
-        let mut out = MotorDemand {
-            motors: [0.0; 4],
+        let out = MotorDemand {
+            motors: through_dshot(d.motors, d.armed),
             armed: d.armed,
         };
-        for (o, m) in out.motors.iter_mut().zip(d.motors.iter()) {
-            let frame = dshot_frame(dshot_value(*m, d.armed), false);
-            *o = dshot_decode(frame)
-                .and_then(|(v, _)| cmd_from_dshot(v))
-                .unwrap_or(0.0);
-        }
         out
     }
 }

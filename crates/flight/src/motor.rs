@@ -70,6 +70,17 @@ pub fn cmd_from_dshot(value: u16) -> Option<f64> {
     Some(f64::from(value.min(DSHOT_MAX_THROTTLE) - DSHOT_MIN_THROTTLE) / span)
 }
 
+/// What the ESCs make of four motor commands sent as DShot600 frames: each
+/// command quantised to the protocol's 11 bits (0 when disarmed).
+pub fn through_dshot(motors: [f64; 4], armed: bool) -> [f64; 4] {
+    motors.map(|m| {
+        let frame = dshot_frame(dshot_value(m, armed), false);
+        dshot_decode(frame)
+            .and_then(|(v, _)| cmd_from_dshot(v))
+            .unwrap_or(0.0)
+    })
+}
+
 /// The 16-bit DShot frame: (value << 1 | telemetry) << 4 | crc, where crc is
 /// the XOR of the three nibbles of (value << 1 | telemetry). `value` is
 /// masked to 11 bits.

@@ -24,7 +24,7 @@ use crate::imu::{Imu, ImuConfig, Reading};
 use crate::loop_sim::{MotorDemand, TracePoint};
 use crate::math::{Euler, Vec3};
 use crate::mixer::mix;
-use crate::motor::{cmd_from_dshot, dshot_decode, dshot_frame, dshot_value};
+use crate::motor::through_dshot;
 use crate::pid::{Controller, Setpoint};
 use crate::plant::Plant;
 use crate::preset::Preset;
@@ -87,6 +87,16 @@ pub enum Role {
 }
 
 impl Role {
+    /// The six tasks of Fig. 11 a flight controller cannot fly without.
+    pub const CRITICAL: [Role; 6] = [
+        Role::Gyro,
+        Role::Accel,
+        Role::Ahrs,
+        Role::Radio,
+        Role::Pid,
+        Role::Pwm,
+    ];
+
     /// Every role, in the order of [`Role::name`]'s list.
     pub const ALL: [Role; 10] = [
         Role::Gyro,
@@ -329,16 +339,10 @@ impl Body<Value> for PwmTask {
             _ => None,
         })
         .unwrap_or_default();
-        let mut out = MotorDemand {
-            motors: [0.0; 4],
+        let out = MotorDemand {
+            motors: through_dshot(d.motors, d.armed),
             armed: d.armed,
         };
-        for (o, m) in out.motors.iter_mut().zip(d.motors.iter()) {
-            let frame = dshot_frame(dshot_value(*m, d.armed), false);
-            *o = dshot_decode(frame)
-                .and_then(|(v, _)| cmd_from_dshot(v))
-                .unwrap_or(0.0);
-        }
         Value::Motors(out)
     }
 }

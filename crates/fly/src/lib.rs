@@ -123,14 +123,7 @@ pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
         };
         roles.push(r);
     }
-    for need in [
-        Role::Gyro,
-        Role::Accel,
-        Role::Ahrs,
-        Role::Radio,
-        Role::Pid,
-        Role::Pwm,
-    ] {
+    for need in Role::CRITICAL {
         if !roles.contains(&Some(need)) {
             return Err(FlyError::new(
                 format!(
