@@ -209,5 +209,4 @@ impl<H: Hooks> Sim<H> {
             }
         }
     }
-
 }

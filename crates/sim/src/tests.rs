@@ -409,7 +409,7 @@ fn varied_system(seed: u64, tasks: std::ops::RangeInclusive<u64>) -> Spec {
 /// model, with and without the job log.
 fn varied_configs(spec: &Spec, seed: u64, horizon: Nanos) -> Vec<SimConfig> {
     use rtpipe_model::gen::Rng;
-    let mut r = Rng::new(seed ^ 0xC0FF_EE);
+    let mut r = Rng::new(seed ^ 0x00C0_FFEE);
     let given = spec
         .tasks
         .iter()
