@@ -964,7 +964,9 @@ impl<H: Hooks> Sim<H> {
     /// would compute at t (O(tasks), once per pick).
     #[cfg(debug_assertions)]
     fn check(&self, t: Nanos) {
-        let mut contenders = vec![std::collections::BTreeSet::new(); self.contenders.len()];
+        let mut contenders = vec![BTreeSet::new(); self.contenders.len()];
+        let timers: BTreeSet<_> = self.timers.iter().map(|&Reverse(e)| e).collect();
+        let throttled: BTreeSet<_> = self.throttled.iter().map(|&Reverse(e)| e).collect();
         for (i, ts) in self.tasks.iter().enumerate() {
             let (entry, timer) = self.standing(i, t);
             assert_eq!(ts.entry, entry, "task {i}: stale contender entry at {t}");
@@ -974,13 +976,13 @@ impl<H: Hooks> Sim<H> {
                 contenders[ts.cpu].insert((class, key, i));
             }
             if let Some(at) = timer {
-                assert!(self.timers.iter().any(|&Reverse(e)| e == (at, i)));
+                assert!(timers.contains(&(at, i)), "task {i}: refill timer lost");
             }
             assert!(ts.next_release > t, "task {i}: release at {t} missed");
             if let Budget::Cbs(c) = &ts.budget {
                 if let Some(until) = c.throttled_until {
                     assert!(until > t, "task {i}: CBS not replenished at {t}");
-                    assert!(self.throttled.iter().any(|&Reverse(e)| e == (until, i)));
+                    assert!(throttled.contains(&(until, i)), "task {i}: throttling lost");
                 }
             }
         }

@@ -448,13 +448,15 @@ fn compare_with_reference(spec: &Spec, cfg: &SimConfig) -> u64 {
 }
 
 /// The event heaps (issue 15, item 8) give the results of the per-event scans
-/// they replaced, bit for bit: 300 systems of 1 to 14 tasks, five
+/// they replaced, bit for bit: 300 systems of 1 to 14 tasks (60 in debug
+/// builds, which also check the incremental state at every pick), five
 /// configurations each.
 #[test]
 fn heaps_match_the_reference() {
+    let systems = if cfg!(debug_assertions) { 60 } else { 300 };
     let mut events = 0;
     let mut exhaustions = 0;
-    for seed in 0..300 {
+    for seed in 0..systems {
         let spec = varied_system(seed, 1..=14);
         let horizon = 300_000_000 + (seed as Nanos % 7) * 250_000_000;
         for cfg in varied_configs(&spec, seed, horizon) {
@@ -463,15 +465,18 @@ fn heaps_match_the_reference() {
         let r = simulate(&spec, &SimConfig::new(horizon)).expect("simulates");
         exhaustions += r.tasks.iter().map(|t| t.exhaustions).sum::<u64>();
     }
+    eprintln!("{systems} systems: {events} events compared, {exhaustions} exhaustions");
     // The systems do exercise the budget servers.
-    assert!(events > 1_000_000, "{events} events");
-    assert!(exhaustions > 1_000, "{exhaustions} exhaustions");
+    assert!(events > 5_000 * systems, "{events} events");
+    assert!(exhaustions > 50 * systems, "{exhaustions} exhaustions");
 }
 
-/// The same with many tasks (long ready queues in overload), fewer systems.
+/// The same with many tasks (long ready queues in overload): 12 systems of
+/// 50 to 300 tasks (3 in debug builds).
 #[test]
 fn heaps_match_the_reference_with_many_tasks() {
-    for seed in 1000..1012 {
+    let systems = if cfg!(debug_assertions) { 3 } else { 12 };
+    for seed in 1000..1000 + systems {
         let spec = varied_system(seed, 50..=300);
         for cfg in varied_configs(&spec, seed, 200_000_000) {
             compare_with_reference(&spec, &cfg);
