@@ -370,7 +370,8 @@ fn pibs_inherits_the_served_priority() {
 /// A generated system varied for the equivalence test: RM or EDF, one or
 /// two CPUs, mixed servers with inheritance, feedback edges, overload up to
 /// a utilisation of 1.3 per CPU; then some budgets cut below the demand
-/// (exhaustions, slack, CBS throttling) and some tasks made background.
+/// (exhaustions, slack, CBS throttling), some tasks made background and
+/// some I/O VCPUs serving any task.
 fn varied_system(seed: u64, tasks: std::ops::RangeInclusive<u64>) -> Spec {
     use rtpipe_model::gen::{random_system, GenConfig, Rng};
     let mut r = Rng::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x51);
@@ -393,7 +394,13 @@ fn varied_system(seed: u64, tasks: std::ops::RangeInclusive<u64>) -> Spec {
     let mut s = random_system(seed, &cfg);
     let cut = r.unit() * 0.4;
     let background = r.unit() * 0.2;
+    let n = s.tasks.len() as u64;
     for t in &mut s.tasks {
+        // Inheritance the spec validation would refuse (across CPUs, from
+        // any kind of task): the simulator runs it all the same.
+        if t.server == Server::Io && r.chance(0.2) {
+            t.serves = Some(r.range(0, n - 1) as usize);
+        }
         if r.chance(cut) {
             let d = t.demand();
             t.budget_given = Some((d * r.range(2, 9) as Nanos / 10).max(1_000));
