@@ -13,7 +13,7 @@ use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult};
+use rtpipe_sim::{simulate_with_progress, ExecModel, Phasing, SimConfig, SimError, SimResult};
 use serde_json::{json, Value};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -329,9 +329,15 @@ fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
     })
 }
 
-/// Runs the simulator as `--phasing` asks. One simulation per run today; a
-/// phasing that searches offsets would run several here and return the worst.
-fn run_simulation(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<SimResult, SimError> {
+/// Runs the simulator as `--phasing` asks, reporting the simulated time
+/// reached to `progress`. One simulation per run today; a phasing that
+/// searches offsets would run several here and return the worst.
+fn run_simulation(
+    spec: &Spec,
+    a: &SimulateArgs,
+    p: &Plan,
+    progress: &mut dyn FnMut(Nanos),
+) -> Result<SimResult, SimError> {
     let phasing = match a.phasing {
         PhasingArg::Sync => Phasing::Sync,
         PhasingArg::Random | PhasingArg::Search => Phasing::Random,
@@ -343,7 +349,31 @@ fn run_simulation(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<SimResult, 
         exec: a.exec.model(),
         log_jobs: p.log_jobs,
     };
-    simulate(spec, &cfg)
+    simulate_with_progress(spec, &cfg, progress)
+}
+
+/// Runs `f` with a progress bar over the simulated horizon (fraction done,
+/// elapsed time and ETA) on stderr, hidden when stderr is not a terminal.
+/// `f` reports the simulated time it has reached.
+fn with_horizon_bar<T>(
+    msg: String,
+    horizon: Nanos,
+    f: impl FnOnce(&mut dyn FnMut(Nanos)) -> T,
+) -> T {
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(horizon.max(1) as u64),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{msg} [{bar:30}] {percent:>3}% [{elapsed_precise}, ETA {eta_precise}]",
+    ) {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb.set_message(msg);
+    pb.enable_steady_tick(std::time::Duration::from_millis(100));
+    let out = f(&mut |t| pb.set_position(t.max(0) as u64));
+    pb.finish_and_clear();
+    out
 }
 
 /// Runs `f` with a spinner and the elapsed time on stderr (hidden when stderr
@@ -458,7 +488,9 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         spec.time_unit,
         human(&spec, p.horizon)
     );
-    let res = match with_spinner(msg, || run_simulation(&spec, a, &p)) {
+    let res = match with_horizon_bar(msg, p.horizon, |progress| {
+        run_simulation(&spec, a, &p, progress)
+    }) {
         Ok(r) => r,
         Err(e) => {
             return fail(Bad::new(

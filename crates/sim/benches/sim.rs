@@ -12,8 +12,9 @@
 //! - `search`: a short adversarial search (1 restart, 20 steps) on a
 //!   generated system, in simulations per second.
 //! - `scaling`: events per second against the task count (10, 100, 1,000,
-//!   10,000 tasks on one CPU, RM and EDF), each run about 400,000 events long:
-//!   the cost per event must not grow with the number of tasks.
+//!   10,000 tasks on one CPU, and on two CPUs as `…t-2cpu-…`, RM and EDF),
+//!   each run about 400,000 events long: the cost per event must not grow
+//!   with the number of tasks (only logarithmically).
 //!
 //! Each system is described on stderr (events per run, late jobs) before it
 //! is measured.
@@ -186,9 +187,12 @@ fn scaling(c: &mut Criterion) {
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(5));
-    for tasks in [10, 100, 1_000, 10_000] {
+    for (tasks, cpus) in [10, 100, 1_000, 10_000]
+        .into_iter()
+        .flat_map(|n| [(n, 1), (n, 2)])
+    {
         for scheduler in [Scheduler::Rm, Scheduler::Edf] {
-            let spec = system(tasks, 1, scheduler);
+            let spec = system(tasks, cpus, scheduler);
             let cfg = SimConfig {
                 horizon: span_for(&spec, 400_000.0),
                 seed: SEED,
@@ -200,7 +204,10 @@ fn scaling(c: &mut Criterion) {
                 Scheduler::Rm => "rm",
                 Scheduler::Edf => "edf",
             };
-            let label = format!("{tasks}t-{sched}");
+            let label = match cpus {
+                1 => format!("{tasks}t-{sched}"),
+                _ => format!("{tasks}t-{cpus}cpu-{sched}"),
+            };
             let n = describe(&label, &spec, &cfg);
             group.throughput(Throughput::Elements(n));
             group.bench_function(BenchmarkId::from_parameter(&label), |b| {

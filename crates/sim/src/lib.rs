@@ -54,7 +54,8 @@ use rtpipe_analysis::{Anchor, Metric};
 use rtpipe_model::gen::Rng;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 use server::{Cbs, Pibs, Sporadic};
-use std::collections::VecDeque;
+use std::cmp::Reverse;
+use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 use std::fmt;
 
 /// Release offsets φ_i of one run.
@@ -310,6 +311,20 @@ pub fn simulate(spec: &Spec, cfg: &SimConfig) -> Result<SimResult, SimError> {
     run(spec, cfg, NoHooks)
 }
 
+/// Events between two calls of a progress callback.
+pub const PROGRESS_EVENTS: u64 = 1 << 16;
+
+/// [`simulate`], calling `progress` with the simulated time reached every
+/// [`PROGRESS_EVENTS`] events (for a progress bar over `cfg.horizon`). The
+/// callback only observes: the result is the one [`simulate`] gives.
+pub fn simulate_with_progress(
+    spec: &Spec,
+    cfg: &SimConfig,
+    progress: &mut dyn FnMut(Nanos),
+) -> Result<SimResult, SimError> {
+    run_with_progress(spec, cfg, NoHooks, progress)
+}
+
 /// What the simulator tells the code that runs task bodies: a job reads, a
 /// job publishes. Called in simulated-time order.
 trait Hooks {
@@ -328,10 +343,22 @@ impl Hooks for NoHooks {
 }
 
 fn run<H: Hooks>(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<SimResult, SimError> {
+    run_with_progress(spec, cfg, hooks, &mut |_| {})
+}
+
+fn run_with_progress<H: Hooks>(
+    spec: &Spec,
+    cfg: &SimConfig,
+    hooks: H,
+    progress: &mut dyn FnMut(Nanos),
+) -> Result<SimResult, SimError> {
     let mut sim = Sim::new(spec, cfg, hooks)?;
     let mut t = 0;
     loop {
         sim.instant(t);
+        if sim.events % PROGRESS_EVENTS == 0 {
+            progress(t);
+        }
         match sim.next_event(t) {
             Some(next) if next <= cfg.horizon => {
                 sim.advance(t, next - t);
@@ -405,6 +432,13 @@ impl Budget {
             Budget::Cbs(c) => c.charge(now, ran),
         }
     }
+    /// Until when a CBS is throttled (runtime used up).
+    fn throttled_until(&self) -> Option<Nanos> {
+        match self {
+            Budget::Cbs(c) => c.throttled_until,
+            _ => None,
+        }
+    }
     /// When a server without capacity gets some again.
     fn refill_at(&self) -> Option<Nanos> {
         match self {
@@ -441,6 +475,47 @@ struct TaskSim {
     /// The latest published value's samples, per slot.
     published: Vec<Option<u64>>,
     stats: TaskStats,
+    /// Dense CPU index.
+    cpu: usize,
+    /// The I/O VCPUs that serve this task (their priority follows whether
+    /// it has a job pending).
+    servers: Vec<usize>,
+    /// (class, key) in the CPU's contenders as last refreshed; `None` when
+    /// the task cannot run (no job, or waiting for budget).
+    entry: Option<(u8, Nanos)>,
+    /// A job pending and no capacity: when the server gets some back.
+    timer: Option<Nanos>,
+}
+
+/// Releases every job of `ts` due at or before t.
+fn release_jobs(ts: &mut TaskSim, exec: ExecModel, t: Nanos) {
+    while ts.next_release <= t {
+        let demand = match exec {
+            ExecModel::Worst => ts.demand,
+            ExecModel::Best => ts.demand_min,
+            ExecModel::Uniform => ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos,
+            ExecModel::Extremes => {
+                if ts.rng.chance(0.5) {
+                    ts.demand_min
+                } else {
+                    ts.demand
+                }
+            }
+        };
+        if ts.queue.is_empty() {
+            ts.budget.unblock(ts.next_release.max(t));
+        }
+        ts.queue.push_back(Job {
+            index: ts.next_index,
+            release: ts.next_release,
+            demand,
+            remaining: demand,
+            read: None,
+        });
+        ts.stats.released += 1;
+        ts.next_index += 1;
+        ts.next_release += ts.period;
+    }
 }
 
 /// Per chain: stamps of the samples and the sample the tail currently outputs.
@@ -533,7 +608,8 @@ struct Sim<H> {
     edf: bool,
     exec: ExecModel,
     tasks: Vec<TaskSim>,
-    /// Task indices per (dense) CPU.
+    /// Task indices per (dense) CPU (the reference scheduling scans them).
+    #[cfg(test)]
     cpu_tasks: Vec<Vec<usize>>,
     /// The task whose front job holds each CPU.
     running: Vec<Option<usize>>,
@@ -546,6 +622,16 @@ struct Sim<H> {
     last_segment: Vec<Option<usize>>,
     events: u64,
     horizon: Nanos,
+    /// Every task's next release, earliest first (one entry per task).
+    releases: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Throttled CBS servers by the end of their throttling (every
+    /// throttled server has an entry; stale ones are harmless).
+    throttled: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Refill timers: valid while equal to the task's `timer`.
+    timers: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Per CPU: (class, key, task) of every task that may run; the pick is
+    /// the least.
+    contenders: Vec<BTreeSet<(u8, Nanos, usize)>>,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -630,6 +716,10 @@ impl<H: Hooks> Sim<H> {
                 carried: Vec::new(),
                 published: Vec::new(),
                 stats: TaskStats::default(),
+                cpu,
+                servers: Vec::new(),
+                entry: None,
+                timer: None,
             });
         }
         // Slots: the chain positions each task occupies, linked to the slot
@@ -652,6 +742,20 @@ impl<H: Hooks> Sim<H> {
                 prev = Some((i, ts.slots.len() - 1));
             }
         }
+        for i in 0..n {
+            if let Some(m) = tasks[i].serves {
+                // An index out of range is left to `standing`, which
+                // panics on it as the scan did.
+                if let Some(ms) = tasks.get_mut(m) {
+                    ms.servers.push(i);
+                }
+            }
+        }
+        let releases = tasks
+            .iter()
+            .enumerate()
+            .map(|(i, ts)| Reverse((ts.next_release, i)))
+            .collect();
         let n_cpus = cpu_tasks.len();
         let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
         Ok(Sim {
@@ -659,7 +763,8 @@ impl<H: Hooks> Sim<H> {
             edf: spec.scheduler == Scheduler::Edf,
             exec: cfg.exec,
             tasks,
-            running: vec![None; cpu_tasks.len()],
+            running: vec![None; n_cpus],
+            #[cfg(test)]
             cpu_tasks,
             chains,
             offsets,
@@ -669,18 +774,33 @@ impl<H: Hooks> Sim<H> {
             last_segment: vec![None; n_cpus],
             events: 0,
             horizon: cfg.horizon,
+            releases,
+            throttled: BinaryHeap::new(),
+            timers: BinaryHeap::new(),
+            contenders: vec![BTreeSet::new(); n_cpus],
         })
     }
 
     /// Everything that happens at instant t, in the tie order of the model.
     /// Repeats when a job of zero demand starts, so it reads before it
     /// publishes (at the same instant).
+    ///
+    /// Only the tasks something happens to are visited: throttled CBS
+    /// servers whose throttling ends (a heap), tasks that release (a heap),
+    /// refill timers that fire (a heap); each CPU's pick is the first of its
+    /// contenders (an ordered set kept up to date by [`Sim::refresh`]).
     fn instant(&mut self, t: Nanos) {
         self.events += 1;
-        for ts in &mut self.tasks {
-            if let Budget::Cbs(c) = &mut ts.budget {
+        // CBS replenishment timers (every throttled server has an entry).
+        while let Some(&Reverse((until, i))) = self.throttled.peek() {
+            if until > t {
+                break;
+            }
+            self.throttled.pop();
+            if let Budget::Cbs(c) = &mut self.tasks[i].budget {
                 c.replenish(t);
             }
+            self.refresh(i, t);
         }
         loop {
             for cpu in 0..self.running.len() {
@@ -692,12 +812,33 @@ impl<H: Hooks> Sim<H> {
                     {
                         self.complete(i, t);
                         self.running[cpu] = None;
+                        self.refresh(i, t);
+                        if self.tasks[i].queue.is_empty() {
+                            self.refresh_servers(i, t);
+                        }
                     }
                 }
             }
             self.release(t);
+            // Refill timers: capacity comes back to a waiting server.
+            while let Some(&Reverse((at, i))) = self.timers.peek() {
+                if at > t {
+                    break;
+                }
+                self.timers.pop();
+                if self.tasks[i].timer == Some(at) {
+                    self.tasks[i].timer = None;
+                    self.refresh(i, t);
+                }
+            }
+            // Debug builds: the full check costs O(tasks) per pick, which
+            // would make large systems quadratic again; skip it beyond 512.
+            #[cfg(debug_assertions)]
+            if self.tasks.len() <= 512 {
+                self.check(t);
+            }
             for cpu in 0..self.running.len() {
-                let picked = self.pick(cpu, t);
+                let picked = self.pick(cpu);
                 self.running[cpu] = picked.map(|(i, _)| i);
                 self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
             }
@@ -723,70 +864,143 @@ impl<H: Hooks> Sim<H> {
         }
     }
 
+    /// Releases every job due at or before t.
     fn release(&mut self, t: Nanos) {
         let exec = self.exec;
-        for ts in &mut self.tasks {
-            while ts.next_release <= t {
-                let demand = match exec {
-                    ExecModel::Worst => ts.demand,
-                    ExecModel::Best => ts.demand_min,
-                    ExecModel::Uniform => {
-                        ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos
-                    }
-                    ExecModel::Extremes => {
-                        if ts.rng.chance(0.5) {
-                            ts.demand_min
-                        } else {
-                            ts.demand
-                        }
-                    }
+        loop {
+            let i = {
+                let Some(mut top) = self.releases.peek_mut() else {
+                    return;
                 };
-                if ts.queue.is_empty() {
-                    ts.budget.unblock(ts.next_release.max(t));
+                let Reverse((due, i)) = *top;
+                if due > t {
+                    return;
                 }
-                ts.queue.push_back(Job {
-                    index: ts.next_index,
-                    release: ts.next_release,
-                    demand,
-                    remaining: demand,
-                    read: None,
-                });
-                ts.stats.released += 1;
-                ts.next_index += 1;
-                ts.next_release += ts.period;
-            }
+                let ts = &mut self.tasks[i];
+                debug_assert_eq!(due, ts.next_release, "stale release entry of task {i}");
+                let was_idle = ts.queue.is_empty();
+                release_jobs(ts, exec, t);
+                *top = Reverse((ts.next_release, i));
+                if !was_idle {
+                    // Queued behind the front job: nothing the pick sees changed.
+                    continue;
+                }
+                i
+            };
+            self.refresh(i, t);
+            self.refresh_servers(i, t);
         }
     }
 
     /// The ready task of highest priority on a CPU, and whether it runs in
-    /// slack (a sporadic server out of budget drops to background priority).
-    fn pick(&self, cpu: usize, t: Nanos) -> Option<(usize, bool)> {
-        self.cpu_tasks[cpu]
+    /// slack (a sporadic server out of budget drops to background priority):
+    /// the least (class, key, task) among the CPU's contenders.
+    fn pick(&self, cpu: usize) -> Option<(usize, bool)> {
+        self.contenders[cpu]
+            .first()
+            .map(|&(class, _, i)| (i, class == 2))
+    }
+
+    /// Where task i stands at t, from scratch: its (class, priority key) when
+    /// it may run (a job pending, and budget or slack to run it in), and when
+    /// its server gets capacity back if it waits for it with a job pending.
+    fn standing(&self, i: usize, t: Nanos) -> (Option<(u8, Nanos)>, Option<Nanos>) {
+        let ts = &self.tasks[i];
+        let Some(job) = ts.queue.front() else {
+            return (None, None);
+        };
+        let has_budget = ts.budget.capacity(t) > 0;
+        let timer = if has_budget {
+            None
+        } else {
+            ts.budget.refill_at().filter(|&r| r > t)
+        };
+        let class = match (ts.class, has_budget) {
+            (0, true) => 0,
+            (0, false) if ts.slack_when_empty => 2,
+            (0, false) => return (None, timer),
+            _ => 1,
+        };
+        let key = match (&ts.budget, self.edf) {
+            (Budget::Cbs(c), _) => c.deadline,
+            (_, true) => job.release + ts.period,
+            (_, false) => match ts.serves {
+                Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
+                _ => ts.rank,
+            },
+        };
+        (Some((class, key)), timer)
+    }
+
+    /// Task i's queue, budget or inheritance changed at t: update its place
+    /// among its CPU's contenders and its refill timer.
+    ///
+    /// Between two refreshes a task's standing does not change: capacity
+    /// only grows with time, and only at the refill instant, where the timer
+    /// refreshes it.
+    fn refresh(&mut self, i: usize, t: Nanos) {
+        let (entry, timer) = self.standing(i, t);
+        let ts = &mut self.tasks[i];
+        if ts.entry != entry {
+            let set = &mut self.contenders[ts.cpu];
+            if let Some((class, key)) = ts.entry {
+                let was_there = set.remove(&(class, key, i));
+                debug_assert!(was_there, "task {i} missing from its contenders");
+            }
+            if let Some((class, key)) = entry {
+                set.insert((class, key, i));
+            }
+            ts.entry = entry;
+        }
+        if ts.timer != timer {
+            ts.timer = timer;
+            if let Some(at) = timer {
+                self.timers.push(Reverse((at, i)));
+            }
+        }
+    }
+
+    /// Task m's queue became empty or non-empty: the I/O VCPUs serving it
+    /// inherit its priority or lose it.
+    fn refresh_servers(&mut self, m: usize, t: Nanos) {
+        for k in 0..self.tasks[m].servers.len() {
+            let s = self.tasks[m].servers[k];
+            self.refresh(s, t);
+        }
+    }
+
+    /// Debug builds: the incremental state is what the scans it replaces
+    /// would compute at t (O(tasks), once per pick).
+    #[cfg(debug_assertions)]
+    fn check(&self, t: Nanos) {
+        let mut contenders = vec![BTreeSet::new(); self.contenders.len()];
+        let timers: BTreeSet<_> = self.timers.iter().map(|&Reverse(e)| e).collect();
+        let throttled: BTreeSet<_> = self.throttled.iter().map(|&Reverse(e)| e).collect();
+        for (i, ts) in self.tasks.iter().enumerate() {
+            let (entry, timer) = self.standing(i, t);
+            assert_eq!(ts.entry, entry, "task {i}: stale contender entry at {t}");
+            assert_eq!(ts.timer, timer, "task {i}: stale refill timer at {t}");
+            assert!(entry.is_none() || !ts.queue.is_empty());
+            if let Some((class, key)) = entry {
+                contenders[ts.cpu].insert((class, key, i));
+            }
+            if let Some(at) = timer {
+                assert!(timers.contains(&(at, i)), "task {i}: refill timer lost");
+            }
+            assert!(ts.next_release > t, "task {i}: release at {t} missed");
+            if let Budget::Cbs(c) = &ts.budget {
+                if let Some(until) = c.throttled_until {
+                    assert!(until > t, "task {i}: CBS not replenished at {t}");
+                    assert!(throttled.contains(&(until, i)), "task {i}: throttling lost");
+                }
+            }
+        }
+        assert_eq!(contenders, self.contenders, "contender sets at {t}");
+        assert_eq!(self.releases.len(), self.tasks.len());
+        assert!(self
+            .releases
             .iter()
-            .filter_map(|&i| {
-                let ts = &self.tasks[i];
-                let job = ts.queue.front()?;
-                let has_budget = ts.budget.capacity(t) > 0;
-                let class = match (ts.class, has_budget) {
-                    (0, true) => 0,
-                    (0, false) if ts.slack_when_empty => 2,
-                    (0, false) => return None,
-                    _ => 1,
-                };
-                let key = match (&ts.budget, self.edf) {
-                    (Budget::Cbs(c), _) => c.deadline,
-                    (_, true) => job.release + ts.period,
-                    (_, false) => match ts.serves {
-                        Some(m) if !self.tasks[m].queue.is_empty() => {
-                            ts.rank.min(self.tasks[m].rank)
-                        }
-                        _ => ts.rank,
-                    },
-                };
-                Some(((class, key, i), (i, class == 2)))
-            })
-            .min()
-            .map(|(_, v)| v)
+            .all(|&Reverse((at, i))| at == self.tasks[i].next_release));
     }
 
     /// The front job of task i first gets the CPU: copy the producers' values.
@@ -870,8 +1084,18 @@ impl<H: Hooks> Sim<H> {
 
     /// The next instant something happens after t: a release, a completion,
     /// a budget running out, or a budget coming back to a waiting server.
-    fn next_event(&self, t: Nanos) -> Option<Nanos> {
-        let releases = self.tasks.iter().map(|ts| ts.next_release);
+    fn next_event(&mut self, t: Nanos) -> Option<Nanos> {
+        let release = self.releases.peek().map(|&Reverse((at, _))| at);
+        // Drop the refill timers that no longer hold.
+        let refill = loop {
+            match self.timers.peek() {
+                Some(&Reverse((at, i))) if self.tasks[i].timer != Some(at) => {
+                    self.timers.pop();
+                }
+                top => break top.map(|&Reverse((at, _))| at),
+            }
+        };
+        debug_assert!(refill.is_none_or(|r| r > t));
         let running = self.running.iter().enumerate().filter_map(|(cpu, r)| {
             let ts = &self.tasks[(*r)?];
             let job = ts.queue.front()?;
@@ -884,13 +1108,7 @@ impl<H: Hooks> Sim<H> {
             }
             Some(next)
         });
-        let refills = self.tasks.iter().filter_map(|ts| {
-            if ts.queue.is_empty() || ts.budget.capacity(t) > 0 {
-                return None;
-            }
-            ts.budget.refill_at().filter(|&r| r > t)
-        });
-        releases.chain(running).chain(refills).min()
+        release.into_iter().chain(running).chain(refill).min()
     }
 
     /// Runs every CPU's chosen job from t for dt and charges its server.
@@ -906,10 +1124,17 @@ impl<H: Hooks> Sim<H> {
             let (index, remaining) = (job.index, job.remaining);
             ts.stats.busy += dt;
             if !slack {
+                let throttled = ts.budget.throttled_until();
                 ts.budget.charge(t + dt, dt);
                 if remaining > 0 && ts.budget.capacity(t + dt) == 0 {
                     ts.stats.exhaustions += 1;
                 }
+                if let Some(until) = ts.budget.throttled_until() {
+                    if throttled != Some(until) {
+                        self.throttled.push(Reverse((until, i)));
+                    }
+                }
+                self.refresh(i, t + dt);
             }
             if let Some(seg) = &mut self.segments {
                 // Extend this CPU's last slice when the same job just goes on.
@@ -949,5 +1174,7 @@ impl<H: Hooks> Sim<H> {
     }
 }
 
+#[cfg(test)]
+mod reference;
 #[cfg(test)]
 mod tests;
