@@ -354,11 +354,10 @@ impl LoopSim {
     /// Motor-output task: encode DShot600 frames; the ESC decodes them.
     pub fn pwm_task(&mut self) -> MotorDemand {
         let d = self.r_mix.value;
-        let out = MotorDemand {
+        MotorDemand {
             motors: through_dshot(d.motors, d.armed),
             armed: d.armed,
-        };
-        out
+        }
     }
 }
 
