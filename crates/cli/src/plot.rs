@@ -795,46 +795,50 @@ pub fn flight_motors(trace: &[TracePoint]) -> Res<String> {
 /// from the delay sweep (else the period-scale sweep).
 pub struct SweepDot {
     pub reaction_ms: f64,
+    pub freshness_ms: f64,
     pub settling_s: f64,
     pub flies: bool,
     pub delay: bool,
 }
 
-/// Flight quality against each chain's predicted reaction over a sweep,
-/// one panel per chain, with the spec's reaction limit (dashed) and the
-/// criterion's settling limit (solid) marked.
+/// Flight quality against each chain's predicted reaction (left) and
+/// freshness (right) over a sweep, one row per chain, with the spec's limit
+/// (dashed) and the criterion's settling limit (solid) marked.
 pub fn sweep_chart(
-    panels: &[(String, Option<f64>, Vec<SweepDot>)],
+    panels: &[(String, (Option<f64>, Option<f64>), Vec<SweepDot>)],
     settling_limit: f64,
 ) -> Res<String> {
     let mut svg = String::new();
     {
         let h = 300 * panels.len() as u32 + 40;
-        let root = SVGBackend::with_string(&mut svg, (900, h)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (1200, h)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
         let root = root
             .titled(
-                "flight quality against the predicted reaction (sweep)",
+                "flight quality against the predicted end-to-end times (sweep)",
                 (FONT, 20).into_font(),
             )
             .map_err(err)?;
-        for ((name, limit, dots), area) in panels.iter().zip(root.split_evenly((panels.len(), 1))) {
-            let x_max = dots
-                .iter()
-                .map(|d| d.reaction_ms)
-                .chain(*limit)
-                .fold(1.0, f64::max)
-                * 1.08;
+        let areas = root.split_evenly((panels.len(), 2));
+        for (k, area) in areas.into_iter().enumerate() {
+            let (name, limits, dots) = &panels[k / 2];
+            let fresh = k % 2 == 1;
+            let limit = if fresh { limits.1 } else { limits.0 };
+            let x_of = |d: &SweepDot| if fresh { d.freshness_ms } else { d.reaction_ms };
+            let metric = if fresh { "freshness" } else { "reaction" };
+            let name = format!("{name}: {metric}");
+            // Room on the right for the legend, clear of every dot.
+            let x_max = dots.iter().map(x_of).chain(limit).fold(1.0, f64::max) * 1.8;
             let mut chart = ChartBuilder::on(&area)
                 .margin(10)
-                .caption(name, (FONT, 15))
+                .caption(&name, (FONT, 15))
                 .x_label_area_size(34)
                 .y_label_area_size(60)
                 .build_cartesian_2d(0.0..x_max, 0.0..1.05)
                 .map_err(err)?;
             chart
                 .configure_mesh()
-                .x_desc("predicted sound reaction (ms)")
+                .x_desc(format!("predicted sound {metric} (ms)"))
                 .y_desc("worst step settling (s)")
                 .label_style((FONT, 12))
                 .draw()
@@ -850,7 +854,7 @@ pub fn sweep_chart(
             if let Some(l) = limit {
                 chart
                     .draw_series(std::iter::once(DashedPathElement::new(
-                        vec![(*l, 0.0), (*l, 1.05)],
+                        vec![(l, 0.0), (l, 1.05)],
                         6,
                         4,
                         PAPER.stroke_width(2),
@@ -876,7 +880,7 @@ pub fn sweep_chart(
                         } else {
                             color.stroke_width(2)
                         };
-                        Circle::new((d.reaction_ms, d.settling_s.min(1.0)), 5, style)
+                        Circle::new((x_of(d), d.settling_s.min(1.0)), 5, style)
                     }))
                     .map_err(err)?
                     .label(format!("{label} (filled: flies)"))
@@ -884,6 +888,7 @@ pub fn sweep_chart(
             }
             chart
                 .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
                 .background_style(WHITE.mix(0.85))
                 .border_style(GREY)
                 .label_font((FONT, 12))

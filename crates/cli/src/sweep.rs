@@ -180,17 +180,23 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
                     Variation::Delay { line: l, .. } => Some(l) == line,
                 })
                 .filter_map(|p| {
-                    let r = p.bounds.get(k)?.0?;
+                    let (r, f) = *p.bounds.get(k)?;
                     Some(crate::plot::SweepDot {
-                        reaction_ms: r as f64 * 1e-6,
+                        reaction_ms: r? as f64 * 1e-6,
+                        freshness_ms: f? as f64 * 1e-6,
                         settling_s: worst(p),
                         flies: p.pass(),
                         delay: matches!(p.variation, Variation::Delay { .. }),
                     })
                 })
                 .collect();
-            let limit = spec.chains[k].reaction.map(|l| l as f64 * 1e-6);
-            (spec.chain_label(k), limit, dots)
+            let ch = &spec.chains[k];
+            let ms = |l: Option<Nanos>| l.map(|l| l as f64 * 1e-6);
+            (
+                spec.chain_label(k),
+                (ms(ch.reaction), ms(ch.freshness)),
+                dots,
+            )
         })
         .collect::<Vec<_>>();
     crate::plot::sweep_chart(&panels, c.settling_s)
