@@ -789,6 +789,10 @@ pub fn flight_motors(trace: &[TracePoint]) -> Res<String> {
     time_plot("motor commands", &[("command (0..1)", lines)])
 }
 
+/// One chain's row of [`sweep_chart`]: its label, its spec limits
+/// (reaction, freshness, ms) and its points.
+pub type SweepRow = (String, (Option<f64>, Option<f64>), Vec<SweepDot>);
+
 /// One sweep point for [`sweep_chart`]: the chain's predicted sound reaction
 /// (ms), the worst roll/pitch step's tracked settling (s, capped at the
 /// hold), whether the flight met the criterion, and whether the point came
@@ -804,10 +808,7 @@ pub struct SweepDot {
 /// Flight quality against each chain's predicted reaction (left) and
 /// freshness (right) over a sweep, one row per chain, with the spec's limit
 /// (dashed) and the criterion's settling limit (solid) marked.
-pub fn sweep_chart(
-    panels: &[(String, (Option<f64>, Option<f64>), Vec<SweepDot>)],
-    settling_limit: f64,
-) -> Res<String> {
+pub fn sweep_chart(panels: &[SweepRow], settling_limit: f64) -> Res<String> {
     let mut svg = String::new();
     {
         let h = 300 * panels.len() as u32 + 40;
