@@ -125,6 +125,9 @@ pub enum SimError {
     GridNotPositive(Nanos),
     /// A chain names a task index that does not exist.
     BadChain(usize),
+    /// A task's best-case demand is negative or above its worst case
+    /// (validated specs never have one).
+    BadDemand(String),
 }
 
 impl fmt::Display for SimError {
@@ -143,6 +146,10 @@ impl fmt::Display for SimError {
                 write!(f, "phasing grid must be positive, found {g} ns")
             }
             SimError::BadChain(c) => write!(f, "chain {c} names a task that does not exist"),
+            SimError::BadDemand(t) => write!(
+                f,
+                "task `{t}`: its demands must satisfy 0 <= best case <= worst case"
+            ),
         }
     }
 }
@@ -646,6 +653,9 @@ impl<H: Hooks> Sim<H> {
                 Some(p) if p > 0 => periods.push(p),
                 _ => return Err(SimError::NoPeriod(t.name.clone())),
             }
+            if !(0 <= t.demand_min() && t.demand_min() <= t.demand()) {
+                return Err(SimError::BadDemand(t.name.clone()));
+            }
         }
         // Offsets first, then one independent demand stream per task, so the
         // demands of a task do not depend on the schedule.
@@ -705,9 +715,8 @@ impl<H: Hooks> Sim<H> {
                 } else {
                     None
                 },
-                // Validated specs have 0 ≤ demand_min ≤ demand; clamp anyway.
-                demand_min: t.demand_min().clamp(0, t.demand().max(0)),
-                demand: t.demand().max(0),
+                demand_min: t.demand_min(),
+                demand: t.demand(),
                 rng: Rng::new(master.next_u64()),
                 next_release: offsets[i],
                 next_index: 0,

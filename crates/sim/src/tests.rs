@@ -344,6 +344,10 @@ fn bad_inputs_are_errors() {
     }];
     assert_eq!(simulate(&s, &cfg), Err(SimError::BadChain(0)));
     s.chains.clear();
+    // A best case above the worst case is refused, not clamped.
+    s.tasks[0].exec_min = 3;
+    assert_eq!(simulate(&s, &cfg), Err(SimError::BadDemand("t0".into())));
+    s.tasks[0].exec_min = 2;
     s.tasks[0].period = PeriodSpec::Free;
     assert_eq!(simulate(&s, &cfg), Err(SimError::NoPeriod("t0".into())));
 }
