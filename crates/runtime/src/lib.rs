@@ -1,0 +1,9 @@
+//! # rtpipe-runtime
+//!
+//! Runs a pipe system for real: one thread per task, released periodically
+//! under `SCHED_FIFO` (rate-monotonic priorities) or `SCHED_DEADLINE`, tasks
+//! communicating through Simpson's four-slot registers ([`four_slot`]), one
+//! per (producer, consumer) edge. docs/runtime.md describes the design.
+
+pub mod four_slot;
+pub mod seqlock;
