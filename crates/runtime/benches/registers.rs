@@ -109,9 +109,7 @@ fn bench<R: Register>(c: &mut Criterion, name: &str) {
             R::write(&mut w, [k; 8]);
         }
     });
-    g.bench_function("read_contended", |b| {
-        b.iter(|| black_box(R::read(&mut r)))
-    });
+    g.bench_function("read_contended", |b| b.iter(|| black_box(R::read(&mut r))));
     stop.store(true, Ordering::Relaxed);
     let _ = writer.join();
     g.finish();

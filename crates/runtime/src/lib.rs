@@ -5,5 +5,11 @@
 //! communicating through Simpson's four-slot registers ([`four_slot`]), one
 //! per (producer, consumer) edge. docs/runtime.md describes the design.
 
+pub mod exec;
 pub mod four_slot;
 pub mod seqlock;
+pub mod spin;
+pub mod sys;
+
+pub use exec::{check, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun};
+pub use spin::{synthetic, Spin};
