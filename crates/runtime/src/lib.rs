@@ -11,5 +11,7 @@ pub mod seqlock;
 pub mod spin;
 pub mod sys;
 
-pub use exec::{check, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun};
+pub use exec::{
+    check, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun, OVERRUN_TOLERANCE,
+};
 pub use spin::{synthetic, Spin};
