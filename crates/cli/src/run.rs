@@ -19,14 +19,20 @@ pub struct RunArgs {
     /// The system spec (TOML), e.g. examples/paper-table3.toml.
     pub spec: PathBuf,
     /// How long to release jobs: "2s", "500ms", or a number in the spec's
-    /// time unit.
-    #[arg(
-        long,
-        value_name = "D",
-        default_value = "2s",
-        allow_hyphen_values = true
-    )]
-    pub duration: String,
+    /// time unit [default: 2s; a flight: its mission plus 5 s].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub duration: Option<String>,
+    /// Run synthetic bodies even when the spec's tasks name flight bodies
+    /// (`body = ...`); without it such a spec flies the quadrotor for real
+    /// (the co-simulated world advanced to the true instants).
+    #[arg(long)]
+    pub synthetic: bool,
+    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
+    #[arg(long, default_value = "racer5")]
+    pub vehicle: String,
+    /// A flight's mission: steps, hover, paper, or a mission file (as `fly`).
+    #[arg(long, default_value = "steps")]
+    pub mission: String,
     /// Scheduling class of the task threads [default: fifo for scheduler =
     /// "rm", deadline for "edf"]. `other` needs --best-effort.
     #[arg(long, value_enum)]
@@ -80,20 +86,40 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let duration = match parse_time(&spec, &a.duration) {
-        Ok(d) if d > 0 => d,
-        Ok(_) => {
-            return fail(Bad::new(
-                format!("--duration {} is not positive", a.duration),
-                "e.g. --duration 2s",
-            ))
+    let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
+    let setup = if flight {
+        let r = rtpipe_fly::Request {
+            spec_path: &a.spec,
+            vehicle: &a.vehicle,
+            mission: &a.mission,
+            horizon: None,
+            seed: 0,
+        };
+        match rtpipe_fly::setup(&spec, &r) {
+            Ok(s) => Some(s),
+            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
         }
-        Err(e) => {
-            return fail(Bad::new(
-                format!("--duration {}: {e}", a.duration),
-                "e.g. --duration 2s",
-            ))
-        }
+    } else {
+        None
+    };
+    let duration = match (&a.duration, &setup) {
+        (None, Some(s)) => s.horizon,
+        (None, None) => 2_000_000_000,
+        (Some(d), _) => match parse_time(&spec, d) {
+            Ok(d) if d > 0 => d,
+            Ok(_) => {
+                return fail(Bad::new(
+                    format!("--duration {d} is not positive"),
+                    "e.g. --duration 2s",
+                ))
+            }
+            Err(e) => {
+                return fail(Bad::new(
+                    format!("--duration {d}: {e}"),
+                    "e.g. --duration 2s",
+                ))
+            }
+        },
     };
     let policy = match policy_of(&spec, a) {
         Ok(p) => p,
@@ -105,39 +131,74 @@ pub fn run(a: &RunArgs) -> ExitCode {
     }
     let report = rtpipe_analysis::analyze(&spec);
     let spin = Spin::calibrate();
-    let bodies: Vec<Box<dyn Body<u64>>> = spec
-        .tasks
-        .iter()
-        .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
-        .collect();
     if !a.json {
         eprintln!(
-            "running {} for {} {} under SCHED_{} (Ctrl-C stops early)...",
+            "running {} for {} {} under SCHED_{}{} (Ctrl-C stops early)...",
             spec.name,
             spec.fmt_time(duration),
             spec.time_unit,
-            policy.name().to_uppercase()
+            policy.name().to_uppercase(),
+            if flight { ", flying the quadrotor" } else { "" }
         );
     }
-    let res = match rtpipe_runtime::run(&spec, &cfg, bodies, None) {
-        Ok(r) => r,
-        Err(e) => {
-            let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
-            return match e.kind {
-                ErrorKind::Config | ErrorKind::Refused => fail(b),
-            };
+    let (res, flown) = if let Some(s) = &setup {
+        match rtpipe_fly::fly_real(&spec, s, &cfg) {
+            Ok((f, r)) => (r, Some(f)),
+            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+        }
+    } else {
+        let bodies: Vec<Box<dyn Body<u64>>> = spec
+            .tasks
+            .iter()
+            .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
+            .collect();
+        match rtpipe_runtime::run(&spec, &cfg, bodies, None) {
+            Ok(r) => (r, None),
+            Err(e) => {
+                let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
+                return match e.kind {
+                    ErrorKind::Config | ErrorKind::Refused => fail(b),
+                };
+            }
         }
     };
     let obs = observe(&report, &res.sim);
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let suspects = suspects(&spec, &res);
     if a.json {
-        let v = to_json(&spec, &report, &res, &obs, spin, &suspects);
+        let mut v = to_json(&spec, &report, &res, &obs, spin, &suspects);
+        if let (Some(f), Some(s)) = (&flown, &setup) {
+            let q = &f.quality;
+            v["flight"] = json!({
+                "vehicle": s.preset.name,
+                "mission": s.mission.name,
+                "crashed": q.crashed,
+                "airborne_s": q.airborne_s,
+                "landed_s": q.landed_s,
+                "attitude_error_deg_rms": q.attitude_error_deg.rms,
+                "altitude_error_m_rms": q.altitude_error_m.rms,
+                "failures": q.failures(&s.mission.criteria),
+            });
+        }
         if let Err(code) = analyze::print_json(&v) {
             return code;
         }
     } else {
-        print!("{}", to_text(&spec, &report, &res, &obs, spin));
+        print!(
+            "{}",
+            to_text(&spec, &report, &res, &obs, spin, flown.is_some())
+        );
+        if let (Some(f), Some(s)) = (&flown, &setup) {
+            let failures = f.quality.failures(&s.mission.criteria);
+            println!(
+                "\nflight ({}, mission {}, bodies on real threads):",
+                s.preset.name, s.mission.name
+            );
+            print!(
+                "{}",
+                crate::fly::quality_text(&f.quality, &s.mission.criteria, &failures)
+            );
+        }
     }
     for n in &res.notes {
         eprintln!("{n}");
@@ -190,7 +251,14 @@ fn suspects(spec: &Spec, res: &RunResult) -> Vec<String> {
     out
 }
 
-fn to_text(spec: &Spec, report: &Report, res: &RunResult, obs: &[ChainObs], spin: Spin) -> String {
+fn to_text(
+    spec: &Spec,
+    report: &Report,
+    res: &RunResult,
+    obs: &[ChainObs],
+    spin: Spin,
+    flight: bool,
+) -> String {
     let u = spec.time_unit;
     let mut out = format!(
         "system {}: {} tasks, {} chains; times in {u}; scheduler {}\n",
@@ -205,11 +273,22 @@ fn to_text(spec: &Spec, report: &Report, res: &RunResult, obs: &[ChainObs], spin
         ""
     };
     out.push_str(&format!(
-        "ran {} {u} under SCHED_{}{}{rt}; synthetic bodies burning each task's demand (spin loop: {:.0} iterations/us)\n",
+        "ran {} {u} under SCHED_{}{}{rt}; {}\n",
         spec.fmt_time(res.sim.horizon),
         res.policy.name().to_uppercase(),
-        if res.interrupted { ", interrupted by Ctrl-C" } else { "" },
-        spin.iters_per_us
+        if res.interrupted {
+            ", interrupted by Ctrl-C"
+        } else {
+            ""
+        },
+        if flight {
+            "the flight bodies, the world co-simulated at the true instants".to_string()
+        } else {
+            format!(
+                "synthetic bodies burning each task's demand (spin loop: {:.0} iterations/us)",
+                spin.iters_per_us
+            )
+        }
     ));
     if res.policy == Policy::Deadline {
         out.push_str("SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n");

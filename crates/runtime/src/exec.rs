@@ -468,12 +468,15 @@ fn periodic<V: Copy>(
         }
         // The read instant is taken after the copies: every value read was
         // published (its publish instant taken) before it, as in the model.
-        let read = sys::now();
-        let device = env.and_then(|m| {
-            m.lock()
-                .ok()
-                .and_then(|mut e| e.sense(th.task, read - epoch))
-        });
+        // With a world, it is taken under the world's lock, so the world
+        // sees non-decreasing instants from all threads.
+        let (read, device) = match env.map(Mutex::lock) {
+            Some(Ok(mut e)) => {
+                let read = sys::now();
+                (read, e.sense(th.task, read - epoch))
+            }
+            _ => (sys::now(), None),
+        };
         let job = Job {
             task: th.task,
             index: k,
@@ -481,7 +484,17 @@ fn periodic<V: Copy>(
             read: read - epoch,
         };
         let value = th.body.run(&job, &inputs, device);
-        let publish = sys::now();
+        // The publish instant, taken before the registers are written (a
+        // reader's read instant then follows it); with a world, under its
+        // lock, where the output reaches the world at that instant.
+        let publish = match env.map(Mutex::lock) {
+            Some(Ok(mut e)) => {
+                let publish = sys::now();
+                e.actuate(th.task, publish - epoch, &value);
+                publish
+            }
+            _ => sys::now(),
+        };
         let stamp = Stamp {
             task: th.task,
             job: k,
@@ -490,9 +503,6 @@ fn periodic<V: Copy>(
         };
         for w in &mut th.writers {
             w.write(Some(Stamped { value, stamp }));
-        }
-        if let Some(Ok(mut e)) = env.map(Mutex::lock) {
-            e.actuate(th.task, publish - epoch, &value);
         }
         let demand = sys::thread_cpu_time() - cpu0;
         th.recs.push(Rec {
