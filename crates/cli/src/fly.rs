@@ -217,7 +217,7 @@ fn f3(x: f64) -> String {
     format!("{x:.3}")
 }
 
-fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
+pub(crate) fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
     let mut out = format!(
         "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
         if q.crashed { "CRASHED" } else { "no crash" },

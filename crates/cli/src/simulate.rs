@@ -669,7 +669,7 @@ fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
     )
 }
 
-fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
+pub(crate) fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
     ns.map_or(Value::Null, |n| json!(spec.in_unit(n)))
 }
 
@@ -729,7 +729,7 @@ pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) 
 }
 
 /// {count, min, mean, p99, max} in the spec's unit.
-fn observed_json(spec: &Spec, j: &Judged) -> Value {
+pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> Value {
     let unit = spec.time_unit.nanos() as f64;
     match j.observed {
         Some(s) => json!({

@@ -232,6 +232,49 @@ pub fn fly_with_progress(
     })
 }
 
+/// Flies `spec` for real: the same bodies on real threads
+/// (`rtpipe_runtime::run`, one per task, under `cfg.policy`), the world
+/// behind a lock (it is not thread-safe) sensed and actuated at the true
+/// instants, relative to the run's epoch. `cfg.duration` replaces the
+/// setup's horizon. Returns the flight and the run's figures.
+pub fn fly_real(
+    spec: &Spec,
+    s: &Setup,
+    cfg: &rtpipe_runtime::RunConfig,
+) -> Result<(Flight, rtpipe_runtime::RunResult), FlyError> {
+    let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
+    for (t, role) in spec.tasks.iter().zip(&s.roles) {
+        let period = t.fixed_period().unwrap_or(0);
+        bodies.push(match role {
+            Some(r) => body(*r, period, &s.preset).map_err(|e| {
+                FlyError::new(
+                    format!("task `{}` (body {}): {e}", t.name, r.name()),
+                    "give it a fixed period the body can run at",
+                )
+            })?,
+            None => Box::new(idle),
+        });
+    }
+    let world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
+        .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    let world = std::sync::Mutex::new(world);
+    let res = rtpipe_runtime::run(spec, cfg, bodies, Some(&world))
+        .map_err(|e| FlyError::new(e.msg, e.help))?;
+    let mut world = world.into_inner().unwrap_or_else(|p| p.into_inner());
+    // The world's last call was at the last publish (or read) of the run.
+    let last = res.sim.jobs.iter().map(|j| j.finish).max().unwrap_or(0);
+    let end = u64::try_from(cfg.duration.max(last)).unwrap_or(0);
+    world.advance(end);
+    let quality = assess(&world.trace, &s.mission);
+    let flight = Flight {
+        sim: res.sim.clone(),
+        trace: std::mem::take(&mut world.trace),
+        quality,
+        alerts: std::mem::take(&mut world.alerts),
+    };
+    Ok((flight, res))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

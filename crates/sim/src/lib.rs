@@ -332,6 +332,46 @@ pub fn simulate_with_progress(
     run_with_progress(spec, cfg, NoHooks, progress)
 }
 
+/// The chain statistics of a log of completed jobs (a real-time executor's,
+/// say), measured exactly as the simulator measures its own runs. `jobs`
+/// must hold, per task, its jobs from index 0 without gaps, in completion
+/// order overall, with `carried` resolved (a head job carries its own index;
+/// a job at position k the sample of the value it read from position k−1).
+/// Head samples whose job is missing from the log are not counted.
+pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
+    let mut trackers: Vec<Tracker> = spec.chains.iter().map(|_| Tracker::new()).collect();
+    for (tr, ch) in trackers.iter_mut().zip(&spec.chains) {
+        let Some(&head) = ch.path.first() else {
+            continue;
+        };
+        let mut reads: Vec<(u64, Nanos)> = jobs
+            .iter()
+            .filter(|j| j.task == head)
+            .map(|j| (j.index, j.read))
+            .collect();
+        reads.sort_unstable();
+        tr.stamps = reads
+            .iter()
+            .enumerate()
+            .take_while(|&(k, &(i, _))| k as u64 == i)
+            .map(|(_, &(_, r))| r)
+            .collect();
+        tr.stats.samples = tr.stamps.len() as u64;
+    }
+    for j in jobs {
+        for c in &j.carried {
+            let (Some(ch), Some(sample)) = (spec.chains.get(c.chain), c.sample) else {
+                continue;
+            };
+            let tr = &mut trackers[c.chain];
+            if c.pos + 1 == ch.path.len() && (sample as usize) < tr.stamps.len() {
+                tr.output(sample, j.finish);
+            }
+        }
+    }
+    trackers.into_iter().map(|t| t.stats).collect()
+}
+
 /// What the simulator tells the code that runs task bodies: a job reads, a
 /// job publishes. Called in simulated-time order.
 trait Hooks {

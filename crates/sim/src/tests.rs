@@ -511,3 +511,34 @@ fn progress_reports_do_not_change_the_run() {
     assert!(seen.windows(2).all(|w| w[0] <= w[1]));
     assert!(seen.iter().all(|&t| (0..=cfg.horizon).contains(&t)));
 }
+
+#[test]
+fn chains_from_jobs_replays_the_simulators_own_measurement() {
+    // The measurement from a job log (what `rtpipe run` uses) equals the
+    // simulator's own, on the paper's Table 2 system with random phasing and
+    // demands (jobs finishing out of their tasks' order across CPUs).
+    let text = include_str!("../../../examples/paper-table2.toml");
+    let Ok(s) = Spec::parse("paper-table2.toml", text) else {
+        panic!("paper-table2.toml parses");
+    };
+    for seed in 0..4 {
+        let cfg = SimConfig {
+            seed,
+            phasing: Phasing::Random,
+            exec: ExecModel::Uniform,
+            log_jobs: true,
+            ..SimConfig::new(2_000_000_000)
+        };
+        let Ok(r) = simulate(&s, &cfg) else {
+            panic!("simulates");
+        };
+        let replayed = crate::chains_from_jobs(&s, &r.jobs);
+        for (a, b) in replayed.iter().zip(&r.chains) {
+            assert_eq!(a.reaction, b.reaction);
+            assert_eq!(a.freshness, b.freshness);
+            assert_eq!(a.event_reaction, b.event_reaction);
+            assert_eq!(a.event_freshness, b.event_freshness);
+            assert_eq!(a.reached, b.reached);
+        }
+    }
+}

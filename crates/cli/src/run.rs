@@ -1,0 +1,403 @@
+//! `rtpipe run`: the spec on real threads (rtpipe-runtime), measured like
+//! `simulate` and held against the same bounds.
+
+use crate::analyze;
+use crate::simulate::{chain_table, fail, num, observations_json, parse_time, Bad};
+use crate::table::Table;
+use clap::{Args, ValueEnum};
+use rtpipe_analysis::{Anchor, Report};
+use rtpipe_body::Body;
+use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
+use rtpipe_sim::observe::{observe, ChainObs, Summary};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// The system spec (TOML), e.g. examples/paper-table3.toml.
+    pub spec: PathBuf,
+    /// How long to release jobs: "2s", "500ms", or a number in the spec's
+    /// time unit [default: 2s; a flight: its mission plus 5 s].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub duration: Option<String>,
+    /// Run synthetic bodies even when the spec's tasks name flight bodies
+    /// (`body = ...`); without it such a spec flies the quadrotor for real
+    /// (the co-simulated world advanced to the true instants).
+    #[arg(long)]
+    pub synthetic: bool,
+    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
+    #[arg(long, default_value = "racer5")]
+    pub vehicle: String,
+    /// A flight's mission: steps, hover, paper, or a mission file (as `fly`).
+    #[arg(long, default_value = "steps")]
+    pub mission: String,
+    /// Scheduling class of the task threads [default: fifo for scheduler =
+    /// "rm", deadline for "edf"]. `other` needs --best-effort.
+    #[arg(long, value_enum)]
+    pub policy: Option<PolicyArg>,
+    /// Accept --policy other (SCHED_OTHER): every figure is then marked as
+    /// not real-time.
+    #[arg(long)]
+    pub best_effort: bool,
+    /// Print one JSON object (the `simulate --json` fields that apply, plus
+    /// "run") instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `--policy`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PolicyArg {
+    /// SCHED_FIFO, rate-monotonic priorities, pinned threads (scheduler = "rm").
+    Fifo,
+    /// SCHED_DEADLINE reservations (scheduler = "edf").
+    Deadline,
+    /// SCHED_OTHER: no real-time guarantee (needs --best-effort).
+    Other,
+}
+
+fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
+    let p = match (a.policy, spec.scheduler) {
+        (Some(PolicyArg::Fifo), _) => Policy::Fifo,
+        (Some(PolicyArg::Deadline), _) => Policy::Deadline,
+        (Some(PolicyArg::Other), _) => Policy::Other,
+        (None, Scheduler::Rm) => Policy::Fifo,
+        (None, Scheduler::Edf) => Policy::Deadline,
+    };
+    if p == Policy::Other && !a.best_effort {
+        return Err(Bad::new(
+            "--policy other runs without real-time guarantees",
+            "add --best-effort to accept that (every figure is then marked not real-time)",
+        ));
+    }
+    if p != Policy::Other && a.best_effort {
+        return Err(Bad::new(
+            "--best-effort only applies to --policy other",
+            "drop --best-effort, or add --policy other",
+        ));
+    }
+    Ok(p)
+}
+
+pub fn run(a: &RunArgs) -> ExitCode {
+    let spec = match analyze::load(&a.spec) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
+    let setup = if flight {
+        let r = rtpipe_fly::Request {
+            spec_path: &a.spec,
+            vehicle: &a.vehicle,
+            mission: &a.mission,
+            horizon: None,
+            seed: 0,
+        };
+        match rtpipe_fly::setup(&spec, &r) {
+            Ok(s) => Some(s),
+            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+        }
+    } else {
+        None
+    };
+    let duration = match (&a.duration, &setup) {
+        (None, Some(s)) => s.horizon,
+        (None, None) => 2_000_000_000,
+        (Some(d), _) => match parse_time(&spec, d) {
+            Ok(d) if d > 0 => d,
+            Ok(_) => {
+                return fail(Bad::new(
+                    format!("--duration {d} is not positive"),
+                    "e.g. --duration 2s",
+                ))
+            }
+            Err(e) => {
+                return fail(Bad::new(
+                    format!("--duration {d}: {e}"),
+                    "e.g. --duration 2s",
+                ))
+            }
+        },
+    };
+    let policy = match policy_of(&spec, a) {
+        Ok(p) => p,
+        Err(b) => return fail(b),
+    };
+    let cfg = RunConfig { duration, policy };
+    if let Err(e) = rtpipe_runtime::check(&spec, &cfg) {
+        return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help));
+    }
+    let report = rtpipe_analysis::analyze(&spec);
+    let spin = Spin::calibrate();
+    if !a.json {
+        eprintln!(
+            "running {} for {} {} under SCHED_{}{} (Ctrl-C stops early)...",
+            spec.name,
+            spec.fmt_time(duration),
+            spec.time_unit,
+            policy.name().to_uppercase(),
+            if flight { ", flying the quadrotor" } else { "" }
+        );
+    }
+    let (res, flown) = if let Some(s) = &setup {
+        match rtpipe_fly::fly_real(&spec, s, &cfg) {
+            Ok((f, r)) => (r, Some(f)),
+            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+        }
+    } else {
+        let bodies: Vec<Box<dyn Body<u64>>> = spec
+            .tasks
+            .iter()
+            .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
+            .collect();
+        match rtpipe_runtime::run(&spec, &cfg, bodies, None) {
+            Ok(r) => (r, None),
+            Err(e) => {
+                let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
+                return match e.kind {
+                    ErrorKind::Config | ErrorKind::Refused => fail(b),
+                };
+            }
+        }
+    };
+    let obs = observe(&report, &res.sim);
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
+    let suspects = suspects(&spec, &res);
+    if a.json {
+        let mut v = to_json(&spec, &report, &res, &obs, spin, &suspects);
+        if let (Some(f), Some(s)) = (&flown, &setup) {
+            let q = &f.quality;
+            v["flight"] = json!({
+                "vehicle": s.preset.name,
+                "mission": s.mission.name,
+                "crashed": q.crashed,
+                "airborne_s": q.airborne_s,
+                "landed_s": q.landed_s,
+                "attitude_error_deg_rms": q.attitude_error_deg.rms,
+                "altitude_error_m_rms": q.altitude_error_m.rms,
+                "failures": q.failures(&s.mission.criteria),
+            });
+        }
+        if let Err(code) = analyze::print_json(&v) {
+            return code;
+        }
+    } else {
+        print!(
+            "{}",
+            to_text(&spec, &report, &res, &obs, spin, flown.is_some())
+        );
+        if let (Some(f), Some(s)) = (&flown, &setup) {
+            let failures = f.quality.failures(&s.mission.criteria);
+            println!(
+                "\nflight ({}, mission {}, bodies on real threads):",
+                s.preset.name, s.mission.name
+            );
+            print!(
+                "{}",
+                crate::fly::quality_text(&f.quality, &s.mission.criteria, &failures)
+            );
+        }
+    }
+    for n in &res.notes {
+        eprintln!("{n}");
+    }
+    if over_sound > 0 {
+        eprintln!("warning: {over_sound} observation(s) above a sound chain bound");
+        if suspects.is_empty() {
+            eprintln!(
+                "  = the run met the model's assumptions as far as rtpipe can tell (no overrun, no missed period, no steal time): \
+                 the gap is the kernel's release and switching overheads, which the model does not include, or a bug"
+            );
+            return ExitCode::from(1);
+        }
+        eprintln!(
+            "  = the measurement is at fault, not the analysis: {}",
+            suspects.join("; ")
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+/// Why the run broke the model's assumptions, if it did.
+fn suspects(spec: &Spec, res: &RunResult) -> Vec<String> {
+    let mut out = Vec::new();
+    if res.policy == Policy::Other {
+        out.push("SCHED_OTHER gives no real-time guarantee (--best-effort)".into());
+    }
+    let named = |f: &dyn Fn(&rtpipe_runtime::TaskRun) -> u64| -> Vec<String> {
+        spec.tasks
+            .iter()
+            .zip(&res.tasks)
+            .filter(|(_, r)| f(r) > 0)
+            .map(|(t, r)| format!("{} ({})", t.name, f(r)))
+            .collect()
+    };
+    let over = named(&|r| r.overruns);
+    if !over.is_empty() {
+        out.push(format!("budget overruns in {}", over.join(", ")));
+    }
+    let missed = named(&|r| r.missed);
+    if !missed.is_empty() {
+        out.push(format!("missed periods in {}", missed.join(", ")));
+    }
+    if let Some(s) = res.steal.filter(|&s| s > 0) {
+        out.push(format!(
+            "{:.1} ms of steal time (the hypervisor ran something else on our CPUs)",
+            s as f64 / 1e6
+        ));
+    }
+    out
+}
+
+fn to_text(
+    spec: &Spec,
+    report: &Report,
+    res: &RunResult,
+    obs: &[ChainObs],
+    spin: Spin,
+    flight: bool,
+) -> String {
+    let u = spec.time_unit;
+    let mut out = format!(
+        "system {}: {} tasks, {} chains; times in {u}; scheduler {}\n",
+        spec.name,
+        spec.tasks.len(),
+        spec.chains.len(),
+        spec.scheduler.name()
+    );
+    let rt = if res.policy == Policy::Other {
+        " -- NOT REAL-TIME (best effort): no figure below is a real-time measurement"
+    } else {
+        ""
+    };
+    out.push_str(&format!(
+        "ran {} {u} under SCHED_{}{}{rt}; {}\n",
+        spec.fmt_time(res.sim.horizon),
+        res.policy.name().to_uppercase(),
+        if res.interrupted {
+            ", interrupted by Ctrl-C"
+        } else {
+            ""
+        },
+        if flight {
+            "the flight bodies, the world co-simulated at the true instants".to_string()
+        } else {
+            format!(
+                "synthetic bodies burning each task's demand (spin loop: {:.0} iterations/us)",
+                spin.iters_per_us
+            )
+        }
+    ));
+    if res.policy == Policy::Deadline {
+        out.push_str("SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n");
+    }
+    if !obs.is_empty() {
+        out.push_str(
+            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Read));
+        out.push_str("\nfrom the event just after each head read, against the +event bounds:\n");
+        out.push_str(&chain_table(spec, obs, Anchor::Event));
+    }
+    out.push_str(
+        "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
+         switching overhead; start = read - release; demand = CPU time of one job):\n",
+    );
+    let mut t = Table::new(&[
+        "task",
+        "cpu",
+        "prio",
+        "jobs",
+        "mean R",
+        "p99 R",
+        "max R",
+        "R(job)",
+        "max start",
+        "max demand",
+        "budget",
+        "overruns",
+        "missed",
+    ])
+    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
+    for (((task, ts), tr), tm) in spec
+        .tasks
+        .iter()
+        .zip(&res.sim.tasks)
+        .zip(&res.tasks)
+        .zip(&report.timing)
+    {
+        let s = Summary::of(&tr.responses);
+        let f = |x: Option<Nanos>| x.map_or_else(|| "-".into(), |r| spec.fmt_time(r));
+        let over = matches!((ts.max_response, tm.bounded_response()), (Some(s), Some(r)) if s > r);
+        t.row(vec![
+            task.name.clone(),
+            if res.policy == Policy::Deadline {
+                "any".into()
+            } else {
+                task.cpu.to_string()
+            },
+            tr.priority.map_or_else(|| "-".into(), |p| p.to_string()),
+            ts.completed.to_string(),
+            s.map_or_else(|| "-".into(), |s| spec.fmt_time(s.mean as Nanos)),
+            f(s.map(|s| s.p99)),
+            f(ts.max_response) + if over { " !!" } else { "" },
+            tm.job_response_time
+                .map_or_else(|| "unbounded".into(), |r| spec.fmt_time(r)),
+            spec.fmt_time(tr.max_start),
+            spec.fmt_time(tr.max_demand),
+            spec.fmt_time(task.budget()),
+            tr.overruns.to_string(),
+            tr.missed.to_string(),
+        ]);
+    }
+    out.push_str(&t.render());
+    out.push_str(&format!(
+        "\nsteal time during the run: {}\n",
+        res.steal
+            .map_or_else(|| "unknown".into(), |s| format!("{:.1} ms", s as f64 / 1e6))
+    ));
+    out
+}
+
+fn to_json(
+    spec: &Spec,
+    report: &Report,
+    res: &RunResult,
+    obs: &[ChainObs],
+    spin: Spin,
+    suspects: &[String],
+) -> Value {
+    let mut v = observations_json(spec, report, obs);
+    if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
+        for ((entry, ts), tr) in tasks.iter_mut().zip(&res.sim.tasks).zip(&res.tasks) {
+            let s = Summary::of(&tr.responses);
+            entry["observed"] = json!({
+                "released": ts.released,
+                "completed": ts.completed,
+                "max_response": num(spec, ts.max_response),
+                "mean_response": s.map(|s| s.mean / spec.time_unit.nanos() as f64),
+                "p99_response": num(spec, s.map(|s| s.p99)),
+                "late": ts.late,
+                "missed_periods": tr.missed,
+                "overruns": tr.overruns,
+                "max_demand": spec.in_unit(tr.max_demand),
+                "max_start": spec.in_unit(tr.max_start),
+                "priority": tr.priority,
+                "utilization": ts.busy as f64 / res.sim.horizon as f64,
+            });
+        }
+    }
+    v["run"] = json!({
+        "duration": spec.in_unit(res.sim.horizon),
+        "policy": res.policy.name(),
+        "real_time": res.policy != Policy::Other,
+        "interrupted": res.interrupted,
+        "steal": res.steal.map(|s| spec.in_unit(s)),
+        "spin_iterations_per_us": spin.iters_per_us,
+        "measurement_suspects": suspects,
+        "notes": res.notes,
+    });
+    v
+}

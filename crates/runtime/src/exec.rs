@@ -1,0 +1,640 @@
+//! The executor: one thread per task, periodic releases from one common
+//! epoch, implicit communication through four-slot registers, and a log of
+//! every job from which the chains are measured exactly as in the simulator
+//! (`rtpipe_sim::chains_from_jobs`).
+
+use crate::four_slot::{self, Reader, Writer};
+use crate::sys;
+use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
+use rtpipe_model::{Scheduler, Spec};
+use rtpipe_sim::{Carried, JobRecord, SimResult, TaskStats};
+use std::fmt;
+use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
+use std::sync::{Barrier, Mutex};
+
+/// How task threads are scheduled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Policy {
+    /// `SCHED_FIFO`, rate-monotonic priorities, each thread pinned to its
+    /// task's CPU (partitioned fixed priority, the `rm` model).
+    Fifo,
+    /// `SCHED_DEADLINE` reservations (runtime = budget, deadline = period =
+    /// T): the `edf` model's constant-bandwidth servers.
+    Deadline,
+    /// `SCHED_OTHER`, pinned: no real-time guarantee (best effort).
+    Other,
+}
+
+impl Policy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Policy::Fifo => "fifo",
+            Policy::Deadline => "deadline",
+            Policy::Other => "other",
+        }
+    }
+}
+
+/// What to run.
+#[derive(Debug, Clone, Copy)]
+pub struct RunConfig {
+    /// Releases happen in [0, duration) after the epoch.
+    pub duration: Nanos,
+    pub policy: Policy,
+}
+
+/// The kind of a [`RunError`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The spec or the flags cannot run as asked (exit status 2).
+    Config,
+    /// The kernel refused a scheduling class or a reservation (exit 2:
+    /// fixable by the user).
+    Refused,
+}
+
+/// Why a run could not start: the task, what is wrong, how to fix it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunError {
+    pub kind: ErrorKind,
+    pub msg: String,
+    pub help: String,
+}
+
+impl RunError {
+    fn config(msg: impl Into<String>, help: impl Into<String>) -> RunError {
+        RunError {
+            kind: ErrorKind::Config,
+            msg: msg.into(),
+            help: help.into(),
+        }
+    }
+}
+
+impl fmt::Display for RunError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.msg)
+    }
+}
+
+/// Per task, what the run measured beyond [`TaskStats`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TaskRun {
+    /// finish − release of every job.
+    pub responses: Vec<Nanos>,
+    /// Jobs whose CPU time (read to publish) exceeded the task's budget C
+    /// by more than [`OVERRUN_TOLERANCE`].
+    pub overruns: u64,
+    /// Jobs that published after their period ended (release + T).
+    pub missed: u64,
+    /// The largest CPU time of one job.
+    pub max_demand: Nanos,
+    /// The largest read − release: for the highest-priority task of a CPU,
+    /// the kernel's wake-up latency (the model has none).
+    pub max_start: Nanos,
+    /// The SCHED_FIFO priority (fifo only).
+    pub priority: Option<i32>,
+}
+
+/// A finished run.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// In the simulator's terms: per task stats (late = missed periods,
+    /// exhaustions = budget overruns), the chains, the job log. Times are
+    /// relative to the common epoch.
+    pub sim: SimResult,
+    pub tasks: Vec<TaskRun>,
+    pub policy: Policy,
+    /// Stopped early by Ctrl-C.
+    pub interrupted: bool,
+    /// Steal time of all CPUs during the run (a hypervisor ran someone
+    /// else), when /proc/stat has it.
+    pub steal: Option<Nanos>,
+    /// Wall time from the epoch to the last thread's end.
+    pub elapsed: Nanos,
+    /// Warnings (memory not locked, ...).
+    pub notes: Vec<String>,
+}
+
+/// The value a register holds: `None` until the producer first publishes.
+type Cell<V> = Option<Stamped<V>>;
+
+/// One job as a thread logs it (no allocation in the periodic path).
+#[derive(Debug, Clone, Copy, Default)]
+struct Rec {
+    index: u64,
+    release: Nanos,
+    read: Nanos,
+    finish: Nanos,
+    demand: Nanos,
+}
+
+/// What one task's thread owns.
+struct Thread<'a, V> {
+    task: usize,
+    period: Nanos,
+    budget: Nanos,
+    cpu: usize,
+    priority: Option<i32>,
+    body: Box<dyn Body<V> + 'a>,
+    readers: Vec<Reader<Cell<V>>>,
+    writers: Vec<Writer<Cell<V>>>,
+    recs: Vec<Rec>,
+    /// Per job, the producer job read on each input (u64::MAX: none yet).
+    inputs: Vec<u64>,
+}
+
+/// CPU time a job may exceed its budget by before it counts as an overrun:
+/// the job frame's own cost (three reads of the thread CPU clock, each a
+/// system call, the register copies), which a synthetic body burning
+/// exactly its budget adds on top.
+pub const OVERRUN_TOLERANCE: Nanos = 5_000;
+
+/// Largest number of jobs logged in one run (memory: ~48 bytes a job).
+const MAX_JOBS: u64 = 20_000_000;
+
+/// Checks that `spec` can run under `cfg` before any thread starts.
+pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
+    if cfg.duration <= 0 {
+        return Err(RunError::config(
+            "the duration must be positive",
+            "e.g. --duration 2s",
+        ));
+    }
+    let cpus = sys::online_cpus();
+    let mut jobs = 0u64;
+    let mut bandwidth = 0.0;
+    for t in &spec.tasks {
+        let Some(period) = t.fixed_period().filter(|&p| p > 0) else {
+            return Err(RunError::config(
+                format!("task {} has no fixed positive period", t.name),
+                "give it `period = ...` (run `rtpipe design` to choose free periods)",
+            ));
+        };
+        jobs += (cfg.duration / period) as u64 + 1;
+        bandwidth += t.budget() as f64 / period as f64;
+        if cfg.policy != Policy::Deadline && t.cpu as usize >= cpus {
+            return Err(RunError::config(
+                format!(
+                    "task {} is bound to cpu {} but this machine has {cpus} CPU(s) (0..{})",
+                    t.name,
+                    t.cpu,
+                    cpus - 1
+                ),
+                format!("set `cpu` of task {} to a CPU below {cpus}", t.name),
+            ));
+        }
+        if cfg.policy == Policy::Deadline {
+            deadline_rules(&t.name, t.budget(), period)?;
+        }
+    }
+    if jobs > MAX_JOBS {
+        return Err(RunError::config(
+            format!("the run would log {jobs} jobs, more than the {MAX_JOBS} this executor keeps"),
+            "shorten --duration",
+        ));
+    }
+    match (cfg.policy, spec.scheduler) {
+        (Policy::Fifo, Scheduler::Edf) => Err(RunError::config(
+            "--policy fifo runs the rate-monotonic model, but the spec says scheduler = \"edf\"",
+            "use --policy deadline for an edf spec, or set scheduler = \"rm\"",
+        )),
+        (Policy::Deadline, Scheduler::Rm) => Err(RunError::config(
+            "--policy deadline runs the edf model, but the spec says scheduler = \"rm\"",
+            "use --policy fifo for an rm spec, or set scheduler = \"edf\"",
+        )),
+        (Policy::Deadline, _) if bandwidth > 0.95 * cpus as f64 => Err(RunError {
+            kind: ErrorKind::Refused,
+            msg: format!(
+                "SCHED_DEADLINE admission would fail: total bandwidth Σ C/T = {bandwidth:.3} exceeds 0.95 × {cpus} CPU(s) = {:.2}",
+                0.95 * cpus as f64
+            ),
+            help: "lower the budgets or lengthen the periods (the kernel admits at most sched_rt_runtime_us/sched_rt_period_us of each CPU)".into(),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The kernel's rules for a SCHED_DEADLINE reservation (kernel/sched/
+/// deadline.c: `__checkparam_dl`, and the sched_deadline_period_{min,max}_us
+/// sysctls).
+fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunError> {
+    if budget < 1024 {
+        return Err(RunError::config(
+            format!("task {name}: budget {budget} ns is below SCHED_DEADLINE's minimum runtime of 1024 ns"),
+            format!("give task {name} a budget of at least 1.024 us"),
+        ));
+    }
+    if budget > period {
+        return Err(RunError::config(
+            format!("task {name}: budget {budget} ns exceeds its period {period} ns"),
+            format!("give task {name} a budget at most its period"),
+        ));
+    }
+    let sysctl = |f: &str| {
+        std::fs::read_to_string(format!("/proc/sys/kernel/{f}"))
+            .ok()
+            .and_then(|s| s.trim().parse::<i64>().ok())
+    };
+    let min = sysctl("sched_deadline_period_min_us").unwrap_or(100) * 1000;
+    let max = sysctl("sched_deadline_period_max_us").unwrap_or(1 << 22) * 1000;
+    if period < min || period > max {
+        return Err(RunError::config(
+            format!(
+                "task {name}: period {period} ns is outside SCHED_DEADLINE's allowed range [{min}, {max}] ns (kernel.sched_deadline_period_min_us/max_us)"
+            ),
+            format!("give task {name} a period in that range, or change the sysctls"),
+        ));
+    }
+    Ok(())
+}
+
+/// Runs `spec` for real: `bodies[i]` for every job of task i, `env` as the
+/// world (sensed at each read, actuated at each publish, under its lock, at
+/// the true instants relative to the epoch; `None`: no world, no lock).
+///
+/// # Panics
+/// When `bodies` does not hold one body per task (a caller's bug).
+pub fn run<'a, V: Copy + Send>(
+    spec: &Spec,
+    cfg: &RunConfig,
+    bodies: Vec<Box<dyn Body<V> + 'a>>,
+    env: Option<&Mutex<dyn Environment<V> + Send + 'a>>,
+) -> Result<RunResult, RunError> {
+    assert_eq!(bodies.len(), spec.tasks.len(), "one body per task");
+    check(spec, cfg)?;
+    let n = spec.tasks.len();
+    let mut notes = Vec::new();
+    if cfg.policy != Policy::Other {
+        if let Err(e) = sys::lock_memory() {
+            notes.push(format!(
+                "warning: mlockall failed ({e}): page faults may delay jobs"
+            ));
+        }
+    }
+    let ranks = rtpipe_analysis::sched::rm_priorities(spec);
+    let mut threads: Vec<Thread<'a, V>> = bodies
+        .into_iter()
+        .enumerate()
+        .map(|(i, body)| {
+            let t = &spec.tasks[i];
+            let period = t.fixed_period().unwrap_or(1).max(1);
+            let cap = (cfg.duration / period) as usize + 2;
+            Thread {
+                task: i,
+                period,
+                budget: t.budget(),
+                cpu: t.cpu as usize,
+                priority: match cfg.policy {
+                    // Rank 1 (highest) → 90; background tasks → 1.
+                    Policy::Fifo => Some(ranks[i].map_or(1, |r| (91 - r as i32).max(2))),
+                    _ => None,
+                },
+                body,
+                readers: Vec::with_capacity(t.reads.len()),
+                writers: Vec::new(),
+                recs: Vec::with_capacity(cap),
+                inputs: Vec::with_capacity(cap * t.reads.len()),
+            }
+        })
+        .collect();
+    // One register per (producer, consumer) edge.
+    for c in 0..n {
+        for &p in &spec.tasks[c].reads {
+            let (w, r) = four_slot::register::<Cell<V>>(None);
+            threads[p].writers.push(w);
+            threads[c].readers.push(r);
+        }
+    }
+    sys::catch_sigint();
+    let setup = Barrier::new(n + 1);
+    let go = Barrier::new(n + 1);
+    let abort = AtomicBool::new(false);
+    let epoch = AtomicI64::new(0);
+    let errors: Mutex<Vec<RunError>> = Mutex::new(Vec::new());
+    let steal0 = sys::steal_time();
+    let policy = cfg.policy;
+    let duration = cfg.duration;
+    let finished = std::thread::scope(|s| {
+        let handles: Vec<_> = threads
+            .into_iter()
+            .map(|mut th| {
+                let (setup, go, abort, epoch, errors) = (&setup, &go, &abort, &epoch, &errors);
+                let name = spec.tasks[th.task].name.clone();
+                s.spawn(move || {
+                    if let Err(e) = configure(&name, &th, policy) {
+                        if let Ok(mut v) = errors.lock() {
+                            v.push(e);
+                        }
+                    }
+                    setup.wait();
+                    go.wait();
+                    if !abort.load(Ordering::SeqCst) {
+                        periodic(&mut th, epoch.load(Ordering::SeqCst), duration, policy, env);
+                    }
+                    th
+                })
+            })
+            .collect();
+        setup.wait();
+        let failed = errors.lock().map_or(true, |v| !v.is_empty());
+        abort.store(failed, Ordering::SeqCst);
+        // Start 10 ms from now: every thread is past `go` by then.
+        epoch.store(sys::now() + 10_000_000, Ordering::SeqCst);
+        go.wait();
+        handles.into_iter().map(|h| h.join()).collect::<Vec<_>>()
+    });
+    let e0 = epoch.load(Ordering::SeqCst);
+    let elapsed = sys::now() - e0;
+    let steal = match (steal0, sys::steal_time()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
+    if let Some(e) = errors.into_inner().ok().and_then(|v| v.into_iter().next()) {
+        return Err(e);
+    }
+    let mut threads = Vec::with_capacity(n);
+    for r in finished {
+        match r {
+            Ok(t) => threads.push(t),
+            // A body panicked: the panic hook has reported it.
+            Err(p) => std::panic::resume_unwind(p),
+        }
+    }
+    let interrupted = sys::stop_requested();
+    Ok(assemble(
+        spec,
+        threads,
+        duration,
+        policy,
+        interrupted,
+        steal,
+        elapsed,
+        notes,
+    ))
+}
+
+/// Puts the calling thread into its scheduling class.
+fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), RunError> {
+    let refused = |what: &str, e: std::io::Error, help: String| RunError {
+        kind: ErrorKind::Refused,
+        msg: format!("task {name}: the kernel refused {what}: {e}"),
+        help,
+    };
+    let no_privilege = |what: &str| {
+        format!(
+            "{what} needs root or CAP_SYS_NICE (and an RLIMIT_RTPRIO for SCHED_FIFO); \
+             run as root, or run without real-time guarantees: --policy other --best-effort"
+        )
+    };
+    match policy {
+        Policy::Fifo | Policy::Other => {
+            if let Err(e) = sys::pin_to(th.cpu) {
+                return Err(refused(
+                    &format!("pinning to cpu {}", th.cpu),
+                    e,
+                    format!(
+                        "set `cpu` of task {name} to a CPU this process may use (see taskset -p)"
+                    ),
+                ));
+            }
+            if let (Policy::Fifo, Some(p)) = (policy, th.priority) {
+                if let Err(e) = sys::set_fifo(p) {
+                    let help = if e.raw_os_error() == Some(libc::EPERM) {
+                        no_privilege("SCHED_FIFO")
+                    } else {
+                        "check the RT limits (ulimit -r)".into()
+                    };
+                    return Err(refused(&format!("SCHED_FIFO priority {p}"), e, help));
+                }
+            }
+        }
+        Policy::Deadline => {
+            let (c, t) = (th.budget as u64, th.period as u64);
+            if let Err(e) = sys::set_deadline(c, t, t) {
+                let help = match e.raw_os_error() {
+                    Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
+                    Some(libc::EBUSY) => format!(
+                        "admission control: the reservations already admitted plus this one \
+                         (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU); \
+                         lower the budgets or lengthen the periods",
+                        c as f64 / t as f64
+                    ),
+                    Some(libc::EINVAL) => format!(
+                        "task {name}: runtime {c} ns, deadline = period = {t} ns break the kernel's rules \
+                         (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)"
+                    ),
+                    _ => String::new(),
+                };
+                return Err(refused(
+                    &format!("SCHED_DEADLINE (runtime {c} ns, period {t} ns)"),
+                    e,
+                    help,
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The periodic loop of one task: releases at epoch + k·T for k·T < duration.
+fn periodic<V: Copy>(
+    th: &mut Thread<'_, V>,
+    epoch: Nanos,
+    duration: Nanos,
+    policy: Policy,
+    env: Option<&Mutex<dyn Environment<V> + Send + '_>>,
+) {
+    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len());
+    let mut k: u64 = 0;
+    loop {
+        let offset = k as i64 * th.period;
+        if offset >= duration || sys::stop_requested() || th.recs.len() == th.recs.capacity() {
+            break;
+        }
+        if policy == Policy::Deadline && k > 0 {
+            // Ends this period's reservation; the kernel wakes the thread
+            // with a fresh runtime at the next period.
+            sys::yield_now();
+        }
+        let release = epoch + offset;
+        sys::sleep_until(release);
+        let cpu0 = sys::thread_cpu_time();
+        inputs.clear();
+        for r in &mut th.readers {
+            let v = r.read();
+            th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+            inputs.push(v);
+        }
+        // The read instant is taken after the copies: every value read was
+        // published (its publish instant taken) before it, as in the model.
+        // With a world, it is taken under the world's lock, so the world
+        // sees non-decreasing instants from all threads.
+        let (read, device) = match env.map(Mutex::lock) {
+            Some(Ok(mut e)) => {
+                let read = sys::now();
+                (read, e.sense(th.task, read - epoch))
+            }
+            _ => (sys::now(), None),
+        };
+        let job = Job {
+            task: th.task,
+            index: k,
+            release: offset,
+            read: read - epoch,
+        };
+        let value = th.body.run(&job, &inputs, device);
+        // The publish instant, taken before the registers are written (a
+        // reader's read instant then follows it); with a world, under its
+        // lock, where the output reaches the world at that instant.
+        let publish = match env.map(Mutex::lock) {
+            Some(Ok(mut e)) => {
+                let publish = sys::now();
+                e.actuate(th.task, publish - epoch, &value);
+                publish
+            }
+            _ => sys::now(),
+        };
+        let stamp = Stamp {
+            task: th.task,
+            job: k,
+            read: read - epoch,
+            publish: publish - epoch,
+        };
+        for w in &mut th.writers {
+            w.write(Some(Stamped { value, stamp }));
+        }
+        let demand = sys::thread_cpu_time() - cpu0;
+        th.recs.push(Rec {
+            index: k,
+            release: offset,
+            read: read - epoch,
+            finish: publish - epoch,
+            demand,
+        });
+        k += 1;
+    }
+}
+
+/// The job log in the simulator's terms and the per-task figures.
+#[allow(clippy::too_many_arguments)]
+fn assemble<V>(
+    spec: &Spec,
+    threads: Vec<Thread<'_, V>>,
+    duration: Nanos,
+    policy: Policy,
+    interrupted: bool,
+    steal: Option<Nanos>,
+    elapsed: Nanos,
+    notes: Vec<String>,
+) -> RunResult {
+    let n = spec.tasks.len();
+    // Chain positions each task occupies: (chain, pos).
+    let mut slots: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+    for (c, ch) in spec.chains.iter().enumerate() {
+        for (pos, &t) in ch.path.iter().enumerate() {
+            if t < n {
+                slots[t].push((c, pos));
+            }
+        }
+    }
+    // Every job, in publish order (ties: read order, then task).
+    let mut order: Vec<(Nanos, Nanos, usize, usize)> = Vec::new();
+    for (i, th) in threads.iter().enumerate() {
+        for (j, r) in th.recs.iter().enumerate() {
+            order.push((r.finish, r.read, i, j));
+        }
+    }
+    order.sort_unstable();
+    // carried[task][job] = per slot of the task, the sample it carries.
+    let mut carried: Vec<Vec<Vec<Option<u64>>>> = threads
+        .iter()
+        .map(|th| Vec::with_capacity(th.recs.len()))
+        .collect();
+    let mut jobs = Vec::with_capacity(order.len());
+    for &(_, _, i, j) in &order {
+        let th = &threads[i];
+        let r = th.recs[j];
+        let nreads = th.readers.len();
+        let mine: Vec<Option<u64>> = slots[i]
+            .iter()
+            .map(|&(c, pos)| {
+                if pos == 0 {
+                    return Some(r.index);
+                }
+                let p = spec.chains[c].path[pos - 1];
+                let input = spec.tasks[i].reads.iter().position(|&q| q == p)?;
+                let pj = th.inputs[j * nreads + input];
+                let ps = slots[p].iter().position(|&s| s == (c, pos - 1))?;
+                carried[p]
+                    .get(pj as usize)
+                    .and_then(|v: &Vec<Option<u64>>| v[ps])
+            })
+            .collect();
+        // Jobs of one task publish in index order, so this is index j.
+        carried[i].push(mine.clone());
+        jobs.push(JobRecord {
+            task: i,
+            index: r.index,
+            release: r.release,
+            demand: r.demand,
+            read: r.read,
+            finish: r.finish,
+            carried: slots[i]
+                .iter()
+                .zip(mine)
+                .map(|(&(chain, pos), sample)| Carried { chain, pos, sample })
+                .collect(),
+        });
+    }
+    let chains = rtpipe_sim::chains_from_jobs(spec, &jobs);
+    let mut tasks = Vec::with_capacity(n);
+    let mut runs = Vec::with_capacity(n);
+    for th in &threads {
+        let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
+        let missed = responses.iter().filter(|&&r| r > th.period).count() as u64;
+        let overruns = th
+            .recs
+            .iter()
+            .filter(|r| r.demand > th.budget + OVERRUN_TOLERANCE)
+            .count() as u64;
+        tasks.push(TaskStats {
+            released: th.recs.len() as u64,
+            completed: th.recs.len() as u64,
+            max_response: responses.iter().copied().max(),
+            late: missed,
+            exhaustions: overruns,
+            busy: th.recs.iter().map(|r| r.demand).sum(),
+        });
+        runs.push(TaskRun {
+            max_demand: th.recs.iter().map(|r| r.demand).max().unwrap_or(0),
+            max_start: th
+                .recs
+                .iter()
+                .map(|r| r.read - r.release)
+                .max()
+                .unwrap_or(0),
+            responses,
+            overruns,
+            missed,
+            priority: th.priority,
+        });
+    }
+    RunResult {
+        sim: SimResult {
+            offsets: vec![0; n],
+            tasks,
+            chains,
+            jobs,
+            segments: Vec::new(),
+            events: 0,
+            horizon: duration,
+        },
+        tasks: runs,
+        policy,
+        interrupted,
+        steal,
+        elapsed,
+        notes,
+    }
+}

@@ -1,0 +1,87 @@
+//! Synthetic task bodies that burn a calibrated amount of CPU time, like
+//! rt-app: any spec runs without task code.
+
+use crate::sys;
+use rtpipe_body::{Body, Job, Nanos, Stamped};
+use std::hint::black_box;
+
+/// A spin loop calibrated at start-up: how many iterations take 1 µs of CPU.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spin {
+    pub iters_per_us: f64,
+}
+
+fn spin(iters: u64) {
+    let mut x = 0u64;
+    for i in 0..iters {
+        x = black_box(x.wrapping_mul(6364136223846793005).wrapping_add(i));
+    }
+    black_box(x);
+}
+
+impl Spin {
+    /// Times the loop on the calling thread's CPU clock (preemption does not
+    /// count) and keeps the fastest of several trials (the least disturbed).
+    pub fn calibrate() -> Spin {
+        let iters = 200_000u64;
+        spin(iters); // warm up
+        let best = (0..7)
+            .map(|_| {
+                let t0 = sys::thread_cpu_time();
+                spin(iters);
+                (sys::thread_cpu_time() - t0).max(1)
+            })
+            .min()
+            .unwrap_or(1);
+        Spin {
+            iters_per_us: iters as f64 * 1000.0 / best as f64,
+        }
+    }
+
+    /// Burns `ns` nanoseconds of the calling thread's CPU time: calibrated
+    /// chunks of at most 20 µs, checked against the thread's CPU clock, so
+    /// preemption, frequency changes and calibration error do not change
+    /// the demand (it ends within one clock read, ~0.3 µs, of `ns`).
+    pub fn burn(&self, ns: Nanos) {
+        if ns <= 0 {
+            return;
+        }
+        let start = sys::thread_cpu_time();
+        loop {
+            let left = ns - (sys::thread_cpu_time() - start);
+            if left <= 0 {
+                return;
+            }
+            let chunk = left.min(20_000);
+            spin((chunk as f64 * self.iters_per_us / 1000.0) as u64);
+        }
+    }
+}
+
+/// A body that burns `demand` ns of CPU per job and publishes its job index.
+pub fn synthetic(spin: Spin, demand: Nanos) -> impl Body<u64> {
+    move |job: &Job, _: &[Option<Stamped<u64>>], _: Option<u64>| {
+        spin.burn(demand);
+        job.index
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn burns_roughly_what_it_is_asked() {
+        let s = Spin::calibrate();
+        assert!(s.iters_per_us > 1.0, "{s:?}");
+        let t0 = sys::thread_cpu_time();
+        s.burn(2_000_000);
+        let used = sys::thread_cpu_time() - t0;
+        // Generous: the machine is shared.
+        // At least what was asked; a little more (the last chunk, clock reads).
+        assert!(
+            (2_000_000..2_500_000).contains(&used),
+            "burned {used} ns for 2 ms"
+        );
+    }
+}

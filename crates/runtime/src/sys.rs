@@ -1,0 +1,171 @@
+//! Thin wrappers over the Linux calls the executor needs: clocks, absolute
+//! sleeps, scheduling classes (including `SCHED_DEADLINE` through the raw
+//! `sched_setattr` system call, which glibc does not wrap), affinity,
+//! `mlockall`, and the steal time of /proc/stat.
+
+use std::io;
+
+/// `SCHED_DEADLINE` (include/uapi/linux/sched.h).
+pub const SCHED_DEADLINE: u32 = 6;
+
+/// `struct sched_attr` (include/uapi/linux/sched/types.h), version 0 (48 bytes).
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy)]
+struct SchedAttr {
+    size: u32,
+    sched_policy: u32,
+    sched_flags: u64,
+    sched_nice: i32,
+    sched_priority: u32,
+    sched_runtime: u64,
+    sched_deadline: u64,
+    sched_period: u64,
+}
+
+/// CLOCK_MONOTONIC in nanoseconds.
+pub fn now() -> i64 {
+    clock(libc::CLOCK_MONOTONIC)
+}
+
+/// CPU time consumed by the calling thread, in nanoseconds.
+pub fn thread_cpu_time() -> i64 {
+    clock(libc::CLOCK_THREAD_CPUTIME_ID)
+}
+
+fn clock(id: libc::clockid_t) -> i64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; both clocks always exist.
+    unsafe { libc::clock_gettime(id, &mut ts) };
+    ts.tv_sec * 1_000_000_000 + ts.tv_nsec
+}
+
+/// Sleeps until CLOCK_MONOTONIC reads `t` (absolute: no drift), resuming
+/// after signals.
+pub fn sleep_until(t: i64) {
+    let ts = libc::timespec {
+        tv_sec: t.div_euclid(1_000_000_000),
+        tv_nsec: t.rem_euclid(1_000_000_000),
+    };
+    loop {
+        // SAFETY: `ts` is a valid timespec; no remainder is asked for.
+        let r = unsafe {
+            libc::clock_nanosleep(
+                libc::CLOCK_MONOTONIC,
+                libc::TIMER_ABSTIME,
+                &ts,
+                std::ptr::null_mut(),
+            )
+        };
+        if r != libc::EINTR {
+            return;
+        }
+    }
+}
+
+/// `SCHED_FIFO` at `priority` (1..=99) for the calling thread.
+pub fn set_fifo(priority: i32) -> io::Result<()> {
+    let p = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: `p` is a valid sched_param; pid 0 is the calling thread.
+    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &p) } != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
+/// `SCHED_DEADLINE` with runtime, deadline and period (ns) for the calling
+/// thread.
+pub fn set_deadline(runtime: u64, deadline: u64, period: u64) -> io::Result<()> {
+    let attr = SchedAttr {
+        size: std::mem::size_of::<SchedAttr>() as u32,
+        sched_policy: SCHED_DEADLINE,
+        sched_runtime: runtime,
+        sched_deadline: deadline,
+        sched_period: period,
+        ..SchedAttr::default()
+    };
+    // SAFETY: sched_setattr(pid 0 = calling thread, a valid sched_attr whose
+    // size field is its size, flags 0).
+    let r = unsafe { libc::syscall(libc::SYS_sched_setattr, 0, &attr as *const SchedAttr, 0u32) };
+    if r != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
+/// Pins the calling thread to `cpu`.
+pub fn pin_to(cpu: usize) -> io::Result<()> {
+    // SAFETY: a zeroed cpu_set_t is the empty set; CPU_SET stays in bounds
+    // for cpu < CPU_SETSIZE (checked), and the set is passed with its size.
+    unsafe {
+        if cpu >= libc::CPU_SETSIZE as usize {
+            return Err(io::Error::from_raw_os_error(libc::EINVAL));
+        }
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        libc::CPU_SET(cpu, &mut set);
+        if libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) != 0 {
+            return Err(io::Error::last_os_error());
+        }
+    }
+    Ok(())
+}
+
+/// Locks current and future memory (no page faults in the periodic path).
+pub fn lock_memory() -> io::Result<()> {
+    // SAFETY: mlockall takes flags only.
+    if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
+/// Gives up the CPU (`SCHED_DEADLINE`: ends the job until the next period).
+pub fn yield_now() {
+    // SAFETY: no arguments.
+    unsafe { libc::sched_yield() };
+}
+
+/// The CPUs the process may run on.
+pub fn online_cpus() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Steal time of all CPUs so far (the `steal` column of /proc/stat's `cpu`
+/// line), in nanoseconds; `None` when unavailable.
+pub fn steal_time() -> Option<i64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let line = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let steal: i64 = line.split_whitespace().nth(8)?.parse().ok()?;
+    // SAFETY: sysconf takes a constant.
+    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
+    (hz > 0).then(|| steal * (1_000_000_000 / hz as i64))
+}
+
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn on_sigint(_: libc::c_int) {
+    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Installs a SIGINT handler that sets the stop flag ([`stop_requested`]).
+pub fn catch_sigint() {
+    STOP.store(false, std::sync::atomic::Ordering::SeqCst);
+    let handler: extern "C" fn(libc::c_int) = on_sigint;
+    // SAFETY: the handler only stores to an atomic (async-signal-safe).
+    unsafe { libc::signal(libc::SIGINT, handler as libc::sighandler_t) };
+}
+
+/// Whether Ctrl-C was pressed since [`catch_sigint`].
+pub fn stop_requested() -> bool {
+    STOP.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// Whether the process runs with an effective user id of 0.
+pub fn is_root() -> bool {
+    // SAFETY: geteuid cannot fail.
+    unsafe { libc::geteuid() == 0 }
+}
