@@ -593,6 +593,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         on_chain: (0..n)
             .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
             .collect(),
+        numerical: NumLog::default(),
     };
     let mut o = run.solve_all()?;
     o.notes.splice(0..0, notes);
@@ -743,6 +744,69 @@ struct Runner<'a> {
     levels: Levels,
     /// Task i lies on some declared chain.
     on_chain: Vec<bool>,
+    /// Numerical failures of the solver and what became of them.
+    numerical: NumLog,
+}
+
+/// Master problems on which the solver failed numerically (`lp::solve`
+/// re-solves them written differently first), by what became of them.
+#[derive(Debug, Clone, Default)]
+struct NumLog {
+    /// The solver's first message.
+    message: Option<String>,
+    /// Answered by a re-solve.
+    resolved: usize,
+    /// Every attempt failed; a failed attempt's best solution was used.
+    from_failed: usize,
+    /// Every attempt failed without a solution: skipped as undecided.
+    skipped: usize,
+    /// The last master solve was skipped that way.
+    last_skipped: bool,
+}
+
+impl NumLog {
+    fn absorb(&mut self, o: &NumLog) {
+        if self.message.is_none() {
+            self.message.clone_from(&o.message);
+        }
+        self.resolved += o.resolved;
+        self.from_failed += o.from_failed;
+        self.skipped += o.skipped;
+        self.last_skipped = o.last_skipped;
+    }
+
+    /// What the outcome says about them.
+    fn note(&self) -> Option<String> {
+        let total = self.resolved + self.from_failed + self.skipped;
+        if total == 0 {
+            return None;
+        }
+        let mut done = Vec::new();
+        if self.resolved > 0 {
+            done.push(format!(
+                "{} re-solved with the rows rescaled or reordered",
+                self.resolved
+            ));
+        }
+        if self.from_failed > 0 {
+            done.push(format!(
+                "{} answered by the best solution found before the failure (no lower bound from it)",
+                self.from_failed
+            ));
+        }
+        if self.skipped > 0 {
+            done.push(format!(
+                "{} given up (treated as undecided, like a time limit)",
+                self.skipped
+            ));
+        }
+        Some(format!(
+            "the solver failed numerically ({}) on {total} master problem{}: {}; any design shown is verified by the analysis",
+            self.message.as_deref().unwrap_or("no message"),
+            if total == 1 { "" } else { "s" },
+            done.join(", ")
+        ))
+    }
 }
 
 /// What the sound model knows of response times: unconditional lower
@@ -769,8 +833,9 @@ struct RCut {
 
 enum Solved {
     Infeasible,
-    /// Stopped by a time limit: nothing proven.
-    TimeLimit,
+    /// Stopped by a time or work limit, or by a numerical failure of the
+    /// solver that re-solving did not get round: nothing proven.
+    Stopped,
     /// Periods per task (ns), the model objective, proven optimal, and the
     /// model's response times (grid units) where it has them.
     Periods(Vec<Nanos>, f64, bool, Vec<Option<f64>>),
@@ -1075,12 +1140,29 @@ impl<'a> Runner<'a> {
                 m.lp.rows.len()
             );
         }
-        let solved = lp::solve(&m.lp, self.opts.solver, left);
-        self.work = self.work.saturating_add(match &solved {
-            Ok(s) => s.work,
-            Err(LpError::NodeLimit(w)) => *w,
-            Err(_) => 1,
-        });
+        let lp::Solve {
+            result: solved,
+            work,
+            numerical,
+        } = lp::solve(&m.lp, self.opts.solver, left);
+        self.work = self.work.saturating_add(work);
+        self.numerical.last_skipped = false;
+        if let Some(n) = &numerical {
+            if self.numerical.message.is_none() {
+                self.numerical.message = Some(n.message.clone());
+            }
+            if n.from_failed {
+                self.numerical.from_failed += 1;
+            } else if n.solved_by > 0 {
+                self.numerical.resolved += 1;
+            } else {
+                self.numerical.skipped += 1;
+                self.numerical.last_skipped = true;
+            }
+            if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+                eprintln!("master: numerical failure {n:?}");
+            }
+        }
         if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
             match &solved {
                 Err(e) => eprintln!(
@@ -1097,7 +1179,11 @@ impl<'a> Runner<'a> {
         }
         match solved {
             Err(LpError::Infeasible) => Solved::Infeasible,
-            Err(LpError::TimeLimit | LpError::NodeLimit(_)) => Solved::TimeLimit,
+            Err(LpError::TimeLimit | LpError::NodeLimit(_)) => Solved::Stopped,
+            // The solver failed numerically on every attempt (`lp::solve`
+            // re-solved it written differently): not the user's error, and
+            // nothing proven; every caller treats it as a stopped solve.
+            Err(LpError::Other(_)) if numerical.is_some() => Solved::Stopped,
             Err(LpError::TooLarge { .. }) => Solved::Error(
                 DesignError::solver(format!(
                     "the solver cannot represent the model: {}",
@@ -1460,7 +1546,7 @@ impl<'a> Runner<'a> {
             }
             match solved {
                 Solved::Error(e) => return Err(e),
-                Solved::TimeLimit => {
+                Solved::Stopped => {
                     break;
                 }
                 Solved::Infeasible => {
@@ -1591,7 +1677,13 @@ impl<'a> Runner<'a> {
         if let Some((cand, report, u)) = incumbent {
             notes.push(format!(
                 "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
-                if self.opts.time_limit.is_some() { "time limit" } else { "work budget; --time-limit S searches for S seconds instead" }
+                if self.numerical.last_skipped {
+                    "the solver failed numerically on a master problem"
+                } else if self.opts.time_limit.is_some() {
+                    "time limit"
+                } else {
+                    "work budget; --time-limit S searches for S seconds instead"
+                }
             ));
             let lb = lower_bound.map(|b| b.min(u));
             let mut o = self.outcome(
@@ -1609,7 +1701,11 @@ impl<'a> Runner<'a> {
             }
             return Ok(o);
         }
-        notes.push("stopped by the time or iteration limit before a verified design".into());
+        notes.push(if self.numerical.last_skipped {
+            "stopped by a numerical failure of the solver before a verified design".into()
+        } else {
+            "stopped by the time or iteration limit before a verified design".into()
+        });
         let mut o = self.outcome(Status::Unknown, None, lower_bound, Vec::new(), notes);
         o.lower_bound = lower_bound;
         Ok(o)
@@ -1686,6 +1782,8 @@ impl<'a> Runner<'a> {
             Some((s, r)) => (Some(s), Some(r)),
             None => (None, None),
         };
+        let mut notes = notes;
+        notes.extend(self.numerical.note());
         Outcome {
             status,
             spec,
@@ -1741,7 +1839,7 @@ impl<'a> Runner<'a> {
             }
             let periods = match self.solve_master(groups, sm.as_ref()) {
                 Solved::Infeasible => return Some(false),
-                Solved::Error(_) | Solved::TimeLimit => return None,
+                Solved::Error(_) | Solved::Stopped => return None,
                 Solved::Periods(p, _, _, rmodel) => {
                     let cand = self.with_periods(&p);
                     let report = rtpipe_analysis::analyze(&cand);
@@ -1898,10 +1996,12 @@ impl<'a> Runner<'a> {
                 work_cap: me.work_cap,
                 levels: me.levels.clone(),
                 on_chain: me.on_chain.clone(),
+                numerical: NumLog::default(),
             };
             let r = sub.probe(core, sound);
             // The sub-search's work counts against the budget.
             me.work = sub.work;
+            me.numerical.absorb(&sub.numerical);
             r
         };
         // Any undecided probe makes the answer unknown: say nothing then.

@@ -217,8 +217,173 @@ where
     }
 }
 
-/// Solves with the chosen backend within `limits`.
-pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Result<LpSolution, LpError> {
+/// A numerical failure of the solver (microlp: a singular basis, an
+/// internal error) and how the solve got round it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Numerical {
+    /// The solver's message for the first failure.
+    pub message: String,
+    /// Re-solves of the same problem written differently ([`variant`]).
+    pub retries: u32,
+    /// Which attempt gave the answer: 0 none, else the variant (1–3).
+    pub solved_by: u32,
+    /// Every attempt failed, and the answer is the best solution one of them
+    /// had found before failing (not proven optimal).
+    pub from_failed: bool,
+}
+
+/// The answer of [`solve`] and what it cost.
+#[derive(Debug, Clone)]
+pub struct Solve {
+    pub result: Result<LpSolution, LpError>,
+    /// Work of every attempt (branch-and-bound nodes plus one per attempt).
+    pub work: u64,
+    /// Set when the solver failed numerically on the way.
+    pub numerical: Option<Numerical>,
+}
+
+/// The same problem written differently: the feasible set and the optimum
+/// are unchanged, the solver's pivots are not. 1 scales every row to a
+/// largest coefficient of 1, 2 reverses the row order, 3 does both.
+pub fn variant(lp: &Lp, k: u32) -> Lp {
+    let mut out = lp.clone();
+    if k & 1 != 0 {
+        for r in &mut out.rows {
+            let m = r.terms.iter().map(|&(_, c)| c.abs()).fold(0.0, f64::max);
+            if m > 0.0 && m.is_finite() {
+                r.terms.iter_mut().for_each(|t| t.1 /= m);
+                r.rhs /= m;
+            }
+        }
+    }
+    if k & 2 != 0 {
+        out.rows.reverse();
+    }
+    out
+}
+
+/// Variants tried after a numerical failure, in order.
+const VARIANTS: u32 = 3;
+
+/// Solves with the chosen backend within `limits`. A numerical failure of
+/// the solver is not the end: the problem is solved again written
+/// differently ([`variant`] 1, 2, 3) with what is left of the limits; when
+/// every attempt fails, the best solution any of them had found (not proven
+/// optimal) is the answer, or else the error.
+pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Solve {
+    let started = std::time::Instant::now();
+    let mut work: u64 = 0;
+    let mut numerical: Option<Numerical> = None;
+    let mut best: Option<LpSolution> = None;
+    let mut last_err = String::new();
+    for k in 0..=VARIANTS {
+        let left = Limits {
+            time: limits.time.map(|t| t - started.elapsed().as_secs_f64()),
+            nodes: limits.nodes.map(|n| n.saturating_sub(work)),
+        };
+        if k > 0 {
+            if left.time.is_some_and(|t| t <= 0.0) {
+                break;
+            }
+            if left.nodes == Some(0) {
+                break;
+            }
+            if let Some(n) = &mut numerical {
+                n.retries = k;
+            }
+        }
+        let v;
+        let problem = if k == 0 {
+            lp
+        } else {
+            v = variant(lp, k);
+            &v
+        };
+        let attempt = solve_once(problem, solver, left);
+        work = work.saturating_add(attempt.work);
+        match attempt.result {
+            Err(Failed::Solver(msg, found)) => {
+                if let Some(f) = found {
+                    if best.as_ref().is_none_or(|b| f.objective < b.objective) {
+                        best = Some(f);
+                    }
+                }
+                numerical.get_or_insert(Numerical {
+                    message: msg.clone(),
+                    retries: 0,
+                    solved_by: 0,
+                    from_failed: false,
+                });
+                last_err = msg;
+            }
+            Err(Failed::Lp(e)) => {
+                // A limit or a verdict: done, with a failed attempt's
+                // solution if there is one.
+                let result = match (e, best) {
+                    (LpError::TimeLimit | LpError::NodeLimit(_), Some(mut b)) => {
+                        if let Some(n) = &mut numerical {
+                            n.from_failed = true;
+                        }
+                        b.work = work;
+                        Ok(b)
+                    }
+                    (LpError::NodeLimit(_), None) => Err(LpError::NodeLimit(work)),
+                    (e, _) => Err(e),
+                };
+                if let (Some(n), true) = (&mut numerical, k > 0) {
+                    n.solved_by = k;
+                }
+                return Solve {
+                    result,
+                    work,
+                    numerical,
+                };
+            }
+            Ok(mut s) => {
+                if let Some(n) = &mut numerical {
+                    n.solved_by = k;
+                }
+                s.work = work;
+                return Solve {
+                    result: Ok(s),
+                    work,
+                    numerical,
+                };
+            }
+        }
+    }
+    let result = match best {
+        Some(mut b) => {
+            if let Some(n) = &mut numerical {
+                n.from_failed = true;
+            }
+            b.optimal = false;
+            b.work = work;
+            Ok(b)
+        }
+        None if limits.nodes.is_some_and(|n| work >= n) => Err(LpError::NodeLimit(work)),
+        None => Err(LpError::Other(last_err)),
+    };
+    Solve {
+        result,
+        work,
+        numerical,
+    }
+}
+
+/// Why one attempt failed: a result of the problem (a verdict, a limit,
+/// bad input), or the solver (with the best solution it had found).
+enum Failed {
+    Lp(LpError),
+    Solver(String, Option<LpSolution>),
+}
+
+struct Attempt {
+    result: Result<LpSolution, Failed>,
+    work: u64,
+}
+
+fn solve_once(lp: &Lp, solver: SolverKind, limits: Limits) -> Attempt {
     match solver {
         SolverKind::Microlp => solve_microlp(lp, limits),
         SolverKind::Highs => {
@@ -227,13 +392,25 @@ pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Result<LpSolution, 
             let r = solve_highs(lp, pv, vars, obj, limits);
             // HiGHS reports a time-limited solve without a solution as
             // "infeasible"; that is not a proof.
-            match (r, limits.time) {
+            let r = match (r, limits.time) {
                 (Err(LpError::Infeasible), Some(t))
                     if started.elapsed().as_secs_f64() >= 0.5 * t =>
                 {
                     Err(LpError::TimeLimit)
                 }
                 (r, _) => r,
+            };
+            let work = match &r {
+                Ok(s) => s.work,
+                Err(LpError::NodeLimit(w)) => *w,
+                Err(_) => 1,
+            };
+            Attempt {
+                result: r.map_err(|e| match e {
+                    LpError::Other(m) => Failed::Solver(m, None),
+                    e => Failed::Lp(e),
+                }),
+                work,
             }
         }
     }
@@ -244,10 +421,18 @@ pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Result<LpSolution, 
 /// then) is counted to within this many nodes.
 const NODE_CHUNK: u64 = 64;
 
+/// Nodes per microlp call without a node limit: between calls the best
+/// solution so far is kept, for when a later call fails numerically.
+const FREE_CHUNK: u64 = 1024;
+
 /// microlp directly (not through good_lp), for its deterministic node limit
 /// and node count.
-fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
+fn solve_microlp(lp: &Lp, limits: Limits) -> Attempt {
     use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem, SolveOutcome};
+    let fail = |e: LpError| Attempt {
+        result: Err(Failed::Lp(e)),
+        work: 1,
+    };
     let mut p = Problem::new(OptimizationDirection::Minimize);
     let mut obj = vec![0.0; lp.vars.len()];
     // Repeated objective terms add up.
@@ -260,14 +445,14 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
             let (lo, hi) = (d.lo.ceil(), d.hi.floor());
             let range = i32::MIN as f64..=i32::MAX as f64;
             if !range.contains(&lo) || !range.contains(&hi) {
-                return Err(LpError::TooLarge {
+                return fail(LpError::TooLarge {
                     var: k,
                     lo: d.lo,
                     hi: d.hi,
                 });
             }
             if lo > hi {
-                return Err(LpError::Infeasible);
+                return fail(LpError::Infeasible);
             }
             vars.push(p.add_integer_var(obj[k], (lo as i32, hi as i32)));
         } else {
@@ -290,7 +475,7 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
             if ok {
                 continue;
             }
-            return Err(LpError::Infeasible);
+            return fail(LpError::Infeasible);
         }
         let mut e = LinearExpr::empty();
         // Zero coefficients (a big-M the domains made 0) upset microlp's pivoting.
@@ -311,52 +496,97 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Result<LpSolution, LpError> {
         std::time::Duration::try_from_secs_f64(t.max(0.01)).unwrap_or(std::time::Duration::MAX)
     });
     let mut left = limits.nodes;
-    let chunk = |left: Option<u64>| left.map(|l| l.min(NODE_CHUNK));
+    let chunk = |left: Option<u64>| Some(left.map_or(FREE_CHUNK, |l| l.min(NODE_CHUNK)));
     opts.node_limit = chunk(left);
-    let map_err = |e: microlp::Error| match e {
-        microlp::Error::Infeasible => LpError::Infeasible,
-        microlp::Error::Unbounded => LpError::Unbounded,
-        other => LpError::Other(other.to_string()),
+    let solution = |sol: &microlp::Solution, work: u64| {
+        let values: Vec<f64> = vars.iter().map(|&v| sol.var_value(v)).collect();
+        let objective = lp.obj.iter().map(|&(i, c)| c * values[i]).sum::<f64>() + lp.obj_const;
+        LpSolution {
+            values,
+            objective,
+            optimal: sol.status() == microlp::SolutionStatus::Optimal,
+            work,
+        }
     };
+    // Nodes done by the calls so far, and the best solution they found.
     let mut done: u64 = 0;
-    let mut out = p.solve_with(opts).map_err(map_err)?;
+    let mut best: Option<LpSolution> = None;
+    // A call that fails is charged in full (microlp reports no count then).
+    let failed = |e: microlp::Error, done: u64, best: Option<LpSolution>, charge: u64| {
+        let work = 1 + done + charge;
+        let result = match e {
+            // A verdict is charged one unit, as a solve.
+            microlp::Error::Infeasible => Err(Failed::Lp(LpError::Infeasible)),
+            microlp::Error::Unbounded => Err(Failed::Lp(LpError::Unbounded)),
+            other => Err(Failed::Solver(
+                other.to_string(),
+                best.map(|mut b| {
+                    b.optimal = false;
+                    b.work = work;
+                    b
+                }),
+            )),
+        };
+        let work = if matches!(result, Err(Failed::Lp(_))) {
+            1
+        } else {
+            work
+        };
+        Attempt { result, work }
+    };
+    let started = std::time::Instant::now();
+    let mut out = match p.solve_with(opts) {
+        Ok(o) => o,
+        Err(e) => return failed(e, 0, None, chunk(left).unwrap_or(0)),
+    };
     loop {
         let nodes = out.stats().nodes_solved;
         let by_nodes = out.termination_reason() == microlp::TerminationReason::NodeLimit;
-        if let (true, Some(l)) = (by_nodes, left) {
-            let used = nodes - done;
-            done = nodes;
-            let l = l.saturating_sub(used);
-            left = Some(l);
-            if l > 0 {
+        let used = nodes - done;
+        done = nodes;
+        if let SolveOutcome::Solution(sol) = &out {
+            best = Some(solution(sol, 1 + nodes));
+        }
+        if by_nodes {
+            let more = match left {
+                Some(l) => {
+                    let l = l.saturating_sub(used);
+                    left = Some(l);
+                    l > 0
+                }
+                None => true,
+            };
+            if more {
                 // Go on with a fresh chunk (counted exactly: a chunk that
                 // ends in a proof of infeasibility is charged in full).
                 let mut r = out.last_resume_options();
                 r.node_limit = chunk(left);
+                // The time limit is for the whole solve, not per call.
+                r.time_limit = limits.time.map(|t| {
+                    std::time::Duration::try_from_secs_f64(
+                        (t - started.elapsed().as_secs_f64()).max(0.01),
+                    )
+                    .unwrap_or(std::time::Duration::MAX)
+                });
+                let charge = r.node_limit.unwrap_or(0);
                 out = match out.resume_with(r) {
                     Ok(o) => o,
-                    Err(microlp::Error::Infeasible) => return Err(LpError::Infeasible),
-                    Err(e) => return Err(map_err(e)),
+                    Err(e) => return failed(e, done, best, charge),
                 };
                 continue;
             }
         }
         let work = 1 + nodes;
-        return match out {
-            SolveOutcome::Solution(sol) => {
-                let values: Vec<f64> = vars.iter().map(|&v| sol.var_value(v)).collect();
-                let objective =
-                    lp.obj.iter().map(|&(i, c)| c * values[i]).sum::<f64>() + lp.obj_const;
-                Ok(LpSolution {
-                    values,
-                    objective,
-                    optimal: sol.status() == microlp::SolutionStatus::Optimal,
-                    work,
-                })
+        let result = match out {
+            SolveOutcome::Solution(_) => {
+                let mut b = best.take().expect("a solution outcome was recorded");
+                b.work = work;
+                Ok(b)
             }
-            SolveOutcome::Interrupted(_) if by_nodes => Err(LpError::NodeLimit(work)),
-            SolveOutcome::Interrupted(_) => Err(LpError::TimeLimit),
+            SolveOutcome::Interrupted(_) if by_nodes => Err(Failed::Lp(LpError::NodeLimit(work))),
+            SolveOutcome::Interrupted(_) => Err(Failed::Lp(LpError::TimeLimit)),
         };
+        return Attempt { result, work };
     }
 }
 
@@ -424,7 +654,7 @@ mod tests {
         lp.obj = vec![(x, -1.0), (y, -2.0)];
         lp.row(vec![(x, 1.0), (y, 2.0)], Cmp::Le, 4.0);
         lp.row(vec![(x, 3.0), (y, 1.0)], Cmp::Le, 6.0);
-        match solve(&lp, SolverKind::Microlp, Limits::default()) {
+        match solve(&lp, SolverKind::Microlp, Limits::default()).result {
             Ok(s) => {
                 assert!((s.objective + 4.0).abs() < 1e-9);
                 assert!(s.optimal);
@@ -439,7 +669,9 @@ mod tests {
         let x = lp.var(0.0, 1.0, true);
         lp.row(vec![(x, 1.0)], Cmp::Ge, 2.0);
         assert_eq!(
-            solve(&lp, SolverKind::Microlp, Limits::default()).err(),
+            solve(&lp, SolverKind::Microlp, Limits::default())
+                .result
+                .err(),
             Some(LpError::Infeasible)
         );
     }

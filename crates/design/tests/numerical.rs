@@ -1,0 +1,136 @@
+//! Issue 14: a numerical failure of the solver is not the user's error.
+//!
+//! Cleanflight's design problems in sound mode make microlp hit a singular
+//! basis ("Singular matrix") in some master problems. `design` must still
+//! answer: no error, a status among optimal / feasible / unknown, any design
+//! verified by the analysis, and a note saying what happened when the
+//! solver failed. Each problem runs under a bounded budget (< 60 s in
+//! release; debug builds are much slower).
+
+use rtpipe_analysis::analyze;
+use rtpipe_design::{design, utilization, Mode, Options, Outcome, Status};
+use rtpipe_model::Spec;
+
+fn example(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn parse(name: &str, source: &str) -> Spec {
+    Spec::parse(name, source).unwrap_or_else(|e| panic!("{name}: {e:?}"))
+}
+
+/// Designs in sound mode and checks the outcome.
+fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
+    assert_eq!(opts.mode, Mode::Sound);
+    let o = design(spec, &opts).unwrap_or_else(|e| panic!("{name}: error {e} ({:?})", e.kind));
+    println!(
+        "{name}: {} U = {:?} gap {:?} after {} masters in {:.1} s; notes {:?}",
+        o.status.name(),
+        o.objective,
+        o.gap,
+        o.iterations,
+        o.seconds,
+        o.notes
+    );
+    assert!(
+        matches!(
+            o.status,
+            Status::Optimal | Status::Feasible | Status::Unknown
+        ),
+        "{name}: {}",
+        o.status.name()
+    );
+    if matches!(o.status, Status::Optimal | Status::Feasible) {
+        assert!(o.spec.is_some(), "{name}: a design is reported");
+    }
+    if let Some(s) = &o.spec {
+        let report = analyze(s);
+        assert!(
+            report.all_ok(),
+            "{name}: the design fails the sound analysis"
+        );
+        let u = utilization(s);
+        assert!(
+            o.objective.is_some_and(|x| (x - u).abs() <= 1e-12),
+            "{name}: objective {:?} is not the design's utilisation {u}",
+            o.objective
+        );
+        if let Some(lb) = o.lower_bound {
+            assert!(lb <= u + 1e-9, "{name}: lower bound {lb} above {u}");
+        }
+    }
+    o
+}
+
+fn numerical_note(o: &Outcome) -> bool {
+    o.notes.iter().any(|n| n.contains("failed numerically"))
+}
+
+/// The derived-limits problem: the first master solves (67,000 nodes), the
+/// second makes microlp's basis singular at once. A small work budget keeps
+/// the rest short and the run deterministic.
+#[test]
+fn cleanflight_derived_recovers_from_a_singular_basis() {
+    let spec = parse(
+        "cleanflight-derived.toml",
+        &example("cleanflight-derived.toml"),
+    );
+    let o = check(
+        "cleanflight-derived",
+        &spec,
+        Options {
+            patience: Some(5_000),
+            ..Options::default()
+        },
+    );
+    // The reproducer of issue 14: the second master fails numerically.
+    assert!(o.iterations >= 2, "{}", o.iterations);
+    assert!(
+        numerical_note(&o),
+        "no note on the numerical failure: {:?}",
+        o.notes
+    );
+    assert_eq!(o.status, Status::Feasible);
+}
+
+#[test]
+fn cleanflight_design_never_crashes() {
+    let spec = parse(
+        "cleanflight-design.toml",
+        &example("cleanflight-design.toml"),
+    );
+    check(
+        "cleanflight-design",
+        &spec,
+        Options {
+            time_limit: Some(15.0),
+            ..Options::default()
+        },
+    );
+}
+
+/// The same with non-zero transfers (16 data units on both channels at
+/// bandwidth 1, 5 µs overhead: 21 µs per transfer) and budgets raised to
+/// cover them.
+#[test]
+fn cleanflight_design_with_transfers_never_crashes() {
+    let src = example("cleanflight-design.toml")
+        .replace("size = 0", "size = 16")
+        .replace("overhead = 0", "overhead = 5")
+        .replace("\nbudget = 200\n", "\nbudget = 250\n")
+        .replace("\nbudget = 100\n", "\nbudget = 150\n")
+        .replace("\nbudget = 1000\n", "\nbudget = 1050\n");
+    assert!(src.contains("size = 16") && !src.contains("budget = 200"));
+    let spec = parse("cleanflight-design (transfers)", &src);
+    check(
+        "cleanflight-design with transfers",
+        &spec,
+        Options {
+            time_limit: Some(15.0),
+            ..Options::default()
+        },
+    );
+}
