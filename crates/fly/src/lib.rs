@@ -183,14 +183,12 @@ pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, FlyError> 
     fly_with_progress(spec, s, exec, None)
 }
 
-/// [`fly`], publishing the simulated time (ns) to `progress` as it goes.
-pub fn fly_with_progress(
-    spec: &Spec,
-    s: &Setup,
-    exec: ExecModel,
-    progress: Option<Arc<AtomicU64>>,
-) -> Result<Flight, FlyError> {
-    let seed = s.world.seed;
+/// One body per task of a spec, in task order.
+type Bodies = Vec<Box<dyn Body<Value>>>;
+
+/// The body of every task (an idle one for a task without `body`) and the
+/// world, both for `s`: what every executor of a flight needs.
+fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), FlyError> {
     let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
     for (t, role) in spec.tasks.iter().zip(&s.roles) {
         let period = t.fixed_period().unwrap_or(0);
@@ -204,8 +202,20 @@ pub fn fly_with_progress(
             None => Box::new(idle),
         });
     }
-    let mut world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
+    let world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
         .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    Ok((bodies, world))
+}
+
+/// [`fly`], publishing the simulated time (ns) to `progress` as it goes.
+pub fn fly_with_progress(
+    spec: &Spec,
+    s: &Setup,
+    exec: ExecModel,
+    progress: Option<Arc<AtomicU64>>,
+) -> Result<Flight, FlyError> {
+    let seed = s.world.seed;
+    let (mut bodies, mut world) = bodies_and_world(spec, s)?;
     if let Some(p) = progress {
         world.report_progress(p);
     }
@@ -242,21 +252,7 @@ pub fn fly_real(
     s: &Setup,
     cfg: &rtpipe_runtime::RunConfig,
 ) -> Result<(Flight, rtpipe_runtime::RunResult), FlyError> {
-    let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
-    for (t, role) in spec.tasks.iter().zip(&s.roles) {
-        let period = t.fixed_period().unwrap_or(0);
-        bodies.push(match role {
-            Some(r) => body(*r, period, &s.preset).map_err(|e| {
-                FlyError::new(
-                    format!("task `{}` (body {}): {e}", t.name, r.name()),
-                    "give it a fixed period the body can run at",
-                )
-            })?,
-            None => Box::new(idle),
-        });
-    }
-    let world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
-        .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+    let (bodies, world) = bodies_and_world(spec, s)?;
     let world = std::sync::Mutex::new(world);
     let res = rtpipe_runtime::run(spec, cfg, bodies, Some(&world))
         .map_err(|e| FlyError::new(e.msg, e.help))?;
