@@ -1154,8 +1154,8 @@ impl<'a> Runner<'a> {
         let mut hint = None;
         if let (Some(p), SolverKind::Microlp) = (&self.start_periods, self.opts.solver) {
             let mut fixed = m.lp.clone();
-            for i in 0..self.spec.tasks.len() {
-                let t = p[i] / self.g;
+            for (i, &pi) in p.iter().enumerate() {
+                let t = pi / self.g;
                 match &m.dom[i] {
                     Dom::Grid { step, .. } => {
                         if let Some(k) = m.kvar[i] {
