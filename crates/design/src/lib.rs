@@ -469,6 +469,9 @@ pub const EXPLAIN_EFFORT: u64 = 3;
 /// (else each may use all that is left, as the time-bounded search did).
 const FAIR_SHARES: bool = false;
 
+/// Work the starting solution of a master may take.
+const HINT_NODES: u64 = 2_000;
+
 /// Ranges of at most this many grid steps get every tangent up front.
 const DENSE_TANGENTS: i64 = 128;
 
@@ -594,6 +597,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
             .collect(),
         numerical: NumLog::default(),
+        start_periods: None,
     };
     let mut o = run.solve_all()?;
     o.notes.splice(0..0, notes);
@@ -746,6 +750,9 @@ struct Runner<'a> {
     on_chain: Vec<bool>,
     /// Numerical failures of the solver and what became of them.
     numerical: NumLog,
+    /// The best verified design's periods (ns): a starting solution for
+    /// microlp's branch and bound.
+    start_periods: Option<Vec<Nanos>>,
 }
 
 /// Master problems on which the solver failed numerically (`lp::solve`
@@ -1140,11 +1147,60 @@ impl<'a> Runner<'a> {
                 m.lp.rows.len()
             );
         }
+        // A complete starting solution: the master with every period fixed
+        // to the best verified design's (a small MILP: the periods decide
+        // most binaries), so that branch and bound can prune by bound from
+        // the start.
+        let mut hint = None;
+        if let (Some(p), SolverKind::Microlp) = (&self.start_periods, self.opts.solver) {
+            let mut fixed = m.lp.clone();
+            for (i, &pi) in p.iter().enumerate() {
+                let t = pi / self.g;
+                match &m.dom[i] {
+                    Dom::Grid { step, .. } => {
+                        if let Some(k) = m.kvar[i] {
+                            let k0 = (t / step) as f64;
+                            fixed.vars[k].lo = k0;
+                            fixed.vars[k].hi = k0;
+                        }
+                    }
+                    Dom::Choice(v) => {
+                        for (x, &y) in m.yvars[i].iter().enumerate() {
+                            let on = if v[x] == t { 1.0 } else { 0.0 };
+                            fixed.vars[y].lo = on;
+                            fixed.vars[y].hi = on;
+                        }
+                    }
+                    Dom::Fixed(_) => {}
+                }
+            }
+            let s = lp::solve(
+                &fixed,
+                self.opts.solver,
+                Limits {
+                    time: left.time,
+                    nodes: Some(HINT_NODES.min(left.nodes.unwrap_or(u64::MAX))),
+                },
+            );
+            self.work = self.work.saturating_add(s.work);
+            if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+                eprintln!(
+                    "master: starting solution {:?} (work {})",
+                    s.result.as_ref().map(|x| x.objective),
+                    s.work
+                );
+            }
+            hint = s.result.ok().map(|x| x.values);
+        }
+        let left = Limits {
+            time: self.opts.time_limit.map(|t| (t - self.elapsed()).max(0.01)),
+            nodes: self.work_cap.map(|c| c.saturating_sub(self.work)),
+        };
         let lp::Solve {
             result: solved,
             work,
             numerical,
-        } = lp::solve(&m.lp, self.opts.solver, left);
+        } = lp::solve_hinted(&m.lp, self.opts.solver, left, hint.as_deref());
         self.work = self.work.saturating_add(work);
         self.numerical.last_skipped = false;
         if let Some(n) = &numerical {
@@ -1526,6 +1582,15 @@ impl<'a> Runner<'a> {
                 break;
             }
             self.iterations += 1;
+            self.start_periods = incumbent
+                .as_ref()
+                .filter(|_| std::env::var_os("RTPIPE_NO_HINT").is_none())
+                .map(|x| {
+                    x.0.tasks
+                        .iter()
+                        .map(|t| t.fixed_period().unwrap_or(0))
+                        .collect()
+                });
             self.say(|| {
                 let best = incumbent.as_ref().map_or(String::new(), |(_, _, u)| {
                     format!(", best verified U = {u:.4}")
@@ -1997,6 +2062,7 @@ impl<'a> Runner<'a> {
                 levels: me.levels.clone(),
                 on_chain: me.on_chain.clone(),
                 numerical: NumLog::default(),
+                start_periods: None,
             };
             let r = sub.probe(core, sound);
             // The sub-search's work counts against the budget.

@@ -271,6 +271,12 @@ const VARIANTS: u32 = 3;
 /// every attempt fails, the best solution any of them had found (not proven
 /// optimal) is the answer, or else the error.
 pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Solve {
+    solve_hinted(lp, solver, limits, None)
+}
+
+/// [`solve`] with a starting solution for microlp (a complete assignment;
+/// ignored when it does not satisfy the rows, and by HiGHS).
+pub fn solve_hinted(lp: &Lp, solver: SolverKind, limits: Limits, hint: Option<&[f64]>) -> Solve {
     let started = std::time::Instant::now();
     let mut work: u64 = 0;
     let mut numerical: Option<Numerical> = None;
@@ -299,7 +305,7 @@ pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Solve {
             v = variant(lp, k);
             &v
         };
-        let attempt = solve_once(problem, solver, left);
+        let attempt = solve_once(problem, solver, left, hint);
         work = work.saturating_add(attempt.work);
         match attempt.result {
             Err(Failed::Solver(msg, found)) => {
@@ -383,9 +389,9 @@ struct Attempt {
     work: u64,
 }
 
-fn solve_once(lp: &Lp, solver: SolverKind, limits: Limits) -> Attempt {
+fn solve_once(lp: &Lp, solver: SolverKind, limits: Limits, hint: Option<&[f64]>) -> Attempt {
     match solver {
-        SolverKind::Microlp => solve_microlp(lp, limits),
+        SolverKind::Microlp => solve_microlp(lp, limits, hint),
         SolverKind::Highs => {
             let started = std::time::Instant::now();
             let (pv, vars, obj) = build(lp);
@@ -427,7 +433,7 @@ const FREE_CHUNK: u64 = 1024;
 
 /// microlp directly (not through good_lp), for its deterministic node limit
 /// and node count.
-fn solve_microlp(lp: &Lp, limits: Limits) -> Attempt {
+fn solve_microlp(lp: &Lp, limits: Limits, hint: Option<&[f64]>) -> Attempt {
     use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem, SolveOutcome};
     let fail = |e: LpError| Attempt {
         result: Err(Failed::Lp(e)),
@@ -495,6 +501,9 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Attempt {
     opts.time_limit = limits.time.map(|t| {
         std::time::Duration::try_from_secs_f64(t.max(0.01)).unwrap_or(std::time::Duration::MAX)
     });
+    if let Some(h) = hint.filter(|h| h.len() == vars.len()) {
+        opts.warm_start = Some(vars.iter().copied().zip(h.iter().copied()).collect());
+    }
     let mut left = limits.nodes;
     let chunk = |left: Option<u64>| Some(left.map_or(FREE_CHUNK, |l| l.min(NODE_CHUNK)));
     opts.node_limit = chunk(left);
@@ -546,6 +555,16 @@ fn solve_microlp(lp: &Lp, limits: Limits) -> Attempt {
         done = nodes;
         if let SolveOutcome::Solution(sol) = &out {
             best = Some(solution(sol, 1 + nodes));
+        }
+        if nodes / 16384 != (nodes - used) / 16384 && std::env::var_os("RTPIPE_LP_DEBUG").is_some()
+        {
+            let st = out.stats();
+            eprintln!(
+                "  microlp: {nodes} nodes, incumbent {:?}, bound {:?}, {:.1} s",
+                best.as_ref().map(|b| b.objective),
+                st.best_bound,
+                started.elapsed().as_secs_f64()
+            );
         }
         if by_nodes {
             let more = match left {
