@@ -200,16 +200,21 @@ fn opt(spec: &Spec, v: Option<Nanos>) -> String {
     }
 }
 
-pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
-    let mut out = String::new();
-    out.push_str(&format!(
-        "system {}: {} tasks, {} chains; times in {}; scheduler {}\n\n",
+/// The first line of every report: the system, its size, unit and scheduler.
+pub fn system_line(spec: &Spec) -> String {
+    format!(
+        "system {}: {} tasks, {} chains; times in {}; scheduler {}\n",
         spec.name,
         spec.tasks.len(),
         spec.chains.len(),
         spec.time_unit,
         spec.scheduler.name()
-    ));
+    )
+}
+
+pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
+    let mut out = system_line(spec);
+    out.push('\n');
     let mut t = Table::new(&[
         "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T", "C/T",
         "R(C)", "R(job)",

@@ -260,13 +260,7 @@ fn to_text(
     flight: bool,
 ) -> String {
     let u = spec.time_unit;
-    let mut out = format!(
-        "system {}: {} tasks, {} chains; times in {u}; scheduler {}\n",
-        spec.name,
-        spec.tasks.len(),
-        spec.chains.len(),
-        spec.scheduler.name()
-    );
+    let mut out = crate::analyze::system_line(spec);
     let rt = if res.policy == Policy::Other {
         " -- NOT REAL-TIME (best effort): no figure below is a real-time measurement"
     } else {

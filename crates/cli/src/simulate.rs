@@ -846,13 +846,7 @@ fn to_text(
     seconds: f64,
 ) -> String {
     let u = spec.time_unit;
-    let mut out = format!(
-        "system {}: {} tasks, {} chains; times in {u}; scheduler {}\n",
-        spec.name,
-        spec.tasks.len(),
-        spec.chains.len(),
-        spec.scheduler.name()
-    );
+    let mut out = crate::analyze::system_line(spec);
     let span = match p.outputs {
         Some(n) => format!(", >= {n} outputs of every chain's tail"),
         None => String::new(),
