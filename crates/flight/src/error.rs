@@ -30,6 +30,13 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
+/// The text of a user's configuration file (a preset or a mission); an
+/// error names the file.
+pub fn read_file(path: &std::path::Path) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path)
+        .map_err(|e| ConfigError::new(path.display().to_string(), e.to_string()))
+}
+
 /// Ok if `v` is finite and `v > 0`, else an error naming `field`.
 pub fn positive(field: &str, v: f64) -> Result<f64, ConfigError> {
     if v.is_finite() && v > 0.0 {

@@ -53,9 +53,7 @@ impl Preset {
 
     /// Read a user preset file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
-        let src = std::fs::read_to_string(path)
-            .map_err(|e| ConfigError::new(path.display().to_string(), e.to_string()))?;
-        Self::from_toml_str(&src)
+        Self::from_toml_str(&crate::error::read_file(path)?)
     }
 
     /// A built-in preset by name.

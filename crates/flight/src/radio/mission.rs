@@ -234,9 +234,7 @@ impl Mission {
 
     /// Read and parse a mission file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
-        let src = std::fs::read_to_string(path)
-            .map_err(|e| ConfigError::new(path.display().to_string(), e.to_string()))?;
-        Self::from_toml_str(&src)
+        Self::from_toml_str(&crate::error::read_file(path)?)
     }
 
     /// A built-in mission by name (`hover`, `steps`, `paper`).
