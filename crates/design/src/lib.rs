@@ -15,6 +15,7 @@ use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{ChainResult, Metric, Report};
 use rtpipe_model::{format_in, Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec, MAX_TIME};
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -54,6 +55,23 @@ pub struct Options {
     pub patience: Option<u64>,
     /// Where the search says what it is doing, for a progress display.
     pub progress: Option<Arc<Mutex<String>>>,
+    /// Set from outside (Ctrl-C) to stop the search as its time limit would.
+    pub cancel: Option<Arc<AtomicBool>>,
+    /// Where the search publishes every better verified design as it finds
+    /// it, so that a caller can still report the best one when it stops
+    /// waiting (Ctrl-C).
+    pub incumbent: Option<Arc<Mutex<Option<Incumbent>>>>,
+}
+
+/// A verified design found during the search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Incumbent {
+    /// Period of every task (ns), in declaration order.
+    pub periods: Vec<Nanos>,
+    /// Its Σ C/T.
+    pub utilization: f64,
+    /// The best proven lower bound on the optimum when it was found.
+    pub lower_bound: Option<f64>,
 }
 
 impl Default for Options {
@@ -65,6 +83,8 @@ impl Default for Options {
             max_iterations: 500,
             patience: Some(EXACT_PATIENCE),
             progress: None,
+            cancel: None,
+            incumbent: None,
         }
     }
 }
@@ -863,7 +883,11 @@ impl<'a> Runner<'a> {
     }
 
     fn out_of_time(&self) -> bool {
-        self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
+        self.opts
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+            || self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
             || self.work_cap.is_some_and(|c| self.work >= c)
     }
 
