@@ -13,6 +13,7 @@
 
 pub mod latency;
 pub mod paths;
+pub mod relax;
 pub mod sched;
 
 pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Case, ChainAnalysis, ChainBound};

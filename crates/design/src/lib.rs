@@ -8,6 +8,7 @@
 //! Every answer is re-checked by `rtpipe_analysis::analyze` before it is
 //! returned; the [`Outcome`] carries that report.
 
+mod bnb;
 pub mod lp;
 
 use lp::{Cmp, Limits, Lp, LpError, SolverKind};
@@ -37,9 +38,34 @@ impl Mode {
     }
 }
 
+/// How the exact search runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// The box search where it applies (sound mode, periods not harmonic),
+    /// the MILP otherwise.
+    Auto,
+    /// Branch and bound over boxes of periods, pruned by the sound
+    /// analysis' relaxation (`bnb.rs`; sound mode only).
+    Boxes,
+    /// The mixed-integer model of docs/design.md, solved by `solver`.
+    Milp,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Auto => "auto",
+            Method::Boxes => "boxes",
+            Method::Milp => "milp",
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Options {
     pub mode: Mode,
+    pub method: Method,
+    /// The MILP's solver.
     pub solver: SolverKind,
     /// Wall-clock limit for the whole search, in seconds. Without it the
     /// search is bounded by work only, so its answer is the same on every
@@ -78,6 +104,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             mode: Mode::Sound,
+            method: Method::Auto,
             solver: SolverKind::Microlp,
             time_limit: None,
             max_iterations: 500,
@@ -133,9 +160,14 @@ pub struct Outcome {
     pub lower_bound: Option<f64>,
     /// (objective − lower bound) / objective.
     pub gap: Option<f64>,
+    /// The search that ran: [`Method::Boxes`] or [`Method::Milp`].
+    pub method: Method,
     pub solver: SolverKind,
     pub seconds: f64,
+    /// Master solves (MILP) or boxes examined (box search).
     pub iterations: usize,
+    /// The most boxes the box search held open at once (memory).
+    pub peak_open: usize,
     pub conflicts: Vec<Conflict>,
     pub notes: Vec<String>,
 }
@@ -596,6 +628,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     if spec.harmonic {
         harmonic_domains(spec, &mut dom, &mut notes)?;
     }
+    let boxes = choose_method(spec, opts)?;
     let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
     let max_limit = gu(horizon, g);
     let big_m = 4.0 * (max_t + max_limit) + 10.0;
@@ -618,10 +651,29 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             .collect(),
         numerical: NumLog::default(),
         start_periods: None,
+        boxes,
     };
-    let mut o = run.solve_all()?;
+    let mut o = if boxes {
+        run.solve_boxes()?
+    } else {
+        run.solve_all()?
+    };
     o.notes.splice(0..0, notes);
     Ok(o)
+}
+
+/// Whether the box search runs (true) or the MILP.
+fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
+    let fits = opts.mode == Mode::Sound && !spec.harmonic;
+    match opts.method {
+        Method::Auto => Ok(fits),
+        Method::Milp => Ok(false),
+        Method::Boxes if fits => Ok(true),
+        Method::Boxes => Err(DesignError::input(
+            "the box search designs in sound mode without `harmonic = true` only",
+        )
+        .help("use --method milp (or leave --method out)")),
+    }
 }
 
 /// Most candidate periods a free task keeps under `harmonic = true` before
@@ -773,6 +825,8 @@ struct Runner<'a> {
     /// The best verified design's periods (ns): a starting solution for
     /// microlp's branch and bound.
     start_periods: Option<Vec<Nanos>>,
+    /// The box search decides (`bnb.rs`), not the MILP.
+    boxes: bool,
 }
 
 /// Master problems on which the solver failed numerically (`lp::solve`
@@ -1880,9 +1934,15 @@ impl<'a> Runner<'a> {
             objective: None,
             lower_bound,
             gap: None,
+            method: if self.boxes {
+                Method::Boxes
+            } else {
+                Method::Milp
+            },
             solver: self.opts.solver,
             seconds: self.elapsed(),
             iterations: self.iterations,
+            peak_open: 0,
             conflicts,
             notes,
         }
@@ -1921,6 +1981,9 @@ impl<'a> Runner<'a> {
     /// valid everywhere and kept.
     /// `None` when it could not be decided (time or iteration limit).
     fn probe(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Option<bool> {
+        if self.boxes {
+            return self.probe_boxes(groups);
+        }
         let mut sm = sound.cloned();
         for _ in 0..100 {
             if self.out_of_time() {
@@ -2087,6 +2150,7 @@ impl<'a> Runner<'a> {
                 on_chain: me.on_chain.clone(),
                 numerical: NumLog::default(),
                 start_periods: None,
+                boxes: me.boxes,
             };
             let r = sub.probe(core, sound);
             // The sub-search's work counts against the budget.
