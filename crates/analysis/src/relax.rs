@@ -41,6 +41,8 @@ struct Order<'a> {
     spec: &'a Spec,
     lo: &'a [Nanos],
     hi: &'a [Nanos],
+    /// Rank orders imposed besides the box: (a, b) = a above b.
+    imposed: &'a [(usize, usize)],
 }
 
 impl Order<'_> {
@@ -54,7 +56,7 @@ impl Order<'_> {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && (self.hi[a], a) < (self.lo[b], b)
+            && ((self.hi[a], a) < (self.lo[b], b) || self.imposed.contains(&(a, b)))
     }
 
     /// `a` has the higher RM rank at some point of the box.
@@ -63,6 +65,7 @@ impl Order<'_> {
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
             && (self.lo[a], a) < (self.hi[b], b)
+            && !self.imposed.contains(&(b, a))
     }
 
     /// `j` runs above `i` at every point (`sched::interferers`): its own rank
@@ -117,15 +120,22 @@ impl Order<'_> {
 }
 
 /// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
-/// (ns, one entry per task; background tasks' entries are ignored).
-pub fn relax(spec: &Spec, lo: &[Nanos], hi: &[Nanos]) -> Relaxed {
+/// (ns, one entry per task; background tasks' entries are ignored) at which
+/// every pair `(a, b)` of `imposed` has a ranked above b (RM: (T_a, a) <
+/// (T_b, b)), for a search that branches on priority orders too.
+pub fn relax(spec: &Spec, lo: &[Nanos], hi: &[Nanos], imposed: &[(usize, usize)]) -> Relaxed {
     let n = spec.tasks.len();
     assert!(lo.len() == n && hi.len() == n, "relax: one interval per task");
     assert!(
         (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
         "relax: empty or non-positive period interval"
     );
-    let order = Order { spec, lo, hi };
+    let order = Order {
+        spec,
+        lo,
+        hi,
+        imposed,
+    };
     let cpus = cpu_ids(spec);
     let util_ok = |cpu: u32| {
         let us = cpu_utilizations(spec, hi, cpu);

@@ -100,7 +100,7 @@ fn a_point_box_is_the_analysis() {
     for seed in 0..SYSTEMS {
         let spec = with_test(random_system(seed, &config(seed)), seed);
         let t = periods(&spec);
-        let r = relax(&spec, &t, &t);
+        let r = relax(&spec, &t, &t, &[]);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         bounds_point(&r, &spec, &analyze(&spec), &format!("seed {seed}"), true);
     }
@@ -119,7 +119,7 @@ fn a_box_bounds_every_point_inside_from_below() {
         // A box around the generated periods, up to halving and doubling.
         let lo: Vec<Nanos> = t.iter().map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1)).collect();
         let hi: Vec<Nanos> = t.iter().map(|&p| p + (rng.unit() * p as f64) as Nanos).collect();
-        let r = relax(&spec, &lo, &hi);
+        let r = relax(&spec, &lo, &hi, &[]);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         for probe in 0..8 {
             let point: Vec<Nanos> = (0..t.len())
@@ -135,7 +135,7 @@ fn a_box_bounds_every_point_inside_from_below() {
         }
         // A sub-box never has lower figures.
         let mid: Vec<Nanos> = (0..t.len()).map(|i| lo[i] + (hi[i] - lo[i]) / 2).collect();
-        for sub in [relax(&spec, &lo, &mid), relax(&spec, &mid, &hi)] {
+        for sub in [relax(&spec, &lo, &mid, &[]), relax(&spec, &mid, &hi, &[])] {
             for (a, b) in r.chains.iter().zip(&sub.chains) {
                 assert!(below(a.0, b.0) && below(a.1, b.1), "seed {seed}: a sub-box lowered a chain");
             }
@@ -143,4 +143,42 @@ fn a_box_bounds_every_point_inside_from_below() {
     }
     assert_eq!(checked, 8 * SYSTEMS);
     assert!(bounded > SYSTEMS as usize / 2, "only {bounded} bounded chains over boxes");
+}
+
+/// With rank orders imposed, the box bounds every point inside that has
+/// those orders (here: the orders of one random point).
+#[test]
+fn imposed_orders_bound_the_points_that_have_them() {
+    for seed in 0..SYSTEMS {
+        let spec = with_test(random_system(seed, &config(seed)), seed);
+        if spec.scheduler != Scheduler::Rm {
+            continue;
+        }
+        let t = periods(&spec);
+        let mut rng = Rng::new(seed ^ 0xabc);
+        let lo: Vec<Nanos> = t.iter().map(|&p| (p / 2).max(1)).collect();
+        let hi: Vec<Nanos> = t.iter().map(|&p| 2 * p).collect();
+        let point: Vec<Nanos> = (0..t.len())
+            .map(|i| lo[i] + (rng.unit() * (hi[i] - lo[i]) as f64) as Nanos)
+            .collect();
+        let s = at(&spec, &point);
+        let report = analyze(&s);
+        let mut imposed = Vec::new();
+        for a in 0..t.len() {
+            for b in 0..t.len() {
+                let (pa, pb) = (report.timing[a].priority, report.timing[b].priority);
+                let same = spec.tasks[a].cpu == spec.tasks[b].cpu;
+                if let (Some(x), Some(y), true) = (pa, pb, same) {
+                    if x < y && rng.chance(0.5) {
+                        imposed.push((a, b));
+                    }
+                }
+            }
+        }
+        let r = relax(&spec, &lo, &hi, &imposed);
+        bounds_point(&r, &s, &report, &format!("seed {seed} imposed {imposed:?}"), false);
+        // At the point itself, imposing its own orders changes nothing.
+        let exact = relax(&spec, &point, &point, &imposed);
+        bounds_point(&exact, &s, &report, &format!("seed {seed} point"), true);
+    }
 }

@@ -73,6 +73,20 @@ impl Axis {
         }
     }
 
+    /// The last index whose value is at most `t` (`None` when none).
+    fn last_at_most(&self, t: Nanos) -> Option<u32> {
+        let k = match self {
+            Axis::Grid { first, step, len } => {
+                if t < *first {
+                    return None;
+                }
+                ((t - first) / step).min(Nanos::from(*len) - 1) as u32
+            }
+            Axis::List(v) => (v.partition_point(|&x| x <= t) as u32).checked_sub(1)?,
+        };
+        Some(k)
+    }
+
     /// The first index whose value is at least `t` (`len` when none).
     fn first_at_least(&self, t: f64) -> u32 {
         match self {
@@ -94,6 +108,8 @@ impl Axis {
 struct Node {
     lo: Vec<u32>,
     hi: Vec<u32>,
+    /// RM rank orders imposed by branching: (a, b) = a above b.
+    above: Vec<(usize, usize)>,
     bound: f64,
 }
 
@@ -176,9 +192,45 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     /// Some active constraint fails at every point of the box.
-    fn hopeless(&self, lo: &[u32], hi: &[u32]) -> bool {
-        let r = relax(self.run.spec, &self.periods(lo), &self.periods(hi));
+    fn hopeless(&self, node: &Node) -> bool {
+        let r = relax(
+            self.run.spec,
+            &self.periods(&node.lo),
+            &self.periods(&node.hi),
+            &node.above,
+        );
         !self.may_hold(&r)
+    }
+
+    /// Shrinks the box to the points that have the imposed orders (RM:
+    /// a above b ⟺ (T_a, a) < (T_b, b)); false when none is left.
+    fn enforce_orders(&self, node: &mut Node) -> bool {
+        for _ in 0..node.above.len() + 1 {
+            let mut changed = false;
+            for &(a, b) in &node.above {
+                let tie = Nanos::from(a > b);
+                // T_a ≤ T_b − tie: a's top and b's bottom move.
+                let top = self.axes[b].value(node.hi[b]) - tie;
+                match self.axes[a].last_at_most(top) {
+                    Some(k) if k >= node.lo[a] => {
+                        changed |= k < node.hi[a];
+                        node.hi[a] = node.hi[a].min(k);
+                    }
+                    _ => return false,
+                }
+                let bottom = self.axes[a].value(node.lo[a]) + tie;
+                let k = self.axes[b].first_at_least(bottom as f64);
+                if k > node.hi[b] {
+                    return false;
+                }
+                changed |= k > node.lo[b];
+                node.lo[b] = node.lo[b].max(k);
+            }
+            if !changed {
+                return true;
+            }
+        }
+        true
     }
 
     fn may_hold(&self, r: &Relaxed) -> bool {
@@ -225,6 +277,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     fn narrow(&self, node: &mut Node, best: Option<f64>) -> bool {
         for _ in 0..4 {
             let mut changed = false;
+            if !self.enforce_orders(node) {
+                return false;
+            }
             if let Some(u) = best {
                 match self.raise_lows(node, u) {
                     None => return false,
@@ -282,7 +337,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let (lo0, hi0) = (node.lo[i], node.hi[i]);
         let fails_from = |m: u32, node: &mut Node| {
             node.lo[i] = m;
-            let h = self.hopeless(&node.lo, &node.hi);
+            let h = self.hopeless(node);
             node.lo[i] = lo0;
             h
         };
@@ -306,9 +361,61 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         Some(true)
     }
 
-    /// The task to split: the widest utilisation span among the tasks of a
-    /// constraint that the corner fails (any task with room otherwise).
-    fn split_task(&self, node: &Node, report: &Report) -> Option<usize> {
+    /// How to split a box whose corner fails: on the rank order of two
+    /// tasks of a failing constraint that the box leaves open (a response
+    /// time there jumps with the order, which no box split separates), else
+    /// on the period of one task.
+    fn branch(&self, node: &Node, report: &Report) -> Option<(Node, Node)> {
+        let blamed = self.blamed(node, report);
+        if let Some((a, b)) = self.open_order(node, &blamed) {
+            let mut ab = node.clone();
+            ab.above.push((a, b));
+            let mut ba = node.clone();
+            ba.above.push((b, a));
+            return Some((ab, ba));
+        }
+        let i = self.split_task(node, &blamed)?;
+        Some(self.split(node, i))
+    }
+
+    /// A pair on one CPU under RM, one of them blamed, whose order the box
+    /// and the imposed orders leave open: the widest joint span first.
+    fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
+        let spec = self.run.spec;
+        if spec.scheduler != rtpipe_model::Scheduler::Rm {
+            return None;
+        }
+        let ranked = |i: usize| spec.tasks[i].server != Server::Background;
+        let v = |i: usize, k: u32| (self.axes[i].value(k), i);
+        let mut best: Option<((usize, usize), f64)> = None;
+        for a in 0..node.lo.len() {
+            for b in a + 1..node.lo.len() {
+                let open = ranked(a)
+                    && ranked(b)
+                    && (blamed[a] || blamed[b])
+                    && spec.tasks[a].cpu == spec.tasks[b].cpu
+                    && v(a, node.lo[a]) < v(b, node.hi[b])
+                    && v(b, node.lo[b]) < v(a, node.hi[a])
+                    && !node.above.contains(&(a, b))
+                    && !node.above.contains(&(b, a));
+                if open {
+                    let w = self.span(node, a) + self.span(node, b);
+                    if best.is_none_or(|(_, x)| w > x) {
+                        best = Some(((a, b), w));
+                    }
+                }
+            }
+        }
+        best.map(|(p, _)| p)
+    }
+
+    fn span(&self, node: &Node, i: usize) -> f64 {
+        let a = &self.axes[i];
+        self.budget[i] / a.value(node.lo[i]) as f64 - self.budget[i] / a.value(node.hi[i]) as f64
+    }
+
+    /// Tasks of a constraint the corner fails.
+    fn blamed(&self, node: &Node, report: &Report) -> Vec<bool> {
         let spec = self.run.spec;
         let mut blamed = vec![false; node.lo.len()];
         for c in &report.chains {
@@ -321,10 +428,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 blamed[i] |= t.cpu == v.cpu;
             }
         }
-        let span = |i: usize| {
-            let a = &self.axes[i];
-            self.budget[i] / a.value(node.lo[i]) as f64 - self.budget[i] / a.value(node.hi[i]) as f64
-        };
+        blamed
+    }
+
+    /// The task to split: the widest utilisation span among the blamed
+    /// tasks (any task with room otherwise).
+    fn split_task(&self, node: &Node, blamed: &[bool]) -> Option<usize> {
+        let span = |i: usize| self.span(node, i);
         let open = |i: &usize| node.lo[*i] < node.hi[*i];
         let pick = |only_blamed: bool| {
             (0..node.lo.len())
@@ -371,8 +481,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 let u = utilization(&spec);
                 return best.is_none_or(|b| u < b).then_some((spec, report, u));
             }
-            let i = self.split_task(&node, &report)?;
-            node = self.split(&node, i).0;
+            node = self.branch(&node, &report)?.0;
         }
         None
     }
@@ -414,6 +523,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let root = Node {
             lo: vec![0; n],
             hi: self.axes.iter().map(|a| a.len() - 1).collect(),
+            above: Vec::new(),
             bound: 0.0,
         };
         let mut best = seed;
@@ -470,10 +580,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 }
                 continue;
             }
-            let Some(i) = self.split_task(&node, &report) else {
+            let Some((low, high)) = self.branch(&node, &report) else {
                 continue; // a single point that fails
             };
-            let (low, high) = self.split(&node, i);
             open.push(low);
             open.push(high);
             peak_open = peak_open.max(open.len());
