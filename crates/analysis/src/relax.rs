@@ -34,6 +34,32 @@ pub struct Relaxed {
     /// Per declared chain: lower bounds on its sound (reaction, freshness)
     /// from the read; `None` when the chain is unbounded everywhere.
     pub chains: Vec<(Option<Nanos>, Option<Nanos>)>,
+    /// Per declared chain: the two sums that the sound reaction is the
+    /// smaller of (E: reaction links, F: freshness links), as bounds that
+    /// grow linearly with the periods; the sound freshness is F. `None` when
+    /// the chain is unbounded everywhere. Empty unless asked for.
+    pub forms: Vec<Option<(Affine, Affine)>>,
+}
+
+/// A bound that grows linearly with the periods over the box:
+/// `value(T) ≥ base + Σ slope_i · (T_i − lo_i)` at every point T.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Affine {
+    pub base: f64,
+    /// (task, slope ≥ 0); a task may appear more than once.
+    pub slopes: Vec<(usize, f64)>,
+}
+
+impl Affine {
+    /// The bound at periods `t` (ns), with `lo` the box's lower ends.
+    pub fn at(&self, lo: &[Nanos], t: &[Nanos]) -> f64 {
+        self.base
+            + self
+                .slopes
+                .iter()
+                .map(|&(i, s)| s * (t[i] - lo[i]) as f64)
+                .sum::<f64>()
+    }
 }
 
 /// The priority facts a box decides, for one CPU under RM.
@@ -41,11 +67,15 @@ struct Order<'a> {
     spec: &'a Spec,
     lo: &'a [Nanos],
     hi: &'a [Nanos],
-    /// Rank orders imposed besides the box: (a, b) = a above b.
-    imposed: &'a [(usize, usize)],
+    /// Rank orders imposed besides the box: `imposed[a·n + b]` = a above b.
+    imposed: Vec<bool>,
 }
 
 impl Order<'_> {
+    fn is_imposed(&self, a: usize, b: usize) -> bool {
+        !self.imposed.is_empty() && self.imposed[a * self.lo.len() + b]
+    }
+
     fn ranked(&self, a: usize) -> bool {
         let t = &self.spec.tasks[a];
         self.spec.scheduler == Scheduler::Rm && t.server != Server::Background
@@ -56,7 +86,7 @@ impl Order<'_> {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && ((self.hi[a], a) < (self.lo[b], b) || self.imposed.contains(&(a, b)))
+            && ((self.hi[a], a) < (self.lo[b], b) || self.is_imposed(a, b))
     }
 
     /// `a` has the higher RM rank at some point of the box.
@@ -65,7 +95,7 @@ impl Order<'_> {
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
             && (self.lo[a], a) < (self.hi[b], b)
-            && !self.imposed.contains(&(b, a))
+            && !self.is_imposed(b, a)
     }
 
     /// `j` runs above `i` at every point (`sched::interferers`): its own rank
@@ -122,19 +152,34 @@ impl Order<'_> {
 /// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
 /// (ns, one entry per task; background tasks' entries are ignored) at which
 /// every pair `(a, b)` of `imposed` has a ranked above b (RM: (T_a, a) <
-/// (T_b, b)), for a search that branches on priority orders too.
-pub fn relax(spec: &Spec, lo: &[Nanos], hi: &[Nanos], imposed: &[(usize, usize)]) -> Relaxed {
+/// (T_b, b)), for a search that branches on priority orders too. The
+/// affine forms are computed with `forms` only (they cost four link
+/// evaluations each).
+pub fn relax(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    imposed: &[(usize, usize)],
+    forms: bool,
+) -> Relaxed {
     let n = spec.tasks.len();
     assert!(lo.len() == n && hi.len() == n, "relax: one interval per task");
     assert!(
         (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
         "relax: empty or non-positive period interval"
     );
+    let mut matrix = Vec::new();
+    if !imposed.is_empty() {
+        matrix = vec![false; n * n];
+        for &(a, b) in imposed {
+            matrix[a * n + b] = true;
+        }
+    }
     let order = Order {
         spec,
         lo,
         hi,
-        imposed,
+        imposed: matrix,
     };
     let cpus = cpu_ids(spec);
     let util_ok = |cpu: u32| {
@@ -171,11 +216,20 @@ pub fn relax(spec: &Spec, lo: &[Nanos], hi: &[Nanos], imposed: &[(usize, usize)]
         .iter()
         .map(|ch| chain_bounds(spec, &order, &job_response, &ch.path))
         .collect();
+    let forms = match forms {
+        true => spec
+            .chains
+            .iter()
+            .map(|ch| chain_forms(spec, &order, &job_response, &ch.path))
+            .collect(),
+        false => Vec::new(),
+    };
     Relaxed {
         job_response,
         budget_response,
         cpus,
         chains,
+        forms,
     }
 }
 
@@ -262,4 +316,66 @@ fn chain_bounds(
         (e, _) => e,
     };
     (react, fresh)
+}
+
+/// The sums E and F of a chain (see [`chain_bounds`]) as affine bounds over
+/// the box. Each link term is the least of options that grow with unit
+/// slope in T_p or T_c (response times held at their lower bounds), so it is
+/// concave in (T_p, T_c); an affine function below it at the four corners of
+/// the (T_p, T_c) rectangle is below it on the whole rectangle.
+fn chain_forms(
+    spec: &Spec,
+    order: &Order,
+    r: &[Option<Nanos>],
+    path: &[usize],
+) -> Option<(Affine, Affine)> {
+    let (head, tail) = (path[0], path[path.len() - 1]);
+    let mut e = Affine {
+        base: r[head]? as f64,
+        slopes: Vec::new(),
+    };
+    let mut f = Affine {
+        base: r[tail]? as f64,
+        slopes: Vec::new(),
+    };
+    let mut distinct = true;
+    for w in path.windows(2) {
+        let (pi, ci) = (w[0], w[1]);
+        let orders = order.link_orders(pi, ci);
+        let at = |tp: Nanos, tc: Nanos| {
+            let p = link_task(spec, tp, r[pi], pi);
+            let c = link_task(spec, tc, r[ci], ci);
+            let least = |g: &dyn Fn(Option<Case>) -> Option<Nanos>| {
+                orders.iter().filter_map(|&o| g(o)).min()
+            };
+            Some((
+                least(&|o| sound_reaction_link_in(o, &p, &c, distinct))?,
+                least(&|o| sound_freshness_link_in(o, &p, &c))?,
+            ))
+        };
+        let (lp, hp, lc, hc) = (order.lo[pi], order.hi[pi], order.lo[ci], order.hi[ci]);
+        let corners = [at(lp, lc)?, at(hp, lc)?, at(lp, hc)?, at(hp, hc)?];
+        add_link(&mut e, pi, ci, hp - lp, hc - lc, corners.map(|x| x.0));
+        add_link(&mut f, pi, ci, hp - lp, hc - lc, corners.map(|x| x.1));
+        let c_late = link_task(spec, hc, r[ci], ci);
+        distinct = distinct_passes(&link_task(spec, lp, r[pi], pi), &c_late, distinct);
+    }
+    Some((e, f))
+}
+
+/// Adds to `form` an affine bound of a concave link term from its values
+/// at the corners (lo,lo), (hi,lo), (lo,hi), (hi,hi) of (T_p, T_c).
+fn add_link(form: &mut Affine, p: usize, c: usize, dp: Nanos, dc: Nanos, v: [Nanos; 4]) {
+    let v = v.map(|x| x as f64);
+    let sp = if dp > 0 { (v[1] - v[0]) / dp as f64 } else { 0.0 };
+    let sc = if dc > 0 { (v[2] - v[0]) / dc as f64 } else { 0.0 };
+    // Exact at three corners; at the fourth, lower the base as needed.
+    let base = v[0].min(v[3] - sp * dp as f64 - sc * dc as f64);
+    form.base += base;
+    if sp > 0.0 {
+        form.slopes.push((p, sp));
+    }
+    if sc > 0.0 {
+        form.slopes.push((c, sc));
+    }
 }

@@ -126,14 +126,14 @@ pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
     }
     let mut r = own + hp.iter().map(|&(c, _)| c).sum::<Nanos>();
     for _ in 0..1_000_000 {
-        let mut next = own as i128;
+        // Overflow means a value far beyond MAX_TIME: no bounded response.
+        let mut next = own;
         for &(c, t) in hp {
-            next += ((r as i128 + t as i128 - 1) / t as i128) * c as i128;
+            next = ((r + t - 1) / t).checked_mul(c)?.checked_add(next)?;
         }
-        if next > MAX_TIME as i128 {
+        if next > MAX_TIME {
             return None;
         }
-        let next = next as Nanos;
         if next == r {
             return Some(r);
         }

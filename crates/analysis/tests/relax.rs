@@ -60,6 +60,25 @@ fn sound(report: &Report, chain: usize, metric: Metric) -> Option<Nanos> {
         .and_then(|c| c.bound.sound)
 }
 
+/// The affine forms of every chain bound its sound figures at `t` from
+/// below (reaction is the smaller sum, freshness the second).
+fn forms_below(r: &Relaxed, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str) {
+    for (k, form) in r.forms.iter().enumerate() {
+        let (se, sf) = (sound(report, k, Metric::Reaction), sound(report, k, Metric::Freshness));
+        let Some((e, f)) = form else {
+            assert!(se.is_none() && sf.is_none(), "{what}: chain {k} has no forms but is bounded");
+            continue;
+        };
+        let (e, f) = (e.at(lo, t), f.at(lo, t));
+        if let Some(x) = se {
+            assert!(e.min(f) <= x as f64 + 1e-6, "{what}: chain {k} reaction form {} above {x}", e.min(f));
+        }
+        if let Some(x) = sf {
+            assert!(f <= x as f64 + 1e-6, "{what}: chain {k} freshness form {f} above {x}");
+        }
+    }
+}
+
 /// `lower` is at most `exact`, reading `None` as +∞.
 fn below(lower: Option<Nanos>, exact: Option<Nanos>) -> bool {
     match (lower, exact) {
@@ -100,7 +119,7 @@ fn a_point_box_is_the_analysis() {
     for seed in 0..SYSTEMS {
         let spec = with_test(random_system(seed, &config(seed)), seed);
         let t = periods(&spec);
-        let r = relax(&spec, &t, &t, &[]);
+        let r = relax(&spec, &t, &t, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         bounds_point(&r, &spec, &analyze(&spec), &format!("seed {seed}"), true);
     }
@@ -119,7 +138,7 @@ fn a_box_bounds_every_point_inside_from_below() {
         // A box around the generated periods, up to halving and doubling.
         let lo: Vec<Nanos> = t.iter().map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1)).collect();
         let hi: Vec<Nanos> = t.iter().map(|&p| p + (rng.unit() * p as f64) as Nanos).collect();
-        let r = relax(&spec, &lo, &hi, &[]);
+        let r = relax(&spec, &lo, &hi, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         for probe in 0..8 {
             let point: Vec<Nanos> = (0..t.len())
@@ -130,12 +149,14 @@ fn a_box_bounds_every_point_inside_from_below() {
                 })
                 .collect();
             let s = at(&spec, &point);
-            bounds_point(&r, &s, &analyze(&s), &format!("seed {seed} probe {probe}"), false);
+            let report = analyze(&s);
+            bounds_point(&r, &s, &report, &format!("seed {seed} probe {probe}"), false);
+            forms_below(&r, &lo, &point, &report, &format!("seed {seed} probe {probe}"));
             checked += 1;
         }
         // A sub-box never has lower figures.
         let mid: Vec<Nanos> = (0..t.len()).map(|i| lo[i] + (hi[i] - lo[i]) / 2).collect();
-        for sub in [relax(&spec, &lo, &mid, &[]), relax(&spec, &mid, &hi, &[])] {
+        for sub in [relax(&spec, &lo, &mid, &[], true), relax(&spec, &mid, &hi, &[], true)] {
             for (a, b) in r.chains.iter().zip(&sub.chains) {
                 assert!(below(a.0, b.0) && below(a.1, b.1), "seed {seed}: a sub-box lowered a chain");
             }
@@ -175,10 +196,11 @@ fn imposed_orders_bound_the_points_that_have_them() {
                 }
             }
         }
-        let r = relax(&spec, &lo, &hi, &imposed);
+        let r = relax(&spec, &lo, &hi, &imposed, true);
         bounds_point(&r, &s, &report, &format!("seed {seed} imposed {imposed:?}"), false);
+        forms_below(&r, &lo, &point, &report, &format!("seed {seed} imposed"));
         // At the point itself, imposing its own orders changes nothing.
-        let exact = relax(&spec, &point, &point, &imposed);
+        let exact = relax(&spec, &point, &point, &imposed, true);
         bounds_point(&exact, &s, &report, &format!("seed {seed} point"), true);
     }
 }

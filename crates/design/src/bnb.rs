@@ -19,7 +19,7 @@
 //! every pruned box provably holds nothing better. docs/design.md argues it.
 
 use crate::{utilization, Dom, Group, Incumbent, Runner};
-use rtpipe_analysis::relax::{relax, Relaxed};
+use rtpipe_analysis::relax::{relax, Affine, Relaxed};
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Ordering as CmpOrdering;
@@ -28,6 +28,9 @@ use std::collections::BinaryHeap;
 /// Relative tolerance under which a box's bound counts as no better than
 /// the incumbent (the same as the MILP search's "closed" gap).
 const GAP_TOLERANCE: f64 = 1e-9;
+
+/// Rounds of narrowing per box at most (each may enable the next).
+const NARROW_ROUNDS: usize = 2;
 
 /// A dive for a better verified design every this many boxes.
 const DIVE_EVERY: u64 = 64;
@@ -191,17 +194,6 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             .sum()
     }
 
-    /// Some active constraint fails at every point of the box.
-    fn hopeless(&self, node: &Node) -> bool {
-        let r = relax(
-            self.run.spec,
-            &self.periods(&node.lo),
-            &self.periods(&node.hi),
-            &node.above,
-        );
-        !self.may_hold(&r)
-    }
-
     /// Shrinks the box to the points that have the imposed orders (RM:
     /// a above b ⟺ (T_a, a) < (T_b, b)); false when none is left.
     fn enforce_orders(&self, node: &mut Node) -> bool {
@@ -272,35 +264,165 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         (spec, report, ok)
     }
 
-    /// Narrows the box in place; false when it holds nothing feasible that
-    /// can beat `best`.
+    /// Narrows the box in place and sets its bound; false when it holds
+    /// nothing feasible that can beat `best`.
     fn narrow(&self, node: &mut Node, best: Option<f64>) -> bool {
-        for _ in 0..4 {
-            let mut changed = false;
+        for _ in 0..NARROW_ROUNDS {
             if !self.enforce_orders(node) {
                 return false;
             }
             if let Some(u) = best {
-                match self.raise_lows(node, u) {
-                    None => return false,
-                    Some(c) => changed |= c,
+                if self.raise_lows(node, u).is_none() {
+                    return false;
                 }
             }
-            for i in 0..node.lo.len() {
-                if node.lo[i] == node.hi[i] {
-                    continue;
-                }
-                match self.cut_top(node, i) {
-                    None => return false,
-                    Some(c) => changed |= c,
-                }
+            let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
+            let r = relax(self.run.spec, &lo, &hi, &node.above, true);
+            if !self.may_hold(&r) {
+                return false;
             }
-            if !changed {
-                break;
+            let Some(bound) = self.form_bound(&r, &lo, &hi) else {
+                return false;
+            };
+            node.bound = bound;
+            if best.is_some_and(|u| bound >= u * (1.0 - GAP_TOLERANCE)) {
+                return false;
+            }
+            match self.cut_by_forms(node, &r, &lo) {
+                None => return false,
+                Some(false) => return true,
+                Some(true) => {}
             }
         }
-        node.bound = self.bound(&node.hi);
+        // The last cut's box: its bound is at least the one set above.
+        node.bound = node.bound.max(self.bound(&node.hi));
         true
+    }
+
+    /// Cuts from the top of every task's interval the periods at which some
+    /// limit's affine forms exceed it even with every other period at its
+    /// shortest; `None` when an interval empties, else whether any moved.
+    fn cut_by_forms(&self, node: &mut Node, r: &Relaxed, lo: &[Nanos]) -> Option<bool> {
+        let spec = self.run.spec;
+        let n = node.lo.len();
+        let mut changed = false;
+        for g in self.groups {
+            let Group::Limit(k, metric) = *g else { continue };
+            let Some((e, f)) = r.forms[k].as_ref() else { continue };
+            let (limit, forms) = match metric {
+                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
+                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            };
+            let Some(limit) = limit.map(|l| l as f64) else { continue };
+            // The longest period each task may have: the most any form allows.
+            let mut allow = vec![f64::NEG_INFINITY; n];
+            for a in forms {
+                if a.base > limit {
+                    continue;
+                }
+                let mut slope = vec![0.0; n];
+                a.slopes.iter().for_each(|&(i, s)| slope[i] += s);
+                for i in 0..n {
+                    let room = if slope[i] > 0.0 {
+                        lo[i] as f64 + (limit - a.base) / slope[i]
+                    } else {
+                        f64::INFINITY
+                    };
+                    allow[i] = allow[i].max(room);
+                }
+            }
+            for i in 0..n {
+                if allow[i] >= self.axes[i].value(node.hi[i]) as f64 {
+                    continue;
+                }
+                match self.axes[i].last_at_most(allow[i].floor().max(-1.0) as Nanos) {
+                    Some(k) if k >= node.lo[i] => {
+                        node.hi[i] = k;
+                        changed = true;
+                    }
+                    _ => return None,
+                }
+            }
+        }
+        Some(changed)
+    }
+
+    /// The box's bound: Σ C/hi, raised by each chain limit whose affine
+    /// forms (`Relaxed::forms`) keep the periods of its tasks from all
+    /// being longest. `None` when some limit cannot hold in the box.
+    fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
+        let spec = self.run.spec;
+        let plain: f64 = (0..lo.len()).map(|i| self.budget[i] / hi[i] as f64).sum();
+        let mut bound = plain;
+        for g in self.groups {
+            let Group::Limit(k, metric) = *g else { continue };
+            let (e, f) = r.forms[k].as_ref()?;
+            let (limit, forms) = match metric {
+                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
+                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            };
+            let Some(limit) = limit else { continue };
+            let b = forms
+                .into_iter()
+                .filter_map(|a| self.least_under(a, limit as f64, lo, hi, plain))
+                .min_by(f64::total_cmp)?;
+            bound = bound.max(b);
+        }
+        Some(bound)
+    }
+
+    /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
+    /// nowhere). Lagrangian dual of the separable convex problem: for any
+    /// λ ≥ 0, min_T Σ C_i/T_i + λ (form(T) − limit) is one, with the
+    /// minimising T_i = √(C_i / (λ·s_i)) clamped to the box.
+    fn least_under(&self, form: &Affine, limit: f64, lo: &[Nanos], hi: &[Nanos], plain: f64) -> Option<f64> {
+        let mut slope: Vec<(usize, f64)> = Vec::with_capacity(form.slopes.len());
+        for &(i, s) in &form.slopes {
+            match slope.iter_mut().find(|x| x.0 == i) {
+                Some(x) => x.1 += s,
+                None => slope.push((i, s)),
+            }
+        }
+        let at_lo = form.base;
+        if at_lo > limit {
+            return None;
+        }
+        let t = |i: usize, s: f64, lambda: f64| {
+            let (l, h) = (lo[i] as f64, hi[i] as f64);
+            if self.budget[i] == 0.0 {
+                return l;
+            }
+            (self.budget[i] / (lambda * s)).sqrt().clamp(l, h)
+        };
+        let excess = |lambda: f64| {
+            slope
+                .iter()
+                .map(|&(i, s)| s * (t(i, s, lambda) - lo[i] as f64))
+                .sum::<f64>()
+                + at_lo
+                - limit
+        };
+        let dual = |lambda: f64| {
+            let moved: f64 = slope
+                .iter()
+                .map(|&(i, s)| self.budget[i] / t(i, s, lambda) - self.budget[i] / hi[i] as f64)
+                .sum();
+            plain + moved + lambda * excess(lambda)
+        };
+        if excess(0.0) <= 0.0 || slope.is_empty() {
+            return Some(plain);
+        }
+        // Bisection on log λ for excess(λ) = 0; any λ gives a valid bound.
+        let (mut a, mut b) = (-40.0f64, 40.0f64);
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if excess(m.exp2()) > 0.0 {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        Some(dual(a.exp2()).max(dual(b.exp2())).max(plain))
     }
 
     /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
@@ -328,37 +450,6 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
         }
         Some(changed)
-    }
-
-    /// Cuts from the top of task i's interval the periods at which the
-    /// relaxation fails; `None` when all of it goes. Bisection is valid
-    /// because a sub-box's relaxation is never lower.
-    fn cut_top(&self, node: &mut Node, i: usize) -> Option<bool> {
-        let (lo0, hi0) = (node.lo[i], node.hi[i]);
-        let fails_from = |m: u32, node: &mut Node| {
-            node.lo[i] = m;
-            let h = self.hopeless(node);
-            node.lo[i] = lo0;
-            h
-        };
-        if !fails_from(hi0, node) {
-            return Some(false);
-        }
-        if fails_from(lo0, node) {
-            return None;
-        }
-        // Invariant: [a, hi0] is feasible somewhere, [b, hi0] fails.
-        let (mut a, mut b) = (lo0, hi0);
-        while b - a > 1 {
-            let m = a + (b - a) / 2;
-            if fails_from(m, node) {
-                b = m;
-            } else {
-                a = m;
-            }
-        }
-        node.hi[i] = b - 1;
-        Some(true)
     }
 
     /// How to split a box whose corner fails: on the rank order of two
