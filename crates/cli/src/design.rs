@@ -4,7 +4,7 @@ use crate::analyze::{report_json, report_text, Judge};
 use crate::output;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_design::lp::SolverKind;
-use rtpipe_design::{design, ErrorKind, Mode, Options, Outcome, Status};
+use rtpipe_design::{design, ErrorKind, Method, Mode, Options, Outcome, Status};
 use rtpipe_model::Spec;
 use serde_json::json;
 use std::path::Path;
@@ -20,6 +20,13 @@ pub enum ModeArg {
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    Auto,
+    Boxes,
+    Milp,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum SolverArg {
     Microlp,
     Highs,
@@ -31,6 +38,7 @@ pub struct Args<'a> {
     pub json: bool,
     pub write: Option<&'a Path>,
     pub overwrite_spec: bool,
+    pub method: MethodArg,
     pub solver: Option<SolverArg>,
     pub time_limit: Option<f64>,
 }
@@ -92,6 +100,11 @@ pub fn run(a: Args) -> ExitCode {
             // The faster backend when it is built in.
             None if SolverKind::Highs.available() => SolverKind::Highs,
             None => SolverKind::Microlp,
+        },
+        method: match a.method {
+            MethodArg::Auto => Method::Auto,
+            MethodArg::Boxes => Method::Boxes,
+            MethodArg::Milp => Method::Milp,
         },
         time_limit: a.time_limit,
         progress: Some(Arc::new(Mutex::new(String::new()))),
@@ -204,9 +217,11 @@ fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
         "objective": o.objective,
         "lower_bound": o.lower_bound,
         "gap": o.gap,
-        "solver": o.solver.name(),
+        "method": o.method.name(),
+        "solver": (o.method == Method::Milp).then(|| o.solver.name()),
         "seconds": o.seconds,
         "iterations": o.iterations,
+        "peak_open_boxes": (o.method == Method::Boxes).then_some(o.peak_open),
         "periods": periods,
         "conflicts": o.conflicts.iter().map(|c| json!({"constraint": c.constraint, "fix": c.fix})).collect::<Vec<_>>(),
         "notes": o.notes,
@@ -214,13 +229,24 @@ fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
 }
 
 fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
+    let search = match o.method {
+        Method::Boxes => format!(
+            "branch and bound over periods): {} after {} boxes ({} open at most)",
+            o.status.name(),
+            o.iterations,
+            o.peak_open
+        ),
+        _ => format!(
+            "solver {}): {} after {} master solves",
+            o.solver.name(),
+            o.status.name(),
+            o.iterations
+        ),
+    };
     let mut out = format!(
-        "design of {} ({} analysis, solver {}): {} after {} master solves in {:.2} s\n",
+        "design of {} ({} analysis, {search} in {:.2} s\n",
         spec.name,
         mode.name(),
-        o.solver.name(),
-        o.status.name(),
-        o.iterations,
         o.seconds
     );
     if let (Some(u), Some(s)) = (o.objective, &o.spec) {

@@ -97,6 +97,12 @@ enum Command {
         /// ranges are lost).
         #[arg(long, requires = "write")]
         overwrite_spec: bool,
+        /// The exact search: `boxes` (branch and bound over period boxes,
+        /// pruned by the sound analysis; sound mode without harmonic
+        /// periods), `milp` (the mixed-integer model; every case), or `auto`
+        /// (boxes where they apply, else milp).
+        #[arg(long, value_enum, default_value = "auto")]
+        method: design::MethodArg,
         /// MILP backend [default: highs when built with `--features highs`,
         /// else microlp].
         #[arg(long, value_enum)]
@@ -177,6 +183,7 @@ fn main() -> ExitCode {
             json,
             write,
             overwrite_spec,
+            method,
             solver,
             time_limit,
         } => design::run(design::Args {
@@ -185,6 +192,7 @@ fn main() -> ExitCode {
             json,
             write: write.as_deref(),
             overwrite_spec,
+            method,
             solver,
             time_limit,
         }),

@@ -11,7 +11,7 @@ fn main() {
     for seed in first..first + seeds {
         let spec = design_problem(2018 + seed, &cfg, &|s| bounds_per_chain(s, |b| b.sound));
         for method in [Method::Boxes] {
-            let opts = Options { mode: Mode::Sound, method, time_limit: Some(10.0), ..Options::default() };
+            let opts = Options { mode: Mode::Sound, method, time_limit: Some(std::env::var("TL").map_or(10.0, |v| v.parse().unwrap())), ..Options::default() };
             let t0 = std::time::Instant::now();
             let o = design(&spec, &opts).unwrap();
             println!("{tasks} seed {seed} {:?}: {} obj {:?} lb {:?} gap {:?} nodes {} peak {} in {:.2}s", method, o.status.name(), o.objective, o.lower_bound, o.gap, o.iterations, o.peak_open, t0.elapsed().as_secs_f64());
