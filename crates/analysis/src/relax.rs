@@ -330,21 +330,32 @@ fn chain_forms(
     path: &[usize],
 ) -> Option<(Affine, Affine)> {
     let (head, tail) = (path[0], path[path.len() - 1]);
+    // The head's and tail's response times: R_lb under RM, T under EDF.
+    let own = |i: usize| match spec.scheduler {
+        Scheduler::Edf => vec![(i, 1.0)],
+        Scheduler::Rm => Vec::new(),
+    };
     let mut e = Affine {
         base: r[head]? as f64,
-        slopes: Vec::new(),
+        slopes: own(head),
     };
     let mut f = Affine {
         base: r[tail]? as f64,
-        slopes: Vec::new(),
+        slopes: own(tail),
     };
     let mut distinct = true;
     for w in path.windows(2) {
         let (pi, ci) = (w[0], w[1]);
         let orders = order.link_orders(pi, ci);
+        // Under EDF a response time is the period itself (`sched`), so it
+        // moves with the corner; under RM it stays at its lower bound.
+        let resp = |i: usize, t: Nanos| match spec.scheduler {
+            Scheduler::Edf => r[i].map(|_| t),
+            Scheduler::Rm => r[i],
+        };
         let at = |tp: Nanos, tc: Nanos| {
-            let p = link_task(spec, tp, r[pi], pi);
-            let c = link_task(spec, tc, r[ci], ci);
+            let p = link_task(spec, tp, resp(pi, tp), pi);
+            let c = link_task(spec, tc, resp(ci, tc), ci);
             let least = |g: &dyn Fn(Option<Case>) -> Option<Nanos>| {
                 orders.iter().filter_map(|&o| g(o)).min()
             };

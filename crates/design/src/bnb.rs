@@ -32,6 +32,10 @@ const GAP_TOLERANCE: f64 = 1e-9;
 /// Rounds of narrowing per box at most (each may enable the next).
 const NARROW_ROUNDS: usize = 2;
 
+/// Branch on an open order rather than a period once the order's narrower
+/// span is at least this share of the widest period split's.
+const ORDER_FIRST: f64 = 0.5;
+
 /// A dive for a better verified design every this many boxes.
 const DIVE_EVERY: u64 = 64;
 
@@ -458,19 +462,36 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// on the period of one task.
     fn branch(&self, node: &Node, report: &Report) -> Option<(Node, Node)> {
         let blamed = self.blamed(node, report);
-        if let Some((a, b)) = self.open_order(node, &blamed) {
+        let split = self.split_task(node, &blamed);
+        let widest = split.map_or(0.0, |i| self.span(node, i));
+        // An order is worth a branch once the pair's narrower interval is
+        // about as wide as the widest split (else splitting that period
+        // first often separates the pair anyway).
+        let order = self
+            .open_order(node, &blamed)
+            .filter(|&(a, b)| self.span(node, a).min(self.span(node, b)) >= ORDER_FIRST * widest);
+        if let Some((a, b)) = order {
             let mut ab = node.clone();
             ab.above.push((a, b));
             let mut ba = node.clone();
             ba.above.push((b, a));
             return Some((ab, ba));
         }
-        let i = self.split_task(node, &blamed)?;
-        Some(self.split(node, i))
+        match split {
+            Some(i) => Some(self.split(node, i)),
+            None => {
+                let (a, b) = self.open_order(node, &blamed)?;
+                let mut ab = node.clone();
+                ab.above.push((a, b));
+                let mut ba = node.clone();
+                ba.above.push((b, a));
+                Some((ab, ba))
+            }
+        }
     }
 
     /// A pair on one CPU under RM, one of them blamed, whose order the box
-    /// and the imposed orders leave open: the widest joint span first.
+    /// and the imposed orders leave open: the widest narrower span first.
     fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
         let spec = self.run.spec;
         if spec.scheduler != rtpipe_model::Scheduler::Rm {
@@ -490,7 +511,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                     && !node.above.contains(&(a, b))
                     && !node.above.contains(&(b, a));
                 if open {
-                    let w = self.span(node, a) + self.span(node, b);
+                    let w = self.span(node, a).min(self.span(node, b));
                     if best.is_none_or(|(_, x)| w > x) {
                         best = Some(((a, b), w));
                     }
@@ -642,15 +663,6 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
             if !self.narrow(&mut node, incumbent) {
                 continue;
-            }
-            if std::env::var_os("RTPIPE_BOX_DEBUG").is_some() && nodes % 20000 == 0 {
-                eprintln!(
-                    "node {nodes} bound {:.5} best {incumbent:?} open {}: lo {:?} hi {:?}",
-                    node.bound,
-                    open.len(),
-                    self.periods(&node.lo),
-                    self.periods(&node.hi)
-                );
             }
             if nodes % DIVE_EVERY == 1 {
                 if let Some(found) = self.dive(&node, best.as_ref().map(|b| b.2)) {
