@@ -258,3 +258,42 @@ fn backends_agree_on_cleanflight() {
     assert!((us[0] - us[1]).abs() / us[0] < 1e-6, "{us:?}");
     assert!((us[0] - 0.142_074_5).abs() < 1e-7, "{us:?}");
 }
+
+/// Every better verified design is published as it is found: when the
+/// search ends, the sink holds the answer's periods and utilisation.
+#[test]
+fn the_incumbent_sink_holds_the_answer() {
+    // Paper mode: proven optimal in milliseconds (sound mode is proven
+    // infeasible here, after minutes).
+    let spec = table2_free();
+    for mode in [Mode::Paper] {
+        let sink = Arc::new(Mutex::new(None));
+        let opts = Options {
+            mode,
+            incumbent: Some(sink.clone()),
+            ..Options::default()
+        };
+        let o = match design(&spec, &opts) {
+            Ok(o) => o,
+            Err(e) => panic!("{e}"),
+        };
+        let Some(s) = &o.spec else {
+            panic!("{mode:?}: no design: {:?}", o.status)
+        };
+        let got = sink.lock().map(|g| g.clone()).unwrap_or(None);
+        let Some(inc) = got else {
+            panic!("{mode:?}: nothing published")
+        };
+        let periods: Vec<Nanos> = s
+            .tasks
+            .iter()
+            .map(|t| t.fixed_period().unwrap_or(-1))
+            .collect();
+        assert_eq!(inc.periods, periods, "{mode:?}");
+        assert_eq!(Some(inc.utilization), o.objective, "{mode:?}");
+        assert!(
+            inc.lower_bound.is_some_and(|b| b <= inc.utilization),
+            "{mode:?}"
+        );
+    }
+}
