@@ -266,7 +266,8 @@ fn the_incumbent_sink_holds_the_answer() {
     // Paper mode: proven optimal in milliseconds (sound mode is proven
     // infeasible here, after minutes).
     let spec = table2_free();
-    for mode in [Mode::Paper] {
+    {
+        let mode = Mode::Paper;
         let sink = Arc::new(Mutex::new(None));
         let opts = Options {
             mode,

@@ -472,6 +472,13 @@ impl Budget {
         }
     }
     fn charge(&mut self, now: Nanos, ran: Nanos) {
+        // The next event comes no later than the capacity runs out, so a
+        // server is never charged more than it had (the servers rely on it).
+        assert!(
+            (0..=self.capacity(now)).contains(&ran),
+            "charged {ran} ns beyond the capacity {} at {now}",
+            self.capacity(now)
+        );
         match self {
             Budget::Unlimited => {}
             Budget::Sporadic(s) => s.charge(now, ran),
@@ -974,6 +981,8 @@ impl<H: Hooks> Sim<H> {
             (Budget::Cbs(c), _) => c.deadline,
             (_, true) => job.release + ts.period,
             (_, false) => match ts.serves {
+                // PIBS inheritance: the better (smaller) rank of the server
+                // and the Main VCPU it serves while that one has a job.
                 Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
                 _ => ts.rank,
             },
@@ -1157,6 +1166,7 @@ impl<H: Hooks> Sim<H> {
             }
             Some(next)
         });
+        // The earliest of the three kinds of event.
         release.into_iter().chain(running).chain(refill).min()
     }
 
