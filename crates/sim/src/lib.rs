@@ -43,6 +43,7 @@
 
 mod bodies;
 pub mod observe;
+mod rng;
 pub mod search;
 pub mod server;
 pub mod trace;
@@ -51,7 +52,7 @@ pub use bodies::simulate_bodies;
 
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_analysis::{Anchor, Metric};
-use rtpipe_model::gen::Rng;
+use crate::rng::Rng;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 use server::{Cbs, Pibs, Sporadic};
 use std::cmp::Reverse;

@@ -31,7 +31,7 @@
 
 use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
 use rtpipe_analysis::{analyze, Anchor, Metric};
-use rtpipe_model::gen::Rng;
+use crate::rng::Rng;
 use rtpipe_model::{Nanos, Spec};
 use std::fmt;
 
