@@ -1,19 +1,7 @@
 use super::*;
 use rtpipe_model::Spec;
 
-fn load_with(name: &str, edit: impl Fn(&str) -> String) -> Spec {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    let text = match std::fs::read_to_string(&p) {
-        Ok(t) => edit(&t),
-        Err(e) => panic!("{e}"),
-    };
-    match Spec::parse(name, &text) {
-        Ok(s) => s,
-        Err(e) => panic!("{e}"),
-    }
-}
+use rtpipe_testkit::example_with as load_with;
 
 fn run(spec: &Spec, mode: Mode) -> Outcome {
     let opts = Options {

@@ -50,9 +50,9 @@ pub mod trace;
 
 pub use bodies::simulate_bodies;
 
+use crate::rng::Rng;
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_analysis::{Anchor, Metric};
-use crate::rng::Rng;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 use server::{Cbs, Pibs, Sporadic};
 use std::cmp::Reverse;

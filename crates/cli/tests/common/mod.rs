@@ -7,9 +7,7 @@ use std::process::{Command, Output};
 
 /// The path of a bundled example.
 pub fn example(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
+    rtpipe_testkit::example_path(name)
         .to_string_lossy()
         .into_owned()
 }
