@@ -269,7 +269,7 @@ fn simulate_and_search(
         spec.name,
         spec.fmt_time(p.horizon),
         spec.time_unit,
-        human(&spec, p.horizon)
+        human(spec, p.horizon)
     );
     let res = with_horizon_bar(msg, p.horizon, |progress| {
         run_simulation(spec, a, p, progress)
