@@ -20,23 +20,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// Which analysis the chain limits are judged by.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    /// The paper's equations (Eqs. 1–14).
-    Paper,
-    /// The sound, interference-aware bounds.
-    Sound,
-}
-
-impl Mode {
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Paper => "paper",
-            Mode::Sound => "sound",
-        }
-    }
-}
+/// Which analysis the chain limits are judged by (one enum for the whole
+/// workspace).
+pub use rtpipe_analysis::Mode;
 
 /// How the exact search runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -662,6 +648,15 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     Ok(o)
 }
 
+/// The search `design` runs for `spec` with `opts` ([`Method::Boxes`] or
+/// [`Method::Milp`]; an invalid `--method boxes` is reported by `design`).
+pub fn method_for(spec: &Spec, opts: &Options) -> Method {
+    match choose_method(spec, opts) {
+        Ok(true) | Err(_) if opts.method != Method::Milp => Method::Boxes,
+        _ => Method::Milp,
+    }
+}
+
 /// Whether the box search runs (true) or the MILP.
 fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
     let fits = opts.mode == Mode::Sound && !spec.harmonic;
@@ -932,6 +927,24 @@ impl<'a> Runner<'a> {
         if let Some(p) = &self.opts.progress {
             if let Ok(mut g) = p.lock() {
                 *g = what();
+            }
+        }
+    }
+
+    /// Hands a better verified design to [`Options::incumbent`], so that a
+    /// caller that stops waiting (Ctrl-C) can still report it.
+    fn publish(&self, best: &Option<(Spec, Report, f64)>, lower_bound: Option<f64>) {
+        if let (Some(sink), Some((s, _, u))) = (&self.opts.incumbent, best) {
+            if let Ok(mut g) = sink.lock() {
+                *g = Some(Incumbent {
+                    periods: s
+                        .tasks
+                        .iter()
+                        .map(|t| t.fixed_period().unwrap_or(0))
+                        .collect(),
+                    utilization: *u,
+                    lower_bound: lower_bound.map(|b| b.min(*u)),
+                });
             }
         }
     }
@@ -1609,10 +1622,7 @@ impl<'a> Runner<'a> {
 
     /// One chain limit holds under the mode's analysis.
     fn chain_ok(&self, c: &ChainResult) -> bool {
-        match self.opts.mode {
-            Mode::Sound => c.ok,
-            Mode::Paper => c.paper_ok(),
-        }
+        c.ok_in(self.opts.mode)
     }
 
     fn limits_ok(&self, report: &Report) -> bool {
@@ -1646,6 +1656,7 @@ impl<'a> Runner<'a> {
         // A quick verified design, if there is an easy one: reported when
         // the exact search runs out of time (it does not start the patience).
         let mut incumbent: Option<(Spec, Report, f64)> = self.descent();
+        self.publish(&incumbent, lower_bound);
         let mut heuristic_tried = false;
         // Work done when the exact search found its first verified design.
         let mut exact_since: Option<u64> = None;
@@ -1721,6 +1732,7 @@ impl<'a> Runner<'a> {
                         let u = utilization(&cand);
                         if incumbent.as_ref().is_none_or(|(_, _, b)| u < *b) {
                             incumbent = Some((cand.clone(), report.clone(), u));
+                            self.publish(&incumbent, lower_bound);
                         }
                         exact_since.get_or_insert(self.work);
                     }
@@ -1749,6 +1761,7 @@ impl<'a> Runner<'a> {
                             if let Some(h) = self.heuristic(&groups, &sm_copy, start) {
                                 if incumbent.as_ref().is_none_or(|(_, _, b)| h.2 < *b) {
                                     incumbent = Some(h);
+                                    self.publish(&incumbent, lower_bound);
                                 }
                             }
                             exact_since.get_or_insert(self.work);

@@ -13,16 +13,7 @@ use rtpipe_analysis::analyze;
 use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
 use rtpipe_model::Spec;
 
-fn example(name: &str) -> String {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn parse(name: &str, source: &str) -> Spec {
-    Spec::parse(name, source).unwrap_or_else(|e| panic!("{name}: {e:?}"))
-}
+use rtpipe_testkit::{example_text as example, spec as parse};
 
 /// Designs in sound mode and checks the outcome.
 fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
