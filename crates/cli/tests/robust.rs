@@ -396,7 +396,8 @@ fn too_many_period_steps_name_the_task_and_a_resolution() {
 
 // 3. Ctrl-C stops the design search and prints the best verified design.
 
-/// Sound-mode Cleanflight runs for minutes under microlp; Ctrl-C after 3 s
+/// Sound-mode Cleanflight runs for minutes under the MILP with microlp
+/// (the box search ends in a second, so the MILP is asked for); Ctrl-C after 3 s
 /// must end it within a few seconds with a verified design printed and
 /// written whole, and exit 130.
 #[test]
@@ -406,7 +407,7 @@ fn ctrl_c_stops_design_and_prints_the_best_verified_design() {
     let (o, after) = rtpipe_interrupted(
         &dir,
         &[
-            "design", &spec, "--solver", "microlp", "--write", "out.toml",
+            "design", &spec, "--method", "milp", "--solver", "microlp", "--write", "out.toml",
         ],
         Duration::from_secs(3),
         LIMIT,
@@ -458,7 +459,7 @@ fn ctrl_c_in_json_mode_says_interrupted() {
     let spec = example("cleanflight-design.toml");
     let (o, after) = rtpipe_interrupted(
         &dir,
-        &["design", &spec, "--solver", "microlp", "--json"],
+        &["design", &spec, "--method", "milp", "--solver", "microlp", "--json"],
         Duration::from_secs(2),
         LIMIT,
     );
@@ -482,6 +483,32 @@ fn ctrl_c_in_json_mode_says_interrupted() {
     let gap = v["design"]["gap"].as_f64().unwrap_or(f64::NAN);
     assert!((gap - (u - lb) / u).abs() < 1e-12, "gap {gap}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The box search stops at once on Ctrl-C too: Cleanflight under EDF (about
+/// 300,000 boxes, several seconds) interrupted after one second.
+#[test]
+fn ctrl_c_stops_the_box_search() {
+    let dir = scratch("ctrl-c-boxes");
+    let text = std::fs::read_to_string(example("cleanflight-design.toml"))
+        .unwrap_or_default()
+        .replace("scheduler = \"rm\"", "scheduler = \"edf\"")
+        .replace("schedulability = \"rta\"", "schedulability = \"edf\"");
+    let f = dir.join("edf.toml");
+    write(&f, &text);
+    let (o, after) = rtpipe_interrupted(
+        &dir,
+        &["design", &f.to_string_lossy(), "--json"],
+        Duration::from_secs(1),
+        LIMIT,
+    );
+    assert_exit(&o, 130);
+    assert!(after < Duration::from_secs(3), "exited {after:?} after SIGINT");
+    let v = json_of(&o);
+    assert_eq!(v["design"]["interrupted"], serde_json::json!(true));
+    assert_eq!(v["design"]["method"], serde_json::json!("boxes"));
+    assert_eq!(v["design"]["status"], serde_json::json!("feasible"));
+    assert_eq!(v["ok"], serde_json::json!(true));
 }
 
 // 6. The same answer on any machine without a time limit.
