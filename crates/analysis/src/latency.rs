@@ -77,7 +77,13 @@ pub fn paper_case(p: &LinkTask, c: &LinkTask) -> Case {
 /// S(p, c) + L(c), with S from Eq. 2 (Case 1) or Eq. 4 (Case 2) and
 /// Δ = d/W + δ of the data p writes for c (Eq. 6: W = W_o^p = W_i^c).
 pub fn paper_reaction_link(p: &LinkTask, c: &LinkTask) -> Nanos {
-    let s = match paper_case(p, c) {
+    paper_reaction_link_in(paper_case(p, c), p, c)
+}
+
+/// [`paper_reaction_link`] in a given case, for a relaxation that takes
+/// each case possible over a set of periods.
+pub fn paper_reaction_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos {
+    let s = match case {
         Case::One => c.t - c.c - p.delta_out,
         Case::Two => p.t - p.c - p.delta_out,
     };
@@ -87,9 +93,14 @@ pub fn paper_reaction_link(p: &LinkTask, c: &LinkTask) -> Nanos {
 /// Paper mode: what appending c adds to freshness, F(p|c) − L(p), with
 /// F(p|c) from Eq. 12 in Case 1 and Eq. 5 (= reaction) in Case 2.
 pub fn paper_freshness_link(p: &LinkTask, c: &LinkTask) -> Nanos {
-    match paper_case(p, c) {
+    paper_freshness_link_in(paper_case(p, c), p, c)
+}
+
+/// [`paper_freshness_link`] in a given case.
+pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos {
+    match case {
         Case::One => 2 * p.t - p.delta_out - p.l,
-        Case::Two => paper_reaction_link(p, c),
+        Case::Two => paper_reaction_link_in(case, p, c),
     }
 }
 

@@ -15,7 +15,8 @@
 //! docs/design.md gives the argument.
 
 use crate::latency::{
-    distinct_passes, sound_freshness_link_in, sound_reaction_link_in, Case, LinkTask,
+    distinct_passes, paper_freshness_link_in, paper_reaction_link_in, sound_freshness_link_in,
+    sound_reaction_link_in, Case, LinkTask,
 };
 use crate::sched::{interference, response_time, utilization_test};
 use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec};
@@ -39,6 +40,22 @@ pub struct Relaxed {
     /// grow linearly with the periods; the sound freshness is F. `None` when
     /// the chain is unbounded everywhere. Empty unless asked for.
     pub forms: Vec<Option<(Affine, Affine)>>,
+    /// Per declared chain: lower bounds on its paper-mode (reaction,
+    /// freshness), Eqs. 1–14. Valid when [`paper_monotone`] holds.
+    pub paper: Vec<(Nanos, Nanos)>,
+    /// Per declared chain: the same as affine forms. Empty unless asked for.
+    pub paper_forms: Vec<(Affine, Affine)>,
+}
+
+/// The paper's terms grow with every period when no task on a chain needs
+/// more than three budgets per job: Eq. 12's `2 T_p − L_p` falls with T_p
+/// once L_p (Eq. 1) holds three periods or more. Only then do the paper
+/// figures of [`relax`] bound the analysis from below.
+pub fn paper_monotone(spec: &Spec) -> bool {
+    spec.chains.iter().flat_map(|c| &c.path).all(|&i| {
+        let t = &spec.tasks[i];
+        t.demand() <= t.budget().saturating_mul(3)
+    })
 }
 
 /// A bound that grows linearly with the periods over the box:
@@ -216,13 +233,23 @@ pub fn relax(
         .iter()
         .map(|ch| chain_bounds(spec, &order, &job_response, &ch.path))
         .collect();
-    let forms = match forms {
-        true => spec
-            .chains
-            .iter()
-            .map(|ch| chain_forms(spec, &order, &job_response, &ch.path))
-            .collect(),
-        false => Vec::new(),
+    let paper = spec
+        .chains
+        .iter()
+        .map(|ch| paper_bounds(spec, &order, &ch.path))
+        .collect();
+    let (forms, paper_forms) = match forms {
+        true => (
+            spec.chains
+                .iter()
+                .map(|ch| chain_forms(spec, &order, &job_response, &ch.path))
+                .collect(),
+            spec.chains
+                .iter()
+                .map(|ch| paper_forms(spec, &order, &ch.path))
+                .collect(),
+        ),
+        false => (Vec::new(), Vec::new()),
     };
     Relaxed {
         job_response,
@@ -230,6 +257,8 @@ pub fn relax(
         cpus,
         chains,
         forms,
+        paper,
+        paper_forms,
     }
 }
 
@@ -389,4 +418,66 @@ fn add_link(form: &mut Affine, p: usize, c: usize, dp: Nanos, dc: Nanos, v: [Nan
     if sc > 0.0 {
         form.slopes.push((c, sc));
     }
+}
+
+impl Order<'_> {
+    /// The paper's cases of link p → c possible over the box (Eq. 6: Case 1
+    /// when T_c < T_p).
+    fn paper_cases(&self, p: usize, c: usize) -> Vec<Case> {
+        let mut v = Vec::new();
+        if self.lo[c] < self.hi[p] {
+            v.push(Case::One);
+        }
+        if self.hi[c] >= self.lo[p] {
+            v.push(Case::Two);
+        }
+        v
+    }
+}
+
+/// The paper's link terms of p → c at periods (tp, tc), least over the
+/// possible cases: (reaction, freshness).
+fn paper_link(spec: &Spec, order: &Order, p: usize, c: usize, tp: Nanos, tc: Nanos) -> (Nanos, Nanos) {
+    let (lp, lc) = (link_task(spec, tp, None, p), link_task(spec, tc, None, c));
+    let cases = order.paper_cases(p, c);
+    let e = cases.iter().map(|&k| paper_reaction_link_in(k, &lp, &lc)).min();
+    let f = cases.iter().map(|&k| paper_freshness_link_in(k, &lp, &lc)).min();
+    (e.unwrap_or(Nanos::MAX), f.unwrap_or(Nanos::MAX))
+}
+
+/// Lower bounds on a chain's paper reaction and freshness: the head's L
+/// plus each link's least term, at the shortest periods.
+fn paper_bounds(spec: &Spec, order: &Order, path: &[usize]) -> (Nanos, Nanos) {
+    let head = link_task(spec, order.lo[path[0]], None, path[0]).l;
+    let (mut e, mut f) = (head, head);
+    for w in path.windows(2) {
+        let (a, b) = paper_link(spec, order, w[0], w[1], order.lo[w[0]], order.lo[w[1]]);
+        e = e.saturating_add(a);
+        f = f.saturating_add(b);
+    }
+    (e, f)
+}
+
+/// The paper's reaction and freshness as affine forms over the box: each
+/// case's term is affine in (T_p, T_c) (Eq. 1's L is affine in T for a
+/// fixed demand and budget), so the least over the cases is concave.
+fn paper_forms(spec: &Spec, order: &Order, path: &[usize]) -> (Affine, Affine) {
+    let h = path[0];
+    let l_at = |t: Nanos| link_task(spec, t, None, h).l as f64;
+    let (lo, hi) = (order.lo[h], order.hi[h]);
+    let slope = if hi > lo { (l_at(hi) - l_at(lo)) / (hi - lo) as f64 } else { 0.0 };
+    let head = Affine {
+        base: l_at(lo),
+        slopes: if slope > 0.0 { vec![(h, slope)] } else { Vec::new() },
+    };
+    let (mut e, mut f) = (head.clone(), head);
+    for w in path.windows(2) {
+        let (p, c) = (w[0], w[1]);
+        let (lp, hp, lc, hc) = (order.lo[p], order.hi[p], order.lo[c], order.hi[c]);
+        let at = |tp, tc| paper_link(spec, order, p, c, tp, tc);
+        let corners = [at(lp, lc), at(hp, lc), at(lp, hc), at(hp, hc)];
+        add_link(&mut e, p, c, hp - lp, hc - lc, corners.map(|x| x.0));
+        add_link(&mut f, p, c, hp - lp, hc - lc, corners.map(|x| x.1));
+    }
+    (e, f)
 }

@@ -2,7 +2,7 @@
 //! over any box it bounds the analysis at every point inside from below
 //! (the property the design's branch and bound prunes with).
 
-use rtpipe_analysis::relax::{relax, Relaxed};
+use rtpipe_analysis::relax::{paper_monotone, relax, Relaxed};
 use rtpipe_analysis::{analyze, Metric, Report};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
@@ -50,6 +50,33 @@ fn at(spec: &Spec, t: &[Nanos]) -> Spec {
         task.period = PeriodSpec::Fixed(p);
     }
     s
+}
+
+fn paper(report: &Report, chain: usize, metric: Metric) -> Nanos {
+    report
+        .chains
+        .iter()
+        .find(|c| c.chain == chain && c.metric == metric)
+        .map_or(Nanos::MAX, |c| c.bound.paper)
+}
+
+/// The paper figures and forms of `r` against the analysis at `t` (equal at
+/// a point box), when the paper's terms are monotone.
+fn paper_below(r: &Relaxed, spec: &Spec, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str, exact: bool) {
+    if !paper_monotone(spec) {
+        return;
+    }
+    for (k, &(e, f)) in r.paper.iter().enumerate() {
+        let (pe, pf) = (paper(report, k, Metric::Reaction), paper(report, k, Metric::Freshness));
+        if exact {
+            assert_eq!((e, f), (pe, pf), "{what}: chain {k} paper");
+        } else {
+            assert!(e <= pe && f <= pf, "{what}: chain {k} paper ({e}, {f}) vs ({pe}, {pf})");
+        }
+        let (fe, ff) = &r.paper_forms[k];
+        assert!(fe.at(lo, t) <= pe as f64 + 1e-6, "{what}: chain {k} paper reaction form");
+        assert!(ff.at(lo, t) <= pf as f64 + 1e-6, "{what}: chain {k} paper freshness form");
+    }
 }
 
 fn sound(report: &Report, chain: usize, metric: Metric) -> Option<Nanos> {
@@ -121,8 +148,14 @@ fn a_point_box_is_the_analysis() {
         let t = periods(&spec);
         let r = relax(&spec, &t, &t, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
-        bounds_point(&r, &spec, &analyze(&spec), &format!("seed {seed}"), true);
+        let report = analyze(&spec);
+        bounds_point(&r, &spec, &report, &format!("seed {seed}"), true);
+        paper_below(&r, &spec, &t, &t, &report, &format!("seed {seed}"), true);
     }
+    let monotone = (0..SYSTEMS)
+        .filter(|&seed| paper_monotone(&random_system(seed, &config(seed))))
+        .count();
+    assert!(monotone > SYSTEMS as usize / 2, "only {monotone} systems check the paper figures");
     // Most generated chains are bounded: the comparison is not vacuous.
     assert!(bounded > SYSTEMS as usize, "only {bounded} bounded chains");
 }
@@ -152,6 +185,7 @@ fn a_box_bounds_every_point_inside_from_below() {
             let report = analyze(&s);
             bounds_point(&r, &s, &report, &format!("seed {seed} probe {probe}"), false);
             forms_below(&r, &lo, &point, &report, &format!("seed {seed} probe {probe}"));
+            paper_below(&r, &spec, &lo, &point, &report, &format!("seed {seed} probe {probe}"), false);
             checked += 1;
         }
         // A sub-box never has lower figures.
@@ -199,6 +233,7 @@ fn imposed_orders_bound_the_points_that_have_them() {
         let r = relax(&spec, &lo, &hi, &imposed, true);
         bounds_point(&r, &s, &report, &format!("seed {seed} imposed {imposed:?}"), false);
         forms_below(&r, &lo, &point, &report, &format!("seed {seed} imposed"));
+        paper_below(&r, &spec, &lo, &point, &report, &format!("seed {seed} imposed"), false);
         // At the point itself, imposing its own orders changes nothing.
         let exact = relax(&spec, &point, &point, &imposed, true);
         bounds_point(&exact, &s, &report, &format!("seed {seed} point"), true);

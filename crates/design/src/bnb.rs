@@ -18,7 +18,7 @@
 //! Nothing is approximated: the answer is verified by the analysis, and
 //! every pruned box provably holds nothing better. docs/design.md argues it.
 
-use crate::{utilization, Dom, Group, Incumbent, Runner};
+use crate::{utilization, Dom, Group, Incumbent, Mode, Runner};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{Nanos, Server, Spec};
@@ -231,33 +231,61 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
 
     fn may_hold(&self, r: &Relaxed) -> bool {
         let spec = self.run.spec;
+        let sound = self.mode() == Mode::Sound;
         // The sound analysis needs every chain bounded, limit or not.
-        if r.chains.iter().any(|c| c.0.is_none() || c.1.is_none()) {
+        if sound && r.chains.iter().any(|c| c.0.is_none() || c.1.is_none()) {
             return false;
         }
+        let least = |k: usize, m: Metric| match (sound, m) {
+            (true, Metric::Reaction) => r.chains[k].0,
+            (true, Metric::Freshness) => r.chains[k].1,
+            (false, Metric::Reaction) => Some(r.paper[k].0),
+            (false, Metric::Freshness) => Some(r.paper[k].1),
+        };
         self.groups.iter().all(|g| match *g {
-            Group::Limit(k, Metric::Reaction) => {
-                spec.chains[k].reaction.is_none_or(|l| r.chains[k].0.is_some_and(|b| b <= l))
-            }
-            Group::Limit(k, Metric::Freshness) => {
-                spec.chains[k].freshness.is_none_or(|l| r.chains[k].1.is_some_and(|b| b <= l))
+            Group::Limit(k, m) => {
+                let limit = match m {
+                    Metric::Reaction => spec.chains[k].reaction,
+                    Metric::Freshness => spec.chains[k].freshness,
+                };
+                limit.is_none_or(|l| least(k, m).is_some_and(|b| b <= l))
             }
             Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
         })
     }
 
-    /// The analysis of one point, and whether it meets the active groups.
+    fn mode(&self) -> Mode {
+        self.run.opts.mode
+    }
+
+    /// The affine forms whose least is the limited figure of chain k in the
+    /// mode (`None`: the chain is unbounded everywhere in the box).
+    fn forms_of<'x>(&self, r: &'x Relaxed, k: usize, m: Metric) -> Option<Vec<&'x Affine>> {
+        Some(match (self.mode(), m) {
+            (Mode::Sound, Metric::Reaction) => {
+                let (e, f) = r.forms[k].as_ref()?;
+                vec![e, f]
+            }
+            (Mode::Sound, Metric::Freshness) => vec![&r.forms[k].as_ref()?.1],
+            (Mode::Paper, Metric::Reaction) => vec![&r.paper_forms[k].0],
+            (Mode::Paper, Metric::Freshness) => vec![&r.paper_forms[k].1],
+        })
+    }
+
+    /// The analysis of one point, and whether it meets the active groups
+    /// (and, in sound mode, bounds every chain).
     fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
         let spec = self.run.with_periods(&self.periods(k));
         let report = rtpipe_analysis::analyze(&spec);
-        let bounded = report.chains.iter().all(|c| c.bound.sound.is_some());
+        let mode = self.mode();
+        let bounded = mode == Mode::Paper || report.chains.iter().all(|c| c.bound.sound.is_some());
         let ok = bounded
             && self.groups.iter().all(|g| match *g {
                 Group::Limit(k, m) => report
                     .chains
                     .iter()
                     .filter(|c| c.chain == k && c.metric == m)
-                    .all(|c| c.ok),
+                    .all(|c| c.ok_in(mode)),
                 Group::Sched(cpu) => report
                     .schedulability
                     .cpus
@@ -312,10 +340,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let mut changed = false;
         for g in self.groups {
             let Group::Limit(k, metric) = *g else { continue };
-            let Some((e, f)) = r.forms[k].as_ref() else { continue };
-            let (limit, forms) = match metric {
-                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
-                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            let Some(forms) = self.forms_of(r, k, metric) else { continue };
+            let limit = match metric {
+                Metric::Reaction => spec.chains[k].reaction,
+                Metric::Freshness => spec.chains[k].freshness,
             };
             let Some(limit) = limit.map(|l| l as f64) else { continue };
             // The longest period each task may have: the most any form allows.
@@ -360,10 +388,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let mut bound = plain;
         for g in self.groups {
             let Group::Limit(k, metric) = *g else { continue };
-            let (e, f) = r.forms[k].as_ref()?;
-            let (limit, forms) = match metric {
-                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
-                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            let forms = self.forms_of(r, k, metric)?;
+            let limit = match metric {
+                Metric::Reaction => spec.chains[k].reaction,
+                Metric::Freshness => spec.chains[k].freshness,
             };
             let Some(limit) = limit else { continue };
             let b = forms

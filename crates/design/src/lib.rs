@@ -659,13 +659,17 @@ pub fn method_for(spec: &Spec, opts: &Options) -> Method {
 
 /// Whether the box search runs (true) or the MILP.
 fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
-    let fits = opts.mode == Mode::Sound && !spec.harmonic;
+    let fits = !spec.harmonic
+        && match opts.mode {
+            Mode::Sound => true,
+            Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
+        };
     match opts.method {
         Method::Auto => Ok(fits),
         Method::Milp => Ok(false),
         Method::Boxes if fits => Ok(true),
         Method::Boxes => Err(DesignError::input(
-            "the box search designs in sound mode without `harmonic = true` only",
+            "the box search needs periods that are not `harmonic = true` and, in paper mode, no chain task whose demand exceeds three budgets (Eq. 12 then falls as its period grows)",
         )
         .help("use --method milp (or leave --method out)")),
     }

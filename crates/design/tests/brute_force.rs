@@ -357,6 +357,11 @@ fn paper_mode_agrees_with_brute_force() {
 }
 
 #[test]
+fn paper_mode_milp_agrees_with_brute_force() {
+    run(Mode::Paper, Method::Milp, 100_000, cases(300) / 3, 3.0, false);
+}
+
+#[test]
 fn ranges_agree_with_brute_force() {
     let n = cases(300) / 3;
     run(Mode::Sound, Method::Boxes, 200_000, n, 3.0, true);
