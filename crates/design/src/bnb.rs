@@ -36,6 +36,44 @@ const NARROW_ROUNDS: usize = 2;
 /// span is at least this share of the widest period split's.
 const ORDER_FIRST: f64 = 0.5;
 
+/// Coordinate-ascent sweeps over the multipliers of the joint bound.
+const JOINT_SWEEPS: usize = 3;
+
+/// One limit in the joint bound: Σ s_i T_i ≤ room.
+struct Row {
+    slopes: Vec<(usize, f64)>,
+    room: f64,
+}
+
+impl Row {
+    /// The form below all of `forms` (least base, least slope per task),
+    /// written as Σ s_i T_i ≤ room.
+    fn new(forms: &[&Affine], limit: f64, lo: &[Nanos], n: usize) -> Row {
+        let mut least: Option<Vec<f64>> = None;
+        let mut base = f64::INFINITY;
+        for a in forms {
+            let mut s = vec![0.0; n];
+            a.slopes.iter().for_each(|&(i, x)| s[i] += x);
+            least = Some(match least {
+                None => s,
+                Some(m) => m.iter().zip(&s).map(|(x, y)| x.min(*y)).collect(),
+            });
+            base = base.min(a.base);
+        }
+        let slopes: Vec<(usize, f64)> = least
+            .unwrap_or_default()
+            .into_iter()
+            .enumerate()
+            .filter(|&(_, x)| x > 0.0)
+            .collect();
+        let at_lo: f64 = slopes.iter().map(|&(i, x)| x * lo[i] as f64).sum();
+        Row {
+            room: limit - base + at_lo,
+            slopes,
+        }
+    }
+}
+
 /// A dive for a better verified design every this many boxes.
 const DIVE_EVERY: u64 = 64;
 
@@ -320,15 +358,48 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             if best.is_some_and(|u| bound >= u * (1.0 - GAP_TOLERANCE)) {
                 return false;
             }
+            let raised = match self.raise_to_responses(node, &r) {
+                None => return false,
+                Some(x) => x,
+            };
             match self.cut_by_forms(node, &r, &lo) {
                 None => return false,
-                Some(false) => return true,
-                Some(true) => {}
+                Some(false) if !raised => return true,
+                _ => {}
             }
         }
         // The last cut's box: its bound is at least the one set above.
         node.bound = node.bound.max(self.bound(&node.hi));
         true
+    }
+
+    /// Periods shorter than a response time's lower bound fail where that
+    /// response time must fit its period: at job level for chain tasks in
+    /// sound mode (a chain needs them bounded), at budget level under RTA.
+    /// Raises each interval's bottom past them; `None` when one empties.
+    fn raise_to_responses(&self, node: &mut Node, r: &Relaxed) -> Option<bool> {
+        let spec = self.run.spec;
+        let rta = spec.schedulability == rtpipe_model::SchedTest::Rta;
+        let sound = self.mode() == Mode::Sound;
+        let mut changed = false;
+        for i in 0..node.lo.len() {
+            let need = [
+                (sound && self.run.on_chain[i], r.job_response[i]),
+                (rta && spec.tasks[i].server != Server::Background, r.budget_response[i]),
+            ];
+            for (applies, least) in need {
+                let Some(least) = least.filter(|_| applies) else { continue };
+                let k = self.axes[i].first_at_least(least as f64);
+                if k > node.hi[i] {
+                    return None;
+                }
+                if k > node.lo[i] {
+                    node.lo[i] = k;
+                    changed = true;
+                }
+            }
+        }
+        Some(changed)
     }
 
     /// Cuts from the top of every task's interval the periods at which some
@@ -386,6 +457,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let spec = self.run.spec;
         let plain: f64 = (0..lo.len()).map(|i| self.budget[i] / hi[i] as f64).sum();
         let mut bound = plain;
+        let mut joint = Vec::new();
         for g in self.groups {
             let Group::Limit(k, metric) = *g else { continue };
             let forms = self.forms_of(r, k, metric)?;
@@ -395,12 +467,68 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             };
             let Some(limit) = limit else { continue };
             let b = forms
-                .into_iter()
+                .iter()
                 .filter_map(|a| self.least_under(a, limit as f64, lo, hi, plain))
                 .min_by(f64::total_cmp)?;
             bound = bound.max(b);
+            joint.push(Row::new(&forms, limit as f64, lo, lo.len()));
         }
-        Some(bound)
+        Some(bound.max(self.joint_bound(&joint, lo, hi)))
+    }
+
+    /// A lower bound from every limit at once (limits share tasks): the
+    /// Lagrangian dual with one multiplier per limit, raised by coordinate
+    /// ascent. Any multipliers give a valid bound; a reaction limit (E or F
+    /// below it) enters as the form below both, the least base and slopes.
+    fn joint_bound(&self, rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
+        let n = lo.len();
+        let mut lambda = vec![0.0f64; rows.len()];
+        let t_at = |w: &[f64], i: usize| {
+            let (l, h) = (lo[i] as f64, hi[i] as f64);
+            match (self.budget[i] == 0.0, w[i] > 0.0) {
+                (true, _) => l,
+                (false, false) => h,
+                (false, true) => (self.budget[i] / w[i]).sqrt().clamp(l, h),
+            }
+        };
+        let weights = |lambda: &[f64]| {
+            let mut w = vec![0.0; n];
+            for (row, &l) in rows.iter().zip(lambda) {
+                row.slopes.iter().for_each(|&(i, s)| w[i] += l * s);
+            }
+            w
+        };
+        for _ in 0..JOINT_SWEEPS {
+            for c in 0..rows.len() {
+                // d dual / d λ_c = Σ s_ci T_i − S_c falls as λ_c grows.
+                let slack = |x: f64, lambda: &mut Vec<f64>| {
+                    lambda[c] = x;
+                    let w = weights(lambda);
+                    rows[c].slopes.iter().map(|&(i, s)| s * t_at(&w, i)).sum::<f64>() - rows[c].room
+                };
+                if slack(0.0, &mut lambda) <= 0.0 {
+                    continue;
+                }
+                let (mut a, mut b) = (-60.0f64, 20.0f64);
+                for _ in 0..40 {
+                    let m = 0.5 * (a + b);
+                    if slack(m.exp2(), &mut lambda) > 0.0 {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                lambda[c] = b.exp2();
+            }
+        }
+        let w = weights(&lambda);
+        let primal: f64 = (0..n)
+            .map(|i| {
+                let t = t_at(&w, i);
+                self.budget[i] / t + w[i] * t
+            })
+            .sum();
+        primal - rows.iter().zip(&lambda).map(|(r, l)| l * r.room).sum::<f64>()
     }
 
     /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
