@@ -117,36 +117,11 @@ pub fn run(a: Args) -> ExitCode {
             });
         }
     };
-    match (&write, &out.spec) {
-        (Some(w), Some(s)) => {
-            let text = rtpipe_model::to_toml(s);
-            if let Err(e) = output::write_all(&[(w, &text)]) {
-                eprint!("{e}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
-        }
-        (Some(w), None) => eprintln!(
-            "note: nothing written to {}: no verified design",
-            w.given.display()
-        ),
-        _ => {}
+    if let Err(code) = write_design(write.as_ref(), &out) {
+        return code;
     }
-    if a.json {
-        let mut v = match (&out.spec, &out.report) {
-            (Some(s), Some(r)) => report_json(s, r),
-            _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
-        };
-        v["design"] = design_json(&spec, &out, opts.mode);
-        v["design"]["interrupted"] = json!(stopped);
-        if stopped {
-            // Not counted: the worker may still be inside a solve.
-            v["design"]["iterations"] = Value::Null;
-        }
-        if let Err(code) = crate::analyze::print_json(&v) {
-            return code;
-        }
-    } else {
-        print!("{}", design_text(&spec, &out, opts.mode, stopped));
+    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped) {
+        return code;
     }
     if stopped {
         return ExitCode::from(EXIT_INTERRUPTED);
@@ -155,6 +130,51 @@ pub fn run(a: Args) -> ExitCode {
         Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
         _ => ExitCode::from(1),
     }
+}
+
+/// `--write`: the designed spec, whole or not at all.
+fn write_design(write: Option<&output::Output>, out: &Outcome) -> Result<(), ExitCode> {
+    match (write, &out.spec) {
+        (Some(w), Some(s)) => {
+            let text = rtpipe_model::to_toml(s);
+            if let Err(e) = output::write_all(&[(w, &text)]) {
+                eprint!("{e}");
+                return Err(ExitCode::from(EXIT_BAD_INPUT));
+            }
+        }
+        (Some(w), None) => eprintln!(
+            "note: nothing written to {}: no verified design",
+            w.given.display()
+        ),
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The answer on stdout, as text or JSON.
+fn print_design(
+    spec: &Spec,
+    out: &Outcome,
+    json_out: bool,
+    mode: Mode,
+    stopped: bool,
+) -> Result<(), ExitCode> {
+    if json_out {
+        let mut v = match (&out.spec, &out.report) {
+            (Some(s), Some(r)) => report_json(s, r),
+            _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
+        };
+        v["design"] = design_json(spec, out, mode);
+        v["design"]["interrupted"] = json!(stopped);
+        if stopped {
+            // Not counted: the worker may still be inside a solve.
+            v["design"]["iterations"] = Value::Null;
+        }
+        crate::analyze::print_json(&v)?;
+    } else {
+        print!("{}", design_text(spec, out, mode, stopped));
+    }
+    Ok(())
 }
 
 /// How long `design` waits for the search to notice Ctrl-C before it

@@ -293,46 +293,11 @@ impl<H: Hooks> Sim<H> {
     /// contenders (an ordered set kept up to date by [`Sim::refresh`]).
     pub(crate) fn instant(&mut self, t: Nanos) {
         self.events += 1;
-        // CBS replenishment timers (every throttled server has an entry).
-        while let Some(&Reverse((until, i))) = self.throttled.peek() {
-            if until > t {
-                break;
-            }
-            self.throttled.pop();
-            if let Budget::Cbs(c) = &mut self.tasks[i].budget {
-                c.replenish(t);
-            }
-            self.refresh(i, t);
-        }
+        self.replenish_throttled(t);
         loop {
-            for cpu in 0..self.running.len() {
-                if let Some(i) = self.running[cpu] {
-                    if self.tasks[i]
-                        .queue
-                        .front()
-                        .is_some_and(|j| j.remaining == 0)
-                    {
-                        self.complete(i, t);
-                        self.running[cpu] = None;
-                        self.refresh(i, t);
-                        if self.tasks[i].queue.is_empty() {
-                            self.refresh_servers(i, t);
-                        }
-                    }
-                }
-            }
+            self.complete_finished(t);
             self.release(t);
-            // Refill timers: capacity comes back to a waiting server.
-            while let Some(&Reverse((at, i))) = self.timers.peek() {
-                if at > t {
-                    break;
-                }
-                self.timers.pop();
-                if self.tasks[i].timer == Some(at) {
-                    self.tasks[i].timer = None;
-                    self.refresh(i, t);
-                }
-            }
+            self.fire_timers(t);
             // Debug builds: the full check costs O(tasks) per pick, which
             // would make large systems quadratic again; skip it beyond 512.
             #[cfg(debug_assertions)]
@@ -344,26 +309,81 @@ impl<H: Hooks> Sim<H> {
                 self.running[cpu] = picked.map(|(i, _)| i);
                 self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
             }
-            let mut again = false;
-            for cpu in 0..self.running.len() {
-                if let Some(i) = self.running[cpu] {
-                    if self.tasks[i]
-                        .queue
-                        .front()
-                        .is_some_and(|j| j.read.is_none())
-                    {
-                        self.read(i, t);
-                    }
-                    again |= self.tasks[i]
-                        .queue
-                        .front()
-                        .is_some_and(|j| j.remaining == 0);
-                }
-            }
-            if !again {
+            if !self.read_started(t) {
                 break;
             }
         }
+    }
+
+    /// CBS replenishment timers due at t (every throttled server has an
+    /// entry).
+    fn replenish_throttled(&mut self, t: Nanos) {
+        while let Some(&Reverse((until, i))) = self.throttled.peek() {
+            if until > t {
+                break;
+            }
+            self.throttled.pop();
+            if let Budget::Cbs(c) = &mut self.tasks[i].budget {
+                c.replenish(t);
+            }
+            self.refresh(i, t);
+        }
+    }
+
+    /// Running jobs with nothing left to do complete (and publish) at t.
+    fn complete_finished(&mut self, t: Nanos) {
+        for cpu in 0..self.running.len() {
+            if let Some(i) = self.running[cpu] {
+                if self.tasks[i]
+                    .queue
+                    .front()
+                    .is_some_and(|j| j.remaining == 0)
+                {
+                    self.complete(i, t);
+                    self.running[cpu] = None;
+                    self.refresh(i, t);
+                    if self.tasks[i].queue.is_empty() {
+                        self.refresh_servers(i, t);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Refill timers due at t: capacity comes back to a waiting server.
+    fn fire_timers(&mut self, t: Nanos) {
+        while let Some(&Reverse((at, i))) = self.timers.peek() {
+            if at > t {
+                break;
+            }
+            self.timers.pop();
+            if self.tasks[i].timer == Some(at) {
+                self.tasks[i].timer = None;
+                self.refresh(i, t);
+            }
+        }
+    }
+
+    /// Picked jobs that start now read their inputs; true when one of them
+    /// has zero demand (it completes at this same instant: go round again).
+    fn read_started(&mut self, t: Nanos) -> bool {
+        let mut again = false;
+        for cpu in 0..self.running.len() {
+            if let Some(i) = self.running[cpu] {
+                if self.tasks[i]
+                    .queue
+                    .front()
+                    .is_some_and(|j| j.read.is_none())
+                {
+                    self.read(i, t);
+                }
+                again |= self.tasks[i]
+                    .queue
+                    .front()
+                    .is_some_and(|j| j.remaining == 0);
+            }
+        }
+        again
     }
 
     /// Releases every job due at or before t.
