@@ -4,10 +4,12 @@
 //! (`rtpipe_sim::chains_from_jobs`).
 
 use crate::four_slot::{self, Reader, Writer};
+use crate::load::Load;
+use crate::pi::PiMutex;
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_model::{Scheduler, Spec};
-use rtpipe_sim::{Carried, JobRecord, SimResult, TaskStats};
+use rtpipe_sim::{Carried, JobRecord, Segment, SimResult, TaskStats};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
@@ -41,6 +43,8 @@ pub struct RunConfig {
     /// Releases happen in [0, duration) after the epoch.
     pub duration: Nanos,
     pub policy: Policy,
+    /// Background CPU hogs (SCHED_OTHER) running for the whole run.
+    pub load: usize,
 }
 
 /// The kind of a [`RunError`].
@@ -249,9 +253,19 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
     Ok(())
 }
 
+/// The SCHED_FIFO priority of each task: rate-monotonic rank 1 (the
+/// highest) → 90, rank 2 → 89, ...; background tasks (no rank) → 1.
+pub fn fifo_priorities(spec: &Spec) -> Vec<i32> {
+    rtpipe_analysis::sched::rm_priorities(spec)
+        .iter()
+        .map(|r| r.map_or(1, |r| (91 - r as i32).max(2)))
+        .collect()
+}
+
 /// Runs `spec` for real: `bodies[i]` for every job of task i, `env` as the
-/// world (sensed at each read, actuated at each publish, under its lock, at
-/// the true instants relative to the epoch; `None`: no world, no lock).
+/// world (sensed at each read, actuated at each publish, under its
+/// priority-inheritance lock, at the true instants relative to the epoch;
+/// `None`: no world, no lock), with `cfg.load` hogs in the background.
 ///
 /// # Panics
 /// When `bodies` does not hold one body per task (a caller's bug).
@@ -259,7 +273,7 @@ pub fn run<'a, V: Copy + Send>(
     spec: &Spec,
     cfg: &RunConfig,
     bodies: Vec<Box<dyn Body<V> + 'a>>,
-    env: Option<&Mutex<dyn Environment<V> + Send + 'a>>,
+    env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
 ) -> Result<RunResult, RunError> {
     assert_eq!(bodies.len(), spec.tasks.len(), "one body per task");
     check(spec, cfg)?;
@@ -272,7 +286,7 @@ pub fn run<'a, V: Copy + Send>(
             ));
         }
     }
-    let ranks = rtpipe_analysis::sched::rm_priorities(spec);
+    let prios = fifo_priorities(spec);
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
         .enumerate()
@@ -286,8 +300,7 @@ pub fn run<'a, V: Copy + Send>(
                 budget: t.budget(),
                 cpu: t.cpu as usize,
                 priority: match cfg.policy {
-                    // Rank 1 (highest) → 90; background tasks → 1.
-                    Policy::Fifo => Some(ranks[i].map_or(1, |r| (91 - r as i32).max(2))),
+                    Policy::Fifo => Some(prios[i]),
                     _ => None,
                 },
                 body,
@@ -306,6 +319,13 @@ pub fn run<'a, V: Copy + Send>(
             threads[c].readers.push(r);
         }
     }
+    // Stopped and joined when `_load` drops: on every way out of `run`.
+    let _load = Load::start(cfg.load).map_err(|e| {
+        RunError::config(
+            format!("cannot start {} background load thread(s): {e}", cfg.load),
+            "lower --load",
+        )
+    })?;
     sys::catch_sigint();
     let setup = Barrier::new(n + 1);
     let go = Barrier::new(n + 1);
@@ -443,7 +463,7 @@ fn periodic<V: Copy>(
     epoch: Nanos,
     duration: Nanos,
     policy: Policy,
-    env: Option<&Mutex<dyn Environment<V> + Send + '_>>,
+    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
 ) {
     let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len());
     let mut k: u64 = 0;
@@ -470,7 +490,7 @@ fn periodic<V: Copy>(
         // published (its publish instant taken) before it, as in the model.
         // With a world, it is taken under the world's lock, so the world
         // sees non-decreasing instants from all threads.
-        let (read, device) = match env.map(Mutex::lock) {
+        let (read, device) = match env.map(PiMutex::lock) {
             Some(Ok(mut e)) => {
                 let read = sys::now();
                 (read, e.sense(th.task, read - epoch))
@@ -487,7 +507,7 @@ fn periodic<V: Copy>(
         // The publish instant, taken before the registers are written (a
         // reader's read instant then follows it); with a world, under its
         // lock, where the output reaches the world at that instant.
-        let publish = match env.map(Mutex::lock) {
+        let publish = match env.map(PiMutex::lock) {
             Some(Ok(mut e)) => {
                 let publish = sys::now();
                 e.actuate(th.task, publish - epoch, &value);
@@ -588,6 +608,7 @@ fn assemble<V>(
         });
     }
     let chains = rtpipe_sim::chains_from_jobs(spec, &jobs);
+    let segments = spans(spec, &jobs);
     let mut tasks = Vec::with_capacity(n);
     let mut runs = Vec::with_capacity(n);
     for th in &threads {
@@ -626,7 +647,7 @@ fn assemble<V>(
             tasks,
             chains,
             jobs,
-            segments: Vec::new(),
+            segments,
             events: 0,
             horizon: duration,
         },
@@ -637,4 +658,26 @@ fn assemble<V>(
         elapsed,
         notes,
     }
+}
+
+/// One "slice" per job from its read to its publish, for the trace writer:
+/// the span the job occupied, preemptions included (the kernel does not
+/// tell a thread when it was switched out), in time order.
+fn spans(spec: &Spec, jobs: &[JobRecord]) -> Vec<Segment> {
+    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    let mut out: Vec<Segment> = jobs
+        .iter()
+        .map(|j| Segment {
+            cpu: cpus.binary_search(&spec.tasks[j.task].cpu).unwrap_or(0),
+            task: j.task,
+            job: j.index,
+            start: j.read,
+            end: j.finish,
+            background: false,
+        })
+        .collect();
+    out.sort_by_key(|s| (s.start, s.task));
+    out
 }

@@ -77,6 +77,7 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         let cfg = RunConfig {
             duration: 300_000_000,
             policy,
+            load: 0,
         };
         let r = run(&spec, &cfg, bodies, None);
         let Ok(r) = r else {
@@ -99,5 +100,14 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         // A job log in publish order, each task's jobs in index order.
         assert!(r.sim.jobs.windows(2).all(|w| w[0].finish <= w[1].finish));
         assert!(ch.reaction.values.iter().all(|&x| x > 0));
+        // The simulator's trace writer draws the run: one span per job,
+        // data-flow arrows along the chain.
+        let opts = rtpipe_sim::trace::TraceOptions {
+            spans: true,
+            ..Default::default()
+        };
+        let t = rtpipe_sim::trace::chrome_trace_with(&spec, &r.sim, opts);
+        assert_eq!(t.slices, r.sim.jobs.len(), "{policy:?}");
+        assert!(t.flows > 50, "{policy:?}: {} arrows", t.flows);
     }
 }
