@@ -109,6 +109,8 @@ pub struct RunResult {
     pub sim: SimResult,
     pub tasks: Vec<TaskRun>,
     pub policy: Policy,
+    /// Background hogs that ran ([`RunConfig::load`]).
+    pub load: usize,
     /// Stopped early by Ctrl-C.
     pub interrupted: bool,
     /// Steal time of all CPUs during the run (a hypervisor ran someone
@@ -382,7 +384,7 @@ pub fn run<'a, V: Copy + Send>(
         }
     }
     let interrupted = sys::stop_requested();
-    Ok(assemble(
+    let mut res = assemble(
         spec,
         threads,
         duration,
@@ -391,7 +393,9 @@ pub fn run<'a, V: Copy + Send>(
         steal,
         elapsed,
         notes,
-    ))
+    );
+    res.load = cfg.load;
+    Ok(res)
 }
 
 /// Puts the calling thread into its scheduling class.
@@ -653,6 +657,7 @@ fn assemble<V>(
         },
         tasks: runs,
         policy,
+        load: 0,
         interrupted,
         steal,
         elapsed,

@@ -1,5 +1,6 @@
 //! The executor as a library: bodies see stamps consistent with the model,
-//! the job log measures the chain, and no thread outlives `run`.
+//! the job log measures the chain, and no thread (task or load hog)
+//! outlives `run`.
 
 use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_model::Spec;
@@ -77,7 +78,8 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         let cfg = RunConfig {
             duration: 300_000_000,
             policy,
-            load: 0,
+            // Two hogs: they too must be gone when run returns.
+            load: 2,
         };
         let r = run(&spec, &cfg, bodies, None);
         let Ok(r) = r else {
