@@ -11,7 +11,7 @@ use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_model::{Scheduler, Spec};
 use rtpipe_sim::{Carried, JobRecord, Segment, SimResult, TaskStats};
 use std::fmt;
-use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
 
 /// How task threads are scheduled.
@@ -155,6 +155,41 @@ struct Thread<'a, V> {
 /// system call, the register copies), which a synthetic body burning
 /// exactly its budget adds on top.
 pub const OVERRUN_TOLERANCE: Nanos = 5_000;
+
+/// How long after the last release a thread may still be running before it
+/// is deemed stuck (at least twice the longest period).
+const GRACE: Nanos = 1_000_000_000;
+
+/// Waits until every task thread is done, or until `end` (or 200 ms after
+/// Ctrl-C); then moves the threads still running to SCHED_OTHER, so that a
+/// throttled SCHED_DEADLINE thread (its runtime overdrawn, it may not run
+/// for minutes) or a starved one still ends, and `run` returns on time.
+/// Returns the tasks moved.
+fn watch(end: Nanos, tids: &[AtomicI32], done: &[AtomicBool]) -> Vec<usize> {
+    let mut end = end;
+    loop {
+        if done.iter().all(|d| d.load(Ordering::SeqCst)) {
+            return Vec::new();
+        }
+        let now = sys::now();
+        if sys::stop_requested() {
+            end = end.min(now + 200_000_000);
+        }
+        if now >= end {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let mut moved = Vec::new();
+    for (i, (tid, d)) in tids.iter().zip(done).enumerate() {
+        // tid 0 would be the calling thread itself: never touch it.
+        let tid = tid.load(Ordering::SeqCst);
+        if !d.load(Ordering::SeqCst) && tid > 0 && sys::set_other(tid).is_ok() {
+            moved.push(i);
+        }
+    }
+    moved
+}
 
 /// Largest number of jobs logged in one run (memory: ~48 bytes a job).
 const MAX_JOBS: u64 = 20_000_000;
@@ -337,13 +372,20 @@ pub fn run<'a, V: Copy + Send>(
     let steal0 = sys::steal_time();
     let policy = cfg.policy;
     let duration = cfg.duration;
+    let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
+    let grace = GRACE.max(2 * longest.unwrap_or(0));
+    let tids: Vec<AtomicI32> = (0..n).map(|_| AtomicI32::new(0)).collect();
+    let done: Vec<AtomicBool> = (0..n).map(|_| AtomicBool::new(false)).collect();
+    let mut demoted = Vec::new();
     let finished = std::thread::scope(|s| {
         let handles: Vec<_> = threads
             .into_iter()
             .map(|mut th| {
                 let (setup, go, abort, epoch, errors) = (&setup, &go, &abort, &epoch, &errors);
+                let (tid, done) = (&tids[th.task], &done[th.task]);
                 let name = spec.tasks[th.task].name.clone();
                 s.spawn(move || {
+                    tid.store(sys::gettid(), Ordering::SeqCst);
                     if let Err(e) = configure(&name, &th, policy) {
                         if let Ok(mut v) = errors.lock() {
                             v.push(e);
@@ -352,8 +394,10 @@ pub fn run<'a, V: Copy + Send>(
                     setup.wait();
                     go.wait();
                     if !abort.load(Ordering::SeqCst) {
-                        periodic(&mut th, epoch.load(Ordering::SeqCst), duration, policy, env);
+                        let e = epoch.load(Ordering::SeqCst);
+                        periodic(&mut th, e, (duration, duration + grace), policy, env);
                     }
+                    done.store(true, Ordering::SeqCst);
                     th
                 })
             })
@@ -364,8 +408,21 @@ pub fn run<'a, V: Copy + Send>(
         // Start 10 ms from now: every thread is past `go` by then.
         epoch.store(sys::now() + 10_000_000, Ordering::SeqCst);
         go.wait();
+        if !failed {
+            let end = epoch.load(Ordering::SeqCst) + duration + grace;
+            demoted = watch(end, &tids, &done);
+        }
         handles.into_iter().map(|h| h.join()).collect::<Vec<_>>()
     });
+    for &i in &demoted {
+        notes.push(format!(
+            "warning: task {} was still waiting for the CPU {} ms after the run ended \
+             (a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back): \
+             it was moved to SCHED_OTHER to finish, and its jobs released but not started by then were dropped",
+            spec.tasks[i].name,
+            grace / 1_000_000
+        ));
+    }
     let e0 = epoch.load(Ordering::SeqCst);
     let elapsed = sys::now() - e0;
     let steal = match (steal0, sys::steal_time()) {
@@ -461,11 +518,13 @@ fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), Ru
     Ok(())
 }
 
-/// The periodic loop of one task: releases at epoch + k·T for k·T < duration.
+/// The periodic loop of one task: releases at epoch + k·T for k·T <
+/// duration, none started after `stop` (the run's end plus its grace: a
+/// thread that far behind was stopped by [`watch`]).
 fn periodic<V: Copy>(
     th: &mut Thread<'_, V>,
     epoch: Nanos,
-    duration: Nanos,
+    (duration, stop): (Nanos, Nanos),
     policy: Policy,
     env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
 ) {
@@ -473,7 +532,11 @@ fn periodic<V: Copy>(
     let mut k: u64 = 0;
     loop {
         let offset = k as i64 * th.period;
-        if offset >= duration || sys::stop_requested() || th.recs.len() == th.recs.capacity() {
+        if offset >= duration
+            || sys::stop_requested()
+            || th.recs.len() == th.recs.capacity()
+            || sys::now() - epoch >= stop
+        {
             break;
         }
         if policy == Policy::Deadline && k > 0 {
@@ -685,4 +748,37 @@ fn spans(spec: &Spec, jobs: &[JobRecord]) -> Vec<Segment> {
         .collect();
     out.sort_by_key(|s| (s.start, s.task));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn watch_gives_up_on_a_stuck_thread_at_the_end() {
+        let tids = [AtomicI32::new(0), AtomicI32::new(0)];
+        let done = [AtomicBool::new(true), AtomicBool::new(false)];
+        let release = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                tids[1].store(sys::gettid(), Ordering::SeqCst);
+                // Stuck until the watcher has given up on it.
+                while !release.load(Ordering::SeqCst) {
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                }
+            });
+            while tids[1].load(Ordering::SeqCst) == 0 {
+                std::thread::yield_now();
+            }
+            let t0 = sys::now();
+            let moved = watch(t0 + 50_000_000, &tids, &done);
+            let waited = sys::now() - t0;
+            release.store(true, Ordering::SeqCst);
+            assert_eq!(moved, vec![1], "only the thread not done");
+            assert!((50_000_000..1_000_000_000).contains(&waited), "{waited} ns");
+        });
+        // All done: returns at once, moving nobody.
+        done[1].store(true, Ordering::SeqCst);
+        assert!(watch(sys::now() + 10_000_000_000, &tids, &done).is_empty());
+    }
 }
