@@ -537,6 +537,7 @@ fn to_json(
         "duration": spec.in_unit(res.sim.horizon),
         "policy": res.policy.name(),
         "load": res.load,
+        "epoch_monotonic_ns": res.epoch,
         "real_time": res.policy != Policy::Other,
         "interrupted": res.interrupted,
         "steal": res.steal.map(|s| spec.in_unit(s)),

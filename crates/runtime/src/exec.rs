@@ -118,6 +118,10 @@ pub struct RunResult {
     pub steal: Option<Nanos>,
     /// Wall time from the epoch to the last thread's end.
     pub elapsed: Nanos,
+    /// The epoch on CLOCK_MONOTONIC: every time of the run is relative to
+    /// it; add it to line the run up with other traces of the machine
+    /// (ftrace, perf, a /proc/stat sampler).
+    pub epoch: Nanos,
     /// Warnings (memory not locked, ...).
     pub notes: Vec<String>,
 }
@@ -452,6 +456,7 @@ pub fn run<'a, V: Copy + Send>(
         notes,
     );
     res.load = cfg.load;
+    res.epoch = e0;
     Ok(res)
 }
 
@@ -721,6 +726,7 @@ fn assemble<V>(
         tasks: runs,
         policy,
         load: 0,
+        epoch: 0,
         interrupted,
         steal,
         elapsed,
