@@ -176,8 +176,11 @@ fn write_outputs(spec: &Spec, a: &RunArgs, res: &RunResult, obs: &[ChainObs]) ->
         files.push(("--trace", path.clone(), t.json));
     }
     if let Some(path) = &a.plot {
+        let steal = res.steal.map_or_else(String::new, |s| {
+            format!(", steal time {:.0} ms", s as f64 / 1e6)
+        });
         let subtitle = format!(
-            "{} {} on real threads, SCHED_{}{}{}",
+            "{} {} on real threads, SCHED_{}{}{}{steal}",
             spec.fmt_time(res.sim.horizon),
             spec.time_unit,
             res.policy.name().to_uppercase(),

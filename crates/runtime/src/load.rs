@@ -21,9 +21,8 @@ pub struct Load {
 }
 
 impl Load {
-    /// Starts `n` hogs, named `rtpipe-load-<i>`, in the default class
-    /// (SCHED_OTHER; they are spawned before any task thread takes a
-    /// real-time class) and on any CPU. On an error the ones started are
+    /// Starts `n` hogs, named `rtpipe-load-<i>`, under SCHED_OTHER (each
+    /// sets it, whatever class `rtpipe` was started in) and on any CPU. On an error the ones started are
     /// stopped again.
     pub fn start(n: usize) -> io::Result<Load> {
         let mut load = Load {
@@ -70,6 +69,9 @@ impl Drop for Load {
 /// One hog: passes over its buffer (a few hundred microseconds each),
 /// checking the stop flag between passes.
 fn hog(stop: &AtomicBool) {
+    // Threads inherit their creator's class: under `chrt -f` a hog would
+    // otherwise compete with the tasks as a real-time thread.
+    let _ = crate::sys::set_other(crate::sys::gettid());
     let mut buf = vec![0u64; BUFFER / 8];
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
     while !stop.load(Ordering::Relaxed) {
@@ -101,8 +103,49 @@ mod tests {
             .count()
     }
 
+    /// The tests count hogs by name: one test at a time.
+    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+    /// The scheduling class of each hog.
+    fn hog_policies() -> Vec<i32> {
+        let Ok(d) = std::fs::read_dir("/proc/self/task") else {
+            return vec![];
+        };
+        d.filter_map(Result::ok)
+            .filter(|e| {
+                std::fs::read_to_string(e.path().join("comm"))
+                    .is_ok_and(|c| c.starts_with("rtpipe-load-"))
+            })
+            .filter_map(|e| e.file_name().to_str().and_then(|t| t.parse::<i32>().ok()))
+            // SAFETY: sched_getscheduler takes a thread id and returns its
+            // class (or -1 when the thread has just ended).
+            .map(|tid| unsafe { libc::sched_getscheduler(tid) })
+            .collect()
+    }
+
+    #[test]
+    fn hogs_are_sched_other_even_when_started_from_a_realtime_thread() {
+        let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        if !crate::sys::is_root() {
+            eprintln!("SKIPPED hogs_are_sched_other...: SCHED_FIFO needs root");
+            return;
+        }
+        let policies = std::thread::spawn(|| {
+            crate::sys::set_fifo(10).unwrap_or_else(|e| panic!("{e}"));
+            let load = Load::start(2).unwrap_or_else(|e| panic!("{e}"));
+            std::thread::sleep(Duration::from_millis(20));
+            let p = hog_policies();
+            drop(load);
+            p
+        })
+        .join()
+        .unwrap_or_else(|_| panic!("the starter panicked"));
+        assert_eq!(policies, vec![libc::SCHED_OTHER; 2]);
+    }
+
     #[test]
     fn hogs_run_and_stop_without_a_trace() {
+        let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
         let load = Load::start(2).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(load.len(), 2);
         std::thread::sleep(Duration::from_millis(50));
