@@ -95,7 +95,7 @@ pub fn paper_freshness_link(p: &LinkTask, c: &LinkTask) -> Nanos {
 
 /// Sound mode: may the priority-based arguments be used for this link? Only
 /// when both tasks share a CPU scheduled by fixed priority.
-fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
+pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     if sched != Scheduler::Rm || p.cpu != c.cpu {
         return None;
     }
@@ -118,10 +118,22 @@ pub fn sound_reaction_link(
     c: &LinkTask,
     p_distinct: bool,
 ) -> Option<Nanos> {
+    sound_reaction_link_in(fp_order(sched, p, c), p, c, p_distinct)
+}
+
+/// [`sound_reaction_link`] with the priority order of the link given
+/// (`fp_order`), so that a relaxation can take each order that is possible
+/// over a set of periods. Every option grows with every period and response
+/// time, which the relaxation relies on.
+pub fn sound_reaction_link_in(
+    order: Option<Case>,
+    p: &LinkTask,
+    c: &LinkTask,
+    p_distinct: bool,
+) -> Option<Nanos> {
     let (rp, rc) = (p.r?, c.r?);
     // Davare et al.: the first c release after the publish is less than T_c later.
     let mut l = c.t + rc;
-    let order = fp_order(sched, p, c);
     if order == Some(Case::One) {
         // c preempts p: at p's publish c has no pending job, and its last job
         // (which ran ≥ x_min(c) before the publish) was released ≥ x_min(c) earlier.
@@ -142,10 +154,16 @@ pub fn sound_reaction_link(
 /// last p job carrying a sample to the read of the last c job carrying it.
 /// A chain's freshness is the sum of these plus the tail's response time.
 pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    sound_freshness_link_in(fp_order(sched, p, c), p, c)
+}
+
+/// [`sound_freshness_link`] with the priority order given (see
+/// [`sound_reaction_link_in`]); every option grows with T_p and R_p.
+pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, _) = (p.r?, c.r?);
     // That c job reads before p's next publish, which the next p job (released
     // T_p after the one that read the sample) makes within R_p.
-    Some(match fp_order(sched, p, c) {
+    Some(match order {
         // c preempts p: that c job has even finished (≥ x_min(c) after its read)
         // by the time p publishes again.
         Some(Case::One) => p.t + rp - c.x_min,

@@ -13,6 +13,7 @@
 
 pub mod latency;
 pub mod paths;
+pub mod relax;
 pub mod sched;
 
 pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Case, ChainAnalysis, ChainBound};
@@ -39,6 +40,42 @@ impl Metric {
     }
 }
 
+/// Which analysis a verdict follows: every command and the design judge a
+/// chain limit by [`ChainResult::ok_in`] under one of these.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// The paper's equations (Eqs. 1–14) as published.
+    Paper,
+    /// The sound, interference-aware bounds (the default: no execution of
+    /// the model exceeds them).
+    #[default]
+    Sound,
+}
+
+impl Mode {
+    /// Every mode, in the order the command line lists them.
+    pub const ALL: [Mode; 2] = [Mode::Sound, Mode::Paper];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Paper => "paper",
+            Mode::Sound => "sound",
+        }
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Mode, String> {
+        Mode::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown mode `{s}` (expected `sound` or `paper`)"))
+    }
+}
+
 /// One chain and metric, judged against its limit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainResult {
@@ -56,6 +93,14 @@ impl ChainResult {
     pub fn paper_ok(&self) -> bool {
         self.limit.is_none_or(|l| self.bound.paper <= l)
     }
+
+    /// The verdict rule: the limit holds under `mode`'s bound.
+    pub fn ok_in(&self, mode: Mode) -> bool {
+        match mode {
+            Mode::Sound => self.ok,
+            Mode::Paper => self.paper_ok(),
+        }
+    }
 }
 
 /// Everything `rtpipe analyze` reports.
@@ -70,13 +115,19 @@ pub struct Report {
 impl Report {
     /// Every limit and the schedulability test hold.
     pub fn all_ok(&self) -> bool {
-        self.schedulability.schedulable && self.chains.iter().all(|c| c.ok)
+        self.ok_in(Mode::Sound)
     }
 
     /// Every limit holds under the paper's equations, and the
     /// schedulability test.
     pub fn all_ok_paper(&self) -> bool {
-        self.schedulability.schedulable && self.chains.iter().all(|c| c.paper_ok())
+        self.ok_in(Mode::Paper)
+    }
+
+    /// Every limit holds under `mode` ([`ChainResult::ok_in`]), and the
+    /// schedulability test.
+    pub fn ok_in(&self, mode: Mode) -> bool {
+        self.schedulability.schedulable && self.chains.iter().all(|c| c.ok_in(mode))
     }
 }
 

@@ -126,20 +126,47 @@ pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
     }
     let mut r = own + hp.iter().map(|&(c, _)| c).sum::<Nanos>();
     for _ in 0..1_000_000 {
-        let mut next = own as i128;
+        // Overflow means a value far beyond MAX_TIME: no bounded response.
+        let mut next = own;
         for &(c, t) in hp {
-            next += ((r as i128 + t as i128 - 1) / t as i128) * c as i128;
+            next = ((r + t - 1) / t).checked_mul(c)?.checked_add(next)?;
         }
-        if next > MAX_TIME as i128 {
+        if next > MAX_TIME {
             return None;
         }
-        let next = next as Nanos;
         if next == r {
             return Some(r);
         }
         r = next;
     }
     None
+}
+
+/// Tolerance of the utilisation tests: sums of quotients may round above a
+/// bound they meet exactly.
+const UTIL_EPS: f64 = 1e-12;
+
+/// A utilisation-based test on one CPU (not RTA) from the utilisations of
+/// its guaranteed tasks: (value, bound, passes).
+pub fn utilization_test(test: SchedTest, us: &[f64]) -> (f64, f64, bool) {
+    let n = us.len();
+    let u: f64 = us.iter().sum();
+    match test {
+        SchedTest::LiuLayland => {
+            let b = if n == 0 {
+                1.0
+            } else {
+                n as f64 * (2f64.powf(1.0 / n as f64) - 1.0)
+            };
+            (u, b, u <= b + UTIL_EPS)
+        }
+        SchedTest::Hyperbolic => {
+            let p: f64 = us.iter().map(|x| x + 1.0).product();
+            (p, 2.0, p <= 2.0 + UTIL_EPS)
+        }
+        SchedTest::Edf => (u, 1.0, u <= 1.0 + UTIL_EPS),
+        SchedTest::Rta => panic!("utilization_test: RTA is not a utilisation test"),
+    }
 }
 
 /// Response times, priorities and the schedulability verdict. Tasks without a
@@ -181,7 +208,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                     // EDF with constant-bandwidth servers: every server gets its
                     // budget by the end of each period when Σ U ≤ 1, but possibly
                     // at its very end.
-                    if cpu_util(t.cpu) <= 1.0 + 1e-12 {
+                    if cpu_util(t.cpu) <= 1.0 + UTIL_EPS {
                         (Some(period(t)), Some(period(t)))
                     } else {
                         (None, None)
@@ -212,20 +239,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             .map(|&i| timings[i].budget as f64 / timings[i].period as f64)
             .collect();
         let u: f64 = us.iter().sum();
-        const EPS: f64 = 1e-12;
         let (value, bound, ok) = match spec.schedulability {
-            SchedTest::LiuLayland => {
-                let b = if n == 0 {
-                    1.0
-                } else {
-                    n as f64 * (2f64.powf(1.0 / n as f64) - 1.0)
-                };
-                (u, b, u <= b + EPS)
-            }
-            SchedTest::Hyperbolic => {
-                let p: f64 = us.iter().map(|x| x + 1.0).product();
-                (p, 2.0, p <= 2.0 + EPS)
-            }
             SchedTest::Rta => {
                 let mut worst: f64 = 0.0;
                 let mut ok = true;
@@ -243,7 +257,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 }
                 (worst, 1.0, ok)
             }
-            SchedTest::Edf => (u, 1.0, u <= 1.0 + EPS),
+            test => utilization_test(test, &us),
         };
         verdicts.push(CpuVerdict {
             cpu,

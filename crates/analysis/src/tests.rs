@@ -5,15 +5,7 @@
 use super::*;
 use rtpipe_model::Spec;
 
-fn load(name: &str) -> Spec {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    match Spec::load(&p) {
-        Ok(s) => s,
-        Err(e) => panic!("{e}"),
-    }
-}
+use rtpipe_testkit::example as load;
 
 const MS: i64 = 1_000_000;
 const US: i64 = 1_000;

@@ -16,7 +16,6 @@
 
 use proptest::prelude::*;
 use proptest::sample::Index;
-use proptest::test_runner::{Config, TestRunner};
 use rtpipe_analysis::latency::{distinct_passes, sound_reaction_link, LinkTask};
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_analysis::{
@@ -24,8 +23,8 @@ use rtpipe_analysis::{
 };
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Nanos, PeriodSpec, Scheduler, Spec};
+use rtpipe_testkit::check;
 use std::collections::{BTreeMap, BTreeSet};
-use std::sync::Mutex;
 
 const US: Nanos = 1_000;
 /// A `None` sound bound read as +∞.
@@ -33,35 +32,6 @@ const INF: Nanos = Nanos::MAX;
 
 fn inf(x: Option<Nanos>) -> Nanos {
     x.unwrap_or(INF)
-}
-
-/// Runs `test` on `cases` values of `strategy`; failures shrink as usual but
-/// are not persisted (no regression files next to the sources). `test`
-/// returns what it did with the case ("checked", or why it was skipped); the
-/// tally is printed (visible with `--nocapture`).
-fn check<S: Strategy>(
-    name: &str,
-    cases: u32,
-    strategy: S,
-    test: impl Fn(S::Value) -> Result<&'static str, TestCaseError>,
-) {
-    let tally: Mutex<BTreeMap<&'static str, usize>> = Mutex::new(BTreeMap::new());
-    let mut runner = TestRunner::new(Config {
-        cases,
-        failure_persistence: None,
-        ..Config::default()
-    });
-    let result = runner.run(&strategy, |v| {
-        let outcome = test(v)?;
-        *tally.lock().expect("tally").entry(outcome).or_default() += 1;
-        Ok(())
-    });
-    if let Err(e) = result {
-        panic!("{name}: {e}");
-    }
-    let tally = tally.into_inner().expect("tally");
-    let total: usize = tally.values().sum();
-    eprintln!("{name}: {total} cases {tally:?}");
 }
 
 fn scheduler() -> impl Strategy<Value = Scheduler> {

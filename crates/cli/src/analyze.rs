@@ -2,7 +2,7 @@
 
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
-use rtpipe_analysis::{AllPaths, Report, Worst};
+use rtpipe_analysis::{AllPaths, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -45,29 +45,7 @@ pub fn print_json(v: &Value) -> Result<(), ExitCode> {
     }
 }
 
-/// Which analysis the verdict (and the exit status) of `analyze` follows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Judge {
-    Sound,
-    Paper,
-}
-
-impl Judge {
-    fn name(self) -> &'static str {
-        match self {
-            Judge::Sound => "sound",
-            Judge::Paper => "paper",
-        }
-    }
-    fn holds(self, r: &Report) -> bool {
-        match self {
-            Judge::Sound => r.all_ok(),
-            Judge::Paper => r.all_ok_paper(),
-        }
-    }
-}
-
-pub fn run(path: &Path, json_out: bool, all_paths: bool, judge: Judge) -> ExitCode {
+pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode {
     let spec = match load(path) {
         Ok(s) => s,
         Err(code) => return code,
@@ -83,12 +61,12 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, judge: Judge) -> ExitCo
             return code;
         }
     } else {
-        print!("{}", report_text(&spec, &report, judge));
+        print!("{}", report_text(&spec, &report, mode));
         if let Some(p) = &paths {
             print!("{}", paths_text(&spec, p));
         }
     }
-    if judge.holds(&report) {
+    if report.ok_in(mode) {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
@@ -212,7 +190,7 @@ pub fn system_line(spec: &Spec) -> String {
     )
 }
 
-pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
+pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     let mut out = system_line(spec);
     out.push('\n');
     let mut t = Table::new(&[
@@ -326,15 +304,8 @@ pub fn report_text(spec: &Spec, r: &Report, judge: Judge) -> String {
         }
         out.push_str(&t.render());
     }
-    let fails = r
-        .chains
-        .iter()
-        .filter(|c| match judge {
-            Judge::Sound => !c.ok,
-            Judge::Paper => !c.paper_ok(),
-        })
-        .count();
-    let name = judge.name();
+    let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
+    let name = mode.name();
     out.push_str(&format!(
         "\n{}\n",
         match (r.schedulability.schedulable, fails) {

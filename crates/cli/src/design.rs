@@ -1,22 +1,25 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-use crate::analyze::{report_json, report_text, Judge};
+use crate::analyze::{report_json, report_text};
 use crate::output;
-use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
+use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
 use rtpipe_design::lp::SolverKind;
-use rtpipe_design::{design, ErrorKind, Mode, Options, Outcome, Status};
-use rtpipe_model::Spec;
-use serde_json::json;
+use rtpipe_design::{
+    design, DesignError, ErrorKind, Incumbent, Method, Mode, Options, Outcome, Status,
+};
+use rtpipe_model::{PeriodSpec, Spec};
+use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::sync::{mpsc, Arc, Mutex};
+use std::time::{Duration, Instant};
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum ModeArg {
-    Sound,
-    Paper,
+pub enum MethodArg {
+    Auto,
+    Boxes,
+    Milp,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -27,10 +30,11 @@ pub enum SolverArg {
 
 pub struct Args<'a> {
     pub spec: &'a Path,
-    pub mode: ModeArg,
+    pub mode: Mode,
     pub json: bool,
     pub write: Option<&'a Path>,
     pub overwrite_spec: bool,
+    pub method: MethodArg,
     pub solver: Option<SolverArg>,
     pub time_limit: Option<f64>,
 }
@@ -82,10 +86,7 @@ pub fn run(a: Args) -> ExitCode {
         }
     };
     let opts = Options {
-        mode: match a.mode {
-            ModeArg::Sound => Mode::Sound,
-            ModeArg::Paper => Mode::Paper,
-        },
+        mode: a.mode,
         solver: match a.solver {
             Some(SolverArg::Microlp) => SolverKind::Microlp,
             Some(SolverArg::Highs) => SolverKind::Highs,
@@ -93,13 +94,19 @@ pub fn run(a: Args) -> ExitCode {
             None if SolverKind::Highs.available() => SolverKind::Highs,
             None => SolverKind::Microlp,
         },
+        method: match a.method {
+            MethodArg::Auto => Method::Auto,
+            MethodArg::Boxes => Method::Boxes,
+            MethodArg::Milp => Method::Milp,
+        },
         time_limit: a.time_limit,
         progress: Some(Arc::new(Mutex::new(String::new()))),
         ..Options::default()
     };
-    let out = match with_progress(&spec, &opts) {
-        Ok(o) => o,
-        Err(e) => {
+    let (out, stopped) = match with_progress(&spec, &opts) {
+        Ended::Finished(Ok(o)) => (o, false),
+        Ended::Interrupted(o) => (o, true),
+        Ended::Finished(Err(e)) => {
             eprintln!("{}: error: {e}", a.spec.display());
             if let Some(h) = &e.help {
                 eprintln!("  = help: {h}");
@@ -130,11 +137,19 @@ pub fn run(a: Args) -> ExitCode {
             _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
         };
         v["design"] = design_json(&spec, &out, opts.mode);
+        v["design"]["interrupted"] = json!(stopped);
+        if stopped {
+            // Not counted: the worker may still be inside a solve.
+            v["design"]["iterations"] = Value::Null;
+        }
         if let Err(code) = crate::analyze::print_json(&v) {
             return code;
         }
     } else {
-        print!("{}", design_text(&spec, &out, opts.mode));
+        print!("{}", design_text(&spec, &out, opts.mode, stopped));
+    }
+    if stopped {
+        return ExitCode::from(EXIT_INTERRUPTED);
     }
     match out.status {
         Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
@@ -142,46 +157,164 @@ pub fn run(a: Args) -> ExitCode {
     }
 }
 
-/// Runs the design with a spinner on stderr that shows what the search is
-/// doing (hidden when stderr is not a terminal).
-fn with_progress(spec: &Spec, opts: &Options) -> Result<Outcome, rtpipe_design::DesignError> {
+/// How long `design` waits for the search to notice Ctrl-C before it
+/// answers from the best verified design published so far (a microlp
+/// solve in progress cannot be interrupted).
+const CTRL_C_GRACE: Duration = Duration::from_secs(1);
+
+/// How the search ended.
+enum Ended {
+    /// The search returned by itself (or stopped at Ctrl-C with a complete
+    /// answer: proven optimal or infeasible).
+    Finished(Result<Outcome, DesignError>),
+    /// Ctrl-C: the best verified design found so far, if any.
+    Interrupted(Outcome),
+}
+
+/// Runs the design on a worker thread with a spinner on stderr that shows
+/// what the search is doing (hidden when stderr is not a terminal). Ctrl-C
+/// cancels the search; if the worker has not returned [`CTRL_C_GRACE`]
+/// later, the answer is built from the designs it published, and the worker
+/// is left to die with the process.
+fn with_progress(spec: &Spec, opts: &Options) -> Ended {
     let pb = crate::spinner(format!(
         "designing {} ({} mode)",
         spec.name,
         opts.mode.name()
     ));
-    let done = AtomicBool::new(false);
-    let out = std::thread::scope(|s| {
-        if let Some(status) = &opts.progress {
-            let (pb, done) = (&pb, &done);
-            s.spawn(move || {
-                while !done.load(Ordering::Relaxed) {
-                    if let Ok(g) = status.lock() {
-                        if !g.is_empty() {
-                            pb.set_message(g.clone());
-                        }
-                    }
-                    std::thread::sleep(Duration::from_millis(200));
-                }
-            });
-        }
-        // `done` is set however the design ends, a panic included, so the
-        // progress thread always stops (main's panic hook exits anyway).
-        struct Done<'a>(&'a AtomicBool);
-        impl Drop for Done<'_> {
-            fn drop(&mut self) {
-                self.0.store(true, Ordering::Relaxed);
-            }
-        }
-        let _done = Done(&done);
+    let start = Instant::now();
+    let cancel = Arc::new(AtomicBool::new(false));
+    let sink: Arc<Mutex<Option<Incumbent>>> = Arc::new(Mutex::new(None));
+    let opts = Options {
+        cancel: Some(cancel.clone()),
+        incumbent: Some(sink.clone()),
+        ..opts.clone()
+    };
+    rtpipe_runtime::sys::catch_sigint();
+    let (tx, rx) = mpsc::channel();
+    let (spec2, opts2) = (spec.clone(), opts.clone());
+    std::thread::spawn(move || {
         if std::env::var_os("RTPIPE_TEST_PANIC").is_some() {
-            // For the tests: a panic in a long command must end the process.
+            // For the tests: a panic in a long command must end the process
+            // (main's panic hook exits with status 3).
             panic!("RTPIPE_TEST_PANIC is set");
         }
-        design(spec, opts)
+        // The receiver is gone only when main already answered.
+        let _ = tx.send(design(&spec2, &opts2));
     });
+    let mut stopped: Option<Instant> = None;
+    let mut shown = String::new();
+    let ended = loop {
+        match rx.recv_timeout(Duration::from_millis(50)) {
+            Ok(r) => break settle(spec, &opts, r, stopped.is_some(), &sink, start),
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                break Ended::Finished(Err(DesignError::internal(
+                    "internal: the design thread ended without an answer",
+                )))
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        if let Some(Ok(g)) = opts.progress.as_ref().map(|p| p.lock()) {
+            if !g.is_empty() && *g != shown {
+                shown.clone_from(&g);
+                pb.set_message(shown.clone());
+            }
+        }
+        if stopped.is_none() && rtpipe_runtime::sys::stop_requested() {
+            cancel.store(true, Ordering::Relaxed);
+            stopped = Some(Instant::now());
+            pb.set_message("interrupted (Ctrl-C): stopping the search");
+        }
+        if stopped.is_some_and(|t| t.elapsed() >= CTRL_C_GRACE) {
+            let best = sink.lock().ok().and_then(|g| g.clone());
+            break Ended::Interrupted(interrupted(spec, &opts, best, start));
+        }
+    };
     pb.finish_and_clear();
-    out
+    ended
+}
+
+/// The worker's answer; after Ctrl-C, one that is not complete (a design
+/// not proven optimal, or none) is reported as interrupted, from the best
+/// design published (or the worker's, should it hold one the sink lacks).
+fn settle(
+    spec: &Spec,
+    opts: &Options,
+    r: Result<Outcome, DesignError>,
+    ctrl_c: bool,
+    sink: &Mutex<Option<Incumbent>>,
+    start: Instant,
+) -> Ended {
+    match r {
+        Ok(o) if ctrl_c && matches!(o.status, Status::Feasible | Status::Unknown) => {
+            let published = sink.lock().ok().and_then(|g| g.clone());
+            let own = o.spec.as_ref().zip(o.objective).map(|(s, u)| Incumbent {
+                periods: s
+                    .tasks
+                    .iter()
+                    .map(|t| t.fixed_period().unwrap_or(0))
+                    .collect(),
+                utilization: u,
+                lower_bound: o.lower_bound,
+            });
+            Ended::Interrupted(interrupted(spec, opts, published.or(own), start))
+        }
+        r => Ended::Finished(r),
+    }
+}
+
+/// The answer after Ctrl-C: the published design, its periods fixed into
+/// the spec and re-checked by the analysis (a design that does not verify
+/// is not reported).
+fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Instant) -> Outcome {
+    let mut o = Outcome {
+        status: Status::Unknown,
+        spec: None,
+        report: None,
+        objective: None,
+        lower_bound: None,
+        gap: None,
+        method: rtpipe_design::method_for(spec, opts),
+        solver: opts.solver,
+        seconds: start.elapsed().as_secs_f64(),
+        iterations: 0,
+        peak_open: 0,
+        conflicts: Vec::new(),
+        notes: Vec::new(),
+    };
+    let verified = best
+        .filter(|b| b.periods.len() == spec.tasks.len())
+        .and_then(|b| {
+            let mut s = spec.clone();
+            for (t, &p) in s.tasks.iter_mut().zip(&b.periods) {
+                t.period = PeriodSpec::Fixed(p);
+            }
+            let r = rtpipe_analysis::analyze(&s);
+            r.ok_in(opts.mode).then_some((s, r, b))
+        });
+    let Some((s, r, b)) = verified else {
+        o.notes
+            .push("interrupted (Ctrl-C) before a verified design was found".into());
+        return o;
+    };
+    let u = rtpipe_design::utilization(&s);
+    o.gap = b.lower_bound.map(|lb| {
+        if u > 0.0 {
+            ((u - lb) / u).max(0.0)
+        } else {
+            0.0
+        }
+    });
+    o.status = if o.gap.is_some_and(|g| g <= 1e-9) {
+        Status::Optimal
+    } else {
+        Status::Feasible
+    };
+    (o.spec, o.report, o.objective, o.lower_bound) = (Some(s), Some(r), Some(u), b.lower_bound);
+    o.notes.push(
+        "interrupted (Ctrl-C): the best verified design found so far, re-checked by the analysis; the gap is to the lower bound proven when it was found".into(),
+    );
+    o
 }
 
 fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
@@ -204,24 +337,36 @@ fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
         "objective": o.objective,
         "lower_bound": o.lower_bound,
         "gap": o.gap,
-        "solver": o.solver.name(),
+        "method": o.method.name(),
+        "solver": (o.method == Method::Milp).then(|| o.solver.name()),
         "seconds": o.seconds,
         "iterations": o.iterations,
+        "peak_open_boxes": (o.method == Method::Boxes).then_some(o.peak_open),
         "periods": periods,
         "conflicts": o.conflicts.iter().map(|c| json!({"constraint": c.constraint, "fix": c.fix})).collect::<Vec<_>>(),
         "notes": o.notes,
     })
 }
 
-fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
+fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
+    let search = match o.method {
+        Method::Boxes => "branch and bound over periods".to_string(),
+        _ => format!("solver {}", o.solver.name()),
+    };
+    let how = match (stopped, o.method) {
+        // The worker may still be inside a solve: its count is not known.
+        (true, _) => format!(", interrupted (Ctrl-C) after {:.2} s", o.seconds),
+        (false, Method::Boxes) => format!(
+            " after {} boxes ({} open at most) in {:.2} s",
+            o.iterations, o.peak_open, o.seconds
+        ),
+        (false, _) => format!(" after {} master solves in {:.2} s", o.iterations, o.seconds),
+    };
     let mut out = format!(
-        "design of {} ({} analysis, solver {}): {} after {} master solves in {:.2} s\n",
+        "design of {} ({} analysis, {search}): {}{how}\n",
         spec.name,
         mode.name(),
-        o.solver.name(),
         o.status.name(),
-        o.iterations,
-        o.seconds
     );
     if let (Some(u), Some(s)) = (o.objective, &o.spec) {
         out.push_str(&format!("total utilisation {u:.4}"));
@@ -246,11 +391,7 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
         }
         out.push_str("\n\nre-check by the analysis:\n\n");
         if let Some(r) = &o.report {
-            let judge = match mode {
-                Mode::Sound => Judge::Sound,
-                Mode::Paper => Judge::Paper,
-            };
-            out.push_str(&report_text(s, r, judge));
+            out.push_str(&report_text(s, r, mode));
         }
     }
     if o.status == Status::Infeasible {
@@ -267,4 +408,62 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode) -> String {
         out.push_str(&format!("note: {n}\n"));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table2() -> Spec {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/table2-design.toml"
+        );
+        match Spec::load(Path::new(path)) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    #[test]
+    fn interrupted_without_a_design_says_so() {
+        let o = interrupted(&table2(), &Options::default(), None, Instant::now());
+        assert_eq!(o.status, Status::Unknown);
+        assert!(o.spec.is_none() && o.objective.is_none());
+        assert_eq!(
+            o.notes,
+            vec!["interrupted (Ctrl-C) before a verified design was found".to_string()]
+        );
+    }
+
+    #[test]
+    fn interrupted_reports_a_published_design_only_if_it_verifies() {
+        let spec = table2();
+        let paper = Options {
+            mode: Mode::Paper,
+            ..Options::default()
+        };
+        // The paper-mode optimum of Section IV-B (README): U = 0.5119.
+        let ms = 1_000_000;
+        let best = Incumbent {
+            periods: [9, 14, 5, 50, 12, 50].map(|p| p * ms).to_vec(),
+            utilization: 0.5119,
+            lower_bound: Some(0.5),
+        };
+        let o = interrupted(&spec, &paper, Some(best.clone()), Instant::now());
+        assert_eq!(o.status, Status::Feasible);
+        let u = o.objective.unwrap_or(f64::NAN);
+        assert!((u - 0.5119).abs() < 5e-5, "{u}");
+        assert_eq!(o.lower_bound, Some(0.5));
+        assert!((o.gap.unwrap_or(f64::NAN) - (u - 0.5) / u).abs() < 1e-12);
+        assert!(o.report.as_ref().is_some_and(|r| r.ok_in(Mode::Paper)));
+        // All periods at 5 ms overload the CPU: not verified, not reported.
+        let bad = Incumbent {
+            periods: vec![5 * ms; 6],
+            ..best
+        };
+        let o = interrupted(&spec, &paper, Some(bad), Instant::now());
+        assert_eq!(o.status, Status::Unknown);
+        assert!(o.spec.is_none());
+    }
 }

@@ -10,8 +10,10 @@ mod simulate;
 mod sweep;
 mod table;
 
+use clap::builder::TypedValueParser;
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+use rtpipe_analysis::Mode;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -44,8 +46,8 @@ enum Command {
         all_paths: bool,
         /// The analysis the verdict and the exit status follow (both are
         /// always shown).
-        #[arg(long, value_enum, default_value = "sound")]
-        mode: analyze::Judge,
+        #[arg(long, value_parser = mode_parser(), default_value = "sound")]
+        mode: Mode,
     },
     /// Simulate the system and hold observed reaction and freshness times
     /// against the analysis' bounds.
@@ -78,13 +80,15 @@ enum Command {
     ///
     /// Exit status: 0 with a verified design, 1 when none exists (or none was
     /// found in time), 2 on bad input (flags, spec, output path), 3 when the
-    /// solver fails or on an internal error (a bug).
+    /// solver fails or on an internal error (a bug), 130 when Ctrl-C stopped
+    /// the search (the best verified design so far is printed, and written
+    /// with --write).
     Design {
         /// The system spec (TOML); tasks without a fixed period are designed.
         spec: PathBuf,
         /// The analysis the chain limits are judged by.
-        #[arg(long, value_enum, default_value = "sound")]
-        mode: design::ModeArg,
+        #[arg(long, value_parser = mode_parser(), default_value = "sound")]
+        mode: Mode,
         /// Print one JSON object: the analysis of the design plus "design".
         #[arg(long)]
         json: bool,
@@ -97,6 +101,12 @@ enum Command {
         /// ranges are lost).
         #[arg(long, requires = "write")]
         overwrite_spec: bool,
+        /// The exact search: `boxes` (branch and bound over period boxes,
+        /// pruned by the sound analysis; sound mode without harmonic
+        /// periods), `milp` (the mixed-integer model; every case), or `auto`
+        /// (boxes where they apply, else milp).
+        #[arg(long, value_enum, default_value = "auto")]
+        method: design::MethodArg,
         /// MILP backend [default: highs when built with `--features highs`,
         /// else microlp].
         #[arg(long, value_enum)]
@@ -107,6 +117,13 @@ enum Command {
         #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
         time_limit: Option<f64>,
     },
+}
+
+/// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
+/// the help and in errors.
+fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Mode> {
+    clap::builder::PossibleValuesParser::new(Mode::ALL.map(Mode::name))
+        .try_map(|s| s.parse::<Mode>())
 }
 
 /// A spinner with a message and the elapsed time on stderr (hidden when
@@ -129,6 +146,11 @@ pub const EXIT_BAD_INPUT: u8 = 2;
 
 /// Exit status for an internal error: a panic (a bug) or a solver failure.
 pub const EXIT_INTERNAL: u8 = 3;
+
+/// Exit status when Ctrl-C stopped `design` (128 + SIGINT, as a shell
+/// reports a process that SIGINT ended), whether or not a design was found
+/// and printed: the answer is not the one the complete search gives.
+pub const EXIT_INTERRUPTED: u8 = 130;
 
 /// A panic anywhere (any thread) prints its message and ends the process
 /// with [`EXIT_INTERNAL`]: it never leaves a waiting thread behind.
@@ -177,6 +199,7 @@ fn main() -> ExitCode {
             json,
             write,
             overwrite_spec,
+            method,
             solver,
             time_limit,
         } => design::run(design::Args {
@@ -185,6 +208,7 @@ fn main() -> ExitCode {
             json,
             write: write.as_deref(),
             overwrite_spec,
+            method,
             solver,
             time_limit,
         }),

@@ -4,7 +4,9 @@
 
 mod common;
 
-use common::{assert_exit, example, json_of, listing, rtpipe, rtpipe_in, scratch};
+use common::{
+    assert_exit, example, json_of, listing, rtpipe, rtpipe_in, rtpipe_interrupted, scratch,
+};
 use std::path::Path;
 use std::time::Duration;
 
@@ -389,6 +391,96 @@ fn too_many_period_steps_name_the_task_and_a_resolution() {
         "{err}"
     );
     assert!(err.contains("help: set a coarser resolution"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// 3. Ctrl-C stops the design search and prints the best verified design.
+
+/// Sound-mode Cleanflight runs for minutes under microlp; Ctrl-C after 3 s
+/// must end it within a few seconds with a verified design printed and
+/// written whole, and exit 130.
+#[test]
+fn ctrl_c_stops_design_and_prints_the_best_verified_design() {
+    let dir = scratch("ctrl-c");
+    let spec = example("cleanflight-design.toml");
+    let (o, after) = rtpipe_interrupted(
+        &dir,
+        &[
+            "design", &spec, "--solver", "microlp", "--write", "out.toml",
+        ],
+        Duration::from_secs(3),
+        LIMIT,
+    );
+    assert_exit(&o, 130);
+    // One second of grace for a solve in progress, plus the re-check.
+    assert!(
+        after < Duration::from_secs(4),
+        "exited {after:?} after SIGINT"
+    );
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        text.contains("design of cleanflight (sound analysis, solver microlp): feasible, interrupted (Ctrl-C) after"),
+        "{text}"
+    );
+    assert!(text.contains("note: interrupted (Ctrl-C)"), "{text}");
+    assert!(text.contains("gap"), "{text}");
+    assert!(
+        text.contains("verdict: every limit holds (sound analysis) and the system is schedulable"),
+        "{text}"
+    );
+    // The written spec is whole (no temporary file left) and verifies.
+    assert_eq!(listing(&dir), vec!["out.toml".to_string()]);
+    let check = rtpipe_in(&dir, &["analyze", "out.toml"], &[], LIMIT);
+    assert_exit(&check, 0);
+    // Its periods are the ones printed.
+    let printed = text
+        .lines()
+        .find_map(|l| l.strip_prefix("periods: "))
+        .unwrap_or_default()
+        .to_string();
+    let written = read(&dir.join("out.toml"));
+    for kv in printed.split_whitespace() {
+        let (name, p) = kv.split_once('=').unwrap_or((kv, ""));
+        let p = p.trim_end_matches("(fixed)");
+        assert!(
+            written.contains(&format!("[tasks.{name}]"))
+                && written.contains(&format!("period = \"{p}us\"")),
+            "{name}={p} not in\n{written}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// --json says that the answer was interrupted and keeps the exit status.
+#[test]
+fn ctrl_c_in_json_mode_says_interrupted() {
+    let dir = scratch("ctrl-c-json");
+    let spec = example("cleanflight-design.toml");
+    let (o, after) = rtpipe_interrupted(
+        &dir,
+        &["design", &spec, "--solver", "microlp", "--json"],
+        Duration::from_secs(2),
+        LIMIT,
+    );
+    assert_exit(&o, 130);
+    assert!(
+        after < Duration::from_secs(4),
+        "exited {after:?} after SIGINT"
+    );
+    let v = json_of(&o);
+    assert_eq!(v["design"]["interrupted"], serde_json::json!(true));
+    assert_eq!(v["design"]["status"], serde_json::json!("feasible"));
+    assert_eq!(v["ok"], serde_json::json!(true));
+    let (u, lb) = (
+        v["design"]["objective"].as_f64().unwrap_or(f64::NAN),
+        v["design"]["lower_bound"].as_f64().unwrap_or(f64::NAN),
+    );
+    assert!(
+        lb > 0.0 && lb <= u && u < 1.0,
+        "objective {u}, lower bound {lb}"
+    );
+    let gap = v["design"]["gap"].as_f64().unwrap_or(f64::NAN);
+    assert!((gap - (u - lb) / u).abs() < 1e-12, "gap {gap}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

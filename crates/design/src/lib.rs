@@ -8,6 +8,7 @@
 //! Every answer is re-checked by `rtpipe_analysis::analyze` before it is
 //! returned; the [`Outcome`] carries that report.
 
+mod bnb;
 pub mod lp;
 
 use lp::{Cmp, Limits, Lp, LpError, SolverKind};
@@ -19,20 +20,29 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-/// Which analysis the chain limits are judged by.
+/// Which analysis the chain limits are judged by (one enum for the whole
+/// workspace).
+pub use rtpipe_analysis::Mode;
+
+/// How the exact search runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mode {
-    /// The paper's equations (Eqs. 1–14).
-    Paper,
-    /// The sound, interference-aware bounds.
-    Sound,
+pub enum Method {
+    /// The box search where it applies (sound mode, periods not harmonic),
+    /// the MILP otherwise.
+    Auto,
+    /// Branch and bound over boxes of periods, pruned by the sound
+    /// analysis' relaxation (`bnb.rs`; sound mode only).
+    Boxes,
+    /// The mixed-integer model of docs/design.md, solved by `solver`.
+    Milp,
 }
 
-impl Mode {
+impl Method {
     pub fn name(self) -> &'static str {
         match self {
-            Mode::Paper => "paper",
-            Mode::Sound => "sound",
+            Method::Auto => "auto",
+            Method::Boxes => "boxes",
+            Method::Milp => "milp",
         }
     }
 }
@@ -40,6 +50,8 @@ impl Mode {
 #[derive(Debug, Clone)]
 pub struct Options {
     pub mode: Mode,
+    pub method: Method,
+    /// The MILP's solver.
     pub solver: SolverKind,
     /// Wall-clock limit for the whole search, in seconds. Without it the
     /// search is bounded by work only, so its answer is the same on every
@@ -78,6 +90,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             mode: Mode::Sound,
+            method: Method::Auto,
             solver: SolverKind::Microlp,
             time_limit: None,
             max_iterations: 500,
@@ -133,9 +146,14 @@ pub struct Outcome {
     pub lower_bound: Option<f64>,
     /// (objective − lower bound) / objective.
     pub gap: Option<f64>,
+    /// The search that ran: [`Method::Boxes`] or [`Method::Milp`].
+    pub method: Method,
     pub solver: SolverKind,
     pub seconds: f64,
+    /// Master solves (MILP) or boxes examined (box search).
     pub iterations: usize,
+    /// The most boxes the box search held open at once (memory).
+    pub peak_open: usize,
     pub conflicts: Vec<Conflict>,
     pub notes: Vec<String>,
 }
@@ -596,6 +614,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     if spec.harmonic {
         harmonic_domains(spec, &mut dom, &mut notes)?;
     }
+    let boxes = choose_method(spec, opts)?;
     let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
     let max_limit = gu(horizon, g);
     let big_m = 4.0 * (max_t + max_limit) + 10.0;
@@ -618,10 +637,38 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             .collect(),
         numerical: NumLog::default(),
         start_periods: None,
+        boxes,
     };
-    let mut o = run.solve_all()?;
+    let mut o = if boxes {
+        run.solve_boxes()?
+    } else {
+        run.solve_all()?
+    };
     o.notes.splice(0..0, notes);
     Ok(o)
+}
+
+/// The search `design` runs for `spec` with `opts` ([`Method::Boxes`] or
+/// [`Method::Milp`]; an invalid `--method boxes` is reported by `design`).
+pub fn method_for(spec: &Spec, opts: &Options) -> Method {
+    match choose_method(spec, opts) {
+        Ok(true) | Err(_) if opts.method != Method::Milp => Method::Boxes,
+        _ => Method::Milp,
+    }
+}
+
+/// Whether the box search runs (true) or the MILP.
+fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
+    let fits = opts.mode == Mode::Sound && !spec.harmonic;
+    match opts.method {
+        Method::Auto => Ok(fits),
+        Method::Milp => Ok(false),
+        Method::Boxes if fits => Ok(true),
+        Method::Boxes => Err(DesignError::input(
+            "the box search designs in sound mode without `harmonic = true` only",
+        )
+        .help("use --method milp (or leave --method out)")),
+    }
 }
 
 /// Most candidate periods a free task keeps under `harmonic = true` before
@@ -773,6 +820,8 @@ struct Runner<'a> {
     /// The best verified design's periods (ns): a starting solution for
     /// microlp's branch and bound.
     start_periods: Option<Vec<Nanos>>,
+    /// The box search decides (`bnb.rs`), not the MILP.
+    boxes: bool,
 }
 
 /// Master problems on which the solver failed numerically (`lp::solve`
@@ -878,6 +927,24 @@ impl<'a> Runner<'a> {
         if let Some(p) = &self.opts.progress {
             if let Ok(mut g) = p.lock() {
                 *g = what();
+            }
+        }
+    }
+
+    /// Hands a better verified design to [`Options::incumbent`], so that a
+    /// caller that stops waiting (Ctrl-C) can still report it.
+    fn publish(&self, best: &Option<(Spec, Report, f64)>, lower_bound: Option<f64>) {
+        if let (Some(sink), Some((s, _, u))) = (&self.opts.incumbent, best) {
+            if let Ok(mut g) = sink.lock() {
+                *g = Some(Incumbent {
+                    periods: s
+                        .tasks
+                        .iter()
+                        .map(|t| t.fixed_period().unwrap_or(0))
+                        .collect(),
+                    utilization: *u,
+                    lower_bound: lower_bound.map(|b| b.min(*u)),
+                });
             }
         }
     }
@@ -1555,10 +1622,7 @@ impl<'a> Runner<'a> {
 
     /// One chain limit holds under the mode's analysis.
     fn chain_ok(&self, c: &ChainResult) -> bool {
-        match self.opts.mode {
-            Mode::Sound => c.ok,
-            Mode::Paper => c.paper_ok(),
-        }
+        c.ok_in(self.opts.mode)
     }
 
     fn limits_ok(&self, report: &Report) -> bool {
@@ -1592,6 +1656,7 @@ impl<'a> Runner<'a> {
         // A quick verified design, if there is an easy one: reported when
         // the exact search runs out of time (it does not start the patience).
         let mut incumbent: Option<(Spec, Report, f64)> = self.descent();
+        self.publish(&incumbent, lower_bound);
         let mut heuristic_tried = false;
         // Work done when the exact search found its first verified design.
         let mut exact_since: Option<u64> = None;
@@ -1667,6 +1732,7 @@ impl<'a> Runner<'a> {
                         let u = utilization(&cand);
                         if incumbent.as_ref().is_none_or(|(_, _, b)| u < *b) {
                             incumbent = Some((cand.clone(), report.clone(), u));
+                            self.publish(&incumbent, lower_bound);
                         }
                         exact_since.get_or_insert(self.work);
                     }
@@ -1695,6 +1761,7 @@ impl<'a> Runner<'a> {
                             if let Some(h) = self.heuristic(&groups, &sm_copy, start) {
                                 if incumbent.as_ref().is_none_or(|(_, _, b)| h.2 < *b) {
                                     incumbent = Some(h);
+                                    self.publish(&incumbent, lower_bound);
                                 }
                             }
                             exact_since.get_or_insert(self.work);
@@ -1880,9 +1947,15 @@ impl<'a> Runner<'a> {
             objective: None,
             lower_bound,
             gap: None,
+            method: if self.boxes {
+                Method::Boxes
+            } else {
+                Method::Milp
+            },
             solver: self.opts.solver,
             seconds: self.elapsed(),
             iterations: self.iterations,
+            peak_open: 0,
             conflicts,
             notes,
         }
@@ -1921,6 +1994,9 @@ impl<'a> Runner<'a> {
     /// valid everywhere and kept.
     /// `None` when it could not be decided (time or iteration limit).
     fn probe(&mut self, groups: &[Group], sound: Option<&SoundModel>) -> Option<bool> {
+        if self.boxes {
+            return self.probe_boxes(groups);
+        }
         let mut sm = sound.cloned();
         for _ in 0..100 {
             if self.out_of_time() {
@@ -2087,6 +2163,7 @@ impl<'a> Runner<'a> {
                 on_chain: me.on_chain.clone(),
                 numerical: NumLog::default(),
                 start_periods: None,
+                boxes: me.boxes,
             };
             let r = sub.probe(core, sound);
             // The sub-search's work counts against the budget.

@@ -1,19 +1,7 @@
 use super::*;
 use rtpipe_model::Spec;
 
-fn load_with(name: &str, edit: impl Fn(&str) -> String) -> Spec {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    let text = match std::fs::read_to_string(&p) {
-        Ok(t) => edit(&t),
-        Err(e) => panic!("{e}"),
-    };
-    match Spec::parse(name, &text) {
-        Ok(s) => s,
-        Err(e) => panic!("{e}"),
-    }
-}
+use rtpipe_testkit::example_with as load_with;
 
 fn run(spec: &Spec, mode: Mode) -> Outcome {
     let opts = Options {
@@ -257,4 +245,44 @@ fn backends_agree_on_cleanflight() {
     let us = paper_optimum_per_backend(&load_with("cleanflight-design.toml", |t| t.to_string()));
     assert!((us[0] - us[1]).abs() / us[0] < 1e-6, "{us:?}");
     assert!((us[0] - 0.142_074_5).abs() < 1e-7, "{us:?}");
+}
+
+/// Every better verified design is published as it is found: when the
+/// search ends, the sink holds the answer's periods and utilisation.
+#[test]
+fn the_incumbent_sink_holds_the_answer() {
+    // Paper mode: proven optimal in milliseconds (sound mode is proven
+    // infeasible here, after minutes).
+    let spec = table2_free();
+    {
+        let mode = Mode::Paper;
+        let sink = Arc::new(Mutex::new(None));
+        let opts = Options {
+            mode,
+            incumbent: Some(sink.clone()),
+            ..Options::default()
+        };
+        let o = match design(&spec, &opts) {
+            Ok(o) => o,
+            Err(e) => panic!("{e}"),
+        };
+        let Some(s) = &o.spec else {
+            panic!("{mode:?}: no design: {:?}", o.status)
+        };
+        let got = sink.lock().map(|g| g.clone()).unwrap_or(None);
+        let Some(inc) = got else {
+            panic!("{mode:?}: nothing published")
+        };
+        let periods: Vec<Nanos> = s
+            .tasks
+            .iter()
+            .map(|t| t.fixed_period().unwrap_or(-1))
+            .collect();
+        assert_eq!(inc.periods, periods, "{mode:?}");
+        assert_eq!(Some(inc.utilization), o.objective, "{mode:?}");
+        assert!(
+            inc.lower_bound.is_some_and(|b| b <= inc.utilization),
+            "{mode:?}"
+        );
+    }
 }

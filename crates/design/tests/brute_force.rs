@@ -18,7 +18,7 @@
 
 use rtpipe_analysis::{analyze, bounds_per_chain, Report};
 use rtpipe_design::lp::SolverKind;
-use rtpipe_design::{design, utilization, Mode, Options, Outcome, Status};
+use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
 use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
 use std::collections::BTreeMap;
@@ -273,7 +273,7 @@ fn cases(default: usize) -> usize {
         .unwrap_or(default)
 }
 
-fn run(mode: Mode, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
+fn run(mode: Mode, method: Method, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
     let verbose = std::env::var_os("RTPIPE_DESIGN_VERBOSE").is_some();
     let mut tally: BTreeMap<&'static str, usize> = BTreeMap::new();
     let mut failures = Vec::new();
@@ -287,6 +287,7 @@ fn run(mode: Mode, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
         };
         let opts = Options {
             mode,
+            method,
             solver: SolverKind::Microlp,
             time_limit: Some(time_limit),
             ..Options::default()
@@ -325,8 +326,9 @@ fn run(mode: Mode, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
     }
     let unknown = tally.get("unknown").copied().unwrap_or(0);
     eprintln!(
-        "{} mode{}: {n} instances {tally:?} in {:.1} s (slowest: seed {} {:.2} s)",
+        "{} mode ({}){}: {n} instances {tally:?} in {:.1} s (slowest: seed {} {:.2} s)",
         mode.name(),
+        method.name(),
         if ranges { ", with ranges" } else { "" },
         start.elapsed().as_secs_f64(),
         slowest.1,
@@ -341,19 +343,29 @@ fn run(mode: Mode, first_seed: u64, n: usize, time_limit: f64, ranges: bool) {
 
 #[test]
 fn sound_mode_agrees_with_brute_force() {
-    run(Mode::Sound, 0, cases(300), 3.0, false);
+    run(Mode::Sound, Method::Boxes, 0, cases(300), 3.0, false);
+}
+
+#[test]
+fn sound_mode_milp_agrees_with_brute_force() {
+    run(Mode::Sound, Method::Milp, 0, cases(300), 3.0, false);
 }
 
 #[test]
 fn paper_mode_agrees_with_brute_force() {
-    run(Mode::Paper, 100_000, cases(300), 3.0, false);
+    run(Mode::Paper, Method::Auto, 100_000, cases(300), 3.0, false);
 }
 
 #[test]
 fn ranges_agree_with_brute_force() {
     let n = cases(300) / 3;
-    run(Mode::Sound, 200_000, n, 3.0, true);
-    run(Mode::Paper, 300_000, n, 3.0, true);
+    run(Mode::Sound, Method::Boxes, 200_000, n, 3.0, true);
+    run(Mode::Paper, Method::Auto, 300_000, n, 3.0, true);
+}
+
+#[test]
+fn ranges_agree_with_brute_force_milp() {
+    run(Mode::Sound, Method::Milp, 200_000, cases(300) / 3, 3.0, true);
 }
 
 #[test]

@@ -1,4 +1,6 @@
 //! Issue 14: a numerical failure of the solver is not the user's error.
+//! These problems run the MILP (`Method::Milp`); the box search, which
+//! solves no LP, has its own tests (tests/boxes.rs).
 //!
 //! Cleanflight's design problems in sound mode make microlp hit a singular
 //! basis ("Singular matrix") in some master problems. `design` must still
@@ -8,19 +10,10 @@
 //! release; debug builds are much slower).
 
 use rtpipe_analysis::analyze;
-use rtpipe_design::{design, utilization, Mode, Options, Outcome, Status};
+use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
 use rtpipe_model::Spec;
 
-fn example(name: &str) -> String {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn parse(name: &str, source: &str) -> Spec {
-    Spec::parse(name, source).unwrap_or_else(|e| panic!("{name}: {e:?}"))
-}
+use rtpipe_testkit::{example_text as example, spec as parse};
 
 /// Designs in sound mode and checks the outcome.
 fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
@@ -82,6 +75,7 @@ fn cleanflight_derived_recovers_from_a_singular_basis() {
         "cleanflight-derived",
         &spec,
         Options {
+            method: Method::Milp,
             patience: Some(5_000),
             ..Options::default()
         },
@@ -106,6 +100,7 @@ fn cleanflight_design_never_crashes() {
         "cleanflight-design",
         &spec,
         Options {
+            method: Method::Milp,
             time_limit: Some(15.0),
             ..Options::default()
         },
@@ -129,6 +124,7 @@ fn cleanflight_design_with_transfers_never_crashes() {
         "cleanflight-design with transfers",
         &spec,
         Options {
+            method: Method::Milp,
             time_limit: Some(15.0),
             ..Options::default()
         },

@@ -11,12 +11,10 @@
 
 use proptest::prelude::*;
 use proptest::sample::{select, Index};
-use proptest::test_runner::{Config, TestRunner};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{format_in, PeriodSpec, Scheduler, Server, Spec, TimeUnit};
-use std::collections::BTreeMap;
+use rtpipe_testkit::check;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::sync::Mutex;
 
 const EXAMPLES: [(&str, &str); 3] = [
     (
@@ -32,33 +30,6 @@ const EXAMPLES: [(&str, &str); 3] = [
         include_str!("../../../examples/paper-table3.toml"),
     ),
 ];
-
-/// Runs `test` on `cases` values; failures shrink but are not persisted. The
-/// outcome labels `test` returns are tallied and printed.
-fn check<S: Strategy>(
-    name: &str,
-    cases: u32,
-    strategy: S,
-    test: impl Fn(S::Value) -> Result<&'static str, TestCaseError>,
-) {
-    let tally: Mutex<BTreeMap<&'static str, usize>> = Mutex::new(BTreeMap::new());
-    let mut runner = TestRunner::new(Config {
-        cases,
-        failure_persistence: None,
-        ..Config::default()
-    });
-    let result = runner.run(&strategy, |v| {
-        let outcome = test(v)?;
-        *tally.lock().expect("tally").entry(outcome).or_default() += 1;
-        Ok(())
-    });
-    if let Err(e) = result {
-        panic!("{name}: {e}");
-    }
-    let tally = tally.into_inner().expect("tally");
-    let total: usize = tally.values().sum();
-    eprintln!("{name}: {total} cases {tally:?}");
-}
 
 fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
     p.downcast_ref::<&str>()

@@ -29,9 +29,9 @@
 //! truth: a tightness of 1 proves the bound exact for this system, a tightness
 //! above 1 is a soundness bug of the analysis (or of the simulator).
 
+use crate::rng::Rng;
 use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
 use rtpipe_analysis::{analyze, Anchor, Metric};
-use rtpipe_model::gen::Rng;
 use rtpipe_model::{Nanos, Spec};
 use std::fmt;
 

@@ -53,17 +53,23 @@ impl Sporadic {
     }
 
     fn head(&self) -> Refill {
-        // Invariant: the queue is never empty.
-        self.queue
-            .front()
-            .copied()
-            .unwrap_or(Refill { time: 0, amount: 0 })
+        // Every operation keeps at least one refill (their amounts sum to C):
+        // an empty queue is a bug in this file, not a state to work around.
+        match self.queue.front() {
+            Some(h) => *h,
+            None => unreachable!("sporadic server: empty replenishment queue"),
+        }
     }
 
     /// Budget usable right now: head.amount − usage once the head is due.
     pub fn capacity(&self, now: Nanos) -> Nanos {
         let h = self.head();
         if h.time <= now {
+            // Usage beyond the head is an overrun (the corrected POSIX
+            // rules allow for them, and `charge` calls this right after
+            // adding the usage): nothing is left, and Budget_Check pushes the
+            // next refill back by the excess. Part of the rules, not a
+            // repair; the simulator itself never overruns (it asserts so).
             (h.amount - self.usage).max(0)
         } else {
             0
@@ -295,6 +301,8 @@ impl Cbs {
             return;
         }
         let late = self.deadline <= now;
+        // Time left to the deadline, none once it has passed (then `late`
+        // decides anyway): part of the rule, not a repair.
         let overflow = (self.runtime as i128) * (self.period as i128)
             > (self.budget as i128) * ((self.deadline - now).max(0) as i128);
         if late || overflow {
@@ -306,6 +314,9 @@ impl Cbs {
     pub fn capacity(&self, now: Nanos) -> Nanos {
         match self.throttled_until {
             Some(t) if now < t => 0,
+            // As in the kernel, an overrun leaves runtime negative (the
+            // deficit is paid back at the next replenishment) and nothing
+            // usable; the simulator itself never overruns (it asserts so).
             _ => self.runtime.max(0),
         }
     }

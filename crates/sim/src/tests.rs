@@ -3,6 +3,7 @@
 
 use super::*;
 use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
+use rtpipe_model::{Scheduler, Server};
 
 /// A task with exec = exec_min (no transfer stages), one output, on `cpu`.
 pub(crate) fn task(period: Nanos, exec: Nanos, reads: &[usize], cpu: u32) -> Task {

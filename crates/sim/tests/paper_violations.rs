@@ -9,15 +9,7 @@ use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 
 const MS: i64 = 1_000_000;
 
-fn load(name: &str) -> Spec {
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name);
-    match Spec::load(&p) {
-        Ok(s) => s,
-        Err(e) => panic!("{e}"),
-    }
-}
+use rtpipe_testkit::example as load;
 
 fn bounds(spec: &Spec, chain: usize, metric: Metric) -> (i64, i64) {
     let r = analyze(spec);

@@ -7,9 +7,7 @@ use std::process::{Command, Output};
 
 /// The path of a bundled example.
 pub fn example(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
+    rtpipe_testkit::example_path(name)
         .to_string_lossy()
         .into_owned()
 }
@@ -65,6 +63,49 @@ pub fn rtpipe_in(
     env: &[(&str, &str)],
     timeout: std::time::Duration,
 ) -> Output {
+    supervise(dir, args, env, timeout, None).0
+}
+
+/// Runs the binary in `dir`, sends it SIGINT (Ctrl-C) after `after`, and
+/// returns what it printed and how long it took to exit after the signal;
+/// kills it and fails the test when it runs longer than `timeout` in all.
+pub fn rtpipe_interrupted(
+    dir: &std::path::Path,
+    args: &[&str],
+    after: std::time::Duration,
+    timeout: std::time::Duration,
+) -> (Output, std::time::Duration) {
+    let (o, sent) = supervise(dir, args, &[], timeout, Some(after));
+    match sent {
+        Some(t) => (o, t.elapsed()),
+        None => panic!(
+            "rtpipe {} exited before SIGINT was sent: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+    }
+}
+
+/// Sends SIGINT to a process (through kill(1): no libc in the tests).
+fn sigint(pid: u32) {
+    match Command::new("kill")
+        .args(["-INT", &pid.to_string()])
+        .status()
+    {
+        Ok(s) if s.success() => {}
+        other => panic!("kill -INT {pid} failed: {other:?}"),
+    }
+}
+
+/// Runs the binary, optionally sending SIGINT after a delay (the instant it
+/// was sent is returned), and kills it past `timeout`.
+fn supervise(
+    dir: &std::path::Path,
+    args: &[&str],
+    env: &[(&str, &str)],
+    timeout: std::time::Duration,
+    sigint_after: Option<std::time::Duration>,
+) -> (Output, Option<std::time::Instant>) {
     use std::io::Read;
     use std::process::Stdio;
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_rtpipe"));
@@ -97,9 +138,14 @@ pub fn rtpipe_in(
         b
     });
     let start = std::time::Instant::now();
+    let mut sent = None;
     let status = loop {
         match child.try_wait() {
             Ok(Some(s)) => break s,
+            Ok(None) if sent.is_none() && sigint_after.is_some_and(|a| start.elapsed() >= a) => {
+                sigint(child.id());
+                sent = Some(std::time::Instant::now());
+            }
             Ok(None) if start.elapsed() > timeout => {
                 let _ = child.kill();
                 let _ = child.wait();
@@ -112,11 +158,12 @@ pub fn rtpipe_in(
             Err(e) => panic!("cannot wait for rtpipe: {e}"),
         }
     };
-    Output {
+    let o = Output {
         status,
         stdout: t_out.join().unwrap_or_default(),
         stderr: t_err.join().unwrap_or_default(),
-    }
+    };
+    (o, sent)
 }
 
 /// The names in a directory, sorted (hidden files included).

@@ -1,0 +1,392 @@
+//! The sound analysis over a box of periods: lower bounds that hold for
+//! every choice of periods `lo ≤ T ≤ hi`, for a design search that prunes
+//! whole boxes (`rtpipe_design`'s branch and bound).
+//!
+//! Nothing here is a second copy of the analysis. The link terms are the
+//! ones of [`crate::latency`], evaluated at the box's most favourable values:
+//! every option of every term grows with periods and response times, so the
+//! terms at `T = lo` and `R = R_lb` bound them from below; where the priority
+//! order of a link is not decided by the box, the smallest term over the
+//! possible orders is taken. Response times come from the same recurrence
+//! ([`response_time`]) with only the tasks that are above whatever the
+//! periods, at their longest periods: fewer and rarer interferers can only
+//! shorten the fixed point. At a box of one point every figure equals the
+//! analysis' (a test checks it), and shrinking a box never lowers a figure.
+//! docs/design.md gives the argument.
+
+use crate::latency::{
+    distinct_passes, sound_freshness_link_in, sound_reaction_link_in, Case, LinkTask,
+};
+use crate::sched::{interference, response_time, utilization_test};
+use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec};
+
+/// Lower bounds over a box of periods.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Relaxed {
+    /// Per task: a lower bound on the job response time (demand x), `None`
+    /// when it exceeds the period at every point of the box (or diverges).
+    pub job_response: Vec<Option<Nanos>>,
+    /// Per task: the same at budget level (the RTA test's figure).
+    pub budget_response: Vec<Option<Nanos>>,
+    /// Per CPU, ascending: whether its schedulability test may pass
+    /// somewhere in the box.
+    pub cpus: Vec<(u32, bool)>,
+    /// Per declared chain: lower bounds on its sound (reaction, freshness)
+    /// from the read; `None` when the chain is unbounded everywhere.
+    pub chains: Vec<(Option<Nanos>, Option<Nanos>)>,
+    /// Per declared chain: the two sums that the sound reaction is the
+    /// smaller of (E: reaction links, F: freshness links), as bounds that
+    /// grow linearly with the periods; the sound freshness is F. `None` when
+    /// the chain is unbounded everywhere. Empty unless asked for.
+    pub forms: Vec<Option<(Affine, Affine)>>,
+}
+
+/// A bound that grows linearly with the periods over the box:
+/// `value(T) ≥ base + Σ slope_i · (T_i − lo_i)` at every point T.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Affine {
+    pub base: f64,
+    /// (task, slope ≥ 0); a task may appear more than once.
+    pub slopes: Vec<(usize, f64)>,
+}
+
+impl Affine {
+    /// The bound at periods `t` (ns), with `lo` the box's lower ends.
+    pub fn at(&self, lo: &[Nanos], t: &[Nanos]) -> f64 {
+        self.base
+            + self
+                .slopes
+                .iter()
+                .map(|&(i, s)| s * (t[i] - lo[i]) as f64)
+                .sum::<f64>()
+    }
+}
+
+/// The priority facts a box decides, for one CPU under RM.
+struct Order<'a> {
+    spec: &'a Spec,
+    lo: &'a [Nanos],
+    hi: &'a [Nanos],
+    /// Rank orders imposed besides the box: `imposed[a·n + b]` = a above b.
+    imposed: Vec<bool>,
+}
+
+impl Order<'_> {
+    fn is_imposed(&self, a: usize, b: usize) -> bool {
+        !self.imposed.is_empty() && self.imposed[a * self.lo.len() + b]
+    }
+
+    fn ranked(&self, a: usize) -> bool {
+        let t = &self.spec.tasks[a];
+        self.spec.scheduler == Scheduler::Rm && t.server != Server::Background
+    }
+
+    /// `a` has the higher RM rank at every point: (T_a, a) < (T_b, b) always.
+    fn surely_above(&self, a: usize, b: usize) -> bool {
+        self.ranked(a)
+            && self.ranked(b)
+            && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
+            && ((self.hi[a], a) < (self.lo[b], b) || self.is_imposed(a, b))
+    }
+
+    /// `a` has the higher RM rank at some point of the box.
+    fn maybe_above(&self, a: usize, b: usize) -> bool {
+        self.ranked(a)
+            && self.ranked(b)
+            && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
+            && (self.lo[a], a) < (self.hi[b], b)
+            && !self.is_imposed(b, a)
+    }
+
+    /// `j` runs above `i` at every point (`sched::interferers`): its own rank
+    /// or the rank it inherits from the task it serves is at or above i's.
+    fn surely_interferes(&self, j: usize, i: usize) -> bool {
+        let served = self.spec.tasks[j].serves;
+        j != i
+            && self.ranked(j)
+            && self.ranked(i)
+            && self.spec.tasks[j].cpu == self.spec.tasks[i].cpu
+            && (self.surely_above(j, i)
+                || served == Some(i)
+                || served.is_some_and(|m| self.surely_above(m, i)))
+    }
+
+    /// `a` above `b` at every instant (`latency::fp_order`: a's own rank
+    /// above b's own and inherited ones) at some point of the box.
+    fn maybe_preempts(&self, a: usize, b: usize) -> bool {
+        self.maybe_above(a, b)
+            && self.spec.tasks[b]
+                .serves
+                .is_none_or(|m| m != a && self.maybe_above(a, m))
+    }
+
+    /// The link orders (`fp_order`) possible over the box; `[None]` when the
+    /// priority arguments never apply.
+    fn link_orders(&self, p: usize, c: usize) -> Vec<Option<Case>> {
+        let same = self.spec.tasks[p].cpu == self.spec.tasks[c].cpu;
+        if !(same && self.ranked(p) && self.ranked(c)) {
+            return vec![None];
+        }
+        let mut v = Vec::new();
+        if self.maybe_preempts(c, p) {
+            v.push(Some(Case::One));
+        }
+        if self.maybe_preempts(p, c) {
+            v.push(Some(Case::Two));
+        }
+        // Some point may have neither (an inherited rank ties them).
+        if !(self.surely_preempts(c, p) || self.surely_preempts(p, c)) {
+            v.push(None);
+        }
+        v
+    }
+
+    fn surely_preempts(&self, a: usize, b: usize) -> bool {
+        self.surely_above(a, b)
+            && self.spec.tasks[b]
+                .serves
+                .is_none_or(|m| m != a && self.surely_above(a, m))
+    }
+}
+
+/// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
+/// (ns, one entry per task; background tasks' entries are ignored) at which
+/// every pair `(a, b)` of `imposed` has a ranked above b (RM: (T_a, a) <
+/// (T_b, b)), for a search that branches on priority orders too. The
+/// affine forms are computed with `forms` only (they cost four link
+/// evaluations each).
+pub fn relax(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    imposed: &[(usize, usize)],
+    forms: bool,
+) -> Relaxed {
+    let n = spec.tasks.len();
+    assert!(lo.len() == n && hi.len() == n, "relax: one interval per task");
+    assert!(
+        (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
+        "relax: empty or non-positive period interval"
+    );
+    let mut matrix = Vec::new();
+    if !imposed.is_empty() {
+        matrix = vec![false; n * n];
+        for &(a, b) in imposed {
+            matrix[a * n + b] = true;
+        }
+    }
+    let order = Order {
+        spec,
+        lo,
+        hi,
+        imposed: matrix,
+    };
+    let cpus = cpu_ids(spec);
+    let util_ok = |cpu: u32| {
+        let us = cpu_utilizations(spec, hi, cpu);
+        us.iter().sum::<f64>() <= 1.0 + 1e-12
+    };
+    let mut job_response = vec![None; n];
+    let mut budget_response = vec![None; n];
+    for (i, t) in spec.tasks.iter().enumerate() {
+        if t.server == Server::Background {
+            continue;
+        }
+        let (rb, rj) = match spec.scheduler {
+            Scheduler::Rm => {
+                let hp: Vec<(Nanos, Nanos)> = (0..n)
+                    .filter(|&j| order.surely_interferes(j, i))
+                    .map(|j| (interference(&spec.tasks[j]), hi[j]))
+                    .collect();
+                (response_time(t.budget(), &hp), response_time(t.demand(), &hp))
+            }
+            // Servers get their budget by the end of each period (`sched`).
+            Scheduler::Edf if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
+            Scheduler::Edf => (None, None),
+        };
+        budget_response[i] = rb.filter(|&r| r <= hi[i]);
+        job_response[i] = rj.filter(|&r| r <= hi[i]);
+    }
+    let cpus = cpus
+        .into_iter()
+        .map(|cpu| (cpu, cpu_may_pass(spec, hi, &budget_response, cpu)))
+        .collect();
+    let chains = spec
+        .chains
+        .iter()
+        .map(|ch| chain_bounds(spec, &order, &job_response, &ch.path))
+        .collect();
+    let forms = match forms {
+        true => spec
+            .chains
+            .iter()
+            .map(|ch| chain_forms(spec, &order, &job_response, &ch.path))
+            .collect(),
+        false => Vec::new(),
+    };
+    Relaxed {
+        job_response,
+        budget_response,
+        cpus,
+        chains,
+        forms,
+    }
+}
+
+fn cpu_ids(spec: &Spec) -> Vec<u32> {
+    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    cpus
+}
+
+/// C/T of the guaranteed tasks of `cpu` at periods `t`.
+fn cpu_utilizations(spec: &Spec, t: &[Nanos], cpu: u32) -> Vec<f64> {
+    spec.tasks
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| x.cpu == cpu && x.server != Server::Background)
+        .map(|(i, x)| x.budget() as f64 / t[i] as f64)
+        .collect()
+}
+
+/// The CPU's test may pass in the box: utilisation tests at the longest
+/// periods (the least utilisation), RTA with the response-time bounds.
+fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32) -> bool {
+    match spec.schedulability {
+        SchedTest::Rta => spec
+            .tasks
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.cpu == cpu && t.server != Server::Background)
+            .all(|(i, _)| budget_r[i].is_some()),
+        test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
+    }
+}
+
+/// The link terms' view of task `i` at the box's most favourable values.
+fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
+    let task = &spec.tasks[i];
+    LinkTask {
+        c: task.budget(),
+        t,
+        x: task.demand(),
+        x_min: task.demand_min(),
+        delta_out: task.delta_out,
+        l: crate::latency::eq1_single_pipe(task.demand(), task.budget(), t),
+        r,
+        cpu: task.cpu,
+        prio: None,
+        top: None,
+    }
+}
+
+/// Lower bounds on a chain's sound reaction and freshness from the read,
+/// composed as `latency::analyze_chain` composes them.
+fn chain_bounds(
+    spec: &Spec,
+    order: &Order,
+    r: &[Option<Nanos>],
+    path: &[usize],
+) -> (Option<Nanos>, Option<Nanos>) {
+    let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
+    let (head, tail) = (path[0], path[path.len() - 1]);
+    let mut react = r[head];
+    let mut fresh = Some(0);
+    // Reachability needs the producer's samples distinct; take it where it
+    // may hold (more options, smaller terms).
+    let mut distinct = true;
+    for w in path.windows(2) {
+        let (p, c) = (low(w[0]), low(w[1]));
+        let orders = order.link_orders(w[0], w[1]);
+        let least = |f: &dyn Fn(Option<Case>) -> Option<Nanos>| {
+            orders.iter().filter_map(|&o| f(o)).min()
+        };
+        let e = least(&|o| sound_reaction_link_in(o, &p, &c, distinct));
+        let f = least(&|o| sound_freshness_link_in(o, &p, &c));
+        react = react.zip(e).map(|(a, b)| a + b);
+        fresh = fresh.zip(f).map(|(a, b)| a + b);
+        // The condition grows with T_c: test it at c's longest period.
+        let c_late = link_task(spec, order.hi[w[1]], r[w[1]], w[1]);
+        distinct = distinct_passes(&p, &c_late, distinct);
+    }
+    fresh = fresh.zip(r[tail]).map(|(a, b)| a + b);
+    let react = match (react, fresh) {
+        (Some(e), Some(f)) => Some(e.min(f)),
+        (e, _) => e,
+    };
+    (react, fresh)
+}
+
+/// The sums E and F of a chain (see [`chain_bounds`]) as affine bounds over
+/// the box. Each link term is the least of options that grow with unit
+/// slope in T_p or T_c (response times held at their lower bounds), so it is
+/// concave in (T_p, T_c); an affine function below it at the four corners of
+/// the (T_p, T_c) rectangle is below it on the whole rectangle.
+fn chain_forms(
+    spec: &Spec,
+    order: &Order,
+    r: &[Option<Nanos>],
+    path: &[usize],
+) -> Option<(Affine, Affine)> {
+    let (head, tail) = (path[0], path[path.len() - 1]);
+    // The head's and tail's response times: R_lb under RM, T under EDF.
+    let own = |i: usize| match spec.scheduler {
+        Scheduler::Edf => vec![(i, 1.0)],
+        Scheduler::Rm => Vec::new(),
+    };
+    let mut e = Affine {
+        base: r[head]? as f64,
+        slopes: own(head),
+    };
+    let mut f = Affine {
+        base: r[tail]? as f64,
+        slopes: own(tail),
+    };
+    let mut distinct = true;
+    for w in path.windows(2) {
+        let (pi, ci) = (w[0], w[1]);
+        let orders = order.link_orders(pi, ci);
+        // Under EDF a response time is the period itself (`sched`), so it
+        // moves with the corner; under RM it stays at its lower bound.
+        let resp = |i: usize, t: Nanos| match spec.scheduler {
+            Scheduler::Edf => r[i].map(|_| t),
+            Scheduler::Rm => r[i],
+        };
+        let at = |tp: Nanos, tc: Nanos| {
+            let p = link_task(spec, tp, resp(pi, tp), pi);
+            let c = link_task(spec, tc, resp(ci, tc), ci);
+            let least = |g: &dyn Fn(Option<Case>) -> Option<Nanos>| {
+                orders.iter().filter_map(|&o| g(o)).min()
+            };
+            Some((
+                least(&|o| sound_reaction_link_in(o, &p, &c, distinct))?,
+                least(&|o| sound_freshness_link_in(o, &p, &c))?,
+            ))
+        };
+        let (lp, hp, lc, hc) = (order.lo[pi], order.hi[pi], order.lo[ci], order.hi[ci]);
+        let corners = [at(lp, lc)?, at(hp, lc)?, at(lp, hc)?, at(hp, hc)?];
+        add_link(&mut e, pi, ci, hp - lp, hc - lc, corners.map(|x| x.0));
+        add_link(&mut f, pi, ci, hp - lp, hc - lc, corners.map(|x| x.1));
+        let c_late = link_task(spec, hc, r[ci], ci);
+        distinct = distinct_passes(&link_task(spec, lp, r[pi], pi), &c_late, distinct);
+    }
+    Some((e, f))
+}
+
+/// Adds to `form` an affine bound of a concave link term from its values
+/// at the corners (lo,lo), (hi,lo), (lo,hi), (hi,hi) of (T_p, T_c).
+fn add_link(form: &mut Affine, p: usize, c: usize, dp: Nanos, dc: Nanos, v: [Nanos; 4]) {
+    let v = v.map(|x| x as f64);
+    let sp = if dp > 0 { (v[1] - v[0]) / dp as f64 } else { 0.0 };
+    let sc = if dc > 0 { (v[2] - v[0]) / dc as f64 } else { 0.0 };
+    // Exact at three corners; at the fourth, lower the base as needed.
+    let base = v[0].min(v[3] - sp * dp as f64 - sc * dc as f64);
+    form.base += base;
+    if sp > 0.0 {
+        form.slopes.push((p, sp));
+    }
+    if sc > 0.0 {
+        form.slopes.push((c, sc));
+    }
+}

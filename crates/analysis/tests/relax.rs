@@ -1,0 +1,206 @@
+//! `relax` against the analysis: at a box of one point it is the analysis;
+//! over any box it bounds the analysis at every point inside from below
+//! (the property the design's branch and bound prunes with).
+
+use rtpipe_analysis::relax::{relax, Relaxed};
+use rtpipe_analysis::{analyze, Metric, Report};
+use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
+
+const SYSTEMS: u64 = 1500;
+
+fn config(seed: u64) -> GenConfig {
+    let mut rng = Rng::new(seed ^ 0x5eed);
+    GenConfig {
+        tasks: rng.range(2, 9) as usize,
+        cpus: rng.range(1, 2) as u32,
+        utilization: 0.3 + 0.6 * rng.unit(),
+        scheduler: if rng.chance(0.2) {
+            Scheduler::Edf
+        } else {
+            Scheduler::Rm
+        },
+        chains: 3,
+        mixed_servers: rng.chance(0.5),
+        inheritance: if rng.chance(0.3) { 0.5 } else { 0.0 },
+        ..GenConfig::default()
+    }
+}
+
+fn with_test(mut spec: Spec, seed: u64) -> Spec {
+    spec.schedulability = match seed % 4 {
+        0 => SchedTest::Rta,
+        1 => SchedTest::LiuLayland,
+        2 => SchedTest::Hyperbolic,
+        _ => SchedTest::Edf,
+    };
+    spec
+}
+
+fn periods(spec: &Spec) -> Vec<Nanos> {
+    spec.tasks
+        .iter()
+        .map(|t| t.fixed_period().expect("generated periods are fixed"))
+        .collect()
+}
+
+fn at(spec: &Spec, t: &[Nanos]) -> Spec {
+    let mut s = spec.clone();
+    for (task, &p) in s.tasks.iter_mut().zip(t) {
+        task.period = PeriodSpec::Fixed(p);
+    }
+    s
+}
+
+fn sound(report: &Report, chain: usize, metric: Metric) -> Option<Nanos> {
+    report
+        .chains
+        .iter()
+        .find(|c| c.chain == chain && c.metric == metric)
+        .and_then(|c| c.bound.sound)
+}
+
+/// The affine forms of every chain bound its sound figures at `t` from
+/// below (reaction is the smaller sum, freshness the second).
+fn forms_below(r: &Relaxed, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str) {
+    for (k, form) in r.forms.iter().enumerate() {
+        let (se, sf) = (sound(report, k, Metric::Reaction), sound(report, k, Metric::Freshness));
+        let Some((e, f)) = form else {
+            assert!(se.is_none() && sf.is_none(), "{what}: chain {k} has no forms but is bounded");
+            continue;
+        };
+        let (e, f) = (e.at(lo, t), f.at(lo, t));
+        if let Some(x) = se {
+            assert!(e.min(f) <= x as f64 + 1e-6, "{what}: chain {k} reaction form {} above {x}", e.min(f));
+        }
+        if let Some(x) = sf {
+            assert!(f <= x as f64 + 1e-6, "{what}: chain {k} freshness form {f} above {x}");
+        }
+    }
+}
+
+/// `lower` is at most `exact`, reading `None` as +∞.
+fn below(lower: Option<Nanos>, exact: Option<Nanos>) -> bool {
+    match (lower, exact) {
+        (_, None) => true,
+        (None, Some(_)) => false,
+        (Some(l), Some(e)) => l <= e,
+    }
+}
+
+fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bool) {
+    let same = |l: Option<Nanos>, e: Option<Nanos>| if exact { l == e } else { below(l, e) };
+    for (i, tm) in report.timing.iter().enumerate() {
+        if spec.tasks[i].server == Server::Background {
+            continue;
+        }
+        let budget = tm.response_time.filter(|&x| x <= tm.period);
+        assert!(same(r.job_response[i], tm.bounded_response()), "{what}: job R of task {i}: {:?} vs {:?}", r.job_response[i], tm.bounded_response());
+        assert!(same(r.budget_response[i], budget), "{what}: budget R of task {i}");
+    }
+    for (v, &(cpu, may)) in report.schedulability.cpus.iter().zip(&r.cpus) {
+        assert_eq!(v.cpu, cpu);
+        if exact {
+            assert_eq!(may, v.schedulable, "{what}: cpu {cpu} verdict");
+        } else {
+            assert!(may || !v.schedulable, "{what}: cpu {cpu} passes but the box says never");
+        }
+    }
+    for (k, &(e, f)) in r.chains.iter().enumerate() {
+        let (se, sf) = (sound(report, k, Metric::Reaction), sound(report, k, Metric::Freshness));
+        assert!(same(e, se), "{what}: chain {k} reaction {e:?} vs {se:?}");
+        assert!(same(f, sf), "{what}: chain {k} freshness {f:?} vs {sf:?}");
+    }
+}
+
+#[test]
+fn a_point_box_is_the_analysis() {
+    let mut bounded = 0;
+    for seed in 0..SYSTEMS {
+        let spec = with_test(random_system(seed, &config(seed)), seed);
+        let t = periods(&spec);
+        let r = relax(&spec, &t, &t, &[], true);
+        bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
+        bounds_point(&r, &spec, &analyze(&spec), &format!("seed {seed}"), true);
+    }
+    // Most generated chains are bounded: the comparison is not vacuous.
+    assert!(bounded > SYSTEMS as usize, "only {bounded} bounded chains");
+}
+
+#[test]
+fn a_box_bounds_every_point_inside_from_below() {
+    let mut checked = 0;
+    let mut bounded = 0;
+    for seed in 0..SYSTEMS {
+        let spec = with_test(random_system(seed, &config(seed)), seed);
+        let t = periods(&spec);
+        let mut rng = Rng::new(seed);
+        // A box around the generated periods, up to halving and doubling.
+        let lo: Vec<Nanos> = t.iter().map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1)).collect();
+        let hi: Vec<Nanos> = t.iter().map(|&p| p + (rng.unit() * p as f64) as Nanos).collect();
+        let r = relax(&spec, &lo, &hi, &[], true);
+        bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
+        for probe in 0..8 {
+            let point: Vec<Nanos> = (0..t.len())
+                .map(|i| match probe {
+                    0 => lo[i],
+                    1 => hi[i],
+                    _ => lo[i] + (rng.unit() * (hi[i] - lo[i]) as f64) as Nanos,
+                })
+                .collect();
+            let s = at(&spec, &point);
+            let report = analyze(&s);
+            bounds_point(&r, &s, &report, &format!("seed {seed} probe {probe}"), false);
+            forms_below(&r, &lo, &point, &report, &format!("seed {seed} probe {probe}"));
+            checked += 1;
+        }
+        // A sub-box never has lower figures.
+        let mid: Vec<Nanos> = (0..t.len()).map(|i| lo[i] + (hi[i] - lo[i]) / 2).collect();
+        for sub in [relax(&spec, &lo, &mid, &[], true), relax(&spec, &mid, &hi, &[], true)] {
+            for (a, b) in r.chains.iter().zip(&sub.chains) {
+                assert!(below(a.0, b.0) && below(a.1, b.1), "seed {seed}: a sub-box lowered a chain");
+            }
+        }
+    }
+    assert_eq!(checked, 8 * SYSTEMS);
+    assert!(bounded > SYSTEMS as usize / 2, "only {bounded} bounded chains over boxes");
+}
+
+/// With rank orders imposed, the box bounds every point inside that has
+/// those orders (here: the orders of one random point).
+#[test]
+fn imposed_orders_bound_the_points_that_have_them() {
+    for seed in 0..SYSTEMS {
+        let spec = with_test(random_system(seed, &config(seed)), seed);
+        if spec.scheduler != Scheduler::Rm {
+            continue;
+        }
+        let t = periods(&spec);
+        let mut rng = Rng::new(seed ^ 0xabc);
+        let lo: Vec<Nanos> = t.iter().map(|&p| (p / 2).max(1)).collect();
+        let hi: Vec<Nanos> = t.iter().map(|&p| 2 * p).collect();
+        let point: Vec<Nanos> = (0..t.len())
+            .map(|i| lo[i] + (rng.unit() * (hi[i] - lo[i]) as f64) as Nanos)
+            .collect();
+        let s = at(&spec, &point);
+        let report = analyze(&s);
+        let mut imposed = Vec::new();
+        for a in 0..t.len() {
+            for b in 0..t.len() {
+                let (pa, pb) = (report.timing[a].priority, report.timing[b].priority);
+                let same = spec.tasks[a].cpu == spec.tasks[b].cpu;
+                if let (Some(x), Some(y), true) = (pa, pb, same) {
+                    if x < y && rng.chance(0.5) {
+                        imposed.push((a, b));
+                    }
+                }
+            }
+        }
+        let r = relax(&spec, &lo, &hi, &imposed, true);
+        bounds_point(&r, &s, &report, &format!("seed {seed} imposed {imposed:?}"), false);
+        forms_below(&r, &lo, &point, &report, &format!("seed {seed} imposed"));
+        // At the point itself, imposing its own orders changes nothing.
+        let exact = relax(&spec, &point, &point, &imposed, true);
+        bounds_point(&exact, &s, &report, &format!("seed {seed} point"), true);
+    }
+}

@@ -1,0 +1,478 @@
+//! `rtpipe simulate`: run the discrete-event simulator on a spec and hold the
+//! observed reaction and freshness times against the analysis' bounds.
+
+mod files;
+mod plan;
+mod report;
+
+use crate::analyze;
+use crate::output;
+use crate::plot;
+use crate::table::Table;
+use crate::EXIT_BAD_INPUT;
+use clap::{Args, ValueEnum};
+use files::{render_outputs, with_horizon_bar};
+pub(crate) use files::{with_spinner, write_all};
+use plan::*;
+pub(crate) use report::*;
+use rtpipe_analysis::{Anchor, Metric, Report};
+use rtpipe_model::time::number_to_nanos;
+use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
+use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
+use rtpipe_sim::search::{search, SearchConfig, SearchResult};
+use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
+use rtpipe_sim::{simulate_with_progress, ExecModel, Phasing, SimConfig, SimError, SimResult};
+use serde_json::{json, Value};
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Tail outputs simulated when neither `--outputs` nor `--duration` is given.
+pub const DEFAULT_OUTPUTS: u64 = 10_000;
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// The system spec (TOML), e.g. examples/paper-table3.toml.
+    pub spec: PathBuf,
+    /// Simulate until every chain's tail has published at least N outputs
+    /// [default: 10000].
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = parse_outputs,
+        conflicts_with = "duration",
+        allow_hyphen_values = true
+    )]
+    pub outputs: Option<u64>,
+    /// Simulated time instead of --outputs: "2s", "500ms", or a number in the
+    /// spec's time unit.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub duration: Option<String>,
+    /// Seeds the random offsets and demands (the same seed gives the same run).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// How each job's demand Δin + p + Δout is drawn: p = exec (worst),
+    /// exec_min (best), uniform in between, or one of the two at random
+    /// (extremes).
+    #[arg(long, value_enum, default_value_t = ExecArg::Worst)]
+    pub exec: ExecArg,
+    /// Release offsets: all at 0 (sync), uniform in [0, T) per task (random),
+    /// or random plus an adversarial search for each chain's worst case
+    /// (search), reported beside the bounds as a tightness ratio.
+    #[arg(long, value_enum, default_value_t = PhasingArg::Sync)]
+    pub phasing: PhasingArg,
+    /// With --phasing search: candidates tried per local search (4 restarts).
+    #[arg(long, value_name = "N", default_value_t = 50)]
+    pub search_steps: u32,
+    /// Print one JSON object (the `analyze --json` report plus observations)
+    /// instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a Chrome trace-event file for the Perfetto UI
+    /// (https://ui.perfetto.dev): one track per task, grouped by CPU.
+    #[arg(long, value_name = "FILE.json")]
+    pub trace: Option<PathBuf>,
+    /// Write the observed-vs-predicted chart (the paper's Fig. 9) as SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Write a Gantt chart of the schedule as SVG (see --window).
+    #[arg(long, value_name = "FILE.svg")]
+    pub gantt: Option<PathBuf>,
+    /// The span of --gantt, START,END in the spec's time unit or with units
+    /// ("0,30ms") [default: the first 3 × the largest period].
+    #[arg(long, value_name = "START,END", allow_hyphen_values = true)]
+    pub window: Option<String>,
+    /// --seed was given on the command line (set by main).
+    #[arg(skip)]
+    pub seed_given: bool,
+    /// --search-steps was given on the command line (set by main).
+    #[arg(skip)]
+    pub search_steps_given: bool,
+}
+
+/// `--exec`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ExecArg {
+    Worst,
+    Uniform,
+    Best,
+    Extremes,
+}
+
+impl ExecArg {
+    pub(crate) fn model(self) -> ExecModel {
+        match self {
+            ExecArg::Worst => ExecModel::Worst,
+            ExecArg::Uniform => ExecModel::Uniform,
+            ExecArg::Best => ExecModel::Best,
+            ExecArg::Extremes => ExecModel::Extremes,
+        }
+    }
+}
+
+/// `--phasing`. Each variant maps to one way of running the simulator in
+/// [`run_simulation`]; add a variant there to add a phasing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PhasingArg {
+    Sync,
+    Random,
+    /// Random phasing for the observations, plus an adversarial search
+    /// (restarts and local search over offsets and execution times) for the
+    /// worst latency of every chain and metric.
+    Search,
+}
+
+/// The command-line name of a value of a [`ValueEnum`].
+fn flag_name<E: ValueEnum>(e: &E) -> String {
+    e.to_possible_value()
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default()
+}
+
+fn parse_outputs(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<u64>() {
+        Ok(0) => Err("must be at least 1 (outputs of every chain's tail)".into()),
+        Ok(n) => Ok(n),
+        Err(_) => {
+            Err("must be a positive whole number of tail outputs, e.g. --outputs 1000".into())
+        }
+    }
+}
+
+/// A bad flag or value: what is wrong and how to fix it (exit status 2).
+#[derive(Debug)]
+pub struct Bad {
+    msg: String,
+    help: String,
+}
+
+impl Bad {
+    pub(crate) fn new(msg: impl Into<String>, help: impl Into<String>) -> Bad {
+        Bad {
+            msg: msg.into(),
+            help: help.into(),
+        }
+    }
+}
+
+impl From<output::OutputError> for Bad {
+    fn from(e: output::OutputError) -> Bad {
+        Bad::new(e.msg, e.help)
+    }
+}
+
+impl fmt::Display for Bad {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "error: {}", self.msg)?;
+        if !self.help.is_empty() {
+            writeln!(f, "  = help: {}", self.help)?;
+        }
+        Ok(())
+    }
+}
+
+pub(crate) fn fail(b: Bad) -> ExitCode {
+    eprint!("{b}");
+    ExitCode::from(EXIT_BAD_INPUT)
+}
+
+/// A time from the command line: a bare number in the spec's unit or a
+/// string with a unit.
+pub(crate) fn parse_time(spec: &Spec, s: &str) -> Result<Nanos, String> {
+    let t = s.trim();
+    let r = match t.parse::<f64>() {
+        Ok(x) => number_to_nanos(x, spec.time_unit),
+        Err(_) => parse_time_str(t),
+    };
+    r.map_err(|e| e.to_string())
+}
+
+/// Runs the simulator as `--phasing` asks, reporting the simulated time
+/// reached to `progress`. One simulation per run today; a phasing that
+/// searches offsets would run several here and return the worst.
+fn run_simulation(
+    spec: &Spec,
+    a: &SimulateArgs,
+    p: &Plan,
+    progress: &mut dyn FnMut(Nanos),
+) -> Result<SimResult, SimError> {
+    let phasing = match a.phasing {
+        PhasingArg::Sync => Phasing::Sync,
+        PhasingArg::Random | PhasingArg::Search => Phasing::Random,
+    };
+    let cfg = SimConfig {
+        horizon: p.horizon,
+        seed: a.seed,
+        phasing,
+        exec: a.exec.model(),
+        log_jobs: p.log_jobs,
+    };
+    simulate_with_progress(spec, &cfg, progress)
+}
+
+pub fn run(a: &SimulateArgs) -> ExitCode {
+    let spec = match analyze::load(&a.spec) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let p = match plan(&spec, a) {
+        Ok(p) => p,
+        Err(b) => return fail(b),
+    };
+    let report = rtpipe_analysis::analyze(&spec);
+    let (res, searches, seconds) = match simulate_and_search(&spec, a, &p) {
+        Ok(r) => r,
+        Err(b) => return fail(b),
+    };
+    let obs = observe(&report, &res);
+    let outputs = match render_outputs(&spec, a, &p, &res, &obs) {
+        Ok(o) => o,
+        Err(b) => return fail(b),
+    };
+    if let Err(b) = write_all(&a.spec, &outputs.files) {
+        return fail(b);
+    }
+    if a.json {
+        let mut v = to_json(&spec, &report, a, &res, &obs, seconds);
+        if !searches.is_empty() {
+            v["search"] = search_json(&spec, &searches);
+        }
+        if let Err(code) = crate::analyze::print_json(&v) {
+            return code;
+        }
+    } else {
+        print!("{}", to_text(&spec, &report, a, &p, &res, &obs, seconds));
+        if !searches.is_empty() {
+            print!("{}", search_text(&spec, &searches));
+        }
+    }
+    for n in &outputs.notes {
+        eprintln!("{n}");
+    }
+    if let Some(n) = p.outputs {
+        note_short_tails(&spec, &res, n);
+    }
+    exit_status(&spec, a, &report, &res, &obs, &searches)
+}
+
+/// The simulation, and the adversarial searches under `--phasing search`,
+/// with their progress shown; and the seconds they took.
+fn simulate_and_search(
+    spec: &Spec,
+    a: &SimulateArgs,
+    p: &Plan,
+) -> Result<(SimResult, Vec<SearchResult>, f64), Bad> {
+    let started = Instant::now();
+    let msg = format!(
+        "simulating {} for {} {}{}",
+        spec.name,
+        spec.fmt_time(p.horizon),
+        spec.time_unit,
+        human(spec, p.horizon)
+    );
+    let res = with_horizon_bar(msg, p.horizon, |progress| {
+        run_simulation(spec, a, p, progress)
+    })
+    .map_err(|e| {
+        Bad::new(
+            format!("{}: cannot simulate: {e}", a.spec.display()),
+            "give every task a fixed positive period",
+        )
+    })?;
+    let searches = if a.phasing == PhasingArg::Search {
+        with_spinner(format!("searching worst cases of {}", spec.name), || {
+            run_searches(spec, a, p)
+        })
+        .map_err(|e| {
+            Bad::new(
+                format!("{}: cannot search: {e}", a.spec.display()),
+                "give every task a fixed positive period",
+            )
+        })?
+    } else {
+        Vec::new()
+    };
+    Ok((res, searches, started.elapsed().as_secs_f64()))
+}
+
+/// Says which chain tails published fewer than the `n` outputs asked for.
+fn note_short_tails(spec: &Spec, res: &SimResult, n: u64) {
+    let short: Vec<String> = spec
+        .chains
+        .iter()
+        .filter_map(|c| c.path.last())
+        .filter(|&&t| res.tasks.get(t).is_some_and(|ts| ts.completed < n))
+        .map(|&t| spec.tasks[t].name.clone())
+        .collect();
+    if !short.is_empty() {
+        eprintln!(
+            "note: tail task(s) {} completed fewer than {n} jobs (late or starved jobs); the run stopped at {} {}",
+            short.join(", "),
+            spec.fmt_time(res.horizon),
+            spec.time_unit
+        );
+    }
+}
+
+/// 1 (with the replay command) when a sample, a response time or a search
+/// exceeded a sound bound, else 0.
+fn exit_status(
+    spec: &Spec,
+    a: &SimulateArgs,
+    report: &Report,
+    res: &SimResult,
+    obs: &[ChainObs],
+    searches: &[SearchResult],
+) -> ExitCode {
+    let late_rt = response_violations(report, res);
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
+    let over_search = searches.iter().filter(|r| r.exceeds_sound()).count();
+    if over_search > 0 {
+        eprintln!("error: SOUND BOUND EXCEEDED by an adversarial search ({over_search} chain metric(s)); the replayable offsets are in --json");
+        return ExitCode::from(1);
+    }
+    if over_sound > 0 || !late_rt.is_empty() {
+        eprintln!(
+            "error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound, {} task(s) above their analysed response time",
+            late_rt.len()
+        );
+        eprintln!(
+            "  = this is a bug in the analysis or the simulator: please report it with the spec and this command line:"
+        );
+        eprintln!(
+            "    rtpipe simulate {} --duration {}{} --seed {} --exec {} --phasing {}",
+            a.spec.display(),
+            spec.fmt_time(res.horizon),
+            spec.time_unit,
+            a.seed,
+            flag_name(&a.exec),
+            flag_name(&a.phasing)
+        );
+        return ExitCode::from(1);
+    }
+    ExitCode::SUCCESS
+}
+
+/// One adversarial search per chain, metric and anchor (`--phasing search`).
+fn run_searches(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<Vec<SearchResult>, SimError> {
+    let longest = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .max()
+        .unwrap_or(1);
+    // Each candidate needs a few hyperperiod-ish spans, not the whole run.
+    let horizon = p.horizon.min(40 * longest);
+    let mut out = Vec::new();
+    for chain in 0..spec.chains.len() {
+        for anchor in Anchor::ALL {
+            for metric in [Metric::Reaction, Metric::Freshness] {
+                let mut cfg = SearchConfig::new(chain, metric, horizon);
+                cfg.anchor = anchor;
+                cfg.steps = a.search_steps;
+                cfg.seed = a.seed;
+                out.push(search(spec, &cfg)?);
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: SimulateArgs,
+    }
+
+    fn spec() -> Spec {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/paper-table3.toml"
+        );
+        match Spec::load(Path::new(path)) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    fn args(flags: &[&str]) -> SimulateArgs {
+        let mut v = vec!["rtpipe", "spec.toml"];
+        v.extend_from_slice(flags);
+        match Cli::try_parse_from(v) {
+            Ok(c) => c.args,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    const MS: Nanos = 1_000_000;
+
+    #[test]
+    fn outputs_set_the_horizon() {
+        let s = spec();
+        // Tails p5 (150 ms) and p7 (50 ms); the largest period is 150 ms.
+        let p = plan(&s, &args(&["--outputs", "4"]));
+        assert_eq!(p.map(|p| p.horizon).ok(), Some(4 * 150 * MS + 150 * MS));
+        let p = plan(&s, &args(&[]));
+        assert_eq!(p.map(|p| p.outputs).ok(), Some(Some(DEFAULT_OUTPUTS)));
+        let p = plan(&s, &args(&["--duration", "2s"]));
+        assert_eq!(
+            p.map(|p| (p.horizon, p.window)).ok(),
+            Some((2000 * MS, (0, 450 * MS)))
+        );
+        let p = plan(&s, &args(&["--duration", "250"]));
+        assert_eq!(
+            p.map(|p| (p.horizon, p.window)).ok(),
+            Some((250 * MS, (0, 250 * MS)))
+        );
+        let p = plan(&s, &args(&["--outputs", "18446744073709551615"]));
+        assert!(p.is_err());
+    }
+
+    #[test]
+    fn windows_take_units() {
+        let s = spec();
+        let p = plan(&s, &args(&["--gantt", "g.svg", "--window", "1.5, 20ms"]));
+        assert_eq!(p.map(|p| p.window).ok(), Some((1_500_000, 20 * MS)));
+        for bad in ["20,10", "-1,5", "5", "a,b", "0,0"] {
+            assert!(
+                plan(&s, &args(&["--gantt", "g.svg", "--window", bad])).is_err(),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn samples_above_a_sound_bound_are_counted() {
+        let s = spec();
+        let report = rtpipe_analysis::analyze(&s);
+        let sound = report.chains[0].bound.sound.unwrap_or(0);
+        let paper = report.chains[0].bound.paper;
+        let mut res = SimResult {
+            offsets: vec![0; s.tasks.len()],
+            tasks: vec![Default::default(); s.tasks.len()],
+            chains: vec![Default::default(); s.chains.len()],
+            jobs: Vec::new(),
+            segments: Vec::new(),
+            events: 0,
+            horizon: 1,
+        };
+        res.chains[0].reaction.values = vec![1, paper + 1, sound + 1, sound];
+        let event = report.chains[0].bound.from_event_sound.unwrap_or(0);
+        res.chains[0].event_reaction.values = vec![event, event + 1, event + 2];
+        let obs = observe(&report, &res);
+        assert_eq!(obs[0].metric, Metric::Reaction);
+        assert_eq!(obs[0].read.over_sound, Some(1));
+        assert_eq!(obs[0].read.over_paper, 2 + usize::from(sound > paper));
+        assert_eq!(obs[0].event.over_sound, Some(2));
+        assert_eq!(obs[0].over_sound(), 3);
+        assert_eq!(obs[1].read.observed, None);
+        assert_eq!(obs[1].read.over_sound, Some(0));
+        assert_eq!(obs[1].event.over_sound, Some(0));
+    }
+}

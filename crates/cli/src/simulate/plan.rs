@@ -1,0 +1,174 @@
+//! What to simulate: the horizon, the Gantt window and the output paths,
+//! all checked before anything runs.
+
+use super::*;
+
+/// What to simulate, checked before anything runs.
+#[derive(Debug)]
+pub(super) struct Plan {
+    pub(super) horizon: Nanos,
+    /// Tail outputs asked for (`--outputs` or the default).
+    pub(super) outputs: Option<u64>,
+    pub(super) window: (Nanos, Nanos),
+    pub(super) log_jobs: bool,
+}
+
+pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
+    let t_max = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .max()
+        .unwrap_or(0);
+    if t_max <= 0 {
+        return Err(Bad::new(
+            "no task has a fixed period, so nothing is ever released",
+            "give the tasks a `period = ...`",
+        ));
+    }
+    let (horizon, outputs) = horizon_of(spec, a)?;
+    flags_have_effect(a)?;
+    let window = match &a.window {
+        None => (0, (3 * t_max).min(horizon)),
+        Some(w) => window_of(spec, a, w, t_max, horizon)?,
+    };
+    let mut outs = Vec::new();
+    for (flag, p) in [
+        ("--trace", &a.trace),
+        ("--plot", &a.plot),
+        ("--gantt", &a.gantt),
+    ] {
+        let Some(p) = p else { continue };
+        outs.push(output::prepare(flag, p, &a.spec, None).map_err(Bad::from)?);
+    }
+    output::distinct(&outs).map_err(Bad::from)?;
+    Ok(Plan {
+        horizon,
+        outputs,
+        window,
+        log_jobs: a.trace.is_some() || a.gantt.is_some(),
+    })
+}
+
+/// The simulated span, from `--duration` or `--outputs` (and the outputs
+/// asked for).
+fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad> {
+    Ok(match (&a.duration, a.outputs) {
+        (Some(d), None) => {
+            let h = parse_time(spec, d).map_err(|e| {
+                Bad::new(
+                    format!("invalid value `{d}` for --duration: {e}"),
+                    format!(
+                        "write a positive time like --duration 2s or --duration 500ms, or a bare number in {}",
+                        spec.time_unit
+                    ),
+                )
+            })?;
+            if h <= 0 {
+                return Err(Bad::new(
+                    format!("--duration must be positive, found `{d}`"),
+                    "write a positive time like --duration 2s",
+                ));
+            }
+            (h, None)
+        }
+        (None, o) => {
+            let n = o.unwrap_or(DEFAULT_OUTPUTS);
+            match horizon_for_outputs(spec, n) {
+                Some(h) => (h, Some(n)),
+                None => {
+                    return Err(Bad::new(
+                        format!(
+                            "--outputs {n} needs more than {} of simulated time (the longest the model allows)",
+                            spec.fmt_time(MAX_TIME)
+                        ),
+                        "ask for fewer outputs, e.g. --outputs 10000",
+                    ))
+                }
+            }
+        }
+        (Some(_), Some(_)) => {
+            return Err(Bad::new(
+                "--outputs and --duration both set the simulated span",
+                "give only one of them",
+            ))
+        }
+    })
+}
+
+/// Flags that would do nothing are errors that name the fix.
+fn flags_have_effect(a: &SimulateArgs) -> Result<(), Bad> {
+    if a.search_steps_given && a.phasing != PhasingArg::Search {
+        return Err(Bad::new(
+            "--search-steps sets the adversarial search, but --phasing is not search",
+            "add --phasing search, or drop --search-steps",
+        ));
+    }
+    if a.seed_given
+        && a.phasing == PhasingArg::Sync
+        && matches!(a.exec, ExecArg::Worst | ExecArg::Best)
+    {
+        return Err(Bad::new(
+            format!(
+                "--seed has no effect: nothing is random with --phasing sync and --exec {}",
+                flag_name(&a.exec)
+            ),
+            "add --phasing random (or --exec uniform), or drop --seed",
+        ));
+    }
+    Ok(())
+}
+
+/// `--window START,END` for the Gantt chart, inside the simulated span.
+fn window_of(
+    spec: &Spec,
+    a: &SimulateArgs,
+    w: &str,
+    t_max: Nanos,
+    horizon: Nanos,
+) -> Result<(Nanos, Nanos), Bad> {
+    if a.gantt.is_none() {
+        return Err(Bad::new(
+            "--window sets the span of the Gantt chart, but no --gantt was given",
+            "add --gantt FILE.svg, or drop --window",
+        ));
+    }
+    let help = format!(
+        "write --window START,END with times in {} or with units, e.g. --window 0,{}",
+        spec.time_unit,
+        spec.fmt_time((3 * t_max).min(horizon))
+    );
+    let Some((s, e)) = w.split_once(',') else {
+        return Err(Bad::new(
+            format!("invalid value `{w}` for --window: expected START,END"),
+            help,
+        ));
+    };
+    let (s, e) = match (parse_time(spec, s), parse_time(spec, e)) {
+        (Ok(s), Ok(e)) => (s, e),
+        (Err(m), _) | (_, Err(m)) => {
+            return Err(Bad::new(
+                format!("invalid value `{w}` for --window: {m}"),
+                help,
+            ))
+        }
+    };
+    if s < 0 || e <= s {
+        return Err(Bad::new(
+            format!("invalid value `{w}` for --window: need 0 <= START < END"),
+            help,
+        ));
+    }
+    if e > horizon {
+        return Err(Bad::new(
+            format!(
+                "--window ends at {} {u}, after the simulated span of {} {u}",
+                spec.fmt_time(e),
+                spec.fmt_time(horizon),
+                u = spec.time_unit
+            ),
+            "lengthen --duration (or --outputs), or pick an earlier END",
+        ));
+    }
+    Ok((s, e))
+}

@@ -1,0 +1,366 @@
+//! The report of a simulation: text tables and JSON.
+
+use super::*;
+
+pub(super) fn search_json(spec: &Spec, rs: &[SearchResult]) -> Value {
+    Value::Array(
+        rs.iter()
+            .map(|r| {
+                json!({
+                    "chain": spec.chain_label(r.chain),
+                    "metric": r.metric.name(),
+                    "from": r.anchor.name(),
+                    "found": num(spec, r.value),
+                    "paper": num(spec, r.paper),
+                    "sound": num(spec, r.sound),
+                    "tightness": r.tightness(),
+                    "simulations": r.simulations,
+                    "offsets": r.best.offsets.iter().map(|&o| spec.in_unit(o)).collect::<Vec<_>>(),
+                    "exec": format!("{:?}", r.best.exec).to_lowercase(),
+                    "seed": r.best.seed,
+                })
+            })
+            .collect(),
+    )
+}
+
+pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
+    let mut t = Table::new(&[
+        "chain",
+        "metric",
+        "from",
+        "found",
+        "paper",
+        "sound",
+        "found/sound",
+        "above paper",
+        "simulations",
+    ])
+    .numeric(&[3, 4, 5, 6, 8]);
+    for r in rs {
+        let f = |v: Option<Nanos>| v.map_or("-".to_string(), |n| spec.fmt_time(n));
+        t.row(vec![
+            spec.chain_label(r.chain),
+            r.metric.name().to_string(),
+            r.anchor.name().to_string(),
+            f(r.value),
+            f(r.paper),
+            f(r.sound),
+            r.tightness().map_or("-".into(), |x| format!("{x:.4}")),
+            match (r.value, r.paper) {
+                (Some(v), Some(p)) if v > p => "yes".into(),
+                _ => "no".into(),
+            },
+            r.simulations.to_string(),
+        ]);
+    }
+    format!(
+        "\nadversarial search (a lower bound on the true worst case; found/sound brackets it):\n{}",
+        t.render()
+    )
+}
+
+pub(crate) fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
+    ns.map_or(Value::Null, |n| json!(spec.in_unit(n)))
+}
+
+pub(super) fn to_json(
+    spec: &Spec,
+    report: &Report,
+    a: &SimulateArgs,
+    res: &SimResult,
+    obs: &[ChainObs],
+    seconds: f64,
+) -> Value {
+    let mut v = observations_json(spec, report, obs);
+    if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
+        for (entry, ts) in tasks.iter_mut().zip(&res.tasks) {
+            entry["observed"] = json!({
+                "released": ts.released,
+                "completed": ts.completed,
+                "max_response": num(spec, ts.max_response),
+                "late": ts.late,
+                "exhaustions": ts.exhaustions,
+                "utilization": ts.busy as f64 / res.horizon as f64,
+            });
+        }
+    }
+    let offsets: serde_json::Map<String, Value> = spec
+        .tasks
+        .iter()
+        .zip(&res.offsets)
+        .map(|(t, &o)| (t.name.clone(), json!(spec.in_unit(o))))
+        .collect();
+    v["simulation"] = json!({
+        "horizon": spec.in_unit(res.horizon),
+        "seed": a.seed,
+        "exec": flag_name(&a.exec),
+        "phasing": flag_name(&a.phasing),
+        "offsets": offsets,
+        "events": res.events,
+        "seconds": seconds,
+    });
+    v
+}
+
+/// The `analyze --json` report with each chain entry's observations from the
+/// read and from the event.
+pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) -> Value {
+    let mut v = analyze::report_json(spec, report);
+    if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
+        for (entry, o) in chains.iter_mut().zip(obs) {
+            entry["observed"] = observed_json(spec, &o.read);
+            entry["violations"] = json!({"paper": o.read.over_paper, "sound": o.read.over_sound});
+            entry["observed_from_event"] = observed_json(spec, &o.event);
+            entry["violations_from_event"] =
+                json!({"paper": o.event.over_paper, "sound": o.event.over_sound});
+        }
+    }
+    v
+}
+
+/// {count, min, mean, p99, max, variation} in the spec's unit; variation =
+/// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV).
+pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> Value {
+    let unit = spec.time_unit.nanos() as f64;
+    match j.observed {
+        Some(s) => json!({
+            "count": s.count,
+            "min": spec.in_unit(s.min),
+            "mean": s.mean / unit,
+            "p99": spec.in_unit(s.p99),
+            "max": spec.in_unit(s.max),
+            "variation": spec.in_unit(s.max - s.min),
+        }),
+        None => {
+            json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null, "variation": null})
+        }
+    }
+}
+
+/// A mean in the spec's unit, to a thousandth of the unit.
+pub(super) fn fmt_mean(spec: &Spec, mean_ns: f64) -> String {
+    let step = (spec.time_unit.nanos() / 1000).max(1) as f64;
+    spec.fmt_time(((mean_ns / step).round() * step) as Nanos)
+}
+
+/// A duration for people in the largest unit that keeps it at least 1
+/// ("300.01 s"), when that differs from the spec's unit.
+pub(super) fn human(spec: &Spec, ns: Nanos) -> String {
+    let unit = TimeUnit::ALL
+        .iter()
+        .rev()
+        .copied()
+        .find(|u| ns >= u.nanos())
+        .unwrap_or(TimeUnit::Ns);
+    if unit == spec.time_unit {
+        return String::new();
+    }
+    let x = unit.from_nanos(ns);
+    let v = format!("{x:.2}");
+    let v = v.trim_end_matches('0').trim_end_matches('.');
+    format!(" ({v} {unit})")
+}
+
+/// 1234567 → "1.23M".
+pub(super) fn si(x: f64) -> String {
+    match x {
+        x if x >= 1e9 => format!("{:.2}G", x / 1e9),
+        x if x >= 1e6 => format!("{:.2}M", x / 1e6),
+        x if x >= 1e3 => format!("{:.1}k", x / 1e3),
+        x => format!("{x:.0}"),
+    }
+}
+
+/// One row per chain and metric: the observations from `a` against the
+/// bounds from `a`.
+pub(crate) fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
+    let mut t = Table::new(&[
+        "chain",
+        "metric",
+        "count",
+        "min",
+        "mean",
+        "p99",
+        "max",
+        "paper",
+        "sound",
+        ">paper",
+        ">sound",
+        "max/sound",
+    ])
+    .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10, 11]);
+    for o in obs {
+        let j = o.from(a);
+        let dash = || "-".to_string();
+        let (count, min, mean, p99, max) = match j.observed {
+            Some(s) => (
+                s.count.to_string(),
+                spec.fmt_time(s.min),
+                fmt_mean(spec, s.mean),
+                spec.fmt_time(s.p99),
+                spec.fmt_time(s.max),
+            ),
+            None => ("0".into(), dash(), dash(), dash(), dash()),
+        };
+        let ratio = match (j.observed, j.sound) {
+            (Some(s), Some(b)) if b > 0 => format!("{:.3}", s.max as f64 / b as f64),
+            _ => dash(),
+        };
+        let over_sound = match j.over_sound {
+            Some(0) => "0".to_string(),
+            Some(n) => format!("{n} !!"),
+            None => dash(),
+        };
+        t.row(vec![
+            spec.chain_label(o.chain),
+            o.metric.name().to_string(),
+            count,
+            min,
+            mean,
+            p99,
+            max,
+            spec.fmt_time(j.paper),
+            j.sound
+                .map_or_else(|| "unbounded".into(), |s| spec.fmt_time(s)),
+            j.over_paper.to_string(),
+            over_sound,
+            ratio,
+        ]);
+    }
+    t.render()
+}
+
+pub(super) fn to_text(
+    spec: &Spec,
+    report: &Report,
+    a: &SimulateArgs,
+    p: &Plan,
+    res: &SimResult,
+    obs: &[ChainObs],
+    seconds: f64,
+) -> String {
+    let u = spec.time_unit;
+    let mut out = crate::analyze::system_line(spec);
+    let span = match p.outputs {
+        Some(n) => format!(", >= {n} outputs of every chain's tail"),
+        None => String::new(),
+    };
+    out.push_str(&format!(
+        "simulated {} {u}{}{span}; seed {}, exec {}, phasing {}\n",
+        spec.fmt_time(res.horizon),
+        human(spec, res.horizon),
+        a.seed,
+        flag_name(&a.exec),
+        flag_name(&a.phasing)
+    ));
+    if res.offsets.iter().any(|&o| o != 0) {
+        let offs: Vec<String> = spec
+            .tasks
+            .iter()
+            .zip(&res.offsets)
+            .map(|(t, &o)| format!("{}={}", t.name, spec.fmt_time(o)))
+            .collect();
+        out.push_str(&format!("offsets: {}\n", offs.join(" ")));
+    }
+    if !obs.is_empty() {
+        out.push_str(
+            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Read));
+        out.push_str(
+            "\nfrom the event just after each head read (reaction: to the first output that \
+             reflects it; freshness: to the last output of the next sample), against the +event bounds:\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Event));
+    }
+    out.push_str("\ntasks (R(job): the analysed worst-case job response time):\n");
+    out.push_str(&task_table(spec, report, res));
+    let eps = if seconds > 0.0 {
+        res.events as f64 / seconds
+    } else {
+        0.0
+    };
+    out.push_str(&format!(
+        "\n{} events simulated in {seconds:.3} s ({} events/s)\n",
+        res.events,
+        si(eps)
+    ));
+    out.push_str(&verdict_text(spec, report, res, obs));
+    out
+}
+
+/// Per task: jobs released and completed, the largest response time seen
+/// against the analysed one (`!!` when above), late jobs, exhaustions, load.
+fn task_table(spec: &Spec, report: &Report, res: &SimResult) -> String {
+    let mut t = Table::new(&[
+        "task",
+        "cpu",
+        "released",
+        "completed",
+        "max R",
+        "R(job)",
+        "late",
+        "exhaustions",
+        "busy/horizon",
+    ])
+    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    for ((task, ts), tm) in spec.tasks.iter().zip(&res.tasks).zip(&report.timing) {
+        let over = matches!((ts.max_response, tm.bounded_response()), (Some(s), Some(r)) if s > r);
+        t.row(vec![
+            task.name.clone(),
+            task.cpu.to_string(),
+            ts.released.to_string(),
+            ts.completed.to_string(),
+            ts.max_response
+                .map_or_else(|| "-".into(), |r| spec.fmt_time(r))
+                + if over { " !!" } else { "" },
+            tm.job_response_time
+                .map_or_else(|| "unbounded".into(), |r| spec.fmt_time(r)),
+            ts.late.to_string(),
+            ts.exhaustions.to_string(),
+            format!("{:.4}", ts.busy as f64 / res.horizon as f64),
+        ]);
+    }
+    t.render()
+}
+
+/// The verdict line (and a note on jobs that finished after their period).
+fn verdict_text(spec: &Spec, report: &Report, res: &SimResult, obs: &[ChainObs]) -> String {
+    let mut out = String::new();
+    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
+    let over_paper: usize = obs
+        .iter()
+        .map(|o| o.read.over_paper + o.event.over_paper)
+        .sum();
+    let late_rt = response_violations(report, res).len();
+    // Background tasks have no deadline: their backlog is not a miss.
+    let late: u64 = res
+        .tasks
+        .iter()
+        .zip(&spec.tasks)
+        .filter(|(_, t)| t.server != rtpipe_model::Server::Background)
+        .map(|(r, _)| r.late)
+        .sum();
+    let verdict = if over_sound > 0 || late_rt > 0 {
+        format!(
+            "verdict: SOUND BOUND EXCEEDED ({over_sound} sample(s), {late_rt} task response time(s)): a bug in the analysis or the simulator"
+        )
+    } else {
+        let paper = match over_paper {
+            0 => "none above the paper bounds either".to_string(),
+            n => format!(
+                "{n} above the paper bounds (the published equations are not upper bounds here)"
+            ),
+        };
+        format!("verdict: no sample above a sound bound; {paper}")
+    };
+    out.push_str(&verdict);
+    out.push('\n');
+    if late > 0 {
+        out.push_str(&format!(
+            "note: {late} job(s) finished after their period: the system breaks the model's assumptions\n"
+        ));
+    }
+    out
+}

@@ -1,0 +1,822 @@
+//! Sound-mode design by branch and bound over boxes of periods.
+//!
+//! A node is a box: an interval of each task's period values. Its bound is
+//! the utilisation at the longest periods, Σ C/hi, which no point of the box
+//! goes below. The box's corner at the longest periods is checked by the
+//! analysis itself: if it verifies, it is the best point of the box and the
+//! box is done. A box is dropped when `rtpipe_analysis::relax` (the sound
+//! analysis at the box's most favourable values) shows that some constraint
+//! fails everywhere in it, or when its bound cannot beat the best verified
+//! design. Before that, each task's interval is narrowed: periods so long
+//! that the relaxation fails are cut from the top (by bisection, since
+//! relaxations only grow on sub-boxes), periods so short that the bound
+//! cannot beat the incumbent from the bottom. Otherwise the box is split in
+//! two at the utilisation midpoint of one task, chosen among the tasks of a
+//! constraint the corner fails. Boxes are taken best bound first, so the
+//! smallest open bound is a proven lower bound at every moment.
+//!
+//! Nothing is approximated: the answer is verified by the analysis, and
+//! every pruned box provably holds nothing better. docs/design.md argues it.
+
+use crate::{utilization, Dom, Group, Incumbent, Runner};
+use rtpipe_analysis::relax::{relax, Affine, Relaxed};
+use rtpipe_analysis::{Metric, Report};
+use rtpipe_model::{Nanos, Server, Spec};
+use std::cmp::Ordering as CmpOrdering;
+use std::collections::BinaryHeap;
+
+/// Relative tolerance under which a box's bound counts as no better than
+/// the incumbent (the same as the MILP search's "closed" gap).
+const GAP_TOLERANCE: f64 = 1e-9;
+
+/// Rounds of narrowing per box at most (each may enable the next).
+const NARROW_ROUNDS: usize = 2;
+
+/// Branch on an open order rather than a period once the order's narrower
+/// span is at least this share of the widest period split's.
+const ORDER_FIRST: f64 = 0.5;
+
+/// A dive for a better verified design every this many boxes.
+const DIVE_EVERY: u64 = 64;
+
+/// The period values (ns) one task may take, ascending.
+#[derive(Debug, Clone)]
+enum Axis {
+    /// `first + k·step` for k in 0..len.
+    Grid { first: Nanos, step: Nanos, len: u32 },
+    List(Vec<Nanos>),
+}
+
+impl Axis {
+    fn new(d: &Dom, g: i64) -> Axis {
+        match d {
+            Dom::Fixed(t) => Axis::List(vec![t * g]),
+            Dom::Grid { step, lo, hi } => Axis::Grid {
+                first: lo * step * g,
+                step: step * g,
+                len: u32::try_from(hi - lo + 1).unwrap_or(u32::MAX),
+            },
+            Dom::Choice(v) => {
+                let mut v: Vec<Nanos> = v.iter().map(|t| t * g).collect();
+                v.sort_unstable();
+                v.dedup();
+                Axis::List(v)
+            }
+        }
+    }
+
+    fn len(&self) -> u32 {
+        match self {
+            Axis::Grid { len, .. } => *len,
+            Axis::List(v) => v.len() as u32,
+        }
+    }
+
+    fn value(&self, k: u32) -> Nanos {
+        debug_assert!(k < self.len());
+        match self {
+            Axis::Grid { first, step, .. } => first + step * Nanos::from(k),
+            Axis::List(v) => v[k as usize],
+        }
+    }
+
+    /// The last index whose value is at most `t` (`None` when none).
+    fn last_at_most(&self, t: Nanos) -> Option<u32> {
+        let k = match self {
+            Axis::Grid { first, step, len } => {
+                if t < *first {
+                    return None;
+                }
+                ((t - first) / step).min(Nanos::from(*len) - 1) as u32
+            }
+            Axis::List(v) => (v.partition_point(|&x| x <= t) as u32).checked_sub(1)?,
+        };
+        Some(k)
+    }
+
+    /// The first index whose value is at least `t` (`len` when none).
+    fn first_at_least(&self, t: f64) -> u32 {
+        match self {
+            Axis::Grid { first, step, len } => {
+                let k = ((t - *first as f64) / *step as f64).ceil().max(0.0);
+                if k >= f64::from(*len) {
+                    *len
+                } else {
+                    k as u32
+                }
+            }
+            Axis::List(v) => v.partition_point(|&x| (x as f64) < t) as u32,
+        }
+    }
+}
+
+/// A box: index intervals per task, with its bound Σ C/hi.
+#[derive(Debug, Clone)]
+struct Node {
+    lo: Vec<u32>,
+    hi: Vec<u32>,
+    /// RM rank orders imposed by branching: (a, b) = a above b.
+    above: Vec<(usize, usize)>,
+    bound: f64,
+}
+
+impl PartialEq for Node {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == CmpOrdering::Equal
+    }
+}
+impl Eq for Node {}
+impl PartialOrd for Node {
+    fn partial_cmp(&self, o: &Self) -> Option<CmpOrdering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Node {
+    /// The heap pops the smallest bound first.
+    fn cmp(&self, o: &Self) -> CmpOrdering {
+        o.bound.total_cmp(&self.bound)
+    }
+}
+
+/// What the box search ended with.
+pub(crate) struct BoxResult {
+    /// The best verified design: the spec with its periods, the analysis, U.
+    pub best: Option<(Spec, Report, f64)>,
+    /// A proven lower bound on the optimum (over the active groups).
+    pub lower_bound: f64,
+    /// Every box was decided: `best` is optimal, or there is none.
+    pub complete: bool,
+    pub nodes: u64,
+    /// The most boxes held open at once (memory: each holds two indices
+    /// per task).
+    pub peak_open: usize,
+}
+
+/// The box search of one problem: which constraint groups count, the axes.
+pub(crate) struct BoxSearch<'r, 'a> {
+    run: &'r mut Runner<'a>,
+    groups: &'r [Group],
+    axes: Vec<Axis>,
+    /// Budgets C_i of guaranteed tasks (0 for background ones).
+    budget: Vec<f64>,
+    /// Stop at the first verified design (a feasibility probe).
+    first_only: bool,
+}
+
+impl<'r, 'a> BoxSearch<'r, 'a> {
+    pub fn new(run: &'r mut Runner<'a>, groups: &'r [Group]) -> Self {
+        let axes = run.dom.iter().map(|d| Axis::new(d, run.g)).collect();
+        let budget = run
+            .spec
+            .tasks
+            .iter()
+            .map(|t| match t.server {
+                Server::Background => 0.0,
+                _ => t.budget() as f64,
+            })
+            .collect();
+        BoxSearch {
+            run,
+            groups,
+            axes,
+            budget,
+            first_only: false,
+        }
+    }
+
+    fn periods(&self, k: &[u32]) -> Vec<Nanos> {
+        k.iter()
+            .zip(&self.axes)
+            .map(|(&k, a)| a.value(k))
+            .collect()
+    }
+
+    fn bound(&self, hi: &[u32]) -> f64 {
+        hi.iter()
+            .enumerate()
+            .map(|(i, &k)| self.budget[i] / self.axes[i].value(k) as f64)
+            .sum()
+    }
+
+    /// Shrinks the box to the points that have the imposed orders (RM:
+    /// a above b ⟺ (T_a, a) < (T_b, b)); false when none is left.
+    fn enforce_orders(&self, node: &mut Node) -> bool {
+        for _ in 0..node.above.len() + 1 {
+            let mut changed = false;
+            for &(a, b) in &node.above {
+                let tie = Nanos::from(a > b);
+                // T_a ≤ T_b − tie: a's top and b's bottom move.
+                let top = self.axes[b].value(node.hi[b]) - tie;
+                match self.axes[a].last_at_most(top) {
+                    Some(k) if k >= node.lo[a] => {
+                        changed |= k < node.hi[a];
+                        node.hi[a] = node.hi[a].min(k);
+                    }
+                    _ => return false,
+                }
+                let bottom = self.axes[a].value(node.lo[a]) + tie;
+                let k = self.axes[b].first_at_least(bottom as f64);
+                if k > node.hi[b] {
+                    return false;
+                }
+                changed |= k > node.lo[b];
+                node.lo[b] = node.lo[b].max(k);
+            }
+            if !changed {
+                return true;
+            }
+        }
+        true
+    }
+
+    fn may_hold(&self, r: &Relaxed) -> bool {
+        let spec = self.run.spec;
+        // The sound analysis needs every chain bounded, limit or not.
+        if r.chains.iter().any(|c| c.0.is_none() || c.1.is_none()) {
+            return false;
+        }
+        self.groups.iter().all(|g| match *g {
+            Group::Limit(k, Metric::Reaction) => {
+                spec.chains[k].reaction.is_none_or(|l| r.chains[k].0.is_some_and(|b| b <= l))
+            }
+            Group::Limit(k, Metric::Freshness) => {
+                spec.chains[k].freshness.is_none_or(|l| r.chains[k].1.is_some_and(|b| b <= l))
+            }
+            Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
+        })
+    }
+
+    /// The analysis of one point, and whether it meets the active groups.
+    fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
+        let spec = self.run.with_periods(&self.periods(k));
+        let report = rtpipe_analysis::analyze(&spec);
+        let bounded = report.chains.iter().all(|c| c.bound.sound.is_some());
+        let ok = bounded
+            && self.groups.iter().all(|g| match *g {
+                Group::Limit(k, m) => report
+                    .chains
+                    .iter()
+                    .filter(|c| c.chain == k && c.metric == m)
+                    .all(|c| c.ok),
+                Group::Sched(cpu) => report
+                    .schedulability
+                    .cpus
+                    .iter()
+                    .filter(|v| v.cpu == cpu)
+                    .all(|v| v.schedulable),
+            });
+        (spec, report, ok)
+    }
+
+    /// Narrows the box in place and sets its bound; false when it holds
+    /// nothing feasible that can beat `best`.
+    fn narrow(&self, node: &mut Node, best: Option<f64>) -> bool {
+        for _ in 0..NARROW_ROUNDS {
+            if !self.enforce_orders(node) {
+                return false;
+            }
+            if let Some(u) = best {
+                if self.raise_lows(node, u).is_none() {
+                    return false;
+                }
+            }
+            let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
+            let r = relax(self.run.spec, &lo, &hi, &node.above, true);
+            if !self.may_hold(&r) {
+                return false;
+            }
+            let Some(bound) = self.form_bound(&r, &lo, &hi) else {
+                return false;
+            };
+            node.bound = bound;
+            if best.is_some_and(|u| bound >= u * (1.0 - GAP_TOLERANCE)) {
+                return false;
+            }
+            match self.cut_by_forms(node, &r, &lo) {
+                None => return false,
+                Some(false) => return true,
+                Some(true) => {}
+            }
+        }
+        // The last cut's box: its bound is at least the one set above.
+        node.bound = node.bound.max(self.bound(&node.hi));
+        true
+    }
+
+    /// Cuts from the top of every task's interval the periods at which some
+    /// limit's affine forms exceed it even with every other period at its
+    /// shortest; `None` when an interval empties, else whether any moved.
+    fn cut_by_forms(&self, node: &mut Node, r: &Relaxed, lo: &[Nanos]) -> Option<bool> {
+        let spec = self.run.spec;
+        let n = node.lo.len();
+        let mut changed = false;
+        for g in self.groups {
+            let Group::Limit(k, metric) = *g else { continue };
+            let Some((e, f)) = r.forms[k].as_ref() else { continue };
+            let (limit, forms) = match metric {
+                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
+                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            };
+            let Some(limit) = limit.map(|l| l as f64) else { continue };
+            // The longest period each task may have: the most any form allows.
+            let mut allow = vec![f64::NEG_INFINITY; n];
+            for a in forms {
+                if a.base > limit {
+                    continue;
+                }
+                let mut slope = vec![0.0; n];
+                a.slopes.iter().for_each(|&(i, s)| slope[i] += s);
+                for i in 0..n {
+                    let room = if slope[i] > 0.0 {
+                        lo[i] as f64 + (limit - a.base) / slope[i]
+                    } else {
+                        f64::INFINITY
+                    };
+                    allow[i] = allow[i].max(room);
+                }
+            }
+            for i in 0..n {
+                if allow[i] >= self.axes[i].value(node.hi[i]) as f64 {
+                    continue;
+                }
+                match self.axes[i].last_at_most(allow[i].floor().max(-1.0) as Nanos) {
+                    Some(k) if k >= node.lo[i] => {
+                        node.hi[i] = k;
+                        changed = true;
+                    }
+                    _ => return None,
+                }
+            }
+        }
+        Some(changed)
+    }
+
+    /// The box's bound: Σ C/hi, raised by each chain limit whose affine
+    /// forms (`Relaxed::forms`) keep the periods of its tasks from all
+    /// being longest. `None` when some limit cannot hold in the box.
+    fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
+        let spec = self.run.spec;
+        let plain: f64 = (0..lo.len()).map(|i| self.budget[i] / hi[i] as f64).sum();
+        let mut bound = plain;
+        for g in self.groups {
+            let Group::Limit(k, metric) = *g else { continue };
+            let (e, f) = r.forms[k].as_ref()?;
+            let (limit, forms) = match metric {
+                Metric::Reaction => (spec.chains[k].reaction, vec![e, f]),
+                Metric::Freshness => (spec.chains[k].freshness, vec![f]),
+            };
+            let Some(limit) = limit else { continue };
+            let b = forms
+                .into_iter()
+                .filter_map(|a| self.least_under(a, limit as f64, lo, hi, plain))
+                .min_by(f64::total_cmp)?;
+            bound = bound.max(b);
+        }
+        Some(bound)
+    }
+
+    /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
+    /// nowhere). Lagrangian dual of the separable convex problem: for any
+    /// λ ≥ 0, min_T Σ C_i/T_i + λ (form(T) − limit) is one, with the
+    /// minimising T_i = √(C_i / (λ·s_i)) clamped to the box.
+    fn least_under(&self, form: &Affine, limit: f64, lo: &[Nanos], hi: &[Nanos], plain: f64) -> Option<f64> {
+        let mut slope: Vec<(usize, f64)> = Vec::with_capacity(form.slopes.len());
+        for &(i, s) in &form.slopes {
+            match slope.iter_mut().find(|x| x.0 == i) {
+                Some(x) => x.1 += s,
+                None => slope.push((i, s)),
+            }
+        }
+        let at_lo = form.base;
+        if at_lo > limit {
+            return None;
+        }
+        let t = |i: usize, s: f64, lambda: f64| {
+            let (l, h) = (lo[i] as f64, hi[i] as f64);
+            if self.budget[i] == 0.0 {
+                return l;
+            }
+            (self.budget[i] / (lambda * s)).sqrt().clamp(l, h)
+        };
+        let excess = |lambda: f64| {
+            slope
+                .iter()
+                .map(|&(i, s)| s * (t(i, s, lambda) - lo[i] as f64))
+                .sum::<f64>()
+                + at_lo
+                - limit
+        };
+        let dual = |lambda: f64| {
+            let moved: f64 = slope
+                .iter()
+                .map(|&(i, s)| self.budget[i] / t(i, s, lambda) - self.budget[i] / hi[i] as f64)
+                .sum();
+            plain + moved + lambda * excess(lambda)
+        };
+        if excess(0.0) <= 0.0 || slope.is_empty() {
+            return Some(plain);
+        }
+        // Bisection on log λ for excess(λ) = 0; any λ gives a valid bound.
+        let (mut a, mut b) = (-40.0f64, 40.0f64);
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if excess(m.exp2()) > 0.0 {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        Some(dual(a.exp2()).max(dual(b.exp2())).max(plain))
+    }
+
+    /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
+    /// below u minus everyone else's least utilisation.
+    fn raise_lows(&self, node: &mut Node, u: f64) -> Option<bool> {
+        let total = self.bound(&node.hi);
+        if total >= u * (1.0 - GAP_TOLERANCE) {
+            return None;
+        }
+        let mut changed = false;
+        for i in 0..node.lo.len() {
+            if node.lo[i] == node.hi[i] || self.budget[i] == 0.0 {
+                continue;
+            }
+            let own = self.budget[i] / self.axes[i].value(node.hi[i]) as f64;
+            let room = u - (total - own);
+            debug_assert!(room > 0.0);
+            let k = self.axes[i].first_at_least(self.budget[i] / room);
+            if k > node.lo[i] {
+                if k > node.hi[i] {
+                    return None;
+                }
+                node.lo[i] = k;
+                changed = true;
+            }
+        }
+        Some(changed)
+    }
+
+    /// How to split a box whose corner fails: on the rank order of two
+    /// tasks of a failing constraint that the box leaves open (a response
+    /// time there jumps with the order, which no box split separates), else
+    /// on the period of one task.
+    fn branch(&self, node: &Node, report: &Report) -> Option<(Node, Node)> {
+        let blamed = self.blamed(node, report);
+        let split = self.split_task(node, &blamed);
+        let widest = split.map_or(0.0, |i| self.span(node, i));
+        // An order is worth a branch once the pair's narrower interval is
+        // about as wide as the widest split (else splitting that period
+        // first often separates the pair anyway).
+        let order = self
+            .open_order(node, &blamed)
+            .filter(|&(a, b)| self.span(node, a).min(self.span(node, b)) >= ORDER_FIRST * widest);
+        if let Some((a, b)) = order {
+            let mut ab = node.clone();
+            ab.above.push((a, b));
+            let mut ba = node.clone();
+            ba.above.push((b, a));
+            return Some((ab, ba));
+        }
+        match split {
+            Some(i) => Some(self.split(node, i)),
+            None => {
+                let (a, b) = self.open_order(node, &blamed)?;
+                let mut ab = node.clone();
+                ab.above.push((a, b));
+                let mut ba = node.clone();
+                ba.above.push((b, a));
+                Some((ab, ba))
+            }
+        }
+    }
+
+    /// A pair on one CPU under RM, one of them blamed, whose order the box
+    /// and the imposed orders leave open: the widest narrower span first.
+    fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
+        let spec = self.run.spec;
+        if spec.scheduler != rtpipe_model::Scheduler::Rm {
+            return None;
+        }
+        let ranked = |i: usize| spec.tasks[i].server != Server::Background;
+        let v = |i: usize, k: u32| (self.axes[i].value(k), i);
+        let mut best: Option<((usize, usize), f64)> = None;
+        for a in 0..node.lo.len() {
+            for b in a + 1..node.lo.len() {
+                let open = ranked(a)
+                    && ranked(b)
+                    && (blamed[a] || blamed[b])
+                    && spec.tasks[a].cpu == spec.tasks[b].cpu
+                    && v(a, node.lo[a]) < v(b, node.hi[b])
+                    && v(b, node.lo[b]) < v(a, node.hi[a])
+                    && !node.above.contains(&(a, b))
+                    && !node.above.contains(&(b, a));
+                if open {
+                    let w = self.span(node, a).min(self.span(node, b));
+                    if best.is_none_or(|(_, x)| w > x) {
+                        best = Some(((a, b), w));
+                    }
+                }
+            }
+        }
+        best.map(|(p, _)| p)
+    }
+
+    fn span(&self, node: &Node, i: usize) -> f64 {
+        let a = &self.axes[i];
+        self.budget[i] / a.value(node.lo[i]) as f64 - self.budget[i] / a.value(node.hi[i]) as f64
+    }
+
+    /// Tasks of a constraint the corner fails.
+    fn blamed(&self, node: &Node, report: &Report) -> Vec<bool> {
+        let spec = self.run.spec;
+        let mut blamed = vec![false; node.lo.len()];
+        for c in &report.chains {
+            if !c.ok {
+                spec.chains[c.chain].path.iter().for_each(|&i| blamed[i] = true);
+            }
+        }
+        for v in report.schedulability.cpus.iter().filter(|v| !v.schedulable) {
+            for (i, t) in spec.tasks.iter().enumerate() {
+                blamed[i] |= t.cpu == v.cpu;
+            }
+        }
+        blamed
+    }
+
+    /// The task to split: the widest utilisation span among the blamed
+    /// tasks (any task with room otherwise).
+    fn split_task(&self, node: &Node, blamed: &[bool]) -> Option<usize> {
+        let span = |i: usize| self.span(node, i);
+        let open = |i: &usize| node.lo[*i] < node.hi[*i];
+        let pick = |only_blamed: bool| {
+            (0..node.lo.len())
+                .filter(open)
+                .filter(|&i| !only_blamed || blamed[i])
+                .max_by(|&a, &b| span(a).total_cmp(&span(b)).then(b.cmp(&a)))
+        };
+        pick(true).or_else(|| pick(false))
+    }
+
+    /// Splits task i's interval at its utilisation midpoint (the harmonic
+    /// mean of its ends).
+    fn split(&self, node: &Node, i: usize) -> (Node, Node) {
+        let a = &self.axes[i];
+        let (l, h) = (a.value(node.lo[i]) as f64, a.value(node.hi[i]) as f64);
+        let mid = 2.0 * l * h / (l + h);
+        let k = a.first_at_least(mid).saturating_sub(1).clamp(node.lo[i], node.hi[i] - 1);
+        let mut low = node.clone();
+        low.hi[i] = k;
+        low.bound = self.bound(&low.hi);
+        let mut high = node.clone();
+        high.lo[i] = k + 1;
+        (low, high)
+    }
+
+    /// A verified point near the frontier below `node`: follow the low child
+    /// of the split (shorter periods) until the corner verifies, then
+    /// lengthen each period as far as the design still verifies.
+    fn dive(&self, node: &Node, best: Option<f64>) -> Option<(Spec, Report, f64)> {
+        let mut node = node.clone();
+        for _ in 0..256 {
+            if !self.narrow(&mut node, best) {
+                return None;
+            }
+            let (spec, report, ok) = self.verify(&node.hi);
+            if ok {
+                let k = self.polish(node.hi.clone());
+                let (spec, report, ok) = if k == node.hi {
+                    (spec, report, ok)
+                } else {
+                    self.verify(&k)
+                };
+                debug_assert!(ok);
+                let u = utilization(&spec);
+                return best.is_none_or(|b| u < b).then_some((spec, report, u));
+            }
+            node = self.branch(&node, &report)?.0;
+        }
+        None
+    }
+
+    /// Lengthens each period (largest utilisation first) by bisection over
+    /// the values that keep the design verified; `k` must verify.
+    fn polish(&self, mut k: Vec<u32>) -> Vec<u32> {
+        for _ in 0..3 {
+            let mut moved = false;
+            let mut order: Vec<usize> = (0..k.len()).collect();
+            let u = |i: usize| self.budget[i] / self.axes[i].value(k[i]) as f64;
+            order.sort_by(|&a, &b| u(b).total_cmp(&u(a)));
+            for i in order {
+                // Invariant: k[i] = a verifies; the search is for a longer one.
+                let (mut a, mut b) = (k[i], self.axes[i].len());
+                while b - a > 1 {
+                    let m = a + (b - a) / 2;
+                    k[i] = m;
+                    if self.verify(&k).2 {
+                        a = m;
+                    } else {
+                        b = m;
+                    }
+                }
+                moved |= k[i] != a;
+                k[i] = a;
+            }
+            if !moved {
+                break;
+            }
+        }
+        k
+    }
+
+    /// Runs the search from the whole domain, starting from `seed` (a
+    /// verified design, if any).
+    pub fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
+        let n = self.axes.len();
+        let root = Node {
+            lo: vec![0; n],
+            hi: self.axes.iter().map(|a| a.len() - 1).collect(),
+            above: Vec::new(),
+            bound: 0.0,
+        };
+        let mut best = seed;
+        let mut open = BinaryHeap::new();
+        let mut nodes: u64 = 0;
+        let mut peak_open = 0;
+        let mut root = root;
+        root.bound = self.bound(&root.hi);
+        open.push(root);
+        let mut stopped = false;
+        while let Some(mut node) = open.pop() {
+            let incumbent = best.as_ref().map(|b| b.2);
+            if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
+                continue;
+            }
+            if self.run.out_of_time() {
+                open.push(node);
+                stopped = true;
+                break;
+            }
+            nodes += 1;
+            self.run.work += 1;
+            if nodes % 256 == 1 {
+                self.progress(nodes, open.len(), node.bound, incumbent);
+            }
+            if !self.narrow(&mut node, incumbent) {
+                continue;
+            }
+            if nodes % DIVE_EVERY == 1 {
+                if let Some(found) = self.dive(&node, best.as_ref().map(|b| b.2)) {
+                    self.publish(&found.0, found.2, node.bound);
+                    best = Some(found);
+                }
+            }
+            let incumbent = best.as_ref().map(|b| b.2);
+            let (spec, report, ok) = self.verify(&node.hi);
+            if ok {
+                let u = utilization(&spec);
+                if incumbent.is_none_or(|b| u < b) {
+                    self.publish(&spec, u, open.iter().map(|n| n.bound).fold(node.bound, f64::min));
+                    best = Some((spec, report, u));
+                }
+                if self.first_only {
+                    break;
+                }
+                continue;
+            }
+            let Some((low, high)) = self.branch(&node, &report) else {
+                continue; // a single point that fails
+            };
+            open.push(low);
+            open.push(high);
+            peak_open = peak_open.max(open.len());
+        }
+        let open_bound = open.iter().map(|n| n.bound).fold(f64::INFINITY, f64::min);
+        let lower_bound = match &best {
+            Some((_, _, u)) => open_bound.min(*u),
+            None => open_bound,
+        };
+        BoxResult {
+            best,
+            lower_bound: if lower_bound.is_finite() { lower_bound } else { 0.0 },
+            complete: !stopped,
+            nodes,
+            peak_open,
+        }
+    }
+
+    fn publish(&self, spec: &Spec, u: f64, lower_bound: f64) {
+        if let Some(sink) = &self.run.opts.incumbent {
+            if let Ok(mut g) = sink.lock() {
+                *g = Some(Incumbent {
+                    periods: spec.tasks.iter().map(|t| t.fixed_period().unwrap_or(0)).collect(),
+                    utilization: u,
+                    lower_bound: Some(lower_bound),
+                });
+            }
+        }
+    }
+
+    fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {
+        self.run.say(|| {
+            let best = best.map_or(String::new(), |u| {
+                let gap = if u > 0.0 { (u - bound).max(0.0) / u } else { 0.0 };
+                format!(", best verified U = {u:.4}, gap {:.2} %", 100.0 * gap)
+            });
+            format!("branch and bound: {nodes} boxes, {open} open, lower bound {bound:.4}{best}")
+        });
+    }
+}
+
+impl Runner<'_> {
+    /// The whole design by box search: a first design by local search, the
+    /// search, and on infeasibility the conflicting constraints.
+    pub(crate) fn solve_boxes(&mut self) -> Result<crate::Outcome, crate::DesignError> {
+        let groups = self.all_groups();
+        let seed = self.descent();
+        if let Some((spec, _, u)) = &seed {
+            BoxSearch::new(self, &groups).publish(spec, *u, 0.0);
+        }
+        if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
+            self.work_cap = Some(self.work.saturating_add(p.saturating_mul(BOX_WORK_PER_PATIENCE)));
+        }
+        let found = BoxSearch::new(self, &groups).run(seed);
+        self.iterations = found.nodes as usize;
+        let mut notes = Vec::new();
+        let mut o = match (found.best, found.complete) {
+            (Some((spec, report, u)), complete) => {
+                let status = if complete {
+                    crate::Status::Optimal
+                } else {
+                    notes.push(self.stop_reason());
+                    crate::Status::Feasible
+                };
+                let lb = if complete { u } else { found.lower_bound.min(u) };
+                let mut o = self.outcome(status, Some((spec, report)), Some(lb), Vec::new(), notes);
+                o.objective = Some(u);
+                o.gap = Some(if u > 0.0 { ((u - lb) / u).max(0.0) } else { 0.0 });
+                o
+            }
+            (None, true) => {
+                self.work_cap = None;
+                if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
+                    self.work_cap = Some(self.work.saturating_add(
+                        p.saturating_mul(BOX_WORK_PER_PATIENCE * crate::EXPLAIN_EFFORT),
+                    ));
+                }
+                let (conflicts, minimal) = self.explain(&groups, None);
+                if !minimal {
+                    notes.push(format!(
+                        "the conflict search stopped ({}): the set may not be minimal and fixes may be missing",
+                        self.stop_cause()
+                    ));
+                }
+                self.outcome(crate::Status::Infeasible, None, None, conflicts, notes)
+            }
+            (None, false) => {
+                notes.push(format!(
+                    "stopped ({}) before a verified design",
+                    self.stop_cause()
+                ));
+                let mut o = self.outcome(crate::Status::Unknown, None, None, Vec::new(), notes);
+                o.lower_bound = Some(found.lower_bound);
+                o
+            }
+        };
+        o.peak_open = found.peak_open;
+        Ok(o)
+    }
+
+    fn stop_cause(&self) -> &'static str {
+        if self.opts.cancel.as_ref().is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+            "interrupted"
+        } else if self.opts.time_limit.is_some() {
+            "time limit"
+        } else {
+            "work budget; --time-limit S searches for S seconds instead"
+        }
+    }
+
+    fn stop_reason(&self) -> String {
+        format!(
+            "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
+            self.stop_cause()
+        )
+    }
+
+    /// Whether `groups` can hold together: a box search that stops at the
+    /// first verified design. `None` when it ran out of time or work.
+    pub(crate) fn probe_boxes(&mut self, groups: &[Group]) -> Option<bool> {
+        let mut search = BoxSearch::new(self, groups);
+        search.first_only = true;
+        let r = search.run(None);
+        match (r.best, r.complete) {
+            (Some(_), _) => Some(true),
+            (None, true) => Some(false),
+            (None, false) => None,
+        }
+    }
+}
+
+/// Boxes the search may examine per unit of [`crate::Options::patience`]
+/// once it holds a verified design (without a time limit).
+const BOX_WORK_PER_PATIENCE: u64 = 10;

@@ -1,0 +1,898 @@
+//! Validation: from the raw TOML tables to a [`Spec`], every problem a
+//! diagnostic with its place and a fix. [`Builder::build`] runs the steps in
+//! order: the system, channels, task names, tasks, inheritance, producers,
+//! transfers, budgets and periods, chains, harmonic periods.
+
+use crate::raw::{RawChain, RawChannel, RawPort, RawSpec, RawSystem, RawTask, S};
+use crate::*;
+use std::collections::HashMap;
+use std::ops::Range;
+
+#[derive(Default)]
+pub(crate) struct Builder {
+    pub(crate) diags: Vec<Diagnostic>,
+    unit: Option<TimeUnit>,
+}
+
+pub(crate) fn span<T>(s: &S<T>) -> Option<Range<usize>> {
+    Some(s.span())
+}
+
+impl Builder {
+    fn err(&mut self, msg: impl Into<String>, span: Option<Range<usize>>, help: impl Into<String>) {
+        self.diags.push(Diagnostic::new(msg, span).help(help));
+    }
+
+    fn unit(&self) -> TimeUnit {
+        self.unit.unwrap_or(TimeUnit::Ms)
+    }
+
+    /// A name must be non-empty and printable; task names must also not
+    /// contain `>`, which joins them in chain labels (`t1>t4`).
+    fn check_name(&mut self, kind: &str, n: &S<String>, example: &str) -> bool {
+        let s = n.get_ref();
+        let problem = if s.trim().is_empty() {
+            Some(format!("{kind} name is empty"))
+        } else if let Some(c) = s.chars().find(|c| c.is_control()) {
+            Some(format!(
+                "{kind} name \"{}\" contains the control character U+{:04X}",
+                s.escape_debug(),
+                c as u32
+            ))
+        } else if kind == "task" && s.contains('>') {
+            Some(format!(
+                "task name \"{s}\" contains `>`, which separates the tasks of chain labels (t1>t4)"
+            ))
+        } else {
+            None
+        };
+        match problem {
+            Some(msg) => {
+                self.err(
+                    msg,
+                    span(n),
+                    format!("use a short printable name without `>`, e.g. {example}"),
+                );
+                false
+            }
+            None => true,
+        }
+    }
+
+    /// A time: a bare number in the time unit or a string with a unit.
+    fn time(&mut self, v: &S<toml::Value>, what: &str) -> Option<Nanos> {
+        let r = match v.get_ref() {
+            toml::Value::Integer(i) => time::number_to_nanos(*i as f64, self.unit()),
+            toml::Value::Float(f) => time::number_to_nanos(*f, self.unit()),
+            toml::Value::String(s) => time::parse_time_str(s),
+            other => {
+                self.err(
+                    format!("{what} must be a time, found a {}", other.type_str()),
+                    span(v),
+                    format!(
+                        "write a number (in {}) or a string like \"250us\"",
+                        self.unit()
+                    ),
+                );
+                return None;
+            }
+        };
+        match r {
+            Ok(ns) => Some(ns),
+            Err(e) => {
+                self.err(
+                    format!("{what}: {e}"),
+                    span(v),
+                    "for example 10, 0.5 or \"250us\"",
+                );
+                None
+            }
+        }
+    }
+
+    fn positive_time(&mut self, v: &S<toml::Value>, what: &str) -> Option<Nanos> {
+        let t = self.time(v, what)?;
+        if t <= 0 {
+            self.err(
+                format!(
+                    "{what} must be positive, found {}",
+                    format_in(t, self.unit())
+                ),
+                span(v),
+                format!("give {what} a value greater than zero"),
+            );
+            return None;
+        }
+        Some(t)
+    }
+
+    fn nonneg_time(&mut self, v: &S<toml::Value>, what: &str) -> Option<Nanos> {
+        let t = self.time(v, what)?;
+        if t < 0 {
+            self.err(
+                format!(
+                    "{what} must not be negative, found {}",
+                    format_in(t, self.unit())
+                ),
+                span(v),
+                format!("give {what} a value of zero or more"),
+            );
+            return None;
+        }
+        Some(t)
+    }
+
+    /// A plain number (sizes, bandwidths).
+    fn number(&mut self, v: &S<toml::Value>, what: &str, positive: bool) -> Option<f64> {
+        let x = match v.get_ref() {
+            toml::Value::Integer(i) => *i as f64,
+            toml::Value::Float(f) => *f,
+            other => {
+                self.err(
+                    format!("{what} must be a number, found a {}", other.type_str()),
+                    span(v),
+                    format!("write {what} as a plain number, without a unit"),
+                );
+                return None;
+            }
+        };
+        let ok = x.is_finite() && x < 1e15 && if positive { x > 0.0 } else { x >= 0.0 };
+        if !ok {
+            self.err(
+                format!(
+                    "{what} must be a finite number {} zero, found {x}",
+                    if positive {
+                        "greater than"
+                    } else {
+                        "of at least"
+                    }
+                ),
+                span(v),
+                format!(
+                    "give {what} a value {}",
+                    if positive { "> 0" } else { ">= 0" }
+                ),
+            );
+            return None;
+        }
+        Some(x)
+    }
+
+    fn choice<T: Copy>(
+        &mut self,
+        v: &S<String>,
+        what: &str,
+        options: &[(&'static str, T)],
+    ) -> Option<T> {
+        let s = v.get_ref().as_str();
+        if let Some((_, t)) = options.iter().find(|(n, _)| *n == s) {
+            return Some(*t);
+        }
+        let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+        let help = match suggest(s, names.iter().copied()) {
+            Some(n) => format!(
+                "did you mean \"{n}\"? ({what} is one of {})",
+                names.join(", ")
+            ),
+            None => format!("{what} is one of {}", names.join(", ")),
+        };
+        self.err(format!("unknown {what} \"{s}\""), span(v), help);
+        None
+    }
+
+    /// Validates a parsed spec; every problem becomes a diagnostic, and the
+    /// spec is returned only when there is none.
+    pub(crate) fn build(&mut self, raw: RawSpec) -> Option<Spec> {
+        let sys = raw.system.get_ref();
+        let (name, scheduler, test) = self.system(sys);
+        let (channels, ch_index) = self.channels(&raw.channels.0);
+        let raw_tasks = &raw.tasks.0;
+        let (task_index, names) = self.task_names(raw_tasks, &raw.system);
+        let mut tasks = Vec::new();
+        for (k, v) in raw_tasks {
+            tasks.push(self.task(k, v, &ch_index, &channels, &task_index, &names));
+        }
+        let mut tasks: Vec<Task> = tasks.into_iter().collect::<Option<Vec<_>>>()?;
+        self.serves(raw_tasks, &mut tasks, &task_index, &names);
+        self.producers_write(raw_tasks, &tasks, &task_index, &names);
+        if !self.diags.is_empty() {
+            return None;
+        }
+        let unit = self.unit();
+        compute_transfers(&mut tasks, &channels, unit);
+        self.budgets_and_periods(raw_tasks, &tasks);
+        let chains: Vec<Chain> = raw
+            .chain
+            .iter()
+            .filter_map(|ch| self.chain(ch.get_ref(), &tasks, &task_index, &names))
+            .collect();
+        if !self.diags.is_empty() {
+            return None;
+        }
+        let harmonic = sys.harmonic.as_ref().is_some_and(|h| *h.get_ref());
+        if harmonic {
+            self.check_harmonic(&tasks, raw_tasks);
+            if !self.diags.is_empty() {
+                return None;
+            }
+        }
+        let resolution = match &sys.resolution {
+            Some(r) => self.positive_time(r, "resolution")?,
+            None => unit.nanos(),
+        };
+        Some(Spec {
+            name,
+            time_unit: unit,
+            scheduler: scheduler?,
+            schedulability: test?,
+            resolution,
+            harmonic,
+            channels,
+            tasks,
+            chains,
+        })
+    }
+
+    /// `[system]`: the name, the time unit (set on `self`), the scheduler
+    /// and the schedulability test, which must fit the scheduler.
+    fn system(&mut self, sys: &RawSystem) -> (String, Option<Scheduler>, Option<SchedTest>) {
+        let name = sys.name.get_ref().trim().to_string();
+        if name.is_empty() {
+            self.err(
+                "system name is empty",
+                span(&sys.name),
+                "name the system, e.g. name = \"quad\"",
+            );
+        } else {
+            self.check_name("system", &sys.name, "name = \"quad\"");
+        }
+        self.time_unit(sys);
+        let scheduler = match &sys.scheduler {
+            Some(s) => self.choice(
+                s,
+                "scheduler",
+                &[("rm", Scheduler::Rm), ("edf", Scheduler::Edf)],
+            ),
+            None => Some(Scheduler::Rm),
+        };
+        let test = match &sys.schedulability {
+            Some(s) => self.choice(
+                s,
+                "schedulability test",
+                &[
+                    ("liu-layland", SchedTest::LiuLayland),
+                    ("hyperbolic", SchedTest::Hyperbolic),
+                    ("rta", SchedTest::Rta),
+                    ("edf", SchedTest::Edf),
+                ],
+            ),
+            None => scheduler.map(|s| match s {
+                Scheduler::Rm => SchedTest::Rta,
+                Scheduler::Edf => SchedTest::Edf,
+            }),
+        };
+        if let (Some(s), Some(t), Some(sp)) = (scheduler, test, &sys.schedulability) {
+            let fits = match s {
+                Scheduler::Rm => t != SchedTest::Edf,
+                Scheduler::Edf => t == SchedTest::Edf,
+            };
+            if !fits {
+                let help = match s {
+                    Scheduler::Rm => "with scheduler = \"rm\" use \"liu-layland\", \"hyperbolic\" or \"rta\"",
+                    Scheduler::Edf => "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test)",
+                };
+                self.err(
+                    format!(
+                        "schedulability test \"{}\" does not apply to scheduler \"{}\"",
+                        t.name(),
+                        s.name()
+                    ),
+                    span(sp),
+                    help,
+                );
+            }
+        }
+        (name, scheduler, test)
+    }
+
+    /// `time_unit` (ms by default), set on `self` for every time after it.
+    fn time_unit(&mut self, sys: &RawSystem) {
+        if let Some(u) = &sys.time_unit {
+            match TimeUnit::parse(u.get_ref()) {
+                Some(t) => self.unit = Some(t),
+                None => {
+                    let names: Vec<&str> = TimeUnit::ALL.iter().map(|u| u.name()).collect();
+                    let help = match suggest(u.get_ref(), names.iter().copied()) {
+                        Some(n) => {
+                            format!("did you mean \"{n}\"? time_unit is one of ns, us, ms, s")
+                        }
+                        None => "time_unit is one of ns, us, ms, s".to_string(),
+                    };
+                    self.err(
+                        format!("unknown time_unit \"{}\"", u.get_ref()),
+                        span(u),
+                        help,
+                    );
+                }
+            }
+        } else {
+            self.unit = Some(TimeUnit::Ms);
+        }
+    }
+
+    /// `[channels.*]`, and their index by name.
+    fn channels(
+        &mut self,
+        raw: &[(S<String>, S<RawChannel>)],
+    ) -> (Vec<Channel>, HashMap<String, usize>) {
+        let mut channels = Vec::new();
+        let mut ch_index: HashMap<String, usize> = HashMap::new();
+        for (k, v) in raw {
+            let c = v.get_ref();
+            self.check_name("channel", k, "[channels.mem]");
+            if ch_index.contains_key(k.get_ref()) {
+                self.err(
+                    format!("channel `{}` is declared twice", k.get_ref()),
+                    span(k),
+                    "rename one of them",
+                );
+                continue;
+            }
+            let bw = self.number(&c.bandwidth, "bandwidth", true);
+            let oh = match &c.overhead {
+                Some(o) => self.nonneg_time(o, "overhead"),
+                None => Some(0),
+            };
+            ch_index.insert(k.get_ref().clone(), channels.len());
+            channels.push(Channel {
+                name: k.get_ref().clone(),
+                bandwidth: bw.unwrap_or(1.0),
+                overhead: oh.unwrap_or(0),
+            });
+        }
+        (channels, ch_index)
+    }
+
+    /// Tasks, first pass: their names (unique, valid) and index.
+    fn task_names(
+        &mut self,
+        raw_tasks: &[(S<String>, S<RawTask>)],
+        system: &S<RawSystem>,
+    ) -> (HashMap<String, usize>, Vec<String>) {
+        let mut task_index: HashMap<String, usize> = HashMap::new();
+        for (i, (k, _)) in raw_tasks.iter().enumerate() {
+            self.check_name("task", k, "[tasks.gyro]");
+            if task_index.insert(k.get_ref().clone(), i).is_some() {
+                self.err(
+                    format!("task `{}` is declared twice", k.get_ref()),
+                    span(k),
+                    "rename one of them",
+                );
+            }
+        }
+        if raw_tasks.is_empty() {
+            self.err(
+                "the spec declares no tasks",
+                span(system),
+                "add at least one [tasks.NAME] table with exec and period",
+            );
+        }
+        let names: Vec<String> = raw_tasks.iter().map(|(k, _)| k.get_ref().clone()).collect();
+        (task_index, names)
+    }
+
+    /// PIBS priority inheritance: an I/O VCPU serves a Main VCPU on its CPU.
+    fn serves(
+        &mut self,
+        raw_tasks: &[(S<String>, S<RawTask>)],
+        tasks: &mut [Task],
+        task_index: &HashMap<String, usize>,
+        names: &[String],
+    ) {
+        for (i, (_, v)) in raw_tasks.iter().enumerate() {
+            let Some(sv) = &v.get_ref().serves else {
+                continue;
+            };
+            let Some(&m) = task_index.get(sv.get_ref()) else {
+                self.unknown_task(sv, names);
+                continue;
+            };
+            let problem = if tasks[i].server != Server::Io {
+                Some(format!(
+                    "`serves` is for I/O VCPUs, but `{}` has server \"{}\"",
+                    names[i],
+                    tasks[i].server.name()
+                ))
+            } else if m == i {
+                Some(format!("task `{}` cannot serve itself", names[i]))
+            } else if tasks[m].server != Server::Main {
+                Some(format!(
+                    "`{}` serves `{}`, which is not a Main VCPU (server \"{}\")",
+                    names[i],
+                    names[m],
+                    tasks[m].server.name()
+                ))
+            } else if tasks[m].cpu != tasks[i].cpu {
+                Some(format!(
+                    "`{}` (cpu {}) serves `{}` on another cpu ({})",
+                    names[i], tasks[i].cpu, names[m], tasks[m].cpu
+                ))
+            } else {
+                None
+            };
+            match problem {
+                Some(msg) => self.err(
+                    msg,
+                    span(sv),
+                    "an I/O VCPU (server = \"io\") may serve a Main VCPU (server = \"main\") on the same cpu",
+                ),
+                None => tasks[i].serves = Some(m),
+            }
+        }
+    }
+
+    /// Producers must write something for consumers to read.
+    fn producers_write(
+        &mut self,
+        raw_tasks: &[(S<String>, S<RawTask>)],
+        tasks: &[Task],
+        task_index: &HashMap<String, usize>,
+        names: &[String],
+    ) {
+        for (ci, (_, v)) in raw_tasks.iter().enumerate() {
+            for r in &v.get_ref().reads {
+                if let Some(&pi) = task_index.get(r.get_ref()) {
+                    if tasks[pi].output.is_none() {
+                        self.err(
+                            format!("task `{}` reads `{}`, which has no output", names[ci], names[pi]),
+                            span(r),
+                            format!(
+                                "give [tasks.{}] an output, e.g. output = {{ channel = \"mem\", size = 1 }}",
+                                names[pi]
+                            ),
+                        );
+                    }
+                    if tasks[pi].server == Server::Background
+                        || tasks[ci].server == Server::Background
+                    {
+                        // Allowed: background tasks may exchange data; they are just not analysable.
+                    }
+                }
+            }
+        }
+    }
+
+    /// Budgets and periods against the demand (Δin + p + Δout, known once
+    /// the transfers are).
+    fn budgets_and_periods(&mut self, raw_tasks: &[(S<String>, S<RawTask>)], tasks: &[Task]) {
+        let unit = self.unit();
+        for (i, (_, v)) in raw_tasks.iter().enumerate() {
+            let t = &tasks[i];
+            let demand = t.demand();
+            if demand > MAX_TIME {
+                self.err(
+                    format!("task `{}` has a demand too large to represent", t.name),
+                    span(v),
+                    "check sizes and bandwidths: transfers take size / bandwidth time units",
+                );
+                continue;
+            }
+            let rt = v.get_ref();
+            if let (Some(c), Some(b)) = (t.budget_given, &rt.budget) {
+                if c < demand {
+                    self.err(
+                        format!(
+                            "budget {} of task `{}` is smaller than its demand Δin + p + Δout = {} + {} + {} = {}",
+                            format_in(c, unit),
+                            t.name,
+                            format_in(t.delta_in, unit),
+                            format_in(t.exec, unit),
+                            format_in(t.delta_out, unit),
+                            format_in(demand, unit)
+                        ),
+                        span(b),
+                        format!(
+                            "raise the budget to at least {} or remove it to use the demand (Section IV-B, Step 1)",
+                            format_in(demand, unit)
+                        ),
+                    );
+                }
+            }
+            if let (Some(p), Some(ps)) = (t.fixed_period(), &rt.period) {
+                if t.server != Server::Background && t.budget() > p {
+                    self.err(
+                        format!(
+                            "period {} of task `{}` is shorter than its budget {}",
+                            format_in(p, unit),
+                            t.name,
+                            format_in(t.budget(), unit)
+                        ),
+                        span(ps),
+                        format!(
+                            "a pipe terminal needs T ≥ C: make the period at least {}",
+                            format_in(t.budget(), unit)
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    /// One `[[chain]]`: a path along edges, through no background task, and
+    /// its limits; `None` (with diagnostics) when the path is not valid.
+    fn chain(
+        &mut self,
+        c: &RawChain,
+        tasks: &[Task],
+        task_index: &HashMap<String, usize>,
+        names: &[String],
+    ) -> Option<Chain> {
+        if let Some(n) = &c.name {
+            self.check_name("chain", n, "name = \"gyro to motors\"");
+        }
+        let mut path = Vec::new();
+        let mut ok = true;
+        if c.path.get_ref().is_empty() {
+            self.err(
+                "chain path is empty",
+                span(&c.path),
+                "list at least one task, e.g. path = [\"t1\", \"t4\"]",
+            );
+            ok = false;
+        }
+        for n in c.path.get_ref() {
+            match task_index.get(n.get_ref()) {
+                Some(&i) => path.push(i),
+                None => {
+                    self.unknown_task(n, names);
+                    ok = false;
+                }
+            }
+        }
+        if ok {
+            ok = self.path_is_timed(c, &path, tasks, names);
+        }
+        let reaction = c
+            .reaction
+            .as_ref()
+            .and_then(|v| self.positive_time(v, "reaction limit"));
+        let freshness = c
+            .freshness
+            .as_ref()
+            .and_then(|v| self.positive_time(v, "freshness limit"));
+        ok.then(|| Chain {
+            name: c.name.as_ref().map(|n| n.get_ref().clone()),
+            path,
+            reaction,
+            freshness,
+        })
+    }
+
+    /// A chain's path follows edges (each task reads the one before) and
+    /// passes through no background task.
+    fn path_is_timed(
+        &mut self,
+        c: &RawChain,
+        path: &[usize],
+        tasks: &[Task],
+        names: &[String],
+    ) -> bool {
+        let mut ok = true;
+        for w in 0..path.len().saturating_sub(1) {
+            let (p, q) = (path[w], path[w + 1]);
+            if !tasks[q].reads.contains(&p) {
+                let n = &c.path.get_ref()[w + 1];
+                self.err(
+                    format!(
+                        "chain step `{}` → `{}` does not follow an edge: `{}` does not read `{}`",
+                        names[p], names[q], names[q], names[p]
+                    ),
+                    span(n),
+                    format!(
+                        "add \"{}\" to reads of [tasks.{}], or fix the path",
+                        names[p], names[q]
+                    ),
+                );
+                ok = false;
+            }
+        }
+        for &i in path {
+            if tasks[i].server == Server::Background {
+                self.err(
+                    format!("chain passes through background task `{}`, which has no timing guarantee", names[i]),
+                    span(&c.path),
+                    "give the task a server (\"main\", \"io\" or \"none\") or drop it from the chain",
+                );
+                ok = false;
+            }
+        }
+        ok
+    }
+
+    /// `harmonic = true`: every pair of fixed periods divides one way.
+    fn check_harmonic(&mut self, tasks: &[Task], raw_tasks: &[(S<String>, S<RawTask>)]) {
+        let unit = self.unit();
+        for b in 0..tasks.len() {
+            let Some(pb) = tasks[b].fixed_period() else {
+                continue;
+            };
+            let clash = (0..b).find(|&a| {
+                tasks[a]
+                    .fixed_period()
+                    .is_some_and(|pa| pa % pb != 0 && pb % pa != 0)
+            });
+            let (Some(a), Some(ps)) = (clash, &raw_tasks[b].1.get_ref().period) else {
+                continue;
+            };
+            let pa = tasks[a].fixed_period().unwrap_or(1).max(1);
+            let up = (pb + pa - 1) / pa * pa;
+            self.err(
+                format!(
+                    "harmonic = true, but the fixed periods of `{}` ({}) and `{}` ({}) do not divide one another",
+                    tasks[a].name,
+                    format_in(pa, unit),
+                    tasks[b].name,
+                    format_in(pb, unit)
+                ),
+                span(ps),
+                format!(
+                    "make one period a multiple of the other (e.g. period = {} here), or drop harmonic = true",
+                    format_in(up, unit)
+                ),
+            );
+        }
+    }
+
+    fn unknown_task(&mut self, n: &S<String>, names: &[String]) {
+        let help = match suggest(n.get_ref(), names.iter().map(|s| s.as_str())) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None => format!(
+                "declare [tasks.{}] or use one of: {}",
+                n.get_ref(),
+                names.join(", ")
+            ),
+        };
+        self.err(format!("unknown task `{}`", n.get_ref()), span(n), help);
+    }
+
+    fn port(
+        &mut self,
+        p: &S<RawPort>,
+        ch_index: &HashMap<String, usize>,
+        channels: &[Channel],
+    ) -> Option<Port> {
+        let rp = p.get_ref();
+        let ch = match ch_index.get(rp.channel.get_ref()) {
+            Some(&c) => Some(c),
+            None => {
+                let help = match suggest(
+                    rp.channel.get_ref(),
+                    channels.iter().map(|c| c.name.as_str()),
+                ) {
+                    Some(s) => format!("did you mean \"{s}\"?"),
+                    None => format!(
+                        "declare it: [channels.{}] with bandwidth and overhead",
+                        rp.channel.get_ref()
+                    ),
+                };
+                self.err(
+                    format!("unknown channel \"{}\"", rp.channel.get_ref()),
+                    span(&rp.channel),
+                    help,
+                );
+                None
+            }
+        };
+        let size = self.number(&rp.size, "size", false);
+        Some(Port {
+            channel: ch?,
+            size: size?,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn task(
+        &mut self,
+        k: &S<String>,
+        v: &S<RawTask>,
+        ch_index: &HashMap<String, usize>,
+        channels: &[Channel],
+        task_index: &HashMap<String, usize>,
+        names: &[String],
+    ) -> Option<Task> {
+        let t = v.get_ref();
+        let (exec, exec_min) = self.exec_times(t);
+        let input = match &t.input {
+            Some(p) => self.port(p, ch_index, channels).map(Some),
+            None => Some(None),
+        };
+        let output = match &t.output {
+            Some(p) => self.port(p, ch_index, channels).map(Some),
+            None => Some(None),
+        };
+        let reads = self.reads(t, task_index, names);
+        let period = match &t.period {
+            Some(p) => self.period(p),
+            None => Some(PeriodSpec::Free),
+        };
+        let budget = match &t.budget {
+            Some(b) => self.positive_time(b, "budget").map(Some),
+            None => Some(None),
+        };
+        let (server, cpu) = self.placement(t);
+        Some(Task {
+            name: k.get_ref().clone(),
+            exec: exec?,
+            exec_min: exec_min?,
+            input: input?,
+            output: output?,
+            reads: reads?,
+            period: period?,
+            budget_given: budget?,
+            server: server?,
+            cpu: cpu?,
+            serves: None,
+            body: v.get_ref().body.as_ref().map(|b| b.get_ref().clone()),
+            delta_in: 0,
+            delta_out: 0,
+        })
+    }
+
+    /// `exec` and `exec_min` (at most `exec`).
+    fn exec_times(&mut self, t: &RawTask) -> (Option<Nanos>, Option<Nanos>) {
+        let exec = self.positive_time(&t.exec, "exec");
+        let exec_min = match &t.exec_min {
+            Some(e) => self.nonneg_time(e, "exec_min"),
+            None => Some(0),
+        };
+        if let (Some(a), Some(b), Some(es)) = (exec_min, exec, &t.exec_min) {
+            if a > b {
+                self.err(
+                    format!(
+                        "exec_min {} is larger than exec {}",
+                        format_in(a, self.unit()),
+                        format_in(b, self.unit())
+                    ),
+                    span(es),
+                    "exec_min is the best-case processing time: make it at most exec",
+                );
+            }
+        }
+        (exec, exec_min)
+    }
+
+    /// `reads`: known producers, each once.
+    fn reads(
+        &mut self,
+        t: &RawTask,
+        task_index: &HashMap<String, usize>,
+        names: &[String],
+    ) -> Option<Vec<usize>> {
+        let mut reads = Vec::new();
+        let mut reads_ok = true;
+        for r in &t.reads {
+            match task_index.get(r.get_ref()) {
+                Some(&i) => {
+                    if reads.contains(&i) {
+                        self.err(
+                            format!("`{}` appears twice in reads", r.get_ref()),
+                            span(r),
+                            "list each producer once",
+                        );
+                        reads_ok = false;
+                    }
+                    reads.push(i)
+                }
+                None => {
+                    self.unknown_task(r, names);
+                    reads_ok = false;
+                }
+            }
+        }
+        reads_ok.then_some(reads)
+    }
+
+    /// `server` and `cpu`.
+    fn placement(&mut self, t: &RawTask) -> (Option<Server>, Option<u32>) {
+        let server = match &t.server {
+            Some(s) => self.choice(
+                s,
+                "server",
+                &[
+                    ("main", Server::Main),
+                    ("io", Server::Io),
+                    ("none", Server::None),
+                    ("background", Server::Background),
+                ],
+            ),
+            None => Some(Server::Main),
+        };
+        let cpu = match &t.cpu {
+            Some(c) => match c.get_ref() {
+                toml::Value::Integer(i) if (0..=1023).contains(i) => Some(*i as u32),
+                _ => {
+                    self.err(
+                        "cpu must be an integer from 0 to 1023",
+                        span(c),
+                        "write the core index, e.g. cpu = 0",
+                    );
+                    None
+                }
+            },
+            None => Some(0),
+        };
+        (server, cpu)
+    }
+
+    fn period(&mut self, p: &S<toml::Value>) -> Option<PeriodSpec> {
+        match p.get_ref() {
+            toml::Value::Table(t) => {
+                let mut min = None;
+                let mut max = None;
+                let mut choices = None;
+                for (key, val) in t {
+                    // Inner values have no spans of their own; point at the table.
+                    let sv = S::new(p.span(), val.clone());
+                    match key.as_str() {
+                        "min" => min = Some(self.positive_time(&sv, "period min")?),
+                        "max" => max = Some(self.positive_time(&sv, "period max")?),
+                        "choices" => {
+                            let arr = match val {
+                                toml::Value::Array(a) if !a.is_empty() => a,
+                                _ => {
+                                    self.err(
+                                        "period choices must be a non-empty list of times",
+                                        Some(p.span()),
+                                        "write e.g. period = { choices = [\"1ms\", \"2ms\"] }",
+                                    );
+                                    return None;
+                                }
+                            };
+                            let mut out = Vec::new();
+                            for x in arr {
+                                out.push(self.positive_time(
+                                    &S::new(p.span(), x.clone()),
+                                    "period choice",
+                                )?);
+                            }
+                            out.sort_unstable();
+                            out.dedup();
+                            choices = Some(out);
+                        }
+                        other => {
+                            self.err(
+                                format!("unknown key `{other}` in period"),
+                                Some(p.span()),
+                                "a period is a time, { min = .., max = .. } or { choices = [..] }",
+                            );
+                            return None;
+                        }
+                    }
+                }
+                if let Some(c) = choices {
+                    if min.is_some() || max.is_some() {
+                        self.err(
+                            "period has both choices and min/max",
+                            Some(p.span()),
+                            "use either choices or a min/max range",
+                        );
+                        return None;
+                    }
+                    return Some(PeriodSpec::Choices(c));
+                }
+                if let (Some(a), Some(b)) = (min, max) {
+                    if a > b {
+                        self.err(
+                            "period min is larger than max",
+                            Some(p.span()),
+                            "swap min and max",
+                        );
+                        return None;
+                    }
+                }
+                Some(PeriodSpec::Range { min, max })
+            }
+            _ => self.positive_time(p, "period").map(PeriodSpec::Fixed),
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! What one run simulates: phasing, execution-time model, horizon, seed;
+//! and why a run cannot start.
+
+use rtpipe_model::Nanos;
+use std::fmt;
+
+/// Release offsets φ_i of one run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Phasing {
+    /// All tasks release at 0 (the classic critical instant).
+    Sync,
+    /// φ_i uniform in [0, T_i), in nanoseconds.
+    Random,
+    /// φ_i a uniform multiple of the grid in [0, T_i): random phasings that
+    /// still produce simultaneous events, where worst cases tend to hide.
+    Grid(Nanos),
+    /// Explicit offsets, one per task (for hand-made and replayed schedules).
+    Given(Vec<Nanos>),
+}
+
+/// How each job's demand is drawn in [demand_min, demand].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExecModel {
+    /// Always the worst case.
+    Worst,
+    /// Always the best case.
+    Best,
+    /// Uniform integer nanoseconds.
+    Uniform,
+    /// Best or worst case with equal probability (extremes stress the bounds'
+    /// best-case terms).
+    Extremes,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SimConfig {
+    /// Simulated time; events after it are not processed.
+    pub horizon: Nanos,
+    /// Seeds offsets ([`Phasing::Random`], [`Phasing::Grid`]) and demands.
+    pub seed: u64,
+    pub phasing: Phasing,
+    pub exec: ExecModel,
+    /// Keep a [`JobRecord`] of every completed job (memory grows with the horizon).
+    pub log_jobs: bool,
+}
+
+impl SimConfig {
+    /// Synchronous release, worst-case demands, no job log.
+    pub fn new(horizon: Nanos) -> SimConfig {
+        SimConfig {
+            horizon,
+            seed: 0,
+            phasing: Phasing::Sync,
+            exec: ExecModel::Worst,
+            log_jobs: false,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SimError {
+    /// The task has no fixed positive period, so it cannot be released.
+    NoPeriod(String),
+    HorizonNotPositive(Nanos),
+    /// `Phasing::Given` needs one non-negative offset per task.
+    BadOffsets {
+        expected: usize,
+        found: usize,
+    },
+    NegativeOffset(String),
+    GridNotPositive(Nanos),
+    /// A chain names a task index that does not exist.
+    BadChain(usize),
+    /// A task's best-case demand is negative or above its worst case
+    /// (validated specs never have one).
+    BadDemand(String),
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::NoPeriod(t) => write!(f, "task `{t}` has no fixed positive period"),
+            SimError::HorizonNotPositive(h) => write!(f, "horizon must be positive, found {h} ns"),
+            SimError::BadOffsets { expected, found } => {
+                write!(
+                    f,
+                    "expected {expected} offsets (one per task), found {found}"
+                )
+            }
+            SimError::NegativeOffset(t) => write!(f, "offset of task `{t}` is negative"),
+            SimError::GridNotPositive(g) => {
+                write!(f, "phasing grid must be positive, found {g} ns")
+            }
+            SimError::BadChain(c) => write!(f, "chain {c} names a task that does not exist"),
+            SimError::BadDemand(t) => write!(
+                f,
+                "task `{t}`: its demands must satisfy 0 <= best case <= worst case"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}

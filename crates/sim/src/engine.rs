@@ -1,0 +1,824 @@
+//! The event loop: releases, the servers' budgets, each CPU's choice of
+//! job, reads and publishes at the instants the model says.
+
+use crate::rng::Rng;
+use crate::server::{Cbs, Pibs, Sporadic};
+use crate::tracker::Tracker;
+use crate::*;
+use rtpipe_analysis::sched::rm_priorities;
+use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use std::cmp::Reverse;
+use std::collections::{BTreeSet, BinaryHeap, VecDeque};
+
+/// What the simulator tells the code that runs task bodies: a job reads, a
+/// job publishes. Called in simulated-time order.
+pub(crate) trait Hooks {
+    /// The front job of `job.task` reads at `job.read`.
+    fn read(&mut self, job: &rtpipe_body::Job);
+    /// The front job of `task` publishes at `t`.
+    fn publish(&mut self, task: usize, t: Nanos);
+}
+
+/// Timing only.
+pub(crate) struct NoHooks;
+
+impl Hooks for NoHooks {
+    fn read(&mut self, _job: &rtpipe_body::Job) {}
+    fn publish(&mut self, _task: usize, _t: Nanos) {}
+}
+
+pub(crate) fn run<H: Hooks>(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<SimResult, SimError> {
+    run_with_progress(spec, cfg, hooks, &mut |_| {})
+}
+
+pub(crate) fn run_with_progress<H: Hooks>(
+    spec: &Spec,
+    cfg: &SimConfig,
+    hooks: H,
+    progress: &mut dyn FnMut(Nanos),
+) -> Result<SimResult, SimError> {
+    let mut sim = Sim::new(spec, cfg, hooks)?;
+    let mut t = 0;
+    loop {
+        sim.instant(t);
+        if sim.events % PROGRESS_EVENTS == 0 {
+            progress(t);
+        }
+        match sim.next_event(t) {
+            Some(next) if next <= cfg.horizon => {
+                sim.advance(t, next - t);
+                t = next;
+            }
+            _ => break,
+        }
+    }
+    Ok(sim.finish())
+}
+
+/// A position of a chain occupied by a task.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Slot {
+    pub(crate) chain: usize,
+    pub(crate) pos: usize,
+    /// The producer's task and slot index, `None` at the head.
+    pub(crate) src: Option<(usize, usize)>,
+    pub(crate) tail: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Job {
+    pub(crate) index: u64,
+    pub(crate) release: Nanos,
+    pub(crate) demand: Nanos,
+    pub(crate) remaining: Nanos,
+    pub(crate) read: Option<Nanos>,
+}
+
+/// The budget server a task runs on (Section II-B).
+#[derive(Debug, Clone)]
+pub(crate) enum Budget {
+    /// `server = "none"` or background: no enforcement.
+    Unlimited,
+    /// Main VCPU under RM.
+    Sporadic(Sporadic),
+    /// I/O VCPU under RM.
+    Pibs(Pibs),
+    /// Any server under EDF (SCHED_DEADLINE).
+    Cbs(Cbs),
+}
+
+impl Budget {
+    pub(crate) fn capacity(&self, now: Nanos) -> Nanos {
+        match self {
+            Budget::Unlimited => Nanos::MAX,
+            Budget::Sporadic(s) => s.capacity(now),
+            Budget::Pibs(p) => p.capacity(now),
+            Budget::Cbs(c) => c.capacity(now),
+        }
+    }
+    pub(crate) fn unblock(&mut self, now: Nanos) {
+        match self {
+            Budget::Unlimited => {}
+            Budget::Sporadic(s) => s.unblock(now),
+            Budget::Pibs(p) => p.unblock(now),
+            Budget::Cbs(c) => c.unblock(now),
+        }
+    }
+    pub(crate) fn block(&mut self, now: Nanos) {
+        if let Budget::Sporadic(s) = self {
+            s.block(now);
+        }
+    }
+    pub(crate) fn charge(&mut self, now: Nanos, ran: Nanos) {
+        // The next event comes no later than the capacity runs out, so a
+        // server is never charged more than it had (the servers rely on it).
+        assert!(
+            (0..=self.capacity(now)).contains(&ran),
+            "charged {ran} ns beyond the capacity {} at {now}",
+            self.capacity(now)
+        );
+        match self {
+            Budget::Unlimited => {}
+            Budget::Sporadic(s) => s.charge(now, ran),
+            Budget::Pibs(p) => p.charge(now, ran),
+            Budget::Cbs(c) => c.charge(now, ran),
+        }
+    }
+    /// Until when a CBS is throttled (runtime used up).
+    pub(crate) fn throttled_until(&self) -> Option<Nanos> {
+        match self {
+            Budget::Cbs(c) => c.throttled_until,
+            _ => None,
+        }
+    }
+    /// When a server without capacity gets some again.
+    pub(crate) fn refill_at(&self) -> Option<Nanos> {
+        match self {
+            Budget::Unlimited => None,
+            Budget::Sporadic(s) => Some(s.next_refill()),
+            Budget::Pibs(p) => Some(p.next_refill()),
+            Budget::Cbs(c) => c.next_refill(),
+        }
+    }
+}
+
+pub(crate) struct TaskSim {
+    pub(crate) budget: Budget,
+    /// Sporadic servers out of budget may run in slack; others wait.
+    pub(crate) slack_when_empty: bool,
+    pub(crate) period: Nanos,
+    /// 0 for guaranteed tasks, 1 for background ones.
+    pub(crate) class: u8,
+    /// RM rank (1 = highest); unused under EDF.
+    pub(crate) rank: i64,
+    /// PIBS: the Main VCPU this I/O VCPU serves; while it has a job pending,
+    /// this one runs at its rank (priority inheritance).
+    pub(crate) serves: Option<usize>,
+    pub(crate) demand_min: Nanos,
+    pub(crate) demand: Nanos,
+    pub(crate) rng: Rng,
+    pub(crate) next_release: Nanos,
+    pub(crate) next_index: u64,
+    /// Released, unfinished jobs; only the front one may have started.
+    pub(crate) queue: VecDeque<Job>,
+    pub(crate) slots: Vec<Slot>,
+    /// What the front job read, per slot (valid once it has started).
+    pub(crate) carried: Vec<Option<u64>>,
+    /// The latest published value's samples, per slot.
+    pub(crate) published: Vec<Option<u64>>,
+    pub(crate) stats: TaskStats,
+    /// Dense CPU index.
+    pub(crate) cpu: usize,
+    /// The I/O VCPUs that serve this task (their priority follows whether
+    /// it has a job pending).
+    pub(crate) servers: Vec<usize>,
+    /// (class, key) in the CPU's contenders as last refreshed; `None` when
+    /// the task cannot run (no job, or waiting for budget).
+    pub(crate) entry: Option<(u8, Nanos)>,
+    /// A job pending and no capacity: when the server gets some back.
+    pub(crate) timer: Option<Nanos>,
+}
+
+/// Releases every job of `ts` due at or before t.
+pub(crate) fn release_jobs(ts: &mut TaskSim, exec: ExecModel, t: Nanos) {
+    while ts.next_release <= t {
+        let demand = match exec {
+            ExecModel::Worst => ts.demand,
+            ExecModel::Best => ts.demand_min,
+            ExecModel::Uniform => ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos,
+            ExecModel::Extremes => {
+                if ts.rng.chance(0.5) {
+                    ts.demand_min
+                } else {
+                    ts.demand
+                }
+            }
+        };
+        if ts.queue.is_empty() {
+            ts.budget.unblock(ts.next_release.max(t));
+        }
+        ts.queue.push_back(Job {
+            index: ts.next_index,
+            release: ts.next_release,
+            demand,
+            remaining: demand,
+            read: None,
+        });
+        ts.stats.released += 1;
+        ts.next_index += 1;
+        ts.next_release += ts.period;
+    }
+}
+
+pub(crate) struct Sim<H> {
+    pub(crate) hooks: H,
+    pub(crate) edf: bool,
+    pub(crate) exec: ExecModel,
+    pub(crate) tasks: Vec<TaskSim>,
+    /// Task indices per (dense) CPU (the reference scheduling scans them).
+    #[cfg(test)]
+    pub(crate) cpu_tasks: Vec<Vec<usize>>,
+    /// The task whose front job holds each CPU.
+    pub(crate) running: Vec<Option<usize>>,
+    pub(crate) chains: Vec<Tracker>,
+    pub(crate) offsets: Vec<Nanos>,
+    pub(crate) log: Option<Vec<JobRecord>>,
+    pub(crate) segments: Option<Vec<Segment>>,
+    /// Whether each CPU's running job holds it at background priority.
+    pub(crate) in_slack: Vec<bool>,
+    pub(crate) last_segment: Vec<Option<usize>>,
+    pub(crate) events: u64,
+    pub(crate) horizon: Nanos,
+    /// Every task's next release, earliest first (one entry per task).
+    pub(crate) releases: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Throttled CBS servers by the end of their throttling (every
+    /// throttled server has an entry; stale ones are harmless).
+    pub(crate) throttled: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Refill timers: valid while equal to the task's `timer`.
+    pub(crate) timers: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// Per CPU: (class, key, task) of every task that may run; the pick is
+    /// the least.
+    pub(crate) contenders: Vec<BTreeSet<(u8, Nanos, usize)>>,
+}
+
+impl<H: Hooks> Sim<H> {
+    pub(crate) fn new(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<Sim<H>, SimError> {
+        if cfg.horizon <= 0 {
+            return Err(SimError::HorizonNotPositive(cfg.horizon));
+        }
+        let periods = periods_of(spec)?;
+        // Offsets first, then one independent demand stream per task, so the
+        // demands of a task do not depend on the schedule.
+        let mut master = Rng::new(cfg.seed);
+        let offsets = offsets_of(spec, &cfg.phasing, &periods, &mut master)?;
+        let (mut tasks, cpu_tasks) = task_sims(spec, &periods, &offsets, &mut master);
+        link_chains(spec, &mut tasks)?;
+        let releases = tasks
+            .iter()
+            .enumerate()
+            .map(|(i, ts)| Reverse((ts.next_release, i)))
+            .collect();
+        let n_cpus = cpu_tasks.len();
+        let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
+        Ok(Sim {
+            hooks,
+            edf: spec.scheduler == Scheduler::Edf,
+            exec: cfg.exec,
+            tasks,
+            running: vec![None; n_cpus],
+            #[cfg(test)]
+            cpu_tasks,
+            chains,
+            offsets,
+            log: cfg.log_jobs.then(Vec::new),
+            segments: cfg.log_jobs.then(Vec::new),
+            in_slack: vec![false; n_cpus],
+            last_segment: vec![None; n_cpus],
+            events: 0,
+            horizon: cfg.horizon,
+            releases,
+            throttled: BinaryHeap::new(),
+            timers: BinaryHeap::new(),
+            contenders: vec![BTreeSet::new(); n_cpus],
+        })
+    }
+
+    /// Everything that happens at instant t, in the tie order of the model.
+    /// Repeats when a job of zero demand starts, so it reads before it
+    /// publishes (at the same instant).
+    ///
+    /// Only the tasks something happens to are visited: throttled CBS
+    /// servers whose throttling ends (a heap), tasks that release (a heap),
+    /// refill timers that fire (a heap); each CPU's pick is the first of its
+    /// contenders (an ordered set kept up to date by [`Sim::refresh`]).
+    pub(crate) fn instant(&mut self, t: Nanos) {
+        self.events += 1;
+        // CBS replenishment timers (every throttled server has an entry).
+        while let Some(&Reverse((until, i))) = self.throttled.peek() {
+            if until > t {
+                break;
+            }
+            self.throttled.pop();
+            if let Budget::Cbs(c) = &mut self.tasks[i].budget {
+                c.replenish(t);
+            }
+            self.refresh(i, t);
+        }
+        loop {
+            for cpu in 0..self.running.len() {
+                if let Some(i) = self.running[cpu] {
+                    if self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.remaining == 0)
+                    {
+                        self.complete(i, t);
+                        self.running[cpu] = None;
+                        self.refresh(i, t);
+                        if self.tasks[i].queue.is_empty() {
+                            self.refresh_servers(i, t);
+                        }
+                    }
+                }
+            }
+            self.release(t);
+            // Refill timers: capacity comes back to a waiting server.
+            while let Some(&Reverse((at, i))) = self.timers.peek() {
+                if at > t {
+                    break;
+                }
+                self.timers.pop();
+                if self.tasks[i].timer == Some(at) {
+                    self.tasks[i].timer = None;
+                    self.refresh(i, t);
+                }
+            }
+            // Debug builds: the full check costs O(tasks) per pick, which
+            // would make large systems quadratic again; skip it beyond 512.
+            #[cfg(debug_assertions)]
+            if self.tasks.len() <= 512 {
+                self.check(t);
+            }
+            for cpu in 0..self.running.len() {
+                let picked = self.pick(cpu);
+                self.running[cpu] = picked.map(|(i, _)| i);
+                self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
+            }
+            let mut again = false;
+            for cpu in 0..self.running.len() {
+                if let Some(i) = self.running[cpu] {
+                    if self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.read.is_none())
+                    {
+                        self.read(i, t);
+                    }
+                    again |= self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.remaining == 0);
+                }
+            }
+            if !again {
+                break;
+            }
+        }
+    }
+
+    /// Releases every job due at or before t.
+    pub(crate) fn release(&mut self, t: Nanos) {
+        let exec = self.exec;
+        loop {
+            let i = {
+                let Some(mut top) = self.releases.peek_mut() else {
+                    return;
+                };
+                let Reverse((due, i)) = *top;
+                if due > t {
+                    return;
+                }
+                let ts = &mut self.tasks[i];
+                debug_assert_eq!(due, ts.next_release, "stale release entry of task {i}");
+                let was_idle = ts.queue.is_empty();
+                release_jobs(ts, exec, t);
+                *top = Reverse((ts.next_release, i));
+                if !was_idle {
+                    // Queued behind the front job: nothing the pick sees changed.
+                    continue;
+                }
+                i
+            };
+            self.refresh(i, t);
+            self.refresh_servers(i, t);
+        }
+    }
+
+    /// The ready task of highest priority on a CPU, and whether it runs in
+    /// slack (a sporadic server out of budget drops to background priority):
+    /// the least (class, key, task) among the CPU's contenders.
+    pub(crate) fn pick(&self, cpu: usize) -> Option<(usize, bool)> {
+        self.contenders[cpu]
+            .first()
+            .map(|&(class, _, i)| (i, class == 2))
+    }
+
+    /// Where task i stands at t, from scratch: its (class, priority key) when
+    /// it may run (a job pending, and budget or slack to run it in), and when
+    /// its server gets capacity back if it waits for it with a job pending.
+    pub(crate) fn standing(&self, i: usize, t: Nanos) -> (Option<(u8, Nanos)>, Option<Nanos>) {
+        let ts = &self.tasks[i];
+        let Some(job) = ts.queue.front() else {
+            return (None, None);
+        };
+        let has_budget = ts.budget.capacity(t) > 0;
+        let timer = if has_budget {
+            None
+        } else {
+            ts.budget.refill_at().filter(|&r| r > t)
+        };
+        let class = match (ts.class, has_budget) {
+            (0, true) => 0,
+            (0, false) if ts.slack_when_empty => 2,
+            (0, false) => return (None, timer),
+            _ => 1,
+        };
+        let key = match (&ts.budget, self.edf) {
+            (Budget::Cbs(c), _) => c.deadline,
+            (_, true) => job.release + ts.period,
+            (_, false) => match ts.serves {
+                // PIBS inheritance: the better (smaller) rank of the server
+                // and the Main VCPU it serves while that one has a job.
+                Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
+                _ => ts.rank,
+            },
+        };
+        (Some((class, key)), timer)
+    }
+
+    /// Task i's queue, budget or inheritance changed at t: update its place
+    /// among its CPU's contenders and its refill timer.
+    ///
+    /// Between two refreshes a task's standing does not change: capacity
+    /// only grows with time, and only at the refill instant, where the timer
+    /// refreshes it.
+    pub(crate) fn refresh(&mut self, i: usize, t: Nanos) {
+        let (entry, timer) = self.standing(i, t);
+        let ts = &mut self.tasks[i];
+        if ts.entry != entry {
+            let set = &mut self.contenders[ts.cpu];
+            if let Some((class, key)) = ts.entry {
+                let was_there = set.remove(&(class, key, i));
+                debug_assert!(was_there, "task {i} missing from its contenders");
+            }
+            if let Some((class, key)) = entry {
+                set.insert((class, key, i));
+            }
+            ts.entry = entry;
+        }
+        if ts.timer != timer {
+            ts.timer = timer;
+            if let Some(at) = timer {
+                self.timers.push(Reverse((at, i)));
+            }
+        }
+    }
+
+    /// Task m's queue became empty or non-empty: the I/O VCPUs serving it
+    /// inherit its priority or lose it.
+    pub(crate) fn refresh_servers(&mut self, m: usize, t: Nanos) {
+        for k in 0..self.tasks[m].servers.len() {
+            let s = self.tasks[m].servers[k];
+            self.refresh(s, t);
+        }
+    }
+
+    /// Debug builds: the incremental state is what the scans it replaces
+    /// would compute at t (O(tasks), once per pick).
+    #[cfg(debug_assertions)]
+    pub(crate) fn check(&self, t: Nanos) {
+        let mut contenders = vec![BTreeSet::new(); self.contenders.len()];
+        let timers: BTreeSet<_> = self.timers.iter().map(|&Reverse(e)| e).collect();
+        let throttled: BTreeSet<_> = self.throttled.iter().map(|&Reverse(e)| e).collect();
+        for (i, ts) in self.tasks.iter().enumerate() {
+            let (entry, timer) = self.standing(i, t);
+            assert_eq!(ts.entry, entry, "task {i}: stale contender entry at {t}");
+            assert_eq!(ts.timer, timer, "task {i}: stale refill timer at {t}");
+            assert!(entry.is_none() || !ts.queue.is_empty());
+            if let Some((class, key)) = entry {
+                contenders[ts.cpu].insert((class, key, i));
+            }
+            if let Some(at) = timer {
+                assert!(timers.contains(&(at, i)), "task {i}: refill timer lost");
+            }
+            assert!(ts.next_release > t, "task {i}: release at {t} missed");
+            if let Budget::Cbs(c) = &ts.budget {
+                if let Some(until) = c.throttled_until {
+                    assert!(until > t, "task {i}: CBS not replenished at {t}");
+                    assert!(throttled.contains(&(until, i)), "task {i}: throttling lost");
+                }
+            }
+        }
+        assert_eq!(contenders, self.contenders, "contender sets at {t}");
+        assert_eq!(self.releases.len(), self.tasks.len());
+        assert!(self
+            .releases
+            .iter()
+            .all(|&Reverse((at, i))| at == self.tasks[i].next_release));
+    }
+
+    /// The front job of task i first gets the CPU: copy the producers' values.
+    pub(crate) fn read(&mut self, i: usize, t: Nanos) {
+        for s in 0..self.tasks[i].slots.len() {
+            let slot = self.tasks[i].slots[s];
+            let v = match slot.src {
+                None => {
+                    // Sample ids count head reads per chain; jobs of a task
+                    // read in release order, so the id is the job index.
+                    let tr = &mut self.chains[slot.chain];
+                    tr.stamps.push(t);
+                    tr.stats.samples += 1;
+                    Some(tr.stamps.len() as u64 - 1)
+                }
+                Some((p, ps)) => self.tasks[p].published[ps],
+            };
+            self.tasks[i].carried[s] = v;
+        }
+        let Some(job) = self.tasks[i].queue.front_mut() else {
+            unreachable!("task {i} reads without a pending job");
+        };
+        job.read = Some(t);
+        let job = rtpipe_body::Job {
+            task: i,
+            index: job.index,
+            release: job.release,
+            read: t,
+        };
+        self.hooks.read(&job);
+    }
+
+    /// The front job of task i completes at t: publish.
+    pub(crate) fn complete(&mut self, i: usize, t: Nanos) {
+        let ts = &mut self.tasks[i];
+        let Some(job) = ts.queue.pop_front() else {
+            return;
+        };
+        debug_assert!(
+            job.read.is_some(),
+            "task {i} publishes a job that never read"
+        );
+        self.hooks.publish(i, t);
+        let response = t - job.release;
+        ts.stats.completed += 1;
+        ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
+        if response > ts.period {
+            ts.stats.late += 1;
+        }
+        ts.published.clone_from(&ts.carried);
+        for (slot, v) in ts.slots.iter().zip(&ts.carried) {
+            if let (true, Some(sample)) = (slot.tail, v) {
+                self.chains[slot.chain].output(*sample, t);
+            }
+        }
+        if let Some(log) = &mut self.log {
+            log.push(JobRecord {
+                task: i,
+                index: job.index,
+                release: job.release,
+                demand: job.demand,
+                read: job.read.unwrap_or(t),
+                finish: t,
+                carried: ts
+                    .slots
+                    .iter()
+                    .zip(&ts.carried)
+                    .map(|(s, &sample)| Carried {
+                        chain: s.chain,
+                        pos: s.pos,
+                        sample,
+                    })
+                    .collect(),
+            });
+        }
+        ts.carried.iter_mut().for_each(|v| *v = None);
+        if ts.queue.is_empty() {
+            ts.budget.block(t);
+        }
+    }
+
+    /// The next instant something happens after t: a release, a completion,
+    /// a budget running out, or a budget coming back to a waiting server.
+    pub(crate) fn next_event(&mut self, t: Nanos) -> Option<Nanos> {
+        let release = self.releases.peek().map(|&Reverse((at, _))| at);
+        // Drop the refill timers that no longer hold.
+        let refill = loop {
+            match self.timers.peek() {
+                Some(&Reverse((at, i))) if self.tasks[i].timer != Some(at) => {
+                    self.timers.pop();
+                }
+                top => break top.map(|&Reverse((at, _))| at),
+            }
+        };
+        debug_assert!(refill.is_none_or(|r| r > t));
+        let running = self.running.iter().enumerate().filter_map(|(cpu, r)| {
+            let ts = &self.tasks[(*r)?];
+            let job = ts.queue.front()?;
+            let mut next = t + job.remaining;
+            if !self.in_slack[cpu] {
+                let cap = ts.budget.capacity(t);
+                if cap < job.remaining {
+                    next = t + cap;
+                }
+            }
+            Some(next)
+        });
+        // The earliest of the three kinds of event.
+        release.into_iter().chain(running).chain(refill).min()
+    }
+
+    /// Runs every CPU's chosen job from t for dt and charges its server.
+    pub(crate) fn advance(&mut self, t: Nanos, dt: Nanos) {
+        for cpu in 0..self.running.len() {
+            let Some(i) = self.running[cpu] else { continue };
+            let slack = self.in_slack[cpu];
+            let ts = &mut self.tasks[i];
+            let Some(job) = ts.queue.front_mut() else {
+                continue;
+            };
+            job.remaining -= dt;
+            let (index, remaining) = (job.index, job.remaining);
+            ts.stats.busy += dt;
+            if !slack {
+                let throttled = ts.budget.throttled_until();
+                ts.budget.charge(t + dt, dt);
+                if remaining > 0 && ts.budget.capacity(t + dt) == 0 {
+                    ts.stats.exhaustions += 1;
+                }
+                if let Some(until) = ts.budget.throttled_until() {
+                    if throttled != Some(until) {
+                        self.throttled.push(Reverse((until, i)));
+                    }
+                }
+                self.refresh(i, t + dt);
+            }
+            if let Some(seg) = &mut self.segments {
+                // Extend this CPU's last slice when the same job just goes on.
+                let last = self.last_segment[cpu].and_then(|k| seg.get_mut(k));
+                match last {
+                    Some(s)
+                        if s.task == i && s.job == index && s.end == t && s.background == slack =>
+                    {
+                        s.end = t + dt
+                    }
+                    _ => {
+                        self.last_segment[cpu] = Some(seg.len());
+                        seg.push(Segment {
+                            cpu,
+                            task: i,
+                            job: index,
+                            start: t,
+                            end: t + dt,
+                            background: slack,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    pub(crate) fn finish(self) -> SimResult {
+        SimResult {
+            offsets: self.offsets,
+            tasks: self.tasks.into_iter().map(|t| t.stats).collect(),
+            chains: self.chains.into_iter().map(|c| c.stats).collect(),
+            jobs: self.log.unwrap_or_default(),
+            segments: self.segments.unwrap_or_default(),
+            events: self.events,
+            horizon: self.horizon,
+        }
+    }
+}
+
+/// Every task's fixed period (positive) and a demand range that makes sense.
+fn periods_of(spec: &Spec) -> Result<Vec<Nanos>, SimError> {
+    let mut periods = Vec::with_capacity(spec.tasks.len());
+    for t in &spec.tasks {
+        match t.fixed_period() {
+            Some(p) if p > 0 => periods.push(p),
+            _ => return Err(SimError::NoPeriod(t.name.clone())),
+        }
+        if !(0 <= t.demand_min() && t.demand_min() <= t.demand()) {
+            return Err(SimError::BadDemand(t.name.clone()));
+        }
+    }
+    Ok(periods)
+}
+
+/// Release offsets φ_i as `phasing` says (drawn from `master` first, before
+/// any demand stream, so that a task's demands do not depend on them).
+fn offsets_of(
+    spec: &Spec,
+    phasing: &Phasing,
+    periods: &[Nanos],
+    master: &mut Rng,
+) -> Result<Vec<Nanos>, SimError> {
+    let n = spec.tasks.len();
+    Ok(match phasing {
+        Phasing::Sync => vec![0; n],
+        Phasing::Random => periods
+            .iter()
+            .map(|&p| master.range(0, p as u64 - 1) as Nanos)
+            .collect(),
+        Phasing::Grid(g) => {
+            if *g <= 0 {
+                return Err(SimError::GridNotPositive(*g));
+            }
+            periods
+                .iter()
+                .map(|&p| master.range(0, ((p - 1) / g) as u64) as Nanos * g)
+                .collect()
+        }
+        Phasing::Given(v) => {
+            if v.len() != n {
+                return Err(SimError::BadOffsets {
+                    expected: n,
+                    found: v.len(),
+                });
+            }
+            if let Some(i) = v.iter().position(|&o| o < 0) {
+                return Err(SimError::NegativeOffset(spec.tasks[i].name.clone()));
+            }
+            v.clone()
+        }
+    })
+}
+
+/// Each task's simulation state (its server, rank, demand stream) and the
+/// tasks of each CPU.
+fn task_sims(
+    spec: &Spec,
+    periods: &[Nanos],
+    offsets: &[Nanos],
+    master: &mut Rng,
+) -> (Vec<TaskSim>, Vec<Vec<usize>>) {
+    let n = spec.tasks.len();
+    let ranks = rm_priorities(spec);
+    let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpu_ids.sort_unstable();
+    cpu_ids.dedup();
+    let mut cpu_tasks = vec![Vec::new(); cpu_ids.len()];
+    let mut tasks = Vec::with_capacity(n);
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let cpu = cpu_ids.binary_search(&t.cpu).unwrap_or(0);
+        cpu_tasks[cpu].push(i);
+        let (c, p) = (t.budget(), periods[i]);
+        let budget = match (spec.scheduler, t.server) {
+            (_, Server::None | Server::Background) => Budget::Unlimited,
+            (Scheduler::Edf, _) => Budget::Cbs(Cbs::new(c, p)),
+            (Scheduler::Rm, Server::Main) => Budget::Sporadic(Sporadic::new(c, p, 0)),
+            (Scheduler::Rm, Server::Io) => Budget::Pibs(Pibs::new(c, p)),
+        };
+        tasks.push(TaskSim {
+            slack_when_empty: matches!(budget, Budget::Sporadic(_)),
+            budget,
+            period: periods[i],
+            class: u8::from(t.server == Server::Background),
+            rank: ranks[i].map_or(i as i64, |r| r as i64),
+            serves: if spec.scheduler == Scheduler::Rm {
+                t.serves
+            } else {
+                None
+            },
+            demand_min: t.demand_min(),
+            demand: t.demand(),
+            rng: Rng::new(master.next_u64()),
+            next_release: offsets[i],
+            next_index: 0,
+            queue: VecDeque::new(),
+            slots: Vec::new(),
+            carried: Vec::new(),
+            published: Vec::new(),
+            stats: TaskStats::default(),
+            cpu,
+            servers: Vec::new(),
+            entry: None,
+            timer: None,
+        });
+    }
+    (tasks, cpu_tasks)
+}
+
+/// Chain slots, and the servers (PIBS) each Main VCPU has.
+fn link_chains(spec: &Spec, tasks: &mut [TaskSim]) -> Result<(), SimError> {
+    let n = spec.tasks.len();
+    // Slots: the chain positions each task occupies, linked to the slot
+    // of the previous position (created just before, in path order).
+    for (c, ch) in spec.chains.iter().enumerate() {
+        if ch.path.iter().any(|&i| i >= n) {
+            return Err(SimError::BadChain(c));
+        }
+        let mut prev: Option<(usize, usize)> = None;
+        for (pos, &i) in ch.path.iter().enumerate() {
+            let ts = &mut tasks[i];
+            ts.slots.push(Slot {
+                chain: c,
+                pos,
+                src: prev,
+                tail: pos + 1 == ch.path.len(),
+            });
+            ts.carried.push(None);
+            ts.published.push(None);
+            prev = Some((i, ts.slots.len() - 1));
+        }
+    }
+    for i in 0..n {
+        if let Some(m) = tasks[i].serves {
+            // An index out of range is left to `standing`, which
+            // panics on it as the scan did.
+            if let Some(ms) = tasks.get_mut(m) {
+                ms.servers.push(i);
+            }
+        }
+    }
+    Ok(())
+}
