@@ -2,16 +2,19 @@
 //! `simulate` and held against the same bounds.
 
 use crate::analyze;
-use crate::simulate::{chain_table, fail, num, observations_json, parse_time, Bad};
+use crate::output;
+use crate::plot;
+use crate::simulate::{chain_table, fail, num, observations_json, parse_time, write_all, Bad};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
-use rtpipe_analysis::{Anchor, Report};
+use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_body::Body;
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
 use rtpipe_sim::observe::{observe, ChainObs, Summary};
+use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
 use serde_json::{json, Value};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Args, Debug)]
@@ -42,10 +45,28 @@ pub struct RunArgs {
     #[arg(long)]
     pub best_effort: bool,
     /// Print one JSON object (the `simulate --json` fields that apply, plus
-    /// "run") instead of tables.
+    /// "run" and "fig10") instead of tables.
     #[arg(long)]
     pub json: bool,
+    /// Run N background CPU hogs (SCHED_OTHER threads, on any CPU) for the
+    /// whole run, as the paper loaded Linux during its measurements.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub load: usize,
+    /// Write the run as a Chrome trace-event file for the Perfetto UI, in
+    /// the format of `simulate --trace` (one span per job, read to publish).
+    #[arg(long, value_name = "FILE.json")]
+    pub trace: Option<PathBuf>,
+    /// Draw each chain's observed reaction and freshness (mean, p99, max)
+    /// against the paper's and the sound bounds as an SVG.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// Write the task set (with --policy and --load) as an rt-app workload.
+    #[arg(long, value_name = "FILE.json")]
+    pub export_rt_app: Option<PathBuf>,
 }
+
+/// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
+const MAX_LOAD: usize = 64;
 
 /// `--policy`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -79,6 +100,111 @@ fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
         ));
     }
     Ok(p)
+}
+
+/// Checks the configuration and the output paths before anything runs, so
+/// that a bad path is reported before a long run, not after.
+fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Bad> {
+    if a.load > MAX_LOAD {
+        return Err(Bad::new(
+            format!("--load {} is more than {MAX_LOAD} hogs", a.load),
+            "one or two hogs per CPU load a machine fully, e.g. --load 2",
+        ));
+    }
+    if let Err(e) = rtpipe_runtime::check(spec, cfg) {
+        return Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help));
+    }
+    let mut outs = Vec::new();
+    for (flag, p) in [
+        ("--trace", &a.trace),
+        ("--plot", &a.plot),
+        ("--export-rt-app", &a.export_rt_app),
+    ] {
+        let Some(p) = p else { continue };
+        outs.push(output::prepare(flag, p, &a.spec, None).map_err(Bad::from)?);
+    }
+    output::distinct(&outs).map_err(Bad::from)
+}
+
+/// Writes the rt-app workload (before the run: it needs no privilege, and a
+/// run refused for lack of one still leaves the file).
+fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Result<(), Bad> {
+    let r = rtpipe_runtime::rt_app(spec, cfg);
+    let text = serde_json::to_string_pretty(&r.json)
+        .map_err(|e| Bad::new(format!("cannot render --export-rt-app: {e}"), ""))?;
+    write_all(
+        &a.spec,
+        &[("--export-rt-app", path.to_path_buf(), text + "\n")],
+    )?;
+    eprintln!(
+        "wrote {}: rt-app workload of {} task(s){}; run it with `rt-app {}` (rt-app has no data flow: the tasks run independently)",
+        path.display(),
+        spec.tasks.len(),
+        if cfg.load > 0 { format!(" and {} hog(s)", cfg.load) } else { String::new() },
+        path.display()
+    );
+    for n in &r.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(())
+}
+
+/// Renders --trace and --plot from the run and writes them (all or none).
+fn write_outputs(spec: &Spec, a: &RunArgs, res: &RunResult, obs: &[ChainObs]) -> Result<(), Bad> {
+    let mut files = Vec::new();
+    let mut notes = Vec::new();
+    if let Some(path) = &a.trace {
+        let opts = TraceOptions {
+            spans: true,
+            ..TraceOptions::default()
+        };
+        let t = chrome_trace_with(spec, &res.sim, opts);
+        notes.push(format!(
+            "wrote {}: {} job spans (read to publish), {} data-flow arrows; open it in https://ui.perfetto.dev beside `rtpipe simulate --trace`",
+            path.display(),
+            t.slices,
+            t.flows
+        ));
+        if let Some(cut) = t.truncated_at {
+            notes.push(format!(
+                "note: the trace stops at {} {u} of {} {u} to stay small; a shorter --duration traces a whole run",
+                spec.fmt_time(cut),
+                spec.fmt_time(res.sim.horizon),
+                u = spec.time_unit
+            ));
+        }
+        files.push(("--trace", path.clone(), t.json));
+    }
+    if let Some(path) = &a.plot {
+        let steal = res.steal.map_or_else(String::new, |s| {
+            format!(", steal time {:.0} ms", s as f64 / 1e6)
+        });
+        let subtitle = format!(
+            "{} {} on real threads, SCHED_{}{}{}{steal}",
+            spec.fmt_time(res.sim.horizon),
+            spec.time_unit,
+            res.policy.name().to_uppercase(),
+            if a.load > 0 {
+                format!(", {} hog(s)", a.load)
+            } else {
+                String::new()
+            },
+            if res.policy == Policy::Other {
+                " (not real-time)"
+            } else {
+                ""
+            }
+        );
+        let svg = plot::fig9(spec, obs, &subtitle)
+            .map_err(|e| Bad::new(format!("cannot draw --plot {}: {e}", path.display()), ""))?;
+        notes.push(format!("wrote {}", path.display()));
+        files.push(("--plot", path.clone(), svg));
+    }
+    write_all(&a.spec, &files)?;
+    for n in notes {
+        eprintln!("{n}");
+    }
+    Ok(())
 }
 
 pub fn run(a: &RunArgs) -> ExitCode {
@@ -125,19 +251,34 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(p) => p,
         Err(b) => return fail(b),
     };
-    let cfg = RunConfig { duration, policy };
-    if let Err(e) = rtpipe_runtime::check(&spec, &cfg) {
-        return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help));
+    let cfg = RunConfig {
+        duration,
+        policy,
+        load: a.load,
+    };
+    if let Err(b) = check_outputs(&spec, a, &cfg) {
+        return fail(b);
+    }
+    if let Some(path) = &a.export_rt_app {
+        match export_rt_app(&spec, a, &cfg, path) {
+            Ok(()) => {}
+            Err(b) => return fail(b),
+        }
     }
     let report = rtpipe_analysis::analyze(&spec);
     let spin = Spin::calibrate();
     if !a.json {
         eprintln!(
-            "running {} for {} {} under SCHED_{}{} (Ctrl-C stops early)...",
+            "running {} for {} {} under SCHED_{}{}{} (Ctrl-C stops early)...",
             spec.name,
             spec.fmt_time(duration),
             spec.time_unit,
             policy.name().to_uppercase(),
+            if a.load > 0 {
+                format!(" with {} background hog(s)", a.load)
+            } else {
+                String::new()
+            },
             if flight { ", flying the quadrotor" } else { "" }
         );
     }
@@ -163,6 +304,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         }
     };
     let obs = observe(&report, &res.sim);
+    if let Err(b) = write_outputs(&spec, a, &res, &obs) {
+        return fail(b);
+    }
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let suspects = suspects(&spec, &res);
     if a.json {
@@ -267,9 +411,13 @@ fn to_text(
         ""
     };
     out.push_str(&format!(
-        "ran {} {u} under SCHED_{}{}{rt}; {}\n",
+        "ran {} {u} under SCHED_{}{}{}{rt}; {}\n",
         spec.fmt_time(res.sim.horizon),
         res.policy.name().to_uppercase(),
+        match res.load {
+            0 => String::new(),
+            n => format!(" with {n} background hog(s)"),
+        },
         if res.interrupted {
             ", interrupted by Ctrl-C"
         } else {
@@ -294,6 +442,10 @@ fn to_text(
         out.push_str(&chain_table(spec, obs, Anchor::Read));
         out.push_str("\nfrom the event just after each head read, against the +event bounds:\n");
         out.push_str(&chain_table(spec, obs, Anchor::Event));
+        out.push_str(
+            "\nthe paper's Fig. 10 columns (from the head's read; AVG mean, WC max, MaxV max - min; R reaction, F freshness):\n",
+        );
+        out.push_str(&fig10_table(spec, obs));
     }
     out.push_str(
         "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
@@ -383,9 +535,12 @@ fn to_json(
             });
         }
     }
+    v["fig10"] = fig10_json(spec, obs);
     v["run"] = json!({
         "duration": spec.in_unit(res.sim.horizon),
         "policy": res.policy.name(),
+        "load": res.load,
+        "epoch_monotonic_ns": res.epoch,
         "real_time": res.policy != Policy::Other,
         "interrupted": res.interrupted,
         "steal": res.steal.map(|s| spec.in_unit(s)),
@@ -394,4 +549,86 @@ fn to_json(
         "notes": res.notes,
     });
     v
+}
+
+/// One chain's Fig. 10 figures from the head's read: (mean, max, max − min)
+/// of reaction and of freshness, and the sound bounds.
+struct Fig10 {
+    chain: usize,
+    reaction: Option<Summary>,
+    freshness: Option<Summary>,
+    sound_r: Option<Nanos>,
+    sound_f: Option<Nanos>,
+}
+
+/// The chains in order, each with its two metrics.
+fn fig10_rows(obs: &[ChainObs]) -> Vec<Fig10> {
+    let mut rows: Vec<Fig10> = Vec::new();
+    for o in obs {
+        if rows.last().is_none_or(|r| r.chain != o.chain) {
+            rows.push(Fig10 {
+                chain: o.chain,
+                reaction: None,
+                freshness: None,
+                sound_r: None,
+                sound_f: None,
+            });
+        }
+        let Some(row) = rows.last_mut() else { continue };
+        match o.metric {
+            Metric::Reaction => (row.reaction, row.sound_r) = (o.read.observed, o.read.sound),
+            Metric::Freshness => (row.freshness, row.sound_f) = (o.read.observed, o.read.sound),
+        }
+    }
+    rows
+}
+
+fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
+    let mut t = Table::new(&[
+        "chain", "AVGR", "WCR", "MaxRV", "sound R", "AVGF", "WCF", "MaxFV", "sound F",
+    ])
+    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    let f = |x: Option<Nanos>| x.map_or_else(|| "-".into(), |v| spec.fmt_time(v));
+    let three = |s: Option<Summary>| {
+        [
+            f(s.map(|s| s.mean.round() as Nanos)),
+            f(s.map(|s| s.max)),
+            f(s.map(|s| s.max - s.min)),
+        ]
+    };
+    for r in fig10_rows(obs) {
+        let mut row = vec![spec.chain_label(r.chain)];
+        row.extend(three(r.reaction));
+        row.push(f(r.sound_r));
+        row.extend(three(r.freshness));
+        row.push(f(r.sound_f));
+        t.row(row);
+    }
+    t.render()
+}
+
+/// `fig10`: one entry per chain, in the spec's unit.
+fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Value {
+    let unit = spec.time_unit.nanos() as f64;
+    let n = |x: Option<Nanos>| num(spec, x);
+    let three = |s: Option<Summary>| {
+        (
+            s.map(|s| s.mean / unit),
+            n(s.map(|s| s.max)),
+            n(s.map(|s| s.max - s.min)),
+        )
+    };
+    let rows: Vec<Value> = fig10_rows(obs)
+        .into_iter()
+        .map(|r| {
+            let (avgr, wcr, maxrv) = three(r.reaction);
+            let (avgf, wcf, maxfv) = three(r.freshness);
+            json!({
+                "chain": spec.chain_label(r.chain),
+                "AVGR": avgr, "WCR": wcr, "MaxRV": maxrv, "sound_reaction": n(r.sound_r),
+                "AVGF": avgf, "WCF": wcf, "MaxFV": maxfv, "sound_freshness": n(r.sound_f),
+            })
+        })
+        .collect();
+    Value::Array(rows)
 }

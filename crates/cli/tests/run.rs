@@ -235,6 +235,8 @@ fn ctrl_c_stops_the_run_cleanly() {
             "--policy",
             "other",
             "--best-effort",
+            "--load",
+            "2",
             "--json",
         ])
         .stdout(std::process::Stdio::piped())
@@ -260,7 +262,102 @@ fn ctrl_c_stops_the_run_cleanly() {
     assert_exit(&o, 0);
     let v = json_of(&o);
     assert_eq!(v["run"]["interrupted"], true);
+    assert_eq!(v["run"]["load"], 2);
     every_chain_observed(&v);
+}
+
+/// The keys of a JSON object, sorted.
+fn keys(v: &Value) -> Vec<String> {
+    let mut k: Vec<String> = v
+        .as_object()
+        .map_or(vec![], |o| o.keys().cloned().collect());
+    k.sort();
+    k
+}
+
+fn read_json(path: &std::path::Path) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn run_writes_a_trace_a_plot_and_an_rt_app_file_and_matches_simulate_json() {
+    let _one = serial();
+    let dir = scratch("run-files");
+    let spec = write_spec("run-files-spec", &small("rm", 0, ""));
+    let (trace, plot, rtapp) = (dir.join("t.json"), dir.join("p.svg"), dir.join("r.json"));
+    let o = rtpipe(&[
+        "run",
+        &spec,
+        "--duration",
+        "500ms",
+        "--policy",
+        "other",
+        "--best-effort",
+        "--load",
+        "1",
+        "--json",
+        "--trace",
+        &trace.to_string_lossy(),
+        "--plot",
+        &plot.to_string_lossy(),
+        "--export-rt-app",
+        &rtapp.to_string_lossy(),
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    // The simulator's trace format: spans per job, arrows along the chain.
+    let t = read_json(&trace);
+    assert_eq!(t["otherData"]["source"], "run");
+    let events = t["traceEvents"].as_array().cloned().unwrap_or_default();
+    let spans = events.iter().filter(|e| e["cat"] == "span").count();
+    assert_eq!(spans, 250 + 100 + 50, "one span per job");
+    assert!(events.iter().any(|e| e["ph"] == "s" && e["cat"] == "data"));
+    let svg = std::fs::read_to_string(&plot).unwrap_or_default();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("loop"),
+        "{svg:.200}"
+    );
+    // rt-app: a global section and one thread per task plus the hog.
+    let r = read_json(&rtapp);
+    assert_eq!(r["global"]["duration"], 1);
+    assert_eq!(r["tasks"]["sensor"]["policy"], "SCHED_OTHER");
+    assert_eq!(r["tasks"]["sensor"]["timer"]["period"], 2000);
+    assert_eq!(r["tasks"]["filter"]["run"], 500);
+    assert_eq!(r["tasks"].as_object().map(|o| o.len()), Some(4));
+    // Fig. 10: one row per chain.
+    let f = &v["fig10"][0];
+    assert_eq!(f["chain"], "loop");
+    for k in ["AVGR", "WCR", "MaxRV", "AVGF", "WCF", "MaxFV"] {
+        assert!(f[k].as_f64().is_some_and(|x| x >= 0.0), "{k}: {f}");
+    }
+    // The chain entries carry the fields of simulate --json.
+    let s = rtpipe(&["simulate", &spec, "--duration", "500ms", "--json"]);
+    assert_exit(&s, 0);
+    let s = json_of(&s);
+    for (rc, sc) in v["chains"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .zip(s["chains"].as_array().into_iter().flatten())
+    {
+        assert_eq!(keys(rc), keys(sc));
+        for k in ["observed", "observed_from_event", "violations"] {
+            assert_eq!(keys(&rc[k]), keys(&sc[k]), "{k}");
+        }
+    }
+    assert_eq!(
+        v["chains"].as_array().map(Vec::len),
+        s["chains"].as_array().map(Vec::len)
+    );
+}
+
+#[test]
+fn too_much_load_exits_2() {
+    let spec = write_spec("run-load", &small("rm", 0, ""));
+    let o = rtpipe(&["run", &spec, "--load", "100000", "--duration", "100ms"]);
+    assert_exit(&o, 2);
+    assert!(stderr(&o).contains("--load 100000"), "{}", stderr(&o));
 }
 
 #[test]

@@ -7,11 +7,18 @@
 
 pub mod exec;
 pub mod four_slot;
+pub mod load;
+pub mod pi;
+pub mod rt_app;
 pub mod seqlock;
 pub mod spin;
 pub mod sys;
 
 pub use exec::{
-    check, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun, OVERRUN_TOLERANCE,
+    check, fifo_priorities, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun,
+    OVERRUN_TOLERANCE,
 };
+pub use load::Load;
+pub use pi::PiMutex;
+pub use rt_app::{rt_app, RtApp};
 pub use spin::{synthetic, Spin};

@@ -97,6 +97,35 @@ pub fn set_deadline(runtime: u64, deadline: u64, period: u64) -> io::Result<()> 
     Ok(())
 }
 
+/// The calling thread's kernel id.
+pub fn gettid() -> i32 {
+    // SAFETY: gettid takes no arguments and cannot fail.
+    unsafe { libc::gettid() }
+}
+
+/// Moves thread `tid` (of any class) to `SCHED_OTHER`, nice 0.
+pub fn set_other(tid: i32) -> io::Result<()> {
+    let attr = SchedAttr {
+        size: std::mem::size_of::<SchedAttr>() as u32,
+        sched_policy: libc::SCHED_OTHER as u32,
+        ..SchedAttr::default()
+    };
+    // SAFETY: sched_setattr(tid, a valid sched_attr whose size field is its
+    // size, flags 0); a stale tid only makes it fail (ESRCH).
+    let r = unsafe {
+        libc::syscall(
+            libc::SYS_sched_setattr,
+            tid,
+            &attr as *const SchedAttr,
+            0u32,
+        )
+    };
+    if r != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
 /// Pins the calling thread to `cpu`.
 pub fn pin_to(cpu: usize) -> io::Result<()> {
     // SAFETY: a zeroed cpu_set_t is the empty set; CPU_SET stays in bounds

@@ -2,7 +2,10 @@
 //! (<https://ui.perfetto.dev>) or `chrome://tracing`.
 //!
 //! Needs a run with [`SimConfig::log_jobs`](crate::SimConfig) set: the trace
-//! is built from [`SimResult::segments`] and [`SimResult::jobs`].
+//! is built from [`SimResult::segments`] and [`SimResult::jobs`]. The real
+//! runtime (`rtpipe run`) produces a `SimResult` too, whose segments are job
+//! spans rather than CPU slices ([`TraceOptions::spans`]), so prediction and
+//! reality open side by side in one format.
 //!
 //! Layout:
 //! - one process per CPU (`pid` = dense CPU index, named `cpu <id>`), one
@@ -34,6 +37,10 @@ pub struct TraceOptions {
     pub max_slices: usize,
     /// Flow arrows (producer publish → consumer read) kept, earliest first.
     pub max_flows: usize,
+    /// The segments are job spans (read to publish, preemptions included:
+    /// what a real run knows), not CPU slices: they are drawn in category
+    /// `span` and without read/process/write stages, which need slices.
+    pub spans: bool,
 }
 
 impl Default for TraceOptions {
@@ -41,6 +48,7 @@ impl Default for TraceOptions {
         TraceOptions {
             max_slices: 50_000,
             max_flows: 20_000,
+            spans: false,
         }
     }
 }
@@ -150,11 +158,14 @@ pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) ->
         let (pid, tid) = (pid_of[seg.task], tid(seg.task));
         let task = &spec.tasks[seg.task];
         ev.push(json!({
-            "ph": "X", "cat": "job", "name": task.name, "pid": pid, "tid": tid,
+            "ph": "X", "cat": if opts.spans { "span" } else { "job" }, "name": task.name, "pid": pid, "tid": tid,
             "ts": ts(seg.start), "dur": ts(seg.end - seg.start),
             "args": {"job": seg.job, "background": seg.background},
         }));
         slices += 1;
+        if opts.spans {
+            continue;
+        }
         let key = (seg.task, seg.job);
         let before = *done.get(&key).unwrap_or(&0);
         let ran = seg.end - seg.start;
@@ -257,6 +268,7 @@ pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) ->
     let events = ev.count;
     let other = json!({
             "system": spec.name,
+            "source": if opts.spans { "run" } else { "simulation" },
             "time_unit": spec.time_unit.name(),
             "horizon_us": us(result.horizon),
             "offsets_us": result.offsets.iter().map(|&o| us(o)).collect::<Vec<_>>(),
@@ -354,6 +366,24 @@ path = ["a", "b"]
     }
 
     #[test]
+    fn spans_have_no_stages() {
+        let (spec, res) = run();
+        let opts = TraceOptions {
+            spans: true,
+            ..TraceOptions::default()
+        };
+        let t = chrome_trace_with(&spec, &res, opts);
+        let ev = events(&t.json);
+        assert_eq!(t.slices, res.segments.len());
+        assert!(ev.iter().all(|e| e["cat"] != "stage" && e["cat"] != "job"));
+        assert_eq!(
+            ev.iter().filter(|e| e["cat"] == "span").count(),
+            res.segments.len()
+        );
+        assert!(t.flows > 0);
+    }
+
+    #[test]
     fn limits_cut_the_trace() {
         let (spec, res) = run();
         let t = chrome_trace_with(
@@ -362,6 +392,7 @@ path = ["a", "b"]
             TraceOptions {
                 max_slices: 3,
                 max_flows: 1,
+                spans: false,
             },
         );
         assert_eq!(t.slices, 3);

@@ -119,7 +119,8 @@ pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) 
     v
 }
 
-/// {count, min, mean, p99, max} in the spec's unit.
+/// {count, min, mean, p99, max, variation} in the spec's unit; variation =
+/// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV).
 pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> Value {
     let unit = spec.time_unit.nanos() as f64;
     match j.observed {
@@ -129,8 +130,11 @@ pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> Value {
             "mean": s.mean / unit,
             "p99": spec.in_unit(s.p99),
             "max": spec.in_unit(s.max),
+            "variation": spec.in_unit(s.max - s.min),
         }),
-        None => json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null}),
+        None => {
+            json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null, "variation": null})
+        }
     }
 }
 

@@ -1,0 +1,189 @@
+//! The task set of a run as an rt-app workload (github.com/scheduler-tools/
+//! rt-app, doc/tutorial.txt), for users who measure with rt-app: one thread
+//! per task with its scheduling class and parameters, a `run` event of the
+//! task's demand and a `timer` event of its period (both in µs), plus the
+//! `--load` hogs as SCHED_OTHER threads that always run. rt-app has no
+//! registers: the data flow between tasks is not part of the file.
+
+use crate::exec::{fifo_priorities, Policy, RunConfig};
+use rtpipe_model::{Nanos, Spec};
+use serde_json::{json, Map, Value};
+
+/// The rt-app file and notes on what it rounds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RtApp {
+    pub json: Value,
+    pub notes: Vec<String>,
+}
+
+/// Microseconds, rounded up (a demand or budget never shrinks); a note when
+/// that changes the value.
+fn us_up(ns: Nanos, what: &str, notes: &mut Vec<String>) -> u64 {
+    let us = (ns.max(0) as u64).div_ceil(1000).max(1);
+    if us as i64 * 1000 != ns {
+        notes.push(format!(
+            "{what}: {ns} ns rounded up to {us} us (rt-app counts whole microseconds)"
+        ));
+    }
+    us
+}
+
+/// One task's thread object.
+fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<String>) -> Value {
+    let t = &spec.tasks[i];
+    let period = t.fixed_period().unwrap_or(0);
+    let period_us = us_up(period, &format!("task {} period", t.name), notes);
+    let mut o = Map::new();
+    o.insert("instance".into(), json!(1));
+    o.insert("loop".into(), json!(-1));
+    match cfg.policy {
+        Policy::Fifo => {
+            o.insert("policy".into(), json!("SCHED_FIFO"));
+            o.insert("priority".into(), json!(prio));
+            o.insert("cpus".into(), json!([t.cpu]));
+        }
+        Policy::Deadline => {
+            let budget = us_up(t.budget(), &format!("task {} budget", t.name), notes);
+            o.insert("policy".into(), json!("SCHED_DEADLINE"));
+            o.insert("dl-runtime".into(), json!(budget));
+            o.insert("dl-period".into(), json!(period_us));
+            o.insert("dl-deadline".into(), json!(period_us));
+        }
+        Policy::Other => {
+            o.insert("policy".into(), json!("SCHED_OTHER"));
+            o.insert("cpus".into(), json!([t.cpu]));
+        }
+    }
+    // Events run in the order listed: the job's demand, then the wait for
+    // the next release (a timer keeps the period whatever the preemptions).
+    let demand = us_up(t.demand(), &format!("task {} demand", t.name), notes);
+    o.insert("run".into(), json!(demand));
+    o.insert(
+        "timer".into(),
+        json!({"ref": format!("unique_{}", t.name), "period": period_us}),
+    );
+    Value::Object(o)
+}
+
+/// The rt-app workload equivalent to running `spec` under `cfg`.
+pub fn rt_app(spec: &Spec, cfg: &RunConfig) -> RtApp {
+    let mut notes = Vec::new();
+    let prios = fifo_priorities(spec);
+    let mut tasks = Map::new();
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let v = task(spec, i, cfg, prios[i], &mut notes);
+        tasks.insert(t.name.clone(), v);
+    }
+    for i in 0..cfg.load {
+        // A hog: one second of work after another, never sleeping.
+        tasks.insert(
+            format!("rtpipe-load-{i}"),
+            json!({"instance": 1, "loop": -1, "policy": "SCHED_OTHER", "run": 1_000_000}),
+        );
+    }
+    let seconds = (cfg.duration.max(1) as u64).div_ceil(1_000_000_000);
+    if seconds as i64 * 1_000_000_000 != cfg.duration {
+        notes.push(format!(
+            "duration rounded up to {seconds} s (rt-app counts whole seconds)"
+        ));
+    }
+    let json = json!({
+        "tasks": tasks,
+        "global": {
+            "duration": seconds,
+            "calibration": "CPU0",
+            "default_policy": "SCHED_OTHER",
+            "pi_enabled": false,
+            "lock_pages": true,
+            "logdir": "./",
+            "log_basename": format!("rtpipe-{}", spec.name),
+            "ftrace": "none",
+            "gnuplot": false,
+        },
+    });
+    RtApp { json, notes }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPEC: &str = r#"
+[system]
+name = "pair"
+time_unit = "us"
+scheduler = "rm"
+[channels.m]
+bandwidth = 1
+overhead = 0
+[tasks.src]
+exec = 100.5
+budget = 200
+period = 1000
+cpu = 1
+output = { channel = "m", size = 0 }
+[tasks.dst]
+exec = 300
+budget = 400
+period = 5000
+cpu = 1
+reads = ["src"]
+output = { channel = "m", size = 0 }
+"#;
+
+    fn spec(scheduler: &str) -> Spec {
+        let text = SPEC.replace("\"rm\"", &format!("\"{scheduler}\""));
+        Spec::parse("pair.toml", &text).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn cfg(policy: Policy, load: usize) -> RunConfig {
+        RunConfig {
+            duration: 2_500_000_000,
+            policy,
+            load,
+        }
+    }
+
+    #[test]
+    fn fifo_tasks_have_priorities_cpus_and_run_then_timer() {
+        let r = rt_app(&spec("rm"), &cfg(Policy::Fifo, 2));
+        let v = &r.json;
+        assert_eq!(v["global"]["duration"], 3);
+        assert_eq!(v["global"]["default_policy"], "SCHED_OTHER");
+        let src = &v["tasks"]["src"];
+        assert_eq!(src["policy"], "SCHED_FIFO");
+        assert_eq!(src["priority"], 90, "rate-monotonic rank 1");
+        assert_eq!(v["tasks"]["dst"]["priority"], 89);
+        assert_eq!(src["cpus"], json!([1]));
+        assert_eq!(src["run"], 101, "100.5 us rounded up");
+        assert_eq!(src["timer"]["period"], 1000);
+        assert_eq!(v["tasks"]["dst"]["timer"]["period"], 5000);
+        // Events in order: the run before the timer.
+        let keys: Vec<&String> = src.as_object().map_or(vec![], |o| o.keys().collect());
+        let pos = |k: &str| keys.iter().position(|x| *x == k);
+        assert!(pos("run") < pos("timer"), "{keys:?}");
+        assert_ne!(src["timer"]["ref"], v["tasks"]["dst"]["timer"]["ref"]);
+        for i in 0..2 {
+            let hog = &v["tasks"][format!("rtpipe-load-{i}")];
+            assert_eq!(hog["policy"], "SCHED_OTHER");
+            assert!(hog.get("timer").is_none());
+        }
+        assert_eq!(r.notes.len(), 2, "{:?}", r.notes);
+    }
+
+    #[test]
+    fn deadline_tasks_carry_their_reservation_in_us() {
+        let r = rt_app(&spec("edf"), &cfg(Policy::Deadline, 0));
+        let dst = &r.json["tasks"]["dst"];
+        assert_eq!(dst["policy"], "SCHED_DEADLINE");
+        assert_eq!(dst["dl-runtime"], 400);
+        assert_eq!(dst["dl-period"], 5000);
+        assert_eq!(dst["dl-deadline"], 5000);
+        assert!(
+            dst.get("cpus").is_none(),
+            "deadline affinity spans the root domain"
+        );
+        assert!(dst.get("priority").is_none());
+        assert_eq!(r.json["tasks"].as_object().map(|o| o.len()), Some(2));
+    }
+}
