@@ -180,7 +180,10 @@ pub fn relax(
     forms: bool,
 ) -> Relaxed {
     let n = spec.tasks.len();
-    assert!(lo.len() == n && hi.len() == n, "relax: one interval per task");
+    assert!(
+        lo.len() == n && hi.len() == n,
+        "relax: one interval per task"
+    );
     assert!(
         (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
         "relax: empty or non-positive period interval"
@@ -215,7 +218,10 @@ pub fn relax(
                     .filter(|&j| order.surely_interferes(j, i))
                     .map(|j| (interference(&spec.tasks[j]), hi[j]))
                     .collect();
-                (response_time(t.budget(), &hp), response_time(t.demand(), &hp))
+                (
+                    response_time(t.budget(), &hp),
+                    response_time(t.demand(), &hp),
+                )
             }
             // Servers get their budget by the end of each period (`sched`).
             Scheduler::Edf if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
@@ -328,9 +334,8 @@ fn chain_bounds(
     for w in path.windows(2) {
         let (p, c) = (low(w[0]), low(w[1]));
         let orders = order.link_orders(w[0], w[1]);
-        let least = |f: &dyn Fn(Option<Case>) -> Option<Nanos>| {
-            orders.iter().filter_map(|&o| f(o)).min()
-        };
+        let least =
+            |f: &dyn Fn(Option<Case>) -> Option<Nanos>| orders.iter().filter_map(|&o| f(o)).min();
         let e = least(&|o| sound_reaction_link_in(o, &p, &c, distinct));
         let f = least(&|o| sound_freshness_link_in(o, &p, &c));
         react = react.zip(e).map(|(a, b)| a + b);
@@ -407,8 +412,16 @@ fn chain_forms(
 /// at the corners (lo,lo), (hi,lo), (lo,hi), (hi,hi) of (T_p, T_c).
 fn add_link(form: &mut Affine, p: usize, c: usize, dp: Nanos, dc: Nanos, v: [Nanos; 4]) {
     let v = v.map(|x| x as f64);
-    let sp = if dp > 0 { (v[1] - v[0]) / dp as f64 } else { 0.0 };
-    let sc = if dc > 0 { (v[2] - v[0]) / dc as f64 } else { 0.0 };
+    let sp = if dp > 0 {
+        (v[1] - v[0]) / dp as f64
+    } else {
+        0.0
+    };
+    let sc = if dc > 0 {
+        (v[2] - v[0]) / dc as f64
+    } else {
+        0.0
+    };
     // Exact at three corners; at the fourth, lower the base as needed.
     let base = v[0].min(v[3] - sp * dp as f64 - sc * dc as f64);
     form.base += base;
@@ -437,11 +450,24 @@ impl Order<'_> {
 
 /// The paper's link terms of p → c at periods (tp, tc), least over the
 /// possible cases: (reaction, freshness).
-fn paper_link(spec: &Spec, order: &Order, p: usize, c: usize, tp: Nanos, tc: Nanos) -> (Nanos, Nanos) {
+fn paper_link(
+    spec: &Spec,
+    order: &Order,
+    p: usize,
+    c: usize,
+    tp: Nanos,
+    tc: Nanos,
+) -> (Nanos, Nanos) {
     let (lp, lc) = (link_task(spec, tp, None, p), link_task(spec, tc, None, c));
     let cases = order.paper_cases(p, c);
-    let e = cases.iter().map(|&k| paper_reaction_link_in(k, &lp, &lc)).min();
-    let f = cases.iter().map(|&k| paper_freshness_link_in(k, &lp, &lc)).min();
+    let e = cases
+        .iter()
+        .map(|&k| paper_reaction_link_in(k, &lp, &lc))
+        .min();
+    let f = cases
+        .iter()
+        .map(|&k| paper_freshness_link_in(k, &lp, &lc))
+        .min();
     (e.unwrap_or(Nanos::MAX), f.unwrap_or(Nanos::MAX))
 }
 
@@ -465,10 +491,18 @@ fn paper_forms(spec: &Spec, order: &Order, path: &[usize]) -> (Affine, Affine) {
     let h = path[0];
     let l_at = |t: Nanos| link_task(spec, t, None, h).l as f64;
     let (lo, hi) = (order.lo[h], order.hi[h]);
-    let slope = if hi > lo { (l_at(hi) - l_at(lo)) / (hi - lo) as f64 } else { 0.0 };
+    let slope = if hi > lo {
+        (l_at(hi) - l_at(lo)) / (hi - lo) as f64
+    } else {
+        0.0
+    };
     let head = Affine {
         base: l_at(lo),
-        slopes: if slope > 0.0 { vec![(h, slope)] } else { Vec::new() },
+        slopes: if slope > 0.0 {
+            vec![(h, slope)]
+        } else {
+            Vec::new()
+        },
     };
     let (mut e, mut f) = (head.clone(), head);
     for w in path.windows(2) {

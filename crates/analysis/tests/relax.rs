@@ -62,20 +62,40 @@ fn paper(report: &Report, chain: usize, metric: Metric) -> Nanos {
 
 /// The paper figures and forms of `r` against the analysis at `t` (equal at
 /// a point box), when the paper's terms are monotone.
-fn paper_below(r: &Relaxed, spec: &Spec, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str, exact: bool) {
+fn paper_below(
+    r: &Relaxed,
+    spec: &Spec,
+    lo: &[Nanos],
+    t: &[Nanos],
+    report: &Report,
+    what: &str,
+    exact: bool,
+) {
     if !paper_monotone(spec) {
         return;
     }
     for (k, &(e, f)) in r.paper.iter().enumerate() {
-        let (pe, pf) = (paper(report, k, Metric::Reaction), paper(report, k, Metric::Freshness));
+        let (pe, pf) = (
+            paper(report, k, Metric::Reaction),
+            paper(report, k, Metric::Freshness),
+        );
         if exact {
             assert_eq!((e, f), (pe, pf), "{what}: chain {k} paper");
         } else {
-            assert!(e <= pe && f <= pf, "{what}: chain {k} paper ({e}, {f}) vs ({pe}, {pf})");
+            assert!(
+                e <= pe && f <= pf,
+                "{what}: chain {k} paper ({e}, {f}) vs ({pe}, {pf})"
+            );
         }
         let (fe, ff) = &r.paper_forms[k];
-        assert!(fe.at(lo, t) <= pe as f64 + 1e-6, "{what}: chain {k} paper reaction form");
-        assert!(ff.at(lo, t) <= pf as f64 + 1e-6, "{what}: chain {k} paper freshness form");
+        assert!(
+            fe.at(lo, t) <= pe as f64 + 1e-6,
+            "{what}: chain {k} paper reaction form"
+        );
+        assert!(
+            ff.at(lo, t) <= pf as f64 + 1e-6,
+            "{what}: chain {k} paper freshness form"
+        );
     }
 }
 
@@ -91,17 +111,30 @@ fn sound(report: &Report, chain: usize, metric: Metric) -> Option<Nanos> {
 /// below (reaction is the smaller sum, freshness the second).
 fn forms_below(r: &Relaxed, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str) {
     for (k, form) in r.forms.iter().enumerate() {
-        let (se, sf) = (sound(report, k, Metric::Reaction), sound(report, k, Metric::Freshness));
+        let (se, sf) = (
+            sound(report, k, Metric::Reaction),
+            sound(report, k, Metric::Freshness),
+        );
         let Some((e, f)) = form else {
-            assert!(se.is_none() && sf.is_none(), "{what}: chain {k} has no forms but is bounded");
+            assert!(
+                se.is_none() && sf.is_none(),
+                "{what}: chain {k} has no forms but is bounded"
+            );
             continue;
         };
         let (e, f) = (e.at(lo, t), f.at(lo, t));
         if let Some(x) = se {
-            assert!(e.min(f) <= x as f64 + 1e-6, "{what}: chain {k} reaction form {} above {x}", e.min(f));
+            assert!(
+                e.min(f) <= x as f64 + 1e-6,
+                "{what}: chain {k} reaction form {} above {x}",
+                e.min(f)
+            );
         }
         if let Some(x) = sf {
-            assert!(f <= x as f64 + 1e-6, "{what}: chain {k} freshness form {f} above {x}");
+            assert!(
+                f <= x as f64 + 1e-6,
+                "{what}: chain {k} freshness form {f} above {x}"
+            );
         }
     }
 }
@@ -122,19 +155,33 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
             continue;
         }
         let budget = tm.response_time.filter(|&x| x <= tm.period);
-        assert!(same(r.job_response[i], tm.bounded_response()), "{what}: job R of task {i}: {:?} vs {:?}", r.job_response[i], tm.bounded_response());
-        assert!(same(r.budget_response[i], budget), "{what}: budget R of task {i}");
+        assert!(
+            same(r.job_response[i], tm.bounded_response()),
+            "{what}: job R of task {i}: {:?} vs {:?}",
+            r.job_response[i],
+            tm.bounded_response()
+        );
+        assert!(
+            same(r.budget_response[i], budget),
+            "{what}: budget R of task {i}"
+        );
     }
     for (v, &(cpu, may)) in report.schedulability.cpus.iter().zip(&r.cpus) {
         assert_eq!(v.cpu, cpu);
         if exact {
             assert_eq!(may, v.schedulable, "{what}: cpu {cpu} verdict");
         } else {
-            assert!(may || !v.schedulable, "{what}: cpu {cpu} passes but the box says never");
+            assert!(
+                may || !v.schedulable,
+                "{what}: cpu {cpu} passes but the box says never"
+            );
         }
     }
     for (k, &(e, f)) in r.chains.iter().enumerate() {
-        let (se, sf) = (sound(report, k, Metric::Reaction), sound(report, k, Metric::Freshness));
+        let (se, sf) = (
+            sound(report, k, Metric::Reaction),
+            sound(report, k, Metric::Freshness),
+        );
         assert!(same(e, se), "{what}: chain {k} reaction {e:?} vs {se:?}");
         assert!(same(f, sf), "{what}: chain {k} freshness {f:?} vs {sf:?}");
     }
@@ -155,7 +202,10 @@ fn a_point_box_is_the_analysis() {
     let monotone = (0..SYSTEMS)
         .filter(|&seed| paper_monotone(&random_system(seed, &config(seed))))
         .count();
-    assert!(monotone > SYSTEMS as usize / 2, "only {monotone} systems check the paper figures");
+    assert!(
+        monotone > SYSTEMS as usize / 2,
+        "only {monotone} systems check the paper figures"
+    );
     // Most generated chains are bounded: the comparison is not vacuous.
     assert!(bounded > SYSTEMS as usize, "only {bounded} bounded chains");
 }
@@ -169,8 +219,14 @@ fn a_box_bounds_every_point_inside_from_below() {
         let t = periods(&spec);
         let mut rng = Rng::new(seed);
         // A box around the generated periods, up to halving and doubling.
-        let lo: Vec<Nanos> = t.iter().map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1)).collect();
-        let hi: Vec<Nanos> = t.iter().map(|&p| p + (rng.unit() * p as f64) as Nanos).collect();
+        let lo: Vec<Nanos> = t
+            .iter()
+            .map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1))
+            .collect();
+        let hi: Vec<Nanos> = t
+            .iter()
+            .map(|&p| p + (rng.unit() * p as f64) as Nanos)
+            .collect();
         let r = relax(&spec, &lo, &hi, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         for probe in 0..8 {
@@ -183,21 +239,50 @@ fn a_box_bounds_every_point_inside_from_below() {
                 .collect();
             let s = at(&spec, &point);
             let report = analyze(&s);
-            bounds_point(&r, &s, &report, &format!("seed {seed} probe {probe}"), false);
-            forms_below(&r, &lo, &point, &report, &format!("seed {seed} probe {probe}"));
-            paper_below(&r, &spec, &lo, &point, &report, &format!("seed {seed} probe {probe}"), false);
+            bounds_point(
+                &r,
+                &s,
+                &report,
+                &format!("seed {seed} probe {probe}"),
+                false,
+            );
+            forms_below(
+                &r,
+                &lo,
+                &point,
+                &report,
+                &format!("seed {seed} probe {probe}"),
+            );
+            paper_below(
+                &r,
+                &spec,
+                &lo,
+                &point,
+                &report,
+                &format!("seed {seed} probe {probe}"),
+                false,
+            );
             checked += 1;
         }
         // A sub-box never has lower figures.
         let mid: Vec<Nanos> = (0..t.len()).map(|i| lo[i] + (hi[i] - lo[i]) / 2).collect();
-        for sub in [relax(&spec, &lo, &mid, &[], true), relax(&spec, &mid, &hi, &[], true)] {
+        for sub in [
+            relax(&spec, &lo, &mid, &[], true),
+            relax(&spec, &mid, &hi, &[], true),
+        ] {
             for (a, b) in r.chains.iter().zip(&sub.chains) {
-                assert!(below(a.0, b.0) && below(a.1, b.1), "seed {seed}: a sub-box lowered a chain");
+                assert!(
+                    below(a.0, b.0) && below(a.1, b.1),
+                    "seed {seed}: a sub-box lowered a chain"
+                );
             }
         }
     }
     assert_eq!(checked, 8 * SYSTEMS);
-    assert!(bounded > SYSTEMS as usize / 2, "only {bounded} bounded chains over boxes");
+    assert!(
+        bounded > SYSTEMS as usize / 2,
+        "only {bounded} bounded chains over boxes"
+    );
 }
 
 /// With rank orders imposed, the box bounds every point inside that has
@@ -231,9 +316,23 @@ fn imposed_orders_bound_the_points_that_have_them() {
             }
         }
         let r = relax(&spec, &lo, &hi, &imposed, true);
-        bounds_point(&r, &s, &report, &format!("seed {seed} imposed {imposed:?}"), false);
+        bounds_point(
+            &r,
+            &s,
+            &report,
+            &format!("seed {seed} imposed {imposed:?}"),
+            false,
+        );
         forms_below(&r, &lo, &point, &report, &format!("seed {seed} imposed"));
-        paper_below(&r, &spec, &lo, &point, &report, &format!("seed {seed} imposed"), false);
+        paper_below(
+            &r,
+            &spec,
+            &lo,
+            &point,
+            &report,
+            &format!("seed {seed} imposed"),
+            false,
+        );
         // At the point itself, imposing its own orders changes nothing.
         let exact = relax(&spec, &point, &point, &imposed, true);
         bounds_point(&exact, &s, &report, &format!("seed {seed} point"), true);

@@ -380,7 +380,10 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
             " after {} boxes ({} open at most) in {:.2} s",
             o.iterations, o.peak_open, o.seconds
         ),
-        (false, _) => format!(" after {} master solves in {:.2} s", o.iterations, o.seconds),
+        (false, _) => format!(
+            " after {} master solves in {:.2} s",
+            o.iterations, o.seconds
+        ),
     };
     let mut out = format!(
         "design of {} ({} analysis, {search}): {}{how}\n",

@@ -459,7 +459,9 @@ fn ctrl_c_in_json_mode_says_interrupted() {
     let spec = example("cleanflight-design.toml");
     let (o, after) = rtpipe_interrupted(
         &dir,
-        &["design", &spec, "--method", "milp", "--solver", "microlp", "--json"],
+        &[
+            "design", &spec, "--method", "milp", "--solver", "microlp", "--json",
+        ],
         Duration::from_secs(2),
         LIMIT,
     );
@@ -503,7 +505,10 @@ fn ctrl_c_stops_the_box_search() {
         LIMIT,
     );
     assert_exit(&o, 130);
-    assert!(after < Duration::from_secs(3), "exited {after:?} after SIGINT");
+    assert!(
+        after < Duration::from_secs(3),
+        "exited {after:?} after SIGINT"
+    );
     let v = json_of(&o);
     assert_eq!(v["design"]["interrupted"], serde_json::json!(true));
     assert_eq!(v["design"]["method"], serde_json::json!("boxes"));

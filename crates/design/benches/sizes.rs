@@ -85,7 +85,13 @@ struct Row {
 fn run_child(tasks: usize, seed: u64, mode: Mode, limit: f64) -> Option<Row> {
     let exe = std::env::current_exe().ok()?;
     let out = Command::new(exe)
-        .args(["--one", &tasks.to_string(), &seed.to_string(), mode.name(), &limit.to_string()])
+        .args([
+            "--one",
+            &tasks.to_string(),
+            &seed.to_string(),
+            mode.name(),
+            &limit.to_string(),
+        ])
         .output()
         .ok()?;
     let text = String::from_utf8_lossy(&out.stdout);
@@ -111,7 +117,11 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     if let Some(i) = args.iter().position(|a| a == "--one") {
-        let mode = if args[i + 3] == "paper" { Mode::Paper } else { Mode::Sound };
+        let mode = if args[i + 3] == "paper" {
+            Mode::Paper
+        } else {
+            Mode::Sound
+        };
         child(
             args[i + 1].parse().unwrap_or(6),
             args[i + 2].parse().unwrap_or(FIRST_SEED),
@@ -139,7 +149,8 @@ fn main() {
                 })
                 .collect();
             let mut statuses: BTreeMap<&str, usize> = BTreeMap::new();
-            rows.iter().for_each(|r| *statuses.entry(&r.status).or_default() += 1);
+            rows.iter()
+                .for_each(|r| *statuses.entry(&r.status).or_default() += 1);
             let statuses: Vec<String> = statuses.iter().map(|(s, n)| format!("{n} {s}")).collect();
             let feasible_gaps: Vec<f64> = rows
                 .iter()
@@ -147,7 +158,8 @@ fn main() {
                 .map(|r| 100.0 * r.gap)
                 .collect();
             let mib = |k: u64| k as f64 / 1024.0;
-            let methods: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+            let methods: std::collections::BTreeSet<&str> =
+                rows.iter().map(|r| r.method.as_str()).collect();
             println!(
                 "| {tasks} | {} | {} | {} | {:.2} | {:.2} | {} | {:.1} | {:.1} |",
                 mode.name(),
@@ -155,7 +167,11 @@ fn main() {
                 statuses.join(", "),
                 median(rows.iter().map(|r| r.secs).collect()),
                 rows.iter().map(|r| r.secs).fold(0.0, f64::max),
-                if feasible_gaps.is_empty() { "-".to_string() } else { format!("{:.2} %", median(feasible_gaps)) },
+                if feasible_gaps.is_empty() {
+                    "-".to_string()
+                } else {
+                    format!("{:.2} %", median(feasible_gaps))
+                },
                 median(rows.iter().map(|r| mib(r.kib)).collect()),
                 rows.iter().map(|r| mib(r.kib)).fold(0.0, f64::max),
             );

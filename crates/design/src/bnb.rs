@@ -81,7 +81,11 @@ const DIVE_EVERY: u64 = 64;
 #[derive(Debug, Clone)]
 enum Axis {
     /// `first + k·step` for k in 0..len.
-    Grid { first: Nanos, step: Nanos, len: u32 },
+    Grid {
+        first: Nanos,
+        step: Nanos,
+        len: u32,
+    },
     List(Vec<Nanos>),
 }
 
@@ -223,10 +227,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     fn periods(&self, k: &[u32]) -> Vec<Nanos> {
-        k.iter()
-            .zip(&self.axes)
-            .map(|(&k, a)| a.value(k))
-            .collect()
+        k.iter().zip(&self.axes).map(|(&k, a)| a.value(k)).collect()
     }
 
     fn bound(&self, hi: &[u32]) -> f64 {
@@ -385,10 +386,15 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         for i in 0..node.lo.len() {
             let need = [
                 (sound && self.run.on_chain[i], r.job_response[i]),
-                (rta && spec.tasks[i].server != Server::Background, r.budget_response[i]),
+                (
+                    rta && spec.tasks[i].server != Server::Background,
+                    r.budget_response[i],
+                ),
             ];
             for (applies, least) in need {
-                let Some(least) = least.filter(|_| applies) else { continue };
+                let Some(least) = least.filter(|_| applies) else {
+                    continue;
+                };
                 let k = self.axes[i].first_at_least(least as f64);
                 if k > node.hi[i] {
                     return None;
@@ -410,13 +416,19 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let n = node.lo.len();
         let mut changed = false;
         for g in self.groups {
-            let Group::Limit(k, metric) = *g else { continue };
-            let Some(forms) = self.forms_of(r, k, metric) else { continue };
+            let Group::Limit(k, metric) = *g else {
+                continue;
+            };
+            let Some(forms) = self.forms_of(r, k, metric) else {
+                continue;
+            };
             let limit = match metric {
                 Metric::Reaction => spec.chains[k].reaction,
                 Metric::Freshness => spec.chains[k].freshness,
             };
-            let Some(limit) = limit.map(|l| l as f64) else { continue };
+            let Some(limit) = limit.map(|l| l as f64) else {
+                continue;
+            };
             // The longest period each task may have: the most any form allows.
             let mut allow = vec![f64::NEG_INFINITY; n];
             for a in forms {
@@ -425,20 +437,20 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 }
                 let mut slope = vec![0.0; n];
                 a.slopes.iter().for_each(|&(i, s)| slope[i] += s);
-                for i in 0..n {
-                    let room = if slope[i] > 0.0 {
-                        lo[i] as f64 + (limit - a.base) / slope[i]
+                for (i, (cap, &s)) in allow.iter_mut().zip(&slope).enumerate() {
+                    let room = if s > 0.0 {
+                        lo[i] as f64 + (limit - a.base) / s
                     } else {
                         f64::INFINITY
                     };
-                    allow[i] = allow[i].max(room);
+                    *cap = cap.max(room);
                 }
             }
-            for i in 0..n {
-                if allow[i] >= self.axes[i].value(node.hi[i]) as f64 {
+            for (i, &cap) in allow.iter().enumerate() {
+                if cap >= self.axes[i].value(node.hi[i]) as f64 {
                     continue;
                 }
-                match self.axes[i].last_at_most(allow[i].floor().max(-1.0) as Nanos) {
+                match self.axes[i].last_at_most(cap.floor().max(-1.0) as Nanos) {
                     Some(k) if k >= node.lo[i] => {
                         node.hi[i] = k;
                         changed = true;
@@ -459,7 +471,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let mut bound = plain;
         let mut joint = Vec::new();
         for g in self.groups {
-            let Group::Limit(k, metric) = *g else { continue };
+            let Group::Limit(k, metric) = *g else {
+                continue;
+            };
             let forms = self.forms_of(r, k, metric)?;
             let limit = match metric {
                 Metric::Reaction => spec.chains[k].reaction,
@@ -504,7 +518,12 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 let slack = |x: f64, lambda: &mut Vec<f64>| {
                     lambda[c] = x;
                     let w = weights(lambda);
-                    rows[c].slopes.iter().map(|&(i, s)| s * t_at(&w, i)).sum::<f64>() - rows[c].room
+                    rows[c]
+                        .slopes
+                        .iter()
+                        .map(|&(i, s)| s * t_at(&w, i))
+                        .sum::<f64>()
+                        - rows[c].room
                 };
                 if slack(0.0, &mut lambda) <= 0.0 {
                     continue;
@@ -528,14 +547,26 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 self.budget[i] / t + w[i] * t
             })
             .sum();
-        primal - rows.iter().zip(&lambda).map(|(r, l)| l * r.room).sum::<f64>()
+        primal
+            - rows
+                .iter()
+                .zip(&lambda)
+                .map(|(r, l)| l * r.room)
+                .sum::<f64>()
     }
 
     /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
     /// nowhere). Lagrangian dual of the separable convex problem: for any
     /// λ ≥ 0, min_T Σ C_i/T_i + λ (form(T) − limit) is one, with the
     /// minimising T_i = √(C_i / (λ·s_i)) clamped to the box.
-    fn least_under(&self, form: &Affine, limit: f64, lo: &[Nanos], hi: &[Nanos], plain: f64) -> Option<f64> {
+    fn least_under(
+        &self,
+        form: &Affine,
+        limit: f64,
+        lo: &[Nanos],
+        hi: &[Nanos],
+        plain: f64,
+    ) -> Option<f64> {
         let mut slope: Vec<(usize, f64)> = Vec::with_capacity(form.slopes.len());
         for &(i, s) in &form.slopes {
             match slope.iter_mut().find(|x| x.0 == i) {
@@ -688,7 +719,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let mut blamed = vec![false; node.lo.len()];
         for c in &report.chains {
             if !c.ok {
-                spec.chains[c.chain].path.iter().for_each(|&i| blamed[i] = true);
+                spec.chains[c.chain]
+                    .path
+                    .iter()
+                    .for_each(|&i| blamed[i] = true);
             }
         }
         for v in report.schedulability.cpus.iter().filter(|v| !v.schedulable) {
@@ -719,7 +753,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let a = &self.axes[i];
         let (l, h) = (a.value(node.lo[i]) as f64, a.value(node.hi[i]) as f64);
         let mid = 2.0 * l * h / (l + h);
-        let k = a.first_at_least(mid).saturating_sub(1).clamp(node.lo[i], node.hi[i] - 1);
+        let k = a
+            .first_at_least(mid)
+            .saturating_sub(1)
+            .clamp(node.lo[i], node.hi[i] - 1);
         let mut low = node.clone();
         low.hi[i] = k;
         low.bound = self.bound(&low.hi);
@@ -831,7 +868,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             if ok {
                 let u = utilization(&spec);
                 if incumbent.is_none_or(|b| u < b) {
-                    self.publish(&spec, u, open.iter().map(|n| n.bound).fold(node.bound, f64::min));
+                    self.publish(
+                        &spec,
+                        u,
+                        open.iter().map(|n| n.bound).fold(node.bound, f64::min),
+                    );
                     best = Some((spec, report, u));
                 }
                 if self.first_only {
@@ -853,7 +894,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         };
         BoxResult {
             best,
-            lower_bound: if lower_bound.is_finite() { lower_bound } else { 0.0 },
+            lower_bound: if lower_bound.is_finite() {
+                lower_bound
+            } else {
+                0.0
+            },
             complete: !stopped,
             nodes,
             peak_open,
@@ -864,7 +909,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if let Some(sink) = &self.run.opts.incumbent {
             if let Ok(mut g) = sink.lock() {
                 *g = Some(Incumbent {
-                    periods: spec.tasks.iter().map(|t| t.fixed_period().unwrap_or(0)).collect(),
+                    periods: spec
+                        .tasks
+                        .iter()
+                        .map(|t| t.fixed_period().unwrap_or(0))
+                        .collect(),
                     utilization: u,
                     lower_bound: Some(lower_bound),
                 });
@@ -875,7 +924,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {
         self.run.say(|| {
             let best = best.map_or(String::new(), |u| {
-                let gap = if u > 0.0 { (u - bound).max(0.0) / u } else { 0.0 };
+                let gap = if u > 0.0 {
+                    (u - bound).max(0.0) / u
+                } else {
+                    0.0
+                };
                 format!(", best verified U = {u:.4}, gap {:.2} %", 100.0 * gap)
             });
             format!("branch and bound: {nodes} boxes, {open} open, lower bound {bound:.4}{best}")
@@ -893,7 +946,10 @@ impl Runner<'_> {
             BoxSearch::new(self, &groups).publish(spec, *u, 0.0);
         }
         if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
-            self.work_cap = Some(self.work.saturating_add(p.saturating_mul(BOX_WORK_PER_PATIENCE)));
+            self.work_cap = Some(
+                self.work
+                    .saturating_add(p.saturating_mul(BOX_WORK_PER_PATIENCE)),
+            );
         }
         let found = BoxSearch::new(self, &groups).run(seed);
         self.iterations = found.nodes as usize;
@@ -906,10 +962,18 @@ impl Runner<'_> {
                     notes.push(self.stop_reason());
                     crate::Status::Feasible
                 };
-                let lb = if complete { u } else { found.lower_bound.min(u) };
+                let lb = if complete {
+                    u
+                } else {
+                    found.lower_bound.min(u)
+                };
                 let mut o = self.outcome(status, Some((spec, report)), Some(lb), Vec::new(), notes);
                 o.objective = Some(u);
-                o.gap = Some(if u > 0.0 { ((u - lb) / u).max(0.0) } else { 0.0 });
+                o.gap = Some(if u > 0.0 {
+                    ((u - lb) / u).max(0.0)
+                } else {
+                    0.0
+                });
                 o
             }
             (None, true) => {
@@ -943,7 +1007,12 @@ impl Runner<'_> {
     }
 
     fn stop_cause(&self) -> &'static str {
-        if self.opts.cancel.as_ref().is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+        if self
+            .opts
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+        {
             "interrupted"
         } else if self.opts.time_limit.is_some() {
             "time limit"

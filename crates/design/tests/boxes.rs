@@ -88,7 +88,11 @@ fn table2_conflicts_are_minimal() {
             "cpu 0: liu-layland schedulability",
         ]
     );
-    assert!(o.notes.iter().all(|n| !n.contains("may not be minimal")), "{:?}", o.notes);
+    assert!(
+        o.notes.iter().all(|n| !n.contains("may not be minimal")),
+        "{:?}",
+        o.notes
+    );
 }
 
 /// Table II with exact RTA: the optimum docs/design.md gives (and the MILP

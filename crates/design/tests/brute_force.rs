@@ -358,7 +358,14 @@ fn paper_mode_agrees_with_brute_force() {
 
 #[test]
 fn paper_mode_milp_agrees_with_brute_force() {
-    run(Mode::Paper, Method::Milp, 100_000, cases(300) / 3, 3.0, false);
+    run(
+        Mode::Paper,
+        Method::Milp,
+        100_000,
+        cases(300) / 3,
+        3.0,
+        false,
+    );
 }
 
 #[test]
@@ -370,7 +377,14 @@ fn ranges_agree_with_brute_force() {
 
 #[test]
 fn ranges_agree_with_brute_force_milp() {
-    run(Mode::Sound, Method::Milp, 200_000, cases(300) / 3, 3.0, true);
+    run(
+        Mode::Sound,
+        Method::Milp,
+        200_000,
+        cases(300) / 3,
+        3.0,
+        true,
+    );
 }
 
 #[test]
