@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The demo: analyse every bundled example, design two, fly one. `rtpipe
+# The demo: analyse every bundled example, design two (Cleanflight in both
+# modes), fly one. `rtpipe
 # analyze` exits 1 when a limit fails (a finding, shown in the output) and 2
 # on bad input (an error).
 set -uo pipefail
@@ -16,10 +17,12 @@ for spec in examples/paper-table2.toml examples/cleanflight.toml examples/paper-
 done
 echo "\$ rtpipe analyze examples/paper-table2.toml --all-paths  (worst path per source/sink pair)"
 ./target/release/rtpipe analyze examples/paper-table2.toml --all-paths | sed -n '/all source-to-sink/,$p'
-for spec in examples/table2-design.toml examples/cleanflight-design.toml; do
+for run in "examples/table2-design.toml --mode paper" "examples/cleanflight-design.toml --mode paper" \
+  "examples/cleanflight-design.toml --mode sound"; do
   echo
-  echo "\$ rtpipe design $spec --mode paper"
-  ./target/release/rtpipe design "$spec" --mode paper | sed -n '1,3p'
+  echo "\$ rtpipe design $run"
+  # shellcheck disable=SC2086 # the spec and its flags, split on purpose
+  ./target/release/rtpipe design $run | sed -n '1,3p'
   code=${PIPESTATUS[0]}
   [ "$code" -ge 2 ] && status=$code
 done
