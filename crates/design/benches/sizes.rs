@@ -12,7 +12,7 @@
 
 use rtpipe_analysis::bounds_per_chain;
 use rtpipe_design::{design, Mode, Options, Status};
-use rtpipe_model::gen::{design_problem, DesignGenConfig, GenConfig};
+use rtpipe_model::gen::{benchmark_config, design_problem, DesignGenConfig};
 use std::collections::BTreeMap;
 use std::process::Command;
 
@@ -20,23 +20,7 @@ const SIZES: [usize; 4] = [6, 20, 50, 100];
 const FIRST_SEED: u64 = 2018;
 
 fn config(tasks: usize) -> DesignGenConfig {
-    let (cpus, chains) = match tasks {
-        0..=10 => (1, 2),
-        11..=30 => (2, 4),
-        31..=60 => (4, 6),
-        _ => (8, 10),
-    };
-    DesignGenConfig {
-        system: GenConfig {
-            tasks,
-            cpus,
-            utilization: 0.5,
-            chains,
-            ..DesignGenConfig::default().system
-        },
-        choices_fraction: 0.0,
-        ..DesignGenConfig::default()
-    }
+    benchmark_config(tasks)
 }
 
 fn env<T: std::str::FromStr>(name: &str, default: T) -> T {

@@ -22,7 +22,9 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Samplin
 use rtpipe_analysis::{analyze, bounds_per_chain};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Mode, Options, Outcome};
-use rtpipe_model::gen::{design_origin, design_problem, ChainBounds, DesignGenConfig, GenConfig};
+use rtpipe_model::gen::{
+    benchmark_config, design_origin, design_problem, ChainBounds, DesignGenConfig,
+};
 use rtpipe_model::{PeriodSpec, Spec};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -34,23 +36,7 @@ fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
 }
 
 fn config(tasks: usize) -> DesignGenConfig {
-    let (cpus, chains) = match tasks {
-        0..=10 => (1, 2),
-        11..=30 => (2, 4),
-        31..=60 => (4, 6),
-        _ => (8, 10),
-    };
-    DesignGenConfig {
-        system: GenConfig {
-            tasks,
-            cpus,
-            utilization: 0.5,
-            chains,
-            ..DesignGenConfig::default().system
-        },
-        choices_fraction: 0.0,
-        ..DesignGenConfig::default()
-    }
+    benchmark_config(tasks)
 }
 
 /// The problem, described on stderr with its generating design (which the

@@ -2,7 +2,7 @@
 //! bundled design problems: proven optima, verified by the analysis, the
 //! same as the MILP's, and a minimal conflict set where none exists.
 //! The brute-force agreement on thousands of small problems is in
-//! tests/brute_force.rs.
+//! tests/brute_force.rs, Cleanflight with transfers in tests/numerical.rs.
 
 use rtpipe_analysis::analyze;
 use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
@@ -57,20 +57,6 @@ fn cleanflight_derived_optimum() {
     let u = optimum("cleanflight-derived", &o);
     let expected = 2.0 * 200.0 / 6352.0 + 2.0 * 100.0 / 3095.0 + 100.0 / 9718.0 + 1000.0 / 22630.0;
     assert!((u - expected).abs() < 1e-12, "{u} vs {expected}");
-}
-
-/// With transfer costs the MILP's masters fail numerically (tests/numerical.rs);
-/// the box search solves no LP and proves its optimum.
-#[test]
-fn cleanflight_with_transfers_optimum() {
-    let src = example("cleanflight-design.toml")
-        .replace("size = 0", "size = 16")
-        .replace("overhead = 0", "overhead = 5")
-        .replace("\nbudget = 200\n", "\nbudget = 250\n")
-        .replace("\nbudget = 100\n", "\nbudget = 150\n")
-        .replace("\nbudget = 1000\n", "\nbudget = 1050\n");
-    let o = solve("cleanflight (transfers)", &src);
-    optimum("cleanflight (transfers)", &o);
 }
 
 /// Table II under Liu–Layland in sound mode cannot meet its limits; the

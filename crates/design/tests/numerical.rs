@@ -107,11 +107,10 @@ fn cleanflight_design_never_crashes() {
     );
 }
 
-/// The same with non-zero transfers (16 data units on both channels at
-/// bandwidth 1, 5 µs overhead: 21 µs per transfer) and budgets raised to
-/// cover them.
-#[test]
-fn cleanflight_design_with_transfers_never_crashes() {
+/// Cleanflight's design problem with non-zero transfers (16 data units on
+/// both channels at bandwidth 1, 5 µs overhead: 21 µs per transfer) and
+/// budgets raised to cover them.
+fn with_transfers() -> String {
     let src = example("cleanflight-design.toml")
         .replace("size = 0", "size = 16")
         .replace("overhead = 0", "overhead = 5")
@@ -119,7 +118,32 @@ fn cleanflight_design_with_transfers_never_crashes() {
         .replace("\nbudget = 100\n", "\nbudget = 150\n")
         .replace("\nbudget = 1000\n", "\nbudget = 1050\n");
     assert!(src.contains("size = 16") && !src.contains("budget = 200"));
-    let spec = parse("cleanflight-design (transfers)", &src);
+    src
+}
+
+/// The box search, which solves no LP, proves the optimum of the same
+/// problem.
+#[test]
+fn box_search_proves_the_transfers_optimum() {
+    let spec = parse("cleanflight-design (transfers)", &with_transfers());
+    let o = check(
+        "cleanflight-design with transfers (boxes)",
+        &spec,
+        Options {
+            method: Method::Boxes,
+            ..Options::default()
+        },
+    );
+    assert_eq!(o.status, Status::Optimal);
+    assert_eq!(o.gap, Some(0.0));
+}
+
+/// The same with non-zero transfers (16 data units on both channels at
+/// bandwidth 1, 5 µs overhead: 21 µs per transfer) and budgets raised to
+/// cover them.
+#[test]
+fn cleanflight_design_with_transfers_never_crashes() {
+    let spec = parse("cleanflight-design (transfers)", &with_transfers());
     check(
         "cleanflight-design with transfers",
         &spec,

@@ -498,6 +498,29 @@ fn nearby_choices(rng: &mut Rng, p: Nanos, c: Nanos, max: usize) -> Vec<Nanos> {
     all[first..first + size].to_vec()
 }
 
+/// The design benchmarks' problems (`rtpipe-design`'s `solve` and `sizes`
+/// benches): `tasks` tasks on 1, 2, 4 or 8 CPUs with 2, 4, 6 or 10 chains
+/// (up to 10, 30, 60 tasks and beyond), utilisation 0.5 per CPU, ranges only.
+pub fn benchmark_config(tasks: usize) -> DesignGenConfig {
+    let (cpus, chains) = match tasks {
+        0..=10 => (1, 2),
+        11..=30 => (2, 4),
+        31..=60 => (4, 6),
+        _ => (8, 10),
+    };
+    DesignGenConfig {
+        system: GenConfig {
+            tasks,
+            cpus,
+            utilization: 0.5,
+            chains,
+            ..DesignGenConfig::default().system
+        },
+        choices_fraction: 0.0,
+        ..DesignGenConfig::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
