@@ -14,12 +14,14 @@
 //! solve), `heuristic` (quick verified designs), `explain` (conflicts) and
 //! `runner` (the loop of master solves and cuts). docs/architecture.md
 //! places the crate in the workspace.
+#![deny(missing_docs)]
 
 mod bnb;
 mod domain;
 mod explain;
 mod heuristic;
 mod linear;
+/// The solver layer: a small MILP handed to good_lp (microlp, HiGHS).
 pub mod lp;
 mod master;
 mod paper;
@@ -56,6 +58,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The name the CLI's `--method` takes.
     pub fn name(self) -> &'static str {
         match self {
             Method::Auto => "auto",
@@ -65,9 +68,12 @@ impl Method {
     }
 }
 
+/// How to design: the analysis, the search, the solver and the limits.
 #[derive(Debug, Clone)]
 pub struct Options {
+    /// The analysis the chain limits are judged by.
     pub mode: Mode,
+    /// The search to run.
     pub method: Method,
     /// The MILP's solver.
     pub solver: SolverKind,
@@ -120,6 +126,7 @@ impl Default for Options {
     }
 }
 
+/// What the search proved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Status {
     /// Proven minimal.
@@ -133,6 +140,7 @@ pub enum Status {
 }
 
 impl Status {
+    /// The name printed and written to JSON.
     pub fn name(self) -> &'static str {
         match self {
             Status::Optimal => "optimal",
@@ -146,13 +154,16 @@ impl Status {
 /// One constraint of a conflicting set, and how far it would have to move.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Conflict {
+    /// The constraint, said for the user (e.g. `chain t1>t4: reaction ≤ 10`).
     pub constraint: String,
     /// What would make the rest of the set feasible, when computed.
     pub fix: Option<String>,
 }
 
+/// The answer of [`design`].
 #[derive(Debug, Clone)]
 pub struct Outcome {
+    /// What was proven.
     pub status: Status,
     /// The spec with every period fixed to the design, when one was found.
     pub spec: Option<Spec>,
@@ -166,13 +177,17 @@ pub struct Outcome {
     pub gap: Option<f64>,
     /// The search that ran: [`Method::Boxes`] or [`Method::Milp`].
     pub method: Method,
+    /// The MILP's solver (also when the box search ran).
     pub solver: SolverKind,
+    /// Wall-clock time of the search.
     pub seconds: f64,
     /// Master solves (MILP) or boxes examined (box search).
     pub iterations: usize,
     /// The most boxes the box search held open at once (memory).
     pub peak_open: usize,
+    /// A small set of constraints that cannot hold together (infeasible).
     pub conflicts: Vec<Conflict>,
+    /// What the user should know about the answer.
     pub notes: Vec<String>,
 }
 
@@ -191,13 +206,16 @@ pub enum ErrorKind {
 /// [`Outcome`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DesignError {
+    /// Whose fault it is.
     pub kind: ErrorKind,
+    /// What went wrong.
     pub message: String,
     /// What to change, when we can tell.
     pub help: Option<String>,
 }
 
 impl DesignError {
+    /// A problem with the input.
     pub fn input(message: impl Into<String>) -> Self {
         DesignError {
             kind: ErrorKind::Input,
@@ -205,6 +223,8 @@ impl DesignError {
             help: None,
         }
     }
+
+    /// A failure of the solver.
     pub fn solver(message: impl Into<String>) -> Self {
         DesignError {
             kind: ErrorKind::Solver,
@@ -212,6 +232,8 @@ impl DesignError {
             help: None,
         }
     }
+
+    /// A bug: rtpipe's model and analysis disagree.
     pub fn internal(message: impl Into<String>) -> Self {
         DesignError {
             kind: ErrorKind::Internal,
