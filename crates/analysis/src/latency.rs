@@ -21,15 +21,21 @@ pub fn eq1_single_pipe(x: Nanos, c: Nanos, t: Nanos) -> Nanos {
 /// What the link terms need to know about a task.
 #[derive(Debug, Clone, Copy)]
 pub struct LinkTask {
+    /// Budget C.
     pub c: Nanos,
+    /// Period T.
     pub t: Nanos,
+    /// Demand x = Δin + exec + Δout.
     pub x: Nanos,
+    /// Least demand x_min.
     pub x_min: Nanos,
+    /// Output overhead Δout (the Δ of Eq. 6).
     pub delta_out: Nanos,
     /// Paper Eq. 1.
     pub l: Nanos,
     /// Job response time, when it is at most the period.
     pub r: Option<Nanos>,
+    /// The CPU it runs on.
     pub cpu: u32,
     /// Own RM rank (the lowest priority the task runs at).
     pub prio: Option<usize>,
@@ -38,6 +44,7 @@ pub struct LinkTask {
 }
 
 impl LinkTask {
+    /// Task `i` as its links see it.
     pub fn new(spec: &Spec, timing: &[TaskTiming], i: usize) -> LinkTask {
         let tm = &timing[i];
         LinkTask {
@@ -196,6 +203,7 @@ pub fn distinct_passes(p: &LinkTask, c: &LinkTask, p_distinct: bool) -> bool {
 /// The bounds of one chain in one metric.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainBound {
+    /// The paper's bound (Eqs. 1–14).
     pub paper: Nanos,
     /// `None` when some task on the chain has no bounded response time.
     pub sound: Option<Nanos>,
@@ -226,6 +234,7 @@ impl Anchor {
     /// Both anchors, from-read first.
     pub const ALL: [Anchor; 2] = [Anchor::Read, Anchor::Event];
 
+    /// The name used in output and JSON.
     pub fn name(self) -> &'static str {
         match self {
             Anchor::Read => "read",
@@ -252,9 +261,12 @@ impl ChainBound {
     }
 }
 
+/// Both metrics' bounds of one chain.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainAnalysis {
+    /// Reaction time bounds.
     pub reaction: ChainBound,
+    /// Freshness time bounds.
     pub freshness: ChainBound,
     /// The paper's case of each link.
     pub cases: Vec<Case>,
@@ -293,6 +305,7 @@ fn sound_event_reaction(sched: Scheduler, lt: &[LinkTask]) -> Option<Nanos> {
     Some(sum)
 }
 
+/// The bounds of the chain along `path` (task indices, head first), given the tasks' timing.
 pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> ChainAnalysis {
     let lt: Vec<LinkTask> = path
         .iter()

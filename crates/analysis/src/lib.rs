@@ -10,6 +10,7 @@
 //!   exceeded by any execution of the model; see docs/analysis.md).
 //! - [`paths`]: the worst path between every source and sink, by dynamic
 //!   programming over the task graph.
+#![deny(missing_docs)]
 
 pub mod latency;
 pub mod paths;
@@ -32,6 +33,7 @@ pub enum Metric {
 }
 
 impl Metric {
+    /// The name used in output and JSON.
     pub fn name(self) -> &'static str {
         match self {
             Metric::Reaction => "reaction",
@@ -79,9 +81,13 @@ impl std::str::FromStr for Mode {
 /// One chain and metric, judged against its limit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainResult {
+    /// Index of the chain in `Spec::chains`.
     pub chain: usize,
+    /// Which metric.
     pub metric: Metric,
+    /// The chain's limit on it, if any.
     pub limit: Option<Nanos>,
+    /// The bounds.
     pub bound: ChainBound,
     /// The sound bound is within the limit (or there is no limit and the
     /// bound exists).
@@ -106,9 +112,13 @@ impl ChainResult {
 /// Everything `rtpipe analyze` reports.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Report {
+    /// Timing of every task, in declaration order.
     pub timing: Vec<TaskTiming>,
+    /// The schedulability verdict.
     pub schedulability: Schedulability,
+    /// Two entries per declared chain: reaction, then freshness.
     pub chains: Vec<ChainResult>,
+    /// Per declared chain, the paper's case of each link.
     pub cases: Vec<Vec<Case>>,
 }
 

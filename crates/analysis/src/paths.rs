@@ -30,23 +30,33 @@ fn add(a: Nanos, b: Option<Nanos>) -> Nanos {
 /// The worst path for one metric and mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Worst {
+    /// Task indices, source first.
     pub path: Vec<usize>,
     /// `None`: unbounded (sound mode, a task without a bounded response time).
     pub value: Option<Nanos>,
 }
 
+/// The worst paths between one source and one sink.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairBounds {
+    /// The source task.
     pub source: usize,
+    /// The sink task.
     pub sink: usize,
+    /// Worst reaction, paper mode.
     pub reaction_paper: Worst,
+    /// Worst reaction, sound mode.
     pub reaction_sound: Worst,
+    /// Worst freshness, paper mode.
     pub freshness_paper: Worst,
+    /// Worst freshness, sound mode.
     pub freshness_sound: Worst,
 }
 
+/// Every source-to-sink pair's worst paths.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AllPaths {
+    /// One entry per pair connected by a path.
     pub pairs: Vec<PairBounds>,
     /// Strongly connected components with more than one task, or a task that
     /// reads itself: their inner edges were skipped.

@@ -62,6 +62,7 @@ pub fn paper_monotone(spec: &Spec) -> bool {
 /// `value(T) ≥ base + Σ slope_i · (T_i − lo_i)` at every point T.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Affine {
+    /// The value at the box's lower corner (T = lo).
     pub base: f64,
     /// (task, slope ≥ 0); a task may appear more than once.
     pub slopes: Vec<(usize, f64)>,

@@ -18,6 +18,7 @@ pub struct TaskTiming {
     /// The highest rank the task can run at: its own, or the rank of the Main
     /// VCPU it serves (PIBS priority inheritance).
     pub top_priority: Option<usize>,
+    /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
     /// release (exact RTA under RM; T under EDF, which may deliver the budget
@@ -39,7 +40,9 @@ impl TaskTiming {
 /// The verdict of the chosen test on one CPU.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CpuVerdict {
+    /// The CPU.
     pub cpu: u32,
+    /// How many guaranteed (not background) tasks run on it.
     pub tasks: usize,
     /// Σ C/T over the CPU's guaranteed tasks.
     pub utilization: f64,
@@ -48,13 +51,18 @@ pub struct CpuVerdict {
     pub value: f64,
     /// The bound: n(2^{1/n} − 1), 2, 1 or 1.
     pub bound: f64,
+    /// It passes the test.
     pub schedulable: bool,
 }
 
+/// The verdict of the system's test on every CPU.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Schedulability {
+    /// The test.
     pub test: SchedTest,
+    /// One verdict per CPU that has tasks.
     pub cpus: Vec<CpuVerdict>,
+    /// Every CPU passes.
     pub schedulable: bool,
 }
 

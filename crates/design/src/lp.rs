@@ -10,6 +10,7 @@ use good_lp::{constraint, ResolutionError, Solution, SolutionStatus, SolverModel
 use good_lp::{variable, Expression, ProblemVariables, Variable};
 use std::fmt;
 
+/// Which MILP backend solves the master problems.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SolverKind {
     /// Pure-Rust microlp (default build).
@@ -19,12 +20,15 @@ pub enum SolverKind {
 }
 
 impl SolverKind {
+    /// The name the CLI's `--solver` takes.
     pub fn name(self) -> &'static str {
         match self {
             SolverKind::Microlp => "microlp",
             SolverKind::Highs => "highs",
         }
     }
+
+    /// Compiled into this build.
     pub fn available(self) -> bool {
         match self {
             SolverKind::Microlp => true,
@@ -33,52 +37,76 @@ impl SolverKind {
     }
 }
 
+/// A variable: its bounds and whether it is integer.
 #[derive(Debug, Clone, Copy)]
 pub struct VarDef {
+    /// Lower bound.
     pub lo: f64,
+    /// Upper bound.
     pub hi: f64,
+    /// Integer (a binary when its bounds are 0 and 1).
     pub integer: bool,
 }
 
+/// The sense of a row.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Cmp {
+    /// Σ a·x ≤ rhs.
     Le,
+    /// Σ a·x ≥ rhs.
     Ge,
+    /// Σ a·x = rhs.
     Eq,
 }
 
+/// One linear constraint `Σ a·x cmp rhs`.
 #[derive(Debug, Clone)]
 pub struct Row {
+    /// (variable, coefficient) pairs.
     pub terms: Vec<(usize, f64)>,
+    /// Its sense.
     pub cmp: Cmp,
+    /// Right-hand side.
     pub rhs: f64,
 }
 
 /// min Σ obj·x subject to rows, bounds and integrality.
 #[derive(Debug, Clone, Default)]
 pub struct Lp {
+    /// The variables, by index.
     pub vars: Vec<VarDef>,
+    /// The constraints.
     pub rows: Vec<Row>,
+    /// The objective's (variable, coefficient) pairs (minimised).
     pub obj: Vec<(usize, f64)>,
+    /// The objective's constant.
     pub obj_const: f64,
 }
 
 impl Lp {
+    /// Adds a variable; returns its index.
     pub fn var(&mut self, lo: f64, hi: f64, integer: bool) -> usize {
         self.vars.push(VarDef { lo, hi, integer });
         self.vars.len() - 1
     }
+
+    /// Adds a binary variable; returns its index.
     pub fn binary(&mut self) -> usize {
         self.var(0.0, 1.0, true)
     }
+
+    /// Adds the row `Σ terms cmp rhs`.
     pub fn row(&mut self, terms: Vec<(usize, f64)>, cmp: Cmp, rhs: f64) {
         self.rows.push(Row { terms, cmp, rhs });
     }
 }
 
+/// A solution of an [`Lp`].
 #[derive(Debug, Clone)]
 pub struct LpSolution {
+    /// The value of every variable, by index.
     pub values: Vec<f64>,
+    /// The objective there (with its constant).
     pub objective: f64,
     /// The solver proved optimality (not stopped by a limit).
     pub optimal: bool,
@@ -97,9 +125,12 @@ pub struct Limits {
     pub nodes: Option<u64>,
 }
 
+/// Why a solve gave no solution.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LpError {
+    /// Proven infeasible.
     Infeasible,
+    /// Proven unbounded.
     Unbounded,
     /// Stopped by the time limit before a solution or a proof.
     TimeLimit,
@@ -109,12 +140,16 @@ pub enum LpError {
     /// An integer variable's bounds exceed what the backend represents
     /// (microlp: the i32 range).
     TooLarge {
+        /// The variable's index.
         var: usize,
+        /// Its lower bound.
         lo: f64,
+        /// Its upper bound.
         hi: f64,
     },
     /// The solver is not compiled in.
     Unavailable(&'static str),
+    /// Any other failure of the solver, with its message.
     Other(String),
 }
 
@@ -235,6 +270,7 @@ pub struct Numerical {
 /// The answer of [`solve`] and what it cost.
 #[derive(Debug, Clone)]
 pub struct Solve {
+    /// The solution, or why there is none.
     pub result: Result<LpSolution, LpError>,
     /// Work of every attempt (branch-and-bound nodes plus one per attempt).
     pub work: u64,

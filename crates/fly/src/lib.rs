@@ -6,7 +6,9 @@
 //! sampled and actuated at exactly the instants the schedule gives, and
 //! rates the flight (`rtpipe_flight::quality`). `rtpipe fly` and the flight
 //! benchmark use it; the analysis and the simulator know nothing of it.
+#![deny(missing_docs)]
 
+/// The timing sweep: flights over scaled periods and added delays.
 pub mod sweep;
 
 use rtpipe_body::{Body, Job, Stamped};
@@ -29,7 +31,9 @@ pub const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
 /// Why a flight cannot start: what is wrong and how to fix it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FlyError {
+    /// What is wrong.
     pub msg: String,
+    /// How to fix it (may be empty).
     pub help: String,
 }
 
@@ -57,9 +61,14 @@ impl std::error::Error for FlyError {}
 /// Everything a flight needs besides the spec.
 #[derive(Clone)]
 pub struct Setup {
+    /// The vehicle.
     pub preset: Preset,
+    /// What it flies.
     pub mission: Mission,
+    /// The flight-controller role of each task's body, in declaration order
+    /// (`None`: a task without a body).
     pub roles: Vec<Option<Role>>,
+    /// How long to fly (simulated ns).
     pub horizon: Nanos,
     /// The world's options (noise, disturbances).
     pub world: CosimConfig,
@@ -67,8 +76,11 @@ pub struct Setup {
 
 /// The outcome of one flight.
 pub struct Flight {
+    /// The simulation of the schedule it flew on.
     pub sim: SimResult,
+    /// The vehicle's state over time.
     pub trace: Vec<TracePoint>,
+    /// How well it flew.
     pub quality: FlightQuality,
     /// When the housekeeping raised each battery alert level, ns.
     pub alerts: Vec<(u64, BatteryAlert)>,
@@ -142,10 +154,15 @@ pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
 /// mission (`hover`, `steps`, `paper` or a mission file), how long (default: 5 s after
 /// the mission's last step) and the seed of the noise and execution times.
 pub struct Request<'a> {
+    /// The spec's file, named in diagnostics.
     pub spec_path: &'a Path,
+    /// A built-in preset name or a preset file.
     pub vehicle: &'a str,
+    /// `hover`, `steps`, `paper` or a mission file.
     pub mission: &'a str,
+    /// How long to fly (default: 5 s after the mission's last step).
     pub horizon: Option<Nanos>,
+    /// Seed of the noise and execution times.
     pub seed: u64,
 }
 

@@ -35,12 +35,18 @@ pub enum Variation {
     /// Every guaranteed task's period × this factor.
     Scale(f64),
     /// This delay (ns) on the samples of `DELAY_LINES[line]`.
-    Delay { line: usize, ns: u64 },
+    Delay {
+        /// Index into `DELAY_LINES`.
+        line: usize,
+        /// The delay (ns).
+        ns: u64,
+    },
 }
 
 /// One flight of a sweep.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
+    /// What was varied, and by how much.
     pub variation: Variation,
     /// Per declared chain: the sound reaction and freshness bounds (from the
     /// read) of the timing flown, a pure delay included.
@@ -201,7 +207,9 @@ pub fn default_variations(spec: &Spec, s: &Setup, lo: f64, hi: f64) -> Vec<Varia
 /// first failing one (in the order given) and that failing point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Edge<'a> {
+    /// The last passing point before the first failing one.
     pub last_pass: Option<&'a Point>,
+    /// The first failing point.
     pub first_fail: Option<&'a Point>,
 }
 

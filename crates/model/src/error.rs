@@ -6,6 +6,7 @@ use std::ops::Range;
 /// One problem in a spec, located in its source text.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagnostic {
+    /// What is wrong.
     pub message: String,
     /// What to change, when we can tell.
     pub help: Option<String>,
@@ -14,6 +15,7 @@ pub struct Diagnostic {
 }
 
 impl Diagnostic {
+    /// A diagnostic at `span` (byte range in the source), without help.
     pub fn new(message: impl Into<String>, span: Option<Range<usize>>) -> Self {
         Diagnostic {
             message: message.into(),
@@ -22,6 +24,7 @@ impl Diagnostic {
         }
     }
 
+    /// Adds what to change.
     pub fn help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
         self
@@ -31,8 +34,11 @@ impl Diagnostic {
 /// All problems found in one spec file, with the text needed to show them.
 #[derive(Debug, Clone)]
 pub struct SpecError {
+    /// The file's name as shown in diagnostics.
     pub file: String,
+    /// The file's text.
     pub source: String,
+    /// Every problem found, in source order where known.
     pub diagnostics: Vec<Diagnostic>,
 }
 
@@ -57,6 +63,7 @@ impl SpecError {
     }
 }
 
+/// 1-based line and column (in characters) of a byte offset in `source`.
 pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(source.len());
     let mut line = 1;

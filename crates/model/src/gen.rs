@@ -16,9 +16,11 @@ use crate::{
 pub struct Rng(u64);
 
 impl Rng {
+    /// A generator seeded with `seed`.
     pub fn new(seed: u64) -> Rng {
         Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
     }
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
@@ -34,6 +36,7 @@ impl Rng {
     pub fn range(&mut self, lo: u64, hi: u64) -> u64 {
         lo + self.next_u64() % (hi - lo + 1)
     }
+    /// True with probability `p`.
     pub fn chance(&mut self, p: f64) -> bool {
         self.unit() < p
     }
@@ -81,10 +84,13 @@ pub fn uunifast(rng: &mut Rng, n: usize, u: f64) -> Vec<f64> {
 /// What to generate.
 #[derive(Debug, Clone)]
 pub struct GenConfig {
+    /// Number of tasks.
     pub tasks: usize,
+    /// Number of CPUs.
     pub cpus: u32,
     /// Total utilisation per CPU (budgets over periods).
     pub utilization: f64,
+    /// The scheduler of the generated system.
     pub scheduler: Scheduler,
     /// Fraction of tasks with no producer.
     pub source_fraction: f64,

@@ -7,6 +7,7 @@
 //! [`Spec::parse`] turns TOML into a validated [`Spec`] or a [`SpecError`] that
 //! names file, line and column of every problem and how to fix it. It never
 //! panics, whatever the input.
+#![deny(missing_docs)]
 
 mod error;
 pub mod gen;
@@ -36,6 +37,7 @@ pub enum Scheduler {
 }
 
 impl Scheduler {
+    /// The name used in specs and output.
     pub fn name(self) -> &'static str {
         match self {
             Scheduler::Rm => "rm",
@@ -58,6 +60,7 @@ pub enum SchedTest {
 }
 
 impl SchedTest {
+    /// The name used in specs and output.
     pub fn name(self) -> &'static str {
         match self {
             SchedTest::LiuLayland => "liu-layland",
@@ -82,6 +85,7 @@ pub enum Server {
 }
 
 impl Server {
+    /// The name used in specs and output.
     pub fn name(self) -> &'static str {
         match self {
             Server::Main => "main",
@@ -95,6 +99,7 @@ impl Server {
 /// A communication channel (pipe end): shared memory, SPI, I2C, …
 #[derive(Debug, Clone, PartialEq)]
 pub struct Channel {
+    /// Its name in the spec.
     pub name: String,
     /// W: data units per time unit of the spec.
     pub bandwidth: f64,
@@ -105,17 +110,22 @@ pub struct Channel {
 /// Data moved over one channel by one transfer.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Port {
+    /// The channel (index into `Spec::channels`).
     pub channel: usize,
+    /// Data units moved per transfer (the channel's bandwidth is per time unit).
     pub size: f64,
 }
 
 /// Where the period of a task comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum PeriodSpec {
+    /// A fixed period.
     Fixed(Nanos),
     /// A design variable in [min, max] (either end may be open).
     Range {
+        /// Lower end.
         min: Option<Nanos>,
+        /// Upper end.
         max: Option<Nanos>,
     },
     /// A design variable taking one of these values.
@@ -124,8 +134,10 @@ pub enum PeriodSpec {
     Free,
 }
 
+/// A task (one pipe, Section III-C), validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Task {
+    /// Its name in the spec.
     pub name: String,
     /// p: worst-case uninterrupted processing time.
     pub exec: Nanos,
@@ -138,10 +150,13 @@ pub struct Task {
     pub output: Option<Port>,
     /// Producers this task reads, in declaration order.
     pub reads: Vec<usize>,
+    /// Where its period comes from.
     pub period: PeriodSpec,
     /// C. `None` = Step 1 of Section IV-B: C = Δin + p + Δout.
     pub budget_given: Option<Nanos>,
+    /// The server that provides its budget.
     pub server: Server,
+    /// The CPU it runs on.
     pub cpu: u32,
     /// I/O VCPUs only: the Main VCPU this one serves. While that task has a
     /// job pending, the I/O VCPU inherits its priority (PIBS, Section II-B).
@@ -210,25 +225,36 @@ impl Task {
 /// A path along edges (producer → consumer) with optional limits.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chain {
+    /// Its name, when the spec gives one.
     pub name: Option<String>,
+    /// Task indices, head first.
     pub path: Vec<usize>,
+    /// Limit on the reaction time.
     pub reaction: Option<Nanos>,
+    /// Limit on the freshness time.
     pub freshness: Option<Nanos>,
 }
 
 /// A validated system.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spec {
+    /// The system's name.
     pub name: String,
+    /// The unit of bare numbers in the spec (and of the output).
     pub time_unit: TimeUnit,
+    /// The scheduler of every CPU.
     pub scheduler: Scheduler,
+    /// The schedulability test applied.
     pub schedulability: SchedTest,
     /// Design: periods are integer multiples of this (default 1 time unit).
     pub resolution: Nanos,
     /// Design: every pair of periods divides one another.
     pub harmonic: bool,
+    /// The channels, in declaration order.
     pub channels: Vec<Channel>,
+    /// The tasks, in declaration order.
     pub tasks: Vec<Task>,
+    /// The declared chains.
     pub chains: Vec<Chain>,
 }
 
@@ -321,6 +347,7 @@ impl Spec {
         }
     }
 
+    /// The index of the task called `name`.
     pub fn task_index(&self, name: &str) -> Option<usize> {
         self.tasks.iter().position(|t| t.name == name)
     }

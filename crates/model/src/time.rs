@@ -12,13 +12,18 @@ pub type Nanos = i64;
 /// The unit that bare numbers in a spec are expressed in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TimeUnit {
+    /// Nanoseconds.
     Ns,
+    /// Microseconds.
     Us,
+    /// Milliseconds.
     Ms,
+    /// Seconds.
     S,
 }
 
 impl TimeUnit {
+    /// Every unit, smallest first.
     pub const ALL: [TimeUnit; 4] = [TimeUnit::Ns, TimeUnit::Us, TimeUnit::Ms, TimeUnit::S];
 
     /// Nanoseconds in one unit.
@@ -31,6 +36,7 @@ impl TimeUnit {
         }
     }
 
+    /// The unit's symbol, as written in specs (`ns`, `us`, `ms`, `s`).
     pub fn name(self) -> &'static str {
         match self {
             TimeUnit::Ns => "ns",

@@ -28,6 +28,7 @@ pub enum Policy {
 }
 
 impl Policy {
+    /// The name the CLI's `--policy` takes.
     pub fn name(self) -> &'static str {
         match self {
             Policy::Fifo => "fifo",
@@ -42,6 +43,7 @@ impl Policy {
 pub struct RunConfig {
     /// Releases happen in [0, duration) after the epoch.
     pub duration: Nanos,
+    /// The scheduling policy of the task threads.
     pub policy: Policy,
     /// Background CPU hogs (SCHED_OTHER) running for the whole run.
     pub load: usize,
@@ -60,8 +62,11 @@ pub enum ErrorKind {
 /// Why a run could not start: the task, what is wrong, how to fix it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunError {
+    /// Whose fault it is.
     pub kind: ErrorKind,
+    /// What is wrong.
     pub msg: String,
+    /// How to fix it.
     pub help: String,
 }
 
@@ -107,7 +112,9 @@ pub struct RunResult {
     /// exhaustions = budget overruns), the chains, the job log. Times are
     /// relative to the common epoch.
     pub sim: SimResult,
+    /// Per task: what its thread measured, in declaration order.
     pub tasks: Vec<TaskRun>,
+    /// The policy it ran under.
     pub policy: Policy,
     /// Background hogs that ran ([`RunConfig::load`]).
     pub load: usize,

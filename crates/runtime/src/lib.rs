@@ -4,6 +4,7 @@
 //! under `SCHED_FIFO` (rate-monotonic priorities) or `SCHED_DEADLINE`, tasks
 //! communicating through Simpson's four-slot registers ([`four_slot`]), one
 //! per (producer, consumer) edge. docs/runtime.md describes the design.
+#![deny(missing_docs)]
 
 pub mod exec;
 pub mod four_slot;

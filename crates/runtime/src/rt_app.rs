@@ -12,7 +12,9 @@ use serde_json::{json, Map, Value};
 /// The rt-app file and notes on what it rounds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RtApp {
+    /// The rt-app JSON document.
     pub json: Value,
+    /// What the translation rounds or leaves out.
     pub notes: Vec<String>,
 }
 

@@ -14,6 +14,7 @@ pub struct SeqLock<const N: usize> {
 }
 
 impl<const N: usize> SeqLock<N> {
+    /// A seqlock holding `v`.
     pub fn new(v: [u64; N]) -> Self {
         SeqLock {
             seq: AtomicU64::new(0),

@@ -8,6 +8,7 @@ use std::hint::black_box;
 /// A spin loop calibrated at start-up: how many iterations take 1 µs of CPU.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spin {
+    /// Loop iterations per microsecond of CPU.
     pub iters_per_us: f64,
 }
 

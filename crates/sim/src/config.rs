@@ -32,13 +32,16 @@ pub enum ExecModel {
     Extremes,
 }
 
+/// How to run a simulation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SimConfig {
     /// Simulated time; events after it are not processed.
     pub horizon: Nanos,
     /// Seeds offsets ([`Phasing::Random`], [`Phasing::Grid`]) and demands.
     pub seed: u64,
+    /// When each task is first released.
     pub phasing: Phasing,
+    /// Which demand each job gets.
     pub exec: ExecModel,
     /// Keep a [`JobRecord`] of every completed job (memory grows with the horizon).
     pub log_jobs: bool,
@@ -57,17 +60,23 @@ impl SimConfig {
     }
 }
 
+/// Why a simulation cannot run.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SimError {
     /// The task has no fixed positive period, so it cannot be released.
     NoPeriod(String),
+    /// The horizon is not positive.
     HorizonNotPositive(Nanos),
     /// `Phasing::Given` needs one non-negative offset per task.
     BadOffsets {
+        /// Offsets needed: one per task.
         expected: usize,
+        /// Offsets given.
         found: usize,
     },
+    /// A task's offset is negative.
     NegativeOffset(String),
+    /// The `Phasing::Grid` step is not positive.
     GridNotPositive(Nanos),
     /// A chain names a task index that does not exist.
     BadChain(usize),

@@ -40,6 +40,7 @@
 //! tail output carrying a sample read at or after the event, which need not
 //! be the event's own sample (it may be overwritten before it is used); its
 //! freshness is the previous head read to the sample's last tail output.
+#![deny(missing_docs)]
 
 mod bodies;
 mod config;

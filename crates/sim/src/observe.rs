@@ -10,12 +10,15 @@ use rtpipe_model::{Nanos, Spec, MAX_TIME};
 /// Distribution of the observations of one quantity.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Summary {
+    /// How many observations.
     pub count: usize,
+    /// The smallest.
     pub min: Nanos,
     /// In nanoseconds, not rounded.
     pub mean: f64,
     /// Nearest-rank 99th percentile.
     pub p99: Nanos,
+    /// The largest.
     pub max: Nanos,
 }
 
@@ -42,8 +45,11 @@ impl Summary {
 /// Observations of one quantity against its bounds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Judged {
+    /// The observations, `None` when there were none.
     pub observed: Option<Summary>,
+    /// The paper bound.
     pub paper: Nanos,
+    /// The sound bound, `None` when it does not exist.
     pub sound: Option<Nanos>,
     /// Observations above the paper bound.
     pub over_paper: usize,
@@ -68,9 +74,13 @@ impl Judged {
 /// the head's read and from the event.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainObs {
+    /// Index of the chain in `Spec::chains`.
     pub chain: usize,
+    /// Which metric.
     pub metric: Metric,
+    /// Measured from the head's read.
     pub read: Judged,
+    /// Measured from the event.
     pub event: Judged,
 }
 

@@ -8,7 +8,9 @@ use rtpipe_model::{Nanos, Spec};
 /// The sample carried for one chain position by a job.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Carried {
+    /// Index of the chain in `Spec::chains`.
     pub chain: usize,
+    /// The task's position on that chain (0 = head).
     pub pos: usize,
     /// `None` when the producer had not published yet.
     pub sample: Option<u64>,
@@ -17,10 +19,13 @@ pub struct Carried {
 /// One completed job.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct JobRecord {
+    /// The task.
     pub task: usize,
     /// k of the k-th release, from 0.
     pub index: u64,
+    /// Release instant.
     pub release: Nanos,
+    /// Its demand (CPU time needed).
     pub demand: Nanos,
     /// First got the CPU (read instant).
     pub read: Nanos,
@@ -33,6 +38,7 @@ pub struct JobRecord {
 /// The life of one sample at the tail of a chain, as one observation saw it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Witness {
+    /// The sample's id.
     pub sample: u64,
     /// The instant the latency is measured from: the head's read of the
     /// sample (from-read quantities), or the head read before it (from-event
@@ -41,13 +47,16 @@ pub struct Witness {
     /// First and last tail publishes of the observation. From-event
     /// reaction: the first tail publish carrying `sample` or a newer one.
     pub first: Nanos,
+    /// The last tail publish of the observation.
     pub last: Nanos,
 }
 
 impl Witness {
+    /// First tail publish minus the anchor: the reaction time.
     pub fn reaction(&self) -> Nanos {
         self.first - self.read
     }
+    /// Last tail publish minus the anchor: the freshness time.
     pub fn freshness(&self) -> Nanos {
         self.last - self.read
     }
@@ -80,6 +89,7 @@ impl Observed {
     }
 }
 
+/// What one chain's samples did.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ChainStats {
     /// Samples created by the head (head reads).
@@ -116,9 +126,12 @@ impl ChainStats {
     }
 }
 
+/// What one task's jobs did.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct TaskStats {
+    /// Jobs released.
     pub released: u64,
+    /// Jobs completed.
     pub completed: u64,
     /// Largest finish − release over completed jobs.
     pub max_response: Option<Nanos>,
@@ -136,18 +149,24 @@ pub struct TaskStats {
 pub struct Segment {
     /// Dense CPU index (CPUs in ascending order of their ids).
     pub cpu: usize,
+    /// The task.
     pub task: usize,
+    /// Its job (release index, from 0).
     pub job: u64,
+    /// Start of the slice.
     pub start: Nanos,
+    /// End of the slice.
     pub end: Nanos,
     /// Ran in slack at background priority (a sporadic server out of budget).
     pub background: bool,
 }
 
+/// Everything a run measured.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SimResult {
     /// The offsets used (replay a random phasing with [`Phasing::Given`]).
     pub offsets: Vec<Nanos>,
+    /// Per task, in declaration order.
     pub tasks: Vec<TaskStats>,
     /// Indexed like `spec.chains`.
     pub chains: Vec<ChainStats>,

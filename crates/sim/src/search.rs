@@ -49,6 +49,7 @@ pub const EXEC_MODELS: [ExecModel; 4] = [
 pub struct Candidate {
     /// φ_i in [0, T_i), one per task.
     pub offsets: Vec<Nanos>,
+    /// The demand model of the run.
     pub exec: ExecModel,
     /// Seeds the demand draws of [`ExecModel::Extremes`] and [`ExecModel::Uniform`].
     pub seed: u64,
@@ -67,10 +68,12 @@ impl Candidate {
     }
 }
 
+/// What to search for, and how long.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SearchConfig {
     /// Index into `spec.chains` of the chain whose latency is maximised.
     pub chain: usize,
+    /// Which metric is maximised.
     pub metric: Metric,
     /// Measured from the head's read or from the event.
     pub anchor: Anchor,
@@ -80,6 +83,7 @@ pub struct SearchConfig {
     pub steps: u32,
     /// Simulated span of every run.
     pub horizon: Nanos,
+    /// Seeds the search's random choices.
     pub seed: u64,
     /// Starting points of the first restarts (say, the worst runs of an
     /// earlier experiment); further restarts start from generated points.
@@ -107,14 +111,20 @@ impl SearchConfig {
 pub struct Progress {
     /// Simulations run so far (1 = the first one).
     pub simulation: u64,
+    /// The restart in which it was found.
     pub restart: u32,
+    /// The best value then.
     pub value: Nanos,
 }
 
+/// The worst latency the search found, and how.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SearchResult {
+    /// Index into `spec.chains`.
     pub chain: usize,
+    /// The metric.
     pub metric: Metric,
+    /// The anchor it is measured from.
     pub anchor: Anchor,
     /// The longest latency found; `None` when no run finalised a sample of
     /// the chain (the horizon is too short).
@@ -134,6 +144,7 @@ pub struct SearchResult {
     pub trajectory: Vec<Progress>,
     /// The analysis' bounds for this chain, metric and anchor.
     pub sound: Option<Nanos>,
+    /// The paper bound.
     pub paper: Option<Nanos>,
 }
 

@@ -17,7 +17,9 @@ use std::collections::VecDeque;
 /// One replenishment: `amount` of budget usable from `time` on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Refill {
+    /// When the budget becomes usable.
     pub time: Nanos,
+    /// How much.
     pub amount: Nanos,
 }
 
@@ -27,11 +29,15 @@ pub const MAX_REFILLS: usize = 32;
 /// Sporadic server (Main VCPU).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Sporadic {
+    /// Budget C.
     pub budget: Nanos,
+    /// Period T.
     pub period: Nanos,
+    /// Pending replenishments.
     pub queue: VecDeque<Refill>,
     /// Budget consumed from the head since it was last charged.
     pub usage: Nanos,
+    /// The most entries the queue may hold.
     pub max_refills: usize,
 }
 
@@ -213,7 +219,9 @@ impl Sporadic {
 /// bandwidth away or takes it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Pibs {
+    /// Budget C.
     pub budget: Nanos,
+    /// Period T.
     pub period: Nanos,
     /// Eligibility time × C.
     eligible_scaled: i128,
@@ -222,6 +230,7 @@ pub struct Pibs {
 }
 
 impl Pibs {
+    /// A server with budget C and period T.
     pub fn new(budget: Nanos, period: Nanos) -> Pibs {
         Pibs {
             budget,
@@ -274,15 +283,20 @@ impl Pibs {
 /// scheduled by absolute deadline.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Cbs {
+    /// Budget C.
     pub budget: Nanos,
+    /// Period T.
     pub period: Nanos,
+    /// The current absolute deadline.
     pub deadline: Nanos,
+    /// Runtime left (negative after an overrun).
     pub runtime: Nanos,
     /// Throttled until this instant (runtime exhausted).
     pub throttled_until: Option<Nanos>,
 }
 
 impl Cbs {
+    /// A server with budget C and period T, not yet woken (no runtime).
     pub fn new(budget: Nanos, period: Nanos) -> Cbs {
         Cbs {
             budget,
@@ -311,6 +325,7 @@ impl Cbs {
         }
     }
 
+    /// Runtime usable at `now` (0 while throttled).
     pub fn capacity(&self, now: Nanos) -> Nanos {
         match self.throttled_until {
             Some(t) if now < t => 0,
@@ -341,6 +356,7 @@ impl Cbs {
         }
     }
 
+    /// When the throttled server gets its budget back, if it is throttled.
     pub fn next_refill(&self) -> Option<Nanos> {
         self.throttled_until
     }

@@ -56,6 +56,7 @@ impl Default for TraceOptions {
 /// A rendered trace and what was left out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trace {
+    /// The Chrome trace-event JSON.
     pub json: String,
     /// Trace events written (metadata included).
     pub events: usize,

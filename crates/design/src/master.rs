@@ -1,0 +1,456 @@
+//! The master problem: variables, objective, schedulability rows and the
+//! chain limits (built from the encodings in `paper`, `sound` and `rta`).
+
+use crate::domain::{gu, harmonic_pair, Dom};
+use crate::linear::{Bin, Lin};
+use crate::lp::{Cmp, Lp, SolverKind};
+use crate::paper::paper_chain;
+use crate::rta::{add_rta_cut, Levels, RtaCut};
+use crate::runner::Runner;
+use crate::sound::{add_r_cut, rmax_of, sound_chain, SoundModel};
+use rtpipe_analysis::Metric;
+use rtpipe_model::{SchedTest, Scheduler, Server, Spec};
+use std::collections::HashMap;
+
+/// Ranges of at most this many grid steps get every tangent up front.
+pub(crate) const DENSE_TANGENTS: i64 = 128;
+
+/// The master problem and its bookkeeping.
+pub(crate) struct Master<'a> {
+    pub(crate) spec: &'a Spec,
+    pub(crate) g: i64,
+    pub(crate) dom: Vec<Dom>,
+    pub(crate) lp: Lp,
+    /// Period expression per task (grid units).
+    pub(crate) period: Vec<Lin>,
+    /// Grid variable k per Grid task; choice binaries per Choice task.
+    pub(crate) kvar: Vec<Option<usize>>,
+    pub(crate) yvars: Vec<Vec<usize>>,
+    /// Utilisation (and hyperbolic log term) per task.
+    pub(crate) util: Vec<Lin>,
+    pub(crate) uvar: Vec<Option<usize>>,
+    pub(crate) hlog: Vec<Lin>,
+    pub(crate) hvar: Vec<Option<usize>>,
+    pub(crate) lt_cache: HashMap<(usize, usize, bool), Bin>,
+    pub(crate) big_m: f64,
+    /// Response-time variables (sound mode, RM).
+    pub(crate) rvar: Vec<Option<usize>>,
+    /// Valid lower ends of option variables (for their big-Ms).
+    pub(crate) floor: HashMap<usize, f64>,
+    /// Declare the option variables' bounds (see `sound_chain`).
+    pub(crate) tight_bounds: bool,
+    /// Every chain bound added, as the model writes it.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) chains: Vec<ChainExpr>,
+}
+
+/// Which constraint groups are active (for the conflict search).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Group {
+    Limit(usize, Metric),
+    Sched(u32),
+}
+
+impl<'a> Master<'a> {
+    pub(crate) fn guaranteed(&self, i: usize) -> bool {
+        self.spec.tasks[i].server != Server::Background
+    }
+
+    pub(crate) fn lt(&mut self, a: usize, b: usize, tie_true: bool) -> Bin {
+        if let Some(&bin) = self.lt_cache.get(&(a, b, tie_true)) {
+            return bin;
+        }
+        let (da, db) = (&self.dom[a], &self.dom[b]);
+        // 1 ⟺ T_a < T_b, or T_a = T_b and tie_true.
+        let bin = if da.max() < db.min() || (tie_true && da.max() <= db.min()) {
+            Bin::Const(true)
+        } else if da.min() > db.max() || (!tie_true && da.min() >= db.max()) {
+            Bin::Const(false)
+        } else {
+            let z = self.lp.binary();
+            let d1 = if tie_true { 0.0 } else { 1.0 };
+            let d0 = if tie_true { 1.0 } else { 0.0 };
+            // z = 1 ⇒ T_a − T_b ≤ −d1;  z = 0 ⇒ T_a − T_b ≥ d0, with the
+            // smallest big-M that the period domains allow.
+            let diff = self.period[a].plus(&self.period[b].scale(-1.0));
+            let (hi, lo) = ((da.max() - db.min()) as f64, (da.min() - db.max()) as f64);
+            let m1 = (hi + d1).max(0.0);
+            let m0 = (d0 - lo).max(0.0);
+            let mut t = diff.terms.clone();
+            t.push((z, m1));
+            self.lp.row(t, Cmp::Le, -d1 - diff.c + m1);
+            let mut t = diff.terms.clone();
+            t.push((z, m0));
+            self.lp.row(t, Cmp::Ge, d0 - diff.c);
+            Bin::Var(z)
+        };
+        self.lt_cache.insert((a, b, tie_true), bin);
+        bin
+    }
+
+    /// A binary b with b = 1 ⇒ T_j ≥ tj + 1 ("the period of j grew past its
+    /// value in a cut"); `None` when it cannot grow.
+    pub(crate) fn grew(&mut self, j: usize, tj: i64) -> Option<usize> {
+        if matches!(self.dom[j], Dom::Fixed(_)) || self.dom[j].max() <= tj {
+            return None;
+        }
+        let b = self.lp.binary();
+        let p = self.period[j].clone();
+        let mut t = p.terms.clone();
+        t.push((b, -self.big_m));
+        self.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - self.big_m);
+        Some(b)
+    }
+
+    /// RM priority: a ≻ b.
+    pub(crate) fn above(&mut self, a: usize, b: usize) -> Bin {
+        self.lt(a, b, a < b)
+    }
+
+    /// Adds `lhs ≥ opt − M·(Σ off)` where `off` are 0/1 expressions that
+    /// switch the option off when 1.
+    pub(crate) fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
+        // Switched off, the row must allow every value: M ≥ max(opt) − min(lhs).
+        // (One grid unit of slack keeps microlp's pivots away from degenerate ties.)
+        let lo = self
+            .floor
+            .get(&lhs)
+            .copied()
+            .unwrap_or(self.lp.vars[lhs].lo);
+        let m = (opt.max_in(&self.lp) - lo + 1.0).clamp(1.0, self.big_m);
+        let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
+        terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
+        let mut rhs = opt.c;
+        for &(b, negate) in off {
+            // negate = false: off when b = 1; negate = true: off when b = 0.
+            match (b, negate) {
+                (Bin::Const(v), false) => {
+                    if v {
+                        return;
+                    }
+                }
+                (Bin::Const(v), true) => {
+                    if !v {
+                        return;
+                    }
+                }
+                (Bin::Var(z), false) => terms.push((z, m)),
+                (Bin::Var(z), true) => {
+                    terms.push((z, -m));
+                    rhs -= m;
+                }
+            }
+        }
+        self.lp.row(terms, Cmp::Ge, rhs);
+    }
+}
+
+/// A chain's bound as the model writes it, for the test that the encoding
+/// agrees with the analysis: paper mode one sum; sound mode the sums E
+/// (anchored on publishes) and F (on reads), reaction being min(E, F).
+#[cfg_attr(not(test), allow(dead_code))]
+#[derive(Debug, Clone)]
+pub(crate) struct ChainExpr {
+    pub(crate) chain: usize,
+    pub(crate) metric: Metric,
+    pub(crate) sums: Vec<Lin>,
+}
+
+impl<'a> Master<'a> {
+    /// An empty master over the runner's domains.
+    fn new(run: &Runner<'a>) -> Self {
+        let n = run.spec.tasks.len();
+        Master {
+            spec: run.spec,
+            g: run.g,
+            dom: run.dom.clone(),
+            lp: Lp::default(),
+            period: Vec::with_capacity(n),
+            kvar: vec![None; n],
+            yvars: vec![Vec::new(); n],
+            util: Vec::with_capacity(n),
+            uvar: vec![None; n],
+            hlog: Vec::with_capacity(n),
+            hvar: vec![None; n],
+            lt_cache: HashMap::new(),
+            big_m: run.big_m,
+            rvar: vec![None; n],
+            floor: HashMap::new(),
+            tight_bounds: run.opts.solver == SolverKind::Highs,
+            chains: Vec::new(),
+        }
+    }
+
+    /// The period, utilisation and hyperbolic term of every task; the
+    /// objective Σ u over guaranteed tasks (also returned).
+    fn add_periods(&mut self, oa_points: &[Vec<i64>]) -> Vec<(usize, f64)> {
+        for (i, pts) in oa_points.iter().enumerate() {
+            let c = self.spec.tasks[i].budget() as f64;
+            match self.dom[i].clone() {
+                Dom::Fixed(t) => {
+                    self.period.push(Lin::constant(t as f64));
+                    let u = c / (t * self.g) as f64;
+                    self.util.push(Lin::constant(u));
+                    self.hlog.push(Lin::constant((1.0 + u).ln()));
+                }
+                Dom::Choice(v) => self.add_choice(i, c, &v),
+                Dom::Grid { step, lo, hi } => self.add_grid(i, c, (step, lo, hi), pts),
+            }
+        }
+        let mut objective: Vec<(usize, f64)> = Vec::new();
+        let mut obj_const = 0.0;
+        for i in (0..self.spec.tasks.len()).filter(|&i| self.guaranteed(i)) {
+            objective.extend_from_slice(&self.util[i].terms);
+            obj_const += self.util[i].c;
+        }
+        self.lp.obj = objective.clone();
+        self.lp.obj_const = obj_const;
+        objective
+    }
+
+    /// A choice domain: one binary per choice, exactly one set.
+    fn add_choice(&mut self, i: usize, c: f64, v: &[i64]) {
+        let g = self.g;
+        let ys: Vec<usize> = v.iter().map(|_| self.lp.binary()).collect();
+        self.lp
+            .row(ys.iter().map(|&y| (y, 1.0)).collect(), Cmp::Eq, 1.0);
+        let per = |f: &dyn Fn(i64) -> f64| Lin {
+            terms: ys.iter().zip(v).map(|(&y, &t)| (y, f(t))).collect(),
+            c: 0.0,
+        };
+        self.period.push(per(&|t| t as f64));
+        self.util.push(per(&|t| c / (t * g) as f64));
+        self.hlog.push(per(&|t| (1.0 + c / (t * g) as f64).ln()));
+        self.yvars[i] = ys;
+    }
+
+    /// A range of grid steps: an integer k, and the utilisation and
+    /// hyperbolic term under-approximated by tangents.
+    fn add_grid(&mut self, i: usize, c: f64, (step, lo, hi): (i64, i64, i64), oa: &[i64]) {
+        let k = self.lp.var(lo as f64, hi as f64, true);
+        self.kvar[i] = Some(k);
+        self.period.push(Lin {
+            terms: vec![(k, step as f64)],
+            c: 0.0,
+        });
+        let u = self.lp.var(0.0, 1e6, false);
+        let h = self.lp.var(0.0, 1e6, false);
+        self.uvar[i] = Some(u);
+        self.hvar[i] = Some(h);
+        self.util.push(Lin {
+            terms: vec![(u, 1.0)],
+            c: 0.0,
+        });
+        self.hlog.push(Lin {
+            terms: vec![(h, 1.0)],
+            c: 0.0,
+        });
+        // Outer approximation of U = a / k (a = C / (step·g)) and of
+        // ln(1 + a/k): tangents, valid since both are convex in k.
+        let a = c / (step * self.g) as f64;
+        for k0 in tangent_points(lo, hi, oa) {
+            if k0 < lo.max(1) || k0 > hi {
+                continue;
+            }
+            let k0 = k0 as f64;
+            // U ≥ 2a/k0 − a·k/k0²
+            self.lp
+                .row(vec![(u, 1.0), (k, a / (k0 * k0))], Cmp::Ge, 2.0 * a / k0);
+            // ln(1 + a/k) ≥ ln(1 + a/k0) − a/(k0 (k0 + a))·(k − k0)
+            let s = a / (k0 * (k0 + a));
+            self.lp.row(
+                vec![(h, 1.0), (k, s)],
+                Cmp::Ge,
+                (1.0 + a / k0).ln() + s * k0,
+            );
+        }
+    }
+
+    /// No two choices that are not harmonic (fixed ones are filtered).
+    fn forbid_non_harmonic(&mut self) {
+        let n = self.spec.tasks.len();
+        for a in 0..n {
+            for b in a + 1..n {
+                let (Dom::Choice(va), Dom::Choice(vb)) = (&self.dom[a], &self.dom[b]) else {
+                    continue;
+                };
+                for (x, &p) in va.iter().enumerate() {
+                    for (y, &q) in vb.iter().enumerate() {
+                        if !harmonic_pair(p, q) {
+                            let (ya, yb) = (self.yvars[a][x], self.yvars[b][y]);
+                            self.lp.row(vec![(ya, 1.0), (yb, 1.0)], Cmp::Le, 1.0);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Schedulability per CPU: Σ U ≤ 1 is necessary for any test; an
+    /// active group adds the test's bound (Liu–Layland, hyperbolic).
+    fn add_sched(&mut self, groups: &[Group]) {
+        let spec = self.spec;
+        let n = spec.tasks.len();
+        let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+        cpus.sort_unstable();
+        cpus.dedup();
+        for &cpu in &cpus {
+            let ids: Vec<usize> = (0..n)
+                .filter(|&i| spec.tasks[i].cpu == cpu && self.guaranteed(i))
+                .collect();
+            let sched_on = groups.contains(&Group::Sched(cpu));
+            let sum_u = ids
+                .iter()
+                .fold(Lin::default(), |acc, &i| acc.plus(&self.util[i]));
+            let bound = match (sched_on, spec.schedulability) {
+                (true, SchedTest::LiuLayland) => {
+                    let k = ids.len().max(1) as f64;
+                    k * (2f64.powf(1.0 / k) - 1.0)
+                }
+                _ => 1.0,
+            };
+            self.lp.row(sum_u.terms.clone(), Cmp::Le, bound - sum_u.c);
+            if sched_on && spec.schedulability == SchedTest::Hyperbolic {
+                let sum_h = ids
+                    .iter()
+                    .fold(Lin::default(), |acc, &i| acc.plus(&self.hlog[i]));
+                self.lp
+                    .row(sum_h.terms.clone(), Cmp::Le, 2f64.ln() - sum_h.c);
+            }
+        }
+    }
+
+    /// Exact RTA where the levels fit: budget-level R_i ≥ W_i(R_i),
+    /// R_i ≤ T_i; and the older cuts of failed candidates.
+    fn add_rta(&mut self, groups: &[Group], levels: &Levels, cuts: &[RtaCut]) {
+        let spec = self.spec;
+        let tested: Vec<bool> = (0..spec.tasks.len())
+            .map(|i| self.guaranteed(i) && groups.contains(&Group::Sched(spec.tasks[i].cpu)))
+            .collect();
+        for i in (0..spec.tasks.len()).filter(|&i| tested[i]) {
+            let rmax = self.dom[i].max() as f64;
+            let r = self.lp.var(0.0, rmax, false);
+            self.at_most_period(i, r);
+            let own = gu(spec.tasks[i].budget(), self.g);
+            self.rta_levels(i, r, own, rmax, levels, true);
+        }
+        for cut in cuts {
+            if groups.contains(&Group::Sched(spec.tasks[cut.i].cpu)) {
+                add_rta_cut(self, cut);
+            }
+        }
+    }
+
+    /// T_i ≥ r.
+    fn at_most_period(&mut self, i: usize, r: usize) {
+        let mut t = self.period[i].terms.clone();
+        t.push((r, -1.0));
+        self.lp.row(t, Cmp::Ge, -self.period[i].c);
+    }
+
+    /// Sound mode: job response-time variables of the chain tasks with
+    /// their lower bounds, every chain task finishing within its period
+    /// (T ≥ R), and the recurrence R_i ≥ W_i(R_i) with a binary per job of
+    /// each higher-priority task (docs/design.md); not when the response
+    /// times are pinned.
+    fn add_responses(&mut self, groups: &[Group], sm: &SoundModel, run: &Runner) {
+        let n = self.spec.tasks.len();
+        for i in (0..n).filter(|&i| run.on_chain[i]) {
+            let r = match &sm.fixed {
+                Some(f) => self.lp.var(f[i], f[i], false),
+                None => {
+                    let hi = rmax_of(self, groups, i).max(sm.rlow[i]);
+                    self.lp.var(sm.rlow[i], hi, false)
+                }
+            };
+            self.rvar[i] = Some(r);
+            self.at_most_period(i, r);
+        }
+        if sm.fixed.is_some() {
+            return;
+        }
+        for i in (0..n).filter(|&i| run.on_chain[i]) {
+            let Some(r) = self.rvar[i] else { continue };
+            let rmax = rmax_of(self, groups, i);
+            let own = gu(self.spec.tasks[i].demand(), self.g);
+            self.rta_levels(i, r, own, rmax, &run.levels, false);
+        }
+        for cut in &sm.cuts {
+            add_r_cut(self, cut);
+        }
+    }
+
+    /// Every active chain limit, in the mode's encoding.
+    fn add_limits(&mut self, groups: &[Group], sound: Option<&SoundModel>) {
+        let spec = self.spec;
+        for (k, ch) in spec.chains.iter().enumerate() {
+            for metric in [Metric::Reaction, Metric::Freshness] {
+                let limit = match metric {
+                    Metric::Reaction => ch.reaction,
+                    Metric::Freshness => ch.freshness,
+                };
+                let Some(limit) = limit else { continue };
+                if !groups.contains(&Group::Limit(k, metric)) {
+                    continue;
+                }
+                let l = gu(limit, self.g);
+                let sums = match sound {
+                    None => vec![paper_chain(self, &ch.path, metric, l)],
+                    Some(_) => sound_chain(self, &ch.path, metric, l),
+                };
+                self.chains.push(ChainExpr {
+                    chain: k,
+                    metric,
+                    sums,
+                });
+            }
+        }
+    }
+}
+
+/// The tangent points of a range [lo, hi] of grid steps: every point of a
+/// small range; else the ends, the middle and doublings from lo; plus the
+/// points learnt from candidates (`oa`).
+fn tangent_points(lo: i64, hi: i64, oa: &[i64]) -> Vec<i64> {
+    // Small ranges get a tangent at every point: the objective is then
+    // exact from the first solve.
+    let mut pts = if hi - lo <= DENSE_TANGENTS {
+        (lo..=hi).collect()
+    } else {
+        vec![lo, hi, (lo + hi) / 2]
+    };
+    let mut x = lo as f64;
+    while x < hi as f64 {
+        pts.push(x as i64);
+        x *= 2.0;
+    }
+    pts.extend(oa.iter().copied());
+    pts.sort_unstable();
+    pts.dedup();
+    pts
+}
+
+impl<'a> Runner<'a> {
+    /// The master problem over `groups` (every constraint group for the
+    /// search, a subset for the conflict search), with its objective.
+    pub(crate) fn build(
+        &self,
+        groups: &[Group],
+        sound: Option<&SoundModel>,
+    ) -> (Master<'a>, Vec<(usize, f64)>) {
+        let mut m = Master::new(self);
+        let objective = m.add_periods(&self.oa_points);
+        if self.spec.harmonic {
+            m.forbid_non_harmonic();
+        }
+        m.add_sched(groups);
+        if self.spec.schedulability == SchedTest::Rta {
+            m.add_rta(groups, &self.levels, &self.rta_cuts);
+        }
+        if let (Some(sm), Scheduler::Rm) = (sound, self.spec.scheduler) {
+            m.add_responses(groups, sm, self);
+        }
+        m.add_limits(groups, sound);
+        (m, objective)
+    }
+}

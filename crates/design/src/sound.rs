@@ -1,0 +1,293 @@
+//! Sound mode: response-time variables and their cuts, and each link term
+//! as the smallest valid option of docs/analysis.md.
+
+use crate::domain::gu;
+use crate::linear::{Bin, Lin};
+use crate::lp::{Cmp, Lp};
+use crate::master::{Group, Master};
+use crate::runner::Runner;
+use rtpipe_analysis::sched::interference;
+use rtpipe_analysis::{Metric, Report};
+use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+
+/// What the sound model knows of response times: unconditional lower
+/// bounds, and conditional ones learnt from verified candidates.
+#[derive(Debug, Clone)]
+pub(crate) struct SoundModel {
+    /// R_i ≥ this whatever the periods (grid units).
+    pub(crate) rlow: Vec<f64>,
+    pub(crate) cuts: Vec<RCut>,
+    /// Heuristic phase: response times pinned to these estimates (not a
+    /// relaxation; its candidates still go through the analysis).
+    pub(crate) fixed: Option<Vec<f64>>,
+}
+
+/// R_i ≥ r unless some higher-priority task's period grew past its value
+/// then, or left the higher-priority set (RTA is monotone in both).
+#[derive(Debug, Clone)]
+pub(crate) struct RCut {
+    pub(crate) i: usize,
+    pub(crate) r: f64,
+    pub(crate) hp: Vec<usize>,
+    pub(crate) periods: Vec<(usize, i64)>,
+}
+
+impl<'a> Runner<'a> {
+    /// Lower bounds on job response times that hold for every choice of
+    /// periods: own demand plus one job of each task that has higher
+    /// priority whatever the periods.
+    pub(crate) fn rhat_lower(&self) -> Vec<f64> {
+        let spec = self.spec;
+        let n = spec.tasks.len();
+        (0..n)
+            .map(|i| {
+                let mut r = spec.tasks[i].demand();
+                for j in 0..n {
+                    if j == i
+                        || spec.tasks[j].cpu != spec.tasks[i].cpu
+                        || spec.tasks[j].server == Server::Background
+                    {
+                        continue;
+                    }
+                    let (di, dj) = (&self.dom[i], &self.dom[j]);
+                    let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
+                    if always_above && spec.scheduler == Scheduler::Rm {
+                        r += interference(&spec.tasks[j]);
+                    }
+                }
+                gu(r, self.g)
+            })
+            .collect()
+    }
+}
+
+/// An upper end for R_i: T_i (it finishes within its period) and every
+/// active freshness limit of a chain through i (T_p and the tail's R both
+/// appear in the freshness sum).
+pub(crate) fn rmax_of(m: &Master, groups: &[Group], i: usize) -> f64 {
+    let mut r = m.dom[i].max() as f64;
+    for (k, ch) in m.spec.chains.iter().enumerate() {
+        if let (true, Some(l)) = (
+            ch.path.contains(&i) && groups.contains(&Group::Limit(k, Metric::Freshness)),
+            ch.freshness,
+        ) {
+            r = r.min(gu(l, m.g));
+        }
+    }
+    r
+}
+
+/// Adds a cut for every chain task whose response time the model
+/// under-estimated at this candidate; false when there was none.
+pub(crate) fn learn_r_cuts(
+    g: i64,
+    cand: &Spec,
+    report: &Report,
+    periods: &[Nanos],
+    rmodel: &[Option<f64>],
+    sm: &mut SoundModel,
+) -> bool {
+    let prio = rtpipe_analysis::sched::rm_priorities(cand);
+    let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
+    let mut learnt = false;
+    for (i, mv) in rmodel.iter().enumerate() {
+        let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
+            continue;
+        };
+        let tr = gu(tr, g);
+        if tr > mv + 1e-6 {
+            let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
+            let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
+            sm.cuts.push(RCut {
+                i,
+                r: tr,
+                hp,
+                periods,
+            });
+            learnt = true;
+        }
+    }
+    learnt
+}
+
+/// R_i ≥ r − M·(Σ [hp period grew] + Σ [left the hp set]).
+pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
+    let Some(rv) = m.rvar[cut.i] else { return };
+    let big = m.big_m;
+    let mut terms: Vec<(usize, f64)> = vec![(rv, 1.0)];
+    let mut rhs = cut.r;
+    for &(j, tj) in &cut.periods {
+        if let Some(b) = m.grew(j, tj) {
+            terms.push((b, big));
+        }
+    }
+    for &j in &cut.hp {
+        match m.above(j, cut.i) {
+            Bin::Const(true) => {}
+            Bin::Const(false) => return,
+            Bin::Var(z) => {
+                // (1 − z)·M on the right: R + … − M z ≥ r − M
+                terms.push((z, -big));
+                rhs -= big;
+            }
+        }
+    }
+    m.lp.row(terms, Cmp::Ge, rhs);
+}
+
+/// Sound mode (docs/analysis.md): reaction anchored on publishes, freshness
+/// on reads, each link term the smallest valid option, the priority cases
+/// and the "distinct" property of each stage as binaries. Returns the sums
+/// [E, F]: E the reaction sum, F the freshness sum (the reaction limit holds
+/// when either fits, as the reported reaction is min(E, F)).
+pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64) -> Vec<Lin> {
+    let mut e = response(m, path[0]);
+    let mut f = Lin::default();
+    // d = 1: the stage's jobs carry distinct samples (true at the head).
+    let mut d = Bin::Const(true);
+    for w in path.windows(2) {
+        let (p, c) = (w[0], w[1]);
+        let (l, gq) = sound_link(m, p, c, d);
+        e = e.plus(&Lin {
+            terms: vec![(l, 1.0)],
+            c: 0.0,
+        });
+        f = f.plus(&Lin {
+            terms: vec![(gq, 1.0)],
+            c: 0.0,
+        });
+        d = pass_distinct(m, p, c, d);
+    }
+    let tail = *path.last().unwrap_or(&0);
+    f = f.plus(&response(m, tail));
+    let big = m.big_m;
+    match metric {
+        Metric::Freshness => m.lp.row(f.terms.clone(), Cmp::Le, limit - f.c),
+        Metric::Reaction => {
+            // The reported reaction is min(E, F): one of them must fit.
+            let w = m.lp.binary();
+            let mut t = e.terms.clone();
+            t.push((w, -big));
+            m.lp.row(t, Cmp::Le, limit - e.c);
+            let mut t = f.terms.clone();
+            t.push((w, big));
+            m.lp.row(t, Cmp::Le, limit - f.c + big);
+        }
+    }
+    vec![e, f]
+}
+
+/// The job response time of task i: its variable under RM, its period
+/// under EDF (and where it has none).
+fn response(m: &Master, i: usize) -> Lin {
+    match m.rvar[i] {
+        Some(v) if m.spec.scheduler != Scheduler::Edf => Lin {
+            terms: vec![(v, 1.0)],
+            c: 0.0,
+        },
+        _ => m.period[i].clone(),
+    }
+}
+
+/// The demands x_min(i) and x(i) in grid units.
+fn xmin(m: &Master, i: usize) -> f64 {
+    gu(m.spec.tasks[i].demand_min(), m.g)
+}
+
+fn demand(m: &Master, i: usize) -> f64 {
+    gu(m.spec.tasks[i].demand(), m.g)
+}
+
+/// The smallest and largest values of some options over the variables'
+/// bounds, within ±big.
+fn span(opts: &[&Lin], lp: &Lp, big: f64) -> (f64, f64) {
+    let lo = opts
+        .iter()
+        .map(|o| o.min_in(lp))
+        .fold(f64::INFINITY, f64::min);
+    let hi = opts
+        .iter()
+        .map(|o| o.max_in(lp))
+        .fold(f64::NEG_INFINITY, f64::max);
+    (lo.max(-big), hi.min(big))
+}
+
+/// Link p → c with the producer's stage distinct when `d`: the reaction
+/// term variable (≥ the option its binaries pick) and the freshness term
+/// variable (≥ the option of the priority order).
+fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin) -> (usize, usize) {
+    let big = m.big_m;
+    let (rp, rc) = (response(m, p), response(m, c));
+    let same = m.spec.scheduler != Scheduler::Edf && m.spec.tasks[p].cpu == m.spec.tasks[c].cpu;
+    let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
+    let o1 = tc.plus(&rc);
+    let o2 = tc.plus(&rc).add_c(-xmin(m, c));
+    let o3 = tp.plus(&rp).plus(&rc).add_c(-xmin(m, p));
+    let o4 = tp.plus(&rc).add_c(-xmin(m, p));
+    let q1 = tp.plus(&rp);
+    let q2 = tp.plus(&rp).add_c(-xmin(m, c));
+    let q3 = tp.clone();
+    // Bounded by their options, so that the switches get tight big-Ms.
+    let (llo, lhi) = span(&[&o1, &o2, &o3, &o4], &m.lp, big);
+    let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp, big);
+    // HiGHS gets the bounds declared; microlp's basis can go singular
+    // when both the bounds and the big-Ms are tight, so there they are
+    // only known (used for the big-Ms).
+    let (l, gq) = if m.tight_bounds {
+        (m.lp.var(llo, lhi, false), m.lp.var(qlo, qhi, false))
+    } else {
+        (m.lp.var(-big, big, false), m.lp.var(-big, big, false))
+    };
+    m.floor.insert(l, llo);
+    m.floor.insert(gq, qlo);
+    // b = 1 picks a reachability option; allowed only when d = 1.
+    let b = match d {
+        Bin::Const(false) => Bin::Const(false),
+        _ => {
+            let v = m.lp.binary();
+            if let Bin::Var(dv) = d {
+                m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+            }
+            Bin::Var(v)
+        }
+    };
+    if same {
+        let o = m.above(c, p); // 1: c ≻ p (Case 1)
+        m.ge_option(l, &o2, &[(o, true), (b, false)]);
+        m.ge_option(l, &o3, &[(o, true), (b, true)]);
+        m.ge_option(l, &o1, &[(o, false), (b, false)]);
+        m.ge_option(l, &o4, &[(o, false), (b, true)]);
+        m.ge_option(gq, &q2, &[(o, true)]);
+        m.ge_option(gq, &q3, &[(o, false)]);
+    } else {
+        m.ge_option(l, &o1, &[(b, false)]);
+        m.ge_option(l, &o3, &[(b, true)]);
+        m.ge_option(gq, &q1, &[]);
+    }
+    (l, gq)
+}
+
+/// Distinct passes to c when c's reads are further apart than p's
+/// publishes can be: T_c − R_c + x_c > T_p + R_p − x_min(p).
+fn pass_distinct(m: &mut Master, p: usize, c: usize, d: Bin) -> Bin {
+    if let Bin::Const(false) = d {
+        return d;
+    }
+    let big = m.big_m;
+    let (rp, rc) = (response(m, p), response(m, c));
+    let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
+    let dc = m.lp.binary();
+    if let Bin::Var(dv) = d {
+        m.lp.row(vec![(dc, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+    }
+    let lhs = tc
+        .plus(&rc.scale(-1.0))
+        .plus(&tp.scale(-1.0))
+        .plus(&rp.scale(-1.0));
+    // lhs + x_c + x_min(p) ≥ ε − M(1 − dc), ε = one grid unit's share of a ns
+    let eps = 1.0 / m.g as f64;
+    let mut t = lhs.terms.clone();
+    t.push((dc, -big));
+    m.lp.row(t, Cmp::Ge, eps - demand(m, c) - xmin(m, p) - lhs.c - big);
+    Bin::Var(dc)
+}
