@@ -40,6 +40,14 @@ impl Metric {
             Metric::Freshness => "freshness",
         }
     }
+
+    /// The chain's limit on this metric, if it has one.
+    pub fn limit(self, chain: &rtpipe_model::Chain) -> Option<Nanos> {
+        match self {
+            Metric::Reaction => chain.reaction,
+            Metric::Freshness => chain.freshness,
+        }
+    }
 }
 
 /// Which analysis a verdict follows: every command and the design judge a

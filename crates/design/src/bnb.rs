@@ -231,10 +231,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     fn bound(&self, hi: &[u32]) -> f64 {
-        hi.iter()
-            .enumerate()
-            .map(|(i, &k)| self.budget[i] / self.axes[i].value(k) as f64)
-            .sum()
+        self.utilization_at(&self.periods(hi))
+    }
+
+    /// Σ C/T at periods `t` (ns): the least utilisation of a box whose
+    /// longest periods they are.
+    fn utilization_at(&self, t: &[Nanos]) -> f64 {
+        t.iter().zip(&self.budget).map(|(&t, c)| c / t as f64).sum()
     }
 
     /// Shrinks the box to the points that have the imposed orders (RM:
@@ -283,10 +286,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         };
         self.groups.iter().all(|g| match *g {
             Group::Limit(k, m) => {
-                let limit = match m {
-                    Metric::Reaction => spec.chains[k].reaction,
-                    Metric::Freshness => spec.chains[k].freshness,
-                };
+                let limit = m.limit(&spec.chains[k]);
                 limit.is_none_or(|l| least(k, m).is_some_and(|b| b <= l))
             }
             Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
@@ -422,10 +422,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let Some(forms) = self.forms_of(r, k, metric) else {
                 continue;
             };
-            let limit = match metric {
-                Metric::Reaction => spec.chains[k].reaction,
-                Metric::Freshness => spec.chains[k].freshness,
-            };
+            let limit = metric.limit(&spec.chains[k]);
             let Some(limit) = limit.map(|l| l as f64) else {
                 continue;
             };
@@ -467,7 +464,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// being longest. `None` when some limit cannot hold in the box.
     fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
         let spec = self.run.spec;
-        let plain: f64 = (0..lo.len()).map(|i| self.budget[i] / hi[i] as f64).sum();
+        let plain = self.utilization_at(hi);
         let mut bound = plain;
         let mut joint = Vec::new();
         for g in self.groups {
@@ -475,14 +472,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 continue;
             };
             let forms = self.forms_of(r, k, metric)?;
-            let limit = match metric {
-                Metric::Reaction => spec.chains[k].reaction,
-                Metric::Freshness => spec.chains[k].freshness,
-            };
+            let limit = metric.limit(&spec.chains[k]);
             let Some(limit) = limit else { continue };
             let b = forms
                 .iter()
-                .filter_map(|a| self.least_under(a, limit as f64, lo, hi, plain))
+                .filter_map(|a| self.least_under(a, limit as f64, lo, hi))
                 .min_by(f64::total_cmp)?;
             bound = bound.max(b);
             joint.push(Row::new(&forms, limit as f64, lo, lo.len()));
@@ -491,9 +485,12 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     /// A lower bound from every limit at once (limits share tasks): the
-    /// Lagrangian dual with one multiplier per limit, raised by coordinate
-    /// ascent. Any multipliers give a valid bound; a reaction limit (E or F
-    /// below it) enters as the form below both, the least base and slopes.
+    /// Lagrangian dual of the separable convex problem, with one multiplier
+    /// per limit, raised by coordinate ascent. For multipliers λ ≥ 0,
+    /// Σ_i min_T (C_i/T_i + w_i T_i) − Σ λ_c room_c with w = Σ λ_c s_c is a
+    /// valid bound whatever λ, the minimising T_i = √(C_i / w_i) clamped to
+    /// the box. A reaction limit (E or F below it) enters as the form below
+    /// both, the least base and slopes.
     fn joint_bound(&self, rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
         let n = lo.len();
         let mut lambda = vec![0.0f64; rows.len()];
@@ -512,7 +509,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
             w
         };
-        for _ in 0..JOINT_SWEEPS {
+        // One multiplier is maximised in one pass.
+        let sweeps = if rows.len() > 1 { JOINT_SWEEPS } else { 1 };
+        for _ in 0..sweeps {
             for c in 0..rows.len() {
                 // d dual / d λ_c = Σ s_ci T_i − S_c falls as λ_c grows.
                 let slack = |x: f64, lambda: &mut Vec<f64>| {
@@ -556,64 +555,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
-    /// nowhere). Lagrangian dual of the separable convex problem: for any
-    /// λ ≥ 0, min_T Σ C_i/T_i + λ (form(T) − limit) is one, with the
-    /// minimising T_i = √(C_i / (λ·s_i)) clamped to the box.
-    fn least_under(
-        &self,
-        form: &Affine,
-        limit: f64,
-        lo: &[Nanos],
-        hi: &[Nanos],
-        plain: f64,
-    ) -> Option<f64> {
-        let mut slope: Vec<(usize, f64)> = Vec::with_capacity(form.slopes.len());
-        for &(i, s) in &form.slopes {
-            match slope.iter_mut().find(|x| x.0 == i) {
-                Some(x) => x.1 += s,
-                None => slope.push((i, s)),
-            }
-        }
-        let at_lo = form.base;
-        if at_lo > limit {
-            return None;
-        }
-        let t = |i: usize, s: f64, lambda: f64| {
-            let (l, h) = (lo[i] as f64, hi[i] as f64);
-            if self.budget[i] == 0.0 {
-                return l;
-            }
-            (self.budget[i] / (lambda * s)).sqrt().clamp(l, h)
-        };
-        let excess = |lambda: f64| {
-            slope
-                .iter()
-                .map(|&(i, s)| s * (t(i, s, lambda) - lo[i] as f64))
-                .sum::<f64>()
-                + at_lo
-                - limit
-        };
-        let dual = |lambda: f64| {
-            let moved: f64 = slope
-                .iter()
-                .map(|&(i, s)| self.budget[i] / t(i, s, lambda) - self.budget[i] / hi[i] as f64)
-                .sum();
-            plain + moved + lambda * excess(lambda)
-        };
-        if excess(0.0) <= 0.0 || slope.is_empty() {
-            return Some(plain);
-        }
-        // Bisection on log λ for excess(λ) = 0; any λ gives a valid bound.
-        let (mut a, mut b) = (-40.0f64, 40.0f64);
-        for _ in 0..60 {
-            let m = 0.5 * (a + b);
-            if excess(m.exp2()) > 0.0 {
-                a = m;
-            } else {
-                b = m;
-            }
-        }
-        Some(dual(a.exp2()).max(dual(b.exp2())).max(plain))
+    /// nowhere): the joint bound of that one limit.
+    fn least_under(&self, form: &Affine, limit: f64, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
+        (form.base <= limit)
+            .then(|| self.joint_bound(&[Row::new(&[form], limit, lo, lo.len())], lo, hi))
     }
 
     /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
@@ -657,24 +602,22 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let order = self
             .open_order(node, &blamed)
             .filter(|&(a, b)| self.span(node, a).min(self.span(node, b)) >= ORDER_FIRST * widest);
-        if let Some((a, b)) = order {
-            let mut ab = node.clone();
-            ab.above.push((a, b));
-            let mut ba = node.clone();
-            ba.above.push((b, a));
-            return Some((ab, ba));
+        if let Some(pair) = order {
+            return Some(Self::ordered(node, pair));
         }
         match split {
             Some(i) => Some(self.split(node, i)),
-            None => {
-                let (a, b) = self.open_order(node, &blamed)?;
-                let mut ab = node.clone();
-                ab.above.push((a, b));
-                let mut ba = node.clone();
-                ba.above.push((b, a));
-                Some((ab, ba))
-            }
+            None => Some(Self::ordered(node, self.open_order(node, &blamed)?)),
         }
+    }
+
+    /// The two children of an order branch: a above b, and b above a.
+    fn ordered(node: &Node, (a, b): (usize, usize)) -> (Node, Node) {
+        let mut ab = node.clone();
+        ab.above.push((a, b));
+        let mut ba = node.clone();
+        ba.above.push((b, a));
+        (ab, ba)
     }
 
     /// A pair on one CPU under RM, one of them blamed, whose order the box

@@ -148,11 +148,7 @@ impl<'a> Runner<'a> {
                 .collect::<Vec<_>>()
                 .join(">")
         });
-        let limit = match metric {
-            Metric::Reaction => ch.reaction,
-            Metric::Freshness => ch.freshness,
-        }
-        .unwrap_or(0);
+        let limit = metric.limit(ch).unwrap_or(0);
         self.say(|| format!("infeasible; how far must {name} move"));
         let fix = self.min_limit(groups, gr, sound).map(|need| {
             format!(
@@ -185,10 +181,7 @@ impl<'a> Runner<'a> {
             return None;
         };
         let original = self.spec.clone();
-        let lo0 = match metric {
-            Metric::Reaction => original.chains[c].reaction,
-            Metric::Freshness => original.chains[c].freshness,
-        }?;
+        let lo0 = metric.limit(&original.chains[c])?;
         let mut hi = lo0.max(1);
         // Whether `core` holds with the limit at l, by a sub-search on a
         // copy of the spec that shares what was learnt.

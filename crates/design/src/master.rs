@@ -385,11 +385,9 @@ impl<'a> Master<'a> {
         let spec = self.spec;
         for (k, ch) in spec.chains.iter().enumerate() {
             for metric in [Metric::Reaction, Metric::Freshness] {
-                let limit = match metric {
-                    Metric::Reaction => ch.reaction,
-                    Metric::Freshness => ch.freshness,
+                let Some(limit) = metric.limit(ch) else {
+                    continue;
                 };
-                let Some(limit) = limit else { continue };
                 if !groups.contains(&Group::Limit(k, metric)) {
                     continue;
                 }
