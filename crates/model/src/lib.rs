@@ -164,6 +164,10 @@ pub struct Task {
     /// The task code that runs its jobs (`rtpipe fly`), by name; the timing
     /// analysis does not use it.
     pub body: Option<String>,
+    /// Release offset: the first job is released at this instant and every
+    /// later one a period after the previous. `None`: unknown (the analysis
+    /// then holds for every phasing).
+    pub offset: Option<Nanos>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -192,6 +196,7 @@ impl Task {
             cpu: 0,
             serves: None,
             body: None,
+            offset: None,
             delta_in: 0,
             delta_out: 0,
         }

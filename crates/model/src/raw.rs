@@ -29,6 +29,7 @@ pub struct RawSystem {
     pub schedulability: Option<S<String>>,
     pub resolution: Option<S<toml::Value>>,
     pub harmonic: Option<S<bool>>,
+    pub release: Option<S<String>>,
 }
 
 #[derive(Debug, serde::Deserialize)]
@@ -60,6 +61,7 @@ pub struct RawTask {
     pub cpu: Option<S<toml::Value>>,
     pub serves: Option<S<String>>,
     pub body: Option<S<String>>,
+    pub offset: Option<S<toml::Value>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -370,3 +370,35 @@ fn load_caps_the_size() {
         assert!(t.elapsed().as_secs() < 5);
     }
 }
+
+#[test]
+fn offsets_known_or_synchronous() {
+    // Unknown by default: the analysis holds for every phasing.
+    let s = Spec::parse("x.toml", MINI).expect("valid");
+    assert_eq!(s.tasks[0].offset, None);
+    // One task's own offset; the other stays unknown.
+    let src = MINI.replace("period = 10", "period = 10\noffset = \"2.5ms\"");
+    let s = Spec::parse("x.toml", &src).expect("valid");
+    assert_eq!(s.tasks[0].offset, Some(2_500_000));
+    assert_eq!(s.tasks[1].offset, None);
+    // release = "synchronous" fills the others with 0 and keeps given ones.
+    let sync = src.replace(
+        "time_unit = \"ms\"",
+        "time_unit = \"ms\"\nrelease = \"synchronous\"",
+    );
+    let s = Spec::parse("x.toml", &sync).expect("valid");
+    assert_eq!(s.tasks[0].offset, Some(2_500_000));
+    assert_eq!(s.tasks[1].offset, Some(0));
+    // Written specs keep them.
+    let back = Spec::parse("y.toml", &crate::write::to_toml(&s)).expect("round trip");
+    assert_eq!(back.tasks[0].offset, Some(2_500_000));
+    assert_eq!(back.tasks[1].offset, Some(0));
+    // Negative offsets and unknown release modes are located errors.
+    let e = err(&MINI.replace("period = 10", "period = 10\noffset = -1"));
+    assert!(e.diagnostics[0].message.contains("offset"), "{e}");
+    let e = err(&MINI.replace(
+        "time_unit = \"ms\"",
+        "time_unit = \"ms\"\nrelease = \"sync\"",
+    ));
+    assert!(e.to_string().contains("synchronous"), "{e}");
+}

@@ -193,6 +193,11 @@ impl Builder {
             tasks.push(self.task(k, v, &ch_index, &channels, &task_index, &names));
         }
         let mut tasks: Vec<Task> = tasks.into_iter().collect::<Option<Vec<_>>>()?;
+        if self.synchronous(sys) {
+            for t in tasks.iter_mut().filter(|t| t.offset.is_none()) {
+                t.offset = Some(0);
+            }
+        }
         self.serves(raw_tasks, &mut tasks, &task_index, &names);
         self.producers_write(raw_tasks, &tasks, &task_index, &names);
         if !self.diags.is_empty() {
@@ -231,6 +236,17 @@ impl Builder {
             tasks,
             chains,
         })
+    }
+
+    /// `release = "synchronous"`: every task without its own `offset` is
+    /// released at 0; `"arbitrary"` (the default) leaves them unknown.
+    fn synchronous(&mut self, sys: &RawSystem) -> bool {
+        match &sys.release {
+            Some(r) => self
+                .choice(r, "release", &[("synchronous", true), ("arbitrary", false)])
+                .unwrap_or(false),
+            None => false,
+        }
     }
 
     /// `[system]`: the name, the time unit (set on `self`), the scheduler
@@ -720,6 +736,10 @@ impl Builder {
             None => Some(None),
         };
         let (server, cpu) = self.placement(t);
+        let offset = match &t.offset {
+            Some(o) => self.nonneg_time(o, "offset").map(Some),
+            None => Some(None),
+        };
         Some(Task {
             name: k.get_ref().clone(),
             exec: exec?,
@@ -733,6 +753,7 @@ impl Builder {
             cpu: cpu?,
             serves: None,
             body: v.get_ref().body.as_ref().map(|b| b.get_ref().clone()),
+            offset: offset?,
             delta_in: 0,
             delta_out: 0,
         })

@@ -118,6 +118,9 @@ pub fn to_toml(spec: &Spec) -> String {
         if let Some(b) = t.budget_given {
             let _ = writeln!(o, "budget = {}", time(spec, b));
         }
+        if let Some(x) = t.offset {
+            let _ = writeln!(o, "offset = {}", time(spec, x));
+        }
         let _ = writeln!(o, "server = \"{}\"", t.server.name());
         let _ = writeln!(o, "cpu = {}", t.cpu);
         if let Some(m) = t.serves {
