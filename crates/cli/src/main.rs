@@ -3,6 +3,7 @@
 mod analyze;
 mod design;
 mod fly;
+mod import;
 mod output;
 mod plot;
 mod run;
@@ -117,6 +118,15 @@ enum Command {
         #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
         time_limit: Option<f64>,
     },
+    /// Turn the task sets of other tools into rtpipe specs: `import e2eeval
+    /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework.
+    ///
+    /// Exit status: 0 when every spec was written, 2 on bad input (nothing is
+    /// written then), 3 on an internal error.
+    Import {
+        #[command(subcommand)]
+        format: import::ImportCommand,
+    },
 }
 
 /// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
@@ -212,5 +222,6 @@ fn main() -> ExitCode {
             solver,
             time_limit,
         }),
+        Command::Import { format } => import::run(&format),
     }
 }
