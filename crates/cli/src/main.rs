@@ -3,6 +3,7 @@
 mod analyze;
 mod design;
 mod fly;
+mod generate;
 mod import;
 mod output;
 mod plot;
@@ -127,6 +128,15 @@ enum Command {
         #[command(subcommand)]
         format: import::ImportCommand,
     },
+    /// Generate random systems: `generate waters` writes an automotive task
+    /// set with cause-effect chains (WATERS 2015, as E2EEvaluation does).
+    ///
+    /// Exit status: 0 when the spec was written, 2 on bad input, 3 on an
+    /// internal error.
+    Generate {
+        #[command(subcommand)]
+        kind: generate::GenerateCommand,
+    },
 }
 
 /// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
@@ -223,5 +233,6 @@ fn main() -> ExitCode {
             time_limit,
         }),
         Command::Import { format } => import::run(&format),
+        Command::Generate { kind } => generate::run(&kind),
     }
 }
