@@ -296,11 +296,20 @@ fn number(m: &Mapping, key: &str, place: &str) -> Result<Option<f64>, Bad> {
     }
 }
 
-/// A value as the file writes it, for messages.
+/// A value in YAML's flow style, as the file writes it, for messages.
 fn show(v: &Value) -> String {
-    serde_yaml::to_string(v)
-        .map(|s| s.trim().replace('\n', " "))
-        .unwrap_or_else(|_| "?".into())
+    match v {
+        Value::Null => "null".into(),
+        Value::Bool(b) => b.to_string(),
+        Value::Number(n) => n.to_string(),
+        Value::String(s) => format!("{s:?}"),
+        Value::Sequence(items) => {
+            let items: Vec<String> = items.iter().map(show).collect();
+            format!("[{}]", items.join(", "))
+        }
+        Value::Mapping(_) => "a mapping".into(),
+        Value::Tagged(t) => format!("{} {}", t.tag, show(&t.value)),
+    }
 }
 
 /// A string field (`ReleasePattern`, `CommunicationPolicy`).
