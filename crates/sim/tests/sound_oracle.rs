@@ -682,7 +682,10 @@ fn tightness_distribution() {
         for (l, len) in ["1", "2", ">=3"].iter().enumerate() {
             let mut w = all[m][l].clone();
             w.sort_by(f64::total_cmp);
-            let q = |p: f64| w.get(((w.len() as f64 - 1.0) * p).round() as usize).copied();
+            let q = |p: f64| {
+                w.get(((w.len() as f64 - 1.0) * p).round() as usize)
+                    .copied()
+            };
             println!(
                 "  {} from the {}, chains of {len} tasks: {} chains, found/sound median {:.3}, 10th percentile {:.3}",
                 metric.name(),

@@ -124,9 +124,11 @@ fn tally(report: &Report, worst: &[[Nanos; 4]], seed: u64, r: &mut Ratios) {
                 continue;
             }
             let b = &c.bound;
-            let (Some(s), Some(d), Some(u)) =
-                (b.sound_from(anchor), b.davare_from(anchor), b.duerr_from(anchor))
-            else {
+            let (Some(s), Some(d), Some(u)) = (
+                b.sound_from(anchor),
+                b.davare_from(anchor),
+                b.duerr_from(anchor),
+            ) else {
                 continue;
             };
             assert!(
@@ -147,7 +149,10 @@ fn tally(report: &Report, worst: &[[Nanos; 4]], seed: u64, r: &mut Ratios) {
 fn summary(v: &[f64]) -> (f64, f64, f64) {
     let mut w = v.to_vec();
     w.sort_by(f64::total_cmp);
-    let at = |p: f64| w.get(((w.len() as f64 - 1.0) * p).round() as usize).copied();
+    let at = |p: f64| {
+        w.get(((w.len() as f64 - 1.0) * p).round() as usize)
+            .copied()
+    };
     let nan = f64::NAN;
     (
         at(0.5).unwrap_or(nan),
