@@ -249,6 +249,7 @@ pub fn search_with(
         demands,
         grids: [gcd_periods, gcd_all],
         chain_tasks,
+        prio: rtpipe_analysis::sched::rm_priorities(spec),
         t_max,
         rng: Rng::new(cfg.seed ^ 0x5EA2_C4ED_0F7A_11E5),
         observe,
@@ -309,6 +310,15 @@ fn gcd(a: Nanos, b: Nanos) -> Nanos {
     }
 }
 
+/// Instants of the jobs near a run's worst sample (see `instants`).
+#[derive(Default)]
+struct Log {
+    /// Release, read and finish instants, by task.
+    all: Vec<(usize, Nanos)>,
+    /// Read instants only, by task.
+    reads: Vec<(usize, Nanos)>,
+}
+
 /// A candidate and what it produced.
 #[derive(Clone)]
 struct Scored {
@@ -325,6 +335,8 @@ struct Searcher<'a, F> {
     /// Grids for aligned starts: gcd of the periods, and of periods and demands.
     grids: [Nanos; 2],
     chain_tasks: Vec<usize>,
+    /// Rate-monotonic ranks (1 highest; `None` in the background).
+    prio: Vec<Option<usize>>,
     /// Longest period on the chain: how far before a sample's read to look
     /// for instants to align with.
     t_max: Nanos,
@@ -423,7 +435,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
     /// `cur` (the whole run when there is none), from a replay with a job log.
     /// The replay stops at the witness' last output: runs are causal, so the
     /// schedule up to there is the same, for a fraction of the cost.
-    fn instants(&mut self, cur: &Scored) -> Result<Vec<(usize, Nanos)>, SimError> {
+    fn instants(&mut self, cur: &Scored) -> Result<Log, SimError> {
         let horizon = match cur.witness {
             Some(w) => w.last.clamp(1, self.cfg.horizon),
             None => self.cfg.horizon,
@@ -439,15 +451,45 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
             Some(w) => (w.read - 2 * self.t_max, w.last),
             None => (Nanos::MIN, Nanos::MAX),
         };
-        let mut out = Vec::new();
+        let mut out = Log::default();
         for j in &res.jobs {
             for x in [j.release, j.read, j.finish] {
                 if (lo..=hi).contains(&x) {
-                    out.push((j.task, x));
+                    out.all.push((j.task, x));
                 }
+            }
+            if (lo..=hi).contains(&j.read) {
+                out.reads.push((j.task, j.read));
             }
         }
         Ok(out)
+    }
+
+    /// Every task that preempts a chain task is released just after one of
+    /// that task's reads near the worst sample, so the job meets the whole
+    /// interference of its response time after its read: the worst case of
+    /// a from-read latency, which perturbing one offset at a time rarely
+    /// reaches on a busy CPU.
+    fn burst(&mut self, cand: &mut Candidate, log: &Log) {
+        let c = self.chain_tasks[self.rng.range(0, self.chain_tasks.len() as u64 - 1) as usize];
+        let reads: Vec<Nanos> = log
+            .reads
+            .iter()
+            .filter(|&&(k, _)| k == c)
+            .map(|&(_, x)| x)
+            .collect();
+        if reads.is_empty() {
+            return;
+        }
+        let x = reads[self.rng.range(0, reads.len() as u64 - 1) as usize];
+        let Some(pc) = self.prio[c] else { return };
+        for j in 0..self.n() {
+            let above = self.prio[j].is_some_and(|pj| pj < pc);
+            if above && self.spec.tasks[j].cpu == self.spec.tasks[c].cpu {
+                let d = 1 + self.small_delta(j).max(0);
+                cand.offsets[j] = (x + d).rem_euclid(self.periods[j]);
+            }
+        }
     }
 
     /// 0 most of the time, else ±1 ns or ± up to a quarter of a demand: the
@@ -510,14 +552,20 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
     }
 
     /// A neighbour of `cur`. `log` caches the instants of `cur`'s run.
-    fn neighbour(
-        &mut self,
-        cur: &Scored,
-        log: &mut Option<Vec<(usize, Nanos)>>,
-    ) -> Result<Candidate, SimError> {
+    fn neighbour(&mut self, cur: &Scored, log: &mut Option<Log>) -> Result<Candidate, SimError> {
         let mut cand = cur.cand.clone();
         let n = self.n();
         let r = self.rng.unit();
+        // Interference bursts after a chain task's read: 10 %.
+        if r >= 0.9 && n > 0 {
+            if log.is_none() {
+                *log = Some(self.instants(cur)?);
+            }
+            if let Some(l) = log.as_ref() {
+                self.burst(&mut cand, l);
+            }
+            return Ok(cand);
+        }
         // Demands: 12 % alone, 8 % together with an offset move.
         if r < 0.2 {
             cand.exec = self.random_exec();
@@ -579,7 +627,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
                     *log = Some(self.instants(cur)?);
                 }
                 let j = self.partner(i);
-                let inst = log.as_deref().unwrap_or(&[]);
+                let inst = log.as_ref().map_or(&[][..], |l| &l.all[..]);
                 let mut pool: Vec<Nanos> = inst
                     .iter()
                     .filter(|&&(k, _)| k == j)

@@ -640,12 +640,15 @@ fn reproduction(
     s
 }
 
+/// Ratios per scheduler (RM, EDF), quantity and chain length.
+type Spread = [[[Vec<f64>; 3]; 4]; 2];
+
 /// The tightness distribution of docs/analysis.md: for every chain and
 /// quantity of `RTPIPE_TIGHT_SYSTEMS` random systems (default 300), a search
 /// of its own (`RTPIPE_TIGHT_RESTARTS` × `RTPIPE_TIGHT_STEPS`, default 3 ×
 /// 40) for the worst latency, divided by the sound bound. Minutes of work,
 /// hence ignored; `--ignored --nocapture` prints the distribution per
-/// quantity and chain length. Fails if a search exceeds a bound.
+/// scheduler, quantity and chain length. Fails if a search exceeds a bound.
 #[test]
 #[ignore]
 fn tightness_distribution() {
@@ -653,12 +656,12 @@ fn tightness_distribution() {
     let restarts = env_u64("RTPIPE_TIGHT_RESTARTS", 3) as u32;
     let steps = env_u64("RTPIPE_TIGHT_STEPS", 40) as u32;
     let workers = std::thread::available_parallelism().map_or(1, |p| p.get()) as u64;
-    let mut all: [[Vec<f64>; 3]; 4] = Default::default();
+    let mut all: Spread = Default::default();
     std::thread::scope(|s| {
         let handles: Vec<_> = (0..workers)
             .map(|w| {
                 s.spawn(move || {
-                    let mut mine: [[Vec<f64>; 3]; 4] = Default::default();
+                    let mut mine: Spread = Default::default();
                     let mut seed = w;
                     while seed < n {
                         tightness_of(seed, restarts, steps, &mut mine);
@@ -670,7 +673,7 @@ fn tightness_distribution() {
             .collect();
         for h in handles {
             let mine = h.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
-            for (a, m) in all.iter_mut().zip(mine) {
+            for (a, m) in all.iter_mut().flatten().zip(mine.into_iter().flatten()) {
                 for (x, y) in a.iter_mut().zip(m) {
                     x.extend(y);
                 }
@@ -678,30 +681,33 @@ fn tightness_distribution() {
         }
     });
     println!("tightness: {n} systems, {restarts} x {steps} search steps per chain and quantity");
-    for (m, (metric, anchor)) in QUANTITIES.iter().enumerate() {
-        for (l, len) in ["1", "2", ">=3"].iter().enumerate() {
-            let mut w = all[m][l].clone();
-            w.sort_by(f64::total_cmp);
-            let q = |p: f64| {
-                w.get(((w.len() as f64 - 1.0) * p).round() as usize)
-                    .copied()
-            };
-            println!(
-                "  {} from the {}, chains of {len} tasks: {} chains, found/sound median {:.3}, 10th percentile {:.3}",
-                metric.name(),
-                anchor.name(),
-                w.len(),
-                q(0.5).unwrap_or(f64::NAN),
-                q(0.1).unwrap_or(f64::NAN)
-            );
+    for (k, sched) in ["rm", "edf"].iter().enumerate() {
+        for (m, (metric, anchor)) in QUANTITIES.iter().enumerate() {
+            for (l, len) in ["1", "2", ">=3"].iter().enumerate() {
+                let mut w = all[k][m][l].clone();
+                w.sort_by(f64::total_cmp);
+                let q = |p: f64| {
+                    w.get(((w.len() as f64 - 1.0) * p).round() as usize)
+                        .copied()
+                };
+                println!(
+                    "  {sched}, {} from the {}, chains of {len} tasks: {} chains, found/sound median {:.3}, 10th percentile {:.3}",
+                    metric.name(),
+                    anchor.name(),
+                    w.len(),
+                    q(0.5).unwrap_or(f64::NAN),
+                    q(0.1).unwrap_or(f64::NAN)
+                );
+            }
         }
     }
 }
 
 /// One system's searched found/sound ratios, per quantity and chain length.
-fn tightness_of(seed: u64, restarts: u32, steps: u32, out: &mut [[Vec<f64>; 3]; 4]) {
+fn tightness_of(seed: u64, restarts: u32, steps: u32, out: &mut Spread) {
     let spec = random_system(seed, &gen_config(seed));
     let report = analyze(&spec);
+    let k = usize::from(spec.scheduler == Scheduler::Edf);
     for c in &report.chains {
         for anchor in Anchor::ALL {
             let Some(bound) = c.bound.sound_from(anchor) else {
@@ -719,7 +725,7 @@ fn tightness_of(seed: u64, restarts: u32, steps: u32, out: &mut [[Vec<f64>; 3]; 
             assert!(!r.exceeds_sound(), "seed {seed}: {r}");
             if let Some(v) = r.value {
                 let l = spec.chains[c.chain].path.len().clamp(1, 3) - 1;
-                out[quantity_index(c.metric, anchor)][l].push(v as f64 / bound as f64);
+                out[k][quantity_index(c.metric, anchor)][l].push(v as f64 / bound as f64);
             }
         }
     }
