@@ -15,7 +15,7 @@ use crate::latency::{
     sound_freshness_link, sound_reaction_link, LinkTask,
 };
 use crate::sched::TaskTiming;
-use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 
 /// Stands for an unbounded sound value inside the DP.
 const INF: Nanos = Nanos::MAX;
@@ -118,45 +118,73 @@ pub fn strongly_connected(n: usize, succ: &[Vec<usize>]) -> Vec<usize> {
     comp
 }
 
-/// Worst paths from every source (no producer in the acyclic part) to every
-/// sink (no consumer) it reaches. Background tasks are left out: they have
-/// no timing guarantee.
-pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
-    let n = spec.tasks.len();
-    let live = |i: usize| spec.tasks[i].server != Server::Background;
-    let mut succ = vec![Vec::new(); n];
-    for (p, c) in spec.edges() {
-        if live(p) && live(c) {
-            succ[p].push(c);
+/// The task graph without its feedback: the edges inside strongly
+/// connected components dropped, in topological order.
+struct Acyclic {
+    /// Successors outside the own component.
+    dag: Vec<Vec<usize>>,
+    /// Live tasks in topological order, and each task's place in it.
+    order: Vec<usize>,
+    pos: Vec<usize>,
+    /// Live tasks without a producer in the acyclic part.
+    sources: Vec<usize>,
+    /// Components with more than one task, or a task that reads itself.
+    cycles: Vec<Vec<usize>>,
+}
+
+impl Acyclic {
+    /// Background tasks are left out: they have no timing guarantee.
+    fn new(spec: &Spec) -> Acyclic {
+        let n = spec.tasks.len();
+        let live = |i: usize| spec.tasks[i].server != Server::Background;
+        let mut succ = vec![Vec::new(); n];
+        for (p, c) in spec.edges() {
+            if live(p) && live(c) {
+                succ[p].push(c);
+            }
         }
-    }
-    let comp = strongly_connected(n, &succ);
-    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for (v, &c) in comp.iter().enumerate() {
-        members[c].push(v);
-    }
-    let mut cycles: Vec<Vec<usize>> = Vec::new();
-    for (c, m) in members.iter().enumerate() {
-        if m.len() > 1 || (m.len() == 1 && succ[m[0]].contains(&m[0])) {
-            let _ = c;
-            cycles.push(m.clone());
-        }
-    }
-    // The acyclic part: drop edges inside a component.
-    let mut dag = vec![Vec::new(); n];
-    let mut indeg = vec![0usize; n];
-    for p in 0..n {
-        for &c in &succ[p] {
-            if comp[p] != comp[c] {
+        let comp = strongly_connected(n, &succ);
+        let cycles = cycles_of(&comp, &succ);
+        let mut dag = vec![Vec::new(); n];
+        let mut indeg = vec![0usize; n];
+        for p in 0..n {
+            for &c in succ[p].iter().filter(|&&c| comp[p] != comp[c]) {
                 dag[p].push(c);
                 indeg[c] += 1;
             }
         }
+        let sources: Vec<usize> = (0..n).filter(|&i| live(i) && indeg[i] == 0).collect();
+        let order = kahn(&dag, indeg, &sources);
+        let mut pos = vec![usize::MAX; n];
+        for (k, &v) in order.iter().enumerate() {
+            pos[v] = k;
+        }
+        Acyclic {
+            dag,
+            order,
+            pos,
+            sources,
+            cycles,
+        }
     }
-    // Kahn topological order.
-    let mut order = Vec::with_capacity(n);
-    let mut deg = indeg.clone();
-    let mut queue: Vec<usize> = (0..n).filter(|&i| live(i) && deg[i] == 0).collect();
+}
+
+/// The components that form cycles, each as its members.
+fn cycles_of(comp: &[usize], succ: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); comp.len()];
+    for (v, &c) in comp.iter().enumerate() {
+        members[c].push(v);
+    }
+    members
+        .into_iter()
+        .filter(|m| m.len() > 1 || (m.len() == 1 && succ[m[0]].contains(&m[0])))
+        .collect()
+}
+
+/// Kahn's topological order from the tasks without predecessors.
+fn kahn(dag: &[Vec<usize>], mut deg: Vec<usize>, sources: &[usize]) -> Vec<usize> {
+    let mut order = Vec::with_capacity(dag.len());
+    let mut queue: Vec<usize> = sources.to_vec();
     queue.reverse();
     while let Some(v) = queue.pop() {
         order.push(v);
@@ -167,173 +195,207 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
             }
         }
     }
-    let mut pos = vec![usize::MAX; n];
-    for (k, &v) in order.iter().enumerate() {
-        pos[v] = k;
+    order
+}
+
+const NONE: usize = usize::MAX;
+
+/// One longest-path value per state and the state it came from.
+struct Track {
+    val: Vec<Nanos>,
+    from: Vec<usize>,
+}
+
+impl Track {
+    fn new(states: usize) -> Track {
+        Track {
+            val: vec![0; states],
+            from: vec![NONE; states],
+        }
     }
-    let lt: Vec<LinkTask> = (0..n).map(|i| LinkTask::new(spec, timing, i)).collect();
-    let sched = spec.scheduler;
-    let sources: Vec<usize> = (0..n).filter(|&i| live(i) && indeg[i] == 0).collect();
-    let is_sink = |i: usize| dag[i].is_empty();
 
-    let mut pairs = Vec::new();
-    // Scratch arrays reused across sources; `stamp` marks what this source reached.
-    const NONE: usize = usize::MAX;
-    let mut stamp = vec![NONE; n];
-    let mut pe = vec![0 as Nanos; n];
-    let mut pe_from = vec![NONE; n];
-    let mut pf = vec![0 as Nanos; n];
-    let mut pf_from = vec![NONE; n];
-    let mut sf = vec![0 as Nanos; n];
-    let mut sf_from = vec![NONE; n];
-    // Sound freshness ending at a task's publish: the last link's own term.
-    let mut sl = vec![0 as Nanos; n];
-    let mut sl_from = vec![NONE; n];
-    // Sound reaction on (task, distinct) states: index 2·task + distinct.
-    let mut se = vec![0 as Nanos; 2 * n];
-    let mut se_ok = vec![NONE; 2 * n];
-    let mut se_from = vec![NONE; 2 * n];
+    fn set(&mut self, at: usize, val: Nanos, from: usize) {
+        self.val[at] = val;
+        self.from[at] = from;
+    }
 
-    for &s in &sources {
-        stamp[s] = s;
-        pe[s] = lt[s].l;
-        pf[s] = lt[s].l;
-        sf[s] = 0;
-        pe_from[s] = NONE;
-        pf_from[s] = NONE;
-        sf_from[s] = NONE;
-        se_ok[2 * s] = NONE;
-        se[2 * s + 1] = 0;
-        se_ok[2 * s + 1] = s;
-        se_from[2 * s + 1] = NONE;
-        let start = pos[s];
-        for &v in &order[start..] {
-            if stamp[v] != s {
+    /// Keeps the larger value (the first one on ties).
+    fn offer(&mut self, at: usize, val: Nanos, from: usize) {
+        if val > self.val[at] {
+            self.set(at, val, from);
+        }
+    }
+
+    /// The states back to the start, first to last.
+    fn walk(&self, end: usize) -> Vec<usize> {
+        let mut path = vec![end];
+        let mut cur = end;
+        while self.from[cur] != NONE {
+            cur = self.from[cur];
+            path.push(cur);
+        }
+        path.reverse();
+        path
+    }
+}
+
+/// The DP's arrays, reused across sources; `stamp` marks what the current
+/// source reached.
+struct Scratch {
+    stamp: Vec<usize>,
+    /// Paper reaction and freshness.
+    pe: Track,
+    pf: Track,
+    /// Sound freshness to a task's release, and to its publish through the
+    /// last link's own term.
+    sf: Track,
+    sl: Track,
+    /// Sound reaction on (task, distinct) states, index 2·task + distinct,
+    /// with `se_ok` marking the states the current source reached.
+    se: Track,
+    se_ok: Vec<usize>,
+}
+
+impl Scratch {
+    fn new(n: usize) -> Scratch {
+        Scratch {
+            stamp: vec![NONE; n],
+            pe: Track::new(n),
+            pf: Track::new(n),
+            sf: Track::new(n),
+            sl: Track::new(n),
+            se: Track::new(2 * n),
+            se_ok: vec![NONE; 2 * n],
+        }
+    }
+
+    /// Starts the DP at source `s`: sums start at its release.
+    fn start(&mut self, s: usize, lt: &[LinkTask]) {
+        self.stamp[s] = s;
+        self.pe.set(s, lt[s].l, NONE);
+        self.pf.set(s, lt[s].l, NONE);
+        self.sf.set(s, 0, NONE);
+        self.se_ok[2 * s] = NONE;
+        self.se.set(2 * s + 1, 0, NONE);
+        self.se_ok[2 * s + 1] = s;
+    }
+
+    /// Relaxes edge v → c for source `s`.
+    fn relax(&mut self, s: usize, v: usize, c: usize, lt: &[LinkTask], sched: Scheduler) {
+        let (p, q) = (&lt[v], &lt[c]);
+        let cand_pe = self.pe.val[v] + paper_reaction_link(p, q);
+        let cand_pf = self.pf.val[v] + paper_freshness_link(p, q);
+        let cand_sf = add(self.sf.val[v], sound_freshness_link(sched, p, q));
+        let cand_sl = add(self.sf.val[v], sound_freshness_last(sched, p, q));
+        if self.stamp[c] != s {
+            self.stamp[c] = s;
+            self.pe.set(c, cand_pe, v);
+            self.pf.set(c, cand_pf, v);
+            self.sf.set(c, cand_sf, v);
+            self.sl.set(c, cand_sl, v);
+            self.se_ok[2 * c] = NONE;
+            self.se_ok[2 * c + 1] = NONE;
+        } else {
+            self.pe.offer(c, cand_pe, v);
+            self.pf.offer(c, cand_pf, v);
+            self.sf.offer(c, cand_sf, v);
+            self.sl.offer(c, cand_sl, v);
+        }
+        for d in 0..2 {
+            let sv = 2 * v + d;
+            if self.se_ok[sv] != s {
                 continue;
             }
-            for &c in &dag[v] {
-                let (p, q) = (&lt[v], &lt[c]);
-                let cand_pe = pe[v] + paper_reaction_link(p, q);
-                let cand_pf = pf[v] + paper_freshness_link(p, q);
-                let cand_sf = add(sf[v], sound_freshness_link(sched, p, q));
-                let cand_sl = add(sf[v], sound_freshness_last(sched, p, q));
-                if stamp[c] != s {
-                    stamp[c] = s;
-                    pe[c] = cand_pe;
-                    pe_from[c] = v;
-                    pf[c] = cand_pf;
-                    pf_from[c] = v;
-                    sf[c] = cand_sf;
-                    sf_from[c] = v;
-                    sl[c] = cand_sl;
-                    sl_from[c] = v;
-                    se_ok[2 * c] = NONE;
-                    se_ok[2 * c + 1] = NONE;
-                } else {
-                    if cand_pe > pe[c] {
-                        pe[c] = cand_pe;
-                        pe_from[c] = v;
-                    }
-                    if cand_pf > pf[c] {
-                        pf[c] = cand_pf;
-                        pf_from[c] = v;
-                    }
-                    if cand_sf > sf[c] {
-                        sf[c] = cand_sf;
-                        sf_from[c] = v;
-                    }
-                    if cand_sl > sl[c] {
-                        sl[c] = cand_sl;
-                        sl_from[c] = v;
-                    }
-                }
-                for d in 0..2 {
-                    let sv = 2 * v + d;
-                    if se_ok[sv] != s {
-                        continue;
-                    }
-                    let distinct = d == 1;
-                    let cand = add(se[sv], sound_reaction_link(sched, p, q, distinct));
-                    let dc = usize::from(distinct_passes(p, q, distinct));
-                    let sc = 2 * c + dc;
-                    if se_ok[sc] != s || cand > se[sc] {
-                        se[sc] = cand;
-                        se_ok[sc] = s;
-                        se_from[sc] = sv;
-                    }
-                }
+            let distinct = d == 1;
+            let cand = add(self.se.val[sv], sound_reaction_link(sched, p, q, distinct));
+            let sc = 2 * c + usize::from(distinct_passes(p, q, distinct));
+            if self.se_ok[sc] != s || cand > self.se.val[sc] {
+                self.se.set(sc, cand, sv);
+                self.se_ok[sc] = s;
             }
         }
-        for &v in &order[start..] {
-            if stamp[v] != s || !is_sink(v) {
-                continue;
-            }
-            let walk = |from: &[usize], end: usize| {
-                let mut path = vec![end];
-                let mut cur = end;
-                while from[cur] != NONE {
-                    cur = from[cur];
-                    path.push(cur);
-                }
-                path.reverse();
-                path
-            };
-            let fin = |x: Nanos| if x == INF { None } else { Some(x) };
-            // Sums start at the source's release; a path of one task is its
-            // response time, a longer one ends with its last link's term.
-            let (fresh, fresh_path) = if v == s {
-                (lt[v].r, vec![v])
-            } else {
-                let mut path = walk(&sf_from, sl_from[v]);
-                path.push(v);
-                (fin(sl[v]), path)
-            };
-            // Best sound-reaction state at the sink.
-            let mut best = NONE;
-            for d in 0..2 {
-                let sv = 2 * v + d;
-                if se_ok[sv] == s && (best == NONE || se[sv] > se[best]) {
-                    best = sv;
-                }
-            }
-            let se_path: Vec<usize> = if best == NONE {
-                vec![v]
-            } else {
-                walk(&se_from, best).into_iter().map(|x| x / 2).collect()
-            };
-            pairs.push(PairBounds {
-                source: s,
-                sink: v,
-                reaction_paper: Worst {
-                    path: walk(&pe_from, v),
-                    value: Some(pe[v]),
-                },
-                reaction_sound: Worst {
-                    path: se_path,
-                    // First output ≤ last output: the pair's worst freshness
-                    // bounds the reaction of every path between them too.
-                    value: match (
-                        if best == NONE {
-                            None
-                        } else {
-                            fin(add(se[best], lt[v].r))
-                        },
-                        fresh,
-                    ) {
-                        (Some(e), Some(f)) => Some(e.min(f)),
-                        (e, _) => e,
-                    },
-                },
-                freshness_paper: Worst {
-                    path: walk(&pf_from, v),
-                    value: Some(pf[v]),
-                },
-                freshness_sound: Worst {
-                    path: fresh_path,
-                    value: fresh,
-                },
+    }
+
+    /// The bounds of source `s` and sink `v`, both reached.
+    fn pair(&self, s: usize, v: usize, lt: &[LinkTask]) -> PairBounds {
+        let fin = |x: Nanos| if x == INF { None } else { Some(x) };
+        // A path of one task is its response time; a longer one ends with its
+        // last link's term.
+        let (fresh, fresh_path) = if v == s {
+            (lt[v].r, vec![v])
+        } else {
+            let mut path = self.sf.walk(self.sl.from[v]);
+            path.push(v);
+            (fin(self.sl.val[v]), path)
+        };
+        // The worse sound-reaction state at the sink.
+        let best = [2 * v, 2 * v + 1]
+            .into_iter()
+            .filter(|&sv| self.se_ok[sv] == s)
+            .fold(None, |b: Option<usize>, sv| match b {
+                Some(b) if self.se.val[sv] <= self.se.val[b] => Some(b),
+                _ => Some(sv),
             });
+        let se_path = best.map_or(vec![v], |b| {
+            self.se.walk(b).into_iter().map(|x| x / 2).collect()
+        });
+        let react = best.and_then(|b| fin(add(self.se.val[b], lt[v].r)));
+        PairBounds {
+            source: s,
+            sink: v,
+            reaction_paper: Worst {
+                path: self.pe.walk(v),
+                value: Some(self.pe.val[v]),
+            },
+            reaction_sound: Worst {
+                path: se_path,
+                // First output ≤ last output: the pair's worst freshness
+                // bounds the reaction of every path between them too.
+                value: match (react, fresh) {
+                    (Some(e), Some(f)) => Some(e.min(f)),
+                    (e, _) => e,
+                },
+            },
+            freshness_paper: Worst {
+                path: self.pf.walk(v),
+                value: Some(self.pf.val[v]),
+            },
+            freshness_sound: Worst {
+                path: fresh_path,
+                value: fresh,
+            },
         }
     }
-    AllPaths { pairs, cycles }
+}
+
+/// Worst paths from every source (no producer in the acyclic part) to every
+/// sink (no consumer) it reaches. Background tasks are left out: they have
+/// no timing guarantee.
+pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
+    let g = Acyclic::new(spec);
+    let lt: Vec<LinkTask> = (0..spec.tasks.len())
+        .map(|i| LinkTask::new(spec, timing, i))
+        .collect();
+    let mut sc = Scratch::new(spec.tasks.len());
+    let mut pairs = Vec::new();
+    for &s in &g.sources {
+        sc.start(s, &lt);
+        let reached = &g.order[g.pos[s]..];
+        for &v in reached {
+            if sc.stamp[v] == s {
+                for &c in &g.dag[v] {
+                    sc.relax(s, v, c, &lt, spec.scheduler);
+                }
+            }
+        }
+        for &v in reached {
+            if sc.stamp[v] == s && g.dag[v].is_empty() {
+                pairs.push(sc.pair(s, v, &lt));
+            }
+        }
+    }
+    AllPaths {
+        pairs,
+        cycles: g.cycles,
+    }
 }
