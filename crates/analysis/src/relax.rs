@@ -89,7 +89,25 @@ struct Order<'a> {
     imposed: Vec<bool>,
 }
 
-impl Order<'_> {
+impl<'a> Order<'a> {
+    /// The box `lo ≤ T ≤ hi` with the rank orders `imposed` (a above b).
+    fn new(spec: &'a Spec, lo: &'a [Nanos], hi: &'a [Nanos], imposed: &[(usize, usize)]) -> Self {
+        let n = lo.len();
+        let mut matrix = Vec::new();
+        if !imposed.is_empty() {
+            matrix = vec![false; n * n];
+            for &(a, b) in imposed {
+                matrix[a * n + b] = true;
+            }
+        }
+        Order {
+            spec,
+            lo,
+            hi,
+            imposed: matrix,
+        }
+    }
+
     fn is_imposed(&self, a: usize, b: usize) -> bool {
         !self.imposed.is_empty() && self.imposed[a * self.lo.len() + b]
     }
@@ -167,46 +185,12 @@ impl Order<'_> {
     }
 }
 
-/// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
-/// (ns, one entry per task; background tasks' entries are ignored) at which
-/// every pair `(a, b)` of `imposed` has a ranked above b (RM: (T_a, a) <
-/// (T_b, b)), for a search that branches on priority orders too. The
-/// affine forms are computed with `forms` only (they cost four link
-/// evaluations each).
-pub fn relax(
-    spec: &Spec,
-    lo: &[Nanos],
-    hi: &[Nanos],
-    imposed: &[(usize, usize)],
-    forms: bool,
-) -> Relaxed {
-    let n = spec.tasks.len();
-    assert!(
-        lo.len() == n && hi.len() == n,
-        "relax: one interval per task"
-    );
-    assert!(
-        (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
-        "relax: empty or non-positive period interval"
-    );
-    let mut matrix = Vec::new();
-    if !imposed.is_empty() {
-        matrix = vec![false; n * n];
-        for &(a, b) in imposed {
-            matrix[a * n + b] = true;
-        }
-    }
-    let order = Order {
-        spec,
-        lo,
-        hi,
-        imposed: matrix,
-    };
-    let cpus = cpu_ids(spec);
-    let util_ok = |cpu: u32| {
-        let us = cpu_utilizations(spec, hi, cpu);
-        us.iter().sum::<f64>() <= 1.0 + 1e-12
-    };
+/// Per task, lower bounds on the job-level and budget-level response times
+/// over the box (see the module documentation); `None` when above the
+/// longest period.
+fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec<Option<Nanos>>) {
+    let (n, lo, hi) = (spec.tasks.len(), order.lo, order.hi);
+    let util_ok = |cpu: u32| cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() <= 1.0 + 1e-12;
     let mut job_response = vec![None; n];
     let mut budget_response = vec![None; n];
     for (i, t) in spec.tasks.iter().enumerate() {
@@ -231,6 +215,34 @@ pub fn relax(
         budget_response[i] = rb.filter(|&r| r <= hi[i]);
         job_response[i] = rj.filter(|&r| r <= hi[i]);
     }
+    (job_response, budget_response)
+}
+
+/// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
+/// (ns, one entry per task; background tasks' entries are ignored) at which
+/// every pair `(a, b)` of `imposed` has a ranked above b (RM: (T_a, a) <
+/// (T_b, b)), for a search that branches on priority orders too. The
+/// affine forms are computed with `forms` only (they cost four link
+/// evaluations each).
+pub fn relax(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    imposed: &[(usize, usize)],
+    forms: bool,
+) -> Relaxed {
+    let n = spec.tasks.len();
+    assert!(
+        lo.len() == n && hi.len() == n,
+        "relax: one interval per task"
+    );
+    assert!(
+        (0..n).all(|i| 0 < lo[i] && lo[i] <= hi[i]),
+        "relax: empty or non-positive period interval"
+    );
+    let order = Order::new(spec, lo, hi, imposed);
+    let cpus = cpu_ids(spec);
+    let (job_response, budget_response) = response_lower_bounds(spec, &order);
     let cpus = cpus
         .into_iter()
         .map(|cpu| (cpu, cpu_may_pass(spec, hi, &budget_response, cpu)))
