@@ -714,17 +714,7 @@ fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
         else {
             continue;
         };
-        for w in path.windows(2) {
-            if !tasks[w[1]].reads.contains(&w[0]) {
-                tasks[w[1]].reads.push(w[0]);
-            }
-        }
-        chains.push(Chain {
-            name: None,
-            path,
-            reaction: None,
-            freshness: None,
-        });
+        chains.push(Chain::linked(&mut tasks, path));
     }
     Spec {
         name: name.to_string(),

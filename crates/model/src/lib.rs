@@ -240,6 +240,25 @@ pub struct Chain {
     pub freshness: Option<Nanos>,
 }
 
+impl Chain {
+    /// An unnamed chain along `path` without limits, each task on it made to
+    /// read its predecessor: how generated and imported systems get their
+    /// edges from their chains.
+    pub fn linked(tasks: &mut [Task], path: Vec<usize>) -> Chain {
+        for w in path.windows(2) {
+            if !tasks[w[1]].reads.contains(&w[0]) {
+                tasks[w[1]].reads.push(w[0]);
+            }
+        }
+        Chain {
+            name: None,
+            path,
+            reaction: None,
+            freshness: None,
+        }
+    }
+}
+
 /// A validated system.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Spec {

@@ -19,6 +19,7 @@ use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult, Witness};
+use rtpipe_testkit::env_u64;
 use std::fmt::Write;
 
 const MS: Nanos = 1_000_000;
@@ -141,13 +142,6 @@ impl Stats {
         self.search_improved += o.search_improved;
         self.failures.extend(o.failures);
     }
-}
-
-fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(default)
 }
 
 /// Every quantity a bound is checked for.

@@ -18,15 +18,9 @@ use rtpipe_model::gen::{waters_system, WatersConfig};
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::search::{search_with, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;
-
-fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(default)
-}
 
 /// Every quantity, in table order.
 const QUANTITIES: [(Metric, Anchor); 4] = [

@@ -348,17 +348,7 @@ fn waters_chains(rng: &mut Rng, tasks: &mut [Task], n: usize) -> Vec<Chain> {
         if chains.iter().any(|c| c.path == path) {
             continue;
         }
-        for w in path.windows(2) {
-            if !tasks[w[1]].reads.contains(&w[0]) {
-                tasks[w[1]].reads.push(w[0]);
-            }
-        }
-        chains.push(Chain {
-            name: None,
-            path,
-            reaction: None,
-            freshness: None,
-        });
+        chains.push(Chain::linked(tasks, path));
     }
     chains
 }
