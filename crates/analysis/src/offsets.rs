@@ -139,6 +139,16 @@ impl ChainOffsets {
 }
 
 impl OffsetBound {
+    /// Whether an observed latency `v` breaks this bound: it is above it, or
+    /// it exists although no sample reaches the tail.
+    pub fn exceeded_by(&self, v: Nanos) -> bool {
+        match (&self.basis, self.value) {
+            (Basis::NoSampleReaches, _) => true,
+            (_, Some(b)) => v > b,
+            (_, None) => false,
+        }
+    }
+
     /// What the figure rests on, for people: "known offsets", "any phasing
     /// (hyperperiod too long: 2000000 jobs)", ….
     pub fn label(&self, spec: &Spec) -> String {
