@@ -5,42 +5,16 @@
 use rtpipe_analysis::offsets::{chain_offsets, Basis, ChainOffsets, Fallback, MAX_JOBS};
 use rtpipe_analysis::{analyze, analyze_chain, schedulability, Anchor, Metric, Report};
 use rtpipe_model::{Nanos, Spec};
-use rtpipe_testkit::spec;
+use rtpipe_testkit::{example_text, spec};
 
 const MS: Nanos = 1_000_000;
 
 /// The E2EEvaluation example (Kloda et al., ETFA 2018; Becker et al., JSA
 /// 2017): periods 5, 10, 20 ms, execution times 1, 2, 5 ms (best = worst),
 /// RM, synchronous release, chain t20 → t5 → t10, zero-cost transfers.
-pub const GOLDEN: &str = r#"
-[system]
-name = "e2e-golden"
-time_unit = "ms"
-scheduler = "rm"
-schedulability = "rta"
-release = "synchronous"
-[channels.mem]
-bandwidth = 1
-[tasks.t5]
-output = { channel = "mem", size = 0 }
-reads = ["t20"]
-exec = 1
-exec_min = 1
-period = 5
-[tasks.t10]
-output = { channel = "mem", size = 0 }
-exec = 2
-exec_min = 2
-period = 10
-reads = ["t5"]
-[tasks.t20]
-output = { channel = "mem", size = 0 }
-exec = 5
-exec_min = 5
-period = 20
-[[chain]]
-path = ["t20", "t5", "t10"]
-"#;
+fn golden_text() -> String {
+    example_text("e2e-golden.toml")
+}
 
 const QUANTITIES: [(Metric, Anchor); 4] = [
     (Metric::Reaction, Anchor::Read),
@@ -105,7 +79,7 @@ fn any_phasing(r: &Report, chain: usize) -> [Option<Nanos>; 4] {
 /// at its release, 3 ms earlier: crates/sim/tests/known_offsets.rs.)
 #[test]
 fn golden_case_by_hand() {
-    let s = spec("golden.toml", GOLDEN);
+    let s = spec("golden.toml", &golden_text());
     let r = analyze(&s);
     let o = known(&r, 0);
     assert_eq!(values(o), [13, 23, 33, 43].map(|x| Some(x * MS)));
@@ -131,7 +105,7 @@ fn golden_case_by_hand() {
 /// 34 ms after the release of job j − 1.
 #[test]
 fn offsets_move_the_bound() {
-    let src = GOLDEN
+    let src = golden_text()
         .replace("period = 5\n", "period = 5\noffset = 4\n")
         .replace("period = 10\n", "period = 10\noffset = 1\n");
     let s = spec("golden-offsets.toml", &src);
@@ -148,7 +122,7 @@ fn offsets_move_the_bound() {
 fn without_known_offsets_there_is_nothing_to_add() {
     let s = spec(
         "golden.toml",
-        &GOLDEN.replace("release = \"synchronous\"\n", ""),
+        &golden_text().replace("release = \"synchronous\"\n", ""),
     );
     let r = analyze(&s);
     assert_eq!(r.offsets, vec![None]);
@@ -157,7 +131,7 @@ fn without_known_offsets_there_is_nothing_to_add() {
 #[test]
 fn unknown_offsets_fall_back_and_say_which() {
     // Only t20 has an offset: the chain uses the arbitrary-phasing bound.
-    let src = GOLDEN
+    let src = golden_text()
         .replace("release = \"synchronous\"\n", "")
         .replace("period = 20\n", "period = 20\noffset = 3\n");
     let s = spec("golden-partial.toml", &src);
@@ -175,7 +149,7 @@ fn unknown_offsets_fall_back_and_say_which() {
 
 #[test]
 fn too_many_jobs_fall_back_and_say_how_many() {
-    let s = spec("golden.toml", GOLDEN);
+    let s = spec("golden.toml", &golden_text());
     let (timing, _) = schedulability(&s);
     let path = &s.chains[0].path;
     let any = analyze_chain(&s, &timing, path);
@@ -191,7 +165,7 @@ fn too_many_jobs_fall_back_and_say_how_many() {
     assert!(o.is_some_and(|o| o.job_level.is_some()));
     // Coprime periods in the ms range: the hyperperiod explodes, and the
     // limit stops the lcm long before it could overflow.
-    let big = GOLDEN
+    let big = golden_text()
         .replace("period = 5\n", "period = 4.999999\n")
         .replace("period = 10\n", "period = 9.999997\n")
         .replace("period = 20\n", "period = 19.999993\n");
