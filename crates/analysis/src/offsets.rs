@@ -333,16 +333,48 @@ impl Stage {
 #[derive(Debug, Clone, Copy)]
 struct Link {
     /// A c job released at least this long after a p job's release surely
-    /// reads that job's value or a newer one: R_p (the p job has published
-    /// by then), or 0 when p preempts c (P2: a c job starting after p's
-    /// release starts after that job finished).
+    /// reads that job's value or a newer one.
     sure: i128,
-    /// A c job may read a p job's value only if released no earlier than
-    /// this after the p job's release: x_min(p) − (R_c − x_c) (the c job
-    /// reads by r + R_c − x_c, F1; the p job publishes from r + x_min(p),
-    /// F2), or x_min(p) when c preempts p (P1: a c job released before p's
-    /// publish has finished before it).
+    /// A c job may read a p job's value (or a newer one) only if released
+    /// no earlier than this after the p job's release.
     may: i128,
+    /// c preempts p (P1): a c job that carries a p job's value (so was
+    /// released before the next p job published) has also published before
+    /// that.
+    c_preempts: bool,
+}
+
+impl Link {
+    /// The link's windows; `order` as [`fp_order`] gives it.
+    fn new(order: Option<crate::Case>, p: &LinkTask, c: &LinkTask) -> Link {
+        let rp = i128::from(p.r.unwrap_or(0));
+        let read_slack = i128::from(c.r.unwrap_or(0)) - i128::from(c.x);
+        let (xp, xc) = (i128::from(p.x_min), i128::from(c.x_min));
+        let (sure, may) = match order {
+            // P1, c preempts p: at p's publish f, c has no pending job, so a c
+            // job released before f has finished before it (it does not see
+            // the value) and was released at least x_min(c) before f. So a c
+            // job sees the value exactly when released at or after f, which
+            // is in [r + x_min(p), r + R_p]; and one released after
+            // r + R_p − x_min(c) was not released before f.
+            Some(crate::Case::One) => (rp - (xc - 1).max(0), xp),
+            // P2, p preempts c: a c job starting at or after p's release
+            // starts after that p job finished, and one starting before it
+            // cannot see it: it sees the value exactly when it starts at or
+            // after the release, which it may do up to R_c − x_c after its
+            // own (F1) and surely does if released after it.
+            Some(crate::Case::Two) => (0, -read_slack),
+            // Otherwise the windows alone: the p job publishes in
+            // [r + x_min(p), r + R_p] (F2), the c job reads in
+            // [r', r' + R_c − x_c] (F1).
+            None => (rp, xp - read_slack),
+        };
+        Link {
+            sure,
+            may,
+            c_preempts: order == Some(crate::Case::One),
+        }
+    }
 }
 
 fn ceil_div(a: i128, b: i128) -> i128 {
@@ -380,22 +412,7 @@ fn stages_and_links(
     }
     let links = lt
         .windows(2)
-        .map(|w| {
-            let (p, c) = (&w[0], &w[1]);
-            let order = fp_order(spec.scheduler, p, c);
-            let (rp, rc) = (i128::from(p.r.unwrap_or(0)), i128::from(c.r.unwrap_or(0)));
-            let sure = if order == Some(crate::Case::Two) {
-                0
-            } else {
-                rp
-            };
-            let may = if order == Some(crate::Case::One) {
-                i128::from(p.x_min)
-            } else {
-                i128::from(p.x_min) - (rc - i128::from(c.x))
-            };
-            Link { sure, may }
-        })
+        .map(|w| Link::new(fp_order(spec.scheduler, &w[0], &w[1]), &w[0], &w[1]))
         .collect();
     Ok((stages, links))
 }
@@ -486,8 +503,12 @@ fn job_level(
 fn head_job(stages: &[Stage], links: &[Link], k: i128) -> PerQuantity<Option<i128>> {
     let (mut lo, mut hi, mut first, mut next) = (k, k, k, k);
     let mut reaches = true;
+    // The latest instant a carrier of the sample at the current stage can
+    // publish, when P1 says more than its window (the last link only).
+    let mut cap = None;
     for (w, l) in stages.windows(2).zip(links) {
         let (p, c) = (&w[0], &w[1]);
+        cap = l.c_preempts.then(|| p.release(hi + 1) + p.r);
         // The first c job that may read lo's value (or a newer one), and the
         // last that may still read hi's (it is not sure to read hi + 1's).
         lo = c.first_at_or_after(p.release(lo) + l.may);
@@ -499,11 +520,14 @@ fn head_job(stages: &[Stage], links: &[Link], k: i128) -> PerQuantity<Option<i12
     let tail = &stages[stages.len() - 1];
     let head = &stages[0];
     let publish = |j: i128| tail.release(j) + tail.r;
+    // Only a carrier of the sample publishes before the cap: `next` need not
+    // carry it.
+    let carrier_publish = |j: i128| cap.map_or(publish(j), |c: i128| publish(j).min(c));
     let (read, event) = (head.release(k), head.release(k - 1));
     PerQuantity {
-        reaction_read: reaches.then(|| publish(first) - read),
-        freshness_read: reaches.then(|| publish(hi) - read),
+        reaction_read: reaches.then(|| carrier_publish(first) - read),
+        freshness_read: reaches.then(|| carrier_publish(hi) - read),
         reaction_event: (k >= 1).then(|| publish(next) - event),
-        freshness_event: (reaches && k >= 1).then(|| publish(hi) - event),
+        freshness_event: (reaches && k >= 1).then(|| carrier_publish(hi) - event),
     }
 }
