@@ -52,7 +52,7 @@ enum Offsets {
 
 /// The generator settings of a seed (as the sound oracle's) and its offsets.
 fn system(seed: u64) -> (Spec, Offsets) {
-    let mut r = Rng::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x0FF5_E75);
+    let mut r = Rng::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x00FF_5E75);
     let gen = GenConfig {
         tasks: r.range(2, 10) as usize,
         cpus: r.range(1, 2) as u32,
@@ -135,12 +135,12 @@ struct Stats {
     /// no sample reaches, fallback for unknown offsets, too many jobs, an
     /// unbounded response time.
     basis: [u64; 6],
-    /// Per quantity: worst observed / job-level bound of every (system,
-    /// chain) where the bound is the job-level one.
-    tightness: [Vec<f64>; 4],
-    /// Per quantity: job-level / arbitrary-phasing bound (every known
-    /// offset below its period).
-    versus_any: [Vec<f64>; 4],
+    /// Per scheduler (RM, EDF) and quantity: worst observed / job-level
+    /// bound of every (system, chain) where the bound is the job-level one.
+    tightness: [[Vec<f64>; 4]; 2],
+    /// Per scheduler and quantity: job-level / arbitrary-phasing bound
+    /// (every known offset below its period).
+    versus_any: [[Vec<f64>; 4]; 2],
     /// Of those, how often the job-level figure was the higher one.
     above_any: [u64; 4],
     searched: u64,
@@ -158,8 +158,10 @@ impl Stats {
             self.basis[k] += o.basis[k];
         }
         for k in 0..4 {
-            self.tightness[k].extend(&o.tightness[k]);
-            self.versus_any[k].extend(&o.versus_any[k]);
+            for s in 0..2 {
+                self.tightness[s][k].extend(&o.tightness[s][k]);
+                self.versus_any[s][k].extend(&o.versus_any[s][k]);
+            }
             self.above_any[k] += o.above_any[k];
         }
         self.searched += o.searched;
@@ -328,6 +330,7 @@ fn search(
 /// (system, chain, quantity), over chains of two tasks or more (a single
 /// task's bound from the read is its response time either way).
 fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut Stats) {
+    let s = usize::from(spec.scheduler == Scheduler::Edf);
     for (k, o) in report.offsets.iter().enumerate() {
         let Some(o) = o else { continue };
         for (q, &(m, a)) in QUANTITIES.iter().enumerate() {
@@ -337,7 +340,7 @@ fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut St
                 continue;
             }
             if let (Basis::KnownOffsets, Some(v), Some(seen)) = (&b.basis, b.value, worst[k][q]) {
-                st.tightness[q].push(seen as f64 / v.max(1) as f64);
+                st.tightness[s][q].push(seen as f64 / v.max(1) as f64);
             }
             let late = spec.chains[k].path.iter().any(|&i| {
                 spec.tasks[i]
@@ -351,7 +354,7 @@ fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut St
                 .and_then(|c| c.bound.sound_from(a));
             let job = o.job_level.as_ref().and_then(|j| *j.values.get(m, a));
             if let (false, Some(j), Some(any)) = (late, job, any) {
-                st.versus_any[q].push(j as f64 / any.max(1) as f64);
+                st.versus_any[s][q].push(j as f64 / any.max(1) as f64);
                 st.above_any[q] += u64::from(j > any);
             }
         }
@@ -428,23 +431,45 @@ fn report(t: &mut Stats, first: u64, n: u64) {
          fallback: unknown offsets {}, too many jobs {}, unbounded {}",
         t.basis[0], t.basis[1], t.basis[2], t.basis[3], t.basis[4], t.basis[5]
     );
-    for (q, (m, a)) in QUANTITIES.iter().enumerate() {
-        let n_t = t.tightness[q].len();
-        let n_v = t.versus_any[q].len();
-        println!(
-            "  {} from the {}: observed/bound median {:.3} p10 {:.3} max {:.4} ({n_t} chains); \
-             known/any-phasing median {:.3} p10 {:.3} p90 {:.3}, above in {} of {n_v} \
-             (chains of 2+ tasks)",
-            m.name(),
-            a.name(),
-            quantile(&mut t.tightness[q], 0.5),
-            quantile(&mut t.tightness[q], 0.1),
-            quantile(&mut t.tightness[q], 1.0),
-            quantile(&mut t.versus_any[q], 0.5),
-            quantile(&mut t.versus_any[q], 0.1),
-            quantile(&mut t.versus_any[q], 0.9),
-            t.above_any[q],
-        );
+    for (s, sched) in ["rm", "edf", "all"].iter().enumerate() {
+        println!("  {sched} (chains of 2+ tasks):");
+        for (q, (m, a)) in QUANTITIES.iter().enumerate() {
+            let mut tight: Vec<f64> = match s {
+                2 => [&t.tightness[0][q], &t.tightness[1][q]]
+                    .into_iter()
+                    .flatten()
+                    .copied()
+                    .collect(),
+                _ => t.tightness[s][q].clone(),
+            };
+            let mut vs: Vec<f64> = match s {
+                2 => [&t.versus_any[0][q], &t.versus_any[1][q]]
+                    .into_iter()
+                    .flatten()
+                    .copied()
+                    .collect(),
+                _ => t.versus_any[s][q].clone(),
+            };
+            println!(
+                "    {} from the {}: observed/bound median {:.3} p10 {:.3} max {:.4} ({} chains); \
+                 known/any-phasing median {:.3} p10 {:.3} p90 {:.3} ({} chains){}",
+                m.name(),
+                a.name(),
+                quantile(&mut tight, 0.5),
+                quantile(&mut tight, 0.1),
+                quantile(&mut tight, 1.0),
+                tight.len(),
+                quantile(&mut vs, 0.5),
+                quantile(&mut vs, 0.1),
+                quantile(&mut vs, 0.9),
+                vs.len(),
+                if s == 2 {
+                    format!(", known above any-phasing in {}", t.above_any[q])
+                } else {
+                    String::new()
+                },
+            );
+        }
     }
 }
 
