@@ -143,6 +143,11 @@ struct Stats {
     versus_any: [[Vec<f64>; 4]; 2],
     /// Of those, how often the job-level figure was the higher one.
     above_any: [u64; 4],
+    /// Chains (per run) with a task starting later than a period, and
+    /// observations of theirs above the arbitrary-phasing bound (which does
+    /// not cover them; every other chain must stay within it too).
+    late_checks: u64,
+    late_over_any: u64,
     searched: u64,
     search_sims: u64,
     failures: Vec<String>,
@@ -164,6 +169,8 @@ impl Stats {
             }
             self.above_any[k] += o.above_any[k];
         }
+        self.late_checks += o.late_checks;
+        self.late_over_any += o.late_over_any;
         self.searched += o.searched;
         self.search_sims += o.search_sims;
         self.failures.extend(o.failures);
@@ -245,6 +252,22 @@ fn check_run(
     st.runs += 1;
     let mut best: Option<(f64, usize, usize)> = None;
     for o in observe(report, res) {
+        if late_start(spec, report, o.chain) {
+            st.late_checks += 1;
+            st.late_over_any += o.over_sound() as u64;
+        } else if o.over_sound() > 0 {
+            st.failures.push(format!(
+                "seed {seed}: chain {} {}: {} observation(s) above the arbitrary-phasing bound \
+                 with every offset below its period; sim {:?} {:?} seed {} offsets {:?}",
+                o.chain,
+                o.metric.name(),
+                o.over_sound(),
+                cfg.phasing,
+                cfg.exec,
+                cfg.seed,
+                res.offsets
+            ));
+        }
         for (q, &(m, a)) in QUANTITIES.iter().enumerate() {
             if m != o.metric {
                 continue;
@@ -342,11 +365,7 @@ fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut St
             if let (Basis::KnownOffsets, Some(v), Some(seen)) = (&b.basis, b.value, worst[k][q]) {
                 st.tightness[s][q].push(seen as f64 / v.max(1) as f64);
             }
-            let late = spec.chains[k].path.iter().any(|&i| {
-                spec.tasks[i]
-                    .offset
-                    .is_some_and(|x| x >= report.timing[i].period)
-            });
+            let late = late_start(spec, report, k);
             let any = report
                 .chains
                 .iter()
@@ -359,6 +378,15 @@ fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut St
             }
         }
     }
+}
+
+/// A task of the chain has a known offset of a period or more.
+fn late_start(spec: &Spec, report: &Report, chain: usize) -> bool {
+    spec.chains[chain].path.iter().any(|&i| {
+        spec.tasks[i]
+            .offset
+            .is_some_and(|x| x >= report.timing[i].period)
+    })
 }
 
 /// The p-quantile (nearest rank) of `v`, sorted in place.
@@ -425,6 +453,10 @@ fn report(t: &mut Stats, first: u64, n: u64) {
         t.checks,
         t.observations,
         t.failures.len()
+    );
+    println!(
+        "  late starts: {} chain checks, {} observations above the arbitrary-phasing bound",
+        t.late_checks, t.late_over_any
     );
     println!(
         "  bases (chain quantities): known offsets {}, any phasing lower {}, no sample reaches {}; \
