@@ -372,11 +372,16 @@ pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
         } else {
             format!("{lr}; +event: {le}")
         };
+        // No value because no sample reaches the tail is not "unbounded".
+        let value = |b: &rtpipe_analysis::OffsetBound| match b.basis {
+            rtpipe_analysis::Basis::NoSampleReaches => "-".to_string(),
+            _ => opt(spec, b.value),
+        };
         t.row(vec![
             spec.chain_label(c.chain),
             c.metric.name().to_string(),
-            opt(spec, read.value),
-            opt(spec, event.value),
+            value(read),
+            value(event),
             basis,
         ]);
     }

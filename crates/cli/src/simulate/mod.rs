@@ -59,7 +59,8 @@ pub struct SimulateArgs {
     pub exec: ExecArg,
     /// Release offsets: all at 0 (sync), uniform in [0, T) per task (random),
     /// or random plus an adversarial search for each chain's worst case
-    /// (search), reported beside the bounds as a tightness ratio.
+    /// (search), reported beside the bounds as a tightness ratio. A task
+    /// with a known `offset` in the spec keeps it in every mode.
     #[arg(long, value_enum, default_value_t = PhasingArg::Sync)]
     pub phasing: PhasingArg,
     /// With --phasing search: candidates tried per local search (4 restarts).
