@@ -119,36 +119,7 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
                    "value": finite(c.value), "bound": c.bound, "schedulable": c.schedulable})
         })
         .collect();
-    let chains: Vec<Value> = r
-        .chains
-        .iter()
-        .map(|c| {
-            let ch = &spec.chains[c.chain];
-            let mut entry = json!({
-                "name": ch.name,
-                "path": path_names(spec, &ch.path),
-                "metric": c.metric.name(),
-                "limit": num(spec, c.limit),
-                "paper": spec.in_unit(c.bound.paper),
-                "sound": num(spec, c.bound.sound),
-                "davare": num(spec, c.bound.davare),
-                "ok": c.ok,
-                "paper_ok": c.paper_ok(),
-                "from_event": {
-                    "paper": spec.in_unit(c.bound.from_event_paper),
-                    "sound": num(spec, c.bound.from_event_sound),
-                },
-                "cases": r.cases[c.chain].iter().map(|k| match k {
-                    rtpipe_analysis::Case::One => 1,
-                    rtpipe_analysis::Case::Two => 2,
-                }).collect::<Vec<_>>(),
-            });
-            if let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) {
-                entry["known_offsets"] = known_offsets_json(spec, o, c.metric);
-            }
-            entry
-        })
-        .collect();
+    let chains: Vec<Value> = r.chains.iter().map(|c| chain_json(spec, r, c)).collect();
     json!({
         "system": spec.name,
         "time_unit": spec.time_unit.name(),
@@ -165,6 +136,35 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
         "ok": r.all_ok(),
         "paper_ok": r.all_ok_paper(),
     })
+}
+
+/// One chain and metric of the report; `known_offsets` only for a chain
+/// with known offsets.
+fn chain_json(spec: &Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> Value {
+    let ch = &spec.chains[c.chain];
+    let mut entry = json!({
+        "name": ch.name,
+        "path": path_names(spec, &ch.path),
+        "metric": c.metric.name(),
+        "limit": num(spec, c.limit),
+        "paper": spec.in_unit(c.bound.paper),
+        "sound": num(spec, c.bound.sound),
+        "davare": num(spec, c.bound.davare),
+        "ok": c.ok,
+        "paper_ok": c.paper_ok(),
+        "from_event": {
+            "paper": spec.in_unit(c.bound.from_event_paper),
+            "sound": num(spec, c.bound.from_event_sound),
+        },
+        "cases": r.cases[c.chain].iter().map(|k| match k {
+            rtpipe_analysis::Case::One => 1,
+            rtpipe_analysis::Case::Two => 2,
+        }).collect::<Vec<_>>(),
+    });
+    if let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) {
+        entry["known_offsets"] = known_offsets_json(spec, o, c.metric);
+    }
+    entry
 }
 
 /// A chain's bounds of `metric` under the spec's known release offsets:

@@ -192,16 +192,24 @@ fn max_period(spec: &Spec, tasks: impl Iterator<Item = usize>) -> Option<Nanos> 
 /// The horizon that gives every chain's tail at least `outputs` outputs:
 /// tails release one job per period and (when schedulable) finish it within
 /// the period, so N periods of the slowest tail plus one longest period
-/// cover N outputs of every tail. `None` when no task has a fixed period or
-/// the span exceeds the longest time the model allows.
+/// cover N outputs of every tail, once every task has started (after the
+/// largest known offset, 0 without any). `None` when no task has a fixed
+/// period or the span exceeds the longest time the model allows.
 pub fn horizon_for_outputs(spec: &Spec, outputs: u64) -> Option<Nanos> {
     let t_max = max_period(spec, 0..spec.tasks.len()).filter(|&t| t > 0)?;
     let tails = spec.chains.iter().filter_map(|c| c.path.last().copied());
     let t_tail = max_period(spec, tails).unwrap_or(t_max);
+    let start = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.offset)
+        .max()
+        .unwrap_or(0);
     i64::try_from(outputs)
         .ok()
         .and_then(|n| n.checked_mul(t_tail))
         .and_then(|h| h.checked_add(t_max))
+        .and_then(|h| h.checked_add(start))
         .filter(|&h| h <= MAX_TIME)
 }
 

@@ -561,6 +561,20 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
         }
     }
 
+    /// Demands: 12 % of the moves change them alone, 8 % together with an
+    /// offset move; with every offset known, every move changes them alone
+    /// (they are all there is to search). True when the move is complete.
+    fn demand_move(&mut self, cand: &mut Candidate) -> bool {
+        let r = self.rng.unit();
+        let all_known = self.movable.is_empty() && self.n() > 0;
+        if r < 0.2 || all_known {
+            cand.exec = self.random_exec();
+            cand.seed = self.rng.next_u64();
+            return r < 0.12 || all_known;
+        }
+        false
+    }
+
     /// A neighbour of `cur`. `log` caches the instants of `cur`'s run.
     fn neighbour(
         &mut self,
@@ -569,17 +583,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
     ) -> Result<Candidate, SimError> {
         let mut cand = cur.cand.clone();
         let n = self.n();
-        let r = self.rng.unit();
-        // Demands: 12 % alone, 8 % together with an offset move.
-        // With every offset known, demands are all there is to search.
-        if r < 0.2 || (self.movable.is_empty() && n > 0) {
-            cand.exec = self.random_exec();
-            cand.seed = self.rng.next_u64();
-            if r < 0.12 || self.movable.is_empty() {
-                return Ok(cand);
-            }
-        }
-        if n == 0 {
+        if self.demand_move(&mut cand) || n == 0 {
             return Ok(cand);
         }
         let i = self.pick_task();
