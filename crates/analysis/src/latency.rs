@@ -126,10 +126,12 @@ pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     }
 }
 
-/// Sound mode, reaction link p → c: the time from p's publish of a sample to
-/// the first output of c carrying it. `p_distinct`: no two jobs of p carry the
-/// same sample (true at the chain head), which licenses the reachability
-/// arguments. `None` when a response time is unbounded.
+/// Sound mode, reaction link p → c, anchored on releases (docs/analysis.md,
+/// "Reaction"): from the release of `J_k`, the first p job carrying the
+/// sample, to the release of `J_{k+1}`, the first c job reading at or after
+/// `J_k`'s publish. `p_distinct`: no two jobs of p carry the same sample
+/// (true at the chain head), which licenses the reachability arguments.
+/// `None` when a response time is unbounded.
 pub fn sound_reaction_link(
     sched: Scheduler,
     p: &LinkTask,
@@ -149,28 +151,37 @@ pub fn sound_reaction_link_in(
     c: &LinkTask,
     p_distinct: bool,
 ) -> Option<Nanos> {
-    let (rp, rc) = (p.r?, c.r?);
-    // Davare et al.: the first c release after the publish is less than T_c later.
-    let mut l = c.t + rc;
-    if order == Some(Case::One) {
-        // c preempts p: at p's publish c has no pending job, and its last job
-        // (which ran ≥ x_min(c) before the publish) was released ≥ x_min(c) earlier.
-        l = l.min(c.t - c.x_min + rc);
+    let (rp, _) = (p.r?, c.r?);
+    // Davare et al.: J_k publishes within R_p of its release, and the first
+    // c release after the publish is less than T_c later.
+    let mut l = rp + c.t;
+    match order {
+        // P1, c preempts p: at the publish c has no pending job, and its last
+        // job (which ran ≥ x_min(c) before the publish) was released
+        // ≥ x_min(c) earlier.
+        Some(Case::One) => l = l.min(rp + c.t - c.x_min),
+        // P2, p preempts c: a c job released at or after J_k's release starts
+        // after J_k's publish, and one is released less than T_c later
+        // (Dürr et al. 2019).
+        Some(Case::Two) => l = l.min(c.t),
+        None => {}
     }
     if p_distinct {
-        // Reachability: c must read before p's next publish, ≤ T_p + R_p − x_min(p) later.
-        l = l.min(p.t + rp - p.x_min + rc);
+        // Reachability: J_{k+1} reads, so is released, before p's next
+        // publish, which the next p job makes within T_p + R_p of J_k's release.
+        l = l.min(p.t + rp);
         if order == Some(Case::Two) {
-            // p preempts c: c must start before p's next release, ≤ T_p − x_min(p) later.
-            l = l.min(p.t - p.x_min + rc);
+            // p preempts c: J_{k+1} starts before p's next release.
+            l = l.min(p.t);
         }
     }
     Some(l)
 }
 
-/// Sound mode, freshness link p → c, anchored on reads: from the read of the
-/// last p job carrying a sample to the read of the last c job carrying it.
-/// A chain's freshness is the sum of these plus the tail's response time.
+/// Sound mode, freshness link p → c, anchored on releases: from the release
+/// of the last p job carrying a sample to the release of the last c job
+/// carrying it. A chain's freshness is the sum of these over every link
+/// but the last, plus [`sound_freshness_last_in`].
 pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     sound_freshness_link_in(fp_order(sched, p, c), p, c)
 }
@@ -179,16 +190,108 @@ pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_reaction_link_in`]); every option grows with T_p and R_p.
 pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, _) = (p.r?, c.r?);
-    // That c job reads before p's next publish, which the next p job (released
-    // T_p after the one that read the sample) makes within R_p.
+    // That c job reads, so is released, before p's next publish, which the
+    // next p job (released T_p after the one that carried the sample) makes
+    // within R_p.
     Some(match order {
-        // c preempts p: that c job has even finished (≥ x_min(c) after its read)
-        // by the time p publishes again.
+        // c preempts p: that c job has even finished (≥ x_min(c) after its
+        // read) by the time p publishes again.
         Some(Case::One) => p.t + rp - c.x_min,
         // p preempts c: that c job started before p's next release.
         Some(Case::Two) => p.t,
         None => p.t + rp,
     })
+}
+
+/// Sound mode, the last freshness link p → c: from the release of the last
+/// p job carrying a sample to the publish of the last c job carrying it.
+pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    sound_freshness_last_in(fp_order(sched, p, c), p, c)
+}
+
+/// [`sound_freshness_last`] with the priority order given; every option
+/// grows with the periods and response times.
+pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    let (rp, rc) = (p.r?, c.r?);
+    Some(match order {
+        // c preempts p: the last c job carrying the sample has published
+        // before p publishes again (nothing of c is pending while p runs).
+        Some(Case::One) => p.t + rp,
+        // Otherwise: it reads before that publish (started before p's next
+        // release when p preempts c) and publishes within R_c of its release.
+        Some(Case::Two) => p.t + rc,
+        None => p.t + rp + rc,
+    })
+}
+
+/// One link's sound terms, all anchored on releases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SoundLink {
+    /// [`sound_reaction_link_in`].
+    pub reaction: Option<Nanos>,
+    /// [`sound_freshness_link_in`].
+    pub freshness: Option<Nanos>,
+    /// [`sound_freshness_last_in`].
+    pub freshness_last: Option<Nanos>,
+}
+
+impl SoundLink {
+    /// The terms of link p → c in a given order.
+    pub fn new_in(order: Option<Case>, p: &LinkTask, c: &LinkTask, p_distinct: bool) -> SoundLink {
+        SoundLink {
+            reaction: sound_reaction_link_in(order, p, c, p_distinct),
+            freshness: sound_freshness_link_in(order, p, c),
+            freshness_last: sound_freshness_last_in(order, p, c),
+        }
+    }
+
+    /// The smallest of each term over some links (a relaxation's view of a
+    /// link whose order a set of periods does not decide).
+    pub fn least(links: impl IntoIterator<Item = SoundLink>) -> SoundLink {
+        let min = |a: Option<Nanos>, b: Option<Nanos>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let none = SoundLink {
+            reaction: None,
+            freshness: None,
+            freshness_last: None,
+        };
+        links.into_iter().fold(none, |acc, l| SoundLink {
+            reaction: min(acc.reaction, l.reaction),
+            freshness: min(acc.freshness, l.freshness),
+            freshness_last: min(acc.freshness_last, l.freshness_last),
+        })
+    }
+}
+
+/// A chain's sound (reaction, freshness) from the head's read, composed from
+/// its links' terms and the tail's response time: reaction ≤ Σ reaction
+/// terms + R_n, freshness ≤ Σ freshness terms of all links but the last +
+/// the last link's `freshness_last` (R_n for a chain of one task), and
+/// reaction ≤ freshness (a sample's first output is never after its last).
+/// The head's read comes after its release, where both sums start.
+pub fn compose_sound(tail_r: Option<Nanos>, links: &[SoundLink]) -> (Option<Nanos>, Option<Nanos>) {
+    let react = links
+        .iter()
+        .map(|l| l.reaction)
+        .sum::<Option<Nanos>>()
+        .zip(tail_r)
+        .map(|(a, b)| a + b);
+    let fresh = match links.split_last() {
+        None => tail_r,
+        Some((last, rest)) => rest
+            .iter()
+            .map(|l| l.freshness)
+            .sum::<Option<Nanos>>()
+            .zip(last.freshness_last)
+            .map(|(a, b)| a + b),
+    };
+    let react = match (react, fresh) {
+        (Some(e), Some(f)) => Some(e.min(f)),
+        (e, _) => e,
+    };
+    (react, fresh)
 }
 
 /// Sound mode: does "each sample is carried by at most one job" pass from p to c?
@@ -207,9 +310,15 @@ pub struct ChainBound {
     pub paper: Nanos,
     /// `None` when some task on the chain has no bounded response time.
     pub sound: Option<Nanos>,
-    /// Reaction: R_1 + Σ_{i≥2} (T_i + R_i) (Davare et al., DAC 2007);
-    /// freshness: the data-age form Σ_{i<n} (T_i + R_i) + R_n.
+    /// Davare et al. (DAC 2007) from the read. Reaction:
+    /// R_1 + Σ_{i≥2} (T_i + R_i); freshness: the data-age form
+    /// Σ_{i<n} (T_i + R_i) + R_n.
     pub davare: Option<Nanos>,
+    /// Dürr et al. (CASES 2019) from the read, with the same response times
+    /// and priority orders. Reaction (Theorem 5.4 less the head's sampling
+    /// T_1): R_n + Σ_links max(R_p, T_c + R_p·[p not above c]); freshness
+    /// (Theorem 5.10): R_n + Σ_links (T_p + R_p·[p not above c]).
+    pub duerr: Option<Nanos>,
     /// From the external event, paper mode: the paper's bound plus one head
     /// period (the event waits for the next read).
     pub from_event_paper: Nanos,
@@ -218,6 +327,12 @@ pub struct ChainBound {
     /// (the event's own sample may never reach the tail). Freshness: from the
     /// head read before a sample's read to the sample's last tail output.
     pub from_event_sound: Option<Nanos>,
+    /// Davare's bound from the event: T_1 more than from the read (reaction:
+    /// Σ (T_i + R_i)).
+    pub from_event_davare: Option<Nanos>,
+    /// Dürr's bound from the event: T_1 more than from the read (reaction:
+    /// Theorem 5.4 itself).
+    pub from_event_duerr: Option<Nanos>,
 }
 
 /// Where a latency is measured from.
@@ -259,6 +374,22 @@ impl ChainBound {
             Anchor::Event => self.from_event_sound,
         }
     }
+
+    /// Davare's bound measured from `a`.
+    pub fn davare_from(&self, a: Anchor) -> Option<Nanos> {
+        match a {
+            Anchor::Read => self.davare,
+            Anchor::Event => self.from_event_davare,
+        }
+    }
+
+    /// Dürr's bound measured from `a`.
+    pub fn duerr_from(&self, a: Anchor) -> Option<Nanos> {
+        match a {
+            Anchor::Read => self.duerr,
+            Anchor::Event => self.from_event_duerr,
+        }
+    }
 }
 
 /// Both metrics' bounds of one chain.
@@ -278,31 +409,92 @@ fn paper_sampling_delay(h: &LinkTask) -> Nanos {
     h.t
 }
 
-/// Sound mode, freshness from the event: the previous head read is at most
-/// T_1 + R_1 − x_1 before the read of the sample (F3), so the event that the
-/// sample reflects happened at most that long before it.
-fn sound_sampling_delay(h: &LinkTask) -> Option<Nanos> {
-    h.r.map(|r| h.t + r - h.x)
+/// Every bound that starts at the head job's release, from the event: the
+/// first head release after an event (reaction), or after the head read
+/// before the sample's (freshness), is less than T_1 later.
+fn from_event(head: &LinkTask, from_release: Option<Nanos>) -> Option<Nanos> {
+    from_release.map(|b| b + head.t)
 }
 
 /// Sound mode, reaction from the event (the maximum reaction time of the
 /// cause-effect-chain literature): from an event at any instant to the first
 /// output of the tail carrying a sample read at or after it. Follow the
 /// immediate forward job chain: the first head job reading at or after the
-/// event publishes within T_1 + R_1 of it (the first release after the event
-/// is less than T_1 later), and each stage's first job reading at or after
-/// the producer's publish publishes within the link term. That job carries
-/// the event's sample or a newer one, so nothing needs the event's own sample
-/// to reach the tail: the reachability terms do not apply, and each link gets
-/// the generic terms only (`p_distinct = false`). Never above Davare's
-/// Σ (T_i + R_i). docs/analysis.md derives it.
+/// event is released less than T_1 after it, and each stage's first job
+/// reading at or after the producer's publish is released within the link
+/// term. That job carries the event's sample or a newer one, so nothing
+/// needs the event's own sample to reach the tail: the reachability terms
+/// do not apply (`p_distinct = false`). docs/analysis.md derives it.
 fn sound_event_reaction(sched: Scheduler, lt: &[LinkTask]) -> Option<Nanos> {
-    let head = &lt[0];
-    let mut sum = head.t + head.r?;
+    let mut sum = Some(0);
     for w in lt.windows(2) {
-        sum += sound_reaction_link(sched, &w[0], &w[1], false)?;
+        sum = sum
+            .zip(sound_reaction_link(sched, &w[0], &w[1], false))
+            .map(|(a, b)| a + b);
     }
-    Some(sum)
+    from_event(&lt[0], sum.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b))
+}
+
+/// The sound links of a chain, with "distinct" passed along from the head.
+fn sound_links(sched: Scheduler, lt: &[LinkTask]) -> Vec<SoundLink> {
+    let mut distinct = true;
+    let mut links = Vec::with_capacity(lt.len().saturating_sub(1));
+    for w in lt.windows(2) {
+        let (p, c) = (&w[0], &w[1]);
+        links.push(SoundLink::new_in(fp_order(sched, p, c), p, c, distinct));
+        distinct = distinct_passes(p, c, distinct);
+    }
+    links
+}
+
+/// Davare's (reaction, freshness) from the read.
+fn davare(lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
+    let tail = lt[lt.len() - 1].r;
+    let mid: Option<Nanos> = lt[..lt.len() - 1]
+        .iter()
+        .map(|t| t.r.map(|r| t.t + r))
+        .sum();
+    let last_t = lt[lt.len() - 1].t;
+    let reaction = mid.zip(tail).map(|(a, r)| a + last_t + r - lt[0].t);
+    (reaction, mid.zip(tail).map(|(a, r)| a + r))
+}
+
+/// Dürr et al. 2019's (reaction, freshness) from the read: Theorems 5.4 and
+/// 5.10 for one ECU, a link gaining R_p back when its producer preempts its
+/// consumer (`fp_order`, so inheritance and other CPUs count as "not above").
+fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
+    // The theorems assume every response time is bounded.
+    if lt.iter().any(|t| t.r.is_none()) {
+        return (None, None);
+    }
+    let mut react = lt[lt.len() - 1].r;
+    let mut age = react;
+    for w in lt.windows(2) {
+        let (p, c) = (&w[0], &w[1]);
+        let part2 = match fp_order(sched, p, c) {
+            Some(Case::Two) => Some(0),
+            _ => p.r,
+        };
+        react = react
+            .zip(p.r.zip(part2))
+            .map(|(a, (rp, x))| a + rp.max(c.t + x));
+        age = age.zip(part2).map(|(a, x)| a + p.t + x);
+    }
+    (react, age)
+}
+
+/// The paper's (reaction, freshness) along the chain: Eq. 1 at the head and
+/// each link's term.
+fn paper(lt: &[LinkTask]) -> (Nanos, Nanos, Vec<Case>) {
+    let (mut pe, mut pf) = (lt[0].l, lt[0].l);
+    let mut cases = Vec::new();
+    for w in lt.windows(2) {
+        let (p, c) = (&w[0], &w[1]);
+        cases.push(paper_case(p, c));
+        pe += paper_reaction_link(p, c);
+        pf += paper_freshness_link(p, c);
+    }
+    (pe, pf, cases)
 }
 
 /// The bounds of the chain along `path` (task indices, head first), given the tasks' timing.
@@ -313,55 +505,24 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
         .collect();
     let sched = spec.scheduler;
     let head = &lt[0];
-    let tail = &lt[lt.len() - 1];
-    let mut pe = head.l;
-    let mut pf = head.l;
-    // Reaction is anchored on publishes (head: read → publish ≤ R_1), freshness
-    // on reads (tail: read → publish ≤ R_n, added at the end).
-    let mut se = head.r;
-    let mut sf = Some(0);
-    let mut dv_e = head.r;
-    let mut dv_f = Some(0);
-    let mut distinct = true;
-    let mut cases = Vec::new();
-    for w in lt.windows(2) {
-        let (p, c) = (&w[0], &w[1]);
-        cases.push(paper_case(p, c));
-        pe += paper_reaction_link(p, c);
-        pf += paper_freshness_link(p, c);
-        se = se
-            .zip(sound_reaction_link(sched, p, c, distinct))
-            .map(|(a, b)| a + b);
-        sf = sf
-            .zip(sound_freshness_link(sched, p, c))
-            .map(|(a, b)| a + b);
-        dv_e = dv_e.zip(c.r).map(|(a, r)| a + c.t + r);
-        dv_f = dv_f.zip(p.r).map(|(a, r)| a + p.t + r);
-        distinct = distinct_passes(p, c, distinct);
-    }
-    sf = sf.zip(tail.r).map(|(a, r)| a + r);
-    dv_f = dv_f.zip(tail.r).map(|(a, r)| a + r);
-    // Every sample's first output comes no later than its last one.
-    se = match (se, sf) {
-        (Some(e), Some(f)) => Some(e.min(f)),
-        (e, _) => e,
-    };
+    let (pe, pf, cases) = paper(&lt);
+    let (se, sf) = compose_sound(lt[lt.len() - 1].r, &sound_links(sched, &lt));
+    let (dv_e, dv_f) = davare(&lt);
+    let (du_e, du_f) = duerr(sched, &lt);
     let paper_delay = paper_sampling_delay(head);
-    let event_reaction = sound_event_reaction(sched, &lt);
-    let event_freshness = sf.zip(sound_sampling_delay(head)).map(|(a, b)| a + b);
-    let bound =
-        |paper: Nanos, sound: Option<Nanos>, davare: Option<Nanos>, event: Option<Nanos>| {
-            ChainBound {
-                paper,
-                sound,
-                davare,
-                from_event_paper: paper + paper_delay,
-                from_event_sound: event,
-            }
-        };
+    let bound = |paper: Nanos, sound, davare, duerr, event| ChainBound {
+        paper,
+        sound,
+        davare,
+        duerr,
+        from_event_paper: paper + paper_delay,
+        from_event_sound: event,
+        from_event_davare: from_event(head, davare),
+        from_event_duerr: from_event(head, duerr),
+    };
     ChainAnalysis {
-        reaction: bound(pe, se, dv_e, event_reaction),
-        freshness: bound(pf, sf, dv_f, event_freshness),
+        reaction: bound(pe, se, dv_e, du_e, sound_event_reaction(sched, &lt)),
+        freshness: bound(pf, sf, dv_f, du_f, from_event(head, sf)),
         cases,
     }
 }

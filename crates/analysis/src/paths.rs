@@ -11,8 +11,8 @@
 //! skipped cycle is named.
 
 use crate::latency::{
-    distinct_passes, paper_freshness_link, paper_reaction_link, sound_freshness_link,
-    sound_reaction_link, LinkTask,
+    distinct_passes, paper_freshness_link, paper_reaction_link, sound_freshness_last,
+    sound_freshness_link, sound_reaction_link, LinkTask,
 };
 use crate::sched::TaskTiming;
 use rtpipe_model::{Nanos, Server, Spec};
@@ -186,6 +186,9 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
     let mut pf_from = vec![NONE; n];
     let mut sf = vec![0 as Nanos; n];
     let mut sf_from = vec![NONE; n];
+    // Sound freshness ending at a task's publish: the last link's own term.
+    let mut sl = vec![0 as Nanos; n];
+    let mut sl_from = vec![NONE; n];
     // Sound reaction on (task, distinct) states: index 2·task + distinct.
     let mut se = vec![0 as Nanos; 2 * n];
     let mut se_ok = vec![NONE; 2 * n];
@@ -195,13 +198,12 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
         stamp[s] = s;
         pe[s] = lt[s].l;
         pf[s] = lt[s].l;
-        let head = lt[s].r.unwrap_or(INF);
         sf[s] = 0;
         pe_from[s] = NONE;
         pf_from[s] = NONE;
         sf_from[s] = NONE;
         se_ok[2 * s] = NONE;
-        se[2 * s + 1] = head;
+        se[2 * s + 1] = 0;
         se_ok[2 * s + 1] = s;
         se_from[2 * s + 1] = NONE;
         let start = pos[s];
@@ -214,6 +216,7 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                 let cand_pe = pe[v] + paper_reaction_link(p, q);
                 let cand_pf = pf[v] + paper_freshness_link(p, q);
                 let cand_sf = add(sf[v], sound_freshness_link(sched, p, q));
+                let cand_sl = add(sf[v], sound_freshness_last(sched, p, q));
                 if stamp[c] != s {
                     stamp[c] = s;
                     pe[c] = cand_pe;
@@ -222,6 +225,8 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                     pf_from[c] = v;
                     sf[c] = cand_sf;
                     sf_from[c] = v;
+                    sl[c] = cand_sl;
+                    sl_from[c] = v;
                     se_ok[2 * c] = NONE;
                     se_ok[2 * c + 1] = NONE;
                 } else {
@@ -236,6 +241,10 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                     if cand_sf > sf[c] {
                         sf[c] = cand_sf;
                         sf_from[c] = v;
+                    }
+                    if cand_sl > sl[c] {
+                        sl[c] = cand_sl;
+                        sl_from[c] = v;
                     }
                 }
                 for d in 0..2 {
@@ -270,8 +279,15 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                 path
             };
             let fin = |x: Nanos| if x == INF { None } else { Some(x) };
-            // Freshness is anchored on reads: the sink's read → publish closes it.
-            let fresh = fin(add(sf[v], lt[v].r));
+            // Sums start at the source's release; a path of one task is its
+            // response time, a longer one ends with its last link's term.
+            let (fresh, fresh_path) = if v == s {
+                (lt[v].r, vec![v])
+            } else {
+                let mut path = walk(&sf_from, sl_from[v]);
+                path.push(v);
+                (fin(sl[v]), path)
+            };
             // Best sound-reaction state at the sink.
             let mut best = NONE;
             for d in 0..2 {
@@ -296,7 +312,14 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                     path: se_path,
                     // First output ≤ last output: the pair's worst freshness
                     // bounds the reaction of every path between them too.
-                    value: match (if best == NONE { None } else { fin(se[best]) }, fresh) {
+                    value: match (
+                        if best == NONE {
+                            None
+                        } else {
+                            fin(add(se[best], lt[v].r))
+                        },
+                        fresh,
+                    ) {
                         (Some(e), Some(f)) => Some(e.min(f)),
                         (e, _) => e,
                     },
@@ -306,7 +329,7 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                     value: Some(pf[v]),
                 },
                 freshness_sound: Worst {
-                    path: walk(&sf_from, v),
+                    path: fresh_path,
                     value: fresh,
                 },
             });

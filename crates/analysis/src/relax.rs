@@ -15,8 +15,8 @@
 //! docs/design.md gives the argument.
 
 use crate::latency::{
-    distinct_passes, paper_freshness_link_in, paper_reaction_link_in, sound_freshness_link_in,
-    sound_reaction_link_in, Case, LinkTask,
+    compose_sound, distinct_passes, paper_freshness_link_in, paper_reaction_link_in, Case,
+    LinkTask, SoundLink,
 };
 use crate::sched::{interference, response_time, utilization_test};
 use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec};
@@ -318,7 +318,7 @@ fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
 }
 
 /// Lower bounds on a chain's sound reaction and freshness from the read,
-/// composed as `latency::analyze_chain` composes them.
+/// composed by `latency::compose_sound` as the analysis composes them.
 fn chain_bounds(
     spec: &Spec,
     order: &Order,
@@ -326,31 +326,23 @@ fn chain_bounds(
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
     let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
-    let (head, tail) = (path[0], path[path.len() - 1]);
-    let mut react = r[head];
-    let mut fresh = Some(0);
     // Reachability needs the producer's samples distinct; take it where it
     // may hold (more options, smaller terms).
     let mut distinct = true;
+    let mut links = Vec::with_capacity(path.len() - 1);
     for w in path.windows(2) {
         let (p, c) = (low(w[0]), low(w[1]));
         let orders = order.link_orders(w[0], w[1]);
-        let least =
-            |f: &dyn Fn(Option<Case>) -> Option<Nanos>| orders.iter().filter_map(|&o| f(o)).min();
-        let e = least(&|o| sound_reaction_link_in(o, &p, &c, distinct));
-        let f = least(&|o| sound_freshness_link_in(o, &p, &c));
-        react = react.zip(e).map(|(a, b)| a + b);
-        fresh = fresh.zip(f).map(|(a, b)| a + b);
+        links.push(SoundLink::least(
+            orders
+                .iter()
+                .map(|&o| SoundLink::new_in(o, &p, &c, distinct)),
+        ));
         // The condition grows with T_c: test it at c's longest period.
         let c_late = link_task(spec, order.hi[w[1]], r[w[1]], w[1]);
         distinct = distinct_passes(&p, &c_late, distinct);
     }
-    fresh = fresh.zip(r[tail]).map(|(a, b)| a + b);
-    let react = match (react, fresh) {
-        (Some(e), Some(f)) => Some(e.min(f)),
-        (e, _) => e,
-    };
-    (react, fresh)
+    compose_sound(r[path[path.len() - 1]], &links)
 }
 
 /// The sums E and F of a chain (see [`chain_bounds`]) as affine bounds over
@@ -364,23 +356,24 @@ fn chain_forms(
     r: &[Option<Nanos>],
     path: &[usize],
 ) -> Option<(Affine, Affine)> {
-    let (head, tail) = (path[0], path[path.len() - 1]);
-    // The head's and tail's response times: R_lb under RM, T under EDF.
+    let tail = path[path.len() - 1];
+    // The tail's response time: R_lb under RM, T under EDF.
     let own = |i: usize| match spec.scheduler {
         Scheduler::Edf => vec![(i, 1.0)],
         Scheduler::Rm => Vec::new(),
     };
     let mut e = Affine {
-        base: r[head]? as f64,
-        slopes: own(head),
-    };
-    let mut f = Affine {
         base: r[tail]? as f64,
         slopes: own(tail),
     };
+    if path.len() == 1 {
+        return Some((e.clone(), e));
+    }
+    let mut f = Affine::default();
     let mut distinct = true;
-    for w in path.windows(2) {
+    for (k, w) in path.windows(2).enumerate() {
         let (pi, ci) = (w[0], w[1]);
+        let last = k + 2 == path.len();
         let orders = order.link_orders(pi, ci);
         // Under EDF a response time is the period itself (`sched`), so it
         // moves with the corner; under RM it stays at its lower bound.
@@ -391,13 +384,13 @@ fn chain_forms(
         let at = |tp: Nanos, tc: Nanos| {
             let p = link_task(spec, tp, resp(pi, tp), pi);
             let c = link_task(spec, tc, resp(ci, tc), ci);
-            let least = |g: &dyn Fn(Option<Case>) -> Option<Nanos>| {
-                orders.iter().filter_map(|&o| g(o)).min()
-            };
-            Some((
-                least(&|o| sound_reaction_link_in(o, &p, &c, distinct))?,
-                least(&|o| sound_freshness_link_in(o, &p, &c))?,
-            ))
+            let l = SoundLink::least(
+                orders
+                    .iter()
+                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct)),
+            );
+            let fresh = if last { l.freshness_last } else { l.freshness };
+            Some((l.reaction?, fresh?))
         };
         let (lp, hp, lc, hc) = (order.lo[pi], order.hi[pi], order.lo[ci], order.hi[ci]);
         let corners = [at(lp, lc)?, at(hp, lc)?, at(lp, hc)?, at(hp, hc)?];

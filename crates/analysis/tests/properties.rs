@@ -6,7 +6,8 @@
 //! ("checked", or why it was skipped) and prints the tally when run with
 //! `--nocapture`.
 //!
-//! - (a) `sound_within_davare`: sound ≤ Davare, recomputed here.
+//! - (a) `sound_within_davare_and_duerr`: sound ≤ min(Davare, Dürr), both
+//!   recomputed here, from the read and from the event.
 //! - (b) `monotone_in_exec`, `monotone_in_period`: bounds do not fall when a
 //!   task gets more work or a longer period, with the restrictions (and
 //!   minimal counterexamples) documented at each test and pinned at the end.
@@ -16,10 +17,11 @@
 
 use proptest::prelude::*;
 use proptest::sample::Index;
-use rtpipe_analysis::latency::{distinct_passes, sound_reaction_link, LinkTask};
+use rtpipe_analysis::latency::{distinct_passes, fp_order, sound_reaction_link, LinkTask};
 use rtpipe_analysis::sched::rm_priorities;
 use rtpipe_analysis::{
-    all_paths, analyze, analyze_chain, schedulability, Case, ChainBound, Metric, Report, TaskTiming,
+    all_paths, analyze, analyze_chain, schedulability, Anchor, Case, ChainBound, Metric, Report,
+    TaskTiming,
 };
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Nanos, PeriodSpec, Scheduler, Spec};
@@ -111,11 +113,36 @@ fn davare(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Option<(Nanos, 
     Some((reaction, freshness))
 }
 
-// (a) Sound bounds never exceed Davare's, whichever way it is computed.
+/// Dürr et al. (CASES 2019) recomputed: reaction (Theorem 5.4 less the
+/// head's T_1) R_n + Σ max(R_p, T_c + part2), data age (Theorem 5.10)
+/// R_n + Σ (T_p + part2), part2 = 0 when the producer preempts the consumer
+/// at every instant, else R_p. `None` when some R_i is missing or exceeds T_i.
+fn duerr(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Option<(Nanos, Nanos)> {
+    let lt: Vec<LinkTask> = path
+        .iter()
+        .map(|&i| LinkTask::new(spec, timing, i))
+        .collect();
+    let rn = lt[lt.len() - 1].r?;
+    let (mut react, mut age) = (rn, rn);
+    for w in lt.windows(2) {
+        let (p, c) = (&w[0], &w[1]);
+        let rp = p.r?;
+        let part2 = match fp_order(spec.scheduler, p, c) {
+            Some(Case::Two) => 0,
+            _ => rp,
+        };
+        react += rp.max(c.t + part2);
+        age += p.t + part2;
+    }
+    Some((react, age))
+}
+
+// (a) Sound bounds never exceed Davare's or Dürr's, from the read or from the
+// event, whichever way they are computed.
 #[test]
-fn sound_within_davare() {
+fn sound_within_davare_and_duerr() {
     check(
-        "sound_within_davare",
+        "sound_within_davare_and_duerr",
         4096,
         system(30, true),
         |(seed, cfg)| {
@@ -125,38 +152,37 @@ fn sound_within_davare() {
             for (k, ch) in spec.chains.iter().enumerate() {
                 let (re, fr) = bounds(&rep, k);
                 let dv = davare(&spec, &rep.timing, &ch.path);
+                let du = duerr(&spec, &rep.timing, &ch.path);
                 prop_assert_eq!(re.davare, dv.map(|d| d.0), "reaction davare, chain {}", k);
                 prop_assert_eq!(fr.davare, dv.map(|d| d.1), "freshness davare, chain {}", k);
+                prop_assert_eq!(re.duerr, du.map(|d| d.0), "reaction duerr, chain {}", k);
+                prop_assert_eq!(fr.duerr, du.map(|d| d.1), "freshness duerr, chain {}", k);
                 if sched_ok {
                     prop_assert!(dv.is_some() && re.sound.is_some() && fr.sound.is_some());
                 }
-                // From the event, Davare's reaction is Σ (T_i + R_i) and the
-                // data age waits at most T_1 + R_1 more for the head's read.
-                let head = ch.path[0];
-                let t1r1 = period(&spec, head) + rep.timing[head].job_response_time.unwrap_or(0);
-                let dv_event = dv.map(|(e, f)| (e + period(&spec, head), f + t1r1));
-                let event = [
-                    (re.from_event_sound, dv_event.map(|d| d.0)),
-                    (fr.from_event_sound, dv_event.map(|d| d.1)),
-                ];
-                for ((b, what), (ev, dv_ev)) in
-                    [(re, "reaction"), (fr, "freshness")].into_iter().zip(event)
-                {
-                    // Both exist exactly when every task on the chain has R ≤ T.
+                // From the event both start one head period earlier: the
+                // head job is released less than T_1 after the event.
+                let t1 = period(&spec, ch.path[0]);
+                for (b, what) in [(re, "reaction"), (fr, "freshness")] {
+                    prop_assert_eq!(b.from_event_davare, b.davare.map(|d| d + t1));
+                    prop_assert_eq!(b.from_event_duerr, b.duerr.map(|d| d + t1));
+                    // All exist exactly when every task on the chain has R ≤ T.
                     prop_assert_eq!(b.sound.is_some(), b.davare.is_some(), "{}", what);
-                    if let (Some(s), Some(d)) = (b.sound, b.davare) {
-                        prop_assert!(s <= d, "{} chain {}: sound {} > davare {}", what, k, s, d);
-                    }
-                    prop_assert_eq!(ev.is_some(), dv_ev.is_some(), "{} from the event", what);
-                    if let (Some(s), Some(d)) = (ev, dv_ev) {
-                        prop_assert!(
-                            s <= d,
-                            "{} chain {} from the event: sound {} > davare {}",
-                            what,
-                            k,
-                            s,
-                            d
-                        );
+                    prop_assert_eq!(b.sound.is_some(), b.duerr.is_some(), "{}", what);
+                    for a in Anchor::ALL {
+                        let (s, d, u) = (b.sound_from(a), b.davare_from(a), b.duerr_from(a));
+                        if let (Some(s), Some(d), Some(u)) = (s, d, u) {
+                            prop_assert!(
+                                s <= d.min(u),
+                                "{} chain {} from the {}: sound {} > min(davare {}, duerr {})",
+                                what,
+                                k,
+                                a.name(),
+                                s,
+                                d,
+                                u
+                            );
+                        }
                     }
                 }
             }
@@ -491,7 +517,8 @@ fn sound_reaction_unclamped(spec: &Spec, timing: &[TaskTiming], path: &[usize]) 
         .iter()
         .map(|&i| LinkTask::new(spec, timing, i))
         .collect();
-    let mut acc = lt[0].r;
+    // From the head's release: the links' terms, then the tail's R.
+    let mut acc = Some(0);
     let mut distinct = true;
     for w in lt.windows(2) {
         acc = acc
@@ -499,7 +526,7 @@ fn sound_reaction_unclamped(spec: &Spec, timing: &[TaskTiming], path: &[usize]) 
             .map(|(a, b)| a + b);
         distinct = distinct_passes(&w[0], &w[1], distinct);
     }
-    acc
+    acc.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b)
 }
 
 /// Worst values over all paths of one (source, sink) pair; sound values with
@@ -814,8 +841,11 @@ fn paper_bounds_can_fall_when_exec_grows() {
     assert_eq!(lo.cases, vec![vec![Case::One, Case::One]]);
     assert_eq!(bounds(&lo, 0).1.paper, 59 * MS);
     assert_eq!(bounds(&hi, 0).1.paper, 58 * MS);
-    assert_eq!(bounds(&lo, 0).1.sound, Some(36 * MS));
-    assert_eq!(bounds(&hi, 0).1.sound, Some(38 * MS));
+    // Sound freshness rises: T_a + R_a − x_min(b) + T_b + R_b (c preempts
+    // b: its last job published before b publishes again) = 20 + 3 + 10 + 2
+    // = 35, then 20 + 4 + 10 + 3 = 37.
+    assert_eq!(bounds(&lo, 0).1.sound, Some(35 * MS));
+    assert_eq!(bounds(&hi, 0).1.sound, Some(37 * MS));
 }
 
 #[test]
@@ -918,10 +948,11 @@ fn sound_reaction_can_fall_when_exec_crosses_the_distinct_threshold_under_edf() 
         distinct_flags(&hi, &rn.timing, path),
         vec![true, true, false, false]
     );
-    // Before: 1 + 12 + 200 + 20 = 233, clamped to the freshness
-    // 2 + 20 + 200 + 10 = 232; after: 1 + 12 + 120 + 20 = 153.
+    // From a's release, links then d's R: before 2 + 110 + 110 + 10 = 232
+    // (= the freshness 2 + 20 + 210); after, b → c gets reachability
+    // (T_b + R_b = 20 instead of R_b + T_c = 110): 2 + 20 + 110 + 10 = 142.
     assert_eq!(bounds(&ro, 0).0.sound, Some(232 * MS));
-    assert_eq!(bounds(&rn, 0).0.sound, Some(153 * MS));
+    assert_eq!(bounds(&rn, 0).0.sound, Some(142 * MS));
     assert_eq!(bounds(&rn, 0).1.sound, Some(232 * MS));
 }
 
@@ -968,9 +999,9 @@ fn sound_reaction_can_fall_when_a_period_crosses_the_distinct_threshold() {
         distinct_flags(&hi, &rn.timing, path),
         vec![true, true, true, false]
     );
-    // 1 + 22 + 51 + 21 = 95 ms (= Davare = the freshness) against
-    // 1 + 22 + 24 + 21 = 68 ms.
-    assert_eq!(bounds(&ro, 0).0.sound, Some(95 * MS));
+    // From a's release, links then d's R: 21 + 51 + 21 + 1 = 94 ms (Davare
+    // 95) against 21 + 23 + 21 + 1 = 66 ms.
+    assert_eq!(bounds(&ro, 0).0.sound, Some(94 * MS));
     assert_eq!(bounds(&ro, 0).0.davare, Some(95 * MS));
-    assert_eq!(bounds(&rn, 0).0.sound, Some(68 * MS));
+    assert_eq!(bounds(&rn, 0).0.sound, Some(66 * MS));
 }

@@ -150,11 +150,14 @@ fn chain_json(spec: &Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> Valu
         "paper": spec.in_unit(c.bound.paper),
         "sound": num(spec, c.bound.sound),
         "davare": num(spec, c.bound.davare),
+        "duerr": num(spec, c.bound.duerr),
         "ok": c.ok,
         "paper_ok": c.paper_ok(),
         "from_event": {
             "paper": spec.in_unit(c.bound.from_event_paper),
             "sound": num(spec, c.bound.from_event_sound),
+            "davare": num(spec, c.bound.from_event_davare),
+            "duerr": num(spec, c.bound.from_event_duerr),
         },
         "cases": r.cases[c.chain].iter().map(|k| match k {
             rtpipe_analysis::Case::One => 1,
@@ -280,7 +283,7 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     }
     if !spec.chains.is_empty() {
         out.push_str(
-            "\nchains (worst case from the head's read; +event: from the event in the world, see docs/analysis.md):\n",
+            "\nchains (worst case from the head's read; +event: from the event in the world; davare: Davare et al. 2007, duerr: Dürr et al. 2019; see docs/analysis.md):\n",
         );
         let mut t = Table::new(&[
             "chain",
@@ -289,12 +292,15 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
             "paper",
             "sound",
             "davare",
+            "duerr",
             "paper+event",
             "sound+event",
+            "davare+event",
+            "duerr+event",
             "paper verdict",
             "sound verdict",
         ])
-        .numeric(&[2, 3, 4, 5, 6, 7]);
+        .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10]);
         for c in &r.chains {
             let label = spec.chain_label(c.chain);
             let verdict = match (c.ok, c.limit) {
@@ -316,8 +322,11 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
                 spec.fmt_time(c.bound.paper),
                 opt(spec, c.bound.sound),
                 opt(spec, c.bound.davare),
+                opt(spec, c.bound.duerr),
                 spec.fmt_time(c.bound.from_event_paper),
                 opt(spec, c.bound.from_event_sound),
+                opt(spec, c.bound.from_event_davare),
+                opt(spec, c.bound.from_event_duerr),
                 paper_verdict.to_string(),
                 verdict.to_string(),
             ]);

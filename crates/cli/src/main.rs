@@ -3,6 +3,8 @@
 mod analyze;
 mod design;
 mod fly;
+mod generate;
+mod import;
 mod output;
 mod plot;
 mod run;
@@ -117,6 +119,24 @@ enum Command {
         #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
         time_limit: Option<f64>,
     },
+    /// Turn the task sets of other tools into rtpipe specs: `import e2eeval
+    /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework.
+    ///
+    /// Exit status: 0 when every spec was written, 2 on bad input (nothing is
+    /// written then), 3 on an internal error.
+    Import {
+        #[command(subcommand)]
+        format: import::ImportCommand,
+    },
+    /// Generate random systems: `generate waters` writes an automotive task
+    /// set with cause-effect chains (WATERS 2015, as E2EEvaluation does).
+    ///
+    /// Exit status: 0 when the spec was written, 2 on bad input, 3 on an
+    /// internal error.
+    Generate {
+        #[command(subcommand)]
+        kind: generate::GenerateCommand,
+    },
 }
 
 /// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
@@ -212,5 +232,7 @@ fn main() -> ExitCode {
             solver,
             time_limit,
         }),
+        Command::Import { format } => import::run(&format),
+        Command::Generate { kind } => generate::run(&kind),
     }
 }

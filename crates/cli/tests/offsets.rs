@@ -38,7 +38,7 @@ fn analyze_shows_the_known_offset_bounds() {
     assert_eq!(k["jobs"], 17);
     assert_eq!(v["chains"][1]["known_offsets"]["sound"], 23.0);
     // The existing keys are unchanged.
-    assert_eq!(v["chains"][0]["sound"], 27.0);
+    assert_eq!(v["chains"][0]["sound"], 26.0);
 }
 
 #[test]

@@ -147,7 +147,8 @@ impl<'a> Master<'a> {
 
 /// A chain's bound as the model writes it, for the test that the encoding
 /// agrees with the analysis: paper mode one sum; sound mode the sums E
-/// (anchored on publishes) and F (on reads), reaction being min(E, F).
+/// (reaction) and F (freshness), both from the head's release, reaction
+/// being min(E, F).
 #[cfg_attr(not(test), allow(dead_code))]
 #[derive(Debug, Clone)]
 pub(crate) struct ChainExpr {

@@ -30,6 +30,24 @@ pub(crate) struct NumLog {
 }
 
 impl NumLog {
+    /// Counts one master solve's numerical failure, if any, by what became
+    /// of it.
+    pub(crate) fn count(&mut self, numerical: Option<&Numerical>) {
+        self.last_skipped = false;
+        let Some(n) = numerical else { return };
+        if self.message.is_none() {
+            self.message = Some(n.message.clone());
+        }
+        if n.from_failed {
+            self.from_failed += 1;
+        } else if n.solved_by > 0 {
+            self.resolved += 1;
+        } else {
+            self.skipped += 1;
+            self.last_skipped = true;
+        }
+    }
+
     pub(crate) fn absorb(&mut self, o: &NumLog) {
         if self.message.is_none() {
             self.message.clone_from(&o.message);
@@ -179,20 +197,8 @@ impl<'a> Runner<'a> {
 
     /// Counts a numerical failure of the solver by what became of it.
     fn note_numerical(&mut self, numerical: Option<&Numerical>) {
-        self.numerical.last_skipped = false;
-        let Some(n) = numerical else { return };
-        if self.numerical.message.is_none() {
-            self.numerical.message = Some(n.message.clone());
-        }
-        if n.from_failed {
-            self.numerical.from_failed += 1;
-        } else if n.solved_by > 0 {
-            self.numerical.resolved += 1;
-        } else {
-            self.numerical.skipped += 1;
-            self.numerical.last_skipped = true;
-        }
-        if debug() {
+        self.numerical.count(numerical);
+        if let (Some(n), true) = (numerical, debug()) {
             eprintln!("master: numerical failure {n:?}");
         }
     }
@@ -252,4 +258,42 @@ pub(crate) fn fix_periods(m: &Master, periods: &[Nanos], g: i64) -> lp::Lp {
         }
     }
     fixed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn failure(solved_by: u32, from_failed: bool) -> Numerical {
+        Numerical {
+            message: "Singular matrix".into(),
+            retries: 3,
+            solved_by,
+            from_failed,
+        }
+    }
+
+    #[test]
+    fn numerical_failures_are_counted_and_noted() {
+        let mut log = NumLog::default();
+        log.count(None);
+        assert_eq!(log.note(), None);
+        log.count(Some(&failure(2, false)));
+        log.count(Some(&failure(0, true)));
+        log.count(Some(&failure(0, false)));
+        assert!(log.last_skipped);
+        log.count(None);
+        assert!(!log.last_skipped);
+        assert_eq!((log.resolved, log.from_failed, log.skipped), (1, 1, 1));
+        assert_eq!(
+            log.note().as_deref(),
+            Some(
+                "the solver failed numerically (Singular matrix) on 3 master problems: \
+                 1 re-solved with the rows rescaled or reordered, 1 answered by the best \
+                 solution found before the failure (no lower bound from it), 1 given up \
+                 (treated as undecided, like a time limit); any design shown is verified \
+                 by the analysis"
+            )
+        );
+    }
 }

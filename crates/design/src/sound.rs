@@ -135,19 +135,25 @@ pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
     m.lp.row(terms, Cmp::Ge, rhs);
 }
 
-/// Sound mode (docs/analysis.md): reaction anchored on publishes, freshness
-/// on reads, each link term the smallest valid option, the priority cases
-/// and the "distinct" property of each stage as binaries. Returns the sums
-/// [E, F]: E the reaction sum, F the freshness sum (the reaction limit holds
-/// when either fits, as the reported reaction is min(E, F)).
+/// Sound mode (docs/analysis.md): both sums anchored on the head's release,
+/// each link term the smallest valid option, the priority cases and the
+/// "distinct" property of each stage as binaries. Returns the sums [E, F]:
+/// E the reaction sum (links + the tail's R), F the freshness sum (links,
+/// the last one to the tail's publish); the reaction limit holds when either
+/// fits, as the reported reaction is min(E, F).
 pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64) -> Vec<Lin> {
-    let mut e = response(m, path[0]);
-    let mut f = Lin::default();
+    let tail = *path.last().unwrap_or(&0);
+    let mut e = response(m, tail);
+    let mut f = if path.len() == 1 {
+        response(m, tail)
+    } else {
+        Lin::default()
+    };
     // d = 1: the stage's jobs carry distinct samples (true at the head).
     let mut d = Bin::Const(true);
-    for w in path.windows(2) {
+    for (k, w) in path.windows(2).enumerate() {
         let (p, c) = (w[0], w[1]);
-        let (l, gq) = sound_link(m, p, c, d);
+        let (l, gq) = sound_link(m, p, c, d, k + 2 == path.len());
         e = e.plus(&Lin {
             terms: vec![(l, 1.0)],
             c: 0.0,
@@ -158,8 +164,6 @@ pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
         });
         d = pass_distinct(m, p, c, d);
     }
-    let tail = *path.last().unwrap_or(&0);
-    f = f.plus(&response(m, tail));
     let big = m.big_m;
     match metric {
         Metric::Freshness => m.lp.row(f.terms.clone(), Cmp::Le, limit - f.c),
@@ -214,21 +218,27 @@ fn span(opts: &[&Lin], lp: &Lp, big: f64) -> (f64, f64) {
 
 /// Link p → c with the producer's stage distinct when `d`: the reaction
 /// term variable (≥ the option its binaries pick) and the freshness term
-/// variable (≥ the option of the priority order).
-fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin) -> (usize, usize) {
+/// variable (≥ the option of the priority order; to the consumer's publish
+/// when `last`). The options are `rtpipe_analysis::latency`'s
+/// `sound_reaction_link_in`, `sound_freshness_link_in` and
+/// `sound_freshness_last_in`, release-anchored.
+fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin, last: bool) -> (usize, usize) {
     let big = m.big_m;
     let (rp, rc) = (response(m, p), response(m, c));
     let same = m.spec.scheduler != Scheduler::Edf && m.spec.tasks[p].cpu == m.spec.tasks[c].cpu;
     let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
-    let o1 = tc.plus(&rc);
-    let o2 = tc.plus(&rc).add_c(-xmin(m, c));
-    let o3 = tp.plus(&rp).plus(&rc).add_c(-xmin(m, p));
-    let o4 = tp.plus(&rc).add_c(-xmin(m, p));
-    let q1 = tp.plus(&rp);
-    let q2 = tp.plus(&rp).add_c(-xmin(m, c));
-    let q3 = tp.clone();
+    let o1 = rp.plus(&tc);
+    let o2 = rp.plus(&tc).add_c(-xmin(m, c));
+    let o3 = tp.plus(&rp);
+    let o4 = tp.clone();
+    let o5 = tc.clone();
+    let (q1, q2, q3) = if last {
+        (tp.plus(&rp).plus(&rc), tp.plus(&rp), tp.plus(&rc))
+    } else {
+        (tp.plus(&rp), tp.plus(&rp).add_c(-xmin(m, c)), tp.clone())
+    };
     // Bounded by their options, so that the switches get tight big-Ms.
-    let (llo, lhi) = span(&[&o1, &o2, &o3, &o4], &m.lp, big);
+    let (llo, lhi) = span(&[&o1, &o2, &o3, &o4, &o5], &m.lp, big);
     let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp, big);
     // HiGHS gets the bounds declared; microlp's basis can go singular
     // when both the bounds and the big-Ms are tight, so there they are
@@ -252,10 +262,10 @@ fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin) -> (usize, usize) {
         }
     };
     if same {
-        let o = m.above(c, p); // 1: c ≻ p (Case 1)
+        let o = m.above(c, p); // 1: c ≻ p (P1), 0: p ≻ c (P2)
         m.ge_option(l, &o2, &[(o, true), (b, false)]);
         m.ge_option(l, &o3, &[(o, true), (b, true)]);
-        m.ge_option(l, &o1, &[(o, false), (b, false)]);
+        m.ge_option(l, &o5, &[(o, false), (b, false)]);
         m.ge_option(l, &o4, &[(o, false), (b, true)]);
         m.ge_option(gq, &q2, &[(o, true)]);
         m.ge_option(gq, &q3, &[(o, false)]);

@@ -58,15 +58,14 @@ fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
     o
 }
 
-fn numerical_note(o: &Outcome) -> bool {
-    o.notes.iter().any(|n| n.contains("failed numerically"))
-}
-
-/// The derived-limits problem: the first master solves (67,000 nodes), the
-/// second makes microlp's basis singular at once. A small work budget keeps
-/// the rest short and the run deterministic.
+/// The derived-limits problem. Under the publish-anchored link terms its
+/// second master made microlp's basis singular at once (the reproducer of
+/// issue 14); the release-anchored terms of issue 13 changed the model and
+/// the failure no longer occurs there. The problem stays as a MILP run that
+/// must answer within a small work budget; how failures are counted and
+/// noted is unit-tested in `solve.rs`.
 #[test]
-fn cleanflight_derived_recovers_from_a_singular_basis() {
+fn cleanflight_derived_answers_within_its_budget() {
     let spec = parse(
         "cleanflight-derived.toml",
         &example("cleanflight-derived.toml"),
@@ -76,18 +75,12 @@ fn cleanflight_derived_recovers_from_a_singular_basis() {
         &spec,
         Options {
             method: Method::Milp,
-            patience: Some(5_000),
+            patience: Some(1_000),
             ..Options::default()
         },
     );
-    // The reproducer of issue 14: the second master fails numerically.
-    assert!(o.iterations >= 2, "{}", o.iterations);
-    assert!(
-        numerical_note(&o),
-        "no note on the numerical failure: {:?}",
-        o.notes
-    );
-    assert_eq!(o.status, Status::Feasible);
+    assert!(matches!(o.status, Status::Feasible | Status::Optimal));
+    assert!(o.iterations >= 1, "{}", o.iterations);
 }
 
 #[test]

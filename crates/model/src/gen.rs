@@ -4,10 +4,17 @@
 //! Hamann): 1, 2, 5, 10, 20, 50, 100, 200, 1000 ms with shares
 //! 3, 2, 2, 25, 25, 3, 20, 1, 4 % (the angle-synchronous class left out).
 //! Utilisation per CPU is split with UUniFast (Bini and Buttazzo 2005).
+//! [`waters_system`] adds the paper's execution-time statistics and the
+//! cause-effect chains of the E2EEvaluation framework (module `waters`).
 
 use crate::{
     compute_transfers, Chain, Channel, Nanos, PeriodSpec, Port, SchedTest, Scheduler, Server, Spec,
     Task, TimeUnit,
+};
+
+mod waters;
+pub use waters::{
+    sample_acet_us, waters_exec, waters_share, waters_system, WatersConfig, WatersExec, WATERS_EXEC,
 };
 
 /// SplitMix64: tiny, fast, good enough for test generation, and stable across

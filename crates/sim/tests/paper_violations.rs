@@ -48,7 +48,7 @@ fn table3_p2_reaction_exceeds_eq5() {
     };
     let (paper, sound) = bounds(&spec, 1, Metric::Reaction);
     assert_eq!(paper, 249 * MS);
-    assert_eq!(sound, 364 * MS);
+    assert_eq!(sound, 326_500_000);
     let got = res.chains[1].reaction.max.unwrap_or(0);
     assert_eq!(got, 278_887_857);
     assert!(got > paper && got <= sound);
