@@ -10,14 +10,18 @@
 //!   exceeded by any execution of the model; see docs/analysis.md).
 //! - [`paths`]: the worst path between every source and sink, by dynamic
 //!   programming over the task graph.
+//! - [`offsets`]: the bounds of chains whose tasks all have known release
+//!   offsets, job by job over the hyperperiod.
 #![deny(missing_docs)]
 
 pub mod latency;
+pub mod offsets;
 pub mod paths;
 pub mod relax;
 pub mod sched;
 
 pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Case, ChainAnalysis, ChainBound};
+pub use offsets::{Basis, ChainOffsets, Fallback, OffsetBound};
 pub use paths::{all_paths, AllPaths, PairBounds, Worst};
 pub use sched::{analyze as schedulability, CpuVerdict, Schedulability, TaskTiming};
 
@@ -128,6 +132,9 @@ pub struct Report {
     pub chains: Vec<ChainResult>,
     /// Per declared chain, the paper's case of each link.
     pub cases: Vec<Vec<Case>>,
+    /// Per declared chain, its bounds under the spec's known release
+    /// offsets (`None` when no task of the chain has one).
+    pub offsets: Vec<Option<ChainOffsets>>,
 }
 
 impl Report {
@@ -146,6 +153,20 @@ impl Report {
     /// schedulability test.
     pub fn ok_in(&self, mode: Mode) -> bool {
         self.schedulability.schedulable && self.chains.iter().all(|c| c.ok_in(mode))
+    }
+
+    /// The bound of `chain`'s `metric` from `anchor` under the spec's known
+    /// offsets, when the chain has any.
+    pub fn offset_bound(
+        &self,
+        chain: usize,
+        metric: Metric,
+        anchor: Anchor,
+    ) -> Option<&OffsetBound> {
+        self.offsets
+            .get(chain)?
+            .as_ref()
+            .map(|o| o.get(metric, anchor))
     }
 }
 
@@ -180,8 +201,17 @@ pub fn analyze(spec: &Spec) -> Report {
     let (timing, schedulability) = sched::analyze(spec);
     let mut chains = Vec::new();
     let mut cases = Vec::new();
+    let mut offsets = Vec::new();
     for (k, ch) in spec.chains.iter().enumerate() {
         let a = analyze_chain(spec, &timing, &ch.path);
+        offsets.push(offsets::chain_offsets(
+            spec,
+            &timing,
+            k,
+            &ch.path,
+            &a,
+            offsets::MAX_JOBS,
+        ));
         for (metric, bound, limit) in [
             (Metric::Reaction, a.reaction.clone(), ch.reaction),
             (Metric::Freshness, a.freshness.clone(), ch.freshness),
@@ -206,6 +236,7 @@ pub fn analyze(spec: &Spec) -> Report {
         schedulability,
         chains,
         cases,
+        offsets,
     }
 }
 

@@ -2,7 +2,7 @@
 
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
-use rtpipe_analysis::{AllPaths, Mode, Report, Worst};
+use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -119,35 +119,7 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
                    "value": finite(c.value), "bound": c.bound, "schedulable": c.schedulable})
         })
         .collect();
-    let chains: Vec<Value> = r
-        .chains
-        .iter()
-        .map(|c| {
-            let ch = &spec.chains[c.chain];
-            json!({
-                "name": ch.name,
-                "path": path_names(spec, &ch.path),
-                "metric": c.metric.name(),
-                "limit": num(spec, c.limit),
-                "paper": spec.in_unit(c.bound.paper),
-                "sound": num(spec, c.bound.sound),
-                "davare": num(spec, c.bound.davare),
-                "duerr": num(spec, c.bound.duerr),
-                "ok": c.ok,
-                "paper_ok": c.paper_ok(),
-                "from_event": {
-                    "paper": spec.in_unit(c.bound.from_event_paper),
-                    "sound": num(spec, c.bound.from_event_sound),
-                    "davare": num(spec, c.bound.from_event_davare),
-                    "duerr": num(spec, c.bound.from_event_duerr),
-                },
-                "cases": r.cases[c.chain].iter().map(|k| match k {
-                    rtpipe_analysis::Case::One => 1,
-                    rtpipe_analysis::Case::Two => 2,
-                }).collect::<Vec<_>>(),
-            })
-        })
-        .collect();
+    let chains: Vec<Value> = r.chains.iter().map(|c| chain_json(spec, r, c)).collect();
     json!({
         "system": spec.name,
         "time_unit": spec.time_unit.name(),
@@ -164,6 +136,54 @@ pub fn report_json(spec: &Spec, r: &Report) -> Value {
         "ok": r.all_ok(),
         "paper_ok": r.all_ok_paper(),
     })
+}
+
+/// One chain and metric of the report; `known_offsets` only for a chain
+/// with known offsets.
+fn chain_json(spec: &Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> Value {
+    let ch = &spec.chains[c.chain];
+    let mut entry = json!({
+        "name": ch.name,
+        "path": path_names(spec, &ch.path),
+        "metric": c.metric.name(),
+        "limit": num(spec, c.limit),
+        "paper": spec.in_unit(c.bound.paper),
+        "sound": num(spec, c.bound.sound),
+        "davare": num(spec, c.bound.davare),
+        "duerr": num(spec, c.bound.duerr),
+        "ok": c.ok,
+        "paper_ok": c.paper_ok(),
+        "from_event": {
+            "paper": spec.in_unit(c.bound.from_event_paper),
+            "sound": num(spec, c.bound.from_event_sound),
+            "davare": num(spec, c.bound.from_event_davare),
+            "duerr": num(spec, c.bound.from_event_duerr),
+        },
+        "cases": r.cases[c.chain].iter().map(|k| match k {
+            rtpipe_analysis::Case::One => 1,
+            rtpipe_analysis::Case::Two => 2,
+        }).collect::<Vec<_>>(),
+    });
+    if let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) {
+        entry["known_offsets"] = known_offsets_json(spec, o, c.metric);
+    }
+    entry
+}
+
+/// A chain's bounds of `metric` under the spec's known release offsets:
+/// {sound, basis, from_event {sound, basis}, hyperperiod, jobs}; the
+/// hyperperiod and jobs are null when the job-level analysis did not run.
+fn known_offsets_json(spec: &Spec, o: &ChainOffsets, metric: Metric) -> Value {
+    let one = |a: Anchor| {
+        let b = o.get(metric, a);
+        json!({"sound": num(spec, b.value), "basis": b.label(spec)})
+    };
+    let mut v = one(Anchor::Read);
+    v["from_event"] = one(Anchor::Event);
+    let jl = o.job_level.as_ref();
+    v["hyperperiod"] = num(spec, jl.map(|j| j.hyperperiod));
+    v["jobs"] = jl.map_or(Value::Null, |j| json!(j.jobs));
+    v
 }
 
 fn finite(x: f64) -> Value {
@@ -313,6 +333,7 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
         }
         out.push_str(&t.render());
     }
+    out.push_str(&known_offsets_text(spec, r));
     let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
     let name = mode.name();
     out.push_str(&format!(
@@ -332,6 +353,48 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
             ),
         }
     ));
+    out
+}
+
+/// The bounds under the spec's known release offsets, for the chains with
+/// any (nothing when none has).
+pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
+    if r.offsets.iter().all(Option::is_none) {
+        return String::new();
+    }
+    let mut out = String::from(
+        "\nknown release offsets (job by job over the hyperperiod, see docs/analysis.md; \
+         basis: what each bound rests on):\n",
+    );
+    let mut t = Table::new(&["chain", "metric", "sound", "sound+event", "basis"]).numeric(&[2, 3]);
+    for c in &r.chains {
+        let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) else {
+            continue;
+        };
+        let (read, event) = (
+            o.get(c.metric, Anchor::Read),
+            o.get(c.metric, Anchor::Event),
+        );
+        let (lr, le) = (read.label(spec), event.label(spec));
+        let basis = if lr == le {
+            lr
+        } else {
+            format!("{lr}; +event: {le}")
+        };
+        // No value because no sample reaches the tail is not "unbounded".
+        let value = |b: &rtpipe_analysis::OffsetBound| match b.basis {
+            rtpipe_analysis::Basis::NoSampleReaches => "-".to_string(),
+            _ => opt(spec, b.value),
+        };
+        t.row(vec![
+            spec.chain_label(c.chain),
+            c.metric.name().to_string(),
+            value(read),
+            value(event),
+            basis,
+        ]);
+    }
+    out.push_str(&t.render());
     out
 }
 

@@ -4,10 +4,12 @@
 use rtpipe_model::Nanos;
 use std::fmt;
 
-/// Release offsets φ_i of one run.
+/// Release offsets φ_i of one run. Every variant keeps a task's known
+/// offset (`offset` in the spec) and places only the tasks whose offset is
+/// unknown; `Given` must agree with the known ones.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Phasing {
-    /// All tasks release at 0 (the classic critical instant).
+    /// Tasks release at 0 (the classic critical instant).
     Sync,
     /// φ_i uniform in [0, T_i), in nanoseconds.
     Random,
@@ -76,6 +78,15 @@ pub enum SimError {
     },
     /// A task's offset is negative.
     NegativeOffset(String),
+    /// `Phasing::Given` places a task whose offset the spec fixes elsewhere.
+    OffsetConflict {
+        /// The task.
+        task: String,
+        /// Its offset in the spec.
+        known: Nanos,
+        /// The offset given for the run.
+        given: Nanos,
+    },
     /// The `Phasing::Grid` step is not positive.
     GridNotPositive(Nanos),
     /// A chain names a task index that does not exist.
@@ -97,6 +108,11 @@ impl fmt::Display for SimError {
                 )
             }
             SimError::NegativeOffset(t) => write!(f, "offset of task `{t}` is negative"),
+            SimError::OffsetConflict { task, known, given } => write!(
+                f,
+                "task `{task}` has the known offset {known} ns in the spec, but the run gives it {given} ns \
+                 (a known offset is fixed in every run)"
+            ),
             SimError::GridNotPositive(g) => {
                 write!(f, "phasing grid must be positive, found {g} ns")
             }

@@ -716,6 +716,11 @@ fn periods_of(spec: &Spec) -> Result<Vec<Nanos>, SimError> {
 
 /// Release offsets φ_i as `phasing` says (drawn from `master` first, before
 /// any demand stream, so that a task's demands do not depend on them).
+///
+/// A task with a known offset (`offset` in the spec) is always released at
+/// it: the phasing places only the unknown ones. `Random` and `Grid` draw
+/// for the unknown tasks only, in task order, so a spec without known
+/// offsets draws exactly what it always drew.
 fn offsets_of(
     spec: &Spec,
     phasing: &Phasing,
@@ -723,11 +728,13 @@ fn offsets_of(
     master: &mut Rng,
 ) -> Result<Vec<Nanos>, SimError> {
     let n = spec.tasks.len();
+    let known = |i: usize| spec.tasks[i].offset;
     Ok(match phasing {
-        Phasing::Sync => vec![0; n],
+        Phasing::Sync => (0..n).map(|i| known(i).unwrap_or(0)).collect(),
         Phasing::Random => periods
             .iter()
-            .map(|&p| master.range(0, p as u64 - 1) as Nanos)
+            .enumerate()
+            .map(|(i, &p)| known(i).unwrap_or_else(|| master.range(0, p as u64 - 1) as Nanos))
             .collect(),
         Phasing::Grid(g) => {
             if *g <= 0 {
@@ -735,7 +742,10 @@ fn offsets_of(
             }
             periods
                 .iter()
-                .map(|&p| master.range(0, ((p - 1) / g) as u64) as Nanos * g)
+                .enumerate()
+                .map(|(i, &p)| {
+                    known(i).unwrap_or_else(|| master.range(0, ((p - 1) / g) as u64) as Nanos * g)
+                })
                 .collect()
         }
         Phasing::Given(v) => {
@@ -747,6 +757,14 @@ fn offsets_of(
             }
             if let Some(i) = v.iter().position(|&o| o < 0) {
                 return Err(SimError::NegativeOffset(spec.tasks[i].name.clone()));
+            }
+            let clash = (0..n).find_map(|i| known(i).filter(|&k| k != v[i]).map(|k| (i, k)));
+            if let Some((i, k)) = clash {
+                return Err(SimError::OffsetConflict {
+                    task: spec.tasks[i].name.clone(),
+                    known: k,
+                    given: v[i],
+                });
             }
             v.clone()
         }

@@ -4,7 +4,7 @@
 //! `simulate` and `fly` report these; the oracle tests check them.
 
 use crate::SimResult;
-use rtpipe_analysis::{Anchor, Metric, Report};
+use rtpipe_analysis::{Anchor, Metric, OffsetBound, Report};
 use rtpipe_model::{Nanos, Spec, MAX_TIME};
 
 /// Distribution of the observations of one quantity.
@@ -70,6 +70,16 @@ impl Judged {
     }
 }
 
+/// Observations of one quantity against its bound under the spec's known
+/// release offsets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnownJudged {
+    /// The bound, and what it rests on.
+    pub bound: OffsetBound,
+    /// Observations that break it ([`OffsetBound::exceeded_by`]).
+    pub over: usize,
+}
+
 /// One chain and metric: observations against the analysis, measured from
 /// the head's read and from the event.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,6 +92,9 @@ pub struct ChainObs {
     pub read: Judged,
     /// Measured from the event.
     pub event: Judged,
+    /// The same observations against the bounds under the spec's known
+    /// offsets (from the read, from the event), when the chain has any.
+    pub known: Option<[KnownJudged; 2]>,
 }
 
 impl ChainObs {
@@ -96,6 +109,27 @@ impl ChainObs {
     /// Observations above a sound bound, from either anchor.
     pub fn over_sound(&self) -> usize {
         self.read.over_sound.unwrap_or(0) + self.event.over_sound.unwrap_or(0)
+    }
+
+    /// The observations against the known-offset bound from `a`, if any.
+    pub fn known_from(&self, a: Anchor) -> Option<&KnownJudged> {
+        let k = self.known.as_ref()?;
+        Some(match a {
+            Anchor::Read => &k[0],
+            Anchor::Event => &k[1],
+        })
+    }
+
+    /// Observations that break the bound that holds for the simulated runs:
+    /// the known-offset bound when the chain has one (the simulator always
+    /// releases a task with a known offset at it; that bound is never above
+    /// the arbitrary-phasing one where the latter holds), the sound
+    /// arbitrary-phasing bound otherwise.
+    pub fn violations(&self) -> usize {
+        match &self.known {
+            Some([r, e]) => r.over + e.over,
+            None => self.over_sound(),
+        }
     }
 }
 
@@ -112,11 +146,23 @@ pub fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
                     .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
                 Judged::of(values, c.bound.paper_from(a), c.bound.sound_from(a))
             };
+            let known = |a: Anchor| {
+                let bound = report.offset_bound(c.chain, c.metric, a)?.clone();
+                let values = res
+                    .chains
+                    .get(c.chain)
+                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
+                let over = values.iter().filter(|&&v| bound.exceeded_by(v)).count();
+                Some(KnownJudged { bound, over })
+            };
             ChainObs {
                 chain: c.chain,
                 metric: c.metric,
                 read: judge(Anchor::Read),
                 event: judge(Anchor::Event),
+                known: known(Anchor::Read)
+                    .zip(known(Anchor::Event))
+                    .map(|(r, e)| [r, e]),
             }
         })
         .collect()
@@ -146,16 +192,24 @@ fn max_period(spec: &Spec, tasks: impl Iterator<Item = usize>) -> Option<Nanos> 
 /// The horizon that gives every chain's tail at least `outputs` outputs:
 /// tails release one job per period and (when schedulable) finish it within
 /// the period, so N periods of the slowest tail plus one longest period
-/// cover N outputs of every tail. `None` when no task has a fixed period or
-/// the span exceeds the longest time the model allows.
+/// cover N outputs of every tail, once every task has started (after the
+/// largest known offset, 0 without any). `None` when no task has a fixed
+/// period or the span exceeds the longest time the model allows.
 pub fn horizon_for_outputs(spec: &Spec, outputs: u64) -> Option<Nanos> {
     let t_max = max_period(spec, 0..spec.tasks.len()).filter(|&t| t > 0)?;
     let tails = spec.chains.iter().filter_map(|c| c.path.last().copied());
     let t_tail = max_period(spec, tails).unwrap_or(t_max);
+    let start = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.offset)
+        .max()
+        .unwrap_or(0);
     i64::try_from(outputs)
         .ok()
         .and_then(|n| n.checked_mul(t_tail))
         .and_then(|h| h.checked_add(t_max))
+        .and_then(|h| h.checked_add(start))
         .filter(|&h| h <= MAX_TIME)
 }
 

@@ -20,6 +20,9 @@
 //! only feeds the demand streams, and each task has its own stream, so a
 //! candidate's demands do not change when only its offsets do.
 //!
+//! A task with a known offset (`offset` in the spec) keeps it in every
+//! candidate: the search moves only the unknown offsets, and the demands.
+//!
 //! Everything is deterministic per [`SearchConfig::seed`], and the result is
 //! replayable: `simulate(spec, &result.config)` reproduces `result.value`.
 //!
@@ -31,7 +34,7 @@
 
 use crate::rng::Rng;
 use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
-use rtpipe_analysis::{analyze, Anchor, Metric};
+use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
 use rtpipe_model::{Nanos, Spec};
 use std::fmt;
 
@@ -47,7 +50,8 @@ pub const EXEC_MODELS: [ExecModel; 4] = [
 /// spec and the horizon.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Candidate {
-    /// φ_i in [0, T_i), one per task.
+    /// φ_i in [0, T_i) for a task whose offset is unknown, its known offset
+    /// otherwise; one per task.
     pub offsets: Vec<Nanos>,
     /// The demand model of the run.
     pub exec: ExecModel,
@@ -146,6 +150,9 @@ pub struct SearchResult {
     pub sound: Option<Nanos>,
     /// The paper bound.
     pub paper: Option<Nanos>,
+    /// The bound under the spec's known release offsets, when the chain has
+    /// any: the one every run of the search must respect.
+    pub known: Option<OffsetBound>,
 }
 
 impl SearchResult {
@@ -159,9 +166,23 @@ impl SearchResult {
         }
     }
 
-    /// Whether the found latency exceeds the sound bound (an analysis bug).
+    /// Whether the found latency exceeds the sound bound that holds for the
+    /// search's runs (an analysis bug): the known-offset bound when the
+    /// chain has one, the arbitrary-phasing one otherwise.
     pub fn exceeds_sound(&self) -> bool {
-        matches!((self.value, self.sound), (Some(v), Some(b)) if v > b)
+        match (&self.known, self.value) {
+            (Some(k), Some(v)) => k.exceeded_by(v),
+            (None, Some(v)) => self.sound.is_some_and(|b| v > b),
+            (_, None) => false,
+        }
+    }
+
+    /// Found / known-offset bound, when the chain has one.
+    pub fn tightness_known(&self) -> Option<f64> {
+        match (self.value, self.known.as_ref().and_then(|k| k.value)) {
+            (Some(v), Some(b)) if b > 0 => Some(v as f64 / b as f64),
+            _ => None,
+        }
     }
 }
 
@@ -237,6 +258,8 @@ pub fn search_with(
         .filter(|&x| x > 0)
         .fold(gcd_periods, gcd);
     let chain_tasks = spec.chains[cfg.chain].path.clone();
+    let fixed: Vec<Option<Nanos>> = spec.tasks.iter().map(|t| t.offset).collect();
+    let movable: Vec<usize> = (0..fixed.len()).filter(|&i| fixed[i].is_none()).collect();
     let t_max = chain_tasks
         .iter()
         .filter_map(|&i| periods.get(i).copied())
@@ -250,6 +273,8 @@ pub fn search_with(
         grids: [gcd_periods, gcd_all],
         chain_tasks,
         prio: rtpipe_analysis::sched::rm_priorities(spec),
+        fixed,
+        movable,
         t_max,
         rng: Rng::new(cfg.seed ^ 0x5EA2_C4ED_0F7A_11E5),
         observe,
@@ -265,7 +290,8 @@ pub fn search_with(
         };
         s.local_search(r, start)?;
     }
-    let (sound, paper) = analyze(spec)
+    let report = analyze(spec);
+    let (sound, paper) = report
         .chains
         .iter()
         .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
@@ -273,15 +299,18 @@ pub fn search_with(
             let a = cfg.anchor;
             (c.bound.sound_from(a), Some(c.bound.paper_from(a)))
         });
+    let known = report
+        .offset_bound(cfg.chain, cfg.metric, cfg.anchor)
+        .cloned();
     let (best, value, witness) = match s.best {
         Some(b) => (b.cand, b.value, b.witness),
         // No restart at all: report the synchronous worst case, unevaluated.
         None => (
-            Candidate {
+            s.pinned(Candidate {
                 offsets: vec![0; s.periods.len()],
                 exec: ExecModel::Worst,
                 seed: cfg.seed,
-            },
+            }),
             None,
             None,
         ),
@@ -299,6 +328,7 @@ pub fn search_with(
         trajectory: s.trajectory,
         sound,
         paper,
+        known,
     })
 }
 
@@ -337,6 +367,10 @@ struct Searcher<'a, F> {
     chain_tasks: Vec<usize>,
     /// Rate-monotonic ranks (1 highest; `None` in the background).
     prio: Vec<Option<usize>>,
+    /// Known offsets (`offset` in the spec), which no candidate changes.
+    fixed: Vec<Option<Nanos>>,
+    /// The tasks whose offset the search may move.
+    movable: Vec<usize>,
     /// Longest period on the chain: how far before a sample's read to look
     /// for instants to align with.
     t_max: Nanos,
@@ -359,12 +393,29 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
 
     fn pick_task(&mut self) -> usize {
         // Half the time a task of the chain, otherwise any (interference).
-        if !self.chain_tasks.is_empty() && self.rng.chance(0.5) {
+        let i = if !self.chain_tasks.is_empty() && self.rng.chance(0.5) {
             let k = self.rng.range(0, self.chain_tasks.len() as u64 - 1) as usize;
             self.chain_tasks[k]
         } else {
             self.rng.range(0, self.n() as u64 - 1) as usize
+        };
+        // A known offset cannot move: any task whose offset can instead
+        // (only specs with known offsets draw here).
+        if self.fixed[i].is_some() && !self.movable.is_empty() {
+            let k = self.rng.range(0, self.movable.len() as u64 - 1) as usize;
+            return self.movable[k];
         }
+        i
+    }
+
+    /// `cand` with every known offset in place.
+    fn pinned(&self, mut cand: Candidate) -> Candidate {
+        for (o, f) in cand.offsets.iter_mut().zip(&self.fixed) {
+            if let Some(f) = f {
+                *o = *f;
+            }
+        }
+        cand
     }
 
     fn random_exec(&mut self) -> ExecModel {
@@ -393,11 +444,12 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
         } else {
             self.random_exec()
         };
-        Candidate {
+        let cand = Candidate {
             offsets,
             exec,
             seed: self.rng.next_u64(),
-        }
+        };
+        self.pinned(cand)
     }
 
     fn evaluate(&mut self, restart: u32, cand: Candidate) -> Result<Scored, SimError> {
@@ -485,7 +537,8 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
         let Some(pc) = self.prio[c] else { return };
         for j in 0..self.n() {
             let above = self.prio[j].is_some_and(|pj| pj < pc);
-            if above && self.spec.tasks[j].cpu == self.spec.tasks[c].cpu {
+            let free = self.fixed[j].is_none();
+            if above && free && self.spec.tasks[j].cpu == self.spec.tasks[c].cpu {
                 let d = 1 + self.small_delta(j).max(0);
                 cand.offsets[j] = (x + d).rem_euclid(self.periods[j]);
             }
@@ -551,30 +604,35 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
         }
     }
 
+    /// Demands: 12 % of the moves change them alone, 8 % together with an
+    /// offset move; with every offset known, every move changes them alone
+    /// (they are all there is to search). True when the move is complete.
+    fn demand_move(&mut self, cand: &mut Candidate) -> bool {
+        let r = self.rng.unit();
+        let all_known = self.movable.is_empty() && self.n() > 0;
+        if r < 0.2 || all_known {
+            cand.exec = self.random_exec();
+            cand.seed = self.rng.next_u64();
+            return r < 0.12 || all_known;
+        }
+        false
+    }
+
     /// A neighbour of `cur`. `log` caches the instants of `cur`'s run.
     fn neighbour(&mut self, cur: &Scored, log: &mut Option<Log>) -> Result<Candidate, SimError> {
         let mut cand = cur.cand.clone();
         let n = self.n();
-        let r = self.rng.unit();
-        // Interference bursts after a chain task's read: 10 %.
-        if r >= 0.9 && n > 0 {
+        if self.demand_move(&mut cand) || n == 0 {
+            return Ok(cand);
+        }
+        // Interference bursts after a chain task's read: 10 % of the offset moves.
+        if self.rng.chance(0.1) {
             if log.is_none() {
                 *log = Some(self.instants(cur)?);
             }
             if let Some(l) = log.as_ref() {
                 self.burst(&mut cand, l);
             }
-            return Ok(cand);
-        }
-        // Demands: 12 % alone, 8 % together with an offset move.
-        if r < 0.2 {
-            cand.exec = self.random_exec();
-            cand.seed = self.rng.next_u64();
-            if r < 0.12 {
-                return Ok(cand);
-            }
-        }
-        if n == 0 {
             return Ok(cand);
         }
         let i = self.pick_task();
@@ -649,7 +707,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
                 }
             }
         }
-        Ok(cand)
+        Ok(self.pinned(cand))
     }
 
     /// Hill climbing from `start`. When a move of a single offset makes
@@ -659,6 +717,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
     /// cliff (a job shifted later until it catches the data), and this finds
     /// the edge to the nanosecond in a logarithmic number of runs.
     fn local_search(&mut self, restart: u32, start: Candidate) -> Result<(), SimError> {
+        let start = self.pinned(start);
         let mut cur = self.evaluate(restart, start)?;
         let mut log = None;
         let mut line: Option<(usize, Nanos)> = None;
@@ -667,7 +726,7 @@ impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
                 Some((i, step)) => {
                     let mut c = cur.cand.clone();
                     c.offsets[i] = (c.offsets[i] + step).rem_euclid(self.periods[i]);
-                    c
+                    self.pinned(c)
                 }
                 None => self.neighbour(&cur, &mut log)?,
             };

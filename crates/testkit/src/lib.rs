@@ -95,6 +95,15 @@ pub fn check<S: Strategy>(
     eprintln!("{name}: {total} cases {tally:?}");
 }
 
+/// An unsigned integer from the environment variable `name` (a test's size
+/// knob), or `default` when it is unset or not a number.
+pub fn env_u64(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(default)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,13 +126,4 @@ mod tests {
         });
         assert_eq!(seen.into_inner().unwrap_or(0), 17);
     }
-}
-
-/// An unsigned integer from the environment variable `name` (a test's size
-/// knob), or `default` when it is unset or not a number.
-pub fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(default)
 }
