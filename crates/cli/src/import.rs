@@ -394,10 +394,14 @@ fn release(m: &Mapping, place: &str, rounded: &mut usize) -> Result<(Nanos, Opti
         return Ok((period, None));
     }
     let phase = number(m, "Phase", place)?.unwrap_or(0.0);
-    Ok((
-        period,
-        Some(time(phase, Round::Nearest, "Phase", place, rounded)?),
-    ))
+    let phase = time(phase, Round::Nearest, "Phase", place, rounded)?;
+    if phase >= period {
+        return Err(bad(
+            format!("{place}: Phase is not below Period"),
+            "a task released a period or more late has no job in its first periods, which rtpipe does not model; give a Phase below the Period",
+        ));
+    }
+    Ok((period, Some(phase)))
 }
 
 /// A sporadic task's inter-arrival time, which must not vary.

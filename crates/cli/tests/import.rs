@@ -331,6 +331,11 @@ fn bad_input_names_its_place_and_writes_nothing() {
         ],
     );
     refused(
+        "imp-late",
+        &one_task(&ok.replace("Phase: 0", "Phase: 10")),
+        &["task 1 (Tasks[0])", "Phase is not below Period"],
+    );
+    refused(
         "imp-jitter",
         &one_task(&ok.replace("Jitter: 0", "Jitter: 0.5")),
         &["task 1 (Tasks[0])", "release jitter"],

@@ -106,7 +106,7 @@ fn simulate_holds_runs_against_the_known_offset_bounds() {
 /// the event (which assumes every task has started), not the known-offset
 /// one, which is the one that holds for them: exit 0, with a note.
 #[test]
-fn a_late_start_is_not_a_violation() {
+fn a_late_start_is_refused() {
     let dir = scratch("offsets-late");
     let p = dir.join("late.toml");
     let src = "[system]\nname = \"late\"\ntime_unit = \"ms\"\nscheduler = \"rm\"\nschedulability = \"rta\"\n\
@@ -117,12 +117,11 @@ fn a_late_start_is_not_a_violation() {
     if let Err(e) = std::fs::write(&p, src) {
         panic!("{e}");
     }
+    // A task released a period or more late has no job in its first
+    // periods, which the any-phasing bounds do not allow for.
     let o = rtpipe(&["simulate", &p.to_string_lossy(), "--outputs", "30"]);
-    assert_exit(&o, 0);
-    let out = stdout(&o);
-    assert!(out.contains("no sample above a sound bound"), "{out}");
-    assert!(
-        out.contains("does not cover a task that starts later"),
-        "{out}"
-    );
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(err.contains("offset 100 of task `b` is not below its period (10)"), "{err}");
+    assert!(err.contains("offset = 0"), "{err}");
 }

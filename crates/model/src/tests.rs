@@ -402,3 +402,29 @@ fn offsets_known_or_synchronous() {
     ));
     assert!(e.to_string().contains("synchronous"), "{e}");
 }
+
+#[test]
+fn offsets_must_be_below_the_period() {
+    // A task released a period or more late has no job in its first
+    // periods: refused, with the offset modulo the period suggested.
+    let e = err(&MINI.replace("period = 10", "period = 10\noffset = 12"));
+    assert!(
+        e.diagnostics[0].message.contains("not below its period"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("offset = 2"), "{e}");
+    let e = err(&MINI.replace("period = 10", "period = { min = 5, max = 20 }\noffset = 5"));
+    assert!(
+        e.diagnostics[0]
+            .message
+            .contains("least period of its range"),
+        "{e}"
+    );
+    // Just below is fine.
+    let s = Spec::parse(
+        "x.toml",
+        &MINI.replace("period = 10", "period = 10\noffset = 9.999"),
+    )
+    .expect("valid");
+    assert_eq!(s.tasks[0].offset, Some(9_999_000));
+}

@@ -531,6 +531,46 @@ impl Builder {
                     );
                 }
             }
+            self.check_offset(t, rt);
+        }
+    }
+
+    /// An offset must be below every period the task can have: a task that
+    /// starts a period or more late has no job in its first periods, and the
+    /// any-phasing bounds assume one release per period from the start.
+    fn check_offset(&mut self, t: &Task, rt: &RawTask) {
+        let (Some(x), Some(os)) = (t.offset, &rt.offset) else {
+            return;
+        };
+        let (least, what) = match &t.period {
+            PeriodSpec::Fixed(p) => (*p, "its period"),
+            PeriodSpec::Range { min: Some(m), .. } => (*m, "the least period of its range"),
+            PeriodSpec::Choices(c) => (
+                c.iter().copied().min().unwrap_or(0),
+                "its shortest period choice",
+            ),
+            // The design never picks a period below the budget.
+            _ => (
+                t.budget(),
+                "its budget, the least period the design may pick",
+            ),
+        };
+        if x >= least {
+            let unit = self.unit();
+            self.err(
+                format!(
+                    "offset {} of task `{}` is not below {what} ({})",
+                    format_in(x, unit),
+                    t.name,
+                    format_in(least, unit)
+                ),
+                span(os),
+                format!(
+                    "make the offset less than {} (e.g. offset = {}); a task released a period or more late has no job in its first periods, which the analysis does not model",
+                    format_in(least, unit),
+                    format_in(x % least.max(1), unit)
+                ),
+            );
         }
     }
 
