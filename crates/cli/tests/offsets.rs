@@ -122,6 +122,9 @@ fn a_late_start_is_refused() {
     let o = rtpipe(&["simulate", &p.to_string_lossy(), "--outputs", "30"]);
     assert_exit(&o, 2);
     let err = String::from_utf8_lossy(&o.stderr).to_string();
-    assert!(err.contains("offset 100 of task `b` is not below its period (10)"), "{err}");
+    assert!(
+        err.contains("offset 100 of task `b` is not below its period (10)"),
+        "{err}"
+    );
     assert!(err.contains("offset = 0"), "{err}");
 }

@@ -277,8 +277,27 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             t.name
         )));
     }
+    // Known offsets do not enter the design: its bounds hold for any
+    // phasing, and a job-level analysis of every candidate would cost a
+    // hyperperiod each. The answer keeps them.
+    let offsets: Vec<Option<Nanos>> = spec.tasks.iter().map(|t| t.offset).collect();
+    let plain;
+    let spec = if offsets.iter().any(Option::is_some) {
+        let mut s = spec.clone();
+        s.tasks.iter_mut().for_each(|t| t.offset = None);
+        plain = s;
+        &plain
+    } else {
+        spec
+    };
     let mut domains = domains(spec)?;
     let mut notes = Vec::new();
+    if offsets.iter().any(Option::is_some) {
+        notes.push(
+            "known release offsets are kept but not used by the design: its bounds hold for any phasing (`rtpipe analyze` shows the known-offset bounds of the result)"
+                .to_string(),
+        );
+    }
     if spec.harmonic {
         domain::harmonic_domains(spec, &mut domains.dom, &mut notes)?;
     }
@@ -290,6 +309,11 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         run.solve_all()?
     };
     o.notes.splice(0..0, notes);
+    if let Some(s) = o.spec.as_mut() {
+        for (t, &x) in s.tasks.iter_mut().zip(&offsets) {
+            t.offset = x;
+        }
+    }
     Ok(o)
 }
 

@@ -95,3 +95,26 @@ fn table2_rta_optimum() {
     assert_eq!(periods, [5, 5, 5, 10, 10, 50].map(|ms| ms * 1_000_000));
     assert!((u - 0.838).abs() < 1e-9, "{u}");
 }
+
+/// Known offsets do not change the design (its bounds hold for any
+/// phasing) and stay in the answer, with a note saying so.
+#[test]
+fn known_offsets_are_kept_and_not_used() {
+    let src = example("cleanflight-design.toml");
+    let plain = solve("cleanflight-design.toml", &src);
+    let sync = solve(
+        "cleanflight-design (synchronous)",
+        &src.replacen("[system]", "[system]\nrelease = \"synchronous\"", 1),
+    );
+    assert_eq!(sync.status, Status::Optimal);
+    assert_eq!(sync.objective, plain.objective);
+    let s = sync.spec.unwrap_or_else(|| panic!("a design"));
+    assert!(s.tasks.iter().all(|t| t.offset == Some(0)));
+    assert!(
+        sync.notes
+            .iter()
+            .any(|n| n.contains("not used by the design")),
+        "{:?}",
+        sync.notes
+    );
+}
