@@ -61,6 +61,57 @@ pub enum Value {
     Alert(BatteryAlert),
 }
 
+/// Typed views of a [`Value`], for picking a task's inputs by kind.
+impl Value {
+    /// The gyro task's running sums.
+    pub fn gyro(self) -> Option<crate::ahrs::GyroSnapshot> {
+        match self {
+            Value::Gyro(g) => Some(g),
+            _ => None,
+        }
+    }
+
+    /// The accelerometer task's sample.
+    pub fn accel(self) -> Option<AccelSample> {
+        match self {
+            Value::Accel(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    /// The AHRS estimate.
+    pub fn attitude(self) -> Option<Attitude> {
+        match self {
+            Value::Attitude(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    /// A radio frame.
+    pub fn radio(self) -> Option<RadioSample> {
+        match self {
+            Value::Radio(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The PID task's mixed motor demand.
+    pub fn demand(self) -> Option<MotorDemand> {
+        match self {
+            Value::Demand(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// A housekeeping figure.
+    pub fn scalar(self) -> Option<f64> {
+        match self {
+            Value::Scalar(x) => Some(x),
+            _ => None,
+        }
+    }
+}
+
 /// The job a task does, named by the spec's `body = "..."`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Role {
@@ -200,14 +251,8 @@ impl Body<Value> for AhrsTask {
         inputs: &[Option<Stamped<Value>>],
         _device: Option<Value>,
     ) -> Value {
-        let gyro = input(inputs, |v| match v {
-            Value::Gyro(g) => Some(g),
-            _ => None,
-        });
-        let accel = input(inputs, |v| match v {
-            Value::Accel(a) => Some(a),
-            _ => None,
-        });
+        let gyro = input(inputs, Value::gyro);
+        let accel = input(inputs, Value::accel);
         match (gyro, accel) {
             (Some(g), Some(a)) => Value::Attitude(self.mahony.update(g, a)),
             _ => Value::Nothing,
@@ -282,14 +327,8 @@ impl Body<Value> for PidTask {
         inputs: &[Option<Stamped<Value>>],
         _device: Option<Value>,
     ) -> Value {
-        let att = input(inputs, |v| match v {
-            Value::Attitude(a) => Some(a),
-            _ => None,
-        });
-        let rx = input(inputs, |v| match v {
-            Value::Radio(r) => Some(r),
-            _ => None,
-        });
+        let att = input(inputs, Value::attitude);
+        let rx = input(inputs, Value::radio);
         let (Some(att), Some(rx)) = (att, rx) else {
             return Value::Demand(MotorDemand::default());
         };
@@ -334,11 +373,7 @@ impl Body<Value> for PwmTask {
         inputs: &[Option<Stamped<Value>>],
         _device: Option<Value>,
     ) -> Value {
-        let d = input(inputs, |v| match v {
-            Value::Demand(d) => Some(d),
-            _ => None,
-        })
-        .unwrap_or_default();
+        let d = input(inputs, Value::demand).unwrap_or_default();
         let out = MotorDemand {
             motors: through_dshot(d.motors, d.armed),
             armed: d.armed,
@@ -421,10 +456,7 @@ impl Body<Value> for AlertTask {
         inputs: &[Option<Stamped<Value>>],
         _device: Option<Value>,
     ) -> Value {
-        if let Some(v) = input(inputs, |v| match v {
-            Value::Scalar(x) => Some(x),
-            _ => None,
-        }) {
+        if let Some(v) = input(inputs, Value::scalar) {
             self.hk.voltage = v;
         }
         Value::Alert(self.hk.battery_alerts())
