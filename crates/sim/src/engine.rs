@@ -661,27 +661,39 @@ impl<H: Hooks> Sim<H> {
                 }
                 self.refresh(i, t + dt);
             }
-            if let Some(seg) = &mut self.segments {
-                // Extend this CPU's last slice when the same job just goes on.
-                let last = self.last_segment[cpu].and_then(|k| seg.get_mut(k));
-                match last {
-                    Some(s)
-                        if s.task == i && s.job == index && s.end == t && s.background == slack =>
-                    {
-                        s.end = t + dt
-                    }
-                    _ => {
-                        self.last_segment[cpu] = Some(seg.len());
-                        seg.push(Segment {
-                            cpu,
-                            task: i,
-                            job: index,
-                            start: t,
-                            end: t + dt,
-                            background: slack,
-                        });
-                    }
-                }
+            self.record_segment(cpu, i, index, t, dt, slack);
+        }
+    }
+
+    /// Records that task i ran job `index` on `cpu` over [t, t + dt) (for
+    /// the Gantt chart), extending the CPU's last slice when the same job
+    /// just goes on.
+    pub(crate) fn record_segment(
+        &mut self,
+        cpu: usize,
+        i: usize,
+        index: u64,
+        t: Nanos,
+        dt: Nanos,
+        slack: bool,
+    ) {
+        let Some(seg) = &mut self.segments else {
+            return;
+        };
+        match self.last_segment[cpu].and_then(|k| seg.get_mut(k)) {
+            Some(s) if s.task == i && s.job == index && s.end == t && s.background == slack => {
+                s.end = t + dt
+            }
+            _ => {
+                self.last_segment[cpu] = Some(seg.len());
+                seg.push(Segment {
+                    cpu,
+                    task: i,
+                    job: index,
+                    start: t,
+                    end: t + dt,
+                    background: slack,
+                });
             }
         }
     }

@@ -159,28 +159,7 @@ impl<H: Hooks> Sim<H> {
                     ts.stats.exhaustions += 1;
                 }
             }
-            if let Some(seg) = &mut self.segments {
-                // Extend this CPU's last slice when the same job just goes on.
-                let last = self.last_segment[cpu].and_then(|k| seg.get_mut(k));
-                match last {
-                    Some(s)
-                        if s.task == i && s.job == index && s.end == t && s.background == slack =>
-                    {
-                        s.end = t + dt
-                    }
-                    _ => {
-                        self.last_segment[cpu] = Some(seg.len());
-                        seg.push(Segment {
-                            cpu,
-                            task: i,
-                            job: index,
-                            start: t,
-                            end: t + dt,
-                            background: slack,
-                        });
-                    }
-                }
-            }
+            self.record_segment(cpu, i, index, t, dt, slack);
         }
     }
 }
