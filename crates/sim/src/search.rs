@@ -230,6 +230,20 @@ pub fn search_with(
     cfg: &SearchConfig,
     observe: impl FnMut(&SimConfig, &SimResult),
 ) -> Result<SearchResult, SimError> {
+    let periods = checked_periods(spec, cfg)?;
+    let mut s = Searcher::new(spec, cfg, periods, observe);
+    for r in 0..cfg.restarts {
+        let start = match cfg.start.get(r as usize) {
+            Some(c) => c.clone(),
+            None => s.generated_start(r as usize - cfg.start.len().min(r as usize)),
+        };
+        s.local_search(r, start)?;
+    }
+    Ok(s.result())
+}
+
+/// The tasks' periods, once the configuration is known to fit the spec.
+fn checked_periods(spec: &Spec, cfg: &SearchConfig) -> Result<Vec<Nanos>, SimError> {
     if cfg.chain >= spec.chains.len() {
         return Err(SimError::BadChain(cfg.chain));
     }
@@ -249,87 +263,7 @@ pub fn search_with(
             found: c.offsets.len(),
         });
     }
-    let demands: Vec<Nanos> = spec.tasks.iter().map(|t| t.demand().max(0)).collect();
-    let gcd_periods = periods.iter().fold(0, |g, &p| gcd(g, p));
-    let gcd_all = spec
-        .tasks
-        .iter()
-        .flat_map(|t| [t.demand(), t.demand_min()])
-        .filter(|&x| x > 0)
-        .fold(gcd_periods, gcd);
-    let chain_tasks = spec.chains[cfg.chain].path.clone();
-    let fixed: Vec<Option<Nanos>> = spec.tasks.iter().map(|t| t.offset).collect();
-    let movable: Vec<usize> = (0..fixed.len()).filter(|&i| fixed[i].is_none()).collect();
-    let t_max = chain_tasks
-        .iter()
-        .filter_map(|&i| periods.get(i).copied())
-        .max()
-        .unwrap_or(1);
-    let mut s = Searcher {
-        spec,
-        cfg,
-        periods,
-        demands,
-        grids: [gcd_periods, gcd_all],
-        chain_tasks,
-        prio: rtpipe_analysis::sched::rm_priorities(spec),
-        fixed,
-        movable,
-        t_max,
-        rng: Rng::new(cfg.seed ^ 0x5EA2_C4ED_0F7A_11E5),
-        observe,
-        simulations: 0,
-        events: 0,
-        best: None,
-        trajectory: Vec::new(),
-    };
-    for r in 0..cfg.restarts {
-        let start = match cfg.start.get(r as usize) {
-            Some(c) => c.clone(),
-            None => s.generated_start(r as usize - cfg.start.len().min(r as usize)),
-        };
-        s.local_search(r, start)?;
-    }
-    let report = analyze(spec);
-    let (sound, paper) = report
-        .chains
-        .iter()
-        .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
-        .map_or((None, None), |c| {
-            let a = cfg.anchor;
-            (c.bound.sound_from(a), Some(c.bound.paper_from(a)))
-        });
-    let known = report
-        .offset_bound(cfg.chain, cfg.metric, cfg.anchor)
-        .cloned();
-    let (best, value, witness) = match s.best {
-        Some(b) => (b.cand, b.value, b.witness),
-        // No restart at all: report the synchronous worst case, unevaluated.
-        None => (
-            s.pinned(Candidate {
-                offsets: vec![0; s.periods.len()],
-                exec: ExecModel::Worst,
-                seed: cfg.seed,
-            }),
-            None,
-            None,
-        ),
-    };
-    Ok(SearchResult {
-        chain: cfg.chain,
-        metric: cfg.metric,
-        anchor: cfg.anchor,
-        value,
-        config: best.config(cfg.horizon),
-        best,
-        witness,
-        simulations: s.simulations,
-        events: s.events,
-        trajectory: s.trajectory,
-        sound,
-        paper,
-        known,
-    })
+    Ok(periods)
 }
 
 fn gcd(a: Nanos, b: Nanos) -> Nanos {
@@ -382,7 +316,89 @@ struct Searcher<'a, F> {
     trajectory: Vec<Progress>,
 }
 
-impl<F: FnMut(&SimConfig, &SimResult)> Searcher<'_, F> {
+impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
+    fn new(spec: &'a Spec, cfg: &'a SearchConfig, periods: Vec<Nanos>, observe: F) -> Self {
+        let demands: Vec<Nanos> = spec.tasks.iter().map(|t| t.demand().max(0)).collect();
+        let gcd_periods = periods.iter().fold(0, |g, &p| gcd(g, p));
+        let gcd_all = spec
+            .tasks
+            .iter()
+            .flat_map(|t| [t.demand(), t.demand_min()])
+            .filter(|&x| x > 0)
+            .fold(gcd_periods, gcd);
+        let chain_tasks = spec.chains[cfg.chain].path.clone();
+        let fixed: Vec<Option<Nanos>> = spec.tasks.iter().map(|t| t.offset).collect();
+        let movable: Vec<usize> = (0..fixed.len()).filter(|&i| fixed[i].is_none()).collect();
+        let t_max = chain_tasks
+            .iter()
+            .filter_map(|&i| periods.get(i).copied())
+            .max()
+            .unwrap_or(1);
+        Searcher {
+            spec,
+            cfg,
+            periods,
+            demands,
+            grids: [gcd_periods, gcd_all],
+            chain_tasks,
+            prio: rtpipe_analysis::sched::rm_priorities(spec),
+            fixed,
+            movable,
+            t_max,
+            rng: Rng::new(cfg.seed ^ 0x5EA2_C4ED_0F7A_11E5),
+            observe,
+            simulations: 0,
+            events: 0,
+            best: None,
+            trajectory: Vec::new(),
+        }
+    }
+
+    /// The best run found, with the analysis' bounds for its quantity.
+    fn result(self) -> SearchResult {
+        let (spec, cfg) = (self.spec, self.cfg);
+        let report = analyze(spec);
+        let (sound, paper) = report
+            .chains
+            .iter()
+            .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
+            .map_or((None, None), |c| {
+                let a = cfg.anchor;
+                (c.bound.sound_from(a), Some(c.bound.paper_from(a)))
+            });
+        let known = report
+            .offset_bound(cfg.chain, cfg.metric, cfg.anchor)
+            .cloned();
+        let (best, value, witness) = match &self.best {
+            Some(b) => (b.cand.clone(), b.value, b.witness),
+            // No restart at all: report the synchronous worst case, unevaluated.
+            None => (
+                self.pinned(Candidate {
+                    offsets: vec![0; self.periods.len()],
+                    exec: ExecModel::Worst,
+                    seed: cfg.seed,
+                }),
+                None,
+                None,
+            ),
+        };
+        SearchResult {
+            chain: cfg.chain,
+            metric: cfg.metric,
+            anchor: cfg.anchor,
+            value,
+            config: best.config(cfg.horizon),
+            best,
+            witness,
+            simulations: self.simulations,
+            events: self.events,
+            trajectory: self.trajectory,
+            sound,
+            paper,
+            known,
+        }
+    }
+
     fn n(&self) -> usize {
         self.periods.len()
     }
