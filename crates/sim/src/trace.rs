@@ -25,8 +25,8 @@
 //! cut at [`TraceOptions::max_slices`] CPU slices and
 //! [`TraceOptions::max_flows`] flow arrows so files stay openable.
 
-use crate::{JobRecord, SimResult};
-use rtpipe_model::{Nanos, Spec};
+use crate::{Carried, JobRecord, Segment, SimResult};
+use rtpipe_model::{Nanos, Spec, Task};
 use serde_json::{json, Value};
 use std::collections::{HashMap, HashSet};
 
@@ -110,162 +110,15 @@ fn ts(ns: Nanos) -> Value {
 
 /// The trace of `result`, with explicit limits and a summary of the cut.
 pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) -> Trace {
-    let n = spec.tasks.len();
-    let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpu_ids.sort_unstable();
-    cpu_ids.dedup();
-    let pid_of: Vec<usize> = spec
-        .tasks
-        .iter()
-        .map(|t| cpu_ids.binary_search(&t.cpu).unwrap_or(0))
-        .collect();
-    let tid = |task: usize| task + 1;
-
+    let lay = Layout::new(spec);
     // The cut: the start of the first slice beyond the limit.
     let cut: Option<Nanos> = result.segments.get(opts.max_slices).map(|s| s.start);
     let end = cut.unwrap_or(result.horizon.saturating_add(1));
-
     let mut ev = Events::default();
-    for (pid, id) in cpu_ids.iter().enumerate() {
-        ev.push(
-            json!({"ph": "M", "name": "process_name", "pid": pid, "tid": 0,
-                       "args": {"name": format!("cpu {id}")}}),
-        );
-        ev.push(
-            json!({"ph": "M", "name": "process_sort_index", "pid": pid, "tid": 0,
-                       "args": {"sort_index": pid}}),
-        );
-    }
-    for (i, t) in spec.tasks.iter().enumerate() {
-        ev.push(
-            json!({"ph": "M", "name": "thread_name", "pid": pid_of[i], "tid": tid(i),
-                       "args": {"name": t.name}}),
-        );
-        ev.push(
-            json!({"ph": "M", "name": "thread_sort_index", "pid": pid_of[i], "tid": tid(i),
-                       "args": {"sort_index": i}}),
-        );
-    }
-
-    let jobs: HashMap<(usize, u64), &JobRecord> =
-        result.jobs.iter().map(|j| ((j.task, j.index), j)).collect();
-    // CPU time each job has received before the slice at hand.
-    let mut done: HashMap<(usize, u64), Nanos> = HashMap::new();
-    let mut slices = 0;
-    for seg in result.segments.iter().take(opts.max_slices) {
-        if seg.task >= n {
-            continue;
-        }
-        let (pid, tid) = (pid_of[seg.task], tid(seg.task));
-        let task = &spec.tasks[seg.task];
-        ev.push(json!({
-            "ph": "X", "cat": if opts.spans { "span" } else { "job" }, "name": task.name, "pid": pid, "tid": tid,
-            "ts": ts(seg.start), "dur": ts(seg.end - seg.start),
-            "args": {"job": seg.job, "background": seg.background},
-        }));
-        slices += 1;
-        if opts.spans {
-            continue;
-        }
-        let key = (seg.task, seg.job);
-        let before = *done.get(&key).unwrap_or(&0);
-        let ran = seg.end - seg.start;
-        done.insert(key, before + ran);
-        // Stages need the job's demand: only completed jobs have it.
-        let Some(job) = jobs.get(&key) else { continue };
-        let d_in = task.delta_in.clamp(0, job.demand);
-        let d_out = task.delta_out.clamp(0, job.demand - d_in);
-        let stages = [
-            ("read", 0, d_in),
-            ("process", d_in, job.demand - d_out),
-            ("write", job.demand - d_out, job.demand),
-        ];
-        for (name, lo, hi) in stages {
-            // Overlap of [lo, hi) with the execution [before, before + ran).
-            let a = lo.max(before);
-            let b = hi.min(before + ran);
-            if b > a {
-                ev.push(json!({
-                    "ph": "X", "cat": "stage", "name": name, "pid": pid, "tid": tid,
-                    "ts": ts(seg.start + (a - before)), "dur": ts(b - a),
-                    "args": {"job": seg.job},
-                }));
-            }
-        }
-    }
-
-    for j in &result.jobs {
-        if j.release < end && j.task < n {
-            ev.push(
-                json!({"ph": "i", "s": "t", "cat": "release", "name": "release",
-                           "pid": pid_of[j.task], "tid": tid(j.task), "ts": ts(j.release),
-                           "args": {"job": j.index}}),
-            );
-        }
-    }
-
-    // Data flow. Jobs per task in completion (= publish) order.
-    let mut by_task: Vec<Vec<&JobRecord>> = vec![Vec::new(); n];
-    for j in &result.jobs {
-        if j.task < n {
-            by_task[j.task].push(j);
-        }
-    }
-    let mut linked: HashSet<(usize, u64, usize, u64)> = HashSet::new();
-    let (mut flows, mut flows_dropped) = (0usize, 0usize);
-    let mut consumers: Vec<&JobRecord> = result.jobs.iter().filter(|j| j.read < end).collect();
-    consumers.sort_by_key(|j| (j.read, j.task));
-    for cj in consumers {
-        for c in &cj.carried {
-            let (Some(sample), true) = (c.sample, c.pos > 0) else {
-                continue;
-            };
-            let Some(&producer) = spec
-                .chains
-                .get(c.chain)
-                .and_then(|ch| ch.path.get(c.pos - 1))
-            else {
-                continue;
-            };
-            let Some(list) = by_task.get(producer) else {
-                continue;
-            };
-            // Completions publish before reads at one instant: finish ≤ read.
-            let k = list.partition_point(|p| p.finish <= cj.read);
-            let Some(pj) = k.checked_sub(1).and_then(|k| list.get(k)) else {
-                continue;
-            };
-            let same = pj
-                .carried
-                .iter()
-                .any(|pc| pc.chain == c.chain && pc.pos + 1 == c.pos && pc.sample == Some(sample));
-            if !same || !linked.insert((pj.task, pj.index, cj.task, cj.index)) {
-                continue;
-            }
-            if flows >= opts.max_flows {
-                flows_dropped += 1;
-                continue;
-            }
-            flows += 1;
-            let id = flows;
-            // Bind the start inside the producer's last slice (it ends at the
-            // publish instant, and a slice does not enclose its end).
-            let start = if pj.finish > pj.read {
-                pj.finish - 1
-            } else {
-                pj.finish
-            };
-            ev.push(json!({"ph": "s", "cat": "data", "name": "data", "id": id,
-                           "pid": pid_of[pj.task], "tid": tid(pj.task), "ts": ts(start),
-                           "args": {"job": pj.index, "chain": c.chain, "sample": sample}}));
-            ev.push(
-                json!({"ph": "f", "bp": "e", "cat": "data", "name": "data", "id": id,
-                           "pid": pid_of[cj.task], "tid": tid(cj.task), "ts": ts(cj.read),
-                           "args": {"job": cj.index, "chain": c.chain, "sample": sample}}),
-            );
-        }
-    }
-
+    lay.metadata(spec, &mut ev);
+    let slices = lay.slices(spec, result, &opts, &mut ev);
+    lay.releases(spec, result, end, &mut ev);
+    let (flows, flows_dropped) = lay.flows(spec, result, end, opts.max_flows, &mut ev);
     let events = ev.count;
     let other = json!({
             "system": spec.name,
@@ -292,6 +145,226 @@ pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) ->
         truncated_at: cut,
         flows_dropped,
     }
+}
+
+/// Where each task's track is: a process per CPU, a thread per task.
+struct Layout {
+    cpu_ids: Vec<u32>,
+    pid_of: Vec<usize>,
+}
+
+impl Layout {
+    fn new(spec: &Spec) -> Layout {
+        let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+        cpu_ids.sort_unstable();
+        cpu_ids.dedup();
+        let pid_of: Vec<usize> = spec
+            .tasks
+            .iter()
+            .map(|t| cpu_ids.binary_search(&t.cpu).unwrap_or(0))
+            .collect();
+        Layout { cpu_ids, pid_of }
+    }
+
+    fn tid(task: usize) -> usize {
+        task + 1
+    }
+
+    /// Names and order of the CPU processes and task threads.
+    fn metadata(&self, spec: &Spec, ev: &mut Events) {
+        for (pid, id) in self.cpu_ids.iter().enumerate() {
+            ev.push(
+                json!({"ph": "M", "name": "process_name", "pid": pid, "tid": 0,
+                           "args": {"name": format!("cpu {id}")}}),
+            );
+            ev.push(
+                json!({"ph": "M", "name": "process_sort_index", "pid": pid, "tid": 0,
+                           "args": {"sort_index": pid}}),
+            );
+        }
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let (pid, tid) = (self.pid_of[i], Self::tid(i));
+            ev.push(
+                json!({"ph": "M", "name": "thread_name", "pid": pid, "tid": tid,
+                           "args": {"name": t.name}}),
+            );
+            ev.push(
+                json!({"ph": "M", "name": "thread_sort_index", "pid": pid, "tid": tid,
+                           "args": {"sort_index": i}}),
+            );
+        }
+    }
+
+    /// One slice per stretch of execution (with its job's stages, unless
+    /// `opts.spans`); returns how many slices.
+    fn slices(
+        &self,
+        spec: &Spec,
+        result: &SimResult,
+        opts: &TraceOptions,
+        ev: &mut Events,
+    ) -> usize {
+        let jobs: HashMap<(usize, u64), &JobRecord> =
+            result.jobs.iter().map(|j| ((j.task, j.index), j)).collect();
+        // CPU time each job has received before the slice at hand.
+        let mut done: HashMap<(usize, u64), Nanos> = HashMap::new();
+        let mut slices = 0;
+        for seg in result.segments.iter().take(opts.max_slices) {
+            if seg.task >= spec.tasks.len() {
+                continue;
+            }
+            let (pid, tid) = (self.pid_of[seg.task], Self::tid(seg.task));
+            let task = &spec.tasks[seg.task];
+            ev.push(json!({
+                "ph": "X", "cat": if opts.spans { "span" } else { "job" }, "name": task.name, "pid": pid, "tid": tid,
+                "ts": ts(seg.start), "dur": ts(seg.end - seg.start),
+                "args": {"job": seg.job, "background": seg.background},
+            }));
+            slices += 1;
+            if opts.spans {
+                continue;
+            }
+            let key = (seg.task, seg.job);
+            let before = *done.get(&key).unwrap_or(&0);
+            done.insert(key, before + (seg.end - seg.start));
+            // Stages need the job's demand: only completed jobs have it.
+            if let Some(job) = jobs.get(&key) {
+                stages(task, job, seg, before, (pid, tid), ev);
+            }
+        }
+        slices
+    }
+
+    /// An instant event at every release before `end`.
+    fn releases(&self, spec: &Spec, result: &SimResult, end: Nanos, ev: &mut Events) {
+        for j in &result.jobs {
+            if j.release < end && j.task < spec.tasks.len() {
+                ev.push(
+                    json!({"ph": "i", "s": "t", "cat": "release", "name": "release",
+                               "pid": self.pid_of[j.task], "tid": Self::tid(j.task), "ts": ts(j.release),
+                               "args": {"job": j.index}}),
+                );
+            }
+        }
+    }
+
+    /// Data flow: an arrow from the publish of each chain sample to each
+    /// read that took it, at most `max_flows`; returns (drawn, dropped).
+    fn flows(
+        &self,
+        spec: &Spec,
+        result: &SimResult,
+        end: Nanos,
+        max_flows: usize,
+        ev: &mut Events,
+    ) -> (usize, usize) {
+        // Jobs per task in completion (= publish) order.
+        let mut by_task: Vec<Vec<&JobRecord>> = vec![Vec::new(); spec.tasks.len()];
+        for j in result.jobs.iter().filter(|j| j.task < spec.tasks.len()) {
+            by_task[j.task].push(j);
+        }
+        let mut linked: HashSet<(usize, u64, usize, u64)> = HashSet::new();
+        let (mut flows, mut flows_dropped) = (0usize, 0usize);
+        let mut consumers: Vec<&JobRecord> = result.jobs.iter().filter(|j| j.read < end).collect();
+        consumers.sort_by_key(|j| (j.read, j.task));
+        for cj in consumers {
+            for c in &cj.carried {
+                let Some((pj, sample)) = producer_of(spec, &by_task, cj, c) else {
+                    continue;
+                };
+                if !linked.insert((pj.task, pj.index, cj.task, cj.index)) {
+                    continue;
+                }
+                if flows >= max_flows {
+                    flows_dropped += 1;
+                    continue;
+                }
+                flows += 1;
+                self.arrow(pj, cj, c.chain, sample, flows, ev);
+            }
+        }
+        (flows, flows_dropped)
+    }
+
+    /// The flow events of one arrow from `pj`'s publish to `cj`'s read.
+    fn arrow(
+        &self,
+        pj: &JobRecord,
+        cj: &JobRecord,
+        chain: usize,
+        sample: u64,
+        id: usize,
+        ev: &mut Events,
+    ) {
+        // Bind the start inside the producer's last slice (it ends at the
+        // publish instant, and a slice does not enclose its end).
+        let start = if pj.finish > pj.read {
+            pj.finish - 1
+        } else {
+            pj.finish
+        };
+        ev.push(json!({"ph": "s", "cat": "data", "name": "data", "id": id,
+                       "pid": self.pid_of[pj.task], "tid": Self::tid(pj.task), "ts": ts(start),
+                       "args": {"job": pj.index, "chain": chain, "sample": sample}}));
+        ev.push(
+            json!({"ph": "f", "bp": "e", "cat": "data", "name": "data", "id": id,
+                       "pid": self.pid_of[cj.task], "tid": Self::tid(cj.task), "ts": ts(cj.read),
+                       "args": {"job": cj.index, "chain": chain, "sample": sample}}),
+        );
+    }
+}
+
+/// The read, process and write stages of `job` that fall in slice `seg`,
+/// which starts after `before` of the job's CPU time.
+fn stages(
+    task: &Task,
+    job: &JobRecord,
+    seg: &Segment,
+    before: Nanos,
+    (pid, tid): (usize, usize),
+    ev: &mut Events,
+) {
+    let ran = seg.end - seg.start;
+    let d_in = task.delta_in.clamp(0, job.demand);
+    let d_out = task.delta_out.clamp(0, job.demand - d_in);
+    let stages = [
+        ("read", 0, d_in),
+        ("process", d_in, job.demand - d_out),
+        ("write", job.demand - d_out, job.demand),
+    ];
+    for (name, lo, hi) in stages {
+        // Overlap of [lo, hi) with the execution [before, before + ran).
+        let a = lo.max(before);
+        let b = hi.min(before + ran);
+        if b > a {
+            ev.push(json!({
+                "ph": "X", "cat": "stage", "name": name, "pid": pid, "tid": tid,
+                "ts": ts(seg.start + (a - before)), "dur": ts(b - a),
+                "args": {"job": seg.job},
+            }));
+        }
+    }
+}
+
+/// The producer job whose output `cj` read for the chain sample `c`, when it
+/// carried that very sample one position earlier on the chain.
+fn producer_of<'r>(
+    spec: &Spec,
+    by_task: &[Vec<&'r JobRecord>],
+    cj: &JobRecord,
+    c: &Carried,
+) -> Option<(&'r JobRecord, u64)> {
+    let sample = c.sample.filter(|_| c.pos > 0)?;
+    let producer = *spec.chains.get(c.chain)?.path.get(c.pos - 1)?;
+    let list = by_task.get(producer)?;
+    // Completions publish before reads at one instant: finish ≤ read.
+    let k = list.partition_point(|p| p.finish <= cj.read);
+    let pj = *k.checked_sub(1).and_then(|k| list.get(k))?;
+    let same = pj
+        .carried
+        .iter()
+        .any(|pc| pc.chain == c.chain && pc.pos + 1 == c.pos && pc.sample == Some(sample));
+    same.then_some((pj, sample))
 }
 
 #[cfg(test)]
