@@ -216,6 +216,16 @@ pub fn system_line(spec: &Spec) -> String {
 pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     let mut out = system_line(spec);
     out.push('\n');
+    out.push_str(&task_table(spec, r));
+    out.push_str(&schedulability_text(r));
+    out.push_str(&chain_table(spec, r));
+    out.push_str(&known_offsets_text(spec, r));
+    out.push_str(&verdict_text(r, mode));
+    out
+}
+
+/// One row per task: its pipe, budget, period and response times.
+fn task_table(spec: &Spec, r: &Report) -> String {
     let mut t = Table::new(&[
         "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T", "C/T",
         "R(C)", "R(job)",
@@ -239,7 +249,12 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
             opt(spec, tm.job_response_time),
         ]);
     }
-    out.push_str(&t.render());
+    t.render()
+}
+
+/// The schedulability test's verdict per CPU.
+fn schedulability_text(r: &Report) -> String {
+    let mut out = String::new();
     let s = &r.schedulability;
     out.push_str(&format!("\nschedulability ({}):\n", s.test.name()));
     for c in &s.cpus {
@@ -281,6 +296,13 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
             c.cpu, c.tasks
         ));
     }
+    out
+}
+
+/// Every chain's bounds in both modes, from the read and from the event,
+/// beside the literature's, with both verdicts.
+fn chain_table(spec: &Spec, r: &Report) -> String {
+    let mut out = String::new();
     if !spec.chains.is_empty() {
         out.push_str(
             "\nchains (worst case from the head's read; +event: from the event in the world; davare: Davare et al. 2007, duerr: Dürr et al. 2019; see docs/analysis.md):\n",
@@ -333,7 +355,12 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
         }
         out.push_str(&t.render());
     }
-    out.push_str(&known_offsets_text(spec, r));
+    out
+}
+
+/// The last line: what fails under `mode`, or that nothing does.
+fn verdict_text(r: &Report, mode: Mode) -> String {
+    let mut out = String::new();
     let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
     let name = mode.name();
     out.push_str(&format!(
