@@ -1,6 +1,7 @@
 //! SVG figures of a simulated run: observed vs predicted end-to-end times
 //! (the paper's Fig. 9) and a Gantt chart of the schedule.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -173,6 +174,10 @@ fn text_px(s: &str, size: u32) -> i32 {
     (s.chars().count() as f64 * size as f64 * 0.46).round() as i32
 }
 
+/// One panel of Fig. 9: for one metric, a group per chain of observed mean
+/// and max bars (with the p99 as a tick on the max bar) under the chain's
+/// paper and sound bounds, every bar and bound labelled with its value, the
+/// chain named below its group.
 fn panel<DB: DrawingBackend>(
     spec: &Spec,
     root: &Area<DB>,
@@ -185,19 +190,7 @@ where
     DB::ErrorType: 'static,
 {
     let u = unit_of(spec);
-    let top = obs
-        .iter()
-        .flat_map(|o| {
-            [
-                o.read.observed.map(|s| s.max as f64),
-                Some(o.read.paper as f64),
-                o.read.sound.map(|s| s as f64),
-            ]
-        })
-        .flatten()
-        .fold(0.0f64, f64::max)
-        / u;
-    let top = if top > 0.0 { top * 1.12 } else { 1.0 };
+    let top = panel_top(obs, u);
     let mut chart = ChartBuilder::on(area)
         .caption(format!("{} time", metric.name()), (FONT, 18).into_font())
         .margin_left(10)
@@ -218,74 +211,154 @@ where
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
-
-    let bar =
-        |x0: f64, x1: f64, y: f64, c: RGBColor| Rectangle::new([(x0, 0.0), (x1, y)], c.filled());
-    // (x, value) of each bar, labelled once the chart is drawn.
-    let mut bar_labels: Vec<(f64, f64, RGBColor, Option<f64>)> = Vec::new();
-    // (x, value, text, colour) of each bound line: paper at the right end,
-    // sound at the left end, on a light box over whatever is behind.
-    let mut bound_labels: Vec<(f64, f64, String, RGBColor)> = Vec::new();
-    let mut means = Vec::new();
-    let mut maxes = Vec::new();
-    let mut p99s = Vec::new();
-    let mut papers = Vec::new();
-    let mut sounds = Vec::new();
-    let mut labels = Vec::new();
     // Groups centred when there are fewer than two.
     let shift = (n.max(2) - n) as f64 / 2.0;
-    for (i, o) in obs.iter().enumerate() {
-        let x = i as f64 + shift;
-        if let Some(s) = o.read.observed {
-            let (mean, max, p99) = (s.mean / u, s.max as f64 / u, s.p99 as f64 / u);
-            means.push(bar(x + 0.2, x + 0.48, mean, MEAN));
-            maxes.push(bar(x + 0.52, x + 0.8, max, MAX));
-            p99s.push(PathElement::new(
-                vec![(x + 0.52, p99), (x + 0.8, p99)],
-                P99.stroke_width(2),
-            ));
-            bar_labels.push((x + 0.34, mean, P99, None));
-            bar_labels.push((x + 0.66, max, WHITE, Some(p99)));
-        } else {
+    let groups: Vec<BarGroup> = obs
+        .iter()
+        .enumerate()
+        .map(|(i, o)| BarGroup::of(o, i as f64 + shift, u))
+        .collect();
+    draw_groups(&mut chart, &groups, top)?;
+    draw_bar_labels(root, &chart, &groups)?;
+    draw_bound_labels(root, &chart, &groups)?;
+    draw_chain_names(spec, root, &chart, obs, shift)
+}
+
+/// A chart with `f64` axes, as every figure here draws.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The top of a Fig. 9 panel's axis (in the spec's unit): 12 % above the
+/// tallest bar or bound, so their labels fit above them.
+fn panel_top(obs: &[&ChainObs], u: f64) -> f64 {
+    let top = obs
+        .iter()
+        .flat_map(|o| {
+            [
+                o.read.observed.map(|s| s.max as f64),
+                Some(o.read.paper as f64),
+                o.read.sound.map(|s| s as f64),
+            ]
+        })
+        .flatten()
+        .fold(0.0f64, f64::max)
+        / u;
+    if top > 0.0 {
+        top * 1.12
+    } else {
+        1.0
+    }
+}
+
+/// One chain's group of bars in a Fig. 9 panel, in the spec's unit: the
+/// group spans [x, x + 1).
+struct BarGroup {
+    x: f64,
+    /// Observed (mean, max, p99), when there were samples.
+    observed: Option<(f64, f64, f64)>,
+    paper: f64,
+    /// `None`: the sound analysis has no bound.
+    sound: Option<f64>,
+}
+
+impl BarGroup {
+    fn of(o: &ChainObs, x: f64, u: f64) -> BarGroup {
+        BarGroup {
+            x,
+            observed: o
+                .read
+                .observed
+                .map(|s| (s.mean / u, s.max as f64 / u, s.p99 as f64 / u)),
+            paper: o.read.paper as f64 / u,
+            sound: o.read.sound.map(|s| s as f64 / u),
+        }
+    }
+}
+
+/// The bars, the p99 ticks, the bound lines and the notes of missing
+/// samples or bounds, each kind as one series, in that order.
+fn draw_groups<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    groups: &[BarGroup],
+    top: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let bar =
+        |x0: f64, x1: f64, y: f64, c: RGBColor| Rectangle::new([(x0, 0.0), (x1, y)], c.filled());
+    let observed = || groups.iter().filter_map(|g| g.observed.map(|o| (g.x, o)));
+    chart
+        .draw_series(observed().map(|(x, (mean, _, _))| bar(x + 0.2, x + 0.48, mean, MEAN)))
+        .map_err(err)?;
+    chart
+        .draw_series(observed().map(|(x, (_, max, _))| bar(x + 0.52, x + 0.8, max, MAX)))
+        .map_err(err)?;
+    chart
+        .draw_series(observed().map(|(x, (_, _, p99))| {
+            PathElement::new(vec![(x + 0.52, p99), (x + 0.8, p99)], P99.stroke_width(2))
+        }))
+        .map_err(err)?;
+    chart
+        .draw_series(groups.iter().map(|g| {
+            DashedPathElement::new(
+                vec![(g.x + 0.08, g.paper), (g.x + 0.92, g.paper)],
+                6,
+                4,
+                PAPER.stroke_width(2),
+            )
+        }))
+        .map_err(err)?;
+    chart
+        .draw_series(groups.iter().filter_map(|g| {
+            let s = g.sound?;
+            Some(PathElement::new(
+                vec![(g.x + 0.08, s), (g.x + 0.92, s)],
+                SOUND.stroke_width(2),
+            ))
+        }))
+        .map_err(err)?;
+    let mut labels = Vec::new();
+    for g in groups {
+        if g.observed.is_none() {
             labels.push(Text::new(
                 "no samples".to_string(),
-                (x + 0.5, top * 0.05),
+                (g.x + 0.5, top * 0.05),
                 text_style(12, GREY, HPos::Center, VPos::Bottom),
             ));
         }
-        let paper = o.read.paper as f64 / u;
-        papers.push(DashedPathElement::new(
-            vec![(x + 0.08, paper), (x + 0.92, paper)],
-            6,
-            4,
-            PAPER.stroke_width(2),
-        ));
-        bound_labels.push((x + 0.92, paper, format!("paper {}", short(paper)), PAPER));
-        match o.read.sound {
-            Some(s) => {
-                let s = s as f64 / u;
-                sounds.push(PathElement::new(
-                    vec![(x + 0.08, s), (x + 0.92, s)],
-                    SOUND.stroke_width(2),
-                ));
-                bound_labels.push((x + 0.08, s, format!("sound {}", short(s)), SOUND));
-            }
-            None => labels.push(Text::new(
+        if g.sound.is_none() {
+            labels.push(Text::new(
                 "sound: unbounded".to_string(),
-                (x + 0.08, top * 0.97),
+                (g.x + 0.08, top * 0.97),
                 text_style(11, SOUND, HPos::Left, VPos::Top),
-            )),
+            ));
         }
     }
-    chart.draw_series(means).map_err(err)?;
-    chart.draw_series(maxes).map_err(err)?;
-    chart.draw_series(p99s).map_err(err)?;
-    chart.draw_series(papers).map_err(err)?;
-    chart.draw_series(sounds).map_err(err)?;
     chart.draw_series(labels).map_err(err)?;
-    // Bar values inside the bar's top (clear of the bound labels above the
-    // lines), or above a bar too short to hold them.
-    for (x, v, inside, tick) in bar_labels {
+    Ok(())
+}
+
+/// Bar values inside the bar's top (clear of the bound labels above the
+/// lines), or above a bar too short to hold them; on the max bar, below
+/// the p99 tick when the tick is where the label would go. In root pixels,
+/// after the series, so that they are drawn on top.
+fn draw_bar_labels<DB: DrawingBackend>(
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    groups: &[BarGroup],
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    // (x, value, colour inside the bar, p99 tick) of each bar.
+    let bars = groups.iter().filter_map(|g| g.observed.map(|o| (g.x, o)));
+    let bars = bars.flat_map(|(x, (mean, max, p99))| {
+        [
+            (x + 0.34, mean, P99, None),
+            (x + 0.66, max, WHITE, Some(p99)),
+        ]
+    });
+    for (x, v, inside, tick) in bars {
         let (px, top_px) = chart.backend_coord(&(x, v));
         let (_, base_px) = chart.backend_coord(&(x, 0.0));
         // Below the p99 tick when the tick is where the label would go.
@@ -308,7 +381,33 @@ where
         };
         root.draw(&label).map_err(err)?;
     }
-    for (x, v, text, c) in bound_labels {
+    Ok(())
+}
+
+/// The value of each bound line above it, on a light box over whatever is
+/// behind: paper at the line's right end, sound at its left end, so that
+/// the two stay apart when the bounds are close.
+fn draw_bound_labels<DB: DrawingBackend>(
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    groups: &[BarGroup],
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let bounds = groups.iter().flat_map(|g| {
+        let paper = (
+            g.x + 0.92,
+            g.paper,
+            format!("paper {}", short(g.paper)),
+            PAPER,
+        );
+        let sound = g
+            .sound
+            .map(|s| (g.x + 0.08, s, format!("sound {}", short(s)), SOUND));
+        std::iter::once(paper).chain(sound)
+    });
+    for (x, v, text, c) in bounds {
         let (px, py) = chart.backend_coord(&(x, v));
         let wd = text_px(&text, 11) + 4;
         let (l, r, h) = if c == PAPER {
@@ -329,7 +428,21 @@ where
         ))
         .map_err(err)?;
     }
-    // Chain names (and paths) under each group, in root pixels.
+    Ok(())
+}
+
+/// Chain names (and paths, when they differ) under each group, in root
+/// pixels.
+fn draw_chain_names<DB: DrawingBackend>(
+    spec: &Spec,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    obs: &[&ChainObs],
+    shift: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
     for (i, o) in obs.iter().enumerate() {
         let (px, py) = chart.backend_coord(&(i as f64 + shift + 0.5, 0.0));
         let name = spec.chain_label(o.chain);
