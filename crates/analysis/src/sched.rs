@@ -185,97 +185,32 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
         Scheduler::Edf => vec![None; spec.tasks.len()],
     };
     let top = top_priorities(spec, &prio);
-    let period = |t: &Task| t.fixed_period().unwrap_or(MAX_TIME);
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
     cpus.dedup();
-    let cpu_util = |cpu: u32| -> f64 {
-        spec.tasks
-            .iter()
-            .filter(|t| t.cpu == cpu && t.server != Server::Background)
-            .map(|t| t.budget() as f64 / period(t) as f64)
-            .sum()
-    };
-    let mut timings = Vec::with_capacity(spec.tasks.len());
-    for (i, t) in spec.tasks.iter().enumerate() {
-        let (rt, jrt) = if t.server == Server::Background {
-            (None, None)
-        } else {
-            match spec.scheduler {
-                Scheduler::Rm => {
-                    let hp: Vec<(Nanos, Nanos)> = interferers(spec, &prio, &top, i)
-                        .into_iter()
-                        .map(|j| (interference(&spec.tasks[j]), period(&spec.tasks[j])))
-                        .collect();
-                    (
-                        response_time(t.budget(), &hp),
-                        response_time(t.demand(), &hp),
-                    )
-                }
-                Scheduler::Edf => {
-                    // EDF with constant-bandwidth servers: every server gets its
-                    // budget by the end of each period when Σ U ≤ 1, but possibly
-                    // at its very end.
-                    if cpu_util(t.cpu) <= 1.0 + UTIL_EPS {
-                        (Some(period(t)), Some(period(t)))
-                    } else {
-                        (None, None)
-                    }
-                }
+    let timings: Vec<TaskTiming> = spec
+        .tasks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let (rt, jrt) = response_times(spec, &prio, &top, i);
+            TaskTiming {
+                budget: t.budget(),
+                demand: t.demand(),
+                demand_min: t.demand_min(),
+                period: period_or_max(t),
+                priority: prio[i],
+                top_priority: top[i],
+                cpu: t.cpu,
+                response_time: rt,
+                job_response_time: jrt,
             }
-        };
-        timings.push(TaskTiming {
-            budget: t.budget(),
-            demand: t.demand(),
-            demand_min: t.demand_min(),
-            period: period(t),
-            priority: prio[i],
-            top_priority: top[i],
-            cpu: t.cpu,
-            response_time: rt,
-            job_response_time: jrt,
-        });
-    }
-    let mut verdicts = Vec::new();
-    for cpu in cpus {
-        let ids: Vec<usize> = (0..spec.tasks.len())
-            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
-            .collect();
-        let n = ids.len();
-        let us: Vec<f64> = ids
-            .iter()
-            .map(|&i| timings[i].budget as f64 / timings[i].period as f64)
-            .collect();
-        let u: f64 = us.iter().sum();
-        let (value, bound, ok) = match spec.schedulability {
-            SchedTest::Rta => {
-                let mut worst: f64 = 0.0;
-                let mut ok = true;
-                for &i in &ids {
-                    match timings[i].response_time {
-                        Some(r) => {
-                            worst = worst.max(r as f64 / timings[i].period as f64);
-                            ok &= r <= timings[i].period;
-                        }
-                        None => {
-                            worst = f64::INFINITY;
-                            ok = false;
-                        }
-                    }
-                }
-                (worst, 1.0, ok)
-            }
-            test => utilization_test(test, &us),
-        };
-        verdicts.push(CpuVerdict {
-            cpu,
-            tasks: n,
-            utilization: u,
-            value,
-            bound,
-            schedulable: ok,
-        });
-    }
+        })
+        .collect();
+    let verdicts: Vec<CpuVerdict> = cpus
+        .into_iter()
+        .map(|cpu| cpu_verdict(spec, &timings, cpu))
+        .collect();
     let schedulable = verdicts.iter().all(|v| v.schedulable);
     (
         timings,
@@ -285,6 +220,105 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             schedulable,
         },
     )
+}
+
+/// A task's period, or [`MAX_TIME`] when none is fixed (callers are to rule
+/// that out first, see [`analyze`]), so that such a task counts as almost
+/// never released rather than as a panic.
+fn period_or_max(t: &Task) -> Nanos {
+    t.fixed_period().unwrap_or(MAX_TIME)
+}
+
+/// Task `i`'s (budget, job) response times: under RM the exact RTA against
+/// the tasks that can run above it; under EDF with constant-bandwidth
+/// servers the period, when its CPU is not overloaded. A background task
+/// has neither: nothing guarantees it the CPU.
+fn response_times(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>) {
+    let t = &spec.tasks[i];
+    if t.server == Server::Background {
+        return (None, None);
+    }
+    match spec.scheduler {
+        Scheduler::Rm => {
+            let hp: Vec<(Nanos, Nanos)> = interferers(spec, prio, top, i)
+                .into_iter()
+                .map(|j| (interference(&spec.tasks[j]), period_or_max(&spec.tasks[j])))
+                .collect();
+            (
+                response_time(t.budget(), &hp),
+                response_time(t.demand(), &hp),
+            )
+        }
+        Scheduler::Edf => {
+            // EDF with constant-bandwidth servers: every server gets its
+            // budget by the end of each period when Σ U ≤ 1, but possibly
+            // at its very end.
+            if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
+                (Some(period_or_max(t)), Some(period_or_max(t)))
+            } else {
+                (None, None)
+            }
+        }
+    }
+}
+
+/// Σ C/T of the guaranteed (not background) tasks on `cpu`.
+fn cpu_utilization(spec: &Spec, cpu: u32) -> f64 {
+    spec.tasks
+        .iter()
+        .filter(|t| t.cpu == cpu && t.server != Server::Background)
+        .map(|t| t.budget() as f64 / period_or_max(t) as f64)
+        .sum()
+}
+
+/// The verdict of the spec's test on one CPU, over its guaranteed tasks.
+fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
+    let ids: Vec<usize> = (0..spec.tasks.len())
+        .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+        .collect();
+    let us: Vec<f64> = ids
+        .iter()
+        .map(|&i| timings[i].budget as f64 / timings[i].period as f64)
+        .collect();
+    let u: f64 = us.iter().sum();
+    let (value, bound, ok) = match spec.schedulability {
+        SchedTest::Rta => rta_test(&ids, timings),
+        test => utilization_test(test, &us),
+    };
+    CpuVerdict {
+        cpu,
+        tasks: ids.len(),
+        utilization: u,
+        value,
+        bound,
+        schedulable: ok,
+    }
+}
+
+/// The exact RTA test on the tasks `ids` of one CPU: (the largest R/T, its
+/// bound 1, every budget delivered within its period). A task without a
+/// finite response time makes the largest R/T infinite.
+fn rta_test(ids: &[usize], timings: &[TaskTiming]) -> (f64, f64, bool) {
+    let mut worst: f64 = 0.0;
+    let mut ok = true;
+    for &i in ids {
+        match timings[i].response_time {
+            Some(r) => {
+                worst = worst.max(r as f64 / timings[i].period as f64);
+                ok &= r <= timings[i].period;
+            }
+            None => {
+                worst = f64::INFINITY;
+                ok = false;
+            }
+        }
+    }
+    (worst, 1.0, ok)
 }
 
 #[cfg(test)]

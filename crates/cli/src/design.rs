@@ -85,7 +85,31 @@ pub fn run(a: Args) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    let opts = Options {
+    let opts = options(&a);
+    let (out, stopped) = match with_progress(&spec, &opts) {
+        Ended::Finished(Ok(o)) => (o, false),
+        Ended::Interrupted(o) => (o, true),
+        Ended::Finished(Err(e)) => return design_error(a.spec, &e),
+    };
+    if let Err(code) = write_design(write.as_ref(), &out) {
+        return code;
+    }
+    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped) {
+        return code;
+    }
+    if stopped {
+        return ExitCode::from(EXIT_INTERRUPTED);
+    }
+    match out.status {
+        Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
+        _ => ExitCode::from(1),
+    }
+}
+
+/// The search's options from the flags: the solver named, else HiGHS when
+/// it is built in, else microlp; and a progress line for the spinner.
+fn options(a: &Args) -> Options {
+    Options {
         mode: a.mode,
         solver: match a.solver {
             Some(SolverArg::Microlp) => SolverKind::Microlp,
@@ -102,34 +126,20 @@ pub fn run(a: Args) -> ExitCode {
         time_limit: a.time_limit,
         progress: Some(Arc::new(Mutex::new(String::new()))),
         ..Options::default()
-    };
-    let (out, stopped) = match with_progress(&spec, &opts) {
-        Ended::Finished(Ok(o)) => (o, false),
-        Ended::Interrupted(o) => (o, true),
-        Ended::Finished(Err(e)) => {
-            eprintln!("{}: error: {e}", a.spec.display());
-            if let Some(h) = &e.help {
-                eprintln!("  = help: {h}");
-            }
-            return ExitCode::from(match e.kind {
-                ErrorKind::Input => EXIT_BAD_INPUT,
-                ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
-            });
-        }
-    };
-    if let Err(code) = write_design(write.as_ref(), &out) {
-        return code;
     }
-    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped) {
-        return code;
+}
+
+/// Reports why no design could be attempted; the exit status says whose
+/// fault it is (bad input, or the solver and rtpipe itself).
+fn design_error(spec: &Path, e: &DesignError) -> ExitCode {
+    eprintln!("{}: error: {e}", spec.display());
+    if let Some(h) = &e.help {
+        eprintln!("  = help: {h}");
     }
-    if stopped {
-        return ExitCode::from(EXIT_INTERRUPTED);
-    }
-    match out.status {
-        Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
-        _ => ExitCode::from(1),
-    }
+    ExitCode::from(match e.kind {
+        ErrorKind::Input => EXIT_BAD_INPUT,
+        ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
+    })
 }
 
 /// `--write`: the designed spec, whole or not at all.

@@ -1,6 +1,7 @@
 //! SVG figures of a simulated run: observed vs predicted end-to-end times
 //! (the paper's Fig. 9) and a Gantt chart of the schedule.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -173,6 +174,10 @@ fn text_px(s: &str, size: u32) -> i32 {
     (s.chars().count() as f64 * size as f64 * 0.46).round() as i32
 }
 
+/// One panel of Fig. 9: for one metric, a group per chain of observed mean
+/// and max bars (with the p99 as a tick on the max bar) under the chain's
+/// paper and sound bounds, every bar and bound labelled with its value, the
+/// chain named below its group.
 fn panel<DB: DrawingBackend>(
     spec: &Spec,
     root: &Area<DB>,
@@ -185,19 +190,7 @@ where
     DB::ErrorType: 'static,
 {
     let u = unit_of(spec);
-    let top = obs
-        .iter()
-        .flat_map(|o| {
-            [
-                o.read.observed.map(|s| s.max as f64),
-                Some(o.read.paper as f64),
-                o.read.sound.map(|s| s as f64),
-            ]
-        })
-        .flatten()
-        .fold(0.0f64, f64::max)
-        / u;
-    let top = if top > 0.0 { top * 1.12 } else { 1.0 };
+    let top = panel_top(obs, u);
     let mut chart = ChartBuilder::on(area)
         .caption(format!("{} time", metric.name()), (FONT, 18).into_font())
         .margin_left(10)
@@ -218,74 +211,154 @@ where
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
-
-    let bar =
-        |x0: f64, x1: f64, y: f64, c: RGBColor| Rectangle::new([(x0, 0.0), (x1, y)], c.filled());
-    // (x, value) of each bar, labelled once the chart is drawn.
-    let mut bar_labels: Vec<(f64, f64, RGBColor, Option<f64>)> = Vec::new();
-    // (x, value, text, colour) of each bound line: paper at the right end,
-    // sound at the left end, on a light box over whatever is behind.
-    let mut bound_labels: Vec<(f64, f64, String, RGBColor)> = Vec::new();
-    let mut means = Vec::new();
-    let mut maxes = Vec::new();
-    let mut p99s = Vec::new();
-    let mut papers = Vec::new();
-    let mut sounds = Vec::new();
-    let mut labels = Vec::new();
     // Groups centred when there are fewer than two.
     let shift = (n.max(2) - n) as f64 / 2.0;
-    for (i, o) in obs.iter().enumerate() {
-        let x = i as f64 + shift;
-        if let Some(s) = o.read.observed {
-            let (mean, max, p99) = (s.mean / u, s.max as f64 / u, s.p99 as f64 / u);
-            means.push(bar(x + 0.2, x + 0.48, mean, MEAN));
-            maxes.push(bar(x + 0.52, x + 0.8, max, MAX));
-            p99s.push(PathElement::new(
-                vec![(x + 0.52, p99), (x + 0.8, p99)],
-                P99.stroke_width(2),
-            ));
-            bar_labels.push((x + 0.34, mean, P99, None));
-            bar_labels.push((x + 0.66, max, WHITE, Some(p99)));
-        } else {
+    let groups: Vec<BarGroup> = obs
+        .iter()
+        .enumerate()
+        .map(|(i, o)| BarGroup::of(o, i as f64 + shift, u))
+        .collect();
+    draw_groups(&mut chart, &groups, top)?;
+    draw_bar_labels(root, &chart, &groups)?;
+    draw_bound_labels(root, &chart, &groups)?;
+    draw_chain_names(spec, root, &chart, obs, shift)
+}
+
+/// A chart with `f64` axes, as every figure here draws.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The top of a Fig. 9 panel's axis (in the spec's unit): 12 % above the
+/// tallest bar or bound, so their labels fit above them.
+fn panel_top(obs: &[&ChainObs], u: f64) -> f64 {
+    let top = obs
+        .iter()
+        .flat_map(|o| {
+            [
+                o.read.observed.map(|s| s.max as f64),
+                Some(o.read.paper as f64),
+                o.read.sound.map(|s| s as f64),
+            ]
+        })
+        .flatten()
+        .fold(0.0f64, f64::max)
+        / u;
+    if top > 0.0 {
+        top * 1.12
+    } else {
+        1.0
+    }
+}
+
+/// One chain's group of bars in a Fig. 9 panel, in the spec's unit: the
+/// group spans [x, x + 1).
+struct BarGroup {
+    x: f64,
+    /// Observed (mean, max, p99), when there were samples.
+    observed: Option<(f64, f64, f64)>,
+    paper: f64,
+    /// `None`: the sound analysis has no bound.
+    sound: Option<f64>,
+}
+
+impl BarGroup {
+    fn of(o: &ChainObs, x: f64, u: f64) -> BarGroup {
+        BarGroup {
+            x,
+            observed: o
+                .read
+                .observed
+                .map(|s| (s.mean / u, s.max as f64 / u, s.p99 as f64 / u)),
+            paper: o.read.paper as f64 / u,
+            sound: o.read.sound.map(|s| s as f64 / u),
+        }
+    }
+}
+
+/// The bars, the p99 ticks, the bound lines and the notes of missing
+/// samples or bounds, each kind as one series, in that order.
+fn draw_groups<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    groups: &[BarGroup],
+    top: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let bar =
+        |x0: f64, x1: f64, y: f64, c: RGBColor| Rectangle::new([(x0, 0.0), (x1, y)], c.filled());
+    let observed = || groups.iter().filter_map(|g| g.observed.map(|o| (g.x, o)));
+    chart
+        .draw_series(observed().map(|(x, (mean, _, _))| bar(x + 0.2, x + 0.48, mean, MEAN)))
+        .map_err(err)?;
+    chart
+        .draw_series(observed().map(|(x, (_, max, _))| bar(x + 0.52, x + 0.8, max, MAX)))
+        .map_err(err)?;
+    chart
+        .draw_series(observed().map(|(x, (_, _, p99))| {
+            PathElement::new(vec![(x + 0.52, p99), (x + 0.8, p99)], P99.stroke_width(2))
+        }))
+        .map_err(err)?;
+    chart
+        .draw_series(groups.iter().map(|g| {
+            DashedPathElement::new(
+                vec![(g.x + 0.08, g.paper), (g.x + 0.92, g.paper)],
+                6,
+                4,
+                PAPER.stroke_width(2),
+            )
+        }))
+        .map_err(err)?;
+    chart
+        .draw_series(groups.iter().filter_map(|g| {
+            let s = g.sound?;
+            Some(PathElement::new(
+                vec![(g.x + 0.08, s), (g.x + 0.92, s)],
+                SOUND.stroke_width(2),
+            ))
+        }))
+        .map_err(err)?;
+    let mut labels = Vec::new();
+    for g in groups {
+        if g.observed.is_none() {
             labels.push(Text::new(
                 "no samples".to_string(),
-                (x + 0.5, top * 0.05),
+                (g.x + 0.5, top * 0.05),
                 text_style(12, GREY, HPos::Center, VPos::Bottom),
             ));
         }
-        let paper = o.read.paper as f64 / u;
-        papers.push(DashedPathElement::new(
-            vec![(x + 0.08, paper), (x + 0.92, paper)],
-            6,
-            4,
-            PAPER.stroke_width(2),
-        ));
-        bound_labels.push((x + 0.92, paper, format!("paper {}", short(paper)), PAPER));
-        match o.read.sound {
-            Some(s) => {
-                let s = s as f64 / u;
-                sounds.push(PathElement::new(
-                    vec![(x + 0.08, s), (x + 0.92, s)],
-                    SOUND.stroke_width(2),
-                ));
-                bound_labels.push((x + 0.08, s, format!("sound {}", short(s)), SOUND));
-            }
-            None => labels.push(Text::new(
+        if g.sound.is_none() {
+            labels.push(Text::new(
                 "sound: unbounded".to_string(),
-                (x + 0.08, top * 0.97),
+                (g.x + 0.08, top * 0.97),
                 text_style(11, SOUND, HPos::Left, VPos::Top),
-            )),
+            ));
         }
     }
-    chart.draw_series(means).map_err(err)?;
-    chart.draw_series(maxes).map_err(err)?;
-    chart.draw_series(p99s).map_err(err)?;
-    chart.draw_series(papers).map_err(err)?;
-    chart.draw_series(sounds).map_err(err)?;
     chart.draw_series(labels).map_err(err)?;
-    // Bar values inside the bar's top (clear of the bound labels above the
-    // lines), or above a bar too short to hold them.
-    for (x, v, inside, tick) in bar_labels {
+    Ok(())
+}
+
+/// Bar values inside the bar's top (clear of the bound labels above the
+/// lines), or above a bar too short to hold them; on the max bar, below
+/// the p99 tick when the tick is where the label would go. In root pixels,
+/// after the series, so that they are drawn on top.
+fn draw_bar_labels<DB: DrawingBackend>(
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    groups: &[BarGroup],
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    // (x, value, colour inside the bar, p99 tick) of each bar.
+    let bars = groups.iter().filter_map(|g| g.observed.map(|o| (g.x, o)));
+    let bars = bars.flat_map(|(x, (mean, max, p99))| {
+        [
+            (x + 0.34, mean, P99, None),
+            (x + 0.66, max, WHITE, Some(p99)),
+        ]
+    });
+    for (x, v, inside, tick) in bars {
         let (px, top_px) = chart.backend_coord(&(x, v));
         let (_, base_px) = chart.backend_coord(&(x, 0.0));
         // Below the p99 tick when the tick is where the label would go.
@@ -308,7 +381,33 @@ where
         };
         root.draw(&label).map_err(err)?;
     }
-    for (x, v, text, c) in bound_labels {
+    Ok(())
+}
+
+/// The value of each bound line above it, on a light box over whatever is
+/// behind: paper at the line's right end, sound at its left end, so that
+/// the two stay apart when the bounds are close.
+fn draw_bound_labels<DB: DrawingBackend>(
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    groups: &[BarGroup],
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let bounds = groups.iter().flat_map(|g| {
+        let paper = (
+            g.x + 0.92,
+            g.paper,
+            format!("paper {}", short(g.paper)),
+            PAPER,
+        );
+        let sound = g
+            .sound
+            .map(|s| (g.x + 0.08, s, format!("sound {}", short(s)), SOUND));
+        std::iter::once(paper).chain(sound)
+    });
+    for (x, v, text, c) in bounds {
         let (px, py) = chart.backend_coord(&(x, v));
         let wd = text_px(&text, 11) + 4;
         let (l, r, h) = if c == PAPER {
@@ -329,7 +428,21 @@ where
         ))
         .map_err(err)?;
     }
-    // Chain names (and paths) under each group, in root pixels.
+    Ok(())
+}
+
+/// Chain names (and paths, when they differ) under each group, in root
+/// pixels.
+fn draw_chain_names<DB: DrawingBackend>(
+    spec: &Spec,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    obs: &[&ChainObs],
+    shift: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
     for (i, o) in obs.iter().enumerate() {
         let (px, py) = chart.backend_coord(&(i as f64 + shift + 0.5, 0.0));
         let name = spec.chain_label(o.chain);
@@ -372,20 +485,7 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
     if w1 <= w0 {
         return Err("empty window".into());
     }
-    // Rows: tasks grouped by CPU id, declaration order inside a CPU.
-    let mut order: Vec<usize> = (0..spec.tasks.len()).collect();
-    order.sort_by_key(|&i| (spec.tasks[i].cpu, i));
-    let mut row_of = vec![0usize; spec.tasks.len()];
-    let mut groups: Vec<(u32, usize, usize)> = Vec::new(); // (cpu, first row, rows)
-    for (r, &i) in order.iter().enumerate() {
-        row_of[i] = r;
-        let cpu = spec.tasks[i].cpu;
-        match groups.last_mut() {
-            Some(g) if g.0 == cpu => g.2 += 1,
-            _ => groups.push((cpu, r, 1)),
-        }
-    }
-    let rows = order.len().max(1);
+    let rows = Rows::of(spec);
     let row_px = 34u32;
     let name_w = spec
         .tasks
@@ -394,9 +494,7 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
         .max()
         .unwrap_or(4) as u32;
     let label_w = 70 + 8 * name_w;
-    let (w, h) = (1300u32, 130 + row_px * rows as u32 + 60);
-    // Row r is centred at y = rows - r - 0.5 (row 0 on top).
-    let yc = |r: usize| (rows - r) as f64 - 0.5;
+    let (w, h) = (1300u32, 130 + row_px * rows.n as u32 + 60);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
@@ -421,7 +519,7 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
             .margin_left(10)
             .x_label_area_size(50)
             .y_label_area_size(label_w)
-            .build_cartesian_2d(x0..x1, 0f64..rows as f64)
+            .build_cartesian_2d(x0..x1, 0f64..rows.n as f64)
             .map_err(err)?;
         chart
             .configure_mesh()
@@ -435,110 +533,246 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
             .bold_line_style(RGBColor(215, 215, 215))
             .draw()
             .map_err(err)?;
-        // CPU bands and labels.
-        for (k, &(cpu, first, n)) in groups.iter().enumerate() {
-            let top = yc(first) + 0.5;
-            let bottom = top - n as f64;
-            if k % 2 == 1 {
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(x0, bottom), (x1, top)],
-                        RGBColor(246, 246, 250).filled(),
-                    )))
-                    .map_err(err)?;
-            }
-            if k > 0 {
-                chart
-                    .draw_series(std::iter::once(PathElement::new(
-                        vec![(x0, top), (x1, top)],
-                        RGBColor(160, 160, 160).stroke_width(1),
-                    )))
-                    .map_err(err)?;
-            }
-            let (_, py) = chart.backend_coord(&(x0, (top + bottom) / 2.0));
-            root.draw(&Text::new(
-                format!("cpu {cpu}"),
-                (14, py),
-                text_style(14, BLACK, HPos::Left, VPos::Center),
-            ))
-            .map_err(err)?;
-        }
-        for (i, t) in spec.tasks.iter().enumerate() {
-            let (px, py) = chart.backend_coord(&(x0, yc(row_of[i])));
-            root.draw(&Text::new(
-                t.name.clone(),
-                (px - 8, py),
-                text_style(13, BLACK, HPos::Right, VPos::Center),
-            ))
-            .map_err(err)?;
-        }
-        // Slices.
-        let half = 0.32;
-        for s in &res.segments {
-            let (a, b) = (s.start.max(w0), s.end.min(w1));
-            if b <= a || s.task >= spec.tasks.len() {
-                continue;
-            }
-            let c = PALETTE[s.task % PALETTE.len()];
-            let y = yc(row_of[s.task]);
-            let bg = s.background || spec.tasks[s.task].server == Server::Background;
-            let fill = if bg { lighter(c, 0.6) } else { c };
-            // In pixels, at least 2 wide so short jobs stay visible.
-            let (l, t) = chart.backend_coord(&(a as f64 / u, y + half));
-            let (r, b) = chart.backend_coord(&(b as f64 / u, y - half));
-            let r = r.max(l + 2);
-            root.draw(&Rectangle::new([(l, t), (r, b)], fill.filled()))
-                .map_err(err)?;
-            if bg {
-                hatch(&root, (l, t), (r, b), c)?;
-            }
-            root.draw(&Rectangle::new([(l, t), (r, b)], darker(c).stroke_width(1)))
-                .map_err(err)?;
-        }
-        // Releases: ticks from the bottom of the row, computed from the offsets.
-        for (i, t) in spec.tasks.iter().enumerate() {
-            let Some(p) = t.fixed_period().filter(|&p| p > 0) else {
-                continue;
-            };
-            let off = res.offsets.get(i).copied().unwrap_or(0);
-            let mut r = if w0 > off {
-                off + (w0 - off + p - 1) / p * p
-            } else {
-                off
-            };
-            let y = yc(row_of[i]);
-            while r <= w1 && r <= res.horizon {
-                let x = r as f64 / u;
-                let (px, pb) = chart.backend_coord(&(x, y - 0.5));
-                let (_, pt) = chart.backend_coord(&(x, y + 0.42));
-                root.draw(&PathElement::new(
-                    vec![(px, pb), (px, pt)],
-                    RELEASE.stroke_width(1),
-                ))
-                .map_err(err)?;
-                root.draw(&Polygon::new(
-                    vec![(px, pt - 1), (px - 4, pt + 6), (px + 4, pt + 6)],
-                    RELEASE.filled(),
-                ))
-                .map_err(err)?;
-                r += p;
-            }
-        }
-        // Publishes: a diamond on the row's top edge at each completion.
-        for j in &res.jobs {
-            if j.finish < w0 || j.finish > w1 || j.task >= spec.tasks.len() {
-                continue;
-            }
-            let (px, py) = chart.backend_coord(&(j.finish as f64 / u, yc(row_of[j.task]) + half));
-            root.draw(&Polygon::new(
-                vec![(px, py - 5), (px + 4, py), (px, py + 5), (px - 4, py)],
-                RGBColor(20, 20, 20).filled(),
-            ))
-            .map_err(err)?;
-        }
+        draw_cpu_bands(&root, &mut chart, &rows, (x0, x1))?;
+        draw_task_names(spec, &root, &chart, &rows, x0)?;
+        draw_slices(spec, res, &root, &chart, &rows, window)?;
+        draw_releases(spec, res, &root, &chart, &rows, window)?;
+        draw_publishes(spec, res, &root, &chart, &rows, window)?;
         root.present().map_err(err)?;
     }
     Ok(svg)
+}
+
+/// Half the height of a slice, in rows: slices leave a gap between rows.
+const HALF_SLICE: f64 = 0.32;
+
+/// The rows of the Gantt chart: one per task, grouped by CPU id,
+/// declaration order inside a CPU.
+struct Rows {
+    /// The row of each task (row 0 on top).
+    of: Vec<usize>,
+    /// The CPUs, top to bottom.
+    cpus: Vec<CpuRows>,
+    /// How many rows (at least one).
+    n: usize,
+}
+
+/// The consecutive rows of one CPU's tasks.
+struct CpuRows {
+    cpu: u32,
+    first: usize,
+    rows: usize,
+}
+
+impl Rows {
+    fn of(spec: &Spec) -> Rows {
+        let mut order: Vec<usize> = (0..spec.tasks.len()).collect();
+        order.sort_by_key(|&i| (spec.tasks[i].cpu, i));
+        let mut of = vec![0usize; spec.tasks.len()];
+        let mut cpus: Vec<CpuRows> = Vec::new();
+        for (r, &i) in order.iter().enumerate() {
+            of[i] = r;
+            let cpu = spec.tasks[i].cpu;
+            match cpus.last_mut() {
+                Some(g) if g.cpu == cpu => g.rows += 1,
+                _ => cpus.push(CpuRows {
+                    cpu,
+                    first: r,
+                    rows: 1,
+                }),
+            }
+        }
+        Rows {
+            of,
+            cpus,
+            n: order.len().max(1),
+        }
+    }
+
+    /// The centre of row `r` on the chart's y axis: rows − r − 0.5 (row 0
+    /// on top).
+    fn y(&self, r: usize) -> f64 {
+        (self.n - r) as f64 - 0.5
+    }
+}
+
+/// Every other CPU's rows on a tinted band, a rule between CPUs, and each
+/// CPU's name left of its rows.
+fn draw_cpu_bands<DB: DrawingBackend>(
+    root: &Area<DB>,
+    chart: &mut Chart<'_, DB>,
+    rows: &Rows,
+    (x0, x1): (f64, f64),
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    for (k, g) in rows.cpus.iter().enumerate() {
+        let top = rows.y(g.first) + 0.5;
+        let bottom = top - g.rows as f64;
+        if k % 2 == 1 {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(x0, bottom), (x1, top)],
+                    RGBColor(246, 246, 250).filled(),
+                )))
+                .map_err(err)?;
+        }
+        if k > 0 {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(x0, top), (x1, top)],
+                    RGBColor(160, 160, 160).stroke_width(1),
+                )))
+                .map_err(err)?;
+        }
+        let (_, py) = chart.backend_coord(&(x0, (top + bottom) / 2.0));
+        root.draw(&Text::new(
+            format!("cpu {}", g.cpu),
+            (14, py),
+            text_style(14, BLACK, HPos::Left, VPos::Center),
+        ))
+        .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Each task's name left of its row, right-aligned against the axis.
+fn draw_task_names<DB: DrawingBackend>(
+    spec: &Spec,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    rows: &Rows,
+    x0: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(x0, rows.y(rows.of[i])));
+        root.draw(&Text::new(
+            t.name.clone(),
+            (px - 8, py),
+            text_style(13, BLACK, HPos::Right, VPos::Center),
+        ))
+        .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// The CPU slices within the window, in the task's colour; a slice at
+/// background priority (a background task, or a server out of budget) is
+/// light and hatched. Drawn in pixels, at least 2 wide, so that short jobs
+/// stay visible.
+fn draw_slices<DB: DrawingBackend>(
+    spec: &Spec,
+    res: &SimResult,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    rows: &Rows,
+    (w0, w1): (Nanos, Nanos),
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let u = unit_of(spec);
+    for s in &res.segments {
+        let (a, b) = (s.start.max(w0), s.end.min(w1));
+        if b <= a || s.task >= spec.tasks.len() {
+            continue;
+        }
+        let c = PALETTE[s.task % PALETTE.len()];
+        let y = rows.y(rows.of[s.task]);
+        let bg = s.background || spec.tasks[s.task].server == Server::Background;
+        let fill = if bg { lighter(c, 0.6) } else { c };
+        // In pixels, at least 2 wide so short jobs stay visible.
+        let (l, t) = chart.backend_coord(&(a as f64 / u, y + HALF_SLICE));
+        let (r, b) = chart.backend_coord(&(b as f64 / u, y - HALF_SLICE));
+        let r = r.max(l + 2);
+        root.draw(&Rectangle::new([(l, t), (r, b)], fill.filled()))
+            .map_err(err)?;
+        if bg {
+            hatch(root, (l, t), (r, b), c)?;
+        }
+        root.draw(&Rectangle::new([(l, t), (r, b)], darker(c).stroke_width(1)))
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Releases: an arrow up from the bottom of the task's row at each release
+/// in the window (and within the run), computed from the task's offset and
+/// period.
+fn draw_releases<DB: DrawingBackend>(
+    spec: &Spec,
+    res: &SimResult,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    rows: &Rows,
+    (w0, w1): (Nanos, Nanos),
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let u = unit_of(spec);
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let Some(p) = t.fixed_period().filter(|&p| p > 0) else {
+            continue;
+        };
+        let off = res.offsets.get(i).copied().unwrap_or(0);
+        let mut r = if w0 > off {
+            off + (w0 - off + p - 1) / p * p
+        } else {
+            off
+        };
+        let y = rows.y(rows.of[i]);
+        while r <= w1 && r <= res.horizon {
+            let x = r as f64 / u;
+            let (px, pb) = chart.backend_coord(&(x, y - 0.5));
+            let (_, pt) = chart.backend_coord(&(x, y + 0.42));
+            root.draw(&PathElement::new(
+                vec![(px, pb), (px, pt)],
+                RELEASE.stroke_width(1),
+            ))
+            .map_err(err)?;
+            root.draw(&Polygon::new(
+                vec![(px, pt - 1), (px - 4, pt + 6), (px + 4, pt + 6)],
+                RELEASE.filled(),
+            ))
+            .map_err(err)?;
+            r += p;
+        }
+    }
+    Ok(())
+}
+
+/// Publishes: a diamond on the top edge of the task's slices at each
+/// completion in the window.
+fn draw_publishes<DB: DrawingBackend>(
+    spec: &Spec,
+    res: &SimResult,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    rows: &Rows,
+    (w0, w1): (Nanos, Nanos),
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let u = unit_of(spec);
+    for j in &res.jobs {
+        if j.finish < w0 || j.finish > w1 || j.task >= spec.tasks.len() {
+            continue;
+        }
+        let (px, py) =
+            chart.backend_coord(&(j.finish as f64 / u, rows.y(rows.of[j.task]) + HALF_SLICE));
+        root.draw(&Polygon::new(
+            vec![(px, py - 5), (px + 4, py), (px, py + 5), (px - 4, py)],
+            RGBColor(20, 20, 20).filled(),
+        ))
+        .map_err(err)?;
+    }
+    Ok(())
 }
 
 /// Diagonal hatching inside the pixel rectangle from p0 (top left) to p1
@@ -829,81 +1063,108 @@ pub fn sweep_chart(panels: &[SweepRow], settling_limit: f64) -> Res<String> {
             .map_err(err)?;
         let areas = root.split_evenly((panels.len(), 2));
         for (k, area) in areas.into_iter().enumerate() {
-            let (name, limits, dots) = &panels[k / 2];
-            let fresh = k % 2 == 1;
-            let limit = if fresh { limits.1 } else { limits.0 };
-            let x_of = |d: &SweepDot| if fresh { d.freshness_ms } else { d.reaction_ms };
-            let metric = if fresh { "freshness" } else { "reaction" };
-            let name = format!("{name}: {metric}");
-            // Room on the right for the legend, clear of every dot.
-            let x_max = dots.iter().map(x_of).chain(limit).fold(1.0, f64::max) * 1.8;
-            let mut chart = ChartBuilder::on(&area)
-                .margin(10)
-                .caption(&name, (FONT, 15))
-                .x_label_area_size(34)
-                .y_label_area_size(60)
-                .build_cartesian_2d(0.0..x_max, 0.0..1.05)
-                .map_err(err)?;
-            chart
-                .configure_mesh()
-                .x_desc(format!("predicted sound {metric} (ms)"))
-                .y_desc("worst step settling (s)")
-                .label_style((FONT, 12))
-                .draw()
-                .map_err(err)?;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![(0.0, settling_limit), (x_max, settling_limit)],
-                    SOUND.stroke_width(1),
-                )))
-                .map_err(err)?
-                .label(format!("criterion: settling < {settling_limit} s"))
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], SOUND.stroke_width(2)));
-            if let Some(l) = limit {
-                chart
-                    .draw_series(std::iter::once(DashedPathElement::new(
-                        vec![(l, 0.0), (l, 1.05)],
-                        6,
-                        4,
-                        PAPER.stroke_width(2),
-                    )))
-                    .map_err(err)?
-                    .label(format!("spec's limit {l} ms"))
-                    .legend(|(x, y)| {
-                        PathElement::new([(x, y), (x + 16, y)], PAPER.stroke_width(2))
-                    });
-            }
-            for (delay, label, color) in [
-                (false, "period scale", MAX),
-                (true, "pure delay", PALETTE[4]),
-            ] {
-                let pts: Vec<&SweepDot> = dots.iter().filter(|d| d.delay == delay).collect();
-                if pts.is_empty() {
-                    continue;
-                }
-                chart
-                    .draw_series(pts.iter().map(|d| {
-                        let style = if d.flies {
-                            color.filled()
-                        } else {
-                            color.stroke_width(2)
-                        };
-                        Circle::new((x_of(d), d.settling_s.min(1.0)), 5, style)
-                    }))
-                    .map_err(err)?
-                    .label(format!("{label} (filled: flies)"))
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(GREY)
-                .label_font((FONT, 12))
-                .draw()
-                .map_err(err)?;
+            sweep_panel(&area, &panels[k / 2], k % 2 == 1, settling_limit)?;
         }
         root.present().map_err(err)?;
     }
     Ok(svg)
+}
+
+/// One panel of [`sweep_chart`]: a chain's points against its predicted
+/// freshness (`fresh`) or reaction, the criterion's settling limit and the
+/// spec's limit as lines, and the key.
+fn sweep_panel<DB: DrawingBackend>(
+    area: &Area<DB>,
+    (name, limits, dots): &SweepRow,
+    fresh: bool,
+    settling_limit: f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let limit = if fresh { limits.1 } else { limits.0 };
+    let x_of = |d: &SweepDot| if fresh { d.freshness_ms } else { d.reaction_ms };
+    let metric = if fresh { "freshness" } else { "reaction" };
+    let name = format!("{name}: {metric}");
+    // Room on the right for the legend, clear of every dot.
+    let x_max = dots.iter().map(x_of).chain(limit).fold(1.0, f64::max) * 1.8;
+    let mut chart = ChartBuilder::on(area)
+        .margin(10)
+        .caption(&name, (FONT, 15))
+        .x_label_area_size(34)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..x_max, 0.0..1.05)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(format!("predicted sound {metric} (ms)"))
+        .y_desc("worst step settling (s)")
+        .label_style((FONT, 12))
+        .draw()
+        .map_err(err)?;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![(0.0, settling_limit), (x_max, settling_limit)],
+            SOUND.stroke_width(1),
+        )))
+        .map_err(err)?
+        .label(format!("criterion: settling < {settling_limit} s"))
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], SOUND.stroke_width(2)));
+    if let Some(l) = limit {
+        chart
+            .draw_series(std::iter::once(DashedPathElement::new(
+                vec![(l, 0.0), (l, 1.05)],
+                6,
+                4,
+                PAPER.stroke_width(2),
+            )))
+            .map_err(err)?
+            .label(format!("spec's limit {l} ms"))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], PAPER.stroke_width(2)));
+    }
+    draw_sweep_dots(&mut chart, dots, x_of)?;
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(GREY)
+        .label_font((FONT, 12))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The sweep's points at (`x_of`, settling capped at 1 s), one series per
+/// sweep (period scale, pure delay) in its own colour, filled where the
+/// vehicle flies and hollow where it fails.
+fn draw_sweep_dots<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    dots: &[SweepDot],
+    x_of: impl Fn(&SweepDot) -> f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    for (delay, label, color) in [
+        (false, "period scale", MAX),
+        (true, "pure delay", PALETTE[4]),
+    ] {
+        let pts: Vec<&SweepDot> = dots.iter().filter(|d| d.delay == delay).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        chart
+            .draw_series(pts.iter().map(|d| {
+                let style = if d.flies {
+                    color.filled()
+                } else {
+                    color.stroke_width(2)
+                };
+                Circle::new((x_of(d), d.settling_s.min(1.0)), 5, style)
+            }))
+            .map_err(err)?
+            .label(format!("{label} (filled: flies)"))
+            .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
+    }
+    Ok(())
 }

@@ -9,6 +9,7 @@ use crate::table::Table;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_body::Body;
+use rtpipe_fly::{Flight, Setup};
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
 use rtpipe_sim::observe::{observe, ChainObs, Summary};
@@ -212,96 +213,18 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
-    let setup = if flight {
-        let r = rtpipe_fly::Request {
-            spec_path: &a.spec,
-            vehicle: &a.vehicle,
-            mission: &a.mission,
-            horizon: None,
-            seed: 0,
-        };
-        match rtpipe_fly::setup(&spec, &r) {
-            Ok(s) => Some(s),
-            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
-        }
-    } else {
-        None
-    };
-    let duration = match (&a.duration, &setup) {
-        (None, Some(s)) => s.horizon,
-        (None, None) => 2_000_000_000,
-        (Some(d), _) => match parse_time(&spec, d) {
-            Ok(d) if d > 0 => d,
-            Ok(_) => {
-                return fail(Bad::new(
-                    format!("--duration {d} is not positive"),
-                    "e.g. --duration 2s",
-                ))
-            }
-            Err(e) => {
-                return fail(Bad::new(
-                    format!("--duration {d}: {e}"),
-                    "e.g. --duration 2s",
-                ))
-            }
-        },
-    };
-    let policy = match policy_of(&spec, a) {
-        Ok(p) => p,
+    let (setup, cfg) = match prepare(&spec, a) {
+        Ok(x) => x,
         Err(b) => return fail(b),
     };
-    let cfg = RunConfig {
-        duration,
-        policy,
-        load: a.load,
-    };
-    if let Err(b) = check_outputs(&spec, a, &cfg) {
-        return fail(b);
-    }
-    if let Some(path) = &a.export_rt_app {
-        match export_rt_app(&spec, a, &cfg, path) {
-            Ok(()) => {}
-            Err(b) => return fail(b),
-        }
-    }
     let report = rtpipe_analysis::analyze(&spec);
     let spin = Spin::calibrate();
     if !a.json {
-        eprintln!(
-            "running {} for {} {} under SCHED_{}{}{} (Ctrl-C stops early)...",
-            spec.name,
-            spec.fmt_time(duration),
-            spec.time_unit,
-            policy.name().to_uppercase(),
-            if a.load > 0 {
-                format!(" with {} background hog(s)", a.load)
-            } else {
-                String::new()
-            },
-            if flight { ", flying the quadrotor" } else { "" }
-        );
+        announce(&spec, a, &cfg, setup.is_some());
     }
-    let (res, flown) = if let Some(s) = &setup {
-        match rtpipe_fly::fly_real(&spec, s, &cfg) {
-            Ok((f, r)) => (r, Some(f)),
-            Err(e) => return fail(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
-        }
-    } else {
-        let bodies: Vec<Box<dyn Body<u64>>> = spec
-            .tasks
-            .iter()
-            .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
-            .collect();
-        match rtpipe_runtime::run(&spec, &cfg, bodies, None) {
-            Ok(r) => (r, None),
-            Err(e) => {
-                let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
-                return match e.kind {
-                    ErrorKind::Config | ErrorKind::Refused => fail(b),
-                };
-            }
-        }
+    let (res, flown) = match execute(&spec, a, &cfg, setup.as_ref(), spin) {
+        Ok(x) => x,
+        Err(b) => return fail(b),
     };
     let obs = observe(&report, &res.sim);
     if let Err(b) = write_outputs(&spec, a, &res, &obs) {
@@ -309,20 +232,11 @@ pub fn run(a: &RunArgs) -> ExitCode {
     }
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let suspects = suspects(&spec, &res);
+    let flight = flown.as_ref().zip(setup.as_ref());
     if a.json {
         let mut v = to_json(&spec, &report, &res, &obs, spin, &suspects);
-        if let (Some(f), Some(s)) = (&flown, &setup) {
-            let q = &f.quality;
-            v["flight"] = json!({
-                "vehicle": s.preset.name,
-                "mission": s.mission.name,
-                "crashed": q.crashed,
-                "airborne_s": q.airborne_s,
-                "landed_s": q.landed_s,
-                "attitude_error_deg_rms": q.attitude_error_deg.rms,
-                "altitude_error_m_rms": q.altitude_error_m.rms,
-                "failures": q.failures(&s.mission.criteria),
-            });
+        if let Some((f, s)) = flight {
+            v["flight"] = flight_json(f, s);
         }
         if let Err(code) = analyze::print_json(&v) {
             return code;
@@ -332,7 +246,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
             "{}",
             to_text(&spec, &report, &res, &obs, spin, flown.is_some())
         );
-        if let (Some(f), Some(s)) = (&flown, &setup) {
+        if let Some((f, s)) = flight {
             let failures = f.quality.failures(&s.mission.criteria);
             println!(
                 "\nflight ({}, mission {}, bodies on real threads):",
@@ -347,6 +261,133 @@ pub fn run(a: &RunArgs) -> ExitCode {
     for n in &res.notes {
         eprintln!("{n}");
     }
+    exit_status(over_sound, &suspects)
+}
+
+/// Everything that is checked before the run: the flight's setup when the
+/// spec's tasks name flight bodies (and --synthetic does not say
+/// otherwise), the duration, the policy, the output paths; writes the
+/// rt-app workload if asked, since it needs no run.
+fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Bad> {
+    let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
+    let setup = if flight {
+        let r = rtpipe_fly::Request {
+            spec_path: &a.spec,
+            vehicle: &a.vehicle,
+            mission: &a.mission,
+            horizon: None,
+            seed: 0,
+        };
+        match rtpipe_fly::setup(spec, &r) {
+            Ok(s) => Some(s),
+            Err(e) => return Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+        }
+    } else {
+        None
+    };
+    let duration = duration_of(spec, a, setup.as_ref())?;
+    let policy = policy_of(spec, a)?;
+    let cfg = RunConfig {
+        duration,
+        policy,
+        load: a.load,
+    };
+    check_outputs(spec, a, &cfg)?;
+    if let Some(path) = &a.export_rt_app {
+        export_rt_app(spec, a, &cfg, path)?;
+    }
+    Ok((setup, cfg))
+}
+
+/// `--duration`, by default a flight's mission (plus its margin) or 2 s.
+fn duration_of(spec: &Spec, a: &RunArgs, setup: Option<&Setup>) -> Result<Nanos, Bad> {
+    match (&a.duration, setup) {
+        (None, Some(s)) => Ok(s.horizon),
+        (None, None) => Ok(2_000_000_000),
+        (Some(d), _) => match parse_time(spec, d) {
+            Ok(d) if d > 0 => Ok(d),
+            Ok(_) => Err(Bad::new(
+                format!("--duration {d} is not positive"),
+                "e.g. --duration 2s",
+            )),
+            Err(e) => Err(Bad::new(
+                format!("--duration {d}: {e}"),
+                "e.g. --duration 2s",
+            )),
+        },
+    }
+}
+
+/// Says on stderr what is about to run, and how to stop it.
+fn announce(spec: &Spec, a: &RunArgs, cfg: &RunConfig, flight: bool) {
+    eprintln!(
+        "running {} for {} {} under SCHED_{}{}{} (Ctrl-C stops early)...",
+        spec.name,
+        spec.fmt_time(cfg.duration),
+        spec.time_unit,
+        cfg.policy.name().to_uppercase(),
+        if a.load > 0 {
+            format!(" with {} background hog(s)", a.load)
+        } else {
+            String::new()
+        },
+        if flight { ", flying the quadrotor" } else { "" }
+    );
+}
+
+/// The run itself: the flight on real threads with the world co-simulated
+/// when there is a `setup`, else synthetic bodies burning each task's
+/// demand. A spec the kernel refuses, like one that cannot run, is bad
+/// input.
+fn execute(
+    spec: &Spec,
+    a: &RunArgs,
+    cfg: &RunConfig,
+    setup: Option<&Setup>,
+    spin: Spin,
+) -> Result<(RunResult, Option<Flight>), Bad> {
+    if let Some(s) = setup {
+        return match rtpipe_fly::fly_real(spec, s, cfg) {
+            Ok((f, r)) => Ok((r, Some(f))),
+            Err(e) => Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+        };
+    }
+    let bodies: Vec<Box<dyn Body<u64>>> = spec
+        .tasks
+        .iter()
+        .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
+        .collect();
+    match rtpipe_runtime::run(spec, cfg, bodies, None) {
+        Ok(r) => Ok((r, None)),
+        Err(e) => {
+            let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
+            match e.kind {
+                ErrorKind::Config | ErrorKind::Refused => Err(b),
+            }
+        }
+    }
+}
+
+/// The `flight` entry of the JSON: the vehicle, the mission and how the
+/// flight went.
+fn flight_json(f: &Flight, s: &Setup) -> Value {
+    let q = &f.quality;
+    json!({
+        "vehicle": s.preset.name,
+        "mission": s.mission.name,
+        "crashed": q.crashed,
+        "airborne_s": q.airborne_s,
+        "landed_s": q.landed_s,
+        "attitude_error_deg_rms": q.attitude_error_deg.rms,
+        "altitude_error_m_rms": q.altitude_error_m.rms,
+        "failures": q.failures(&s.mission.criteria),
+    })
+}
+
+/// Exit status 1 only when an observation exceeded a sound bound and
+/// nothing in the measurement explains it (the `suspects`); the warnings
+/// say which case it is.
+fn exit_status(over_sound: usize, suspects: &[String]) -> ExitCode {
     if over_sound > 0 {
         eprintln!("warning: {over_sound} observation(s) above a sound chain bound");
         if suspects.is_empty() {
@@ -395,6 +436,9 @@ fn suspects(spec: &Spec, res: &RunResult) -> Vec<String> {
     out
 }
 
+/// The text report: what ran, the chains against the bounds (from the
+/// head's read, from the event, and the paper's Fig. 10 columns), the
+/// tasks, and the steal time.
 fn to_text(
     spec: &Spec,
     report: &Report,
@@ -403,14 +447,46 @@ fn to_text(
     spin: Spin,
     flight: bool,
 ) -> String {
-    let u = spec.time_unit;
     let mut out = crate::analyze::system_line(spec);
+    out.push_str(&ran_line(spec, res, spin, flight));
+    if res.policy == Policy::Deadline {
+        out.push_str("SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n");
+    }
+    if !obs.is_empty() {
+        out.push_str(
+            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Read));
+        out.push_str("\nfrom the event just after each head read, against the +event bounds:\n");
+        out.push_str(&chain_table(spec, obs, Anchor::Event));
+        out.push_str(
+            "\nthe paper's Fig. 10 columns (from the head's read; AVG mean, WC max, MaxV max - min; R reaction, F freshness):\n",
+        );
+        out.push_str(&fig10_table(spec, obs));
+    }
+    out.push_str(
+        "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
+         switching overhead; start = read - release; demand = CPU time of one job):\n",
+    );
+    out.push_str(&task_table(spec, report, res));
+    out.push_str(&format!(
+        "\nsteal time during the run: {}\n",
+        res.steal
+            .map_or_else(|| "unknown".into(), |s| format!("{:.1} ms", s as f64 / 1e6))
+    ));
+    out
+}
+
+/// What ran, for how long, under which class and load, with which bodies;
+/// best effort says loudly that no figure is a real-time measurement.
+fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
+    let u = spec.time_unit;
     let rt = if res.policy == Policy::Other {
         " -- NOT REAL-TIME (best effort): no figure below is a real-time measurement"
     } else {
         ""
     };
-    out.push_str(&format!(
+    format!(
         "ran {} {u} under SCHED_{}{}{}{rt}; {}\n",
         spec.fmt_time(res.sim.horizon),
         res.policy.name().to_uppercase(),
@@ -431,26 +507,13 @@ fn to_text(
                 spin.iters_per_us
             )
         }
-    ));
-    if res.policy == Policy::Deadline {
-        out.push_str("SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n");
-    }
-    if !obs.is_empty() {
-        out.push_str(
-            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
-        );
-        out.push_str(&chain_table(spec, obs, Anchor::Read));
-        out.push_str("\nfrom the event just after each head read, against the +event bounds:\n");
-        out.push_str(&chain_table(spec, obs, Anchor::Event));
-        out.push_str(
-            "\nthe paper's Fig. 10 columns (from the head's read; AVG mean, WC max, MaxV max - min; R reaction, F freshness):\n",
-        );
-        out.push_str(&fig10_table(spec, obs));
-    }
-    out.push_str(
-        "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
-         switching overhead; start = read - release; demand = CPU time of one job):\n",
-    );
+    )
+}
+
+/// One row per task: jobs, measured response times (`!!` marks a max above
+/// the analysed R(job)), start latency, CPU time against the budget,
+/// overruns and missed periods.
+fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
     let mut t = Table::new(&[
         "task",
         "cpu",
@@ -498,13 +561,7 @@ fn to_text(
             tr.missed.to_string(),
         ]);
     }
-    out.push_str(&t.render());
-    out.push_str(&format!(
-        "\nsteal time during the run: {}\n",
-        res.steal
-            .map_or_else(|| "unknown".into(), |s| format!("{:.1} ms", s as f64 / 1e6))
-    ));
-    out
+    t.render()
 }
 
 fn to_json(

@@ -215,6 +215,28 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
             return simulate::fail(b.into());
         }
     }
+    let points = fly_all(spec, s, a, &c, &vars);
+    let limits = derived_limits(spec, s, &points);
+    if let Err(b) = write_files(spec, s, a, &c, &points, &limits) {
+        return simulate::fail(b);
+    }
+    if a.json {
+        if let Err(code) = analyze::print_json(&sweep_json(spec, s, &c, &points, &limits)) {
+            return code;
+        }
+    } else {
+        print!(
+            "{}",
+            text(spec, s, &c, &points, &limits, a.write_limits.as_deref())
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+/// Flies every variation (on a worker thread) while a progress bar on
+/// stderr counts the flights done; a panic in the sweep goes on unwinding
+/// here.
+fn fly_all(spec: &Spec, s: &Setup, a: &FlyArgs, c: &Criteria, vars: &[Variation]) -> Vec<Point> {
     let done = AtomicU64::new(0);
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(vars.len() as u64),
@@ -227,7 +249,7 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
     }
     pb.set_message(spec.name.clone());
     let points = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), &c, &vars, &done));
+        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), c, vars, &done));
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));
             std::thread::sleep(std::time::Duration::from_millis(50));
@@ -235,51 +257,58 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
         worker.join()
     });
     pb.finish_and_clear();
-    let points = match points {
+    match points {
         Ok(p) => p,
         Err(e) => std::panic::resume_unwind(e),
-    };
-    let limits = derived_limits(spec, s, &points);
+    }
+}
+
+/// `--write-limits` (the spec with the derived limits) and `--plot`
+/// (DIR/sweep.svg), all written or none.
+fn write_files(
+    spec: &Spec,
+    s: &Setup,
+    a: &FlyArgs,
+    c: &Criteria,
+    points: &[Point],
+    limits: &[ChainPair],
+) -> Result<(), Bad> {
     let mut files = Vec::new();
     if let Some(out) = &a.write_limits {
-        let text = rtpipe_model::to_toml(&with_limits(spec, &limits));
+        let text = rtpipe_model::to_toml(&with_limits(spec, limits));
         files.push(("--write-limits", out.to_path_buf(), text));
     }
     if let Some(dir) = &a.plot {
-        match chart(spec, s, &c, &points) {
+        match chart(spec, s, c, points) {
             Ok(svg) => files.push(("--plot", dir.join("sweep.svg"), svg)),
-            Err(e) => return simulate::fail(Bad::new(format!("cannot draw the sweep: {e}"), "")),
+            Err(e) => return Err(Bad::new(format!("cannot draw the sweep: {e}"), "")),
         }
-        if let Err(b) = crate::fly::ensure_dir(dir) {
-            return simulate::fail(b);
-        }
+        crate::fly::ensure_dir(dir)?;
     }
-    if let Err(b) = simulate::write_all(&a.spec, &files) {
-        return simulate::fail(b);
-    }
-    if a.json {
-        let v = json!({
-            "system": spec.name,
-            "vehicle": s.preset.name,
-            "mission": s.mission.name,
-            "criterion": c.describe(),
-            "points": points.iter().map(point_json).collect::<Vec<_>>(),
-            "limits_ms": limits.iter().enumerate().map(|(k, l)| json!({
-                "chain": spec.chain_label(k),
-                "reaction": l.0.map(|x| x as f64 * 1e-6),
-                "freshness": l.1.map(|x| x as f64 * 1e-6),
-            })).collect::<Vec<_>>(),
-        });
-        if let Err(code) = analyze::print_json(&v) {
-            return code;
-        }
-    } else {
-        print!(
-            "{}",
-            text(spec, s, &c, &points, &limits, a.write_limits.as_deref())
-        );
-    }
-    ExitCode::SUCCESS
+    simulate::write_all(&a.spec, &files)
+}
+
+/// The sweep as one JSON object: the setup, every point, the derived
+/// limits (ms).
+fn sweep_json(
+    spec: &Spec,
+    s: &Setup,
+    c: &Criteria,
+    points: &[Point],
+    limits: &[ChainPair],
+) -> Json {
+    json!({
+        "system": spec.name,
+        "vehicle": s.preset.name,
+        "mission": s.mission.name,
+        "criterion": c.describe(),
+        "points": points.iter().map(point_json).collect::<Vec<_>>(),
+        "limits_ms": limits.iter().enumerate().map(|(k, l)| json!({
+            "chain": spec.chain_label(k),
+            "reaction": l.0.map(|x| x as f64 * 1e-6),
+            "freshness": l.1.map(|x| x as f64 * 1e-6),
+        })).collect::<Vec<_>>(),
+    })
 }
 
 fn text(

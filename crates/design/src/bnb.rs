@@ -24,6 +24,7 @@ use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Ordering as CmpOrdering;
 use std::collections::BinaryHeap;
+use std::ops::ControlFlow;
 
 /// Relative tolerance under which a box's bound counts as no better than
 /// the incumbent (the same as the MILP search's "closed" gap).
@@ -192,6 +193,49 @@ pub(crate) struct BoxResult {
     /// The most boxes held open at once (memory: each holds two indices
     /// per task).
     pub peak_open: usize,
+}
+
+/// The state of a running box search: the best design so far and the boxes
+/// still to examine.
+struct Frontier {
+    /// The best verified design so far: its spec, analysis and U.
+    best: Option<(Spec, Report, f64)>,
+    /// The open boxes, smallest bound first.
+    open: BinaryHeap<Node>,
+    /// Boxes examined.
+    nodes: u64,
+    /// The most boxes open at once.
+    peak_open: usize,
+    /// The time ran out with boxes still open.
+    stopped: bool,
+}
+
+impl Frontier {
+    /// What the search proved: the best design, and as the lower bound the
+    /// least bound of the boxes still open (or the best design's U, if
+    /// smaller; 0 when there is neither).
+    fn result(self) -> BoxResult {
+        let open_bound = self
+            .open
+            .iter()
+            .map(|n| n.bound)
+            .fold(f64::INFINITY, f64::min);
+        let lower_bound = match &self.best {
+            Some((_, _, u)) => open_bound.min(*u),
+            None => open_bound,
+        };
+        BoxResult {
+            best: self.best,
+            lower_bound: if lower_bound.is_finite() {
+                lower_bound
+            } else {
+                0.0
+            },
+            complete: !self.stopped,
+            nodes: self.nodes,
+            peak_open: self.peak_open,
+        }
+    }
 }
 
 /// The box search of one problem: which constraint groups count, the axes.
@@ -768,84 +812,90 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// verified design, if any).
     pub fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
         let n = self.axes.len();
-        let root = Node {
+        let mut root = Node {
             lo: vec![0; n],
             hi: self.axes.iter().map(|a| a.len() - 1).collect(),
             above: Vec::new(),
             bound: 0.0,
         };
-        let mut best = seed;
-        let mut open = BinaryHeap::new();
-        let mut nodes: u64 = 0;
-        let mut peak_open = 0;
-        let mut root = root;
+        let mut f = Frontier {
+            best: seed,
+            open: BinaryHeap::new(),
+            nodes: 0,
+            peak_open: 0,
+            stopped: false,
+        };
         root.bound = self.bound(&root.hi);
-        open.push(root);
-        let mut stopped = false;
-        while let Some(mut node) = open.pop() {
-            let incumbent = best.as_ref().map(|b| b.2);
-            if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
-                continue;
-            }
-            if self.run.out_of_time() {
-                open.push(node);
-                stopped = true;
+        f.open.push(root);
+        while let Some(node) = f.open.pop() {
+            if self.visit(&mut f, node).is_break() {
                 break;
             }
-            nodes += 1;
-            self.run.work += 1;
-            if nodes % 256 == 1 {
-                self.progress(nodes, open.len(), node.bound, incumbent);
-            }
-            if !self.narrow(&mut node, incumbent) {
-                continue;
-            }
-            if nodes % DIVE_EVERY == 1 {
-                if let Some(found) = self.dive(&node, best.as_ref().map(|b| b.2)) {
-                    self.publish(&found.0, found.2, node.bound);
-                    best = Some(found);
-                }
-            }
-            let incumbent = best.as_ref().map(|b| b.2);
-            let (spec, report, ok) = self.verify(&node.hi);
-            if ok {
-                let u = utilization(&spec);
-                if incumbent.is_none_or(|b| u < b) {
-                    self.publish(
-                        &spec,
-                        u,
-                        open.iter().map(|n| n.bound).fold(node.bound, f64::min),
-                    );
-                    best = Some((spec, report, u));
-                }
-                if self.first_only {
-                    break;
-                }
-                continue;
-            }
-            let Some((low, high)) = self.branch(&node, &report) else {
-                continue; // a single point that fails
-            };
-            open.push(low);
-            open.push(high);
-            peak_open = peak_open.max(open.len());
         }
-        let open_bound = open.iter().map(|n| n.bound).fold(f64::INFINITY, f64::min);
-        let lower_bound = match &best {
-            Some((_, _, u)) => open_bound.min(*u),
-            None => open_bound,
+        f.result()
+    }
+
+    /// Examines the box `node` just taken from the frontier: drops it when
+    /// it cannot beat the best design, narrows it, now and then dives from
+    /// it for a better design, then settles it. Breaks when the search must
+    /// stop (out of time: the box goes back to the frontier, whose bounds
+    /// still count for the lower bound).
+    fn visit(&mut self, f: &mut Frontier, mut node: Node) -> ControlFlow<()> {
+        let incumbent = f.best.as_ref().map(|b| b.2);
+        if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
+            return ControlFlow::Continue(());
+        }
+        if self.run.out_of_time() {
+            f.open.push(node);
+            f.stopped = true;
+            return ControlFlow::Break(());
+        }
+        f.nodes += 1;
+        self.run.work += 1;
+        if f.nodes % 256 == 1 {
+            self.progress(f.nodes, f.open.len(), node.bound, incumbent);
+        }
+        if !self.narrow(&mut node, incumbent) {
+            return ControlFlow::Continue(());
+        }
+        if f.nodes % DIVE_EVERY == 1 {
+            if let Some(found) = self.dive(&node, f.best.as_ref().map(|b| b.2)) {
+                self.publish(&found.0, found.2, node.bound);
+                f.best = Some(found);
+            }
+        }
+        self.settle(f, node)
+    }
+
+    /// Checks the corner of longest periods of `node`: if it verifies,
+    /// nothing in the box is better, so it may be the new best design;
+    /// otherwise the box is split and both halves join the frontier. Breaks
+    /// at the first verified design of a feasibility probe.
+    fn settle(&mut self, f: &mut Frontier, node: Node) -> ControlFlow<()> {
+        let incumbent = f.best.as_ref().map(|b| b.2);
+        let (spec, report, ok) = self.verify(&node.hi);
+        if ok {
+            let u = utilization(&spec);
+            if incumbent.is_none_or(|b| u < b) {
+                self.publish(
+                    &spec,
+                    u,
+                    f.open.iter().map(|n| n.bound).fold(node.bound, f64::min),
+                );
+                f.best = Some((spec, report, u));
+            }
+            if self.first_only {
+                return ControlFlow::Break(());
+            }
+            return ControlFlow::Continue(());
+        }
+        let Some((low, high)) = self.branch(&node, &report) else {
+            return ControlFlow::Continue(()); // a single point that fails
         };
-        BoxResult {
-            best,
-            lower_bound: if lower_bound.is_finite() {
-                lower_bound
-            } else {
-                0.0
-            },
-            complete: !stopped,
-            nodes,
-            peak_open,
-        }
+        f.open.push(low);
+        f.open.push(high);
+        f.peak_open = f.peak_open.max(f.open.len());
+        ControlFlow::Continue(())
     }
 
     fn publish(&self, spec: &Spec, u: f64, lower_bound: f64) {

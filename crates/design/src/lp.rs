@@ -314,14 +314,11 @@ pub fn solve(lp: &Lp, solver: SolverKind, limits: Limits) -> Solve {
 /// ignored when it does not satisfy the rows, and by HiGHS).
 pub fn solve_hinted(lp: &Lp, solver: SolverKind, limits: Limits, hint: Option<&[f64]>) -> Solve {
     let started = std::time::Instant::now();
-    let mut work: u64 = 0;
-    let mut numerical: Option<Numerical> = None;
-    let mut best: Option<LpSolution> = None;
-    let mut last_err = String::new();
+    let mut so_far = Attempts::default();
     for k in 0..=VARIANTS {
         let left = Limits {
             time: limits.time.map(|t| t - started.elapsed().as_secs_f64()),
-            nodes: limits.nodes.map(|n| n.saturating_sub(work)),
+            nodes: limits.nodes.map(|n| n.saturating_sub(so_far.work)),
         };
         if k > 0 {
             if left.time.is_some_and(|t| t <= 0.0) {
@@ -330,7 +327,7 @@ pub fn solve_hinted(lp: &Lp, solver: SolverKind, limits: Limits, hint: Option<&[
             if left.nodes == Some(0) {
                 break;
             }
-            if let Some(n) = &mut numerical {
+            if let Some(n) = &mut so_far.numerical {
                 n.retries = k;
             }
         }
@@ -342,74 +339,109 @@ pub fn solve_hinted(lp: &Lp, solver: SolverKind, limits: Limits, hint: Option<&[
             &v
         };
         let attempt = solve_once(problem, solver, left, hint);
-        work = work.saturating_add(attempt.work);
+        so_far.work = so_far.work.saturating_add(attempt.work);
         match attempt.result {
-            Err(Failed::Solver(msg, found)) => {
-                if let Some(f) = found {
-                    if best.as_ref().is_none_or(|b| f.objective < b.objective) {
-                        best = Some(f);
-                    }
-                }
-                numerical.get_or_insert(Numerical {
-                    message: msg.clone(),
-                    retries: 0,
-                    solved_by: 0,
-                    from_failed: false,
-                });
-                last_err = msg;
-            }
-            Err(Failed::Lp(e)) => {
-                // A limit or a verdict: done, with a failed attempt's
-                // solution if there is one.
-                let result = match (e, best) {
-                    (LpError::TimeLimit | LpError::NodeLimit(_), Some(mut b)) => {
-                        if let Some(n) = &mut numerical {
-                            n.from_failed = true;
-                        }
-                        b.work = work;
-                        Ok(b)
-                    }
-                    (LpError::NodeLimit(_), None) => Err(LpError::NodeLimit(work)),
-                    (e, _) => Err(e),
-                };
-                if let (Some(n), true) = (&mut numerical, k > 0) {
-                    n.solved_by = k;
-                }
-                return Solve {
-                    result,
-                    work,
-                    numerical,
-                };
-            }
-            Ok(mut s) => {
-                if let Some(n) = &mut numerical {
-                    n.solved_by = k;
-                }
-                s.work = work;
-                return Solve {
-                    result: Ok(s),
-                    work,
-                    numerical,
-                };
-            }
+            Err(Failed::Solver(msg, found)) => so_far.failed_numerically(msg, found),
+            Err(Failed::Lp(e)) => return so_far.ended(k, e),
+            Ok(s) => return so_far.solved(k, s),
         }
     }
-    let result = match best {
-        Some(mut b) => {
-            if let Some(n) = &mut numerical {
-                n.from_failed = true;
+    so_far.exhausted(limits)
+}
+
+/// What the attempts of [`solve_hinted`] have gathered so far: a numerical
+/// failure does not end the solve, so its message and the best solution the
+/// failed attempt had found are kept for the answer.
+#[derive(Default)]
+struct Attempts {
+    /// Work of every attempt so far.
+    work: u64,
+    /// Set at the first numerical failure.
+    numerical: Option<Numerical>,
+    /// The best solution a failed attempt had found.
+    best: Option<LpSolution>,
+    /// The message of the latest numerical failure.
+    last_err: String,
+}
+
+impl Attempts {
+    /// An attempt failed numerically: keep the better of its solution and
+    /// the best so far, and the message.
+    fn failed_numerically(&mut self, msg: String, found: Option<LpSolution>) {
+        if let Some(f) = found {
+            if self.best.as_ref().is_none_or(|b| f.objective < b.objective) {
+                self.best = Some(f);
             }
-            b.optimal = false;
-            b.work = work;
-            Ok(b)
         }
-        None if limits.nodes.is_some_and(|n| work >= n) => Err(LpError::NodeLimit(work)),
-        None => Err(LpError::Other(last_err)),
-    };
-    Solve {
-        result,
-        work,
-        numerical,
+        self.numerical.get_or_insert(Numerical {
+            message: msg.clone(),
+            retries: 0,
+            solved_by: 0,
+            from_failed: false,
+        });
+        self.last_err = msg;
+    }
+
+    /// Attempt `k` ended in a limit or a verdict: that is the answer, unless
+    /// a limit stopped it and a failed attempt had found a solution.
+    fn ended(mut self, k: u32, e: LpError) -> Solve {
+        let work = self.work;
+        let result = match (e, self.best) {
+            (LpError::TimeLimit | LpError::NodeLimit(_), Some(mut b)) => {
+                if let Some(n) = &mut self.numerical {
+                    n.from_failed = true;
+                }
+                b.work = work;
+                Ok(b)
+            }
+            (LpError::NodeLimit(_), None) => Err(LpError::NodeLimit(work)),
+            (e, _) => Err(e),
+        };
+        if let (Some(n), true) = (&mut self.numerical, k > 0) {
+            n.solved_by = k;
+        }
+        Solve {
+            result,
+            work,
+            numerical: self.numerical,
+        }
+    }
+
+    /// Attempt `k` solved the problem.
+    fn solved(mut self, k: u32, mut s: LpSolution) -> Solve {
+        if let Some(n) = &mut self.numerical {
+            n.solved_by = k;
+        }
+        s.work = self.work;
+        Solve {
+            result: Ok(s),
+            work: self.work,
+            numerical: self.numerical,
+        }
+    }
+
+    /// Every attempt failed numerically (or the limits ran out between
+    /// them): the best solution found on the way, not proven optimal, else
+    /// the node limit or the last failure.
+    fn exhausted(mut self, limits: Limits) -> Solve {
+        let work = self.work;
+        let result = match self.best {
+            Some(mut b) => {
+                if let Some(n) = &mut self.numerical {
+                    n.from_failed = true;
+                }
+                b.optimal = false;
+                b.work = work;
+                Ok(b)
+            }
+            None if limits.nodes.is_some_and(|n| work >= n) => Err(LpError::NodeLimit(work)),
+            None => Err(LpError::Other(self.last_err)),
+        };
+        Solve {
+            result,
+            work,
+            numerical: self.numerical,
+        }
     }
 }
 
@@ -470,11 +502,52 @@ const FREE_CHUNK: u64 = 1024;
 /// microlp directly (not through good_lp), for its deterministic node limit
 /// and node count.
 fn solve_microlp(lp: &Lp, limits: Limits, hint: Option<&[f64]>) -> Attempt {
-    use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem, SolveOutcome};
-    let fail = |e: LpError| Attempt {
-        result: Err(Failed::Lp(e)),
-        work: 1,
+    let (p, vars) = match microlp_problem(lp) {
+        Ok(x) => x,
+        Err(e) => {
+            return Attempt {
+                result: Err(Failed::Lp(e)),
+                work: 1,
+            }
+        }
     };
+    let mut opts = microlp::SolveOptions::default();
+    opts.time_limit = limits.time.map(|t| {
+        std::time::Duration::try_from_secs_f64(t.max(0.01)).unwrap_or(std::time::Duration::MAX)
+    });
+    if let Some(h) = hint.filter(|h| h.len() == vars.len()) {
+        opts.warm_start = Some(vars.iter().copied().zip(h.iter().copied()).collect());
+    }
+    opts.node_limit = node_chunk(limits.nodes);
+    let started = std::time::Instant::now();
+    let out = match p.solve_with(opts) {
+        Ok(o) => o,
+        Err(e) => return failed_call(e, 0, None, node_chunk(limits.nodes).unwrap_or(0)),
+    };
+    Chunked {
+        lp,
+        vars: &vars,
+        limits,
+        started,
+        left: limits.nodes,
+        done: 0,
+        best: None,
+    }
+    .run(out)
+}
+
+/// The node limit of the next microlp call, given the nodes the solve's
+/// limit still allows (`None`: no limit).
+fn node_chunk(left: Option<u64>) -> Option<u64> {
+    Some(left.map_or(FREE_CHUNK, |l| l.min(NODE_CHUNK)))
+}
+
+/// The [`Lp`] as a microlp problem and its variables, by index; an error
+/// when microlp cannot hold an integer variable's bounds, or when the
+/// problem is infeasible on its face (empty integer bounds, a row without
+/// variables that fails).
+fn microlp_problem(lp: &Lp) -> Result<(microlp::Problem, Vec<microlp::Variable>), LpError> {
+    use microlp::{ComparisonOp, LinearExpr, OptimizationDirection, Problem};
     let mut p = Problem::new(OptimizationDirection::Minimize);
     let mut obj = vec![0.0; lp.vars.len()];
     // Repeated objective terms add up.
@@ -487,14 +560,14 @@ fn solve_microlp(lp: &Lp, limits: Limits, hint: Option<&[f64]>) -> Attempt {
             let (lo, hi) = (d.lo.ceil(), d.hi.floor());
             let range = i32::MIN as f64..=i32::MAX as f64;
             if !range.contains(&lo) || !range.contains(&hi) {
-                return fail(LpError::TooLarge {
+                return Err(LpError::TooLarge {
                     var: k,
                     lo: d.lo,
                     hi: d.hi,
                 });
             }
             if lo > hi {
-                return fail(LpError::Infeasible);
+                return Err(LpError::Infeasible);
             }
             vars.push(p.add_integer_var(obj[k], (lo as i32, hi as i32)));
         } else {
@@ -509,15 +582,10 @@ fn solve_microlp(lp: &Lp, limits: Limits, hint: Option<&[f64]>) -> Attempt {
         }
         if merged.values().all(|&c| c == 0.0) {
             // A row without variables: decide it here.
-            let ok = match r.cmp {
-                Cmp::Le => 0.0 <= r.rhs + 1e-9,
-                Cmp::Ge => 0.0 >= r.rhs - 1e-9,
-                Cmp::Eq => r.rhs.abs() <= 1e-9,
-            };
-            if ok {
+            if constant_row_holds(r) {
                 continue;
             }
-            return fail(LpError::Infeasible);
+            return Err(LpError::Infeasible);
         }
         let mut e = LinearExpr::empty();
         // Zero coefficients (a big-M the domains made 0) upset microlp's pivoting.
@@ -533,115 +601,164 @@ fn solve_microlp(lp: &Lp, limits: Limits, hint: Option<&[f64]>) -> Attempt {
         };
         p.add_constraint(e, op, r.rhs);
     }
-    let mut opts = microlp::SolveOptions::default();
-    opts.time_limit = limits.time.map(|t| {
-        std::time::Duration::try_from_secs_f64(t.max(0.01)).unwrap_or(std::time::Duration::MAX)
-    });
-    if let Some(h) = hint.filter(|h| h.len() == vars.len()) {
-        opts.warm_start = Some(vars.iter().copied().zip(h.iter().copied()).collect());
+    Ok((p, vars))
+}
+
+/// Whether a row whose coefficients are all zero holds: `0 cmp rhs`, within
+/// 1e-9 (microlp cannot take a row without variables).
+fn constant_row_holds(r: &Row) -> bool {
+    match r.cmp {
+        Cmp::Le => 0.0 <= r.rhs + 1e-9,
+        Cmp::Ge => 0.0 >= r.rhs - 1e-9,
+        Cmp::Eq => r.rhs.abs() <= 1e-9,
     }
-    let mut left = limits.nodes;
-    let chunk = |left: Option<u64>| Some(left.map_or(FREE_CHUNK, |l| l.min(NODE_CHUNK)));
-    opts.node_limit = chunk(left);
-    let solution = |sol: &microlp::Solution, work: u64| {
-        let values: Vec<f64> = vars.iter().map(|&v| sol.var_value(v)).collect();
-        let objective = lp.obj.iter().map(|&(i, c)| c * values[i]).sum::<f64>() + lp.obj_const;
+}
+
+/// A microlp call that failed, after `done` nodes of earlier calls that
+/// found `best`. A verdict (infeasible, unbounded) is charged one unit, as
+/// a solve; any other failure is numerical, charged the call's whole node
+/// limit `charge` (microlp reports no count then) and carries `best`.
+fn failed_call(e: microlp::Error, done: u64, best: Option<LpSolution>, charge: u64) -> Attempt {
+    let work = 1 + done + charge;
+    let result = match e {
+        // A verdict is charged one unit, as a solve.
+        microlp::Error::Infeasible => Err(Failed::Lp(LpError::Infeasible)),
+        microlp::Error::Unbounded => Err(Failed::Lp(LpError::Unbounded)),
+        other => Err(Failed::Solver(
+            other.to_string(),
+            best.map(|mut b| {
+                b.optimal = false;
+                b.work = work;
+                b
+            }),
+        )),
+    };
+    let work = if matches!(result, Err(Failed::Lp(_))) {
+        1
+    } else {
+        work
+    };
+    Attempt { result, work }
+}
+
+/// One microlp solve carried on call after call, each limited to a chunk of
+/// nodes: under a node limit, so that the work is counted to within a
+/// chunk; without one, so that the best solution so far survives a later
+/// call's numerical failure.
+struct Chunked<'a> {
+    lp: &'a Lp,
+    vars: &'a [microlp::Variable],
+    limits: Limits,
+    /// When the first call started: the time limit is for the whole solve.
+    started: std::time::Instant,
+    /// Nodes the node limit still allows (`None`: no node limit).
+    left: Option<u64>,
+    /// Nodes done by the calls so far.
+    done: u64,
+    /// The best solution the calls so far found.
+    best: Option<LpSolution>,
+}
+
+impl Chunked<'_> {
+    /// Resumes `out` until it ends in a solution, a proof, a limit, or a
+    /// failure.
+    fn run(mut self, mut out: microlp::SolveOutcome) -> Attempt {
+        loop {
+            let nodes = out.stats().nodes_solved;
+            let by_nodes = out.termination_reason() == microlp::TerminationReason::NodeLimit;
+            let used = nodes - self.done;
+            self.done = nodes;
+            if let microlp::SolveOutcome::Solution(sol) = &out {
+                self.best = Some(self.solution(sol, 1 + nodes));
+            }
+            if nodes / 16384 != (nodes - used) / 16384
+                && std::env::var_os("RTPIPE_LP_DEBUG").is_some()
+            {
+                self.debug(&out, nodes);
+            }
+            if by_nodes && self.more(used) {
+                // Go on with a fresh chunk (counted exactly: a chunk that
+                // ends in a proof of infeasibility is charged in full).
+                let r = self.resume_options(&out);
+                let charge = r.node_limit.unwrap_or(0);
+                out = match out.resume_with(r) {
+                    Ok(o) => o,
+                    Err(e) => return failed_call(e, self.done, self.best, charge),
+                };
+                continue;
+            }
+            return self.finish(out, nodes, by_nodes);
+        }
+    }
+
+    /// After a call the node limit stopped that used `used` nodes: whether
+    /// the solve's own node limit (if any) allows another call.
+    fn more(&mut self, used: u64) -> bool {
+        match self.left {
+            Some(l) => {
+                let l = l.saturating_sub(used);
+                self.left = Some(l);
+                l > 0
+            }
+            None => true,
+        }
+    }
+
+    /// The options of the next call: a fresh chunk of nodes, and what is
+    /// left of the time limit (it is for the whole solve, not per call).
+    fn resume_options(&self, out: &microlp::SolveOutcome) -> microlp::ResumeOptions {
+        let mut r = out.last_resume_options();
+        r.node_limit = node_chunk(self.left);
+        r.time_limit = self.limits.time.map(|t| {
+            std::time::Duration::try_from_secs_f64(
+                (t - self.started.elapsed().as_secs_f64()).max(0.01),
+            )
+            .unwrap_or(std::time::Duration::MAX)
+        });
+        r
+    }
+
+    /// The answer once no call follows: the last solution, or the limit
+    /// that stopped the solve before it found one.
+    fn finish(mut self, out: microlp::SolveOutcome, nodes: u64, by_nodes: bool) -> Attempt {
+        let work = 1 + nodes;
+        let result = match out {
+            microlp::SolveOutcome::Solution(_) => {
+                let mut b = self.best.take().expect("a solution outcome was recorded");
+                b.work = work;
+                Ok(b)
+            }
+            microlp::SolveOutcome::Interrupted(_) if by_nodes => {
+                Err(Failed::Lp(LpError::NodeLimit(work)))
+            }
+            microlp::SolveOutcome::Interrupted(_) => Err(Failed::Lp(LpError::TimeLimit)),
+        };
+        Attempt { result, work }
+    }
+
+    /// microlp's solution as an [`LpSolution`], its objective recomputed
+    /// from the model's terms (with the constant microlp does not know).
+    fn solution(&self, sol: &microlp::Solution, work: u64) -> LpSolution {
+        let values: Vec<f64> = self.vars.iter().map(|&v| sol.var_value(v)).collect();
+        let objective =
+            self.lp.obj.iter().map(|&(i, c)| c * values[i]).sum::<f64>() + self.lp.obj_const;
         LpSolution {
             values,
             objective,
             optimal: sol.status() == microlp::SolutionStatus::Optimal,
             work,
         }
-    };
-    // Nodes done by the calls so far, and the best solution they found.
-    let mut done: u64 = 0;
-    let mut best: Option<LpSolution> = None;
-    // A call that fails is charged in full (microlp reports no count then).
-    let failed = |e: microlp::Error, done: u64, best: Option<LpSolution>, charge: u64| {
-        let work = 1 + done + charge;
-        let result = match e {
-            // A verdict is charged one unit, as a solve.
-            microlp::Error::Infeasible => Err(Failed::Lp(LpError::Infeasible)),
-            microlp::Error::Unbounded => Err(Failed::Lp(LpError::Unbounded)),
-            other => Err(Failed::Solver(
-                other.to_string(),
-                best.map(|mut b| {
-                    b.optimal = false;
-                    b.work = work;
-                    b
-                }),
-            )),
-        };
-        let work = if matches!(result, Err(Failed::Lp(_))) {
-            1
-        } else {
-            work
-        };
-        Attempt { result, work }
-    };
-    let started = std::time::Instant::now();
-    let mut out = match p.solve_with(opts) {
-        Ok(o) => o,
-        Err(e) => return failed(e, 0, None, chunk(left).unwrap_or(0)),
-    };
-    loop {
-        let nodes = out.stats().nodes_solved;
-        let by_nodes = out.termination_reason() == microlp::TerminationReason::NodeLimit;
-        let used = nodes - done;
-        done = nodes;
-        if let SolveOutcome::Solution(sol) = &out {
-            best = Some(solution(sol, 1 + nodes));
-        }
-        if nodes / 16384 != (nodes - used) / 16384 && std::env::var_os("RTPIPE_LP_DEBUG").is_some()
-        {
-            let st = out.stats();
-            eprintln!(
-                "  microlp: {nodes} nodes, incumbent {:?}, bound {:?}, {:.1} s",
-                best.as_ref().map(|b| b.objective),
-                st.best_bound,
-                started.elapsed().as_secs_f64()
-            );
-        }
-        if by_nodes {
-            let more = match left {
-                Some(l) => {
-                    let l = l.saturating_sub(used);
-                    left = Some(l);
-                    l > 0
-                }
-                None => true,
-            };
-            if more {
-                // Go on with a fresh chunk (counted exactly: a chunk that
-                // ends in a proof of infeasibility is charged in full).
-                let mut r = out.last_resume_options();
-                r.node_limit = chunk(left);
-                // The time limit is for the whole solve, not per call.
-                r.time_limit = limits.time.map(|t| {
-                    std::time::Duration::try_from_secs_f64(
-                        (t - started.elapsed().as_secs_f64()).max(0.01),
-                    )
-                    .unwrap_or(std::time::Duration::MAX)
-                });
-                let charge = r.node_limit.unwrap_or(0);
-                out = match out.resume_with(r) {
-                    Ok(o) => o,
-                    Err(e) => return failed(e, done, best, charge),
-                };
-                continue;
-            }
-        }
-        let work = 1 + nodes;
-        let result = match out {
-            SolveOutcome::Solution(_) => {
-                let mut b = best.take().expect("a solution outcome was recorded");
-                b.work = work;
-                Ok(b)
-            }
-            SolveOutcome::Interrupted(_) if by_nodes => Err(Failed::Lp(LpError::NodeLimit(work))),
-            SolveOutcome::Interrupted(_) => Err(Failed::Lp(LpError::TimeLimit)),
-        };
-        return Attempt { result, work };
+    }
+
+    /// Progress on stderr (`RTPIPE_LP_DEBUG`), every 16,384 nodes.
+    fn debug(&self, out: &microlp::SolveOutcome, nodes: u64) {
+        let st = out.stats();
+        eprintln!(
+            "  microlp: {nodes} nodes, incumbent {:?}, bound {:?}, {:.1} s",
+            self.best.as_ref().map(|b| b.objective),
+            st.best_bound,
+            self.started.elapsed().as_secs_f64()
+        );
     }
 }
 

@@ -183,107 +183,26 @@ fn random_walk(
 
 /// A random valid system. Times are whole microseconds so that every demand,
 /// budget and period is exact.
+///
+/// Every random draw comes from one stream, in a fixed order (tasks, feedback
+/// edges, inheritance, demands, chains): the steps below must keep that
+/// order, or every seed would mean a different system.
 pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
     let mut rng = Rng::new(seed);
     let n = cfg.tasks.max(1);
     let cpus = cfg.cpus.max(1);
-    let mut tasks: Vec<Task> = Vec::with_capacity(n);
     let n_sources = source_count(n, cfg);
-    for i in 0..n {
-        let mut reads = Vec::new();
-        if i >= n_sources {
-            let k = rng.range(1, cfg.max_fan_in.max(1) as u64) as usize;
-            for _ in 0..k {
-                let p = rng.range(0, i as u64 - 1) as usize;
-                if !reads.contains(&p) {
-                    reads.push(p);
-                }
-            }
-        }
-        let server = if cfg.mixed_servers {
-            match rng.range(0, 3) {
-                0 => Server::Io,
-                1 => Server::None,
-                _ => Server::Main,
-            }
-        } else {
-            Server::Main
-        };
-        // The period is drawn before the CPU (the streams stay as they were).
-        let period = waters_period(&mut rng);
-        tasks.push(Task {
-            name: format!("t{i}"),
-            exec_min: 0,
-            input: if i < n_sources {
-                Some(Port {
-                    channel: 0,
-                    size: 0.0,
-                })
-            } else {
-                None
-            },
-            reads,
-            server,
-            cpu: rng.range(0, cpus as u64 - 1) as u32,
-            ..Task::periodic(1, period)
-        });
-    }
+    let mut tasks: Vec<Task> = (0..n)
+        .map(|i| random_task(&mut rng, cfg, i, n_sources, cpus))
+        .collect();
     if cfg.feedback > 0.0 {
-        for (i, t) in tasks.iter_mut().enumerate().take(n.saturating_sub(1)) {
-            if rng.chance(cfg.feedback) {
-                let p = rng.range(i as u64 + 1, n as u64 - 1) as usize;
-                if !t.reads.contains(&p) {
-                    t.reads.push(p);
-                }
-            }
-        }
+        add_feedback(&mut rng, cfg, &mut tasks);
     }
     if cfg.inheritance > 0.0 {
-        for i in 0..n {
-            if tasks[i].server != Server::Io || !rng.chance(cfg.inheritance) {
-                continue;
-            }
-            let mains: Vec<usize> = (0..n)
-                .filter(|&j| tasks[j].server == Server::Main && tasks[j].cpu == tasks[i].cpu)
-                .collect();
-            if !mains.is_empty() {
-                tasks[i].serves = Some(mains[rng.range(0, mains.len() as u64 - 1) as usize]);
-            }
-        }
+        add_inheritance(&mut rng, cfg, &mut tasks);
     }
-    // Execution times from UUniFast utilisations per CPU, in whole µs.
     for cpu in 0..cpus {
-        let ids: Vec<usize> = (0..n).filter(|&i| tasks[i].cpu == cpu).collect();
-        if ids.is_empty() {
-            continue;
-        }
-        let us = uunifast(&mut rng, ids.len(), cfg.utilization);
-        for (&i, &u) in ids.iter().zip(&us) {
-            let t = tasks[i].fixed_period().unwrap_or(1_000_000);
-            let budget_us = ((u * t as f64 / 1000.0).floor() as i64).max(3);
-            // Split the demand: transfers of up to a quarter each, the rest processing.
-            let (din, dout) = if cfg.transfers {
-                (
-                    rng.range(0, (budget_us / 4) as u64) as i64,
-                    rng.range(0, (budget_us / 4) as u64) as i64,
-                )
-            } else {
-                (0, 0)
-            };
-            let exec_us = (budget_us - din - dout).max(1);
-            tasks[i].exec = exec_us * 1000;
-            tasks[i].exec_min = rng.range(0, exec_us as u64) as i64 * 1000;
-            // Transfers as sizes on the 1-unit-per-µs channel below.
-            if let Some(p) = &mut tasks[i].input {
-                p.size = din as f64;
-            }
-            if let Some(p) = &mut tasks[i].output {
-                p.size = dout as f64;
-            }
-            if rng.chance(0.3) {
-                tasks[i].budget_given = Some(budget_us * 1000 + rng.range(0, 3) as i64 * 1000);
-            }
-        }
+        draw_demands(&mut rng, cfg, &mut tasks, cpu);
     }
     // One memory channel of 1000 units per ms (1 unit per µs): a size of k
     // units is a transfer of k µs, so every demand is a whole number of µs.
@@ -293,30 +212,8 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         overhead: 0,
     }];
     compute_transfers(&mut tasks, &channels, TimeUnit::Ms);
-    // Budgets must cover the (now aggregated) demand and fit the period.
-    for t in &mut tasks {
-        let d = t.demand();
-        if t.budget_given.is_some_and(|c| c < d) {
-            t.budget_given = Some(d);
-        }
-        if let PeriodSpec::Fixed(p) = t.period {
-            if t.budget() > p {
-                t.period = PeriodSpec::Fixed((t.budget() + 999_999) / 1_000_000 * 1_000_000);
-            }
-        }
-    }
-    // Chains: random walks forward along edges.
-    let consumers = forward_consumers(&tasks);
-    let mut chains = Vec::new();
-    for _ in 0..cfg.chains {
-        let path = random_walk(&mut rng, &consumers, n_sources, |_, _| true);
-        chains.push(Chain {
-            name: None,
-            path,
-            reaction: None,
-            freshness: None,
-        });
-    }
+    fit_budgets(&mut tasks);
+    let chains = random_chains(&mut rng, cfg, &tasks, n_sources);
     Spec {
         name: format!("random-{seed}"),
         time_unit: TimeUnit::Ms,
@@ -330,6 +227,161 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         channels,
         tasks,
         chains,
+    }
+}
+
+/// `cfg.chains` chains without limits: random walks forward along edges
+/// from a source.
+fn random_chains(rng: &mut Rng, cfg: &GenConfig, tasks: &[Task], n_sources: usize) -> Vec<Chain> {
+    let consumers = forward_consumers(tasks);
+    let mut chains = Vec::new();
+    for _ in 0..cfg.chains {
+        let path = random_walk(rng, &consumers, n_sources, |_, _| true);
+        chains.push(Chain {
+            name: None,
+            path,
+            reaction: None,
+            freshness: None,
+        });
+    }
+    chains
+}
+
+/// Task `i` of [`random_system`] before its demand is drawn: its producers
+/// (earlier tasks only, so the graph has no cycle yet), its server, its
+/// WATERS period and its CPU, drawn in that order. The first `n_sources`
+/// tasks read no task but an input port instead.
+fn random_task(rng: &mut Rng, cfg: &GenConfig, i: usize, n_sources: usize, cpus: u32) -> Task {
+    let mut reads = Vec::new();
+    if i >= n_sources {
+        let k = rng.range(1, cfg.max_fan_in.max(1) as u64) as usize;
+        for _ in 0..k {
+            let p = rng.range(0, i as u64 - 1) as usize;
+            if !reads.contains(&p) {
+                reads.push(p);
+            }
+        }
+    }
+    let server = if cfg.mixed_servers {
+        match rng.range(0, 3) {
+            0 => Server::Io,
+            1 => Server::None,
+            _ => Server::Main,
+        }
+    } else {
+        Server::Main
+    };
+    // The period is drawn before the CPU (the streams stay as they were).
+    let period = waters_period(rng);
+    let cpu = rng.range(0, cpus as u64 - 1) as u32;
+    Task {
+        name: format!("t{i}"),
+        exec_min: 0,
+        input: if i < n_sources {
+            Some(Port {
+                channel: 0,
+                size: 0.0,
+            })
+        } else {
+            None
+        },
+        reads,
+        server,
+        cpu,
+        ..Task::periodic(1, period)
+    }
+}
+
+/// Feedback edges: each task but the last reads, with probability
+/// `cfg.feedback`, one later task (the cycles the analysis must cope with).
+fn add_feedback(rng: &mut Rng, cfg: &GenConfig, tasks: &mut [Task]) {
+    let n = tasks.len();
+    for (i, t) in tasks.iter_mut().enumerate().take(n.saturating_sub(1)) {
+        if rng.chance(cfg.feedback) {
+            let p = rng.range(i as u64 + 1, n as u64 - 1) as usize;
+            if !t.reads.contains(&p) {
+                t.reads.push(p);
+            }
+        }
+    }
+}
+
+/// PIBS inheritance: each I/O VCPU, with probability `cfg.inheritance`,
+/// serves one Main VCPU on its CPU (when there is one).
+fn add_inheritance(rng: &mut Rng, cfg: &GenConfig, tasks: &mut [Task]) {
+    let n = tasks.len();
+    for i in 0..n {
+        if tasks[i].server != Server::Io || !rng.chance(cfg.inheritance) {
+            continue;
+        }
+        let mains: Vec<usize> = (0..n)
+            .filter(|&j| tasks[j].server == Server::Main && tasks[j].cpu == tasks[i].cpu)
+            .collect();
+        if !mains.is_empty() {
+            tasks[i].serves = Some(mains[rng.range(0, mains.len() as u64 - 1) as usize]);
+        }
+    }
+}
+
+/// Demands of the tasks on `cpu`: UUniFast utilisations summing to
+/// `cfg.utilization`, each turned into a budget of whole µs and split into
+/// transfers and processing.
+fn draw_demands(rng: &mut Rng, cfg: &GenConfig, tasks: &mut [Task], cpu: u32) {
+    let ids: Vec<usize> = (0..tasks.len()).filter(|&i| tasks[i].cpu == cpu).collect();
+    if ids.is_empty() {
+        return;
+    }
+    let us = uunifast(rng, ids.len(), cfg.utilization);
+    for (&i, &u) in ids.iter().zip(&us) {
+        draw_demand(rng, cfg, &mut tasks[i], u);
+    }
+}
+
+/// One task's demand at utilisation `u` of its period: a budget of at least
+/// 3 µs, split into an input and an output transfer of up to a quarter of it
+/// each (as sizes on the 1-unit-per-µs channel) and processing, a best case
+/// below the worst, and for some tasks a budget above the demand.
+fn draw_demand(rng: &mut Rng, cfg: &GenConfig, t: &mut Task, u: f64) {
+    let period = t.fixed_period().unwrap_or(1_000_000);
+    let budget_us = ((u * period as f64 / 1000.0).floor() as i64).max(3);
+    // Split the demand: transfers of up to a quarter each, the rest processing.
+    let (din, dout) = if cfg.transfers {
+        (
+            rng.range(0, (budget_us / 4) as u64) as i64,
+            rng.range(0, (budget_us / 4) as u64) as i64,
+        )
+    } else {
+        (0, 0)
+    };
+    let exec_us = (budget_us - din - dout).max(1);
+    t.exec = exec_us * 1000;
+    t.exec_min = rng.range(0, exec_us as u64) as i64 * 1000;
+    // Transfers as sizes on the 1-unit-per-µs channel below.
+    if let Some(p) = &mut t.input {
+        p.size = din as f64;
+    }
+    if let Some(p) = &mut t.output {
+        p.size = dout as f64;
+    }
+    if rng.chance(0.3) {
+        t.budget_given = Some(budget_us * 1000 + rng.range(0, 3) as i64 * 1000);
+    }
+}
+
+/// Budgets must cover the (now aggregated) demand and fit the period: a
+/// given budget below the demand is raised to it, and a period shorter than
+/// the budget is lengthened to the next whole ms.
+fn fit_budgets(tasks: &mut [Task]) {
+    for t in tasks {
+        let d = t.demand();
+        if t.budget_given.is_some_and(|c| c < d) {
+            t.budget_given = Some(d);
+        }
+        if let PeriodSpec::Fixed(p) = t.period {
+            if t.budget() > p {
+                t.period = PeriodSpec::Fixed((t.budget() + 999_999) / 1_000_000 * 1_000_000);
+            }
+        }
     }
 }
 

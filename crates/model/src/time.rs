@@ -4,6 +4,7 @@
 //! unit suffix (`"250us"`, `"1.5ms"`). Strings are parsed as exact decimals so
 //! `"0.1ms"` is exactly 100000 ns, never 99999.99…
 
+use std::borrow::Cow;
 use std::fmt;
 
 /// A duration or instant in integer nanoseconds.
@@ -155,14 +156,37 @@ fn number_end(t: &str) -> usize {
 }
 
 /// Exact decimal (with an optional exponent) × scale → integer, or an error
-/// when not a whole number of ns.
+/// when not a whole number of ns. `None` is a syntax error. The number is
+/// handled as a string of digits throughout, never as a float, so that every
+/// decimal a user writes means exactly what it says.
 fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
     let num = num.replace('_', "");
     let (neg, digits) = match num.strip_prefix('-') {
         Some(rest) => (true, rest),
         None => (false, num.strip_prefix('+').unwrap_or(&num)),
     };
-    let (mantissa, exp) = match digits.find(['e', 'E']) {
+    let (mantissa, exp) = split_exponent(digits)?;
+    let (int, frac) = match mantissa.split_once('.') {
+        Some((i, f)) => (i, f),
+        None => (mantissa, ""),
+    };
+    if int.is_empty() && frac.is_empty() {
+        return None;
+    }
+    if !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let (int, frac) = match shift_point(int, frac, exp) {
+        Shifted::Digits(int, frac) => (int, frac),
+        Shifted::Decided(r) => return Some(r),
+    };
+    Some(scale_digits(&int, &frac, scale).map(|v| if neg { -v } else { v }))
+}
+
+/// Splits an unsigned number into its mantissa and its exponent (0 when it
+/// has none); `None` when the exponent is not a signed run of digits.
+fn split_exponent(digits: &str) -> Option<(&str, i64)> {
+    match digits.find(['e', 'E']) {
         Some(k) => {
             let e = &digits[k + 1..];
             let e_digits = e.strip_prefix(['+', '-']).unwrap_or(e);
@@ -174,62 +198,69 @@ fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
                 .get(..e_digits.len().min(6))
                 .and_then(|d| d.parse().ok())
                 .unwrap_or(999_999);
-            (&digits[..k], if e.starts_with('-') { -v } else { v })
+            Some((&digits[..k], if e.starts_with('-') { -v } else { v }))
         }
-        None => (digits, 0),
-    };
-    let (int, frac) = match mantissa.split_once('.') {
-        Some((i, f)) => (i, f),
-        None => (mantissa, ""),
-    };
-    if int.is_empty() && frac.is_empty() {
-        return None;
+        None => Some((digits, 0)),
     }
-    if !int.chars().all(|c| c.is_ascii_digit()) || !frac.chars().all(|c| c.is_ascii_digit()) {
-        return None;
+}
+
+/// The digits of a number once its exponent has moved the decimal point.
+enum Shifted<'a> {
+    /// The integer and fractional digits, still to be scaled.
+    Digits(Cow<'a, str>, Cow<'a, str>),
+    /// The exponent alone decides: zero, too large, or below a nanosecond.
+    Decided(Result<Nanos, TimeError>),
+}
+
+/// Moves the decimal point of `int.frac` by `exp` places, on the digit
+/// strings (so `1.5e-3` is exactly `0.0015`). A point moved more than 40
+/// places from the first significant digit leaves no representable time.
+fn shift_point<'a>(int: &'a str, frac: &'a str, exp: i64) -> Shifted<'a> {
+    if exp == 0 {
+        return Shifted::Digits(Cow::Borrowed(int), Cow::Borrowed(frac));
     }
-    // Move the decimal point by the exponent.
-    let shifted;
-    let (int, frac) = if exp == 0 {
-        (int, frac)
+    let all: String = format!("{int}{frac}");
+    let all = all.trim_start_matches('0');
+    if all.is_empty() {
+        return Shifted::Decided(Ok(0));
+    }
+    // Position of the point in `all`, counted from its first digit.
+    let lead_zeros = format!("{int}{frac}").len() - all.len();
+    let point = int.len() as i64 - lead_zeros as i64 + exp;
+    if point > 40 {
+        return Shifted::Decided(Err(TimeError::TooLarge));
+    }
+    if point < -40 {
+        return Shifted::Decided(Err(TimeError::SubNanosecond));
+    }
+    let (int, frac) = if point <= 0 {
+        (
+            String::new(),
+            format!("{}{all}", "0".repeat((-point) as usize)),
+        )
+    } else if point as usize >= all.len() {
+        (
+            format!("{all}{}", "0".repeat(point as usize - all.len())),
+            String::new(),
+        )
     } else {
-        let all: String = format!("{int}{frac}");
-        let all = all.trim_start_matches('0');
-        if all.is_empty() {
-            return Some(Ok(0));
-        }
-        // Position of the point in `all`, counted from its first digit.
-        let lead_zeros = format!("{int}{frac}").len() - all.len();
-        let point = int.len() as i64 - lead_zeros as i64 + exp;
-        if point > 40 {
-            return Some(Err(TimeError::TooLarge));
-        }
-        if point < -40 {
-            return Some(Err(TimeError::SubNanosecond));
-        }
-        shifted = if point <= 0 {
-            (
-                String::new(),
-                format!("{}{all}", "0".repeat((-point) as usize)),
-            )
-        } else if point as usize >= all.len() {
-            (
-                format!("{all}{}", "0".repeat(point as usize - all.len())),
-                String::new(),
-            )
-        } else {
-            (
-                all[..point as usize].to_string(),
-                all[point as usize..].to_string(),
-            )
-        };
-        (shifted.0.as_str(), shifted.1.as_str())
+        (
+            all[..point as usize].to_string(),
+            all[point as usize..].to_string(),
+        )
     };
+    Shifted::Digits(Cow::Owned(int), Cow::Owned(frac))
+}
+
+/// `int.frac` × `scale` as whole nanoseconds: too large past [`MAX_TIME`]
+/// (checked digit by digit, so no digit string can overflow), below a
+/// nanosecond when a non-zero fractional digit falls below the scale.
+fn scale_digits(int: &str, frac: &str, scale: i64) -> Result<Nanos, TimeError> {
     let mut value: i128 = 0;
     for c in int.chars() {
         value = value * 10 + (c as i128 - '0' as i128);
         if value > MAX_TIME as i128 {
-            return Some(Err(TimeError::TooLarge));
+            return Err(TimeError::TooLarge);
         }
     }
     value *= scale as i128;
@@ -239,7 +270,7 @@ fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
         let d = c as i128 - '0' as i128;
         if place % 10 != 0 {
             if d != 0 {
-                return Some(Err(TimeError::SubNanosecond));
+                return Err(TimeError::SubNanosecond);
             }
             continue;
         }
@@ -247,10 +278,9 @@ fn parse_decimal(num: &str, scale: i64) -> Option<Result<Nanos, TimeError>> {
         value += d * place;
     }
     if value > MAX_TIME as i128 {
-        return Some(Err(TimeError::TooLarge));
+        return Err(TimeError::TooLarge);
     }
-    let v = value as i64;
-    Some(Ok(if neg { -v } else { v }))
+    Ok(value as i64)
 }
 
 /// A bare number in `unit` to nanoseconds (rounded to the nearest ns, since

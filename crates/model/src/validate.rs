@@ -885,75 +885,83 @@ impl Builder {
         (server, cpu)
     }
 
+    /// `period`: a fixed time, or a domain for `design` to choose from.
     fn period(&mut self, p: &S<toml::Value>) -> Option<PeriodSpec> {
         match p.get_ref() {
-            toml::Value::Table(t) => {
-                let mut min = None;
-                let mut max = None;
-                let mut choices = None;
-                for (key, val) in t {
-                    // Inner values have no spans of their own; point at the table.
-                    let sv = S::new(p.span(), val.clone());
-                    match key.as_str() {
-                        "min" => min = Some(self.positive_time(&sv, "period min")?),
-                        "max" => max = Some(self.positive_time(&sv, "period max")?),
-                        "choices" => {
-                            let arr = match val {
-                                toml::Value::Array(a) if !a.is_empty() => a,
-                                _ => {
-                                    self.err(
-                                        "period choices must be a non-empty list of times",
-                                        Some(p.span()),
-                                        "write e.g. period = { choices = [\"1ms\", \"2ms\"] }",
-                                    );
-                                    return None;
-                                }
-                            };
-                            let mut out = Vec::new();
-                            for x in arr {
-                                out.push(self.positive_time(
-                                    &S::new(p.span(), x.clone()),
-                                    "period choice",
-                                )?);
-                            }
-                            out.sort_unstable();
-                            out.dedup();
-                            choices = Some(out);
-                        }
-                        other => {
-                            self.err(
-                                format!("unknown key `{other}` in period"),
-                                Some(p.span()),
-                                "a period is a time, { min = .., max = .. } or { choices = [..] }",
-                            );
-                            return None;
-                        }
-                    }
-                }
-                if let Some(c) = choices {
-                    if min.is_some() || max.is_some() {
-                        self.err(
-                            "period has both choices and min/max",
-                            Some(p.span()),
-                            "use either choices or a min/max range",
-                        );
-                        return None;
-                    }
-                    return Some(PeriodSpec::Choices(c));
-                }
-                if let (Some(a), Some(b)) = (min, max) {
-                    if a > b {
-                        self.err(
-                            "period min is larger than max",
-                            Some(p.span()),
-                            "swap min and max",
-                        );
-                        return None;
-                    }
-                }
-                Some(PeriodSpec::Range { min, max })
-            }
+            toml::Value::Table(t) => self.period_domain(p, t),
             _ => self.positive_time(p, "period").map(PeriodSpec::Fixed),
         }
+    }
+
+    /// `period = { min = .., max = .. }` (either end may be left out) or
+    /// `period = { choices = [..] }`, never both. The first bad key ends the
+    /// check: the rest of a table that is wrong anyway would only add noise.
+    fn period_domain(&mut self, p: &S<toml::Value>, t: &toml::Table) -> Option<PeriodSpec> {
+        let mut min = None;
+        let mut max = None;
+        let mut choices = None;
+        for (key, val) in t {
+            // Inner values have no spans of their own; point at the table.
+            let sv = S::new(p.span(), val.clone());
+            match key.as_str() {
+                "min" => min = Some(self.positive_time(&sv, "period min")?),
+                "max" => max = Some(self.positive_time(&sv, "period max")?),
+                "choices" => choices = Some(self.period_choices(p, val)?),
+                other => {
+                    self.err(
+                        format!("unknown key `{other}` in period"),
+                        Some(p.span()),
+                        "a period is a time, { min = .., max = .. } or { choices = [..] }",
+                    );
+                    return None;
+                }
+            }
+        }
+        if let Some(c) = choices {
+            if min.is_some() || max.is_some() {
+                self.err(
+                    "period has both choices and min/max",
+                    Some(p.span()),
+                    "use either choices or a min/max range",
+                );
+                return None;
+            }
+            return Some(PeriodSpec::Choices(c));
+        }
+        if let (Some(a), Some(b)) = (min, max) {
+            if a > b {
+                self.err(
+                    "period min is larger than max",
+                    Some(p.span()),
+                    "swap min and max",
+                );
+                return None;
+            }
+        }
+        Some(PeriodSpec::Range { min, max })
+    }
+
+    /// `choices = [..]` of `period` (the table `p`): a non-empty list of
+    /// positive times, returned sorted and without repeats: the domain is a
+    /// set, whatever order the spec lists it in.
+    fn period_choices(&mut self, p: &S<toml::Value>, val: &toml::Value) -> Option<Vec<Nanos>> {
+        let arr = match val {
+            toml::Value::Array(a) if !a.is_empty() => a,
+            _ => {
+                self.err(
+                    "period choices must be a non-empty list of times",
+                    Some(p.span()),
+                    "write e.g. period = { choices = [\"1ms\", \"2ms\"] }",
+                );
+                return None;
+            }
+        };
+        let mut out = Vec::new();
+        for x in arr {
+            out.push(self.positive_time(&S::new(p.span(), x.clone()), "period choice")?);
+        }
+        out.sort_unstable();
+        out.dedup();
+        Some(out)
     }
 }

@@ -3,7 +3,7 @@
 //! Times are written as strings with a unit suffix (`"1.15ms"`), which parse
 //! exactly; numbers that are not times use Rust's shortest round-trip form.
 
-use crate::{format_in, Nanos, PeriodSpec, Port, Spec};
+use crate::{format_in, Chain, Channel, Nanos, PeriodSpec, Port, Spec, Task};
 use std::fmt::Write;
 
 fn time(spec: &Spec, ns: Nanos) -> String {
@@ -59,6 +59,23 @@ fn port(spec: &Spec, p: &Port) -> String {
 /// Writes a complete spec: every task field explicit, budgets included.
 pub fn to_toml(spec: &Spec) -> String {
     let mut o = String::new();
+    system(&mut o, spec);
+    for c in &spec.channels {
+        channel(&mut o, spec, c);
+    }
+    for t in &spec.tasks {
+        task(&mut o, spec, t);
+    }
+    for c in &spec.chains {
+        chain(&mut o, spec, c);
+    }
+    o
+}
+
+/// The `[system]` table. `resolution` and `harmonic` are written only when
+/// they differ from their defaults, so a spec that never set them reads the
+/// same after a round trip.
+fn system(o: &mut String, spec: &Spec) {
     let _ = writeln!(o, "[system]");
     let _ = writeln!(o, "name = {}", quoted(&spec.name));
     let _ = writeln!(o, "time_unit = \"{}\"", spec.time_unit);
@@ -70,85 +87,95 @@ pub fn to_toml(spec: &Spec) -> String {
     if spec.harmonic {
         let _ = writeln!(o, "harmonic = true");
     }
-    for c in &spec.channels {
-        let _ = writeln!(o, "\n[channels.{}]", key(&c.name));
-        let _ = writeln!(o, "bandwidth = {}", num(c.bandwidth));
-        let _ = writeln!(o, "overhead = {}", time(spec, c.overhead));
+}
+
+/// One `[channels.NAME]` table.
+fn channel(o: &mut String, spec: &Spec, c: &Channel) {
+    let _ = writeln!(o, "\n[channels.{}]", key(&c.name));
+    let _ = writeln!(o, "bandwidth = {}", num(c.bandwidth));
+    let _ = writeln!(o, "overhead = {}", time(spec, c.overhead));
+}
+
+/// One `[tasks.NAME]` table, its keys in the order a reader expects them:
+/// the job's demand and data flow, then its timing, then its placement.
+/// Optional keys are left out when they hold their default.
+fn task(o: &mut String, spec: &Spec, t: &Task) {
+    let _ = writeln!(o, "\n[tasks.{}]", key(&t.name));
+    let _ = writeln!(o, "exec = {}", time(spec, t.exec));
+    if t.exec_min != 0 {
+        let _ = writeln!(o, "exec_min = {}", time(spec, t.exec_min));
     }
-    for t in &spec.tasks {
-        let _ = writeln!(o, "\n[tasks.{}]", key(&t.name));
-        let _ = writeln!(o, "exec = {}", time(spec, t.exec));
-        if t.exec_min != 0 {
-            let _ = writeln!(o, "exec_min = {}", time(spec, t.exec_min));
-        }
-        if let Some(p) = &t.input {
-            let _ = writeln!(o, "input = {}", port(spec, p));
-        }
-        if !t.reads.is_empty() {
-            let names: Vec<String> = t
-                .reads
-                .iter()
-                .map(|&i| quoted(&spec.tasks[i].name))
-                .collect();
-            let _ = writeln!(o, "reads = [{}]", names.join(", "));
-        }
-        if let Some(p) = &t.output {
-            let _ = writeln!(o, "output = {}", port(spec, p));
-        }
-        match &t.period {
-            PeriodSpec::Fixed(p) => {
-                let _ = writeln!(o, "period = {}", time(spec, *p));
-            }
-            PeriodSpec::Range { min, max } => {
-                let mut parts = Vec::new();
-                if let Some(m) = min {
-                    parts.push(format!("min = {}", time(spec, *m)));
-                }
-                if let Some(m) = max {
-                    parts.push(format!("max = {}", time(spec, *m)));
-                }
-                let _ = writeln!(o, "period = {{ {} }}", parts.join(", "));
-            }
-            PeriodSpec::Choices(c) => {
-                let v: Vec<String> = c.iter().map(|&p| time(spec, p)).collect();
-                let _ = writeln!(o, "period = {{ choices = [{}] }}", v.join(", "));
-            }
-            PeriodSpec::Free => {}
-        }
-        if let Some(b) = t.budget_given {
-            let _ = writeln!(o, "budget = {}", time(spec, b));
-        }
-        if let Some(x) = t.offset {
-            let _ = writeln!(o, "offset = {}", time(spec, x));
-        }
-        let _ = writeln!(o, "server = \"{}\"", t.server.name());
-        let _ = writeln!(o, "cpu = {}", t.cpu);
-        if let Some(m) = t.serves {
-            let _ = writeln!(o, "serves = {}", quoted(&spec.tasks[m].name));
-        }
-        if let Some(b) = &t.body {
-            let _ = writeln!(o, "body = {}", quoted(b));
-        }
+    if let Some(p) = &t.input {
+        let _ = writeln!(o, "input = {}", port(spec, p));
     }
-    for c in &spec.chains {
-        let _ = writeln!(o, "\n[[chain]]");
-        if let Some(n) = &c.name {
-            let _ = writeln!(o, "name = {}", quoted(n));
-        }
-        let names: Vec<String> = c
-            .path
-            .iter()
-            .map(|&i| quoted(&spec.tasks[i].name))
-            .collect();
-        let _ = writeln!(o, "path = [{}]", names.join(", "));
-        if let Some(l) = c.reaction {
-            let _ = writeln!(o, "reaction = {}", time(spec, l));
-        }
-        if let Some(l) = c.freshness {
-            let _ = writeln!(o, "freshness = {}", time(spec, l));
-        }
+    if !t.reads.is_empty() {
+        let _ = writeln!(o, "reads = [{}]", task_names(spec, &t.reads));
     }
-    o
+    if let Some(p) = &t.output {
+        let _ = writeln!(o, "output = {}", port(spec, p));
+    }
+    period(o, spec, &t.period);
+    if let Some(b) = t.budget_given {
+        let _ = writeln!(o, "budget = {}", time(spec, b));
+    }
+    if let Some(x) = t.offset {
+        let _ = writeln!(o, "offset = {}", time(spec, x));
+    }
+    let _ = writeln!(o, "server = \"{}\"", t.server.name());
+    let _ = writeln!(o, "cpu = {}", t.cpu);
+    if let Some(m) = t.serves {
+        let _ = writeln!(o, "serves = {}", quoted(&spec.tasks[m].name));
+    }
+    if let Some(b) = &t.body {
+        let _ = writeln!(o, "body = {}", quoted(b));
+    }
+}
+
+/// A task's `period` key in whichever of its three forms the spec uses; a
+/// free period (for `design` to choose) writes no key at all.
+fn period(o: &mut String, spec: &Spec, period: &PeriodSpec) {
+    match period {
+        PeriodSpec::Fixed(p) => {
+            let _ = writeln!(o, "period = {}", time(spec, *p));
+        }
+        PeriodSpec::Range { min, max } => {
+            let mut parts = Vec::new();
+            if let Some(m) = min {
+                parts.push(format!("min = {}", time(spec, *m)));
+            }
+            if let Some(m) = max {
+                parts.push(format!("max = {}", time(spec, *m)));
+            }
+            let _ = writeln!(o, "period = {{ {} }}", parts.join(", "));
+        }
+        PeriodSpec::Choices(c) => {
+            let v: Vec<String> = c.iter().map(|&p| time(spec, p)).collect();
+            let _ = writeln!(o, "period = {{ choices = [{}] }}", v.join(", "));
+        }
+        PeriodSpec::Free => {}
+    }
+}
+
+/// One `[[chain]]` table.
+fn chain(o: &mut String, spec: &Spec, c: &Chain) {
+    let _ = writeln!(o, "\n[[chain]]");
+    if let Some(n) = &c.name {
+        let _ = writeln!(o, "name = {}", quoted(n));
+    }
+    let _ = writeln!(o, "path = [{}]", task_names(spec, &c.path));
+    if let Some(l) = c.reaction {
+        let _ = writeln!(o, "reaction = {}", time(spec, l));
+    }
+    if let Some(l) = c.freshness {
+        let _ = writeln!(o, "freshness = {}", time(spec, l));
+    }
+}
+
+/// Tasks named by index as the items of a TOML list (`"a", "b"`): tasks are
+/// referred to by name in a spec, by index in memory.
+fn task_names(spec: &Spec, tasks: &[usize]) -> String {
+    let names: Vec<String> = tasks.iter().map(|&i| quoted(&spec.tasks[i].name)).collect();
+    names.join(", ")
 }
 
 #[cfg(test)]

@@ -334,6 +334,87 @@ pub fn run<'a, V: Copy + Send>(
             ));
         }
     }
+    let threads = threads(spec, cfg, bodies);
+    // Stopped and joined when `_load` drops: on every way out of `run`.
+    let _load = Load::start(cfg.load).map_err(|e| {
+        RunError::config(
+            format!("cannot start {} background load thread(s): {e}", cfg.load),
+            "lower --load",
+        )
+    })?;
+    sys::catch_sigint();
+    let shared = Shared::new(n);
+    let steal0 = sys::steal_time();
+    let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
+    let grace = GRACE.max(2 * longest.unwrap_or(0));
+    let (finished, demoted) = start(spec, cfg, threads, env, &shared, grace);
+    for &i in &demoted {
+        notes.push(demoted_note(&spec.tasks[i].name, grace));
+    }
+    let e0 = shared.epoch.load(Ordering::SeqCst);
+    let elapsed = sys::now() - e0;
+    let steal = match (steal0, sys::steal_time()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
+    if let Some(e) = shared
+        .errors
+        .into_inner()
+        .ok()
+        .and_then(|v| v.into_iter().next())
+    {
+        return Err(e);
+    }
+    let threads = unwrap_joined(finished);
+    let interrupted = sys::stop_requested();
+    let mut res = assemble(
+        spec,
+        threads,
+        cfg.duration,
+        cfg.policy,
+        interrupted,
+        steal,
+        elapsed,
+        notes,
+    );
+    res.load = cfg.load;
+    res.epoch = e0;
+    Ok(res)
+}
+
+/// The warning for a task [`watch`] demoted to SCHED_OTHER `grace` after
+/// the run's end.
+fn demoted_note(name: &str, grace: Nanos) -> String {
+    format!(
+        "warning: task {} was still waiting for the CPU {} ms after the run ended \
+         (a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back): \
+         it was moved to SCHED_OTHER to finish, and its jobs released but not started by then were dropped",
+        name,
+        grace / 1_000_000
+    )
+}
+
+/// The joined threads, in task order; a body's panic goes on unwinding
+/// here, in the caller's thread (the panic hook has reported it).
+fn unwrap_joined<'a, V>(finished: Joined<'a, V>) -> Vec<Thread<'a, V>> {
+    let mut threads = Vec::with_capacity(finished.len());
+    for r in finished {
+        match r {
+            Ok(t) => threads.push(t),
+            // A body panicked: the panic hook has reported it.
+            Err(p) => std::panic::resume_unwind(p),
+        }
+    }
+    threads
+}
+
+/// One [`Thread`] per task, with its body, room for every job it can log,
+/// and one four-slot register per (producer, consumer) edge.
+fn threads<'a, V: Copy + Send>(
+    spec: &Spec,
+    cfg: &RunConfig,
+    bodies: Vec<Box<dyn Body<V> + 'a>>,
+) -> Vec<Thread<'a, V>> {
     let prios = fifo_priorities(spec);
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
@@ -360,111 +441,118 @@ pub fn run<'a, V: Copy + Send>(
         })
         .collect();
     // One register per (producer, consumer) edge.
-    for c in 0..n {
+    for c in 0..spec.tasks.len() {
         for &p in &spec.tasks[c].reads {
             let (w, r) = four_slot::register::<Cell<V>>(None);
             threads[p].writers.push(w);
             threads[c].readers.push(r);
         }
     }
-    // Stopped and joined when `_load` drops: on every way out of `run`.
-    let _load = Load::start(cfg.load).map_err(|e| {
-        RunError::config(
-            format!("cannot start {} background load thread(s): {e}", cfg.load),
-            "lower --load",
-        )
-    })?;
-    sys::catch_sigint();
-    let setup = Barrier::new(n + 1);
-    let go = Barrier::new(n + 1);
-    let abort = AtomicBool::new(false);
-    let epoch = AtomicI64::new(0);
-    let errors: Mutex<Vec<RunError>> = Mutex::new(Vec::new());
-    let steal0 = sys::steal_time();
-    let policy = cfg.policy;
-    let duration = cfg.duration;
-    let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
-    let grace = GRACE.max(2 * longest.unwrap_or(0));
-    let tids: Vec<AtomicI32> = (0..n).map(|_| AtomicI32::new(0)).collect();
-    let done: Vec<AtomicBool> = (0..n).map(|_| AtomicBool::new(false)).collect();
+    threads
+}
+
+/// What the task threads and the thread that starts them share.
+struct Shared {
+    /// Every task thread has configured its scheduling class.
+    setup: Barrier,
+    /// The epoch is set (or the run aborted): go.
+    go: Barrier,
+    /// A thread could not be configured: run no job.
+    abort: AtomicBool,
+    /// The common epoch on CLOCK_MONOTONIC.
+    epoch: AtomicI64,
+    /// Why threads could not be configured.
+    errors: Mutex<Vec<RunError>>,
+    /// Per task, its thread's id (0 until the thread has started).
+    tids: Vec<AtomicI32>,
+    /// Per task, its thread is done.
+    done: Vec<AtomicBool>,
+}
+
+impl Shared {
+    /// For `n` task threads (and the one that starts them).
+    fn new(n: usize) -> Shared {
+        Shared {
+            setup: Barrier::new(n + 1),
+            go: Barrier::new(n + 1),
+            abort: AtomicBool::new(false),
+            epoch: AtomicI64::new(0),
+            errors: Mutex::new(Vec::new()),
+            tids: (0..n).map(|_| AtomicI32::new(0)).collect(),
+            done: (0..n).map(|_| AtomicBool::new(false)).collect(),
+        }
+    }
+}
+
+/// What each task thread returned when joined: its [`Thread`] and log, or
+/// the panic of its body.
+type Joined<'a, V> = Vec<std::thread::Result<Thread<'a, V>>>;
+
+/// Starts one thread per task, lets them run from a common epoch once all
+/// are configured (none runs a job if one could not be), watches them until
+/// the run's end plus `grace`, and joins them. Returns every thread's
+/// outcome, in task order, and the tasks [`watch`] had to demote.
+fn start<'a, V: Copy + Send>(
+    spec: &Spec,
+    cfg: &RunConfig,
+    threads: Vec<Thread<'a, V>>,
+    env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
+    shared: &Shared,
+    grace: Nanos,
+) -> (Joined<'a, V>, Vec<usize>) {
+    let (policy, duration) = (cfg.policy, cfg.duration);
     let mut demoted = Vec::new();
     let finished = std::thread::scope(|s| {
         let handles: Vec<_> = threads
             .into_iter()
-            .map(|mut th| {
-                let (setup, go, abort, epoch, errors) = (&setup, &go, &abort, &epoch, &errors);
-                let (tid, done) = (&tids[th.task], &done[th.task]);
-                let name = spec.tasks[th.task].name.clone();
-                s.spawn(move || {
-                    tid.store(sys::gettid(), Ordering::SeqCst);
-                    if let Err(e) = configure(&name, &th, policy) {
-                        if let Ok(mut v) = errors.lock() {
-                            v.push(e);
-                        }
-                    }
-                    setup.wait();
-                    go.wait();
-                    if !abort.load(Ordering::SeqCst) {
-                        let e = epoch.load(Ordering::SeqCst);
-                        periodic(&mut th, e, (duration, duration + grace), env);
-                    }
-                    done.store(true, Ordering::SeqCst);
-                    th
-                })
+            .map(|th| {
+                let name = spec.tasks[th.task].name.as_str();
+                s.spawn(move || task_thread(th, name, policy, (duration, grace), env, shared))
             })
             .collect();
-        setup.wait();
-        let failed = errors.lock().map_or(true, |v| !v.is_empty());
-        abort.store(failed, Ordering::SeqCst);
+        shared.setup.wait();
+        let failed = shared.errors.lock().map_or(true, |v| !v.is_empty());
+        shared.abort.store(failed, Ordering::SeqCst);
         // Start 10 ms from now: every thread is past `go` by then.
-        epoch.store(sys::now() + 10_000_000, Ordering::SeqCst);
-        go.wait();
+        shared
+            .epoch
+            .store(sys::now() + 10_000_000, Ordering::SeqCst);
+        shared.go.wait();
         if !failed {
-            let end = epoch.load(Ordering::SeqCst) + duration + grace;
-            demoted = watch(end, &tids, &done);
+            let end = shared.epoch.load(Ordering::SeqCst) + duration + grace;
+            demoted = watch(end, &shared.tids, &shared.done);
         }
         handles.into_iter().map(|h| h.join()).collect::<Vec<_>>()
     });
-    for &i in &demoted {
-        notes.push(format!(
-            "warning: task {} was still waiting for the CPU {} ms after the run ended \
-             (a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back): \
-             it was moved to SCHED_OTHER to finish, and its jobs released but not started by then were dropped",
-            spec.tasks[i].name,
-            grace / 1_000_000
-        ));
-    }
-    let e0 = epoch.load(Ordering::SeqCst);
-    let elapsed = sys::now() - e0;
-    let steal = match (steal0, sys::steal_time()) {
-        (Some(a), Some(b)) => Some(b - a),
-        _ => None,
-    };
-    if let Some(e) = errors.into_inner().ok().and_then(|v| v.into_iter().next()) {
-        return Err(e);
-    }
-    let mut threads = Vec::with_capacity(n);
-    for r in finished {
-        match r {
-            Ok(t) => threads.push(t),
-            // A body panicked: the panic hook has reported it.
-            Err(p) => std::panic::resume_unwind(p),
+    (finished, demoted)
+}
+
+/// The life of one task's thread: enter its scheduling class, wait for
+/// the others, run its periodic loop from the epoch (unless the run was
+/// aborted), and hand the thread's log back.
+fn task_thread<'a, V: Copy>(
+    mut th: Thread<'a, V>,
+    name: &str,
+    policy: Policy,
+    (duration, grace): (Nanos, Nanos),
+    env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
+    shared: &Shared,
+) -> Thread<'a, V> {
+    let (tid, done) = (&shared.tids[th.task], &shared.done[th.task]);
+    tid.store(sys::gettid(), Ordering::SeqCst);
+    if let Err(e) = configure(name, &th, policy) {
+        if let Ok(mut v) = shared.errors.lock() {
+            v.push(e);
         }
     }
-    let interrupted = sys::stop_requested();
-    let mut res = assemble(
-        spec,
-        threads,
-        duration,
-        policy,
-        interrupted,
-        steal,
-        elapsed,
-        notes,
-    );
-    res.load = cfg.load;
-    res.epoch = e0;
-    Ok(res)
+    shared.setup.wait();
+    shared.go.wait();
+    if !shared.abort.load(Ordering::SeqCst) {
+        let e = shared.epoch.load(Ordering::SeqCst);
+        periodic(&mut th, e, (duration, duration + grace), env);
+    }
+    done.store(true, Ordering::SeqCst);
+    th
 }
 
 /// Puts the calling thread into its scheduling class.
@@ -559,60 +647,93 @@ fn periodic<V: Copy>(
         // wake-up rule re-anchor the deadline at the release.
         let release = epoch + offset;
         sys::sleep_until(release);
-        let cpu0 = sys::thread_cpu_time();
-        inputs.clear();
-        for r in &mut th.readers {
-            let v = r.read();
-            th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
-            inputs.push(v);
-        }
-        // The read instant is taken after the copies: every value read was
-        // published (its publish instant taken) before it, as in the model.
-        // With a world, it is taken under the world's lock, so the world
-        // sees non-decreasing instants from all threads.
-        let (read, device) = match env.map(PiMutex::lock) {
-            Some(Ok(mut e)) => {
-                let read = sys::now();
-                (read, e.sense(th.task, read - epoch))
-            }
-            _ => (sys::now(), None),
-        };
-        let job = Job {
-            task: th.task,
-            index: k,
-            release: offset,
-            read: read - epoch,
-        };
-        let value = th.body.run(&job, &inputs, device);
-        // The publish instant, taken before the registers are written (a
-        // reader's read instant then follows it); with a world, under its
-        // lock, where the output reaches the world at that instant.
-        let publish = match env.map(PiMutex::lock) {
-            Some(Ok(mut e)) => {
-                let publish = sys::now();
-                e.actuate(th.task, publish - epoch, &value);
-                publish
-            }
-            _ => sys::now(),
-        };
-        let stamp = Stamp {
-            task: th.task,
-            job: k,
-            read: read - epoch,
-            publish: publish - epoch,
-        };
-        for w in &mut th.writers {
-            w.write(Some(Stamped { value, stamp }));
-        }
-        let demand = sys::thread_cpu_time() - cpu0;
-        th.recs.push(Rec {
-            index: k,
-            release: offset,
-            read: read - epoch,
-            finish: publish - epoch,
-            demand,
-        });
+        job(th, k, epoch, env, &mut inputs);
         k += 1;
+    }
+}
+
+/// Job `k` of the task, released at epoch + k·T: read the registers, run
+/// the body, publish to the registers, and log it. `inputs` is the job's
+/// buffer for the values read (kept across jobs: no allocation here).
+fn job<V: Copy>(
+    th: &mut Thread<'_, V>,
+    k: u64,
+    epoch: Nanos,
+    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    inputs: &mut Vec<Cell<V>>,
+) {
+    let offset = k as i64 * th.period;
+    let cpu0 = sys::thread_cpu_time();
+    inputs.clear();
+    for r in &mut th.readers {
+        let v = r.read();
+        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+        inputs.push(v);
+    }
+    let (read, device) = sense(th.task, epoch, env);
+    let job = Job {
+        task: th.task,
+        index: k,
+        release: offset,
+        read: read - epoch,
+    };
+    let value = th.body.run(&job, inputs, device);
+    let publish = actuate(th.task, epoch, env, &value);
+    let stamp = Stamp {
+        task: th.task,
+        job: k,
+        read: read - epoch,
+        publish: publish - epoch,
+    };
+    for w in &mut th.writers {
+        w.write(Some(Stamped { value, stamp }));
+    }
+    let demand = sys::thread_cpu_time() - cpu0;
+    th.recs.push(Rec {
+        index: k,
+        release: offset,
+        read: read - epoch,
+        finish: publish - epoch,
+        demand,
+    });
+}
+
+/// The read instant of a job of `task`, and what the world gives it there.
+/// The instant is taken after the register copies: every value read was
+/// published (its publish instant taken) before it, as in the model. With
+/// a world, it is taken under the world's lock, so the world sees
+/// non-decreasing instants from all threads.
+fn sense<V>(
+    task: usize,
+    epoch: Nanos,
+    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+) -> (Nanos, Option<V>) {
+    match env.map(PiMutex::lock) {
+        Some(Ok(mut e)) => {
+            let read = sys::now();
+            (read, e.sense(task, read - epoch))
+        }
+        _ => (sys::now(), None),
+    }
+}
+
+/// The publish instant of a job of `task` that computed `value`, taken
+/// before the registers are written (a reader's read instant then follows
+/// it); with a world, under its lock, where the output reaches the world at
+/// that instant.
+fn actuate<V>(
+    task: usize,
+    epoch: Nanos,
+    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    value: &V,
+) -> Nanos {
+    match env.map(PiMutex::lock) {
+        Some(Ok(mut e)) => {
+            let publish = sys::now();
+            e.actuate(task, publish - epoch, value);
+            publish
+        }
+        _ => sys::now(),
     }
 }
 
@@ -629,7 +750,42 @@ fn assemble<V>(
     notes: Vec<String>,
 ) -> RunResult {
     let n = spec.tasks.len();
-    // Chain positions each task occupies: (chain, pos).
+    let slots = chain_slots(spec);
+    let jobs = job_log(spec, &threads, &slots);
+    let chains = rtpipe_sim::chains_from_jobs(spec, &jobs);
+    let segments = spans(spec, &jobs);
+    let mut tasks = Vec::with_capacity(n);
+    let mut runs = Vec::with_capacity(n);
+    for th in &threads {
+        let (stats, run) = task_figures(th);
+        tasks.push(stats);
+        runs.push(run);
+    }
+    RunResult {
+        sim: SimResult {
+            offsets: vec![0; n],
+            tasks,
+            chains,
+            jobs,
+            segments,
+            events: 0,
+            horizon: duration,
+        },
+        tasks: runs,
+        policy,
+        load: 0,
+        epoch: 0,
+        interrupted,
+        steal,
+        elapsed,
+        notes,
+    }
+}
+
+/// The chain positions each task occupies: per task, its (chain, position)
+/// pairs, in chain order.
+fn chain_slots(spec: &Spec) -> Vec<Vec<(usize, usize)>> {
+    let n = spec.tasks.len();
     let mut slots: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
     for (c, ch) in spec.chains.iter().enumerate() {
         for (pos, &t) in ch.path.iter().enumerate() {
@@ -638,7 +794,19 @@ fn assemble<V>(
             }
         }
     }
-    // Every job, in publish order (ties: read order, then task).
+    slots
+}
+
+/// Every job the threads logged, in publish order (ties: read order, then
+/// task), with the chain samples it carried: a chain's head carries its own
+/// job's sample, any other position the sample the producer job it read
+/// carried at the previous position. Publish order guarantees that the
+/// producer job's samples are known by then.
+fn job_log<V>(
+    spec: &Spec,
+    threads: &[Thread<'_, V>],
+    slots: &[Vec<(usize, usize)>],
+) -> Vec<JobRecord> {
     let mut order: Vec<(Nanos, Nanos, usize, usize)> = Vec::new();
     for (i, th) in threads.iter().enumerate() {
         for (j, r) in th.recs.iter().enumerate() {
@@ -687,59 +855,42 @@ fn assemble<V>(
                 .collect(),
         });
     }
-    let chains = rtpipe_sim::chains_from_jobs(spec, &jobs);
-    let segments = spans(spec, &jobs);
-    let mut tasks = Vec::with_capacity(n);
-    let mut runs = Vec::with_capacity(n);
-    for th in &threads {
-        let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
-        let missed = responses.iter().filter(|&&r| r > th.period).count() as u64;
-        let overruns = th
+    jobs
+}
+
+/// One task's figures from its thread's log: in the simulator's terms
+/// (late = missed periods, exhaustions = budget overruns beyond
+/// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
+fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
+    let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
+    let missed = responses.iter().filter(|&&r| r > th.period).count() as u64;
+    let overruns = th
+        .recs
+        .iter()
+        .filter(|r| r.demand > th.budget + OVERRUN_TOLERANCE)
+        .count() as u64;
+    let stats = TaskStats {
+        released: th.recs.len() as u64,
+        completed: th.recs.len() as u64,
+        max_response: responses.iter().copied().max(),
+        late: missed,
+        exhaustions: overruns,
+        busy: th.recs.iter().map(|r| r.demand).sum(),
+    };
+    let run = TaskRun {
+        max_demand: th.recs.iter().map(|r| r.demand).max().unwrap_or(0),
+        max_start: th
             .recs
             .iter()
-            .filter(|r| r.demand > th.budget + OVERRUN_TOLERANCE)
-            .count() as u64;
-        tasks.push(TaskStats {
-            released: th.recs.len() as u64,
-            completed: th.recs.len() as u64,
-            max_response: responses.iter().copied().max(),
-            late: missed,
-            exhaustions: overruns,
-            busy: th.recs.iter().map(|r| r.demand).sum(),
-        });
-        runs.push(TaskRun {
-            max_demand: th.recs.iter().map(|r| r.demand).max().unwrap_or(0),
-            max_start: th
-                .recs
-                .iter()
-                .map(|r| r.read - r.release)
-                .max()
-                .unwrap_or(0),
-            responses,
-            overruns,
-            missed,
-            priority: th.priority,
-        });
-    }
-    RunResult {
-        sim: SimResult {
-            offsets: vec![0; n],
-            tasks,
-            chains,
-            jobs,
-            segments,
-            events: 0,
-            horizon: duration,
-        },
-        tasks: runs,
-        policy,
-        load: 0,
-        epoch: 0,
-        interrupted,
-        steal,
-        elapsed,
-        notes,
-    }
+            .map(|r| r.read - r.release)
+            .max()
+            .unwrap_or(0),
+        responses,
+        overruns,
+        missed,
+        priority: th.priority,
+    };
+    (stats, run)
 }
 
 /// One "slice" per job from its read to its publish, for the trace writer:
