@@ -680,50 +680,61 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
                 }
             }
             // Release with a release of another task near the worst sample.
-            5 | 6 => {
-                let j = self.partner(i);
-                let (tj, phj) = (self.periods[j], cand.offsets[j]);
-                let k = match cur.witness {
-                    Some(w) => {
-                        let lo = (w.read - 2 * self.t_max - phj).div_euclid(tj) + 1;
-                        let hi = (w.last - phj).div_euclid(tj).max(lo);
-                        lo + self.rng.range(0, (hi - lo) as u64) as Nanos
-                    }
-                    None => self.rng.range(0, 3) as Nanos,
-                };
-                let d = self.small_delta(j);
-                cand.offsets[i] = (phj + k * tj + d).rem_euclid(t);
-            }
+            5 | 6 => cand.offsets[i] = self.near_release(cur, &cand.offsets, i),
             // Release at a read or finish (or release) instant of another
             // task's job near the worst sample, from the run's job log.
             _ => {
                 if log.is_none() {
                     *log = Some(self.instants(cur)?);
                 }
-                let j = self.partner(i);
                 let inst = log.as_ref().map_or(&[][..], |l| &l.all[..]);
-                let mut pool: Vec<Nanos> = inst
-                    .iter()
-                    .filter(|&&(k, _)| k == j)
-                    .map(|&(_, x)| x)
-                    .collect();
-                if pool.is_empty() {
-                    pool = inst
-                        .iter()
-                        .filter(|&&(k, _)| k != i)
-                        .map(|&(_, x)| x)
-                        .collect();
-                }
-                if pool.is_empty() {
-                    cand.offsets[i] = self.below(t);
-                } else {
-                    let x = pool[self.rng.range(0, pool.len() as u64 - 1) as usize];
-                    let d = self.small_delta(j);
-                    cand.offsets[i] = (x + d).rem_euclid(t);
-                }
+                cand.offsets[i] = self.at_instant(inst, i);
             }
         }
         Ok(self.pinned(cand))
+    }
+
+    /// An offset for task i that releases it with a release of a partner
+    /// near `cur`'s worst sample (± a small delta).
+    fn near_release(&mut self, cur: &Scored, offsets: &[Nanos], i: usize) -> Nanos {
+        let j = self.partner(i);
+        let (tj, phj) = (self.periods[j], offsets[j]);
+        let k = match cur.witness {
+            Some(w) => {
+                let lo = (w.read - 2 * self.t_max - phj).div_euclid(tj) + 1;
+                let hi = (w.last - phj).div_euclid(tj).max(lo);
+                lo + self.rng.range(0, (hi - lo) as u64) as Nanos
+            }
+            None => self.rng.range(0, 3) as Nanos,
+        };
+        let d = self.small_delta(j);
+        (phj + k * tj + d).rem_euclid(self.periods[i])
+    }
+
+    /// An offset for task i that releases it at one of a partner's logged
+    /// instants (any other task's when the partner has none; anywhere when
+    /// the log is empty), ± a small delta.
+    fn at_instant(&mut self, inst: &[(usize, Nanos)], i: usize) -> Nanos {
+        let t = self.periods[i];
+        let j = self.partner(i);
+        let mut pool: Vec<Nanos> = inst
+            .iter()
+            .filter(|&&(k, _)| k == j)
+            .map(|&(_, x)| x)
+            .collect();
+        if pool.is_empty() {
+            pool = inst
+                .iter()
+                .filter(|&&(k, _)| k != i)
+                .map(|&(_, x)| x)
+                .collect();
+        }
+        if pool.is_empty() {
+            return self.below(t);
+        }
+        let x = pool[self.rng.range(0, pool.len() as u64 - 1) as usize];
+        let d = self.small_delta(j);
+        (x + d).rem_euclid(t)
     }
 
     /// Hill climbing from `start`. When a move of a single offset makes
