@@ -2,15 +2,7 @@
 //! (fixed, a range of grid steps, or a list of choices), harmonic domains.
 
 use crate::DesignError;
-use rtpipe_model::{format_in, Nanos, PeriodSpec, Spec, Task, MAX_TIME};
-
-pub(crate) fn gcd(a: i64, b: i64) -> i64 {
-    if b == 0 {
-        a.abs()
-    } else {
-        gcd(b, a % b)
-    }
-}
+use rtpipe_model::{format_in, gcd, Nanos, PeriodSpec, Spec, Task, MAX_TIME};
 
 /// The period domain of one task, in grid units (g ns).
 #[derive(Debug, Clone)]

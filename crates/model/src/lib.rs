@@ -18,7 +18,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
-pub use time::{format_in, parse_time_str, Nanos, TimeUnit, MAX_TIME};
+pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB.
 pub const MAX_SPEC_BYTES: u64 = 16 << 20;

@@ -301,6 +301,16 @@ pub fn number_to_nanos(x: f64, unit: TimeUnit) -> Result<Nanos, TimeError> {
     Ok(r as i64)
 }
 
+/// Greatest common divisor of two times (non-negative; `gcd(a, 0) = |a|`):
+/// the grid of the design's periods and the simulator's search.
+pub fn gcd(a: Nanos, b: Nanos) -> Nanos {
+    if b == 0 {
+        a.abs()
+    } else {
+        gcd(b, a % b)
+    }
+}
+
 /// Formats nanoseconds in a unit with up to 6 significant decimals, trimming zeros.
 pub fn format_in(ns: Nanos, unit: TimeUnit) -> String {
     let whole = ns / unit.nanos();

@@ -35,7 +35,7 @@
 use crate::rng::Rng;
 use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
 use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{gcd, Nanos, Spec};
 use std::fmt;
 
 /// The demand models a candidate may use.
@@ -264,14 +264,6 @@ fn checked_periods(spec: &Spec, cfg: &SearchConfig) -> Result<Vec<Nanos>, SimErr
         });
     }
     Ok(periods)
-}
-
-fn gcd(a: Nanos, b: Nanos) -> Nanos {
-    if b == 0 {
-        a.abs()
-    } else {
-        gcd(b, a % b)
-    }
 }
 
 /// Instants of the jobs near a run's worst sample (see `instants`).

@@ -24,6 +24,7 @@ use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::observe::observe;
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;
 
@@ -175,13 +176,6 @@ impl Stats {
         self.search_sims += o.search_sims;
         self.failures.extend(o.failures);
     }
-}
-
-fn env_u64(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(default)
 }
 
 fn basis_index(b: &Basis) -> usize {
