@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{example, rtpipe, scratch};
+use common::{example, rtpipe_in, scratch};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -361,7 +361,7 @@ fn resolve(arg: &str, dir: &Path, outputs: &mut Vec<PathBuf>) -> String {
     if let Some(n) = arg.strip_prefix('@') {
         example(&format!("{n}.toml"))
     } else if let Some(n) = arg.strip_prefix('%') {
-        at(dir.join(n))
+        n.to_string()
     } else if let Some(n) = arg.strip_prefix('#') {
         at(Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/data")
@@ -370,8 +370,8 @@ fn resolve(arg: &str, dir: &Path, outputs: &mut Vec<PathBuf>) -> String {
         let p = dir.join(n);
         let _ = std::fs::remove_dir_all(&p);
         let _ = std::fs::remove_file(&p);
-        outputs.push(p.clone());
-        at(p)
+        outputs.push(p);
+        n.to_string()
     } else {
         arg.to_string()
     }
@@ -406,7 +406,9 @@ fn run(case: &Case, dir: &Path) -> String {
         .map(|a| resolve(a, dir, &mut outputs))
         .collect();
     let argv: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = rtpipe(&argv);
+    // Run in the scratch directory with relative paths, so that no output
+    // (a table's column widths included) depends on where it is.
+    let o = rtpipe_in(dir, &argv, &[], std::time::Duration::from_secs(600));
     let mut text = format!(
         "$ rtpipe {}\nexit {:?}\n--- stdout\n{}--- stderr\n{}",
         case.args.join(" "),
