@@ -114,7 +114,7 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 /// Sound mode: may the priority-based arguments be used for this link? Only
 /// when both tasks share a CPU scheduled by fixed priority.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
-    if sched != Scheduler::Rm || p.cpu != c.cpu {
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
@@ -303,36 +303,55 @@ pub fn distinct_passes(p: &LinkTask, c: &LinkTask, p_distinct: bool) -> bool {
     }
 }
 
-/// The bounds of one chain in one metric.
+/// Who a chain bound comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Bound {
+    /// The paper's equations (Eqs. 1–14); from the event, one head period
+    /// more (the event waits for the next read).
+    Paper,
+    /// rtpipe's sound, interference-aware bound (docs/analysis.md). From the
+    /// event, reaction runs from an event at any instant to the first tail
+    /// output carrying a sample read at or after it (the event's own sample
+    /// may never reach the tail); freshness from the head read before a
+    /// sample's read to the sample's last tail output.
+    Sound,
+    /// Davare et al. (DAC 2007). Reaction from the read:
+    /// R_1 + Σ_{i≥2} (T_i + R_i); freshness: the data-age form
+    /// Σ_{i<n} (T_i + R_i) + R_n; from the event, T_1 more.
+    Davare,
+    /// Dürr et al. (CASES 2019), with the same response times and priority
+    /// orders. Reaction from the read (Theorem 5.4 less the head's sampling
+    /// T_1): R_n + Σ_links max(R_p, T_c + R_p·[p not above c]); freshness
+    /// (Theorem 5.10): R_n + Σ_links (T_p + R_p·[p not above c]); from the
+    /// event, T_1 more.
+    Duerr,
+}
+
+impl Bound {
+    /// Every method, in the order reports list them.
+    pub const ALL: [Bound; 4] = [Bound::Paper, Bound::Sound, Bound::Davare, Bound::Duerr];
+
+    /// The name used in output and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Bound::Paper => "paper",
+            Bound::Sound => "sound",
+            Bound::Davare => "davare",
+            Bound::Duerr => "duerr",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// The bounds of one chain in one metric: one per [`Bound`] and
+/// [`Anchor`]. `None` where some task on the chain has no bounded response
+/// time; the paper's bound always exists.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainBound {
-    /// The paper's bound (Eqs. 1–14).
-    pub paper: Nanos,
-    /// `None` when some task on the chain has no bounded response time.
-    pub sound: Option<Nanos>,
-    /// Davare et al. (DAC 2007) from the read. Reaction:
-    /// R_1 + Σ_{i≥2} (T_i + R_i); freshness: the data-age form
-    /// Σ_{i<n} (T_i + R_i) + R_n.
-    pub davare: Option<Nanos>,
-    /// Dürr et al. (CASES 2019) from the read, with the same response times
-    /// and priority orders. Reaction (Theorem 5.4 less the head's sampling
-    /// T_1): R_n + Σ_links max(R_p, T_c + R_p·[p not above c]); freshness
-    /// (Theorem 5.10): R_n + Σ_links (T_p + R_p·[p not above c]).
-    pub duerr: Option<Nanos>,
-    /// From the external event, paper mode: the paper's bound plus one head
-    /// period (the event waits for the next read).
-    pub from_event_paper: Nanos,
-    /// From the external event, sound mode. Reaction: from an event at any
-    /// instant to the first tail output carrying a sample read at or after it
-    /// (the event's own sample may never reach the tail). Freshness: from the
-    /// head read before a sample's read to the sample's last tail output.
-    pub from_event_sound: Option<Nanos>,
-    /// Davare's bound from the event: T_1 more than from the read (reaction:
-    /// Σ (T_i + R_i)).
-    pub from_event_davare: Option<Nanos>,
-    /// Dürr's bound from the event: T_1 more than from the read (reaction:
-    /// Theorem 5.4 itself).
-    pub from_event_duerr: Option<Nanos>,
+    by: [[Option<Nanos>; 2]; 4],
 }
 
 /// Where a latency is measured from.
@@ -356,39 +375,53 @@ impl Anchor {
             Anchor::Event => "event",
         }
     }
+
+    fn index(self) -> usize {
+        self as usize
+    }
 }
 
 impl ChainBound {
-    /// The paper-mode bound measured from `a`.
-    pub fn paper_from(&self, a: Anchor) -> Nanos {
-        match a {
-            Anchor::Read => self.paper,
-            Anchor::Event => self.from_event_paper,
+    /// The bounds `bound(method, anchor)` gives. Panics when the paper's
+    /// bound is missing: its equations hold no response time, so it always
+    /// exists.
+    pub fn from_fn(bound: impl Fn(Bound, Anchor) -> Option<Nanos>) -> ChainBound {
+        let mut by = [[None; 2]; 4];
+        for m in Bound::ALL {
+            for a in Anchor::ALL {
+                by[m.index()][a.index()] = bound(m, a);
+            }
         }
+        assert!(
+            Anchor::ALL
+                .iter()
+                .all(|a| by[Bound::Paper.index()][a.index()].is_some()),
+            "the paper's bound always exists"
+        );
+        ChainBound { by }
     }
 
-    /// The sound bound measured from `a`.
-    pub fn sound_from(&self, a: Anchor) -> Option<Nanos> {
-        match a {
-            Anchor::Read => self.sound,
-            Anchor::Event => self.from_event_sound,
-        }
+    /// `method`'s bound measured from `anchor`.
+    pub fn get(&self, method: Bound, anchor: Anchor) -> Option<Nanos> {
+        self.by[method.index()][anchor.index()]
     }
 
-    /// Davare's bound measured from `a`.
-    pub fn davare_from(&self, a: Anchor) -> Option<Nanos> {
-        match a {
-            Anchor::Read => self.davare,
-            Anchor::Event => self.from_event_davare,
-        }
+    /// The paper-mode bound measured from `anchor`.
+    pub fn paper(&self, anchor: Anchor) -> Nanos {
+        self.get(Bound::Paper, anchor)
+            .expect("ChainBound::from_fn asserts the paper's bound")
     }
 
-    /// Dürr's bound measured from `a`.
-    pub fn duerr_from(&self, a: Anchor) -> Option<Nanos> {
-        match a {
-            Anchor::Read => self.duerr,
-            Anchor::Event => self.from_event_duerr,
-        }
+    /// The sound bound measured from `anchor`.
+    pub fn sound(&self, anchor: Anchor) -> Option<Nanos> {
+        self.get(Bound::Sound, anchor)
+    }
+
+    /// Every bound from `anchor`, in [`Bound::ALL`] order.
+    pub fn from(&self, anchor: Anchor) -> impl Iterator<Item = (Bound, Option<Nanos>)> + '_ {
+        Bound::ALL
+            .into_iter()
+            .map(move |m| (m, self.get(m, anchor)))
     }
 }
 
@@ -510,15 +543,20 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
     let (dv_e, dv_f) = davare(&lt);
     let (du_e, du_f) = duerr(sched, &lt);
     let paper_delay = paper_sampling_delay(head);
-    let bound = |paper: Nanos, sound, davare, duerr, event| ChainBound {
-        paper,
-        sound,
-        davare,
-        duerr,
-        from_event_paper: paper + paper_delay,
-        from_event_sound: event,
-        from_event_davare: from_event(head, davare),
-        from_event_duerr: from_event(head, duerr),
+    // The literature's bounds from the event: T_1 more than from the read.
+    let at = |a: Anchor, from_read: Option<Nanos>| match a {
+        Anchor::Read => from_read,
+        Anchor::Event => from_event(head, from_read),
+    };
+    let bound = |paper: Nanos, sound, davare, duerr, event| {
+        ChainBound::from_fn(|m, a| match (m, a) {
+            (Bound::Paper, Anchor::Read) => Some(paper),
+            (Bound::Paper, Anchor::Event) => Some(paper + paper_delay),
+            (Bound::Sound, Anchor::Read) => sound,
+            (Bound::Sound, Anchor::Event) => event,
+            (Bound::Davare, a) => at(a, davare),
+            (Bound::Duerr, a) => at(a, duerr),
+        })
     };
     ChainAnalysis {
         reaction: bound(pe, se, dv_e, du_e, sound_event_reaction(sched, &lt)),

@@ -20,7 +20,7 @@ pub mod paths;
 pub mod relax;
 pub mod sched;
 
-pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Case, ChainAnalysis, ChainBound};
+pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Bound, Case, ChainAnalysis, ChainBound};
 pub use offsets::{Basis, ChainOffsets, Fallback, OffsetBound};
 pub use paths::{all_paths, AllPaths, PairBounds, Worst};
 pub use sched::{analyze as schedulability, CpuVerdict, Schedulability, TaskTiming};
@@ -109,7 +109,8 @@ pub struct ChainResult {
 impl ChainResult {
     /// The paper's bound is within the limit (or there is no limit).
     pub fn paper_ok(&self) -> bool {
-        self.limit.is_none_or(|l| self.bound.paper <= l)
+        self.limit
+            .is_none_or(|l| self.bound.paper(Anchor::Read) <= l)
     }
 
     /// The verdict rule: the limit holds under `mode`'s bound.
@@ -180,7 +181,7 @@ pub fn missing_periods(spec: &Spec) -> Vec<&str> {
 }
 
 /// (reaction, freshness) of every declared chain, in chain order, as
-/// `pick` reads them off the bounds (e.g. `|b| b.sound`). For generators
+/// `pick` reads them off the bounds (e.g. `|b| b.sound(Anchor::Read)`). For generators
 /// that set limits from a design's own bounds.
 pub fn bounds_per_chain(
     spec: &Spec,
@@ -216,7 +217,7 @@ pub fn analyze(spec: &Spec) -> Report {
             (Metric::Reaction, a.reaction.clone(), ch.reaction),
             (Metric::Freshness, a.freshness.clone(), ch.freshness),
         ] {
-            let ok = match (bound.sound, limit) {
+            let ok = match (bound.sound(Anchor::Read), limit) {
                 (Some(s), Some(l)) => s <= l,
                 (Some(_), None) => true,
                 (None, _) => false,

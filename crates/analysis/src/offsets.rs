@@ -297,13 +297,13 @@ fn any_phasing_valid(
     any: &ChainAnalysis,
 ) -> PerQuantity<Option<Nanos>> {
     let mut v = PerQuantity {
-        reaction_read: any.reaction.sound,
-        freshness_read: any.freshness.sound,
-        reaction_event: any.reaction.from_event_sound,
-        freshness_event: any.freshness.from_event_sound,
+        reaction_read: any.reaction.sound(Anchor::Read),
+        freshness_read: any.freshness.sound(Anchor::Read),
+        reaction_event: any.reaction.sound(Anchor::Event),
+        freshness_event: any.freshness.sound(Anchor::Event),
     };
     if let Some(delay) = late_start_delay(spec, timing, path) {
-        v.reaction_read = any.freshness.sound;
+        v.reaction_read = any.freshness.sound(Anchor::Read);
         v.reaction_event = v.reaction_event.map(|b| b + delay);
     }
     v

@@ -19,7 +19,8 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::sched::{interference, response_time, utilization_test};
-use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::{Nanos, SchedTest, Server, Spec};
 
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]
@@ -114,7 +115,7 @@ impl<'a> Order<'a> {
 
     fn ranked(&self, a: usize) -> bool {
         let t = &self.spec.tasks[a];
-        self.spec.scheduler == Scheduler::Rm && t.server != Server::Background
+        self.spec.policy().fixed_priority() && t.server != Server::Background
     }
 
     /// `a` has the higher RM rank at every point: (T_a, a) < (T_b, b) always.
@@ -197,8 +198,8 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec
         if t.server == Server::Background {
             continue;
         }
-        let (rb, rj) = match spec.scheduler {
-            Scheduler::Rm => {
+        let (rb, rj) = match spec.policy().response {
+            ResponseAnalysis::Rta => {
                 let hp: Vec<(Nanos, Nanos)> = (0..n)
                     .filter(|&j| order.surely_interferes(j, i))
                     .map(|j| (interference(&spec.tasks[j]), hi[j]))
@@ -209,8 +210,8 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec
                 )
             }
             // Servers get their budget by the end of each period (`sched`).
-            Scheduler::Edf if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
-            Scheduler::Edf => (None, None),
+            ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
+            ResponseAnalysis::ServerPeriod => (None, None),
         };
         budget_response[i] = rb.filter(|&r| r <= hi[i]);
         job_response[i] = rj.filter(|&r| r <= hi[i]);
@@ -370,9 +371,9 @@ fn chain_forms(
 ) -> Option<(Affine, Affine)> {
     let tail = path[path.len() - 1];
     // The tail's response time: R_lb under RM, T under EDF.
-    let own = |i: usize| match spec.scheduler {
-        Scheduler::Edf => vec![(i, 1.0)],
-        Scheduler::Rm => Vec::new(),
+    let own = |i: usize| match spec.policy().response {
+        ResponseAnalysis::ServerPeriod => vec![(i, 1.0)],
+        ResponseAnalysis::Rta => Vec::new(),
     };
     let mut e = Affine {
         base: r[tail]? as f64,
@@ -389,9 +390,9 @@ fn chain_forms(
         let orders = order.link_orders(pi, ci);
         // Under EDF a response time is the period itself (`sched`), so it
         // moves with the corner; under RM it stays at its lower bound.
-        let resp = |i: usize, t: Nanos| match spec.scheduler {
-            Scheduler::Edf => r[i].map(|_| t),
-            Scheduler::Rm => r[i],
+        let resp = |i: usize, t: Nanos| match spec.policy().response {
+            ResponseAnalysis::ServerPeriod => r[i].map(|_| t),
+            ResponseAnalysis::Rta => r[i],
         };
         let at = |tp: Nanos, tc: Nanos| {
             let p = link_task(spec, tp, resp(pi, tp), pi);

@@ -1,6 +1,7 @@
 //! Priorities, response times and schedulability tests per CPU.
 
-use rtpipe_model::{Nanos, SchedTest, Scheduler, Server, Spec, Task, MAX_TIME};
+use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
 
 /// Timing facts of one task that the latency analysis builds on.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,24 +74,6 @@ pub fn interference(t: &Task) -> Nanos {
         Server::Main | Server::Io => t.budget(),
         Server::None | Server::Background => t.demand(),
     }
-}
-
-/// Rate-monotonic ranks per CPU: shorter period first, ties by declaration order.
-pub fn rm_priorities(spec: &Spec) -> Vec<Option<usize>> {
-    let mut out = vec![None; spec.tasks.len()];
-    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpus.sort_unstable();
-    cpus.dedup();
-    for cpu in cpus {
-        let mut ids: Vec<usize> = (0..spec.tasks.len())
-            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
-            .collect();
-        ids.sort_by_key(|&i| (spec.tasks[i].fixed_period().unwrap_or(Nanos::MAX), i));
-        for (rank, i) in ids.into_iter().enumerate() {
-            out[i] = Some(rank + 1);
-        }
-    }
-    out
 }
 
 /// The highest rank each task can run at: an I/O VCPU that serves a Main
@@ -180,10 +163,7 @@ pub fn utilization_test(test: SchedTest, us: &[f64]) -> (f64, f64, bool) {
 /// Response times, priorities and the schedulability verdict. Tasks without a
 /// fixed period must not be passed here (the CLI checks first).
 pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
-    let prio = match spec.scheduler {
-        Scheduler::Rm => rm_priorities(spec),
-        Scheduler::Edf => vec![None; spec.tasks.len()],
-    };
+    let prio = spec.policy().priorities(spec);
     let top = top_priorities(spec, &prio);
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
@@ -243,8 +223,8 @@ fn response_times(
     if t.server == Server::Background {
         return (None, None);
     }
-    match spec.scheduler {
-        Scheduler::Rm => {
+    match spec.policy().response {
+        ResponseAnalysis::Rta => {
             let hp: Vec<(Nanos, Nanos)> = interferers(spec, prio, top, i)
                 .into_iter()
                 .map(|j| (interference(&spec.tasks[j]), period_or_max(&spec.tasks[j])))
@@ -254,7 +234,7 @@ fn response_times(
                 response_time(t.demand(), &hp),
             )
         }
-        Scheduler::Edf => {
+        ResponseAnalysis::ServerPeriod => {
             // EDF with constant-bandwidth servers: every server gets its
             // budget by the end of each period when Σ U ≤ 1, but possibly
             // at its very end.

@@ -27,7 +27,12 @@ fn bounds(r: &Report, chain: usize) -> (i64, i64, Option<i64>, Option<i64>) {
         .find(|c| c.chain == chain && c.metric == Metric::Freshness)
         .map(|c| c.bound.clone());
     match (e, f) {
-        (Some(e), Some(f)) => (e.paper, f.paper, e.sound, f.sound),
+        (Some(e), Some(f)) => (
+            e.paper(Anchor::Read),
+            f.paper(Anchor::Read),
+            e.sound(Anchor::Read),
+            f.sound(Anchor::Read),
+        ),
         _ => panic!("chain {chain} missing"),
     }
 }
@@ -62,12 +67,12 @@ fn table2_paper_mode() {
     let paper_fails: Vec<(usize, Metric)> = r
         .chains
         .iter()
-        .filter(|c| c.limit.is_some_and(|l| c.bound.paper > l))
+        .filter(|c| c.limit.is_some_and(|l| c.bound.paper(Anchor::Read) > l))
         .map(|c| (c.chain, c.metric))
         .collect();
     assert_eq!(paper_fails, vec![(0, Metric::Reaction)]);
     // From the event: + T_head. t1 → t4: 10.9 + 10 = 20.9.
-    assert_eq!(r.chains[0].bound.from_event_paper, ms(20.9));
+    assert_eq!(r.chains[0].bound.paper(Anchor::Event), ms(20.9));
 }
 
 #[test]
@@ -137,19 +142,34 @@ fn table2_sound_mode() {
     assert_eq!(bounds(&r, 3).2, Some(ms(8.65)));
     assert_eq!(bounds(&r, 3).3, Some(ms(13.15)));
     // Davare: t1 → t4 reaction R1 + T4 + R4 = 2.15 + 10 + 4.3 = 16.45.
-    assert_eq!(r.chains[0].bound.davare, Some(ms(16.45)));
+    assert_eq!(
+        r.chains[0].bound.get(Bound::Davare, Anchor::Read),
+        Some(ms(16.45))
+    );
     // Dürr (Theorem 5.4 less T1): t1 ≻ t4, so max(R1, T4 + 0) + R4 = 14.3.
-    assert_eq!(r.chains[0].bound.duerr, Some(ms(14.3)));
+    assert_eq!(
+        r.chains[0].bound.get(Bound::Duerr, Anchor::Read),
+        Some(ms(14.3))
+    );
     // From the event, reaction t2 → t4: the first t2 job reading after the
     // event is released within T2 = 15; t4 preempts t2 (P1), so the first t4
     // job reading after its publish is released within R2 + T4 − x_min4 =
     // 15.8 and publishes within R4: 35.1 (Davare 35.75, Dürr 15 + 16.45 + 4.3 = 35.75).
-    assert_eq!(r.chains[2].bound.from_event_sound, Some(ms(35.1)));
-    assert_eq!(r.chains[2].bound.from_event_davare, Some(ms(35.75)));
-    assert_eq!(r.chains[2].bound.from_event_duerr, Some(ms(35.75)));
+    assert_eq!(r.chains[2].bound.sound(Anchor::Event), Some(ms(35.1)));
+    assert_eq!(
+        r.chains[2].bound.get(Bound::Davare, Anchor::Event),
+        Some(ms(35.75))
+    );
+    assert_eq!(
+        r.chains[2].bound.get(Bound::Duerr, Anchor::Event),
+        Some(ms(35.75))
+    );
     // Freshness t2 → t4 from the event: the sample's head job is released
     // less than T2 after the read before it: 15 + 21.45.
-    assert_eq!(r.chains[3].bound.from_event_sound, Some(ms(15.0 + 21.45)));
+    assert_eq!(
+        r.chains[3].bound.sound(Anchor::Event),
+        Some(ms(15.0 + 21.45))
+    );
 }
 
 #[test]
@@ -222,7 +242,10 @@ fn sound_never_above_davare_on_examples() {
     for f in ["paper-table2.toml", "cleanflight.toml", "paper-table3.toml"] {
         let r = analyze(&load(f));
         for c in &r.chains {
-            let (s, d) = (c.bound.sound, c.bound.davare);
+            let (s, d) = (
+                c.bound.sound(Anchor::Read),
+                c.bound.get(Bound::Davare, Anchor::Read),
+            );
             assert!(s.is_some() && d.is_some());
             assert!(s <= d, "{f}: {c:?}");
         }
@@ -249,10 +272,16 @@ fn all_paths_of_table2() {
     // Each pair has one path here, so the DP equals the chain analysis.
     for p in &a.pairs {
         let ch = analyze_chain(&s, &r.timing, &p.reaction_paper.path);
-        assert_eq!(p.reaction_paper.value, Some(ch.reaction.paper));
-        assert_eq!(p.freshness_paper.value, Some(ch.freshness.paper));
-        assert_eq!(p.freshness_sound.value, ch.freshness.sound);
-        assert_eq!(p.reaction_sound.value, ch.reaction.sound);
+        assert_eq!(
+            p.reaction_paper.value,
+            Some(ch.reaction.paper(Anchor::Read))
+        );
+        assert_eq!(
+            p.freshness_paper.value,
+            Some(ch.freshness.paper(Anchor::Read))
+        );
+        assert_eq!(p.freshness_sound.value, ch.freshness.sound(Anchor::Read));
+        assert_eq!(p.reaction_sound.value, ch.reaction.sound(Anchor::Read));
     }
 }
 
@@ -334,21 +363,21 @@ fn golden_case_is_within_davare_and_duerr() {
     // Reaction from the event: T_20 + (R_20 + T_5 − x_min5) + T_10 + R_10
     // = 20 + 14 + 10 + 3 = 47. Davare Σ (T + R) = 29 + 6 + 13 = 48; Dürr
     // T_20 + R_10 + max(R_20, T_5 + R_20) + max(R_5, T_10) = 20 + 3 + 14 + 10 = 47.
-    assert_eq!(e.from_event_sound, Some(ms(47.0)));
-    assert_eq!(e.from_event_davare, Some(ms(48.0)));
-    assert_eq!(e.from_event_duerr, Some(ms(47.0)));
+    assert_eq!(e.sound(Anchor::Event), Some(ms(47.0)));
+    assert_eq!(e.get(Bound::Davare, Anchor::Event), Some(ms(48.0)));
+    assert_eq!(e.get(Bound::Duerr, Anchor::Event), Some(ms(47.0)));
     // From the read: 14 + 10 + 3 = 27 (the freshness, 29 + 8 = 37, is larger).
-    assert_eq!(e.sound, Some(ms(27.0)));
+    assert_eq!(e.sound(Anchor::Read), Some(ms(27.0)));
     // Freshness: (T_20 + R_20 − x_min5) + (last link, P2) T_5 + R_10 = 29 + 8
     // = 37 = Dürr's R_10 + (T_20 + R_20) + T_5; Davare 29 + 6 + 3 = 38.
-    assert_eq!(f.sound, Some(ms(37.0)));
-    assert_eq!(f.duerr, Some(ms(37.0)));
-    assert_eq!(f.davare, Some(ms(38.0)));
+    assert_eq!(f.sound(Anchor::Read), Some(ms(37.0)));
+    assert_eq!(f.get(Bound::Duerr, Anchor::Read), Some(ms(37.0)));
+    assert_eq!(f.get(Bound::Davare, Anchor::Read), Some(ms(38.0)));
     // With best cases known (BCET = WCET), x_min5 = 1 takes 1 ms off both
     // P1 terms: reaction from the event 46, freshness 36. Synchronous
     // release gives 33 (Kloda et al. 2018; the known-offset analysis).
     let r = analyze(&golden(true));
-    assert_eq!(r.chains[0].bound.from_event_sound, Some(ms(46.0)));
-    assert_eq!(r.chains[0].bound.sound, Some(ms(26.0)));
-    assert_eq!(r.chains[1].bound.sound, Some(ms(36.0)));
+    assert_eq!(r.chains[0].bound.sound(Anchor::Event), Some(ms(46.0)));
+    assert_eq!(r.chains[0].bound.sound(Anchor::Read), Some(ms(26.0)));
+    assert_eq!(r.chains[1].bound.sound(Anchor::Read), Some(ms(36.0)));
 }

@@ -41,7 +41,7 @@ fn any_phasing(r: &Report, chain: usize) -> [Option<Nanos>; 4] {
         r.chains
             .iter()
             .find(|c| c.chain == chain && c.metric == m)
-            .and_then(|c| c.bound.sound_from(a))
+            .and_then(|c| c.bound.sound(a))
     })
 }
 
@@ -176,7 +176,7 @@ fn too_many_jobs_fall_back_and_say_how_many() {
         matches!(b.basis, Basis::AnyPhasing(Fallback::TooManyJobs(n)) if n > MAX_JOBS),
         "{b:?}"
     );
-    assert_eq!(b.value, r.chains[0].bound.sound);
+    assert_eq!(b.value, r.chains[0].bound.sound(Anchor::Read));
 }
 
 /// A task that starts later than one period: head `a` (T = 5 ms, offset 0)

@@ -18,12 +18,13 @@
 use proptest::prelude::*;
 use proptest::sample::Index;
 use rtpipe_analysis::latency::{distinct_passes, fp_order, sound_reaction_link, LinkTask};
-use rtpipe_analysis::sched::rm_priorities;
+use rtpipe_analysis::Bound;
 use rtpipe_analysis::{
     all_paths, analyze, analyze_chain, schedulability, Anchor, Case, ChainBound, Metric, Report,
     TaskTiming,
 };
 use rtpipe_model::gen::{random_system, GenConfig};
+use rtpipe_model::policy::rate_monotonic;
 use rtpipe_model::{Nanos, PeriodSpec, Scheduler, Spec};
 use rtpipe_testkit::check;
 use std::collections::{BTreeMap, BTreeSet};
@@ -153,24 +154,65 @@ fn sound_within_davare_and_duerr() {
                 let (re, fr) = bounds(&rep, k);
                 let dv = davare(&spec, &rep.timing, &ch.path);
                 let du = duerr(&spec, &rep.timing, &ch.path);
-                prop_assert_eq!(re.davare, dv.map(|d| d.0), "reaction davare, chain {}", k);
-                prop_assert_eq!(fr.davare, dv.map(|d| d.1), "freshness davare, chain {}", k);
-                prop_assert_eq!(re.duerr, du.map(|d| d.0), "reaction duerr, chain {}", k);
-                prop_assert_eq!(fr.duerr, du.map(|d| d.1), "freshness duerr, chain {}", k);
+                prop_assert_eq!(
+                    re.get(Bound::Davare, Anchor::Read),
+                    dv.map(|d| d.0),
+                    "reaction davare, chain {}",
+                    k
+                );
+                prop_assert_eq!(
+                    fr.get(Bound::Davare, Anchor::Read),
+                    dv.map(|d| d.1),
+                    "freshness davare, chain {}",
+                    k
+                );
+                prop_assert_eq!(
+                    re.get(Bound::Duerr, Anchor::Read),
+                    du.map(|d| d.0),
+                    "reaction duerr, chain {}",
+                    k
+                );
+                prop_assert_eq!(
+                    fr.get(Bound::Duerr, Anchor::Read),
+                    du.map(|d| d.1),
+                    "freshness duerr, chain {}",
+                    k
+                );
                 if sched_ok {
-                    prop_assert!(dv.is_some() && re.sound.is_some() && fr.sound.is_some());
+                    prop_assert!(
+                        dv.is_some()
+                            && re.sound(Anchor::Read).is_some()
+                            && fr.sound(Anchor::Read).is_some()
+                    );
                 }
                 // From the event both start one head period earlier: the
                 // head job is released less than T_1 after the event.
                 let t1 = period(&spec, ch.path[0]);
                 for (b, what) in [(re, "reaction"), (fr, "freshness")] {
-                    prop_assert_eq!(b.from_event_davare, b.davare.map(|d| d + t1));
-                    prop_assert_eq!(b.from_event_duerr, b.duerr.map(|d| d + t1));
+                    prop_assert_eq!(
+                        b.get(Bound::Davare, Anchor::Event),
+                        b.get(Bound::Davare, Anchor::Read).map(|d| d + t1)
+                    );
+                    prop_assert_eq!(
+                        b.get(Bound::Duerr, Anchor::Event),
+                        b.get(Bound::Duerr, Anchor::Read).map(|d| d + t1)
+                    );
                     // All exist exactly when every task on the chain has R ≤ T.
-                    prop_assert_eq!(b.sound.is_some(), b.davare.is_some(), "{}", what);
-                    prop_assert_eq!(b.sound.is_some(), b.duerr.is_some(), "{}", what);
+                    prop_assert_eq!(
+                        b.sound(Anchor::Read).is_some(),
+                        b.get(Bound::Davare, Anchor::Read).is_some(),
+                        "{}",
+                        what
+                    );
+                    prop_assert_eq!(
+                        b.sound(Anchor::Read).is_some(),
+                        b.get(Bound::Duerr, Anchor::Read).is_some(),
+                        "{}",
+                        what
+                    );
                     for a in Anchor::ALL {
-                        let (s, d, u) = (b.sound_from(a), b.davare_from(a), b.duerr_from(a));
+                        let (s, d, u) =
+                            (b.sound(a), b.get(Bound::Davare, a), b.get(Bound::Duerr, a));
                         if let (Some(s), Some(d), Some(u)) = (s, d, u) {
                             prop_assert!(
                                 s <= d.min(u),
@@ -208,7 +250,7 @@ fn reaction_within_freshness_and_event_after_read() {
             let rep = analyze(&spec);
             for k in 0..spec.chains.len() {
                 let (re, fr) = bounds(&rep, k);
-                if let (Some(e), Some(f)) = (re.sound, fr.sound) {
+                if let (Some(e), Some(f)) = (re.sound(Anchor::Read), fr.sound(Anchor::Read)) {
                     prop_assert!(
                         e <= f,
                         "chain {}: sound reaction {} > freshness {}",
@@ -217,11 +259,17 @@ fn reaction_within_freshness_and_event_after_read() {
                         f
                     );
                 }
-                prop_assert_eq!(re.sound.is_some(), fr.sound.is_some());
+                prop_assert_eq!(
+                    re.sound(Anchor::Read).is_some(),
+                    fr.sound(Anchor::Read).is_some()
+                );
                 for b in [re, fr] {
-                    prop_assert!(b.from_event_paper >= b.paper);
-                    prop_assert_eq!(b.from_event_sound.is_some(), b.sound.is_some());
-                    if let (Some(ev), Some(s)) = (b.from_event_sound, b.sound) {
+                    prop_assert!(b.paper(Anchor::Event) >= b.paper(Anchor::Read));
+                    prop_assert_eq!(
+                        b.sound(Anchor::Event).is_some(),
+                        b.sound(Anchor::Read).is_some()
+                    );
+                    if let (Some(ev), Some(s)) = (b.sound(Anchor::Event), b.sound(Anchor::Read)) {
                         prop_assert!(ev >= s, "chain {}: from_event {} < {}", k, ev, s);
                     }
                 }
@@ -240,7 +288,10 @@ fn all_bounds(spec: &Spec, rep: &Report) -> Vec<[(Nanos, Nanos); 2]> {
     (0..spec.chains.len())
         .map(|k| {
             let (re, fr) = bounds(rep, k);
-            [(re.paper, inf(re.sound)), (fr.paper, inf(fr.sound))]
+            [
+                (re.paper(Anchor::Read), inf(re.sound(Anchor::Read))),
+                (fr.paper(Anchor::Read), inf(fr.sound(Anchor::Read))),
+            ]
         })
         .collect()
 }
@@ -417,7 +468,7 @@ fn monotone_in_period() {
             let mut longer = spec.clone();
             longer.tasks[i].period = PeriodSpec::Fixed(t + delta);
             // Priorities only matter under RM.
-            if spec.scheduler == Scheduler::Rm && rm_priorities(&spec) != rm_priorities(&longer) {
+            if spec.scheduler == Scheduler::Rm && rate_monotonic(&spec) != rate_monotonic(&longer) {
                 return Ok("skipped: priority order changed");
             }
             let (old, new) = (analyze(&spec), analyze(&longer));
@@ -575,16 +626,16 @@ fn brute_force(
             let e = sound_reaction_unclamped(spec, timing, &path);
             // analyze_chain's reaction is the unclamped sum clamped to the
             // path's own freshness.
-            let clamped = match (e, a.freshness.sound) {
+            let clamped = match (e, a.freshness.sound(Anchor::Read)) {
                 (Some(e), Some(f)) => Some(e.min(f)),
                 (e, _) => e,
             };
-            prop_assert_eq!(a.reaction.sound, clamped, "path {:?}", path);
+            prop_assert_eq!(a.reaction.sound(Anchor::Read), clamped, "path {:?}", path);
             let v = Maxima {
-                paper_reaction: a.reaction.paper,
-                paper_freshness: a.freshness.paper,
+                paper_reaction: a.reaction.paper(Anchor::Read),
+                paper_freshness: a.freshness.paper(Anchor::Read),
                 sound_reaction_unclamped: inf(e),
-                sound_freshness: inf(a.freshness.sound),
+                sound_freshness: inf(a.freshness.sound(Anchor::Read)),
             };
             let key = (s, *path.last().expect("non-empty"));
             let m = out.entry(key).or_insert(Maxima {
@@ -691,11 +742,11 @@ fn compare_with_brute_force(spec: &Spec) -> Result<(), TestCaseError> {
             check_path(&succ, &w.path, s, v)?;
         }
         let a = analyze_chain(spec, &timing, &p.reaction_paper.path);
-        prop_assert_eq!(a.reaction.paper, m.paper_reaction);
+        prop_assert_eq!(a.reaction.paper(Anchor::Read), m.paper_reaction);
         let a = analyze_chain(spec, &timing, &p.freshness_paper.path);
-        prop_assert_eq!(a.freshness.paper, m.paper_freshness);
+        prop_assert_eq!(a.freshness.paper(Anchor::Read), m.paper_freshness);
         let a = analyze_chain(spec, &timing, &p.freshness_sound.path);
-        prop_assert_eq!(inf(a.freshness.sound), m.sound_freshness);
+        prop_assert_eq!(inf(a.freshness.sound(Anchor::Read)), m.sound_freshness);
         let e = sound_reaction_unclamped(spec, &timing, &p.reaction_sound.path);
         prop_assert_eq!(inf(e), m.sound_reaction_unclamped);
     }
@@ -829,23 +880,23 @@ fn paper_bounds_can_fall_when_exec_grows() {
         analyze(&three("2", "10", "20")),
     );
     assert_eq!(lo.cases, vec![vec![Case::One, Case::Two]]);
-    assert_eq!(bounds(&lo, 0).0.paper, 21 * MS);
-    assert_eq!(bounds(&hi, 0).0.paper, 20 * MS);
-    assert_eq!(bounds(&lo, 0).0.sound, Some(35 * MS));
-    assert_eq!(bounds(&hi, 0).0.sound, Some(37 * MS));
+    assert_eq!(bounds(&lo, 0).0.paper(Anchor::Read), 21 * MS);
+    assert_eq!(bounds(&hi, 0).0.paper(Anchor::Read), 20 * MS);
+    assert_eq!(bounds(&lo, 0).0.sound(Anchor::Read), Some(35 * MS));
+    assert_eq!(bounds(&hi, 0).0.sound(Anchor::Read), Some(37 * MS));
     // Freshness: both links in Case 1.
     let (lo, hi) = (
         analyze(&three("1", "10", "5")),
         analyze(&three("2", "10", "5")),
     );
     assert_eq!(lo.cases, vec![vec![Case::One, Case::One]]);
-    assert_eq!(bounds(&lo, 0).1.paper, 59 * MS);
-    assert_eq!(bounds(&hi, 0).1.paper, 58 * MS);
+    assert_eq!(bounds(&lo, 0).1.paper(Anchor::Read), 59 * MS);
+    assert_eq!(bounds(&hi, 0).1.paper(Anchor::Read), 58 * MS);
     // Sound freshness rises: T_a + R_a − x_min(b) + T_b + R_b (c preempts
     // b: its last job published before b publishes again) = 20 + 3 + 10 + 2
     // = 35, then 20 + 4 + 10 + 3 = 37.
-    assert_eq!(bounds(&lo, 0).1.sound, Some(35 * MS));
-    assert_eq!(bounds(&hi, 0).1.sound, Some(37 * MS));
+    assert_eq!(bounds(&lo, 0).1.sound(Anchor::Read), Some(35 * MS));
+    assert_eq!(bounds(&hi, 0).1.sound(Anchor::Read), Some(37 * MS));
 }
 
 #[test]
@@ -873,21 +924,30 @@ path = ["h", "a"]
         Spec::parse("mono.toml", &src).expect("valid")
     };
     let (lo, hi) = (spec("2"), spec("2.5"));
-    assert_eq!(rm_priorities(&lo), rm_priorities(&hi));
+    assert_eq!(rate_monotonic(&lo), rate_monotonic(&hi));
     let (lo, hi) = (analyze(&lo), analyze(&hi));
     assert_eq!(lo.cases, hi.cases);
     assert_eq!(lo.timing[1].job_response_time, Some(10 * MS));
     assert_eq!(hi.timing[1].job_response_time, Some(9 * MS));
     let (lo_e, lo_f) = bounds(&lo, 0);
     let (hi_e, hi_f) = bounds(&hi, 0);
-    assert_eq!((lo_e.sound, hi_e.sound), (Some(12 * MS), Some(11_500_000)));
-    assert_eq!((lo_f.sound, hi_f.sound), (Some(12 * MS), Some(11_500_000)));
     assert_eq!(
-        (lo_f.davare, hi_f.davare),
+        (lo_e.sound(Anchor::Read), hi_e.sound(Anchor::Read)),
+        (Some(12 * MS), Some(11_500_000))
+    );
+    assert_eq!(
+        (lo_f.sound(Anchor::Read), hi_f.sound(Anchor::Read)),
+        (Some(12 * MS), Some(11_500_000))
+    );
+    assert_eq!(
+        (
+            lo_f.get(Bound::Davare, Anchor::Read),
+            hi_f.get(Bound::Davare, Anchor::Read)
+        ),
         (Some(13 * MS), Some(12_500_000))
     );
     // The paper bound does grow.
-    assert!(bounds(&hi, 0).0.paper > bounds(&lo, 0).0.paper);
+    assert!(bounds(&hi, 0).0.paper(Anchor::Read) > bounds(&lo, 0).0.paper(Anchor::Read));
 }
 
 /// Whether each task of `path` passes on "one job per sample" (the flag that
@@ -951,9 +1011,9 @@ fn sound_reaction_can_fall_when_exec_crosses_the_distinct_threshold_under_edf() 
     // From a's release, links then d's R: before 2 + 110 + 110 + 10 = 232
     // (= the freshness 2 + 20 + 210); after, b → c gets reachability
     // (T_b + R_b = 20 instead of R_b + T_c = 110): 2 + 20 + 110 + 10 = 142.
-    assert_eq!(bounds(&ro, 0).0.sound, Some(232 * MS));
-    assert_eq!(bounds(&rn, 0).0.sound, Some(142 * MS));
-    assert_eq!(bounds(&rn, 0).1.sound, Some(232 * MS));
+    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(232 * MS));
+    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(142 * MS));
+    assert_eq!(bounds(&rn, 0).1.sound(Anchor::Read), Some(232 * MS));
 }
 
 #[test]
@@ -1001,7 +1061,10 @@ fn sound_reaction_can_fall_when_a_period_crosses_the_distinct_threshold() {
     );
     // From a's release, links then d's R: 21 + 51 + 21 + 1 = 94 ms (Davare
     // 95) against 21 + 23 + 21 + 1 = 66 ms.
-    assert_eq!(bounds(&ro, 0).0.sound, Some(94 * MS));
-    assert_eq!(bounds(&ro, 0).0.davare, Some(95 * MS));
-    assert_eq!(bounds(&rn, 0).0.sound, Some(66 * MS));
+    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(94 * MS));
+    assert_eq!(
+        bounds(&ro, 0).0.get(Bound::Davare, Anchor::Read),
+        Some(95 * MS)
+    );
+    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(66 * MS));
 }

@@ -3,6 +3,7 @@
 //! (the property the design's branch and bound prunes with).
 
 use rtpipe_analysis::relax::{paper_monotone, relax, Relaxed};
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric, Report};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
@@ -57,7 +58,7 @@ fn paper(report: &Report, chain: usize, metric: Metric) -> Nanos {
         .chains
         .iter()
         .find(|c| c.chain == chain && c.metric == metric)
-        .map_or(Nanos::MAX, |c| c.bound.paper)
+        .map_or(Nanos::MAX, |c| c.bound.paper(Anchor::Read))
 }
 
 /// The paper figures and forms of `r` against the analysis at `t` (equal at
@@ -104,7 +105,7 @@ fn sound(report: &Report, chain: usize, metric: Metric) -> Option<Nanos> {
         .chains
         .iter()
         .find(|c| c.chain == chain && c.metric == metric)
-        .and_then(|c| c.bound.sound)
+        .and_then(|c| c.bound.sound(Anchor::Read))
 }
 
 /// The affine forms of every chain bound its sound figures at `t` from

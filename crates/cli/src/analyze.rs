@@ -2,6 +2,7 @@
 
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
+use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
 use serde_json::{json, Value};
@@ -147,23 +148,26 @@ fn chain_json(spec: &Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> Valu
         "path": path_names(spec, &ch.path),
         "metric": c.metric.name(),
         "limit": num(spec, c.limit),
-        "paper": spec.in_unit(c.bound.paper),
-        "sound": num(spec, c.bound.sound),
-        "davare": num(spec, c.bound.davare),
-        "duerr": num(spec, c.bound.duerr),
-        "ok": c.ok,
-        "paper_ok": c.paper_ok(),
-        "from_event": {
-            "paper": spec.in_unit(c.bound.from_event_paper),
-            "sound": num(spec, c.bound.from_event_sound),
-            "davare": num(spec, c.bound.from_event_davare),
-            "duerr": num(spec, c.bound.from_event_duerr),
-        },
-        "cases": r.cases[c.chain].iter().map(|k| match k {
+    });
+    let bounds = |a: Anchor| -> serde_json::Map<String, Value> {
+        c.bound
+            .from(a)
+            .map(|(b, v)| (b.name().to_string(), num(spec, v)))
+            .collect()
+    };
+    for (k, v) in bounds(Anchor::Read) {
+        entry[k] = v;
+    }
+    entry["ok"] = json!(c.ok);
+    entry["paper_ok"] = json!(c.paper_ok());
+    entry["from_event"] = Value::Object(bounds(Anchor::Event));
+    entry["cases"] = r.cases[c.chain]
+        .iter()
+        .map(|k| match k {
             rtpipe_analysis::Case::One => 1,
             rtpipe_analysis::Case::Two => 2,
-        }).collect::<Vec<_>>(),
-    });
+        })
+        .collect();
     if let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) {
         entry["known_offsets"] = known_offsets_json(spec, o, c.metric);
     }
@@ -307,22 +311,16 @@ fn chain_table(spec: &Spec, r: &Report) -> String {
         out.push_str(
             "\nchains (worst case from the head's read; +event: from the event in the world; davare: Davare et al. 2007, duerr: Dürr et al. 2019; see docs/analysis.md):\n",
         );
-        let mut t = Table::new(&[
-            "chain",
-            "metric",
-            "limit",
-            "paper",
-            "sound",
-            "davare",
-            "duerr",
-            "paper+event",
-            "sound+event",
-            "davare+event",
-            "duerr+event",
-            "paper verdict",
-            "sound verdict",
-        ])
-        .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10]);
+        // One column per bound and anchor, from-read first (`ChainBound::from`).
+        let mut heads: Vec<String> = ["chain", "metric", "limit"].map(String::from).to_vec();
+        for a in Anchor::ALL {
+            let suffix = if a == Anchor::Event { "+event" } else { "" };
+            heads.extend(Bound::ALL.map(|b| format!("{}{suffix}", b.name())));
+        }
+        heads.extend(["paper verdict", "sound verdict"].map(String::from));
+        let numeric: Vec<usize> = (2..heads.len() - 2).collect();
+        let heads: Vec<&str> = heads.iter().map(String::as_str).collect();
+        let mut t = Table::new(&heads).numeric(&numeric);
         for c in &r.chains {
             let label = spec.chain_label(c.chain);
             let verdict = match (c.ok, c.limit) {
@@ -335,23 +333,18 @@ fn chain_table(spec: &Spec, r: &Report) -> String {
                 (true, None) => "-",
                 (false, _) => "FAIL",
             };
-            t.row(vec![
+            let mut row = vec![
                 label,
                 c.metric.name().to_string(),
                 c.limit
                     .map(|l| spec.fmt_time(l))
                     .unwrap_or_else(|| "-".into()),
-                spec.fmt_time(c.bound.paper),
-                opt(spec, c.bound.sound),
-                opt(spec, c.bound.davare),
-                opt(spec, c.bound.duerr),
-                spec.fmt_time(c.bound.from_event_paper),
-                opt(spec, c.bound.from_event_sound),
-                opt(spec, c.bound.from_event_davare),
-                opt(spec, c.bound.from_event_duerr),
-                paper_verdict.to_string(),
-                verdict.to_string(),
-            ]);
+            ];
+            for a in Anchor::ALL {
+                row.extend(c.bound.from(a).map(|(_, v)| opt(spec, v)));
+            }
+            row.extend([paper_verdict.to_string(), verdict.to_string()]);
+            t.row(row);
         }
         out.push_str(&t.render());
     }

@@ -10,7 +10,8 @@ use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_body::Body;
 use rtpipe_fly::{Flight, Setup};
-use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_model::policy::LinuxClass;
+use rtpipe_model::{Nanos, Spec};
 use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
 use rtpipe_sim::observe::{observe, ChainObs, Summary};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
@@ -81,12 +82,12 @@ pub enum PolicyArg {
 }
 
 fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
-    let p = match (a.policy, spec.scheduler) {
+    let p = match (a.policy, spec.policy().linux) {
         (Some(PolicyArg::Fifo), _) => Policy::Fifo,
         (Some(PolicyArg::Deadline), _) => Policy::Deadline,
         (Some(PolicyArg::Other), _) => Policy::Other,
-        (None, Scheduler::Rm) => Policy::Fifo,
-        (None, Scheduler::Edf) => Policy::Deadline,
+        (None, LinuxClass::Fifo) => Policy::Fifo,
+        (None, LinuxClass::Deadline) => Policy::Deadline,
     };
     if p == Policy::Other && !a.best_effort {
         return Err(Bad::new(

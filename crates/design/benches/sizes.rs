@@ -11,6 +11,7 @@
 //! peak resident memory (VmHWM) is its own. Prints a Markdown table.
 
 use rtpipe_analysis::bounds_per_chain;
+use rtpipe_analysis::Anchor;
 use rtpipe_design::{design, Mode, Options, Status};
 use rtpipe_model::gen::{benchmark_config, design_problem, DesignGenConfig};
 use std::collections::BTreeMap;
@@ -43,7 +44,9 @@ fn peak_kib() -> u64 {
 /// The child: one solve, one line "status seconds gap peak_kib method".
 fn child(tasks: usize, seed: u64, mode: Mode, limit: f64) {
     let cfg = config(tasks);
-    let spec = design_problem(seed, &cfg, &|s| bounds_per_chain(s, |b| b.sound));
+    let spec = design_problem(seed, &cfg, &|s| {
+        bounds_per_chain(s, |b| b.sound(Anchor::Read))
+    });
     let opts = Options {
         mode,
         time_limit: Some(limit),

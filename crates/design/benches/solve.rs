@@ -19,6 +19,7 @@
 //! (comma-separated names) restricts the backends.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, bounds_per_chain};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Mode, Options, Outcome};
@@ -32,7 +33,7 @@ use std::time::{Duration, Instant};
 const SEED: u64 = 2018;
 
 fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    bounds_per_chain(spec, |b| b.sound)
+    bounds_per_chain(spec, |b| b.sound(Anchor::Read))
 }
 
 fn config(tasks: usize) -> DesignGenConfig {
@@ -54,7 +55,7 @@ fn problem(tasks: usize) -> Spec {
     let paper = report
         .chains
         .iter()
-        .filter(|c| c.limit.is_some_and(|l| c.bound.paper <= l))
+        .filter(|c| c.limit.is_some_and(|l| c.bound.paper(Anchor::Read) <= l))
         .count();
     let ranges = spec
         .tasks

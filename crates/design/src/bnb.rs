@@ -20,6 +20,7 @@
 
 use crate::{utilization, Dom, Group, Incumbent, Mode, Runner};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Ordering as CmpOrdering;
@@ -361,7 +362,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let spec = self.run.with_periods(&self.periods(k));
         let report = rtpipe_analysis::analyze(&spec);
         let mode = self.mode();
-        let bounded = mode == Mode::Paper || report.chains.iter().all(|c| c.bound.sound.is_some());
+        let bounded = mode == Mode::Paper
+            || report
+                .chains
+                .iter()
+                .all(|c| c.bound.sound(Anchor::Read).is_some());
         let ok = bounded
             && self.groups.iter().all(|g| match *g {
                 Group::Limit(k, m) => report
@@ -668,7 +673,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// and the imposed orders leave open: the widest narrower span first.
     fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
         let spec = self.run.spec;
-        if spec.scheduler != rtpipe_model::Scheduler::Rm {
+        if !spec.policy().fixed_priority() {
             return None;
         }
         let ranked = |i: usize| spec.tasks[i].server != Server::Background;

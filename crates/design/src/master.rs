@@ -9,7 +9,8 @@ use crate::rta::{add_rta_cut, Levels, RtaCut};
 use crate::runner::Runner;
 use crate::sound::{add_r_cut, rmax_of, sound_chain, SoundModel};
 use rtpipe_analysis::Metric;
-use rtpipe_model::{SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::{SchedTest, Server, Spec};
 use std::collections::HashMap;
 
 /// Ranges of at most this many grid steps get every tangent up front.
@@ -446,7 +447,8 @@ impl<'a> Runner<'a> {
         if self.spec.schedulability == SchedTest::Rta {
             m.add_rta(groups, &self.levels, &self.rta_cuts);
         }
-        if let (Some(sm), Scheduler::Rm) = (sound, self.spec.scheduler) {
+        let rta = self.spec.policy().response == ResponseAnalysis::Rta;
+        if let Some(sm) = sound.filter(|_| rta) {
             m.add_responses(groups, sm, self);
         }
         m.add_limits(groups, sound);

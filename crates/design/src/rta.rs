@@ -9,7 +9,7 @@ use crate::runner::Runner;
 use crate::Mode;
 use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::Report;
-use rtpipe_model::{SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::{SchedTest, Server, Spec};
 use std::collections::HashMap;
 
 /// Response-time levels per (budget level?, task, higher-priority task): the
@@ -122,7 +122,7 @@ impl<'a> Runner<'a> {
             return true;
         }
         if self.spec.schedulability == SchedTest::Rta {
-            let prio = rtpipe_analysis::sched::rm_priorities(spec);
+            let prio = rtpipe_model::policy::rate_monotonic(spec);
             for (i, tm) in report.timing.iter().enumerate() {
                 if spec.tasks[i].server == Server::Background {
                     continue;
@@ -151,11 +151,11 @@ impl<'a> Runner<'a> {
     /// when R_i diverged) plus one. True when any level was added.
     pub(crate) fn raise_levels(&mut self, cand: &Spec, report: &Report) -> bool {
         let spec = self.spec;
-        if spec.scheduler != Scheduler::Rm {
+        if !spec.policy().fixed_priority() {
             return false;
         }
         let n = spec.tasks.len();
-        let prio = rtpipe_analysis::sched::rm_priorities(cand);
+        let prio = rtpipe_model::policy::rate_monotonic(cand);
         let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
         let sound = self.opts.mode == Mode::Sound;
         let tested = spec.schedulability == SchedTest::Rta;

@@ -8,7 +8,8 @@ use crate::master::{Group, Master};
 use crate::runner::Runner;
 use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{Metric, Report};
-use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::{Nanos, Server, Spec};
 
 /// What the sound model knows of response times: unconditional lower
 /// bounds, and conditional ones learnt from verified candidates.
@@ -51,7 +52,7 @@ impl<'a> Runner<'a> {
                     }
                     let (di, dj) = (&self.dom[i], &self.dom[j]);
                     let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
-                    if always_above && spec.scheduler == Scheduler::Rm {
+                    if always_above && spec.policy().fixed_priority() {
                         r += interference(&spec.tasks[j]);
                     }
                 }
@@ -87,7 +88,7 @@ pub(crate) fn learn_r_cuts(
     rmodel: &[Option<f64>],
     sm: &mut SoundModel,
 ) -> bool {
-    let prio = rtpipe_analysis::sched::rm_priorities(cand);
+    let prio = rtpipe_model::policy::rate_monotonic(cand);
     let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
     let mut learnt = false;
     for (i, mv) in rmodel.iter().enumerate() {
@@ -185,7 +186,7 @@ pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
 /// under EDF (and where it has none).
 fn response(m: &Master, i: usize) -> Lin {
     match m.rvar[i] {
-        Some(v) if m.spec.scheduler != Scheduler::Edf => Lin {
+        Some(v) if m.spec.policy().response == ResponseAnalysis::Rta => Lin {
             terms: vec![(v, 1.0)],
             c: 0.0,
         },
@@ -225,7 +226,7 @@ fn span(opts: &[&Lin], lp: &Lp, big: f64) -> (f64, f64) {
 fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin, last: bool) -> (usize, usize) {
     let big = m.big_m;
     let (rp, rc) = (response(m, p), response(m, c));
-    let same = m.spec.scheduler != Scheduler::Edf && m.spec.tasks[p].cpu == m.spec.tasks[c].cpu;
+    let same = m.spec.policy().fixed_priority() && m.spec.tasks[p].cpu == m.spec.tasks[c].cpu;
     let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
     let o1 = rp.plus(&tc);
     let o2 = rp.plus(&tc).add_c(-xmin(m, c));

@@ -1,4 +1,5 @@
 use super::*;
+use rtpipe_analysis::Anchor;
 use rtpipe_model::Spec;
 
 use rtpipe_testkit::example_with as load_with;
@@ -46,7 +47,7 @@ fn table2_paper_mode_design_is_verified() {
     let r = o.report.as_ref().map(|r| {
         r.chains
             .iter()
-            .all(|c| c.limit.is_none_or(|l| c.bound.paper <= l))
+            .all(|c| c.limit.is_none_or(|l| c.bound.paper(Anchor::Read) <= l))
     });
     assert_eq!(r, Some(true));
     // The published set (10, 15, 10, 10, 15, 5) has U = 0.678; but it misses the
@@ -92,7 +93,7 @@ fn passes_both(o: &Outcome) -> bool {
         r.all_ok()
             && r.chains
                 .iter()
-                .all(|c| c.limit.is_none_or(|l| c.bound.paper <= l))
+                .all(|c| c.limit.is_none_or(|l| c.bound.paper(Anchor::Read) <= l))
     })
 }
 
@@ -174,7 +175,7 @@ fn cleanflight_both_modes() {
                 Mode::Paper => assert!(rep
                     .chains
                     .iter()
-                    .all(|c| c.limit.is_none_or(|l| c.bound.paper <= l))),
+                    .all(|c| c.limit.is_none_or(|l| c.bound.paper(Anchor::Read) <= l))),
             }
             // Far below Table V's 0.68 either way.
             assert!(o.objective.unwrap_or(1.0) < 0.3, "{name} {mode:?}");

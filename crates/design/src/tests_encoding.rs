@@ -29,6 +29,7 @@ use crate::lp::{self, Limits};
 use crate::master::{ChainExpr, Group};
 use crate::solve::fix_periods;
 use crate::sound::SoundModel;
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig};
 use rtpipe_model::{Nanos, Scheduler};
@@ -136,8 +137,11 @@ fn bound_of(report: &Report, chain: usize, metric: Metric, mode: Mode) -> Nanos 
         .find(|c| c.chain == chain && c.metric == metric)
         .expect("chain in report");
     match mode {
-        Mode::Paper => c.bound.paper,
-        Mode::Sound => c.bound.sound.expect("a verified design has sound bounds"),
+        Mode::Paper => c.bound.paper(Anchor::Read),
+        Mode::Sound => c
+            .bound
+            .sound(Anchor::Read)
+            .expect("a verified design has sound bounds"),
     }
 }
 
@@ -208,8 +212,8 @@ fn generated(seed: u64, mode: Mode) -> Spec {
     };
     let bound = |s: &Spec| -> Vec<ChainBounds> {
         match mode {
-            Mode::Paper => rtpipe_analysis::bounds_per_chain(s, |b| Some(b.paper)),
-            Mode::Sound => rtpipe_analysis::bounds_per_chain(s, |b| b.sound),
+            Mode::Paper => rtpipe_analysis::bounds_per_chain(s, |b| Some(b.paper(Anchor::Read))),
+            Mode::Sound => rtpipe_analysis::bounds_per_chain(s, |b| b.sound(Anchor::Read)),
         }
     };
     design_problem(seed, &cfg, &bound)

@@ -16,6 +16,7 @@
 //! 300 in each mode); `RTPIPE_DESIGN_VERBOSE=1` prints
 //! every instance. Run with `--nocapture` to see the tallies.
 
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, bounds_per_chain, Report};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
@@ -26,14 +27,14 @@ use std::time::Instant;
 
 /// Sound bounds of every chain, for the generator's limits.
 fn sound_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    bounds_per_chain(spec, |b| b.sound)
+    bounds_per_chain(spec, |b| b.sound(Anchor::Read))
 }
 
 /// Paper bounds of every chain: limits for paper-mode instances (the sound
 /// bound's limits leave many of them infeasible under the paper's equations,
 /// whose freshness can exceed the sound bound).
 fn paper_bounds(spec: &Spec) -> Vec<ChainBounds> {
-    bounds_per_chain(spec, |b| Some(b.paper))
+    bounds_per_chain(spec, |b| Some(b.paper(Anchor::Read)))
 }
 
 /// Instance `seed`: 3–5 tasks on one CPU (two for some), 1–3 chains, choice
@@ -144,7 +145,7 @@ fn passes(report: &Report, mode: Mode) -> bool {
     report.schedulability.schedulable
         && report.chains.iter().all(|c| match mode {
             Mode::Sound => c.ok,
-            Mode::Paper => c.limit.is_none_or(|l| c.bound.paper <= l),
+            Mode::Paper => c.limit.is_none_or(|l| c.bound.paper(Anchor::Read) <= l),
         })
 }
 

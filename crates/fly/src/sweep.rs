@@ -15,6 +15,7 @@
 
 use crate::{fly, FlyError, Setup};
 use rayon::prelude::*;
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric};
 use rtpipe_flight::quality::{Criteria, FlightQuality};
 use rtpipe_flight::tasks::Role;
@@ -100,8 +101,8 @@ fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, bool) {
     let mut out = vec![(None, None); spec.chains.len()];
     for c in &rep.chains {
         match c.metric {
-            Metric::Reaction => out[c.chain].0 = c.bound.sound,
-            Metric::Freshness => out[c.chain].1 = c.bound.sound,
+            Metric::Reaction => out[c.chain].0 = c.bound.sound(Anchor::Read),
+            Metric::Freshness => out[c.chain].1 = c.bound.sound(Anchor::Read),
         }
     }
     (out, rep.schedulability.schedulable)

@@ -8,8 +8,8 @@
 //! cause-effect chains of the E2EEvaluation framework (module `waters`).
 
 use crate::{
-    compute_transfers, Chain, Channel, Nanos, PeriodSpec, Port, SchedTest, Scheduler, Server, Spec,
-    Task, TimeUnit,
+    compute_transfers, Chain, Channel, Nanos, PeriodSpec, Port, Scheduler, Server, Spec, Task,
+    TimeUnit,
 };
 
 mod waters;
@@ -218,10 +218,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         name: format!("random-{seed}"),
         time_unit: TimeUnit::Ms,
         scheduler: cfg.scheduler,
-        schedulability: match cfg.scheduler {
-            Scheduler::Rm => SchedTest::Rta,
-            Scheduler::Edf => SchedTest::Edf,
-        },
+        schedulability: cfg.scheduler.policy().default_test(),
         resolution: 1_000_000,
         harmonic: false,
         channels,

@@ -11,6 +11,7 @@
 
 mod error;
 pub mod gen;
+pub mod policy;
 mod raw;
 pub mod time;
 mod validate;
@@ -18,6 +19,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
+pub use policy::{SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB.
@@ -26,50 +28,6 @@ pub const MAX_SPEC_BYTES: u64 = 16 << 20;
 use raw::RawSpec;
 use std::collections::BTreeMap;
 use validate::Builder;
-
-/// How CPUs pick among ready pipe terminals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scheduler {
-    /// Fixed priority, rate monotonic; equal periods are ordered by declaration.
-    Rm,
-    /// Reservations scheduled EDF (constant-bandwidth servers, as SCHED_DEADLINE).
-    Edf,
-}
-
-impl Scheduler {
-    /// The name used in specs and output.
-    pub fn name(self) -> &'static str {
-        match self {
-            Scheduler::Rm => "rm",
-            Scheduler::Edf => "edf",
-        }
-    }
-}
-
-/// The schedulability test applied per CPU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SchedTest {
-    /// Σ U ≤ n(2^{1/n} − 1) (Liu and Layland 1973), the test of Table II.
-    LiuLayland,
-    /// Π (U_i + 1) ≤ 2 (Bini, Buttazzo, Buttazzo 2003).
-    Hyperbolic,
-    /// Exact response-time analysis: every R_i ≤ T_i.
-    Rta,
-    /// EDF: Σ U ≤ 1.
-    Edf,
-}
-
-impl SchedTest {
-    /// The name used in specs and output.
-    pub fn name(self) -> &'static str {
-        match self {
-            SchedTest::LiuLayland => "liu-layland",
-            SchedTest::Hyperbolic => "hyperbolic",
-            SchedTest::Rta => "rta",
-            SchedTest::Edf => "edf",
-        }
-    }
-}
 
 /// The kind of VCPU a pipe terminal is (Section II-B).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -263,40 +263,19 @@ impl Builder {
             self.check_name("system", &sys.name, "name = \"quad\"");
         }
         self.time_unit(sys);
+        let schedulers = Scheduler::ALL.map(|s| (s.name(), s));
         let scheduler = match &sys.scheduler {
-            Some(s) => self.choice(
-                s,
-                "scheduler",
-                &[("rm", Scheduler::Rm), ("edf", Scheduler::Edf)],
-            ),
+            Some(s) => self.choice(s, "scheduler", &schedulers),
             None => Some(Scheduler::Rm),
         };
+        let tests = SchedTest::ALL.map(|t| (t.name(), t));
         let test = match &sys.schedulability {
-            Some(s) => self.choice(
-                s,
-                "schedulability test",
-                &[
-                    ("liu-layland", SchedTest::LiuLayland),
-                    ("hyperbolic", SchedTest::Hyperbolic),
-                    ("rta", SchedTest::Rta),
-                    ("edf", SchedTest::Edf),
-                ],
-            ),
-            None => scheduler.map(|s| match s {
-                Scheduler::Rm => SchedTest::Rta,
-                Scheduler::Edf => SchedTest::Edf,
-            }),
+            Some(s) => self.choice(s, "schedulability test", &tests),
+            None => scheduler.map(|s| s.policy().default_test()),
         };
         if let (Some(s), Some(t), Some(sp)) = (scheduler, test, &sys.schedulability) {
-            let fits = match s {
-                Scheduler::Rm => t != SchedTest::Edf,
-                Scheduler::Edf => t == SchedTest::Edf,
-            };
-            if !fits {
-                let help = match s {
-                    Scheduler::Rm => "with scheduler = \"rm\" use \"liu-layland\", \"hyperbolic\" or \"rta\"",
-                    Scheduler::Edf => "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test)",
-                };
+            if !s.policy().admits(t) {
+                let help = s.policy().tests_help;
                 self.err(
                     format!(
                         "schedulability test \"{}\" does not apply to scheduler \"{}\"",

@@ -8,7 +8,8 @@ use crate::load::Load;
 use crate::pi::PiMutex;
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
-use rtpipe_model::{Scheduler, Spec};
+use rtpipe_model::policy::LinuxClass;
+use rtpipe_model::Spec;
 use rtpipe_sim::{Carried, JobRecord, Segment, SimResult, TaskStats};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
@@ -246,12 +247,12 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             "shorten --duration",
         ));
     }
-    match (cfg.policy, spec.scheduler) {
-        (Policy::Fifo, Scheduler::Edf) => Err(RunError::config(
+    match (cfg.policy, spec.policy().linux) {
+        (Policy::Fifo, LinuxClass::Deadline) => Err(RunError::config(
             "--policy fifo runs the rate-monotonic model, but the spec says scheduler = \"edf\"",
             "use --policy deadline for an edf spec, or set scheduler = \"rm\"",
         )),
-        (Policy::Deadline, Scheduler::Rm) => Err(RunError::config(
+        (Policy::Deadline, LinuxClass::Fifo) => Err(RunError::config(
             "--policy deadline runs the edf model, but the spec says scheduler = \"rm\"",
             "use --policy fifo for an rm spec, or set scheduler = \"edf\"",
         )),
@@ -304,7 +305,7 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
 /// The SCHED_FIFO priority of each task: rate-monotonic rank 1 (the
 /// highest) → 90, rank 2 → 89, ...; background tasks (no rank) → 1.
 pub fn fifo_priorities(spec: &Spec) -> Vec<i32> {
-    rtpipe_analysis::sched::rm_priorities(spec)
+    rtpipe_model::policy::rate_monotonic(spec)
         .iter()
         .map(|r| r.map_or(1, |r| (91 - r as i32).max(2)))
         .collect()

@@ -5,8 +5,8 @@ use crate::rng::Rng;
 use crate::server::{Cbs, Pibs, Sporadic};
 use crate::tracker::Tracker;
 use crate::*;
-use rtpipe_analysis::sched::rm_priorities;
-use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use rtpipe_model::policy::{rate_monotonic, Budget as Kind, Preemption};
+use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
@@ -262,7 +262,7 @@ impl<H: Hooks> Sim<H> {
         let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
         Ok(Sim {
             hooks,
-            edf: spec.scheduler == Scheduler::Edf,
+            edf: spec.policy().preemption == Preemption::EarliestDeadline,
             exec: cfg.exec,
             tasks,
             running: vec![None; n_cpus],
@@ -792,7 +792,7 @@ fn task_sims(
     master: &mut Rng,
 ) -> (Vec<TaskSim>, Vec<Vec<usize>>) {
     let n = spec.tasks.len();
-    let ranks = rm_priorities(spec);
+    let ranks = rate_monotonic(spec);
     let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpu_ids.sort_unstable();
     cpu_ids.dedup();
@@ -802,11 +802,11 @@ fn task_sims(
         let cpu = cpu_ids.binary_search(&t.cpu).unwrap_or(0);
         cpu_tasks[cpu].push(i);
         let (c, p) = (t.budget(), periods[i]);
-        let budget = match (spec.scheduler, t.server) {
-            (_, Server::None | Server::Background) => Budget::Unlimited,
-            (Scheduler::Edf, _) => Budget::Cbs(Cbs::new(c, p)),
-            (Scheduler::Rm, Server::Main) => Budget::Sporadic(Sporadic::new(c, p, 0)),
-            (Scheduler::Rm, Server::Io) => Budget::Pibs(Pibs::new(c, p)),
+        let budget = match spec.policy().budget(t.server) {
+            None => Budget::Unlimited,
+            Some(Kind::Cbs) => Budget::Cbs(Cbs::new(c, p)),
+            Some(Kind::Sporadic) => Budget::Sporadic(Sporadic::new(c, p, 0)),
+            Some(Kind::Pibs) => Budget::Pibs(Pibs::new(c, p)),
         };
         tasks.push(TaskSim {
             slack_when_empty: matches!(budget, Budget::Sporadic(_)),
@@ -814,11 +814,7 @@ fn task_sims(
             period: periods[i],
             class: u8::from(t.server == Server::Background),
             rank: ranks[i].map_or(i as i64, |r| r as i64),
-            serves: if spec.scheduler == Scheduler::Rm {
-                t.serves
-            } else {
-                None
-            },
+            serves: spec.policy().inherits_from(t.serves),
             demand_min: t.demand_min(),
             demand: t.demand(),
             rng: Rng::new(master.next_u64()),

@@ -16,7 +16,7 @@
 //!   its last unit of execution completes. Register semantics: a value is
 //!   overwritten by the next publish.
 //! - Each CPU is preemptive: RM by the rank of
-//!   [`rtpipe_analysis::sched::rm_priorities`], EDF by absolute deadline
+//!   [`rtpipe_model::policy::rate_monotonic`], EDF by absolute deadline
 //!   (release + T) then task index. Jobs of one task run in FIFO order.
 //!   Background tasks run only when nothing else is ready.
 //! - At one instant: (1) completions publish, (2) releases, (3) each CPU picks

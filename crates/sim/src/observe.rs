@@ -144,7 +144,7 @@ pub fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
                     .chains
                     .get(c.chain)
                     .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
-                Judged::of(values, c.bound.paper_from(a), c.bound.sound_from(a))
+                Judged::of(values, c.bound.paper(a), c.bound.sound(a))
             };
             let known = |a: Anchor| {
                 let bound = report.offset_bound(c.chain, c.metric, a)?.clone();

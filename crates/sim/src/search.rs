@@ -333,7 +333,7 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
             demands,
             grids: [gcd_periods, gcd_all],
             chain_tasks,
-            prio: rtpipe_analysis::sched::rm_priorities(spec),
+            prio: rtpipe_model::policy::rate_monotonic(spec),
             fixed,
             movable,
             t_max,
@@ -356,7 +356,7 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
             .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
             .map_or((None, None), |c| {
                 let a = cfg.anchor;
-                (c.bound.sound_from(a), Some(c.bound.paper_from(a)))
+                (c.bound.sound(a), Some(c.bound.paper(a)))
             });
         let known = report
             .offset_bound(cfg.chain, cfg.metric, cfg.anchor)

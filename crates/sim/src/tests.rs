@@ -2,6 +2,7 @@
 //! traces in the comments read directly.
 
 use super::*;
+use rtpipe_analysis::Anchor;
 use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
 use rtpipe_model::{Scheduler, Server};
 
@@ -78,7 +79,7 @@ fn assert_within_sound(spec: &Spec, r: &SimResult) {
             rtpipe_analysis::Metric::Reaction => st.reaction.max,
             rtpipe_analysis::Metric::Freshness => st.freshness.max,
         };
-        if let (Some(s), Some(b)) = (seen, c.bound.sound) {
+        if let (Some(s), Some(b)) = (seen, c.bound.sound(Anchor::Read)) {
             assert!(s <= b, "chain {} {:?}: {s} > {b}", c.chain, c.metric);
         }
     }

@@ -49,7 +49,7 @@ fn bounds(spec: &Spec, metric: Metric) -> (Option<Nanos>, Option<Nanos>) {
         .iter()
         .find(|c| c.metric == metric)
         .unwrap_or_else(|| panic!("no {metric:?} bound"));
-    (c.bound.sound, c.bound.from_event_sound)
+    (c.bound.sound(Anchor::Read), c.bound.sound(Anchor::Event))
 }
 
 #[test]

@@ -364,7 +364,7 @@ fn tally(spec: &Spec, report: &Report, worst: &[[Option<Nanos>; 4]], st: &mut St
                 .chains
                 .iter()
                 .find(|c| c.chain == k && c.metric == m)
-                .and_then(|c| c.bound.sound_from(a));
+                .and_then(|c| c.bound.sound(a));
             let job = o.job_level.as_ref().and_then(|j| *j.values.get(m, a));
             if let (false, Some(j), Some(any)) = (late, job, any) {
                 st.versus_any[s][q].push(j as f64 / any.max(1) as f64);

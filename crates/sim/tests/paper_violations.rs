@@ -3,6 +3,7 @@
 //! run exactly and checks that it exceeds the paper's bound and stays within
 //! the sound one.
 
+use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric};
 use rtpipe_model::Spec;
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
@@ -18,7 +19,10 @@ fn bounds(spec: &Spec, chain: usize, metric: Metric) -> (i64, i64) {
         .iter()
         .find(|c| c.chain == chain && c.metric == metric)
     {
-        Some(c) => (c.bound.paper, c.bound.sound.unwrap_or(i64::MAX)),
+        Some(c) => (
+            c.bound.paper(Anchor::Read),
+            c.bound.sound(Anchor::Read).unwrap_or(i64::MAX),
+        ),
         None => panic!("no chain {chain}"),
     }
 }

@@ -14,8 +14,10 @@
 //! to see the tightness summary; in release mode for large runs:
 //! `RTPIPE_ORACLE_SYSTEMS=10000 cargo test -p rtpipe-sim --release -- --nocapture`.
 
-use rtpipe_analysis::{analyze, sched::rm_priorities, Anchor, Metric, Report};
+use rtpipe_analysis::Bound;
+use rtpipe_analysis::{analyze, Anchor, Metric, Report};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::policy::rate_monotonic;
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult, Witness};
@@ -312,7 +314,7 @@ fn check_system(seed: u64, search_steps: u64, st: &mut Stats) {
     search(&sys, best, search_steps, &mut paper_exceeded, st);
     for (k, c) in report.chains.iter().enumerate() {
         for (ai, a) in Anchor::ALL.into_iter().enumerate() {
-            if c.bound.sound_from(a).is_some() {
+            if c.bound.sound(a).is_some() {
                 let m = quantity_index(c.metric, a);
                 let l = spec.chains[c.chain].path.len().clamp(1, 3) - 1;
                 st.paper_pairs[m][l] += 1;
@@ -431,7 +433,7 @@ fn check_result(
                 *w = ratio;
             }
             let seen = res.chains[c.chain].observed(c.metric, anchor).max;
-            if seen.is_some_and(|v| v > c.bound.paper_from(anchor)) {
+            if seen.is_some_and(|v| v > c.bound.paper(anchor)) {
                 paper_exceeded[k][ai] = true;
             }
             // Single-task chains are exactly tight under RM; they would steer
@@ -492,10 +494,10 @@ fn check_quantity(
     let obs = cs.observed(q.metric, q.anchor);
     let seen = obs.max?;
     let m = quantity_index(q.metric, q.anchor);
-    if let (Anchor::Read, Some(d)) = (q.anchor, c.bound.davare) {
+    if let (Anchor::Read, Some(d)) = (q.anchor, c.bound.get(Bound::Davare, Anchor::Read)) {
         st.davare_violations[m] += u64::from(seen > d);
     }
-    let bound = c.bound.sound_from(q.anchor)?;
+    let bound = c.bound.sound(q.anchor)?;
     st.checks += 1;
     st.samples += obs.values.len() as u64;
     let l = spec.chains[q.chain].path.len().clamp(1, 3) - 1;
@@ -520,7 +522,7 @@ fn check_quantity(
             q.chain,
             q.metric.name(),
             q.anchor.name(),
-            c.bound.paper_from(q.anchor)
+            c.bound.paper(q.anchor)
         );
         st.failures
             .push(reproduction(sys, cfg, res, q.chain, obs.witness, &what));
@@ -547,7 +549,7 @@ fn reproduction(
         "sim: horizon {} ns, seed {}, {:?}, {:?}, offsets {:?}",
         cfg.horizon, cfg.seed, cfg.phasing, cfg.exec, res.offsets
     );
-    let ranks = rm_priorities(spec);
+    let ranks = rate_monotonic(spec);
     for (i, t) in spec.tasks.iter().enumerate() {
         let tm = &report.timing[i];
         let _ = writeln!(
@@ -704,7 +706,7 @@ fn tightness_of(seed: u64, restarts: u32, steps: u32, out: &mut Spread) {
     let k = usize::from(spec.scheduler == Scheduler::Edf);
     for c in &report.chains {
         for anchor in Anchor::ALL {
-            let Some(bound) = c.bound.sound_from(anchor) else {
+            let Some(bound) = c.bound.sound(anchor) else {
                 continue;
             };
             let cfg = SearchConfig {

@@ -13,6 +13,7 @@
 //! (steps per search, default 12) size it; run with `--nocapture` for the
 //! table that docs/analysis.md reports.
 
+use rtpipe_analysis::Bound;
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
 use rtpipe_model::gen::{waters_system, WatersConfig};
 use rtpipe_model::{Nanos, Spec};
@@ -61,7 +62,7 @@ fn observe(report: &Report, res: &SimResult, worst: &mut [[Nanos; 4]], seed: u64
             }
             let (Some(seen), Some(bound)) = (
                 res.chains[c.chain].observed(metric, anchor).max,
-                c.bound.sound_from(anchor),
+                c.bound.sound(anchor),
             ) else {
                 continue;
             };
@@ -119,9 +120,9 @@ fn tally(report: &Report, worst: &[[Nanos; 4]], seed: u64, r: &mut Ratios) {
             }
             let b = &c.bound;
             let (Some(s), Some(d), Some(u)) = (
-                b.sound_from(anchor),
-                b.davare_from(anchor),
-                b.duerr_from(anchor),
+                b.sound(anchor),
+                b.get(Bound::Davare, anchor),
+                b.get(Bound::Duerr, anchor),
             ) else {
                 continue;
             };

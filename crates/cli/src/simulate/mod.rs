@@ -454,8 +454,8 @@ mod tests {
     fn samples_above_a_sound_bound_are_counted() {
         let s = spec();
         let report = rtpipe_analysis::analyze(&s);
-        let sound = report.chains[0].bound.sound.unwrap_or(0);
-        let paper = report.chains[0].bound.paper;
+        let sound = report.chains[0].bound.sound(Anchor::Read).unwrap_or(0);
+        let paper = report.chains[0].bound.paper(Anchor::Read);
         let mut res = SimResult {
             offsets: vec![0; s.tasks.len()],
             tasks: vec![Default::default(); s.tasks.len()],
@@ -466,7 +466,7 @@ mod tests {
             horizon: 1,
         };
         res.chains[0].reaction.values = vec![1, paper + 1, sound + 1, sound];
-        let event = report.chains[0].bound.from_event_sound.unwrap_or(0);
+        let event = report.chains[0].bound.sound(Anchor::Event).unwrap_or(0);
         res.chains[0].event_reaction.values = vec![event, event + 1, event + 2];
         let obs = observe(&report, &res);
         assert_eq!(obs[0].metric, Metric::Reaction);

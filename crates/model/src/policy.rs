@@ -1,0 +1,253 @@
+//! Scheduling policies: what a [`Scheduler`] means to everything that
+//! schedules or analyses tasks.
+//!
+//! Each policy is one [`SchedPolicy`] descriptor: who preempts whom, which
+//! budget each kind of VCPU gets, which response-time analysis and
+//! schedulability tests apply, and which Linux class runs it. The analysis,
+//! the simulator, the design and the runtime ask the descriptor instead of
+//! matching on the scheduler, so adding a policy is a variant of
+//! [`Scheduler`] and its descriptor here, plus the mechanisms it names.
+
+use crate::{Nanos, Server, Spec};
+
+/// How CPUs pick among ready pipe terminals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheduler {
+    /// Fixed priority, rate monotonic; equal periods are ordered by declaration.
+    Rm,
+    /// Reservations scheduled EDF (constant-bandwidth servers, as SCHED_DEADLINE).
+    Edf,
+}
+
+impl Scheduler {
+    /// Every scheduler, in the order specs list them.
+    pub const ALL: [Scheduler; 2] = [Scheduler::Rm, Scheduler::Edf];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        self.policy().name
+    }
+
+    /// The policy's descriptor.
+    pub fn policy(self) -> &'static SchedPolicy {
+        match self {
+            Scheduler::Rm => &RM,
+            Scheduler::Edf => &EDF,
+        }
+    }
+}
+
+/// The schedulability test applied per CPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SchedTest {
+    /// Σ U ≤ n(2^{1/n} − 1) (Liu and Layland 1973), the test of Table II.
+    LiuLayland,
+    /// Π (U_i + 1) ≤ 2 (Bini, Buttazzo, Buttazzo 2003).
+    Hyperbolic,
+    /// Exact response-time analysis: every R_i ≤ T_i.
+    Rta,
+    /// EDF: Σ U ≤ 1.
+    Edf,
+}
+
+impl SchedTest {
+    /// Every test, in the order specs list them.
+    pub const ALL: [SchedTest; 4] = [
+        SchedTest::LiuLayland,
+        SchedTest::Hyperbolic,
+        SchedTest::Rta,
+        SchedTest::Edf,
+    ];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            SchedTest::LiuLayland => "liu-layland",
+            SchedTest::Hyperbolic => "hyperbolic",
+            SchedTest::Rta => "rta",
+            SchedTest::Edf => "edf",
+        }
+    }
+}
+
+/// Who preempts whom on a CPU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preemption {
+    /// Fixed ranks ([`SchedPolicy::priorities`]): a ready task of a higher
+    /// rank preempts; an I/O VCPU inherits the rank of the Main VCPU it
+    /// serves while that one has a job pending (PIBS).
+    FixedPriority,
+    /// The earliest absolute deadline (release + period) runs first.
+    EarliestDeadline,
+}
+
+/// The budget a guaranteed VCPU enforces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Budget {
+    /// Sporadic server: C per T, replenished T after it is consumed.
+    Sporadic,
+    /// Priority-inheritance bandwidth-preserving server (the paper's I/O VCPU).
+    Pibs,
+    /// Constant-bandwidth server (SCHED_DEADLINE's reservation).
+    Cbs,
+}
+
+/// Which response-time analysis bounds a task's jobs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResponseAnalysis {
+    /// Exact response-time analysis over the tasks that can run above it
+    /// (Joseph and Pandya 1986; Audsley et al. 1993).
+    Rta,
+    /// The server period: a reservation delivers its budget by the end of
+    /// each period when its CPU is not overloaded, possibly at the very end.
+    ServerPeriod,
+}
+
+/// The Linux scheduling class that runs a policy on real threads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinuxClass {
+    /// SCHED_FIFO with one static priority per rank.
+    Fifo,
+    /// SCHED_DEADLINE with one reservation per task.
+    Deadline,
+}
+
+/// What a scheduling policy means to the analysis, the simulator, the
+/// design and the runtime.
+#[derive(Debug, PartialEq, Eq)]
+pub struct SchedPolicy {
+    /// The name used in specs and output.
+    pub name: &'static str,
+    /// Who preempts whom.
+    pub preemption: Preemption,
+    /// The budget of a Main VCPU.
+    pub main_budget: Budget,
+    /// The budget of an I/O VCPU.
+    pub io_budget: Budget,
+    /// How job response times are bounded.
+    pub response: ResponseAnalysis,
+    /// The schedulability tests that apply; the first is the default.
+    pub tests: &'static [SchedTest],
+    /// What to write instead of a test that does not apply.
+    pub tests_help: &'static str,
+    /// The Linux class that runs it.
+    pub linux: LinuxClass,
+}
+
+const RM: SchedPolicy = SchedPolicy {
+    name: "rm",
+    preemption: Preemption::FixedPriority,
+    main_budget: Budget::Sporadic,
+    io_budget: Budget::Pibs,
+    response: ResponseAnalysis::Rta,
+    tests: &[SchedTest::Rta, SchedTest::LiuLayland, SchedTest::Hyperbolic],
+    tests_help: "with scheduler = \"rm\" use \"liu-layland\", \"hyperbolic\" or \"rta\"",
+    linux: LinuxClass::Fifo,
+};
+
+const EDF: SchedPolicy = SchedPolicy {
+    name: "edf",
+    preemption: Preemption::EarliestDeadline,
+    main_budget: Budget::Cbs,
+    io_budget: Budget::Cbs,
+    response: ResponseAnalysis::ServerPeriod,
+    tests: &[SchedTest::Edf],
+    tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test)",
+    linux: LinuxClass::Deadline,
+};
+
+impl SchedPolicy {
+    /// Tasks run by fixed ranks (so priority arguments apply between them).
+    pub fn fixed_priority(&self) -> bool {
+        self.preemption == Preemption::FixedPriority
+    }
+
+    /// The test a spec gets when it names none.
+    pub fn default_test(&self) -> SchedTest {
+        self.tests[0]
+    }
+
+    /// `test` applies to this policy.
+    pub fn admits(&self, test: SchedTest) -> bool {
+        self.tests.contains(&test)
+    }
+
+    /// The budget a VCPU of this kind enforces; `None` for a plain periodic
+    /// or a background task, which enforce none.
+    pub fn budget(&self, server: Server) -> Option<Budget> {
+        match server {
+            Server::Main => Some(self.main_budget),
+            Server::Io => Some(self.io_budget),
+            Server::None | Server::Background => None,
+        }
+    }
+
+    /// The Main VCPU whose rank an I/O VCPU inherits while it has a job
+    /// pending (PIBS), where the policy has ranks to inherit.
+    pub fn inherits_from(&self, serves: Option<usize>) -> Option<usize> {
+        serves.filter(|_| self.fixed_priority())
+    }
+
+    /// Ranks per CPU, 1 = highest (`None` for background tasks, and for
+    /// every task when the policy has no fixed ranks).
+    pub fn priorities(&self, spec: &Spec) -> Vec<Option<usize>> {
+        match self.preemption {
+            Preemption::FixedPriority => rate_monotonic(spec),
+            Preemption::EarliestDeadline => vec![None; spec.tasks.len()],
+        }
+    }
+}
+
+/// Rate-monotonic ranks per CPU: shorter period first, ties by declaration
+/// order; background tasks get none. A task without a fixed period ranks
+/// last among its CPU's.
+pub fn rate_monotonic(spec: &Spec) -> Vec<Option<usize>> {
+    let mut out = vec![None; spec.tasks.len()];
+    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    for cpu in cpus {
+        let mut ids: Vec<usize> = (0..spec.tasks.len())
+            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+            .collect();
+        ids.sort_by_key(|&i| (spec.tasks[i].fixed_period().unwrap_or(Nanos::MAX), i));
+        for (rank, i) in ids.into_iter().enumerate() {
+            out[i] = Some(rank + 1);
+        }
+    }
+    out
+}
+
+impl Spec {
+    /// The descriptor of the spec's scheduler.
+    pub fn policy(&self) -> &'static SchedPolicy {
+        self.scheduler.policy()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_policy_has_a_default_test_it_admits() {
+        for s in Scheduler::ALL {
+            let p = s.policy();
+            assert_eq!(p.name, s.name());
+            assert!(p.admits(p.default_test()));
+        }
+        assert_eq!(Scheduler::Rm.policy().default_test(), SchedTest::Rta);
+        assert_eq!(Scheduler::Edf.policy().default_test(), SchedTest::Edf);
+    }
+
+    #[test]
+    fn every_test_applies_to_exactly_one_policy() {
+        for t in SchedTest::ALL {
+            let n = Scheduler::ALL
+                .iter()
+                .filter(|s| s.policy().admits(t))
+                .count();
+            assert_eq!(n, 1, "{}", t.name());
+        }
+    }
+}
