@@ -291,6 +291,8 @@ pub fn compose_sound(tail_r: Option<Nanos>, links: &[SoundLink]) -> (Option<Nano
         (Some(e), Some(f)) => Some(e.min(f)),
         (e, _) => e,
     };
+    // Every term is a time: both sums start at the head's release.
+    assert!(react.is_none_or(|e| e >= 0) && fresh.is_none_or(|f| f >= 0));
     (react, fresh)
 }
 
@@ -519,15 +521,15 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
 /// The paper's (reaction, freshness) along the chain: Eq. 1 at the head and
 /// each link's term.
 fn paper(lt: &[LinkTask]) -> (Nanos, Nanos, Vec<Case>) {
-    let (mut pe, mut pf) = (lt[0].l, lt[0].l);
+    let (mut reaction, mut freshness) = (lt[0].l, lt[0].l);
     let mut cases = Vec::new();
     for w in lt.windows(2) {
         let (p, c) = (&w[0], &w[1]);
         cases.push(paper_case(p, c));
-        pe += paper_reaction_link(p, c);
-        pf += paper_freshness_link(p, c);
+        reaction += paper_reaction_link(p, c);
+        freshness += paper_freshness_link(p, c);
     }
-    (pe, pf, cases)
+    (reaction, freshness, cases)
 }
 
 /// The bounds of the chain along `path` (task indices, head first), given the tasks' timing.
@@ -538,29 +540,42 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
         .collect();
     let sched = spec.scheduler;
     let head = &lt[0];
-    let (pe, pf, cases) = paper(&lt);
-    let (se, sf) = compose_sound(lt[lt.len() - 1].r, &sound_links(sched, &lt));
-    let (dv_e, dv_f) = davare(&lt);
-    let (du_e, du_f) = duerr(sched, &lt);
-    let paper_delay = paper_sampling_delay(head);
-    // The literature's bounds from the event: T_1 more than from the read.
-    let at = |a: Anchor, from_read: Option<Nanos>| match a {
-        Anchor::Read => from_read,
-        Anchor::Event => from_event(head, from_read),
-    };
-    let bound = |paper: Nanos, sound, davare, duerr, event| {
+    let (paper_reaction, paper_freshness, cases) = paper(&lt);
+    let (sound_reaction, sound_freshness) =
+        compose_sound(lt[lt.len() - 1].r, &sound_links(sched, &lt));
+    let (davare_reaction, davare_freshness) = davare(&lt);
+    let (duerr_reaction, duerr_freshness) = duerr(sched, &lt);
+    // `from_read` in `Bound::ALL` order; from the event, every bound but
+    // sound reaction starts at the head job's release (`from_event`).
+    let bound = |from_read: [Option<Nanos>; 4], sound_event: Option<Nanos>| {
         ChainBound::from_fn(|m, a| match (m, a) {
-            (Bound::Paper, Anchor::Read) => Some(paper),
-            (Bound::Paper, Anchor::Event) => Some(paper + paper_delay),
-            (Bound::Sound, Anchor::Read) => sound,
-            (Bound::Sound, Anchor::Event) => event,
-            (Bound::Davare, a) => at(a, davare),
-            (Bound::Duerr, a) => at(a, duerr),
+            (_, Anchor::Read) => from_read[m.index()],
+            (Bound::Paper, Anchor::Event) => {
+                from_read[m.index()].map(|b| b + paper_sampling_delay(head))
+            }
+            (Bound::Sound, Anchor::Event) => sound_event,
+            (_, Anchor::Event) => from_event(head, from_read[m.index()]),
         })
     };
     ChainAnalysis {
-        reaction: bound(pe, se, dv_e, du_e, sound_event_reaction(sched, &lt)),
-        freshness: bound(pf, sf, dv_f, du_f, from_event(head, sf)),
+        reaction: bound(
+            [
+                Some(paper_reaction),
+                sound_reaction,
+                davare_reaction,
+                duerr_reaction,
+            ],
+            sound_event_reaction(sched, &lt),
+        ),
+        freshness: bound(
+            [
+                Some(paper_freshness),
+                sound_freshness,
+                davare_freshness,
+                duerr_freshness,
+            ],
+            from_event(head, sound_freshness),
+        ),
         cases,
     }
 }

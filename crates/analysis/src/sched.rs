@@ -126,6 +126,9 @@ pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
             return None;
         }
         if next == r {
+            // The fixed point holds the task's own demand and every
+            // interferer's first release.
+            assert!(r >= own + hp.iter().map(|&(c, _)| c).sum::<Nanos>());
             return Some(r);
         }
         r = next;
