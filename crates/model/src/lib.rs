@@ -11,6 +11,7 @@
 
 mod error;
 pub mod gen;
+pub mod import;
 mod raw;
 pub mod time;
 mod validate;
