@@ -3,7 +3,7 @@
 use crate::table::Table;
 use crate::EXIT_BAD_INPUT;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec, SpecError};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
@@ -19,13 +19,20 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
     };
     let missing = rtpipe_analysis::missing_periods(&spec);
     if !missing.is_empty() {
-        eprintln!(
-            "{}: error: no fixed period for task{} {}",
-            path.display(),
+        let msg = format!(
+            "no fixed period for task{} {}",
             if missing.len() > 1 { "s" } else { "" },
             missing.join(", ")
         );
-        eprintln!("      = help: give each a `period = ...`, or let `rtpipe design` choose them");
+        // A spec's problem without a place in its text, shown as the spec's
+        // own diagnostics are (task names hold no control characters).
+        let e = SpecError {
+            file: path.display().to_string(),
+            source: String::new(),
+            diagnostics: vec![Diagnostic::new(msg, None)
+                .help("give each a `period = ...`, or let `rtpipe design` choose them")],
+        };
+        eprint!("{e}");
         return Err(ExitCode::from(EXIT_BAD_INPUT));
     }
     Ok(spec)

@@ -132,10 +132,7 @@ fn options(a: &Args) -> Options {
 /// Reports why no design could be attempted; the exit status says whose
 /// fault it is (bad input, or the solver and rtpipe itself).
 fn design_error(spec: &Path, e: &DesignError) -> ExitCode {
-    eprintln!("{}: error: {e}", spec.display());
-    if let Some(h) = &e.help {
-        eprintln!("  = help: {h}");
-    }
+    eprint!("{}: {}", spec.display(), e.diagnostic);
     ExitCode::from(match e.kind {
         ErrorKind::Input => EXIT_BAD_INPUT,
         ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,

@@ -10,13 +10,13 @@
 
 use crate::analyze;
 use crate::plot;
-use crate::simulate::{self, Bad, ExecArg};
+use crate::simulate::{self, ExecArg};
 use crate::table::Table;
 use clap::Args;
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::quality::{Criteria, FlightQuality};
-use rtpipe_fly::{fly_with_progress, setup, Flight, FlyError, Request, Setup};
-use rtpipe_model::{Server, Spec};
+use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
+use rtpipe_model::{Diagnostic, Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
 use serde_json::{json, Value as Json};
 use std::path::PathBuf;
@@ -77,12 +77,6 @@ pub struct FlyArgs {
     pub log: Option<PathBuf>,
 }
 
-impl From<FlyError> for Bad {
-    fn from(e: FlyError) -> Bad {
-        Bad::new(e.msg, e.help)
-    }
-}
-
 /// Runs `f` in a thread of its own while a progress bar over the simulated
 /// time (`horizon` ns, read from the atomic `f` publishes to) shows the
 /// fraction done and the time left on stderr (hidden when stderr is not a
@@ -128,14 +122,14 @@ fn with_progress_bar<T: Send>(
 }
 
 /// The flight `a` asks for, checked.
-fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
+fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
             simulate::parse_time(spec, d)
                 .ok()
                 .filter(|&h| h > 0)
                 .ok_or_else(|| {
-                    Bad::new(
+                    Diagnostic::error(
                         format!("invalid value `{d}` for --duration"),
                         "write a positive time like --duration 30s",
                     )
@@ -150,7 +144,7 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
         horizon,
         seed: a.seed,
     };
-    Ok(setup(spec, &r)?)
+    setup(spec, &r)
 }
 
 pub fn run(a: &FlyArgs) -> ExitCode {
@@ -164,7 +158,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     };
     if a.sweep {
         if a.log.is_some() {
-            return simulate::fail(Bad::new(
+            return simulate::fail(Diagnostic::error(
                 "--log describes one flight; --sweep flies many",
                 "drop --log, or drop --sweep (--plot DIR writes sweep.svg)",
             ));
@@ -180,7 +174,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     );
     let started = std::time::Instant::now();
     let flight = match with_progress_bar(msg, s.horizon, |p| {
-        fly_with_progress(&spec, &s, a.exec.model(), Some(p)).map_err(Bad::from)
+        fly_with_progress(&spec, &s, a.exec.model(), Some(p))
     }) {
         Ok(f) => f,
         Err(b) => return simulate::fail(b),
@@ -467,12 +461,12 @@ fn csv(spec: &Spec, f: &Flight) -> String {
 }
 
 /// Creates the `--plot` directory when it is missing.
-pub(crate) fn ensure_dir(dir: &std::path::Path) -> Result<(), Bad> {
+pub(crate) fn ensure_dir(dir: &std::path::Path) -> Result<(), Diagnostic> {
     if dir.is_dir() {
         return Ok(());
     }
     std::fs::create_dir_all(dir).map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("--plot {}: cannot create the directory: {e}", dir.display()),
             "name a directory you can write",
         )
@@ -480,7 +474,7 @@ pub(crate) fn ensure_dir(dir: &std::path::Path) -> Result<(), Bad> {
 }
 
 /// Renders `--plot` and `--log` and writes them all or none.
-fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Bad> {
+fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Diagnostic> {
     let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
     if let Some(dir) = &a.plot {
         ensure_dir(dir)?;
@@ -491,7 +485,7 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
             ("latency.svg", plot::fig9(spec, obs, "observed in flight")),
         ];
         for (name, svg) in svgs {
-            let svg = svg.map_err(|e| Bad::new(format!("cannot draw {name}: {e}"), ""))?;
+            let svg = svg.map_err(|e| Diagnostic::error(format!("cannot draw {name}: {e}"), ""))?;
             files.push(("--plot", dir.join(name), svg));
         }
     }

@@ -5,7 +5,7 @@
 
 use crate::analyze;
 use crate::fly::FlyArgs;
-use crate::simulate::{self, Bad};
+use crate::simulate;
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{
@@ -13,7 +13,7 @@ use rtpipe_fly::sweep::{
     DELAY_LINES,
 };
 use rtpipe_fly::Setup;
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec};
 use serde_json::{json, Value as Json};
 use std::path::Path;
 use std::process::ExitCode;
@@ -38,24 +38,24 @@ pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
     }
 }
 
-fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Bad> {
+fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let Some(path) = &a.criterion else {
         return Ok(s.mission.criteria);
     };
     let text = std::fs::read_to_string(path).map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("--criterion {}: {e}", path.display()),
             "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s",
         )
     })?;
     let c: Criteria = toml::from_str(&text).map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("--criterion {}: {}", path.display(), e.message()),
             "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s (omitted keys keep their defaults)",
         )
     })?;
     c.validate()
-        .map_err(|e| Bad::new(format!("--criterion {}: {e}", path.display()), ""))?;
+        .map_err(|e| Diagnostic::error(format!("--criterion {}: {e}", path.display()), ""))?;
     Ok(c)
 }
 
@@ -212,7 +212,7 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
     let vars = default_variations(spec, s, lo, hi);
     if let Some(out) = &a.write_limits {
         if let Err(b) = crate::output::prepare("--write-limits", out, &a.spec, None) {
-            return simulate::fail(b.into());
+            return simulate::fail(b);
         }
     }
     let points = fly_all(spec, s, a, &c, &vars);
@@ -272,7 +272,7 @@ fn write_files(
     c: &Criteria,
     points: &[Point],
     limits: &[ChainPair],
-) -> Result<(), Bad> {
+) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
     if let Some(out) = &a.write_limits {
         let text = rtpipe_model::to_toml(&with_limits(spec, limits));
@@ -281,7 +281,7 @@ fn write_files(
     if let Some(dir) = &a.plot {
         match chart(spec, s, c, points) {
             Ok(svg) => files.push(("--plot", dir.join("sweep.svg"), svg)),
-            Err(e) => return Err(Bad::new(format!("cannot draw the sweep: {e}"), "")),
+            Err(e) => return Err(Diagnostic::error(format!("cannot draw the sweep: {e}"), "")),
         }
         crate::fly::ensure_dir(dir)?;
     }

@@ -35,6 +35,13 @@ impl Diagnostic {
         }
     }
 
+    /// The same problem, its message prefixed by the place it is in
+    /// (`PLACE: message`), e.g. the file a library's caller read.
+    pub fn within(mut self, place: impl fmt::Display) -> Self {
+        self.message = format!("{place}: {}", self.message);
+        self
+    }
+
     /// Adds what to change.
     pub fn help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());

@@ -17,13 +17,12 @@ use plan::*;
 pub(crate) use report::*;
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_model::time::number_to_nanos;
-use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
+use rtpipe_model::{parse_time_str, Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_sim::{simulate_with_progress, ExecModel, Phasing, SimConfig, SimError, SimResult};
 use serde_json::{json, Value};
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -141,39 +140,9 @@ fn parse_outputs(s: &str) -> Result<u64, String> {
     }
 }
 
-/// A bad flag or value: what is wrong and how to fix it (exit status 2).
-#[derive(Debug)]
-pub struct Bad {
-    msg: String,
-    help: String,
-}
-
-impl Bad {
-    pub(crate) fn new(msg: impl Into<String>, help: impl Into<String>) -> Bad {
-        Bad {
-            msg: msg.into(),
-            help: help.into(),
-        }
-    }
-}
-
-impl From<output::OutputError> for Bad {
-    fn from(e: output::OutputError) -> Bad {
-        Bad::new(e.msg, e.help)
-    }
-}
-
-impl fmt::Display for Bad {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "error: {}", self.msg)?;
-        if !self.help.is_empty() {
-            writeln!(f, "  = help: {}", self.help)?;
-        }
-        Ok(())
-    }
-}
-
-pub(crate) fn fail(b: Bad) -> ExitCode {
+/// Prints a bad flag or value (what is wrong and how to fix it) and gives
+/// exit status 2.
+pub(crate) fn fail(b: Diagnostic) -> ExitCode {
     eprint!("{b}");
     ExitCode::from(EXIT_BAD_INPUT)
 }
@@ -263,7 +232,7 @@ fn simulate_and_search(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
-) -> Result<(SimResult, Vec<SearchResult>, f64), Bad> {
+) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
     let started = Instant::now();
     let msg = format!(
         "simulating {} for {} {}{}",
@@ -276,7 +245,7 @@ fn simulate_and_search(
         run_simulation(spec, a, p, progress)
     })
     .map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("{}: cannot simulate: {e}", a.spec.display()),
             "give every task a fixed positive period",
         )
@@ -286,7 +255,7 @@ fn simulate_and_search(
             run_searches(spec, a, p)
         })
         .map_err(|e| {
-            Bad::new(
+            Diagnostic::error(
                 format!("{}: cannot search: {e}", a.spec.display()),
                 "give every task a fixed positive period",
             )
