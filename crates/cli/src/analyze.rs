@@ -1,59 +1,16 @@
 //! `rtpipe analyze`.
 
+use crate::command;
+use crate::report::num;
 use crate::table::Table;
-use crate::EXIT_BAD_INPUT;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
-use rtpipe_model::{Diagnostic, Nanos, Spec, SpecError};
+use rtpipe_model::{Nanos, Spec};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Loads a spec and checks it can be analysed, printing errors to stderr.
-pub fn load(path: &Path) -> Result<Spec, ExitCode> {
-    let spec = match Spec::load(path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprint!("{e}");
-            return Err(ExitCode::from(EXIT_BAD_INPUT));
-        }
-    };
-    let missing = rtpipe_analysis::missing_periods(&spec);
-    if !missing.is_empty() {
-        let msg = format!(
-            "no fixed period for task{} {}",
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        );
-        // A spec's problem without a place in its text, shown as the spec's
-        // own diagnostics are (task names hold no control characters).
-        let e = SpecError {
-            file: path.display().to_string(),
-            source: String::new(),
-            diagnostics: vec![Diagnostic::new(msg, None)
-                .help("give each a `period = ...`, or let `rtpipe design` choose them")],
-        };
-        eprint!("{e}");
-        return Err(ExitCode::from(EXIT_BAD_INPUT));
-    }
-    Ok(spec)
-}
-
-/// Prints a JSON value on stdout; an encoding failure is an error exit.
-pub fn print_json(v: &Value) -> Result<(), ExitCode> {
-    match serde_json::to_string_pretty(v) {
-        Ok(s) => {
-            println!("{s}");
-            Ok(())
-        }
-        Err(e) => {
-            eprintln!("error: cannot encode JSON: {e}");
-            Err(ExitCode::from(EXIT_BAD_INPUT))
-        }
-    }
-}
-
 pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode {
-    let spec = match load(path) {
+    let spec = match command::load(path) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -64,7 +21,7 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode
         if let Some(p) = &paths {
             v["all_paths"] = paths_json(&spec, p);
         }
-        if let Err(code) = print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -77,13 +34,6 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
-    }
-}
-
-fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
-    match ns {
-        Some(n) => json!(spec.in_unit(n)),
-        None => Value::Null,
     }
 }
 

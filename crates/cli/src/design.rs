@@ -1,6 +1,7 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
 use crate::analyze::{report_json, report_text};
+use crate::command;
 use crate::output;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
 use rtpipe_design::lp::SolverKind;
@@ -177,7 +178,7 @@ fn print_design(
             // Not counted: the worker may still be inside a solve.
             v["design"]["iterations"] = Value::Null;
         }
-        crate::analyze::print_json(&v)?;
+        command::print_json(&v)?;
     } else {
         print!("{}", design_text(spec, out, mode, stopped));
     }

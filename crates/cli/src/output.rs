@@ -255,6 +255,37 @@ pub fn write_all(files: &[(&Output, &str)]) -> Result<(), Diagnostic> {
     Ok(())
 }
 
+/// Checks the output paths again (they may have changed during the run) and
+/// writes them all or none (see [`write_all`]).
+pub fn write_files(
+    spec: &Path,
+    files: &[(&'static str, PathBuf, String)],
+) -> Result<(), Diagnostic> {
+    let mut outs = Vec::new();
+    for (flag, path, _) in files {
+        outs.push(prepare(flag, path, spec, None)?);
+    }
+    let pairs: Vec<(&Output, &str)> = outs
+        .iter()
+        .zip(files)
+        .map(|(o, (_, _, text))| (o, text.as_str()))
+        .collect();
+    write_all(&pairs)
+}
+
+/// Creates the `--plot` directory when it is missing.
+pub fn ensure_dir(dir: &Path) -> Result<(), Diagnostic> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Diagnostic::error(
+            format!("--plot {}: cannot create the directory: {e}", dir.display()),
+            "name a directory you can write",
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

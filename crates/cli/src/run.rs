@@ -1,10 +1,11 @@
 //! `rtpipe run`: the spec on real threads (rtpipe-runtime), measured like
 //! `simulate` and held against the same bounds.
 
-use crate::analyze;
+use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
-use crate::simulate::{chain_table, fail, num, observations_json, parse_time, write_all};
+use crate::report::{self, num};
+use crate::simulate::{chain_table, observations_json};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
@@ -133,7 +134,7 @@ fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Resu
     let r = rtpipe_runtime::rt_app(spec, cfg);
     let text = serde_json::to_string_pretty(&r.json)
         .map_err(|e| Diagnostic::error(format!("cannot render --export-rt-app: {e}"), ""))?;
-    write_all(
+    output::write_files(
         &a.spec,
         &[("--export-rt-app", path.to_path_buf(), text + "\n")],
     )?;
@@ -207,7 +208,7 @@ fn write_outputs(
         notes.push(format!("wrote {}", path.display()));
         files.push(("--plot", path.clone(), svg));
     }
-    write_all(&a.spec, &files)?;
+    output::write_files(&a.spec, &files)?;
     for n in notes {
         eprintln!("{n}");
     }
@@ -215,7 +216,7 @@ fn write_outputs(
 }
 
 pub fn run(a: &RunArgs) -> ExitCode {
-    let spec = match analyze::load(&a.spec) {
+    let spec = match command::load(&a.spec) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -244,7 +245,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
         if let Some((f, s)) = flight {
             v["flight"] = flight_json(f, s);
         }
-        if let Err(code) = analyze::print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -260,7 +261,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
             );
             print!(
                 "{}",
-                crate::fly::quality_text(&f.quality, &s.mission.criteria, &failures)
+                report::flight::quality_text(&f.quality, &s.mission.criteria, &failures)
             );
         }
     }

@@ -107,21 +107,3 @@ pub(super) fn render_outputs(
     }
     Ok(out)
 }
-
-/// Checks the output paths again (they may have changed during the run) and
-/// writes them all or none (see [`output::write_all`]).
-pub(crate) fn write_all(
-    spec: &Path,
-    files: &[(&'static str, PathBuf, String)],
-) -> Result<(), Diagnostic> {
-    let mut outs = Vec::new();
-    for (flag, path, _) in files {
-        outs.push(output::prepare(flag, path, spec, None)?);
-    }
-    let pairs: Vec<(&output::Output, &str)> = outs
-        .iter()
-        .zip(files)
-        .map(|(o, (_, _, text))| (o, text.as_str()))
-        .collect();
-    output::write_all(&pairs)
-}
