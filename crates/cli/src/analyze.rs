@@ -1,7 +1,8 @@
 //! `rtpipe analyze`.
 
+use crate::command;
+use crate::report::num;
 use crate::table::Table;
-use crate::EXIT_BAD_INPUT;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
@@ -9,45 +10,8 @@ use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Loads a spec and checks it can be analysed, printing errors to stderr.
-pub fn load(path: &Path) -> Result<Spec, ExitCode> {
-    let spec = match Spec::load(path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprint!("{e}");
-            return Err(ExitCode::from(EXIT_BAD_INPUT));
-        }
-    };
-    let missing = rtpipe_analysis::missing_periods(&spec);
-    if !missing.is_empty() {
-        eprintln!(
-            "{}: error: no fixed period for task{} {}",
-            path.display(),
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        );
-        eprintln!("      = help: give each a `period = ...`, or let `rtpipe design` choose them");
-        return Err(ExitCode::from(EXIT_BAD_INPUT));
-    }
-    Ok(spec)
-}
-
-/// Prints a JSON value on stdout; an encoding failure is an error exit.
-pub fn print_json(v: &Value) -> Result<(), ExitCode> {
-    match serde_json::to_string_pretty(v) {
-        Ok(s) => {
-            println!("{s}");
-            Ok(())
-        }
-        Err(e) => {
-            eprintln!("error: cannot encode JSON: {e}");
-            Err(ExitCode::from(EXIT_BAD_INPUT))
-        }
-    }
-}
-
 pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode {
-    let spec = match load(path) {
+    let spec = match command::load(path) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -58,7 +22,7 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode
         if let Some(p) = &paths {
             v["all_paths"] = paths_json(&spec, p);
         }
-        if let Err(code) = print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -71,13 +35,6 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
-    }
-}
-
-fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
-    match ns {
-        Some(n) => json!(spec.in_unit(n)),
-        None => Value::Null,
     }
 }
 

@@ -1,6 +1,7 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
 use crate::analyze::{report_json, report_text};
+use crate::command;
 use crate::output;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
 use rtpipe_design::lp::SolverKind;
@@ -132,10 +133,7 @@ fn options(a: &Args) -> Options {
 /// Reports why no design could be attempted; the exit status says whose
 /// fault it is (bad input, or the solver and rtpipe itself).
 fn design_error(spec: &Path, e: &DesignError) -> ExitCode {
-    eprintln!("{}: error: {e}", spec.display());
-    if let Some(h) = &e.help {
-        eprintln!("  = help: {h}");
-    }
+    eprint!("{}: {}", spec.display(), e.diagnostic);
     ExitCode::from(match e.kind {
         ErrorKind::Input => EXIT_BAD_INPUT,
         ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
@@ -180,7 +178,7 @@ fn print_design(
             // Not counted: the worker may still be inside a solve.
             v["design"]["iterations"] = Value::Null;
         }
-        crate::analyze::print_json(&v)?;
+        command::print_json(&v)?;
     } else {
         print!("{}", design_text(spec, out, mode, stopped));
     }

@@ -8,80 +8,25 @@
 //! the mission and, as in the paper's Fig. 12, the observed reaction and
 //! freshness of every chain against the bounds.
 
-use crate::analyze;
+mod args;
+mod sweep;
+
+pub use args::FlyArgs;
+
+use crate::command;
+use crate::output;
 use crate::plot;
-use crate::simulate::{self, Bad, ExecArg};
-use crate::table::Table;
-use clap::Args;
+use crate::report::flight::quality_text;
+use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
-use rtpipe_flight::quality::{Criteria, FlightQuality};
-use rtpipe_fly::{fly_with_progress, setup, Flight, FlyError, Request, Setup};
-use rtpipe_model::{Server, Spec};
+use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
+use rtpipe_model::{Diagnostic, Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
 use serde_json::{json, Value as Json};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-
-#[derive(Args, Debug)]
-pub struct FlyArgs {
-    /// The system spec (TOML) whose tasks name their `body`, e.g.
-    /// examples/cleanflight.toml.
-    pub spec: PathBuf,
-    /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
-    #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
-    pub vehicle: String,
-    /// The mission: a built-in one (steps, hover, paper) or a mission file
-    /// (crates/flight/missions/*.toml show the format, `[criteria]` included).
-    #[arg(long, value_name = "FILE|steps|hover|paper", default_value = "steps")]
-    pub mission: String,
-    /// Flight time: "30s", "2500ms", or a number in the spec's time unit
-    /// [default: 5 s after the mission's last step].
-    #[arg(long, value_name = "D", allow_hyphen_values = true)]
-    pub duration: Option<String>,
-    /// Seeds the sensor noise and the execution times (the same seed gives
-    /// the same flight, bit for bit).
-    #[arg(long, value_name = "S", default_value_t = 0)]
-    pub seed: u64,
-    /// How each job's demand is drawn (see `simulate --exec`).
-    #[arg(long, value_enum, default_value_t = ExecArg::Uniform)]
-    pub exec: ExecArg,
-    /// Print one JSON object: "flight" and the chains as `simulate --json`.
-    #[arg(long)]
-    pub json: bool,
-    /// Write SVG plots into this directory (created if missing):
-    /// attitude.svg, altitude.svg, motors.svg, latency.svg; with --sweep,
-    /// sweep.svg.
-    #[arg(long, value_name = "DIR")]
-    pub plot: Option<PathBuf>,
-    /// Sweep instead of one flight: fly the mission over period scales
-    /// (budgets fixed) and over pure delays on each chain's head, and derive
-    /// the chain limits under which the vehicle still meets its criterion.
-    #[arg(long)]
-    pub sweep: bool,
-    /// With --sweep: the period scales, LO..HI (steps of 2^(1/3)).
-    #[arg(long, value_name = "LO..HI", value_parser = crate::sweep::parse_scale, requires = "sweep")]
-    pub scale: Option<(f64, f64)>,
-    /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
-    /// altitude_rms_m, overshoot, settling_s [default: the mission's].
-    #[arg(long, value_name = "FILE", requires = "sweep")]
-    pub criterion: Option<PathBuf>,
-    /// With --sweep: write the spec with the derived chain limits here.
-    #[arg(long, value_name = "OUT.toml", requires = "sweep")]
-    pub write_limits: Option<PathBuf>,
-    /// Write the flight as CSV (one row every 2 ms; the header names every
-    /// column and its unit, ending with each chain's latest observed
-    /// reaction and freshness in ms; readable by PlotJuggler).
-    #[arg(long, value_name = "FILE.csv")]
-    pub log: Option<PathBuf>,
-}
-
-impl From<FlyError> for Bad {
-    fn from(e: FlyError) -> Bad {
-        Bad::new(e.msg, e.help)
-    }
-}
 
 /// Runs `f` in a thread of its own while a progress bar over the simulated
 /// time (`horizon` ns, read from the atomic `f` publishes to) shows the
@@ -128,14 +73,14 @@ fn with_progress_bar<T: Send>(
 }
 
 /// The flight `a` asks for, checked.
-fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
+fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
-            simulate::parse_time(spec, d)
+            command::parse_time(spec, d)
                 .ok()
                 .filter(|&h| h > 0)
                 .ok_or_else(|| {
-                    Bad::new(
+                    Diagnostic::error(
                         format!("invalid value `{d}` for --duration"),
                         "write a positive time like --duration 30s",
                     )
@@ -150,26 +95,26 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Bad> {
         horizon,
         seed: a.seed,
     };
-    Ok(setup(spec, &r)?)
+    setup(spec, &r)
 }
 
 pub fn run(a: &FlyArgs) -> ExitCode {
-    let spec = match analyze::load(&a.spec) {
+    let spec = match command::load(&a.spec) {
         Ok(s) => s,
         Err(code) => return code,
     };
     let s = match setup_of(&spec, a) {
         Ok(s) => s,
-        Err(b) => return simulate::fail(b),
+        Err(b) => return command::fail(b),
     };
     if a.sweep {
         if a.log.is_some() {
-            return simulate::fail(Bad::new(
+            return command::fail(Diagnostic::error(
                 "--log describes one flight; --sweep flies many",
                 "drop --log, or drop --sweep (--plot DIR writes sweep.svg)",
             ));
         }
-        return crate::sweep::run(&spec, &s, a);
+        return sweep::run(&spec, &s, a);
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",
@@ -180,23 +125,23 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     );
     let started = std::time::Instant::now();
     let flight = match with_progress_bar(msg, s.horizon, |p| {
-        fly_with_progress(&spec, &s, a.exec.model(), Some(p)).map_err(Bad::from)
+        fly_with_progress(&spec, &s, a.exec.model(), Some(p))
     }) {
         Ok(f) => f,
-        Err(b) => return simulate::fail(b),
+        Err(b) => return command::fail(b),
     };
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(&spec);
     let obs = observe(&report, &flight.sim);
     if let Err(b) = write_outputs(&spec, a, &flight, &obs) {
-        return simulate::fail(b);
+        return command::fail(b);
     }
     let failures = flight.quality.failures(&s.mission.criteria);
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
     if a.json {
         let v = to_json(&spec, &report, &s, &flight, &obs, &failures, seconds);
-        if let Err(code) = analyze::print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -211,67 +156,6 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     } else {
         ExitCode::from(1)
     }
-}
-
-fn f3(x: f64) -> String {
-    format!("{x:.3}")
-}
-
-pub(crate) fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
-    let mut out = format!(
-        "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
-        if q.crashed { "CRASHED" } else { "no crash" },
-        q.airborne_s,
-        q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
-    );
-    if q.hovers {
-        out.push_str(&format!(
-            "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
-            q.attitude_error_deg.rms,
-            q.attitude_error_deg.max,
-            q.altitude_error_m.rms,
-            q.altitude_error_m.max,
-            q.drift_m,
-            q.saturation_s
-        ));
-    } else {
-        out.push_str("  hover: none to judge (the mission holds no altitude)\n");
-    }
-    if !q.steps.is_empty() {
-        let mut t = Table::new(&[
-            "step",
-            "at s",
-            "to°",
-            "rise s",
-            "overshoot %",
-            "settling s",
-            "true rise s",
-            "true overshoot %",
-            "true drift° at release",
-        ])
-        .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
-        for st in &q.steps {
-            let (e, r) = (&st.tracked, &st.truth);
-            t.row(vec![
-                st.axis.name().to_string(),
-                format!("{:.1}", st.at_s),
-                format!("{:.0}", st.to_deg),
-                f3(e.rise_s),
-                format!("{:.1}", 100.0 * e.overshoot),
-                f3(e.settling_s),
-                f3(r.rise_s),
-                format!("{:.1}", 100.0 * r.overshoot),
-                format!("{:+.2}", st.drift_deg),
-            ]);
-        }
-        out.push_str("  steps (tracked: the AHRS estimate the controller closes its loop on; true: the plant):\n");
-        out.push_str(&t.render());
-    }
-    out.push_str(&match failures {
-        [] => format!("  criteria ({}): met\n", c.describe()),
-        f => format!("  criteria NOT met: {}\n", f.join("; ")),
-    });
-    out
 }
 
 fn to_text(
@@ -466,24 +350,11 @@ fn csv(spec: &Spec, f: &Flight) -> String {
     out
 }
 
-/// Creates the `--plot` directory when it is missing.
-pub(crate) fn ensure_dir(dir: &std::path::Path) -> Result<(), Bad> {
-    if dir.is_dir() {
-        return Ok(());
-    }
-    std::fs::create_dir_all(dir).map_err(|e| {
-        Bad::new(
-            format!("--plot {}: cannot create the directory: {e}", dir.display()),
-            "name a directory you can write",
-        )
-    })
-}
-
 /// Renders `--plot` and `--log` and writes them all or none.
-fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Bad> {
+fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Diagnostic> {
     let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
     if let Some(dir) = &a.plot {
-        ensure_dir(dir)?;
+        output::ensure_dir(dir)?;
         let svgs = [
             ("attitude.svg", plot::flight_attitude(&f.trace)),
             ("altitude.svg", plot::flight_altitude(&f.trace)),
@@ -491,12 +362,12 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
             ("latency.svg", plot::fig9(spec, obs, "observed in flight")),
         ];
         for (name, svg) in svgs {
-            let svg = svg.map_err(|e| Bad::new(format!("cannot draw {name}: {e}"), ""))?;
+            let svg = svg.map_err(|e| Diagnostic::error(format!("cannot draw {name}: {e}"), ""))?;
             files.push(("--plot", dir.join(name), svg));
         }
     }
     if let Some(path) = &a.log {
         files.push(("--log", path.clone(), csv(spec, f)));
     }
-    simulate::write_all(&a.spec, &files)
+    output::write_files(&a.spec, &files)
 }

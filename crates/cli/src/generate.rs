@@ -7,7 +7,7 @@
 use crate::output;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_model::gen::{waters_system, WatersConfig};
-use rtpipe_model::Spec;
+use rtpipe_model::{Diagnostic, Spec};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -98,10 +98,15 @@ fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
 /// message (the shared writer's examples name other flags' files).
 fn check_output(path: &Path) -> Result<output::Output, ExitCode> {
     if path.is_dir() {
-        eprintln!("error: OUTFILE {} is a directory", path.display());
-        eprintln!(
-            "  = help: give a file name, e.g. {}",
-            path.join("waters.toml").display()
+        eprint!(
+            "{}",
+            Diagnostic::error(
+                format!("OUTFILE {} is a directory", path.display()),
+                format!(
+                    "give a file name, e.g. {}",
+                    path.join("waters.toml").display()
+                ),
+            )
         );
         return Err(ExitCode::from(EXIT_BAD_INPUT));
     }

@@ -1,15 +1,16 @@
 //! `rtpipe`: analyse pipe systems (Cheng, West, Einstein, EMSOFT 2018).
 
 mod analyze;
+mod command;
 mod design;
 mod fly;
 mod generate;
 mod import;
 mod output;
 mod plot;
+mod report;
 mod run;
 mod simulate;
-mod sweep;
 mod table;
 
 use clap::builder::TypedValueParser;

@@ -14,33 +14,15 @@
 //! Paths are checked by [`prepare`] before the command does its work, so a
 //! bad path is reported at once, not after a long solve.
 
-use std::fmt;
+use rtpipe_model::Diagnostic;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// An output path that cannot be written, or a failed write.
-#[derive(Debug)]
-pub struct OutputError {
-    pub msg: String,
-    pub help: String,
-}
-
-impl fmt::Display for OutputError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "error: {}", self.msg)?;
-        if !self.help.is_empty() {
-            writeln!(f, "  = help: {}", self.help)?;
-        }
-        Ok(())
-    }
-}
-
-fn err(msg: String, help: impl Into<String>) -> OutputError {
-    OutputError {
-        msg,
-        help: help.into(),
-    }
+/// An output path that cannot be written, or a failed write: the flag and
+/// path, and how to fix it.
+fn err(msg: String, help: impl Into<String>) -> Diagnostic {
+    Diagnostic::error(msg, help)
 }
 
 /// A checked output: the flag that named it, the path as given and the real
@@ -62,7 +44,7 @@ pub fn parent_dir(p: &Path) -> &Path {
 
 /// Follows symlinks (at most 40) to the path that will really be written;
 /// its directory is canonicalised. The file itself need not exist.
-fn resolve(flag: &str, p: &Path) -> Result<PathBuf, OutputError> {
+fn resolve(flag: &str, p: &Path) -> Result<PathBuf, Diagnostic> {
     let mut cur = p.to_path_buf();
     let mut hops = 0;
     while let Ok(m) = fs::symlink_metadata(&cur) {
@@ -142,7 +124,7 @@ pub fn prepare(
     path: &Path,
     input: &Path,
     overwrite_input: Option<(bool, &str)>,
-) -> Result<Output, OutputError> {
+) -> Result<Output, Diagnostic> {
     if path.as_os_str().is_empty() {
         return Err(err(
             format!("{flag} needs a file name, found `{}`", path.display()),
@@ -201,7 +183,7 @@ pub fn prepare(
 }
 
 /// Refuses two outputs that write the same file.
-pub fn distinct(outs: &[Output]) -> Result<(), OutputError> {
+pub fn distinct(outs: &[Output]) -> Result<(), Diagnostic> {
     for (k, o) in outs.iter().enumerate() {
         if let Some(other) = outs[..k].iter().find(|q| q.target == o.target) {
             return Err(err(
@@ -222,7 +204,7 @@ pub fn distinct(outs: &[Output]) -> Result<(), OutputError> {
 /// renames them all over their targets. A failed write removes every
 /// temporary and changes no target; a failed rename (rare: same directory)
 /// keeps the targets renamed before it and removes the other temporaries.
-pub fn write_all(files: &[(&Output, &str)]) -> Result<(), OutputError> {
+pub fn write_all(files: &[(&Output, &str)]) -> Result<(), Diagnostic> {
     let mut temps: Vec<PathBuf> = Vec::new();
     let cleanup = |temps: &[PathBuf]| {
         for t in temps {
@@ -273,6 +255,37 @@ pub fn write_all(files: &[(&Output, &str)]) -> Result<(), OutputError> {
     Ok(())
 }
 
+/// Checks the output paths again (they may have changed during the run) and
+/// writes them all or none (see [`write_all`]).
+pub fn write_files(
+    spec: &Path,
+    files: &[(&'static str, PathBuf, String)],
+) -> Result<(), Diagnostic> {
+    let mut outs = Vec::new();
+    for (flag, path, _) in files {
+        outs.push(prepare(flag, path, spec, None)?);
+    }
+    let pairs: Vec<(&Output, &str)> = outs
+        .iter()
+        .zip(files)
+        .map(|(o, (_, _, text))| (o, text.as_str()))
+        .collect();
+    write_all(&pairs)
+}
+
+/// Creates the `--plot` directory when it is missing.
+pub fn ensure_dir(dir: &Path) -> Result<(), Diagnostic> {
+    if dir.is_dir() {
+        return Ok(());
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Diagnostic::error(
+            format!("--plot {}: cannot create the directory: {e}", dir.display()),
+            "name a directory you can write",
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -313,17 +326,17 @@ mod tests {
         let input = d.join("spec.toml");
         let _ = fs::write(&input, "x");
         let e = prepare("--write", &d, &input, Some((false, "--overwrite-spec")));
-        assert!(e.is_err_and(|e| e.msg.contains("is a directory")));
+        assert!(e.is_err_and(|e| e.message.contains("is a directory")));
         #[cfg(unix)]
         {
             let e = prepare("--write", Path::new("/dev/null"), &input, None);
-            assert!(e.is_err_and(|e| e.msg.contains("not a regular file")));
+            assert!(e.is_err_and(|e| e.message.contains("not a regular file")));
         }
         let e = prepare("--write", &input, &input, Some((false, "--overwrite-spec")));
-        assert!(e.is_err_and(|e| e.help.contains("--overwrite-spec")));
+        assert!(e.is_err_and(|e| e.help.is_some_and(|h| h.contains("--overwrite-spec"))));
         assert!(prepare("--write", &input, &input, Some((true, "--overwrite-spec"))).is_ok());
         let e = prepare("--write", &d.join("no/such/dir/x.toml"), &input, None);
-        assert!(e.is_err_and(|e| e.msg.contains("does not exist")));
+        assert!(e.is_err_and(|e| e.message.contains("does not exist")));
         let _ = fs::remove_dir_all(&d);
     }
 }

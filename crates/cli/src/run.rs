@@ -1,17 +1,18 @@
 //! `rtpipe run`: the spec on real threads (rtpipe-runtime), measured like
 //! `simulate` and held against the same bounds.
 
-use crate::analyze;
+use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
-use crate::simulate::{chain_table, fail, num, observations_json, parse_time, write_all, Bad};
+use crate::report::{self, num};
+use crate::simulate::{chain_table, observations_json};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_body::Body;
 use rtpipe_fly::{Flight, Setup};
 use rtpipe_model::policy::LinuxClass;
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
 use rtpipe_sim::observe::{observe, ChainObs, Summary};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
@@ -81,7 +82,7 @@ pub enum PolicyArg {
     Other,
 }
 
-fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
+fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Diagnostic> {
     let p = match (a.policy, spec.policy().linux) {
         (Some(PolicyArg::Fifo), _) => Policy::Fifo,
         (Some(PolicyArg::Deadline), _) => Policy::Deadline,
@@ -90,13 +91,13 @@ fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
         (None, LinuxClass::Deadline) => Policy::Deadline,
     };
     if p == Policy::Other && !a.best_effort {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             "--policy other runs without real-time guarantees",
             "add --best-effort to accept that (every figure is then marked not real-time)",
         ));
     }
     if p != Policy::Other && a.best_effort {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             "--best-effort only applies to --policy other",
             "drop --best-effort, or add --policy other",
         ));
@@ -106,15 +107,15 @@ fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Bad> {
 
 /// Checks the configuration and the output paths before anything runs, so
 /// that a bad path is reported before a long run, not after.
-fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Bad> {
+fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Diagnostic> {
     if a.load > MAX_LOAD {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             format!("--load {} is more than {MAX_LOAD} hogs", a.load),
             "one or two hogs per CPU load a machine fully, e.g. --load 2",
         ));
     }
     if let Err(e) = rtpipe_runtime::check(spec, cfg) {
-        return Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help));
+        return Err(e.diagnostic.within(a.spec.display()));
     }
     let mut outs = Vec::new();
     for (flag, p) in [
@@ -123,18 +124,18 @@ fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Bad> {
         ("--export-rt-app", &a.export_rt_app),
     ] {
         let Some(p) = p else { continue };
-        outs.push(output::prepare(flag, p, &a.spec, None).map_err(Bad::from)?);
+        outs.push(output::prepare(flag, p, &a.spec, None)?);
     }
-    output::distinct(&outs).map_err(Bad::from)
+    output::distinct(&outs)
 }
 
 /// Writes the rt-app workload (before the run: it needs no privilege, and a
 /// run refused for lack of one still leaves the file).
-fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Result<(), Bad> {
+fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Result<(), Diagnostic> {
     let r = rtpipe_runtime::rt_app(spec, cfg);
     let text = serde_json::to_string_pretty(&r.json)
-        .map_err(|e| Bad::new(format!("cannot render --export-rt-app: {e}"), ""))?;
-    write_all(
+        .map_err(|e| Diagnostic::error(format!("cannot render --export-rt-app: {e}"), ""))?;
+    output::write_files(
         &a.spec,
         &[("--export-rt-app", path.to_path_buf(), text + "\n")],
     )?;
@@ -152,7 +153,12 @@ fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Resu
 }
 
 /// Renders --trace and --plot from the run and writes them (all or none).
-fn write_outputs(spec: &Spec, a: &RunArgs, res: &RunResult, obs: &[ChainObs]) -> Result<(), Bad> {
+fn write_outputs(
+    spec: &Spec,
+    a: &RunArgs,
+    res: &RunResult,
+    obs: &[ChainObs],
+) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
     let mut notes = Vec::new();
     if let Some(path) = &a.trace {
@@ -197,12 +203,13 @@ fn write_outputs(spec: &Spec, a: &RunArgs, res: &RunResult, obs: &[ChainObs]) ->
                 ""
             }
         );
-        let svg = plot::fig9(spec, obs, &subtitle)
-            .map_err(|e| Bad::new(format!("cannot draw --plot {}: {e}", path.display()), ""))?;
+        let svg = plot::fig9(spec, obs, &subtitle).map_err(|e| {
+            Diagnostic::error(format!("cannot draw --plot {}: {e}", path.display()), "")
+        })?;
         notes.push(format!("wrote {}", path.display()));
         files.push(("--plot", path.clone(), svg));
     }
-    write_all(&a.spec, &files)?;
+    output::write_files(&a.spec, &files)?;
     for n in notes {
         eprintln!("{n}");
     }
@@ -210,7 +217,7 @@ fn write_outputs(spec: &Spec, a: &RunArgs, res: &RunResult, obs: &[ChainObs]) ->
 }
 
 pub fn run(a: &RunArgs) -> ExitCode {
-    let spec = match analyze::load(&a.spec) {
+    let spec = match command::load(&a.spec) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -239,7 +246,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
         if let Some((f, s)) = flight {
             v["flight"] = flight_json(f, s);
         }
-        if let Err(code) = analyze::print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -255,7 +262,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
             );
             print!(
                 "{}",
-                crate::fly::quality_text(&f.quality, &s.mission.criteria, &failures)
+                report::flight::quality_text(&f.quality, &s.mission.criteria, &failures)
             );
         }
     }
@@ -269,7 +276,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
 /// spec's tasks name flight bodies (and --synthetic does not say
 /// otherwise), the duration, the policy, the output paths; writes the
 /// rt-app workload if asked, since it needs no run.
-fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Bad> {
+fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagnostic> {
     let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
     let setup = if flight {
         let r = rtpipe_fly::Request {
@@ -281,7 +288,7 @@ fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Bad> 
         };
         match rtpipe_fly::setup(spec, &r) {
             Ok(s) => Some(s),
-            Err(e) => return Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+            Err(e) => return Err(e.within(a.spec.display())),
         }
     } else {
         None
@@ -301,17 +308,17 @@ fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Bad> 
 }
 
 /// `--duration`, by default a flight's mission (plus its margin) or 2 s.
-fn duration_of(spec: &Spec, a: &RunArgs, setup: Option<&Setup>) -> Result<Nanos, Bad> {
+fn duration_of(spec: &Spec, a: &RunArgs, setup: Option<&Setup>) -> Result<Nanos, Diagnostic> {
     match (&a.duration, setup) {
         (None, Some(s)) => Ok(s.horizon),
         (None, None) => Ok(2_000_000_000),
         (Some(d), _) => match parse_time(spec, d) {
             Ok(d) if d > 0 => Ok(d),
-            Ok(_) => Err(Bad::new(
+            Ok(_) => Err(Diagnostic::error(
                 format!("--duration {d} is not positive"),
                 "e.g. --duration 2s",
             )),
-            Err(e) => Err(Bad::new(
+            Err(e) => Err(Diagnostic::error(
                 format!("--duration {d}: {e}"),
                 "e.g. --duration 2s",
             )),
@@ -346,11 +353,11 @@ fn execute(
     cfg: &RunConfig,
     setup: Option<&Setup>,
     spin: Spin,
-) -> Result<(RunResult, Option<Flight>), Bad> {
+) -> Result<(RunResult, Option<Flight>), Diagnostic> {
     if let Some(s) = setup {
         return match rtpipe_fly::fly_real(spec, s, cfg) {
             Ok((f, r)) => Ok((r, Some(f))),
-            Err(e) => Err(Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help)),
+            Err(e) => Err(e.within(a.spec.display())),
         };
     }
     let bodies: Vec<Box<dyn Body<u64>>> = spec
@@ -361,7 +368,7 @@ fn execute(
     match rtpipe_runtime::run(spec, cfg, bodies, None) {
         Ok(r) => Ok((r, None)),
         Err(e) => {
-            let b = Bad::new(format!("{}: {}", a.spec.display(), e.msg), e.help);
+            let b = e.diagnostic.within(a.spec.display());
             match e.kind {
                 ErrorKind::Config | ErrorKind::Refused => Err(b),
             }

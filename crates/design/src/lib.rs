@@ -34,7 +34,7 @@ use domain::{domains, Dom};
 use lp::{LpError, SolverKind};
 use master::Group;
 use rtpipe_analysis::Report;
-use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Server, Spec};
 use runner::Runner;
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
@@ -208,48 +208,42 @@ pub enum ErrorKind {
 pub struct DesignError {
     /// Whose fault it is.
     pub kind: ErrorKind,
-    /// What went wrong.
-    pub message: String,
-    /// What to change, when we can tell.
-    pub help: Option<String>,
+    /// What went wrong and what to change, when we can tell.
+    pub diagnostic: Diagnostic,
 }
 
 impl DesignError {
+    fn of(kind: ErrorKind, message: impl Into<String>) -> Self {
+        DesignError {
+            kind,
+            diagnostic: Diagnostic::new(message, None),
+        }
+    }
+
     /// A problem with the input.
     pub fn input(message: impl Into<String>) -> Self {
-        DesignError {
-            kind: ErrorKind::Input,
-            message: message.into(),
-            help: None,
-        }
+        DesignError::of(ErrorKind::Input, message)
     }
 
     /// A failure of the solver.
     pub fn solver(message: impl Into<String>) -> Self {
-        DesignError {
-            kind: ErrorKind::Solver,
-            message: message.into(),
-            help: None,
-        }
+        DesignError::of(ErrorKind::Solver, message)
     }
 
     /// A bug: rtpipe's model and analysis disagree.
     pub fn internal(message: impl Into<String>) -> Self {
-        DesignError {
-            kind: ErrorKind::Internal,
-            message: message.into(),
-            help: None,
-        }
+        DesignError::of(ErrorKind::Internal, message)
     }
     fn help(mut self, help: impl Into<String>) -> Self {
-        self.help = Some(help.into());
+        self.diagnostic = self.diagnostic.help(help);
         self
     }
 }
 
+/// The message alone (the help is the caller's to show).
 impl std::fmt::Display for DesignError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.message)
+        f.write_str(&self.diagnostic.message)
     }
 }
 

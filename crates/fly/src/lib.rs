@@ -18,45 +18,14 @@ use rtpipe_flight::preset::{Preset, BUILTIN};
 use rtpipe_flight::quality::{assess, FlightQuality};
 use rtpipe_flight::radio::Mission;
 use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig, SimResult};
-use std::fmt;
 use std::path::Path;
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
 
 /// Time flown after the mission's last step when no duration is given.
 pub const AFTER_LAST_STEP_NS: Nanos = 5_000_000_000;
-
-/// Why a flight cannot start: what is wrong and how to fix it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct FlyError {
-    /// What is wrong.
-    pub msg: String,
-    /// How to fix it (may be empty).
-    pub help: String,
-}
-
-impl FlyError {
-    fn new(msg: impl Into<String>, help: impl Into<String>) -> FlyError {
-        FlyError {
-            msg: msg.into(),
-            help: help.into(),
-        }
-    }
-}
-
-impl fmt::Display for FlyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.msg)?;
-        if !self.help.is_empty() {
-            write!(f, " ({})", self.help)?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for FlyError {}
 
 /// Everything a flight needs besides the spec.
 #[derive(Clone)]
@@ -86,14 +55,14 @@ pub struct Flight {
     pub alerts: Vec<(u64, BatteryAlert)>,
 }
 
-fn vehicle(v: &str) -> Result<Preset, FlyError> {
+fn vehicle(v: &str) -> Result<Preset, Diagnostic> {
     let r = if BUILTIN.contains(&v) {
         Preset::builtin(v)
     } else {
         Preset::from_file(Path::new(v))
     };
     r.map_err(|e| {
-        FlyError::new(
+        Diagnostic::error(
             format!("--vehicle {v}: {e}"),
             format!(
                 "name a built-in preset ({}) or a preset file",
@@ -103,13 +72,13 @@ fn vehicle(v: &str) -> Result<Preset, FlyError> {
     })
 }
 
-fn mission(m: &str) -> Result<Mission, FlyError> {
+fn mission(m: &str) -> Result<Mission, Diagnostic> {
     let r = match m {
         "hover" | "steps" | "paper" => Mission::builtin(m),
         _ => Mission::from_file(Path::new(m)),
     };
     r.map_err(|e| {
-        FlyError::new(
+        Diagnostic::error(
             format!("--mission {m}: {e}"),
             "name a built-in mission (hover, steps, paper) or a mission file",
         )
@@ -117,13 +86,13 @@ fn mission(m: &str) -> Result<Mission, FlyError> {
 }
 
 /// The role of every task from its `body`; the pipeline must be complete.
-pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
+pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, Diagnostic> {
     let mut roles = Vec::with_capacity(spec.tasks.len());
     for t in &spec.tasks {
         let r = match &t.body {
             None => None,
             Some(b) => Some(Role::parse(b).ok_or_else(|| {
-                FlyError::new(
+                Diagnostic::error(
                     format!(
                         "{}: task `{}` names an unknown body `{b}`",
                         path.display(),
@@ -137,7 +106,7 @@ pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, FlyError> {
     }
     for need in Role::CRITICAL {
         if !roles.contains(&Some(need)) {
-            return Err(FlyError::new(
+            return Err(Diagnostic::error(
                 format!(
                     "{}: no task has body = \"{}\", so the flight controller is incomplete",
                     path.display(),
@@ -167,7 +136,7 @@ pub struct Request<'a> {
 }
 
 /// Checks the request against the spec before anything runs.
-pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, FlyError> {
+pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
     let roles = roles(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
     let mission = mission(r.mission)?;
@@ -175,7 +144,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, FlyError> {
         .horizon
         .unwrap_or(mission.end_ns() as Nanos + AFTER_LAST_STEP_NS);
     if horizon <= 0 {
-        return Err(FlyError::new(
+        return Err(Diagnostic::error(
             format!("the flight must last a positive time, found {horizon} ns"),
             "give a positive duration",
         ));
@@ -196,7 +165,7 @@ fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
 
 /// Flies `spec` as `setup` says: bodies on the simulated schedule, the
 /// world co-simulated at their read and publish instants.
-pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, FlyError> {
+pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, Diagnostic> {
     fly_with_progress(spec, s, exec, None)
 }
 
@@ -205,13 +174,13 @@ type Bodies = Vec<Box<dyn Body<Value>>>;
 
 /// The body of every task (an idle one for a task without `body`) and the
 /// world, both for `s`: what every executor of a flight needs.
-fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), FlyError> {
+fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnostic> {
     let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
     for (t, role) in spec.tasks.iter().zip(&s.roles) {
         let period = t.fixed_period().unwrap_or(0);
         bodies.push(match role {
             Some(r) => body(*r, period, &s.preset).map_err(|e| {
-                FlyError::new(
+                Diagnostic::error(
                     format!("task `{}` (body {}): {e}", t.name, r.name()),
                     "give it a fixed period the body can run at",
                 )
@@ -220,7 +189,7 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), FlyError>
         });
     }
     let world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
-        .map_err(|e| FlyError::new(format!("--vehicle: {e}"), "check the preset file"))?;
+        .map_err(|e| Diagnostic::error(format!("--vehicle: {e}"), "check the preset file"))?;
     Ok((bodies, world))
 }
 
@@ -230,7 +199,7 @@ pub fn fly_with_progress(
     s: &Setup,
     exec: ExecModel,
     progress: Option<Arc<AtomicU64>>,
-) -> Result<Flight, FlyError> {
+) -> Result<Flight, Diagnostic> {
     let seed = s.world.seed;
     let (mut bodies, mut world) = bodies_and_world(spec, s)?;
     if let Some(p) = progress {
@@ -244,7 +213,7 @@ pub fn fly_with_progress(
         log_jobs: false,
     };
     let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
-        FlyError::new(
+        Diagnostic::error(
             format!("cannot simulate: {e}"),
             "give every task a fixed positive period",
         )
@@ -268,7 +237,7 @@ pub fn fly_real(
     spec: &Spec,
     s: &Setup,
     cfg: &rtpipe_runtime::RunConfig,
-) -> Result<(Flight, rtpipe_runtime::RunResult), FlyError> {
+) -> Result<(Flight, rtpipe_runtime::RunResult), Diagnostic> {
     let (bodies, mut world) = bodies_and_world(spec, s)?;
     // The trajectory grows by a point every `trace_every_ns`: reserve the
     // whole run now, so that no job doubles the vector (copying megabytes,
@@ -279,13 +248,12 @@ pub fn fly_real(
     // Priority inheritance: a background task preempted while it holds the
     // world must not delay the gyro for longer than its critical section.
     let world = rtpipe_runtime::PiMutex::new(world).map_err(|e| {
-        FlyError::new(
+        Diagnostic::error(
             format!("cannot create a priority-inheritance mutex for the world: {e}"),
             "this C library lacks PTHREAD_PRIO_INHERIT; run `rtpipe fly` (simulated threads) instead",
         )
     })?;
-    let res = rtpipe_runtime::run(spec, cfg, bodies, Some(&world))
-        .map_err(|e| FlyError::new(e.msg, e.help))?;
+    let res = rtpipe_runtime::run(spec, cfg, bodies, Some(&world)).map_err(|e| e.diagnostic)?;
     let mut world = world.into_inner();
     // The world's last call was at the last publish (or read) of the run.
     let last = res.sim.jobs.iter().map(|j| j.finish).max().unwrap_or(0);

@@ -13,12 +13,13 @@
 //! from the read) at which the vehicle still met the criteria in every point
 //! up to it: the last passing point before the first failing one.
 
-use crate::{fly, FlyError, Setup};
+use crate::{fly, Setup};
 use rayon::prelude::*;
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric};
 use rtpipe_flight::quality::{Criteria, FlightQuality};
 use rtpipe_flight::tasks::Role;
+use rtpipe_model::Diagnostic;
 use rtpipe_model::{Nanos, PeriodSpec, Server, Spec};
 use rtpipe_sim::ExecModel;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -150,7 +151,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
             let failures = f.quality.failures(c);
             (Some(f.quality), failures)
         }
-        Err(FlyError { msg, .. }) => (None, vec![msg]),
+        Err(Diagnostic { message, .. }) => (None, vec![message]),
     };
     Point {
         variation: v,

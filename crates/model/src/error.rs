@@ -24,12 +24,46 @@ impl Diagnostic {
         }
     }
 
+    /// A problem that has no place in a source text (a flag, a file, a
+    /// run): what is wrong and how to fix it (an empty `help` is none).
+    pub fn error(message: impl Into<String>, help: impl Into<String>) -> Self {
+        let help: String = help.into();
+        Diagnostic {
+            message: message.into(),
+            help: (!help.is_empty()).then_some(help),
+            span: None,
+        }
+    }
+
+    /// The same problem, its message prefixed by the place it is in
+    /// (`PLACE: message`), e.g. the file a library's caller read.
+    pub fn within(mut self, place: impl fmt::Display) -> Self {
+        self.message = format!("{place}: {}", self.message);
+        self
+    }
+
     /// Adds what to change.
     pub fn help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
         self
     }
 }
+
+/// `error: MESSAGE` and `  = help: HELP` lines, without place: how the
+/// commands print a problem that is not in a spec's text (a [`SpecError`]
+/// shows its diagnostics with file, line and source instead). The text is
+/// printed as given.
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "error: {}", self.message)?;
+        if let Some(h) = &self.help {
+            writeln!(f, "  = help: {h}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for Diagnostic {}
 
 /// All problems found in one spec file, with the text needed to show them.
 #[derive(Debug, Clone)]

@@ -11,6 +11,7 @@
 
 mod error;
 pub mod gen;
+pub mod import;
 pub mod policy;
 mod raw;
 pub mod time;

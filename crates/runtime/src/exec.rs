@@ -9,7 +9,7 @@ use crate::pi::PiMutex;
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_model::policy::LinuxClass;
-use rtpipe_model::Spec;
+use rtpipe_model::{Diagnostic, Spec};
 use rtpipe_sim::{Carried, JobRecord, Segment, SimResult, TaskStats};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
@@ -61,29 +61,34 @@ pub enum ErrorKind {
 }
 
 /// Why a run could not start: the task, what is wrong, how to fix it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunError {
     /// Whose fault it is.
     pub kind: ErrorKind,
-    /// What is wrong.
-    pub msg: String,
-    /// How to fix it.
-    pub help: String,
+    /// What is wrong and how to fix it.
+    pub diagnostic: Diagnostic,
 }
 
 impl RunError {
     fn config(msg: impl Into<String>, help: impl Into<String>) -> RunError {
         RunError {
             kind: ErrorKind::Config,
-            msg: msg.into(),
-            help: help.into(),
+            diagnostic: Diagnostic::error(msg, help),
+        }
+    }
+
+    fn refused(msg: impl Into<String>, help: impl Into<String>) -> RunError {
+        RunError {
+            kind: ErrorKind::Refused,
+            diagnostic: Diagnostic::error(msg, help),
         }
     }
 }
 
+/// The message alone (the help is the caller's to show).
 impl fmt::Display for RunError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.msg)
+        write!(f, "{}", self.diagnostic.message)
     }
 }
 
@@ -256,14 +261,13 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             "--policy deadline runs the edf model, but the spec says scheduler = \"rm\"",
             "use --policy fifo for an rm spec, or set scheduler = \"edf\"",
         )),
-        (Policy::Deadline, _) if bandwidth > 0.95 * cpus as f64 => Err(RunError {
-            kind: ErrorKind::Refused,
-            msg: format!(
+        (Policy::Deadline, _) if bandwidth > 0.95 * cpus as f64 => Err(RunError::refused(
+            format!(
                 "SCHED_DEADLINE admission would fail: total bandwidth Σ C/T = {bandwidth:.3} exceeds 0.95 × {cpus} CPU(s) = {:.2}",
                 0.95 * cpus as f64
             ),
-            help: "lower the budgets or lengthen the periods (the kernel admits at most sched_rt_runtime_us/sched_rt_period_us of each CPU)".into(),
-        }),
+            "lower the budgets or lengthen the periods (the kernel admits at most sched_rt_runtime_us/sched_rt_period_us of each CPU)",
+        )),
         _ => Ok(()),
     }
 }
@@ -558,10 +562,8 @@ fn task_thread<'a, V: Copy>(
 
 /// Puts the calling thread into its scheduling class.
 fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), RunError> {
-    let refused = |what: &str, e: std::io::Error, help: String| RunError {
-        kind: ErrorKind::Refused,
-        msg: format!("task {name}: the kernel refused {what}: {e}"),
-        help,
+    let refused = |what: &str, e: std::io::Error, help: String| {
+        RunError::refused(format!("task {name}: the kernel refused {what}: {e}"), help)
     };
     let no_privilege = |what: &str| {
         format!(

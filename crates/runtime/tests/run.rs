@@ -153,7 +153,7 @@ fn a_refused_run_leaves_no_hog_behind() {
     let r = run(&spec, &cfg, bodies, None);
     assert_eq!(threads_of_this_process(), before, "a thread outlived run");
     match r {
-        Err(e) => assert!(e.msg.contains("refused"), "{e}"),
+        Err(e) => assert!(e.diagnostic.message.contains("refused"), "{e}"),
         // A kernel without fair servers admits it: then the run completed,
         // and the check above still held.
         Ok(_) => eprintln!("note: the kernel admitted {cpus} x 0.94: the error path was not taken"),

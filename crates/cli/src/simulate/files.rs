@@ -48,7 +48,7 @@ pub(super) fn render_outputs(
     p: &Plan,
     res: &SimResult,
     obs: &[ChainObs],
-) -> Result<Outputs, Bad> {
+) -> Result<Outputs, Diagnostic> {
     let mut out = Outputs {
         files: Vec::new(),
         notes: Vec::new(),
@@ -86,14 +86,16 @@ pub(super) fn render_outputs(
             flag_name(&a.exec),
             flag_name(&a.phasing)
         );
-        let svg = plot::fig9(spec, obs, &subtitle)
-            .map_err(|e| Bad::new(format!("cannot draw --plot {}: {e}", path.display()), ""))?;
+        let svg = plot::fig9(spec, obs, &subtitle).map_err(|e| {
+            Diagnostic::error(format!("cannot draw --plot {}: {e}", path.display()), "")
+        })?;
         out.notes.push(format!("wrote {}", path.display()));
         out.files.push(("--plot", path.clone(), svg));
     }
     if let Some(path) = &a.gantt {
-        let svg = plot::gantt(spec, res, p.window)
-            .map_err(|e| Bad::new(format!("cannot draw --gantt {}: {e}", path.display()), ""))?;
+        let svg = plot::gantt(spec, res, p.window).map_err(|e| {
+            Diagnostic::error(format!("cannot draw --gantt {}: {e}", path.display()), "")
+        })?;
         out.notes.push(format!(
             "wrote {}: {}..{} {}",
             path.display(),
@@ -104,19 +106,4 @@ pub(super) fn render_outputs(
         out.files.push(("--gantt", path.clone(), svg));
     }
     Ok(out)
-}
-
-/// Checks the output paths again (they may have changed during the run) and
-/// writes them all or none (see [`output::write_all`]).
-pub(crate) fn write_all(spec: &Path, files: &[(&'static str, PathBuf, String)]) -> Result<(), Bad> {
-    let mut outs = Vec::new();
-    for (flag, path, _) in files {
-        outs.push(output::prepare(flag, path, spec, None).map_err(Bad::from)?);
-    }
-    let pairs: Vec<(&output::Output, &str)> = outs
-        .iter()
-        .zip(files)
-        .map(|(o, (_, _, text))| (o, text.as_str()))
-        .collect();
-    output::write_all(&pairs).map_err(Bad::from)
 }

@@ -6,25 +6,24 @@ mod plan;
 mod report;
 
 use crate::analyze;
+use crate::command::{self, fail, parse_time, ExecArg};
 use crate::output;
 use crate::plot;
+use crate::report::num;
 use crate::table::Table;
-use crate::EXIT_BAD_INPUT;
 use clap::{Args, ValueEnum};
+pub(crate) use files::with_spinner;
 use files::{render_outputs, with_horizon_bar};
-pub(crate) use files::{with_spinner, write_all};
 use plan::*;
 pub(crate) use report::*;
 use rtpipe_analysis::{Anchor, Metric, Report};
-use rtpipe_model::time::number_to_nanos;
-use rtpipe_model::{parse_time_str, Nanos, Spec, TimeUnit, MAX_TIME};
+use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
-use rtpipe_sim::{simulate_with_progress, ExecModel, Phasing, SimConfig, SimError, SimResult};
+use rtpipe_sim::{simulate_with_progress, Phasing, SimConfig, SimError, SimResult};
 use serde_json::{json, Value};
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -92,26 +91,6 @@ pub struct SimulateArgs {
     pub search_steps_given: bool,
 }
 
-/// `--exec`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ExecArg {
-    Worst,
-    Uniform,
-    Best,
-    Extremes,
-}
-
-impl ExecArg {
-    pub(crate) fn model(self) -> ExecModel {
-        match self {
-            ExecArg::Worst => ExecModel::Worst,
-            ExecArg::Uniform => ExecModel::Uniform,
-            ExecArg::Best => ExecModel::Best,
-            ExecArg::Extremes => ExecModel::Extremes,
-        }
-    }
-}
-
 /// `--phasing`. Each variant maps to one way of running the simulator in
 /// [`run_simulation`]; add a variant there to add a phasing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -141,54 +120,6 @@ fn parse_outputs(s: &str) -> Result<u64, String> {
     }
 }
 
-/// A bad flag or value: what is wrong and how to fix it (exit status 2).
-#[derive(Debug)]
-pub struct Bad {
-    msg: String,
-    help: String,
-}
-
-impl Bad {
-    pub(crate) fn new(msg: impl Into<String>, help: impl Into<String>) -> Bad {
-        Bad {
-            msg: msg.into(),
-            help: help.into(),
-        }
-    }
-}
-
-impl From<output::OutputError> for Bad {
-    fn from(e: output::OutputError) -> Bad {
-        Bad::new(e.msg, e.help)
-    }
-}
-
-impl fmt::Display for Bad {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "error: {}", self.msg)?;
-        if !self.help.is_empty() {
-            writeln!(f, "  = help: {}", self.help)?;
-        }
-        Ok(())
-    }
-}
-
-pub(crate) fn fail(b: Bad) -> ExitCode {
-    eprint!("{b}");
-    ExitCode::from(EXIT_BAD_INPUT)
-}
-
-/// A time from the command line: a bare number in the spec's unit or a
-/// string with a unit.
-pub(crate) fn parse_time(spec: &Spec, s: &str) -> Result<Nanos, String> {
-    let t = s.trim();
-    let r = match t.parse::<f64>() {
-        Ok(x) => number_to_nanos(x, spec.time_unit),
-        Err(_) => parse_time_str(t),
-    };
-    r.map_err(|e| e.to_string())
-}
-
 /// Runs the simulator as `--phasing` asks, reporting the simulated time
 /// reached to `progress`. One simulation per run today; a phasing that
 /// searches offsets would run several here and return the worst.
@@ -213,7 +144,7 @@ fn run_simulation(
 }
 
 pub fn run(a: &SimulateArgs) -> ExitCode {
-    let spec = match analyze::load(&a.spec) {
+    let spec = match command::load(&a.spec) {
         Ok(s) => s,
         Err(code) => return code,
     };
@@ -231,7 +162,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         Ok(o) => o,
         Err(b) => return fail(b),
     };
-    if let Err(b) = write_all(&a.spec, &outputs.files) {
+    if let Err(b) = output::write_files(&a.spec, &outputs.files) {
         return fail(b);
     }
     if a.json {
@@ -239,7 +170,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         if !searches.is_empty() {
             v["search"] = search_json(&spec, &searches);
         }
-        if let Err(code) = crate::analyze::print_json(&v) {
+        if let Err(code) = command::print_json(&v) {
             return code;
         }
     } else {
@@ -263,7 +194,7 @@ fn simulate_and_search(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
-) -> Result<(SimResult, Vec<SearchResult>, f64), Bad> {
+) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
     let started = Instant::now();
     let msg = format!(
         "simulating {} for {} {}{}",
@@ -276,7 +207,7 @@ fn simulate_and_search(
         run_simulation(spec, a, p, progress)
     })
     .map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("{}: cannot simulate: {e}", a.spec.display()),
             "give every task a fixed positive period",
         )
@@ -286,7 +217,7 @@ fn simulate_and_search(
             run_searches(spec, a, p)
         })
         .map_err(|e| {
-            Bad::new(
+            Diagnostic::error(
                 format!("{}: cannot search: {e}", a.spec.display()),
                 "give every task a fixed positive period",
             )
@@ -398,7 +329,7 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/paper-table3.toml"
         );
-        match Spec::load(Path::new(path)) {
+        match Spec::load(std::path::Path::new(path)) {
             Ok(s) => s,
             Err(e) => panic!("{e}"),
         }

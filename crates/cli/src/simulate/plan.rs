@@ -13,7 +13,7 @@ pub(super) struct Plan {
     pub(super) log_jobs: bool,
 }
 
-pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
+pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Diagnostic> {
     let t_max = spec
         .tasks
         .iter()
@@ -21,7 +21,7 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
         .max()
         .unwrap_or(0);
     if t_max <= 0 {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             "no task has a fixed period, so nothing is ever released",
             "give the tasks a `period = ...`",
         ));
@@ -39,9 +39,9 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
         ("--gantt", &a.gantt),
     ] {
         let Some(p) = p else { continue };
-        outs.push(output::prepare(flag, p, &a.spec, None).map_err(Bad::from)?);
+        outs.push(output::prepare(flag, p, &a.spec, None)?);
     }
-    output::distinct(&outs).map_err(Bad::from)?;
+    output::distinct(&outs)?;
     Ok(Plan {
         horizon,
         outputs,
@@ -52,11 +52,11 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Bad> {
 
 /// The simulated span, from `--duration` or `--outputs` (and the outputs
 /// asked for).
-fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad> {
+fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Diagnostic> {
     Ok(match (&a.duration, a.outputs) {
         (Some(d), None) => {
             let h = parse_time(spec, d).map_err(|e| {
-                Bad::new(
+                Diagnostic::error(
                     format!("invalid value `{d}` for --duration: {e}"),
                     format!(
                         "write a positive time like --duration 2s or --duration 500ms, or a bare number in {}",
@@ -65,7 +65,7 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad
                 )
             })?;
             if h <= 0 {
-                return Err(Bad::new(
+                return Err(Diagnostic::error(
                     format!("--duration must be positive, found `{d}`"),
                     "write a positive time like --duration 2s",
                 ));
@@ -77,7 +77,7 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad
             match horizon_for_outputs(spec, n) {
                 Some(h) => (h, Some(n)),
                 None => {
-                    return Err(Bad::new(
+                    return Err(Diagnostic::error(
                         format!(
                             "--outputs {n} needs more than {} of simulated time (the longest the model allows)",
                             spec.fmt_time(MAX_TIME)
@@ -88,7 +88,7 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad
             }
         }
         (Some(_), Some(_)) => {
-            return Err(Bad::new(
+            return Err(Diagnostic::error(
                 "--outputs and --duration both set the simulated span",
                 "give only one of them",
             ))
@@ -97,9 +97,9 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Bad
 }
 
 /// Flags that would do nothing are errors that name the fix.
-fn flags_have_effect(a: &SimulateArgs) -> Result<(), Bad> {
+fn flags_have_effect(a: &SimulateArgs) -> Result<(), Diagnostic> {
     if a.search_steps_given && a.phasing != PhasingArg::Search {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             "--search-steps sets the adversarial search, but --phasing is not search",
             "add --phasing search, or drop --search-steps",
         ));
@@ -108,7 +108,7 @@ fn flags_have_effect(a: &SimulateArgs) -> Result<(), Bad> {
         && a.phasing == PhasingArg::Sync
         && matches!(a.exec, ExecArg::Worst | ExecArg::Best)
     {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             format!(
                 "--seed has no effect: nothing is random with --phasing sync and --exec {}",
                 flag_name(&a.exec)
@@ -126,9 +126,9 @@ fn window_of(
     w: &str,
     t_max: Nanos,
     horizon: Nanos,
-) -> Result<(Nanos, Nanos), Bad> {
+) -> Result<(Nanos, Nanos), Diagnostic> {
     if a.gantt.is_none() {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             "--window sets the span of the Gantt chart, but no --gantt was given",
             "add --gantt FILE.svg, or drop --window",
         ));
@@ -139,7 +139,7 @@ fn window_of(
         spec.fmt_time((3 * t_max).min(horizon))
     );
     let Some((s, e)) = w.split_once(',') else {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             format!("invalid value `{w}` for --window: expected START,END"),
             help,
         ));
@@ -147,20 +147,20 @@ fn window_of(
     let (s, e) = match (parse_time(spec, s), parse_time(spec, e)) {
         (Ok(s), Ok(e)) => (s, e),
         (Err(m), _) | (_, Err(m)) => {
-            return Err(Bad::new(
+            return Err(Diagnostic::error(
                 format!("invalid value `{w}` for --window: {m}"),
                 help,
             ))
         }
     };
     if s < 0 || e <= s {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             format!("invalid value `{w}` for --window: need 0 <= START < END"),
             help,
         ));
     }
     if e > horizon {
-        return Err(Bad::new(
+        return Err(Diagnostic::error(
             format!(
                 "--window ends at {} {u}, after the simulated span of {} {u}",
                 spec.fmt_time(e),

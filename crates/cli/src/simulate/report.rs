@@ -80,10 +80,6 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
     )
 }
 
-pub(crate) fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
-    ns.map_or(Value::Null, |n| json!(spec.in_unit(n)))
-}
-
 pub(super) fn to_json(
     spec: &Spec,
     report: &Report,

@@ -3,9 +3,9 @@
 //! reports where the flight stops meeting its criteria, the chain limits
 //! that follow, and optionally writes them into a spec.
 
-use crate::analyze;
-use crate::fly::FlyArgs;
-use crate::simulate::{self, Bad};
+use super::args::FlyArgs;
+use crate::command;
+use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{
@@ -13,49 +13,30 @@ use rtpipe_fly::sweep::{
     DELAY_LINES,
 };
 use rtpipe_fly::Setup;
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec};
 use serde_json::{json, Value as Json};
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// `--scale LO..HI`: two positive factors.
-pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s
-        .split_once("..")
-        .ok_or_else(|| format!("expected LO..HI like 0.5..8, found `{s}`"))?;
-    let num = |x: &str| {
-        x.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite() && *v > 0.0)
-    };
-    match (num(a), num(b)) {
-        (Some(lo), Some(hi)) if lo <= hi && hi <= 64.0 => Ok((lo, hi)),
-        _ => Err(format!(
-            "expected two positive factors LO <= HI <= 64, like 0.5..8, found `{s}`"
-        )),
-    }
-}
-
-fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Bad> {
+fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let Some(path) = &a.criterion else {
         return Ok(s.mission.criteria);
     };
     let text = std::fs::read_to_string(path).map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("--criterion {}: {e}", path.display()),
             "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s",
         )
     })?;
     let c: Criteria = toml::from_str(&text).map_err(|e| {
-        Bad::new(
+        Diagnostic::error(
             format!("--criterion {}: {}", path.display(), e.message()),
             "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s (omitted keys keep their defaults)",
         )
     })?;
     c.validate()
-        .map_err(|e| Bad::new(format!("--criterion {}: {e}", path.display()), ""))?;
+        .map_err(|e| Diagnostic::error(format!("--criterion {}: {e}", path.display()), ""))?;
     Ok(c)
 }
 
@@ -206,22 +187,22 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
 pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
     let c = match criteria(a, s) {
         Ok(c) => c,
-        Err(b) => return simulate::fail(b),
+        Err(b) => return command::fail(b),
     };
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = default_variations(spec, s, lo, hi);
     if let Some(out) = &a.write_limits {
         if let Err(b) = crate::output::prepare("--write-limits", out, &a.spec, None) {
-            return simulate::fail(b.into());
+            return command::fail(b);
         }
     }
     let points = fly_all(spec, s, a, &c, &vars);
     let limits = derived_limits(spec, s, &points);
     if let Err(b) = write_files(spec, s, a, &c, &points, &limits) {
-        return simulate::fail(b);
+        return command::fail(b);
     }
     if a.json {
-        if let Err(code) = analyze::print_json(&sweep_json(spec, s, &c, &points, &limits)) {
+        if let Err(code) = command::print_json(&sweep_json(spec, s, &c, &points, &limits)) {
             return code;
         }
     } else {
@@ -272,7 +253,7 @@ fn write_files(
     c: &Criteria,
     points: &[Point],
     limits: &[ChainPair],
-) -> Result<(), Bad> {
+) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
     if let Some(out) = &a.write_limits {
         let text = rtpipe_model::to_toml(&with_limits(spec, limits));
@@ -281,11 +262,11 @@ fn write_files(
     if let Some(dir) = &a.plot {
         match chart(spec, s, c, points) {
             Ok(svg) => files.push(("--plot", dir.join("sweep.svg"), svg)),
-            Err(e) => return Err(Bad::new(format!("cannot draw the sweep: {e}"), "")),
+            Err(e) => return Err(Diagnostic::error(format!("cannot draw the sweep: {e}"), "")),
         }
-        crate::fly::ensure_dir(dir)?;
+        output::ensure_dir(dir)?;
     }
-    simulate::write_all(&a.spec, &files)
+    output::write_files(&a.spec, &files)
 }
 
 /// The sweep as one JSON object: the setup, every point, the derived

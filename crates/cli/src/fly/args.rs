@@ -1,0 +1,77 @@
+//! The flags of `rtpipe fly` (one flight, or `--sweep`).
+
+use crate::command::ExecArg;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct FlyArgs {
+    /// The system spec (TOML) whose tasks name their `body`, e.g.
+    /// examples/cleanflight.toml.
+    pub spec: PathBuf,
+    /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
+    #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
+    pub vehicle: String,
+    /// The mission: a built-in one (steps, hover, paper) or a mission file
+    /// (crates/flight/missions/*.toml show the format, `[criteria]` included).
+    #[arg(long, value_name = "FILE|steps|hover|paper", default_value = "steps")]
+    pub mission: String,
+    /// Flight time: "30s", "2500ms", or a number in the spec's time unit
+    /// [default: 5 s after the mission's last step].
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub duration: Option<String>,
+    /// Seeds the sensor noise and the execution times (the same seed gives
+    /// the same flight, bit for bit).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// How each job's demand is drawn (see `simulate --exec`).
+    #[arg(long, value_enum, default_value_t = ExecArg::Uniform)]
+    pub exec: ExecArg,
+    /// Print one JSON object: "flight" and the chains as `simulate --json`.
+    #[arg(long)]
+    pub json: bool,
+    /// Write SVG plots into this directory (created if missing):
+    /// attitude.svg, altitude.svg, motors.svg, latency.svg; with --sweep,
+    /// sweep.svg.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+    /// Sweep instead of one flight: fly the mission over period scales
+    /// (budgets fixed) and over pure delays on each chain's head, and derive
+    /// the chain limits under which the vehicle still meets its criterion.
+    #[arg(long)]
+    pub sweep: bool,
+    /// With --sweep: the period scales, LO..HI (steps of 2^(1/3)).
+    #[arg(long, value_name = "LO..HI", value_parser = parse_scale, requires = "sweep")]
+    pub scale: Option<(f64, f64)>,
+    /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
+    /// altitude_rms_m, overshoot, settling_s [default: the mission's].
+    #[arg(long, value_name = "FILE", requires = "sweep")]
+    pub criterion: Option<PathBuf>,
+    /// With --sweep: write the spec with the derived chain limits here.
+    #[arg(long, value_name = "OUT.toml", requires = "sweep")]
+    pub write_limits: Option<PathBuf>,
+    /// Write the flight as CSV (one row every 2 ms; the header names every
+    /// column and its unit, ending with each chain's latest observed
+    /// reaction and freshness in ms; readable by PlotJuggler).
+    #[arg(long, value_name = "FILE.csv")]
+    pub log: Option<PathBuf>,
+}
+
+/// `--scale LO..HI`: two positive factors.
+pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("expected LO..HI like 0.5..8, found `{s}`"))?;
+    let num = |x: &str| {
+        x.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0)
+    };
+    match (num(a), num(b)) {
+        (Some(lo), Some(hi)) if lo <= hi && hi <= 64.0 => Ok((lo, hi)),
+        _ => Err(format!(
+            "expected two positive factors LO <= HI <= 64, like 0.5..8, found `{s}`"
+        )),
+    }
+}
