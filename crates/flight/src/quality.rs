@@ -20,9 +20,9 @@
 //! position hold takes over and brakes the sideways speed with its own
 //! set-points.
 
-use crate::loop_sim::metrics::{step_response, StepResponse};
-use crate::loop_sim::TracePoint;
 use crate::radio::Mission;
+use crate::trace::metrics::{step_response, StepResponse};
+use crate::trace::TracePoint;
 
 const CLIMB_S: f64 = 3.0;
 
