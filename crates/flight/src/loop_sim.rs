@@ -224,3 +224,49 @@ pub fn fly(
     world.advance(cfg.duration_ns);
     Ok(std::mem::take(&mut world.trace))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timing_off_the_tick_is_refused() {
+        assert!(Timing::table_v(2).check().is_ok());
+        let mut t = Timing::table_v(2);
+        t.delay = 1_500_000;
+        assert!(t.check().is_err());
+        let mut t = Timing::table_v(0);
+        t.tick = 0;
+        assert!(t.check().is_err());
+        let mut t = Timing::table_v(2);
+        t.pid = 0;
+        let e = t.check().err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("timing.pid"), "{e}");
+    }
+
+    /// The motors first spin a transport delay after the motor task's
+    /// first armed release, never between releases.
+    #[test]
+    fn outputs_reach_the_world_a_delay_after_a_release() -> Result<(), ConfigError> {
+        let preset = Preset::builtin("racer5")?;
+        for delay_ms in [0, 3] {
+            let mut cfg = LoopConfig::new(1.0, 1);
+            cfg.timing = Timing::table_v(delay_ms);
+            cfg.world.trace_every_ns = MS;
+            let tr = fly(&preset, Mission::builtin("hover")?, cfg)?;
+            let armed = tr.iter().find(|p| p.armed).map_or(0, |p| p.t_ns);
+            // The trace records the world before what is published at the
+            // same instant, so the first armed point is one tick later.
+            let published = armed - MS;
+            assert!(armed > 0, "never armed");
+            assert_eq!(
+                published
+                    .checked_sub(delay_ms * MS)
+                    .map(|r| r % cfg.timing.pwm),
+                Some(0),
+                "delay {delay_ms} ms: motors armed at {armed} ns"
+            );
+        }
+        Ok(())
+    }
+}
