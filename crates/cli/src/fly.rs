@@ -223,7 +223,7 @@ fn to_json(
         .steps
         .iter()
         .map(|st| {
-            let r = |x: &rtpipe_flight::loop_sim::metrics::StepResponse| {
+            let r = |x: &rtpipe_flight::trace::metrics::StepResponse| {
                 json!({"rise_s": x.rise_s, "overshoot": x.overshoot, "settling_s": x.settling_s})
             };
             json!({

@@ -2,9 +2,10 @@
 //! print the closed-loop figures:
 //! `cargo run --release -p rtpipe-flight --example fly -- racer5 steps [seed] [delay_ms]`.
 
-use rtpipe_flight::loop_sim::{fly, metrics, LoopConfig, Timing, TracePoint};
+use rtpipe_flight::loop_sim::{fly, LoopConfig, Timing};
 use rtpipe_flight::preset::Preset;
 use rtpipe_flight::radio::Mission;
+use rtpipe_flight::trace::{metrics, TracePoint};
 
 fn print_trace(tr: &[TracePoint]) {
     let every = tr.len() / 120 + 1;
@@ -69,7 +70,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let secs = mission.end_ns() as f64 * 1e-9 + 6.0;
     let mut cfg = LoopConfig::new(secs, seed);
     cfg.timing = Timing::table_v(delay_ms);
-    cfg.trace_every_ns = 1_000_000;
+    cfg.world.trace_every_ns = 1_000_000;
     let tr = fly(&preset, mission, cfg)?;
     print_trace(&tr);
     println!(

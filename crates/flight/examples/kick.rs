@@ -11,8 +11,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let p = Preset::builtin(args.get(1).map_or("racer5", String::as_str))?;
     let kick: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10.0);
     let mut cfg = LoopConfig::new(11.0, 2018);
-    cfg.trace_every_ns = 20_000_000;
-    cfg.impulse = Some((
+    cfg.world.trace_every_ns = 20_000_000;
+    cfg.world.impulse = Some((
         8_000_000_000,
         Vec3::new(p.body.inertia_kg_m2[0] * kick, 0.0, 0.0),
     ));

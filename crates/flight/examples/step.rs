@@ -1,9 +1,10 @@
 //! Print the roll step of the `steps` mission every 20 ms (tuning aid):
 //! `cargo run --release -p rtpipe-flight --example step -- aero1kg [preset.toml]`.
 
-use rtpipe_flight::loop_sim::{fly, metrics, LoopConfig};
+use rtpipe_flight::loop_sim::{fly, LoopConfig};
 use rtpipe_flight::preset::Preset;
 use rtpipe_flight::radio::Mission;
+use rtpipe_flight::trace::metrics;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -12,7 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => Preset::builtin(args.get(1).map_or("racer5", String::as_str))?,
     };
     let mut cfg = LoopConfig::new(8.0, 1);
-    cfg.trace_every_ns = 20_000_000;
+    cfg.world.trace_every_ns = 20_000_000;
     let tr = fly(&preset, Mission::builtin("steps")?, cfg)?;
     for p in tr
         .iter()
@@ -26,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     let mut cfg = LoopConfig::new(8.0, 1);
-    cfg.trace_every_ns = 1_000_000;
+    cfg.world.trace_every_ns = 1_000_000;
     let tr = fly(&preset, Mission::builtin("steps")?, cfg)?;
     let r = metrics::step_response(&tr, |p| p.est.roll.to_degrees(), 6.0, 7.0, 0.0, 20.0, 0.05);
     println!("est: {r:?}");

@@ -6,8 +6,10 @@
 //! battery, a 6-DOF plant with RK4 and a BMI160-like IMU.
 //!
 //! Nothing here knows about scheduling: every periodic computation is a pure
-//! `update`/`step` on caller-owned state, so the scheduler simulator can run
-//! them as task bodies. [`loop_sim`] flies them with ideal timing.
+//! `update`/`step` on caller-owned state. [`tasks`] wraps them as task bodies
+//! and holds the co-simulated world they fly in; the scheduler simulator
+//! runs those bodies (`rtpipe fly`), and [`loop_sim`] runs the same bodies
+//! with ideal timing. Both record a [`trace`].
 //!
 //! ## Conventions
 //!
@@ -42,5 +44,6 @@ pub mod quality;
 pub mod radio;
 pub mod rng;
 pub mod tasks;
+pub mod trace;
 
 pub use error::ConfigError;

@@ -33,6 +33,16 @@ pub struct MixOutput {
     pub saturated: bool,
 }
 
+/// What the PID task publishes for the motor task (and the motor task for
+/// the ESCs): the mixed commands and whether they spin the motors.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MotorDemand {
+    /// Motor commands in [0, 1], Betaflight order.
+    pub motors: [f64; 4],
+    /// Armed: motors spin.
+    pub armed: bool,
+}
+
 /// Mix axis commands into four motor commands.
 ///
 /// The attitude differential d_i = roll·R_i + pitch·P_i + yaw·Y_i keeps

@@ -9,7 +9,7 @@ mod mission;
 
 pub use autopilot::{Autopilot, AutopilotConfig, VehicleState};
 pub use failsafe::{Failsafe, FailsafeAction, FailsafeConfig, FailsafePhase};
-pub use mission::{parse_time, Mission, MissionStep, PilotIntent};
+pub use mission::{parse_time, Criteria, Mission, MissionStep, PilotIntent};
 
 use crate::math::deg;
 use crate::pid::Setpoint;

@@ -21,9 +21,8 @@ use crate::battery::{Battery, BatteryAlert, Housekeeping, HousekeepingConfig};
 use crate::error::ConfigError;
 use crate::filter::{Pt1Vec3, GYRO_LPF_HZ_DEFAULT};
 use crate::imu::{Imu, ImuConfig, Reading};
-use crate::loop_sim::{MotorDemand, TracePoint};
 use crate::math::{Euler, Vec3};
-use crate::mixer::mix;
+use crate::mixer::{mix, MotorDemand};
 use crate::motor::through_dshot;
 use crate::pid::{Controller, Setpoint};
 use crate::plant::Plant;
@@ -32,6 +31,7 @@ use crate::radio::{
     ArmState, ArmingChecks, Autopilot, Failsafe, FailsafeAction, FailsafeConfig, Mission,
     RadioSample, VehicleState,
 };
+use crate::trace::TracePoint;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamped};
 
 /// What flows between the flight tasks: one register value type for the

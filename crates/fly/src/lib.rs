@@ -13,11 +13,11 @@ pub mod sweep;
 
 use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_flight::battery::BatteryAlert;
-use rtpipe_flight::loop_sim::TracePoint;
 use rtpipe_flight::preset::{Preset, BUILTIN};
 use rtpipe_flight::quality::{assess, FlightQuality};
 use rtpipe_flight::radio::Mission;
 use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
+use rtpipe_flight::trace::TracePoint;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig, SimResult};
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! A flight over time: attitude, position, motor commands.
 
 use super::canvas::*;
-use rtpipe_flight::loop_sim::TracePoint;
+use rtpipe_flight::trace::TracePoint;
 use rtpipe_flight::math::Euler;
 
 /// One line of a time plot.

@@ -24,7 +24,6 @@
 //! to the initial heading), `hold_position`.
 
 use crate::error::{in_range, ConfigError};
-use crate::quality::Criteria;
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -262,6 +261,65 @@ impl Mission {
     /// Time of the last step, ns.
     pub fn end_ns(&self) -> u64 {
         self.steps.last().map_or(0, |s| s.t_ns)
+    }
+}
+
+/// Tolerances a flight must meet (a mission's `[criteria]` table; omitted
+/// fields keep the defaults).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Criteria {
+    /// Hover attitude error RMS, degrees.
+    pub attitude_rms_deg: f64,
+    /// Hover altitude error RMS, metres.
+    pub altitude_rms_m: f64,
+    /// Roll and pitch step overshoot of the true attitude, a fraction.
+    pub overshoot: f64,
+    /// Roll and pitch step settling of the tracked attitude, s.
+    pub settling_s: f64,
+}
+
+impl Default for Criteria {
+    /// No crash, hover attitude error RMS < 2°, altitude error RMS < 0.1 m,
+    /// roll/pitch steps with overshoot < 20 % settling within 0.5 s.
+    fn default() -> Criteria {
+        Criteria {
+            attitude_rms_deg: 2.0,
+            altitude_rms_m: 0.1,
+            overshoot: 0.2,
+            settling_s: 0.5,
+        }
+    }
+}
+
+impl Criteria {
+    /// Every tolerance positive and finite.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        for (name, v) in [
+            ("criteria.attitude_rms_deg", self.attitude_rms_deg),
+            ("criteria.altitude_rms_m", self.altitude_rms_m),
+            ("criteria.overshoot", self.overshoot),
+            ("criteria.settling_s", self.settling_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(ConfigError::new(
+                    name,
+                    format!("must be a positive number, found {v}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The criteria in words.
+    pub fn describe(&self) -> String {
+        format!(
+            "no crash, hover attitude RMS < {}°, altitude RMS < {} m, roll/pitch steps: true overshoot < {} %, tracked settling < {} s",
+            self.attitude_rms_deg,
+            self.altitude_rms_m,
+            100.0 * self.overshoot,
+            self.settling_s
+        )
     }
 }
 
