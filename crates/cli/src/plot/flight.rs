@@ -1,8 +1,8 @@
 //! A flight over time: attitude, position, motor commands.
 
 use super::canvas::*;
-use rtpipe_flight::trace::TracePoint;
 use rtpipe_flight::math::Euler;
+use rtpipe_flight::trace::TracePoint;
 
 /// One line of a time plot.
 struct Series {
