@@ -640,7 +640,7 @@ mod tests {
         assert_eq!(paper_reaction_link(&p, &c), 4 * MS);
         // Eq. 13/14, Case 1: F = 2 T_p = 20.
         assert_eq!(p.l + paper_freshness_link(&p, &c), 20 * MS);
-        // Swap roles (Case 2: T_p = 4 ≤ T_c = 10):
+        // Swap kinds (Case 2: T_p = 4 ≤ T_c = 10):
         // Eq. 10: E = T_p + C_c = 4 + 2 = 6; Eq. 11 adds T_p − C_p + C_c = 4 − 3 + 2 = 3;
         // Eq. 14: F = T_p + C_c = 6.
         assert_eq!(c.l + paper_reaction_link(&c, &p), 6 * MS);

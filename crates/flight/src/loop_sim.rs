@@ -14,7 +14,7 @@
 use crate::error::ConfigError;
 use crate::preset::Preset;
 use crate::radio::Mission;
-use crate::tasks::{body, Cosim, CosimConfig, Role, Value};
+use crate::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use crate::trace::TracePoint;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use std::collections::VecDeque;
@@ -65,14 +65,14 @@ impl Timing {
     }
 
     /// The period of the task of `role` (0 for a role the loop lacks).
-    fn period(&self, role: Role) -> u64 {
+    fn period(&self, role: BodyKind) -> u64 {
         match role {
-            Role::Gyro => self.gyro,
-            Role::Accel => self.accel,
-            Role::Ahrs => self.ahrs,
-            Role::Pid => self.pid,
-            Role::Pwm => self.pwm,
-            Role::Radio => self.radio,
+            BodyKind::Gyro => self.gyro,
+            BodyKind::Accel => self.accel,
+            BodyKind::Ahrs => self.ahrs,
+            BodyKind::Pid => self.pid,
+            BodyKind::Pwm => self.pwm,
+            BodyKind::Radio => self.radio,
             _ => 0,
         }
     }
@@ -119,13 +119,13 @@ impl LoopConfig {
 /// The loop's tasks in their release order within an instant (the pilot's
 /// frame first, the motor output last), each with the tasks it reads, by
 /// index into this list: Fig. 11's critical path.
-const TASKS: [(Role, &[usize]); 6] = [
-    (Role::Radio, &[]),
-    (Role::Gyro, &[]),
-    (Role::Accel, &[]),
-    (Role::Ahrs, &[1, 2]),
-    (Role::Pid, &[3, 0]),
-    (Role::Pwm, &[4]),
+const TASKS: [(BodyKind, &[usize]); 6] = [
+    (BodyKind::Radio, &[]),
+    (BodyKind::Gyro, &[]),
+    (BodyKind::Accel, &[]),
+    (BodyKind::Ahrs, &[1, 2]),
+    (BodyKind::Pid, &[3, 0]),
+    (BodyKind::Pwm, &[4]),
 ];
 
 /// The ideal-timing executor: bodies, their registers and the outputs in
@@ -204,8 +204,8 @@ pub fn fly(
     for (role, _) in TASKS {
         bodies.push(body(role, nanos(tm.period(role)), preset)?);
     }
-    let roles = TASKS.iter().map(|&(r, _)| Some(r)).collect();
-    let mut world = Cosim::new(preset, mission, roles, cfg.world)?;
+    let kinds = TASKS.iter().map(|&(r, _)| Some(r)).collect();
+    let mut world = Cosim::new(preset, mission, kinds, cfg.world)?;
     let points = cfg.duration_ns / cfg.world.trace_every_ns.max(1) + 1;
     world.trace.reserve(usize::try_from(points).unwrap_or(0));
     let mut exec = Executor {

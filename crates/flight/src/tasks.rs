@@ -114,7 +114,7 @@ impl Value {
 
 /// The job a task does, named by the spec's `body = "..."`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Role {
+pub enum BodyKind {
     /// Samples the gyro, low-pass filters it, accumulates sums.
     Gyro,
     /// Samples the accelerometer.
@@ -137,55 +137,55 @@ pub enum Role {
     Alert,
 }
 
-impl Role {
+impl BodyKind {
     /// The six tasks of Fig. 11 a flight controller cannot fly without.
-    pub const CRITICAL: [Role; 6] = [
-        Role::Gyro,
-        Role::Accel,
-        Role::Ahrs,
-        Role::Radio,
-        Role::Pid,
-        Role::Pwm,
+    pub const CRITICAL: [BodyKind; 6] = [
+        BodyKind::Gyro,
+        BodyKind::Accel,
+        BodyKind::Ahrs,
+        BodyKind::Radio,
+        BodyKind::Pid,
+        BodyKind::Pwm,
     ];
 
-    /// Every role, in the order of [`Role::name`]'s list.
-    pub const ALL: [Role; 10] = [
-        Role::Gyro,
-        Role::Accel,
-        Role::Ahrs,
-        Role::Radio,
-        Role::Pid,
-        Role::Pwm,
-        Role::Load,
-        Role::Vbat,
-        Role::Current,
-        Role::Alert,
+    /// Every role, in the order of [`BodyKind::name`]'s list.
+    pub const ALL: [BodyKind; 10] = [
+        BodyKind::Gyro,
+        BodyKind::Accel,
+        BodyKind::Ahrs,
+        BodyKind::Radio,
+        BodyKind::Pid,
+        BodyKind::Pwm,
+        BodyKind::Load,
+        BodyKind::Vbat,
+        BodyKind::Current,
+        BodyKind::Alert,
     ];
 
     /// The name a spec uses.
     pub fn name(self) -> &'static str {
         match self {
-            Role::Gyro => "gyro",
-            Role::Accel => "accel",
-            Role::Ahrs => "ahrs",
-            Role::Radio => "radio",
-            Role::Pid => "pid",
-            Role::Pwm => "pwm",
-            Role::Load => "system_load",
-            Role::Vbat => "battery_voltage",
-            Role::Current => "battery_current",
-            Role::Alert => "battery_alert",
+            BodyKind::Gyro => "gyro",
+            BodyKind::Accel => "accel",
+            BodyKind::Ahrs => "ahrs",
+            BodyKind::Radio => "radio",
+            BodyKind::Pid => "pid",
+            BodyKind::Pwm => "pwm",
+            BodyKind::Load => "system_load",
+            BodyKind::Vbat => "battery_voltage",
+            BodyKind::Current => "battery_current",
+            BodyKind::Alert => "battery_alert",
         }
     }
 
     /// The role a spec names, if any.
-    pub fn parse(name: &str) -> Option<Role> {
-        Role::ALL.into_iter().find(|r| r.name() == name)
+    pub fn parse(name: &str) -> Option<BodyKind> {
+        BodyKind::ALL.into_iter().find(|r| r.name() == name)
     }
 
     /// The names a spec may use, for error messages.
     pub fn names() -> String {
-        let v: Vec<&str> = Role::ALL.iter().map(|r| r.name()).collect();
+        let v: Vec<&str> = BodyKind::ALL.iter().map(|r| r.name()).collect();
         v.join(", ")
     }
 }
@@ -466,7 +466,7 @@ impl Body<Value> for AlertTask {
 /// Builds the body of a task of `role` with period `period` (ns) for the
 /// vehicle `preset`.
 pub fn body(
-    role: Role,
+    role: BodyKind,
     period: Nanos,
     preset: &Preset,
 ) -> Result<Box<dyn Body<Value>>, ConfigError> {
@@ -479,30 +479,30 @@ pub fn body(
     let hz = 1e9 / period as f64;
     let hk = || Housekeeping::new(HousekeepingConfig::cleanflight(preset.battery.cells));
     Ok(match role {
-        Role::Gyro => Box::new(GyroTask {
+        BodyKind::Gyro => Box::new(GyroTask {
             lpf: Pt1Vec3::new(GYRO_LPF_HZ_DEFAULT.min(0.45 * hz), hz)?,
             acc: GyroAccumulator::new(),
         }),
-        Role::Accel => Box::new(AccelTask),
-        Role::Ahrs => Box::new(AhrsTask {
+        BodyKind::Accel => Box::new(AccelTask),
+        BodyKind::Ahrs => Box::new(AhrsTask {
             mahony: Mahony::new(DCM_KP_DEFAULT, 0.0),
         }),
-        Role::Radio => Box::new(RadioTask::default()),
-        Role::Pid => Box::new(PidTask {
+        BodyKind::Radio => Box::new(RadioTask::default()),
+        BodyKind::Pid => Box::new(PidTask {
             ctrl: Controller::new(preset.pid, hz)?,
             arm: ArmState::default(),
             checks: ArmingChecks::default(),
             failsafe: Failsafe::new(failsafe_config(preset)),
             last: None,
         }),
-        Role::Pwm => Box::new(PwmTask),
-        Role::Load => Box::new(LoadTask { period, hk: hk()? }),
-        Role::Vbat => Box::new(VbatTask { hk: hk()? }),
-        Role::Current => Box::new(CurrentTask {
+        BodyKind::Pwm => Box::new(PwmTask),
+        BodyKind::Load => Box::new(LoadTask { period, hk: hk()? }),
+        BodyKind::Vbat => Box::new(VbatTask { hk: hk()? }),
+        BodyKind::Current => Box::new(CurrentTask {
             hk: hk()?,
             last_read: None,
         }),
-        Role::Alert => Box::new(AlertTask { hk: hk()? }),
+        BodyKind::Alert => Box::new(AlertTask { hk: hk()? }),
     })
 }
 
@@ -567,7 +567,7 @@ pub struct Cosim {
     battery: Battery,
     mission: Mission,
     autopilot: Autopilot,
-    roles: Vec<Option<Role>>,
+    kinds: Vec<Option<BodyKind>>,
     now: u64,
     next_trace: u64,
     /// Time since the battery last stepped, s (it steps every millisecond:
@@ -585,11 +585,11 @@ pub struct Cosim {
 }
 
 impl Cosim {
-    /// The world for tasks of the given roles (indexed like the spec's tasks).
+    /// The world for tasks of the given kinds (indexed like the spec's tasks).
     pub fn new(
         preset: &Preset,
         mission: Mission,
-        roles: Vec<Option<Role>>,
+        kinds: Vec<Option<BodyKind>>,
         cfg: CosimConfig,
     ) -> Result<Cosim, ConfigError> {
         let pp = preset.plant_params();
@@ -600,7 +600,7 @@ impl Cosim {
             battery: Battery::new(preset.battery)?,
             autopilot: Autopilot::new(preset.autopilot, hover)?,
             mission,
-            roles,
+            kinds,
             now: 0,
             next_trace: 0,
             battery_dt: 0.0,
@@ -749,18 +749,18 @@ impl Environment<Value> for Cosim {
     fn sense(&mut self, task: usize, t: Nanos) -> Option<Value> {
         let t = ns(t);
         self.advance(t);
-        let (line, fresh) = match self.roles.get(task).copied().flatten()? {
-            Role::Gyro => (
+        let (line, fresh) = match self.kinds.get(task).copied().flatten()? {
+            BodyKind::Gyro => (
                 0,
                 Some(Value::Imu(self.imu.read_gyro(t, self.plant.state().rate))),
             ),
-            Role::Accel => {
+            BodyKind::Accel => {
                 let sf = self.plant.truth().specific_force;
                 (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
             }
-            Role::Radio => (2, self.radio_frame(t)),
-            Role::Vbat => return Some(Value::Scalar(self.battery.voltage())),
-            Role::Current => return Some(Value::Scalar(self.battery.current())),
+            BodyKind::Radio => (2, self.radio_frame(t)),
+            BodyKind::Vbat => return Some(Value::Scalar(self.battery.voltage())),
+            BodyKind::Current => return Some(Value::Scalar(self.battery.current())),
             _ => return None,
         };
         self.delayed[line].pass(t, fresh)
@@ -769,14 +769,14 @@ impl Environment<Value> for Cosim {
     fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {
         let t = ns(t);
         self.advance(t);
-        match (self.roles.get(task).copied().flatten(), *value) {
-            (Some(Role::Pwm), Value::Motors(m)) => {
+        match (self.kinds.get(task).copied().flatten(), *value) {
+            (Some(BodyKind::Pwm), Value::Motors(m)) => {
                 self.plant.set_motor_commands(m.motors, m.armed);
                 self.seen.motors = m;
             }
-            (Some(Role::Ahrs), Value::Attitude(a)) => self.seen.est = a.euler,
-            (Some(Role::Radio), Value::Radio(r)) => self.seen.sp = r.cmd.setpoint(),
-            (Some(Role::Alert), Value::Alert(a))
+            (Some(BodyKind::Ahrs), Value::Attitude(a)) => self.seen.est = a.euler,
+            (Some(BodyKind::Radio), Value::Radio(r)) => self.seen.sp = r.cmd.setpoint(),
+            (Some(BodyKind::Alert), Value::Alert(a))
                 if a != BatteryAlert::Ok && self.alerts.last().is_none_or(|&(_, l)| l != a) =>
             {
                 self.alerts.push((t, a));

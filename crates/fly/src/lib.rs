@@ -16,7 +16,7 @@ use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::preset::{Preset, BUILTIN};
 use rtpipe_flight::quality::{assess, FlightQuality};
 use rtpipe_flight::radio::Mission;
-use rtpipe_flight::tasks::{body, Cosim, CosimConfig, Role, Value};
+use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig, SimResult};
@@ -36,7 +36,7 @@ pub struct Setup {
     pub mission: Mission,
     /// The flight-controller role of each task's body, in declaration order
     /// (`None`: a task without a body).
-    pub roles: Vec<Option<Role>>,
+    pub kinds: Vec<Option<BodyKind>>,
     /// How long to fly (simulated ns).
     pub horizon: Nanos,
     /// The world's options (noise, disturbances).
@@ -86,26 +86,26 @@ fn mission(m: &str) -> Result<Mission, Diagnostic> {
 }
 
 /// The role of every task from its `body`; the pipeline must be complete.
-pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, Diagnostic> {
-    let mut roles = Vec::with_capacity(spec.tasks.len());
+pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Diagnostic> {
+    let mut kinds = Vec::with_capacity(spec.tasks.len());
     for t in &spec.tasks {
         let r = match &t.body {
             None => None,
-            Some(b) => Some(Role::parse(b).ok_or_else(|| {
+            Some(b) => Some(BodyKind::parse(b).ok_or_else(|| {
                 Diagnostic::error(
                     format!(
                         "{}: task `{}` names an unknown body `{b}`",
                         path.display(),
                         t.name
                     ),
-                    format!("use one of: {}", Role::names()),
+                    format!("use one of: {}", BodyKind::names()),
                 )
             })?),
         };
-        roles.push(r);
+        kinds.push(r);
     }
-    for need in Role::CRITICAL {
-        if !roles.contains(&Some(need)) {
+    for need in BodyKind::CRITICAL {
+        if !kinds.contains(&Some(need)) {
             return Err(Diagnostic::error(
                 format!(
                     "{}: no task has body = \"{}\", so the flight controller is incomplete",
@@ -116,7 +116,7 @@ pub fn roles(spec: &Spec, path: &Path) -> Result<Vec<Option<Role>>, Diagnostic> 
             ));
         }
     }
-    Ok(roles)
+    Ok(kinds)
 }
 
 /// What to fly: the vehicle (a built-in preset name or a preset file), the
@@ -137,7 +137,7 @@ pub struct Request<'a> {
 
 /// Checks the request against the spec before anything runs.
 pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
-    let roles = roles(spec, r.spec_path)?;
+    let kinds = body_kinds(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
     let mission = mission(r.mission)?;
     let horizon = r
@@ -152,7 +152,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
     Ok(Setup {
         preset,
         mission,
-        roles,
+        kinds,
         horizon,
         world: CosimConfig::new(r.seed),
     })
@@ -176,7 +176,7 @@ type Bodies = Vec<Box<dyn Body<Value>>>;
 /// world, both for `s`: what every executor of a flight needs.
 fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnostic> {
     let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
-    for (t, role) in spec.tasks.iter().zip(&s.roles) {
+    for (t, role) in spec.tasks.iter().zip(&s.kinds) {
         let period = t.fixed_period().unwrap_or(0);
         bodies.push(match role {
             Some(r) => body(*r, period, &s.preset).map_err(|e| {
@@ -188,7 +188,7 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
             None => Box::new(idle),
         });
     }
-    let world = Cosim::new(&s.preset, s.mission.clone(), s.roles.clone(), s.world)
+    let world = Cosim::new(&s.preset, s.mission.clone(), s.kinds.clone(), s.world)
         .map_err(|e| Diagnostic::error(format!("--vehicle: {e}"), "check the preset file"))?;
     Ok((bodies, world))
 }
@@ -447,7 +447,7 @@ mod tests {
     fn incomplete_or_unknown_bodies_are_refused() {
         let (mut spec, path) = cleanflight();
         spec.tasks[0].body = Some("gyroscope".into());
-        let e = roles(&spec, &path)
+        let e = body_kinds(&spec, &path)
             .err()
             .map(|b| b.to_string())
             .unwrap_or_default();
@@ -456,7 +456,7 @@ mod tests {
             "{e}"
         );
         spec.tasks[0].body = None;
-        let e = roles(&spec, &path)
+        let e = body_kinds(&spec, &path)
             .err()
             .map(|b| b.to_string())
             .unwrap_or_default();

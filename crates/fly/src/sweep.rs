@@ -18,15 +18,15 @@ use rayon::prelude::*;
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric};
 use rtpipe_flight::quality::{Criteria, FlightQuality};
-use rtpipe_flight::tasks::Role;
+use rtpipe_flight::tasks::BodyKind;
 use rtpipe_model::Diagnostic;
 use rtpipe_model::{Nanos, PeriodSpec, Server, Spec};
 use rtpipe_sim::ExecModel;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The sensing roles a pure delay can be put on, in the order of
+/// The sensing kinds a pure delay can be put on, in the order of
 /// `CosimConfig::sense_delay_ns`.
-pub const DELAY_LINES: [Role; 3] = [Role::Gyro, Role::Accel, Role::Radio];
+pub const DELAY_LINES: [BodyKind; 3] = [BodyKind::Gyro, BodyKind::Accel, BodyKind::Radio];
 
 /// A chain's (reaction, freshness) bounds or limits, ns.
 pub type ChainPair = (Option<Nanos>, Option<Nanos>);
@@ -112,7 +112,7 @@ fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, bool) {
 /// The delay line a chain starts at, if any.
 pub fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
     let head = *spec.chains.get(chain)?.path.first()?;
-    let role = s.roles.get(head).copied().flatten()?;
+    let role = s.kinds.get(head).copied().flatten()?;
     DELAY_LINES.iter().position(|&r| r == role)
 }
 
