@@ -1,5 +1,6 @@
 use super::*;
 use rtpipe_model::Spec;
+use std::sync::{Arc, Mutex};
 
 use rtpipe_testkit::example_with as load_with;
 
