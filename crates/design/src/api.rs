@@ -123,7 +123,7 @@ pub struct Conflict {
     pub fix: Option<String>,
 }
 
-/// The answer of [`crate::design`].
+/// The answer of `rtpipe_design::design`.
 #[derive(Debug, Clone)]
 pub struct Outcome {
     /// What was proven.

@@ -728,7 +728,7 @@ pub(crate) fn probe(p: &Problem, budget: &mut Budget, groups: &[Group]) -> Optio
 }
 
 /// Hands a better verified design (its Σ C/T `u`, the least open bound
-/// then) to [`crate::Options::incumbent`], so that a caller that stops
+/// then) to [`Options::incumbent`](crate::api::Options::incumbent), so that a caller that stops
 /// waiting (Ctrl-C) can still report it.
 pub(crate) fn publish(p: &Problem, spec: &Spec, u: f64, lower_bound: f64) {
     if let Some(sink) = &p.opts.incumbent {

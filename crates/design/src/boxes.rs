@@ -9,7 +9,7 @@ use crate::heuristic::descent;
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 
-/// Boxes the search may examine per unit of [`crate::Options::patience`]
+/// Boxes the search may examine per unit of [`Options::patience`](crate::api::Options::patience)
 /// once it holds a verified design (without a time limit).
 const BOX_WORK_PER_PATIENCE: u64 = 10;
 
