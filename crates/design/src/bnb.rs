@@ -18,12 +18,14 @@
 //! Nothing is approximated: the answer is verified by the analysis, and
 //! every pruned box provably holds nothing better. docs/design.md argues it.
 
-use crate::{utilization, Dom, Group, Incumbent, Mode, Runner};
+use crate::api::{utilization, Incumbent};
+use crate::axis::{Axis, Node};
+use crate::budget::Budget;
+use crate::joint::{joint_bound, least_under, Row};
+use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
-use rtpipe_analysis::Anchor;
-use rtpipe_analysis::{Metric, Report};
+use rtpipe_analysis::{Metric, Mode, Report};
 use rtpipe_model::{Nanos, Server, Spec};
-use std::cmp::Ordering as CmpOrdering;
 use std::collections::BinaryHeap;
 use std::ops::ControlFlow;
 
@@ -38,162 +40,21 @@ const NARROW_ROUNDS: usize = 2;
 /// span is at least this share of the widest period split's.
 const ORDER_FIRST: f64 = 0.5;
 
-/// Coordinate-ascent sweeps over the multipliers of the joint bound.
-const JOINT_SWEEPS: usize = 3;
-
-/// One limit in the joint bound: Σ s_i T_i ≤ room.
-struct Row {
-    slopes: Vec<(usize, f64)>,
-    room: f64,
-}
-
-impl Row {
-    /// The form below all of `forms` (least base, least slope per task),
-    /// written as Σ s_i T_i ≤ room.
-    fn new(forms: &[&Affine], limit: f64, lo: &[Nanos], n: usize) -> Row {
-        let mut least: Option<Vec<f64>> = None;
-        let mut base = f64::INFINITY;
-        for a in forms {
-            let mut s = vec![0.0; n];
-            a.slopes.iter().for_each(|&(i, x)| s[i] += x);
-            least = Some(match least {
-                None => s,
-                Some(m) => m.iter().zip(&s).map(|(x, y)| x.min(*y)).collect(),
-            });
-            base = base.min(a.base);
-        }
-        let slopes: Vec<(usize, f64)> = least
-            .unwrap_or_default()
-            .into_iter()
-            .enumerate()
-            .filter(|&(_, x)| x > 0.0)
-            .collect();
-        let at_lo: f64 = slopes.iter().map(|&(i, x)| x * lo[i] as f64).sum();
-        Row {
-            room: limit - base + at_lo,
-            slopes,
-        }
-    }
-}
-
 /// A dive for a better verified design every this many boxes.
 const DIVE_EVERY: u64 = 64;
-
-/// The period values (ns) one task may take, ascending.
-#[derive(Debug, Clone)]
-enum Axis {
-    /// `first + k·step` for k in 0..len.
-    Grid {
-        first: Nanos,
-        step: Nanos,
-        len: u32,
-    },
-    List(Vec<Nanos>),
-}
-
-impl Axis {
-    fn new(d: &Dom, g: i64) -> Axis {
-        match d {
-            Dom::Fixed(t) => Axis::List(vec![t * g]),
-            Dom::Grid { step, lo, hi } => Axis::Grid {
-                first: lo * step * g,
-                step: step * g,
-                len: u32::try_from(hi - lo + 1).unwrap_or(u32::MAX),
-            },
-            Dom::Choice(v) => {
-                let mut v: Vec<Nanos> = v.iter().map(|t| t * g).collect();
-                v.sort_unstable();
-                v.dedup();
-                Axis::List(v)
-            }
-        }
-    }
-
-    fn len(&self) -> u32 {
-        match self {
-            Axis::Grid { len, .. } => *len,
-            Axis::List(v) => v.len() as u32,
-        }
-    }
-
-    fn value(&self, k: u32) -> Nanos {
-        debug_assert!(k < self.len());
-        match self {
-            Axis::Grid { first, step, .. } => first + step * Nanos::from(k),
-            Axis::List(v) => v[k as usize],
-        }
-    }
-
-    /// The last index whose value is at most `t` (`None` when none).
-    fn last_at_most(&self, t: Nanos) -> Option<u32> {
-        let k = match self {
-            Axis::Grid { first, step, len } => {
-                if t < *first {
-                    return None;
-                }
-                ((t - first) / step).min(Nanos::from(*len) - 1) as u32
-            }
-            Axis::List(v) => (v.partition_point(|&x| x <= t) as u32).checked_sub(1)?,
-        };
-        Some(k)
-    }
-
-    /// The first index whose value is at least `t` (`len` when none).
-    fn first_at_least(&self, t: f64) -> u32 {
-        match self {
-            Axis::Grid { first, step, len } => {
-                let k = ((t - *first as f64) / *step as f64).ceil().max(0.0);
-                if k >= f64::from(*len) {
-                    *len
-                } else {
-                    k as u32
-                }
-            }
-            Axis::List(v) => v.partition_point(|&x| (x as f64) < t) as u32,
-        }
-    }
-}
-
-/// A box: index intervals per task, with its bound Σ C/hi.
-#[derive(Debug, Clone)]
-struct Node {
-    lo: Vec<u32>,
-    hi: Vec<u32>,
-    /// RM rank orders imposed by branching: (a, b) = a above b.
-    above: Vec<(usize, usize)>,
-    bound: f64,
-}
-
-impl PartialEq for Node {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o) == CmpOrdering::Equal
-    }
-}
-impl Eq for Node {}
-impl PartialOrd for Node {
-    fn partial_cmp(&self, o: &Self) -> Option<CmpOrdering> {
-        Some(self.cmp(o))
-    }
-}
-impl Ord for Node {
-    /// The heap pops the smallest bound first.
-    fn cmp(&self, o: &Self) -> CmpOrdering {
-        o.bound.total_cmp(&self.bound)
-    }
-}
 
 /// What the box search ended with.
 pub(crate) struct BoxResult {
     /// The best verified design: the spec with its periods, the analysis, U.
-    pub best: Option<(Spec, Report, f64)>,
+    pub(crate) best: Option<(Spec, Report, f64)>,
     /// A proven lower bound on the optimum (over the active groups).
-    pub lower_bound: f64,
+    pub(crate) lower_bound: f64,
     /// Every box was decided: `best` is optimal, or there is none.
-    pub complete: bool,
-    pub nodes: u64,
+    pub(crate) complete: bool,
+    pub(crate) nodes: u64,
     /// The most boxes held open at once (memory: each holds two indices
     /// per task).
-    pub peak_open: usize,
+    pub(crate) peak_open: usize,
 }
 
 /// The state of a running box search: the best design so far and the boxes
@@ -240,8 +101,10 @@ impl Frontier {
 }
 
 /// The box search of one problem: which constraint groups count, the axes.
-pub(crate) struct BoxSearch<'r, 'a> {
-    run: &'r mut Runner<'a>,
+struct BoxSearch<'r, 'a> {
+    p: &'r Problem<'a>,
+    /// Each box examined is one unit of work.
+    effort: &'r mut Budget,
     groups: &'r [Group],
     axes: Vec<Axis>,
     /// Budgets C_i of guaranteed tasks (0 for background ones).
@@ -251,9 +114,9 @@ pub(crate) struct BoxSearch<'r, 'a> {
 }
 
 impl<'r, 'a> BoxSearch<'r, 'a> {
-    pub fn new(run: &'r mut Runner<'a>, groups: &'r [Group]) -> Self {
-        let axes = run.dom.iter().map(|d| Axis::new(d, run.g)).collect();
-        let budget = run
+    fn new(p: &'r Problem<'a>, effort: &'r mut Budget, groups: &'r [Group]) -> Self {
+        let axes = p.dom.iter().map(|d| Axis::new(d, p.g)).collect();
+        let budget = p
             .spec
             .tasks
             .iter()
@@ -263,7 +126,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             })
             .collect();
         BoxSearch {
-            run,
+            p,
+            effort,
             groups,
             axes,
             budget,
@@ -317,7 +181,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     fn may_hold(&self, r: &Relaxed) -> bool {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         let sound = self.mode() == Mode::Sound;
         // The sound analysis needs every chain bounded, limit or not.
         if sound && r.chains.iter().any(|c| c.0.is_none() || c.1.is_none()) {
@@ -339,7 +203,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 
     fn mode(&self) -> Mode {
-        self.run.opts.mode
+        self.p.opts.mode
     }
 
     /// The affine forms whose least is the limited figure of chain k in the
@@ -359,14 +223,14 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// The analysis of one point, and whether it meets the active groups
     /// (and, in sound mode, bounds every chain).
     fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
-        let spec = self.run.with_periods(&self.periods(k));
+        let spec = self.p.with_periods(&self.periods(k));
         let report = rtpipe_analysis::analyze(&spec);
         let mode = self.mode();
         let bounded = mode == Mode::Paper
             || report
                 .chains
                 .iter()
-                .all(|c| c.bound.sound(Anchor::Read).is_some());
+                .all(|c| c.bound.sound(rtpipe_analysis::Anchor::Read).is_some());
         let ok = bounded
             && self.groups.iter().all(|g| match *g {
                 Group::Limit(k, m) => report
@@ -397,7 +261,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 }
             }
             let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
-            let r = relax(self.run.spec, &lo, &hi, &node.above, true);
+            let r = relax(self.p.spec, &lo, &hi, &node.above, true);
             if !self.may_hold(&r) {
                 return false;
             }
@@ -428,13 +292,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// sound mode (a chain needs them bounded), at budget level under RTA.
     /// Raises each interval's bottom past them; `None` when one empties.
     fn raise_to_responses(&self, node: &mut Node, r: &Relaxed) -> Option<bool> {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         let rta = spec.schedulability == rtpipe_model::SchedTest::Rta;
         let sound = self.mode() == Mode::Sound;
         let mut changed = false;
         for i in 0..node.lo.len() {
             let need = [
-                (sound && self.run.on_chain[i], r.job_response[i]),
+                (sound && self.p.on_chain[i], r.job_response[i]),
                 (
                     rta && spec.tasks[i].server != Server::Background,
                     r.budget_response[i],
@@ -461,7 +325,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// limit's affine forms exceed it even with every other period at its
     /// shortest; `None` when an interval empties, else whether any moved.
     fn cut_by_forms(&self, node: &mut Node, r: &Relaxed, lo: &[Nanos]) -> Option<bool> {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         let n = node.lo.len();
         let mut changed = false;
         for g in self.groups {
@@ -512,7 +376,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// forms (`Relaxed::forms`) keep the periods of its tasks from all
     /// being longest. `None` when some limit cannot hold in the box.
     fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         let plain = self.utilization_at(hi);
         let mut bound = plain;
         let mut joint = Vec::new();
@@ -525,89 +389,12 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let Some(limit) = limit else { continue };
             let b = forms
                 .iter()
-                .filter_map(|a| self.least_under(a, limit as f64, lo, hi))
+                .filter_map(|a| least_under(&self.budget, a, limit as f64, lo, hi))
                 .min_by(f64::total_cmp)?;
             bound = bound.max(b);
             joint.push(Row::new(&forms, limit as f64, lo, lo.len()));
         }
-        Some(bound.max(self.joint_bound(&joint, lo, hi)))
-    }
-
-    /// A lower bound from every limit at once (limits share tasks): the
-    /// Lagrangian dual of the separable convex problem, with one multiplier
-    /// per limit, raised by coordinate ascent. For multipliers λ ≥ 0,
-    /// Σ_i min_T (C_i/T_i + w_i T_i) − Σ λ_c room_c with w = Σ λ_c s_c is a
-    /// valid bound whatever λ, the minimising T_i = √(C_i / w_i) clamped to
-    /// the box. A reaction limit (E or F below it) enters as the form below
-    /// both, the least base and slopes.
-    fn joint_bound(&self, rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
-        let n = lo.len();
-        let mut lambda = vec![0.0f64; rows.len()];
-        let t_at = |w: &[f64], i: usize| {
-            let (l, h) = (lo[i] as f64, hi[i] as f64);
-            match (self.budget[i] == 0.0, w[i] > 0.0) {
-                (true, _) => l,
-                (false, false) => h,
-                (false, true) => (self.budget[i] / w[i]).sqrt().clamp(l, h),
-            }
-        };
-        let weights = |lambda: &[f64]| {
-            let mut w = vec![0.0; n];
-            for (row, &l) in rows.iter().zip(lambda) {
-                row.slopes.iter().for_each(|&(i, s)| w[i] += l * s);
-            }
-            w
-        };
-        // One multiplier is maximised in one pass.
-        let sweeps = if rows.len() > 1 { JOINT_SWEEPS } else { 1 };
-        for _ in 0..sweeps {
-            for c in 0..rows.len() {
-                // d dual / d λ_c = Σ s_ci T_i − S_c falls as λ_c grows.
-                let slack = |x: f64, lambda: &mut Vec<f64>| {
-                    lambda[c] = x;
-                    let w = weights(lambda);
-                    rows[c]
-                        .slopes
-                        .iter()
-                        .map(|&(i, s)| s * t_at(&w, i))
-                        .sum::<f64>()
-                        - rows[c].room
-                };
-                if slack(0.0, &mut lambda) <= 0.0 {
-                    continue;
-                }
-                let (mut a, mut b) = (-60.0f64, 20.0f64);
-                for _ in 0..40 {
-                    let m = 0.5 * (a + b);
-                    if slack(m.exp2(), &mut lambda) > 0.0 {
-                        a = m;
-                    } else {
-                        b = m;
-                    }
-                }
-                lambda[c] = b.exp2();
-            }
-        }
-        let w = weights(&lambda);
-        let primal: f64 = (0..n)
-            .map(|i| {
-                let t = t_at(&w, i);
-                self.budget[i] / t + w[i] * t
-            })
-            .sum();
-        primal
-            - rows
-                .iter()
-                .zip(&lambda)
-                .map(|(r, l)| l * r.room)
-                .sum::<f64>()
-    }
-
-    /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
-    /// nowhere): the joint bound of that one limit.
-    fn least_under(&self, form: &Affine, limit: f64, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
-        (form.base <= limit)
-            .then(|| self.joint_bound(&[Row::new(&[form], limit, lo, lo.len())], lo, hi))
+        Some(bound.max(joint_bound(&self.budget, &joint, lo, hi)))
     }
 
     /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
@@ -672,7 +459,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// A pair on one CPU under RM, one of them blamed, whose order the box
     /// and the imposed orders leave open: the widest narrower span first.
     fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         if !spec.policy().fixed_priority() {
             return None;
         }
@@ -707,7 +494,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
 
     /// Tasks of a constraint the corner fails.
     fn blamed(&self, node: &Node, report: &Report) -> Vec<bool> {
-        let spec = self.run.spec;
+        let spec = self.p.spec;
         let mut blamed = vec![false; node.lo.len()];
         for c in &report.chains {
             if !c.ok {
@@ -815,7 +602,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
 
     /// Runs the search from the whole domain, starting from `seed` (a
     /// verified design, if any).
-    pub fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
+    fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
         let n = self.axes.len();
         let mut root = Node {
             lo: vec![0; n],
@@ -850,13 +637,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
             return ControlFlow::Continue(());
         }
-        if self.run.out_of_time() {
+        if self.effort.out_of_time() {
             f.open.push(node);
             f.stopped = true;
             return ControlFlow::Break(());
         }
         f.nodes += 1;
-        self.run.work += 1;
+        self.effort.work += 1;
         if f.nodes % 256 == 1 {
             self.progress(f.nodes, f.open.len(), node.bound, incumbent);
         }
@@ -865,7 +652,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         }
         if f.nodes % DIVE_EVERY == 1 {
             if let Some(found) = self.dive(&node, f.best.as_ref().map(|b| b.2)) {
-                self.publish(&found.0, found.2, node.bound);
+                publish(self.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }
         }
@@ -882,7 +669,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if ok {
             let u = utilization(&spec);
             if incumbent.is_none_or(|b| u < b) {
-                self.publish(
+                publish(
+                    self.p,
                     &spec,
                     u,
                     f.open.iter().map(|n| n.bound).fold(node.bound, f64::min),
@@ -903,24 +691,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         ControlFlow::Continue(())
     }
 
-    fn publish(&self, spec: &Spec, u: f64, lower_bound: f64) {
-        if let Some(sink) = &self.run.opts.incumbent {
-            if let Ok(mut g) = sink.lock() {
-                *g = Some(Incumbent {
-                    periods: spec
-                        .tasks
-                        .iter()
-                        .map(|t| t.fixed_period().unwrap_or(0))
-                        .collect(),
-                    utilization: u,
-                    lower_bound: Some(lower_bound),
-                });
-            }
-        }
-    }
-
     fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {
-        self.run.say(|| {
+        self.p.say(|| {
             let best = best.map_or(String::new(), |u| {
                 let gap = if u > 0.0 {
                     (u - bound).max(0.0) / u
@@ -934,112 +706,46 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     }
 }
 
-impl Runner<'_> {
-    /// The whole design by box search: a first design by local search, the
-    /// search, and on infeasibility the conflicting constraints.
-    pub(crate) fn solve_boxes(&mut self) -> Result<crate::Outcome, crate::DesignError> {
-        let groups = self.all_groups();
-        let seed = self.descent();
-        if let Some((spec, _, u)) = &seed {
-            BoxSearch::new(self, &groups).publish(spec, *u, 0.0);
-        }
-        if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
-            self.work_cap = Some(
-                self.work
-                    .saturating_add(p.saturating_mul(BOX_WORK_PER_PATIENCE)),
-            );
-        }
-        let found = BoxSearch::new(self, &groups).run(seed);
-        self.iterations = found.nodes as usize;
-        let mut notes = Vec::new();
-        let mut o = match (found.best, found.complete) {
-            (Some((spec, report, u)), complete) => {
-                let status = if complete {
-                    crate::Status::Optimal
-                } else {
-                    notes.push(self.stop_reason());
-                    crate::Status::Feasible
-                };
-                let lb = if complete {
-                    u
-                } else {
-                    found.lower_bound.min(u)
-                };
-                let mut o = self.outcome(status, Some((spec, report)), Some(lb), Vec::new(), notes);
-                o.objective = Some(u);
-                o.gap = Some(if u > 0.0 {
-                    ((u - lb) / u).max(0.0)
-                } else {
-                    0.0
-                });
-                o
-            }
-            (None, true) => {
-                self.work_cap = None;
-                if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
-                    self.work_cap = Some(self.work.saturating_add(
-                        p.saturating_mul(BOX_WORK_PER_PATIENCE * crate::EXPLAIN_EFFORT),
-                    ));
-                }
-                let (conflicts, minimal) = self.explain(&groups, None);
-                if !minimal {
-                    notes.push(format!(
-                        "the conflict search stopped ({}): the set may not be minimal and fixes may be missing",
-                        self.stop_cause()
-                    ));
-                }
-                self.outcome(crate::Status::Infeasible, None, None, conflicts, notes)
-            }
-            (None, false) => {
-                notes.push(format!(
-                    "stopped ({}) before a verified design",
-                    self.stop_cause()
-                ));
-                let mut o = self.outcome(crate::Status::Unknown, None, None, Vec::new(), notes);
-                o.lower_bound = Some(found.lower_bound);
-                o
-            }
-        };
-        o.peak_open = found.peak_open;
-        Ok(o)
-    }
+/// The box search of `p` over `groups` from the whole domain, starting from
+/// `seed` (a verified design, if any); each box is a unit of `budget`'s
+/// work.
+pub(crate) fn search(
+    p: &Problem,
+    budget: &mut Budget,
+    groups: &[Group],
+    seed: Option<(Spec, Report, f64)>,
+) -> BoxResult {
+    BoxSearch::new(p, budget, groups).run(seed)
+}
 
-    fn stop_cause(&self) -> &'static str {
-        if self
-            .opts
-            .cancel
-            .as_ref()
-            .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
-        {
-            "interrupted"
-        } else if self.opts.time_limit.is_some() {
-            "time limit"
-        } else {
-            "work budget; --time-limit S searches for S seconds instead"
-        }
-    }
-
-    fn stop_reason(&self) -> String {
-        format!(
-            "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
-            self.stop_cause()
-        )
-    }
-
-    /// Whether `groups` can hold together: a box search that stops at the
-    /// first verified design. `None` when it ran out of time or work.
-    pub(crate) fn probe_boxes(&mut self, groups: &[Group]) -> Option<bool> {
-        let mut search = BoxSearch::new(self, groups);
-        search.first_only = true;
-        let r = search.run(None);
-        match (r.best, r.complete) {
-            (Some(_), _) => Some(true),
-            (None, true) => Some(false),
-            (None, false) => None,
-        }
+/// Whether `groups` can hold together: a box search that stops at the
+/// first verified design. `None` when it ran out of time or work.
+pub(crate) fn probe(p: &Problem, budget: &mut Budget, groups: &[Group]) -> Option<bool> {
+    let mut search = BoxSearch::new(p, budget, groups);
+    search.first_only = true;
+    let r = search.run(None);
+    match (r.best, r.complete) {
+        (Some(_), _) => Some(true),
+        (None, true) => Some(false),
+        (None, false) => None,
     }
 }
 
-/// Boxes the search may examine per unit of [`crate::Options::patience`]
-/// once it holds a verified design (without a time limit).
-const BOX_WORK_PER_PATIENCE: u64 = 10;
+/// Hands a better verified design (its Σ C/T `u`, the least open bound
+/// then) to [`Options::incumbent`](crate::api::Options::incumbent), so that a caller that stops
+/// waiting (Ctrl-C) can still report it.
+pub(crate) fn publish(p: &Problem, spec: &Spec, u: f64, lower_bound: f64) {
+    if let Some(sink) = &p.opts.incumbent {
+        if let Ok(mut g) = sink.lock() {
+            *g = Some(Incumbent {
+                periods: spec
+                    .tasks
+                    .iter()
+                    .map(|t| t.fixed_period().unwrap_or(0))
+                    .collect(),
+                utilization: u,
+                lower_bound: Some(lower_bound),
+            });
+        }
+    }
+}

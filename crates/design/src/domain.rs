@@ -1,7 +1,7 @@
 //! Period domains: the grid every period lives on, each task's domain
 //! (fixed, a range of grid steps, or a list of choices), harmonic domains.
 
-use crate::DesignError;
+use crate::api::DesignError;
 use rtpipe_model::{format_in, gcd, Nanos, PeriodSpec, Spec, Task, MAX_TIME};
 
 /// The period domain of one task, in grid units (g ns).

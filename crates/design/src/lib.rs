@@ -8,254 +8,63 @@
 //! Every answer is re-checked by `rtpipe_analysis::analyze` before it is
 //! returned; the [`Outcome`] carries that report.
 //!
-//! Two searches: the box search (`bnb`) and the MILP, whose parts are
-//! `domain` (period grids), `linear` (expressions), `master` (the master
-//! problem), `paper` / `sound` / `rta` (the encodings), `solve` (one master
-//! solve), `heuristic` (quick verified designs), `explain` (conflicts) and
-//! `runner` (the loop of master solves and cuts). docs/architecture.md
-//! places the crate in the workspace.
+//! Two searches share the problem (`problem`: spec, domains, options;
+//! `domain` the period grids), what the search learns (`learnt`: cuts,
+//! response-time levels, tangent points) and the budget (`budget`: work,
+//! time, iterations). The box search: `boxes` (the whole design) runs `bnb`
+//! (the search), which uses `axis` (boxes of period values) and `joint`
+//! (bounds from the chain limits). The MILP: `runner` (the loop of master
+//! solves and cuts) runs `solve` (one master solve) on `master` (the master
+//! problem assembled from `model`, its variables and switches, and the
+//! encodings `paper` / `sound` / `rta`, written with `linear` expressions
+//! for the solver layer `lp`), with `heuristic` (quick verified designs).
+//! `explain` (conflicts of an infeasible problem) probes with either.
+//! `api` holds the public types. No module uses one of a layer above its
+//! own (listed below), so the modules import each other without cycles;
+//! docs/architecture.md places the crate in the workspace.
 #![deny(missing_docs)]
 
+// Layers, bottom up; a module uses only modules of lower layers:
+// lp < api, linear < domain < problem < budget, model < paper, rta, sound
+// < learnt < master < solve < heuristic, axis, joint < bnb < explain
+// < boxes, runner < lib.rs (`design`).
+mod api;
+mod axis;
 mod bnb;
+mod boxes;
+mod budget;
 mod domain;
 mod explain;
 mod heuristic;
+mod joint;
+mod learnt;
 mod linear;
 /// The solver layer: a small MILP handed to good_lp (microlp, HiGHS).
 pub mod lp;
 mod master;
+mod model;
 mod paper;
+mod problem;
 mod rta;
 mod runner;
 mod solve;
 mod sound;
 
-use domain::{domains, Dom};
-use lp::{LpError, SolverKind};
-use master::Group;
-use rtpipe_analysis::Report;
-use rtpipe_model::{Diagnostic, Nanos, Server, Spec};
-use runner::Runner;
-use std::sync::atomic::AtomicBool;
-use std::sync::{Arc, Mutex};
+pub use api::{
+    utilization, Conflict, DesignError, ErrorKind, Incumbent, Method, Options, Outcome, Status,
+    EXACT_PATIENCE, EXPLAIN_EFFORT,
+};
+use budget::Budget;
+use domain::domains;
+use learnt::Learnt;
+use lp::LpError;
+use problem::Problem;
+use rtpipe_model::{Nanos, Spec};
 use std::time::Instant;
 
 /// Which analysis the chain limits are judged by (one enum for the whole
 /// workspace).
 pub use rtpipe_analysis::Mode;
-
-/// How the exact search runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
-    /// The box search where it applies (sound mode, periods not harmonic),
-    /// the MILP otherwise.
-    Auto,
-    /// Branch and bound over boxes of periods, pruned by the sound
-    /// analysis' relaxation (`bnb.rs`; sound mode only).
-    Boxes,
-    /// The mixed-integer model of docs/design.md, solved by `solver`.
-    Milp,
-}
-
-impl Method {
-    /// The name the CLI's `--method` takes.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Auto => "auto",
-            Method::Boxes => "boxes",
-            Method::Milp => "milp",
-        }
-    }
-}
-
-/// How to design: the analysis, the search, the solver and the limits.
-#[derive(Debug, Clone)]
-pub struct Options {
-    /// The analysis the chain limits are judged by.
-    pub mode: Mode,
-    /// The search to run.
-    pub method: Method,
-    /// The MILP's solver.
-    pub solver: SolverKind,
-    /// Wall-clock limit for the whole search, in seconds. Without it the
-    /// search is bounded by work only, so its answer is the same on every
-    /// machine.
-    pub time_limit: Option<f64>,
-    /// Upper bound on master solves.
-    pub max_iterations: usize,
-    /// Without a time limit: work (branch-and-bound nodes, plus one per
-    /// master solve) the exact search may spend after a verified design is
-    /// found, and the conflict search spends at most [`EXPLAIN_EFFORT`]
-    /// times this once infeasibility is proven (`None`: no bound, until
-    /// the search is done).
-    pub patience: Option<u64>,
-    /// Where the search says what it is doing, for a progress display.
-    pub progress: Option<Arc<Mutex<String>>>,
-    /// Set from outside (Ctrl-C) to stop the search as its time limit would.
-    pub cancel: Option<Arc<AtomicBool>>,
-    /// Where the search publishes every better verified design as it finds
-    /// it, so that a caller can still report the best one when it stops
-    /// waiting (Ctrl-C).
-    pub incumbent: Option<Arc<Mutex<Option<Incumbent>>>>,
-}
-
-/// A verified design found during the search.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Incumbent {
-    /// Period of every task (ns), in declaration order.
-    pub periods: Vec<Nanos>,
-    /// Its Σ C/T.
-    pub utilization: f64,
-    /// The best proven lower bound on the optimum when it was found.
-    pub lower_bound: Option<f64>,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            mode: Mode::Sound,
-            method: Method::Auto,
-            solver: SolverKind::Microlp,
-            time_limit: None,
-            max_iterations: 500,
-            patience: Some(EXACT_PATIENCE),
-            progress: None,
-            cancel: None,
-            incumbent: None,
-        }
-    }
-}
-
-/// What the search proved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status {
-    /// Proven minimal.
-    Optimal,
-    /// Verified, but not proven minimal (see the gap).
-    Feasible,
-    /// Proven impossible (see the conflicts).
-    Infeasible,
-    /// Neither a verified design nor a proof of infeasibility.
-    Unknown,
-}
-
-impl Status {
-    /// The name printed and written to JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Status::Optimal => "optimal",
-            Status::Feasible => "feasible",
-            Status::Infeasible => "infeasible",
-            Status::Unknown => "unknown",
-        }
-    }
-}
-
-/// One constraint of a conflicting set, and how far it would have to move.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Conflict {
-    /// The constraint, said for the user (e.g. `chain t1>t4: reaction ≤ 10`).
-    pub constraint: String,
-    /// What would make the rest of the set feasible, when computed.
-    pub fix: Option<String>,
-}
-
-/// The answer of [`design`].
-#[derive(Debug, Clone)]
-pub struct Outcome {
-    /// What was proven.
-    pub status: Status,
-    /// The spec with every period fixed to the design, when one was found.
-    pub spec: Option<Spec>,
-    /// The analysis of that spec (the re-check).
-    pub report: Option<Report>,
-    /// Σ C/T of the design.
-    pub objective: Option<f64>,
-    /// A proven lower bound on the optimum.
-    pub lower_bound: Option<f64>,
-    /// (objective − lower bound) / objective.
-    pub gap: Option<f64>,
-    /// The search that ran: [`Method::Boxes`] or [`Method::Milp`].
-    pub method: Method,
-    /// The MILP's solver (also when the box search ran).
-    pub solver: SolverKind,
-    /// Wall-clock time of the search.
-    pub seconds: f64,
-    /// Master solves (MILP) or boxes examined (box search).
-    pub iterations: usize,
-    /// The most boxes the box search held open at once (memory).
-    pub peak_open: usize,
-    /// A small set of constraints that cannot hold together (infeasible).
-    pub conflicts: Vec<Conflict>,
-    /// What the user should know about the answer.
-    pub notes: Vec<String>,
-}
-
-/// Whose fault a [`DesignError`] is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorKind {
-    /// The input makes designing meaningless or impossible to model.
-    Input,
-    /// The solver failed.
-    Solver,
-    /// rtpipe's model and analysis disagree (a bug).
-    Internal,
-}
-
-/// Why no design could be attempted (not an infeasible design: that is an
-/// [`Outcome`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct DesignError {
-    /// Whose fault it is.
-    pub kind: ErrorKind,
-    /// What went wrong and what to change, when we can tell.
-    pub diagnostic: Diagnostic,
-}
-
-impl DesignError {
-    fn of(kind: ErrorKind, message: impl Into<String>) -> Self {
-        DesignError {
-            kind,
-            diagnostic: Diagnostic::new(message, None),
-        }
-    }
-
-    /// A problem with the input.
-    pub fn input(message: impl Into<String>) -> Self {
-        DesignError::of(ErrorKind::Input, message)
-    }
-
-    /// A failure of the solver.
-    pub fn solver(message: impl Into<String>) -> Self {
-        DesignError::of(ErrorKind::Solver, message)
-    }
-
-    /// A bug: rtpipe's model and analysis disagree.
-    pub fn internal(message: impl Into<String>) -> Self {
-        DesignError::of(ErrorKind::Internal, message)
-    }
-    fn help(mut self, help: impl Into<String>) -> Self {
-        self.diagnostic = self.diagnostic.help(help);
-        self
-    }
-}
-
-/// The message alone (the help is the caller's to show).
-impl std::fmt::Display for DesignError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.diagnostic.message)
-    }
-}
-
-impl std::error::Error for DesignError {}
-
-/// The conflict search may take this many times the patience.
-pub const EXPLAIN_EFFORT: u64 = 3;
-
-/// Work (branch-and-bound nodes, plus one per master solve) the exact
-/// search may spend after the first verified design, when no time limit is
-/// given; about 20 s of microlp on Table II (6,000 nodes/s).
-pub const EXACT_PATIENCE: u64 = 120_000;
 
 /// Designs the periods of `spec`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
@@ -296,11 +105,14 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         domain::harmonic_domains(spec, &mut domains.dom, &mut notes)?;
     }
     let boxes = choose_method(spec, opts)?;
-    let mut run = Runner::new(spec, opts, domains, start, boxes);
+    let method = if boxes { Method::Boxes } else { Method::Milp };
+    let p = Problem::new(spec, opts, domains, method);
+    let mut learnt = Learnt::new(spec.tasks.len());
+    let mut budget = Budget::new(opts, start);
     let mut o = if boxes {
-        run.solve_boxes()?
+        boxes::solve_boxes(&p, &mut learnt, &mut budget)?
     } else {
-        run.solve_all()?
+        runner::solve_all(&p, &mut learnt, &mut budget)?
     };
     o.notes.splice(0..0, notes);
     if let Some(s) = o.spec.as_mut() {
@@ -336,15 +148,6 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
         )
         .help("use --method milp (or leave --method out)")),
     }
-}
-
-/// Σ C/T over guaranteed tasks.
-pub fn utilization(spec: &Spec) -> f64 {
-    spec.tasks
-        .iter()
-        .filter(|t| t.server != Server::Background)
-        .filter_map(|t| t.fixed_period().map(|p| t.budget() as f64 / p as f64))
-        .sum()
 }
 
 #[cfg(test)]

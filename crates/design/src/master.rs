@@ -1,188 +1,21 @@
 //! The master problem: variables, objective, schedulability rows and the
-//! chain limits (built from the encodings in `paper`, `sound` and `rta`).
+//! chain limits (the `model`, written with the encodings in `paper`,
+//! `sound` and `rta`, and with what the search has learnt).
 
 use crate::domain::{gu, harmonic_pair, Dom};
-use crate::linear::{Bin, Lin};
-use crate::lp::{Cmp, Lp, SolverKind};
+use crate::learnt::{Learnt, DENSE_TANGENTS};
+use crate::linear::Lin;
+use crate::lp::Cmp;
+use crate::model::{ChainExpr, Master};
 use crate::paper::paper_chain;
+use crate::problem::{Group, Problem};
 use crate::rta::{add_rta_cut, Levels, RtaCut};
-use crate::runner::Runner;
 use crate::sound::{add_r_cut, rmax_of, sound_chain, SoundModel};
 use rtpipe_analysis::Metric;
 use rtpipe_model::policy::ResponseAnalysis;
-use rtpipe_model::{SchedTest, Server, Spec};
-use std::collections::HashMap;
-
-/// Ranges of at most this many grid steps get every tangent up front.
-pub(crate) const DENSE_TANGENTS: i64 = 128;
-
-/// The master problem and its bookkeeping.
-pub(crate) struct Master<'a> {
-    pub(crate) spec: &'a Spec,
-    pub(crate) g: i64,
-    pub(crate) dom: Vec<Dom>,
-    pub(crate) lp: Lp,
-    /// Period expression per task (grid units).
-    pub(crate) period: Vec<Lin>,
-    /// Grid variable k per Grid task; choice binaries per Choice task.
-    pub(crate) kvar: Vec<Option<usize>>,
-    pub(crate) yvars: Vec<Vec<usize>>,
-    /// Utilisation (and hyperbolic log term) per task.
-    pub(crate) util: Vec<Lin>,
-    pub(crate) uvar: Vec<Option<usize>>,
-    pub(crate) hlog: Vec<Lin>,
-    pub(crate) hvar: Vec<Option<usize>>,
-    pub(crate) lt_cache: HashMap<(usize, usize, bool), Bin>,
-    pub(crate) big_m: f64,
-    /// Response-time variables (sound mode, RM).
-    pub(crate) rvar: Vec<Option<usize>>,
-    /// Valid lower ends of option variables (for their big-Ms).
-    pub(crate) floor: HashMap<usize, f64>,
-    /// Declare the option variables' bounds (see `sound_chain`).
-    pub(crate) tight_bounds: bool,
-    /// Every chain bound added, as the model writes it.
-    #[cfg_attr(not(test), allow(dead_code))]
-    pub(crate) chains: Vec<ChainExpr>,
-}
-
-/// Which constraint groups are active (for the conflict search).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Group {
-    Limit(usize, Metric),
-    Sched(u32),
-}
+use rtpipe_model::SchedTest;
 
 impl<'a> Master<'a> {
-    pub(crate) fn guaranteed(&self, i: usize) -> bool {
-        self.spec.tasks[i].server != Server::Background
-    }
-
-    pub(crate) fn lt(&mut self, a: usize, b: usize, tie_true: bool) -> Bin {
-        if let Some(&bin) = self.lt_cache.get(&(a, b, tie_true)) {
-            return bin;
-        }
-        let (da, db) = (&self.dom[a], &self.dom[b]);
-        // 1 ⟺ T_a < T_b, or T_a = T_b and tie_true.
-        let bin = if da.max() < db.min() || (tie_true && da.max() <= db.min()) {
-            Bin::Const(true)
-        } else if da.min() > db.max() || (!tie_true && da.min() >= db.max()) {
-            Bin::Const(false)
-        } else {
-            let z = self.lp.binary();
-            let d1 = if tie_true { 0.0 } else { 1.0 };
-            let d0 = if tie_true { 1.0 } else { 0.0 };
-            // z = 1 ⇒ T_a − T_b ≤ −d1;  z = 0 ⇒ T_a − T_b ≥ d0, with the
-            // smallest big-M that the period domains allow.
-            let diff = self.period[a].plus(&self.period[b].scale(-1.0));
-            let (hi, lo) = ((da.max() - db.min()) as f64, (da.min() - db.max()) as f64);
-            let m1 = (hi + d1).max(0.0);
-            let m0 = (d0 - lo).max(0.0);
-            let mut t = diff.terms.clone();
-            t.push((z, m1));
-            self.lp.row(t, Cmp::Le, -d1 - diff.c + m1);
-            let mut t = diff.terms.clone();
-            t.push((z, m0));
-            self.lp.row(t, Cmp::Ge, d0 - diff.c);
-            Bin::Var(z)
-        };
-        self.lt_cache.insert((a, b, tie_true), bin);
-        bin
-    }
-
-    /// A binary b with b = 1 ⇒ T_j ≥ tj + 1 ("the period of j grew past its
-    /// value in a cut"); `None` when it cannot grow.
-    pub(crate) fn grew(&mut self, j: usize, tj: i64) -> Option<usize> {
-        if matches!(self.dom[j], Dom::Fixed(_)) || self.dom[j].max() <= tj {
-            return None;
-        }
-        let b = self.lp.binary();
-        let p = self.period[j].clone();
-        let mut t = p.terms.clone();
-        t.push((b, -self.big_m));
-        self.lp.row(t, Cmp::Ge, (tj + 1) as f64 - p.c - self.big_m);
-        Some(b)
-    }
-
-    /// RM priority: a ≻ b.
-    pub(crate) fn above(&mut self, a: usize, b: usize) -> Bin {
-        self.lt(a, b, a < b)
-    }
-
-    /// Adds `lhs ≥ opt − M·(Σ off)` where `off` are 0/1 expressions that
-    /// switch the option off when 1.
-    pub(crate) fn ge_option(&mut self, lhs: usize, opt: &Lin, off: &[(Bin, bool)]) {
-        // Switched off, the row must allow every value: M ≥ max(opt) − min(lhs).
-        // (One grid unit of slack keeps microlp's pivots away from degenerate ties.)
-        let lo = self
-            .floor
-            .get(&lhs)
-            .copied()
-            .unwrap_or(self.lp.vars[lhs].lo);
-        let m = (opt.max_in(&self.lp) - lo + 1.0).clamp(1.0, self.big_m);
-        let mut terms: Vec<(usize, f64)> = vec![(lhs, 1.0)];
-        terms.extend(opt.terms.iter().map(|&(v, a)| (v, -a)));
-        let mut rhs = opt.c;
-        for &(b, negate) in off {
-            // negate = false: off when b = 1; negate = true: off when b = 0.
-            match (b, negate) {
-                (Bin::Const(v), false) => {
-                    if v {
-                        return;
-                    }
-                }
-                (Bin::Const(v), true) => {
-                    if !v {
-                        return;
-                    }
-                }
-                (Bin::Var(z), false) => terms.push((z, m)),
-                (Bin::Var(z), true) => {
-                    terms.push((z, -m));
-                    rhs -= m;
-                }
-            }
-        }
-        self.lp.row(terms, Cmp::Ge, rhs);
-    }
-}
-
-/// A chain's bound as the model writes it, for the test that the encoding
-/// agrees with the analysis: paper mode one sum; sound mode the sums E
-/// (reaction) and F (freshness), both from the head's release, reaction
-/// being min(E, F).
-#[cfg_attr(not(test), allow(dead_code))]
-#[derive(Debug, Clone)]
-pub(crate) struct ChainExpr {
-    pub(crate) chain: usize,
-    pub(crate) metric: Metric,
-    pub(crate) sums: Vec<Lin>,
-}
-
-impl<'a> Master<'a> {
-    /// An empty master over the runner's domains.
-    fn new(run: &Runner<'a>) -> Self {
-        let n = run.spec.tasks.len();
-        Master {
-            spec: run.spec,
-            g: run.g,
-            dom: run.dom.clone(),
-            lp: Lp::default(),
-            period: Vec::with_capacity(n),
-            kvar: vec![None; n],
-            yvars: vec![Vec::new(); n],
-            util: Vec::with_capacity(n),
-            uvar: vec![None; n],
-            hlog: Vec::with_capacity(n),
-            hvar: vec![None; n],
-            lt_cache: HashMap::new(),
-            big_m: run.big_m,
-            rvar: vec![None; n],
-            floor: HashMap::new(),
-            tight_bounds: run.opts.solver == SolverKind::Highs,
-            chains: Vec::new(),
-        }
-    }
-
     /// The period, utilisation and hyperbolic term of every task; the
     /// objective Σ u over guaranteed tasks (also returned).
     fn add_periods(&mut self, oa_points: &[Vec<i64>]) -> Vec<(usize, f64)> {
@@ -343,21 +176,14 @@ impl<'a> Master<'a> {
         }
     }
 
-    /// T_i ≥ r.
-    fn at_most_period(&mut self, i: usize, r: usize) {
-        let mut t = self.period[i].terms.clone();
-        t.push((r, -1.0));
-        self.lp.row(t, Cmp::Ge, -self.period[i].c);
-    }
-
     /// Sound mode: job response-time variables of the chain tasks with
     /// their lower bounds, every chain task finishing within its period
     /// (T ≥ R), and the recurrence R_i ≥ W_i(R_i) with a binary per job of
     /// each higher-priority task (docs/design.md); not when the response
     /// times are pinned.
-    fn add_responses(&mut self, groups: &[Group], sm: &SoundModel, run: &Runner) {
+    fn add_responses(&mut self, groups: &[Group], sm: &SoundModel, p: &Problem, levels: &Levels) {
         let n = self.spec.tasks.len();
-        for i in (0..n).filter(|&i| run.on_chain[i]) {
+        for i in (0..n).filter(|&i| p.on_chain[i]) {
             let r = match &sm.fixed {
                 Some(f) => self.lp.var(f[i], f[i], false),
                 None => {
@@ -371,11 +197,11 @@ impl<'a> Master<'a> {
         if sm.fixed.is_some() {
             return;
         }
-        for i in (0..n).filter(|&i| run.on_chain[i]) {
+        for i in (0..n).filter(|&i| p.on_chain[i]) {
             let Some(r) = self.rvar[i] else { continue };
             let rmax = rmax_of(self, groups, i);
             let own = gu(self.spec.tasks[i].demand(), self.g);
-            self.rta_levels(i, r, own, rmax, &run.levels, false);
+            self.rta_levels(i, r, own, rmax, levels, false);
         }
         for cut in &sm.cuts {
             add_r_cut(self, cut);
@@ -430,28 +256,28 @@ fn tangent_points(lo: i64, hi: i64, oa: &[i64]) -> Vec<i64> {
     pts
 }
 
-impl<'a> Runner<'a> {
-    /// The master problem over `groups` (every constraint group for the
-    /// search, a subset for the conflict search), with its objective.
-    pub(crate) fn build(
-        &self,
-        groups: &[Group],
-        sound: Option<&SoundModel>,
-    ) -> (Master<'a>, Vec<(usize, f64)>) {
-        let mut m = Master::new(self);
-        let objective = m.add_periods(&self.oa_points);
-        if self.spec.harmonic {
-            m.forbid_non_harmonic();
-        }
-        m.add_sched(groups);
-        if self.spec.schedulability == SchedTest::Rta {
-            m.add_rta(groups, &self.levels, &self.rta_cuts);
-        }
-        let rta = self.spec.policy().response == ResponseAnalysis::Rta;
-        if let Some(sm) = sound.filter(|_| rta) {
-            m.add_responses(groups, sm, self);
-        }
-        m.add_limits(groups, sound);
-        (m, objective)
+/// The master problem of `p` over `groups` (every constraint group for the
+/// search, a subset for the conflict search) with what the search has
+/// learnt, and its objective.
+pub(crate) fn build<'a>(
+    p: &Problem<'a>,
+    learnt: &Learnt,
+    groups: &[Group],
+    sound: Option<&SoundModel>,
+) -> (Master<'a>, Vec<(usize, f64)>) {
+    let mut m = Master::new(p);
+    let objective = m.add_periods(&learnt.oa_points);
+    if p.spec.harmonic {
+        m.forbid_non_harmonic();
     }
+    m.add_sched(groups);
+    if p.spec.schedulability == SchedTest::Rta {
+        m.add_rta(groups, &learnt.levels, &learnt.rta_cuts);
+    }
+    let rta = p.spec.policy().response == ResponseAnalysis::Rta;
+    if let Some(sm) = sound.filter(|_| rta) {
+        m.add_responses(groups, sm, p, &learnt.levels);
+    }
+    m.add_limits(groups, sound);
+    (m, objective)
 }

@@ -4,7 +4,7 @@
 use crate::domain::gu;
 use crate::linear::Lin;
 use crate::lp::Cmp;
-use crate::master::Master;
+use crate::model::Master;
 use rtpipe_analysis::Metric;
 
 /// Paper mode (Eqs. 2–6, 12 and Section III-F), with the case of each link a

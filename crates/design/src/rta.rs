@@ -4,11 +4,10 @@
 use crate::domain::gu;
 use crate::linear::Bin;
 use crate::lp::Cmp;
-use crate::master::Master;
-use crate::runner::Runner;
-use crate::Mode;
+use crate::model::Master;
+use crate::problem::Problem;
 use rtpipe_analysis::sched::interference;
-use rtpipe_analysis::Report;
+use rtpipe_analysis::{Mode, Report};
 use rtpipe_model::{SchedTest, Server, Spec};
 use std::collections::HashMap;
 
@@ -32,7 +31,7 @@ impl<'a> Master<'a> {
     /// W(r) ≤ r, hence r ≥ the least fixed point (the RTA response time),
     /// and the response time itself is allowed: exact when `cap` covers
     /// every job that can fall below `rmax`, a relaxation otherwise (the
-    /// levels grow lazily, see `Runner::raise_levels`).
+    /// levels grow lazily, see `raise_levels`).
     pub(crate) fn rta_levels(
         &mut self,
         i: usize,
@@ -115,81 +114,79 @@ pub(crate) fn add_rta_cut(m: &mut Master, cut: &RtaCut) {
     m.lp.row(sum, Cmp::Ge, 1.0 - flips);
 }
 
-impl<'a> Runner<'a> {
-    /// Checks the schedulability test exactly; adds an RTA cut on failure.
-    pub(crate) fn sched_ok(&mut self, spec: &Spec, report: &Report) -> bool {
-        if report.schedulability.schedulable {
-            return true;
-        }
-        if self.spec.schedulability == SchedTest::Rta {
-            let prio = rtpipe_model::policy::rate_monotonic(spec);
-            for (i, tm) in report.timing.iter().enumerate() {
-                if spec.tasks[i].server == Server::Background {
-                    continue;
-                }
-                let ok = tm.response_time.is_some_and(|r| r <= tm.period);
-                if !ok {
-                    let top = rtpipe_analysis::sched::top_priorities(spec, &prio);
-                    let hp = rtpipe_analysis::sched::interferers(spec, &prio, &top, i);
-                    let periods = hp
-                        .iter()
-                        .chain(std::iter::once(&i))
-                        .map(|&j| (j, spec.tasks[j].fixed_period().unwrap_or(0) / self.g))
-                        .collect();
-                    self.rta_cuts.push(RtaCut { i, hp, periods });
-                    return false;
-                }
-            }
-        }
-        false
+/// Checks the schedulability test of `p` exactly; adds an RTA cut to
+/// `cuts` on failure.
+pub(crate) fn sched_ok(p: &Problem, cuts: &mut Vec<RtaCut>, spec: &Spec, report: &Report) -> bool {
+    if report.schedulability.schedulable {
+        return true;
     }
-
-    /// Counts more jobs of higher-priority tasks where the candidate's
-    /// response times need them: for each modelled R_i (job level for chain
-    /// tasks in sound mode, budget level under the RTA test), every task j
-    /// above i gets levels up to its jobs within the analysed R_i (or T_i
-    /// when R_i diverged) plus one. True when any level was added.
-    pub(crate) fn raise_levels(&mut self, cand: &Spec, report: &Report) -> bool {
-        let spec = self.spec;
-        if !spec.policy().fixed_priority() {
-            return false;
-        }
-        let n = spec.tasks.len();
-        let prio = rtpipe_model::policy::rate_monotonic(cand);
-        let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
-        let sound = self.opts.mode == Mode::Sound;
-        let tested = spec.schedulability == SchedTest::Rta;
-        let mut raised = false;
-        for i in 0..n {
-            let chain_task = sound && self.on_chain[i];
+    if p.spec.schedulability == SchedTest::Rta {
+        let prio = rtpipe_model::policy::rate_monotonic(spec);
+        for (i, tm) in report.timing.iter().enumerate() {
             if spec.tasks[i].server == Server::Background {
                 continue;
             }
-            let t = &report.timing[i];
-            let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
-            for (budget_level, on, r) in [
-                (false, chain_task, t.job_response_time),
-                (true, tested, t.response_time),
-            ] {
-                if !on {
-                    continue;
-                }
-                let r = r.unwrap_or(t.period).min(t.period.saturating_mul(2));
-                for &j in &hp {
-                    let tj = report.timing[j].period.max(1);
-                    let jobs = ((r + tj - 1) / tj) as usize + 1;
-                    let need = (self.dom[i].max() as f64 / self.dom[j].min().max(1) as f64).ceil()
-                        as usize
-                        + 1;
-                    let e = self.levels.entry((budget_level, i, j)).or_insert(1);
-                    let want = jobs.min(need);
-                    if want > *e {
-                        *e = want;
-                        raised = true;
-                    }
+            let ok = tm.response_time.is_some_and(|r| r <= tm.period);
+            if !ok {
+                let top = rtpipe_analysis::sched::top_priorities(spec, &prio);
+                let hp = rtpipe_analysis::sched::interferers(spec, &prio, &top, i);
+                let periods = hp
+                    .iter()
+                    .chain(std::iter::once(&i))
+                    .map(|&j| (j, spec.tasks[j].fixed_period().unwrap_or(0) / p.g))
+                    .collect();
+                cuts.push(RtaCut { i, hp, periods });
+                return false;
+            }
+        }
+    }
+    false
+}
+
+/// Counts more jobs of higher-priority tasks where the candidate's
+/// response times need them: for each modelled R_i (job level for chain
+/// tasks in sound mode, budget level under the RTA test), every task j
+/// above i gets levels up to its jobs within the analysed R_i (or T_i
+/// when R_i diverged) plus one. True when any level was added.
+pub(crate) fn raise_levels(p: &Problem, levels: &mut Levels, cand: &Spec, report: &Report) -> bool {
+    let spec = p.spec;
+    if !spec.policy().fixed_priority() {
+        return false;
+    }
+    let n = spec.tasks.len();
+    let prio = rtpipe_model::policy::rate_monotonic(cand);
+    let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
+    let sound = p.opts.mode == Mode::Sound;
+    let tested = spec.schedulability == SchedTest::Rta;
+    let mut raised = false;
+    for i in 0..n {
+        let chain_task = sound && p.on_chain[i];
+        if spec.tasks[i].server == Server::Background {
+            continue;
+        }
+        let t = &report.timing[i];
+        let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
+        for (budget_level, on, r) in [
+            (false, chain_task, t.job_response_time),
+            (true, tested, t.response_time),
+        ] {
+            if !on {
+                continue;
+            }
+            let r = r.unwrap_or(t.period).min(t.period.saturating_mul(2));
+            for &j in &hp {
+                let tj = report.timing[j].period.max(1);
+                let jobs = ((r + tj - 1) / tj) as usize + 1;
+                let need =
+                    (p.dom[i].max() as f64 / p.dom[j].min().max(1) as f64).ceil() as usize + 1;
+                let e = levels.entry((budget_level, i, j)).or_insert(1);
+                let want = jobs.min(need);
+                if want > *e {
+                    *e = want;
+                    raised = true;
                 }
             }
         }
-        raised
     }
+    raised
 }

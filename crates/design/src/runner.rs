@@ -1,214 +1,61 @@
 //! The MILP search: master solves, each candidate checked by the analysis,
 //! cuts and tangents until a candidate verifies or the master is infeasible.
 
-use crate::domain::{gu, Dom, Domains};
-use crate::master::{Group, DENSE_TANGENTS};
-use crate::rta::{Levels, RtaCut};
-use crate::solve::{NumLog, Solved};
-use crate::sound::{learn_r_cuts, SoundModel};
-use crate::{
-    utilization, Conflict, DesignError, Incumbent, Method, Mode, Options, Outcome, Status,
-    EXPLAIN_EFFORT,
-};
-use rtpipe_analysis::{ChainResult, Metric, Report};
-use rtpipe_model::{Nanos, PeriodSpec, Server, Spec};
-use std::sync::atomic::Ordering;
-use std::time::Instant;
+use crate::api::{utilization, DesignError, Outcome, Status, EXPLAIN_EFFORT};
+use crate::budget::Budget;
+use crate::domain::gu;
+use crate::explain::explain;
+use crate::heuristic::{descent, heuristic};
+use crate::learnt::Learnt;
+use crate::problem::{Group, Problem};
+use crate::solve::{solve_master, Solved};
+use crate::sound::{learn_r_cuts, rhat_lower, SoundModel};
+use rtpipe_analysis::{Mode, Report};
+use rtpipe_model::{Nanos, Server, Spec};
 
-/// One design search: the problem, its domains, what the search has
-/// learnt (cuts, tangent points, response-time levels) and the work it has
-/// done. The MILP (`solve_all`) and the box search (`bnb.rs`) both run on it.
-pub(crate) struct Runner<'a> {
-    pub(crate) spec: &'a Spec,
-    pub(crate) opts: &'a Options,
-    pub(crate) g: i64,
-    pub(crate) dom: Vec<Dom>,
-    pub(crate) big_m: f64,
-    pub(crate) start: Instant,
-    pub(crate) rta_cuts: Vec<RtaCut>,
-    /// Outer-approximation points (k values) per Grid task.
-    pub(crate) oa_points: Vec<Vec<i64>>,
-    pub(crate) iterations: usize,
-    /// Work done so far (see [`Options::patience`]).
-    pub(crate) work: u64,
-    /// No solve may run past this much work (the patience after a verified
-    /// design, the conflict search's effort).
-    pub(crate) work_cap: Option<u64>,
-    pub(crate) levels: Levels,
-    /// Task i lies on some declared chain.
-    pub(crate) on_chain: Vec<bool>,
-    /// Numerical failures of the solver and what became of them.
-    pub(crate) numerical: NumLog,
-    /// The best verified design's periods (ns): a starting solution for
-    /// microlp's branch and bound.
-    pub(crate) start_periods: Option<Vec<Nanos>>,
-    /// The box search decides (`bnb.rs`), not the MILP.
-    pub(crate) boxes: bool,
+/// The MILP search of `p`: master solves until a candidate verifies with
+/// nothing left to learn, the master turns infeasible, or a limit stops it.
+/// What it learns goes to `learnt`, what it spends to `budget`.
+pub(crate) fn solve_all(
+    p: &Problem,
+    learnt: &mut Learnt,
+    budget: &mut Budget,
+) -> Result<Outcome, DesignError> {
+    Milp { p, learnt, budget }.solve_all()
 }
 
-impl<'a> Runner<'a> {
-    /// A runner for `spec` over these domains, nothing learnt yet.
-    pub(crate) fn new(
-        spec: &'a Spec,
-        opts: &'a Options,
-        domains: Domains,
-        start: Instant,
-        boxes: bool,
-    ) -> Self {
-        let Domains { g, dom, horizon } = domains;
-        let n = spec.tasks.len();
-        let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
-        let max_limit = gu(horizon, g);
-        let big_m = 4.0 * (max_t + max_limit) + 10.0;
-        Runner {
-            spec,
-            opts,
-            g,
-            dom,
-            big_m,
-            start,
-            rta_cuts: Vec::new(),
-            oa_points: vec![Vec::new(); n],
-            iterations: 0,
-            work: 0,
-            work_cap: None,
-            levels: Levels::new(),
-            on_chain: (0..n)
-                .map(|i| spec.chains.iter().any(|c| c.path.contains(&i)))
-                .collect(),
-            numerical: NumLog::default(),
-            start_periods: None,
-            boxes,
-        }
-    }
+/// The three parts of one MILP search its steps use together.
+struct Milp<'s, 'a> {
+    p: &'s Problem<'a>,
+    learnt: &'s mut Learnt,
+    budget: &'s mut Budget,
+}
 
-    pub(crate) fn elapsed(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
-    }
-
-    pub(crate) fn say(&self, what: impl FnOnce() -> String) {
-        if let Some(p) = &self.opts.progress {
-            if let Ok(mut g) = p.lock() {
-                *g = what();
-            }
-        }
-    }
-
-    /// Hands a better verified design to [`Options::incumbent`], so that a
-    /// caller that stops waiting (Ctrl-C) can still report it.
-    pub(crate) fn publish(&self, best: &Option<(Spec, Report, f64)>, lower_bound: Option<f64>) {
-        if let (Some(sink), Some((s, _, u))) = (&self.opts.incumbent, best) {
-            if let Ok(mut g) = sink.lock() {
-                *g = Some(Incumbent {
-                    periods: s
-                        .tasks
-                        .iter()
-                        .map(|t| t.fixed_period().unwrap_or(0))
-                        .collect(),
-                    utilization: *u,
-                    lower_bound: lower_bound.map(|b| b.min(*u)),
-                });
-            }
-        }
-    }
-
-    pub(crate) fn out_of_time(&self) -> bool {
-        self.opts
-            .cancel
-            .as_ref()
-            .is_some_and(|c| c.load(Ordering::Relaxed))
-            || self.opts.time_limit.is_some_and(|t| self.elapsed() >= t)
-            || self.work_cap.is_some_and(|c| self.work >= c)
-    }
-
-    pub(crate) fn all_groups(&self) -> Vec<Group> {
-        let mut v = Vec::new();
-        for (k, ch) in self.spec.chains.iter().enumerate() {
-            if ch.reaction.is_some() {
-                v.push(Group::Limit(k, Metric::Reaction));
-            }
-            if ch.freshness.is_some() {
-                v.push(Group::Limit(k, Metric::Freshness));
-            }
-        }
-        let mut cpus: Vec<u32> = self.spec.tasks.iter().map(|t| t.cpu).collect();
-        cpus.sort_unstable();
-        cpus.dedup();
-        v.extend(cpus.into_iter().map(Group::Sched));
-        v
-    }
-
-    /// The spec with these periods fixed.
-    pub(crate) fn with_periods(&self, periods: &[Nanos]) -> Spec {
-        let mut s = self.spec.clone();
-        for (t, &p) in s.tasks.iter_mut().zip(periods) {
-            t.period = PeriodSpec::Fixed(p);
-        }
-        s
-    }
-
-    /// Adds outer-approximation points where the model under-estimated the
-    /// utilisation (or the hyperbolic term); true when nothing was added.
-    pub(crate) fn oa_exact(&mut self, periods: &[Nanos]) -> bool {
-        let mut exact = true;
-        for ((d, pts), &p) in self.dom.iter().zip(self.oa_points.iter_mut()).zip(periods) {
-            if let Dom::Grid { step, lo, hi } = *d {
-                if hi - lo <= DENSE_TANGENTS {
-                    continue;
-                }
-                let k = p / (step * self.g);
-                if !pts.contains(&k) {
-                    // The tangent at k makes the model exact there; the
-                    // neighbours keep the next solve from stepping aside.
-                    for d in [0, 1, (k / 64).max(1), (k / 16).max(1), (k / 4).max(1)] {
-                        for q in [k - d, k + d] {
-                            if q >= lo && q <= hi && !pts.contains(&q) {
-                                pts.push(q);
-                            }
-                        }
-                    }
-                    exact = false;
-                }
-            }
-        }
-        exact
-    }
-
-    /// One chain limit holds under the mode's analysis.
-    pub(crate) fn chain_ok(&self, c: &ChainResult) -> bool {
-        c.ok_in(self.opts.mode)
-    }
-
-    pub(crate) fn limits_ok(&self, report: &Report) -> bool {
-        report.chains.iter().all(|c| self.chain_ok(c))
-    }
-
-    /// The MILP search: master solves until a candidate verifies with
-    /// nothing left to learn, the master turns infeasible, or a limit stops
-    /// it.
-    pub(crate) fn solve_all(&mut self) -> Result<Outcome, DesignError> {
-        let groups = self.all_groups();
+impl Milp<'_, '_> {
+    /// See [`solve_all`].
+    fn solve_all(&mut self) -> Result<Outcome, DesignError> {
+        let groups = self.p.all_groups();
         let mut s = self.begin();
         loop {
             if self.should_stop(&s) {
                 break;
             }
-            self.iterations += 1;
-            self.start_periods = s
+            self.budget.iterations += 1;
+            self.learnt.hint = s
                 .incumbent
                 .as_ref()
                 .filter(|_| std::env::var_os("RTPIPE_NO_HINT").is_none())
                 .map(|x| periods_of(&x.0));
-            self.say(|| {
+            self.p.say(|| {
                 let best = s.incumbent.as_ref().map_or(String::new(), |(_, _, u)| {
                     format!(", best verified U = {u:.4}")
                 });
                 let lb = s
                     .lower_bound
                     .map_or(String::new(), |b| format!(", lower bound {b:.4}"));
-                format!("master problem {}{lb}{best}", self.iterations)
+                format!("master problem {}{lb}{best}", self.budget.iterations)
             });
-            let solved = self.solve_master(&groups, s.sound.as_ref());
+            let solved = solve_master(self.p, self.learnt, self.budget, &groups, s.sound.as_ref());
             match solved {
                 Solved::Error(e) => return Err(e),
                 Solved::Stopped => break,
@@ -222,9 +69,9 @@ impl<'a> Runner<'a> {
                     if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
                         eprintln!(
                             "iteration {}: objective {objective:.6} optimal {optimal} periods {:?} ({:.2} s)",
-                            self.iterations,
+                            self.budget.iterations,
                             periods,
-                            self.elapsed()
+                            self.budget.elapsed()
                         );
                     }
                     let cand = Candidate {
@@ -251,22 +98,24 @@ impl<'a> Runner<'a> {
         // term are under-approximated by tangents, response times by valid
         // lower bounds. A candidate that the analysis verifies is therefore
         // optimal; one that fails yields a cut that removes it.
-        let sound = match self.opts.mode {
+        let sound = match self.p.opts.mode {
             Mode::Paper => None,
             Mode::Sound => Some(SoundModel {
-                rlow: self.rhat_lower(),
+                rlow: rhat_lower(self.p),
                 cuts: Vec::new(),
                 fixed: None,
             }),
         };
         let lower_bound: Option<f64> = Some(
-            (0..self.spec.tasks.len())
-                .filter(|&i| self.spec.tasks[i].server != Server::Background)
-                .map(|i| self.spec.tasks[i].budget() as f64 / (self.dom[i].max() * self.g) as f64)
+            (0..self.p.spec.tasks.len())
+                .filter(|&i| self.p.spec.tasks[i].server != Server::Background)
+                .map(|i| {
+                    self.p.spec.tasks[i].budget() as f64 / (self.p.dom[i].max() * self.p.g) as f64
+                })
                 .sum(),
         );
-        let incumbent = self.descent();
-        self.publish(&incumbent, lower_bound);
+        let incumbent = descent(self.p, self.budget);
+        self.p.publish(&incumbent, lower_bound);
         Search {
             sound,
             lower_bound,
@@ -281,29 +130,37 @@ impl<'a> Runner<'a> {
     /// search found a verified design.
     fn should_stop(&self, s: &Search) -> bool {
         let patience_out = s.incumbent.is_some()
-            && self.opts.time_limit.is_none()
-            && self.opts.patience.is_some_and(|p| {
+            && self.p.opts.time_limit.is_none()
+            && self.p.opts.patience.is_some_and(|p| {
                 s.exact_since
-                    .is_some_and(|t| self.work.saturating_sub(t) > p)
+                    .is_some_and(|t| self.budget.work.saturating_sub(t) > p)
             });
-        self.iterations >= self.opts.max_iterations || self.out_of_time() || patience_out
+        self.budget.iterations >= self.p.opts.max_iterations
+            || self.budget.out_of_time()
+            || patience_out
     }
 
     /// The master is infeasible: the problem is. Explaining it gets a
     /// bounded effort unless a time limit says otherwise.
     fn infeasible(&mut self, groups: &[Group], mut s: Search) -> Outcome {
-        if let (None, Some(p)) = (self.opts.time_limit, self.opts.patience) {
-            self.work_cap = Some(self.work.saturating_add(EXPLAIN_EFFORT.saturating_mul(p)));
+        if let (None, Some(p)) = (self.p.opts.time_limit, self.p.opts.patience) {
+            self.budget.work_cap = Some(
+                self.budget
+                    .work
+                    .saturating_add(EXPLAIN_EFFORT.saturating_mul(p)),
+            );
         }
-        let (conflicts, minimal) = self.explain(groups, s.sound.as_ref());
-        if !minimal || self.out_of_time() {
-            s.notes.push(if self.opts.time_limit.is_some() {
+        let (conflicts, minimal) =
+            explain(self.p, self.learnt, self.budget, groups, s.sound.as_ref());
+        if !minimal || self.budget.out_of_time() {
+            s.notes.push(if self.p.opts.time_limit.is_some() {
                 "the conflict search ran out of time: the set may not be minimal and fixes may be missing".to_string()
             } else {
                 "the conflict search used up its work budget: the set may not be minimal and fixes may be missing (--time-limit S searches for S seconds instead)".to_string()
             });
         }
-        self.outcome(Status::Infeasible, None, None, conflicts, s.notes)
+        self.budget
+            .outcome(self.p, Status::Infeasible, None, None, conflicts, s.notes)
     }
 
     /// One candidate of the master: checked by the analysis, kept if it
@@ -321,28 +178,28 @@ impl<'a> Runner<'a> {
                     .map_or(c.objective, |b: f64| b.max(c.objective)),
             );
         }
-        let cand = self.with_periods(&c.periods);
+        let cand = self.p.with_periods(&c.periods);
         let report = rtpipe_analysis::analyze(&cand);
         self.keep_if_verified(s, &cand, &report);
-        if !s.heuristic_tried && s.sound.is_some() && !self.limits_ok(&report) {
+        if !s.heuristic_tried && s.sound.is_some() && !self.p.limits_ok(&report) {
             self.run_heuristic(groups, s, &cand, &report);
         }
-        let oa = self.oa_exact(&c.periods);
+        let oa = self.learnt.oa_exact(self.p, &c.periods);
         // Response times the model under-counted: count more jobs.
-        let verified = report.schedulability.schedulable && self.limits_ok(&report);
-        if !verified && self.raise_levels(&cand, &report) {
+        let verified = report.schedulability.schedulable && self.p.limits_ok(&report);
+        if !verified && self.learnt.raise_levels(self.p, &cand, &report) {
             return Ok(None);
         }
-        let sched = self.sched_ok(&cand, &report);
+        let sched = self.learnt.sched_ok(self.p, &cand, &report);
         if !oa || !sched {
             // Learn response times from the same candidate now rather than
             // after it comes back.
             if let Some(sm) = &mut s.sound {
-                learn_r_cuts(self.g, &cand, &report, &c.periods, &c.responses, sm);
+                learn_r_cuts(self.p.g, &cand, &report, &c.periods, &c.responses, sm);
             }
             return Ok(None);
         }
-        if self.limits_ok(&report) {
+        if self.p.limits_ok(&report) {
             return Ok(Some(self.verified(s, cand, report, c.optimal)));
         }
         let Some(sm) = &mut s.sound else {
@@ -351,7 +208,7 @@ impl<'a> Runner<'a> {
             ));
         };
         // Learn the response times the model under-estimated.
-        if !learn_r_cuts(self.g, &cand, &report, &c.periods, &c.responses, sm) {
+        if !learn_r_cuts(self.p.g, &cand, &report, &c.periods, &c.responses, sm) {
             return Err(DesignError::internal(
                 "internal: the sound model and the analysis disagree on a candidate",
             ));
@@ -362,21 +219,21 @@ impl<'a> Runner<'a> {
     /// Any candidate the analysis accepts is a valid design, optimal or
     /// not: keep the best one; the patience runs from the first.
     fn keep_if_verified(&mut self, s: &mut Search, cand: &Spec, report: &Report) {
-        if report.schedulability.schedulable && self.limits_ok(report) {
+        if report.schedulability.schedulable && self.p.limits_ok(report) {
             let u = utilization(cand);
             if s.incumbent.as_ref().is_none_or(|(_, _, b)| u < *b) {
                 s.incumbent = Some((cand.clone(), report.clone(), u));
-                self.publish(&s.incumbent, s.lower_bound);
+                self.p.publish(&s.incumbent, s.lower_bound);
             }
-            s.exact_since.get_or_insert(self.work);
+            s.exact_since.get_or_insert(self.budget.work);
         }
         if let (Some(t), None, None, Some(p)) = (
             s.exact_since,
-            self.opts.time_limit,
-            self.work_cap,
-            self.opts.patience,
+            self.p.opts.time_limit,
+            self.budget.work_cap,
+            self.p.opts.patience,
         ) {
-            self.work_cap = Some(t.saturating_add(p));
+            self.budget.work_cap = Some(t.saturating_add(p));
         }
     }
 
@@ -390,19 +247,23 @@ impl<'a> Runner<'a> {
             .map(|i| {
                 let r = report.timing[i]
                     .job_response_time
-                    .map_or(0.0, |r| gu(r, self.g));
+                    .map_or(0.0, |r| gu(r, self.p.g));
                 r.max(sm.rlow[i])
             })
             .collect();
-        if let Some(h) = self.heuristic(groups, &sm, start) {
+        if let Some(h) = heuristic(self.p, self.learnt, self.budget, groups, &sm, start) {
             if s.incumbent.as_ref().is_none_or(|(_, _, b)| h.2 < *b) {
                 s.incumbent = Some(h);
-                self.publish(&s.incumbent, s.lower_bound);
+                self.p.publish(&s.incumbent, s.lower_bound);
             }
         }
-        s.exact_since.get_or_insert(self.work);
-        if let (None, Some(_), Some(p)) = (self.opts.time_limit, &s.incumbent, self.opts.patience) {
-            self.work_cap.get_or_insert(self.work.saturating_add(p));
+        s.exact_since.get_or_insert(self.budget.work);
+        if let (None, Some(_), Some(p)) =
+            (self.p.opts.time_limit, &s.incumbent, self.p.opts.patience)
+        {
+            self.budget
+                .work_cap
+                .get_or_insert(self.budget.work.saturating_add(p));
         }
     }
 
@@ -426,7 +287,9 @@ impl<'a> Runner<'a> {
             Status::Feasible
         };
         let notes = std::mem::take(&mut s.notes);
-        let mut o = self.outcome(status, Some((cand, report)), lb, Vec::new(), notes);
+        let mut o =
+            self.budget
+                .outcome(self.p, status, Some((cand, report)), lb, Vec::new(), notes);
         o.objective = Some(u);
         o.gap = if status == Status::Optimal {
             Some(0.0)
@@ -448,16 +311,17 @@ impl<'a> Runner<'a> {
         if let Some((cand, report, u)) = incumbent {
             notes.push(format!(
                 "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
-                if self.numerical.last_skipped {
+                if self.budget.numerical.last_skipped {
                     "the solver failed numerically on a master problem"
-                } else if self.opts.time_limit.is_some() {
+                } else if self.p.opts.time_limit.is_some() {
                     "time limit"
                 } else {
                     "work budget; --time-limit S searches for S seconds instead"
                 }
             ));
             let lb = lower_bound.map(|b| b.min(u));
-            let mut o = self.outcome(
+            let mut o = self.budget.outcome(
+                self.p,
                 Status::Feasible,
                 Some((cand, report)),
                 lb,
@@ -472,49 +336,21 @@ impl<'a> Runner<'a> {
             }
             return o;
         }
-        notes.push(if self.numerical.last_skipped {
+        notes.push(if self.budget.numerical.last_skipped {
             "stopped by a numerical failure of the solver before a verified design".into()
         } else {
             "stopped by the time or iteration limit before a verified design".into()
         });
-        let mut o = self.outcome(Status::Unknown, None, lower_bound, Vec::new(), notes);
+        let mut o = self.budget.outcome(
+            self.p,
+            Status::Unknown,
+            None,
+            lower_bound,
+            Vec::new(),
+            notes,
+        );
         o.lower_bound = lower_bound;
         o
-    }
-
-    pub(crate) fn outcome(
-        &self,
-        status: Status,
-        found: Option<(Spec, Report)>,
-        lower_bound: Option<f64>,
-        conflicts: Vec<Conflict>,
-        notes: Vec<String>,
-    ) -> Outcome {
-        let (spec, report) = match found {
-            Some((s, r)) => (Some(s), Some(r)),
-            None => (None, None),
-        };
-        let mut notes = notes;
-        notes.extend(self.numerical.note());
-        Outcome {
-            status,
-            spec,
-            report,
-            objective: None,
-            lower_bound,
-            gap: None,
-            method: if self.boxes {
-                Method::Boxes
-            } else {
-                Method::Milp
-            },
-            solver: self.opts.solver,
-            seconds: self.elapsed(),
-            iterations: self.iterations,
-            peak_open: 0,
-            conflicts,
-            notes,
-        }
     }
 }
 

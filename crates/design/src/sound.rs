@@ -4,8 +4,8 @@
 use crate::domain::gu;
 use crate::linear::{Bin, Lin};
 use crate::lp::{Cmp, Lp};
-use crate::master::{Group, Master};
-use crate::runner::Runner;
+use crate::model::Master;
+use crate::problem::{Group, Problem};
 use rtpipe_analysis::sched::interference;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::policy::ResponseAnalysis;
@@ -33,33 +33,31 @@ pub(crate) struct RCut {
     pub(crate) periods: Vec<(usize, i64)>,
 }
 
-impl<'a> Runner<'a> {
-    /// Lower bounds on job response times that hold for every choice of
-    /// periods: own demand plus one job of each task that has higher
-    /// priority whatever the periods.
-    pub(crate) fn rhat_lower(&self) -> Vec<f64> {
-        let spec = self.spec;
-        let n = spec.tasks.len();
-        (0..n)
-            .map(|i| {
-                let mut r = spec.tasks[i].demand();
-                for j in 0..n {
-                    if j == i
-                        || spec.tasks[j].cpu != spec.tasks[i].cpu
-                        || spec.tasks[j].server == Server::Background
-                    {
-                        continue;
-                    }
-                    let (di, dj) = (&self.dom[i], &self.dom[j]);
-                    let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
-                    if always_above && spec.policy().fixed_priority() {
-                        r += interference(&spec.tasks[j]);
-                    }
+/// Lower bounds on job response times that hold for every choice of
+/// periods: own demand plus one job of each task that has higher priority
+/// whatever the periods.
+pub(crate) fn rhat_lower(p: &Problem) -> Vec<f64> {
+    let spec = p.spec;
+    let n = spec.tasks.len();
+    (0..n)
+        .map(|i| {
+            let mut r = spec.tasks[i].demand();
+            for j in 0..n {
+                if j == i
+                    || spec.tasks[j].cpu != spec.tasks[i].cpu
+                    || spec.tasks[j].server == Server::Background
+                {
+                    continue;
                 }
-                gu(r, self.g)
-            })
-            .collect()
-    }
+                let (di, dj) = (&p.dom[i], &p.dom[j]);
+                let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
+                if always_above && spec.policy().fixed_priority() {
+                    r += interference(&spec.tasks[j]);
+                }
+            }
+            gu(r, p.g)
+        })
+        .collect()
 }
 
 /// An upper end for R_i: T_i (it finishes within its period) and every

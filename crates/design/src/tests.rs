@@ -1,6 +1,7 @@
 use super::*;
 use rtpipe_analysis::Anchor;
 use rtpipe_model::Spec;
+use std::sync::{Arc, Mutex};
 
 use rtpipe_testkit::example_with as load_with;
 

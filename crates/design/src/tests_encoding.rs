@@ -25,10 +25,13 @@
 
 use super::*;
 use crate::domain::{domains, gu, harmonic_domains};
-use crate::lp::{self, Limits};
-use crate::master::{ChainExpr, Group};
+use crate::learnt::Learnt;
+use crate::lp::{self, Limits, SolverKind};
+use crate::master::build;
+use crate::model::ChainExpr;
+use crate::problem::{Group, Problem};
 use crate::solve::fix_periods;
-use crate::sound::SoundModel;
+use crate::sound::{rhat_lower, SoundModel};
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig};
@@ -48,20 +51,20 @@ fn least_chain_values(
     if spec.harmonic {
         harmonic_domains(spec, &mut d.dom, &mut Vec::new()).expect("harmonic domains");
     }
-    let run = Runner::new(spec, opts, d, Instant::now(), false);
-    let groups: Vec<Group> = run
+    let p = Problem::new(spec, opts, d, Method::Milp);
+    let groups: Vec<Group> = p
         .all_groups()
         .into_iter()
         .filter(|g| matches!(g, Group::Limit(..)))
         .collect();
     let pinned = SoundModel {
-        rlow: run.rhat_lower(),
+        rlow: rhat_lower(&p),
         cuts: Vec::new(),
-        fixed: Some(responses.iter().map(|&r| gu(r, run.g)).collect()),
+        fixed: Some(responses.iter().map(|&r| gu(r, p.g)).collect()),
     };
     let sound = (opts.mode == Mode::Sound).then_some(&pinned);
-    let (m, _) = run.build(&groups, sound);
-    let fixed = fix_periods(&m, periods, run.g);
+    let (m, _) = build(&p, &Learnt::new(spec.tasks.len()), &groups, sound);
+    let fixed = fix_periods(&m, periods, p.g);
     m.chains
         .iter()
         .map(|ce| {
@@ -74,7 +77,7 @@ fn least_chain_values(
                     lp.obj_const = sum.c;
                     let s = lp::solve(&lp, SolverKind::Microlp, Limits::default());
                     match s.result {
-                        Ok(sol) => sol.objective * run.g as f64,
+                        Ok(sol) => sol.objective * p.g as f64,
                         Err(e) => panic!("chain {} {:?}: {e}", ce.chain, ce.metric),
                     }
                 })

@@ -63,7 +63,7 @@ fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
 /// issue 14); the release-anchored terms of issue 13 changed the model and
 /// the failure no longer occurs there. The problem stays as a MILP run that
 /// must answer within a small work budget; how failures are counted and
-/// noted is unit-tested in `solve.rs`.
+/// noted is unit-tested in `budget.rs`.
 #[test]
 fn cleanflight_derived_answers_within_its_budget() {
     let spec = parse(

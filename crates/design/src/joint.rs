@@ -1,0 +1,128 @@
+//! Lower bounds on Σ C/T over a box from the chain limits' affine forms
+//! (`rtpipe_analysis::relax`): the Lagrangian dual of the separable convex
+//! problem, one multiplier per limit. `budget` is C_i per task (0 for
+//! background tasks), `lo` / `hi` the box's shortest and longest periods.
+
+use rtpipe_analysis::relax::Affine;
+use rtpipe_model::Nanos;
+
+/// Coordinate-ascent sweeps over the multipliers of the joint bound.
+const JOINT_SWEEPS: usize = 3;
+
+/// One limit in the joint bound: Σ s_i T_i ≤ room.
+pub(crate) struct Row {
+    slopes: Vec<(usize, f64)>,
+    room: f64,
+}
+
+impl Row {
+    /// The form below all of `forms` (least base, least slope per task),
+    /// written as Σ s_i T_i ≤ room.
+    pub(crate) fn new(forms: &[&Affine], limit: f64, lo: &[Nanos], n: usize) -> Row {
+        let mut least: Option<Vec<f64>> = None;
+        let mut base = f64::INFINITY;
+        for a in forms {
+            let mut s = vec![0.0; n];
+            a.slopes.iter().for_each(|&(i, x)| s[i] += x);
+            least = Some(match least {
+                None => s,
+                Some(m) => m.iter().zip(&s).map(|(x, y)| x.min(*y)).collect(),
+            });
+            base = base.min(a.base);
+        }
+        let slopes: Vec<(usize, f64)> = least
+            .unwrap_or_default()
+            .into_iter()
+            .enumerate()
+            .filter(|&(_, x)| x > 0.0)
+            .collect();
+        let at_lo: f64 = slopes.iter().map(|&(i, x)| x * lo[i] as f64).sum();
+        Row {
+            room: limit - base + at_lo,
+            slopes,
+        }
+    }
+}
+
+/// A lower bound from every limit at once (limits share tasks): the
+/// Lagrangian dual of the separable convex problem, with one multiplier
+/// per limit, raised by coordinate ascent. For multipliers λ ≥ 0,
+/// Σ_i min_T (C_i/T_i + w_i T_i) − Σ λ_c room_c with w = Σ λ_c s_c is a
+/// valid bound whatever λ, the minimising T_i = √(C_i / w_i) clamped to
+/// the box. A reaction limit (E or F below it) enters as the form below
+/// both, the least base and slopes.
+pub(crate) fn joint_bound(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
+    let n = lo.len();
+    let mut lambda = vec![0.0f64; rows.len()];
+    let t_at = |w: &[f64], i: usize| {
+        let (l, h) = (lo[i] as f64, hi[i] as f64);
+        match (budget[i] == 0.0, w[i] > 0.0) {
+            (true, _) => l,
+            (false, false) => h,
+            (false, true) => (budget[i] / w[i]).sqrt().clamp(l, h),
+        }
+    };
+    let weights = |lambda: &[f64]| {
+        let mut w = vec![0.0; n];
+        for (row, &l) in rows.iter().zip(lambda) {
+            row.slopes.iter().for_each(|&(i, s)| w[i] += l * s);
+        }
+        w
+    };
+    // One multiplier is maximised in one pass.
+    let sweeps = if rows.len() > 1 { JOINT_SWEEPS } else { 1 };
+    for _ in 0..sweeps {
+        for c in 0..rows.len() {
+            // d dual / d λ_c = Σ s_ci T_i − S_c falls as λ_c grows.
+            let slack = |x: f64, lambda: &mut Vec<f64>| {
+                lambda[c] = x;
+                let w = weights(lambda);
+                rows[c]
+                    .slopes
+                    .iter()
+                    .map(|&(i, s)| s * t_at(&w, i))
+                    .sum::<f64>()
+                    - rows[c].room
+            };
+            if slack(0.0, &mut lambda) <= 0.0 {
+                continue;
+            }
+            let (mut a, mut b) = (-60.0f64, 20.0f64);
+            for _ in 0..40 {
+                let m = 0.5 * (a + b);
+                if slack(m.exp2(), &mut lambda) > 0.0 {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            lambda[c] = b.exp2();
+        }
+    }
+    let w = weights(&lambda);
+    let primal: f64 = (0..n)
+        .map(|i| {
+            let t = t_at(&w, i);
+            budget[i] / t + w[i] * t
+        })
+        .sum();
+    primal
+        - rows
+            .iter()
+            .zip(&lambda)
+            .map(|(r, l)| l * r.room)
+            .sum::<f64>()
+}
+
+/// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
+/// nowhere): the joint bound of that one limit.
+pub(crate) fn least_under(
+    budget: &[f64],
+    form: &Affine,
+    limit: f64,
+    lo: &[Nanos],
+    hi: &[Nanos],
+) -> Option<f64> {
+    (form.base <= limit)
+        .then(|| joint_bound(budget, &[Row::new(&[form], limit, lo, lo.len())], lo, hi))
+}
