@@ -8,9 +8,9 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use rtpipe_analysis::Metric;
 use rtpipe_flight::loop_sim::TracePoint;
 use rtpipe_flight::math::Euler;
+use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Server, Spec};
 use rtpipe_sim::observe::ChainObs;
-use rtpipe_sim::SimResult;
 
 type Res<T> = Result<T, String>;
 

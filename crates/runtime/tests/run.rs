@@ -108,11 +108,11 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         assert!(ch.reaction.values.iter().all(|&x| x > 0));
         // The simulator's trace writer draws the run: one span per job,
         // data-flow arrows along the chain.
-        let opts = rtpipe_sim::trace::TraceOptions {
+        let opts = rtpipe_joblog::trace::TraceOptions {
             spans: true,
             ..Default::default()
         };
-        let t = rtpipe_sim::trace::chrome_trace_with(&spec, &r.sim, opts);
+        let t = rtpipe_joblog::trace::chrome_trace_with(&spec, &r.sim, opts);
         assert_eq!(t.slices, r.sim.jobs.len(), "{policy:?}");
         assert!(t.flows > 50, "{policy:?}: {} arrows", t.flows);
     }

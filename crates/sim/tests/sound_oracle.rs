@@ -15,10 +15,12 @@
 //! `RTPIPE_ORACLE_SYSTEMS=10000 cargo test -p rtpipe-sim --release -- --nocapture`.
 
 use rtpipe_analysis::{analyze, sched::rm_priorities, Anchor, Metric, Report};
+use rtpipe_joblog::{SimResult, Witness};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult, Witness};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
 use std::fmt::Write;
 
