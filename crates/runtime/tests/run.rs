@@ -106,6 +106,13 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         // A job log in publish order, each task's jobs in index order.
         assert!(r.sim.jobs.windows(2).all(|w| w[0].finish <= w[1].finish));
         assert!(ch.reaction.values.iter().all(|&x| x > 0));
+        // Replayed as the run went or measured from the finished log: one
+        // measurement.
+        assert_eq!(
+            rtpipe_joblog::chains_from_jobs(&spec, &r.sim.jobs),
+            r.sim.chains,
+            "{policy:?}"
+        );
         // The simulator's trace writer draws the run: one span per job,
         // data-flow arrows along the chain.
         let opts = rtpipe_joblog::trace::TraceOptions {
