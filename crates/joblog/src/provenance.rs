@@ -47,14 +47,20 @@ impl std::error::Error for BadChain {}
 /// calls across tasks come in the order of the instants they give (a
 /// producer's publish before the reads that see it).
 pub struct Provenance {
-    /// Per task, the chain positions it occupies, in chain then path order.
-    slots: Vec<Vec<Slot>>,
-    /// Per task and slot: the sample its reading job carries.
-    carried: Vec<Vec<Option<u64>>>,
-    /// Per task and slot: the sample its latest published value carries.
-    published: Vec<Vec<Option<u64>>>,
+    /// Per task (one struct each: one lookup per read or publish).
+    tasks: Vec<TaskSlots>,
     /// Per chain: its samples' stamps and figures so far.
     chains: Vec<Tracker>,
+}
+
+/// One task's chain positions and the samples at each.
+struct TaskSlots {
+    /// The chain positions it occupies, in chain then path order.
+    slots: Vec<Slot>,
+    /// Per slot: the sample its reading job carries.
+    carried: Vec<Option<u64>>,
+    /// Per slot: the sample its latest published value carries.
+    published: Vec<Option<u64>>,
 }
 
 impl Provenance {
@@ -79,32 +85,30 @@ impl Provenance {
                 prev = Some((i, slots[i].len() - 1));
             }
         }
-        let empty: Vec<Vec<Option<u64>>> = slots.iter().map(|s| vec![None; s.len()]).collect();
+        let tasks = slots
+            .into_iter()
+            .map(|slots| TaskSlots {
+                carried: vec![None; slots.len()],
+                published: vec![None; slots.len()],
+                slots,
+            })
+            .collect();
         Ok(Provenance {
-            slots,
-            carried: empty.clone(),
-            published: empty,
+            tasks,
             chains: spec.chains.iter().map(|_| Tracker::new()).collect(),
         })
     }
 
     /// The chain positions `task` occupies, in chain order.
     pub fn slots(&self, task: usize) -> &[Slot] {
-        &self.slots[task]
+        &self.tasks[task].slots
     }
 
     /// A job of `task` reads at t the value each producer published last
     /// (register semantics, as the simulator runs).
     #[inline]
     pub fn read(&mut self, task: usize, t: Nanos) {
-        let published = &self.published;
-        read_into(
-            &self.slots[task],
-            &mut self.carried[task],
-            &mut self.chains,
-            t,
-            |p, ps| published[p][ps],
-        );
+        self.read_by(task, t, |tasks, p, ps| tasks[p].published[ps]);
     }
 
     /// A job of `task` reads at t values that need not be the latest
@@ -118,22 +122,36 @@ impl Provenance {
         t: Nanos,
         upstream: impl Fn(usize, usize) -> Option<u64>,
     ) {
-        read_into(
-            &self.slots[task],
-            &mut self.carried[task],
-            &mut self.chains,
-            t,
-            upstream,
-        );
+        self.read_by(task, t, |_, p, ps| upstream(p, ps));
+    }
+
+    /// The samples a job of `task` carries when it reads at t: a new sample
+    /// at a head, else the one `upstream` says the value read carries.
+    /// Indexed, not iterated: `upstream` may look at any task's samples.
+    #[inline]
+    fn read_by(
+        &mut self,
+        task: usize,
+        t: Nanos,
+        upstream: impl Fn(&[TaskSlots], usize, usize) -> Option<u64>,
+    ) {
+        for s in 0..self.tasks[task].slots.len() {
+            let slot = self.tasks[task].slots[s];
+            let v = match slot.src {
+                None => Some(self.chains[slot.chain].sample(t)),
+                Some((p, ps)) => upstream(&self.tasks, p, ps),
+            };
+            self.tasks[task].carried[s] = v;
+        }
     }
 
     /// The job of `task` that read last publishes at t: what it carried is
     /// now what the task's value carries, and at a tail it is an output.
     #[inline]
     pub fn publish(&mut self, task: usize, t: Nanos) {
-        let carried = &self.carried[task];
-        self.published[task].clone_from(carried);
-        for (slot, v) in self.slots[task].iter().zip(carried) {
+        let ts = &mut self.tasks[task];
+        ts.published.clone_from(&ts.carried);
+        for (slot, v) in ts.slots.iter().zip(&ts.carried) {
             if let (true, Some(sample)) = (slot.tail, v) {
                 self.chains[slot.chain].output(*sample, t);
             }
@@ -143,9 +161,10 @@ impl Provenance {
     /// What the value `task` published last carries, one entry per slot:
     /// the [`JobRecord::carried`] of the job that published it.
     pub fn record(&self, task: usize) -> Vec<Carried> {
-        self.slots[task]
+        let ts = &self.tasks[task];
+        ts.slots
             .iter()
-            .zip(&self.published[task])
+            .zip(&ts.published)
             .map(|(s, &sample)| Carried {
                 chain: s.chain,
                 pos: s.pos,
@@ -157,24 +176,6 @@ impl Provenance {
     /// Every chain's figures, indexed like `Spec::chains`.
     pub fn finish(self) -> Vec<ChainStats> {
         self.chains.into_iter().map(|c| c.stats).collect()
-    }
-}
-
-/// The samples a job at `slots` carries when it reads at t: a new sample at
-/// a head, else the one `upstream` says the value read carries.
-#[inline]
-fn read_into(
-    slots: &[Slot],
-    carried: &mut [Option<u64>],
-    chains: &mut [Tracker],
-    t: Nanos,
-    upstream: impl Fn(usize, usize) -> Option<u64>,
-) {
-    for (slot, v) in slots.iter().zip(carried.iter_mut()) {
-        *v = match slot.src {
-            None => Some(chains[slot.chain].sample(t)),
-            Some((p, ps)) => upstream(p, ps),
-        };
     }
 }
 

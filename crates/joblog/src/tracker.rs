@@ -27,6 +27,8 @@ impl Tracker {
     }
 
     /// The head reads a new sample at t: its id (ids count head reads).
+    /// Inlined: the simulator calls it on every head read, across crates.
+    #[inline]
     pub(crate) fn sample(&mut self, t: Nanos) -> u64 {
         self.stamps.push(t);
         self.stats.samples += 1;
