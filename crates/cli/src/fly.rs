@@ -264,7 +264,7 @@ motor1,motor2,motor3,motor4,armed,on_ground,crashed,battery_v";
 /// A chain's latency as a step function of time: the value of the latest
 /// observation that ended at or before each trace instant.
 struct LatencyColumn<'a> {
-    obs: &'a rtpipe_sim::Observed,
+    obs: &'a rtpipe_joblog::Observed,
     next: usize,
 }
 

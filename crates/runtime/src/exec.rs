@@ -1,16 +1,16 @@
 //! The executor: one thread per task, periodic releases from one common
 //! epoch, implicit communication through four-slot registers, and a log of
-//! every job from which the chains are measured exactly as in the simulator
-//! (`rtpipe_sim::chains_from_jobs`).
+//! every job, replayed after the run through the simulator's own sample
+//! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
 use crate::four_slot::{self, Reader, Writer};
 use crate::load::Load;
 use crate::pi::PiMutex;
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
+use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::LinuxClass;
 use rtpipe_model::{Diagnostic, Spec};
-use rtpipe_sim::{Carried, JobRecord, Segment, SimResult, TaskStats};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
@@ -330,6 +330,8 @@ pub fn run<'a, V: Copy + Send>(
 ) -> Result<RunResult, RunError> {
     assert_eq!(bodies.len(), spec.tasks.len(), "one body per task");
     check(spec, cfg)?;
+    let prov = Provenance::new(spec)
+        .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
     let mut notes = Vec::new();
     if cfg.policy != Policy::Other {
@@ -374,7 +376,7 @@ pub fn run<'a, V: Copy + Send>(
     let interrupted = sys::stop_requested();
     let mut res = assemble(
         spec,
-        threads,
+        (threads, prov),
         cfg.duration,
         cfg.policy,
         interrupted,
@@ -740,11 +742,12 @@ fn actuate<V>(
     }
 }
 
-/// The job log in the simulator's terms and the per-task figures.
+/// The job log in the simulator's terms, the chains `prov` measures on it,
+/// and the per-task figures.
 #[allow(clippy::too_many_arguments)]
 fn assemble<V>(
     spec: &Spec,
-    threads: Vec<Thread<'_, V>>,
+    (threads, mut prov): (Vec<Thread<'_, V>>, Provenance),
     duration: Nanos,
     policy: Policy,
     interrupted: bool,
@@ -753,9 +756,8 @@ fn assemble<V>(
     notes: Vec<String>,
 ) -> RunResult {
     let n = spec.tasks.len();
-    let slots = chain_slots(spec);
-    let jobs = job_log(spec, &threads, &slots);
-    let chains = rtpipe_sim::chains_from_jobs(spec, &jobs);
+    let jobs = job_log(spec, &threads, &mut prov);
+    let chains = prov.finish();
     let segments = spans(spec, &jobs);
     let mut tasks = Vec::with_capacity(n);
     let mut runs = Vec::with_capacity(n);
@@ -785,31 +787,13 @@ fn assemble<V>(
     }
 }
 
-/// The chain positions each task occupies: per task, its (chain, position)
-/// pairs, in chain order.
-fn chain_slots(spec: &Spec) -> Vec<Vec<(usize, usize)>> {
-    let n = spec.tasks.len();
-    let mut slots: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
-    for (c, ch) in spec.chains.iter().enumerate() {
-        for (pos, &t) in ch.path.iter().enumerate() {
-            if t < n {
-                slots[t].push((c, pos));
-            }
-        }
-    }
-    slots
-}
-
 /// Every job the threads logged, in publish order (ties: read order, then
-/// task), with the chain samples it carried: a chain's head carries its own
-/// job's sample, any other position the sample the producer job it read
-/// carried at the previous position. Publish order guarantees that the
-/// producer job's samples are known by then.
-fn job_log<V>(
-    spec: &Spec,
-    threads: &[Thread<'_, V>],
-    slots: &[Vec<(usize, usize)>],
-) -> Vec<JobRecord> {
+/// task), replayed through `prov` for the chain samples it carried. A
+/// register read need not return the latest value published before the
+/// read instant (the publish instant is taken before the register write),
+/// so a job takes its samples from the producer job its thread logged
+/// reading; publish order guarantees that job's record exists by then.
+fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> Vec<JobRecord> {
     let mut order: Vec<(Nanos, Nanos, usize, usize)> = Vec::new();
     for (i, th) in threads.iter().enumerate() {
         for (j, r) in th.recs.iter().enumerate() {
@@ -817,33 +801,26 @@ fn job_log<V>(
         }
     }
     order.sort_unstable();
-    // carried[task][job] = per slot of the task, the sample it carries.
-    let mut carried: Vec<Vec<Vec<Option<u64>>>> = threads
+    // at[task][k] = where job k of the task is in `jobs`.
+    let mut at: Vec<Vec<usize>> = threads
         .iter()
         .map(|th| Vec::with_capacity(th.recs.len()))
         .collect();
-    let mut jobs = Vec::with_capacity(order.len());
+    let mut jobs: Vec<JobRecord> = Vec::with_capacity(order.len());
     for &(_, _, i, j) in &order {
         let th = &threads[i];
         let r = th.recs[j];
         let nreads = th.readers.len();
-        let mine: Vec<Option<u64>> = slots[i]
-            .iter()
-            .map(|&(c, pos)| {
-                if pos == 0 {
-                    return Some(r.index);
-                }
-                let p = spec.chains[c].path[pos - 1];
-                let input = spec.tasks[i].reads.iter().position(|&q| q == p)?;
-                let pj = th.inputs[j * nreads + input];
-                let ps = slots[p].iter().position(|&s| s == (c, pos - 1))?;
-                carried[p]
-                    .get(pj as usize)
-                    .and_then(|v: &Vec<Option<u64>>| v[ps])
-            })
-            .collect();
-        // Jobs of one task publish in index order, so this is index j.
-        carried[i].push(mine.clone());
+        let inputs = th.inputs.get(j * nreads..(j + 1) * nreads).unwrap_or(&[]);
+        let reads = &spec.tasks[i].reads;
+        prov.read_with(i, r.read, |p, ps| {
+            let input = reads.iter().position(|&q| q == p)?;
+            let k = *at[p].get(*inputs.get(input)? as usize)?;
+            jobs[k].carried.get(ps)?.sample
+        });
+        prov.publish(i, r.finish);
+        // Jobs of one task publish in index order, so this is job j.
+        at[i].push(jobs.len());
         jobs.push(JobRecord {
             task: i,
             index: r.index,
@@ -851,11 +828,7 @@ fn job_log<V>(
             demand: r.demand,
             read: r.read,
             finish: r.finish,
-            carried: slots[i]
-                .iter()
-                .zip(mine)
-                .map(|(&(chain, pos), sample)| Carried { chain, pos, sample })
-                .collect(),
+            carried: prov.record(i),
         });
     }
     jobs

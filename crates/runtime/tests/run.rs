@@ -106,13 +106,20 @@ fn stamps_follow_the_model_and_every_thread_is_joined() {
         // A job log in publish order, each task's jobs in index order.
         assert!(r.sim.jobs.windows(2).all(|w| w[0].finish <= w[1].finish));
         assert!(ch.reaction.values.iter().all(|&x| x > 0));
+        // Replayed as the run went or measured from the finished log: one
+        // measurement.
+        assert_eq!(
+            rtpipe_joblog::chains_from_jobs(&spec, &r.sim.jobs),
+            r.sim.chains,
+            "{policy:?}"
+        );
         // The simulator's trace writer draws the run: one span per job,
         // data-flow arrows along the chain.
-        let opts = rtpipe_sim::trace::TraceOptions {
+        let opts = rtpipe_joblog::trace::TraceOptions {
             spans: true,
             ..Default::default()
         };
-        let t = rtpipe_sim::trace::chrome_trace_with(&spec, &r.sim, opts);
+        let t = rtpipe_joblog::trace::chrome_trace_with(&spec, &r.sim, opts);
         assert_eq!(t.slices, r.sim.jobs.len(), "{policy:?}");
         assert!(t.flows > 50, "{policy:?}: {} arrows", t.flows);
     }

@@ -21,10 +21,11 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_analysis::Metric;
+use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::search::{search, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::{Duration, Instant};

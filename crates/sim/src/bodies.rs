@@ -8,8 +8,9 @@
 //! Its output stays private until the job's publish instant, when it
 //! overwrites the task's register and reaches the environment.
 
-use crate::{run, Hooks, SimConfig, SimError, SimResult};
+use crate::{run, Hooks, SimConfig, SimError};
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
+use rtpipe_joblog::SimResult;
 use rtpipe_model::Spec;
 
 /// Simulates `spec` like [`crate::simulate`] and runs `bodies[i]` for every

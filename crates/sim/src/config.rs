@@ -45,7 +45,7 @@ pub struct SimConfig {
     pub phasing: Phasing,
     /// Which demand each job gets.
     pub exec: ExecModel,
-    /// Keep a [`JobRecord`] of every completed job (memory grows with the horizon).
+    /// Keep a [`JobRecord`](rtpipe_joblog::JobRecord) of every completed job (memory grows with the horizon).
     pub log_jobs: bool,
 }
 

@@ -3,8 +3,8 @@
 
 use crate::rng::Rng;
 use crate::server::{Cbs, Pibs, Sporadic};
-use crate::tracker::Tracker;
 use crate::*;
+use rtpipe_joblog::{BadChain, JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::{rate_monotonic, Budget as Kind, Preemption};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Reverse;
@@ -53,16 +53,6 @@ pub(crate) fn run_with_progress<H: Hooks>(
         }
     }
     Ok(sim.finish())
-}
-
-/// A position of a chain occupied by a task.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Slot {
-    pub(crate) chain: usize,
-    pub(crate) pos: usize,
-    /// The producer's task and slot index, `None` at the head.
-    pub(crate) src: Option<(usize, usize)>,
-    pub(crate) tail: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -161,11 +151,6 @@ pub(crate) struct TaskSim {
     pub(crate) next_index: u64,
     /// Released, unfinished jobs; only the front one may have started.
     pub(crate) queue: VecDeque<Job>,
-    pub(crate) slots: Vec<Slot>,
-    /// What the front job read, per slot (valid once it has started).
-    pub(crate) carried: Vec<Option<u64>>,
-    /// The latest published value's samples, per slot.
-    pub(crate) published: Vec<Option<u64>>,
     pub(crate) stats: TaskStats,
     /// Dense CPU index.
     pub(crate) cpu: usize,
@@ -220,7 +205,8 @@ pub(crate) struct Sim<H> {
     pub(crate) cpu_tasks: Vec<Vec<usize>>,
     /// The task whose front job holds each CPU.
     pub(crate) running: Vec<Option<usize>>,
-    pub(crate) chains: Vec<Tracker>,
+    /// Which sample each job carries, and the chains' figures.
+    pub(crate) prov: Provenance,
     pub(crate) offsets: Vec<Nanos>,
     pub(crate) log: Option<Vec<JobRecord>>,
     pub(crate) segments: Option<Vec<Segment>>,
@@ -252,14 +238,14 @@ impl<H: Hooks> Sim<H> {
         let mut master = Rng::new(cfg.seed);
         let offsets = offsets_of(spec, &cfg.phasing, &periods, &mut master)?;
         let (mut tasks, cpu_tasks) = task_sims(spec, &periods, &offsets, &mut master);
-        link_chains(spec, &mut tasks)?;
+        let prov = Provenance::new(spec).map_err(|BadChain(c)| SimError::BadChain(c))?;
+        link_servers(&mut tasks);
         let releases = tasks
             .iter()
             .enumerate()
             .map(|(i, ts)| Reverse((ts.next_release, i)))
             .collect();
         let n_cpus = cpu_tasks.len();
-        let chains = spec.chains.iter().map(|_| Tracker::new()).collect();
         Ok(Sim {
             hooks,
             edf: spec.policy().preemption == Preemption::EarliestDeadline,
@@ -268,7 +254,7 @@ impl<H: Hooks> Sim<H> {
             running: vec![None; n_cpus],
             #[cfg(test)]
             cpu_tasks,
-            chains,
+            prov,
             offsets,
             log: cfg.log_jobs.then(Vec::new),
             segments: cfg.log_jobs.then(Vec::new),
@@ -529,21 +515,7 @@ impl<H: Hooks> Sim<H> {
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
-        for s in 0..self.tasks[i].slots.len() {
-            let slot = self.tasks[i].slots[s];
-            let v = match slot.src {
-                None => {
-                    // Sample ids count head reads per chain; jobs of a task
-                    // read in release order, so the id is the job index.
-                    let tr = &mut self.chains[slot.chain];
-                    tr.stamps.push(t);
-                    tr.stats.samples += 1;
-                    Some(tr.stamps.len() as u64 - 1)
-                }
-                Some((p, ps)) => self.tasks[p].published[ps],
-            };
-            self.tasks[i].carried[s] = v;
-        }
+        self.prov.read(i, t);
         let Some(job) = self.tasks[i].queue.front_mut() else {
             unreachable!("task {i} reads without a pending job");
         };
@@ -574,12 +546,7 @@ impl<H: Hooks> Sim<H> {
         if response > ts.period {
             ts.stats.late += 1;
         }
-        ts.published.clone_from(&ts.carried);
-        for (slot, v) in ts.slots.iter().zip(&ts.carried) {
-            if let (true, Some(sample)) = (slot.tail, v) {
-                self.chains[slot.chain].output(*sample, t);
-            }
-        }
+        self.prov.publish(i, t);
         if let Some(log) = &mut self.log {
             log.push(JobRecord {
                 task: i,
@@ -588,19 +555,9 @@ impl<H: Hooks> Sim<H> {
                 demand: job.demand,
                 read: job.read.unwrap_or(t),
                 finish: t,
-                carried: ts
-                    .slots
-                    .iter()
-                    .zip(&ts.carried)
-                    .map(|(s, &sample)| Carried {
-                        chain: s.chain,
-                        pos: s.pos,
-                        sample,
-                    })
-                    .collect(),
+                carried: self.prov.record(i),
             });
         }
-        ts.carried.iter_mut().for_each(|v| *v = None);
         if ts.queue.is_empty() {
             ts.budget.block(t);
         }
@@ -702,7 +659,7 @@ impl<H: Hooks> Sim<H> {
         SimResult {
             offsets: self.offsets,
             tasks: self.tasks.into_iter().map(|t| t.stats).collect(),
-            chains: self.chains.into_iter().map(|c| c.stats).collect(),
+            chains: self.prov.finish(),
             jobs: self.log.unwrap_or_default(),
             segments: self.segments.unwrap_or_default(),
             events: self.events,
@@ -821,9 +778,6 @@ fn task_sims(
             next_release: offsets[i],
             next_index: 0,
             queue: VecDeque::new(),
-            slots: Vec::new(),
-            carried: Vec::new(),
-            published: Vec::new(),
             stats: TaskStats::default(),
             cpu,
             servers: Vec::new(),
@@ -834,29 +788,9 @@ fn task_sims(
     (tasks, cpu_tasks)
 }
 
-/// Chain slots, and the servers (PIBS) each Main VCPU has.
-fn link_chains(spec: &Spec, tasks: &mut [TaskSim]) -> Result<(), SimError> {
-    let n = spec.tasks.len();
-    // Slots: the chain positions each task occupies, linked to the slot
-    // of the previous position (created just before, in path order).
-    for (c, ch) in spec.chains.iter().enumerate() {
-        if ch.path.iter().any(|&i| i >= n) {
-            return Err(SimError::BadChain(c));
-        }
-        let mut prev: Option<(usize, usize)> = None;
-        for (pos, &i) in ch.path.iter().enumerate() {
-            let ts = &mut tasks[i];
-            ts.slots.push(Slot {
-                chain: c,
-                pos,
-                src: prev,
-                tail: pos + 1 == ch.path.len(),
-            });
-            ts.carried.push(None);
-            ts.published.push(None);
-            prev = Some((i, ts.slots.len() - 1));
-        }
-    }
+/// The servers (PIBS) each Main VCPU has.
+fn link_servers(tasks: &mut [TaskSim]) {
+    let n = tasks.len();
     for i in 0..n {
         if let Some(m) = tasks[i].serves {
             // An index out of range is left to `standing`, which
@@ -866,5 +800,4 @@ fn link_chains(spec: &Spec, tasks: &mut [TaskSim]) -> Result<(), SimError> {
             }
         }
     }
-    Ok(())
 }

@@ -25,6 +25,10 @@
 //!
 //! ## Measurement (Section III-D and the paper's instrumentation)
 //!
+//! The simulator feeds each read and publish to [`rtpipe_joblog::Provenance`],
+//! which the real-time runtime feeds too, and returns its job log as an
+//! [`rtpipe_joblog::SimResult`].
+//!
 //! Every job of a chain's head creates a sample stamped with its read instant.
 //! A job at position k of a chain carries the sample carried by the value it
 //! read from position k−1 (provenance follows the chain's edges only, each
@@ -46,18 +50,15 @@ mod bodies;
 mod config;
 mod engine;
 pub mod observe;
-mod result;
 mod rng;
 pub mod search;
 pub mod server;
-pub mod trace;
-mod tracker;
 
 pub use config::*;
 pub(crate) use engine::*;
-pub use result::*;
 
 pub use bodies::simulate_bodies;
+use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
 
 /// Simulates `spec` from 0 to `cfg.horizon`: the timing alone, no task code

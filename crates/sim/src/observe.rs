@@ -3,9 +3,27 @@
 //! each bound; per task, response times above the analysed ones. The CLI's
 //! `simulate` and `fly` report these; the oracle tests check them.
 
-use crate::SimResult;
 use rtpipe_analysis::{Anchor, Metric, OffsetBound, Report};
+use rtpipe_joblog::{ChainStats, Observed, SimResult};
 use rtpipe_model::{Nanos, Spec, MAX_TIME};
+
+/// A chain's observations by the analysis' names for them (the job log
+/// that measures them knows no analysis).
+pub trait ChainStatsExt {
+    /// The observations of one metric measured from one anchor.
+    fn observed(&self, metric: Metric, anchor: Anchor) -> &Observed;
+}
+
+impl ChainStatsExt for ChainStats {
+    fn observed(&self, metric: Metric, anchor: Anchor) -> &Observed {
+        match (metric, anchor) {
+            (Metric::Reaction, Anchor::Read) => &self.reaction,
+            (Metric::Freshness, Anchor::Read) => &self.freshness,
+            (Metric::Reaction, Anchor::Event) => &self.event_reaction,
+            (Metric::Freshness, Anchor::Event) => &self.event_freshness,
+        }
+    }
+}
 
 /// Distribution of the observations of one quantity.
 #[derive(Debug, Clone, Copy, PartialEq)]

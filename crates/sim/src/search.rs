@@ -32,9 +32,11 @@
 //! truth: a tightness of 1 proves the bound exact for this system, a tightness
 //! above 1 is a soundness bug of the analysis (or of the simulator).
 
+use crate::observe::ChainStatsExt;
 use crate::rng::Rng;
-use crate::{simulate, ExecModel, Phasing, SimConfig, SimError, SimResult, Witness};
+use crate::{simulate, ExecModel, Phasing, SimConfig, SimError};
 use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
+use rtpipe_joblog::{SimResult, Witness};
 use rtpipe_model::{gcd, Nanos, Spec};
 use std::fmt;
 

@@ -3,6 +3,7 @@
 
 use super::*;
 use rtpipe_analysis::Anchor;
+use rtpipe_joblog::{chains_from_jobs, Witness};
 use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
 use rtpipe_model::{Scheduler, Server};
 
@@ -534,7 +535,7 @@ fn chains_from_jobs_replays_the_simulators_own_measurement() {
         let Ok(r) = simulate(&s, &cfg) else {
             panic!("simulates");
         };
-        let replayed = crate::chains_from_jobs(&s, &r.jobs);
+        let replayed = chains_from_jobs(&s, &r.jobs);
         for (a, b) in replayed.iter().zip(&r.chains) {
             assert_eq!(a.reaction, b.reaction);
             assert_eq!(a.freshness, b.freshness);

@@ -5,6 +5,7 @@
 
 use rtpipe_analysis::{analyze, Anchor, Metric};
 use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 

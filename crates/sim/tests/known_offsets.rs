@@ -4,9 +4,10 @@
 //! computed by hand.
 
 use rtpipe_analysis::{analyze, Anchor, Metric};
+use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Nanos, Spec};
-use rtpipe_sim::observe::observe;
+use rtpipe_sim::observe::{observe, ChainStatsExt};
 use rtpipe_sim::search::{search_with, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimError};
 
@@ -16,7 +17,7 @@ fn parse(name: &str, src: &str) -> Spec {
     Spec::parse(name, src).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn run(spec: &Spec, phasing: Phasing, horizon: Nanos) -> rtpipe_sim::SimResult {
+fn run(spec: &Spec, phasing: Phasing, horizon: Nanos) -> SimResult {
     let cfg = SimConfig {
         horizon,
         seed: 5,

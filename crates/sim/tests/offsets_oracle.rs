@@ -19,11 +19,12 @@
 
 use rtpipe_analysis::offsets::{Basis, Fallback};
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
+use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, Scheduler, Spec};
-use rtpipe_sim::observe::observe;
+use rtpipe_sim::observe::{observe, ChainStatsExt};
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;

@@ -16,11 +16,13 @@
 
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
+use rtpipe_joblog::{SimResult, Witness};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::policy::rate_monotonic;
 use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult, Witness};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
 use std::fmt::Write;
 

@@ -15,10 +15,12 @@
 
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
+use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{waters_system, WatersConfig};
 use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search_with, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig, SimResult};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;

@@ -2,8 +2,8 @@
 //! releases and publishes.
 
 use super::canvas::*;
+use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Server, Spec};
-use rtpipe_sim::SimResult;
 
 /// Mixes a colour with white (t = 0: the colour, 1: white).
 fn lighter(c: RGBColor, t: f64) -> RGBColor {

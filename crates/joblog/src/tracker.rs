@@ -1,7 +1,7 @@
 //! Provenance of samples along one chain, and the reaction and freshness
 //! of each sample that reaches the tail.
 
-use crate::*;
+use crate::{ChainStats, Witness};
 use rtpipe_model::Nanos;
 
 /// Per chain: stamps of the samples and the sample the tail currently outputs.
@@ -26,6 +26,16 @@ impl Tracker {
         }
     }
 
+    /// The head reads a new sample at t: its id (ids count head reads).
+    /// Inlined: the simulator calls it on every head read, across crates.
+    #[inline]
+    pub(crate) fn sample(&mut self, t: Nanos) -> u64 {
+        self.stamps.push(t);
+        self.stats.samples += 1;
+        self.stamps.len() as u64 - 1
+    }
+
+    /// The tail publishes a value carrying `sample` at t.
     pub(crate) fn output(&mut self, sample: u64, t: Nanos) {
         match self.current {
             Some((s, first, _)) if s == sample => self.current = Some((s, first, t)),
