@@ -1,6 +1,6 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-use crate::analyze::{report_json, report_text};
+use crate::analyze::{report_text, report_view};
 use crate::command;
 use crate::output;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
@@ -169,7 +169,7 @@ fn print_design(
 ) -> Result<(), ExitCode> {
     if json_out {
         let mut v = match (&out.spec, &out.report) {
-            (Some(s), Some(r)) => report_json(s, r),
+            (Some(s), Some(r)) => serde_json::to_value(report_view(s, r)).unwrap_or_default(),
             _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
         };
         v["design"] = design_json(spec, out, mode);

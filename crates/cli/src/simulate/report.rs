@@ -122,7 +122,7 @@ pub(super) fn to_json(
 /// The `analyze --json` report with each chain entry's observations from the
 /// read and from the event.
 pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) -> Value {
-    let mut v = analyze::report_json(spec, report);
+    let mut v = serde_json::to_value(analyze::report_view(spec, report)).unwrap_or_default();
     if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
         for (entry, o) in chains.iter_mut().zip(obs) {
             entry["observed"] = observed_json(spec, &o.read);
