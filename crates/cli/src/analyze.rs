@@ -1,7 +1,7 @@
 //! `rtpipe analyze`.
 
 use crate::command;
-use crate::report::time;
+use crate::report::{time, Pairs};
 use crate::table::Table;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
@@ -66,29 +66,19 @@ pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
 }
 
 impl<'a, T, C> ReportView<'a, T, C> {
-    /// The same report with each task and chain entry replaced (by index).
-    pub fn map<T2, C2>(
+    /// The same report with the task and chain entries replaced.
+    pub fn with<T2, C2>(
         self,
-        mut task: impl FnMut(usize, T) -> T2,
-        mut chain: impl FnMut(usize, C) -> C2,
+        tasks: impl FnOnce(Vec<T>) -> Vec<T2>,
+        chains: impl FnOnce(Vec<C>) -> Vec<C2>,
     ) -> ReportView<'a, T2, C2> {
         ReportView {
             system: self.system,
             time_unit: self.time_unit,
             scheduler: self.scheduler,
-            tasks: self
-                .tasks
-                .into_iter()
-                .enumerate()
-                .map(|(i, t)| task(i, t))
-                .collect(),
+            tasks: tasks(self.tasks),
             schedulability: self.schedulability,
-            chains: self
-                .chains
-                .into_iter()
-                .enumerate()
-                .map(|(i, c)| chain(i, c))
-                .collect(),
+            chains: chains(self.chains),
             ok: self.ok,
             paper_ok: self.paper_ok,
         }
@@ -151,22 +141,13 @@ pub struct ChainView<'a> {
     metric: &'static str,
     limit: Option<f64>,
     #[serde(flatten)]
-    bounds: Bounds,
+    bounds: Pairs<&'static str, Option<f64>>,
     ok: bool,
     paper_ok: bool,
-    from_event: Bounds,
+    from_event: Pairs<&'static str, Option<f64>>,
     cases: Vec<u8>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
-}
-
-/// Every bound of one anchor, keyed by the bound's name, in `Bound::ALL` order.
-pub struct Bounds(Vec<(&'static str, Option<f64>)>);
-
-impl Serialize for Bounds {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
-    }
 }
 
 /// A chain's bounds of its metric under the spec's known release offsets;
@@ -254,7 +235,7 @@ fn sched_view(s: &rtpipe_analysis::Schedulability) -> SchedView {
 fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> ChainView<'a> {
     let ch = &spec.chains[c.chain];
     let bounds = |a: Anchor| {
-        Bounds(
+        Pairs(
             c.bound
                 .from(a)
                 .map(|(b, v)| (b.name(), time(spec, v)))
