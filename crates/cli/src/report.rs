@@ -4,7 +4,6 @@
 pub mod flight;
 
 use rtpipe_model::{Nanos, Spec};
-use serde_json::{json, Value};
 
 /// Keys and values serialized as a JSON object in their order (the keys
 /// come from the spec or the analysis, so they are not struct fields).
@@ -19,9 +18,4 @@ impl<K: serde::Serialize, V: serde::Serialize> serde::Serialize for Pairs<K, V> 
 /// A time in the spec's unit; `None` (JSON null) for none.
 pub fn time(spec: &Spec, ns: Option<Nanos>) -> Option<f64> {
     ns.map(|n| spec.in_unit(n))
-}
-
-/// A time in the spec's unit as a JSON number; `null` for none.
-pub fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
-    ns.map_or(Value::Null, |n| json!(spec.in_unit(n)))
 }

@@ -21,7 +21,6 @@ use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, Cha
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_sim::{simulate_with_progress, Phasing, SimConfig, SimError, SimResult};
-use serde_json::Value;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

@@ -243,12 +243,6 @@ pub(crate) fn observations_view<'a>(
     )
 }
 
-/// `observations_view` as a JSON value, for the commands that still extend
-/// it by hand.
-pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) -> Value {
-    serde_json::to_value(observations_view(spec, report, obs)).unwrap_or_default()
-}
-
 /// {count, min, mean, p99, max, variation} in the spec's unit; variation =
 /// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV); all
 /// but the count null without observations.
