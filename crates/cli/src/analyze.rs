@@ -1,12 +1,12 @@
 //! `rtpipe analyze`.
 
 use crate::command;
-use crate::report::num;
+use crate::report::{time, Pairs};
 use crate::table::Table;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
-use serde_json::{json, Value};
+use serde::Serialize;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -18,10 +18,10 @@ pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode
     let report = rtpipe_analysis::analyze(&spec);
     let paths = all_paths.then(|| rtpipe_analysis::all_paths(&spec, &report.timing));
     if json_out {
-        let mut v = report_json(&spec, &report);
-        if let Some(p) = &paths {
-            v["all_paths"] = paths_json(&spec, p);
-        }
+        let v = AnalyzeView {
+            report: report_view(&spec, &report),
+            all_paths: paths.as_ref().map(|p| paths_view(&spec, p)),
+        };
         if let Err(code) = command::print_json(&v) {
             return code;
         }
@@ -42,116 +42,246 @@ fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
     path.iter().map(|&i| spec.tasks[i].name.clone()).collect()
 }
 
-pub fn report_json(spec: &Spec, r: &Report) -> Value {
-    let tasks: Vec<Value> = spec
-        .tasks
-        .iter()
-        .zip(&r.timing)
-        .map(|(t, tm)| {
-            json!({
-                "name": t.name,
-                "server": t.server.name(),
-                "exec": spec.in_unit(t.exec),
-                "exec_min": spec.in_unit(t.exec_min),
-                "delta_in": spec.in_unit(t.delta_in),
-                "delta_out": spec.in_unit(t.delta_out),
-                "demand": spec.in_unit(tm.demand),
-                "budget": spec.in_unit(tm.budget),
-                "period": spec.in_unit(tm.period),
-                "utilization": tm.budget as f64 / tm.period as f64,
-                "priority": tm.priority,
-                "cpu": tm.cpu,
-                "response_time": num(spec, tm.response_time),
-                "job_response_time": num(spec, tm.job_response_time),
-            })
-        })
-        .collect();
-    let s = &r.schedulability;
-    let total_u: f64 = s.cpus.iter().map(|c| c.utilization).sum();
-    let single = s.cpus.len() == 1;
-    let cpus: Vec<Value> = s
-        .cpus
-        .iter()
-        .map(|c| {
-            json!({"cpu": c.cpu, "tasks": c.tasks, "utilization": c.utilization,
-                   "value": finite(c.value), "bound": c.bound, "schedulable": c.schedulable})
-        })
-        .collect();
-    let chains: Vec<Value> = r.chains.iter().map(|c| chain_json(spec, r, c)).collect();
-    json!({
-        "system": spec.name,
-        "time_unit": spec.time_unit.name(),
-        "scheduler": spec.scheduler.name(),
-        "tasks": tasks,
-        "schedulability": {
-            "test": s.test.name(),
-            "utilization": total_u,
-            "bound": if single { json!(s.cpus[0].bound) } else { json!(s.cpus.iter().map(|c| c.bound).collect::<Vec<_>>()) },
-            "schedulable": s.schedulable,
-            "cpus": cpus,
-        },
-        "chains": chains,
-        "ok": r.all_ok(),
-        "paper_ok": r.all_ok_paper(),
-    })
+/// `analyze --json`: the report, then every source-to-sink pair when asked.
+#[derive(Serialize)]
+struct AnalyzeView<'a> {
+    #[serde(flatten)]
+    report: ReportView<'a>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    all_paths: Option<PathsView<'a>>,
+}
+
+/// The JSON report; `T` and `C` let `simulate` extend the task and chain
+/// entries with what it observed.
+#[derive(Serialize)]
+pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
+    pub system: &'a str,
+    pub time_unit: &'static str,
+    pub scheduler: &'static str,
+    pub tasks: Vec<T>,
+    pub schedulability: SchedView,
+    pub chains: Vec<C>,
+    pub ok: bool,
+    pub paper_ok: bool,
+}
+
+impl<'a, T, C> ReportView<'a, T, C> {
+    /// The same report with the task and chain entries replaced.
+    pub fn with<T2, C2>(
+        self,
+        tasks: impl FnOnce(Vec<T>) -> Vec<T2>,
+        chains: impl FnOnce(Vec<C>) -> Vec<C2>,
+    ) -> ReportView<'a, T2, C2> {
+        ReportView {
+            system: self.system,
+            time_unit: self.time_unit,
+            scheduler: self.scheduler,
+            tasks: tasks(self.tasks),
+            schedulability: self.schedulability,
+            chains: chains(self.chains),
+            ok: self.ok,
+            paper_ok: self.paper_ok,
+        }
+    }
+}
+
+#[derive(Serialize)]
+pub struct TaskView<'a> {
+    name: &'a str,
+    server: &'static str,
+    exec: f64,
+    exec_min: f64,
+    delta_in: f64,
+    delta_out: f64,
+    demand: f64,
+    budget: f64,
+    period: f64,
+    utilization: f64,
+    priority: Option<usize>,
+    cpu: u32,
+    response_time: Option<f64>,
+    job_response_time: Option<f64>,
+}
+
+#[derive(Serialize)]
+pub struct SchedView {
+    test: &'static str,
+    utilization: f64,
+    bound: OneOrMany,
+    schedulable: bool,
+    cpus: Vec<CpuView>,
+}
+
+/// A single CPU's bound as a number, several as a list (the format
+/// predates multiprocessor specs).
+#[derive(Serialize)]
+#[serde(untagged)]
+enum OneOrMany {
+    One(f64),
+    Many(Vec<f64>),
+}
+
+#[derive(Serialize)]
+struct CpuView {
+    cpu: u32,
+    tasks: usize,
+    utilization: f64,
+    /// `None` for an unbounded response time (RTA).
+    value: Option<f64>,
+    bound: f64,
+    schedulable: bool,
 }
 
 /// One chain and metric of the report; `known_offsets` only for a chain
 /// with known offsets.
-fn chain_json(spec: &Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> Value {
-    let ch = &spec.chains[c.chain];
-    let mut entry = json!({
-        "name": ch.name,
-        "path": path_names(spec, &ch.path),
-        "metric": c.metric.name(),
-        "limit": num(spec, c.limit),
-    });
-    let bounds = |a: Anchor| -> serde_json::Map<String, Value> {
-        c.bound
-            .from(a)
-            .map(|(b, v)| (b.name().to_string(), num(spec, v)))
-            .collect()
-    };
-    for (k, v) in bounds(Anchor::Read) {
-        entry[k] = v;
-    }
-    entry["ok"] = json!(c.ok);
-    entry["paper_ok"] = json!(c.paper_ok());
-    entry["from_event"] = Value::Object(bounds(Anchor::Event));
-    entry["cases"] = r.cases[c.chain]
+#[derive(Serialize)]
+pub struct ChainView<'a> {
+    name: Option<&'a str>,
+    path: Vec<String>,
+    metric: &'static str,
+    limit: Option<f64>,
+    #[serde(flatten)]
+    bounds: Pairs<&'static str, Option<f64>>,
+    ok: bool,
+    paper_ok: bool,
+    from_event: Pairs<&'static str, Option<f64>>,
+    cases: Vec<u8>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub known_offsets: Option<KnownView>,
+}
+
+/// A chain's bounds of its metric under the spec's known release offsets;
+/// the hyperperiod and jobs are null when the job-level analysis did not
+/// run. `simulate` fills in the violations.
+#[derive(Serialize)]
+pub struct KnownView {
+    #[serde(flatten)]
+    read: KnownBound,
+    pub from_event: KnownBound,
+    hyperperiod: Option<f64>,
+    jobs: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub violations: Option<usize>,
+}
+
+#[derive(Serialize)]
+pub struct KnownBound {
+    sound: Option<f64>,
+    basis: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub violations: Option<usize>,
+}
+
+pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
+    let tasks = spec
+        .tasks
         .iter()
-        .map(|k| match k {
-            rtpipe_analysis::Case::One => 1,
-            rtpipe_analysis::Case::Two => 2,
+        .zip(&r.timing)
+        .map(|(t, tm)| TaskView {
+            name: &t.name,
+            server: t.server.name(),
+            exec: spec.in_unit(t.exec),
+            exec_min: spec.in_unit(t.exec_min),
+            delta_in: spec.in_unit(t.delta_in),
+            delta_out: spec.in_unit(t.delta_out),
+            demand: spec.in_unit(tm.demand),
+            budget: spec.in_unit(tm.budget),
+            period: spec.in_unit(tm.period),
+            utilization: tm.budget as f64 / tm.period as f64,
+            priority: tm.priority,
+            cpu: tm.cpu,
+            response_time: time(spec, tm.response_time),
+            job_response_time: time(spec, tm.job_response_time),
         })
         .collect();
-    if let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) {
-        entry["known_offsets"] = known_offsets_json(spec, o, c.metric);
+    ReportView {
+        system: &spec.name,
+        time_unit: spec.time_unit.name(),
+        scheduler: spec.scheduler.name(),
+        tasks,
+        schedulability: sched_view(&r.schedulability),
+        chains: r.chains.iter().map(|c| chain_view(spec, r, c)).collect(),
+        ok: r.all_ok(),
+        paper_ok: r.all_ok_paper(),
     }
-    entry
 }
 
-/// A chain's bounds of `metric` under the spec's known release offsets:
-/// {sound, basis, from_event {sound, basis}, hyperperiod, jobs}; the
-/// hyperperiod and jobs are null when the job-level analysis did not run.
-fn known_offsets_json(spec: &Spec, o: &ChainOffsets, metric: Metric) -> Value {
+fn sched_view(s: &rtpipe_analysis::Schedulability) -> SchedView {
+    let bound = match s.cpus.as_slice() {
+        [one] => OneOrMany::One(one.bound),
+        cpus => OneOrMany::Many(cpus.iter().map(|c| c.bound).collect()),
+    };
+    let cpus = s
+        .cpus
+        .iter()
+        .map(|c| CpuView {
+            cpu: c.cpu,
+            tasks: c.tasks,
+            utilization: c.utilization,
+            value: c.value.is_finite().then_some(c.value),
+            bound: c.bound,
+            schedulable: c.schedulable,
+        })
+        .collect();
+    SchedView {
+        test: s.test.name(),
+        utilization: s.cpus.iter().map(|c| c.utilization).sum(),
+        bound,
+        schedulable: s.schedulable,
+        cpus,
+    }
+}
+
+fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> ChainView<'a> {
+    let ch = &spec.chains[c.chain];
+    let bounds = |a: Anchor| {
+        Pairs(
+            c.bound
+                .from(a)
+                .map(|(b, v)| (b.name(), time(spec, v)))
+                .collect(),
+        )
+    };
+    ChainView {
+        name: ch.name.as_deref(),
+        path: path_names(spec, &ch.path),
+        metric: c.metric.name(),
+        limit: time(spec, c.limit),
+        bounds: bounds(Anchor::Read),
+        ok: c.ok,
+        paper_ok: c.paper_ok(),
+        from_event: bounds(Anchor::Event),
+        cases: r.cases[c.chain]
+            .iter()
+            .map(|k| match k {
+                rtpipe_analysis::Case::One => 1,
+                rtpipe_analysis::Case::Two => 2,
+            })
+            .collect(),
+        known_offsets: r
+            .offsets
+            .get(c.chain)
+            .and_then(Option::as_ref)
+            .map(|o| known_view(spec, o, c.metric)),
+    }
+}
+
+fn known_view(spec: &Spec, o: &ChainOffsets, metric: Metric) -> KnownView {
     let one = |a: Anchor| {
         let b = o.get(metric, a);
-        json!({"sound": num(spec, b.value), "basis": b.label(spec)})
+        KnownBound {
+            sound: time(spec, b.value),
+            basis: b.label(spec),
+            violations: None,
+        }
     };
-    let mut v = one(Anchor::Read);
-    v["from_event"] = one(Anchor::Event);
     let jl = o.job_level.as_ref();
-    v["hyperperiod"] = num(spec, jl.map(|j| j.hyperperiod));
-    v["jobs"] = jl.map_or(Value::Null, |j| json!(j.jobs));
-    v
-}
-
-fn finite(x: f64) -> Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
-        Value::Null
+    KnownView {
+        read: one(Anchor::Read),
+        from_event: one(Anchor::Event),
+        hyperperiod: time(spec, jl.map(|j| j.hyperperiod)),
+        jobs: jl.map(|j| j.jobs),
+        violations: None,
     }
 }
 
@@ -375,25 +505,58 @@ pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
     out
 }
 
-fn worst_json(spec: &Spec, w: &Worst) -> Value {
-    json!({"path": path_names(spec, &w.path), "bound": num(spec, w.value)})
+#[derive(Serialize)]
+struct WorstView {
+    path: Vec<String>,
+    bound: Option<f64>,
 }
 
-pub fn paths_json(spec: &Spec, a: &AllPaths) -> Value {
-    let pairs: Vec<Value> = a
+#[derive(Serialize)]
+struct PairMetric {
+    paper: WorstView,
+    sound: WorstView,
+}
+
+#[derive(Serialize)]
+struct PairView<'a> {
+    source: &'a str,
+    sink: &'a str,
+    reaction: PairMetric,
+    freshness: PairMetric,
+}
+
+#[derive(Serialize)]
+pub struct PathsView<'a> {
+    pairs: Vec<PairView<'a>>,
+    skipped_cycles: Vec<Vec<String>>,
+}
+
+fn worst_view(spec: &Spec, w: &Worst) -> WorstView {
+    WorstView {
+        path: path_names(spec, &w.path),
+        bound: time(spec, w.value),
+    }
+}
+
+pub fn paths_view<'a>(spec: &'a Spec, a: &AllPaths) -> PathsView<'a> {
+    let pair = |paper, sound| PairMetric {
+        paper: worst_view(spec, paper),
+        sound: worst_view(spec, sound),
+    };
+    let pairs = a
         .pairs
         .iter()
-        .map(|p| {
-            json!({
-                "source": spec.tasks[p.source].name,
-                "sink": spec.tasks[p.sink].name,
-                "reaction": {"paper": worst_json(spec, &p.reaction_paper), "sound": worst_json(spec, &p.reaction_sound)},
-                "freshness": {"paper": worst_json(spec, &p.freshness_paper), "sound": worst_json(spec, &p.freshness_sound)},
-            })
+        .map(|p| PairView {
+            source: &spec.tasks[p.source].name,
+            sink: &spec.tasks[p.sink].name,
+            reaction: pair(&p.reaction_paper, &p.reaction_sound),
+            freshness: pair(&p.freshness_paper, &p.freshness_sound),
         })
         .collect();
-    let cycles: Vec<Vec<String>> = a.cycles.iter().map(|c| path_names(spec, c)).collect();
-    json!({"pairs": pairs, "skipped_cycles": cycles})
+    PathsView {
+        pairs,
+        skipped_cycles: a.cycles.iter().map(|c| path_names(spec, c)).collect(),
+    }
 }
 
 pub fn paths_text(spec: &Spec, a: &AllPaths) -> String {

@@ -7,7 +7,6 @@ use clap::ValueEnum;
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Diagnostic, Nanos, Spec, SpecError};
 use rtpipe_sim::ExecModel;
-use serde_json::Value;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -42,7 +41,7 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
 }
 
 /// Prints a JSON value on stdout; an encoding failure is an error exit.
-pub fn print_json(v: &Value) -> Result<(), ExitCode> {
+pub fn print_json(v: &impl serde::Serialize) -> Result<(), ExitCode> {
     match serde_json::to_string_pretty(v) {
         Ok(s) => {
             println!("{s}");

@@ -1,15 +1,16 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-use crate::analyze::{report_json, report_text};
+use crate::analyze::{report_text, report_view, ReportView};
 use crate::command;
 use crate::output;
+use crate::report::Pairs;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{
     design, DesignError, ErrorKind, Incumbent, Method, Mode, Options, Outcome, Status,
 };
 use rtpipe_model::{PeriodSpec, Spec};
-use serde_json::{json, Value};
+use serde::Serialize;
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -168,16 +169,17 @@ fn print_design(
     stopped: bool,
 ) -> Result<(), ExitCode> {
     if json_out {
-        let mut v = match (&out.spec, &out.report) {
-            (Some(s), Some(r)) => report_json(s, r),
-            _ => json!({"system": spec.name, "time_unit": spec.time_unit.name()}),
+        let head = match (&out.spec, &out.report) {
+            (Some(s), Some(r)) => Head::Report(report_view(s, r)),
+            _ => Head::Bare {
+                system: &spec.name,
+                time_unit: spec.time_unit.name(),
+            },
         };
-        v["design"] = design_json(spec, out, mode);
-        v["design"]["interrupted"] = json!(stopped);
-        if stopped {
-            // Not counted: the worker may still be inside a solve.
-            v["design"]["iterations"] = Value::Null;
-        }
+        let v = DesignOut {
+            head,
+            design: design_json(spec, out, mode, stopped),
+        };
         command::print_json(&v)?;
     } else {
         print!("{}", design_text(spec, out, mode, stopped));
@@ -345,35 +347,77 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
     o
 }
 
-fn design_json(spec: &Spec, o: &Outcome, mode: Mode) -> serde_json::Value {
-    let periods: serde_json::Map<String, serde_json::Value> = match &o.spec {
-        Some(s) => s
-            .tasks
+/// `design --json`: the verified design's analysis report (or just the
+/// system when there is none), then the search's answer.
+#[derive(Serialize)]
+struct DesignOut<'a> {
+    #[serde(flatten)]
+    head: Head<'a>,
+    design: DesignView<'a>,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Head<'a> {
+    Report(ReportView<'a>),
+    Bare {
+        system: &'a str,
+        time_unit: &'static str,
+    },
+}
+
+#[derive(Serialize)]
+struct DesignView<'a> {
+    mode: &'static str,
+    status: &'static str,
+    objective: Option<f64>,
+    lower_bound: Option<f64>,
+    gap: Option<f64>,
+    method: &'static str,
+    solver: Option<&'static str>,
+    seconds: f64,
+    /// `None` when interrupted: the worker may still be inside a solve.
+    iterations: Option<usize>,
+    peak_open_boxes: Option<usize>,
+    periods: Pairs<&'a str, Option<f64>>,
+    conflicts: Vec<ConflictView<'a>>,
+    notes: &'a [String],
+    interrupted: bool,
+}
+
+#[derive(Serialize)]
+struct ConflictView<'a> {
+    constraint: &'a str,
+    fix: Option<&'a str>,
+}
+
+fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> DesignView<'a> {
+    let periods = o.spec.as_ref().map_or_else(Vec::new, |s| {
+        s.tasks
             .iter()
-            .map(|t| {
-                (
-                    t.name.clone(),
-                    json!(t.fixed_period().map(|p| spec.in_unit(p))),
-                )
-            })
-            .collect(),
-        None => serde_json::Map::new(),
-    };
-    json!({
-        "mode": mode.name(),
-        "status": o.status.name(),
-        "objective": o.objective,
-        "lower_bound": o.lower_bound,
-        "gap": o.gap,
-        "method": o.method.name(),
-        "solver": (o.method == Method::Milp).then(|| o.solver.name()),
-        "seconds": o.seconds,
-        "iterations": o.iterations,
-        "peak_open_boxes": (o.method == Method::Boxes).then_some(o.peak_open),
-        "periods": periods,
-        "conflicts": o.conflicts.iter().map(|c| json!({"constraint": c.constraint, "fix": c.fix})).collect::<Vec<_>>(),
-        "notes": o.notes,
-    })
+            .map(|t| (t.name.as_str(), t.fixed_period().map(|p| spec.in_unit(p))))
+            .collect()
+    });
+    let conflicts = o.conflicts.iter().map(|c| ConflictView {
+        constraint: &c.constraint,
+        fix: c.fix.as_deref(),
+    });
+    DesignView {
+        mode: mode.name(),
+        status: o.status.name(),
+        objective: o.objective,
+        lower_bound: o.lower_bound,
+        gap: o.gap,
+        method: o.method.name(),
+        solver: (o.method == Method::Milp).then(|| o.solver.name()),
+        seconds: o.seconds,
+        iterations: (!stopped).then_some(o.iterations),
+        peak_open_boxes: (o.method == Method::Boxes).then_some(o.peak_open),
+        periods: Pairs(periods),
+        conflicts: conflicts.collect(),
+        notes: &o.notes,
+        interrupted: stopped,
+    }
 }
 
 fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {

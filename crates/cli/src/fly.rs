@@ -13,16 +13,19 @@ mod sweep;
 
 pub use args::FlyArgs;
 
+use crate::analyze::{ReportView, TaskView};
 use crate::command;
 use crate::output;
 use crate::plot;
 use crate::report::flight::quality_text;
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
+use rtpipe_flight::quality::ErrorStats;
+use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
 use rtpipe_model::{Diagnostic, Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
-use serde_json::{json, Value as Json};
+use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -208,51 +211,113 @@ fn to_text(
     out
 }
 
-fn to_json(
-    spec: &Spec,
+/// `fly --json`: the observations report, then the flight's quality.
+#[derive(Serialize)]
+struct FlyView<'a> {
+    #[serde(flatten)]
+    report: ReportView<'a, TaskView<'a>, simulate::ObsChain<'a>>,
+    flight: FlightView<'a>,
+}
+
+#[derive(Serialize)]
+struct FlightView<'a> {
+    vehicle: &'a str,
+    mission: &'a str,
+    duration_s: f64,
+    crashed: bool,
+    attitude_error_deg: RmsMax,
+    altitude_error_m: RmsMax,
+    drift_m: f64,
+    saturation_s: f64,
+    airborne_s: f64,
+    landed_s: Option<f64>,
+    steps: Vec<StepView>,
+    criteria_met: bool,
+    failures: &'a [String],
+    seconds: f64,
+}
+
+#[derive(Serialize)]
+struct RmsMax {
+    rms: f64,
+    max: f64,
+}
+
+impl From<&ErrorStats> for RmsMax {
+    fn from(e: &ErrorStats) -> Self {
+        RmsMax {
+            rms: e.rms,
+            max: e.max,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct StepView {
+    axis: &'static str,
+    at_s: f64,
+    to_deg: f64,
+    tracked: ResponseView,
+    #[serde(rename = "true")]
+    truth: ResponseView,
+    drift_deg: f64,
+}
+
+#[derive(Serialize)]
+struct ResponseView {
+    rise_s: f64,
+    overshoot: f64,
+    settling_s: f64,
+}
+
+impl From<&StepResponse> for ResponseView {
+    fn from(x: &StepResponse) -> Self {
+        ResponseView {
+            rise_s: x.rise_s,
+            overshoot: x.overshoot,
+            settling_s: x.settling_s,
+        }
+    }
+}
+
+fn to_json<'a>(
+    spec: &'a Spec,
     report: &Report,
-    s: &Setup,
+    s: &'a Setup,
     f: &Flight,
     obs: &[ChainObs],
-    failures: &[String],
+    failures: &'a [String],
     seconds: f64,
-) -> Json {
-    let mut v = simulate::observations_json(spec, report, obs);
+) -> FlyView<'a> {
     let q = &f.quality;
-    let steps: Vec<Json> = q
-        .steps
-        .iter()
-        .map(|st| {
-            let r = |x: &rtpipe_flight::trace::metrics::StepResponse| {
-                json!({"rise_s": x.rise_s, "overshoot": x.overshoot, "settling_s": x.settling_s})
-            };
-            json!({
-                "axis": st.axis.name(),
-                "at_s": st.at_s,
-                "to_deg": st.to_deg,
-                "tracked": r(&st.tracked),
-                "true": r(&st.truth),
-                "drift_deg": st.drift_deg,
-            })
-        })
-        .collect();
-    v["flight"] = json!({
-        "vehicle": s.preset.name,
-        "mission": s.mission.name,
-        "duration_s": s.horizon as f64 * 1e-9,
-        "crashed": q.crashed,
-        "attitude_error_deg": {"rms": q.attitude_error_deg.rms, "max": q.attitude_error_deg.max},
-        "altitude_error_m": {"rms": q.altitude_error_m.rms, "max": q.altitude_error_m.max},
-        "drift_m": q.drift_m,
-        "saturation_s": q.saturation_s,
-        "airborne_s": q.airborne_s,
-        "landed_s": q.landed_s,
-        "steps": steps,
-        "criteria_met": failures.is_empty(),
-        "failures": failures,
-        "seconds": seconds,
+    let steps = q.steps.iter().map(|st| StepView {
+        axis: st.axis.name(),
+        at_s: st.at_s,
+        to_deg: st.to_deg,
+        tracked: (&st.tracked).into(),
+        truth: (&st.truth).into(),
+        drift_deg: st.drift_deg,
     });
-    v
+    let flight = FlightView {
+        vehicle: &s.preset.name,
+        mission: &s.mission.name,
+        duration_s: s.horizon as f64 * 1e-9,
+        crashed: q.crashed,
+        attitude_error_deg: (&q.attitude_error_deg).into(),
+        altitude_error_m: (&q.altitude_error_m).into(),
+        drift_m: q.drift_m,
+        saturation_s: q.saturation_s,
+        airborne_s: q.airborne_s,
+        landed_s: q.landed_s,
+        steps: steps.collect(),
+        criteria_met: failures.is_empty(),
+        failures,
+        seconds,
+    };
+    FlyView {
+        report: simulate::observations_view(spec, report, obs),
+        flight,
+    }
 }
 
 /// The CSV header: every column with its unit (chain latency columns follow).

@@ -4,9 +4,18 @@
 pub mod flight;
 
 use rtpipe_model::{Nanos, Spec};
-use serde_json::{json, Value};
 
-/// A time in the spec's unit as a JSON number; `null` for none.
-pub fn num(spec: &Spec, ns: Option<Nanos>) -> Value {
-    ns.map_or(Value::Null, |n| json!(spec.in_unit(n)))
+/// Keys and values serialized as a JSON object in their order (the keys
+/// come from the spec or the analysis, so they are not struct fields).
+pub struct Pairs<K, V>(pub Vec<(K, V)>);
+
+impl<K: serde::Serialize, V: serde::Serialize> serde::Serialize for Pairs<K, V> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+/// A time in the spec's unit; `None` (JSON null) for none.
+pub fn time(spec: &Spec, ns: Option<Nanos>) -> Option<f64> {
+    ns.map(|n| spec.in_unit(n))
 }

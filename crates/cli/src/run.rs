@@ -1,11 +1,12 @@
 //! `rtpipe run`: the spec on real threads (rtpipe-runtime), measured like
 //! `simulate` and held against the same bounds.
 
+use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
-use crate::report::{self, num};
-use crate::simulate::{chain_table, observations_json};
+use crate::report::{self, time};
+use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
@@ -16,7 +17,7 @@ use rtpipe_model::policy::LinuxClass;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_runtime::{ErrorKind, Policy, RunConfig, RunResult, Spin};
 use rtpipe_sim::observe::{observe, ChainObs, Summary};
-use serde_json::{json, Value};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -243,9 +244,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
     let flight = flown.as_ref().zip(setup.as_ref());
     if a.json {
         let mut v = to_json(&spec, &report, &res, &obs, spin, &suspects);
-        if let Some((f, s)) = flight {
-            v["flight"] = flight_json(f, s);
-        }
+        v.flight = flight.map(|(f, s)| flight_json(f, s));
         if let Err(code) = command::print_json(&v) {
             return code;
         }
@@ -378,18 +377,30 @@ fn execute(
 
 /// The `flight` entry of the JSON: the vehicle, the mission and how the
 /// flight went.
-fn flight_json(f: &Flight, s: &Setup) -> Value {
+#[derive(Serialize)]
+struct FlightView<'a> {
+    vehicle: &'a str,
+    mission: &'a str,
+    crashed: bool,
+    airborne_s: f64,
+    landed_s: Option<f64>,
+    attitude_error_deg_rms: f64,
+    altitude_error_m_rms: f64,
+    failures: Vec<String>,
+}
+
+fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
     let q = &f.quality;
-    json!({
-        "vehicle": s.preset.name,
-        "mission": s.mission.name,
-        "crashed": q.crashed,
-        "airborne_s": q.airborne_s,
-        "landed_s": q.landed_s,
-        "attitude_error_deg_rms": q.attitude_error_deg.rms,
-        "altitude_error_m_rms": q.altitude_error_m.rms,
-        "failures": q.failures(&s.mission.criteria),
-    })
+    FlightView {
+        vehicle: &s.preset.name,
+        mission: &s.mission.name,
+        crashed: q.crashed,
+        airborne_s: q.airborne_s,
+        landed_s: q.landed_s,
+        attitude_error_deg_rms: q.attitude_error_deg.rms,
+        altitude_error_m_rms: q.altitude_error_m.rms,
+        failures: q.failures(&s.mission.criteria),
+    }
 }
 
 /// Exit status 1 only when an observation exceeded a sound bound and
@@ -572,48 +583,103 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
     t.render()
 }
 
-fn to_json(
-    spec: &Spec,
+/// `run --json`: the observations report with each task's measurements,
+/// the Fig. 10 figures, the run, and the flight when bodies flew.
+#[derive(Serialize)]
+struct RunView<'a> {
+    #[serde(flatten)]
+    report: ReportView<'a, Extended<TaskView<'a>, TaskMeasured>, ObsChain<'a>>,
+    fig10: Vec<Fig10View>,
+    run: RunInfo<'a>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flight: Option<FlightView<'a>>,
+}
+
+#[derive(Serialize)]
+struct TaskMeasured {
+    released: u64,
+    completed: u64,
+    max_response: Option<f64>,
+    mean_response: Option<f64>,
+    p99_response: Option<f64>,
+    late: u64,
+    missed_periods: u64,
+    overruns: u64,
+    max_demand: f64,
+    max_start: f64,
+    priority: Option<i32>,
+    utilization: f64,
+}
+
+#[derive(Serialize)]
+struct RunInfo<'a> {
+    duration: f64,
+    policy: &'static str,
+    load: usize,
+    epoch_monotonic_ns: Nanos,
+    real_time: bool,
+    interrupted: bool,
+    steal: Option<f64>,
+    spin_iterations_per_us: f64,
+    measurement_suspects: &'a [String],
+    notes: &'a [String],
+}
+
+fn to_json<'a>(
+    spec: &'a Spec,
     report: &Report,
-    res: &RunResult,
+    res: &'a RunResult,
     obs: &[ChainObs],
     spin: Spin,
-    suspects: &[String],
-) -> Value {
-    let mut v = observations_json(spec, report, obs);
-    if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
-        for ((entry, ts), tr) in tasks.iter_mut().zip(&res.sim.tasks).zip(&res.tasks) {
-            let s = Summary::of(&tr.responses);
-            entry["observed"] = json!({
-                "released": ts.released,
-                "completed": ts.completed,
-                "max_response": num(spec, ts.max_response),
-                "mean_response": s.map(|s| s.mean / spec.time_unit.nanos() as f64),
-                "p99_response": num(spec, s.map(|s| s.p99)),
-                "late": ts.late,
-                "missed_periods": tr.missed,
-                "overruns": tr.overruns,
-                "max_demand": spec.in_unit(tr.max_demand),
-                "max_start": spec.in_unit(tr.max_start),
-                "priority": tr.priority,
-                "utilization": ts.busy as f64 / res.sim.horizon as f64,
-            });
+    suspects: &'a [String],
+) -> RunView<'a> {
+    let measured = |(ts, tr): (&rtpipe_joblog::TaskStats, &rtpipe_runtime::TaskRun)| {
+        let s = Summary::of(&tr.responses);
+        TaskMeasured {
+            released: ts.released,
+            completed: ts.completed,
+            max_response: time(spec, ts.max_response),
+            mean_response: s.map(|s| s.mean / spec.time_unit.nanos() as f64),
+            p99_response: time(spec, s.map(|s| s.p99)),
+            late: ts.late,
+            missed_periods: tr.missed,
+            overruns: tr.overruns,
+            max_demand: spec.in_unit(tr.max_demand),
+            max_start: spec.in_unit(tr.max_start),
+            priority: tr.priority,
+            utilization: ts.busy as f64 / res.sim.horizon as f64,
         }
+    };
+    let runs = res.sim.tasks.iter().zip(&res.tasks);
+    let report = observations_view(spec, report, obs).with(
+        |tasks| {
+            (tasks.into_iter().zip(runs))
+                .map(|(base, r)| Extended {
+                    base,
+                    observed: measured(r),
+                })
+                .collect()
+        },
+        |chains| chains,
+    );
+    let run = RunInfo {
+        duration: spec.in_unit(res.sim.horizon),
+        policy: res.policy.name(),
+        load: res.load,
+        epoch_monotonic_ns: res.epoch,
+        real_time: res.policy != Policy::Other,
+        interrupted: res.interrupted,
+        steal: res.steal.map(|s| spec.in_unit(s)),
+        spin_iterations_per_us: spin.iters_per_us,
+        measurement_suspects: suspects,
+        notes: &res.notes,
+    };
+    RunView {
+        report,
+        fig10: fig10_json(spec, obs),
+        run,
+        flight: None,
     }
-    v["fig10"] = fig10_json(spec, obs);
-    v["run"] = json!({
-        "duration": spec.in_unit(res.sim.horizon),
-        "policy": res.policy.name(),
-        "load": res.load,
-        "epoch_monotonic_ns": res.epoch,
-        "real_time": res.policy != Policy::Other,
-        "interrupted": res.interrupted,
-        "steal": res.steal.map(|s| spec.in_unit(s)),
-        "spin_iterations_per_us": spin.iters_per_us,
-        "measurement_suspects": suspects,
-        "notes": res.notes,
-    });
-    v
 }
 
 /// One chain's Fig. 10 figures from the head's read: (mean, max, max − min)
@@ -673,9 +739,23 @@ fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
 }
 
 /// `fig10`: one entry per chain, in the spec's unit.
-fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Value {
+#[derive(Serialize)]
+#[allow(non_snake_case)] // the paper's names for the figures
+struct Fig10View {
+    chain: String,
+    AVGR: Option<f64>,
+    WCR: Option<f64>,
+    MaxRV: Option<f64>,
+    sound_reaction: Option<f64>,
+    AVGF: Option<f64>,
+    WCF: Option<f64>,
+    MaxFV: Option<f64>,
+    sound_freshness: Option<f64>,
+}
+
+fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Vec<Fig10View> {
     let unit = spec.time_unit.nanos() as f64;
-    let n = |x: Option<Nanos>| num(spec, x);
+    let n = |x: Option<Nanos>| time(spec, x);
     let three = |s: Option<Summary>| {
         (
             s.map(|s| s.mean / unit),
@@ -683,17 +763,22 @@ fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Value {
             n(s.map(|s| s.max - s.min)),
         )
     };
-    let rows: Vec<Value> = fig10_rows(obs)
+    fig10_rows(obs)
         .into_iter()
         .map(|r| {
             let (avgr, wcr, maxrv) = three(r.reaction);
             let (avgf, wcf, maxfv) = three(r.freshness);
-            json!({
-                "chain": spec.chain_label(r.chain),
-                "AVGR": avgr, "WCR": wcr, "MaxRV": maxrv, "sound_reaction": n(r.sound_r),
-                "AVGF": avgf, "WCF": wcf, "MaxFV": maxfv, "sound_freshness": n(r.sound_f),
-            })
+            Fig10View {
+                chain: spec.chain_label(r.chain),
+                AVGR: avgr,
+                WCR: wcr,
+                MaxRV: maxrv,
+                sound_reaction: n(r.sound_r),
+                AVGF: avgf,
+                WCF: wcf,
+                MaxFV: maxfv,
+                sound_freshness: n(r.sound_f),
+            }
         })
-        .collect();
-    Value::Array(rows)
+        .collect()
 }

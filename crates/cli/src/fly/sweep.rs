@@ -14,7 +14,7 @@ use rtpipe_fly::sweep::{
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
-use serde_json::{json, Value as Json};
+use serde::Serialize;
 use std::path::Path;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -116,23 +116,53 @@ fn with_limits(spec: &Spec, limits: &[ChainPair]) -> Spec {
     s
 }
 
-fn point_json(p: &Point) -> Json {
-    let (kind, value) = match p.variation {
-        Variation::Scale(k) => ("scale", json!(k)),
-        Variation::Delay { line, ns } => (DELAY_LINES[line].name(), json!(ns as f64 * 1e-6)),
+#[derive(Serialize)]
+struct PointView<'a> {
+    varied: &'static str,
+    value: f64,
+    bounds_ms: Vec<PairMs>,
+    schedulable: bool,
+    flies: bool,
+    failures: &'a [String],
+    attitude_error_rms_deg: Option<f64>,
+    altitude_error_rms_m: Option<f64>,
+    crashed: Option<bool>,
+}
+
+/// A chain's reaction and freshness, in ms (null: none).
+#[derive(Serialize)]
+struct PairMs {
+    reaction: Option<f64>,
+    freshness: Option<f64>,
+}
+
+impl From<&ChainPair> for PairMs {
+    fn from(p: &ChainPair) -> Self {
+        let ms = |ns: Option<Nanos>| ns.map(|x| x as f64 * 1e-6);
+        PairMs {
+            reaction: ms(p.0),
+            freshness: ms(p.1),
+        }
+    }
+}
+
+fn point_json(p: &Point) -> PointView<'_> {
+    let (varied, value) = match p.variation {
+        Variation::Scale(k) => ("scale", k),
+        Variation::Delay { line, ns } => (DELAY_LINES[line].name(), ns as f64 * 1e-6),
     };
     let q = p.quality.as_ref();
-    json!({
-        "varied": kind,
-        "value": value,
-        "bounds_ms": p.bounds.iter().map(|b| json!({"reaction": b.0.map(|x| x as f64 * 1e-6), "freshness": b.1.map(|x| x as f64 * 1e-6)})).collect::<Vec<_>>(),
-        "schedulable": p.schedulable,
-        "flies": p.pass(),
-        "failures": p.failures,
-        "attitude_error_rms_deg": q.map(|q| q.attitude_error_deg.rms),
-        "altitude_error_rms_m": q.map(|q| q.altitude_error_m.rms),
-        "crashed": q.map(|q| q.crashed),
-    })
+    PointView {
+        varied,
+        value,
+        bounds_ms: p.bounds.iter().map(PairMs::from).collect(),
+        schedulable: p.schedulable,
+        flies: p.pass(),
+        failures: &p.failures,
+        attitude_error_rms_deg: q.map(|q| q.attitude_error_deg.rms),
+        altitude_error_rms_m: q.map(|q| q.altitude_error_m.rms),
+        crashed: q.map(|q| q.crashed),
+    }
 }
 
 /// The sweep plot: per chain, every scale point and the chain's own delay
@@ -271,25 +301,42 @@ fn write_files(
 
 /// The sweep as one JSON object: the setup, every point, the derived
 /// limits (ms).
-fn sweep_json(
-    spec: &Spec,
-    s: &Setup,
+#[derive(Serialize)]
+struct SweepView<'a> {
+    system: &'a str,
+    vehicle: &'a str,
+    mission: &'a str,
+    criterion: String,
+    points: Vec<PointView<'a>>,
+    limits_ms: Vec<LimitMs>,
+}
+
+#[derive(Serialize)]
+struct LimitMs {
+    chain: String,
+    #[serde(flatten)]
+    limit: PairMs,
+}
+
+fn sweep_json<'a>(
+    spec: &'a Spec,
+    s: &'a Setup,
     c: &Criteria,
-    points: &[Point],
+    points: &'a [Point],
     limits: &[ChainPair],
-) -> Json {
-    json!({
-        "system": spec.name,
-        "vehicle": s.preset.name,
-        "mission": s.mission.name,
-        "criterion": c.describe(),
-        "points": points.iter().map(point_json).collect::<Vec<_>>(),
-        "limits_ms": limits.iter().enumerate().map(|(k, l)| json!({
-            "chain": spec.chain_label(k),
-            "reaction": l.0.map(|x| x as f64 * 1e-6),
-            "freshness": l.1.map(|x| x as f64 * 1e-6),
-        })).collect::<Vec<_>>(),
-    })
+) -> SweepView<'a> {
+    let limits = limits.iter().enumerate().map(|(k, l)| LimitMs {
+        chain: spec.chain_label(k),
+        limit: l.into(),
+    });
+    SweepView {
+        system: &spec.name,
+        vehicle: &s.preset.name,
+        mission: &s.mission.name,
+        criterion: c.describe(),
+        points: points.iter().map(point_json).collect(),
+        limits_ms: limits.collect(),
+    }
 }
 
 fn text(

@@ -9,7 +9,6 @@ use crate::analyze;
 use crate::command::{self, fail, parse_time, ExecArg};
 use crate::output;
 use crate::plot;
-use crate::report::num;
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 pub(crate) use files::with_spinner;
@@ -23,7 +22,6 @@ use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::{simulate_with_progress, Phasing, SimConfig, SimError};
-use serde_json::{json, Value};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -168,9 +166,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
     }
     if a.json {
         let mut v = to_json(&spec, &report, a, &res, &obs, seconds);
-        if !searches.is_empty() {
-            v["search"] = search_json(&spec, &searches);
-        }
+        v.search = search_json(&spec, &searches);
         if let Err(code) = command::print_json(&v) {
             return code;
         }

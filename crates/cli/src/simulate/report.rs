@@ -1,35 +1,55 @@
 //! The report of a simulation: text tables and JSON.
 
 use super::*;
+use crate::analyze::{ChainView, ReportView, TaskView};
+use crate::report::{time, Pairs};
+use serde::Serialize;
 
-pub(super) fn search_json(spec: &Spec, rs: &[SearchResult]) -> Value {
-    Value::Array(
-        rs.iter()
-            .map(|r| {
-                let mut v = json!({
-                    "chain": spec.chain_label(r.chain),
-                    "metric": r.metric.name(),
-                    "from": r.anchor.name(),
-                    "found": num(spec, r.value),
-                    "paper": num(spec, r.paper),
-                    "sound": num(spec, r.sound),
-                    "tightness": r.tightness(),
-                    "simulations": r.simulations,
-                    "offsets": r.best.offsets.iter().map(|&o| spec.in_unit(o)).collect::<Vec<_>>(),
-                    "exec": format!("{:?}", r.best.exec).to_lowercase(),
-                    "seed": r.best.seed,
-                });
-                if let Some(k) = &r.known {
-                    v["known_offsets"] = json!({
-                        "sound": num(spec, k.value),
-                        "basis": k.label(spec),
-                        "tightness": r.tightness_known(),
-                    });
-                }
-                v
-            })
-            .collect(),
-    )
+#[derive(Serialize)]
+pub(super) struct SearchView {
+    chain: String,
+    metric: &'static str,
+    from: &'static str,
+    found: Option<f64>,
+    paper: Option<f64>,
+    sound: Option<f64>,
+    tightness: Option<f64>,
+    simulations: u64,
+    offsets: Vec<f64>,
+    exec: String,
+    seed: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    known_offsets: Option<SearchKnown>,
+}
+
+#[derive(Serialize)]
+struct SearchKnown {
+    sound: Option<f64>,
+    basis: String,
+    tightness: Option<f64>,
+}
+
+pub(super) fn search_json(spec: &Spec, rs: &[SearchResult]) -> Vec<SearchView> {
+    rs.iter()
+        .map(|r| SearchView {
+            chain: spec.chain_label(r.chain),
+            metric: r.metric.name(),
+            from: r.anchor.name(),
+            found: time(spec, r.value),
+            paper: time(spec, r.paper),
+            sound: time(spec, r.sound),
+            tightness: r.tightness(),
+            simulations: r.simulations,
+            offsets: r.best.offsets.iter().map(|&o| spec.in_unit(o)).collect(),
+            exec: format!("{:?}", r.best.exec).to_lowercase(),
+            seed: r.best.seed,
+            known_offsets: r.known.as_ref().map(|k| SearchKnown {
+                sound: time(spec, k.value),
+                basis: k.label(spec),
+                tightness: r.tightness_known(),
+            }),
+        })
+        .collect()
 }
 
 pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
@@ -80,81 +100,172 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
     )
 }
 
-pub(super) fn to_json(
-    spec: &Spec,
+/// `simulate --json`: the observations report, the run, and the adversarial
+/// search when one ran.
+#[derive(Serialize)]
+pub(super) struct SimulateView<'a> {
+    #[serde(flatten)]
+    report: ReportView<'a, Extended<TaskView<'a>, TaskObserved>, ObsChain<'a>>,
+    simulation: SimulationView<'a>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub search: Vec<SearchView>,
+}
+
+/// A report entry with one more key at its end.
+#[derive(Serialize)]
+pub(crate) struct Extended<B, X> {
+    #[serde(flatten)]
+    pub base: B,
+    pub observed: X,
+}
+
+#[derive(Serialize)]
+pub(super) struct TaskObserved {
+    released: u64,
+    completed: u64,
+    max_response: Option<f64>,
+    late: u64,
+    exhaustions: u64,
+    utilization: f64,
+}
+
+#[derive(Serialize)]
+struct SimulationView<'a> {
+    horizon: f64,
+    seed: u64,
+    exec: String,
+    phasing: String,
+    offsets: Pairs<&'a str, f64>,
+    events: u64,
+    seconds: f64,
+}
+
+pub(super) fn to_json<'a>(
+    spec: &'a Spec,
     report: &Report,
     a: &SimulateArgs,
     res: &SimResult,
     obs: &[ChainObs],
     seconds: f64,
-) -> Value {
-    let mut v = observations_json(spec, report, obs);
-    if let Some(tasks) = v.get_mut("tasks").and_then(Value::as_array_mut) {
-        for (entry, ts) in tasks.iter_mut().zip(&res.tasks) {
-            entry["observed"] = json!({
-                "released": ts.released,
-                "completed": ts.completed,
-                "max_response": num(spec, ts.max_response),
-                "late": ts.late,
-                "exhaustions": ts.exhaustions,
-                "utilization": ts.busy as f64 / res.horizon as f64,
-            });
+) -> SimulateView<'a> {
+    let observed = |ts: &rtpipe_joblog::TaskStats| TaskObserved {
+        released: ts.released,
+        completed: ts.completed,
+        max_response: time(spec, ts.max_response),
+        late: ts.late,
+        exhaustions: ts.exhaustions,
+        utilization: ts.busy as f64 / res.horizon as f64,
+    };
+    let report = observations_view(spec, report, obs).with(
+        |tasks| {
+            tasks
+                .into_iter()
+                .zip(&res.tasks)
+                .map(|(base, ts)| Extended {
+                    base,
+                    observed: observed(ts),
+                })
+                .collect()
+        },
+        |chains| chains,
+    );
+    let offsets = spec.tasks.iter().zip(&res.offsets);
+    let simulation = SimulationView {
+        horizon: spec.in_unit(res.horizon),
+        seed: a.seed,
+        exec: flag_name(&a.exec),
+        phasing: flag_name(&a.phasing),
+        offsets: Pairs(
+            offsets
+                .map(|(t, &o)| (t.name.as_str(), spec.in_unit(o)))
+                .collect(),
+        ),
+        events: res.events,
+        seconds,
+    };
+    SimulateView {
+        report,
+        simulation,
+        search: Vec::new(),
+    }
+}
+
+/// A chain entry of the report with its observations from the read and
+/// from the event.
+#[derive(Serialize)]
+pub(crate) struct ObsChain<'a> {
+    #[serde(flatten)]
+    base: ChainView<'a>,
+    observed: ObservedView,
+    violations: Violations,
+    observed_from_event: ObservedView,
+    violations_from_event: Violations,
+}
+
+#[derive(Serialize)]
+struct Violations {
+    paper: usize,
+    sound: Option<usize>,
+}
+
+impl Violations {
+    fn of(j: &Judged) -> Self {
+        Violations {
+            paper: j.over_paper,
+            sound: j.over_sound,
         }
     }
-    let offsets: serde_json::Map<String, Value> = spec
-        .tasks
-        .iter()
-        .zip(&res.offsets)
-        .map(|(t, &o)| (t.name.clone(), json!(spec.in_unit(o))))
-        .collect();
-    v["simulation"] = json!({
-        "horizon": spec.in_unit(res.horizon),
-        "seed": a.seed,
-        "exec": flag_name(&a.exec),
-        "phasing": flag_name(&a.phasing),
-        "offsets": offsets,
-        "events": res.events,
-        "seconds": seconds,
-    });
-    v
 }
 
 /// The `analyze --json` report with each chain entry's observations from the
 /// read and from the event.
-pub(crate) fn observations_json(spec: &Spec, report: &Report, obs: &[ChainObs]) -> Value {
-    let mut v = analyze::report_json(spec, report);
-    if let Some(chains) = v.get_mut("chains").and_then(Value::as_array_mut) {
-        for (entry, o) in chains.iter_mut().zip(obs) {
-            entry["observed"] = observed_json(spec, &o.read);
-            entry["violations"] = json!({"paper": o.read.over_paper, "sound": o.read.over_sound});
-            entry["observed_from_event"] = observed_json(spec, &o.event);
-            entry["violations_from_event"] =
-                json!({"paper": o.event.over_paper, "sound": o.event.over_sound});
-            if let (Some(k), Some([read, event])) = (entry.get_mut("known_offsets"), &o.known) {
-                k["violations"] = json!(read.over);
-                k["from_event"]["violations"] = json!(event.over);
-            }
+pub(crate) fn observations_view<'a>(
+    spec: &'a Spec,
+    report: &Report,
+    obs: &[ChainObs],
+) -> ReportView<'a, TaskView<'a>, ObsChain<'a>> {
+    let chain = |(mut base, o): (ChainView<'a>, &ChainObs)| {
+        if let (Some(k), Some([read, event])) = (base.known_offsets.as_mut(), &o.known) {
+            k.violations = Some(read.over);
+            k.from_event.violations = Some(event.over);
         }
-    }
-    v
+        ObsChain {
+            base,
+            observed: observed_json(spec, &o.read),
+            violations: Violations::of(&o.read),
+            observed_from_event: observed_json(spec, &o.event),
+            violations_from_event: Violations::of(&o.event),
+        }
+    };
+    analyze::report_view(spec, report).with(
+        |tasks| tasks,
+        |chains| chains.into_iter().zip(obs).map(chain).collect(),
+    )
 }
 
 /// {count, min, mean, p99, max, variation} in the spec's unit; variation =
-/// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV).
-pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> Value {
+/// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV); all
+/// but the count null without observations.
+#[derive(Serialize)]
+pub(crate) struct ObservedView {
+    count: usize,
+    min: Option<f64>,
+    mean: Option<f64>,
+    p99: Option<f64>,
+    max: Option<f64>,
+    variation: Option<f64>,
+}
+
+pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> ObservedView {
     let unit = spec.time_unit.nanos() as f64;
-    match j.observed {
-        Some(s) => json!({
-            "count": s.count,
-            "min": spec.in_unit(s.min),
-            "mean": s.mean / unit,
-            "p99": spec.in_unit(s.p99),
-            "max": spec.in_unit(s.max),
-            "variation": spec.in_unit(s.max - s.min),
-        }),
-        None => {
-            json!({"count": 0, "min": null, "mean": null, "p99": null, "max": null, "variation": null})
-        }
+    let s = j.observed;
+    ObservedView {
+        count: s.map_or(0, |s| s.count),
+        min: s.map(|s| spec.in_unit(s.min)),
+        mean: s.map(|s| s.mean / unit),
+        p99: s.map(|s| spec.in_unit(s.p99)),
+        max: s.map(|s| spec.in_unit(s.max)),
+        variation: s.map(|s| spec.in_unit(s.max - s.min)),
     }
 }
 
