@@ -1,4 +1,6 @@
 use super::*;
+#[cfg(feature = "highs")]
+use crate::lp::SolverKind;
 use rtpipe_analysis::Anchor;
 use rtpipe_model::Spec;
 use std::sync::{Arc, Mutex};
