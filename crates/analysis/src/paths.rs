@@ -244,74 +244,83 @@ impl Track {
 struct Scratch {
     stamp: Vec<usize>,
     /// Paper reaction and freshness.
-    pe: Track,
-    pf: Track,
+    paper_reaction: Track,
+    paper_freshness: Track,
     /// Sound freshness to a task's release, and to its publish through the
     /// last link's own term.
-    sf: Track,
-    sl: Track,
+    sound_freshness: Track,
+    sound_last: Track,
     /// Sound reaction on (task, distinct) states, index 2·task + distinct,
-    /// with `se_ok` marking the states the current source reached.
-    se: Track,
-    se_ok: Vec<usize>,
+    /// with `sound_reached` marking the states the current source reached.
+    sound_reaction: Track,
+    sound_reached: Vec<usize>,
 }
 
 impl Scratch {
     fn new(n: usize) -> Scratch {
         Scratch {
             stamp: vec![NONE; n],
-            pe: Track::new(n),
-            pf: Track::new(n),
-            sf: Track::new(n),
-            sl: Track::new(n),
-            se: Track::new(2 * n),
-            se_ok: vec![NONE; 2 * n],
+            paper_reaction: Track::new(n),
+            paper_freshness: Track::new(n),
+            sound_freshness: Track::new(n),
+            sound_last: Track::new(n),
+            sound_reaction: Track::new(2 * n),
+            sound_reached: vec![NONE; 2 * n],
         }
     }
 
     /// Starts the DP at source `s`: sums start at its release.
     fn start(&mut self, s: usize, lt: &[LinkTask]) {
         self.stamp[s] = s;
-        self.pe.set(s, lt[s].l, NONE);
-        self.pf.set(s, lt[s].l, NONE);
-        self.sf.set(s, 0, NONE);
-        self.se_ok[2 * s] = NONE;
-        self.se.set(2 * s + 1, 0, NONE);
-        self.se_ok[2 * s + 1] = s;
+        self.paper_reaction.set(s, lt[s].l, NONE);
+        self.paper_freshness.set(s, lt[s].l, NONE);
+        self.sound_freshness.set(s, 0, NONE);
+        self.sound_reached[2 * s] = NONE;
+        self.sound_reaction.set(2 * s + 1, 0, NONE);
+        self.sound_reached[2 * s + 1] = s;
     }
 
     /// Relaxes edge v → c for source `s`.
     fn relax(&mut self, s: usize, v: usize, c: usize, lt: &[LinkTask], sched: Scheduler) {
         let (p, q) = (&lt[v], &lt[c]);
-        let cand_pe = self.pe.val[v] + paper_reaction_link(p, q);
-        let cand_pf = self.pf.val[v] + paper_freshness_link(p, q);
-        let cand_sf = add(self.sf.val[v], sound_freshness_link(sched, p, q));
-        let cand_sl = add(self.sf.val[v], sound_freshness_last(sched, p, q));
+        let cand_pe = self.paper_reaction.val[v] + paper_reaction_link(p, q);
+        let cand_pf = self.paper_freshness.val[v] + paper_freshness_link(p, q);
+        let cand_sf = add(
+            self.sound_freshness.val[v],
+            sound_freshness_link(sched, p, q),
+        );
+        let cand_sl = add(
+            self.sound_freshness.val[v],
+            sound_freshness_last(sched, p, q),
+        );
         if self.stamp[c] != s {
             self.stamp[c] = s;
-            self.pe.set(c, cand_pe, v);
-            self.pf.set(c, cand_pf, v);
-            self.sf.set(c, cand_sf, v);
-            self.sl.set(c, cand_sl, v);
-            self.se_ok[2 * c] = NONE;
-            self.se_ok[2 * c + 1] = NONE;
+            self.paper_reaction.set(c, cand_pe, v);
+            self.paper_freshness.set(c, cand_pf, v);
+            self.sound_freshness.set(c, cand_sf, v);
+            self.sound_last.set(c, cand_sl, v);
+            self.sound_reached[2 * c] = NONE;
+            self.sound_reached[2 * c + 1] = NONE;
         } else {
-            self.pe.offer(c, cand_pe, v);
-            self.pf.offer(c, cand_pf, v);
-            self.sf.offer(c, cand_sf, v);
-            self.sl.offer(c, cand_sl, v);
+            self.paper_reaction.offer(c, cand_pe, v);
+            self.paper_freshness.offer(c, cand_pf, v);
+            self.sound_freshness.offer(c, cand_sf, v);
+            self.sound_last.offer(c, cand_sl, v);
         }
         for d in 0..2 {
             let sv = 2 * v + d;
-            if self.se_ok[sv] != s {
+            if self.sound_reached[sv] != s {
                 continue;
             }
             let distinct = d == 1;
-            let cand = add(self.se.val[sv], sound_reaction_link(sched, p, q, distinct));
+            let cand = add(
+                self.sound_reaction.val[sv],
+                sound_reaction_link(sched, p, q, distinct),
+            );
             let sc = 2 * c + usize::from(distinct_passes(p, q, distinct));
-            if self.se_ok[sc] != s || cand > self.se.val[sc] {
-                self.se.set(sc, cand, sv);
-                self.se_ok[sc] = s;
+            if self.sound_reached[sc] != s || cand > self.sound_reaction.val[sc] {
+                self.sound_reaction.set(sc, cand, sv);
+                self.sound_reached[sc] = s;
             }
         }
     }
@@ -324,28 +333,32 @@ impl Scratch {
         let (fresh, fresh_path) = if v == s {
             (lt[v].r, vec![v])
         } else {
-            let mut path = self.sf.walk(self.sl.from[v]);
+            let mut path = self.sound_freshness.walk(self.sound_last.from[v]);
             path.push(v);
-            (fin(self.sl.val[v]), path)
+            (fin(self.sound_last.val[v]), path)
         };
         // The worse sound-reaction state at the sink.
         let best = [2 * v, 2 * v + 1]
             .into_iter()
-            .filter(|&sv| self.se_ok[sv] == s)
+            .filter(|&sv| self.sound_reached[sv] == s)
             .fold(None, |b: Option<usize>, sv| match b {
-                Some(b) if self.se.val[sv] <= self.se.val[b] => Some(b),
+                Some(b) if self.sound_reaction.val[sv] <= self.sound_reaction.val[b] => Some(b),
                 _ => Some(sv),
             });
         let se_path = best.map_or(vec![v], |b| {
-            self.se.walk(b).into_iter().map(|x| x / 2).collect()
+            self.sound_reaction
+                .walk(b)
+                .into_iter()
+                .map(|x| x / 2)
+                .collect()
         });
-        let react = best.and_then(|b| fin(add(self.se.val[b], lt[v].r)));
+        let react = best.and_then(|b| fin(add(self.sound_reaction.val[b], lt[v].r)));
         PairBounds {
             source: s,
             sink: v,
             reaction_paper: Worst {
-                path: self.pe.walk(v),
-                value: Some(self.pe.val[v]),
+                path: self.paper_reaction.walk(v),
+                value: Some(self.paper_reaction.val[v]),
             },
             reaction_sound: Worst {
                 path: se_path,
@@ -357,8 +370,8 @@ impl Scratch {
                 },
             },
             freshness_paper: Worst {
-                path: self.pf.walk(v),
-                value: Some(self.pf.val[v]),
+                path: self.paper_freshness.walk(v),
+                value: Some(self.paper_freshness.val[v]),
             },
             freshness_sound: Worst {
                 path: fresh_path,

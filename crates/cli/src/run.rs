@@ -720,7 +720,7 @@ fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
     ])
     .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
     let f = |x: Option<Nanos>| x.map_or_else(|| "-".into(), |v| spec.fmt_time(v));
-    let three = |s: Option<Summary>| {
+    let summary_cells = |s: Option<Summary>| {
         [
             f(s.map(|s| s.mean.round() as Nanos)),
             f(s.map(|s| s.max)),
@@ -729,9 +729,9 @@ fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
     };
     for r in fig10_rows(obs) {
         let mut row = vec![spec.chain_label(r.chain)];
-        row.extend(three(r.reaction));
+        row.extend(summary_cells(r.reaction));
         row.push(f(r.sound_r));
-        row.extend(three(r.freshness));
+        row.extend(summary_cells(r.freshness));
         row.push(f(r.sound_f));
         t.row(row);
     }
@@ -756,7 +756,7 @@ struct Fig10View {
 fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Vec<Fig10View> {
     let unit = spec.time_unit.nanos() as f64;
     let n = |x: Option<Nanos>| time(spec, x);
-    let three = |s: Option<Summary>| {
+    let summary_cells = |s: Option<Summary>| {
         (
             s.map(|s| s.mean / unit),
             n(s.map(|s| s.max)),
@@ -766,8 +766,8 @@ fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Vec<Fig10View> {
     fig10_rows(obs)
         .into_iter()
         .map(|r| {
-            let (avgr, wcr, maxrv) = three(r.reaction);
-            let (avgf, wcf, maxfv) = three(r.freshness);
+            let (avgr, wcr, maxrv) = summary_cells(r.reaction);
+            let (avgf, wcf, maxfv) = summary_cells(r.freshness);
             Fig10View {
                 chain: spec.chain_label(r.chain),
                 AVGR: avgr,

@@ -35,7 +35,7 @@ impl Dom {
 }
 
 /// Converts ns to grid units.
-pub(crate) fn gu(ns: Nanos, g: i64) -> f64 {
+pub(crate) fn grid_units(ns: Nanos, g: i64) -> f64 {
     ns as f64 / g as f64
 }
 

@@ -3,7 +3,7 @@
 
 use crate::api::utilization;
 use crate::budget::Budget;
-use crate::domain::{gu, Dom};
+use crate::domain::{grid_units, Dom};
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 use crate::solve::{solve_master, Solved};
@@ -216,7 +216,7 @@ pub(crate) fn heuristic(
         let mut raised = false;
         for (f, t) in fixed.iter_mut().zip(&report.timing) {
             if let Some(r) = t.job_response_time {
-                let r = gu(r, p.g);
+                let r = grid_units(r, p.g);
                 if r > *f + 1e-9 {
                     *f = r;
                     raised = true;

@@ -2,7 +2,7 @@
 //! chain limits (the `model`, written with the encodings in `paper`,
 //! `sound` and `rta`, and with what the search has learnt).
 
-use crate::domain::{gu, harmonic_pair, Dom};
+use crate::domain::{grid_units, harmonic_pair, Dom};
 use crate::learnt::{Learnt, DENSE_TANGENTS};
 use crate::linear::Lin;
 use crate::lp::Cmp;
@@ -166,7 +166,7 @@ impl<'a> Master<'a> {
             let rmax = self.dom[i].max() as f64;
             let r = self.lp.var(0.0, rmax, false);
             self.at_most_period(i, r);
-            let own = gu(spec.tasks[i].budget(), self.g);
+            let own = grid_units(spec.tasks[i].budget(), self.g);
             self.rta_levels(i, r, own, rmax, levels, true);
         }
         for cut in cuts {
@@ -200,7 +200,7 @@ impl<'a> Master<'a> {
         for i in (0..n).filter(|&i| p.on_chain[i]) {
             let Some(r) = self.rvar[i] else { continue };
             let rmax = rmax_of(self, groups, i);
-            let own = gu(self.spec.tasks[i].demand(), self.g);
+            let own = grid_units(self.spec.tasks[i].demand(), self.g);
             self.rta_levels(i, r, own, rmax, levels, false);
         }
         for cut in &sm.cuts {
@@ -219,7 +219,7 @@ impl<'a> Master<'a> {
                 if !groups.contains(&Group::Limit(k, metric)) {
                     continue;
                 }
-                let l = gu(limit, self.g);
+                let l = grid_units(limit, self.g);
                 let sums = match sound {
                     None => vec![paper_chain(self, &ch.path, metric, l)],
                     Some(_) => sound_chain(self, &ch.path, metric, l),

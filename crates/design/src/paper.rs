@@ -1,7 +1,7 @@
 //! Paper mode (Eqs. 2–6, 12): each link's case a binary, the link term a
 //! variable bounded below by the active case.
 
-use crate::domain::gu;
+use crate::domain::grid_units;
 use crate::linear::Lin;
 use crate::lp::Cmp;
 use crate::model::Master;
@@ -13,15 +13,15 @@ pub(crate) fn paper_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
     let g = m.g;
     let spec = m.spec;
     // Budgets cover the demand (validated), so Eq. 1 gives L = x.
-    let l = |i: usize| gu(spec.tasks[i].demand(), g);
+    let l = |i: usize| grid_units(spec.tasks[i].demand(), g);
     let mut total = Lin::constant(l(path[0]));
     let big = m.big_m;
     for w in path.windows(2) {
         let (p, c) = (w[0], w[1]);
         let z = m.lt(c, p, false);
-        let delta = gu(spec.tasks[p].delta_out, g);
-        let cc = gu(spec.tasks[c].budget(), g);
-        let cp = gu(spec.tasks[p].budget(), g);
+        let delta = grid_units(spec.tasks[p].delta_out, g);
+        let cc = grid_units(spec.tasks[c].budget(), g);
+        let cp = grid_units(spec.tasks[p].budget(), g);
         let case1 = match metric {
             Metric::Reaction => m.period[c].add_c(-cc - delta + l(c)),
             Metric::Freshness => m.period[p].scale(2.0).add_c(-delta - l(p)),

@@ -2,7 +2,7 @@
 //! domains and the options, and the constraint groups it is made of.
 
 use crate::api::{Incumbent, Method, Options};
-use crate::domain::{gu, Dom, Domains};
+use crate::domain::{grid_units, Dom, Domains};
 use rtpipe_analysis::{ChainResult, Metric, Report};
 use rtpipe_model::{Nanos, PeriodSpec, Spec};
 
@@ -34,7 +34,7 @@ impl<'a> Problem<'a> {
         let Domains { g, dom, horizon } = domains;
         let n = spec.tasks.len();
         let max_t = dom.iter().map(|d| d.max()).max().unwrap_or(1) as f64;
-        let max_limit = gu(horizon, g);
+        let max_limit = grid_units(horizon, g);
         let big_m = 4.0 * (max_t + max_limit) + 10.0;
         Problem {
             spec,
@@ -60,7 +60,7 @@ impl<'a> Problem<'a> {
             opts: self.opts,
             g: self.g,
             dom: self.dom.clone(),
-            big_m: self.big_m.max(4.0 * gu(l, self.g)),
+            big_m: self.big_m.max(4.0 * grid_units(l, self.g)),
             on_chain: self.on_chain.clone(),
             method: self.method,
         }

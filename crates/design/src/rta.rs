@@ -1,7 +1,7 @@
 //! Response times in the master: the recurrence with one binary per job of
 //! a higher-priority task (levels added lazily), and the RTA test's cuts.
 
-use crate::domain::gu;
+use crate::domain::grid_units;
 use crate::linear::Bin;
 use crate::lp::Cmp;
 use crate::model::Master;
@@ -49,7 +49,7 @@ impl<'a> Master<'a> {
             if j == i || spec.tasks[j].cpu != spec.tasks[i].cpu || !self.guaranteed(j) {
                 continue;
             }
-            let cj = gu(interference(&spec.tasks[j]), g);
+            let cj = grid_units(interference(&spec.tasks[j]), g);
             let a = self.above(j, i);
             match a {
                 Bin::Const(true) => rhs += cj,

@@ -3,7 +3,7 @@
 
 use crate::api::{utilization, DesignError, Outcome, Status, EXPLAIN_EFFORT};
 use crate::budget::Budget;
-use crate::domain::gu;
+use crate::domain::grid_units;
 use crate::explain::explain;
 use crate::heuristic::{descent, heuristic};
 use crate::learnt::Learnt;
@@ -247,7 +247,7 @@ impl Milp<'_, '_> {
             .map(|i| {
                 let r = report.timing[i]
                     .job_response_time
-                    .map_or(0.0, |r| gu(r, self.p.g));
+                    .map_or(0.0, |r| grid_units(r, self.p.g));
                 r.max(sm.rlow[i])
             })
             .collect();

@@ -1,7 +1,7 @@
 //! Sound mode: response-time variables and their cuts, and each link term
 //! as the smallest valid option of docs/analysis.md.
 
-use crate::domain::gu;
+use crate::domain::grid_units;
 use crate::linear::{Bin, Lin};
 use crate::lp::{Cmp, Lp};
 use crate::model::Master;
@@ -55,7 +55,7 @@ pub(crate) fn rhat_lower(p: &Problem) -> Vec<f64> {
                     r += interference(&spec.tasks[j]);
                 }
             }
-            gu(r, p.g)
+            grid_units(r, p.g)
         })
         .collect()
 }
@@ -70,7 +70,7 @@ pub(crate) fn rmax_of(m: &Master, groups: &[Group], i: usize) -> f64 {
             ch.path.contains(&i) && groups.contains(&Group::Limit(k, Metric::Freshness)),
             ch.freshness,
         ) {
-            r = r.min(gu(l, m.g));
+            r = r.min(grid_units(l, m.g));
         }
     }
     r
@@ -93,7 +93,7 @@ pub(crate) fn learn_r_cuts(
         let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
             continue;
         };
-        let tr = gu(tr, g);
+        let tr = grid_units(tr, g);
         if tr > mv + 1e-6 {
             let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
             let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
@@ -194,11 +194,11 @@ fn response(m: &Master, i: usize) -> Lin {
 
 /// The demands x_min(i) and x(i) in grid units.
 fn xmin(m: &Master, i: usize) -> f64 {
-    gu(m.spec.tasks[i].demand_min(), m.g)
+    grid_units(m.spec.tasks[i].demand_min(), m.g)
 }
 
 fn demand(m: &Master, i: usize) -> f64 {
-    gu(m.spec.tasks[i].demand(), m.g)
+    grid_units(m.spec.tasks[i].demand(), m.g)
 }
 
 /// The smallest and largest values of some options over the variables'

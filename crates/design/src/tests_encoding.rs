@@ -24,7 +24,7 @@
 //! fixed and the chain sum as the objective.
 
 use super::*;
-use crate::domain::{domains, gu, harmonic_domains};
+use crate::domain::{domains, grid_units, harmonic_domains};
 use crate::learnt::Learnt;
 use crate::lp::{self, Limits, SolverKind};
 use crate::master::build;
@@ -60,7 +60,7 @@ fn least_chain_values(
     let pinned = SoundModel {
         rlow: rhat_lower(&p),
         cuts: Vec::new(),
-        fixed: Some(responses.iter().map(|&r| gu(r, p.g)).collect()),
+        fixed: Some(responses.iter().map(|&r| grid_units(r, p.g)).collect()),
     };
     let sound = (opts.mode == Mode::Sound).then_some(&pinned);
     let (m, _) = build(&p, &Learnt::new(spec.tasks.len()), &groups, sound);

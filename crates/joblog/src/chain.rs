@@ -47,7 +47,7 @@ pub struct Observed {
 impl Observed {
     /// A value that ended at `at`.
     pub(crate) fn push(&mut self, value: Nanos, at: Nanos, w: Witness) {
-        debug_assert!(value >= 0, "a latency is never negative: {w:?}");
+        assert!(value >= 0, "a latency is never negative: {w:?}");
         self.values.push(value);
         self.at.push(at);
         if self.max.is_none_or(|m| value > m) {

@@ -206,6 +206,16 @@ pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
         tr.stats.samples = tr.stamps.len() as u64;
     }
     for j in jobs {
+        // Causality within a job: every latency below starts from a read.
+        assert!(
+            j.release <= j.read && j.read <= j.finish,
+            "task {} job {}: release {} read {} finish {} out of order",
+            j.task,
+            j.index,
+            j.release,
+            j.read,
+            j.finish
+        );
         for c in &j.carried {
             let (Some(ch), Some(sample)) = (spec.chains.get(c.chain), c.sample) else {
                 continue;

@@ -535,9 +535,9 @@ impl<H: Hooks> Sim<H> {
         let Some(job) = ts.queue.pop_front() else {
             return;
         };
-        debug_assert!(
-            job.read.is_some(),
-            "task {i} publishes a job that never read"
+        assert!(
+            job.read.is_some_and(|r| job.release <= r && r <= t),
+            "task {i} publishes at {t} a job that did not read after its release"
         );
         self.hooks.publish(i, t);
         let response = t - job.release;

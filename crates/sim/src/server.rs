@@ -265,6 +265,8 @@ impl Pibs {
 
     /// After running `ran`: e += ran / U = ran · T / C.
     pub fn charge(&mut self, _now: Nanos, ran: Nanos) {
+        // The simulator runs a PIBS job only within its capacity.
+        assert!(ran <= self.left, "PIBS overrun: ran {ran} of {}", self.left);
         self.left -= ran;
         self.eligible_scaled += ran as i128 * self.period as i128;
         if self.left <= 0 {
