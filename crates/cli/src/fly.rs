@@ -18,6 +18,7 @@ use crate::command;
 use crate::output;
 use crate::plot;
 use crate::report::flight::quality_text;
+use crate::report::samples::samples_csv;
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::quality::ErrorStats;
@@ -98,7 +99,9 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
         horizon,
         seed: a.seed,
     };
-    setup(spec, &r)
+    let mut s = setup(spec, &r)?;
+    s.log_jobs = a.samples.is_some();
+    Ok(s)
 }
 
 pub fn run(a: &FlyArgs) -> ExitCode {
@@ -111,10 +114,13 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Err(b) => return command::fail(b),
     };
     if a.sweep {
-        if a.log.is_some() {
+        if let Some(flag) = [("--log", &a.log), ("--samples", &a.samples)]
+            .into_iter()
+            .find_map(|(flag, p)| p.as_ref().map(|_| flag))
+        {
             return command::fail(Diagnostic::error(
-                "--log describes one flight; --sweep flies many",
-                "drop --log, or drop --sweep (--plot DIR writes sweep.svg)",
+                format!("{flag} describes one flight; --sweep flies many"),
+                format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
             ));
         }
         return sweep::run(&spec, &s, a);
@@ -433,6 +439,10 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
     }
     if let Some(path) = &a.log {
         files.push(("--log", path.clone(), csv(spec, f)));
+    }
+    if let Some(path) = &a.samples {
+        let rows = rtpipe_joblog::sample_rows(spec, &f.sim.jobs);
+        files.push(("--samples", path.clone(), samples_csv(spec, &rows)));
     }
     output::write_files(&a.spec, &files)
 }

@@ -2,6 +2,7 @@
 //! report (the commands print their own reports from these parts).
 
 pub mod flight;
+pub mod samples;
 
 use rtpipe_model::{Nanos, Spec};
 

@@ -5,6 +5,7 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
+use crate::report::samples::samples_csv;
 use crate::report::{self, time};
 use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
 use crate::table::Table;
@@ -67,6 +68,11 @@ pub struct RunArgs {
     /// Write the task set (with --policy and --load) as an rt-app workload.
     #[arg(long, value_name = "FILE.json")]
     pub export_rt_app: Option<PathBuf>,
+    /// Write one CSV row per head sample of every chain (as `simulate
+    /// --samples`): read, event, first and last tail output, reaction and
+    /// freshness from the read and from the event, integer ns.
+    #[arg(long, value_name = "FILE.csv")]
+    pub samples: Option<PathBuf>,
 }
 
 /// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
@@ -123,6 +129,7 @@ fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Diagno
         ("--trace", &a.trace),
         ("--plot", &a.plot),
         ("--export-rt-app", &a.export_rt_app),
+        ("--samples", &a.samples),
     ] {
         let Some(p) = p else { continue };
         outs.push(output::prepare(flag, p, &a.spec, None)?);
@@ -209,6 +216,12 @@ fn write_outputs(
         })?;
         notes.push(format!("wrote {}", path.display()));
         files.push(("--plot", path.clone(), svg));
+    }
+    if let Some(path) = &a.samples {
+        let rows = rtpipe_joblog::sample_rows(spec, &res.sim.jobs);
+        let n: usize = rows.iter().map(Vec::len).sum();
+        notes.push(format!("wrote {}: {n} samples", path.display()));
+        files.push(("--samples", path.clone(), samples_csv(spec, &rows)));
     }
     output::write_files(&a.spec, &files)?;
     for n in notes {

@@ -136,6 +136,21 @@ const CASES: &[Fixed] = &[
         ],
     ),
     case(
+        "simulate-table2-samples",
+        &[
+            "simulate",
+            "@paper-table2",
+            "--outputs",
+            "50",
+            "--exec",
+            "uniform",
+            "--phasing",
+            "random",
+            "--samples",
+            "^samples.csv",
+        ],
+    ),
+    case(
         "simulate-table3-search",
         &[
             "simulate",

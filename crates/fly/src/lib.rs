@@ -42,6 +42,8 @@ pub struct Setup {
     pub horizon: Nanos,
     /// The world's options (noise, disturbances).
     pub world: CosimConfig,
+    /// Keep the job log (`Flight::sim.jobs`), for per-sample figures.
+    pub log_jobs: bool,
 }
 
 /// The outcome of one flight.
@@ -156,6 +158,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
         kinds,
         horizon,
         world: CosimConfig::new(r.seed),
+        log_jobs: false,
     })
 }
 
@@ -211,7 +214,7 @@ pub fn fly_with_progress(
         seed,
         phasing: Phasing::Sync,
         exec,
-        log_jobs: false,
+        log_jobs: s.log_jobs,
     };
     let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
         Diagnostic::error(

@@ -81,3 +81,59 @@ pub struct ChainStats {
     /// output: every finalised sample but the first.
     pub event_freshness: Observed,
 }
+
+/// One head sample of one chain: its read and the tail outputs that end
+/// its latencies (`None` where the run ended first). The per-sample view
+/// of [`ChainStats`], from the same trackers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleRow {
+    /// The sample's id (the k-th head read).
+    pub sample: u64,
+    /// The head's read of the sample.
+    pub read: Nanos,
+    /// The head read before it: the latest instant of an event the sample
+    /// reflects first (`None` for sample 0).
+    pub event: Option<Nanos>,
+    /// The first tail output carrying the sample.
+    pub first: Option<Nanos>,
+    /// The last tail output carrying the sample, once a newer one reached
+    /// the tail.
+    pub last: Option<Nanos>,
+    /// The first tail output carrying the sample or a newer one.
+    pub event_first: Option<Nanos>,
+}
+
+impl SampleRow {
+    pub(crate) fn new(sample: u64, read: Nanos, event: Option<Nanos>) -> SampleRow {
+        SampleRow {
+            sample,
+            read,
+            event,
+            first: None,
+            last: None,
+            event_first: None,
+        }
+    }
+
+    /// Reaction from the read: first output − read.
+    pub fn reaction(&self) -> Option<Nanos> {
+        self.first.map(|f| f - self.read)
+    }
+
+    /// Freshness from the read: last output − read.
+    pub fn freshness(&self) -> Option<Nanos> {
+        self.last.map(|l| l - self.read)
+    }
+
+    /// Reaction from the event: first output carrying this sample or a
+    /// newer one − the previous head read.
+    pub fn event_reaction(&self) -> Option<Nanos> {
+        Some(self.event_first? - self.event?)
+    }
+
+    /// Freshness from the event (maximum data age): last output − the
+    /// previous head read.
+    pub fn event_freshness(&self) -> Option<Nanos> {
+        Some(self.last? - self.event?)
+    }
+}

@@ -40,6 +40,6 @@ mod provenance;
 pub mod trace;
 mod tracker;
 
-pub use chain::{ChainStats, Observed, Witness};
+pub use chain::{ChainStats, Observed, SampleRow, Witness};
 pub use log::{Carried, JobRecord, Segment, SimResult, TaskStats};
-pub use provenance::{chains_from_jobs, BadChain, Provenance, Slot};
+pub use provenance::{chains_from_jobs, sample_rows, BadChain, Provenance, Slot};

@@ -3,7 +3,7 @@
 //! the chains' figures that follow from it.
 
 use crate::tracker::Tracker;
-use crate::{Carried, ChainStats, JobRecord};
+use crate::{Carried, ChainStats, JobRecord, SampleRow};
 use rtpipe_model::{Nanos, Spec};
 use std::fmt;
 
@@ -186,7 +186,25 @@ impl Provenance {
 /// k the sample of the value it read from position k−1). Head samples
 /// whose job is missing from the log are not counted.
 pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
-    let mut trackers: Vec<Tracker> = spec.chains.iter().map(|_| Tracker::new()).collect();
+    replay(spec, jobs, Tracker::new)
+        .into_iter()
+        .map(|t| t.stats)
+        .collect()
+}
+
+/// Every head sample of every chain of a finished job log, one
+/// [`SampleRow`] each (indexed like `Spec::chains`, then by sample id),
+/// measured by the same trackers as [`chains_from_jobs`].
+pub fn sample_rows(spec: &Spec, jobs: &[JobRecord]) -> Vec<Vec<SampleRow>> {
+    replay(spec, jobs, Tracker::with_rows)
+        .into_iter()
+        .map(|t| t.rows.unwrap_or_default())
+        .collect()
+}
+
+/// Feeds a finished job log through one tracker per chain.
+fn replay(spec: &Spec, jobs: &[JobRecord], tracker: fn() -> Tracker) -> Vec<Tracker> {
+    let mut trackers: Vec<Tracker> = spec.chains.iter().map(|_| tracker()).collect();
     for (tr, ch) in trackers.iter_mut().zip(&spec.chains) {
         let Some(&head) = ch.path.first() else {
             continue;
@@ -197,13 +215,14 @@ pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
             .map(|j| (j.index, j.read))
             .collect();
         reads.sort_unstable();
-        tr.stamps = reads
-            .iter()
-            .enumerate()
-            .take_while(|&(k, &(i, _))| k as u64 == i)
-            .map(|(_, &(_, r))| r)
-            .collect();
-        tr.stats.samples = tr.stamps.len() as u64;
+        tr.set_stamps(
+            reads
+                .iter()
+                .enumerate()
+                .take_while(|&(k, &(i, _))| k as u64 == i)
+                .map(|(_, &(_, r))| r)
+                .collect(),
+        );
     }
     for j in jobs {
         // Causality within a job: every latency below starts from a read.
@@ -226,7 +245,7 @@ pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
             }
         }
     }
-    trackers.into_iter().map(|t| t.stats).collect()
+    trackers
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Provenance of samples along one chain, and the reaction and freshness
 //! of each sample that reaches the tail.
 
-use crate::{ChainStats, Witness};
+use crate::{ChainStats, SampleRow, Witness};
 use rtpipe_model::Nanos;
 
 /// Per chain: stamps of the samples and the sample the tail currently outputs.
@@ -13,6 +13,8 @@ pub(crate) struct Tracker {
     /// the first tail output carrying it or a newer one has not happened.
     pub(crate) event_pending: u64,
     pub(crate) stats: ChainStats,
+    /// One row per head sample, indexed by sample id, when asked for.
+    pub(crate) rows: Option<Vec<SampleRow>>,
 }
 
 impl Tracker {
@@ -23,6 +25,15 @@ impl Tracker {
             // Sample 0 has no head read before it, so no event window.
             event_pending: 1,
             stats: ChainStats::default(),
+            rows: None,
+        }
+    }
+
+    /// A tracker that also keeps one [`SampleRow`] per head sample.
+    pub(crate) fn with_rows() -> Tracker {
+        Tracker {
+            rows: Some(Vec::new()),
+            ..Tracker::new()
         }
     }
 
@@ -30,9 +41,28 @@ impl Tracker {
     /// Inlined: the simulator calls it on every head read, across crates.
     #[inline]
     pub(crate) fn sample(&mut self, t: Nanos) -> u64 {
+        if let Some(rows) = &mut self.rows {
+            rows.push(SampleRow::new(
+                rows.len() as u64,
+                t,
+                self.stamps.last().copied(),
+            ));
+        }
         self.stamps.push(t);
         self.stats.samples += 1;
         self.stamps.len() as u64 - 1
+    }
+
+    /// The head's reads, known beforehand (a finished job log): sample k
+    /// is the k-th read.
+    pub(crate) fn set_stamps(&mut self, stamps: Vec<Nanos>) {
+        if let Some(rows) = &mut self.rows {
+            *rows = (0..stamps.len())
+                .map(|k| SampleRow::new(k as u64, stamps[k], k.checked_sub(1).map(|e| stamps[e])))
+                .collect();
+        }
+        self.stats.samples = stamps.len() as u64;
+        self.stamps = stamps;
     }
 
     /// The tail publishes a value carrying `sample` at t.
@@ -75,6 +105,12 @@ impl Tracker {
                 last: t,
             };
             self.stats.event_reaction.push(t - event, t, w);
+            if let Some(rows) = &mut self.rows {
+                rows[s as usize].event_first = Some(t);
+            }
+        }
+        if let Some(rows) = &mut self.rows {
+            rows[sample as usize].first = Some(t);
         }
         self.event_pending = self.event_pending.max(sample + 1);
     }
@@ -86,6 +122,9 @@ impl Tracker {
             first,
             last,
         };
+        if let Some(rows) = &mut self.rows {
+            rows[sample as usize].last = Some(last);
+        }
         let st = &mut self.stats;
         st.finalised += 1;
         st.freshness.push(w.freshness(), last, w);

@@ -3,7 +3,7 @@
 
 use super::*;
 use rtpipe_analysis::Anchor;
-use rtpipe_joblog::{chains_from_jobs, Witness};
+use rtpipe_joblog::{chains_from_jobs, sample_rows, SampleRow, Witness};
 use rtpipe_model::{Chain, PeriodSpec, SchedTest, Task, TimeUnit};
 use rtpipe_model::{Scheduler, Server};
 
@@ -543,5 +543,39 @@ fn chains_from_jobs_replays_the_simulators_own_measurement() {
             assert_eq!(a.event_freshness, b.event_freshness);
             assert_eq!(a.reached, b.reached);
         }
+    }
+}
+
+#[test]
+fn sample_rows_are_the_chain_figures_one_sample_at_a_time() {
+    // The per-sample export (`--samples`) lists, in sample order, exactly
+    // the values the chain figures hold, for every quantity and anchor.
+    let text = include_str!("../../../examples/paper-table2.toml");
+    let Ok(s) = Spec::parse("paper-table2.toml", text) else {
+        panic!("paper-table2.toml parses");
+    };
+    let cfg = SimConfig {
+        seed: 3,
+        phasing: Phasing::Random,
+        exec: ExecModel::Uniform,
+        log_jobs: true,
+        ..SimConfig::new(2_000_000_000)
+    };
+    let Ok(r) = simulate(&s, &cfg) else {
+        panic!("simulates");
+    };
+    let rows = sample_rows(&s, &r.jobs);
+    assert_eq!(rows.len(), r.chains.len());
+    for (rows, c) in rows.iter().zip(&r.chains) {
+        let col = |f: fn(&SampleRow) -> Option<Nanos>| -> Vec<Nanos> {
+            rows.iter().filter_map(f).collect()
+        };
+        assert_eq!(rows.len() as u64, c.samples);
+        assert!(rows.iter().enumerate().all(|(k, r)| r.sample == k as u64));
+        assert_eq!(col(SampleRow::reaction), c.reaction.values);
+        assert_eq!(col(SampleRow::freshness), c.freshness.values);
+        assert_eq!(col(SampleRow::event_reaction), c.event_reaction.values);
+        assert_eq!(col(SampleRow::event_freshness), c.event_freshness.values);
+        assert!(c.reached > 10);
     }
 }

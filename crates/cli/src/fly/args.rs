@@ -55,6 +55,11 @@ pub struct FlyArgs {
     /// reaction and freshness in ms; readable by PlotJuggler).
     #[arg(long, value_name = "FILE.csv")]
     pub log: Option<PathBuf>,
+    /// Write one CSV row per head sample of every chain (as `simulate
+    /// --samples`): read, event, first and last tail output, reaction and
+    /// freshness from the read and from the event, integer ns.
+    #[arg(long, value_name = "FILE.csv")]
+    pub samples: Option<PathBuf>,
 }
 
 /// `--scale LO..HI`: two positive factors.

@@ -78,6 +78,11 @@ pub struct SimulateArgs {
     /// Write a Gantt chart of the schedule as SVG (see --window).
     #[arg(long, value_name = "FILE.svg")]
     pub gantt: Option<PathBuf>,
+    /// Write one CSV row per head sample of every chain: its read, the
+    /// event before it, its first and last tail outputs, and its reaction
+    /// and freshness from the read and from the event (integer ns).
+    #[arg(long, value_name = "FILE.csv")]
+    pub samples: Option<PathBuf>,
     /// The span of --gantt, START,END in the spec's time unit or with units
     /// ("0,30ms") [default: the first 3 × the largest period].
     #[arg(long, value_name = "START,END", allow_hyphen_values = true)]

@@ -37,6 +37,7 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Diagnostic> {
         ("--trace", &a.trace),
         ("--plot", &a.plot),
         ("--gantt", &a.gantt),
+        ("--samples", &a.samples),
     ] {
         let Some(p) = p else { continue };
         outs.push(output::prepare(flag, p, &a.spec, None)?);
@@ -46,7 +47,7 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Diagnostic> {
         horizon,
         outputs,
         window,
-        log_jobs: a.trace.is_some() || a.gantt.is_some(),
+        log_jobs: a.trace.is_some() || a.gantt.is_some() || a.samples.is_some(),
     })
 }
 
