@@ -9,6 +9,7 @@
 
 use std::cell::UnsafeCell;
 use std::io;
+use std::marker::PhantomData;
 use std::mem::ManuallyDrop;
 use std::ops::{Deref, DerefMut};
 
@@ -25,9 +26,52 @@ unsafe impl<T: ?Sized + Send> Send for PiMutex<T> {}
 unsafe impl<T: ?Sized + Send> Sync for PiMutex<T> {}
 
 /// Access to the value while the lock is held; unlocks when dropped.
+///
+/// Not `Send`: a POSIX mutex must be unlocked by the thread that locked
+/// it. `Sync` only when `T` is (as `std::sync::MutexGuard`): a shared guard
+/// hands out `&T` to every thread that holds a reference to it. Both are
+/// checked at compile time; the first two examples must not compile, the
+/// third must:
+///
+/// ```compile_fail
+/// use rtpipe_runtime::pi::PiMutex;
+/// let m = PiMutex::new(0u64).unwrap();
+/// let g = m.lock().unwrap();
+/// std::thread::scope(|s| {
+///     s.spawn(move || drop(g)); // unlocking on another thread
+/// });
+/// ```
+///
+/// ```compile_fail
+/// use rtpipe_runtime::pi::PiMutex;
+/// use std::cell::Cell;
+/// let m = PiMutex::new(Cell::new(0u64)).unwrap();
+/// let g = m.lock().unwrap();
+/// std::thread::scope(|s| {
+///     s.spawn(|| g.set(g.get() + 1)); // a data race on the Cell
+///     g.set(g.get() + 1);
+/// });
+/// ```
+///
+/// ```
+/// use rtpipe_runtime::pi::PiMutex;
+/// use std::sync::atomic::{AtomicU64, Ordering};
+/// let m = PiMutex::new(AtomicU64::new(0)).unwrap();
+/// let g = m.lock().unwrap();
+/// std::thread::scope(|s| {
+///     s.spawn(|| g.fetch_add(1, Ordering::SeqCst)); // Sync data: fine
+/// });
+/// assert_eq!(g.load(Ordering::SeqCst), 1);
+/// ```
 pub struct PiGuard<'a, T: ?Sized> {
     mutex: &'a PiMutex<T>,
+    /// Makes the guard neither `Send` nor `Sync` by default.
+    _not_send: PhantomData<*const ()>,
 }
+
+// SAFETY: sharing `&PiGuard<T>` across threads shares only `&T`, which is
+// sound exactly when T: Sync; the unlock stays with the owning thread.
+unsafe impl<T: ?Sized + Sync> Sync for PiGuard<'_, T> {}
 
 fn check(r: libc::c_int) -> io::Result<()> {
     if r == 0 {
@@ -81,7 +125,10 @@ impl<T: ?Sized> PiMutex<T> {
     pub fn lock(&self) -> io::Result<PiGuard<'_, T>> {
         // SAFETY: the mutex was initialised by `new` and lives as long as self.
         check(unsafe { libc::pthread_mutex_lock(self.raw.get()) })?;
-        Ok(PiGuard { mutex: self })
+        Ok(PiGuard {
+            mutex: self,
+            _not_send: PhantomData,
+        })
     }
 }
 
