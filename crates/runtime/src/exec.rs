@@ -377,7 +377,7 @@ pub fn run<'a, V: Copy + Send>(
     let mut res = assemble(
         spec,
         (threads, prov),
-        cfg.duration,
+        released_span(cfg.duration, e0),
         cfg.policy,
         interrupted,
         steal,
@@ -387,6 +387,17 @@ pub fn run<'a, V: Copy + Send>(
     res.load = cfg.load;
     res.epoch = e0;
     Ok(res)
+}
+
+/// The span in which jobs were released: the whole duration, or up to
+/// Ctrl-C (no job is released after it).
+fn released_span(duration: Nanos, epoch: Nanos) -> Nanos {
+    match sys::stop_instant() {
+        // A stop after the last release leaves the whole run; one before
+        // the epoch, an empty one.
+        Some(at) => (at - epoch).clamp(0, duration),
+        None => duration,
+    }
 }
 
 /// The warning for a task [`watch`] demoted to SCHED_OTHER `grace` after
@@ -652,6 +663,11 @@ fn periodic<V: Copy>(
         // wake-up rule re-anchor the deadline at the release.
         let release = epoch + offset;
         sys::sleep_until(release);
+        if sys::stop_requested() {
+            // Ctrl-C came while sleeping, before this release: the report's
+            // span ends at the stop, so this job is not part of it.
+            break;
+        }
         job(th, k, epoch, env, &mut inputs);
         k += 1;
     }
@@ -748,7 +764,7 @@ fn actuate<V>(
 fn assemble<V>(
     spec: &Spec,
     (threads, mut prov): (Vec<Thread<'_, V>>, Provenance),
-    duration: Nanos,
+    horizon: Nanos,
     policy: Policy,
     interrupted: bool,
     steal: Option<Nanos>,
@@ -774,7 +790,7 @@ fn assemble<V>(
             jobs,
             segments,
             events: 0,
-            horizon: duration,
+            horizon,
         },
         tasks: runs,
         policy,

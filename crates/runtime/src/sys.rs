@@ -175,9 +175,18 @@ pub fn steal_time() -> Option<i64> {
 }
 
 static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// [`now`] when the first Ctrl-C arrived.
+static STOP_AT: std::sync::atomic::AtomicI64 = std::sync::atomic::AtomicI64::new(0);
 
 extern "C" fn on_sigint(_: libc::c_int) {
-    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+    use std::sync::atomic::Ordering::SeqCst;
+    // clock_gettime is async-signal-safe (POSIX.1-2008, signal-safety(7)).
+    // The instant is stored before the flag, so whoever sees the flag
+    // sees the instant.
+    if !STOP.load(SeqCst) {
+        STOP_AT.store(now(), SeqCst);
+    }
+    STOP.store(true, SeqCst);
 }
 
 /// Installs a SIGINT handler that sets the stop flag ([`stop_requested`]).
@@ -191,6 +200,11 @@ pub fn catch_sigint() {
 /// Whether Ctrl-C was pressed since [`catch_sigint`].
 pub fn stop_requested() -> bool {
     STOP.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// When Ctrl-C was first pressed since [`catch_sigint`] ([`now`]'s clock).
+pub fn stop_instant() -> Option<i64> {
+    stop_requested().then(|| STOP_AT.load(std::sync::atomic::Ordering::SeqCst))
 }
 
 /// Whether the process runs with an effective user id of 0.
