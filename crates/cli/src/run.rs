@@ -49,6 +49,11 @@ pub struct RunArgs {
     /// not real-time.
     #[arg(long)]
     pub best_effort: bool,
+    /// Run a spec that `analyze` finds unschedulable under a real-time
+    /// policy anyway (its threads may starve everything else on their
+    /// CPUs for as long as they are behind).
+    #[arg(long)]
+    pub force: bool,
     /// Print one JSON object (the `simulate --json` fields that apply, plus
     /// "run" and "fig10") instead of tables.
     #[arg(long)]
@@ -240,6 +245,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Err(b) => return fail(b),
     };
     let report = rtpipe_analysis::analyze(&spec);
+    if let Err(b) = admit(&spec, a, &cfg, &report) {
+        return fail(b);
+    }
     let spin = Spin::calibrate();
     if !a.json {
         announce(&spec, a, &cfg, setup.is_some());
@@ -317,6 +325,40 @@ fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagn
         export_rt_app(spec, a, &cfg, path)?;
     }
     Ok((setup, cfg))
+}
+
+/// Refuses to run an unschedulable spec under a real-time policy without
+/// --force: the analysis said its threads can fall behind for good, and a
+/// SCHED_FIFO or SCHED_DEADLINE thread that is behind keeps its CPU from
+/// every ordinary process (measured: up to 950 ms on CPU 0).
+fn admit(spec: &Spec, a: &RunArgs, cfg: &RunConfig, report: &Report) -> Result<(), Diagnostic> {
+    let s = &report.schedulability;
+    if s.schedulable || a.force || cfg.policy == Policy::Other {
+        return Ok(());
+    }
+    let failing: Vec<String> = s
+        .cpus
+        .iter()
+        .filter(|v| !v.schedulable)
+        .map(|v| {
+            format!(
+                "CPU {} ({} {:.3} > {:.3})",
+                v.cpu,
+                s.test.name(),
+                v.value,
+                v.bound
+            )
+        })
+        .collect();
+    Err(Diagnostic::error(
+        format!(
+            "{} is not schedulable ({}): under SCHED_{} its threads can fall behind for good and starve everything else on their CPUs",
+            spec.name,
+            failing.join(", "),
+            cfg.policy.name().to_uppercase()
+        ),
+        "fix the budgets or periods (`rtpipe analyze` says where, `rtpipe design` picks periods), run it with --policy other --best-effort, or pass --force to run it anyway",
+    ))
 }
 
 /// `--duration`, by default a flight's mission (plus its margin) or 2 s.

@@ -382,3 +382,38 @@ fn cleanflight_flies_on_real_threads() {
     // The gyro ran at 1 kHz for 3 s.
     assert_eq!(v["tasks"][0]["observed"]["completed"], 3000);
 }
+
+/// An unschedulable spec (the sensor's budget is its whole period, so the
+/// filter and actuator never get the CPU in time) is refused under a
+/// real-time policy before any thread starts, unless --force; SCHED_OTHER
+/// cannot starve anyone and is not refused.
+#[test]
+fn an_unschedulable_spec_is_refused_without_force() {
+    let spec = write_spec(
+        "unsched",
+        &small("rm", 0, "").replace("exec = 0.2", "exec = 2"),
+    );
+    let o = rtpipe(&["run", &spec, "--duration", "100ms"]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("small is not schedulable (CPU 0 (rta"),
+        "{err}"
+    );
+    assert!(err.contains("pass --force"), "{err}");
+    let o = rtpipe(&[
+        "run",
+        &spec,
+        "--duration",
+        "100ms",
+        "--policy",
+        "other",
+        "--best-effort",
+    ]);
+    assert_ne!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

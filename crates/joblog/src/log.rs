@@ -75,7 +75,8 @@ pub struct Segment {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SimResult {
     /// The release offsets used (a simulator replays a random phasing with
-    /// them; all 0 for a real run, whose tasks release from one epoch).
+    /// them; a real run releases from one epoch with the spec's known
+    /// offsets, 0 where a task has none).
     pub offsets: Vec<Nanos>,
     /// Per task, in declaration order.
     pub tasks: Vec<TaskStats>,

@@ -155,6 +155,8 @@ struct Rec {
 /// What one task's thread owns.
 struct Thread<'a, V> {
     task: usize,
+    /// The spec's release offset (0 without one): releases at phase + k·T.
+    phase: Nanos,
     period: Nanos,
     budget: Nanos,
     cpu: usize,
@@ -356,7 +358,7 @@ pub fn run<'a, V: Copy + Send>(
     let grace = GRACE.max(2 * longest.unwrap_or(0));
     let (finished, demoted) = start(spec, cfg, threads, env, &shared, grace);
     for &i in &demoted {
-        notes.push(demoted_note(&spec.tasks[i].name, grace));
+        notes.push(demoted_note(&spec.tasks[i].name, cfg.policy, grace));
     }
     let e0 = shared.epoch.load(Ordering::SeqCst);
     let elapsed = sys::now() - e0;
@@ -402,12 +404,17 @@ fn released_span(duration: Nanos, epoch: Nanos) -> Nanos {
 
 /// The warning for a task [`watch`] demoted to SCHED_OTHER `grace` after
 /// the run's end.
-fn demoted_note(name: &str, grace: Nanos) -> String {
+fn demoted_note(name: &str, policy: Policy, grace: Nanos) -> String {
+    let why = match policy {
+        Policy::Deadline => {
+            "a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back"
+        }
+        Policy::Fifo => "higher-priority SCHED_FIFO threads kept it from running",
+        Policy::Other => "the fair scheduler gave it too little CPU time",
+    };
     format!(
-        "warning: task {} was still waiting for the CPU {} ms after the run ended \
-         (a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back): \
+        "warning: task {name} was still waiting for the CPU {} ms after the run ended ({why}): \
          it was moved to SCHED_OTHER to finish, and its jobs released but not started by then were dropped",
-        name,
         grace / 1_000_000
     )
 }
@@ -443,6 +450,7 @@ fn threads<'a, V: Copy + Send>(
             let cap = (cfg.duration / period) as usize + 2;
             Thread {
                 task: i,
+                phase: t.offset.unwrap_or(0),
                 period,
                 budget: t.budget(),
                 cpu: t.cpu as usize,
@@ -634,8 +642,8 @@ fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), Ru
     Ok(())
 }
 
-/// The periodic loop of one task: releases at epoch + k·T for k·T <
-/// duration, none started after `stop` (the run's end plus its grace: a
+/// The periodic loop of one task: releases at epoch + φ + k·T for
+/// φ + k·T < duration, none started after `stop` (the run's end plus its grace: a
 /// thread that far behind was stopped by [`watch`]).
 fn periodic<V: Copy>(
     th: &mut Thread<'_, V>,
@@ -646,7 +654,7 @@ fn periodic<V: Copy>(
     let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len());
     let mut k: u64 = 0;
     loop {
-        let offset = k as i64 * th.period;
+        let offset = th.phase + k as i64 * th.period;
         if offset >= duration
             || sys::stop_requested()
             || th.recs.len() == th.recs.capacity()
@@ -673,7 +681,7 @@ fn periodic<V: Copy>(
     }
 }
 
-/// Job `k` of the task, released at epoch + k·T: read the registers, run
+/// Job `k` of the task, released at epoch + φ + k·T: read the registers, run
 /// the body, publish to the registers, and log it. `inputs` is the job's
 /// buffer for the values read (kept across jobs: no allocation here).
 fn job<V: Copy>(
@@ -683,7 +691,7 @@ fn job<V: Copy>(
     env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
     inputs: &mut Vec<Cell<V>>,
 ) {
-    let offset = k as i64 * th.period;
+    let offset = th.phase + k as i64 * th.period;
     let cpu0 = sys::thread_cpu_time();
     inputs.clear();
     for r in &mut th.readers {
@@ -784,7 +792,7 @@ fn assemble<V>(
     }
     RunResult {
         sim: SimResult {
-            offsets: vec![0; n],
+            offsets: spec.tasks.iter().map(|t| t.offset.unwrap_or(0)).collect(),
             tasks,
             chains,
             jobs,

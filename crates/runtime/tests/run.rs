@@ -166,3 +166,39 @@ fn a_refused_run_leaves_no_hog_behind() {
         Ok(_) => eprintln!("note: the kernel admitted {cpus} x 0.94: the error path was not taken"),
     }
 }
+
+/// A task's `offset` delays its releases as in the simulator and the
+/// analysis: the k-th job is released at offset + k·T after the epoch.
+#[test]
+fn offsets_shift_the_releases() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let text = SPEC.replace("period = 3\n", "period = 3\noffset = 2.5\n");
+    let Ok(spec) = Spec::parse("pair.toml", &text) else {
+        panic!("the spec parses");
+    };
+    let spin = Spin::calibrate();
+    let bodies: Vec<Box<dyn Body<u64>>> = vec![
+        Box::new(rtpipe_runtime::synthetic(spin, 100_000)),
+        Box::new(rtpipe_runtime::synthetic(spin, 200_000)),
+    ];
+    let cfg = RunConfig {
+        duration: 30_000_000,
+        policy: Policy::Other,
+        load: 0,
+    };
+    let r = run(&spec, &cfg, bodies, None);
+    let Ok(r) = r else {
+        panic!("{:?}", r.err());
+    };
+    assert_eq!(r.sim.offsets, vec![0, 2_500_000]);
+    let releases: Vec<i64> = r
+        .sim
+        .jobs
+        .iter()
+        .filter(|j| j.task == 1)
+        .map(|j| j.release)
+        .collect();
+    let expected: Vec<i64> = (0..10).map(|k| 2_500_000 + k * 3_000_000).collect();
+    assert_eq!(releases, expected);
+    assert!(r.sim.jobs.iter().all(|j| j.release <= j.read));
+}
