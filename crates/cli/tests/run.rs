@@ -417,3 +417,76 @@ fn an_unschedulable_spec_is_refused_without_force() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// `rtpipe` run by user nobody through setpriv(1), with `caps` as its
+/// inheritable and ambient capabilities ("" for none), from a copy of the
+/// binary and the spec in a directory nobody can read. `None` when this
+/// test process cannot do that (not root, or no setpriv).
+fn as_nobody(tag: &str, caps: &str, args: &[&str]) -> Option<Output> {
+    use std::os::unix::fs::PermissionsExt;
+    if !rtpipe_runtime::sys::is_root() {
+        eprintln!("SKIPPED {tag}: setpriv needs root");
+        return None;
+    }
+    let dir = scratch(tag);
+    let open = |p: &std::path::Path, mode: u32| {
+        std::fs::set_permissions(p, std::fs::Permissions::from_mode(mode))
+    };
+    let bin = dir.join("rtpipe");
+    let spec = dir.join("spec.toml");
+    let copied = std::fs::copy(env!("CARGO_BIN_EXE_rtpipe"), &bin)
+        .and_then(|_| std::fs::write(&spec, small("rm", 0, "")))
+        .and_then(|()| open(&dir, 0o777))
+        .and_then(|()| open(&bin, 0o755))
+        .and_then(|()| open(&spec, 0o644));
+    if let Err(e) = copied {
+        panic!("cannot prepare {}: {e}", dir.display());
+    }
+    let mut cmd = std::process::Command::new("setpriv");
+    cmd.args(["--reuid=nobody", "--regid=nogroup", "--clear-groups"]);
+    if !caps.is_empty() {
+        cmd.arg(format!("--inh-caps=+{caps}"))
+            .arg(format!("--ambient-caps=+{caps}"));
+    }
+    cmd.arg(&bin)
+        .arg("run")
+        .arg(&spec)
+        .args(args)
+        .current_dir(&dir);
+    match cmd.output() {
+        Ok(o) => Some(o),
+        Err(e) => {
+            eprintln!("SKIPPED {tag}: cannot run setpriv: {e}");
+            None
+        }
+    }
+}
+
+/// Without privilege a real-time run is refused up front with the fix
+/// (exit 2, not a thread-spawn panic); with CAP_SYS_NICE alone (as the
+/// README says suffices) it runs, memory unlocked and said so; SCHED_OTHER
+/// needs nothing.
+#[test]
+fn unprivileged_runs_are_refused_with_the_fix_or_run() {
+    let Some(o) = as_nobody("nobody", "", &["--duration", "200ms"]) else {
+        return;
+    };
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("SCHED_FIFO needs root, CAP_SYS_NICE, or an RLIMIT_RTPRIO"),
+        "{err}"
+    );
+    assert!(err.contains("--policy other --best-effort"), "{err}");
+    let Some(o) = as_nobody("nice", "sys_nice", &["--duration", "200ms"]) else {
+        return;
+    };
+    assert_exit(&o, 0);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning: memory not locked"), "{err}");
+    let best = ["--duration", "200ms", "--policy", "other", "--best-effort"];
+    let Some(o) = as_nobody("other", "", &best) else {
+        return;
+    };
+    assert_exit(&o, 0);
+}

@@ -210,6 +210,40 @@ fn watch(end: Nanos, tids: &[AtomicI32], done: &[AtomicBool]) -> Vec<usize> {
     moved
 }
 
+/// Refuses up front a real-time policy this process may not use (rather
+/// than failing thread by thread once the load has started).
+fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
+    if policy == Policy::Other || sys::is_root() || sys::has_capability(sys::CAP_SYS_NICE) {
+        return Ok(());
+    }
+    let top = fifo_priorities(spec).into_iter().max().unwrap_or(1);
+    let rtprio = sys::soft_limit(libc::RLIMIT_RTPRIO);
+    if policy == Policy::Fifo && rtprio >= top as u64 {
+        return Ok(());
+    }
+    let (class, need) = match policy {
+        Policy::Deadline => ("SCHED_DEADLINE", "root or CAP_SYS_NICE".to_string()),
+        _ => (
+            "SCHED_FIFO",
+            format!("root, CAP_SYS_NICE, or an RLIMIT_RTPRIO of at least {top} (it is {rtprio})"),
+        ),
+    };
+    Err(RunError::refused(
+        format!("{class} needs {need}; this process has none of them"),
+        "run as root, or grant the capability (e.g. `setcap cap_sys_nice,cap_ipc_lock+ep $(which rtpipe)`), or run without real-time guarantees: --policy other --best-effort",
+    ))
+}
+
+/// Whether locking all current and future memory can work: unlimited
+/// RLIMIT_MEMLOCK, root or CAP_IPC_LOCK. Under a finite limit mlockall
+/// itself succeeds, and then every later thread stack that does not fit
+/// fails to map (EAGAIN at thread spawn), so it is not tried.
+fn may_lock_memory() -> bool {
+    sys::is_root()
+        || sys::has_capability(sys::CAP_IPC_LOCK)
+        || sys::soft_limit(libc::RLIMIT_MEMLOCK) == u64::MAX
+}
+
 /// Largest number of jobs logged in one run (memory: ~48 bytes a job).
 const MAX_JOBS: u64 = 20_000_000;
 
@@ -248,6 +282,7 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             deadline_rules(&t.name, t.budget(), period)?;
         }
     }
+    privileges(spec, cfg.policy)?;
     if jobs > MAX_JOBS {
         return Err(RunError::config(
             format!("the run would log {jobs} jobs, more than the {MAX_JOBS} this executor keeps"),
@@ -337,7 +372,12 @@ pub fn run<'a, V: Copy + Send>(
     let n = spec.tasks.len();
     let mut notes = Vec::new();
     if cfg.policy != Policy::Other {
-        if let Err(e) = sys::lock_memory() {
+        if !may_lock_memory() {
+            notes.push(format!(
+                "warning: memory not locked (RLIMIT_MEMLOCK is {} KiB, and mlockall under it starves thread stacks): page faults may delay jobs; `ulimit -l unlimited` or CAP_IPC_LOCK locks it",
+                sys::soft_limit(libc::RLIMIT_MEMLOCK) / 1024
+            ));
+        } else if let Err(e) = sys::lock_memory() {
             notes.push(format!(
                 "warning: mlockall failed ({e}): page faults may delay jobs"
             ));

@@ -207,6 +207,41 @@ pub fn stop_instant() -> Option<i64> {
     stop_requested().then(|| STOP_AT.load(std::sync::atomic::Ordering::SeqCst))
 }
 
+/// `CAP_IPC_LOCK`: lock memory beyond RLIMIT_MEMLOCK.
+pub const CAP_IPC_LOCK: u32 = 14;
+/// `CAP_SYS_NICE`: real-time scheduling classes and priorities.
+pub const CAP_SYS_NICE: u32 = 23;
+
+/// Whether the process holds capability `cap` in its effective set
+/// (`CapEff` of /proc/self/status; false when that cannot be read).
+pub fn has_capability(cap: u32) -> bool {
+    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
+        return false;
+    };
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("CapEff:"))
+        .and_then(|hex| u64::from_str_radix(hex.trim(), 16).ok())
+        .is_some_and(|set| set >> cap & 1 == 1)
+}
+
+/// The soft limit of `resource` (`u64::MAX`: unlimited).
+pub fn soft_limit(resource: libc::__rlimit_resource_t) -> u64 {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes the struct it is given.
+    if unsafe { libc::getrlimit(resource, &mut r) } != 0 {
+        return 0;
+    }
+    if r.rlim_cur == libc::RLIM_INFINITY {
+        u64::MAX
+    } else {
+        r.rlim_cur
+    }
+}
+
 /// Whether the process runs with an effective user id of 0.
 pub fn is_root() -> bool {
     // SAFETY: geteuid cannot fail.
