@@ -359,10 +359,20 @@ fn producer_of<'r>(
     let list = by_task.get(producer)?;
     // Completions publish before reads at one instant: finish ≤ read.
     let k = list.partition_point(|p| p.finish <= cj.read);
-    let pj = *k.checked_sub(1).and_then(|k| list.get(k))?;
-    let same = pj
-        .carried
+    // The simulator's reads take the latest value published; a real run's
+    // may take an older one (its publish instant is taken before the
+    // register write). Samples only grow along a task's jobs, so look back
+    // from the latest until the sample is older than the one carried.
+    let carried = |pj: &JobRecord| {
+        pj.carried
+            .iter()
+            .find(|pc| pc.chain == c.chain && pc.pos + 1 == c.pos)
+            .and_then(|pc| pc.sample)
+    };
+    list[..k]
         .iter()
-        .any(|pc| pc.chain == c.chain && pc.pos + 1 == c.pos && pc.sample == Some(sample));
-    same.then_some((pj, sample))
+        .rev()
+        .take_while(|pj| carried(pj).is_some_and(|s| s >= sample))
+        .find(|pj| carried(pj) == Some(sample))
+        .map(|pj| (*pj, sample))
 }
