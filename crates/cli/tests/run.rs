@@ -490,3 +490,64 @@ fn unprivileged_runs_are_refused_with_the_fix_or_run() {
     };
     assert_exit(&o, 0);
 }
+
+/// The rt-app export runs under the real rt-app (CI installs Debian's
+/// package): every thread runs its jobs and logs them, one row per
+/// period of the exported timer.
+#[test]
+fn the_rt_app_export_runs_under_rt_app() {
+    if std::process::Command::new("rt-app").arg("--help").output().is_err() {
+        eprintln!("SKIPPED the_rt_app_export_runs_under_rt_app: rt-app is not installed (apt-get install rt-app)");
+        return;
+    }
+    let dir = scratch("rtapp");
+    let spec = dir.join("spec.toml");
+    if let Err(e) = std::fs::write(&spec, small("rm", 0, "")) {
+        panic!("cannot write the spec: {e}");
+    }
+    let json = dir.join("small.json");
+    let (s, j) = (spec.to_string_lossy(), json.to_string_lossy());
+    let args = [
+        "run",
+        &s,
+        "--duration",
+        "1s",
+        "--policy",
+        "other",
+        "--best-effort",
+        "--export-rt-app",
+        &j,
+    ];
+    assert_exit(&rtpipe(&args), 0);
+    let o = std::process::Command::new("rt-app")
+        .arg(&json)
+        .current_dir(&dir)
+        .output();
+    let Ok(o) = o else {
+        panic!("cannot run rt-app");
+    };
+    assert_exit(&o, 0);
+    // Periods 2, 5 and 10 ms over 1 s: about 500, 200 and 100 jobs each.
+    for (task, jobs) in [("sensor", 500), ("filter", 200), ("actuator", 100)] {
+        let Some(log) = std::fs::read_dir(&dir).ok().and_then(|d| {
+            d.filter_map(Result::ok)
+                .map(|e| e.path())
+                .find(|p| p.to_string_lossy().contains(&format!("-{task}-")))
+        }) else {
+            panic!(
+                "rt-app left no log for {task}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        };
+        let text = std::fs::read_to_string(&log).unwrap_or_default();
+        let rows = text
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .count();
+        assert!(
+            (jobs * 9 / 10..=jobs + 1).contains(&rows),
+            "{task}: {rows} rows in {}",
+            log.display()
+        );
+    }
+}

@@ -99,7 +99,6 @@ pub fn rt_app(spec: &Spec, cfg: &RunConfig) -> RtApp {
             "lock_pages": true,
             "logdir": "./",
             "log_basename": format!("rtpipe-{}", spec.name),
-            "ftrace": "none",
             "gnuplot": false,
         },
     });
