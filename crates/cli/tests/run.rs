@@ -496,7 +496,11 @@ fn unprivileged_runs_are_refused_with_the_fix_or_run() {
 /// period of the exported timer.
 #[test]
 fn the_rt_app_export_runs_under_rt_app() {
-    if std::process::Command::new("rt-app").arg("--help").output().is_err() {
+    if std::process::Command::new("rt-app")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
         eprintln!("SKIPPED the_rt_app_export_runs_under_rt_app: rt-app is not installed (apt-get install rt-app)");
         return;
     }
