@@ -14,6 +14,7 @@
 //!   offsets, job by job over the hyperperiod.
 #![deny(missing_docs)]
 
+pub mod disturbance;
 pub mod latency;
 pub mod offsets;
 pub mod paths;

@@ -9,6 +9,9 @@ use crate::report::samples::samples_csv;
 use crate::report::{self, time};
 use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
 use crate::table::Table;
+use verdict::Verdict;
+
+mod verdict;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_body::Body;
@@ -260,11 +263,10 @@ pub fn run(a: &RunArgs) -> ExitCode {
     if let Err(b) = write_outputs(&spec, a, &res, &obs) {
         return fail(b);
     }
-    let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
-    let suspects = suspects(&spec, &res);
+    let verdict = verdict::judge(&spec, &report, &res);
     let flight = flown.as_ref().zip(setup.as_ref());
     if a.json {
-        let mut v = to_json(&spec, &report, &res, &obs, spin, &suspects);
+        let mut v = to_json(&spec, &report, &res, &obs, spin, &verdict);
         v.flight = flight.map(|(f, s)| flight_json(f, s));
         if let Err(code) = command::print_json(&v) {
             return code;
@@ -274,6 +276,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
             "{}",
             to_text(&spec, &report, &res, &obs, spin, flown.is_some())
         );
+        print!("\n{}", verdict.text(&spec, 10));
         if let Some((f, s)) = flight {
             let failures = f.quality.failures(&s.mission.criteria);
             println!(
@@ -289,7 +292,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
     for n in &res.notes {
         eprintln!("{n}");
     }
-    exit_status(over_sound, &suspects)
+    exit_status(&verdict)
 }
 
 /// Everything that is checked before the run: the flight's setup when the
@@ -458,56 +461,24 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
     }
 }
 
-/// Exit status 1 only when an observation exceeded a sound bound and
-/// nothing in the measurement explains it (the `suspects`); the warnings
-/// say which case it is.
-fn exit_status(over_sound: usize, suspects: &[String]) -> ExitCode {
-    if over_sound > 0 {
-        eprintln!("warning: {over_sound} observation(s) above a sound chain bound");
-        if suspects.is_empty() {
-            eprintln!(
-                "  = the run met the model's assumptions as far as rtpipe can tell (no overrun, no missed period, no steal time): \
-                 the gap is the kernel's release and switching overheads, which the model does not include, or a bug"
-            );
-            return ExitCode::from(1);
-        }
+/// Exit 1 when an observation above a sound bound has no cause in its
+/// window that adds up to its excess (a violation of the analysis, or of
+/// the model by something rtpipe cannot see); exit 0 otherwise.
+fn exit_status(v: &Verdict) -> ExitCode {
+    if v.unexcused > 0 {
         eprintln!(
-            "  = the measurement is at fault, not the analysis: {}",
-            suspects.join("; ")
+            "error: {} observation(s) above a sound bound with no cause in their own window that explains them (listed above; --json has them all)",
+            v.unexcused
+        );
+        return ExitCode::from(1);
+    }
+    if v.excused > 0 {
+        eprintln!(
+            "warning: {} observation(s) above a sound bound, each excused by what broke the model in its window (listed above)",
+            v.excused
         );
     }
     ExitCode::SUCCESS
-}
-
-/// Why the run broke the model's assumptions, if it did.
-fn suspects(spec: &Spec, res: &RunResult) -> Vec<String> {
-    let mut out = Vec::new();
-    if res.policy == Policy::Other {
-        out.push("SCHED_OTHER gives no real-time guarantee (--best-effort)".into());
-    }
-    let named = |f: &dyn Fn(&rtpipe_runtime::TaskRun) -> u64| -> Vec<String> {
-        spec.tasks
-            .iter()
-            .zip(&res.tasks)
-            .filter(|(_, r)| f(r) > 0)
-            .map(|(t, r)| format!("{} ({})", t.name, f(r)))
-            .collect()
-    };
-    let over = named(&|r| r.overruns);
-    if !over.is_empty() {
-        out.push(format!("budget overruns in {}", over.join(", ")));
-    }
-    let missed = named(&|r| r.missed);
-    if !missed.is_empty() {
-        out.push(format!("missed periods in {}", missed.join(", ")));
-    }
-    if let Some(s) = res.steal.filter(|&s| s > 0) {
-        out.push(format!(
-            "{:.1} ms of steal time (the hypervisor ran something else on our CPUs)",
-            s as f64 / 1e6
-        ));
-    }
-    out
 }
 
 /// The text report: what ran, the chains against the bounds (from the
@@ -676,7 +647,7 @@ struct RunInfo<'a> {
     interrupted: bool,
     steal: Option<f64>,
     spin_iterations_per_us: f64,
-    measurement_suspects: &'a [String],
+    sound_bound_violations: &'a Verdict,
     notes: &'a [String],
 }
 
@@ -686,7 +657,7 @@ fn to_json<'a>(
     res: &'a RunResult,
     obs: &[ChainObs],
     spin: Spin,
-    suspects: &'a [String],
+    verdict: &'a Verdict,
 ) -> RunView<'a> {
     let measured = |(ts, tr): (&rtpipe_joblog::TaskStats, &rtpipe_runtime::TaskRun)| {
         let s = Summary::of(&tr.responses);
@@ -726,7 +697,7 @@ fn to_json<'a>(
         interrupted: res.interrupted,
         steal: res.steal.map(|s| spec.in_unit(s)),
         spin_iterations_per_us: spin.iters_per_us,
-        measurement_suspects: suspects,
+        sound_bound_violations: verdict,
         notes: &res.notes,
     };
     RunView {

@@ -6,6 +6,7 @@
 use crate::four_slot::{self, Reader, Writer};
 use crate::load::Load;
 use crate::pi::PiMutex;
+use crate::probe::{probe, Probe, PROBE_PERIOD};
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
@@ -137,6 +138,11 @@ pub struct RunResult {
     pub epoch: Nanos,
     /// Warnings (memory not locked, ...).
     pub notes: Vec<String>,
+    /// The counters sampled during the run, in time order.
+    pub probes: Vec<Probe>,
+    /// Tasks moved to SCHED_OTHER to finish (still running long after the
+    /// run's end).
+    pub demoted: Vec<usize>,
 }
 
 /// The value a register holds: `None` until the producer first publishes.
@@ -183,11 +189,19 @@ const GRACE: Nanos = 1_000_000_000;
 /// Ctrl-C); then moves the threads still running to SCHED_OTHER, so that a
 /// throttled SCHED_DEADLINE thread (its runtime overdrawn, it may not run
 /// for minutes) or a starved one still ends, and `run` returns on time.
-/// Returns the tasks moved.
-fn watch(end: Nanos, tids: &[AtomicI32], done: &[AtomicBool]) -> Vec<usize> {
+/// Samples the run's counters every [`PROBE_PERIOD`] into `probes` (one
+/// more once every thread is done). Returns the tasks moved.
+fn watch(
+    (epoch, end): (Nanos, Nanos),
+    tids: &[AtomicI32],
+    done: &[AtomicBool],
+    probes: &mut Vec<Probe>,
+) -> Vec<usize> {
     let mut end = end;
     loop {
-        if done.iter().all(|d| d.load(Ordering::SeqCst)) {
+        let all_done = done.iter().all(|d| d.load(Ordering::SeqCst));
+        probes.push(probe(epoch, tids));
+        if all_done {
             return Vec::new();
         }
         let now = sys::now();
@@ -197,7 +211,7 @@ fn watch(end: Nanos, tids: &[AtomicI32], done: &[AtomicBool]) -> Vec<usize> {
         if now >= end {
             break;
         }
-        std::thread::sleep(std::time::Duration::from_millis(10));
+        std::thread::sleep(std::time::Duration::from_nanos(PROBE_PERIOD as u64));
     }
     let mut moved = Vec::new();
     for (i, (tid, d)) in tids.iter().zip(done).enumerate() {
@@ -396,7 +410,7 @@ pub fn run<'a, V: Copy + Send>(
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
-    let (finished, demoted) = start(spec, cfg, threads, env, &shared, grace);
+    let (finished, demoted, probes) = start(spec, cfg, threads, env, &shared, grace);
     for &i in &demoted {
         notes.push(demoted_note(&spec.tasks[i].name, cfg.policy, grace));
     }
@@ -428,6 +442,8 @@ pub fn run<'a, V: Copy + Send>(
     );
     res.load = cfg.load;
     res.epoch = e0;
+    res.probes = probes;
+    res.demoted = demoted;
     Ok(res)
 }
 
@@ -565,9 +581,10 @@ fn start<'a, V: Copy + Send>(
     env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
     shared: &Shared,
     grace: Nanos,
-) -> (Joined<'a, V>, Vec<usize>) {
+) -> (Joined<'a, V>, Vec<usize>, Vec<Probe>) {
     let (policy, duration) = (cfg.policy, cfg.duration);
     let mut demoted = Vec::new();
+    let mut probes = Vec::new();
     let finished = std::thread::scope(|s| {
         let handles: Vec<_> = threads
             .into_iter()
@@ -585,12 +602,13 @@ fn start<'a, V: Copy + Send>(
             .store(sys::now() + 10_000_000, Ordering::SeqCst);
         shared.go.wait();
         if !failed {
-            let end = shared.epoch.load(Ordering::SeqCst) + duration + grace;
-            demoted = watch(end, &shared.tids, &shared.done);
+            let epoch = shared.epoch.load(Ordering::SeqCst);
+            let span = (epoch, epoch + duration + grace);
+            demoted = watch(span, &shared.tids, &shared.done, &mut probes);
         }
         handles.into_iter().map(|h| h.join()).collect::<Vec<_>>()
     });
-    (finished, demoted)
+    (finished, demoted, probes)
 }
 
 /// The life of one task's thread: enter its scheduling class, wait for
@@ -848,6 +866,8 @@ fn assemble<V>(
         steal,
         elapsed,
         notes,
+        probes: Vec::new(),
+        demoted: Vec::new(),
     }
 }
 
@@ -976,14 +996,21 @@ mod tests {
                 std::thread::yield_now();
             }
             let t0 = sys::now();
-            let moved = watch(t0 + 50_000_000, &tids, &done);
+            let mut probes = Vec::new();
+            let moved = watch((t0, t0 + 50_000_000), &tids, &done, &mut probes);
             let waited = sys::now() - t0;
             release.store(true, Ordering::SeqCst);
             assert_eq!(moved, vec![1], "only the thread not done");
             assert!((50_000_000..1_000_000_000).contains(&waited), "{waited} ns");
+            // Sampled every PROBE_PERIOD while it waited, in time order.
+            assert!(probes.len() >= 5, "{} probes", probes.len());
+            assert!(probes.windows(2).all(|w| w[0].at < w[1].at));
         });
         // All done: returns at once, moving nobody.
         done[1].store(true, Ordering::SeqCst);
-        assert!(watch(sys::now() + 10_000_000_000, &tids, &done).is_empty());
+        let t0 = sys::now();
+        let mut probes = Vec::new();
+        assert!(watch((t0, t0 + 10_000_000_000), &tids, &done, &mut probes).is_empty());
+        assert_eq!(probes.len(), 1, "one last probe");
     }
 }

@@ -6,10 +6,12 @@
 //! per (producer, consumer) edge. docs/runtime.md describes the design.
 #![deny(missing_docs)]
 
+pub mod blame;
 pub mod exec;
 pub mod four_slot;
 pub mod load;
 pub mod pi;
+pub mod probe;
 pub mod rt_app;
 pub mod seqlock;
 pub mod spin;

@@ -169,9 +169,18 @@ pub fn steal_time() -> Option<i64> {
     let stat = std::fs::read_to_string("/proc/stat").ok()?;
     let line = stat.lines().find(|l| l.starts_with("cpu "))?;
     let steal: i64 = line.split_whitespace().nth(8)?.parse().ok()?;
+    Some(steal * tick_ns())
+}
+
+/// One clock tick of /proc/stat (1/USER_HZ), ns.
+pub fn tick_ns() -> i64 {
     // SAFETY: sysconf takes a constant.
     let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) };
-    (hz > 0).then(|| steal * (1_000_000_000 / hz as i64))
+    if hz > 0 {
+        1_000_000_000 / hz as i64
+    } else {
+        10_000_000
+    }
 }
 
 static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);

@@ -1,0 +1,191 @@
+//! Which observations of a real run break a sound bound, and which of them
+//! a cause in their own window excuses (`rtpipe_runtime::blame`): per chain
+//! sample and quantity, and per job whose response exceeds R(job).
+
+use rtpipe_analysis::disturbance::inflation;
+use rtpipe_analysis::{Anchor, Metric, Report};
+use rtpipe_joblog::{sample_rows, SampleRow};
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_runtime::blame::{Blame, Cause};
+use rtpipe_runtime::RunResult;
+use serde::Serialize;
+
+/// One observation above its sound bound.
+#[derive(Debug, Clone, Serialize)]
+pub(super) struct Violation {
+    /// The chain's label, or the task's name.
+    pub(super) what: String,
+    /// `reaction`/`freshness` from `read`/`event`, or `response`.
+    pub(super) quantity: String,
+    /// The sample id (chains) or the job index (tasks).
+    pub(super) id: u64,
+    /// The observed value and the bound, in the spec's unit.
+    pub(super) value: f64,
+    pub(super) bound: f64,
+    /// The window the causes were looked for in, in the spec's unit.
+    pub(super) window: (f64, f64),
+    /// The causes found there; excused when they can explain the excess.
+    pub(super) causes: Vec<String>,
+    pub(super) excused: bool,
+}
+
+/// Every observation above a sound bound.
+#[derive(Debug, Default, Serialize)]
+pub(super) struct Verdict {
+    pub(super) excused: usize,
+    pub(super) unexcused: usize,
+    pub(super) violations: Vec<Violation>,
+}
+
+/// The bound's name, the value and the window of one row for one quantity.
+fn measured(r: &SampleRow, metric: Metric, anchor: Anchor) -> Option<(Nanos, (Nanos, Nanos))> {
+    let (from, to) = match (metric, anchor) {
+        (Metric::Reaction, Anchor::Read) => (Some(r.read), r.first),
+        (Metric::Freshness, Anchor::Read) => (Some(r.read), r.last),
+        (Metric::Reaction, Anchor::Event) => (r.event, r.event_first),
+        (Metric::Freshness, Anchor::Event) => (r.event, r.last),
+    };
+    let (from, to) = (from?, to?);
+    Some((to - from, (from, to)))
+}
+
+/// Judges `res` against `report`'s sound bounds.
+pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
+    let blame = Blame::new(spec, res);
+    let mut v = Verdict::default();
+    let rows = sample_rows(spec, &res.sim.jobs);
+    for c in &report.chains {
+        let path = &spec.chains[c.chain].path;
+        for a in Anchor::ALL {
+            let Some(bound) = c.bound.sound(a) else {
+                continue;
+            };
+            for r in rows.get(c.chain).into_iter().flatten() {
+                let Some((value, window)) = measured(r, c.metric, a) else {
+                    continue;
+                };
+                if value > bound {
+                    let quantity = format!("{} from {}", c.metric.name(), a.name());
+                    let what = spec.chain_label(c.chain);
+                    let obs = Obs {
+                        what,
+                        quantity,
+                        id: r.sample,
+                        value,
+                        bound,
+                        window: blame.extend(window, path),
+                    };
+                    v.push(spec, obs, blame.causes(window, path), path);
+                }
+            }
+        }
+    }
+    for j in &res.sim.jobs {
+        let Some(bound) = report.timing.get(j.task).and_then(|t| t.bounded_response()) else {
+            continue;
+        };
+        let value = j.finish - j.release;
+        if value > bound {
+            let window = (j.release, j.finish);
+            let what = spec.tasks[j.task].name.clone();
+            let obs = Obs {
+                what,
+                quantity: "response".into(),
+                id: j.index,
+                value,
+                bound,
+                window: blame.extend(window, &[j.task]),
+            };
+            v.push(spec, obs, blame.causes(window, &[j.task]), &[j.task]);
+        }
+    }
+    v
+}
+
+/// An observation above its bound, before its causes are judged.
+struct Obs {
+    what: String,
+    quantity: String,
+    id: u64,
+    value: Nanos,
+    bound: Nanos,
+    window: (Nanos, Nanos),
+}
+
+impl Verdict {
+    /// Records an observation with the causes found in its window: excused
+    /// when their total, as a disturbance of the analysis, can lengthen the
+    /// response of one of `tasks` by the excess (a chain's stages add their
+    /// delays, each at most that task's inflation by its share, and the
+    /// inflation is superadditive, so the largest single inflation by the
+    /// total covers them).
+    fn push(&mut self, spec: &Spec, o: Obs, causes: Vec<Cause>, tasks: &[usize]) {
+        let b = Blame::total(&causes);
+        let allowance = tasks
+            .iter()
+            .map(|&t| inflation(spec, t, b))
+            .max()
+            .unwrap_or(0);
+        let excused = allowance >= o.value - o.bound;
+        if excused {
+            self.excused += 1;
+        } else {
+            self.unexcused += 1;
+        }
+        self.violations.push(Violation {
+            what: o.what,
+            quantity: o.quantity,
+            id: o.id,
+            value: spec.in_unit(o.value),
+            bound: spec.in_unit(o.bound),
+            window: (spec.in_unit(o.window.0), spec.in_unit(o.window.1)),
+            causes: causes.iter().map(|c| c.describe(spec)).collect(),
+            excused,
+        });
+    }
+
+    /// The text report's lines (at most `shown` violations listed).
+    pub(super) fn text(&self, spec: &Spec, shown: usize) -> String {
+        if self.violations.is_empty() {
+            return "no observation above a sound bound\n".into();
+        }
+        let mut out = format!(
+            "{} observation(s) above a sound bound: {} excused by what broke the model in their window on their CPUs, {} not\n",
+            self.violations.len(),
+            self.excused,
+            self.unexcused
+        );
+        for x in self
+            .violations
+            .iter()
+            .filter(|x| !x.excused)
+            .chain(self.violations.iter().filter(|x| x.excused))
+            .take(shown)
+        {
+            let because = if x.causes.is_empty() {
+                "no cause found".to_string()
+            } else {
+                x.causes.join("; ")
+            };
+            out.push_str(&format!(
+                "  {} {} #{}: {} > {} {u} in [{}, {}] {u}: {} ({because})\n",
+                x.what,
+                x.quantity,
+                x.id,
+                x.value,
+                x.bound,
+                x.window.0,
+                x.window.1,
+                if x.excused { "excused" } else { "VIOLATION" },
+                u = spec.time_unit
+            ));
+        }
+        if self.violations.len() > shown {
+            out.push_str(&format!(
+                "  ... {} more in --json\n",
+                self.violations.len() - shown
+            ));
+        }
+        out
+    }
+}

@@ -1,0 +1,517 @@
+//! What broke the model in a window of a real run: the evidence an
+//! observation above a sound bound may be excused by. A cause counts only
+//! inside the observation's window and on the CPUs of the tasks involved;
+//! `rtpipe run` excuses the observation only when the causes' total, taken
+//! as a disturbance of the analysis (`rtpipe_analysis::disturbance`),
+//! grows the bound by at least the excess. Everything else is a violation.
+
+use crate::exec::{Policy, RunResult};
+use crate::probe::Probe;
+use rtpipe_joblog::JobRecord;
+use rtpipe_model::{Nanos, Spec};
+
+/// One thing that broke the model's assumptions.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Cause {
+    /// The run had no real-time policy (`--policy other --best-effort`).
+    BestEffort,
+    /// A job used more CPU time than its task's budget.
+    Overrun {
+        /// The task.
+        task: usize,
+        /// Its job (release index).
+        job: u64,
+        /// CPU time the job used, ns.
+        demand: Nanos,
+        /// The task's budget C, ns.
+        budget: Nanos,
+    },
+    /// A job used more CPU time than its task's declared demand x (the job
+    /// frame's register copies and clock reads, a burn's overshoot): the
+    /// analysis' R(job) assumes x.
+    Demand {
+        /// The task.
+        task: usize,
+        /// Its job (release index).
+        job: u64,
+        /// CPU time the job used, ns.
+        demand: Nanos,
+        /// The declared demand x, ns.
+        declared: Nanos,
+    },
+    /// Time in the window when jobs of the run on a CPU were pending but
+    /// none of them used it: the kernel's timer and wake-up latency,
+    /// interrupts, other processes, the hypervisor (steal). The model has
+    /// none of it.
+    Foreign {
+        /// The CPU (`None`: all of them, under global EDF).
+        cpu: Option<u32>,
+        /// Pending time minus the CPU time the run's jobs used in it, ns.
+        ns: Nanos,
+    },
+    /// The hypervisor ran something else on a CPU (steal time): named, but
+    /// already part of that CPU's [`Cause::Foreign`] time, so it adds no
+    /// delay of its own.
+    Steal {
+        /// The CPU.
+        cpu: usize,
+        /// Steal time in the probe intervals covering the window, ns.
+        ns: Nanos,
+    },
+    /// The task was still running long after the run's end and was moved
+    /// to SCHED_OTHER.
+    Demoted {
+        /// The task.
+        task: usize,
+    },
+}
+
+impl Cause {
+    /// How long it can have delayed the window's observation, ns.
+    pub fn delay(&self) -> Nanos {
+        match *self {
+            Cause::BestEffort | Cause::Demoted { .. } => Nanos::MAX,
+            Cause::Steal { .. } => 0,
+            Cause::Overrun { demand, budget, .. } => demand - budget,
+            Cause::Demand {
+                demand, declared, ..
+            } => demand - declared,
+            Cause::Foreign { ns, .. } => ns,
+        }
+    }
+
+    /// In words, naming tasks as the spec does.
+    pub fn describe(&self, spec: &Spec) -> String {
+        let name = |t: usize| spec.tasks.get(t).map_or("?", |t| t.name.as_str());
+        match *self {
+            Cause::BestEffort => "SCHED_OTHER (--best-effort): no real-time guarantee".into(),
+            Cause::Overrun {
+                task,
+                job,
+                demand,
+                budget,
+            } => format!(
+                "{} job {job} ran {} us against a budget of {} us",
+                name(task),
+                us(demand),
+                us(budget)
+            ),
+            Cause::Demand {
+                task,
+                job,
+                demand,
+                declared,
+            } => format!(
+                "{} job {job} used {} us of CPU against a demand of {} us",
+                name(task),
+                us(demand),
+                us(declared)
+            ),
+            Cause::Foreign { cpu, ns } => format!(
+                "{} us on {} with jobs of the run pending but none running (kernel latency, interrupts, other processes, steal)",
+                us(ns),
+                cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}"))
+            ),
+            Cause::Steal { cpu, ns } => format!(
+                "{} us of steal time on CPU {cpu} (within the foreign time)",
+                us(ns)
+            ),
+            Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
+        }
+    }
+}
+
+fn us(ns: Nanos) -> String {
+    format!("{:.1}", ns as f64 / 1e3)
+}
+
+/// The evidence of one run, indexed for windows.
+pub struct Blame<'r> {
+    spec: &'r Spec,
+    res: &'r RunResult,
+    /// Per task, its jobs in release order.
+    jobs: Vec<Vec<&'r JobRecord>>,
+}
+
+impl<'r> Blame<'r> {
+    /// Indexes `res`'s job log.
+    pub fn new(spec: &'r Spec, res: &'r RunResult) -> Blame<'r> {
+        let mut jobs: Vec<Vec<&JobRecord>> = vec![Vec::new(); spec.tasks.len()];
+        for j in &res.sim.jobs {
+            if let Some(v) = jobs.get_mut(j.task) {
+                v.push(j);
+            }
+        }
+        for v in &mut jobs {
+            v.sort_by_key(|j| j.index);
+        }
+        Blame { spec, res, jobs }
+    }
+
+    /// The causes inside `window` (relative to the epoch; [`Blame::extend`]
+    /// back to its busy period's start) on the CPUs of `tasks`: budget overruns of jobs of the tasks sharing those CPUs,
+    /// demand overruns, start latency and outside preemption of `tasks`'
+    /// own jobs, steal on those CPUs.
+    pub fn causes(&self, window: (Nanos, Nanos), tasks: &[usize]) -> Vec<Cause> {
+        if self.res.policy == Policy::Other {
+            return vec![Cause::BestEffort];
+        }
+        let window = self.extend(window, tasks);
+        let mut out: Vec<Cause> = tasks
+            .iter()
+            .filter(|t| self.res.demoted.contains(t))
+            .map(|&task| Cause::Demoted { task })
+            .collect();
+        let cpus = self.cpus_of(tasks);
+        for t in 0..self.spec.tasks.len() {
+            if self.on(t, &cpus) && self.level(t, tasks) {
+                out.extend(self.overruns(t, window));
+            }
+        }
+        for &t in tasks {
+            out.extend(self.demands(t, window));
+        }
+        match &cpus {
+            Some(list) => {
+                let mut list = list.clone();
+                list.sort_unstable();
+                list.dedup();
+                for c in list {
+                    out.extend(self.foreign(Some(c), window, tasks));
+                }
+            }
+            None => out.extend(self.foreign(None, window, tasks)),
+        }
+        let (p0, p1) = covering(&self.res.probes, window);
+        if let (Some(p0), Some(p1)) = (p0, p1) {
+            out.extend(steal(p0, p1, &cpus));
+        }
+        out
+    }
+
+    /// `window` reaching back to the start of the busy period (of the
+    /// tasks' level, on their CPUs) it begins in: what delayed the jobs
+    /// pending at its start delays what happens in it (a backlog carries a
+    /// disturbance on).
+    pub fn extend(&self, (a, b): (Nanos, Nanos), tasks: &[usize]) -> (Nanos, Nanos) {
+        let cpus = self.cpus_of(tasks);
+        let mut start = a;
+        loop {
+            // The earliest release of a job still pending just before
+            // `start`, if any.
+            let earlier = (0..self.spec.tasks.len())
+                .filter(|&t| self.on(t, &cpus) && self.level(t, tasks))
+                .filter_map(|t| {
+                    let jobs = &self.jobs[t];
+                    let k = jobs.partition_point(|j| j.release < start);
+                    let j = jobs.get(k.checked_sub(1)?)?;
+                    (j.finish >= start).then_some(j.release)
+                })
+                .min();
+            match earlier {
+                Some(r) if r < start => start = r,
+                _ => return (start, b),
+            }
+        }
+    }
+
+    /// How long the causes can have delayed things, together, ns.
+    pub fn total(causes: &[Cause]) -> Nanos {
+        causes
+            .iter()
+            .map(Cause::delay)
+            .fold(0, Nanos::saturating_add)
+    }
+
+    /// Whether task `t` belongs to the level of `tasks`: under SCHED_FIFO a
+    /// priority at least the lowest of theirs (only those can delay them:
+    /// the level-i busy period of RTA), under global EDF every task.
+    fn level(&self, t: usize, tasks: &[usize]) -> bool {
+        let prio = |t: usize| self.res.tasks.get(t).and_then(|r| r.priority);
+        let lowest = tasks.iter().map(|&i| prio(i)).min().flatten();
+        match (prio(t), lowest) {
+            (Some(p), Some(low)) => p >= low,
+            _ => true,
+        }
+    }
+
+    /// The CPUs the tasks run on (`None`: all of them, under global EDF).
+    fn cpus_of(&self, tasks: &[usize]) -> Option<Vec<u32>> {
+        (self.res.policy != Policy::Deadline).then(|| {
+            tasks
+                .iter()
+                .filter_map(|&t| self.spec.tasks.get(t))
+                .map(|t| t.cpu)
+                .collect()
+        })
+    }
+
+    fn on(&self, task: usize, cpus: &Option<Vec<u32>>) -> bool {
+        cpus.as_ref().is_none_or(|c| {
+            self.spec
+                .tasks
+                .get(task)
+                .is_some_and(|t| c.contains(&t.cpu))
+        })
+    }
+
+    /// Jobs of `task` that overlap `window` ([release, finish]) and overran.
+    fn overruns(&self, task: usize, window: (Nanos, Nanos)) -> Vec<Cause> {
+        let budget = self.spec.tasks[task].budget();
+        self.overlapping(task, window)
+            .iter()
+            // Any excess: the analysis charges the budget as interference,
+            // so even the job frame's few µs above it delay others.
+            .filter(|j| j.demand > budget)
+            .map(|j| Cause::Overrun {
+                task,
+                job: j.index,
+                demand: j.demand,
+                budget,
+            })
+            .collect()
+    }
+
+    /// Jobs of `task` overlapping `window` ([release, finish]).
+    fn overlapping(&self, task: usize, (a, b): (Nanos, Nanos)) -> &[&'r JobRecord] {
+        let jobs = &self.jobs[task];
+        let end = jobs.partition_point(|j| j.release <= b);
+        let start = jobs[..end].partition_point(|j| j.finish < a);
+        &jobs[start..end]
+    }
+
+    /// Jobs of `task` in `window` that used more CPU time than its declared
+    /// demand (within its budget: beyond it, [`Cause::Overrun`]).
+    fn demands(&self, task: usize, window: (Nanos, Nanos)) -> Vec<Cause> {
+        let t = &self.spec.tasks[task];
+        let (declared, budget) = (t.demand(), t.budget());
+        self.overlapping(task, window)
+            .iter()
+            .filter(|j| j.demand > declared && j.demand <= budget)
+            .map(|j| Cause::Demand {
+                task,
+                job: j.index,
+                demand: j.demand,
+                declared,
+            })
+            .collect()
+    }
+
+    /// The foreign time on `cpu` (all CPUs when `None`) in `window`: how
+    /// long some job of the level of `tasks` there was pending (released,
+    /// not yet published) less the CPU time those jobs can have used in the
+    /// window (each at most its demand, at most its read → publish span
+    /// inside the window: an upper estimate, so the foreign time is a
+    /// lower one).
+    fn foreign(&self, cpu: Option<u32>, (a, b): (Nanos, Nanos), tasks: &[usize]) -> Option<Cause> {
+        let cpus = cpu.map(|c| vec![c]);
+        let (p0, p1) = covering(&self.res.probes, (a, b));
+        let mut pending: Vec<(Nanos, Nanos)> = Vec::new();
+        let mut used: Nanos = 0;
+        let level = |t: usize| self.on(t, &cpus) && self.level(t, tasks);
+        for t in (0..self.spec.tasks.len()).filter(|&t| level(t)) {
+            let mut by_jobs = 0;
+            for j in self.overlapping(t, (a, b)) {
+                pending.push((j.release.max(a), j.finish.min(b)));
+                let span = j.finish.min(b) - j.read.max(a);
+                by_jobs += j.demand.min(span.max(0));
+            }
+            // The thread's CPU time over the probes around the window
+            // bounds it too (it covers a little more than the window).
+            let by_probes = match (p0, p1) {
+                (Some(p0), Some(p1)) if p0.at <= a && p1.at >= b => {
+                    p1.run.get(t).zip(p0.run.get(t)).map(|(x, y)| x - y)
+                }
+                _ => None,
+            };
+            used += by_probes.map_or(by_jobs, |p| p.min(by_jobs));
+        }
+        let ns = union_length(pending) - used;
+        (ns > 0).then_some(Cause::Foreign { cpu, ns })
+    }
+}
+
+/// The total length of a set of intervals (overlaps counted once).
+fn union_length(mut spans: Vec<(Nanos, Nanos)>) -> Nanos {
+    spans.sort_unstable();
+    let (mut total, mut reach) = (0, Nanos::MIN);
+    for (s, e) in spans {
+        let from = s.max(reach);
+        if e > from {
+            total += e - from;
+        }
+        reach = reach.max(e);
+    }
+    total
+}
+
+/// The last probe at or before `a` and the first at or after `b` (the
+/// first and last probes where the run's probes do not reach that far).
+fn covering(probes: &[Probe], (a, b): (Nanos, Nanos)) -> (Option<&Probe>, Option<&Probe>) {
+    let i0 = probes.partition_point(|p| p.at <= a).saturating_sub(1);
+    let i1 = probes
+        .partition_point(|p| p.at < b)
+        .min(probes.len().saturating_sub(1));
+    (probes.get(i0), probes.get(i1))
+}
+
+/// Steal between two probes on the given CPUs (all when `None`).
+fn steal(p0: &Probe, p1: &Probe, cpus: &Option<Vec<u32>>) -> Vec<Cause> {
+    (0..p1.steal.len())
+        .filter(|&c| cpus.as_ref().is_none_or(|v| v.contains(&(c as u32))))
+        .filter_map(|cpu| {
+            let ns = p1.steal[cpu] - p0.steal.get(cpu).copied().unwrap_or(0);
+            (ns > 0).then_some(Cause::Steal { cpu, ns })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rtpipe_joblog::SimResult;
+
+    const SPEC: &str = r#"
+[system]
+name = "two"
+time_unit = "ms"
+[channels.shm]
+bandwidth = 1000
+overhead = 0
+[tasks.a]
+exec = 1
+period = 10
+output = { channel = "shm", size = 0 }
+[tasks.b]
+exec = 1
+period = 10
+cpu = 1
+output = { channel = "shm", size = 0 }
+"#;
+
+    const MS: Nanos = 1_000_000;
+
+    fn job(task: usize, index: u64, demand: Nanos) -> JobRecord {
+        let release = index as Nanos * 10 * MS;
+        JobRecord {
+            task,
+            index,
+            release,
+            demand,
+            read: release,
+            finish: release + demand,
+            carried: Vec::new(),
+        }
+    }
+
+    fn probe(at: Nanos, steal: [Nanos; 2]) -> Probe {
+        Probe {
+            at,
+            steal: steal.to_vec(),
+            run: Vec::new(),
+        }
+    }
+
+    /// Task a overruns its job 2 (20–23 ms, 3 ms against 1); CPU 1 (task b)
+    /// has 4 ms of steal in 10–20 ms; CPU 0 none; a's job 3 starts 0.5 ms
+    /// late and takes 3 ms for 1 ms of CPU with nothing of the run beside
+    /// it.
+    fn run() -> (Spec, RunResult) {
+        let Ok(spec) = Spec::parse("two.toml", SPEC) else {
+            panic!("the spec parses");
+        };
+        let jobs = vec![
+            job(0, 0, MS),
+            job(1, 0, MS),
+            job(0, 1, MS),
+            job(0, 2, 3 * MS),
+            JobRecord {
+                read: 30 * MS + MS / 2,
+                finish: 33 * MS + MS / 2,
+                ..job(0, 3, MS)
+            },
+        ];
+        let probes = vec![
+            probe(0, [0, 0]),
+            probe(10 * MS, [0, 0]),
+            probe(20 * MS, [0, 4 * MS]),
+            probe(30 * MS, [0, 4 * MS]),
+            probe(40 * MS, [0, 4 * MS]),
+        ];
+        let sim = SimResult {
+            offsets: vec![0, 0],
+            tasks: Vec::new(),
+            chains: Vec::new(),
+            jobs,
+            segments: Vec::new(),
+            events: 0,
+            horizon: 40 * MS,
+        };
+        let res = RunResult {
+            sim,
+            tasks: Vec::new(),
+            policy: Policy::Fifo,
+            load: 0,
+            interrupted: false,
+            steal: None,
+            elapsed: 40 * MS,
+            epoch: 0,
+            notes: Vec::new(),
+            probes,
+            demoted: Vec::new(),
+        };
+        (spec, res)
+    }
+
+    #[test]
+    fn causes_count_only_inside_the_window_and_on_the_tasks_cpus() {
+        let (spec, res) = run();
+        let b = Blame::new(&spec, &res);
+        // 0–9 ms on CPU 0: nothing happened there then.
+        assert_eq!(b.causes((0, 9 * MS), &[0]), vec![]);
+        // 21–22 ms on CPU 0: a's overrun; CPU 1's steal is not a's.
+        let overrun = Cause::Overrun {
+            task: 0,
+            job: 2,
+            demand: 3 * MS,
+            budget: MS,
+        };
+        assert_eq!(b.causes((21 * MS, 22 * MS), &[0]), vec![overrun]);
+        // 12–18 ms on CPU 1: the steal there.
+        let steal = Cause::Steal { cpu: 1, ns: 4 * MS };
+        assert_eq!(b.causes((12 * MS, 18 * MS), &[1]), vec![steal]);
+        // 31–39 ms, from the start of its busy period (job 3's release at
+        // 30): job 3 was pending 3.5 ms of it and ran 1 ms.
+        let foreign = Cause::Foreign {
+            cpu: Some(0),
+            ns: 5 * MS / 2,
+        };
+        assert_eq!(b.causes((31 * MS, 39 * MS), &[0]), vec![foreign]);
+        // Outside them, no evidence.
+        assert_eq!(Blame::total(&b.causes((0, 9 * MS), &[0])), 0);
+    }
+
+    #[test]
+    fn the_total_delay_adds_the_causes_up() {
+        let c = [
+            Cause::Foreign {
+                cpu: Some(0),
+                ns: 3 * MS,
+            },
+            Cause::Overrun {
+                task: 0,
+                job: 0,
+                demand: 2 * MS,
+                budget: MS,
+            },
+        ];
+        assert_eq!(Blame::total(&c), 4 * MS);
+        // Steal is named but already inside the foreign time.
+        assert_eq!(Blame::total(&[Cause::Steal { cpu: 0, ns: 1 }]), 0);
+        assert_eq!(Blame::total(&[]), 0);
+        assert_eq!(
+            Blame::total(&[Cause::BestEffort, Cause::Steal { cpu: 0, ns: 1 }]),
+            Nanos::MAX
+        );
+    }
+}
