@@ -248,6 +248,23 @@ fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
     ))
 }
 
+/// Locks memory for a real-time run where that cannot starve thread
+/// stacks; the warning when it does not.
+fn lock_memory(policy: Policy) -> Option<String> {
+    if policy == Policy::Other {
+        return None;
+    }
+    if !may_lock_memory() {
+        return Some(format!(
+            "warning: memory not locked (RLIMIT_MEMLOCK is {} KiB, and mlockall under it starves thread stacks): page faults may delay jobs; `ulimit -l unlimited` or CAP_IPC_LOCK locks it",
+            sys::soft_limit(libc::RLIMIT_MEMLOCK) / 1024
+        ));
+    }
+    sys::lock_memory()
+        .err()
+        .map(|e| format!("warning: mlockall failed ({e}): page faults may delay jobs"))
+}
+
 /// Whether locking all current and future memory can work: unlimited
 /// RLIMIT_MEMLOCK, root or CAP_IPC_LOCK. Under a finite limit mlockall
 /// itself succeeds, and then every later thread stack that does not fit
@@ -384,19 +401,7 @@ pub fn run<'a, V: Copy + Send>(
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
-    let mut notes = Vec::new();
-    if cfg.policy != Policy::Other {
-        if !may_lock_memory() {
-            notes.push(format!(
-                "warning: memory not locked (RLIMIT_MEMLOCK is {} KiB, and mlockall under it starves thread stacks): page faults may delay jobs; `ulimit -l unlimited` or CAP_IPC_LOCK locks it",
-                sys::soft_limit(libc::RLIMIT_MEMLOCK) / 1024
-            ));
-        } else if let Err(e) = sys::lock_memory() {
-            notes.push(format!(
-                "warning: mlockall failed ({e}): page faults may delay jobs"
-            ));
-        }
-    }
+    let mut notes: Vec<String> = lock_memory(cfg.policy).into_iter().collect();
     let threads = threads(spec, cfg, bodies);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
