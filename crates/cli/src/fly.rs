@@ -98,7 +98,11 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
         horizon,
         seed: a.seed,
     };
-    setup(spec, &r)
+    let mut s = setup(spec, &r)?;
+    if let Some(t) = a.turbulence {
+        s.mission.world.turbulence = t;
+    }
+    Ok(s)
 }
 
 pub fn run(a: &FlyArgs) -> ExitCode {
@@ -181,6 +185,10 @@ fn to_text(
         seconds,
         flown / seconds.max(1e-9)
     );
+    let world = s.mission.world.describe();
+    if !world.is_empty() {
+        out.push_str(&format!("world: {world}\n"));
+    }
     out.push_str(&quality_text(&f.quality, &s.mission.criteria, failures));
     out.push_str(
         "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
@@ -228,6 +236,9 @@ struct FlightView<'a> {
     attitude_error_deg: RmsMax,
     altitude_error_m: RmsMax,
     drift_m: f64,
+    /// Only for a mission that judges it (a disturbance-rejection criterion).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    position_error_m: Option<RmsMax>,
     saturation_s: f64,
     airborne_s: f64,
     landed_s: Option<f64>,
@@ -306,6 +317,11 @@ fn to_json<'a>(
         attitude_error_deg: (&q.attitude_error_deg).into(),
         altitude_error_m: (&q.altitude_error_m).into(),
         drift_m: q.drift_m,
+        position_error_m: s
+            .mission
+            .criteria
+            .position_rms_m
+            .map(|_| (&q.position_error_m).into()),
         saturation_s: q.saturation_s,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,

@@ -8,12 +8,18 @@
 //! rate / specific force at the read time.
 //!
 //! The disturbed world adds, per axis, a scale error (value × (1 + e)) and
-//! the rotors' vibration: each rotor i shakes both sensors at its rotation
-//! frequency and the next two harmonics, A_k (Ω_i/Ω_ref)² sin(k φ_i + ψ),
-//! with φ_i the rotor's angle at the ODR sample, ψ a fixed phase per rotor,
-//! harmonic and axis (seeded), and the amplitude growing as the imbalance
-//! force, with the square of the speed (A_k at the hover speed Ω_ref).
-
+//! the rotors' vibration. Rotor i at angle φ_i and speed Ω_i shakes both
+//! sensors with amplitudes growing as the forces behind them, with Ω²
+//! (A_k given at the hover speed Ω_ref), and a fixed phase ψ_ik (seeded):
+//! - at the rotation frequency (imbalance), a force spinning in the rotor
+//!   plane: accel A_1 (cos, sin, 0)(φ_i + ψ_i1), gyro (a rocking of the
+//!   frame) G_1 the same way about x and y;
+//! - at its 2nd and 3rd harmonics (blade passing, thrust ripple), along the
+//!   rotor axis: accel A_k (0, 0, sin(kφ_i + ψ_ik)), and the ripple's moment
+//!   about the arm: gyro G_k sin(kφ_i + ψ_ik) along (y_i, −x_i, 0)/|r_i|.
+//!
+//! Components at different frequencies or in quadrature, so the vibration
+//! has no mean and no product term a normalisation could rectify.
 use crate::math::{Vec3, GRAVITY};
 use crate::rng::Rng;
 
@@ -57,6 +63,12 @@ pub struct Vibration {
     pub accel_mps2: [f64; 3],
     /// The rotor speed the amplitudes are given at, rad/s.
     pub ref_omega_rad_s: f64,
+    /// The direction of each rotor's arm moment, (y_i, −x_i)/|r_i|.
+    pub arm_dir: [[f64; 2]; 4],
+    /// The flight controller's accelerometer low-pass (first order), Hz,
+    /// as it acts on the vibration: each component's steady-state gain
+    /// 1/√(1 + (ω/ω_c)²) and lag atan(ω/ω_c). 0: none.
+    pub accel_lpf_hz: f64,
 }
 
 impl Vibration {
@@ -163,8 +175,8 @@ pub struct Imu {
 #[derive(Debug, Clone)]
 struct Shaker {
     v: Vibration,
-    /// ψ per rotor, harmonic, axis; gyro then accel.
-    phase: [[[[f64; 3]; 3]; 4]; 2],
+    /// ψ per rotor and harmonic.
+    phase: [[f64; 3]; 4],
     /// (time ns, angles rad, speeds rad/s) of the rotors, as last told.
     rotors: Option<(u64, [f64; 4], [f64; 4])>,
 }
@@ -173,8 +185,8 @@ impl Shaker {
     fn new(v: Vibration, seed: u64) -> Shaker {
         // Its own stream: the white noise stays what it is without it.
         let mut rng = Rng::new(seed ^ 0x5648_4942); // "VHIB"
-        let mut phase = [[[[0.0; 3]; 3]; 4]; 2];
-        for x in phase.iter_mut().flatten().flatten().flatten() {
+        let mut phase = [[0.0; 3]; 4];
+        for x in phase.iter_mut().flatten() {
             *x = std::f64::consts::TAU * rng.uniform();
         }
         Shaker {
@@ -194,18 +206,37 @@ impl Shaker {
             self.v.accel_mps2
         };
         let dt = (t_ns as f64 - t0 as f64) * 1e-9;
-        let mut out = [0.0; 3];
+        let mut out = Vec3::ZERO;
+        let wc = std::f64::consts::TAU * self.v.accel_lpf_hz;
+        // (gain, lag) of the filter at ω; none for the gyro.
+        let lpf = |w: f64| {
+            if which == 1 && wc > 0.0 {
+                let r = w.abs() / wc;
+                (1.0 / (1.0 + r * r).sqrt(), r.atan())
+            } else {
+                (1.0, 0.0)
+            }
+        };
         for i in 0..4 {
             let phi = angle[i] + omega[i] * dt;
             let s = (omega[i] / self.v.ref_omega_rad_s).powi(2);
-            for (k, a) in amp.iter().enumerate() {
-                for (j, o) in out.iter_mut().enumerate() {
-                    let psi = self.phase[which][i][k][j];
-                    *o += a * s * ((k + 1) as f64 * phi + psi).sin();
-                }
+            let ps = self.phase[i];
+            let (g, lag) = lpf(omega[i]);
+            let (sin1, cos1) = (phi + ps[0] - lag).sin_cos();
+            out += Vec3::new(cos1, sin1, 0.0) * (g * amp[0] * s);
+            let along = if which == 0 {
+                let [dx, dy] = self.v.arm_dir[i];
+                Vec3::new(dx, dy, 0.0)
+            } else {
+                Vec3::new(0.0, 0.0, 1.0)
+            };
+            for k in 1..3 {
+                let n = (k + 1) as f64;
+                let (g, lag) = lpf(n * omega[i]);
+                out += along * (g * amp[k] * s * (n * phi + ps[k] - lag).sin());
             }
         }
-        Some(Vec3::from_array(out))
+        Some(out)
     }
 }
 
@@ -346,6 +377,8 @@ mod disturbed_tests {
                 gyro_rad_s: [0.1, 0.0, 0.0],
                 accel_mps2: [0.0; 3],
                 ref_omega_rad_s: 1000.0,
+                arm_dir: [[0.0; 2]; 4],
+                accel_lpf_hz: 0.0,
             },
             ..ImuConfig::default()
         };

@@ -106,6 +106,9 @@ pub struct FlightQuality {
     /// Largest horizontal distance from where the first hover window began,
     /// over that window, metres.
     pub drift_m: f64,
+    /// Horizontal distance from where the first hover window began, over
+    /// the hover samples, metres (a disturbance-rejection figure).
+    pub position_error_m: ErrorStats,
     /// Every roll, pitch and heading step of the mission.
     pub steps: Vec<Step>,
     /// Time armed with some motor at 0 or 1 (saturated), s.
@@ -183,6 +186,7 @@ pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
                 .map(|p| p.pos.z - p.alt_target.unwrap_or(p.pos.z)),
         ),
         drift_m: first_window_drift(trace, &hover),
+        position_error_m: position_error(&hovering),
         steps: steps(trace, &changes),
         saturation_s: dt
             * trace
@@ -207,6 +211,17 @@ fn first_window_drift(trace: &[TracePoint], hover: &impl Fn(&TracePoint) -> bool
         drift = drift.max(((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt());
     }
     drift
+}
+
+fn position_error(hovering: &[&TracePoint]) -> ErrorStats {
+    let Some(o) = hovering.first().map(|p| p.pos) else {
+        return ErrorStats::default();
+    };
+    ErrorStats::of(
+        hovering
+            .iter()
+            .map(|p| ((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt()),
+    )
 }
 
 fn angle(axis: Axis, e: &crate::math::Euler) -> f64 {
@@ -289,6 +304,12 @@ impl FlightQuality {
                 "altitude error RMS {h:.3} m ≥ {} m",
                 c.altitude_rms_m
             ));
+        }
+        if let Some(limit) = c.position_rms_m {
+            let p = self.position_error_m.rms;
+            if p >= limit {
+                out.push(format!("position error RMS {p:.3} m ≥ {limit} m"));
+            }
         }
         for s in self.steps.iter().filter(|s| s.axis != Axis::Yaw) {
             let (over, settle) = (s.truth.overshoot, s.tracked.settling_s);

@@ -15,7 +15,7 @@ use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::preset::{Preset, BUILTIN};
 use rtpipe_flight::quality::{assess, FlightQuality};
-use rtpipe_flight::radio::Mission;
+use rtpipe_flight::radio::{Mission, BUILTIN_MISSIONS};
 use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_joblog::SimResult;
@@ -75,13 +75,13 @@ fn vehicle(v: &str) -> Result<Preset, Diagnostic> {
 
 fn mission(m: &str) -> Result<Mission, Diagnostic> {
     let r = match m {
-        "hover" | "steps" | "paper" => Mission::builtin(m),
+        _ if BUILTIN_MISSIONS.contains(&m) => Mission::builtin(m),
         _ => Mission::from_file(Path::new(m)),
     };
     r.map_err(|e| {
         Diagnostic::error(
             format!("--mission {m}: {e}"),
-            "name a built-in mission (hover, steps, paper) or a mission file",
+            "name a built-in mission (hover, steps, paper, gusty) or a mission file",
         )
     })
 }

@@ -26,6 +26,12 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
             q.drift_m,
             q.saturation_s
         ));
+        if c.position_rms_m.is_some() {
+            out.push_str(&format!(
+                "  disturbance rejection: position error RMS {:.3} m max {:.3} m\n",
+                q.position_error_m.rms, q.position_error_m.max
+            ));
+        }
     } else {
         out.push_str("  hover: none to judge (the mission holds no altitude)\n");
     }
