@@ -17,10 +17,9 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command;
 use crate::output;
 use crate::plot;
-use crate::report::flight::quality_text;
+use crate::report::flight::{quality_text, RmsMax};
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
-use rtpipe_flight::quality::ErrorStats;
 use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
 use rtpipe_model::{Diagnostic, Server, Spec};
@@ -233,6 +232,8 @@ struct FlightView<'a> {
     mission: &'a str,
     duration_s: f64,
     crashed: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    crashed_s: Option<f64>,
     attitude_error_deg: RmsMax,
     altitude_error_m: RmsMax,
     drift_m: f64,
@@ -246,21 +247,6 @@ struct FlightView<'a> {
     criteria_met: bool,
     failures: &'a [String],
     seconds: f64,
-}
-
-#[derive(Serialize)]
-struct RmsMax {
-    rms: f64,
-    max: f64,
-}
-
-impl From<&ErrorStats> for RmsMax {
-    fn from(e: &ErrorStats) -> Self {
-        RmsMax {
-            rms: e.rms,
-            max: e.max,
-        }
-    }
 }
 
 #[derive(Serialize)]
@@ -314,6 +300,7 @@ fn to_json<'a>(
         mission: &s.mission.name,
         duration_s: s.horizon as f64 * 1e-9,
         crashed: q.crashed,
+        crashed_s: q.crashed_s,
         attitude_error_deg: (&q.attitude_error_deg).into(),
         altitude_error_m: (&q.altitude_error_m).into(),
         drift_m: q.drift_m,

@@ -5,6 +5,7 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
+use crate::report::flight::RmsMax;
 use crate::report::{self, time};
 use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
 use crate::table::Table;
@@ -376,7 +377,7 @@ fn execute(
 }
 
 /// The `flight` entry of the JSON: the vehicle, the mission and how the
-/// flight went.
+/// flight went, its figures named as `fly --json` names them.
 #[derive(Serialize)]
 struct FlightView<'a> {
     vehicle: &'a str,
@@ -384,8 +385,8 @@ struct FlightView<'a> {
     crashed: bool,
     airborne_s: f64,
     landed_s: Option<f64>,
-    attitude_error_deg_rms: f64,
-    altitude_error_m_rms: f64,
+    attitude_error_deg: RmsMax,
+    altitude_error_m: RmsMax,
     failures: Vec<String>,
 }
 
@@ -397,8 +398,8 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
         crashed: q.crashed,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,
-        attitude_error_deg_rms: q.attitude_error_deg.rms,
-        altitude_error_m_rms: q.altitude_error_m.rms,
+        attitude_error_deg: (&q.attitude_error_deg).into(),
+        altitude_error_m: (&q.altitude_error_m).into(),
         failures: q.failures(&s.mission.criteria),
     }
 }
@@ -781,4 +782,34 @@ fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Vec<Fig10View> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_names_the_flight_s_figures_as_fly_does() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let r = rtpipe_fly::Request {
+            spec_path: &path,
+            vehicle: "racer5",
+            mission: "hover",
+            horizon: Some(6_000_000_000),
+            seed: 0,
+        };
+        let s = rtpipe_fly::setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let f = rtpipe_fly::fly(&spec, &s, rtpipe_sim::ExecModel::Uniform)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let v = serde_json::to_value(flight_json(&f, &s)).unwrap_or_default();
+        // `fly --json` has flight.attitude_error_deg.rms and .max.
+        for key in ["attitude_error_deg", "altitude_error_m"] {
+            assert!(
+                v[key]["rms"].is_number() && v[key]["max"].is_number(),
+                "{v}"
+            );
+        }
+        assert!(v.get("attitude_error_deg_rms").is_none(), "{v}");
+    }
 }

@@ -1,7 +1,25 @@
 //! How a flight went, for people.
 
 use crate::table::Table;
-use rtpipe_flight::quality::{Criteria, FlightQuality};
+use rtpipe_flight::quality::{Criteria, ErrorStats, FlightQuality};
+use serde::Serialize;
+
+/// An error's RMS and maximum, as `fly --json` and `run --json` both name
+/// them (`attitude_error_deg.rms`): one name for one figure.
+#[derive(Serialize)]
+pub struct RmsMax {
+    pub rms: f64,
+    pub max: f64,
+}
+
+impl From<&ErrorStats> for RmsMax {
+    fn from(e: &ErrorStats) -> Self {
+        RmsMax {
+            rms: e.rms,
+            max: e.max,
+        }
+    }
+}
 
 fn f3(x: f64) -> String {
     format!("{x:.3}")
@@ -10,13 +28,21 @@ fn f3(x: f64) -> String {
 /// The flight's quality against the mission's criteria, as `fly` and `run`
 /// print it: crash and landing, hover errors, step responses, verdict.
 pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
-    let mut out = format!(
-        "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
-        if q.crashed { "CRASHED" } else { "no crash" },
-        q.airborne_s,
-        q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
-    );
-    if q.hovers {
+    let mut out = match q.crashed_s {
+        Some(t) => format!(
+            "flight: CRASHED at {t:.2} s; airborne {:.1} s; what follows the crash is not judged\n",
+            q.airborne_s
+        ),
+        None => format!(
+            "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
+            if q.crashed { "CRASHED" } else { "no crash" },
+            q.airborne_s,
+            q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
+        ),
+    };
+    if q.hovers && q.attitude_error_deg.count == 0 {
+        out.push_str("  hover: never hovered (no sample to judge)\n");
+    } else if q.hovers {
         out.push_str(&format!(
             "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
             q.attitude_error_deg.rms,
@@ -49,6 +75,17 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
         ])
         .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
         for st in &q.steps {
+            if !q.judged(st) {
+                let mut row = vec![
+                    st.axis.name().to_string(),
+                    format!("{:.1}", st.at_s),
+                    format!("{:.0}", st.to_deg),
+                ];
+                row.extend(std::iter::repeat_n("-".to_string(), 5));
+                row.push("after the crash".to_string());
+                t.row(row);
+                continue;
+            }
             let (e, r) = (&st.tracked, &st.truth);
             t.row(vec![
                 st.axis.name().to_string(),
