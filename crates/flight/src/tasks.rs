@@ -184,6 +184,19 @@ impl BodyKind {
         BodyKind::ALL.into_iter().find(|r| r.name() == name)
     }
 
+    /// The roles whose outputs this body takes as inputs: without one of
+    /// them among its task's `reads`, the input is always missing (a PID
+    /// without the radio never arms: zero motor demand).
+    pub fn needs(self) -> &'static [BodyKind] {
+        match self {
+            BodyKind::Ahrs => &[BodyKind::Gyro, BodyKind::Accel],
+            BodyKind::Pid => &[BodyKind::Ahrs, BodyKind::Radio],
+            BodyKind::Pwm => &[BodyKind::Pid],
+            BodyKind::Alert => &[BodyKind::Vbat],
+            _ => &[],
+        }
+    }
+
     /// The names a spec may use, for error messages.
     pub fn names() -> String {
         let v: Vec<&str> = BodyKind::ALL.iter().map(|r| r.name()).collect();
