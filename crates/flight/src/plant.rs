@@ -425,13 +425,13 @@ impl Plant {
     /// the smallest one: 0.99 × 5e-324 rounds back to it), and every
     /// derivative after a disarm runs on the slow subnormal path.
     fn rotors_after_step(&mut self, before: &[f64; 4], h: f64) {
-        for i in 0..4 {
-            let w = &mut self.s.omega[i];
-            if self.target[i] == 0.0 && w.abs() < OMEGA_AT_REST {
+        let rotors = self.s.omega.iter_mut().zip(&self.target);
+        for ((w, angle), (target, w0)) in rotors.zip(self.rotor_angle.iter_mut().zip(before)) {
+            if *target == 0.0 && w.abs() < OMEGA_AT_REST {
                 *w = 0.0;
             }
-            let a = self.rotor_angle[i] + 0.5 * h * (before[i] + *w);
-            self.rotor_angle[i] = a.rem_euclid(std::f64::consts::TAU);
+            let a = *angle + 0.5 * h * (w0 + *w);
+            *angle = a.rem_euclid(std::f64::consts::TAU);
         }
     }
 
