@@ -426,7 +426,7 @@ impl Plant {
     /// derivative after a disarm runs on the slow subnormal path.
     fn rotors_after_step(&mut self, before: &[f64; 4], h: f64) {
         let rotors = self.s.omega.iter_mut().zip(&self.target);
-        for ((w, angle), (target, w0)) in rotors.zip(self.rotor_angle.iter_mut().zip(before)) {
+        for ((w, target), (angle, w0)) in rotors.zip(self.rotor_angle.iter_mut().zip(before)) {
             if *target == 0.0 && w.abs() < OMEGA_AT_REST {
                 *w = 0.0;
             }

@@ -190,8 +190,8 @@ fn rotorpy_agrees_on_the_scales_and_differs_in_documented_conventions() {
         let theirs = rotorpy::lengths_m(h);
         // The same formula; only the feet per metre differ (3.281 against
         // 1/0.3048 = 3.28084): 5e-5 relative at most.
-        for k in 0..3 {
-            let r = ours.length_m[k] / theirs[k];
+        for (k, (l, t)) in ours.length_m.iter().zip(theirs).enumerate() {
+            let r = l / t;
             assert!((r - 1.0).abs() < 5e-5, "h {h}, component {k}: {r}");
         }
         // rotorpy puts MIL-F-8785C's L into MIL-HDBK-1797's form, which
@@ -202,8 +202,8 @@ fn rotorpy_agrees_on_the_scales_and_differs_in_documented_conventions() {
             ..ours
         };
         for w in [0.01, 0.1, 1.0, 10.0] {
-            for k in 0..3 {
-                let a = rotorpy::gain2(ours.sigma_mps[k], theirs[k], 1.0, w);
+            for (k, l) in theirs.iter().enumerate() {
+                let a = rotorpy::gain2(ours.sigma_mps[k], *l, 1.0, w);
                 // The same shape: |H|² equals our v/w spectrum with 2L.
                 let rel = a / doubled.psd(k.max(1), w)
                     * (ours.sigma_mps[k.max(1)] / ours.sigma_mps[k]).powi(2);
