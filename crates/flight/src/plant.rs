@@ -476,7 +476,7 @@ impl Plant {
 }
 
 #[cfg(test)]
-mod rest_tests {
+mod tests {
     use super::*;
     use crate::preset::Preset;
 

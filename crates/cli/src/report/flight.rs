@@ -62,49 +62,52 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
         out.push_str("  hover: none to judge (the mission holds no altitude)\n");
     }
     if !q.steps.is_empty() {
-        let mut t = Table::new(&[
-            "step",
-            "at s",
-            "to°",
-            "rise s",
-            "overshoot %",
-            "settling s",
-            "true rise s",
-            "true overshoot %",
-            "true drift° at release",
-        ])
-        .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
-        for st in &q.steps {
-            if !q.judged(st) {
-                let mut row = vec![
-                    st.axis.name().to_string(),
-                    format!("{:.1}", st.at_s),
-                    format!("{:.0}", st.to_deg),
-                ];
-                row.extend(std::iter::repeat_n("-".to_string(), 5));
-                row.push("after the crash".to_string());
-                t.row(row);
-                continue;
-            }
-            let (e, r) = (&st.tracked, &st.truth);
-            t.row(vec![
-                st.axis.name().to_string(),
-                format!("{:.1}", st.at_s),
-                format!("{:.0}", st.to_deg),
-                f3(e.rise_s),
-                format!("{:.1}", 100.0 * e.overshoot),
-                f3(e.settling_s),
-                f3(r.rise_s),
-                format!("{:.1}", 100.0 * r.overshoot),
-                format!("{:+.2}", st.drift_deg),
-            ]);
-        }
         out.push_str("  steps (tracked: the AHRS estimate the controller closes its loop on; true: the plant):\n");
-        out.push_str(&t.render());
+        out.push_str(&steps_table(q));
     }
     out.push_str(&match failures {
         [] => format!("  criteria ({}): met\n", c.describe()),
         f => format!("  criteria NOT met: {}\n", f.join("; ")),
     });
     out
+}
+
+/// The step responses; a step after a crash shows no figure.
+fn steps_table(q: &FlightQuality) -> String {
+    let mut t = Table::new(&[
+        "step",
+        "at s",
+        "to°",
+        "rise s",
+        "overshoot %",
+        "settling s",
+        "true rise s",
+        "true overshoot %",
+        "true drift° at release",
+    ])
+    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    for st in &q.steps {
+        let mut row = vec![
+            st.axis.name().to_string(),
+            format!("{:.1}", st.at_s),
+            format!("{:.0}", st.to_deg),
+        ];
+        if !q.judged(st) {
+            row.extend(std::iter::repeat_n("-".to_string(), 5));
+            row.push("after the crash".to_string());
+            t.row(row);
+            continue;
+        }
+        let (e, r) = (&st.tracked, &st.truth);
+        row.extend([
+            f3(e.rise_s),
+            format!("{:.1}", 100.0 * e.overshoot),
+            f3(e.settling_s),
+            f3(r.rise_s),
+            format!("{:.1}", 100.0 * r.overshoot),
+            format!("{:+.2}", st.drift_deg),
+        ]);
+        t.row(row);
+    }
+    t.render()
 }
