@@ -230,6 +230,9 @@ struct FlyView<'a> {
 struct FlightView<'a> {
     vehicle: &'a str,
     mission: &'a str,
+    /// The disturbances flown in, in words (absent in calm air).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    world: String,
     duration_s: f64,
     crashed: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -298,6 +301,7 @@ fn to_json<'a>(
     let flight = FlightView {
         vehicle: &s.preset.name,
         mission: &s.mission.name,
+        world: s.mission.world.describe(),
         duration_s: s.horizon as f64 * 1e-9,
         crashed: q.crashed,
         crashed_s: q.crashed_s,
