@@ -38,7 +38,8 @@ pub struct RunArgs {
     /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
     #[arg(long, default_value = "racer5")]
     pub vehicle: String,
-    /// A flight's mission: steps, hover, paper, or a mission file (as `fly`).
+    /// A flight's mission: steps, hover, paper, gusty, or a mission file (as
+    /// `fly`).
     #[arg(long, default_value = "steps")]
     pub mission: String,
     /// Scheduling class of the task threads [default: fifo for scheduler =
