@@ -55,7 +55,8 @@ pub struct FlyArgs {
     #[arg(long, value_name = "LO..HI", value_parser = parse_scale, requires = "sweep")]
     pub scale: Option<(f64, f64)>,
     /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
-    /// altitude_rms_m, overshoot, settling_s [default: the mission's].
+    /// altitude_rms_m, overshoot, settling_s, position_rms_m [default: the
+    /// mission's].
     #[arg(long, value_name = "FILE", requires = "sweep")]
     pub criterion: Option<PathBuf>,
     /// With --sweep: write the spec with the derived chain limits here.

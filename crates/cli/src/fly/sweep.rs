@@ -26,13 +26,13 @@ fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let text = std::fs::read_to_string(path).map_err(|e| {
         Diagnostic::error(
             format!("--criterion {}: {e}", path.display()),
-            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s",
+            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m",
         )
     })?;
     let c: Criteria = toml::from_str(&text).map_err(|e| {
         Diagnostic::error(
             format!("--criterion {}: {}", path.display(), e.message()),
-            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s (omitted keys keep their defaults)",
+            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m (omitted keys keep their defaults; position is judged only when given)",
         )
     })?;
     c.validate()
