@@ -101,6 +101,8 @@ pub struct FlightQuality {
     pub crashed: bool,
     /// When it crashed, s: figures judged after it mean nothing.
     pub crashed_s: Option<f64>,
+    /// The last trace point, s: a step at or after it was not flown.
+    pub end_s: f64,
     /// Over the hover samples, degrees.
     pub attitude_error_deg: ErrorStats,
     /// Over the hover samples, metres.
@@ -179,6 +181,7 @@ pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
     FlightQuality {
         crashed: trace.iter().any(|p| p.crashed),
         crashed_s: trace.iter().find(|p| p.crashed).map(secs),
+        end_s: trace.last().map_or(0.0, secs),
         attitude_error_deg: ErrorStats::of(hovering.iter().map(|p| {
             let (er, ep) = (p.euler.roll - p.sp.roll, p.euler.pitch - p.sp.pitch);
             (er * er + ep * ep).sqrt().to_degrees()
@@ -290,10 +293,23 @@ fn landed(trace: &[TracePoint]) -> Option<f64> {
 }
 
 impl FlightQuality {
-    /// A step is judged only when it began before any crash: after one,
-    /// its overshoot and settling describe a wreck.
+    /// A step is judged only when it began before any crash (after one,
+    /// its overshoot and settling describe a wreck) and before the flight
+    /// ended (else there is nothing to judge).
     pub fn judged(&self, s: &Step) -> bool {
-        self.crashed_s.is_none_or(|t| s.at_s < t)
+        self.crashed_s.is_none_or(|t| s.at_s < t) && s.at_s < self.end_s
+    }
+
+    /// Why a step is not judged, in words; `None` when it is.
+    pub fn unjudged_why(&self, s: &Step) -> Option<String> {
+        match self.crashed_s {
+            Some(t) if s.at_s >= t => Some("after the crash".to_string()),
+            _ if s.at_s >= self.end_s => Some(format!(
+                "not flown (the flight ended at {:.2} s)",
+                self.end_s
+            )),
+            _ => None,
+        }
     }
 
     /// What fails `c`, in words; empty when the flight meets it.
@@ -328,17 +344,17 @@ impl FlightQuality {
                 out.push(format!("position error RMS {p:.3} m ≥ {limit} m"));
             }
         }
-        let wrecked: Vec<String> = self
-            .steps
-            .iter()
-            .filter(|s| s.axis != Axis::Yaw && !self.judged(s))
-            .map(|s| format!("{:.1}", s.at_s))
-            .collect();
-        if !wrecked.is_empty() {
-            out.push(format!(
-                "steps at {} s not judged (after the crash)",
-                wrecked.join(", ")
-            ));
+        let mut unjudged: Vec<(String, String)> = Vec::new();
+        for s in self.steps.iter().filter(|s| s.axis != Axis::Yaw) {
+            if let Some(why) = self.unjudged_why(s) {
+                match unjudged.iter_mut().find(|(w, _)| *w == why) {
+                    Some((_, at)) => at.push_str(&format!(", {:.1}", s.at_s)),
+                    None => unjudged.push((why, format!("{:.1}", s.at_s))),
+                }
+            }
+        }
+        for (why, at) in unjudged {
+            out.push(format!("steps at {at} s not judged: {why}"));
         }
         for s in self
             .steps
@@ -476,7 +492,7 @@ attitude_rms_deg = 0.5
         assert!(f.iter().any(|x| x.contains("never hovered")), "{f:?}");
         assert!(
             f.iter()
-                .any(|x| x == "steps at 6.0, 11.0 s not judged (after the crash)"),
+                .any(|x| x == "steps at 6.0, 11.0 s not judged: after the crash"),
             "{f:?}"
         );
         assert!(!f.iter().any(|x| x.contains("overshoot")), "{f:?}");

@@ -92,9 +92,9 @@ fn steps_table(q: &FlightQuality) -> String {
             format!("{:.1}", st.at_s),
             format!("{:.0}", st.to_deg),
         ];
-        if !q.judged(st) {
+        if let Some(why) = q.unjudged_why(st) {
             row.extend(std::iter::repeat_n("-".to_string(), 5));
-            row.push("after the crash".to_string());
+            row.push(why);
             t.row(row);
             continue;
         }
