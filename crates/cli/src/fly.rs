@@ -17,11 +17,10 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command;
 use crate::output;
 use crate::plot;
-use crate::report::flight::quality_text;
+use crate::report::flight::{quality_text, RmsMax};
 use crate::report::samples::samples_csv;
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
-use rtpipe_flight::quality::ErrorStats;
 use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
 use rtpipe_model::{Diagnostic, Server, Spec};
@@ -101,6 +100,9 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     };
     let mut s = setup(spec, &r)?;
     s.log_jobs = a.samples.is_some();
+    if let Some(t) = a.turbulence {
+        s.mission.world.turbulence = t;
+    }
     Ok(s)
 }
 
@@ -187,6 +189,10 @@ fn to_text(
         seconds,
         flown / seconds.max(1e-9)
     );
+    let world = s.mission.world.describe();
+    if !world.is_empty() {
+        out.push_str(&format!("world: {world}\n"));
+    }
     out.push_str(&quality_text(&f.quality, &s.mission.criteria, failures));
     out.push_str(
         "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
@@ -229,11 +235,19 @@ struct FlyView<'a> {
 struct FlightView<'a> {
     vehicle: &'a str,
     mission: &'a str,
+    /// The disturbances flown in, in words (absent in calm air).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    world: String,
     duration_s: f64,
     crashed: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    crashed_s: Option<f64>,
     attitude_error_deg: RmsMax,
     altitude_error_m: RmsMax,
     drift_m: f64,
+    /// Only for a mission that judges it (a disturbance-rejection criterion).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    position_error_m: Option<RmsMax>,
     saturation_s: f64,
     airborne_s: f64,
     landed_s: Option<f64>,
@@ -241,21 +255,6 @@ struct FlightView<'a> {
     criteria_met: bool,
     failures: &'a [String],
     seconds: f64,
-}
-
-#[derive(Serialize)]
-struct RmsMax {
-    rms: f64,
-    max: f64,
-}
-
-impl From<&ErrorStats> for RmsMax {
-    fn from(e: &ErrorStats) -> Self {
-        RmsMax {
-            rms: e.rms,
-            max: e.max,
-        }
-    }
 }
 
 #[derive(Serialize)]
@@ -307,11 +306,18 @@ fn to_json<'a>(
     let flight = FlightView {
         vehicle: &s.preset.name,
         mission: &s.mission.name,
+        world: s.mission.world.describe(),
         duration_s: s.horizon as f64 * 1e-9,
         crashed: q.crashed,
+        crashed_s: q.crashed_s,
         attitude_error_deg: (&q.attitude_error_deg).into(),
         altitude_error_m: (&q.altitude_error_m).into(),
         drift_m: q.drift_m,
+        position_error_m: s
+            .mission
+            .criteria
+            .position_rms_m
+            .map(|_| (&q.position_error_m).into()),
         saturation_s: q.saturation_s,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,

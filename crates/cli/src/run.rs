@@ -5,6 +5,7 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
+use crate::report::flight::RmsMax;
 use crate::report::samples::samples_csv;
 use crate::report::{self, time};
 use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
@@ -41,7 +42,8 @@ pub struct RunArgs {
     /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
     #[arg(long, default_value = "racer5")]
     pub vehicle: String,
-    /// A flight's mission: steps, hover, paper, or a mission file (as `fly`).
+    /// A flight's mission: steps, hover, paper, gusty, or a mission file (as
+    /// `fly`).
     #[arg(long, default_value = "steps")]
     pub mission: String,
     /// Scheduling class of the task threads [default: fifo for scheduler =
@@ -434,7 +436,7 @@ fn execute(
 }
 
 /// The `flight` entry of the JSON: the vehicle, the mission and how the
-/// flight went.
+/// flight went, its figures named as `fly --json` names them.
 #[derive(Serialize)]
 struct FlightView<'a> {
     vehicle: &'a str,
@@ -442,8 +444,8 @@ struct FlightView<'a> {
     crashed: bool,
     airborne_s: f64,
     landed_s: Option<f64>,
-    attitude_error_deg_rms: f64,
-    altitude_error_m_rms: f64,
+    attitude_error_deg: RmsMax,
+    altitude_error_m: RmsMax,
     failures: Vec<String>,
 }
 
@@ -455,8 +457,8 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
         crashed: q.crashed,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,
-        attitude_error_deg_rms: q.attitude_error_deg.rms,
-        altitude_error_m_rms: q.altitude_error_m.rms,
+        attitude_error_deg: (&q.attitude_error_deg).into(),
+        altitude_error_m: (&q.altitude_error_m).into(),
         failures: q.failures(&s.mission.criteria),
     }
 }
@@ -807,4 +809,34 @@ fn fig10_json(spec: &Spec, obs: &[ChainObs]) -> Vec<Fig10View> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_names_the_flight_s_figures_as_fly_does() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let r = rtpipe_fly::Request {
+            spec_path: &path,
+            vehicle: "racer5",
+            mission: "hover",
+            horizon: Some(6_000_000_000),
+            seed: 0,
+        };
+        let s = rtpipe_fly::setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let f = rtpipe_fly::fly(&spec, &s, rtpipe_sim::ExecModel::Uniform)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let v = serde_json::to_value(flight_json(&f, &s)).unwrap_or_default();
+        // `fly --json` has flight.attitude_error_deg.rms and .max.
+        for key in ["attitude_error_deg", "altitude_error_m"] {
+            assert!(
+                v[key]["rms"].is_number() && v[key]["max"].is_number(),
+                "{v}"
+            );
+        }
+        assert!(v.get("attitude_error_deg_rms").is_none(), "{v}");
+    }
 }

@@ -267,6 +267,21 @@ const CASES: &[Fixed] = &[
             "^flyplots",
         ],
     ),
+    case("fly-gusty", &["fly", "@cleanflight", "--mission", "gusty"]),
+    case(
+        "fly-gusty-json",
+        &[
+            "fly",
+            "@cleanflight",
+            "--mission",
+            "gusty",
+            "--vehicle",
+            "aero1kg",
+            "--turbulence",
+            "light",
+            "--json",
+        ],
+    ),
     case(
         "design-derived-write",
         &[

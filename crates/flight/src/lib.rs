@@ -45,5 +45,6 @@ pub mod radio;
 pub mod rng;
 pub mod tasks;
 pub mod trace;
+pub mod wind;
 
 pub use error::ConfigError;

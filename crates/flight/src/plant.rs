@@ -90,6 +90,11 @@ pub struct PlantParams {
     pub substep_ns: u64,
 }
 
+/// A stopped rotor slower than this (rad/s) is at rest: its thrust,
+/// k_f·ω² < 1e-12 N on both presets, is far below anything the flight
+/// notices.
+pub const OMEGA_AT_REST: f64 = 1e-3;
+
 /// Default RK4 sub-step: 250 µs.
 pub const SUBSTEP_NS_DEFAULT: u64 = 250_000;
 
@@ -207,6 +212,12 @@ pub struct Plant {
     t_ns: u64,
     target: [f64; 4],
     ext_torque: Vec3,
+    /// The air's velocity (world), m/s: drag acts on the velocity relative
+    /// to it.
+    wind: Vec3,
+    /// Rotor angles, rad in [0, 2π): where the vibration they shake the IMU
+    /// with is in its cycle.
+    rotor_angle: [f64; 4],
     on_ground: bool,
     crashed: bool,
 }
@@ -234,6 +245,8 @@ impl Plant {
             t_ns: 0,
             target: [0.0; 4],
             ext_torque: Vec3::ZERO,
+            wind: Vec3::ZERO,
+            rotor_angle: [0.0; 4],
             on_ground: true,
             crashed: false,
         })
@@ -273,6 +286,18 @@ impl Plant {
         self.ext_torque = tau;
     }
 
+    /// The wind (world, m/s) from now on, held until the next call: the
+    /// linear drag acts on the airspeed v − wind. With no wind the
+    /// arithmetic is the calm plant's, bit for bit (v − 0 = v).
+    pub fn set_wind(&mut self, wind: Vec3) {
+        self.wind = wind;
+    }
+
+    /// The rotor angles, rad in [0, 2π), Betaflight order.
+    pub fn rotor_angles(&self) -> [f64; 4] {
+        self.rotor_angle
+    }
+
     /// An instantaneous angular impulse in the body, N·m·s.
     pub fn apply_torque_impulse(&mut self, j: Vec3) {
         let i = Vec3::from_array(self.p.body.inertia_kg_m2);
@@ -306,7 +331,7 @@ impl Plant {
         let gyro = s.rate.cross(s.rate.hadamard(inertia));
         let t = tau - gyro;
         let ang_accel = Vec3::new(t.x / inertia.x, t.y / inertia.y, t.z / inertia.z);
-        let f_world = s.q.rotate(Vec3::new(0.0, 0.0, thrust)) - s.vel * b.drag_linear;
+        let f_world = s.q.rotate(Vec3::new(0.0, 0.0, thrust)) - (s.vel - self.wind) * b.drag_linear;
         let accel_world = f_world / b.mass_kg - Vec3::new(0.0, 0.0, GRAVITY);
         Wrench {
             accel_world,
@@ -393,13 +418,33 @@ impl Plant {
         self.on_ground = true;
     }
 
+    /// Rotor bookkeeping after a step of `h` s from speeds `before`: the
+    /// angles advance by the trapezoid of the speeds, and a stopped rotor's
+    /// speed is snapped to 0 once below [`OMEGA_AT_REST`]. Without the snap
+    /// the exponential spin-down sinks into subnormal numbers (and sticks at
+    /// the smallest one: 0.99 × 5e-324 rounds back to it), and every
+    /// derivative after a disarm runs on the slow subnormal path.
+    fn rotors_after_step(&mut self, before: &[f64; 4], h: f64) {
+        let rotors = self.s.omega.iter_mut().zip(&self.target);
+        for ((w, target), (angle, w0)) in rotors.zip(self.rotor_angle.iter_mut().zip(before)) {
+            if *target == 0.0 && w.abs() < OMEGA_AT_REST {
+                *w = 0.0;
+            }
+            let a = *angle + 0.5 * h * (w0 + *w);
+            *angle = a.rem_euclid(std::f64::consts::TAU);
+        }
+    }
+
     /// Integrate to `t_ns` in fixed sub-steps, the last one partial.
     /// Times before the current time are ignored (the plant never rewinds).
     pub fn advance_to(&mut self, t_ns: u64) {
         while self.t_ns < t_ns {
             let h_ns = (t_ns - self.t_ns).min(self.p.substep_ns);
-            self.rk4(h_ns as f64 * 1e-9);
+            let before = self.s.omega;
+            let h = h_ns as f64 * 1e-9;
+            self.rk4(h);
             self.t_ns += h_ns;
+            self.rotors_after_step(&before, h);
             self.ground_contact();
         }
     }
@@ -427,5 +472,47 @@ impl Plant {
             on_ground: self.on_ground,
             crashed: self.crashed,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::preset::Preset;
+
+    #[test]
+    fn stopped_rotors_come_to_rest_at_zero_not_in_subnormals() {
+        let p = Preset::builtin("racer5").map(|p| p.plant_params());
+        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
+        plant.set_motor_commands([0.3; 4], true);
+        plant.advance_to(1_000_000_000);
+        assert!(plant.state().omega.iter().all(|&w| w > 100.0));
+        plant.set_motor_commands([0.0; 4], false);
+        // ln(1000 rad/s / 1e-3 rad/s) · 20 ms = 0.28 s to rest; the
+        // subnormal range begins only after ln(1000/2.2e-308) · 20 ms = 14 s.
+        plant.advance_to(1_400_000_000);
+        assert_eq!(plant.state().omega, [0.0; 4]);
+        plant.advance_to(60_000_000_000);
+        assert!(plant
+            .state()
+            .omega
+            .iter()
+            .all(|w| *w == 0.0 && !w.is_subnormal()));
+    }
+
+    #[test]
+    fn drag_acts_on_the_airspeed() {
+        let p = Preset::builtin("racer5").map(|p| p.plant_params());
+        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
+        let mut s = *plant.state();
+        s.pos.z = 10.0;
+        plant.set_state(s);
+        plant.set_wind(Vec3::new(3.0, 0.0, 0.0));
+        // At rest in a 3 m/s wind: pushed downwind at drag·3/m.
+        let a = plant.truth();
+        let d = plant.params().body.drag_linear;
+        let ax = plant.params().body.mass_kg.recip() * d * 3.0;
+        let sf = a.specific_force;
+        assert!((sf.x - ax).abs() < 1e-12, "{sf:?} vs {ax}");
     }
 }

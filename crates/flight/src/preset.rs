@@ -4,6 +4,8 @@
 
 use crate::battery::BatteryParams;
 use crate::error::ConfigError;
+use crate::imu::{ImuConfig, Vibration};
+use crate::math::Vec3;
 use crate::pid::PidConfig;
 use crate::plant::{BodyParams, PlantParams, RotorParams, SUBSTEP_NS_DEFAULT};
 use crate::radio::AutopilotConfig;
@@ -32,6 +34,94 @@ pub struct Preset {
     pub pid: PidConfig,
     /// Autopilot gains.
     pub autopilot: AutopilotConfig,
+    /// The IMU's errors in a disturbed world (`[imu]`; none when omitted).
+    #[serde(default)]
+    pub imu: ImuErrors,
+}
+
+/// What a real IMU on this vehicle adds to the datasheet noise: residual
+/// bias, scale error and the rotors' vibration. Flights use them only in a
+/// disturbed world (a mission's `[world] sensor_errors = true`), so the
+/// calm missions fly the datasheet IMU.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ImuErrors {
+    /// Gyro bias left after the boot calibration, °/s per axis.
+    pub gyro_bias_dps: [f64; 3],
+    /// Accelerometer bias left after trimming, m/s² per axis.
+    pub accel_bias_mps2: [f64; 3],
+    /// Gyro scale error per axis, a fraction.
+    pub gyro_scale_error: [f64; 3],
+    /// Accelerometer scale error per axis, a fraction.
+    pub accel_scale_error: [f64; 3],
+    /// Gyro vibration per rotor and axis at the hover speed, °/s, at the
+    /// rotation frequency and its 2nd and 3rd harmonics.
+    pub gyro_vibration_dps: [f64; 3],
+    /// Accelerometer vibration per rotor and axis at the hover speed, m/s²,
+    /// harmonics 1, 2, 3.
+    pub accel_vibration_mps2: [f64; 3],
+    /// The firmware's accelerometer low-pass cut-off, Hz, applied to the
+    /// vibration only (0: none); see [`Vibration::accel_lpf_hz`].
+    pub accel_lpf_hz: f64,
+}
+
+impl ImuErrors {
+    /// Every field finite; amplitudes ≥ 0; scale errors within ±10 %.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let groups = [
+            ("imu.gyro_bias_dps", self.gyro_bias_dps, -10.0, 10.0),
+            ("imu.accel_bias_mps2", self.accel_bias_mps2, -5.0, 5.0),
+            ("imu.gyro_scale_error", self.gyro_scale_error, -0.1, 0.1),
+            ("imu.accel_scale_error", self.accel_scale_error, -0.1, 0.1),
+            (
+                "imu.gyro_vibration_dps",
+                self.gyro_vibration_dps,
+                0.0,
+                500.0,
+            ),
+            (
+                "imu.accel_vibration_mps2",
+                self.accel_vibration_mps2,
+                0.0,
+                200.0,
+            ),
+            ("imu.accel_lpf_hz", [self.accel_lpf_hz; 3], 0.0, 1000.0),
+        ];
+        for (name, v, lo, hi) in groups {
+            for (i, x) in v.iter().enumerate() {
+                crate::error::in_range(&format!("{name}[{i}]"), *x, lo, hi)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `cfg` with these errors, the vibration's amplitudes given at the
+    /// rotor speed `hover_omega_rad_s`, rotors at `positions_m`.
+    pub fn apply(
+        &self,
+        cfg: ImuConfig,
+        hover_omega_rad_s: f64,
+        positions_m: [[f64; 2]; 4],
+    ) -> ImuConfig {
+        let rad = |d: [f64; 3]| d.map(f64::to_radians);
+        ImuConfig {
+            gyro_bias: cfg.gyro_bias + Vec3::from_array(rad(self.gyro_bias_dps)),
+            accel_bias: cfg.accel_bias + Vec3::from_array(self.accel_bias_mps2),
+            gyro_scale_error: Vec3::from_array(self.gyro_scale_error),
+            accel_scale_error: Vec3::from_array(self.accel_scale_error),
+            vibration: Vibration {
+                gyro_rad_s: rad(self.gyro_vibration_dps),
+                accel_mps2: self.accel_vibration_mps2,
+                ref_omega_rad_s: hover_omega_rad_s,
+                arm_dir: positions_m.map(|[x, y]| {
+                    let r = x.hypot(y).max(1e-9);
+                    [y / r, -x / r]
+                }),
+                accel_lpf_hz: self.accel_lpf_hz,
+            },
+            ..cfg
+        }
+    }
 }
 
 impl Preset {
@@ -48,6 +138,7 @@ impl Preset {
         p.battery.validate()?;
         p.pid.validate()?;
         p.autopilot.validate()?;
+        p.imu.validate()?;
         Ok(p)
     }
 
@@ -66,6 +157,12 @@ impl Preset {
                 format!("unknown built-in preset {name:?} (racer5, aero1kg)"),
             )),
         }
+    }
+
+    /// The rotor speed at which the four rotors carry the weight, rad/s.
+    pub fn hover_omega_rad_s(&self) -> f64 {
+        let pp = self.plant_params();
+        pp.omega_for_cmd(pp.hover_cmd())
     }
 
     /// The plant parameters with the default RK4 sub-step.

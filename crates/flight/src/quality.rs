@@ -99,6 +99,10 @@ pub struct Step {
 pub struct FlightQuality {
     /// The vehicle hit the ground too hard or tipped over.
     pub crashed: bool,
+    /// When it crashed, s: figures judged after it mean nothing.
+    pub crashed_s: Option<f64>,
+    /// The last trace point, s: a step at or after it was not flown.
+    pub end_s: f64,
     /// Over the hover samples, degrees.
     pub attitude_error_deg: ErrorStats,
     /// Over the hover samples, metres.
@@ -106,6 +110,9 @@ pub struct FlightQuality {
     /// Largest horizontal distance from where the first hover window began,
     /// over that window, metres.
     pub drift_m: f64,
+    /// Horizontal distance from where the first hover window began, over
+    /// the hover samples, metres (a disturbance-rejection figure).
+    pub position_error_m: ErrorStats,
     /// Every roll, pitch and heading step of the mission.
     pub steps: Vec<Step>,
     /// Time armed with some motor at 0 or 1 (saturated), s.
@@ -173,6 +180,8 @@ pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
     };
     FlightQuality {
         crashed: trace.iter().any(|p| p.crashed),
+        crashed_s: trace.iter().find(|p| p.crashed).map(secs),
+        end_s: trace.last().map_or(0.0, secs),
         attitude_error_deg: ErrorStats::of(hovering.iter().map(|p| {
             let (er, ep) = (p.euler.roll - p.sp.roll, p.euler.pitch - p.sp.pitch);
             (er * er + ep * ep).sqrt().to_degrees()
@@ -183,6 +192,7 @@ pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
                 .map(|p| p.pos.z - p.alt_target.unwrap_or(p.pos.z)),
         ),
         drift_m: first_window_drift(trace, &hover),
+        position_error_m: position_error(&hovering),
         steps: steps(trace, &changes),
         saturation_s: dt
             * trace
@@ -207,6 +217,17 @@ fn first_window_drift(trace: &[TracePoint], hover: &impl Fn(&TracePoint) -> bool
         drift = drift.max(((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt());
     }
     drift
+}
+
+fn position_error(hovering: &[&TracePoint]) -> ErrorStats {
+    let Some(o) = hovering.first().map(|p| p.pos) else {
+        return ErrorStats::default();
+    };
+    ErrorStats::of(
+        hovering
+            .iter()
+            .map(|p| ((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt()),
+    )
 }
 
 fn angle(axis: Axis, e: &crate::math::Euler) -> f64 {
@@ -256,7 +277,12 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
     out
 }
 
+/// When the vehicle was last disarmed on the ground after flying; never
+/// after a crash (a wreck is not a landing).
 fn landed(trace: &[TracePoint]) -> Option<f64> {
+    if trace.iter().any(|p| p.crashed) {
+        return None;
+    }
     let flew = trace.iter().position(|p| p.armed && !p.on_ground)?;
     trace[flew..]
         .iter()
@@ -267,30 +293,74 @@ fn landed(trace: &[TracePoint]) -> Option<f64> {
 }
 
 impl FlightQuality {
+    /// A step is judged only when it began before any crash (after one,
+    /// its overshoot and settling describe a wreck) and before the flight
+    /// ended (else there is nothing to judge).
+    pub fn judged(&self, s: &Step) -> bool {
+        self.crashed_s.is_none_or(|t| s.at_s < t) && s.at_s < self.end_s
+    }
+
+    /// Why a step is not judged, in words; `None` when it is.
+    pub fn unjudged_why(&self, s: &Step) -> Option<String> {
+        match self.crashed_s {
+            Some(t) if s.at_s >= t => Some("after the crash".to_string()),
+            _ if s.at_s >= self.end_s => Some(format!(
+                "not flown (the flight ended at {:.2} s)",
+                self.end_s
+            )),
+            _ => None,
+        }
+    }
+
     /// What fails `c`, in words; empty when the flight meets it.
     pub fn failures(&self, c: &Criteria) -> Vec<String> {
         let mut out = Vec::new();
-        if self.crashed {
-            out.push("crashed".to_string());
+        match self.crashed_s {
+            Some(t) => out.push(format!("crashed at {t:.2} s")),
+            None if self.crashed => out.push("crashed".to_string()),
+            None => {}
         }
-        if self.hovers && self.attitude_error_deg.count == 0 {
+        let never = self.hovers && self.attitude_error_deg.count == 0;
+        if never {
             out.push("never hovered (no sample to judge)".to_string());
         }
         let a = self.attitude_error_deg.rms;
-        if a >= c.attitude_rms_deg {
+        if !never && a >= c.attitude_rms_deg {
             out.push(format!(
                 "attitude error RMS {a:.2}° ≥ {}°",
                 c.attitude_rms_deg
             ));
         }
         let h = self.altitude_error_m.rms;
-        if h >= c.altitude_rms_m {
+        if !never && h >= c.altitude_rms_m {
             out.push(format!(
                 "altitude error RMS {h:.3} m ≥ {} m",
                 c.altitude_rms_m
             ));
         }
+        if let Some(limit) = c.position_rms_m {
+            let p = self.position_error_m.rms;
+            if !never && p >= limit {
+                out.push(format!("position error RMS {p:.3} m ≥ {limit} m"));
+            }
+        }
+        let mut unjudged: Vec<(String, String)> = Vec::new();
         for s in self.steps.iter().filter(|s| s.axis != Axis::Yaw) {
+            if let Some(why) = self.unjudged_why(s) {
+                match unjudged.iter_mut().find(|(w, _)| *w == why) {
+                    Some((_, at)) => at.push_str(&format!(", {:.1}", s.at_s)),
+                    None => unjudged.push((why, format!("{:.1}", s.at_s))),
+                }
+            }
+        }
+        for (why, at) in unjudged {
+            out.push(format!("steps at {at} s not judged: {why}"));
+        }
+        for s in self
+            .steps
+            .iter()
+            .filter(|s| s.axis != Axis::Yaw && self.judged(s))
+        {
             let (over, settle) = (s.truth.overshoot, s.tracked.settling_s);
             if over >= c.overshoot || settle >= c.settling_s {
                 out.push(format!(
@@ -391,5 +461,41 @@ attitude_rms_deg = 0.5
         assert!((roll.tracked.settling_s - 0.2996).abs() < 0.003, "{roll:?}");
         assert!((roll.truth.rise_s - 0.2197).abs() < 0.003, "{roll:?}");
         assert_eq!(roll.truth.overshoot, 0.0);
+    }
+
+    #[test]
+    fn a_crash_is_reported_and_voids_what_follows_it() {
+        let m = Mission::builtin("steps").unwrap_or_else(|e| panic!("{e}"));
+        // Airborne and level until 3.03 s, then a wreck on the ground,
+        // disarmed, tipped over: never hovered, steps at 6 s and 11 s.
+        let trace: Vec<TracePoint> = (0..7500)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let mut p = point(t, 0.0, 0.0);
+                if t >= 3.03 {
+                    p.crashed = true;
+                    p.on_ground = true;
+                    p.armed = false;
+                    p.euler.roll = 2.0; // upside down: a 715 % "overshoot"
+                    p.est.roll = 2.0;
+                }
+                p
+            })
+            .collect();
+        let q = assess(&trace, &m);
+        assert!(q.crashed);
+        assert!((q.crashed_s.unwrap_or(0.0) - 3.03).abs() < 0.003, "{q:?}");
+        assert_eq!(q.landed_s, None, "a wreck is not a landing");
+        assert!(q.steps.iter().all(|s| !q.judged(s)));
+        let f = q.failures(&Criteria::default());
+        assert_eq!(f[0], "crashed at 3.03 s", "{f:?}");
+        assert!(f.iter().any(|x| x.contains("never hovered")), "{f:?}");
+        assert!(
+            f.iter()
+                .any(|x| x == "steps at 6.0, 11.0 s not judged: after the crash"),
+            "{f:?}"
+        );
+        assert!(!f.iter().any(|x| x.contains("overshoot")), "{f:?}");
+        assert!(!f.iter().any(|x| x.contains("RMS")), "{f:?}");
     }
 }

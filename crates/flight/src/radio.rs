@@ -9,7 +9,9 @@ mod mission;
 
 pub use autopilot::{Autopilot, AutopilotConfig, VehicleState};
 pub use failsafe::{Failsafe, FailsafeAction, FailsafeConfig, FailsafePhase};
-pub use mission::{parse_time, Criteria, Mission, MissionStep, PilotIntent};
+pub use mission::{
+    parse_time, Criteria, Mission, MissionStep, PilotIntent, World, BUILTIN_MISSIONS,
+};
 
 use crate::math::deg;
 use crate::pid::Setpoint;

@@ -32,6 +32,7 @@ use crate::radio::{
     RadioSample, VehicleState,
 };
 use crate::trace::TracePoint;
+use crate::wind::Wind;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamped};
 
 /// What flows between the flight tasks: one register value type for the
@@ -181,6 +182,19 @@ impl BodyKind {
     /// The role a spec names, if any.
     pub fn parse(name: &str) -> Option<BodyKind> {
         BodyKind::ALL.into_iter().find(|r| r.name() == name)
+    }
+
+    /// The roles whose outputs this body takes as inputs: without one of
+    /// them among its task's `reads`, the input is always missing (a PID
+    /// without the radio never arms: zero motor demand).
+    pub fn needs(self) -> &'static [BodyKind] {
+        match self {
+            BodyKind::Ahrs => &[BodyKind::Gyro, BodyKind::Accel],
+            BodyKind::Pid => &[BodyKind::Ahrs, BodyKind::Radio],
+            BodyKind::Pwm => &[BodyKind::Pid],
+            BodyKind::Alert => &[BodyKind::Vbat],
+            _ => &[],
+        }
     }
 
     /// The names a spec may use, for error messages.
@@ -582,7 +596,15 @@ pub struct Cosim {
     pub alerts: Vec<(u64, BatteryAlert)>,
     /// The recorded trajectory, one point every `trace_every_ns`.
     pub trace: Vec<TracePoint>,
+    /// The mission's turbulence, if any, and the next instant it steps at.
+    wind: Option<(Wind, u64)>,
 }
+
+/// The turbulence steps every millisecond (exactly, whatever the step:
+/// [`crate::wind`]) and is held between: its spectrum ends far below 500 Hz.
+const WIND_STEP_NS: u64 = 1_000_000;
+/// Mixed into the seed so the wind's noise is not the IMU's.
+const WIND_SALT: u64 = 0x5749_4E44; // "WIND"
 
 impl Cosim {
     /// The world for tasks of the given kinds (indexed like the spec's tasks).
@@ -594,9 +616,20 @@ impl Cosim {
     ) -> Result<Cosim, ConfigError> {
         let pp = preset.plant_params();
         let hover = pp.hover_cmd();
+        let imu = if mission.world.sensor_errors {
+            preset.imu.apply(
+                cfg.imu,
+                preset.hover_omega_rad_s(),
+                preset.rotors.positions_m,
+            )
+        } else {
+            cfg.imu
+        };
+        let wind = mission.world.dryden()?;
         Ok(Cosim {
             plant: Plant::new(pp)?,
-            imu: Imu::new(cfg.imu, cfg.seed),
+            imu: Imu::new(imu, cfg.seed),
+            wind: wind.map(|d| (Wind::new(&d, cfg.seed ^ WIND_SALT), 0)),
             battery: Battery::new(preset.battery)?,
             autopilot: Autopilot::new(preset.autopilot, hover)?,
             mission,
@@ -658,6 +691,13 @@ impl Cosim {
             }
         }
         self.battery_dt += (t - self.now) as f64 * 1e-9;
+        if let Some((wind, next)) = &mut self.wind {
+            while *next <= t {
+                self.plant.advance_to(*next);
+                self.plant.set_wind(wind.at(*next));
+                *next += WIND_STEP_NS;
+            }
+        }
         self.plant.advance_to(t);
         if self.battery_dt >= 1e-3 {
             self.battery.step(self.plant.shaft_power(), self.battery_dt);
@@ -683,6 +723,12 @@ impl Cosim {
             motors: self.seen.motors.motors,
             voltage: self.battery.voltage(),
         });
+    }
+
+    /// The IMU's vibration follows the rotors (a no-op without vibration).
+    fn tell_rotors(&mut self, t: u64) {
+        let omega = self.plant.state().omega;
+        self.imu.set_rotors(t, self.plant.rotor_angles(), omega);
     }
 
     /// The pilot's radio frame at `t`: the mission's intent flown by the
@@ -750,11 +796,13 @@ impl Environment<Value> for Cosim {
         let t = ns(t);
         self.advance(t);
         let (line, fresh) = match self.kinds.get(task).copied().flatten()? {
-            BodyKind::Gyro => (
-                0,
-                Some(Value::Imu(self.imu.read_gyro(t, self.plant.state().rate))),
-            ),
+            BodyKind::Gyro => {
+                self.tell_rotors(t);
+                let rate = self.plant.state().rate;
+                (0, Some(Value::Imu(self.imu.read_gyro(t, rate))))
+            }
             BodyKind::Accel => {
+                self.tell_rotors(t);
                 let sf = self.plant.truth().specific_force;
                 (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
             }

@@ -15,7 +15,7 @@ use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::preset::{Preset, BUILTIN};
 use rtpipe_flight::quality::{assess, FlightQuality};
-use rtpipe_flight::radio::Mission;
+use rtpipe_flight::radio::{Mission, BUILTIN_MISSIONS};
 use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_joblog::SimResult;
@@ -77,13 +77,13 @@ fn vehicle(v: &str) -> Result<Preset, Diagnostic> {
 
 fn mission(m: &str) -> Result<Mission, Diagnostic> {
     let r = match m {
-        "hover" | "steps" | "paper" => Mission::builtin(m),
+        _ if BUILTIN_MISSIONS.contains(&m) => Mission::builtin(m),
         _ => Mission::from_file(Path::new(m)),
     };
     r.map_err(|e| {
         Diagnostic::error(
             format!("--mission {m}: {e}"),
-            "name a built-in mission (hover, steps, paper) or a mission file",
+            "name a built-in mission (hover, steps, paper, gusty) or a mission file",
         )
     })
 }
@@ -119,7 +119,43 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
             ));
         }
     }
+    check_wiring(spec, path, &kinds)?;
     Ok(kinds)
+}
+
+/// Every body's inputs are wired: a task whose body needs another role's
+/// output reads a task of that role (else that input is always missing and
+/// the vehicle flies on defaults, e.g. zero motor demand).
+fn check_wiring(spec: &Spec, path: &Path, kinds: &[Option<BodyKind>]) -> Result<(), Diagnostic> {
+    for (t, kind) in spec.tasks.iter().zip(kinds) {
+        let Some(kind) = kind else { continue };
+        for &need in kind.needs() {
+            if t.reads.iter().any(|&j| kinds.get(j) == Some(&Some(need))) {
+                continue;
+            }
+            let source = spec
+                .tasks
+                .iter()
+                .zip(kinds)
+                .find(|(_, k)| **k == Some(need))
+                .map_or(String::new(), |(s, _)| s.name.clone());
+            return Err(Diagnostic::error(
+                format!(
+                    "{}: task `{}` (body {}) reads no task with body = \"{}\", so its input from it would always be missing",
+                    path.display(),
+                    t.name,
+                    kind.name(),
+                    need.name()
+                ),
+                if source.is_empty() {
+                    format!("add a task with body = \"{}\" and list it in `{}`'s reads", need.name(), t.name)
+                } else {
+                    format!("add \"{source}\" to the reads of task `{}`", t.name)
+                },
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What to fly: the vehicle (a built-in preset name or a preset file), the
@@ -445,6 +481,27 @@ mod tests {
         // A full one raises none.
         let full = setup_of(&spec, &path, &["--mission", "hover", "--duration", "8s"]);
         assert!(flown(&spec, &full).alerts.is_empty());
+    }
+
+    #[test]
+    fn a_missing_wire_is_refused_with_its_place_and_fix() {
+        let (mut spec, path) = cleanflight();
+        let pid = spec
+            .tasks
+            .iter()
+            .position(|t| t.name == "pid")
+            .unwrap_or_else(|| panic!("no pid task"));
+        let radio = spec.tasks.iter().position(|t| t.name == "radio");
+        spec.tasks[pid].reads.retain(|&j| Some(j) != radio);
+        let e = body_kinds(&spec, &path)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("task `pid` (body pid) reads no task with body = \"radio\"")
+                && e.contains("add \"radio\" to the reads of task `pid`"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -2,6 +2,7 @@
 
 use crate::command::ExecArg;
 use clap::Args;
+use rtpipe_flight::wind::Intensity;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -12,10 +13,20 @@ pub struct FlyArgs {
     /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
     #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
     pub vehicle: String,
-    /// The mission: a built-in one (steps, hover, paper) or a mission file
-    /// (crates/flight/missions/*.toml show the format, `[criteria]` included).
-    #[arg(long, value_name = "FILE|steps|hover|paper", default_value = "steps")]
+    /// The mission: a built-in one (steps, hover, paper, gusty) or a mission
+    /// file (crates/flight/missions/*.toml show the format, `[criteria]` and
+    /// `[world]` included).
+    #[arg(
+        long,
+        value_name = "FILE|steps|hover|paper|gusty",
+        default_value = "steps"
+    )]
     pub mission: String,
+    /// The turbulence (Dryden, MIL-F-8785C intensities) instead of the
+    /// mission's own: none, light (W20 = 15 kn), moderate (30 kn), severe
+    /// (45 kn). The mission's other world settings stay.
+    #[arg(long, value_name = "INTENSITY", value_parser = parse_turbulence)]
+    pub turbulence: Option<Intensity>,
     /// Flight time: "30s", "2500ms", or a number in the spec's time unit
     /// [default: 5 s after the mission's last step].
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
@@ -44,7 +55,8 @@ pub struct FlyArgs {
     #[arg(long, value_name = "LO..HI", value_parser = parse_scale, requires = "sweep")]
     pub scale: Option<(f64, f64)>,
     /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
-    /// altitude_rms_m, overshoot, settling_s [default: the mission's].
+    /// altitude_rms_m, overshoot, settling_s, position_rms_m [default: the
+    /// mission's].
     #[arg(long, value_name = "FILE", requires = "sweep")]
     pub criterion: Option<PathBuf>,
     /// With --sweep: write the spec with the derived chain limits here.
@@ -79,4 +91,11 @@ pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
             "expected two positive factors LO <= HI <= 64, like 0.5..8, found `{s}`"
         )),
     }
+}
+
+/// `--turbulence none|light|moderate|severe`.
+pub fn parse_turbulence(s: &str) -> Result<Intensity, String> {
+    Intensity::parse(s).ok_or_else(|| {
+        format!("expected none, light, moderate or severe (MIL-F-8785C), found `{s}`")
+    })
 }

@@ -26,13 +26,13 @@ fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let text = std::fs::read_to_string(path).map_err(|e| {
         Diagnostic::error(
             format!("--criterion {}: {e}", path.display()),
-            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s",
+            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m",
         )
     })?;
     let c: Criteria = toml::from_str(&text).map_err(|e| {
         Diagnostic::error(
             format!("--criterion {}: {}", path.display(), e.message()),
-            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s (omitted keys keep their defaults)",
+            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m (omitted keys keep their defaults; position is judged only when given)",
         )
     })?;
     c.validate()
@@ -168,17 +168,17 @@ fn point_json(p: &Point) -> PointView<'_> {
 /// The sweep plot: per chain, every scale point and the chain's own delay
 /// points.
 fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<String, String> {
-    let worst = |p: &Point| {
-        p.quality.as_ref().map_or(1.0, |q| {
-            if q.crashed {
-                return 1.0;
-            }
+    use crate::plot::DotOutcome;
+    let outcome = |p: &Point| match &p.quality {
+        None => DotOutcome::NotFlown,
+        Some(q) if q.crashed => DotOutcome::Crashed,
+        Some(q) => DotOutcome::Settling(
             q.steps
                 .iter()
                 .filter(|st| st.axis != rtpipe_flight::quality::Axis::Yaw)
                 .map(|st| st.tracked.settling_s)
-                .fold(0.0, f64::max)
-        })
+                .fold(0.0, f64::max),
+        ),
     };
     let panels = (0..spec.chains.len())
         .map(|k| {
@@ -195,7 +195,7 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
                     Some(crate::plot::SweepDot {
                         reaction_ms: r? as f64 * 1e-6,
                         freshness_ms: f? as f64 * 1e-6,
-                        settling_s: worst(p),
+                        outcome: outcome(p),
                         flies: p.pass(),
                         delay: matches!(p.variation, Variation::Delay { .. }),
                     })

@@ -8,15 +8,26 @@ use super::canvas::*;
 pub type SweepRow = (String, (Option<f64>, Option<f64>), Vec<SweepDot>);
 
 /// One sweep point for [`sweep_chart`]: the chain's predicted sound reaction
-/// (ms), the worst roll/pitch step's tracked settling (s, capped at the
-/// hold), whether the flight met the criterion, and whether the point came
-/// from the delay sweep (else the period-scale sweep).
+/// (ms), what the flight gave, whether it met the criterion, and whether
+/// the point came from the delay sweep (else the period-scale sweep).
 pub struct SweepDot {
     pub reaction_ms: f64,
     pub freshness_ms: f64,
-    pub settling_s: f64,
+    pub outcome: DotOutcome,
     pub flies: bool,
     pub delay: bool,
+}
+
+/// What a sweep point's flight gave: a settling to plot, or why there is
+/// none (drawn apart, never as a settling).
+pub enum DotOutcome {
+    /// Flown: the worst roll/pitch step's tracked settling, s (capped at
+    /// the hold).
+    Settling(f64),
+    /// The vehicle crashed: its step figures mean nothing.
+    Crashed,
+    /// Not flown: the controller cannot be configured at that timing.
+    NotFlown,
 }
 
 /// Flight quality against each chain's predicted reaction (left) and
@@ -103,7 +114,7 @@ where
     Ok(())
 }
 
-/// The sweep's points at (`x_of`, settling capped at 1 s), one series per
+/// The sweep's flown points at (`x_of`, settling capped at 1 s), one series per
 /// sweep (period scale, pure delay) in its own colour, filled where the
 /// vehicle flies and hollow where it fails.
 fn draw_sweep_dots<DB: DrawingBackend>(
@@ -118,22 +129,102 @@ where
         (false, "period scale", MAX),
         (true, "pure delay", PALETTE[4]),
     ] {
-        let pts: Vec<&SweepDot> = dots.iter().filter(|d| d.delay == delay).collect();
+        let pts: Vec<(&SweepDot, f64)> = dots
+            .iter()
+            .filter(|d| d.delay == delay)
+            .filter_map(|d| match d.outcome {
+                DotOutcome::Settling(s) => Some((d, s)),
+                _ => None,
+            })
+            .collect();
         if pts.is_empty() {
             continue;
         }
         chart
-            .draw_series(pts.iter().map(|d| {
+            .draw_series(pts.iter().map(|&(d, s)| {
                 let style = if d.flies {
                     color.filled()
                 } else {
                     color.stroke_width(2)
                 };
-                Circle::new((x_of(d), d.settling_s.min(1.0)), 5, style)
+                Circle::new((x_of(d), s.min(1.0)), 5, style)
             }))
             .map_err(err)?
             .label(format!("{label} (filled: flies)"))
             .legend(move |(x, y)| Circle::new((x + 8, y), 4, color.filled()));
     }
+    draw_unflown(chart, dots, x_of)
+}
+
+/// Crashes (red crosses) and timings the controller cannot be configured
+/// at (grey triangles), along the top edge: no settling to show.
+fn draw_unflown<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    dots: &[SweepDot],
+    x_of: impl Fn(&SweepDot) -> f64,
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let crashed: Vec<f64> = dots
+        .iter()
+        .filter(|d| matches!(d.outcome, DotOutcome::Crashed))
+        .map(&x_of)
+        .collect();
+    if !crashed.is_empty() {
+        chart
+            .draw_series(
+                crashed
+                    .iter()
+                    .map(|&x| Cross::new((x, 1.03), 5, SOUND.stroke_width(2))),
+            )
+            .map_err(err)?
+            .label("crashed (no settling)")
+            .legend(|(x, y)| Cross::new((x + 8, y), 4, SOUND.stroke_width(2)));
+    }
+    let unflown: Vec<f64> = dots
+        .iter()
+        .filter(|d| matches!(d.outcome, DotOutcome::NotFlown))
+        .map(&x_of)
+        .collect();
+    if !unflown.is_empty() {
+        chart
+            .draw_series(
+                unflown
+                    .iter()
+                    .map(|&x| TriangleMarker::new((x, 1.03), 5, GREY.filled())),
+            )
+            .map_err(err)?
+            .label("not flown (configuration error)")
+            .legend(|(x, y)| TriangleMarker::new((x + 8, y), 4, GREY.filled()));
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dot(outcome: DotOutcome) -> SweepDot {
+        SweepDot {
+            reaction_ms: 10.0,
+            freshness_ms: 10.0,
+            outcome,
+            flies: false,
+            delay: false,
+        }
+    }
+
+    #[test]
+    fn crashes_and_configuration_errors_are_not_drawn_as_settling() {
+        let row = |o| ("gyro path".to_string(), (None, None), vec![dot(o)]);
+        let svg = sweep_chart(&[row(DotOutcome::Crashed)], 0.5).unwrap_or_default();
+        assert!(svg.contains("crashed (no settling)"), "{svg}");
+        assert!(!svg.contains("<circle"), "a crash drawn as a flown point");
+        let svg = sweep_chart(&[row(DotOutcome::NotFlown)], 0.5).unwrap_or_default();
+        assert!(svg.contains("not flown (configuration error)"));
+        assert!(!svg.contains("<circle"));
+        let svg = sweep_chart(&[row(DotOutcome::Settling(0.3))], 0.5).unwrap_or_default();
+        assert!(svg.contains("<circle") && !svg.contains("crashed"));
+    }
 }

@@ -1,7 +1,25 @@
 //! How a flight went, for people.
 
 use crate::table::Table;
-use rtpipe_flight::quality::{Criteria, FlightQuality};
+use rtpipe_flight::quality::{Criteria, ErrorStats, FlightQuality};
+use serde::Serialize;
+
+/// An error's RMS and maximum, as `fly --json` and `run --json` both name
+/// them (`attitude_error_deg.rms`): one name for one figure.
+#[derive(Serialize)]
+pub struct RmsMax {
+    pub rms: f64,
+    pub max: f64,
+}
+
+impl From<&ErrorStats> for RmsMax {
+    fn from(e: &ErrorStats) -> Self {
+        RmsMax {
+            rms: e.rms,
+            max: e.max,
+        }
+    }
+}
 
 fn f3(x: f64) -> String {
     format!("{x:.3}")
@@ -10,13 +28,21 @@ fn f3(x: f64) -> String {
 /// The flight's quality against the mission's criteria, as `fly` and `run`
 /// print it: crash and landing, hover errors, step responses, verdict.
 pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> String {
-    let mut out = format!(
-        "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
-        if q.crashed { "CRASHED" } else { "no crash" },
-        q.airborne_s,
-        q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
-    );
-    if q.hovers {
+    let mut out = match q.crashed_s {
+        Some(t) => format!(
+            "flight: CRASHED at {t:.2} s; airborne {:.1} s; what follows the crash is not judged\n",
+            q.airborne_s
+        ),
+        None => format!(
+            "flight: {}; airborne {:.1} s; landed and disarmed at {}\n",
+            if q.crashed { "CRASHED" } else { "no crash" },
+            q.airborne_s,
+            q.landed_s.map_or("never".into(), |t| format!("{t:.2} s"))
+        ),
+    };
+    if q.hovers && q.attitude_error_deg.count == 0 {
+        out.push_str("  hover: never hovered (no sample to judge)\n");
+    } else if q.hovers {
         out.push_str(&format!(
             "  hover: attitude error RMS {:.3}° max {:.3}°; altitude error RMS {:.4} m max {:.4} m; drift {:.3} m; motors saturated {:.2} s\n",
             q.attitude_error_deg.rms,
@@ -26,42 +52,62 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
             q.drift_m,
             q.saturation_s
         ));
+        if c.position_rms_m.is_some() {
+            out.push_str(&format!(
+                "  disturbance rejection: position error RMS {:.3} m max {:.3} m\n",
+                q.position_error_m.rms, q.position_error_m.max
+            ));
+        }
     } else {
         out.push_str("  hover: none to judge (the mission holds no altitude)\n");
     }
     if !q.steps.is_empty() {
-        let mut t = Table::new(&[
-            "step",
-            "at s",
-            "to°",
-            "rise s",
-            "overshoot %",
-            "settling s",
-            "true rise s",
-            "true overshoot %",
-            "true drift° at release",
-        ])
-        .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
-        for st in &q.steps {
-            let (e, r) = (&st.tracked, &st.truth);
-            t.row(vec![
-                st.axis.name().to_string(),
-                format!("{:.1}", st.at_s),
-                format!("{:.0}", st.to_deg),
-                f3(e.rise_s),
-                format!("{:.1}", 100.0 * e.overshoot),
-                f3(e.settling_s),
-                f3(r.rise_s),
-                format!("{:.1}", 100.0 * r.overshoot),
-                format!("{:+.2}", st.drift_deg),
-            ]);
-        }
         out.push_str("  steps (tracked: the AHRS estimate the controller closes its loop on; true: the plant):\n");
-        out.push_str(&t.render());
+        out.push_str(&steps_table(q));
     }
     out.push_str(&match failures {
         [] => format!("  criteria ({}): met\n", c.describe()),
         f => format!("  criteria NOT met: {}\n", f.join("; ")),
     });
     out
+}
+
+/// The step responses; a step after a crash shows no figure.
+fn steps_table(q: &FlightQuality) -> String {
+    let mut t = Table::new(&[
+        "step",
+        "at s",
+        "to°",
+        "rise s",
+        "overshoot %",
+        "settling s",
+        "true rise s",
+        "true overshoot %",
+        "true drift° at release",
+    ])
+    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    for st in &q.steps {
+        let mut row = vec![
+            st.axis.name().to_string(),
+            format!("{:.1}", st.at_s),
+            format!("{:.0}", st.to_deg),
+        ];
+        if let Some(why) = q.unjudged_why(st) {
+            row.extend(std::iter::repeat_n("-".to_string(), 5));
+            row.push(why);
+            t.row(row);
+            continue;
+        }
+        let (e, r) = (&st.tracked, &st.truth);
+        row.extend([
+            f3(e.rise_s),
+            format!("{:.1}", 100.0 * e.overshoot),
+            f3(e.settling_s),
+            f3(r.rise_s),
+            format!("{:.1}", 100.0 * r.overshoot),
+            format!("{:+.2}", st.drift_deg),
+        ]);
+        t.row(row);
+    }
+    t.render()
 }

@@ -24,6 +24,7 @@
 //! to the initial heading), `hold_position`.
 
 use crate::error::{in_range, ConfigError};
+use crate::wind::{Dryden, Intensity};
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -59,6 +60,63 @@ struct MissionFile {
     /// What the flight must meet; omitted fields keep their defaults.
     #[serde(default)]
     criteria: Criteria,
+    /// The world it flies in; calm when omitted.
+    #[serde(default)]
+    world: World,
+}
+
+/// The world a mission flies in (its `[world]` table): turbulence (the
+/// Dryden model, [`crate::wind`]) and the vehicle's IMU errors (its
+/// preset's `[imu]`). The default is the calm world with the datasheet
+/// IMU, which every mission without the table flies.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct World {
+    /// MIL-F-8785C intensity: none, light, moderate, severe.
+    pub turbulence: Intensity,
+    /// The height the turbulence's scales and intensities are taken at, m.
+    pub altitude_m: f64,
+    /// The speed V at which the turbulence passes the vehicle, m/s.
+    pub speed_mps: f64,
+    /// Use the preset's IMU bias, scale error and vibration.
+    pub sensor_errors: bool,
+}
+
+impl Default for World {
+    fn default() -> World {
+        World {
+            turbulence: Intensity::None,
+            altitude_m: 1.0,
+            speed_mps: 5.0,
+            sensor_errors: false,
+        }
+    }
+}
+
+impl World {
+    /// The turbulence model, `None` in calm air.
+    pub fn dryden(&self) -> Result<Option<Dryden>, ConfigError> {
+        let d = Dryden::low_altitude(self.turbulence, self.altitude_m, self.speed_mps)
+            .map_err(|e| ConfigError::new(e.field.replace("wind.", "world."), e.reason))?;
+        Ok((self.turbulence != Intensity::None).then_some(d))
+    }
+
+    /// The world in words (empty for the calm one).
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if self.turbulence != Intensity::None {
+            parts.push(format!(
+                "{} turbulence (Dryden, at {} m, passing at {} m/s)",
+                self.turbulence.name(),
+                self.altitude_m,
+                self.speed_mps
+            ));
+        }
+        if self.sensor_errors {
+            parts.push("IMU bias, scale error and rotor vibration".to_string());
+        }
+        parts.join("; ")
+    }
 }
 
 /// One validated step.
@@ -148,6 +206,8 @@ pub struct Mission {
     pub steps: Vec<MissionStep>,
     /// The tolerances the flight must meet (`[criteria]`, defaults otherwise).
     pub criteria: Criteria,
+    /// The world it flies in (`[world]`, calm otherwise).
+    pub world: World,
 }
 
 /// Parse "2.5s", "250ms", "1500us" or "2" (seconds) into ns.
@@ -205,6 +265,10 @@ pub const HOVER_TOML: &str = include_str!("../../missions/hover.toml");
 pub const STEPS_TOML: &str = include_str!("../../missions/steps.toml");
 /// Built-in `paper` mission source: the paper's synthetic radio input.
 pub const PAPER_TOML: &str = include_str!("../../missions/paper.toml");
+/// Built-in `gusty` mission source: a hover in moderate turbulence.
+pub const GUSTY_TOML: &str = include_str!("../../missions/gusty.toml");
+/// Names of the built-in missions.
+pub const BUILTIN_MISSIONS: [&str; 4] = ["hover", "steps", "paper", "gusty"];
 
 impl Mission {
     /// Parse a mission; errors name the offending field.
@@ -223,11 +287,13 @@ impl Mission {
             steps.push(st);
         }
         f.criteria.validate()?;
+        f.world.dryden()?;
         Ok(Self {
             name: f.name,
             description: f.description,
             steps,
             criteria: f.criteria,
+            world: f.world,
         })
     }
 
@@ -236,15 +302,16 @@ impl Mission {
         Self::from_toml_str(&crate::error::read_file(path)?)
     }
 
-    /// A built-in mission by name (`hover`, `steps`, `paper`).
+    /// A built-in mission by name (`hover`, `steps`, `paper`, `gusty`).
     pub fn builtin(name: &str) -> Result<Self, ConfigError> {
         match name {
             "hover" => Self::from_toml_str(HOVER_TOML),
             "steps" => Self::from_toml_str(STEPS_TOML),
             "paper" => Self::from_toml_str(PAPER_TOML),
+            "gusty" => Self::from_toml_str(GUSTY_TOML),
             _ => Err(ConfigError::new(
                 "mission",
-                format!("unknown built-in mission {name:?} (hover, steps, paper)"),
+                format!("unknown built-in mission {name:?} (hover, steps, paper, gusty)"),
             )),
         }
     }
@@ -277,6 +344,9 @@ pub struct Criteria {
     pub overshoot: f64,
     /// Roll and pitch step settling of the tracked attitude, s.
     pub settling_s: f64,
+    /// Hover horizontal position error RMS, metres (judged only when set:
+    /// a disturbance-rejection criterion).
+    pub position_rms_m: Option<f64>,
 }
 
 impl Default for Criteria {
@@ -288,6 +358,7 @@ impl Default for Criteria {
             altitude_rms_m: 0.1,
             overshoot: 0.2,
             settling_s: 0.5,
+            position_rms_m: None,
         }
     }
 }
@@ -300,6 +371,10 @@ impl Criteria {
             ("criteria.altitude_rms_m", self.altitude_rms_m),
             ("criteria.overshoot", self.overshoot),
             ("criteria.settling_s", self.settling_s),
+            (
+                "criteria.position_rms_m",
+                self.position_rms_m.unwrap_or(1.0),
+            ),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(ConfigError::new(
@@ -313,8 +388,11 @@ impl Criteria {
 
     /// The criteria in words.
     pub fn describe(&self) -> String {
+        let position = self
+            .position_rms_m
+            .map_or(String::new(), |p| format!(", position RMS < {p} m"));
         format!(
-            "no crash, hover attitude RMS < {}°, altitude RMS < {} m, roll/pitch steps: true overshoot < {} %, tracked settling < {} s",
+            "no crash, hover attitude RMS < {}°, altitude RMS < {} m{position}, roll/pitch steps: true overshoot < {} %, tracked settling < {} s",
             self.attitude_rms_deg,
             self.altitude_rms_m,
             100.0 * self.overshoot,
