@@ -1,5 +1,6 @@
 //! Priorities, response times and schedulability tests per CPU.
 
+use crate::edf;
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
 
@@ -22,8 +23,7 @@ pub struct TaskTiming {
     /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
-    /// release (exact RTA under RM; T under EDF, which may deliver the budget
-    /// anywhere in the period). `None` when it does not exist (overload) or the
+    /// release (exact RTA under RM; Spuri's EDF analysis under EDF). `None` when it does not exist (overload) or the
     /// task is background.
     pub response_time: Option<Nanos>,
     /// Worst-case response time of a job of demand x (≤ response_time), the
@@ -214,7 +214,7 @@ fn period_or_max(t: &Task) -> Nanos {
 
 /// Task `i`'s (budget, job) response times: under RM the exact RTA against
 /// the tasks that can run above it; under EDF with constant-bandwidth
-/// servers the period, when its CPU is not overloaded. A background task
+/// servers Spuri's analysis, when its CPU is not overloaded. A background task
 /// has neither: nothing guarantees it the CPU.
 fn response_times(
     spec: &Spec,
@@ -237,17 +237,79 @@ fn response_times(
                 response_time(t.demand(), &hp),
             )
         }
-        ResponseAnalysis::ServerPeriod => {
-            // EDF with constant-bandwidth servers: every server gets its
-            // budget by the end of each period when Σ U ≤ 1, but possibly
-            // at its very end.
-            if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
-                (Some(period_or_max(t)), Some(period_or_max(t)))
-            } else {
-                (None, None)
+        ResponseAnalysis::ServerPeriod => server_period(spec, t),
+        ResponseAnalysis::EdfRta => edf_response_times(spec, i),
+    }
+}
+
+/// EDF with constant-bandwidth servers: every server gets its budget by
+/// the end of each period when Σ U ≤ 1, but possibly at its very end.
+fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
+    if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
+        (Some(period_or_max(t)), Some(period_or_max(t)))
+    } else {
+        (None, None)
+    }
+}
+
+/// The guaranteed tasks of `cpu` as the EDF analysis sees them, and the
+/// place of task `i` among them (when it is one).
+pub fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
+    let cpu = spec.tasks[i].cpu;
+    let mut at = 0;
+    let mut out = Vec::new();
+    for (j, t) in spec.tasks.iter().enumerate() {
+        if t.cpu == cpu && t.server != Server::Background {
+            if j == i {
+                at = out.len();
             }
+            out.push(edf::EdfTask {
+                work: interference(t),
+                period: periods[j],
+            });
         }
     }
+    (out, at)
+}
+
+/// Task `i`'s (budget, job) response times under EDF at the spec's periods.
+fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
+    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
+    edf_response_at(spec, &periods, i)
+}
+
+/// Task `i`'s (budget, job) response times under EDF (Spuri 1996, see
+/// [`edf`]) at the given periods (one per task); `None` when its CPU is
+/// overloaded, and the server period where the busy period holds more than
+/// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
+pub fn edf_response_at(
+    spec: &Spec,
+    periods: &[Nanos],
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>) {
+    let (tasks, at) = edf_tasks(spec, periods, i);
+    let u: f64 = tasks
+        .iter()
+        .map(|t| t.work as f64 / t.period as f64)
+        .sum();
+    if u > 1.0 + UTIL_EPS {
+        return (None, None);
+    }
+    let t = &spec.tasks[i];
+    let Some(l) = edf::busy_period(&tasks, edf::MAX_BUSY_JOBS) else {
+        return (Some(periods[i]), Some(periods[i]));
+    };
+    let job = edf::response_time(&tasks, at, t.demand(), l);
+    // Spuri's demand argument: with Σ I/T ≤ 1 (the busy period exists) a
+    // job of demand x ≤ I meets its deadline, so the bound is within the
+    // period.
+    assert!(
+        job <= periods[i],
+        "EDF response time {job} above the period {}",
+        periods[i]
+    );
+    let budget = edf::response_time(&tasks, at, t.budget(), l);
+    (Some(budget), Some(job))
 }
 
 /// Σ C/T of the guaranteed (not background) tasks on `cpu`.
