@@ -172,7 +172,10 @@ mod tests {
     fn busy_period_and_overload() {
         // (1, 4), (2, 6), (3, 13): L = 6 → 1·2 + 2 + 3 = 7 → 2 + 4 + 3 = 9
         // → 3 + 4 + 3 = 10 → 10.
-        assert_eq!(busy_period(&set(&[(1, 4), (2, 6), (3, 13)]), 1000), Some(10));
+        assert_eq!(
+            busy_period(&set(&[(1, 4), (2, 6), (3, 13)]), 1000),
+            Some(10)
+        );
         // U = 1 exactly: the busy period is the hyperperiod.
         assert_eq!(busy_period(&set(&[(1, 2), (2, 4)]), 1000), Some(4));
         // U > 1: no fixed point, the job bound stops the iteration.

@@ -282,16 +282,9 @@ fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
 /// [`edf`]) at the given periods (one per task); `None` when its CPU is
 /// overloaded, and the server period where the busy period holds more than
 /// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
-pub fn edf_response_at(
-    spec: &Spec,
-    periods: &[Nanos],
-    i: usize,
-) -> (Option<Nanos>, Option<Nanos>) {
+pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nanos>, Option<Nanos>) {
     let (tasks, at) = edf_tasks(spec, periods, i);
-    let u: f64 = tasks
-        .iter()
-        .map(|t| t.work as f64 / t.period as f64)
-        .sum();
+    let u: f64 = tasks.iter().map(|t| t.work as f64 / t.period as f64).sum();
     if u > 1.0 + UTIL_EPS {
         return (None, None);
     }
