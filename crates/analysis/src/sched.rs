@@ -254,7 +254,7 @@ fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
 
 /// The guaranteed tasks of `cpu` as the EDF analysis sees them, and the
 /// place of task `i` among them (when it is one).
-pub fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
+fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
     let cpu = spec.tasks[i].cpu;
     let mut at = 0;
     let mut out = Vec::new();
@@ -284,7 +284,13 @@ fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
 /// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
 pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nanos>, Option<Nanos>) {
     let (tasks, at) = edf_tasks(spec, periods, i);
-    let u: f64 = tasks.iter().map(|t| t.work as f64 / t.period as f64).sum();
+    // The test's utilisation (budgets), as everywhere else (`relax` too); it
+    // bounds the work's (x ≤ C), so below it a busy period exists.
+    let u: f64 = (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
+        .filter(|&j| spec.tasks[j].server != Server::Background)
+        .map(|j| spec.tasks[j].budget() as f64 / periods[j] as f64)
+        .sum();
     if u > 1.0 + UTIL_EPS {
         return (None, None);
     }
