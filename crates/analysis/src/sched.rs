@@ -23,8 +23,8 @@ pub struct TaskTiming {
     /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
-    /// release (exact RTA under RM; Spuri's EDF analysis under EDF). `None` when it does not exist (overload) or the
-    /// task is background.
+    /// release (exact RTA under RM; Spuri's EDF analysis under EDF). `None`
+    /// when it does not exist (overload) or the task is background.
     pub response_time: Option<Nanos>,
     /// Worst-case response time of a job of demand x (≤ response_time), the
     /// figure the latency bounds use.
@@ -214,8 +214,8 @@ fn period_or_max(t: &Task) -> Nanos {
 
 /// Task `i`'s (budget, job) response times: under RM the exact RTA against
 /// the tasks that can run above it; under EDF with constant-bandwidth
-/// servers Spuri's analysis, when its CPU is not overloaded. A background task
-/// has neither: nothing guarantees it the CPU.
+/// servers Spuri's analysis, when its CPU is not overloaded. A background
+/// task has neither: nothing guarantees it the CPU.
 fn response_times(
     spec: &Spec,
     prio: &[Option<usize>],
