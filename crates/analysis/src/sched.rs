@@ -397,6 +397,36 @@ mod tests {
     }
 
     #[test]
+    fn edf_response_times_through_the_descriptor() {
+        // (C, T) = (2, 5), (4, 7) ms (`edf::tests::spuri_by_hand`): RM
+        // gives the second 4 + 2·2 = 8 > 7; EDF's servers give (4, 6). A
+        // budget of 3 for `a` overloads the CPU under EDF.
+        let src = |sched: &str, c1: &str| {
+            format!(
+                "[system]\nname = \"e\"\nscheduler = \"{sched}\"\n\
+                 [tasks.a]\nexec = 2\nperiod = 5\nbudget = {c1}\n\
+                 [tasks.b]\nexec = 4\nperiod = 7\n"
+            )
+        };
+        let r = |sched: &str, c1: &str| -> Vec<Option<Nanos>> {
+            let spec = match Spec::parse("e.toml", &src(sched, c1)) {
+                Ok(s) => s,
+                Err(e) => panic!("{e}"),
+            };
+            analyze(&spec)
+                .0
+                .iter()
+                .map(|t| t.job_response_time)
+                .collect()
+        };
+        let ms = |x: Nanos| Some(x * 1_000_000);
+        assert_eq!(r("rm", "2"), vec![ms(2), ms(8)]);
+        assert_eq!(r("edf", "2"), vec![ms(4), ms(6)]);
+        // U = 3/5 + 4/7 > 1: overloaded, no response time.
+        assert_eq!(r("edf", "3"), vec![None, None]);
+    }
+
+    #[test]
     fn rta_diverges_when_overloaded() {
         assert_eq!(response_time(1, &[(2, 4), (2, 4)]), None);
     }
