@@ -12,6 +12,7 @@ use proptest::prelude::*;
 use rtpipe_analysis::analyze;
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
+use rtpipe_testkit::check;
 
 const MS: Nanos = 1_000_000;
 
@@ -66,38 +67,61 @@ fn worst_responses(spec: &Spec, offsets: &[i64], exec: ExecModel, seed: u64) -> 
 }
 
 fn params() -> impl Strategy<Value = Params> {
+    let periods = vec![2i64, 3, 4, 5, 6, 8, 10, 12, 24];
     (
         1i64..=4,
         0i64..=2,
-        prop::sample::select(vec![2i64, 3, 4, 5, 6, 8, 10, 12, 24]),
+        prop::sample::select(periods),
         any::<bool>(),
     )
-        .prop_map(|(x, e, t, s)| (x.min(t), e, t, s))
+        // At most a third of the period: fewer overloaded systems to skip.
+        .prop_map(|(x, e, t, s)| (x.min(t / 3).max(1), e, t, s))
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 3000, ..ProptestConfig::default() })]
-
-    /// No job of any phasing or demand model exceeds its task's job
-    /// response time.
-    #[test]
-    fn no_job_exceeds_the_edf_response_time(
-        tasks in prop::collection::vec(params(), 2..=5),
-        offsets in prop::collection::vec(0i64..24, 5),
-        uniform in any::<bool>(),
-        seed in any::<u64>(),
-    ) {
-        let Some(spec) = spec_of(&tasks) else { return Ok(()) };
-        let report = analyze(&spec);
-        let offs: Vec<i64> = (0..tasks.len()).map(|k| offsets[k] % tasks[k].2).collect();
-        let exec = if uniform { ExecModel::Uniform } else { ExecModel::Worst };
-        let seen = worst_responses(&spec, &offs, exec, seed);
-        for (k, t) in report.timing.iter().enumerate() {
-            let r = t.job_response_time.unwrap_or(0);
-            prop_assert!(r <= t.period, "task {k}: R {r} above T");
-            prop_assert!(seen[k] <= r, "task {k}: observed {} > bound {r}, offsets {offs:?}", seen[k]);
-        }
-    }
+/// No job of any phasing or demand model exceeds its task's job response
+/// time, and that is within the period.
+#[test]
+fn no_job_exceeds_the_edf_response_time() {
+    let strategy = (
+        prop::collection::vec(params(), 2..=5),
+        prop::collection::vec(0i64..24, 5),
+        any::<bool>(),
+        any::<u64>(),
+    );
+    check(
+        "no_job_exceeds_the_edf_response_time",
+        10_000,
+        strategy,
+        |(tasks, offsets, uniform, seed)| {
+            let Some(spec) = spec_of(&tasks) else {
+                return Ok("overloaded");
+            };
+            let report = analyze(&spec);
+            let offs: Vec<i64> = (0..tasks.len()).map(|k| offsets[k] % tasks[k].2).collect();
+            let exec = if uniform {
+                ExecModel::Uniform
+            } else {
+                ExecModel::Worst
+            };
+            let seen = worst_responses(&spec, &offs, exec, seed);
+            let mut reached = false;
+            for (k, t) in report.timing.iter().enumerate() {
+                let r = t.job_response_time.unwrap_or(0);
+                prop_assert!(r <= t.period, "task {k}: R {r} above T");
+                prop_assert!(
+                    seen[k] <= r,
+                    "task {k}: observed {} > bound {r}, offsets {offs:?}",
+                    seen[k]
+                );
+                reached |= seen[k] == r;
+            }
+            Ok(if reached {
+                "checked, some task at its bound"
+            } else {
+                "checked"
+            })
+        },
+    );
 }
 
 /// Spuri's critical pattern: the analysed task declared last (it loses
