@@ -5,6 +5,8 @@
 //!
 //! - [`sched`]: rate-monotonic priorities, exact response-time analysis,
 //!   Liu–Layland, hyperbolic and EDF utilisation tests, per CPU.
+//! - [`edf`]: response times under EDF (Spuri 1996) for the reservations
+//!   of a CPU.
 //! - [`latency`]: reaction and freshness bounds of a chain, in `paper` mode
 //!   (Eqs. 1–14 as published) and `sound` mode (interference-aware, never
 //!   exceeded by any execution of the model; see docs/analysis.md).
@@ -15,6 +17,7 @@
 #![deny(missing_docs)]
 
 pub mod disturbance;
+pub mod edf;
 pub mod latency;
 pub mod offsets;
 pub mod paths;

@@ -212,11 +212,42 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec
             // Servers get their budget by the end of each period (`sched`).
             ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
             ResponseAnalysis::ServerPeriod => (None, None),
+            ResponseAnalysis::EdfRta if util_ok(t.cpu) => edf_lower_bounds(spec, lo, hi, i),
+            ResponseAnalysis::EdfRta => (None, None),
         };
         budget_response[i] = rb.filter(|&r| r <= hi[i]);
         job_response[i] = rj.filter(|&r| r <= hi[i]);
     }
     (job_response, budget_response)
+}
+
+/// Lower bounds on task `i`'s (budget, job) EDF response times over the
+/// box: the analysis itself when the box fixes every period of i's CPU;
+/// otherwise Spuri's bound at `a = 0`, which holds the job's own demand and
+/// one job of every task whose deadline is never after i's (`T_j ≤ T_i`),
+/// a figure that only grows as the box shrinks. docs/analysis.md.
+fn edf_lower_bounds(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>) {
+    let t = &spec.tasks[i];
+    let mates: Vec<usize> = (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
+        .collect();
+    if mates.iter().all(|&j| lo[j] == hi[j]) {
+        return crate::sched::edf_response_at(spec, lo, i);
+    }
+    let before: Nanos = mates
+        .iter()
+        .filter(|&&j| j != i && hi[j] <= lo[i])
+        .map(|&j| interference(&spec.tasks[j]))
+        .sum();
+    (
+        Some(t.budget().max(1) + before),
+        Some(t.demand().max(1) + before),
+    )
 }
 
 /// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`
@@ -370,10 +401,11 @@ fn chain_forms(
     path: &[usize],
 ) -> Option<(Affine, Affine)> {
     let tail = path[path.len() - 1];
-    // The tail's response time: R_lb under RM, T under EDF.
+    // The tail's response time: its lower bound, or T where a response
+    // time is the server period.
     let own = |i: usize| match spec.policy().response {
         ResponseAnalysis::ServerPeriod => vec![(i, 1.0)],
-        ResponseAnalysis::Rta => Vec::new(),
+        ResponseAnalysis::Rta | ResponseAnalysis::EdfRta => Vec::new(),
     };
     let mut e = Affine {
         base: r[tail]? as f64,
@@ -388,11 +420,11 @@ fn chain_forms(
         let (pi, ci) = (w[0], w[1]);
         let last = k + 2 == path.len();
         let orders = order.link_orders(pi, ci);
-        // Under EDF a response time is the period itself (`sched`), so it
-        // moves with the corner; under RM it stays at its lower bound.
+        // Where a response time is the period itself it moves with the
+        // corner; otherwise it stays at its lower bound.
         let resp = |i: usize, t: Nanos| match spec.policy().response {
             ResponseAnalysis::ServerPeriod => r[i].map(|_| t),
-            ResponseAnalysis::Rta => r[i],
+            ResponseAnalysis::Rta | ResponseAnalysis::EdfRta => r[i],
         };
         let at = |tp: Nanos, tc: Nanos| {
             let p = link_task(spec, tp, resp(pi, tp), pi);

@@ -1,5 +1,6 @@
 //! Priorities, response times and schedulability tests per CPU.
 
+use crate::edf;
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
 
@@ -22,9 +23,8 @@ pub struct TaskTiming {
     /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
-    /// release (exact RTA under RM; T under EDF, which may deliver the budget
-    /// anywhere in the period). `None` when it does not exist (overload) or the
-    /// task is background.
+    /// release (exact RTA under RM; Spuri's EDF analysis under EDF). `None`
+    /// when it does not exist (overload) or the task is background.
     pub response_time: Option<Nanos>,
     /// Worst-case response time of a job of demand x (≤ response_time), the
     /// figure the latency bounds use.
@@ -214,8 +214,8 @@ fn period_or_max(t: &Task) -> Nanos {
 
 /// Task `i`'s (budget, job) response times: under RM the exact RTA against
 /// the tasks that can run above it; under EDF with constant-bandwidth
-/// servers the period, when its CPU is not overloaded. A background task
-/// has neither: nothing guarantees it the CPU.
+/// servers Spuri's analysis, when its CPU is not overloaded. A background
+/// task has neither: nothing guarantees it the CPU.
 fn response_times(
     spec: &Spec,
     prio: &[Option<usize>],
@@ -237,17 +237,78 @@ fn response_times(
                 response_time(t.demand(), &hp),
             )
         }
-        ResponseAnalysis::ServerPeriod => {
-            // EDF with constant-bandwidth servers: every server gets its
-            // budget by the end of each period when Σ U ≤ 1, but possibly
-            // at its very end.
-            if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
-                (Some(period_or_max(t)), Some(period_or_max(t)))
-            } else {
-                (None, None)
+        ResponseAnalysis::ServerPeriod => server_period(spec, t),
+        ResponseAnalysis::EdfRta => edf_response_times(spec, i),
+    }
+}
+
+/// EDF with constant-bandwidth servers: every server gets its budget by
+/// the end of each period when Σ U ≤ 1, but possibly at its very end.
+fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
+    if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
+        (Some(period_or_max(t)), Some(period_or_max(t)))
+    } else {
+        (None, None)
+    }
+}
+
+/// The guaranteed tasks of `cpu` as the EDF analysis sees them, and the
+/// place of task `i` among them (when it is one).
+fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
+    let cpu = spec.tasks[i].cpu;
+    let mut at = 0;
+    let mut out = Vec::new();
+    for (j, t) in spec.tasks.iter().enumerate() {
+        if t.cpu == cpu && t.server != Server::Background {
+            if j == i {
+                at = out.len();
             }
+            out.push(edf::EdfTask {
+                work: interference(t),
+                period: periods[j],
+            });
         }
     }
+    (out, at)
+}
+
+/// Task `i`'s (budget, job) response times under EDF at the spec's periods.
+fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
+    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
+    edf_response_at(spec, &periods, i)
+}
+
+/// Task `i`'s (budget, job) response times under EDF (Spuri 1996, see
+/// [`edf`]) at the given periods (one per task); `None` when its CPU is
+/// overloaded, and the server period where the busy period holds more than
+/// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
+pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nanos>, Option<Nanos>) {
+    let (tasks, at) = edf_tasks(spec, periods, i);
+    // The test's utilisation (budgets), as everywhere else (`relax` too); it
+    // bounds the work's (x ≤ C), so below it a busy period exists.
+    let u: f64 = (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
+        .filter(|&j| spec.tasks[j].server != Server::Background)
+        .map(|j| spec.tasks[j].budget() as f64 / periods[j] as f64)
+        .sum();
+    if u > 1.0 + UTIL_EPS {
+        return (None, None);
+    }
+    let t = &spec.tasks[i];
+    let Some(l) = edf::busy_period(&tasks, edf::MAX_BUSY_JOBS) else {
+        return (Some(periods[i]), Some(periods[i]));
+    };
+    let job = edf::response_time(&tasks, at, t.demand(), l);
+    // Spuri's demand argument: with Σ I/T ≤ 1 (the busy period exists) a
+    // job of demand x ≤ I meets its deadline, so the bound is within the
+    // period.
+    assert!(
+        job <= periods[i],
+        "EDF response time {job} above the period {}",
+        periods[i]
+    );
+    let budget = edf::response_time(&tasks, at, t.budget(), l);
+    (Some(budget), Some(job))
 }
 
 /// Σ C/T of the guaranteed (not background) tasks on `cpu`.
@@ -333,6 +394,36 @@ mod tests {
         assert_eq!(t[1].job_response_time, Some(4_000_000));
         assert_eq!(t[2].job_response_time, Some(4_000_000));
         assert_eq!((t[2].priority, t[2].top_priority), (Some(3), Some(2)));
+    }
+
+    #[test]
+    fn edf_response_times_through_the_descriptor() {
+        // (C, T) = (2, 5), (4, 7) ms (`edf::tests::spuri_by_hand`): RM
+        // gives the second 4 + 2·2 = 8 > 7; EDF's servers give (4, 6). A
+        // budget of 3 for `a` overloads the CPU under EDF.
+        let src = |sched: &str, c1: &str| {
+            format!(
+                "[system]\nname = \"e\"\nscheduler = \"{sched}\"\n\
+                 [tasks.a]\nexec = 2\nperiod = 5\nbudget = {c1}\n\
+                 [tasks.b]\nexec = 4\nperiod = 7\n"
+            )
+        };
+        let r = |sched: &str, c1: &str| -> Vec<Option<Nanos>> {
+            let spec = match Spec::parse("e.toml", &src(sched, c1)) {
+                Ok(s) => s,
+                Err(e) => panic!("{e}"),
+            };
+            analyze(&spec)
+                .0
+                .iter()
+                .map(|t| t.job_response_time)
+                .collect()
+        };
+        let ms = |x: Nanos| Some(x * 1_000_000);
+        assert_eq!(r("rm", "2"), vec![ms(2), ms(8)]);
+        assert_eq!(r("edf", "2"), vec![ms(4), ms(6)]);
+        // U = 3/5 + 4/7 > 1: overloaded, no response time.
+        assert_eq!(r("edf", "3"), vec![None, None]);
     }
 
     #[test]

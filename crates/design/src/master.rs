@@ -178,9 +178,10 @@ impl<'a> Master<'a> {
 
     /// Sound mode: job response-time variables of the chain tasks with
     /// their lower bounds, every chain task finishing within its period
-    /// (T ≥ R), and the recurrence R_i ≥ W_i(R_i) with a binary per job of
-    /// each higher-priority task (docs/design.md); not when the response
-    /// times are pinned.
+    /// (T ≥ R), and under fixed priority the recurrence R_i ≥ W_i(R_i) with
+    /// a binary per job of each higher-priority task (docs/design.md); not
+    /// when the response times are pinned. Under EDF the lower bounds and
+    /// the cuts learnt from candidates are all there is (a relaxation).
     fn add_responses(&mut self, groups: &[Group], sm: &SoundModel, p: &Problem, levels: &Levels) {
         let n = self.spec.tasks.len();
         for i in (0..n).filter(|&i| p.on_chain[i]) {
@@ -197,7 +198,8 @@ impl<'a> Master<'a> {
         if sm.fixed.is_some() {
             return;
         }
-        for i in (0..n).filter(|&i| p.on_chain[i]) {
+        let recurrence = self.spec.policy().response == ResponseAnalysis::Rta;
+        for i in (0..n).filter(|&i| p.on_chain[i] && recurrence) {
             let Some(r) = self.rvar[i] else { continue };
             let rmax = rmax_of(self, groups, i);
             let own = grid_units(self.spec.tasks[i].demand(), self.g);
@@ -274,8 +276,10 @@ pub(crate) fn build<'a>(
     if p.spec.schedulability == SchedTest::Rta {
         m.add_rta(groups, &learnt.levels, &learnt.rta_cuts);
     }
-    let rta = p.spec.policy().response == ResponseAnalysis::Rta;
-    if let Some(sm) = sound.filter(|_| rta) {
+    // Response-time variables wherever the analysis computes response
+    // times (not where a response time is the server period).
+    let rvars = p.spec.policy().response != ResponseAnalysis::ServerPeriod;
+    if let Some(sm) = sound.filter(|_| rvars) {
         m.add_responses(groups, sm, p, &learnt.levels);
     }
     m.add_limits(groups, sound);

@@ -90,6 +90,20 @@ impl<'a> Master<'a> {
         Some(b)
     }
 
+    /// A binary b with b = 1 ⇒ T_j ≤ tj − 1 ("the period of j shrank below
+    /// its value in a cut"); `None` when it cannot shrink.
+    pub(crate) fn shrank(&mut self, j: usize, tj: i64) -> Option<usize> {
+        if matches!(self.dom[j], Dom::Fixed(_)) || self.dom[j].min() >= tj {
+            return None;
+        }
+        let b = self.lp.binary();
+        let p = self.period[j].clone();
+        let mut t = p.terms.clone();
+        t.push((b, self.big_m));
+        self.lp.row(t, Cmp::Le, (tj - 1) as f64 - p.c + self.big_m);
+        Some(b)
+    }
+
     /// RM priority: a ≻ b.
     pub(crate) fn above(&mut self, a: usize, b: usize) -> Bin {
         self.lt(a, b, a < b)

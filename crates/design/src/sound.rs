@@ -24,24 +24,35 @@ pub(crate) struct SoundModel {
 }
 
 /// R_i ≥ r unless some higher-priority task's period grew past its value
-/// then, or left the higher-priority set (RTA is monotone in both).
+/// then, or left the higher-priority set (RTA is monotone in both). Under
+/// EDF `hp` is empty, `periods` holds every other task of i's CPU (Spuri's
+/// bound never grows with another task's period: fewer jobs, later
+/// deadlines, a shorter busy period) and `own` i's period, which moves the
+/// bound either way: the cut holds only while it is unchanged.
 #[derive(Debug, Clone)]
 pub(crate) struct RCut {
     pub(crate) i: usize,
     pub(crate) r: f64,
     pub(crate) hp: Vec<usize>,
     pub(crate) periods: Vec<(usize, i64)>,
+    pub(crate) own: Option<i64>,
 }
 
 /// Lower bounds on job response times that hold for every choice of
 /// periods: own demand plus one job of each task that has higher priority
-/// whatever the periods.
+/// whatever the periods (under EDF: whose period is never above i's, so
+/// whose first deadline never comes after i's; `analysis::relax` uses the
+/// same bound).
 pub(crate) fn rhat_lower(p: &Problem) -> Vec<f64> {
     let spec = p.spec;
     let n = spec.tasks.len();
     (0..n)
         .map(|i| {
+            let fp = spec.policy().fixed_priority();
             let mut r = spec.tasks[i].demand();
+            if !fp {
+                r = r.max(1);
+            }
             for j in 0..n {
                 if j == i
                     || spec.tasks[j].cpu != spec.tasks[i].cpu
@@ -51,7 +62,11 @@ pub(crate) fn rhat_lower(p: &Problem) -> Vec<f64> {
                 }
                 let (di, dj) = (&p.dom[i], &p.dom[j]);
                 let always_above = dj.max() < di.min() || (j < i && dj.max() <= di.min());
-                if always_above && spec.policy().fixed_priority() {
+                let counts = match fp {
+                    true => always_above,
+                    false => dj.max() <= di.min(),
+                };
+                if counts {
                     r += interference(&spec.tasks[j]);
                 }
             }
@@ -95,21 +110,52 @@ pub(crate) fn learn_r_cuts(
         };
         let tr = grid_units(tr, g);
         if tr > mv + 1e-6 {
-            let hp = rtpipe_analysis::sched::interferers(cand, &prio, &top, i);
-            let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
-            sm.cuts.push(RCut {
-                i,
-                r: tr,
-                hp,
-                periods,
-            });
+            sm.cuts.push(r_cut(g, cand, &prio, &top, periods, i, tr));
             learnt = true;
         }
     }
     learnt
 }
 
-/// R_i ≥ r − M·(Σ [hp period grew] + Σ [left the hp set]).
+/// The cut of task i's analysed response time `r` at the candidate's
+/// periods (see [`RCut`]).
+fn r_cut(
+    g: i64,
+    cand: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    periods: &[Nanos],
+    i: usize,
+    r: f64,
+) -> RCut {
+    if cand.policy().fixed_priority() {
+        let hp = rtpipe_analysis::sched::interferers(cand, prio, top, i);
+        let periods = hp.iter().map(|&j| (j, periods[j] / g)).collect();
+        return RCut {
+            i,
+            r,
+            hp,
+            periods,
+            own: None,
+        };
+    }
+    let t = &cand.tasks[i];
+    let own = Some(periods[i] / g);
+    let periods = (0..cand.tasks.len())
+        .filter(|&j| j != i && cand.tasks[j].cpu == t.cpu)
+        .filter(|&j| cand.tasks[j].server != Server::Background)
+        .map(|j| (j, periods[j] / g))
+        .collect();
+    RCut {
+        i,
+        r,
+        hp: Vec::new(),
+        periods,
+        own,
+    }
+}
+
+/// R_i ≥ r − M·(Σ [hp period grew] + Σ [left the hp set] + [T_i moved]).
 pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
     let Some(rv) = m.rvar[cut.i] else { return };
     let big = m.big_m;
@@ -119,6 +165,10 @@ pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
         if let Some(b) = m.grew(j, tj) {
             terms.push((b, big));
         }
+    }
+    if let Some(ti) = cut.own {
+        let moved = [m.grew(cut.i, ti), m.shrank(cut.i, ti)];
+        terms.extend(moved.into_iter().flatten().map(|b| (b, big)));
     }
     for &j in &cut.hp {
         match m.above(j, cut.i) {
@@ -180,11 +230,11 @@ pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
     vec![e, f]
 }
 
-/// The job response time of task i: its variable under RM, its period
-/// under EDF (and where it has none).
+/// The job response time of task i: its variable, or its period where a
+/// response time is the server period (and where it has none).
 fn response(m: &Master, i: usize) -> Lin {
     match m.rvar[i] {
-        Some(v) if m.spec.policy().response == ResponseAnalysis::Rta => Lin {
+        Some(v) if m.spec.policy().response != ResponseAnalysis::ServerPeriod => Lin {
             terms: vec![(v, 1.0)],
             c: 0.0,
         },

@@ -101,6 +101,10 @@ pub enum ResponseAnalysis {
     /// The server period: a reservation delivers its budget by the end of
     /// each period when its CPU is not overloaded, possibly at the very end.
     ServerPeriod,
+    /// EDF response-time analysis (Spuri 1996) over the reservations of a
+    /// CPU, each with deadline = period; the server period where the busy
+    /// period is too long to analyse.
+    EdfRta,
 }
 
 /// The Linux scheduling class that runs a policy on real threads.
@@ -150,7 +154,7 @@ const EDF: SchedPolicy = SchedPolicy {
     preemption: Preemption::EarliestDeadline,
     main_budget: Budget::Cbs,
     io_budget: Budget::Cbs,
-    response: ResponseAnalysis::ServerPeriod,
+    response: ResponseAnalysis::EdfRta,
     tests: &[SchedTest::Edf],
     tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test)",
     linux: LinuxClass::Deadline,

@@ -1,0 +1,166 @@
+//! EDF response times (Spuri 1996, `rtpipe_analysis::edf`) against the
+//! simulator's reservations: no job of any phasing or demand responds later
+//! than the analysis says, and Spuri's critical pattern (every other task
+//! released at 0, the analysed one at some offset) reaches the bound.
+//!
+//! Systems are small and on a 1 ms grid (periods 2–24 ms, one CPU, servers
+//! or plain tasks, budgets at or above the demands), so a few hyperperiods
+//! are cheap to simulate and the grid of offsets holds every candidate
+//! instant of the analysis.
+
+use proptest::prelude::*;
+use rtpipe_analysis::analyze;
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
+use rtpipe_testkit::check;
+
+const MS: Nanos = 1_000_000;
+
+/// One task: (demand ms, extra budget ms, period ms, on a server).
+type Params = (i64, i64, i64, bool);
+
+/// The spec of `tasks` under EDF, one CPU; `last` is declared last (it
+/// loses every tie of deadlines, as the analysis assumes it may).
+fn spec_of(tasks: &[Params]) -> Option<Spec> {
+    let mut src = String::from("[system]\nname = \"edf\"\nscheduler = \"edf\"\n");
+    let mut u = 0.0;
+    for (k, &(x, extra, t, server)) in tasks.iter().enumerate() {
+        let c = x + if server { extra } else { 0 };
+        u += c as f64 / t as f64;
+        let srv = if server { "main" } else { "none" };
+        src += &format!("[tasks.t{k}]\nexec = \"{x}ms\"\nperiod = \"{t}ms\"\nserver = \"{srv}\"\n");
+        if server {
+            src += &format!("budget = \"{c}ms\"\n");
+        }
+    }
+    if u > 1.0 {
+        return None;
+    }
+    Spec::parse("edf.toml", &src).ok()
+}
+
+fn lcm(a: i64, b: i64) -> i64 {
+    a / rtpipe_model::gcd(a, b) * b
+}
+
+/// Every job's worst response per task, from a run of `offsets` (ms) over
+/// three hyperperiods past the last offset.
+fn worst_responses(spec: &Spec, offsets: &[i64], exec: ExecModel, seed: u64) -> Vec<Nanos> {
+    let h = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .fold(1, lcm);
+    let last = offsets.iter().copied().max().unwrap_or(0) * MS;
+    let cfg = SimConfig {
+        horizon: last + 3 * h,
+        seed,
+        phasing: Phasing::Given(offsets.iter().map(|o| o * MS).collect()),
+        exec,
+        log_jobs: false,
+    };
+    let r = simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+    r.tasks
+        .iter()
+        .map(|t| t.max_response.unwrap_or(0))
+        .collect()
+}
+
+fn params() -> impl Strategy<Value = Params> {
+    let periods = vec![2i64, 3, 4, 5, 6, 8, 10, 12, 24];
+    (
+        1i64..=4,
+        0i64..=2,
+        prop::sample::select(periods),
+        any::<bool>(),
+    )
+        // At most a third of the period: fewer overloaded systems to skip.
+        .prop_map(|(x, e, t, s)| (x.min(t / 3).max(1), e, t, s))
+}
+
+/// No job of any phasing or demand model exceeds its task's job response
+/// time, and that is within the period.
+#[test]
+fn no_job_exceeds_the_edf_response_time() {
+    let strategy = (
+        prop::collection::vec(params(), 2..=5),
+        prop::collection::vec(0i64..24, 5),
+        any::<bool>(),
+        any::<u64>(),
+    );
+    check(
+        "no_job_exceeds_the_edf_response_time",
+        10_000,
+        strategy,
+        |(tasks, offsets, uniform, seed)| {
+            let Some(spec) = spec_of(&tasks) else {
+                return Ok("overloaded");
+            };
+            let report = analyze(&spec);
+            let offs: Vec<i64> = (0..tasks.len()).map(|k| offsets[k] % tasks[k].2).collect();
+            let exec = if uniform {
+                ExecModel::Uniform
+            } else {
+                ExecModel::Worst
+            };
+            let seen = worst_responses(&spec, &offs, exec, seed);
+            let mut reached = false;
+            for (k, t) in report.timing.iter().enumerate() {
+                let r = t.job_response_time.unwrap_or(0);
+                prop_assert!(r <= t.period, "task {k}: R {r} above T");
+                prop_assert!(
+                    seen[k] <= r,
+                    "task {k}: observed {} > bound {r}, offsets {offs:?}",
+                    seen[k]
+                );
+                reached |= seen[k] == r;
+            }
+            Ok(if reached {
+                "checked, some task at its bound"
+            } else {
+                "checked"
+            })
+        },
+    );
+}
+
+/// Spuri's critical pattern: the analysed task declared last (it loses
+/// every tie), every other task released at 0 with its worst demand, the
+/// analysed one at every offset on the grid. The worst response found is
+/// the bound on almost every system, and never above it.
+#[test]
+fn the_critical_pattern_reaches_the_bound() {
+    let mut rng = rtpipe_model::gen::Rng::new(2026);
+    let periods = [2i64, 3, 4, 5, 6, 8, 10, 12, 24];
+    let (mut systems, mut reached) = (0, 0);
+    while systems < 400 {
+        let n = rng.range(2, 4) as usize;
+        let tasks: Vec<Params> = (0..n)
+            .map(|_| {
+                let t = periods[rng.range(0, periods.len() as u64 - 1) as usize];
+                let x = (rng.range(1, 4) as i64).min(t);
+                (x, 0, t, rng.chance(0.5))
+            })
+            .collect();
+        let Some(spec) = spec_of(&tasks) else {
+            continue;
+        };
+        systems += 1;
+        let report = analyze(&spec);
+        let last = n - 1;
+        let bound = report.timing[last].job_response_time.unwrap_or(0);
+        let mut worst = 0;
+        for phi in 0..tasks[last].2 {
+            let mut offs = vec![0; n];
+            offs[last] = phi;
+            worst = worst.max(worst_responses(&spec, &offs, ExecModel::Worst, 1)[last]);
+        }
+        assert!(worst <= bound, "{tasks:?}: {worst} > {bound}");
+        reached += usize::from(worst == bound);
+    }
+    println!("critical pattern: bound reached on {reached} of {systems} systems");
+    assert!(
+        reached * 10 >= systems * 9,
+        "reached on {reached} of {systems}"
+    );
+}
