@@ -33,8 +33,11 @@ pub struct LinkTask {
     pub delta_out: Nanos,
     /// Paper Eq. 1.
     pub l: Nanos,
-    /// Job response time, when it is at most the period.
+    /// Job response time from the nominal release (release jitter
+    /// included), when it is at most the period.
     pub r: Option<Nanos>,
+    /// Release jitter J: a job is released in [nominal, nominal + J].
+    pub j: Nanos,
     /// The CPU it runs on.
     pub cpu: u32,
     /// Own RM rank (the lowest priority the task runs at).
@@ -55,6 +58,7 @@ impl LinkTask {
             delta_out: spec.tasks[i].delta_out,
             l: eq1_single_pipe(tm.demand, tm.budget, tm.period),
             r: tm.bounded_response(),
+            j: tm.jitter,
             cpu: tm.cpu,
             prio: tm.priority,
             top: tm.top_priority,
@@ -162,8 +166,9 @@ pub fn sound_reaction_link_in(
         Some(Case::One) => l = l.min(rp + c.t - c.x_min),
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
-        // (Dürr et al. 2019).
-        Some(Case::Two) => l = l.min(c.t),
+        // (Dürr et al. 2019). J_k is released up to J_p after its nominal
+        // release, where the term starts.
+        Some(Case::Two) => l = l.min(c.t + p.j),
         None => {}
     }
     if p_distinct {
@@ -171,8 +176,9 @@ pub fn sound_reaction_link_in(
         // publish, which the next p job makes within T_p + R_p of J_k's release.
         l = l.min(p.t + rp);
         if order == Some(Case::Two) {
-            // p preempts c: J_{k+1} starts before p's next release.
-            l = l.min(p.t);
+            // p preempts c: J_{k+1} starts before p's next release, at most
+            // T_p + J_p after J_k's nominal one.
+            l = l.min(p.t + p.j);
         }
     }
     Some(l)
@@ -197,8 +203,9 @@ pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // c preempts p: that c job has even finished (≥ x_min(c) after its
         // read) by the time p publishes again.
         Some(Case::One) => p.t + rp - c.x_min,
-        // p preempts c: that c job started before p's next release.
-        Some(Case::Two) => p.t,
+        // p preempts c: that c job started before p's next release (at
+        // most T_p + J_p after the nominal release of the one before).
+        Some(Case::Two) => p.t + p.j,
         None => p.t + rp,
     })
 }
@@ -213,14 +220,18 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, rc) = (p.r?, c.r?);
+    // From its actual release, at or before its read, the c job publishes
+    // within w_c = R_c − J_c (R_c counts from the nominal release).
+    let wc = rc - c.j;
     Some(match order {
         // c preempts p: the last c job carrying the sample has published
         // before p publishes again (nothing of c is pending while p runs).
         Some(Case::One) => p.t + rp,
         // Otherwise: it reads before that publish (started before p's next
-        // release when p preempts c) and publishes within R_c of its release.
-        Some(Case::Two) => p.t + rc,
-        None => p.t + rp + rc,
+        // release, at most T_p + J_p after the nominal one, when p preempts
+        // c) and publishes within w_c of its actual release.
+        Some(Case::Two) => p.t + p.j + wc,
+        None => p.t + rp + wc,
     })
 }
 
@@ -506,8 +517,10 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
     let mut age = react;
     for w in lt.windows(2) {
         let (p, c) = (&w[0], &w[1]);
+        // With release jitter, "p above c" gives back R_p but for J_p:
+        // the producer job is released up to J_p late (docs/analysis.md).
         let part2 = match fp_order(sched, p, c) {
-            Some(Case::Two) => Some(0),
+            Some(Case::Two) => Some(p.j),
             _ => p.r,
         };
         react = react

@@ -17,6 +17,7 @@
 pub mod latency;
 pub mod offsets;
 pub mod paths;
+pub mod qpa;
 pub mod relax;
 pub mod sched;
 

@@ -156,6 +156,8 @@ struct Rec {
 struct Thread<'a, V> {
     task: usize,
     period: Nanos,
+    /// D ≤ T: SCHED_DEADLINE's dl_deadline.
+    deadline: Nanos,
     budget: Nanos,
     cpu: usize,
     priority: Option<i32>,
@@ -306,10 +308,12 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
     Ok(())
 }
 
-/// The SCHED_FIFO priority of each task: rate-monotonic rank 1 (the
-/// highest) → 90, rank 2 → 89, ...; background tasks (no rank) → 1.
+/// The SCHED_FIFO priority of each task: rank 1 (the highest, in the
+/// spec's priority order: rate monotonic, deadline monotonic or explicit,
+/// `rtpipe_model::policy::ranks`) → 90, rank 2 → 89, ...; background tasks
+/// (no rank) → 1.
 pub fn fifo_priorities(spec: &Spec) -> Vec<i32> {
-    rtpipe_model::policy::rate_monotonic(spec)
+    rtpipe_model::policy::ranks(spec)
         .iter()
         .map(|r| r.map_or(1, |r| (91 - r as i32).max(2)))
         .collect()
@@ -433,6 +437,7 @@ fn threads<'a, V: Copy + Send>(
             Thread {
                 task: i,
                 period,
+                deadline: t.deadline_given.unwrap_or(period).min(period),
                 budget: t.budget(),
                 cpu: t.cpu as usize,
                 priority: match cfg.policy {
@@ -597,7 +602,7 @@ fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), Ru
         }
         Policy::Deadline => {
             let (c, t) = (th.budget as u64, th.period as u64);
-            if let Err(e) = sys::set_deadline(c, t, t) {
+            if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
                 let help = match e.raw_os_error() {
                     Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
                     Some(libc::EBUSY) => format!(

@@ -50,6 +50,7 @@ fn run(spec: &Spec, horizon: Nanos, phasing: Phasing, exec: ExecModel) -> SimRes
         phasing,
         exec,
         log_jobs: true,
+        jitter: crate::Jitter::Uniform,
     };
     match simulate(spec, &cfg) {
         Ok(r) => r,
@@ -300,6 +301,7 @@ fn deterministic_per_seed() {
         phasing: Phasing::Random,
         exec: ExecModel::Uniform,
         log_jobs: false,
+        jitter: crate::Jitter::Uniform,
     };
     let a = simulate(&s, &mk(5));
     let b = simulate(&s, &mk(5));
@@ -444,6 +446,7 @@ fn varied_configs(spec: &Spec, seed: u64, horizon: Nanos) -> Vec<SimConfig> {
         phasing,
         exec,
         log_jobs,
+        jitter: crate::Jitter::Uniform,
     })
     .collect()
 }
@@ -530,6 +533,7 @@ fn chains_from_jobs_replays_the_simulators_own_measurement() {
             phasing: Phasing::Random,
             exec: ExecModel::Uniform,
             log_jobs: true,
+            jitter: crate::Jitter::Uniform,
             ..SimConfig::new(2_000_000_000)
         };
         let Ok(r) = simulate(&s, &cfg) else {
