@@ -116,9 +116,14 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 }
 
 /// Sound mode: may the priority-based arguments be used for this link? Only
-/// when both tasks share a CPU scheduled by fixed priority.
+/// when both tasks share a CPU scheduled by fixed priority, and neither has
+/// release jitter: a jittered job may find its server's budget not yet
+/// replenished and run in slack, below tasks it otherwise preempts, so "a
+/// above b" no longer holds at every instant (docs/analysis.md, "Release
+/// jitter"). Every term then uses the windows alone, anchored on nominal
+/// releases with R = J + w.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
-    if !sched.policy().fixed_priority() || p.cpu != c.cpu {
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu || p.j > 0 || c.j > 0 {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
@@ -166,9 +171,8 @@ pub fn sound_reaction_link_in(
         Some(Case::One) => l = l.min(rp + c.t - c.x_min),
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
-        // (Dürr et al. 2019). J_k is released up to J_p after its nominal
-        // release, where the term starts.
-        Some(Case::Two) => l = l.min(c.t + p.j),
+        // (Dürr et al. 2019).
+        Some(Case::Two) => l = l.min(c.t),
         None => {}
     }
     if p_distinct {
@@ -176,9 +180,8 @@ pub fn sound_reaction_link_in(
         // publish, which the next p job makes within T_p + R_p of J_k's release.
         l = l.min(p.t + rp);
         if order == Some(Case::Two) {
-            // p preempts c: J_{k+1} starts before p's next release, at most
-            // T_p + J_p after J_k's nominal one.
-            l = l.min(p.t + p.j);
+            // p preempts c: J_{k+1} starts before p's next release.
+            l = l.min(p.t);
         }
     }
     Some(l)
@@ -203,9 +206,8 @@ pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // c preempts p: that c job has even finished (≥ x_min(c) after its
         // read) by the time p publishes again.
         Some(Case::One) => p.t + rp - c.x_min,
-        // p preempts c: that c job started before p's next release (at
-        // most T_p + J_p after the nominal release of the one before).
-        Some(Case::Two) => p.t + p.j,
+        // p preempts c: that c job started before p's next release.
+        Some(Case::Two) => p.t,
         None => p.t + rp,
     })
 }
@@ -220,18 +222,15 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, rc) = (p.r?, c.r?);
-    // From its actual release, at or before its read, the c job publishes
-    // within w_c = R_c − J_c (R_c counts from the nominal release).
-    let wc = rc - c.j;
     Some(match order {
         // c preempts p: the last c job carrying the sample has published
         // before p publishes again (nothing of c is pending while p runs).
         Some(Case::One) => p.t + rp,
         // Otherwise: it reads before that publish (started before p's next
-        // release, at most T_p + J_p after the nominal one, when p preempts
-        // c) and publishes within w_c of its actual release.
-        Some(Case::Two) => p.t + p.j + wc,
-        None => p.t + rp + wc,
+        // release when p preempts c) and publishes within R_c of its
+        // (nominal) release, which is no later than its read.
+        Some(Case::Two) => p.t + rc,
+        None => p.t + rp + rc,
     })
 }
 
@@ -517,10 +516,8 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
     let mut age = react;
     for w in lt.windows(2) {
         let (p, c) = (&w[0], &w[1]);
-        // With release jitter, "p above c" gives back R_p but for J_p:
-        // the producer job is released up to J_p late (docs/analysis.md).
         let part2 = match fp_order(sched, p, c) {
-            Some(Case::Two) => Some(p.j),
+            Some(Case::Two) => Some(0),
             _ => p.r,
         };
         react = react
@@ -619,6 +616,7 @@ mod tests {
             delta_out,
             l: c,
             r: Some(r),
+            j: 0,
             cpu: 0,
             prio: Some(prio),
             top: Some(prio),

@@ -321,6 +321,7 @@ fn search(
             offsets,
             exec: cfg.exec,
             seed: cfg.seed,
+            jitter: cfg.jitter,
         }],
         anchor,
         ..SearchConfig::new(chain, metric, cfg.horizon)
