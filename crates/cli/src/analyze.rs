@@ -96,6 +96,12 @@ pub struct TaskView<'a> {
     demand: f64,
     budget: f64,
     period: f64,
+    /// D, when the spec gives a deadline (else D = T, left out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    deadline: Option<f64>,
+    /// J, when the task has release jitter (left out when 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    jitter: Option<f64>,
     utilization: f64,
     priority: Option<usize>,
     cpu: u32,
@@ -187,6 +193,8 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
             demand: spec.in_unit(tm.demand),
             budget: spec.in_unit(tm.budget),
             period: spec.in_unit(tm.period),
+            deadline: t.deadline_given.map(|d| spec.in_unit(d)),
+            jitter: (t.jitter > 0).then(|| spec.in_unit(t.jitter)),
             utilization: tm.budget as f64 / tm.period as f64,
             priority: tm.priority,
             cpu: tm.cpu,

@@ -29,12 +29,13 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 10] = [
+const EXAMPLES: [&str; 11] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
     "cleanflight",
     "e2e-golden",
+    "jitter-deadlines",
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",
