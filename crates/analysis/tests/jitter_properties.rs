@@ -26,7 +26,7 @@ fn system(seed: u64, tasks: usize, jf: f64, df: f64, order: u8) -> Spec {
         cpus: 1 + (seed % 2) as u32,
         utilization: 0.3 + 0.5 * ((seed >> 8) % 100) as f64 / 100.0,
         scheduler: Scheduler::Rm,
-        mixed_servers: seed % 3 == 0,
+        mixed_servers: seed.is_multiple_of(3),
         chains: 4,
         ..GenConfig::default()
     };
