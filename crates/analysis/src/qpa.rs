@@ -164,7 +164,16 @@ pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
             .deadline_given
             .is_none_or(|d| Some(d) == spec.tasks[i].fixed_period())
     }) {
-        return crate::sched::cpu_utilization(spec, cpu) <= 1.0 + 1e-12;
+        // Σ C/T over the same tasks in the same order as `sched` sums it,
+        // so the verdict is the one the utilisation test gives.
+        let u: f64 = ids
+            .iter()
+            .map(|&i| {
+                let t = &spec.tasks[i];
+                t.budget() as f64 / t.fixed_period().unwrap_or(MAX_TIME) as f64
+            })
+            .sum();
+        return u <= 1.0 + 1e-12;
     }
     qpa(&demands(spec, &ids)).schedulable
 }

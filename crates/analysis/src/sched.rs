@@ -287,15 +287,6 @@ fn response_times(
     }
 }
 
-/// Σ C/T of the guaranteed (not background) tasks on `cpu`.
-pub(crate) fn cpu_utilization(spec: &Spec, cpu: u32) -> f64 {
-    spec.tasks
-        .iter()
-        .filter(|t| t.cpu == cpu && t.server != Server::Background)
-        .map(|t| t.budget() as f64 / period_or_max(t) as f64)
-        .sum()
-}
-
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.
 fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
     let ids: Vec<usize> = (0..spec.tasks.len())
