@@ -333,6 +333,7 @@ fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
         l: crate::latency::eq1_single_pipe(task.demand(), task.budget(), t),
         r,
         j: task.jitter,
+        budgeted: spec.policy().budget(task.server).is_some(),
         cpu: task.cpu,
         prio: None,
         top: None,

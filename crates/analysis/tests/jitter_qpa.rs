@@ -94,29 +94,31 @@ fn jitter_spec_response_times_and_deadlines() {
     assert_eq!(r.schedulability.cpus[0].value, 1.1);
 }
 
-/// The chain t1 > t2 > t3 with jitter: every link drops the priority
-/// arguments (`fp_order`), so the sound bound is the window form anchored
-/// on nominal releases with R = J + w. Reaction: links min(R_p + T_c,
-/// T_p + R_p) = min(4 + 6, 4 + 4) = 8 and min(5 + 13, 6 + 5) = 11, plus
-/// R3 = 11: 30; freshness: (T1 + R1) + (T2 + R2 + R3) = 8 + (6 + 5 + 11)
-/// = 30; reaction ≤ freshness. Davare's reaction from the read,
+/// The chain t1 > t2 > t3 with jitter. The tasks are plain (`server =
+/// "none"`: no budget to wait for), so the priority arguments hold with J
+/// where an anchor moves (`latency::fp_order`); both links have the
+/// producer above the consumer (P2). Reaction, link t1 > t2 (the head's
+/// samples are distinct): min(R1 + T2, T2 + J1, T1 + R1, T1 + J1) =
+/// min(10, 9, 8, 7) = 7; t1 does not pass distinctness on (T2 − R2 + x2 =
+/// 3 ≤ T1 + R1 − x_min1 = 8), so link t2 > t3: min(R2 + T3, T3 + J2) =
+/// min(18, 14) = 14; with R3: 7 + 14 + 11 = 32. Freshness: (T1 + J1) +
+/// (T2 + J2 + R3) = 7 + 18 = 25, and reaction ≤ freshness gives 25. From
+/// the event (no reachability): T1 + 9 + 14 + R3 = 4 + 9 + 14 + 11 = 38;
+/// freshness from the event 25 + T1 = 29. Davare's reaction from the read,
 /// Σ_{i<n} (T_i + R_i) + T_n + R_n − T_1 = 8 + 11 + 24 − 4 = 39.
 #[test]
 fn jitter_chain_bounds_by_hand() {
     let r = analyze(&jitter_set("13"));
     let reaction = &r.chains[0].bound;
     let freshness = &r.chains[1].bound;
-    assert_eq!(reaction.sound(Anchor::Read), Some(30 * MS));
-    assert_eq!(freshness.sound(Anchor::Read), Some(30 * MS));
+    assert_eq!(reaction.sound(Anchor::Read), Some(25 * MS));
+    assert_eq!(freshness.sound(Anchor::Read), Some(25 * MS));
     assert_eq!(
         reaction.get(rtpipe_analysis::Bound::Davare, Anchor::Read),
         Some(39 * MS)
     );
-    // From the event (no reachability: the event's own sample need not
-    // reach the tail): T1 + (R1 + T2) + (R2 + T3) + R3 = 4 + 10 + 18 + 11.
-    assert_eq!(reaction.sound(Anchor::Event), Some(43 * MS));
-    // Freshness from the event: one head period more.
-    assert_eq!(freshness.sound(Anchor::Event), Some(34 * MS));
+    assert_eq!(reaction.sound(Anchor::Event), Some(38 * MS));
+    assert_eq!(freshness.sound(Anchor::Event), Some(29 * MS));
 }
 
 /// Deadline monotonic: t2 (T 6, D 3) ranks above t1 (T 4, D 4); rate

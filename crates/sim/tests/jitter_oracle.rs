@@ -56,6 +56,16 @@ fn system(seed: u64) -> Spec {
         prios.swap(i, r.range(0, i as u64) as usize);
     }
     let synchronous = r.chance(0.3);
+    // A quarter of the fixed-priority systems are plain tasks only (no
+    // budget to wait for), where the priority arguments hold with jitter.
+    if !edf && r.chance(0.25) {
+        for t in spec.tasks.iter_mut() {
+            if t.server != rtpipe_model::Server::Background {
+                t.server = rtpipe_model::Server::None;
+                t.serves = None;
+            }
+        }
+    }
     for (i, t) in spec.tasks.iter_mut().enumerate() {
         let Some(p) = t.fixed_period() else { continue };
         if spec.priorities == Priorities::Explicit && t.server != rtpipe_model::Server::Background {
