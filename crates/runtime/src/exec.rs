@@ -100,7 +100,8 @@ pub struct TaskRun {
     /// Jobs whose CPU time (read to publish) exceeded the task's budget C
     /// by more than [`OVERRUN_TOLERANCE`].
     pub overruns: u64,
-    /// Jobs that published after their period ended (release + T).
+    /// Jobs that published after their deadline (release + D; D = T unless
+    /// the spec gives a deadline).
     pub missed: u64,
     /// The largest CPU time of one job.
     pub max_demand: Nanos,
@@ -844,7 +845,8 @@ fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> 
 /// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
 fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
     let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
-    let missed = responses.iter().filter(|&&r| r > th.period).count() as u64;
+    // Against D (the period unless the spec gives a deadline).
+    let missed = responses.iter().filter(|&&r| r > th.deadline).count() as u64;
     let overruns = th
         .recs
         .iter()
