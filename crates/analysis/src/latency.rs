@@ -33,8 +33,14 @@ pub struct LinkTask {
     pub delta_out: Nanos,
     /// Paper Eq. 1.
     pub l: Nanos,
-    /// Job response time, when it is at most the period.
+    /// Job response time from the nominal release (release jitter
+    /// included), when it is at most the period.
     pub r: Option<Nanos>,
+    /// Release jitter J: a job is released in [nominal, nominal + J].
+    pub j: Nanos,
+    /// A server enforces its budget: a jittered job may then wait for it
+    /// after its release (and a sporadic server runs it in slack meanwhile).
+    pub budgeted: bool,
     /// The CPU it runs on.
     pub cpu: u32,
     /// Own RM rank (the lowest priority the task runs at).
@@ -55,6 +61,8 @@ impl LinkTask {
             delta_out: spec.tasks[i].delta_out,
             l: eq1_single_pipe(tm.demand, tm.budget, tm.period),
             r: tm.bounded_response(),
+            j: tm.jitter,
+            budgeted: spec.policy().budget(spec.tasks[i].server).is_some(),
             cpu: tm.cpu,
             prio: tm.priority,
             top: tm.top_priority,
@@ -112,9 +120,16 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 }
 
 /// Sound mode: may the priority-based arguments be used for this link? Only
-/// when both tasks share a CPU scheduled by fixed priority.
+/// when both tasks share a CPU scheduled by fixed priority, and neither is
+/// a server with release jitter: a jittered job may find its server's
+/// budget not yet replenished and wait (a sporadic server runs it in slack
+/// meanwhile), below tasks it otherwise preempts, so "a above b" no longer
+/// holds at every instant (docs/analysis.md). Such links use the windows
+/// alone, anchored on nominal releases with R = J + w; plain jittered tasks
+/// keep the priority arguments, with J where an anchor moves.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
-    if !sched.policy().fixed_priority() || p.cpu != c.cpu {
+    let waits = |t: &LinkTask| t.j > 0 && t.budgeted;
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu || waits(p) || waits(c) {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
@@ -162,8 +177,9 @@ pub fn sound_reaction_link_in(
         Some(Case::One) => l = l.min(rp + c.t - c.x_min),
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
-        // (Dürr et al. 2019).
-        Some(Case::Two) => l = l.min(c.t),
+        // (Dürr et al. 2019). J_k is released up to J_p after its nominal
+        // release, where the term starts.
+        Some(Case::Two) => l = l.min(c.t + p.j),
         None => {}
     }
     if p_distinct {
@@ -171,8 +187,9 @@ pub fn sound_reaction_link_in(
         // publish, which the next p job makes within T_p + R_p of J_k's release.
         l = l.min(p.t + rp);
         if order == Some(Case::Two) {
-            // p preempts c: J_{k+1} starts before p's next release.
-            l = l.min(p.t);
+            // p preempts c: J_{k+1} starts before p's next release, at most
+            // T_p + J_p after J_k's nominal one.
+            l = l.min(p.t + p.j);
         }
     }
     Some(l)
@@ -197,8 +214,9 @@ pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // c preempts p: that c job has even finished (≥ x_min(c) after its
         // read) by the time p publishes again.
         Some(Case::One) => p.t + rp - c.x_min,
-        // p preempts c: that c job started before p's next release.
-        Some(Case::Two) => p.t,
+        // p preempts c: that c job started before p's next release (at
+        // most T_p + J_p after the nominal release of the one before).
+        Some(Case::Two) => p.t + p.j,
         None => p.t + rp,
     })
 }
@@ -218,8 +236,10 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // before p publishes again (nothing of c is pending while p runs).
         Some(Case::One) => p.t + rp,
         // Otherwise: it reads before that publish (started before p's next
-        // release when p preempts c) and publishes within R_c of its release.
-        Some(Case::Two) => p.t + rc,
+        // release, at most T_p + J_p after the nominal one, when p preempts
+        // c) and publishes within R_c of its (nominal) release, which is no
+        // later than its read.
+        Some(Case::Two) => p.t + p.j + rc,
         None => p.t + rp + rc,
     })
 }
@@ -506,8 +526,10 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
     let mut age = react;
     for w in lt.windows(2) {
         let (p, c) = (&w[0], &w[1]);
+        // "p above c" gives R_p back but for J_p with jitter (the producer
+        // job is released up to J_p after its nominal release).
         let part2 = match fp_order(sched, p, c) {
-            Some(Case::Two) => Some(0),
+            Some(Case::Two) => Some(p.j),
             _ => p.r,
         };
         react = react
@@ -606,6 +628,8 @@ mod tests {
             delta_out,
             l: c,
             r: Some(r),
+            j: 0,
+            budgeted: true,
             cpu: 0,
             prio: Some(prio),
             top: Some(prio),

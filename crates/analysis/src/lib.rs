@@ -21,6 +21,7 @@ pub mod edf;
 pub mod latency;
 pub mod offsets;
 pub mod paths;
+pub mod qpa;
 pub mod relax;
 pub mod sched;
 

@@ -350,6 +350,7 @@ impl Link {
         let rp = i128::from(p.r.unwrap_or(0));
         let read_slack = i128::from(c.r.unwrap_or(0)) - i128::from(c.x);
         let (xp, xc) = (i128::from(p.x_min), i128::from(c.x_min));
+        let (jp, jc) = (i128::from(p.j), i128::from(c.j));
         let (sure, may) = match order {
             // P1, c preempts p: at p's publish f, c has no pending job, so a c
             // job released before f has finished before it (it does not see
@@ -357,16 +358,26 @@ impl Link {
             // job sees the value exactly when released at or after f, which
             // is in [r + x_min(p), r + R_p]; and one released after
             // r + R_p − x_min(c) was not released before f.
-            Some(crate::Case::One) => (rp - (xc - 1).max(0), xp),
+            //
+            // With release jitter (plain tasks only, `fp_order`) r is the
+            // nominal release and R counts from it: a c job is actually
+            // released up to J_c after its nominal release, so it may see
+            // the value from J_c earlier.
+            Some(crate::Case::One) => (rp - (xc - 1).max(0), xp - jc),
             // P2, p preempts c: a c job starting at or after p's release
             // starts after that p job finished, and one starting before it
             // cannot see it: it sees the value exactly when it starts at or
             // after the release, which it may do up to R_c − x_c after its
             // own (F1) and surely does if released after it.
-            Some(crate::Case::Two) => (0, -read_slack),
+            // With jitter, the p job is released up to J_p after its
+            // nominal release: a c job released J_p after that surely sees it.
+            Some(crate::Case::Two) => (jp, -read_slack),
             // Otherwise the windows alone: the p job publishes in
             // [r + x_min(p), r + R_p] (F2), the c job reads in
-            // [r', r' + R_c − x_c] (F1).
+            // [r', r' + R_c − x_c] (F1). With release jitter (which
+            // `fp_order` sends here) r and r' are nominal releases and R
+            // counts from them (R = J + w); a job reads no earlier than its
+            // actual release, so no earlier than its nominal one.
             None => (rp, xp - read_slack),
         };
         Link {

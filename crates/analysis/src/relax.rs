@@ -18,7 +18,7 @@ use crate::latency::{
     compose_sound, distinct_passes, paper_freshness_link_in, paper_reaction_link_in, Case,
     LinkTask, SoundLink,
 };
-use crate::sched::{interference, response_time, utilization_test};
+use crate::sched::{interference, response_time_jitter, utilization_test};
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Nanos, SchedTest, Server, Spec};
 
@@ -200,22 +200,28 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec
         }
         let (rb, rj) = match spec.policy().response {
             ResponseAnalysis::Rta => {
-                let hp: Vec<(Nanos, Nanos)> = (0..n)
+                let hp: Vec<(Nanos, Nanos, Nanos)> = (0..n)
                     .filter(|&j| order.surely_interferes(j, i))
-                    .map(|j| (interference(&spec.tasks[j]), hi[j]))
+                    .map(|j| (interference(&spec.tasks[j]), hi[j], spec.tasks[j].jitter))
                     .collect();
                 (
-                    response_time(t.budget(), &hp),
-                    response_time(t.demand(), &hp),
+                    response_time_jitter(t.budget(), t.jitter, &hp),
+                    response_time_jitter(t.demand(), t.jitter, &hp),
                 )
             }
-            // Servers get their budget by the end of each period (`sched`).
-            ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => (Some(lo[i]), Some(lo[i])),
+            // Servers get their budget by the end of each period, or by
+            // the deadline when one is given (`sched`).
+            ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => {
+                let d = t.deadline_given.map_or(lo[i], |d| d.min(lo[i]));
+                (Some(d), Some(d))
+            }
             ResponseAnalysis::ServerPeriod => (None, None),
             ResponseAnalysis::EdfRta if util_ok(t.cpu) => edf_lower_bounds(spec, lo, hi, i),
             ResponseAnalysis::EdfRta => (None, None),
         };
-        budget_response[i] = rb.filter(|&r| r <= hi[i]);
+        // The RTA test asks R ≤ D (D = T unless given).
+        let d = t.deadline_given.map_or(hi[i], |d| d.min(hi[i]));
+        budget_response[i] = rb.filter(|&r| r <= d);
         job_response[i] = rj.filter(|&r| r <= hi[i]);
     }
     (job_response, budget_response)
@@ -340,6 +346,8 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
             .enumerate()
             .filter(|(_, t)| t.cpu == cpu && t.server != Server::Background)
             .all(|(i, _)| budget_r[i].is_some()),
+        // QPA needs Σ U ≤ 1 first.
+        SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
     }
 }
@@ -355,6 +363,8 @@ fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
         delta_out: task.delta_out,
         l: crate::latency::eq1_single_pipe(task.demand(), task.budget(), t),
         r,
+        j: task.jitter,
+        budgeted: spec.policy().budget(task.server).is_some(),
         cpu: task.cpu,
         prio: None,
         top: None,

@@ -15,6 +15,11 @@ pub struct TaskTiming {
     pub demand_min: Nanos,
     /// T.
     pub period: Nanos,
+    /// D: the relative deadline (T unless the spec gives one).
+    pub deadline: Nanos,
+    /// J: release jitter (0 unless the spec gives one). Response times
+    /// are measured from the nominal release and include it.
+    pub jitter: Nanos,
     /// Rank on its CPU, 1 = highest; `None` under EDF and for background tasks.
     pub priority: Option<usize>,
     /// The highest rank the task can run at: its own, or the rank of the Main
@@ -110,17 +115,37 @@ pub fn interferers(
 /// Audsley et al. 1993). `None` when the higher-priority load (with own) is
 /// 100 % or more, so the iteration would not converge, or on overflow.
 pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
+    let hp: Vec<(Nanos, Nanos, Nanos)> = hp.iter().map(|&(c, t)| (c, t, 0)).collect();
+    busy_window(own, &hp)
+}
+
+/// The response time with release jitter (Audsley, Burns, Richardson,
+/// Tindell, Wellings 1993): R = J + w, w = own + Σ_{j ∈ hp} ⌈(w + J_j) /
+/// T_j⌉ · I_j, with `hp` as (I_j, T_j, J_j). Measured from the nominal
+/// release; w alone is measured from the actual one. Valid when R ≤ T (no
+/// job of the task is still pending at its next release). `None` as
+/// [`response_time`].
+pub fn response_time_jitter(
+    own: Nanos,
+    jitter: Nanos,
+    hp: &[(Nanos, Nanos, Nanos)],
+) -> Option<Nanos> {
+    busy_window(own, hp)?.checked_add(jitter)
+}
+
+/// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
+fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
     // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
-    let u: f64 = hp.iter().map(|&(c, t)| c as f64 / t as f64).sum();
+    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     if u >= 1.0 {
         return None;
     }
-    let mut r = own + hp.iter().map(|&(c, _)| c).sum::<Nanos>();
+    let mut r = own + hp.iter().map(|&(c, _, _)| c).sum::<Nanos>();
     for _ in 0..1_000_000 {
         // Overflow means a value far beyond MAX_TIME: no bounded response.
         let mut next = own;
-        for &(c, t) in hp {
-            next = ((r + t - 1) / t).checked_mul(c)?.checked_add(next)?;
+        for &(c, t, j) in hp {
+            next = ((r + j + t - 1) / t).checked_mul(c)?.checked_add(next)?;
         }
         if next > MAX_TIME {
             return None;
@@ -128,7 +153,7 @@ pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
         if next == r {
             // The fixed point holds the task's own demand and every
             // interferer's first release.
-            assert!(r >= own + hp.iter().map(|&(c, _)| c).sum::<Nanos>());
+            assert!(r >= own + hp.iter().map(|&(c, _, _)| c).sum::<Nanos>());
             return Some(r);
         }
         r = next;
@@ -159,7 +184,12 @@ pub fn utilization_test(test: SchedTest, us: &[f64]) -> (f64, f64, bool) {
             (p, 2.0, p <= 2.0 + UTIL_EPS)
         }
         SchedTest::Edf => (u, 1.0, u <= 1.0 + UTIL_EPS),
-        SchedTest::Rta => panic!("utilization_test: RTA is not a utilisation test"),
+        SchedTest::Rta | SchedTest::Qpa => {
+            panic!(
+                "utilization_test: {} is not a utilisation test",
+                test.name()
+            )
+        }
     }
 }
 
@@ -182,6 +212,8 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 demand: t.demand(),
                 demand_min: t.demand_min(),
                 period: period_or_max(t),
+                deadline: t.deadline().unwrap_or(MAX_TIME),
+                jitter: t.jitter,
                 priority: prio[i],
                 top_priority: top[i],
                 cpu: t.cpu,
@@ -228,13 +260,16 @@ fn response_times(
     }
     match spec.policy().response {
         ResponseAnalysis::Rta => {
-            let hp: Vec<(Nanos, Nanos)> = interferers(spec, prio, top, i)
+            let hp: Vec<(Nanos, Nanos, Nanos)> = interferers(spec, prio, top, i)
                 .into_iter()
-                .map(|j| (interference(&spec.tasks[j]), period_or_max(&spec.tasks[j])))
+                .map(|j| {
+                    let o = &spec.tasks[j];
+                    (interference(o), period_or_max(o), o.jitter)
+                })
                 .collect();
             (
-                response_time(t.budget(), &hp),
-                response_time(t.demand(), &hp),
+                response_time_jitter(t.budget(), t.jitter, &hp),
+                response_time_jitter(t.demand(), t.jitter, &hp),
             )
         }
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
@@ -243,10 +278,13 @@ fn response_times(
 }
 
 /// EDF with constant-bandwidth servers: every server gets its budget by
-/// the end of each period when Σ U ≤ 1, but possibly at its very end.
+/// the end of each period when Σ U ≤ 1, but possibly at its very end; with
+/// constrained deadlines, by its deadline when the processor-demand test
+/// passes (docs/analysis.md).
 fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
-    if cpu_utilization(spec, t.cpu) <= 1.0 + UTIL_EPS {
-        (Some(period_or_max(t)), Some(period_or_max(t)))
+    let d = t.deadline().unwrap_or(MAX_TIME);
+    if crate::qpa::edf_feasible(spec, t.cpu) {
+        (Some(d), Some(d))
     } else {
         (None, None)
     }
@@ -272,8 +310,20 @@ fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, us
     (out, at)
 }
 
-/// Task `i`'s (budget, job) response times under EDF at the spec's periods.
+/// Task `i`'s (budget, job) response times under EDF at the spec's periods:
+/// Spuri's analysis, which takes deadlines equal to periods; where a task
+/// of the CPU has a shorter deadline, the deadline under the
+/// processor-demand test ([`server_period`]).
 fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
+    let cpu = spec.tasks[i].cpu;
+    let constrained = spec
+        .tasks
+        .iter()
+        .filter(|t| t.cpu == cpu && t.server != Server::Background)
+        .any(|t| t.deadline().is_some_and(|d| Some(d) < t.fixed_period()));
+    if constrained {
+        return server_period(spec, &spec.tasks[i]);
+    }
     let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
     edf_response_at(spec, &periods, i)
 }
@@ -311,15 +361,6 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
     (Some(budget), Some(job))
 }
 
-/// Σ C/T of the guaranteed (not background) tasks on `cpu`.
-fn cpu_utilization(spec: &Spec, cpu: u32) -> f64 {
-    spec.tasks
-        .iter()
-        .filter(|t| t.cpu == cpu && t.server != Server::Background)
-        .map(|t| t.budget() as f64 / period_or_max(t) as f64)
-        .sum()
-}
-
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.
 fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
     let ids: Vec<usize> = (0..spec.tasks.len())
@@ -332,6 +373,7 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
     let u: f64 = us.iter().sum();
     let (value, bound, ok) = match spec.schedulability {
         SchedTest::Rta => rta_test(&ids, timings),
+        SchedTest::Qpa => crate::qpa::qpa_verdict(spec, &ids),
         test => utilization_test(test, &us),
     };
     CpuVerdict {
@@ -344,17 +386,18 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
     }
 }
 
-/// The exact RTA test on the tasks `ids` of one CPU: (the largest R/T, its
-/// bound 1, every budget delivered within its period). A task without a
-/// finite response time makes the largest R/T infinite.
+/// The exact RTA test on the tasks `ids` of one CPU: (the largest R/D, its
+/// bound 1, every budget delivered within its deadline, R ≤ D; D = T unless
+/// the spec gives a deadline). A task without a finite response time makes
+/// the largest R/D infinite.
 fn rta_test(ids: &[usize], timings: &[TaskTiming]) -> (f64, f64, bool) {
     let mut worst: f64 = 0.0;
     let mut ok = true;
     for &i in ids {
         match timings[i].response_time {
             Some(r) => {
-                worst = worst.max(r as f64 / timings[i].period as f64);
-                ok &= r <= timings[i].period;
+                worst = worst.max(r as f64 / timings[i].deadline as f64);
+                ok &= r <= timings[i].deadline;
             }
             None => {
                 worst = f64::INFINITY;

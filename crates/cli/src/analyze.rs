@@ -96,6 +96,12 @@ pub struct TaskView<'a> {
     demand: f64,
     budget: f64,
     period: f64,
+    /// D, when the spec gives a deadline (else D = T, left out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    deadline: Option<f64>,
+    /// J, when the task has release jitter (left out when 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    jitter: Option<f64>,
     utilization: f64,
     priority: Option<usize>,
     cpu: u32,
@@ -187,6 +193,8 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
             demand: spec.in_unit(tm.demand),
             budget: spec.in_unit(tm.budget),
             period: spec.in_unit(tm.period),
+            deadline: t.deadline_given.map(|d| spec.in_unit(d)),
+            jitter: (t.jitter > 0).then(|| spec.in_unit(t.jitter)),
             utilization: tm.budget as f64 / tm.period as f64,
             priority: tm.priority,
             cpu: tm.cpu,
@@ -308,7 +316,7 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     let mut out = system_line(spec);
     out.push('\n');
     out.push_str(&task_table(spec, r));
-    out.push_str(&schedulability_text(r));
+    out.push_str(&schedulability_text(spec, r));
     out.push_str(&chain_table(spec, r));
     out.push_str(&known_offsets_text(spec, r));
     out.push_str(&verdict_text(r, mode));
@@ -317,13 +325,20 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
 
 /// One row per task: its pipe, budget, period and response times.
 fn task_table(spec: &Spec, r: &Report) -> String {
-    let mut t = Table::new(&[
-        "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T", "C/T",
-        "R(C)", "R(job)",
-    ])
-    .numeric(&[2, 3, 4, 5, 6, 7, 8, 9, 10, 11]);
+    // Deadline and jitter columns only where a task gives one, so specs
+    // without them print as they always did.
+    let extra = timing_keys_given(spec);
+    let mut heads = vec![
+        "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T",
+    ];
+    if extra {
+        heads.extend(["deadline D", "jitter J"]);
+    }
+    heads.extend(["C/T", "R(C)", "R(job)"]);
+    let numeric: Vec<usize> = (2..heads.len()).collect();
+    let mut t = Table::new(&heads).numeric(&numeric);
     for (task, tm) in spec.tasks.iter().zip(&r.timing) {
-        t.row(vec![
+        let mut row = vec![
             task.name.clone(),
             task.server.name().to_string(),
             task.cpu.to_string(),
@@ -335,16 +350,31 @@ fn task_table(spec: &Spec, r: &Report) -> String {
             spec.fmt_time(task.delta_out),
             spec.fmt_time(tm.budget),
             spec.fmt_time(tm.period),
+        ];
+        if extra {
+            row.push(spec.fmt_time(tm.deadline));
+            row.push(spec.fmt_time(tm.jitter));
+        }
+        row.extend([
             format!("{:.4}", tm.budget as f64 / tm.period as f64),
             opt(spec, tm.response_time),
             opt(spec, tm.job_response_time),
         ]);
+        t.row(row);
     }
     t.render()
 }
 
+/// Some task gives a deadline or release jitter.
+fn timing_keys_given(spec: &Spec) -> bool {
+    spec.tasks
+        .iter()
+        .any(|t| t.deadline_given.is_some() || t.jitter > 0)
+}
+
 /// The schedulability test's verdict per CPU.
-fn schedulability_text(r: &Report) -> String {
+fn schedulability_text(spec: &Spec, r: &Report) -> String {
+    let constrained = timing_keys_given(spec);
     let mut out = String::new();
     let s = &r.schedulability;
     out.push_str(&format!("\nschedulability ({}):\n", s.test.name()));
@@ -368,8 +398,9 @@ fn schedulability_text(r: &Report) -> String {
                 if c.schedulable { "<=" } else { ">" }
             ),
             rtpipe_model::SchedTest::Rta => format!(
-                "U = {:.4}, max R/T = {}",
+                "U = {:.4}, max R/{} = {}",
                 c.utilization,
+                if constrained { "D" } else { "T" },
                 if c.value.is_finite() {
                     format!("{:.4}", c.value)
                 } else {
@@ -380,6 +411,11 @@ fn schedulability_text(r: &Report) -> String {
                 "U = {:.4} {} 1",
                 c.utilization,
                 if c.schedulable { "<=" } else { ">" }
+            ),
+            rtpipe_model::SchedTest::Qpa => format!(
+                "U = {:.4}, processor demand h(t) {} t (QPA)",
+                c.utilization,
+                if c.schedulable { "<=" } else { "> some" }
             ),
         };
         out.push_str(&format!(

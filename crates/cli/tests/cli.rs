@@ -215,3 +215,34 @@ fn design_survives_numerical_failures() {
         "{status} with exit {code:?}"
     );
 }
+
+/// Issue 22's bad combinations exit 2 with the place and a fix; `design`
+/// refuses jitter with exit 2.
+#[test]
+fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
+    let dir = scratch("cli-timing");
+    let text = match std::fs::read_to_string(example("jitter-deadlines.toml")) {
+        Ok(t) => t,
+        Err(e) => panic!("{e}"),
+    };
+    let cases = [
+        ("deadline = 1.5", "deadline = 2.5", "bad.toml:24:12: error: deadline 2.5 of task `gyro` is above its period (2)"),
+        ("jitter = 0.4 ", "jitter = 2 ", "bad.toml:23:10: error: jitter 2 of task `gyro` is not below its period (2)"),
+        ("period = 2\n", "period = 2\npriority = 1\n", "bad.toml:23:12: error: task `gyro` gives a priority, but priorities are deadline-monotonic"),
+    ];
+    for (from, to, want) in cases {
+        let f = dir.join("bad.toml");
+        if let Err(e) = std::fs::write(&f, text.replacen(from, to, 1)) {
+            panic!("{e}");
+        }
+        let o = rtpipe(&["analyze", &f.to_string_lossy()]);
+        assert_eq!(o.status.code(), Some(2), "{to}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(want), "{err}");
+        assert!(err.contains("help:"), "{err}");
+    }
+    let o = rtpipe(&["design", &example("jitter-deadlines.toml")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("release jitter"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

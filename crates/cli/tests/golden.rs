@@ -29,13 +29,14 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 11] = [
+const EXAMPLES: [&str; 12] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
     "cleanflight",
     "e2e-golden",
     "paper-table2-edf",
+    "jitter-deadlines",
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",

@@ -135,7 +135,7 @@ pub(crate) fn range_dom(
     let hi = hi_ns / res;
     if lo > hi {
         return Err(DesignError::input(format!(
-            "task `{}`: no multiple of the resolution {}{} lies in [{}, {}] {} (the period must also be at least the budget)",
+            "task `{}`: no multiple of the resolution {}{} lies in [{}, {}] {} (the period must also be at least the budget and the deadline)",
             t.name,
             format_in(res, spec.time_unit),
             spec.time_unit,
@@ -206,14 +206,15 @@ fn grid(spec: &Spec) -> i64 {
 /// The domain of task `t` on the grid `g`.
 fn task_dom(spec: &Spec, t: &Task, horizon: Nanos, g: i64) -> Result<Dom, DesignError> {
     let res = spec.resolution;
-    let c = t.budget();
+    // T ≥ C, and T ≥ D when a deadline is given (constrained deadlines).
+    let c = t.budget().max(t.deadline_given.unwrap_or(0));
     Ok(match &t.period {
         PeriodSpec::Fixed(p) => Dom::Fixed(p / g),
         PeriodSpec::Choices(v) => {
             let ok: Vec<i64> = v.iter().filter(|&&p| p >= c).map(|&p| p / g).collect();
             if ok.is_empty() {
                 return Err(DesignError::input(format!(
-                    "task `{}`: no period choice is at least its budget {}{}",
+                    "task `{}`: no period choice is at least its budget (and deadline) {}{}",
                     t.name,
                     format_in(c, spec.time_unit),
                     spec.time_unit

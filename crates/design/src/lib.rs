@@ -66,6 +66,32 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
+/// Release jitter, priorities other than rate monotonic and the QPA test
+/// are refused: the box search and the MILP branch on rate-monotonic orders
+/// of free periods, encode jitter-free response times and have no cut for
+/// a failed processor-demand test. Deadlines under fixed priorities are
+/// honoured (every answer passes R ≤ D, re-checked by `analyze`).
+fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
+    if let Some(t) = spec.tasks.iter().find(|t| t.jitter > 0) {
+        return Err(DesignError::input(format!(
+            "task `{}` has release jitter, which `design` does not model yet; remove it to design, then add it back and check with `analyze`",
+            t.name
+        )));
+    }
+    if spec.schedulability == rtpipe_model::SchedTest::Qpa {
+        return Err(DesignError::input(
+            "schedulability = \"qpa\" (EDF with deadlines below periods): `design` does not model the processor-demand test yet; design with the deadlines removed (schedulability = \"edf\"), then add them back and check with `analyze`",
+        ));
+    }
+    if spec.priorities != rtpipe_model::Priorities::RateMonotonic {
+        return Err(DesignError::input(format!(
+            "priorities = \"{}\": `design` orders tasks rate-monotonically as it chooses their periods; use priorities = \"rate-monotonic\" to design, then restore your order and check with `analyze`",
+            spec.priorities.name()
+        )));
+    }
+    Ok(())
+}
+
 /// Designs the periods of `spec`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
@@ -80,6 +106,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             t.name
         )));
     }
+    unsupported_timing(spec)?;
     // Known offsets do not enter the design: its bounds hold for any
     // phasing, and a job-level analysis of every candidate would cost a
     // hyperperiod each. The answer keeps them.

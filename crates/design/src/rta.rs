@@ -126,7 +126,10 @@ pub(crate) fn sched_ok(p: &Problem, cuts: &mut Vec<RtaCut>, spec: &Spec, report:
             if spec.tasks[i].server == Server::Background {
                 continue;
             }
-            let ok = tm.response_time.is_some_and(|r| r <= tm.period);
+            // The RTA test: R ≤ D (D = T unless the spec gives a deadline).
+            let ok = tm
+                .response_time
+                .is_some_and(|r| r <= tm.deadline.min(tm.period));
             if !ok {
                 let top = rtpipe_analysis::sched::top_priorities(spec, &prio);
                 let hp = rtpipe_analysis::sched::interferers(spec, &prio, &top, i);

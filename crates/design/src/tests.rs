@@ -290,3 +290,42 @@ fn the_incumbent_sink_holds_the_answer() {
         );
     }
 }
+
+/// Table II (RTA, T3 = 5) with a deadline on t5: the design honours R ≤ D.
+/// At the unconstrained optimum (5, 5, 5, 10, 10, 50) t5 runs below t1, t2,
+/// t3 (T 5) and t4 (T 10, declared first): R5 = 1 + ⌈R/5⌉·3 + 1.15 = 8.15
+/// (two jobs of each 5 ms task). D5 = 9 keeps that optimum (U = 0.838);
+/// D5 = 6 forbids it, and every other choice too (the search proves it).
+#[test]
+fn deadlines_are_honoured() {
+    let with_deadline = |d: &str| {
+        let text = rtpipe_model::to_toml(&table2_free_rta(false))
+            .replace("[tasks.t5]\n", &format!("[tasks.t5]\ndeadline = {d}\n"));
+        Spec::parse("d.toml", &text).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let o = run(&with_deadline("9"), Mode::Sound);
+    assert_eq!(o.status, Status::Optimal);
+    assert_eq!(periods_ms(&o), vec![5, 5, 5, 10, 10, 50]);
+    let r = o.report.as_ref().map(|r| r.timing[4].response_time);
+    assert_eq!(r, Some(Some(8_150_000)));
+    let o = run(&with_deadline("6"), Mode::Sound);
+    assert_eq!(o.status, Status::Infeasible);
+}
+
+/// Jitter and non-rate-monotonic orders are refused as input `design`
+/// cannot model.
+#[test]
+fn jitter_and_other_orders_are_refused() {
+    let text = rtpipe_model::to_toml(&table2_free_rta(false));
+    for (from, to) in [
+        ("[tasks.t5]\n", "[tasks.t5]\njitter = 1\n"),
+        (
+            "scheduler = \"rm\"",
+            "scheduler = \"rm\"\npriorities = \"deadline-monotonic\"",
+        ),
+    ] {
+        let s = Spec::parse("j.toml", &text.replace(from, to)).unwrap_or_else(|e| panic!("{e}"));
+        let e = design(&s, &Options::default()).err();
+        assert_eq!(e.map(|e| e.kind), Some(ErrorKind::Input), "{to}");
+    }
+}

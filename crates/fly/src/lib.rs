@@ -251,6 +251,7 @@ pub fn fly_with_progress(
         phasing: Phasing::Sync,
         exec,
         log_jobs: s.log_jobs,
+        jitter: rtpipe_sim::Jitter::Uniform,
     };
     let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
         Diagnostic::error(

@@ -44,8 +44,8 @@ pub struct TaskStats {
     pub completed: u64,
     /// Largest finish − release over completed jobs.
     pub max_response: Option<Nanos>,
-    /// Completed jobs that finished after their period (the model's
-    /// assumptions are broken for them).
+    /// Completed jobs that finished after their deadline (D, the period
+    /// unless the spec gives one), counted from the nominal release.
     pub late: u64,
     /// Times the server ran out of budget with a job still pending.
     pub exhaustions: u64,

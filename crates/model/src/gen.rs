@@ -221,6 +221,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         schedulability: cfg.scheduler.policy().default_test(),
         resolution: 1_000_000,
         harmonic: false,
+        priorities: crate::Priorities::RateMonotonic,
         channels,
         tasks,
         chains,

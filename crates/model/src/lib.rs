@@ -20,7 +20,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
-pub use policy::{SchedPolicy, SchedTest, Scheduler};
+pub use policy::{Priorities, SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB.
@@ -127,6 +127,15 @@ pub struct Task {
     /// later one a period after the previous. `None`: unknown (the analysis
     /// then holds for every phasing).
     pub offset: Option<Nanos>,
+    /// Explicit fixed priority (`priorities = "explicit"`): 1 is the
+    /// highest; `None` under the other priority orders.
+    pub priority: Option<u32>,
+    /// D, the relative deadline, when given (at most the period); `None`:
+    /// D = T (implicit deadline). See [`Task::deadline`].
+    pub deadline_given: Option<Nanos>,
+    /// J, release jitter: each job is released somewhere in
+    /// [nominal, nominal + J], nominal = offset + k·T (0: none).
+    pub jitter: Nanos,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -156,6 +165,9 @@ impl Task {
             serves: None,
             body: None,
             offset: None,
+            priority: None,
+            deadline_given: None,
+            jitter: 0,
             delta_in: 0,
             delta_out: 0,
         }
@@ -176,6 +188,10 @@ impl Task {
     /// C: the given budget or the demand (Section IV-B, Step 1).
     pub fn budget(&self) -> Nanos {
         self.budget_given.unwrap_or_else(|| self.demand())
+    }
+    /// D: the given deadline, else the fixed period (implicit deadline).
+    pub fn deadline(&self) -> Option<Nanos> {
+        self.deadline_given.or_else(|| self.fixed_period())
     }
     /// T, when fixed.
     pub fn fixed_period(&self) -> Option<Nanos> {
@@ -233,6 +249,8 @@ pub struct Spec {
     pub resolution: Nanos,
     /// Design: every pair of periods divides one another.
     pub harmonic: bool,
+    /// How fixed priorities are assigned (rate monotonic by default).
+    pub priorities: Priorities,
     /// The channels, in declaration order.
     pub channels: Vec<Channel>,
     /// The tasks, in declaration order.

@@ -46,17 +46,21 @@ pub enum SchedTest {
     Hyperbolic,
     /// Exact response-time analysis: every R_i ≤ T_i.
     Rta,
-    /// EDF: Σ U ≤ 1.
+    /// EDF: Σ U ≤ 1 (exact when every deadline equals its period).
     Edf,
+    /// EDF with constrained deadlines: the processor-demand test by Quick
+    /// Processor-demand Analysis (Zhang and Burns 2009).
+    Qpa,
 }
 
 impl SchedTest {
     /// Every test, in the order specs list them.
-    pub const ALL: [SchedTest; 4] = [
+    pub const ALL: [SchedTest; 5] = [
         SchedTest::LiuLayland,
         SchedTest::Hyperbolic,
         SchedTest::Rta,
         SchedTest::Edf,
+        SchedTest::Qpa,
     ];
 
     /// The name used in specs and output.
@@ -66,6 +70,48 @@ impl SchedTest {
             SchedTest::Hyperbolic => "hyperbolic",
             SchedTest::Rta => "rta",
             SchedTest::Edf => "edf",
+            SchedTest::Qpa => "qpa",
+        }
+    }
+
+    /// The test holds only for implicit deadlines (D = T), jitter-free
+    /// releases and, for the fixed-priority ones, rate-monotonic ranks:
+    /// Liu–Layland, hyperbolic and the EDF utilisation test.
+    pub fn needs_implicit_deadlines(self) -> bool {
+        matches!(
+            self,
+            SchedTest::LiuLayland | SchedTest::Hyperbolic | SchedTest::Edf
+        )
+    }
+}
+
+/// How fixed priorities are assigned (`[system] priorities`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Priorities {
+    /// Shorter period first, ties by declaration order (the default).
+    #[default]
+    RateMonotonic,
+    /// Shorter deadline first (D, or T when none is given), ties by
+    /// declaration order.
+    DeadlineMonotonic,
+    /// Each task's `priority = N`, 1 the highest.
+    Explicit,
+}
+
+impl Priorities {
+    /// Every order, in the order specs list them.
+    pub const ALL: [Priorities; 3] = [
+        Priorities::RateMonotonic,
+        Priorities::DeadlineMonotonic,
+        Priorities::Explicit,
+    ];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Priorities::RateMonotonic => "rate-monotonic",
+            Priorities::DeadlineMonotonic => "deadline-monotonic",
+            Priorities::Explicit => "explicit",
         }
     }
 }
@@ -155,8 +201,8 @@ const EDF: SchedPolicy = SchedPolicy {
     main_budget: Budget::Cbs,
     io_budget: Budget::Cbs,
     response: ResponseAnalysis::EdfRta,
-    tests: &[SchedTest::Edf],
-    tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test)",
+    tests: &[SchedTest::Edf, SchedTest::Qpa],
+    tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test) or \"qpa\" (the processor-demand test, for deadlines below periods)",
     linux: LinuxClass::Deadline,
 };
 
@@ -169,6 +215,17 @@ impl SchedPolicy {
     /// The test a spec gets when it names none.
     pub fn default_test(&self) -> SchedTest {
         self.tests[0]
+    }
+
+    /// The test a spec gets when it names none, given whether some task has
+    /// a deadline below its period or release jitter: the first admitted
+    /// test that holds for such tasks.
+    pub fn default_test_for(&self, constrained: bool) -> SchedTest {
+        self.tests
+            .iter()
+            .copied()
+            .find(|t| !(constrained && t.needs_implicit_deadlines()))
+            .unwrap_or(self.tests[0])
     }
 
     /// `test` applies to this policy.
@@ -196,16 +253,43 @@ impl SchedPolicy {
     /// every task when the policy has no fixed ranks).
     pub fn priorities(&self, spec: &Spec) -> Vec<Option<usize>> {
         match self.preemption {
-            Preemption::FixedPriority => rate_monotonic(spec),
+            Preemption::FixedPriority => ranks(spec),
             Preemption::EarliestDeadline => vec![None; spec.tasks.len()],
         }
     }
+}
+
+/// Fixed-priority ranks per CPU in the spec's order (`[system]
+/// priorities`): [`rate_monotonic`], [`deadline_monotonic`] or the explicit
+/// `priority` of each task. Background tasks get none. Whatever runs tasks
+/// by fixed priority (the analysis, the simulator, the design, the
+/// runtime's SCHED_FIFO priorities) takes its ranks from here.
+pub fn ranks(spec: &Spec) -> Vec<Option<usize>> {
+    match spec.priorities {
+        Priorities::RateMonotonic => rate_monotonic(spec),
+        Priorities::DeadlineMonotonic => deadline_monotonic(spec),
+        // Validation makes them distinct per CPU; a task without one (not a
+        // validated spec) ranks last.
+        Priorities::Explicit => ranked_by(spec, |t| t.priority.map_or(Nanos::MAX, Nanos::from)),
+    }
+}
+
+/// Deadline-monotonic ranks per CPU: shorter deadline (D, else T) first,
+/// ties by declaration order.
+pub fn deadline_monotonic(spec: &Spec) -> Vec<Option<usize>> {
+    ranked_by(spec, |t| t.deadline().unwrap_or(Nanos::MAX))
 }
 
 /// Rate-monotonic ranks per CPU: shorter period first, ties by declaration
 /// order; background tasks get none. A task without a fixed period ranks
 /// last among its CPU's.
 pub fn rate_monotonic(spec: &Spec) -> Vec<Option<usize>> {
+    ranked_by(spec, |t| t.fixed_period().unwrap_or(Nanos::MAX))
+}
+
+/// Ranks per CPU by `key` (smaller first), ties by declaration order;
+/// background tasks get none.
+fn ranked_by(spec: &Spec, key: impl Fn(&crate::Task) -> Nanos) -> Vec<Option<usize>> {
     let mut out = vec![None; spec.tasks.len()];
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
@@ -214,7 +298,7 @@ pub fn rate_monotonic(spec: &Spec) -> Vec<Option<usize>> {
         let mut ids: Vec<usize> = (0..spec.tasks.len())
             .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
             .collect();
-        ids.sort_by_key(|&i| (spec.tasks[i].fixed_period().unwrap_or(Nanos::MAX), i));
+        ids.sort_by_key(|&i| (key(&spec.tasks[i]), i));
         for (rank, i) in ids.into_iter().enumerate() {
             out[i] = Some(rank + 1);
         }
@@ -242,6 +326,14 @@ mod tests {
         }
         assert_eq!(Scheduler::Rm.policy().default_test(), SchedTest::Rta);
         assert_eq!(Scheduler::Edf.policy().default_test(), SchedTest::Edf);
+        assert_eq!(
+            Scheduler::Edf.policy().default_test_for(true),
+            SchedTest::Qpa
+        );
+        assert_eq!(
+            Scheduler::Rm.policy().default_test_for(true),
+            SchedTest::Rta
+        );
     }
 
     #[test]

@@ -30,6 +30,7 @@ pub struct RawSystem {
     pub resolution: Option<S<toml::Value>>,
     pub harmonic: Option<S<bool>>,
     pub release: Option<S<String>>,
+    pub priorities: Option<S<String>>,
 }
 
 #[derive(Debug, serde::Deserialize)]
@@ -62,6 +63,9 @@ pub struct RawTask {
     pub serves: Option<S<String>>,
     pub body: Option<S<String>>,
     pub offset: Option<S<toml::Value>>,
+    pub priority: Option<S<toml::Value>>,
+    pub deadline: Option<S<toml::Value>>,
+    pub jitter: Option<S<toml::Value>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -8,6 +8,8 @@ use crate::*;
 use std::collections::HashMap;
 use std::ops::Range;
 
+mod prio;
+
 #[derive(Default)]
 pub(crate) struct Builder {
     pub(crate) diags: Vec<Diagnostic>,
@@ -185,6 +187,7 @@ impl Builder {
     pub(crate) fn build(&mut self, raw: RawSpec) -> Option<Spec> {
         let sys = raw.system.get_ref();
         let (name, scheduler, test) = self.system(sys);
+        let order = self.priority_order(sys, scheduler);
         let (channels, ch_index) = self.channels(&raw.channels.0);
         let raw_tasks = &raw.tasks.0;
         let (task_index, names) = self.task_names(raw_tasks, &raw.system);
@@ -206,6 +209,10 @@ impl Builder {
         let unit = self.unit();
         compute_transfers(&mut tasks, &channels, unit);
         self.budgets_and_periods(raw_tasks, &tasks);
+        self.priorities_and_deadlines(raw_tasks, &tasks, order, scheduler);
+        let test = scheduler
+            .zip(test)
+            .map(|(s, t)| self.test_for_tasks(sys, s, t, order, &tasks));
         let chains: Vec<Chain> = raw
             .chain
             .iter()
@@ -232,6 +239,7 @@ impl Builder {
             schedulability: test?,
             resolution,
             harmonic,
+            priorities: order,
             channels,
             tasks,
             chains,
@@ -759,6 +767,7 @@ impl Builder {
             Some(o) => self.nonneg_time(o, "offset").map(Some),
             None => Some(None),
         };
+        let (priority, deadline, jitter) = self.timing_keys(t);
         Some(Task {
             name: k.get_ref().clone(),
             exec: exec?,
@@ -773,6 +782,9 @@ impl Builder {
             serves: None,
             body: v.get_ref().body.as_ref().map(|b| b.get_ref().clone()),
             offset: offset?,
+            priority: priority?,
+            deadline_given: deadline?,
+            jitter: jitter?,
             delta_in: 0,
             delta_out: 0,
         })

@@ -87,6 +87,9 @@ fn system(o: &mut String, spec: &Spec) {
     if spec.harmonic {
         let _ = writeln!(o, "harmonic = true");
     }
+    if spec.priorities != crate::Priorities::RateMonotonic {
+        let _ = writeln!(o, "priorities = \"{}\"", spec.priorities.name());
+    }
 }
 
 /// One `[channels.NAME]` table.
@@ -120,6 +123,15 @@ fn task(o: &mut String, spec: &Spec, t: &Task) {
     }
     if let Some(x) = t.offset {
         let _ = writeln!(o, "offset = {}", time(spec, x));
+    }
+    if let Some(d) = t.deadline_given {
+        let _ = writeln!(o, "deadline = {}", time(spec, d));
+    }
+    if t.jitter != 0 {
+        let _ = writeln!(o, "jitter = {}", time(spec, t.jitter));
+    }
+    if let Some(p) = t.priority {
+        let _ = writeln!(o, "priority = {p}");
     }
     let _ = writeln!(o, "server = \"{}\"", t.server.name());
     let _ = writeln!(o, "cpu = {}", t.cpu);

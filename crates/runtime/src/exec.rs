@@ -101,7 +101,8 @@ pub struct TaskRun {
     /// Jobs whose CPU time (read to publish) exceeded the task's budget C
     /// by more than [`OVERRUN_TOLERANCE`].
     pub overruns: u64,
-    /// Jobs that published after their period ended (release + T).
+    /// Jobs that published after their deadline (release + D; D = T unless
+    /// the spec gives a deadline).
     pub missed: u64,
     /// The largest CPU time of one job.
     pub max_demand: Nanos,
@@ -164,6 +165,8 @@ struct Thread<'a, V> {
     /// The spec's release offset (0 without one): releases at phase + k·T.
     phase: Nanos,
     period: Nanos,
+    /// D ≤ T: SCHED_DEADLINE's dl_deadline.
+    deadline: Nanos,
     budget: Nanos,
     cpu: usize,
     priority: Option<i32>,
@@ -374,10 +377,12 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
     Ok(())
 }
 
-/// The SCHED_FIFO priority of each task: rate-monotonic rank 1 (the
-/// highest) → 90, rank 2 → 89, ...; background tasks (no rank) → 1.
+/// The SCHED_FIFO priority of each task: rank 1 (the highest, in the
+/// spec's priority order: rate monotonic, deadline monotonic or explicit,
+/// `rtpipe_model::policy::ranks`) → 90, rank 2 → 89, ...; background tasks
+/// (no rank) → 1.
 pub fn fifo_priorities(spec: &Spec) -> Vec<i32> {
-    rtpipe_model::policy::rate_monotonic(spec)
+    rtpipe_model::policy::ranks(spec)
         .iter()
         .map(|r| r.map_or(1, |r| (91 - r as i32).max(2)))
         .collect()
@@ -513,6 +518,7 @@ fn threads<'a, V: Copy + Send>(
                 task: i,
                 phase: t.offset.unwrap_or(0),
                 period,
+                deadline: t.deadline_given.unwrap_or(period).min(period),
                 budget: t.budget(),
                 cpu: t.cpu as usize,
                 priority: match cfg.policy {
@@ -679,7 +685,7 @@ fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), Ru
         }
         Policy::Deadline => {
             let (c, t) = (th.budget as u64, th.period as u64);
-            if let Err(e) = sys::set_deadline(c, t, t) {
+            if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
                 let help = match e.raw_os_error() {
                     Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
                     Some(libc::EBUSY) => format!(
@@ -928,7 +934,8 @@ fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> 
 /// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
 fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
     let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
-    let missed = responses.iter().filter(|&&r| r > th.period).count() as u64;
+    // Against D (the period unless the spec gives a deadline).
+    let missed = responses.iter().filter(|&&r| r > th.deadline).count() as u64;
     let overruns = th
         .recs
         .iter()

@@ -49,7 +49,10 @@ fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<Strin
             o.insert("policy".into(), json!("SCHED_DEADLINE"));
             o.insert("dl-runtime".into(), json!(budget));
             o.insert("dl-period".into(), json!(period_us));
-            o.insert("dl-deadline".into(), json!(period_us));
+            let deadline = t.deadline_given.map_or(period_us, |d| {
+                us_up(d, &format!("task {} deadline", t.name), notes)
+            });
+            o.insert("dl-deadline".into(), json!(deadline));
         }
         Policy::Other => {
             o.insert("policy".into(), json!("SCHED_OTHER"));

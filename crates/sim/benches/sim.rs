@@ -90,6 +90,7 @@ fn events(c: &mut Criterion) {
                     phasing: Phasing::Random,
                     exec: ExecModel::Uniform,
                     log_jobs: false,
+                    jitter: rtpipe_sim::Jitter::Uniform,
                 };
                 let sched = match scheduler {
                     Scheduler::Rm => "rm",
@@ -200,6 +201,7 @@ fn scaling(c: &mut Criterion) {
                 phasing: Phasing::Random,
                 exec: ExecModel::Uniform,
                 log_jobs: false,
+                jitter: rtpipe_sim::Jitter::Uniform,
             };
             let sched = match scheduler {
                 Scheduler::Rm => "rm",

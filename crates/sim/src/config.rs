@@ -34,6 +34,22 @@ pub enum ExecModel {
     Extremes,
 }
 
+/// Where in [nominal, nominal + J] each job of a task with release jitter J
+/// is released (tasks without jitter release at the nominal instant, and
+/// draw nothing, whatever the model).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Jitter {
+    /// Uniform integer nanoseconds in [0, J], from the task's seeded stream.
+    #[default]
+    Uniform,
+    /// 0 or J with equal probability.
+    Extremes,
+    /// Always J (every job as late as it may be).
+    Latest,
+    /// Always 0 (the nominal releases).
+    None,
+}
+
 /// How to run a simulation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SimConfig {
@@ -45,6 +61,8 @@ pub struct SimConfig {
     pub phasing: Phasing,
     /// Which demand each job gets.
     pub exec: ExecModel,
+    /// Where each job of a jittered task is released.
+    pub jitter: Jitter,
     /// Keep a [`JobRecord`](rtpipe_joblog::JobRecord) of every completed job (memory grows with the horizon).
     pub log_jobs: bool,
 }
@@ -57,6 +75,7 @@ impl SimConfig {
             seed: 0,
             phasing: Phasing::Sync,
             exec: ExecModel::Worst,
+            jitter: Jitter::Uniform,
             log_jobs: false,
         }
     }

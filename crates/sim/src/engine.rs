@@ -5,7 +5,7 @@ use crate::rng::Rng;
 use crate::server::{Cbs, Pibs, Sporadic};
 use crate::*;
 use rtpipe_joblog::{BadChain, JobRecord, Provenance, Segment, SimResult, TaskStats};
-use rtpipe_model::policy::{rate_monotonic, Budget as Kind, Preemption};
+use rtpipe_model::policy::{ranks, Budget as Kind, Preemption};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
@@ -137,6 +137,15 @@ pub(crate) struct TaskSim {
     /// Sporadic servers out of budget may run in slack; others wait.
     pub(crate) slack_when_empty: bool,
     pub(crate) period: Nanos,
+    /// D: a job finishing later than this after its nominal release is late.
+    pub(crate) deadline: Nanos,
+    /// J: each job is released in [nominal, nominal + J].
+    pub(crate) jitter: Nanos,
+    /// Where in that window (drawn from `rng` when J > 0).
+    pub(crate) jitter_model: Jitter,
+    /// The nominal release of the next job (`next_release` is its actual
+    /// one, up to J later).
+    pub(crate) next_nominal: Nanos,
     /// 0 for guaranteed tasks, 1 for background ones.
     pub(crate) class: u8,
     /// RM rank (1 = highest); unused under EDF.
@@ -182,16 +191,40 @@ pub(crate) fn release_jobs(ts: &mut TaskSim, exec: ExecModel, t: Nanos) {
         if ts.queue.is_empty() {
             ts.budget.unblock(ts.next_release.max(t));
         }
+        // A job's release is its nominal instant: response times and
+        // deadlines count from there (R = J + w); it enters the queue at
+        // its actual one, `next_release`.
         ts.queue.push_back(Job {
             index: ts.next_index,
-            release: ts.next_release,
+            release: ts.next_nominal,
             demand,
             remaining: demand,
             read: None,
         });
         ts.stats.released += 1;
         ts.next_index += 1;
-        ts.next_release += ts.period;
+        ts.next_nominal += ts.period;
+        ts.next_release = ts.next_nominal + jitter_draw(ts);
+    }
+}
+
+/// How late after its nominal release the next job of `ts` comes: 0
+/// without jitter (and no draw, so jitter-free runs are as they were).
+fn jitter_draw(ts: &mut TaskSim) -> Nanos {
+    if ts.jitter == 0 {
+        return 0;
+    }
+    match ts.jitter_model {
+        Jitter::Uniform => ts.rng.range(0, ts.jitter as u64) as Nanos,
+        Jitter::Extremes => {
+            if ts.rng.chance(0.5) {
+                ts.jitter
+            } else {
+                0
+            }
+        }
+        Jitter::Latest => ts.jitter,
+        Jitter::None => 0,
     }
 }
 
@@ -237,7 +270,7 @@ impl<H: Hooks> Sim<H> {
         // demands of a task do not depend on the schedule.
         let mut master = Rng::new(cfg.seed);
         let offsets = offsets_of(spec, &cfg.phasing, &periods, &mut master)?;
-        let (mut tasks, cpu_tasks) = task_sims(spec, &periods, &offsets, &mut master);
+        let (mut tasks, cpu_tasks) = task_sims(spec, &periods, &offsets, cfg.jitter, &mut master);
         let prov = Provenance::new(spec).map_err(|BadChain(c)| SimError::BadChain(c))?;
         link_servers(&mut tasks);
         let releases = tasks
@@ -431,7 +464,7 @@ impl<H: Hooks> Sim<H> {
         };
         let key = match (&ts.budget, self.edf) {
             (Budget::Cbs(c), _) => c.deadline,
-            (_, true) => job.release + ts.period,
+            (_, true) => job.release + ts.deadline,
             (_, false) => match ts.serves {
                 // PIBS inheritance: the better (smaller) rank of the server
                 // and the Main VCPU it serves while that one has a job.
@@ -543,7 +576,7 @@ impl<H: Hooks> Sim<H> {
         let response = t - job.release;
         ts.stats.completed += 1;
         ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
-        if response > ts.period {
+        if response > ts.deadline {
             ts.stats.late += 1;
         }
         self.prov.publish(i, t);
@@ -746,10 +779,11 @@ fn task_sims(
     spec: &Spec,
     periods: &[Nanos],
     offsets: &[Nanos],
+    jitter: Jitter,
     master: &mut Rng,
 ) -> (Vec<TaskSim>, Vec<Vec<usize>>) {
     let n = spec.tasks.len();
-    let ranks = rate_monotonic(spec);
+    let ranks = ranks(spec);
     let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpu_ids.sort_unstable();
     cpu_ids.dedup();
@@ -761,7 +795,7 @@ fn task_sims(
         let (c, p) = (t.budget(), periods[i]);
         let budget = match spec.policy().budget(t.server) {
             None => Budget::Unlimited,
-            Some(Kind::Cbs) => Budget::Cbs(Cbs::new(c, p)),
+            Some(Kind::Cbs) => Budget::Cbs(Cbs::with_deadline(c, p, t.deadline().unwrap_or(p))),
             Some(Kind::Sporadic) => Budget::Sporadic(Sporadic::new(c, p, 0)),
             Some(Kind::Pibs) => Budget::Pibs(Pibs::new(c, p)),
         };
@@ -769,6 +803,10 @@ fn task_sims(
             slack_when_empty: matches!(budget, Budget::Sporadic(_)),
             budget,
             period: periods[i],
+            deadline: t.deadline().unwrap_or(p),
+            jitter: t.jitter,
+            jitter_model: jitter,
+            next_nominal: offsets[i],
             class: u8::from(t.server == Server::Background),
             rank: ranks[i].map_or(i as i64, |r| r as i64),
             serves: spec.policy().inherits_from(t.serves),
@@ -784,6 +822,10 @@ fn task_sims(
             entry: None,
             timer: None,
         });
+        if let Some(ts) = tasks.last_mut() {
+            // The first job is jittered too.
+            ts.next_release = offsets[i] + jitter_draw(ts);
+        }
     }
     (tasks, cpu_tasks)
 }

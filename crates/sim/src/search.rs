@@ -34,7 +34,7 @@
 
 use crate::observe::ChainStatsExt;
 use crate::rng::Rng;
-use crate::{simulate, ExecModel, Phasing, SimConfig, SimError};
+use crate::{simulate, ExecModel, Jitter, Phasing, SimConfig, SimError};
 use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
 use rtpipe_joblog::{SimResult, Witness};
 use rtpipe_model::{gcd, Nanos, Spec};
@@ -48,6 +48,16 @@ pub const EXEC_MODELS: [ExecModel; 4] = [
     ExecModel::Uniform,
 ];
 
+/// The release-jitter models a candidate may use (only drawn from when a
+/// task has jitter): the nominal releases, the latest, a random extreme
+/// per job, uniform.
+pub const JITTER_MODELS: [Jitter; 4] = [
+    Jitter::None,
+    Jitter::Latest,
+    Jitter::Extremes,
+    Jitter::Uniform,
+];
+
 /// One point of the search space: everything a run depends on besides the
 /// spec and the horizon.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -59,6 +69,8 @@ pub struct Candidate {
     pub exec: ExecModel,
     /// Seeds the demand draws of [`ExecModel::Extremes`] and [`ExecModel::Uniform`].
     pub seed: u64,
+    /// Where jittered jobs are released (the seed draws them too).
+    pub jitter: Jitter,
 }
 
 impl Candidate {
@@ -69,6 +81,7 @@ impl Candidate {
             seed: self.seed,
             phasing: Phasing::Given(self.offsets.clone()),
             exec: self.exec,
+            jitter: self.jitter,
             log_jobs: false,
         }
     }
@@ -295,6 +308,8 @@ struct Searcher<'a, F> {
     chain_tasks: Vec<usize>,
     /// Rate-monotonic ranks (1 highest; `None` in the background).
     prio: Vec<Option<usize>>,
+    /// Some task has release jitter: the search also moves the jitter model.
+    jittered: bool,
     /// Known offsets (`offset` in the spec), which no candidate changes.
     fixed: Vec<Option<Nanos>>,
     /// The tasks whose offset the search may move.
@@ -335,7 +350,8 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
             demands,
             grids: [gcd_periods, gcd_all],
             chain_tasks,
-            prio: rtpipe_model::policy::rate_monotonic(spec),
+            prio: rtpipe_model::policy::ranks(spec),
+            jittered: spec.tasks.iter().any(|t| t.jitter > 0),
             fixed,
             movable,
             t_max,
@@ -371,6 +387,7 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
                     offsets: vec![0; self.periods.len()],
                     exec: ExecModel::Worst,
                     seed: cfg.seed,
+                    jitter: Jitter::Uniform,
                 }),
                 None,
                 None,
@@ -428,6 +445,10 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
         cand
     }
 
+    fn random_jitter(&mut self) -> Jitter {
+        JITTER_MODELS[self.rng.range(0, JITTER_MODELS.len() as u64 - 1) as usize]
+    }
+
     fn random_exec(&mut self) -> ExecModel {
         EXEC_MODELS[self.rng.range(0, EXEC_MODELS.len() as u64 - 1) as usize]
     }
@@ -454,10 +475,21 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
         } else {
             self.random_exec()
         };
+        let seed = self.rng.next_u64();
+        // Jitter draws only where a task has some, so that jitter-free
+        // specs search exactly as before: the nominal releases first, the
+        // latest ones next, then any model.
+        let jitter = match k {
+            _ if !self.jittered => Jitter::Uniform,
+            0 => Jitter::None,
+            1 => Jitter::Latest,
+            _ => self.random_jitter(),
+        };
         let cand = Candidate {
             offsets,
             exec,
-            seed: self.rng.next_u64(),
+            seed,
+            jitter,
         };
         self.pinned(cand)
     }
@@ -623,6 +655,9 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
         if r < 0.2 || all_known {
             cand.exec = self.random_exec();
             cand.seed = self.rng.next_u64();
+            if self.jittered {
+                cand.jitter = self.random_jitter();
+            }
             return r < 0.12 || all_known;
         }
         false
@@ -912,6 +947,7 @@ mod tests {
             offsets: vec![0, 1_999],
             exec: ExecModel::Worst,
             seed: 0,
+            jitter: Jitter::Uniform,
         };
         let c = SearchConfig {
             restarts: 1,

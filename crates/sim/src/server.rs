@@ -289,6 +289,9 @@ pub struct Cbs {
     pub budget: Nanos,
     /// Period T.
     pub period: Nanos,
+    /// Relative deadline D ≤ T (SCHED_DEADLINE's dl_deadline): a fresh
+    /// deadline is D after the wake-up.
+    pub relative_deadline: Nanos,
     /// The current absolute deadline.
     pub deadline: Nanos,
     /// Runtime left (negative after an overrun).
@@ -300,9 +303,16 @@ pub struct Cbs {
 impl Cbs {
     /// A server with budget C and period T, not yet woken (no runtime).
     pub fn new(budget: Nanos, period: Nanos) -> Cbs {
+        Cbs::with_deadline(budget, period, period)
+    }
+
+    /// A server with budget C, period T and relative deadline D ≤ T, not
+    /// yet woken.
+    pub fn with_deadline(budget: Nanos, period: Nanos, deadline: Nanos) -> Cbs {
         Cbs {
             budget,
             period,
+            relative_deadline: deadline,
             deadline: 0,
             runtime: 0,
             throttled_until: None,
@@ -319,10 +329,11 @@ impl Cbs {
         let late = self.deadline <= now;
         // Time left to the deadline, none once it has passed (then `late`
         // decides anyway): part of the rule, not a repair.
-        let overflow = (self.runtime as i128) * (self.period as i128)
+        // With D < T the density C / D stands for the bandwidth C / T.
+        let overflow = (self.runtime as i128) * (self.relative_deadline as i128)
             > (self.budget as i128) * ((self.deadline - now).max(0) as i128);
         if late || overflow {
-            self.deadline = now + self.period;
+            self.deadline = now + self.relative_deadline;
             self.runtime = self.budget;
         }
     }

@@ -50,6 +50,7 @@ fn run(spec: &Spec, horizon: Nanos, phasing: Phasing, exec: ExecModel) -> SimRes
         phasing,
         exec,
         log_jobs: true,
+        jitter: crate::Jitter::Uniform,
     };
     match simulate(spec, &cfg) {
         Ok(r) => r,
@@ -300,6 +301,7 @@ fn deterministic_per_seed() {
         phasing: Phasing::Random,
         exec: ExecModel::Uniform,
         log_jobs: false,
+        jitter: crate::Jitter::Uniform,
     };
     let a = simulate(&s, &mk(5));
     let b = simulate(&s, &mk(5));
@@ -444,6 +446,7 @@ fn varied_configs(spec: &Spec, seed: u64, horizon: Nanos) -> Vec<SimConfig> {
         phasing,
         exec,
         log_jobs,
+        jitter: crate::Jitter::Uniform,
     })
     .collect()
 }
@@ -530,6 +533,7 @@ fn chains_from_jobs_replays_the_simulators_own_measurement() {
             phasing: Phasing::Random,
             exec: ExecModel::Uniform,
             log_jobs: true,
+            jitter: crate::Jitter::Uniform,
             ..SimConfig::new(2_000_000_000)
         };
         let Ok(r) = simulate(&s, &cfg) else {
@@ -577,5 +581,42 @@ fn sample_rows_are_the_chain_figures_one_sample_at_a_time() {
         assert_eq!(col(SampleRow::event_reaction), c.event_reaction.values);
         assert_eq!(col(SampleRow::event_freshness), c.event_freshness.values);
         assert!(c.reached > 10);
+    }
+}
+
+/// Release jitter: each job reads (alone on its CPU, at once) within
+/// [k·T, k·T + J] of its nominal release, at its latest under
+/// `Jitter::Latest`, at an end under `Jitter::Extremes`; its recorded
+/// release and response count from the nominal instant.
+#[test]
+fn jittered_jobs_release_within_their_window() {
+    let mut s = spec(Scheduler::Rm, vec![task(10_000, 1_000, &[], 0)], &[&[0]]);
+    s.tasks[0].jitter = 3_000;
+    for (jitter, check) in [
+        (Jitter::Latest, (|d: Nanos| d == 3_000) as fn(Nanos) -> bool),
+        (Jitter::Extremes, |d| d == 0 || d == 3_000),
+        (Jitter::Uniform, |d| (0..=3_000).contains(&d)),
+        (Jitter::None, |d| d == 0),
+    ] {
+        let cfg = SimConfig {
+            horizon: 200_000,
+            seed: 9,
+            phasing: Phasing::Sync,
+            exec: ExecModel::Worst,
+            jitter,
+            log_jobs: true,
+        };
+        let r = simulate(&s, &cfg).unwrap_or_else(|e| panic!("{e}"));
+        assert!(r.jobs.len() >= 19, "{jitter:?}");
+        for (k, j) in r.jobs.iter().enumerate() {
+            assert_eq!(j.release, k as Nanos * 10_000);
+            assert!(
+                check(j.read - j.release),
+                "{jitter:?}: job {k} read {}",
+                j.read
+            );
+        }
+        let late = r.jobs.iter().map(|j| j.read - j.release).max().unwrap_or(0);
+        assert_eq!(r.tasks[0].max_response, Some(late + 1_000), "{jitter:?}");
     }
 }

@@ -58,6 +58,7 @@ fn worst_responses(spec: &Spec, offsets: &[i64], exec: ExecModel, seed: u64) -> 
         phasing: Phasing::Given(offsets.iter().map(|o| o * MS).collect()),
         exec,
         log_jobs: false,
+        jitter: rtpipe_sim::Jitter::default(),
     };
     let r = simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
     r.tasks

@@ -24,6 +24,7 @@ fn run(spec: &Spec, phasing: Phasing, horizon: Nanos) -> SimResult {
         phasing,
         exec: ExecModel::Uniform,
         log_jobs: false,
+        jitter: rtpipe_sim::Jitter::Uniform,
     };
     simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"))
 }

@@ -207,6 +207,7 @@ fn check_system(seed: u64, steps: u32, st: &mut Stats) {
             phasing,
             exec,
             log_jobs: false,
+            jitter: rtpipe_sim::Jitter::Uniform,
         };
         let res = match simulate(&spec, &cfg) {
             Ok(r) => r,
@@ -320,6 +321,7 @@ fn search(
             offsets,
             exec: cfg.exec,
             seed: cfg.seed,
+            jitter: cfg.jitter,
         }],
         anchor,
         ..SearchConfig::new(chain, metric, cfg.horizon)

@@ -45,6 +45,7 @@ fn table3_p2_reaction_exceeds_eq5() {
         phasing: Phasing::Given(offsets),
         exec: ExecModel::Worst,
         log_jobs: false,
+        jitter: rtpipe_sim::Jitter::Uniform,
     };
     let res = match simulate(&spec, &cfg) {
         Ok(r) => r,
@@ -85,6 +86,7 @@ path = ["a"]
         phasing: Phasing::Given(vec![0, 4 * MS + MS / 2]),
         exec: ExecModel::Worst,
         log_jobs: false,
+        jitter: rtpipe_sim::Jitter::Uniform,
     };
     let res = match simulate(&spec, &cfg) {
         Ok(r) => r,

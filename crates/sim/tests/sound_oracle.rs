@@ -303,6 +303,7 @@ fn check_system(seed: u64, search_steps: u64, st: &mut Stats) {
             phasing,
             exec,
             log_jobs: false,
+            jitter: rtpipe_sim::Jitter::Uniform,
         };
         let (score, target, offsets) = check_run(&sys, &cfg, run, true, &mut paper_exceeded, st);
         let better = match &best {
@@ -360,6 +361,7 @@ fn search(
             offsets,
             exec: cfg.exec,
             seed: cfg.seed,
+            jitter: cfg.jitter,
         }],
         anchor,
         ..SearchConfig::new(chain, metric, cfg.horizon)
@@ -585,6 +587,7 @@ fn reproduction(
     let replay = SimConfig {
         phasing: Phasing::Given(res.offsets.clone()),
         log_jobs: true,
+        jitter: rtpipe_sim::Jitter::Uniform,
         ..cfg.clone()
     };
     let Ok(log) = simulate(spec, &replay) else {

@@ -21,7 +21,7 @@ use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
-use rtpipe_sim::{simulate_with_progress, Phasing, SimConfig, SimError};
+use rtpipe_sim::{simulate_with_progress, Jitter, Phasing, SimConfig, SimError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -142,6 +142,13 @@ fn run_simulation(
         seed: a.seed,
         phasing,
         exec: a.exec.model(),
+        // Jittered tasks: every job at its latest under the deterministic
+        // synchronous phasing, uniform in its window otherwise (the search
+        // explores the other models).
+        jitter: match a.phasing {
+            PhasingArg::Sync => Jitter::Latest,
+            PhasingArg::Random | PhasingArg::Search => Jitter::Uniform,
+        },
         log_jobs: p.log_jobs,
     };
     simulate_with_progress(spec, &cfg, progress)

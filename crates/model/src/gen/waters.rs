@@ -202,6 +202,7 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
         schedulability: SchedTest::Rta,
         resolution: 1_000_000,
         harmonic: false,
+        priorities: crate::Priorities::RateMonotonic,
         channels,
         tasks,
         chains,

@@ -286,6 +286,7 @@ fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
         schedulability: SchedTest::Rta,
         resolution: 1_000_000,
         harmonic: false,
+        priorities: crate::Priorities::RateMonotonic,
         channels: vec![Channel {
             name: "mem".into(),
             bandwidth: 1.0,
