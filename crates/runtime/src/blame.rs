@@ -5,7 +5,7 @@
 //! as a disturbance of the analysis (`rtpipe_analysis::disturbance`),
 //! grows the bound by at least the excess. Everything else is a violation.
 
-use crate::exec::{Policy, RunResult};
+use crate::exec::{Policy, RunResult, RESERVATION_MARGIN};
 use crate::probe::Probe;
 use rtpipe_joblog::JobRecord;
 use rtpipe_model::{Nanos, Spec};
@@ -15,6 +15,9 @@ use rtpipe_model::{Nanos, Spec};
 pub enum Cause {
     /// The run had no real-time policy (`--policy other --best-effort`).
     BestEffort,
+    /// SCHED_DEADLINE ran global EDF on all CPUs, which the analysis (EDF
+    /// partitioned by the spec's `cpu`) does not cover.
+    GlobalEdf,
     /// A job used more CPU time than its task's budget.
     Overrun {
         /// The task.
@@ -25,6 +28,10 @@ pub enum Cause {
         demand: Nanos,
         /// The task's budget C, ns.
         budget: Nanos,
+        /// How long the kernel then withheld the CPU from the task: under
+        /// SCHED_DEADLINE a reservation that overruns its runtime is
+        /// throttled until its next period (up to T); 0 under SCHED_FIFO.
+        throttle: Nanos,
     },
     /// A job used more CPU time than its task's declared demand x (the job
     /// frame's register copies and clock reads, a burn's overshoot): the
@@ -70,9 +77,14 @@ impl Cause {
     /// How long it can have delayed the window's observation, ns.
     pub fn delay(&self) -> Nanos {
         match *self {
-            Cause::BestEffort | Cause::Demoted { .. } => Nanos::MAX,
+            Cause::BestEffort | Cause::GlobalEdf | Cause::Demoted { .. } => Nanos::MAX,
             Cause::Steal { .. } => 0,
-            Cause::Overrun { demand, budget, .. } => demand - budget,
+            Cause::Overrun {
+                demand,
+                budget,
+                throttle,
+                ..
+            } => demand - budget + throttle,
             Cause::Demand {
                 demand, declared, ..
             } => demand - declared,
@@ -85,16 +97,26 @@ impl Cause {
         let name = |t: usize| spec.tasks.get(t).map_or("?", |t| t.name.as_str());
         match *self {
             Cause::BestEffort => "SCHED_OTHER (--best-effort): no real-time guarantee".into(),
+            Cause::GlobalEdf => {
+                "SCHED_DEADLINE ran global EDF on all CPUs, which the partitioned analysis does not cover"
+                    .into()
+            }
             Cause::Overrun {
                 task,
                 job,
                 demand,
                 budget,
+                throttle,
             } => format!(
-                "{} job {job} ran {} us against a budget of {} us",
+                "{} job {job} ran {} us against a budget of {} us{}",
                 name(task),
                 us(demand),
-                us(budget)
+                us(budget),
+                if throttle > 0 {
+                    format!(" (SCHED_DEADLINE throttles it up to {} us)", us(throttle))
+                } else {
+                    String::new()
+                }
             ),
             Cause::Demand {
                 task,
@@ -153,8 +175,10 @@ impl<'r> Blame<'r> {
     /// demand overruns, start latency and outside preemption of `tasks`'
     /// own jobs, steal on those CPUs.
     pub fn causes(&self, window: (Nanos, Nanos), tasks: &[usize]) -> Vec<Cause> {
-        if self.res.policy == Policy::Other {
-            return vec![Cause::BestEffort];
+        match self.res.policy {
+            Policy::Other => return vec![Cause::BestEffort],
+            Policy::Deadline => return vec![Cause::GlobalEdf],
+            Policy::Fifo => {}
         }
         let window = self.extend(window, tasks);
         let mut out: Vec<Cause> = tasks
@@ -257,7 +281,16 @@ impl<'r> Blame<'r> {
 
     /// Jobs of `task` that overlap `window` ([release, finish]) and overran.
     fn overruns(&self, task: usize, window: (Nanos, Nanos)) -> Vec<Cause> {
-        let budget = self.spec.tasks[task].budget();
+        let t = &self.spec.tasks[task];
+        let budget = t.budget();
+        // A SCHED_DEADLINE reservation's runtime is C + its margin; beyond
+        // it the kernel throttles the task.
+        let throttled = |demand: Nanos| match self.res.policy {
+            Policy::Deadline if demand > budget + RESERVATION_MARGIN => {
+                t.fixed_period().unwrap_or(0)
+            }
+            _ => 0,
+        };
         self.overlapping(task, window)
             .iter()
             // Any excess: the analysis charges the budget as interference,
@@ -268,6 +301,7 @@ impl<'r> Blame<'r> {
                 job: j.index,
                 demand: j.demand,
                 budget,
+                throttle: throttled(j.demand),
             })
             .collect()
     }
@@ -475,6 +509,7 @@ output = { channel = "shm", size = 0 }
             job: 2,
             demand: 3 * MS,
             budget: MS,
+            throttle: 0,
         };
         assert_eq!(b.causes((21 * MS, 22 * MS), &[0]), vec![overrun]);
         // 12–18 ms on CPU 1: the steal there.
@@ -503,6 +538,7 @@ output = { channel = "shm", size = 0 }
                 job: 0,
                 demand: 2 * MS,
                 budget: MS,
+                throttle: 0,
             },
         ];
         assert_eq!(Blame::total(&c), 4 * MS);

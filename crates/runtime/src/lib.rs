@@ -19,7 +19,7 @@ pub mod sys;
 
 pub use exec::{
     check, fifo_priorities, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun,
-    OVERRUN_TOLERANCE,
+    OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 pub use load::Load;
 pub use pi::PiMutex;
