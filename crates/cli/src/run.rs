@@ -497,7 +497,11 @@ fn to_text(
     let mut out = crate::analyze::system_line(spec);
     out.push_str(&ran_line(spec, res, spin, flight));
     if res.policy == Policy::Deadline {
-        out.push_str("SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n");
+        out.push_str(if res.partitioned {
+            "SCHED_DEADLINE, partitioned EDF: one root domain per CPU (exclusive cpusets), each thread pinned to its task's CPU\n"
+        } else {
+            "SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n"
+        });
     }
     if !obs.is_empty() {
         out.push_str(
@@ -589,7 +593,7 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
         let over = matches!((ts.max_response, tm.bounded_response()), (Some(s), Some(r)) if s > r);
         t.row(vec![
             task.name.clone(),
-            if res.policy == Policy::Deadline {
+            if res.policy == Policy::Deadline && !res.partitioned {
                 "any".into()
             } else {
                 task.cpu.to_string()
@@ -649,6 +653,9 @@ struct RunInfo<'a> {
     interrupted: bool,
     steal: Option<f64>,
     spin_iterations_per_us: f64,
+    /// SCHED_DEADLINE only: `partitioned` (a root domain per CPU) or
+    /// `global` EDF.
+    edf: Option<&'static str>,
     sound_bound_violations: &'a Verdict,
     notes: &'a [String],
 }
@@ -696,6 +703,11 @@ fn to_json<'a>(
         load: res.load,
         epoch_monotonic_ns: res.epoch,
         real_time: res.policy != Policy::Other,
+        edf: (res.policy == Policy::Deadline).then_some(if res.partitioned {
+            "partitioned"
+        } else {
+            "global"
+        }),
         interrupted: res.interrupted,
         steal: res.steal.map(|s| spec.in_unit(s)),
         spin_iterations_per_us: spin.iters_per_us,

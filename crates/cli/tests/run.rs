@@ -139,10 +139,24 @@ fn deadline_run_of_an_edf_spec() {
     if unprivileged(&o, "deadline_run_of_an_edf_spec") {
         return;
     }
-    assert_exit(&o, 0);
     let v = json_of(&o);
     assert_eq!(v["run"]["policy"], "deadline");
     every_chain_observed(&v);
+    // Partitioned where the machine has a cpuset hierarchy (CI does): then
+    // the verdict is the analysis' own, and the exit status follows the
+    // unexplained observations (docs/runtime.md: a few per second remain
+    // unexplained here, so 1 is possible), never anything else.
+    let verdict = &v["run"]["sound_bound_violations"];
+    let unexcused = verdict["unexcused"].as_u64().unwrap_or(0);
+    assert_exit(&o, if unexcused > 0 { 1 } else { 0 });
+    if v["run"]["edf"] == "global" {
+        assert_eq!(
+            unexcused, 0,
+            "a global-EDF run is outside the analysis: {verdict}"
+        );
+    } else {
+        assert_eq!(v["run"]["edf"], "partitioned");
+    }
 }
 
 #[test]

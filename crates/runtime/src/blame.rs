@@ -177,8 +177,8 @@ impl<'r> Blame<'r> {
     pub fn causes(&self, window: (Nanos, Nanos), tasks: &[usize]) -> Vec<Cause> {
         match self.res.policy {
             Policy::Other => return vec![Cause::BestEffort],
-            Policy::Deadline => return vec![Cause::GlobalEdf],
-            Policy::Fifo => {}
+            Policy::Deadline if !self.res.partitioned => return vec![Cause::GlobalEdf],
+            Policy::Deadline | Policy::Fifo => {}
         }
         let window = self.extend(window, tasks);
         let mut out: Vec<Cause> = tasks
@@ -261,7 +261,9 @@ impl<'r> Blame<'r> {
 
     /// The CPUs the tasks run on (`None`: all of them, under global EDF).
     fn cpus_of(&self, tasks: &[usize]) -> Option<Vec<u32>> {
-        (self.res.policy != Policy::Deadline).then(|| {
+        // Pinned to their tasks' CPUs unless SCHED_DEADLINE ran global EDF.
+        let pinned = self.res.policy != Policy::Deadline || self.res.partitioned;
+        pinned.then(|| {
             tasks
                 .iter()
                 .filter_map(|&t| self.spec.tasks.get(t))
@@ -493,6 +495,7 @@ output = { channel = "shm", size = 0 }
             notes: Vec::new(),
             probes,
             demoted: Vec::new(),
+            partitioned: false,
         };
         (spec, res)
     }

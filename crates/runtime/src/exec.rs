@@ -3,95 +3,22 @@
 //! every job, replayed after the run through the simulator's own sample
 //! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
+use crate::class::{configure, lock_memory, privileges, Placement};
+pub use crate::config::{
+    fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
+};
 use crate::four_slot::{self, Reader, Writer};
 use crate::load::Load;
+use crate::partition::Partition;
 use crate::pi::PiMutex;
 use crate::probe::{probe, Probe, PROBE_PERIOD};
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::LinuxClass;
-use rtpipe_model::{Diagnostic, Spec};
-use std::fmt;
+use rtpipe_model::Spec;
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
-
-/// How task threads are scheduled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Policy {
-    /// `SCHED_FIFO`, rate-monotonic priorities, each thread pinned to its
-    /// task's CPU (partitioned fixed priority, the `rm` model).
-    Fifo,
-    /// `SCHED_DEADLINE` reservations (runtime = budget, deadline = period =
-    /// T): the `edf` model's constant-bandwidth servers.
-    Deadline,
-    /// `SCHED_OTHER`, pinned: no real-time guarantee (best effort).
-    Other,
-}
-
-impl Policy {
-    /// The name the CLI's `--policy` takes.
-    pub fn name(self) -> &'static str {
-        match self {
-            Policy::Fifo => "fifo",
-            Policy::Deadline => "deadline",
-            Policy::Other => "other",
-        }
-    }
-}
-
-/// What to run.
-#[derive(Debug, Clone, Copy)]
-pub struct RunConfig {
-    /// Releases happen in [0, duration) after the epoch.
-    pub duration: Nanos,
-    /// The scheduling policy of the task threads.
-    pub policy: Policy,
-    /// Background CPU hogs (SCHED_OTHER) running for the whole run.
-    pub load: usize,
-}
-
-/// The kind of a [`RunError`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorKind {
-    /// The spec or the flags cannot run as asked (exit status 2).
-    Config,
-    /// The kernel refused a scheduling class or a reservation (exit 2:
-    /// fixable by the user).
-    Refused,
-}
-
-/// Why a run could not start: the task, what is wrong, how to fix it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunError {
-    /// Whose fault it is.
-    pub kind: ErrorKind,
-    /// What is wrong and how to fix it.
-    pub diagnostic: Diagnostic,
-}
-
-impl RunError {
-    fn config(msg: impl Into<String>, help: impl Into<String>) -> RunError {
-        RunError {
-            kind: ErrorKind::Config,
-            diagnostic: Diagnostic::error(msg, help),
-        }
-    }
-
-    fn refused(msg: impl Into<String>, help: impl Into<String>) -> RunError {
-        RunError {
-            kind: ErrorKind::Refused,
-            diagnostic: Diagnostic::error(msg, help),
-        }
-    }
-}
-
-/// The message alone (the help is the caller's to show).
-impl fmt::Display for RunError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.diagnostic.message)
-    }
-}
 
 /// Per task, what the run measured beyond [`TaskStats`].
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -144,6 +71,9 @@ pub struct RunResult {
     /// Tasks moved to SCHED_OTHER to finish (still running long after the
     /// run's end).
     pub demoted: Vec<usize>,
+    /// SCHED_DEADLINE ran partitioned EDF (a root domain per CPU, each
+    /// thread pinned to its task's CPU) rather than global EDF.
+    pub partitioned: bool,
 }
 
 /// The value a register holds: `None` until the producer first publishes.
@@ -177,20 +107,6 @@ struct Thread<'a, V> {
     /// Per job, the producer job read on each input (u64::MAX: none yet).
     inputs: Vec<u64>,
 }
-
-/// CPU time a job may exceed its budget by before it counts as an overrun:
-/// the job frame's own cost (three reads of the thread CPU clock, each a
-/// system call, the register copies), which a synthetic body burning
-/// exactly its budget adds on top.
-pub const OVERRUN_TOLERANCE: Nanos = 5_000;
-
-/// What a SCHED_DEADLINE reservation's runtime adds to the budget C: the
-/// job frame, and the rare burn that ends late (up to 15 µs measured). A
-/// reservation with runtime C exactly is overrun by a few µs by nearly
-/// every job that burns its budget, and the kernel then throttles it until
-/// its next period; once behind, a task whose reservation is its whole
-/// demand never catches up (measured: every period missed).
-pub const RESERVATION_MARGIN: Nanos = 50_000;
 
 /// How long after the last release a thread may still be running before it
 /// is deemed stuck (at least twice the longest period).
@@ -235,57 +151,6 @@ fn watch(
     moved
 }
 
-/// Refuses up front a real-time policy this process may not use (rather
-/// than failing thread by thread once the load has started).
-fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
-    if policy == Policy::Other || sys::is_root() || sys::has_capability(sys::CAP_SYS_NICE) {
-        return Ok(());
-    }
-    let top = fifo_priorities(spec).into_iter().max().unwrap_or(1);
-    let rtprio = sys::soft_limit(libc::RLIMIT_RTPRIO);
-    if policy == Policy::Fifo && rtprio >= top as u64 {
-        return Ok(());
-    }
-    let (class, need) = match policy {
-        Policy::Deadline => ("SCHED_DEADLINE", "root or CAP_SYS_NICE".to_string()),
-        _ => (
-            "SCHED_FIFO",
-            format!("root, CAP_SYS_NICE, or an RLIMIT_RTPRIO of at least {top} (it is {rtprio})"),
-        ),
-    };
-    Err(RunError::refused(
-        format!("{class} needs {need}; this process has none of them"),
-        "run as root, or grant the capability (e.g. `setcap cap_sys_nice,cap_ipc_lock+ep $(which rtpipe)`), or run without real-time guarantees: --policy other --best-effort",
-    ))
-}
-
-/// Locks memory for a real-time run where that cannot starve thread
-/// stacks; the warning when it does not.
-fn lock_memory(policy: Policy) -> Option<String> {
-    if policy == Policy::Other {
-        return None;
-    }
-    if !may_lock_memory() {
-        return Some(format!(
-            "warning: memory not locked (RLIMIT_MEMLOCK is {} KiB, and mlockall under it starves thread stacks): page faults may delay jobs; `ulimit -l unlimited` or CAP_IPC_LOCK locks it",
-            sys::soft_limit(libc::RLIMIT_MEMLOCK) / 1024
-        ));
-    }
-    sys::lock_memory()
-        .err()
-        .map(|e| format!("warning: mlockall failed ({e}): page faults may delay jobs"))
-}
-
-/// Whether locking all current and future memory can work: unlimited
-/// RLIMIT_MEMLOCK, root or CAP_IPC_LOCK. Under a finite limit mlockall
-/// itself succeeds, and then every later thread stack that does not fit
-/// fails to map (EAGAIN at thread spawn), so it is not tried.
-fn may_lock_memory() -> bool {
-    sys::is_root()
-        || sys::has_capability(sys::CAP_IPC_LOCK)
-        || sys::soft_limit(libc::RLIMIT_MEMLOCK) == u64::MAX
-}
-
 /// Largest number of jobs logged in one run (memory: ~48 bytes a job).
 const MAX_JOBS: u64 = 20_000_000;
 
@@ -309,7 +174,7 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
         };
         jobs += (cfg.duration / period) as u64 + 1;
         bandwidth += (t.budget() + RESERVATION_MARGIN) as f64 / period as f64;
-        if cfg.policy != Policy::Deadline && t.cpu as usize >= cpus {
+        if t.cpu as usize >= cpus {
             return Err(RunError::config(
                 format!(
                     "task {} is bound to cpu {} but this machine has {cpus} CPU(s) (0..{})",
@@ -385,17 +250,6 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
     Ok(())
 }
 
-/// The SCHED_FIFO priority of each task: rank 1 (the highest, in the
-/// spec's priority order: rate monotonic, deadline monotonic or explicit,
-/// `rtpipe_model::policy::ranks`) → 90, rank 2 → 89, ...; background tasks
-/// (no rank) → 1.
-pub fn fifo_priorities(spec: &Spec) -> Vec<i32> {
-    rtpipe_model::policy::ranks(spec)
-        .iter()
-        .map(|r| r.map_or(1, |r| (91 - r as i32).max(2)))
-        .collect()
-}
-
 /// Runs `spec` for real: `bodies[i]` for every job of task i, `env` as the
 /// world (sensed at each read, actuated at each publish, under its
 /// priority-inheritance lock, at the true instants relative to the epoch;
@@ -424,7 +278,15 @@ pub fn run<'a, V: Copy + Send>(
         )
     })?;
     sys::catch_sigint();
-    let shared = Shared::new(n);
+    let mut shared = Shared::new(n);
+    if cfg.policy == Policy::Deadline {
+        match Partition::create(sys::online_cpus()) {
+            Ok(p) => shared.partition = Some(p),
+            Err(why) => notes.push(format!(
+                "note: global EDF on all CPUs (partitioned EDF needs one cpuset per CPU: {why})"
+            )),
+        }
+    }
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
@@ -462,6 +324,7 @@ pub fn run<'a, V: Copy + Send>(
     res.epoch = e0;
     res.probes = probes;
     res.demoted = demoted;
+    res.partitioned = shared.partition.is_some();
     Ok(res)
 }
 
@@ -568,6 +431,9 @@ struct Shared {
     tids: Vec<AtomicI32>,
     /// Per task, its thread is done.
     done: Vec<AtomicBool>,
+    /// SCHED_DEADLINE: one root domain per CPU (partitioned EDF), when the
+    /// machine allows it; `None`: global EDF.
+    partition: Option<Partition>,
 }
 
 impl Shared {
@@ -581,6 +447,7 @@ impl Shared {
             errors: Mutex::new(Vec::new()),
             tids: (0..n).map(|_| AtomicI32::new(0)).collect(),
             done: (0..n).map(|_| AtomicBool::new(false)).collect(),
+            partition: None,
         }
     }
 }
@@ -643,7 +510,15 @@ fn task_thread<'a, V: Copy>(
 ) -> Thread<'a, V> {
     let (tid, done) = (&shared.tids[th.task], &shared.done[th.task]);
     tid.store(sys::gettid(), Ordering::SeqCst);
-    if let Err(e) = configure(name, &th, policy) {
+    let place = Placement {
+        name,
+        cpu: th.cpu,
+        priority: th.priority,
+        budget: th.budget,
+        deadline: th.deadline,
+        period: th.period,
+    };
+    if let Err(e) = configure(&place, policy, shared.partition.as_ref()) {
         if let Ok(mut v) = shared.errors.lock() {
             v.push(e);
         }
@@ -656,70 +531,6 @@ fn task_thread<'a, V: Copy>(
     }
     done.store(true, Ordering::SeqCst);
     th
-}
-
-/// Puts the calling thread into its scheduling class.
-fn configure<V>(name: &str, th: &Thread<'_, V>, policy: Policy) -> Result<(), RunError> {
-    let refused = |what: &str, e: std::io::Error, help: String| {
-        RunError::refused(format!("task {name}: the kernel refused {what}: {e}"), help)
-    };
-    let no_privilege = |what: &str| {
-        format!(
-            "{what} needs root or CAP_SYS_NICE (and an RLIMIT_RTPRIO for SCHED_FIFO); \
-             run as root, or run without real-time guarantees: --policy other --best-effort"
-        )
-    };
-    match policy {
-        Policy::Fifo | Policy::Other => {
-            if let Err(e) = sys::pin_to(th.cpu) {
-                return Err(refused(
-                    &format!("pinning to cpu {}", th.cpu),
-                    e,
-                    format!(
-                        "set `cpu` of task {name} to a CPU this process may use (see taskset -p)"
-                    ),
-                ));
-            }
-            if let (Policy::Fifo, Some(p)) = (policy, th.priority) {
-                if let Err(e) = sys::set_fifo(p) {
-                    let help = if e.raw_os_error() == Some(libc::EPERM) {
-                        no_privilege("SCHED_FIFO")
-                    } else {
-                        "check the RT limits (ulimit -r)".into()
-                    };
-                    return Err(refused(&format!("SCHED_FIFO priority {p}"), e, help));
-                }
-            }
-        }
-        Policy::Deadline => {
-            // The runtime carries the job frame on top of the budget
-            // (RESERVATION_MARGIN).
-            let c = (th.budget + RESERVATION_MARGIN).min(th.deadline) as u64;
-            let t = th.period as u64;
-            if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
-                let help = match e.raw_os_error() {
-                    Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
-                    Some(libc::EBUSY) => format!(
-                        "admission control: the reservations already admitted plus this one \
-                         (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU); \
-                         lower the budgets or lengthen the periods",
-                        c as f64 / t as f64
-                    ),
-                    Some(libc::EINVAL) => format!(
-                        "task {name}: runtime {c} ns, deadline = period = {t} ns break the kernel's rules \
-                         (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)"
-                    ),
-                    _ => String::new(),
-                };
-                return Err(refused(
-                    &format!("SCHED_DEADLINE (runtime {c} ns, period {t} ns)"),
-                    e,
-                    help,
-                ));
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The periodic loop of one task: releases at epoch + φ + k·T for
@@ -890,6 +701,7 @@ fn assemble<V>(
         notes,
         probes: Vec::new(),
         demoted: Vec::new(),
+        partitioned: false,
     }
 }
 

@@ -7,9 +7,12 @@
 #![deny(missing_docs)]
 
 pub mod blame;
+mod class;
+mod config;
 pub mod exec;
 pub mod four_slot;
 pub mod load;
+pub mod partition;
 pub mod pi;
 pub mod probe;
 pub mod rt_app;

@@ -1,0 +1,163 @@
+//! The scheduling class of a run's threads: what the process may use
+//! (checked up front), memory locking, and putting each task's thread into
+//! its class (SCHED_FIFO pinned to its CPU, or a SCHED_DEADLINE
+//! reservation, partitioned into the CPU's root domain where possible).
+
+use crate::config::{fifo_priorities, Policy, RunError, RESERVATION_MARGIN};
+use crate::partition::Partition;
+use crate::sys;
+use rtpipe_model::{Nanos, Spec};
+
+/// Where and how one task's thread runs.
+pub(crate) struct Placement<'a> {
+    /// The task's name (for errors).
+    pub(crate) name: &'a str,
+    /// Its CPU.
+    pub(crate) cpu: usize,
+    /// Its SCHED_FIFO priority (fifo only).
+    pub(crate) priority: Option<i32>,
+    /// C, D and T.
+    pub(crate) budget: Nanos,
+    pub(crate) deadline: Nanos,
+    pub(crate) period: Nanos,
+}
+
+/// Puts the calling thread into its scheduling class.
+pub(crate) fn configure(
+    th: &Placement<'_>,
+    policy: Policy,
+    partition: Option<&Partition>,
+) -> Result<(), RunError> {
+    let name = th.name;
+    let refused = |what: &str, e: std::io::Error, help: String| {
+        RunError::refused(format!("task {name}: the kernel refused {what}: {e}"), help)
+    };
+    let no_privilege = |what: &str| {
+        format!(
+            "{what} needs root or CAP_SYS_NICE (and an RLIMIT_RTPRIO for SCHED_FIFO); \
+             run as root, or run without real-time guarantees: --policy other --best-effort"
+        )
+    };
+    match policy {
+        Policy::Fifo | Policy::Other => {
+            if let Err(e) = sys::pin_to(th.cpu) {
+                return Err(refused(
+                    &format!("pinning to cpu {}", th.cpu),
+                    e,
+                    format!(
+                        "set `cpu` of task {name} to a CPU this process may use (see taskset -p)"
+                    ),
+                ));
+            }
+            if let (Policy::Fifo, Some(p)) = (policy, th.priority) {
+                if let Err(e) = sys::set_fifo(p) {
+                    let help = if e.raw_os_error() == Some(libc::EPERM) {
+                        no_privilege("SCHED_FIFO")
+                    } else {
+                        "check the RT limits (ulimit -r)".into()
+                    };
+                    return Err(refused(&format!("SCHED_FIFO priority {p}"), e, help));
+                }
+            }
+        }
+        Policy::Deadline => deadline(th, partition, refused, no_privilege)?,
+    }
+    Ok(())
+}
+
+/// SCHED_DEADLINE for the calling thread: into its CPU's root domain and
+/// pinned when EDF is partitioned, then the reservation.
+fn deadline(
+    th: &Placement<'_>,
+    partition: Option<&Partition>,
+    refused: impl Fn(&str, std::io::Error, String) -> RunError,
+    no_privilege: impl Fn(&str) -> String,
+) -> Result<(), RunError> {
+    let name = th.name;
+    if let Some(p) = partition {
+        // Partitioned EDF: into the CPU's own root domain, pinned.
+        if let Err(e) = p.enter(th.cpu).and_then(|()| sys::pin_to(th.cpu)) {
+            let help =
+                "check the cpuset hierarchy (rtpipe makes one exclusive set per CPU for the run)"
+                    .to_string();
+            return Err(refused(&format!("cpu {}'s cpuset", th.cpu), e, help));
+        }
+    }
+    // The runtime carries the job frame on top of the budget
+    // (RESERVATION_MARGIN).
+    let c = (th.budget + RESERVATION_MARGIN).min(th.deadline) as u64;
+    let t = th.period as u64;
+    if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
+        let help = match e.raw_os_error() {
+            Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
+            Some(libc::EBUSY) => format!(
+                "admission control: the reservations already admitted plus this one \
+                 (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU); \
+                 lower the budgets or lengthen the periods",
+                c as f64 / t as f64
+            ),
+            Some(libc::EINVAL) => format!(
+                "task {name}: runtime {c} ns, deadline = period = {t} ns break the kernel's rules \
+                 (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)"
+            ),
+            _ => String::new(),
+        };
+        return Err(refused(
+            &format!("SCHED_DEADLINE (runtime {c} ns, period {t} ns)"),
+            e,
+            help,
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses up front a real-time policy this process may not use (rather
+/// than failing thread by thread once the load has started).
+pub(crate) fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
+    if policy == Policy::Other || sys::is_root() || sys::has_capability(sys::CAP_SYS_NICE) {
+        return Ok(());
+    }
+    let top = fifo_priorities(spec).into_iter().max().unwrap_or(1);
+    let rtprio = sys::soft_limit(libc::RLIMIT_RTPRIO);
+    if policy == Policy::Fifo && rtprio >= top as u64 {
+        return Ok(());
+    }
+    let (class, need) = match policy {
+        Policy::Deadline => ("SCHED_DEADLINE", "root or CAP_SYS_NICE".to_string()),
+        _ => (
+            "SCHED_FIFO",
+            format!("root, CAP_SYS_NICE, or an RLIMIT_RTPRIO of at least {top} (it is {rtprio})"),
+        ),
+    };
+    Err(RunError::refused(
+        format!("{class} needs {need}; this process has none of them"),
+        "run as root, or grant the capability (e.g. `setcap cap_sys_nice,cap_ipc_lock+ep $(which rtpipe)`), or run without real-time guarantees: --policy other --best-effort",
+    ))
+}
+
+/// Locks memory for a real-time run where that cannot starve thread
+/// stacks; the warning when it does not.
+pub(crate) fn lock_memory(policy: Policy) -> Option<String> {
+    if policy == Policy::Other {
+        return None;
+    }
+    if !may_lock_memory() {
+        return Some(format!(
+            "warning: memory not locked (RLIMIT_MEMLOCK is {} KiB, and mlockall under it starves thread stacks): page faults may delay jobs; `ulimit -l unlimited` or CAP_IPC_LOCK locks it",
+            sys::soft_limit(libc::RLIMIT_MEMLOCK) / 1024
+        ));
+    }
+    sys::lock_memory()
+        .err()
+        .map(|e| format!("warning: mlockall failed ({e}): page faults may delay jobs"))
+}
+
+/// Whether locking all current and future memory can work: unlimited
+/// RLIMIT_MEMLOCK, root or CAP_IPC_LOCK. Under a finite limit mlockall
+/// itself succeeds, and then every later thread stack that does not fit
+/// fails to map (EAGAIN at thread spawn), so it is not tried.
+fn may_lock_memory() -> bool {
+    sys::is_root()
+        || sys::has_capability(sys::CAP_IPC_LOCK)
+        || sys::soft_limit(libc::RLIMIT_MEMLOCK) == u64::MAX
+}
