@@ -21,7 +21,7 @@ impl From<&ErrorStats> for RmsMax {
     }
 }
 
-fn f3(x: f64) -> String {
+fn three_decimals(x: f64) -> String {
     format!("{x:.3}")
 }
 
@@ -100,10 +100,10 @@ fn steps_table(q: &FlightQuality) -> String {
         }
         let (e, r) = (&st.tracked, &st.truth);
         row.extend([
-            f3(e.rise_s),
+            three_decimals(e.rise_s),
             format!("{:.1}", 100.0 * e.overshoot),
-            f3(e.settling_s),
-            f3(r.rise_s),
+            three_decimals(e.settling_s),
+            three_decimals(r.rise_s),
             format!("{:.1}", 100.0 * r.overshoot),
             format!("{:+.2}", st.drift_deg),
         ]);
