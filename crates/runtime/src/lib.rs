@@ -7,6 +7,7 @@
 #![deny(missing_docs)]
 
 pub mod blame;
+mod comm;
 pub mod exec;
 pub mod four_slot;
 pub mod load;
