@@ -4,7 +4,8 @@
 //! the simulator (event by event, whatever the schedule and the execution
 //! times) must measure exactly the job-level figure of its offsets, never
 //! above the arbitrary-phasing bound; with synchronous release the sound
-//! bound of `analyze` under known offsets is hit exactly.
+//! bound of `analyze` under known offsets is hit exactly, and the
+//! all-paths figures of a LET system are the chain's.
 
 use rtpipe_analysis::let_bound::{any_phasing, exact, LetLatencies, LetTask};
 use rtpipe_analysis::{analyze, Anchor, Metric};
@@ -156,6 +157,27 @@ fn simulator_measures_exactly_the_let_figures() {
         assert_eq!(
             sound(Metric::Freshness, Anchor::Event),
             Some(any.freshness_event)
+        );
+        // --all-paths: the one path from t0 to the tail has the same figures.
+        let paths = rtpipe_analysis::all_paths(&spec, &report.timing);
+        let pair = paths
+            .pairs
+            .iter()
+            .find(|p| p.source == 0)
+            .unwrap_or_else(|| panic!("no pair"));
+        assert_eq!(
+            pair.reaction_sound.value,
+            Some(any.reaction_read),
+            "case {case}"
+        );
+        assert_eq!(
+            pair.freshness_sound.value,
+            Some(any.freshness_read),
+            "case {case}"
+        );
+        assert_eq!(
+            pair.freshness_sound.path,
+            (0..periods.len()).collect::<Vec<_>>()
         );
         if synchronous {
             let off = report.offsets[0]
