@@ -197,3 +197,41 @@ fn simulator_measures_exactly_the_let_figures() {
     eprintln!("LET: {cases} cases, {hit_any} synchronous hit exactly; chains of 2+ tasks: largest observed / any-phasing bound {worst_ratio:.4}, {reached} figures at the bound");
     assert!(hit_any >= cases / 3);
 }
+
+/// The job log under LET holds the communication instants (read at the
+/// release, publish at release + T), so the replay of the log (`run`'s
+/// measurement, the `--samples` CSV) measures what the simulator measured.
+#[test]
+fn the_job_log_holds_the_let_instants() {
+    let text = include_str!("../../../examples/let.toml");
+    let spec = Spec::parse("let.toml", text).unwrap_or_else(|e| panic!("{e}"));
+    for seed in 0..4 {
+        let cfg = SimConfig {
+            seed,
+            phasing: Phasing::Sync,
+            exec: ExecModel::Uniform,
+            log_jobs: true,
+            jitter: rtpipe_sim::Jitter::None,
+            ..SimConfig::new(400 * MS)
+        };
+        let r = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!r.jobs.is_empty());
+        for j in &r.jobs {
+            let t = spec.tasks[j.task].fixed_period().unwrap_or(0);
+            assert_eq!((j.read, j.finish), (j.release, j.release + t), "{j:?}");
+        }
+        let replayed = rtpipe_joblog::chains_from_jobs(&spec, &r.jobs);
+        for (a, b) in replayed.iter().zip(&r.chains) {
+            assert_eq!(a.reaction, b.reaction);
+            assert_eq!(a.freshness, b.freshness);
+            assert_eq!(a.event_reaction, b.event_reaction);
+            assert_eq!(a.event_freshness, b.event_freshness);
+        }
+        // examples/let.toml by hand (docs/analysis.md): 20, 25, 30, 30.
+        let c = &r.chains[0];
+        assert_eq!(c.reaction.max, Some(20 * MS));
+        assert_eq!(c.freshness.max, Some(25 * MS));
+        assert_eq!(c.event_reaction.max, Some(30 * MS));
+        assert_eq!(c.event_freshness.max, Some(30 * MS));
+    }
+}
