@@ -235,3 +235,25 @@ fn the_job_log_holds_the_let_instants() {
         assert_eq!(c.event_freshness.max, Some(30 * MS));
     }
 }
+
+/// A job that has not completed by its period's end misses its LET
+/// deadline: the simulator counts it late, and `analyze` gives the chain
+/// no LET bound (R > T). hi: C = 6, T = 10; lo: C = 9, T = 20 on one CPU:
+/// R_lo = 9 + 6·⌈R/10⌉ → 21 → 27 > 20.
+#[test]
+fn a_job_missing_its_period_is_late_and_unbounded() {
+    let src = "[system]\nname = \"miss\"\ntime_unit = \"ms\"\ncommunication = \"let\"\n[channels.mem]\nbandwidth = 100\noverhead = 0\n[tasks.hi]\nexec = 6\nperiod = 10\nserver = \"none\"\noutput = { channel = \"mem\", size = 1 }\n[tasks.lo]\nexec = 9\nperiod = 20\nserver = \"none\"\nreads = [\"hi\"]\n[[chain]]\nname = \"c\"\npath = [\"hi\", \"lo\"]\n";
+    let spec = Spec::parse("miss.toml", src).unwrap_or_else(|e| panic!("{e}"));
+    let report = analyze(&spec);
+    assert!(report
+        .chains
+        .iter()
+        .all(|c| c.bound.sound(Anchor::Read).is_none()));
+    let cfg = SimConfig {
+        jitter: rtpipe_sim::Jitter::None,
+        ..SimConfig::new(200 * MS)
+    };
+    let r = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.tasks[1].late > 0, "{:?}", r.tasks[1]);
+    assert_eq!(r.tasks[0].late, 0);
+}
