@@ -6,7 +6,7 @@
 //! docs/analysis.md derives every term.
 
 use crate::sched::TaskTiming;
-use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_model::{Communication, Nanos, Scheduler, Spec};
 
 /// Eq. 1 read with the paper's ε convention: a demand `x` that exactly fills
 /// k budgets completes at (k−1)·T + (x − (k−1)·C), so x ≤ C gives L = x.
@@ -540,6 +540,16 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
     (react, age)
 }
 
+/// The sound bound of a chain under LET with arbitrary offsets: the
+/// [`any_phasing`](crate::let_bound::any_phasing) figures, when every task completes within its period
+/// (LET's premise; `None` otherwise).
+pub fn let_chain_sound(lt: &[LinkTask]) -> Option<crate::let_bound::LetLatencies> {
+    if lt.iter().any(|x| x.r.is_none_or(|r| r > x.t)) {
+        return None;
+    }
+    crate::let_bound::any_phasing(&lt.iter().map(|x| x.t).collect::<Vec<_>>())
+}
+
 /// The paper's (reaction, freshness) along the chain: Eq. 1 at the head and
 /// each link's term.
 fn paper(lt: &[LinkTask]) -> (Nanos, Nanos, Vec<Case>) {
@@ -565,6 +575,19 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
     let (paper_reaction, paper_freshness, cases) = paper(&lt);
     let (sound_reaction, sound_freshness) =
         compose_sound(lt[lt.len() - 1].r, &sound_links(sched, &lt));
+    let mut sound_event = (
+        sound_event_reaction(sched, &lt),
+        from_event(head, sound_freshness),
+    );
+    let (sound_reaction, sound_freshness) = if spec.communication == Communication::Let {
+        // Under LET the sound bound is LET's (`let_bound.rs`): the data
+        // flow follows the periods, not the schedule.
+        let l = let_chain_sound(&lt);
+        sound_event = (l.map(|l| l.reaction_event), l.map(|l| l.freshness_event));
+        (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read))
+    } else {
+        (sound_reaction, sound_freshness)
+    };
     let (davare_reaction, davare_freshness) = davare(&lt);
     let (duerr_reaction, duerr_freshness) = duerr(sched, &lt);
     // `from_read` in `Bound::ALL` order; from the event, every bound but
@@ -587,7 +610,7 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
                 davare_reaction,
                 duerr_reaction,
             ],
-            sound_event_reaction(sched, &lt),
+            sound_event.0,
         ),
         freshness: bound(
             [
@@ -596,7 +619,7 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
                 davare_freshness,
                 duerr_freshness,
             ],
-            from_event(head, sound_freshness),
+            sound_event.1,
         ),
         cases,
     }

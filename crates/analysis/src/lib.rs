@@ -19,6 +19,7 @@
 pub mod disturbance;
 pub mod edf;
 pub mod latency;
+pub mod let_bound;
 pub mod offsets;
 pub mod paths;
 pub mod qpa;

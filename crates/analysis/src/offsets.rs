@@ -209,6 +209,11 @@ pub fn chain_offsets(
         .collect();
     let (bound, job_level) = if !unknown.is_empty() {
         (fallback(Fallback::UnknownOffsets(dedup(unknown))), None)
+    } else if spec.communication == rtpipe_model::Communication::Let {
+        match let_job_level(spec, timing, path, limit) {
+            Err(f) => (fallback(f), None),
+            Ok(jl) => (let_reported(&jl), Some(jl)),
+        }
     } else {
         match job_level(spec, timing, path, limit) {
             Err(f) => (fallback(f), None),
@@ -220,6 +225,75 @@ pub fn chain_offsets(
         bound,
         job_level,
     })
+}
+
+/// The known-offsets analysis of the chain along `path` under LET
+/// ([`chain_offsets`] asks for it): [`exact`](crate::let_bound::exact) on the spec's
+/// offsets, when every task completes within its period.
+fn let_job_level(
+    spec: &Spec,
+    timing: &[TaskTiming],
+    path: &[usize],
+    limit: u64,
+) -> Result<JobLevel, Fallback> {
+    let lt: Vec<LinkTask> = path
+        .iter()
+        .map(|&i| LinkTask::new(spec, timing, i))
+        .collect();
+    if crate::latency::let_chain_sound(&lt).is_none() {
+        return Err(Fallback::Unbounded);
+    }
+    let chain: Vec<crate::let_bound::LetTask> = path
+        .iter()
+        .zip(&lt)
+        .map(|(&i, x)| crate::let_bound::LetTask {
+            t: x.t,
+            phi: spec.tasks[i].offset.unwrap_or(0),
+        })
+        .collect();
+    let mut h: Nanos = 1;
+    for x in &chain {
+        h = (h / rtpipe_model::gcd(h, x.t)).saturating_mul(x.t);
+    }
+    let (values, head_jobs) = match crate::let_bound::exact(&chain, limit) {
+        Ok((l, n)) => (Some(l), n),
+        Err(crate::let_bound::NoExact::TooManyJobs(n)) => return Err(Fallback::TooManyJobs(n)),
+        Err(crate::let_bound::NoExact::BadChain) => return Err(Fallback::Unbounded),
+        Err(crate::let_bound::NoExact::NoSampleReaches) => (None, 0),
+    };
+    Ok(JobLevel {
+        hyperperiod: h,
+        jobs: head_jobs,
+        head_jobs,
+        values: PerQuantity {
+            reaction_read: values.map(|l| l.reaction_read),
+            freshness_read: values.map(|l| l.freshness_read),
+            reaction_event: values.map(|l| l.reaction_event),
+            freshness_event: values.map(|l| l.freshness_event),
+        },
+    })
+}
+
+/// The reported figures of a LET job-level analysis: exact, so never
+/// replaced by the arbitrary-phasing bound (which is at least as large),
+/// and no late start (under LET a consumer that starts late loses the old
+/// samples, it does not delay them).
+fn let_reported(jl: &JobLevel) -> PerQuantity<OffsetBound> {
+    let one = |v: Option<Nanos>| OffsetBound {
+        value: v,
+        basis: if v.is_some() {
+            Basis::KnownOffsets
+        } else {
+            Basis::NoSampleReaches
+        },
+        late_start: false,
+    };
+    PerQuantity {
+        reaction_read: one(jl.values.reaction_read),
+        freshness_read: one(jl.values.freshness_read),
+        reaction_event: one(jl.values.reaction_event),
+        freshness_event: one(jl.values.freshness_event),
+    }
 }
 
 fn dedup(mut v: Vec<usize>) -> Vec<usize> {

@@ -58,6 +58,9 @@ pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
     pub system: &'a str,
     pub time_unit: &'static str,
     pub scheduler: &'static str,
+    /// "let" under LET communication; absent under implicit (the default).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub communication: Option<&'static str>,
     pub tasks: Vec<T>,
     pub schedulability: SchedView,
     pub chains: Vec<C>,
@@ -76,6 +79,7 @@ impl<'a, T, C> ReportView<'a, T, C> {
             system: self.system,
             time_unit: self.time_unit,
             scheduler: self.scheduler,
+            communication: self.communication,
             tasks: tasks(self.tasks),
             schedulability: self.schedulability,
             chains: chains(self.chains),
@@ -206,6 +210,8 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
         system: &spec.name,
         time_unit: spec.time_unit.name(),
         scheduler: spec.scheduler.name(),
+        communication: (spec.communication == rtpipe_model::Communication::Let)
+            .then_some(spec.communication.name()),
         tasks,
         schedulability: sched_view(&r.schedulability),
         chains: r.chains.iter().map(|c| chain_view(spec, r, c)).collect(),
@@ -300,15 +306,22 @@ fn opt(spec: &Spec, v: Option<Nanos>) -> String {
     }
 }
 
-/// The first line of every report: the system, its size, unit and scheduler.
+/// The first line of every report: the system, its size, unit and
+/// scheduler, and LET communication where it applies.
 pub fn system_line(spec: &Spec) -> String {
     format!(
-        "system {}: {} tasks, {} chains; times in {}; scheduler {}\n",
+        "system {}: {} tasks, {} chains; times in {}; scheduler {}{}\n",
         spec.name,
         spec.tasks.len(),
         spec.chains.len(),
         spec.time_unit,
-        spec.scheduler.name()
+        spec.scheduler.name(),
+        // Implicit communication, the default, is not named (as always).
+        if spec.communication == rtpipe_model::Communication::Let {
+            "; communication let (the sound bounds are LET's)"
+        } else {
+            ""
+        }
     )
 }
 

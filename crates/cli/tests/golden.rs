@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 12] = [
+const EXAMPLES: [&str; 13] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -37,6 +37,7 @@ const EXAMPLES: [&str; 12] = [
     "e2e-golden",
     "paper-table2-edf",
     "jitter-deadlines",
+    "let",
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",

@@ -66,8 +66,8 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Release jitter, priorities other than rate monotonic and the QPA test
-/// are refused: the box search and the MILP branch on rate-monotonic orders
+/// Release jitter, priorities other than rate monotonic, the QPA test and
+/// LET communication are refused: the box search and the MILP branch on rate-monotonic orders
 /// of free periods, encode jitter-free response times and have no cut for
 /// a failed processor-demand test. Deadlines under fixed priorities are
 /// honoured (every answer passes R ≤ D, re-checked by `analyze`).
@@ -81,6 +81,12 @@ fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
     if spec.schedulability == rtpipe_model::SchedTest::Qpa {
         return Err(DesignError::input(
             "schedulability = \"qpa\" (EDF with deadlines below periods): `design` does not model the processor-demand test yet; design with the deadlines removed (schedulability = \"edf\"), then add them back and check with `analyze`",
+        ));
+    }
+    if spec.communication == rtpipe_model::Communication::Let {
+        // Its encodings are implicit communication's link terms.
+        return Err(DesignError::input(
+            "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
         ));
     }
     if spec.priorities != rtpipe_model::Priorities::RateMonotonic {

@@ -222,6 +222,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         resolution: 1_000_000,
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
+        communication: crate::Communication::Implicit,
         channels,
         tasks,
         chains,

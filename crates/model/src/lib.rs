@@ -20,7 +20,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
-pub use policy::{Priorities, SchedPolicy, SchedTest, Scheduler};
+pub use policy::{Communication, Priorities, SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB.
@@ -251,6 +251,8 @@ pub struct Spec {
     pub harmonic: bool,
     /// How fixed priorities are assigned (rate monotonic by default).
     pub priorities: Priorities,
+    /// When jobs read and publish (implicit by default; LET).
+    pub communication: Communication,
     /// The channels, in declaration order.
     pub channels: Vec<Channel>,
     /// The tasks, in declaration order.

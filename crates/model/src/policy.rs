@@ -116,6 +116,35 @@ impl Priorities {
     }
 }
 
+/// When a task's jobs exchange data with the registers (`[system]
+/// communication`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Communication {
+    /// Implicit communication (the paper's): a job reads when it first
+    /// gets the CPU and publishes when it completes.
+    #[default]
+    Implicit,
+    /// Logical Execution Time (Kirsch and Sokolova 2012): a job reads at
+    /// its release and its output becomes visible at the end of its period
+    /// (release + T), whenever it ran, so the data flow depends on the
+    /// periods and offsets alone. A job that has not completed by then
+    /// misses its deadline.
+    Let,
+}
+
+impl Communication {
+    /// Every semantics, in the order specs list them.
+    pub const ALL: [Communication; 2] = [Communication::Implicit, Communication::Let];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Communication::Implicit => "implicit",
+            Communication::Let => "let",
+        }
+    }
+}
+
 /// Who preempts whom on a CPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preemption {

@@ -31,6 +31,7 @@ pub struct RawSystem {
     pub harmonic: Option<S<bool>>,
     pub release: Option<S<String>>,
     pub priorities: Option<S<String>>,
+    pub communication: Option<S<String>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

@@ -8,6 +8,7 @@ use crate::*;
 use std::collections::HashMap;
 use std::ops::Range;
 
+mod comm;
 mod prio;
 
 #[derive(Default)]
@@ -210,6 +211,7 @@ impl Builder {
         compute_transfers(&mut tasks, &channels, unit);
         self.budgets_and_periods(raw_tasks, &tasks);
         self.priorities_and_deadlines(raw_tasks, &tasks, order, scheduler);
+        let communication = self.communication(sys, raw_tasks, &tasks);
         let test = scheduler
             .zip(test)
             .map(|(s, t)| self.test_for_tasks(sys, s, t, order, &tasks));
@@ -240,6 +242,7 @@ impl Builder {
             resolution,
             harmonic,
             priorities: order,
+            communication,
             channels,
             tasks,
             chains,

@@ -90,6 +90,9 @@ fn system(o: &mut String, spec: &Spec) {
     if spec.priorities != crate::Priorities::RateMonotonic {
         let _ = writeln!(o, "priorities = \"{}\"", spec.priorities.name());
     }
+    if spec.communication != crate::Communication::Implicit {
+        let _ = writeln!(o, "communication = \"{}\"", spec.communication.name());
+    }
 }
 
 /// One `[channels.NAME]` table.

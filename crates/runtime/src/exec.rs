@@ -156,11 +156,8 @@ const MAX_JOBS: u64 = 20_000_000;
 
 /// Checks that `spec` can run under `cfg` before any thread starts.
 pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
-    if cfg.duration <= 0 {
-        return Err(RunError::config(
-            "the duration must be positive",
-            "e.g. --duration 2s",
-        ));
+    if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration) {
+        return Err(RunError::config(msg, help));
     }
     let cpus = sys::online_cpus();
     let mut jobs = 0u64;

@@ -8,6 +8,7 @@
 
 pub mod blame;
 mod class;
+mod comm;
 mod config;
 pub mod exec;
 pub mod four_slot;

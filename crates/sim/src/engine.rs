@@ -6,7 +6,7 @@ use crate::server::{Cbs, Pibs, Sporadic};
 use crate::*;
 use rtpipe_joblog::{BadChain, JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::{ranks, Budget as Kind, Preemption};
-use rtpipe_model::{Nanos, Server, Spec};
+use rtpipe_model::{Communication, Nanos, Server, Spec};
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
@@ -130,6 +130,16 @@ impl Budget {
             Budget::Cbs(c) => c.next_refill(),
         }
     }
+}
+
+/// A released job as LET communicates it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LetJob {
+    pub(crate) task: usize,
+    pub(crate) index: u64,
+    pub(crate) release: Nanos,
+    pub(crate) demand: Nanos,
+    pub(crate) period: Nanos,
 }
 
 pub(crate) struct TaskSim {
@@ -258,6 +268,12 @@ pub(crate) struct Sim<H> {
     /// Per CPU: (class, key, task) of every task that may run; the pick is
     /// the least.
     pub(crate) contenders: Vec<BTreeSet<(u8, Nanos, usize)>>,
+    /// LET communication (`let_comm.rs`): reads at releases and publishes
+    /// at period ends feed the provenance, not the schedule's instants.
+    pub(crate) let_comm: bool,
+    /// Under LET, per task: the job that read at its release and publishes
+    /// at the end of its period.
+    pub(crate) let_open: Vec<Option<LetJob>>,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -299,6 +315,8 @@ impl<H: Hooks> Sim<H> {
             throttled: BinaryHeap::new(),
             timers: BinaryHeap::new(),
             contenders: vec![BTreeSet::new(); n_cpus],
+            let_comm: spec.communication == Communication::Let,
+            let_open: vec![None; spec.tasks.len()],
         })
     }
 
@@ -405,8 +423,18 @@ impl<H: Hooks> Sim<H> {
         again
     }
 
-    /// Releases every job due at or before t.
+    /// Releases every job due at or before t; under LET, the period ends
+    /// and the releases communicate (`let_comm.rs`).
     pub(crate) fn release(&mut self, t: Nanos) {
+        let mut released = Vec::new();
+        self.release_due(t, &mut released);
+        if !released.is_empty() {
+            self.let_boundary(released);
+        }
+    }
+
+    /// Releases every job due at or before t; under LET, lists them.
+    fn release_due(&mut self, t: Nanos, released: &mut Vec<LetJob>) {
         let exec = self.exec;
         loop {
             let i = {
@@ -420,7 +448,19 @@ impl<H: Hooks> Sim<H> {
                 let ts = &mut self.tasks[i];
                 debug_assert_eq!(due, ts.next_release, "stale release entry of task {i}");
                 let was_idle = ts.queue.is_empty();
+                let before = ts.next_index;
                 release_jobs(ts, exec, t);
+                if self.let_comm {
+                    let new = (ts.next_index - before) as usize;
+                    let skip = ts.queue.len() - new;
+                    released.extend(ts.queue.iter().skip(skip).map(|j| LetJob {
+                        task: i,
+                        index: j.index,
+                        release: j.release,
+                        demand: j.demand,
+                        period: ts.period,
+                    }));
+                }
                 *top = Reverse((ts.next_release, i));
                 if !was_idle {
                     // Queued behind the front job: nothing the pick sees changed.
@@ -548,7 +588,9 @@ impl<H: Hooks> Sim<H> {
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
-        self.prov.read(i, t);
+        if !self.let_comm {
+            self.prov.read(i, t);
+        }
         let Some(job) = self.tasks[i].queue.front_mut() else {
             unreachable!("task {i} reads without a pending job");
         };
@@ -578,6 +620,13 @@ impl<H: Hooks> Sim<H> {
         ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
         if response > ts.deadline {
             ts.stats.late += 1;
+        }
+        if self.let_comm {
+            // LET publishes at the end of the period (`let_comm.rs`).
+            if ts.queue.is_empty() {
+                ts.budget.block(t);
+            }
+            return;
         }
         self.prov.publish(i, t);
         if let Some(log) = &mut self.log {

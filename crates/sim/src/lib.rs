@@ -49,6 +49,7 @@
 mod bodies;
 mod config;
 mod engine;
+mod let_comm;
 pub mod observe;
 mod rng;
 pub mod search;

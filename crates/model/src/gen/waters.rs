@@ -203,6 +203,7 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
         resolution: 1_000_000,
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
+        communication: crate::Communication::Implicit,
         channels,
         tasks,
         chains,

@@ -287,6 +287,7 @@ fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
         resolution: 1_000_000,
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
+        communication: crate::Communication::Implicit,
         channels: vec![Channel {
             name: "mem".into(),
             bandwidth: 1.0,
