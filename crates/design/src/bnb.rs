@@ -195,7 +195,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         };
         self.groups.iter().all(|g| match *g {
             Group::Limit(k, m) => {
-                let limit = m.limit(&spec.chains[k]);
+                let limit = m.limit(&spec.chains[k], rtpipe_analysis::Anchor::Read);
                 limit.is_none_or(|l| least(k, m).is_some_and(|b| b <= l))
             }
             Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
@@ -335,7 +335,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let Some(forms) = self.forms_of(r, k, metric) else {
                 continue;
             };
-            let limit = metric.limit(&spec.chains[k]);
+            let limit = metric.limit(&spec.chains[k], rtpipe_analysis::Anchor::Read);
             let Some(limit) = limit.map(|l| l as f64) else {
                 continue;
             };
@@ -385,7 +385,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 continue;
             };
             let forms = self.forms_of(r, k, metric)?;
-            let limit = metric.limit(&spec.chains[k]);
+            let limit = metric.limit(&spec.chains[k], rtpipe_analysis::Anchor::Read);
             let Some(limit) = limit else { continue };
             let b = forms
                 .iter()
