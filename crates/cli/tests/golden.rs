@@ -29,10 +29,11 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 12] = [
+const EXAMPLES: [&str; 13] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
+    "cleanflight-event-limits",
     "cleanflight",
     "e2e-golden",
     "paper-table2-edf",
@@ -240,6 +241,10 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-derived",
         &["design", "@cleanflight-derived-design"],
+    ),
+    case(
+        "design-cleanflight-event-limits",
+        &["design", "@cleanflight-event-limits"],
     ),
     case("fly-cleanflight", &["fly", "@cleanflight"]),
     case(
