@@ -281,7 +281,7 @@ fn cases(default: usize) -> usize {
 /// Instance `seed` with its limits moved to the event for some chains and
 /// metrics (`max_reaction_time`, `max_data_age`): the from-read limit plus
 /// the head's shortest period, times 1–1.5; the from-read limit is kept for
-/// about half of them.
+/// about half of them; for half the seeds one task gets a `max_period`.
 fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
     let mut r = Rng::new(seed ^ 0x9E37_79B9_7F4A_7C15);
     for k in 0..spec.chains.len() {
@@ -301,6 +301,13 @@ fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
                 *read = None;
             }
         }
+    }
+    // Some task needs a minimum rate: its median period at most.
+    if r.chance(0.5) {
+        let i = r.range(0, spec.tasks.len() as u64 - 1) as usize;
+        let mut d = domain(&spec, i);
+        d.sort_unstable();
+        spec.tasks[i].max_period = d.get(d.len() / 2).copied();
     }
     spec
 }
