@@ -51,11 +51,25 @@ impl Metric {
         }
     }
 
-    /// The chain's limit on this metric, if it has one.
-    pub fn limit(self, chain: &rtpipe_model::Chain) -> Option<Nanos> {
-        match self {
-            Metric::Reaction => chain.reaction,
-            Metric::Freshness => chain.freshness,
+    /// The chain's limit on this metric measured from `anchor`, if it has
+    /// one: from the read `reaction` / `freshness`, from the event
+    /// `max_reaction_time` / `max_data_age` (the literature's names).
+    pub fn limit(self, chain: &rtpipe_model::Chain, anchor: Anchor) -> Option<Nanos> {
+        match (self, anchor) {
+            (Metric::Reaction, Anchor::Read) => chain.reaction,
+            (Metric::Freshness, Anchor::Read) => chain.freshness,
+            (Metric::Reaction, Anchor::Event) => chain.max_reaction_time,
+            (Metric::Freshness, Anchor::Event) => chain.max_data_age,
+        }
+    }
+
+    /// The spec key of this metric's limit from `anchor`.
+    pub fn key(self, anchor: Anchor) -> &'static str {
+        match (self, anchor) {
+            (Metric::Reaction, Anchor::Read) => "reaction",
+            (Metric::Freshness, Anchor::Read) => "freshness",
+            (Metric::Reaction, Anchor::Event) => "max_reaction_time",
+            (Metric::Freshness, Anchor::Event) => "max_data_age",
         }
     }
 }
@@ -96,36 +110,89 @@ impl std::str::FromStr for Mode {
     }
 }
 
-/// One chain and metric, judged against its limit.
+/// One chain and metric, judged against its limits: one per [`Anchor`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChainResult {
     /// Index of the chain in `Spec::chains`.
     pub chain: usize,
     /// Which metric.
     pub metric: Metric,
-    /// The chain's limit on it, if any.
+    /// The chain's limit on it from the head's read, if any.
     pub limit: Option<Nanos>,
+    /// The chain's limit on it from the event, if any.
+    pub event_limit: Option<Nanos>,
     /// The bounds.
     pub bound: ChainBound,
-    /// The sound bound is within the limit (or there is no limit and the
-    /// bound exists).
+    /// Every limit holds under the sound bound from its anchor (or there is
+    /// no limit and the bound from the read exists): `ok_in(Mode::Sound)`.
     pub ok: bool,
 }
 
 impl ChainResult {
-    /// The paper's bound is within the limit (or there is no limit).
-    pub fn paper_ok(&self) -> bool {
-        self.limit
-            .is_none_or(|l| self.bound.paper(Anchor::Read) <= l)
-    }
-
-    /// The verdict rule: the limit holds under `mode`'s bound.
-    pub fn ok_in(&self, mode: Mode) -> bool {
-        match mode {
-            Mode::Sound => self.ok,
-            Mode::Paper => self.paper_ok(),
+    /// The limit measured from `anchor`, if any.
+    pub fn limit_from(&self, anchor: Anchor) -> Option<Nanos> {
+        match anchor {
+            Anchor::Read => self.limit,
+            Anchor::Event => self.event_limit,
         }
     }
+
+    /// The bound `mode` judges from `anchor` (`None`: unbounded).
+    pub fn bound_in(&self, mode: Mode, anchor: Anchor) -> Option<Nanos> {
+        match mode {
+            Mode::Sound => self.bound.sound(anchor),
+            Mode::Paper => Some(self.bound.paper(anchor)),
+        }
+    }
+
+    /// The limit from `anchor` holds under `mode`'s bound from the same
+    /// anchor (true when there is none).
+    pub fn holds(&self, mode: Mode, anchor: Anchor) -> bool {
+        match self.limit_from(anchor) {
+            None => true,
+            Some(l) => self.bound_in(mode, anchor).is_some_and(|b| b <= l),
+        }
+    }
+
+    /// The paper's bounds are within the limits (or there are none).
+    pub fn paper_ok(&self) -> bool {
+        self.ok_in(Mode::Paper)
+    }
+
+    /// The verdict rule: every limit, from the read and from the event,
+    /// holds under `mode`'s bound from its anchor; in sound mode a chain
+    /// with an unbounded response time fails even without limits.
+    pub fn ok_in(&self, mode: Mode) -> bool {
+        let bounded = mode == Mode::Paper || self.bound.sound(Anchor::Read).is_some();
+        bounded && Anchor::ALL.into_iter().all(|a| self.holds(mode, a))
+    }
+}
+
+/// A task whose fixed period exceeds its `max_period`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodExcess {
+    /// Index of the task in `Spec::tasks`.
+    pub task: usize,
+    /// Its period.
+    pub period: Nanos,
+    /// Its `max_period`.
+    pub max_period: Nanos,
+}
+
+/// Every task whose fixed period is above its `max_period`, in task order.
+pub fn period_excesses(spec: &Spec) -> Vec<PeriodExcess> {
+    spec.tasks
+        .iter()
+        .enumerate()
+        .filter_map(|(task, t)| {
+            let (period, max_period) = (t.fixed_period()?, t.max_period?);
+            (period > max_period).then_some(PeriodExcess {
+                task,
+                period,
+                max_period,
+            })
+        })
+        .collect()
 }
 
 /// Everything `rtpipe analyze` reports.
@@ -142,6 +209,9 @@ pub struct Report {
     /// Per declared chain, its bounds under the spec's known release
     /// offsets (`None` when no task of the chain has one).
     pub offsets: Vec<Option<ChainOffsets>>,
+    /// Tasks whose period exceeds their `max_period` (each fails the
+    /// verdict in every mode).
+    pub period_excesses: Vec<PeriodExcess>,
 }
 
 impl Report {
@@ -156,10 +226,12 @@ impl Report {
         self.ok_in(Mode::Paper)
     }
 
-    /// Every limit holds under `mode` ([`ChainResult::ok_in`]), and the
-    /// schedulability test.
+    /// Every limit holds under `mode` ([`ChainResult::ok_in`]), every
+    /// period is within its `max_period`, and the schedulability test.
     pub fn ok_in(&self, mode: Mode) -> bool {
-        self.schedulability.schedulable && self.chains.iter().all(|c| c.ok_in(mode))
+        self.schedulability.schedulable
+            && self.period_excesses.is_empty()
+            && self.chains.iter().all(|c| c.ok_in(mode))
     }
 
     /// The bound of `chain`'s `metric` from `anchor` under the spec's known
@@ -219,22 +291,20 @@ pub fn analyze(spec: &Spec) -> Report {
             &a,
             offsets::MAX_JOBS,
         ));
-        for (metric, bound, limit) in [
-            (Metric::Reaction, a.reaction.clone(), ch.reaction),
-            (Metric::Freshness, a.freshness.clone(), ch.freshness),
+        for (metric, bound) in [
+            (Metric::Reaction, a.reaction.clone()),
+            (Metric::Freshness, a.freshness.clone()),
         ] {
-            let ok = match (bound.sound(Anchor::Read), limit) {
-                (Some(s), Some(l)) => s <= l,
-                (Some(_), None) => true,
-                (None, _) => false,
-            };
-            chains.push(ChainResult {
+            let mut c = ChainResult {
                 chain: k,
                 metric,
-                limit,
+                limit: metric.limit(ch, Anchor::Read),
+                event_limit: metric.limit(ch, Anchor::Event),
                 bound,
-                ok,
-            });
+                ok: false,
+            };
+            c.ok = c.ok_in(Mode::Sound);
+            chains.push(c);
         }
         cases.push(a.cases);
     }
@@ -244,6 +314,7 @@ pub fn analyze(spec: &Spec) -> Report {
         chains,
         cases,
         offsets,
+        period_excesses: period_excesses(spec),
     }
 }
 

@@ -381,3 +381,90 @@ fn golden_case_is_within_davare_and_duerr() {
     assert_eq!(r.chains[0].bound.sound(Anchor::Read), Some(ms(26.0)));
     assert_eq!(r.chains[1].bound.sound(Anchor::Read), Some(ms(36.0)));
 }
+
+/// Two tasks on one CPU, rate monotonic: sense (C 1, T 10) preempts act
+/// (C 2, T 20), so R_sense = 1, R_act = 3. Limits from the read and from the
+/// event (`max_reaction_time`, `max_data_age`), and act's `max_period`.
+const EVENT_LIMITS: &str = r#"
+[system]
+name = "event-limits"
+time_unit = "ms"
+
+[channels.mem]
+bandwidth = 1
+
+[tasks.sense]
+exec = 1
+period = 10
+output = { channel = "mem", size = 0 }
+
+[tasks.act]
+exec = 2
+period = 20
+reads = ["sense"]
+output = { channel = "mem", size = 0 }
+MAX_PERIOD
+
+[[chain]]
+path = ["sense", "act"]
+reaction = 40
+freshness = 60
+max_reaction_time = MRT
+max_data_age = 50
+"#;
+
+fn event_limits(mrt: &str, max_period: &str) -> Report {
+    let src = EVENT_LIMITS
+        .replace("MRT", mrt)
+        .replace("MAX_PERIOD", max_period);
+    analyze(&Spec::parse("event-limits.toml", &src).expect("valid"))
+}
+
+#[test]
+fn from_event_limits_are_judged_against_the_from_event_bounds() {
+    let r = event_limits("40", "");
+    let (e, f) = (&r.chains[0], &r.chains[1]);
+    assert_eq!((e.limit, e.event_limit), (Some(40 * MS), Some(40 * MS)));
+    assert_eq!((f.limit, f.event_limit), (Some(60 * MS), Some(50 * MS)));
+    // Sound reaction from the read: R_act + the link with reachability,
+    // min(R_p + T_c, T_c + J_p, T_p + R_p, T_p + J_p) = min(21, 20, 11, 10)
+    // = 10, so 13. From the event: T_sense + the link without reachability
+    // (min(21, 20) = 20) + R_act = 10 + 20 + 3 = 33.
+    assert_eq!(e.bound.sound(Anchor::Read), Some(13 * MS));
+    assert_eq!(e.bound.sound(Anchor::Event), Some(33 * MS));
+    // Paper: 12 from the read, one head period more from the event.
+    assert_eq!(e.bound.paper(Anchor::Read), 12 * MS);
+    assert_eq!(e.bound.paper(Anchor::Event), 22 * MS);
+    // Freshness from the event: the sound bound from the read (13) + T_1.
+    assert_eq!(f.bound.sound(Anchor::Event), Some(23 * MS));
+    assert_eq!(f.bound.paper(Anchor::Event), 22 * MS);
+    assert!(r.ok_in(Mode::Sound) && r.ok_in(Mode::Paper));
+    // 30 ms from the event: the sound bound (33) breaks it, the paper's
+    // (22) keeps it; the from-read limit (40) holds either way.
+    let r = event_limits("30", "");
+    let e = &r.chains[0];
+    assert!(e.holds(Mode::Sound, Anchor::Read));
+    assert!(!e.holds(Mode::Sound, Anchor::Event));
+    assert!(!e.ok && !e.ok_in(Mode::Sound) && e.ok_in(Mode::Paper));
+    assert!(!r.ok_in(Mode::Sound) && r.ok_in(Mode::Paper));
+    // 33 ms is exactly the bound: it holds.
+    assert!(event_limits("33", "").ok_in(Mode::Sound));
+}
+
+#[test]
+fn max_period_fails_the_verdict_in_every_mode() {
+    let r = event_limits("40", "max_period = 20");
+    assert!(r.period_excesses.is_empty());
+    assert!(r.ok_in(Mode::Sound));
+    let r = event_limits("40", "max_period = 15");
+    assert_eq!(
+        r.period_excesses,
+        vec![PeriodExcess {
+            task: 1,
+            period: 20 * MS,
+            max_period: 15 * MS
+        }]
+    );
+    assert!(r.chains.iter().all(|c| c.ok));
+    assert!(!r.ok_in(Mode::Sound) && !r.ok_in(Mode::Paper));
+}

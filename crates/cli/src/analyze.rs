@@ -106,6 +106,12 @@ pub struct TaskView<'a> {
     /// J, when the task has release jitter (left out when 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     jitter: Option<f64>,
+    /// The task's `max_period` and whether its period keeps to it (both
+    /// left out when the spec gives none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_period: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    period_ok: Option<bool>,
     utilization: f64,
     priority: Option<usize>,
     cpu: u32,
@@ -150,6 +156,10 @@ pub struct ChainView<'a> {
     path: Vec<String>,
     metric: &'static str,
     limit: Option<f64>,
+    /// The limit from the event (`max_reaction_time` / `max_data_age`),
+    /// left out when the spec gives none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    event_limit: Option<f64>,
     #[serde(flatten)]
     bounds: Pairs<&'static str, Option<f64>>,
     ok: bool,
@@ -199,6 +209,8 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
             period: spec.in_unit(tm.period),
             deadline: t.deadline_given.map(|d| spec.in_unit(d)),
             jitter: (t.jitter > 0).then(|| spec.in_unit(t.jitter)),
+            max_period: t.max_period.map(|m| spec.in_unit(m)),
+            period_ok: t.max_period.map(|m| tm.period <= m),
             utilization: tm.budget as f64 / tm.period as f64,
             priority: tm.priority,
             cpu: tm.cpu,
@@ -261,6 +273,7 @@ fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) 
         path: path_names(spec, &ch.path),
         metric: c.metric.name(),
         limit: time(spec, c.limit),
+        event_limit: time(spec, c.event_limit),
         bounds: bounds(Anchor::Read),
         ok: c.ok,
         paper_ok: c.paper_ok(),
@@ -332,6 +345,7 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     out.push_str(&schedulability_text(spec, r));
     out.push_str(&chain_table(spec, r));
     out.push_str(&known_offsets_text(spec, r));
+    out.push_str(&max_period_text(spec, r));
     out.push_str(&verdict_text(r, mode));
     out
 }
@@ -448,7 +462,13 @@ fn chain_table(spec: &Spec, r: &Report) -> String {
             "\nchains (worst case from the head's read; +event: from the event in the world; davare: Davare et al. 2007, duerr: Dürr et al. 2019; see docs/analysis.md):\n",
         );
         // One column per bound and anchor, from-read first (`ChainBound::from`).
+        // The from-event limit column only where a chain gives one, so
+        // specs without them print as they always did.
+        let event = r.chains.iter().any(|c| c.event_limit.is_some());
         let mut heads: Vec<String> = ["chain", "metric", "limit"].map(String::from).to_vec();
+        if event {
+            heads.push("limit+event".into());
+        }
         for a in Anchor::ALL {
             let suffix = if a == Anchor::Event { "+event" } else { "" };
             heads.extend(Bound::ALL.map(|b| format!("{}{suffix}", b.name())));
@@ -459,30 +479,51 @@ fn chain_table(spec: &Spec, r: &Report) -> String {
         let mut t = Table::new(&heads).numeric(&numeric);
         for c in &r.chains {
             let label = spec.chain_label(c.chain);
-            let verdict = match (c.ok, c.limit) {
+            let limited = c.limit.or(c.event_limit);
+            let verdict = |ok: bool| match (ok, limited) {
                 (true, Some(_)) => "ok",
                 (true, None) => "-",
                 (false, _) => "FAIL",
             };
-            let paper_verdict = match (c.paper_ok(), c.limit) {
-                (true, Some(_)) => "ok",
-                (true, None) => "-",
-                (false, _) => "FAIL",
-            };
-            let mut row = vec![
-                label,
-                c.metric.name().to_string(),
-                c.limit
-                    .map(|l| spec.fmt_time(l))
-                    .unwrap_or_else(|| "-".into()),
-            ];
+            let shown =
+                |l: Option<Nanos>| l.map(|l| spec.fmt_time(l)).unwrap_or_else(|| "-".into());
+            let mut row = vec![label, c.metric.name().to_string(), shown(c.limit)];
+            if event {
+                row.push(shown(c.event_limit));
+            }
             for a in Anchor::ALL {
                 row.extend(c.bound.from(a).map(|(_, v)| opt(spec, v)));
             }
-            row.extend([paper_verdict.to_string(), verdict.to_string()]);
+            row.extend([verdict(c.paper_ok()), verdict(c.ok)].map(String::from));
             t.row(row);
         }
         out.push_str(&t.render());
+    }
+    out
+}
+
+/// Every task with a `max_period`: its period against it (nothing when no
+/// task gives one).
+fn max_period_text(spec: &Spec, r: &Report) -> String {
+    let mut out = String::new();
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let Some(m) = t.max_period else { continue };
+        if out.is_empty() {
+            out.push_str(
+                "
+max_period (the slowest rate control tolerates):
+",
+            );
+        }
+        let over = r.period_excesses.iter().any(|e| e.task == i);
+        out.push_str(&format!(
+            "  {}: period {} {} max_period {}: {}\n",
+            t.name,
+            spec.fmt_time(r.timing[i].period),
+            if over { ">" } else { "≤" },
+            spec.fmt_time(m),
+            if over { "FAIL" } else { "ok" }
+        ));
     }
     out
 }
@@ -492,9 +533,11 @@ fn verdict_text(r: &Report, mode: Mode) -> String {
     let mut out = String::new();
     let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
     let name = mode.name();
+    let over = r.period_excesses.len();
     out.push_str(&format!(
-        "\n{}\n",
+        "\n{}{}\n",
         match (r.schedulability.schedulable, fails) {
+            (true, 0) if over > 0 => "verdict: ".to_string(),
             (true, 0) => format!(
                 "verdict: every limit holds ({name} analysis) and the system is schedulable"
             ),
@@ -507,6 +550,11 @@ fn verdict_text(r: &Report, mode: Mode) -> String {
                     String::new()
                 }
             ),
+        },
+        match (over, fails > 0) {
+            (0, _) => String::new(),
+            (n, true) => format!("; {n} period(s) above max_period"),
+            (n, false) => format!("{n} period(s) above max_period"),
         }
     ));
     out

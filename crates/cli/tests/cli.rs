@@ -246,3 +246,65 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("release jitter"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// sense (C 1, T 10) → act (C 2, T 20): sound reaction from the event
+/// T_sense + 20 + R_act = 33 ms, freshness from the event 13 + 10 = 23 ms.
+const EVENT_LIMITS: &str = "[system]\nname = \"small\"\ntime_unit = \"ms\"\n\
+[channels.mem]\nbandwidth = 1\n\
+[tasks.sense]\nexec = 1\nperiod = 10\noutput = { channel = \"mem\", size = 0 }\n\
+[tasks.act]\nexec = 2\nperiod = 20\nreads = [\"sense\"]\noutput = { channel = \"mem\", size = 0 }\nMAXP\n\
+[[chain]]\npath = [\"sense\", \"act\"]\nreaction = 40\nmax_reaction_time = MRT\nmax_data_age = 50\n";
+
+#[test]
+fn analyze_shows_and_judges_limits_from_the_event_and_max_period() {
+    let dir = scratch("cli-event-limits");
+    let f = dir.join("small.toml");
+    let path = f.to_string_lossy().to_string();
+    let write = |mrt: &str, maxp: &str| {
+        let text = EVENT_LIMITS.replace("MRT", mrt).replace("MAXP", maxp);
+        if let Err(e) = std::fs::write(&f, text) {
+            panic!("{e}");
+        }
+    };
+    write("40", "");
+    let o = rtpipe(&["analyze", &path]);
+    assert_exit(&o, 0);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("limit+event"), "{text}");
+    write("30", "");
+    let o = rtpipe(&["analyze", &path, "--json"]);
+    assert_exit(&o, 1);
+    let v = json_of(&o);
+    assert_eq!(v["chains"][0]["event_limit"], 30.0);
+    assert_eq!(v["chains"][0]["from_event"]["sound"], 33.0);
+    assert_eq!(v["chains"][0]["ok"], false);
+    assert_eq!(v["chains"][0]["paper_ok"], true);
+    assert_eq!(v["chains"][1]["event_limit"], 50.0);
+    // The paper analysis (22 ms from the event) keeps the 30 ms limit.
+    assert_exit(&rtpipe(&["analyze", &path, "--mode", "paper"]), 0);
+    write("40", "max_period = 15");
+    let o = rtpipe(&["analyze", &path]);
+    assert_exit(&o, 1);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        text.contains("act: period 20 > max_period 15: FAIL"),
+        "{text}"
+    );
+    assert!(
+        text.contains("verdict: 1 period(s) above max_period"),
+        "{text}"
+    );
+    let v = json_of(&rtpipe(&["analyze", &path, "--json"]));
+    assert_eq!(v["tasks"][1]["max_period"], 15.0);
+    assert_eq!(v["tasks"][1]["period_ok"], false);
+    assert_eq!(v["ok"], false);
+    write("0", "");
+    let o = rtpipe(&["analyze", &path]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        err.contains("small.toml:") && err.contains("max_reaction_time must be positive"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -33,6 +33,7 @@ const EXAMPLES: [&str; 13] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
+    "cleanflight-event-limits",
     "cleanflight",
     "e2e-golden",
     "paper-table2-edf",
@@ -241,6 +242,10 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-derived",
         &["design", "@cleanflight-derived-design"],
+    ),
+    case(
+        "design-cleanflight-event-limits",
+        &["design", "@cleanflight-event-limits"],
     ),
     case("fly-cleanflight", &["fly", "@cleanflight"]),
     case(

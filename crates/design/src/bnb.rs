@@ -24,7 +24,7 @@ use crate::budget::Budget;
 use crate::joint::{joint_bound, least_under, Row};
 use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
-use rtpipe_analysis::{Metric, Mode, Report};
+use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::collections::BinaryHeap;
 use std::ops::ControlFlow;
@@ -180,7 +180,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         true
     }
 
-    fn may_hold(&self, r: &Relaxed) -> bool {
+    fn may_hold(&self, r: &Relaxed, lo: &[Nanos]) -> bool {
         let spec = self.p.spec;
         let sound = self.mode() == Mode::Sound;
         // The sound analysis needs every chain bounded, limit or not.
@@ -195,8 +195,14 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         };
         self.groups.iter().all(|g| match *g {
             Group::Limit(k, m) => {
-                let limit = m.limit(&spec.chains[k]);
-                limit.is_none_or(|l| least(k, m).is_some_and(|b| b <= l))
+                // From the event every bound is at least the one from the
+                // read plus the head's period (`limit_forms`).
+                let head = lo[spec.chains[k].path[0]];
+                Anchor::ALL.into_iter().all(|a| {
+                    let shift = if a == Anchor::Event { head } else { 0 };
+                    m.limit(&spec.chains[k], a)
+                        .is_none_or(|l| least(k, m).is_some_and(|b| b + shift <= l))
+                })
             }
             Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
         })
@@ -218,6 +224,41 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             (Mode::Paper, Metric::Reaction) => vec![&r.paper_forms[k].0],
             (Mode::Paper, Metric::Freshness) => vec![&r.paper_forms[k].1],
         })
+    }
+
+    /// Each limit of chain k's metric m with the affine forms whose least
+    /// bounds the limited figure over the box. From the event, every bound
+    /// is at least the one from the read plus the head's period (sound
+    /// reaction from the event drops the reachability options, which only
+    /// lower a link term), so its forms are the read forms plus T_head.
+    /// `None`: the chain is unbounded everywhere in the box.
+    fn limit_forms(
+        &self,
+        r: &Relaxed,
+        lo: &[Nanos],
+        k: usize,
+        m: Metric,
+    ) -> Option<Vec<(f64, Vec<Affine>)>> {
+        let forms = self.forms_of(r, k, m)?;
+        let ch = &self.p.spec.chains[k];
+        let head = ch.path[0];
+        let mut out = Vec::new();
+        for a in Anchor::ALL {
+            let Some(limit) = m.limit(ch, a) else {
+                continue;
+            };
+            let shifted = forms.iter().map(|f| match a {
+                Anchor::Read => (*f).clone(),
+                Anchor::Event => {
+                    let mut f = (*f).clone();
+                    f.base += lo[head] as f64;
+                    f.slopes.push((head, 1.0));
+                    f
+                }
+            });
+            out.push((limit as f64, shifted.collect()));
+        }
+        Some(out)
     }
 
     /// The analysis of one point, and whether it meets the active groups
@@ -262,7 +303,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
             let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
             let r = relax(self.p.spec, &lo, &hi, &node.above, true);
-            if !self.may_hold(&r) {
+            if !self.may_hold(&r, &lo) {
                 return false;
             }
             let Some(bound) = self.form_bound(&r, &lo, &hi) else {
@@ -325,58 +366,70 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// limit's affine forms exceed it even with every other period at its
     /// shortest; `None` when an interval empties, else whether any moved.
     fn cut_by_forms(&self, node: &mut Node, r: &Relaxed, lo: &[Nanos]) -> Option<bool> {
-        let spec = self.p.spec;
-        let n = node.lo.len();
         let mut changed = false;
         for g in self.groups {
             let Group::Limit(k, metric) = *g else {
                 continue;
             };
-            let Some(forms) = self.forms_of(r, k, metric) else {
+            let Some(limits) = self.limit_forms(r, lo, k, metric) else {
                 continue;
             };
-            let limit = metric.limit(&spec.chains[k]);
-            let Some(limit) = limit.map(|l| l as f64) else {
-                continue;
-            };
-            // The longest period each task may have: the most any form allows.
-            let mut allow = vec![f64::NEG_INFINITY; n];
-            for a in forms {
-                if a.base > limit {
-                    continue;
-                }
-                let mut slope = vec![0.0; n];
-                a.slopes.iter().for_each(|&(i, s)| slope[i] += s);
-                for (i, (cap, &s)) in allow.iter_mut().zip(&slope).enumerate() {
-                    let room = if s > 0.0 {
-                        lo[i] as f64 + (limit - a.base) / s
-                    } else {
-                        f64::INFINITY
-                    };
-                    *cap = cap.max(room);
-                }
-            }
-            for (i, &cap) in allow.iter().enumerate() {
-                if cap >= self.axes[i].value(node.hi[i]) as f64 {
-                    continue;
-                }
-                match self.axes[i].last_at_most(cap.floor().max(-1.0) as Nanos) {
-                    Some(k) if k >= node.lo[i] => {
-                        node.hi[i] = k;
-                        changed = true;
-                    }
-                    _ => return None,
+            for (limit, forms) in &limits {
+                if !self.cut_one(node, forms, *limit, lo, &mut changed) {
+                    return None;
                 }
             }
         }
         Some(changed)
     }
 
+    /// `cut_by_forms` for one limit and its forms; false when an interval
+    /// empties.
+    fn cut_one(
+        &self,
+        node: &mut Node,
+        forms: &[Affine],
+        limit: f64,
+        lo: &[Nanos],
+        changed: &mut bool,
+    ) -> bool {
+        let n = node.lo.len();
+        // The longest period each task may have: the most any form allows.
+        let mut allow = vec![f64::NEG_INFINITY; n];
+        for a in forms {
+            if a.base > limit {
+                continue;
+            }
+            let mut slope = vec![0.0; n];
+            a.slopes.iter().for_each(|&(i, s)| slope[i] += s);
+            for (i, (cap, &s)) in allow.iter_mut().zip(&slope).enumerate() {
+                let room = if s > 0.0 {
+                    lo[i] as f64 + (limit - a.base) / s
+                } else {
+                    f64::INFINITY
+                };
+                *cap = cap.max(room);
+            }
+        }
+        for (i, &cap) in allow.iter().enumerate() {
+            if cap >= self.axes[i].value(node.hi[i]) as f64 {
+                continue;
+            }
+            match self.axes[i].last_at_most(cap.floor().max(-1.0) as Nanos) {
+                Some(k) if k >= node.lo[i] => {
+                    node.hi[i] = k;
+                    *changed = true;
+                }
+                _ => return false,
+            }
+        }
+        true
+    }
+
     /// The box's bound: Σ C/hi, raised by each chain limit whose affine
     /// forms (`Relaxed::forms`) keep the periods of its tasks from all
     /// being longest. `None` when some limit cannot hold in the box.
     fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
-        let spec = self.p.spec;
         let plain = self.utilization_at(hi);
         let mut bound = plain;
         let mut joint = Vec::new();
@@ -384,15 +437,15 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let Group::Limit(k, metric) = *g else {
                 continue;
             };
-            let forms = self.forms_of(r, k, metric)?;
-            let limit = metric.limit(&spec.chains[k]);
-            let Some(limit) = limit else { continue };
-            let b = forms
-                .iter()
-                .filter_map(|a| least_under(&self.budget, a, limit as f64, lo, hi))
-                .min_by(f64::total_cmp)?;
-            bound = bound.max(b);
-            joint.push(Row::new(&forms, limit as f64, lo, lo.len()));
+            for (limit, forms) in self.limit_forms(r, lo, k, metric)? {
+                let b = forms
+                    .iter()
+                    .filter_map(|a| least_under(&self.budget, a, limit, lo, hi))
+                    .min_by(f64::total_cmp)?;
+                bound = bound.max(b);
+                let refs: Vec<&Affine> = forms.iter().collect();
+                joint.push(Row::new(&refs, limit, lo, lo.len()));
+            }
         }
         Some(bound.max(joint_bound(&self.budget, &joint, lo, hi)))
     }

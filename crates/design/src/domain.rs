@@ -180,7 +180,9 @@ fn horizon(spec: &Spec) -> Nanos {
     for c in &spec.chains {
         horizon = horizon
             .max(c.reaction.unwrap_or(0))
-            .max(c.freshness.unwrap_or(0));
+            .max(c.freshness.unwrap_or(0))
+            .max(c.max_reaction_time.unwrap_or(0))
+            .max(c.max_data_age.unwrap_or(0));
     }
     for t in &spec.tasks {
         if let Some(p) = t.fixed_period() {
@@ -208,13 +210,20 @@ fn task_dom(spec: &Spec, t: &Task, horizon: Nanos, g: i64) -> Result<Dom, Design
     let res = spec.resolution;
     // T ≥ C, and T ≥ D when a deadline is given (constrained deadlines).
     let c = t.budget().max(t.deadline_given.unwrap_or(0));
+    // `max_period` caps every period the design may give the task: control
+    // needs at least that rate, whatever the chains allow.
+    let cap = t.max_period.unwrap_or(Nanos::MAX);
     Ok(match &t.period {
         PeriodSpec::Fixed(p) => Dom::Fixed(p / g),
         PeriodSpec::Choices(v) => {
-            let ok: Vec<i64> = v.iter().filter(|&&p| p >= c).map(|&p| p / g).collect();
+            let ok: Vec<i64> = v
+                .iter()
+                .filter(|&&p| p >= c && p <= cap)
+                .map(|&p| p / g)
+                .collect();
             if ok.is_empty() {
                 return Err(DesignError::input(format!(
-                    "task `{}`: no period choice is at least its budget (and deadline) {}{}",
+                    "task `{}`: no period choice is at least its budget (and deadline) {}{} and at most its max_period",
                     t.name,
                     format_in(c, spec.time_unit),
                     spec.time_unit
@@ -222,8 +231,11 @@ fn task_dom(spec: &Spec, t: &Task, horizon: Nanos, g: i64) -> Result<Dom, Design
             }
             Dom::Choice(ok)
         }
-        PeriodSpec::Range { min, max } => range_dom(spec, t, *min, *max, c, horizon, res, g)?,
-        PeriodSpec::Free => range_dom(spec, t, None, None, c, horizon, res, g)?,
+        PeriodSpec::Range { min, max } => {
+            let max = max.map_or(t.max_period, |m| Some(m.min(cap)));
+            range_dom(spec, t, *min, max, c, horizon, res, g)?
+        }
+        PeriodSpec::Free => range_dom(spec, t, None, t.max_period, c, horizon, res, g)?,
     })
 }
 

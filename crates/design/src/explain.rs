@@ -8,7 +8,7 @@ use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 use crate::solve::{solve_master, Solved};
 use crate::sound::{learn_r_cuts, SoundModel};
-use rtpipe_analysis::Metric;
+use rtpipe_analysis::{Anchor, Metric};
 use rtpipe_model::{format_in, Nanos};
 
 /// Whether each conflict probe gets a fair share of the remaining work
@@ -166,51 +166,77 @@ fn conflict(
             .collect::<Vec<_>>()
             .join(">")
     });
-    let limit = metric.limit(ch).unwrap_or(0);
     p.say(|| format!("infeasible; how far must {name} move"));
-    let fix = min_limit(p, learnt, budget, groups, gr, sound).map(|need| {
+    // The group holds the metric's limits from both anchors: name each, and
+    // raise the first whose raise makes the core feasible.
+    let limits: Vec<(Anchor, Nanos)> = Anchor::ALL
+        .into_iter()
+        .filter_map(|a| Some((a, metric.limit(ch, a)?)))
+        .collect();
+    let fix = limits.iter().find_map(|&(a, limit)| {
+        let need = min_limit(p, learnt, budget, groups, gr, a, sound)?;
+        Some(format!(
+            "raise the {} limit from {} to {} {} (within a thousandth of the time unit; other constraints unchanged)",
+            limit_name(metric, a),
+            format_in(limit, spec.time_unit),
+            format_in(need, spec.time_unit),
+            spec.time_unit
+        ))
+    });
+    let said: Vec<String> = limits
+        .iter()
+        .map(|&(a, l)| {
             format!(
-                "raise the {} limit from {} to {} {} (within a thousandth of the time unit; other constraints unchanged)",
-                metric.name(),
-                format_in(limit, spec.time_unit),
-                format_in(need, spec.time_unit),
-                spec.time_unit
+                "{} ≤ {}",
+                limit_name(metric, a),
+                format_in(l, spec.time_unit)
             )
-        });
+        })
+        .collect();
     Conflict {
-        constraint: format!(
-            "chain {name}: {} ≤ {}",
-            metric.name(),
-            format_in(limit, spec.time_unit)
-        ),
+        constraint: format!("chain {name}: {}", said.join(", ")),
         fix,
     }
 }
 
+/// How a conflict names a limit: the metric from the read (as before the
+/// from-event limits), the spec key from the event.
+fn limit_name(metric: Metric, anchor: Anchor) -> &'static str {
+    match anchor {
+        Anchor::Read => metric.name(),
+        Anchor::Event => metric.key(anchor),
+    }
+}
+
 /// The smallest limit of chain group `gr` that makes `core` feasible,
-/// by bisection on the limit (in grid units).
+/// by bisection on its limit from `anchor` (in grid units).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn min_limit(
     p: &Problem,
     learnt: &Learnt,
     budget: &mut Budget,
     core: &[Group],
     gr: Group,
+    anchor: Anchor,
     sound: Option<&SoundModel>,
 ) -> Option<Nanos> {
     let Group::Limit(c, metric) = gr else {
         return None;
     };
     let original = p.spec.clone();
-    let lo0 = metric.limit(&original.chains[c])?;
+    let lo0 = metric.limit(&original.chains[c], anchor)?;
     let mut hi = lo0.max(1);
     // Whether `core` holds with the limit at l, by a sub-search on a
     // copy of the spec that shares what was learnt.
     let feasible = |budget: &mut Budget, l: Nanos| -> Option<bool> {
         let mut s = original.clone();
-        match metric {
-            Metric::Reaction => s.chains[c].reaction = Some(l),
-            Metric::Freshness => s.chains[c].freshness = Some(l),
-        }
+        let ch = &mut s.chains[c];
+        *match (metric, anchor) {
+            (Metric::Reaction, Anchor::Read) => &mut ch.reaction,
+            (Metric::Freshness, Anchor::Read) => &mut ch.freshness,
+            (Metric::Reaction, Anchor::Event) => &mut ch.max_reaction_time,
+            (Metric::Freshness, Anchor::Event) => &mut ch.max_data_age,
+        } = Some(l);
         let sub = p.with_limit(&s, l);
         let mut sub_learnt = learnt.for_sub();
         let mut sub_budget = budget.sub();

@@ -10,8 +10,8 @@ use crate::model::{ChainExpr, Master};
 use crate::paper::paper_chain;
 use crate::problem::{Group, Problem};
 use crate::rta::{add_rta_cut, Levels, RtaCut};
-use crate::sound::{add_r_cut, rmax_of, sound_chain, SoundModel};
-use rtpipe_analysis::Metric;
+use crate::sound::{add_r_cut, rmax_of, sound_chain, sound_event_reaction, SoundModel};
+use rtpipe_analysis::{Anchor, Metric};
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::SchedTest;
 
@@ -215,22 +215,36 @@ impl<'a> Master<'a> {
         let spec = self.spec;
         for (k, ch) in spec.chains.iter().enumerate() {
             for metric in [Metric::Reaction, Metric::Freshness] {
-                let Some(limit) = metric.limit(ch) else {
-                    continue;
-                };
                 if !groups.contains(&Group::Limit(k, metric)) {
                     continue;
                 }
-                let l = grid_units(limit, self.g);
-                let sums = match sound {
-                    None => vec![paper_chain(self, &ch.path, metric, l)],
-                    Some(_) => sound_chain(self, &ch.path, metric, l),
-                };
-                self.chains.push(ChainExpr {
-                    chain: k,
-                    metric,
-                    sums,
-                });
+                if let Some(limit) = metric.limit(ch, Anchor::Read) {
+                    let l = grid_units(limit, self.g);
+                    let none = Lin::default();
+                    let sums = match sound {
+                        None => vec![paper_chain(self, &ch.path, metric, l, &none)],
+                        Some(_) => sound_chain(self, &ch.path, metric, l, &none),
+                    };
+                    self.chains.push(ChainExpr {
+                        chain: k,
+                        metric,
+                        sums,
+                    });
+                }
+                // From the event: the same sums plus the head's period.
+                if let Some(limit) = metric.limit(ch, Anchor::Event) {
+                    let l = grid_units(limit, self.g);
+                    let head = self.period[ch.path[0]].clone();
+                    match (sound, metric) {
+                        (None, _) => drop(paper_chain(self, &ch.path, metric, l, &head)),
+                        (Some(_), Metric::Reaction) => {
+                            drop(sound_event_reaction(self, &ch.path, l))
+                        }
+                        (Some(_), Metric::Freshness) => {
+                            drop(sound_chain(self, &ch.path, metric, l, &head))
+                        }
+                    }
+                }
             }
         }
     }

@@ -9,7 +9,13 @@ use rtpipe_analysis::Metric;
 
 /// Paper mode (Eqs. 2–6, 12 and Section III-F), with the case of each link a
 /// binary: z = 1 ⟺ T_c < T_p. Returns the chain's sum.
-pub(crate) fn paper_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64) -> Lin {
+pub(crate) fn paper_chain(
+    m: &mut Master,
+    path: &[usize],
+    metric: Metric,
+    limit: f64,
+    shift: &Lin,
+) -> Lin {
     let g = m.g;
     let spec = m.spec;
     // Budgets cover the demand (validated), so Eq. 1 gives L = x.
@@ -35,6 +41,8 @@ pub(crate) fn paper_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
             c: 0.0,
         });
     }
-    m.lp.row(total.terms.clone(), Cmp::Le, limit - total.c);
+    // From the event the bound is one head period more (`shift`).
+    let row = total.plus(shift);
+    m.lp.row(row.terms, Cmp::Le, limit - row.c);
     total
 }

@@ -3,7 +3,7 @@
 
 use crate::api::{Incumbent, Method, Options};
 use crate::domain::{grid_units, Dom, Domains};
-use rtpipe_analysis::{ChainResult, Metric, Report};
+use rtpipe_analysis::{Anchor, ChainResult, Metric, Report};
 use rtpipe_model::{Nanos, PeriodSpec, Spec};
 
 /// What one design search is asked: read by every part of it, changed by
@@ -97,11 +97,11 @@ impl<'a> Problem<'a> {
     pub(crate) fn all_groups(&self) -> Vec<Group> {
         let mut v = Vec::new();
         for (k, ch) in self.spec.chains.iter().enumerate() {
-            if ch.reaction.is_some() {
-                v.push(Group::Limit(k, Metric::Reaction));
-            }
-            if ch.freshness.is_some() {
-                v.push(Group::Limit(k, Metric::Freshness));
+            // One group per metric holds its limits from both anchors.
+            for m in [Metric::Reaction, Metric::Freshness] {
+                if Anchor::ALL.iter().any(|&a| m.limit(ch, a).is_some()) {
+                    v.push(Group::Limit(k, m));
+                }
             }
         }
         let mut cpus: Vec<u32> = self.spec.tasks.iter().map(|t| t.cpu).collect();

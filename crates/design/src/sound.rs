@@ -190,7 +190,13 @@ pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
 /// E the reaction sum (links + the tail's R), F the freshness sum (links,
 /// the last one to the tail's publish); the reaction limit holds when either
 /// fits, as the reported reaction is min(E, F).
-pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit: f64) -> Vec<Lin> {
+pub(crate) fn sound_chain(
+    m: &mut Master,
+    path: &[usize],
+    metric: Metric,
+    limit: f64,
+    shift: &Lin,
+) -> Vec<Lin> {
     let tail = *path.last().unwrap_or(&0);
     let mut e = response(m, tail);
     let mut f = if path.len() == 1 {
@@ -214,20 +220,41 @@ pub(crate) fn sound_chain(m: &mut Master, path: &[usize], metric: Metric, limit:
         d = pass_distinct(m, p, c, d);
     }
     let big = m.big_m;
+    // From the event, `shift` is the head period (freshness only: reaction
+    // from the event has its own encoding, `sound_event_reaction`).
+    let (es, fs) = (e.plus(shift), f.plus(shift));
     match metric {
-        Metric::Freshness => m.lp.row(f.terms.clone(), Cmp::Le, limit - f.c),
+        Metric::Freshness => m.lp.row(fs.terms, Cmp::Le, limit - fs.c),
         Metric::Reaction => {
             // The reported reaction is min(E, F): one of them must fit.
             let w = m.lp.binary();
-            let mut t = e.terms.clone();
+            let mut t = es.terms;
             t.push((w, -big));
-            m.lp.row(t, Cmp::Le, limit - e.c);
-            let mut t = f.terms.clone();
+            m.lp.row(t, Cmp::Le, limit - es.c);
+            let mut t = fs.terms;
             t.push((w, big));
-            m.lp.row(t, Cmp::Le, limit - f.c + big);
+            m.lp.row(t, Cmp::Le, limit - fs.c + big);
         }
     }
     vec![e, f]
+}
+
+/// Sound reaction from the event ≤ `limit`: T_1 + Σ link terms + R_n, the
+/// links without the reachability options (the producer's stage never
+/// counts as distinct), as `rtpipe_analysis::latency::sound_event_reaction`.
+/// Returns the sum.
+pub(crate) fn sound_event_reaction(m: &mut Master, path: &[usize], limit: f64) -> Lin {
+    let tail = *path.last().unwrap_or(&0);
+    let mut e = response(m, tail).plus(&m.period[path[0]]);
+    for (k, w) in path.windows(2).enumerate() {
+        let (l, _) = sound_link(m, w[0], w[1], Bin::Const(false), k + 2 == path.len());
+        e = e.plus(&Lin {
+            terms: vec![(l, 1.0)],
+            c: 0.0,
+        });
+    }
+    m.lp.row(e.terms.clone(), Cmp::Le, limit - e.c);
+    e
 }
 
 /// The job response time of task i: its variable, or its period where a

@@ -329,3 +329,117 @@ fn jitter_and_other_orders_are_refused() {
         assert_eq!(e.map(|e| e.kind), Some(ErrorKind::Input), "{to}");
     }
 }
+
+/// sense → act, both periods free up to 50 ms; `extra` goes into the chain
+/// (a from-event limit) and `act_extra` into act (a `max_period`).
+fn event_problem(extra: &str, act_extra: &str) -> Spec {
+    let src = format!(
+        "[system]\nname = \"free\"\ntime_unit = \"ms\"\nresolution = 1\n\
+         [channels.mem]\nbandwidth = 1\n\
+         [tasks.sense]\nexec = 1\nperiod = {{ max = 50 }}\noutput = {{ channel = \"mem\", size = 0 }}\n\
+         [tasks.act]\nexec = 2\nperiod = {{ max = 50 }}\nreads = [\"sense\"]\n\
+         output = {{ channel = \"mem\", size = 0 }}\n{act_extra}\n\
+         [[chain]]\npath = [\"sense\", \"act\"]\nreaction = 40\n{extra}\n"
+    );
+    match Spec::parse("free.toml", &src) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn run_with(spec: &Spec, mode: Mode, method: Method) -> Outcome {
+    let opts = Options {
+        mode,
+        method,
+        patience: None,
+        ..Options::default()
+    };
+    match design(spec, &opts) {
+        Ok(o) => o,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn periods_of(o: &Outcome) -> Vec<Nanos> {
+    o.spec
+        .as_ref()
+        .map(|s| s.tasks.iter().filter_map(|t| t.fixed_period()).collect())
+        .unwrap_or_default()
+}
+
+#[test]
+fn a_from_event_limit_moves_the_optimum_and_the_answer_verifies() {
+    const MS: Nanos = 1_000_000;
+    let cases = [
+        (Mode::Sound, Method::Boxes, [24, 33]),
+        (Mode::Sound, Method::Milp, [24, 33]),
+        (Mode::Paper, Method::Milp, [29, 50]),
+    ];
+    for (mode, method, want) in cases {
+        let free = run_with(&event_problem("", ""), mode, method);
+        let bound = run_with(&event_problem("max_reaction_time = 60", ""), mode, method);
+        for o in [&free, &bound] {
+            assert_eq!(
+                o.status,
+                Status::Optimal,
+                "{mode:?} {method:?} {:?}",
+                o.notes
+            );
+            assert!(o.report.as_ref().is_some_and(|r| r.ok_in(mode)));
+        }
+        let (u0, u1) = (
+            free.objective.unwrap_or(0.0),
+            bound.objective.unwrap_or(0.0),
+        );
+        assert!(u1 > u0 + 1e-6, "{mode:?} {method:?}: {u0} → {u1}");
+        assert_eq!(
+            periods_of(&bound),
+            want.map(|p| p * MS).to_vec(),
+            "{mode:?} {method:?}"
+        );
+        // The limit binds: the mode's from-event bound is at it.
+        let r = bound
+            .report
+            .as_ref()
+            .map(|r| r.chains[0].bound_in(mode, Anchor::Event));
+        assert_eq!(r, Some(Some(60 * MS)), "{mode:?} {method:?}");
+    }
+}
+
+#[test]
+fn max_period_caps_the_design() {
+    const MS: Nanos = 1_000_000;
+    for method in [Method::Boxes, Method::Milp] {
+        let free = run_with(&event_problem("", ""), Mode::Sound, method);
+        assert!(periods_of(&free)[1] > 30 * MS, "{:?}", periods_of(&free));
+        let capped = run_with(&event_problem("", "max_period = 30"), Mode::Sound, method);
+        assert_eq!(capped.status, Status::Optimal, "{:?}", capped.notes);
+        assert_eq!(periods_of(&capped)[1], 30 * MS, "{method:?}");
+        assert!(capped.report.as_ref().is_some_and(|r| r.ok_in(Mode::Sound)));
+    }
+}
+
+#[test]
+fn an_unreachable_from_event_limit_is_explained() {
+    // From the event a reaction needs at least T_sense + R_act > 5 ms.
+    let o = run_with(
+        &event_problem("max_reaction_time = 5", ""),
+        Mode::Sound,
+        Method::Boxes,
+    );
+    assert_eq!(o.status, Status::Infeasible, "{:?}", o.notes);
+    let said: Vec<&str> = o.conflicts.iter().map(|c| c.constraint.as_str()).collect();
+    assert!(
+        said.iter().any(|c| c.contains("max_reaction_time ≤ 5")),
+        "{said:?}"
+    );
+    let fix = o
+        .conflicts
+        .iter()
+        .filter_map(|c| c.fix.as_deref())
+        .collect::<Vec<_>>();
+    assert!(
+        fix.iter().any(|f| f.contains("max_reaction_time limit")),
+        "{fix:?}"
+    );
+}

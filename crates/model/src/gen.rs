@@ -241,6 +241,8 @@ fn random_chains(rng: &mut Rng, cfg: &GenConfig, tasks: &[Task], n_sources: usiz
             path,
             reaction: None,
             freshness: None,
+            max_reaction_time: None,
+            max_data_age: None,
         });
     }
     chains
@@ -483,6 +485,8 @@ pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
             path,
             reaction: None,
             freshness: None,
+            max_reaction_time: None,
+            max_data_age: None,
         });
     }
     spec

@@ -136,6 +136,10 @@ pub struct Task {
     /// J, release jitter: each job is released somewhere in
     /// [nominal, nominal + J], nominal = offset + k·T (0: none).
     pub jitter: Nanos,
+    /// The longest period control tolerates (`max_period`: a minimum
+    /// actuation or sampling rate); a fixed period above it fails the
+    /// verdict and the design keeps a free period at or under it.
+    pub max_period: Option<Nanos>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -168,6 +172,7 @@ impl Task {
             priority: None,
             deadline_given: None,
             jitter: 0,
+            max_period: None,
             delta_in: 0,
             delta_out: 0,
         }
@@ -213,6 +218,12 @@ pub struct Chain {
     pub reaction: Option<Nanos>,
     /// Limit on the freshness time.
     pub freshness: Option<Nanos>,
+    /// Limit on the reaction time from the event (`max_reaction_time`: the
+    /// maximum reaction time of Dürr et al. 2019 and Günzel et al.).
+    pub max_reaction_time: Option<Nanos>,
+    /// Limit on the freshness time from the event (`max_data_age`: the
+    /// maximum data age of the same literature).
+    pub max_data_age: Option<Nanos>,
 }
 
 impl Chain {
@@ -230,6 +241,8 @@ impl Chain {
             path,
             reaction: None,
             freshness: None,
+            max_reaction_time: None,
+            max_data_age: None,
         }
     }
 }

@@ -67,6 +67,7 @@ pub struct RawTask {
     pub priority: Option<S<toml::Value>>,
     pub deadline: Option<S<toml::Value>>,
     pub jitter: Option<S<toml::Value>>,
+    pub max_period: Option<S<toml::Value>>,
 }
 
 #[derive(Debug, serde::Deserialize)]
@@ -75,6 +76,8 @@ pub struct RawChain {
     pub path: S<Vec<S<String>>>,
     pub reaction: Option<S<toml::Value>>,
     pub freshness: Option<S<toml::Value>>,
+    pub max_reaction_time: Option<S<toml::Value>>,
+    pub max_data_age: Option<S<toml::Value>>,
     pub name: Option<S<String>>,
 }
 

@@ -428,3 +428,46 @@ fn offsets_must_be_below_the_period() {
     .expect("valid");
     assert_eq!(s.tasks[0].offset, Some(9_999_000));
 }
+
+#[test]
+fn from_event_limits_and_max_period_parse_and_round_trip() {
+    let src = MINI.replace(
+        "reaction = 10\n",
+        "reaction = 10\nmax_reaction_time = 25\nmax_data_age = \"30ms\"\n",
+    ) + "";
+    let src = src.replace("period = 5\n", "period = 5\nmax_period = 8\n");
+    let s = Spec::parse("x.toml", &src).expect("valid");
+    assert_eq!(s.chains[0].max_reaction_time, Some(25_000_000));
+    assert_eq!(s.chains[0].max_data_age, Some(30_000_000));
+    assert_eq!(s.tasks[1].max_period, Some(8_000_000));
+    assert_eq!(s.tasks[0].max_period, None);
+    let back = Spec::parse("y.toml", &crate::write::to_toml(&s)).expect("written spec parses");
+    assert_eq!(back.chains, s.chains);
+    assert_eq!(back.tasks[1].max_period, s.tasks[1].max_period);
+}
+
+#[test]
+fn bad_from_event_limits_and_max_period_are_located() {
+    let e =
+        err(&MINI.replace("reaction = 10\n", "reaction = 10\nmax_reaction_time = 0\n")).to_string();
+    assert!(
+        e.contains("x.toml:25:21: error: max_reaction_time must be positive"),
+        "{e}"
+    );
+    assert!(
+        e.contains("help: give max_reaction_time a value greater than zero"),
+        "{e}"
+    );
+    let e = err(&MINI.replace(
+        "reaction = 10\n",
+        "reaction = 10\nmax_data_age = \"-2ms\"\n",
+    ))
+    .to_string();
+    assert!(
+        e.contains("x.toml:25:16: error: max_data_age must be positive"),
+        "{e}"
+    );
+    let e = err(&MINI.replace("period = 5\n", "period = 5\nmax_period = \"fast\"\n")).to_string();
+    assert!(e.contains("x.toml:21:14: error: "), "{e}");
+    assert!(e.contains("max_period"), "{e}");
+}

@@ -606,11 +606,21 @@ impl Builder {
             .freshness
             .as_ref()
             .and_then(|v| self.positive_time(v, "freshness limit"));
+        let max_reaction_time = c
+            .max_reaction_time
+            .as_ref()
+            .and_then(|v| self.positive_time(v, "max_reaction_time"));
+        let max_data_age = c
+            .max_data_age
+            .as_ref()
+            .and_then(|v| self.positive_time(v, "max_data_age"));
         ok.then(|| Chain {
             name: c.name.as_ref().map(|n| n.get_ref().clone()),
             path,
             reaction,
             freshness,
+            max_reaction_time,
+            max_data_age,
         })
     }
 
@@ -771,6 +781,10 @@ impl Builder {
             None => Some(None),
         };
         let (priority, deadline, jitter) = self.timing_keys(t);
+        let max_period = match &t.max_period {
+            Some(m) => self.positive_time(m, "max_period").map(Some),
+            None => Some(None),
+        };
         Some(Task {
             name: k.get_ref().clone(),
             exec: exec?,
@@ -788,6 +802,7 @@ impl Builder {
             priority: priority?,
             deadline_given: deadline?,
             jitter: jitter?,
+            max_period: max_period?,
             delta_in: 0,
             delta_out: 0,
         })

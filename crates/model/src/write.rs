@@ -133,6 +133,9 @@ fn task(o: &mut String, spec: &Spec, t: &Task) {
     if t.jitter != 0 {
         let _ = writeln!(o, "jitter = {}", time(spec, t.jitter));
     }
+    if let Some(m) = t.max_period {
+        let _ = writeln!(o, "max_period = {}", time(spec, m));
+    }
     if let Some(p) = t.priority {
         let _ = writeln!(o, "priority = {p}");
     }
@@ -183,6 +186,12 @@ fn chain(o: &mut String, spec: &Spec, c: &Chain) {
     }
     if let Some(l) = c.freshness {
         let _ = writeln!(o, "freshness = {}", time(spec, l));
+    }
+    if let Some(l) = c.max_reaction_time {
+        let _ = writeln!(o, "max_reaction_time = {}", time(spec, l));
+    }
+    if let Some(l) = c.max_data_age {
+        let _ = writeln!(o, "max_data_age = {}", time(spec, l));
     }
 }
 

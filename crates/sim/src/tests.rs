@@ -38,6 +38,8 @@ pub(crate) fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize
             path: p.to_vec(),
             reaction: None,
             freshness: None,
+            max_reaction_time: None,
+            max_data_age: None,
         })
         .collect();
     s
@@ -346,6 +348,8 @@ fn bad_inputs_are_errors() {
         path: vec![0, 1],
         reaction: None,
         freshness: None,
+        max_reaction_time: None,
+        max_data_age: None,
     }];
     assert_eq!(simulate(&s, &cfg), Err(SimError::BadChain(0)));
     s.chains.clear();
