@@ -173,11 +173,33 @@ pub const EXIT_INTERNAL: u8 = 3;
 /// and printed: the answer is not the one the complete search gives.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
+/// Exit status when the reader of stdout went away (128 + SIGPIPE, what a
+/// shell reports for a process a broken pipe ends).
+pub const EXIT_BROKEN_PIPE: u8 = 141;
+
 /// A panic anywhere (any thread) prints its message and ends the process
-/// with [`EXIT_INTERNAL`]: it never leaves a waiting thread behind.
+/// with [`EXIT_INTERNAL`]: it never leaves a waiting thread behind. A
+/// failed write to stdout or stderr (`print!` panics on one) is not a bug:
+/// a closed pipe ends the process quietly, any other failure (a full disk)
+/// with a plain error and [`EXIT_BAD_INPUT`], as an output file that cannot
+/// be written does.
 fn exit_on_panic() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
+        let payload = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if let Some(why) = payload.strip_prefix("failed printing to std") {
+            if why.contains("Broken pipe") {
+                std::process::exit(i32::from(EXIT_BROKEN_PIPE));
+            }
+            let why = why.trim_start_matches("out: ").trim_start_matches("err: ");
+            eprintln!("error: cannot write the output: {why}");
+            std::process::exit(i32::from(EXIT_BAD_INPUT));
+        }
         default(info);
         eprintln!(
             "error: internal error (a bug in rtpipe); please report it with the spec and the command line"

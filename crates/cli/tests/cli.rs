@@ -308,3 +308,76 @@ fn analyze_shows_and_judges_limits_from_the_event_and_max_period() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `rtpipe ARGS` with stdout on /dev/full: a plain error and exit 2, as an
+/// output file that cannot be written, never a panic.
+fn into_full_disk(args: &[&str]) -> std::process::Output {
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        panic!("no /dev/full");
+    };
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(args)
+        .stdout(full)
+        .output();
+    o.unwrap_or_else(|e| panic!("cannot run rtpipe: {e}"))
+}
+
+#[test]
+fn a_full_stdout_is_a_plain_error_for_every_printing_command() {
+    let t2 = example("paper-table2.toml");
+    let dir = scratch("full");
+    let w = dir.join("w.toml");
+    let w = w.to_string_lossy();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["analyze", &t2],
+        vec!["analyze", &t2, "--json"],
+        vec!["simulate", &t2, "--outputs", "20"],
+        vec!["design", &t2],
+        vec!["generate", "waters", "--tasks", "10", "--chains", "2", &w],
+    ];
+    for args in cases {
+        let o = into_full_disk(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("error: cannot write the output: No space left on device"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    let dir = scratch("pipe");
+    let big = dir.join("big.toml");
+    let big = big.to_string_lossy();
+    let gen = [
+        "generate", "waters", "--tasks", "200", "--chains", "40", "--seed", "1", &big,
+    ];
+    assert_exit(&rtpipe(&gen), 0);
+    // Far more than a pipe's buffer, to a reader that is gone.
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(["analyze", &big, "--all-paths", "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn();
+    let Ok(mut child) = child else {
+        panic!("cannot start rtpipe");
+    };
+    drop(child.stdout.take());
+    let Ok(o) = child.wait_with_output() else {
+        panic!("rtpipe did not end");
+    };
+    assert_eq!(
+        o.status.code(),
+        Some(141),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
