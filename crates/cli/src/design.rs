@@ -65,6 +65,12 @@ pub fn run(a: Args) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    if let (MethodArg::Boxes, Some(_)) = (a.method, a.solver) {
+        return crate::command::fail(rtpipe_model::Diagnostic::error(
+            "--solver picks the MILP's LP solver, but --method boxes solves no LP",
+            "drop --solver, or use --method milp (or auto)",
+        ));
+    }
     if let Some(t) = a.time_limit {
         if let Err(e) = parse_time_limit(&t.to_string()) {
             eprintln!("error: --time-limit {t}: {e}");

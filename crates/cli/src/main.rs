@@ -235,7 +235,10 @@ fn main() -> ExitCode {
             simulate::run(&args)
         }
         Command::Fly(args) => fly::run(&args),
-        Command::Run(args) => run::run(&args),
+        Command::Run(mut args) => {
+            args.world_given = given("vehicle") || given("mission");
+            run::run(&args)
+        }
         Command::Design {
             spec,
             mode,

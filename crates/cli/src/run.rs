@@ -83,6 +83,9 @@ pub struct RunArgs {
     /// freshness from the read and from the event, integer ns.
     #[arg(long, value_name = "FILE.csv")]
     pub samples: Option<PathBuf>,
+    /// --vehicle or --mission was given on the command line (set by main).
+    #[arg(skip)]
+    pub world_given: bool,
 }
 
 /// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
@@ -303,6 +306,12 @@ pub fn run(a: &RunArgs) -> ExitCode {
 /// rt-app workload if asked, since it needs no run.
 fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagnostic> {
     let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
+    if a.world_given && !flight {
+        return Err(Diagnostic::error(
+            "--vehicle and --mission choose what a flight flies, but this run has synthetic bodies (no task names a flight body, or --synthetic)",
+            "drop --vehicle/--mission, or run a spec whose tasks name flight bodies without --synthetic",
+        ));
+    }
     let setup = if flight {
         let r = rtpipe_fly::Request {
             spec_path: &a.spec,

@@ -381,3 +381,28 @@ fn a_closed_pipe_ends_quietly() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A flag that would have no effect is an error naming the fix (issue 24
+/// item 8), before anything runs.
+#[test]
+fn flags_that_would_be_ignored_exit_2() {
+    let t2 = example("table2-design.toml");
+    let o = rtpipe(&["design", &t2, "--method", "boxes", "--solver", "microlp"]);
+    assert_exit(&o, 2);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--method boxes solves no LP"));
+    let t3 = example("paper-table3.toml");
+    let o = rtpipe(&["run", &t3, "--vehicle", "racer5", "--duration", "100ms"]);
+    assert_exit(&o, 2);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("this run has synthetic bodies"));
+    let cf = example("cleanflight.toml");
+    let o = rtpipe(&[
+        "run",
+        &cf,
+        "--synthetic",
+        "--mission",
+        "hover",
+        "--duration",
+        "100ms",
+    ]);
+    assert_exit(&o, 2);
+}
