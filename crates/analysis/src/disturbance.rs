@@ -10,7 +10,7 @@
 //! bound only when the disturbance measured in its window grows the bound
 //! by at least the excess.
 
-use crate::sched::{interference, interferers, response_time, top_priorities};
+use crate::sched::{busy_window, hp_load, top_priorities};
 use rtpipe_model::{Nanos, Server, Spec};
 
 /// How much longer task `task`'s job response can be with `b` ns of
@@ -40,19 +40,39 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     }
     let prio = policy.priorities(spec);
     let top = top_priorities(spec, &prio);
-    let hp: Vec<(Nanos, Nanos)> = interferers(spec, &prio, &top, task)
-        .into_iter()
-        .filter_map(|j| Some((interference(&spec.tasks[j]), spec.tasks[j].fixed_period()?)))
-        .collect();
+    // The analysis' own interferers (release jitter included), so R(0) is
+    // the R(job) the bound was built from.
+    let hp = hp_load(spec, &prio, &top, task);
+    let Some(period) = t.fixed_period() else {
+        return Nanos::MAX;
+    };
     match (
-        response_time(t.demand(), &hp),
-        t.demand()
-            .checked_add(b)
-            .and_then(|x| response_time(x, &hp)),
+        busy_response(t.demand(), 0, period, &hp),
+        busy_response(t.demand(), b, period, &hp),
     ) {
         (Some(r), Some(rb)) => rb - r,
         _ => Nanos::MAX,
     }
+}
+
+/// Most own jobs one busy period is followed through before the response
+/// is called unbounded.
+const MAX_JOBS: Nanos = 100_000;
+
+/// The worst response of a job of demand `x` and period `period` with
+/// blocking `b`: max over the q-th own job of the level-i busy period of
+/// w_q − q·T (`None`: unbounded or beyond the search). Own release jitter
+/// adds the same J to every term, so it cancels in [`inflation`].
+fn busy_response(x: Nanos, b: Nanos, period: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+    let mut worst = 0;
+    for q in 0..MAX_JOBS {
+        let w = busy_window((q + 1).checked_mul(x)?.checked_add(b)?, hp)?;
+        worst = worst.max(w - q * period);
+        if w <= (q + 1) * period {
+            return Some(worst);
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -94,6 +114,23 @@ output = { channel = "shm", size = 0 }
         // lo with b = 9: w_0 = 2 + 9 + ⌈w/4⌉ → 15 > 10, so lo's second job
         // joins: w_1 = 4 + 9 + ⌈w/4⌉ → 18, 18 − 10 = 8 < 15: R = 15, +12.
         assert_eq!(inflation(&spec, 1, 9 * MS), 12 * MS);
+    }
+
+    #[test]
+    fn a_later_job_of_the_busy_period_can_be_the_worst() {
+        // hi (2, 5) above lo (4, 7), U = 0.971. Without b: w_0 = 4 +
+        // ⌈w/5⌉·2 → 8 > 7, so lo's next job joins: w_1 = 8 + ⌈w/5⌉·2 → 14
+        // ≤ 14, and R = max(8, 14 − 7) = 8. With b = 2 the busy period holds
+        // ten of lo's jobs (w_q = 10, 18, 24, 30, 38, ..., 70 ≤ 70) and the
+        // worst is the second: w_1 − 7 = 18 − 7 = 11, so +3, where the first
+        // job alone (w_0 = 10) says +2.
+        let spec = SPEC
+            .replace("exec = 1\nperiod = 4", "exec = 2\nperiod = 5")
+            .replace("exec = 2\nperiod = 10", "exec = 4\nperiod = 7");
+        let Ok(spec) = Spec::parse("two.toml", &spec) else {
+            panic!("the spec parses");
+        };
+        assert_eq!(inflation(&spec, 1, 2 * MS), 3 * MS);
         assert_eq!(inflation(&spec, 1, 0), 0);
     }
 }

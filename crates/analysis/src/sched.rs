@@ -111,6 +111,23 @@ pub fn interferers(
         .collect()
 }
 
+/// What the tasks that can run above task `i` impose, as (I_j, T_j, J_j):
+/// the `hp` of [`response_time_jitter`].
+pub fn hp_load(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    i: usize,
+) -> Vec<(Nanos, Nanos, Nanos)> {
+    interferers(spec, prio, top, i)
+        .into_iter()
+        .map(|j| {
+            let o = &spec.tasks[j];
+            (interference(o), period_or_max(o), o.jitter)
+        })
+        .collect()
+}
+
 /// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
 /// Audsley et al. 1993). `None` when the higher-priority load (with own) is
 /// 100 % or more, so the iteration would not converge, or on overflow.
@@ -134,7 +151,7 @@ pub fn response_time_jitter(
 }
 
 /// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
-fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
     // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     if u >= 1.0 {
@@ -260,13 +277,7 @@ fn response_times(
     }
     match spec.policy().response {
         ResponseAnalysis::Rta => {
-            let hp: Vec<(Nanos, Nanos, Nanos)> = interferers(spec, prio, top, i)
-                .into_iter()
-                .map(|j| {
-                    let o = &spec.tasks[j];
-                    (interference(o), period_or_max(o), o.jitter)
-                })
-                .collect();
+            let hp = hp_load(spec, prio, top, i);
             (
                 response_time_jitter(t.budget(), t.jitter, &hp),
                 response_time_jitter(t.demand(), t.jitter, &hp),

@@ -37,7 +37,8 @@ pub(super) struct Verdict {
     pub(super) violations: Vec<Violation>,
 }
 
-/// The bound's name, the value and the window of one row for one quantity.
+/// The value of one row for one quantity and its window (anchor → the
+/// output that ends it), when the run saw both.
 fn measured(r: &SampleRow, metric: Metric, anchor: Anchor) -> Option<(Nanos, (Nanos, Nanos))> {
     let (from, to) = match (metric, anchor) {
         (Metric::Reaction, Anchor::Read) => (Some(r.read), r.first),
