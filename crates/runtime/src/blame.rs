@@ -170,17 +170,16 @@ impl<'r> Blame<'r> {
         Blame { spec, res, jobs }
     }
 
-    /// The causes inside `window` (relative to the epoch; [`Blame::extend`]
-    /// back to its busy period's start) on the CPUs of `tasks`: budget overruns of jobs of the tasks sharing those CPUs,
-    /// demand overruns, start latency and outside preemption of `tasks`'
-    /// own jobs, steal on those CPUs.
+    /// The causes inside `window` (relative to the epoch; callers pass it
+    /// through [`Blame::extend`] first) on the CPUs of `tasks`: budget
+    /// overruns of jobs of the tasks that may delay them, CPU time above
+    /// `exec` of their own jobs, foreign time and steal on those CPUs.
     pub fn causes(&self, window: (Nanos, Nanos), tasks: &[usize]) -> Vec<Cause> {
         match self.res.policy {
             Policy::Other => return vec![Cause::BestEffort],
             Policy::Deadline if !self.res.partitioned => return vec![Cause::GlobalEdf],
             Policy::Deadline | Policy::Fifo => {}
         }
-        let window = self.extend(window, tasks);
         let mut out: Vec<Cause> = tasks
             .iter()
             .filter(|t| self.res.demoted.contains(t))
@@ -504,8 +503,9 @@ output = { channel = "shm", size = 0 }
     fn causes_count_only_inside_the_window_and_on_the_tasks_cpus() {
         let (spec, res) = run();
         let b = Blame::new(&spec, &res);
+        let at = |w: (Nanos, Nanos), t: &[usize]| b.causes(b.extend(w, t), t);
         // 0–9 ms on CPU 0: nothing happened there then.
-        assert_eq!(b.causes((0, 9 * MS), &[0]), vec![]);
+        assert_eq!(at((0, 9 * MS), &[0]), vec![]);
         // 21–22 ms on CPU 0: a's overrun; CPU 1's steal is not a's.
         let overrun = Cause::Overrun {
             task: 0,
@@ -514,19 +514,19 @@ output = { channel = "shm", size = 0 }
             budget: MS,
             throttle: 0,
         };
-        assert_eq!(b.causes((21 * MS, 22 * MS), &[0]), vec![overrun]);
+        assert_eq!(at((21 * MS, 22 * MS), &[0]), vec![overrun]);
         // 12–18 ms on CPU 1: the steal there.
         let steal = Cause::Steal { cpu: 1, ns: 4 * MS };
-        assert_eq!(b.causes((12 * MS, 18 * MS), &[1]), vec![steal]);
+        assert_eq!(at((12 * MS, 18 * MS), &[1]), vec![steal]);
         // 31–39 ms, from the start of its busy period (job 3's release at
         // 30): job 3 was pending 3.5 ms of it and ran 1 ms.
         let foreign = Cause::Foreign {
             cpu: Some(0),
             ns: 5 * MS / 2,
         };
-        assert_eq!(b.causes((31 * MS, 39 * MS), &[0]), vec![foreign]);
+        assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
         // Outside them, no evidence.
-        assert_eq!(Blame::total(&b.causes((0, 9 * MS), &[0])), 0);
+        assert_eq!(Blame::total(&at((0, 9 * MS), &[0])), 0);
     }
 
     #[test]

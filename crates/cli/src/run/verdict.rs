@@ -68,13 +68,14 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
                 if value > bound {
                     let quantity = format!("{} from {}", c.metric.name(), a.name());
                     let what = spec.chain_label(c.chain);
+                    let window = blame.extend(window, path);
                     let obs = Obs {
                         what,
                         quantity,
                         id: r.sample,
                         value,
                         bound,
-                        window: blame.extend(window, path),
+                        window,
                     };
                     v.push(spec, obs, blame.causes(window, path), path);
                 }
@@ -87,7 +88,7 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
         };
         let value = j.finish - j.release;
         if value > bound {
-            let window = (j.release, j.finish);
+            let window = blame.extend((j.release, j.finish), &[j.task]);
             let what = spec.tasks[j.task].name.clone();
             let obs = Obs {
                 what,
@@ -95,7 +96,7 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
                 id: j.index,
                 value,
                 bound,
-                window: blame.extend(window, &[j.task]),
+                window,
             };
             v.push(spec, obs, blame.causes(window, &[j.task]), &[j.task]);
         }
