@@ -60,6 +60,28 @@ pub struct Options {
     /// it, so that a caller can still report the best one when it stops
     /// waiting (Ctrl-C).
     pub incumbent: Option<Arc<Mutex<Option<Incumbent>>>>,
+    /// A check beyond the analysis that the answer must pass (`design
+    /// --fly`: its flights); box search only. See `gate.rs` for the cut a
+    /// rejected design leaves.
+    pub accept: Option<Arc<dyn Acceptance>>,
+}
+
+/// A check beyond the analysis that a design must pass to be the answer.
+pub trait Acceptance: Send + Sync + std::fmt::Debug {
+    /// `Ok` when `spec` (every period fixed, verified by the analysis)
+    /// passes; otherwise why not, said for the user.
+    fn accept(&self, spec: &Spec) -> Result<(), String>;
+}
+
+/// A verified design the [`Acceptance`] check judged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked {
+    /// Period of every task (ns), in declaration order.
+    pub periods: Vec<Nanos>,
+    /// Its Σ C/T.
+    pub utilization: f64,
+    /// Why it was rejected; `None` when it passed.
+    pub failure: Option<String>,
 }
 
 /// A verified design found during the search.
@@ -85,6 +107,7 @@ impl Default for Options {
             progress: None,
             cancel: None,
             incumbent: None,
+            accept: None,
         }
     }
 }
@@ -152,6 +175,9 @@ pub struct Outcome {
     pub conflicts: Vec<Conflict>,
     /// What the user should know about the answer.
     pub notes: Vec<String>,
+    /// Every design the [`Options::accept`] check judged, in order (empty
+    /// without one).
+    pub checked: Vec<Checked>,
 }
 
 /// Whose fault a [`DesignError`] is.

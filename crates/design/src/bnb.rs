@@ -18,7 +18,8 @@
 //! Nothing is approximated: the answer is verified by the analysis, and
 //! every pruned box provably holds nothing better. docs/design.md argues it.
 
-use crate::api::{utilization, Incumbent};
+use crate::api::{utilization, Checked, Incumbent};
+use crate::gate::{Gate, Verdict};
 use crate::axis::{Axis, Node};
 use crate::budget::Budget;
 use crate::joint::{joint_bound, least_under, Row};
@@ -26,6 +27,7 @@ use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::{Nanos, Server, Spec};
+use std::cell::RefCell;
 use std::collections::BinaryHeap;
 use std::ops::ControlFlow;
 
@@ -55,6 +57,8 @@ pub(crate) struct BoxResult {
     /// The most boxes held open at once (memory: each holds two indices
     /// per task).
     pub(crate) peak_open: usize,
+    /// Every design the acceptance check judged (`Options::accept`).
+    pub(crate) checked: Vec<Checked>,
 }
 
 /// The state of a running box search: the best design so far and the boxes
@@ -76,7 +80,7 @@ impl Frontier {
     /// What the search proved: the best design, and as the lower bound the
     /// least bound of the boxes still open (or the best design's U, if
     /// smaller; 0 when there is neither).
-    fn result(self) -> BoxResult {
+    fn result(self, checked: Vec<Checked>) -> BoxResult {
         let open_bound = self
             .open
             .iter()
@@ -96,6 +100,7 @@ impl Frontier {
             complete: !self.stopped,
             nodes: self.nodes,
             peak_open: self.peak_open,
+            checked,
         }
     }
 }
@@ -111,6 +116,8 @@ struct BoxSearch<'r, 'a> {
     budget: Vec<f64>,
     /// Stop at the first verified design (a feasibility probe).
     first_only: bool,
+    /// The check beyond the analysis a design must pass, if any.
+    gate: Option<RefCell<Gate>>,
 }
 
 impl<'r, 'a> BoxSearch<'r, 'a> {
@@ -132,7 +139,21 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             axes,
             budget,
             first_only: false,
+            gate: p.opts.accept.clone().map(|a| RefCell::new(Gate::new(a))),
         }
+    }
+
+    /// The gate's verdict on the verified point `k` (accepted without one).
+    fn judge(&self, k: &[u32], spec: &Spec) -> Verdict {
+        match &self.gate {
+            None => Verdict::Accepted,
+            Some(g) => g.borrow_mut().judge(&self.axes, k, spec),
+        }
+    }
+
+    /// The check budget of the gate is spent.
+    fn gate_exhausted(&self) -> bool {
+        self.gate.as_ref().is_some_and(|g| g.borrow().exhausted())
     }
 
     fn periods(&self, k: &[u32]) -> Vec<Nanos> {
@@ -616,7 +637,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 };
                 debug_assert!(ok);
                 let u = utilization(&spec);
-                return best.is_none_or(|b| u < b).then_some((spec, report, u));
+                let better = best.is_none_or(|b| u < b);
+                return (better && matches!(self.judge(&k, &spec), Verdict::Accepted))
+                    .then_some((spec, report, u));
             }
             node = self.branch(&node, &report)?.0;
         }
@@ -672,12 +695,28 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         };
         root.bound = self.bound(&root.hi);
         f.open.push(root);
+        if let Some((spec, _, _)) = &f.best {
+            let k = self.indices(spec);
+            if !matches!(self.judge(&k, spec), Verdict::Accepted) {
+                f.best = None;
+            }
+        }
         while let Some(node) = f.open.pop() {
             if self.visit(&mut f, node).is_break() {
                 break;
             }
         }
-        f.result()
+        let checked = self.gate.take().map_or(Vec::new(), |g| g.into_inner().log);
+        f.result(checked)
+    }
+
+    /// The axis index of every period of `spec` (on the grid).
+    fn indices(&self, spec: &Spec) -> Vec<u32> {
+        spec.tasks
+            .iter()
+            .zip(&self.axes)
+            .map(|(t, a)| a.first_at_least(t.fixed_period().unwrap_or(0) as f64))
+            .collect()
     }
 
     /// Examines the box `node` just taken from the frontier: drops it when
@@ -690,7 +729,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
             return ControlFlow::Continue(());
         }
-        if self.effort.out_of_time() {
+        if self.effort.out_of_time() || self.gate_exhausted() {
             f.open.push(node);
             f.stopped = true;
             return ControlFlow::Break(());
@@ -722,6 +761,18 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if ok {
             let u = utilization(&spec);
             if incumbent.is_none_or(|b| u < b) {
+                match self.judge(&node.hi, &spec) {
+                    Verdict::Accepted => {}
+                    Verdict::Cut(c) => {
+                        self.push_outside(f, &node, c);
+                        return ControlFlow::Continue(());
+                    }
+                    Verdict::Exhausted => {
+                        f.open.push(node);
+                        f.stopped = true;
+                        return ControlFlow::Break(());
+                    }
+                }
                 publish(
                     self.p,
                     &spec,
@@ -742,6 +793,16 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         f.open.push(high);
         f.peak_open = f.peak_open.max(f.open.len());
         ControlFlow::Continue(())
+    }
+
+    /// Puts the parts of `node` outside cut `c` on the frontier.
+    fn push_outside(&self, f: &mut Frontier, node: &Node, c: usize) {
+        let Some(g) = &self.gate else { return };
+        for mut part in g.borrow().outside(node, c) {
+            part.bound = self.bound(&part.hi).max(node.bound);
+            f.open.push(part);
+        }
+        f.peak_open = f.peak_open.max(f.open.len());
     }
 
     fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {
@@ -776,6 +837,7 @@ pub(crate) fn search(
 pub(crate) fn probe(p: &Problem, budget: &mut Budget, groups: &[Group]) -> Option<bool> {
     let mut search = BoxSearch::new(p, budget, groups);
     search.first_only = true;
+    search.gate = None;
     let r = search.run(None);
     match (r.best, r.complete) {
         (Some(_), _) => Some(true),
@@ -791,11 +853,7 @@ pub(crate) fn publish(p: &Problem, spec: &Spec, u: f64, lower_bound: f64) {
     if let Some(sink) = &p.opts.incumbent {
         if let Ok(mut g) = sink.lock() {
             *g = Some(Incumbent {
-                periods: spec
-                    .tasks
-                    .iter()
-                    .map(|t| t.fixed_period().unwrap_or(0))
-                    .collect(),
+                periods: crate::gate::periods_ns(spec),
                 utilization: u,
                 lower_bound: Some(lower_bound),
             });

@@ -32,15 +32,23 @@ pub(crate) fn solve_boxes(
                 .saturating_add(pat.saturating_mul(BOX_WORK_PER_PATIENCE)),
         );
     }
-    let found = bnb::search(p, budget, &groups, seed);
+    let mut found = bnb::search(p, budget, &groups, seed);
     budget.iterations = found.nodes as usize;
     let mut notes = Vec::new();
+    let checked = std::mem::take(&mut found.checked);
+    let rejected = checked.iter().filter(|c| c.failure.is_some()).count();
+    if rejected > 0 {
+        notes.push(format!(
+            "{rejected} verified design(s) failed the acceptance check and were cut, each with every design no faster than {:.0} % of it (docs/design.md, `--fly`)",
+            100.0 * (1.0 - crate::gate::CUT_MARGIN)
+        ));
+    }
     let mut o = match (found.best, found.complete) {
         (Some((spec, report, u)), complete) => {
             let status = if complete {
                 Status::Optimal
             } else {
-                notes.push(stop_reason(budget));
+                notes.push(stop_reason(budget, checked.len()));
                 Status::Feasible
             };
             let lb = if complete {
@@ -58,11 +66,15 @@ pub(crate) fn solve_boxes(
             });
             o
         }
+        (None, true) if rejected > 0 => {
+            notes.push("every verified design outside the cuts failed the acceptance check: none is both verified and accepted".into());
+            budget.outcome(p, Status::Unknown, None, None, Vec::new(), notes)
+        }
         (None, true) => infeasible(p, learnt, budget, &groups, notes),
         (None, false) => {
             notes.push(format!(
                 "stopped ({}) before a verified design",
-                budget.stop_cause()
+                stop_cause(budget, checked.len())
             ));
             let mut o = budget.outcome(p, Status::Unknown, None, None, Vec::new(), notes);
             o.lower_bound = Some(found.lower_bound);
@@ -70,6 +82,7 @@ pub(crate) fn solve_boxes(
         }
     };
     o.peak_open = found.peak_open;
+    o.checked = checked;
     Ok(o)
 }
 
@@ -100,9 +113,22 @@ fn infeasible(
     budget.outcome(p, Status::Infeasible, None, None, conflicts, notes)
 }
 
-fn stop_reason(budget: &Budget) -> String {
+fn stop_reason(budget: &Budget, checks: usize) -> String {
     format!(
         "the exact search stopped ({}); the design is verified, the gap is to the best proven lower bound",
-        budget.stop_cause()
+        stop_cause(budget, checks)
     )
+}
+
+/// Why the box search stopped early: its budgets, or the acceptance
+/// check's limit.
+fn stop_cause(budget: &Budget, checks: usize) -> String {
+    if checks >= crate::gate::MAX_CHECKS {
+        format!(
+            "the acceptance check judged its limit of {} designs",
+            crate::gate::MAX_CHECKS
+        )
+    } else {
+        budget.stop_cause().to_string()
+    }
 }

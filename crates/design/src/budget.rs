@@ -132,6 +132,7 @@ impl Budget {
             peak_open: 0,
             conflicts,
             notes,
+            checked: Vec::new(),
         }
     }
 }

@@ -35,6 +35,7 @@ mod boxes;
 mod budget;
 mod domain;
 mod explain;
+mod gate;
 mod heuristic;
 mod joint;
 mod learnt;
@@ -51,9 +52,10 @@ mod solve;
 mod sound;
 
 pub use api::{
-    utilization, Conflict, DesignError, ErrorKind, Incumbent, Method, Options, Outcome, Status,
+    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options, Outcome, Status,
     EXACT_PATIENCE, EXPLAIN_EFFORT,
 };
+pub use gate::{CUT_MARGIN, MAX_CHECKS};
 use budget::Budget;
 use domain::domains;
 use learnt::Learnt;
@@ -138,6 +140,12 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         domain::harmonic_domains(spec, &mut domains.dom, &mut notes)?;
     }
     let boxes = choose_method(spec, opts)?;
+    if opts.accept.is_some() && !boxes {
+        return Err(DesignError::input(
+            "an acceptance check (`--fly`) needs the box search: sound mode (or paper mode where it applies) and periods that are not `harmonic = true`",
+        )
+        .help("leave out --fly, or design in sound mode without harmonic periods"));
+    }
     let method = if boxes { Method::Boxes } else { Method::Milp };
     let p = Problem::new(spec, opts, domains, method);
     let mut learnt = Learnt::new(spec.tasks.len());

@@ -45,7 +45,7 @@ impl Milp<'_, '_> {
                 .incumbent
                 .as_ref()
                 .filter(|_| std::env::var_os("RTPIPE_NO_HINT").is_none())
-                .map(|x| periods_of(&x.0));
+                .map(|x| crate::gate::periods_ns(&x.0));
             self.p.say(|| {
                 let best = s.incumbent.as_ref().map_or(String::new(), |(_, _, u)| {
                     format!(", best verified U = {u:.4}")
@@ -376,12 +376,4 @@ struct Candidate {
     objective: f64,
     optimal: bool,
     responses: Vec<Option<f64>>,
-}
-
-/// The period of every task of a spec whose periods are fixed (ns).
-fn periods_of(spec: &Spec) -> Vec<Nanos> {
-    spec.tasks
-        .iter()
-        .map(|t| t.fixed_period().unwrap_or(0))
-        .collect()
 }

@@ -443,3 +443,81 @@ fn an_unreachable_from_event_limit_is_explained() {
         "{fix:?}"
     );
 }
+
+/// Rejects every design whose task `task` has a period above `max` (ns);
+/// `everything` rejects all.
+#[derive(Debug)]
+struct SlowerThan {
+    task: usize,
+    max: Nanos,
+    everything: bool,
+}
+
+impl crate::Acceptance for SlowerThan {
+    fn accept(&self, spec: &Spec) -> Result<(), String> {
+        let p = spec.tasks[self.task].fixed_period().unwrap_or(0);
+        if self.everything || p > self.max {
+            Err(format!("period {p} ns"))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+fn run_gated(spec: &Spec, check: SlowerThan) -> Outcome {
+    let opts = Options {
+        patience: None,
+        accept: Some(std::sync::Arc::new(check)),
+        ..Options::default()
+    };
+    design(spec, &opts).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_rejected_design_is_cut_and_the_next_one_is_checked() {
+    const MS: Nanos = 1_000_000;
+    let spec = event_problem("", "");
+    let free = run_with(&spec, Mode::Sound, Method::Boxes);
+    let capped = run_with(&event_problem("", "max_period = 30"), Mode::Sound, Method::Boxes);
+    let o = run_gated(
+        &spec,
+        SlowerThan {
+            task: 1,
+            max: 30 * MS,
+            everything: false,
+        },
+    );
+    assert_eq!(o.status, Status::Optimal, "{:?}", o.notes);
+    assert!(o.report.as_ref().is_some_and(|r| r.ok_in(Mode::Sound)));
+    let got = periods_of(&o);
+    assert!(got[1] <= 30 * MS, "{got:?}");
+    // The first design checked is the unchecked optimum; the last one is
+    // the answer, the only one accepted.
+    assert_eq!(o.checked.first().map(|c| c.periods.clone()), Some(periods_of(&free)));
+    assert_eq!(o.checked.last().map(|c| c.periods.clone()), Some(got.clone()));
+    let accepted = o.checked.iter().filter(|c| c.failure.is_none()).count();
+    assert_eq!(accepted, 1, "{:?}", o.checked);
+    // No better than the exact optimum under the cap, and the cuts cost
+    // at most their margin of it.
+    let (u, cap) = (o.objective.unwrap_or(0.0), capped.objective.unwrap_or(0.0));
+    assert!(u >= cap - 1e-12 && u <= cap / (1.0 - crate::CUT_MARGIN), "{u} vs {cap}");
+    // Each cut is a neighbourhood, not a grid point: 49 checks here for
+    // a 50 × 50 grid whose rejected part is 2/5 of it.
+    assert!(o.checked.len() < 100, "{} checks", o.checked.len());
+}
+
+#[test]
+fn when_every_design_is_rejected_there_is_no_answer() {
+    let o = run_gated(
+        &event_problem("", ""),
+        SlowerThan {
+            task: 1,
+            max: 0,
+            everything: true,
+        },
+    );
+    assert_eq!(o.status, Status::Unknown, "{:?}", o.notes);
+    assert!(o.spec.is_none());
+    assert!(o.checked.iter().all(|c| c.failure.is_some()));
+    assert!(!o.checked.is_empty());
+}
