@@ -1,5 +1,7 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
+mod flights;
+
 use crate::analyze::{report_text, report_view, ReportView};
 use crate::command;
 use crate::output;
@@ -39,6 +41,12 @@ pub struct Args<'a> {
     pub method: MethodArg,
     pub solver: Option<SolverArg>,
     pub time_limit: Option<f64>,
+    /// `--fly`: missions every answer must fly (empty: no flights).
+    pub missions: Vec<String>,
+    /// `--vehicle`: with `--fly`, the vehicles (default racer5).
+    pub vehicles: Vec<String>,
+    /// `--seed`: with `--fly`, the seeds (default 0).
+    pub seeds: Vec<u64>,
 }
 
 /// The most `--time-limit` accepts, in seconds (about 11.6 days).
@@ -93,7 +101,14 @@ pub fn run(a: Args) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    let opts = options(&a);
+    let mut opts = options(&a);
+    let flying = match flight_check(&a, &spec) {
+        Ok(f) => f,
+        Err(d) => return command::fail(d),
+    };
+    if let Some((check, _)) = &flying {
+        opts.accept = Some(check.clone());
+    }
     let (out, stopped) = match with_progress(&spec, &opts) {
         Ended::Finished(Ok(o)) => (o, false),
         Ended::Interrupted(o) => (o, true),
@@ -102,7 +117,8 @@ pub fn run(a: Args) -> ExitCode {
     if let Err(code) = write_design(write.as_ref(), &out) {
         return code;
     }
-    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped) {
+    let what = flying.map(|(_, w)| w);
+    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped, what.as_deref()) {
         return code;
     }
     if stopped {
@@ -112,6 +128,40 @@ pub fn run(a: Args) -> ExitCode {
         Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
         _ => ExitCode::from(1),
     }
+}
+
+/// `--fly`'s flights (and what they are, for the report); `--vehicle` or
+/// `--seed` without `--fly` is an error, not a silently ignored flag.
+fn flight_check(
+    a: &Args,
+    spec: &Spec,
+) -> Result<Option<(Arc<dyn rtpipe_design::Acceptance>, String)>, rtpipe_model::Diagnostic> {
+    if a.missions.is_empty() {
+        if !a.vehicles.is_empty() || !a.seeds.is_empty() {
+            return Err(rtpipe_model::Diagnostic::error(
+                "--vehicle and --seed choose the flights of --fly, which is not given",
+                "add --fly MISSION (e.g. --fly steps), or drop them",
+            ));
+        }
+        return Ok(None);
+    }
+    let vehicles = if a.vehicles.is_empty() {
+        vec!["racer5".to_string()]
+    } else {
+        a.vehicles.clone()
+    };
+    let seeds = if a.seeds.is_empty() {
+        vec![0]
+    } else {
+        a.seeds.clone()
+    };
+    let r = flights::FlyRequest {
+        missions: &a.missions,
+        vehicles: &vehicles,
+        seeds: &seeds,
+    };
+    let f = flights::flights(a.spec, spec, &r)?;
+    Ok(Some((Arc::new(f), r.describe())))
 }
 
 /// The search's options from the flags: the solver named, else HiGHS when
@@ -173,6 +223,7 @@ fn print_design(
     json_out: bool,
     mode: Mode,
     stopped: bool,
+    flown: Option<&str>,
 ) -> Result<(), ExitCode> {
     if json_out {
         let head = match (&out.spec, &out.report) {
@@ -189,6 +240,9 @@ fn print_design(
         command::print_json(&v)?;
     } else {
         print!("{}", design_text(spec, out, mode, stopped));
+        if let Some(what) = flown {
+            print!("{}", flights::flown_text(spec, what, &out.checked));
+        }
     }
     Ok(())
 }
@@ -317,6 +371,7 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
         peak_open: 0,
         conflicts: Vec::new(),
         notes: Vec::new(),
+        checked: Vec::new(),
     };
     let verified = best
         .filter(|b| b.periods.len() == spec.tasks.len())
@@ -389,6 +444,9 @@ struct DesignView<'a> {
     conflicts: Vec<ConflictView<'a>>,
     notes: &'a [String],
     interrupted: bool,
+    /// `--fly`: every design flown, in order.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flights: Option<Vec<flights::FlownView>>,
 }
 
 #[derive(Serialize)]
@@ -423,6 +481,7 @@ fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> De
         conflicts: conflicts.collect(),
         notes: &o.notes,
         interrupted: stopped,
+        flights: (!o.checked.is_empty()).then(|| flights::flown_json(spec, &o.checked)),
     }
 }
 

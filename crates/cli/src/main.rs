@@ -119,6 +119,22 @@ enum Command {
         /// work, not time, so the answer is the same on every machine.
         #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
         time_limit: Option<f64>,
+        /// Fly every design the search would return on this mission (built-in
+        /// steps, hover, paper, gusty, or a mission file; repeat or separate
+        /// with commas for several): one that misses the mission's criteria is
+        /// cut, with every design no faster than 95 % of it, and the search
+        /// goes on. The answer is the least-utilisation design that both
+        /// verifies and flies. Box search only (sound mode, no harmonic periods).
+        #[arg(long = "fly", value_name = "MISSION", value_delimiter = ',')]
+        missions: Vec<String>,
+        /// With --fly: the vehicles (built-in racer5, aero1kg, or preset files;
+        /// repeat or separate with commas) [default: racer5].
+        #[arg(long = "vehicle", value_name = "PRESET|FILE", value_delimiter = ',')]
+        vehicles: Vec<String>,
+        /// With --fly: the seeds of the sensor noise and execution times
+        /// (repeat or separate with commas) [default: 0].
+        #[arg(long = "seed", value_name = "S", value_delimiter = ',')]
+        seeds: Vec<u64>,
     },
     /// Turn the task sets of other tools into rtpipe specs: `import e2eeval
     /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework.
@@ -248,6 +264,9 @@ fn main() -> ExitCode {
             method,
             solver,
             time_limit,
+            missions,
+            vehicles,
+            seeds,
         } => design::run(design::Args {
             spec: &spec,
             mode,
@@ -257,6 +276,9 @@ fn main() -> ExitCode {
             method,
             solver,
             time_limit,
+            missions,
+            vehicles,
+            seeds,
         }),
         Command::Import { format } => import::run(&format),
         Command::Generate { kind } => generate::run(&kind),

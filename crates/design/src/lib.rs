@@ -52,12 +52,12 @@ mod solve;
 mod sound;
 
 pub use api::{
-    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options, Outcome, Status,
-    EXACT_PATIENCE, EXPLAIN_EFFORT,
+    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options,
+    Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
 };
-pub use gate::{CUT_MARGIN, MAX_CHECKS};
 use budget::Budget;
 use domain::domains;
+pub use gate::{CUT_MARGIN, MAX_CHECKS};
 use learnt::Learnt;
 use lp::LpError;
 use problem::Problem;

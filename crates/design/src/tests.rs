@@ -478,7 +478,11 @@ fn a_rejected_design_is_cut_and_the_next_one_is_checked() {
     const MS: Nanos = 1_000_000;
     let spec = event_problem("", "");
     let free = run_with(&spec, Mode::Sound, Method::Boxes);
-    let capped = run_with(&event_problem("", "max_period = 30"), Mode::Sound, Method::Boxes);
+    let capped = run_with(
+        &event_problem("", "max_period = 30"),
+        Mode::Sound,
+        Method::Boxes,
+    );
     let o = run_gated(
         &spec,
         SlowerThan {
@@ -493,14 +497,23 @@ fn a_rejected_design_is_cut_and_the_next_one_is_checked() {
     assert!(got[1] <= 30 * MS, "{got:?}");
     // The first design checked is the unchecked optimum; the last one is
     // the answer, the only one accepted.
-    assert_eq!(o.checked.first().map(|c| c.periods.clone()), Some(periods_of(&free)));
-    assert_eq!(o.checked.last().map(|c| c.periods.clone()), Some(got.clone()));
+    assert_eq!(
+        o.checked.first().map(|c| c.periods.clone()),
+        Some(periods_of(&free))
+    );
+    assert_eq!(
+        o.checked.last().map(|c| c.periods.clone()),
+        Some(got.clone())
+    );
     let accepted = o.checked.iter().filter(|c| c.failure.is_none()).count();
     assert_eq!(accepted, 1, "{:?}", o.checked);
     // No better than the exact optimum under the cap, and the cuts cost
     // at most their margin of it.
     let (u, cap) = (o.objective.unwrap_or(0.0), capped.objective.unwrap_or(0.0));
-    assert!(u >= cap - 1e-12 && u <= cap / (1.0 - crate::CUT_MARGIN), "{u} vs {cap}");
+    assert!(
+        u >= cap - 1e-12 && u <= cap / (1.0 - crate::CUT_MARGIN),
+        "{u} vs {cap}"
+    );
     // Each cut is a neighbourhood, not a grid point: 49 checks here for
     // a 50 × 50 grid whose rejected part is 2/5 of it.
     assert!(o.checked.len() < 100, "{} checks", o.checked.len());

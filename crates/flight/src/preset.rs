@@ -37,6 +37,10 @@ pub struct Preset {
     /// The IMU's errors in a disturbed world (`[imu]`; none when omitted).
     #[serde(default)]
     pub imu: ImuErrors,
+    /// This vehicle's own tolerances, replacing the mission's
+    /// (`[criteria]`; none when omitted).
+    #[serde(default)]
+    pub criteria: crate::radio::CriteriaOverride,
 }
 
 /// What a real IMU on this vehicle adds to the datasheet noise: residual
@@ -139,6 +143,7 @@ impl Preset {
         p.pid.validate()?;
         p.autopilot.validate()?;
         p.imu.validate()?;
+        p.criteria.apply(crate::radio::Criteria::default())?;
         Ok(p)
     }
 

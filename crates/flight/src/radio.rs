@@ -10,7 +10,8 @@ mod mission;
 pub use autopilot::{Autopilot, AutopilotConfig, VehicleState};
 pub use failsafe::{Failsafe, FailsafeAction, FailsafeConfig, FailsafePhase};
 pub use mission::{
-    parse_time, Criteria, Mission, MissionStep, PilotIntent, World, BUILTIN_MISSIONS,
+    parse_time, Criteria, CriteriaOverride, Mission, MissionStep, PilotIntent, World,
+    BUILTIN_MISSIONS,
 };
 
 use crate::math::deg;

@@ -186,7 +186,11 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
     }
     let kinds = body_kinds(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
-    let mission = mission(r.mission)?;
+    let mut mission = mission(r.mission)?;
+    mission.criteria = preset
+        .criteria
+        .apply(mission.criteria)
+        .map_err(|e| Diagnostic::error(format!("vehicle {}: {e}", r.vehicle), ""))?;
     let horizon = r
         .horizon
         .unwrap_or(mission.end_ns() as Nanos + AFTER_LAST_STEP_NS);

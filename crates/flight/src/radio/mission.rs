@@ -363,6 +363,35 @@ impl Default for Criteria {
     }
 }
 
+/// A vehicle's own tolerances (a preset's `[criteria]`): each given key
+/// replaces the mission's, for the keys the mission judges. A heavy,
+/// draggy vehicle is carried further by the same turbulence than a racer,
+/// whatever its timing.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CriteriaOverride {
+    /// Hover attitude error RMS, degrees.
+    pub attitude_rms_deg: Option<f64>,
+    /// Hover altitude error RMS, metres.
+    pub altitude_rms_m: Option<f64>,
+    /// Hover position error RMS, metres (where the mission judges it).
+    pub position_rms_m: Option<f64>,
+}
+
+impl CriteriaOverride {
+    /// `c` with this vehicle's tolerances; an error names a bad value.
+    pub fn apply(&self, c: Criteria) -> Result<Criteria, ConfigError> {
+        let out = Criteria {
+            attitude_rms_deg: self.attitude_rms_deg.unwrap_or(c.attitude_rms_deg),
+            altitude_rms_m: self.altitude_rms_m.unwrap_or(c.altitude_rms_m),
+            position_rms_m: c.position_rms_m.map(|p| self.position_rms_m.unwrap_or(p)),
+            ..c
+        };
+        out.validate()?;
+        Ok(out)
+    }
+}
+
 impl Criteria {
     /// Every tolerance positive and finite.
     pub fn validate(&self) -> Result<(), ConfigError> {
