@@ -2,16 +2,20 @@
 //! noise) while the pipeline's timing gets worse, and find where the flight
 //! stops meeting its criteria.
 //!
-//! Two sweeps, each point a whole flight:
+//! Three sweeps, each point a whole flight:
 //! - **period scale**: every guaranteed task's period × k (budgets fixed);
 //!   the analysis gives each chain's sound bounds at that k;
 //! - **pure delay** on one chain's head (gyro, accelerometer or radio
 //!   samples delivered `d` late, everything else nominal): that chain's
-//!   bounds grow by exactly `d`.
+//!   bounds grow by exactly `d`;
+//! - **actuation rate**: the tail's (the motor-output task's) period × k
+//!   alone, everything else nominal.
 //!
-//! A chain's derived limit is the largest sound bound (reaction, freshness,
-//! from the read) at which the vehicle still met the criteria in every point
-//! up to it: the last passing point before the first failing one.
+//! A chain's derived limits are the largest sound bounds (reaction and
+//! freshness, from the read and from the event) at which the vehicle still
+//! met the criteria in every point up to it: the last passing point before
+//! the first failing one. The rate sweep gives the tail's `max_period`: a
+//! sample that never reaches a slow tail is counted by no from-read bound.
 
 use crate::{fly, Setup};
 use rayon::prelude::*;
@@ -43,6 +47,8 @@ pub enum Variation {
         /// The delay (ns).
         ns: u64,
     },
+    /// The motor-output task's period × this factor, alone.
+    Rate(f64),
 }
 
 /// One flight of a sweep.
@@ -53,6 +59,8 @@ pub struct Point {
     /// Per declared chain: the sound reaction and freshness bounds (from the
     /// read) of the timing flown, a pure delay included.
     pub bounds: Vec<ChainPair>,
+    /// The same from the event: maximum reaction time and maximum data age.
+    pub event: Vec<ChainPair>,
     /// The timing passes the spec's schedulability test.
     pub schedulable: bool,
     /// `None` when the timing could not be flown (a period below its
@@ -72,15 +80,22 @@ impl Point {
 /// `spec` with every guaranteed task's fixed period × `k` (rounded to the
 /// nanosecond); budgets stay. Background tasks keep their periods.
 pub fn scaled(spec: &Spec, k: f64) -> Result<Spec, String> {
+    scaled_where(spec, k, |_| true)
+}
+
+/// `spec` with the fixed period of each guaranteed task that `pick` (its
+/// index) selects × `k`.
+fn scaled_where(spec: &Spec, k: f64, pick: impl Fn(usize) -> bool) -> Result<Spec, String> {
     assert!(
         k.is_finite() && k > 0.0,
         "a period scale is positive, found {k}"
     );
     let mut s = spec.clone();
-    for t in s
+    for (_, t) in s
         .tasks
         .iter_mut()
-        .filter(|t| t.server != Server::Background)
+        .enumerate()
+        .filter(|(i, t)| t.server != Server::Background && pick(*i))
     {
         let Some(p) = t.fixed_period() else { continue };
         let q = (p as f64 * k).round() as Nanos;
@@ -96,17 +111,28 @@ pub fn scaled(spec: &Spec, k: f64) -> Result<Spec, String> {
     Ok(s)
 }
 
-/// Sound (reaction, freshness) of every declared chain, from the read.
-fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, bool) {
+/// The motor-output tasks: the tails whose rate the rate sweep varies.
+pub fn tails(s: &Setup) -> Vec<usize> {
+    (0..s.kinds.len())
+        .filter(|&i| s.kinds[i] == Some(BodyKind::Pwm))
+        .collect()
+}
+
+/// Sound (reaction, freshness) of every declared chain, from the read and
+/// from the event, and whether the spec is schedulable.
+fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, Vec<ChainPair>, bool) {
     let rep = analyze(spec);
-    let mut out = vec![(None, None); spec.chains.len()];
+    let mut read = vec![(None, None); spec.chains.len()];
+    let mut event = read.clone();
     for c in &rep.chains {
-        match c.metric {
-            Metric::Reaction => out[c.chain].0 = c.bound.sound(Anchor::Read),
-            Metric::Freshness => out[c.chain].1 = c.bound.sound(Anchor::Read),
+        for (out, a) in [(&mut read, Anchor::Read), (&mut event, Anchor::Event)] {
+            match c.metric {
+                Metric::Reaction => out[c.chain].0 = c.bound.sound(a),
+                Metric::Freshness => out[c.chain].1 = c.bound.sound(a),
+            }
         }
     }
-    (out, rep.schedulability.schedulable)
+    (read, event, rep.schedulability.schedulable)
 }
 
 /// The delay line a chain starts at, if any.
@@ -120,6 +146,10 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
     let mut setup = s.clone();
     let timing = match v {
         Variation::Scale(k) => scaled(spec, k),
+        Variation::Rate(k) => {
+            let tails = tails(s);
+            scaled_where(spec, k, |i| tails.contains(&i))
+        }
         Variation::Delay { line, ns } => {
             setup.world.sense_delay_ns[line] = ns;
             Ok(spec.clone())
@@ -131,18 +161,21 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
             return Point {
                 variation: v,
                 bounds: vec![(None, None); spec.chains.len()],
+                event: vec![(None, None); spec.chains.len()],
                 schedulable: false,
                 quality: None,
                 failures: vec![why],
             }
         }
     };
-    let (mut bounds, schedulable) = sound_bounds(&timing);
+    let (mut bounds, mut event, schedulable) = sound_bounds(&timing);
     if let Variation::Delay { line, ns } = v {
-        for (k, b) in bounds.iter_mut().enumerate() {
+        for k in 0..bounds.len() {
             if head_line(&timing, s, k) == Some(line) {
                 let d = ns as Nanos;
-                *b = (b.0.map(|x| x + d), b.1.map(|x| x + d));
+                for b in [&mut bounds[k], &mut event[k]] {
+                    *b = (b.0.map(|x| x + d), b.1.map(|x| x + d));
+                }
             }
         }
     }
@@ -156,6 +189,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
     Point {
         variation: v,
         bounds,
+        event,
         schedulable,
         quality,
         failures,
@@ -183,8 +217,9 @@ pub fn sweep(
 }
 
 /// The default sweep: period scales 2^(i/3) from `lo` to `hi` (both
-/// included when they are powers of 2^(1/3)), and delays of 0, 2, 4, …,
-/// 128 ms on each delay line the spec uses.
+/// included when they are powers of 2^(1/3)), delays of 0, 2, 4, …,
+/// 128 ms on each delay line the spec uses, and the tail's period × 2^(i/3)
+/// from 1 to 32 when the spec has a motor-output task.
 pub fn default_variations(spec: &Spec, s: &Setup, lo: f64, hi: f64) -> Vec<Variation> {
     assert!(lo > 0.0 && hi >= lo, "scale range {lo}..{hi}");
     let first = (3.0 * lo.log2()).round() as i32;
@@ -201,6 +236,9 @@ pub fn default_variations(spec: &Spec, s: &Setup, lo: f64, hi: f64) -> Vec<Varia
                 });
             }
         }
+    }
+    if !tails(s).is_empty() {
+        v.extend((0..=15).map(|i| Variation::Rate(2f64.powf(f64::from(i) / 3.0))));
     }
     v
 }
@@ -242,26 +280,78 @@ pub fn scale_edge(points: &[Point]) -> Edge<'_> {
     edge(points, |v| matches!(v, Variation::Scale(_)))
 }
 
-/// Per declared chain, the derived (reaction, freshness) limits: the
-/// smaller of what the period-scale sweep and the delay sweep of the chain's
-/// head allowed (the bounds at each one's last passing point). The scale
-/// sweep slows every chain at once, so its limits hold as a set; the delay
-/// sweep isolates one chain with the others nominal.
-pub fn derived_limits(
+/// What the sweep derives: every limit the flight depends on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Derived {
+    /// Per declared chain, (reaction, freshness) from the read.
+    pub read: Vec<ChainPair>,
+    /// Per declared chain, (maximum reaction time, maximum data age): the
+    /// same from the event.
+    pub event: Vec<ChainPair>,
+    /// Per task, the longest period that flew: the tail's from the rate
+    /// sweep (its `max_period`), every other guaranteed task's from the
+    /// last passing period scale.
+    pub max_period: Vec<Option<Nanos>>,
+}
+
+/// Everything the sweep derives (see [`Derived`]). A chain's limits are
+/// the smaller of what the period-scale sweep and the delay sweep of the
+/// chain's head allowed (the bounds at each one's last passing point). The
+/// scale sweep slows every chain at once, so its limits hold as a set; the
+/// delay sweep isolates one chain with the others nominal.
+pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point]) -> Derived {
+    let read = chain_limits(spec, s, points, |p| &p.bounds);
+    let event = chain_limits(spec, s, points, |p| &p.event);
+    let scale = match scale_edge(points).last_pass.map(|p| p.variation) {
+        Some(Variation::Scale(k)) => Some(k),
+        _ => None,
+    };
+    let rate = match edge(points, |v| matches!(v, Variation::Rate(_))).last_pass {
+        Some(Point {
+            variation: Variation::Rate(k),
+            ..
+        }) => Some(*k),
+        _ => None,
+    };
+    let tails = tails(s);
+    let max_period = spec
+        .tasks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let p = t
+                .fixed_period()
+                .filter(|_| t.server != Server::Background)?;
+            let k = if tails.contains(&i) { rate } else { scale }?;
+            // Down to the design grid, so a written range stays on it.
+            let q = (p as f64 * k).round() as Nanos;
+            Some(q - q % spec.resolution.max(1))
+        })
+        .collect();
+    Derived {
+        read,
+        event,
+        max_period,
+    }
+}
+
+/// Per chain, the limits one anchor's bounds (`of`) give.
+fn chain_limits(
     spec: &Spec,
     s: &Setup,
     points: &[Point],
-) -> Vec<(Option<Nanos>, Option<Nanos>)> {
+    of: impl Fn(&Point) -> &Vec<ChainPair>,
+) -> Vec<ChainPair> {
     let scale = scale_edge(points);
     (0..spec.chains.len())
         .map(|k| {
-            let mut lim = scale.last_pass.and_then(|p| p.bounds.get(k).copied());
+            let mut lim = scale.last_pass.and_then(|p| of(p).get(k).copied());
             if let Some(line) = head_line(spec, s, k) {
                 let d = edge(
                     points,
                     |v| matches!(v, Variation::Delay { line: l, .. } if *l == line),
                 );
-                let by_delay = d.last_pass.and_then(|p| p.bounds.get(k).copied());
+                let by_delay = d.last_pass.and_then(|p| of(p).get(k).copied());
                 lim = match (lim, by_delay) {
                     (Some(a), Some(b)) => Some((min_opt(a.0, b.0), min_opt(a.1, b.1))),
                     (a, b) => a.or(b),
@@ -321,7 +411,7 @@ mod tests {
             panic!("not scales");
         };
         assert!(1.0 <= a && a < b, "Table V's timing flies: {a} < {b}");
-        let limits = derived_limits(&spec, &s, &points);
+        let limits = derived_limits(&spec, &s, &points).read;
         let nominal = points
             .iter()
             .find(|p| p.variation == Variation::Scale(1.0))

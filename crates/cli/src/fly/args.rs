@@ -59,9 +59,17 @@ pub struct FlyArgs {
     /// mission's].
     #[arg(long, value_name = "FILE", requires = "sweep")]
     pub criterion: Option<PathBuf>,
-    /// With --sweep: write the spec with the derived chain limits here.
+    /// With --sweep: write the spec with every derived limit here: each
+    /// chain's reaction and freshness (from the read), max_reaction_time and
+    /// max_data_age (from the event), and the motor-output task's max_period
+    /// (from the rate sweep).
     #[arg(long, value_name = "OUT.toml", requires = "sweep")]
     pub write_limits: Option<PathBuf>,
+    /// With --write-limits: free the period of every guaranteed task on a
+    /// chain (a range up to the longest period that flew), so that `rtpipe
+    /// design` can choose them; other tasks keep their fixed periods.
+    #[arg(long, requires = "write_limits")]
+    pub free_periods: bool,
     /// Write the flight as CSV (one row every 2 ms; the header names every
     /// column and its unit, ending with each chain's latest observed
     /// reaction and freshness in ms; readable by PlotJuggler).

@@ -9,8 +9,8 @@ use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{
-    default_variations, derived_limits, edge, scale_edge, sweep, ChainPair, Point, Variation,
-    DELAY_LINES,
+    default_variations, derived_limits, edge, scale_edge, sweep, tails, ChainPair, Derived, Point,
+    Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -47,6 +47,7 @@ fn ms(ns: Option<Nanos>) -> String {
 fn what(v: &Variation) -> String {
     match v {
         Variation::Scale(k) => format!("periods ×{k:.3}"),
+        Variation::Rate(k) => format!("tail period ×{k:.3}"),
         Variation::Delay { line, ns } => {
             format!("{} +{} ms", DELAY_LINES[*line].name(), *ns as f64 * 1e-6)
         }
@@ -80,21 +81,25 @@ fn points_table(spec: &Spec, points: &[&Point]) -> String {
     t.render()
 }
 
-fn limits_text(spec: &Spec, limits: &[ChainPair]) -> String {
+fn limits_text(spec: &Spec, d: &Derived) -> String {
     let mut t = Table::new(&[
         "chain",
-        "derived reaction",
-        "derived freshness",
+        "reaction",
+        "freshness",
+        "max reaction time",
+        "max data age",
         "spec's reaction",
         "spec's freshness",
     ])
-    .numeric(&[1, 2, 3, 4]);
-    for (k, l) in limits.iter().enumerate() {
+    .numeric(&[1, 2, 3, 4, 5, 6]);
+    for (k, (l, e)) in d.read.iter().zip(&d.event).enumerate() {
         let ch = &spec.chains[k];
         t.row(vec![
             spec.chain_label(k),
             ms(l.0),
             ms(l.1),
+            ms(e.0),
+            ms(e.1),
             ms(ch.reaction),
             ms(ch.freshness),
         ]);
@@ -102,18 +107,31 @@ fn limits_text(spec: &Spec, limits: &[ChainPair]) -> String {
     t.render()
 }
 
-/// The spec with the derived limits as its chain limits.
-fn with_limits(spec: &Spec, limits: &[ChainPair]) -> Spec {
-    let mut s = spec.clone();
-    for (ch, l) in s.chains.iter_mut().zip(limits) {
-        if let Some(r) = l.0 {
-            ch.reaction = Some(r);
+/// The spec with every derived limit (see `--write-limits`); with `free`,
+/// the periods of the guaranteed chain tasks become ranges up to the
+/// longest that flew.
+fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
+    let mut out = spec.clone();
+    for ((ch, l), e) in out.chains.iter_mut().zip(&d.read).zip(&d.event) {
+        ch.reaction = l.0.or(ch.reaction);
+        ch.freshness = l.1.or(ch.freshness);
+        ch.max_reaction_time = e.0.or(ch.max_reaction_time);
+        ch.max_data_age = e.1.or(ch.max_data_age);
+    }
+    let tails = tails(s);
+    for (i, t) in out.tasks.iter_mut().enumerate() {
+        if tails.contains(&i) {
+            t.max_period = d.max_period[i].or(t.max_period);
         }
-        if let Some(f) = l.1 {
-            ch.freshness = Some(f);
+        let on_chain = spec.chains.iter().any(|c| c.path.contains(&i));
+        if let (true, true, Some(max)) = (free, on_chain, d.max_period[i]) {
+            t.period = rtpipe_model::PeriodSpec::Range {
+                min: None,
+                max: Some(max),
+            };
         }
     }
-    s
+    out
 }
 
 #[derive(Serialize)]
@@ -121,6 +139,9 @@ struct PointView<'a> {
     varied: &'static str,
     value: f64,
     bounds_ms: Vec<PairMs>,
+    /// From the event: `reaction` is the maximum reaction time,
+    /// `freshness` the maximum data age.
+    event_bounds_ms: Vec<PairMs>,
     schedulable: bool,
     flies: bool,
     failures: &'a [String],
@@ -149,6 +170,7 @@ impl From<&ChainPair> for PairMs {
 fn point_json(p: &Point) -> PointView<'_> {
     let (varied, value) = match p.variation {
         Variation::Scale(k) => ("scale", k),
+        Variation::Rate(k) => ("tail rate", k),
         Variation::Delay { line, ns } => (DELAY_LINES[line].name(), ns as f64 * 1e-6),
     };
     let q = p.quality.as_ref();
@@ -156,6 +178,7 @@ fn point_json(p: &Point) -> PointView<'_> {
         varied,
         value,
         bounds_ms: p.bounds.iter().map(PairMs::from).collect(),
+        event_bounds_ms: p.event.iter().map(PairMs::from).collect(),
         schedulable: p.schedulable,
         flies: p.pass(),
         failures: &p.failures,
@@ -188,6 +211,7 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
                 .filter(|p| p.schedulable)
                 .filter(|p| match p.variation {
                     Variation::Scale(_) => true,
+                    Variation::Rate(_) => false,
                     Variation::Delay { line: l, .. } => Some(l) == line,
                 })
                 .filter_map(|p| {
@@ -282,11 +306,11 @@ fn write_files(
     a: &FlyArgs,
     c: &Criteria,
     points: &[Point],
-    limits: &[ChainPair],
+    limits: &Derived,
 ) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
     if let Some(out) = &a.write_limits {
-        let text = rtpipe_model::to_toml(&with_limits(spec, limits));
+        let text = rtpipe_model::to_toml(&with_limits(spec, s, limits, a.free_periods));
         files.push(("--write-limits", out.to_path_buf(), text));
     }
     if let Some(dir) = &a.plot {
@@ -309,6 +333,9 @@ struct SweepView<'a> {
     criterion: String,
     points: Vec<PointView<'a>>,
     limits_ms: Vec<LimitMs>,
+    /// Per task with one, the longest period that flew (ms): the tail's
+    /// `max_period`, the others' range ends with `--free-periods`.
+    max_period_ms: crate::report::Pairs<&'a str, f64>,
 }
 
 #[derive(Serialize)]
@@ -316,6 +343,8 @@ struct LimitMs {
     chain: String,
     #[serde(flatten)]
     limit: PairMs,
+    max_reaction_time: Option<f64>,
+    max_data_age: Option<f64>,
 }
 
 fn sweep_json<'a>(
@@ -323,20 +352,64 @@ fn sweep_json<'a>(
     s: &'a Setup,
     c: &Criteria,
     points: &'a [Point],
-    limits: &[ChainPair],
+    limits: &Derived,
 ) -> SweepView<'a> {
-    let limits = limits.iter().enumerate().map(|(k, l)| LimitMs {
-        chain: spec.chain_label(k),
-        limit: l.into(),
+    let chains = limits.read.iter().zip(&limits.event).enumerate();
+    let chain_limits = chains.map(|(k, (l, e))| {
+        let PairMs {
+            reaction,
+            freshness,
+        } = e.into();
+        LimitMs {
+            chain: spec.chain_label(k),
+            limit: l.into(),
+            max_reaction_time: reaction,
+            max_data_age: freshness,
+        }
     });
+    let max_period = spec.tasks.iter().zip(&limits.max_period);
     SweepView {
         system: &spec.name,
         vehicle: &s.preset.name,
         mission: &s.mission.name,
         criterion: c.describe(),
         points: points.iter().map(point_json).collect(),
-        limits_ms: limits.collect(),
+        limits_ms: chain_limits.collect(),
+        max_period_ms: crate::report::Pairs(
+            max_period
+                .filter_map(|(t, m)| Some((t.name.as_str(), (*m)? as f64 * 1e-6)))
+                .collect(),
+        ),
     }
+}
+
+/// The rate sweep's table and the tail's derived `max_period`.
+fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived) -> String {
+    let pts: Vec<&Point> = points
+        .iter()
+        .filter(|p| matches!(p.variation, Variation::Rate(_)))
+        .collect();
+    let tails = tails(s);
+    if pts.is_empty() || tails.is_empty() {
+        return String::new();
+    }
+    let names: Vec<&str> = tails.iter().map(|&i| spec.tasks[i].name.as_str()).collect();
+    let mut out = format!(
+        "\nactuation rate ({} period alone; sound bounds from the read):\n",
+        names.join(", ")
+    );
+    out.push_str(&points_table(spec, &pts));
+    for &i in &tails {
+        out.push_str(&match limits.max_period[i] {
+            Some(p) => format!(
+                "{}: max_period {} ms (the longest period that flew)\n",
+                spec.tasks[i].name,
+                ms(Some(p))
+            ),
+            None => format!("{}: no period flew\n", spec.tasks[i].name),
+        });
+    }
+    out
 }
 
 fn text(
@@ -344,7 +417,7 @@ fn text(
     s: &Setup,
     c: &Criteria,
     points: &[Point],
-    limits: &[ChainPair],
+    limits: &Derived,
     written: Option<&Path>,
 ) -> String {
     let mut out = format!(
@@ -391,7 +464,8 @@ fn text(
             out.push_str(&format!("no failure up to {}\n", what(&p.variation)));
         }
     }
-    out.push_str("\nderived limits (ms; the smaller of the period-scale and the delay sweep):\n");
+    out.push_str(&rate_text(spec, s, points, limits));
+    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and max data age from the event):\n");
     out.push_str(&limits_text(spec, limits));
     if let Some(w) = written {
         out.push_str(&format!("wrote {} with these limits\n", w.display()));
