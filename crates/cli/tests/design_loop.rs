@@ -1,0 +1,127 @@
+//! The loop that makes timing come from control quality: `fly --sweep`
+//! derives the limits and frees the pipeline's periods, `design` chooses
+//! them, `fly` checks the answer; and `design --fly`, which flies every
+//! answer before giving it.
+
+mod common;
+use common::{assert_exit, example, json_of, rtpipe, scratch};
+
+fn s(p: &std::path::Path) -> String {
+    p.display().to_string()
+}
+
+/// sweep → design → fly, on one vehicle: three commands, no hand edit.
+fn loop_closes_on(vehicle: &str) {
+    let dir = scratch(&format!("loop-{vehicle}"));
+    let (limits, design) = (dir.join("limits.toml"), dir.join("design.toml"));
+    let spec = example("cleanflight.toml");
+    let o = rtpipe(&[
+        "fly",
+        &spec,
+        "--vehicle",
+        vehicle,
+        "--sweep",
+        "--write-limits",
+        &s(&limits),
+        "--free-periods",
+    ]);
+    assert_exit(&o, 0);
+    let written = std::fs::read_to_string(&limits).unwrap_or_default();
+    for key in [
+        "max_reaction_time",
+        "max_data_age",
+        "max_period",
+        "period = { max",
+    ] {
+        assert!(written.contains(key), "{key} missing from\n{written}");
+    }
+    // Housekeeping keeps Table V's fixed periods.
+    assert!(written.contains("period = \"200000us\""), "{written}");
+    let o = rtpipe(&["design", &s(&limits), "--write", &s(&design)]);
+    assert_exit(&o, 0);
+    for mission in ["steps", "gusty"] {
+        let o = rtpipe(&[
+            "fly",
+            &s(&design),
+            "--vehicle",
+            vehicle,
+            "--mission",
+            mission,
+        ]);
+        // Exit 0: the criteria are met and no sample exceeds a sound bound.
+        assert_exit(&o, 0);
+    }
+}
+
+#[test]
+fn sweep_design_fly_closes_on_racer5() {
+    loop_closes_on("racer5");
+}
+
+#[test]
+fn sweep_design_fly_closes_on_aero1kg() {
+    loop_closes_on("aero1kg");
+}
+
+#[test]
+fn design_fly_returns_a_design_that_flies_both_missions_on_both_vehicles() {
+    let spec = example("cleanflight-design.toml");
+    let o = rtpipe(&[
+        "design",
+        &spec,
+        "--fly",
+        "steps,gusty",
+        "--vehicle",
+        "racer5,aero1kg",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let d = &v["design"];
+    let flights = d["flights"].as_array().cloned().unwrap_or_default();
+    assert!(!flights.is_empty(), "{d}");
+    // The answer is the least design that flew; every design flown below
+    // it failed.
+    let u = d["objective"].as_f64().unwrap_or(f64::NAN);
+    let util = |f: &serde_json::Value| f["utilization"].as_f64().unwrap_or(f64::NAN);
+    let least_flown = flights
+        .iter()
+        .filter(|f| f["flies"] == true)
+        .map(util)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(least_flown, u, "{flights:?}");
+    assert!(flights
+        .iter()
+        .filter(|f| util(f) < u)
+        .all(|f| f["flies"] == false));
+    assert!(flights
+        .iter()
+        .all(|f| f["flies"] == true || f["failure"].as_str().is_some_and(|w| !w.is_empty())));
+    // Below Table V's 0.68, at or above the unflown optimum.
+    let free = json_of(&rtpipe(&["design", &spec, "--json"]));
+    let u0 = free["design"]["objective"].as_f64().unwrap_or(f64::NAN);
+    assert!(u0 - 1e-12 <= u && u < 0.68, "{u0} {u}");
+}
+
+#[test]
+fn fly_flags_need_fly() {
+    let o = rtpipe(&[
+        "design",
+        &example("cleanflight-design.toml"),
+        "--vehicle",
+        "aero1kg",
+    ]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--fly"), "{err}");
+    // The MILP has no acceptance check.
+    let o = rtpipe(&[
+        "design",
+        &example("cleanflight-design.toml"),
+        "--fly",
+        "steps",
+        "--method",
+        "milp",
+    ]);
+    assert_exit(&o, 2);
+}
