@@ -221,24 +221,36 @@ pub fn sweep(
 /// 128 ms on each delay line the spec uses, and the tail's period × 2^(i/3)
 /// from 1 to 32 when the spec has a motor-output task.
 pub fn default_variations(spec: &Spec, s: &Setup, lo: f64, hi: f64) -> Vec<Variation> {
+    variations(spec, s, lo, hi, 3)
+}
+
+/// [`default_variations`] with `per_octave` points per doubling of the
+/// scales and a third as many (at least one) of the delays: 0, then
+/// 2 ms × 2^(3i/per_octave) up to 128 ms.
+pub fn variations(spec: &Spec, s: &Setup, lo: f64, hi: f64, per_octave: u32) -> Vec<Variation> {
     assert!(lo > 0.0 && hi >= lo, "scale range {lo}..{hi}");
-    let first = (3.0 * lo.log2()).round() as i32;
-    let last = (3.0 * hi.log2()).round() as i32;
-    let mut v: Vec<Variation> = (first..=last)
-        .map(|i| Variation::Scale(2f64.powf(f64::from(i) / 3.0)))
-        .collect();
+    assert!(
+        (1..=48).contains(&per_octave),
+        "{per_octave} points per doubling"
+    );
+    let n = f64::from(per_octave);
+    let at = |i: i32| 2f64.powf(f64::from(i) / n);
+    let first = (n * lo.log2()).round() as i32;
+    let last = (n * hi.log2()).round() as i32;
+    let mut v: Vec<Variation> = (first..=last).map(|i| Variation::Scale(at(i))).collect();
+    // Delays double from 2 ms: a third as many points per doubling.
+    let per_delay = (per_octave / 3).max(1) as i32;
     for line in 0..DELAY_LINES.len() {
         if (0..spec.chains.len()).any(|k| head_line(spec, s, k) == Some(line)) {
-            for ms in [0u64, 2, 4, 8, 16, 32, 64, 128] {
-                v.push(Variation::Delay {
-                    line,
-                    ns: ms * 1_000_000,
-                });
+            v.push(Variation::Delay { line, ns: 0 });
+            for i in 0..=6 * per_delay {
+                let ns = (2e6 * 2f64.powf(f64::from(i) / f64::from(per_delay))).round() as u64;
+                v.push(Variation::Delay { line, ns });
             }
         }
     }
     if !tails(s).is_empty() {
-        v.extend((0..=15).map(|i| Variation::Rate(2f64.powf(f64::from(i) / 3.0))));
+        v.extend((0..=5 * per_octave as i32).map(|i| Variation::Rate(at(i))));
     }
     v
 }

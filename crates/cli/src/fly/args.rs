@@ -54,6 +54,11 @@ pub struct FlyArgs {
     /// With --sweep: the period scales, LO..HI (steps of 2^(1/3)).
     #[arg(long, value_name = "LO..HI", value_parser = parse_scale, requires = "sweep")]
     pub scale: Option<(f64, f64)>,
+    /// With --sweep: points per doubling of every swept quantity (period
+    /// scale, tail period, head delay from 2 ms); finer finds the edges more
+    /// closely at proportionally more flights.
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=48), requires = "sweep")]
+    pub per_octave: u32,
     /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
     /// altitude_rms_m, overshoot, settling_s, position_rms_m [default: the
     /// mission's].

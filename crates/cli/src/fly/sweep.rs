@@ -9,7 +9,7 @@ use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{
-    default_variations, derived_limits, edge, scale_edge, sweep, tails, ChainPair, Derived, Point,
+    derived_limits, edge, scale_edge, sweep, tails, variations, ChainPair, Derived, Point,
     Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
@@ -147,6 +147,7 @@ struct PointView<'a> {
     failures: &'a [String],
     attitude_error_rms_deg: Option<f64>,
     altitude_error_rms_m: Option<f64>,
+    position_error_rms_m: Option<f64>,
     crashed: Option<bool>,
 }
 
@@ -174,6 +175,8 @@ fn point_json(p: &Point) -> PointView<'_> {
         Variation::Delay { line, ns } => (DELAY_LINES[line].name(), ns as f64 * 1e-6),
     };
     let q = p.quality.as_ref();
+    // A crashed flight, or one that never hovered, has no hover figures.
+    let hover = q.filter(|q| !q.crashed && q.attitude_error_deg.count > 0);
     PointView {
         varied,
         value,
@@ -182,8 +185,9 @@ fn point_json(p: &Point) -> PointView<'_> {
         schedulable: p.schedulable,
         flies: p.pass(),
         failures: &p.failures,
-        attitude_error_rms_deg: q.map(|q| q.attitude_error_deg.rms),
-        altitude_error_rms_m: q.map(|q| q.altitude_error_m.rms),
+        attitude_error_rms_deg: hover.map(|q| q.attitude_error_deg.rms),
+        altitude_error_rms_m: hover.map(|q| q.altitude_error_m.rms),
+        position_error_rms_m: hover.map(|q| q.position_error_m.rms),
         crashed: q.map(|q| q.crashed),
     }
 }
@@ -244,7 +248,7 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
         Err(b) => return command::fail(b),
     };
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
-    let vars = default_variations(spec, s, lo, hi);
+    let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
         if let Err(b) = crate::output::prepare("--write-limits", out, &a.spec, None) {
             return command::fail(b);
