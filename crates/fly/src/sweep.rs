@@ -300,9 +300,8 @@ pub struct Derived {
     /// Per declared chain, (maximum reaction time, maximum data age): the
     /// same from the event.
     pub event: Vec<ChainPair>,
-    /// Per task, the longest period that flew: the tail's from the rate
-    /// sweep (its `max_period`), every other guaranteed task's from the
-    /// last passing period scale.
+    /// Per task, the longest period that flew in the rate sweep: the
+    /// tail's `max_period` (`None` for every other task).
     pub max_period: Vec<Option<Nanos>>,
 }
 
@@ -314,10 +313,6 @@ pub struct Derived {
 pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point]) -> Derived {
     let read = chain_limits(spec, s, points, |p| &p.bounds);
     let event = chain_limits(spec, s, points, |p| &p.event);
-    let scale = match scale_edge(points).last_pass.map(|p| p.variation) {
-        Some(Variation::Scale(k)) => Some(k),
-        _ => None,
-    };
     let rate = match edge(points, |v| matches!(v, Variation::Rate(_))).last_pass {
         Some(Point {
             variation: Variation::Rate(k),
@@ -331,10 +326,8 @@ pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point]) -> Derived {
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let p = t
-                .fixed_period()
-                .filter(|_| t.server != Server::Background)?;
-            let k = if tails.contains(&i) { rate } else { scale }?;
+            let p = t.fixed_period().filter(|_| tails.contains(&i))?;
+            let k = rate?;
             // Down to the design grid, so a written range stays on it.
             let q = (p as f64 * k).round() as Nanos;
             Some(q - q % spec.resolution.max(1))

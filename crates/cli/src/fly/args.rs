@@ -71,8 +71,9 @@ pub struct FlyArgs {
     #[arg(long, value_name = "OUT.toml", requires = "sweep")]
     pub write_limits: Option<PathBuf>,
     /// With --write-limits: free the period of every guaranteed task on a
-    /// chain (a range up to the longest period that flew), so that `rtpipe
-    /// design` can choose them; other tasks keep their fixed periods.
+    /// chain (a range up to the largest from-event limit of its chains), so
+    /// that `rtpipe design` can choose them; other tasks keep their fixed
+    /// periods.
     #[arg(long, requires = "write_limits")]
     pub free_periods: bool,
     /// Write the flight as CSV (one row every 2 ms; the header names every

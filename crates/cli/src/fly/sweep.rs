@@ -109,7 +109,8 @@ fn limits_text(spec: &Spec, d: &Derived) -> String {
 
 /// The spec with every derived limit (see `--write-limits`); with `free`,
 /// the periods of the guaranteed chain tasks become ranges up to the
-/// longest that flew.
+/// largest from-event limit of their chains (so that no fixed period
+/// elsewhere, a housekeeping task's say, sets their ceiling).
 fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
     let mut out = spec.clone();
     for ((ch, l), e) in out.chains.iter_mut().zip(&d.read).zip(&d.event) {
@@ -123,8 +124,16 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
         if tails.contains(&i) {
             t.max_period = d.max_period[i].or(t.max_period);
         }
-        let on_chain = spec.chains.iter().any(|c| c.path.contains(&i));
-        if let (true, true, Some(max)) = (free, on_chain, d.max_period[i]) {
+        let cap = spec
+            .chains
+            .iter()
+            .zip(&d.event)
+            .filter(|(c, _)| c.path.contains(&i))
+            .filter_map(|(_, e)| e.0.max(e.1))
+            .max();
+        let guaranteed = t.server != rtpipe_model::Server::Background;
+        if let (true, true, Some(max)) = (free, guaranteed, cap) {
+            let max = max - max % spec.resolution.max(1);
             t.period = rtpipe_model::PeriodSpec::Range {
                 min: None,
                 max: Some(max),
@@ -337,8 +346,8 @@ struct SweepView<'a> {
     criterion: String,
     points: Vec<PointView<'a>>,
     limits_ms: Vec<LimitMs>,
-    /// Per task with one, the longest period that flew (ms): the tail's
-    /// `max_period`, the others' range ends with `--free-periods`.
+    /// The tail's `max_period` (ms): the longest period that flew in the
+    /// rate sweep.
     max_period_ms: crate::report::Pairs<&'a str, f64>,
 }
 
