@@ -147,7 +147,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     if let Err(b) = write_outputs(&spec, a, &flight, &obs) {
         return command::fail(b);
     }
-    let failures = flight.quality.failures(&s.mission.criteria);
+    let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
     if a.json {
@@ -193,7 +193,7 @@ fn to_text(
     if !world.is_empty() {
         out.push_str(&format!("world: {world}\n"));
     }
-    out.push_str(&quality_text(&f.quality, &s.mission.criteria, failures));
+    out.push_str(&quality_text(&f.quality, &s.criteria(), failures));
     out.push_str(
         "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
     );

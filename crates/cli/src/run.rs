@@ -283,14 +283,14 @@ pub fn run(a: &RunArgs) -> ExitCode {
         );
         print!("\n{}", verdict.text(&spec, 10));
         if let Some((f, s)) = flight {
-            let failures = f.quality.failures(&s.mission.criteria);
+            let failures = f.quality.failures(&s.criteria());
             println!(
                 "\nflight ({}, mission {}, bodies on real threads):",
                 s.preset.name, s.mission.name
             );
             print!(
                 "{}",
-                report::flight::quality_text(&f.quality, &s.mission.criteria, &failures)
+                report::flight::quality_text(&f.quality, &s.criteria(), &failures)
             );
         }
     }
@@ -468,7 +468,7 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
         landed_s: q.landed_s,
         attitude_error_deg: (&q.attitude_error_deg).into(),
         altitude_error_m: (&q.altitude_error_m).into(),
-        failures: q.failures(&s.mission.criteria),
+        failures: q.failures(&s.criteria()),
     }
 }
 

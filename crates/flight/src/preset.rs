@@ -143,7 +143,7 @@ impl Preset {
         p.pid.validate()?;
         p.autopilot.validate()?;
         p.imu.validate()?;
-        p.criteria.apply(crate::radio::Criteria::default())?;
+        p.criteria.validate()?;
         Ok(p)
     }
 

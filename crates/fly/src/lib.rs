@@ -46,6 +46,17 @@ pub struct Setup {
     pub log_jobs: bool,
 }
 
+impl Setup {
+    /// What the flight is judged by: the mission's criteria, with the
+    /// vehicle's own tolerances where its world has turbulence (a preset's
+    /// `[criteria]`).
+    pub fn criteria(&self) -> rtpipe_flight::quality::Criteria {
+        self.preset
+            .criteria
+            .in_world(self.mission.criteria, &self.mission.world)
+    }
+}
+
 /// The outcome of one flight.
 pub struct Flight {
     /// The simulation of the schedule it flew on.
@@ -186,11 +197,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
     }
     let kinds = body_kinds(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
-    let mut mission = mission(r.mission)?;
-    mission.criteria = preset
-        .criteria
-        .apply(mission.criteria)
-        .map_err(|e| Diagnostic::error(format!("vehicle {}: {e}", r.vehicle), ""))?;
+    let mission = mission(r.mission)?;
     let horizon = r
         .horizon
         .unwrap_or(mission.end_ns() as Nanos + AFTER_LAST_STEP_NS);
@@ -549,7 +556,7 @@ mod tests {
         for vehicle in BUILTIN {
             let s = setup_of(&spec, &p, &["--vehicle", vehicle, "--seed", "2"]);
             let f = flown(&spec, &s);
-            let failures = f.quality.failures(&s.mission.criteria);
+            let failures = f.quality.failures(&s.criteria());
             assert!(failures.is_empty(), "{vehicle}: {failures:?}");
             assert_within_sound(&spec, &f);
         }

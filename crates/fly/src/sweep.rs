@@ -399,14 +399,7 @@ mod tests {
         let (spec, s) = cleanflight("racer5");
         let vars = default_variations(&spec, &s, 0.5, 8.0);
         let done = AtomicU64::new(0);
-        let points = sweep(
-            &spec,
-            &s,
-            ExecModel::Uniform,
-            &s.mission.criteria,
-            &vars,
-            &done,
-        );
+        let points = sweep(&spec, &s, ExecModel::Uniform, &s.criteria(), &vars, &done);
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         let e = scale_edge(&points);
         let (Some(last), Some(fail)) = (e.last_pass, e.first_fail) else {

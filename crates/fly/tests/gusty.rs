@@ -34,7 +34,7 @@ fn table_v_hovers_in_gusts_with_real_world_attitude_errors() {
                 q.attitude_error_deg.rms,
                 q.altitude_error_m.rms,
                 q.position_error_m.rms,
-                q.failures(&s.mission.criteria)
+                q.failures(&s.criteria())
             );
             assert!(!q.crashed && q.landed_s.is_some(), "{vehicle}: {q:?}");
             // 20 s of hover judged (4 s to 24 s, one point every 2 ms).

@@ -76,7 +76,7 @@ impl Flights {
     /// Why the flight of `spec` in setup `s` misses its mission's criteria.
     fn failures(&self, spec: &Spec, s: &Setup) -> Vec<String> {
         match fly(spec, s, self.exec) {
-            Ok(f) => f.quality.failures(&s.mission.criteria),
+            Ok(f) => f.quality.failures(&s.criteria()),
             Err(d) => vec![d.message],
         }
     }

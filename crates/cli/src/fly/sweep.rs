@@ -21,7 +21,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let Some(path) = &a.criterion else {
-        return Ok(s.mission.criteria);
+        return Ok(s.criteria());
     };
     let text = std::fs::read_to_string(path).map_err(|e| {
         Diagnostic::error(

@@ -363,10 +363,11 @@ impl Default for Criteria {
     }
 }
 
-/// A vehicle's own tolerances (a preset's `[criteria]`): each given key
-/// replaces the mission's, for the keys the mission judges. A heavy,
-/// draggy vehicle is carried further by the same turbulence than a racer,
-/// whatever its timing.
+/// A vehicle's own tolerances in turbulence (a preset's `[criteria]`): in a
+/// mission whose world has turbulence, each given key replaces the
+/// mission's (position only where the mission judges it); calm missions
+/// keep theirs. A heavy, draggy vehicle is carried further by the same
+/// turbulence than a racer, whatever its timing.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CriteriaOverride {
@@ -379,16 +380,33 @@ pub struct CriteriaOverride {
 }
 
 impl CriteriaOverride {
-    /// `c` with this vehicle's tolerances; an error names a bad value.
-    pub fn apply(&self, c: Criteria) -> Result<Criteria, ConfigError> {
-        let out = Criteria {
+    /// The criteria of a mission in `world` for this vehicle: `c` with its
+    /// tolerances when the world has turbulence.
+    pub fn in_world(&self, c: Criteria, world: &World) -> Criteria {
+        if world.turbulence == Intensity::None {
+            return c;
+        }
+        self.apply(c)
+    }
+
+    /// `c` with this vehicle's tolerances (valid when both are: see
+    /// [`CriteriaOverride::validate`]).
+    pub fn apply(&self, c: Criteria) -> Criteria {
+        Criteria {
             attitude_rms_deg: self.attitude_rms_deg.unwrap_or(c.attitude_rms_deg),
             altitude_rms_m: self.altitude_rms_m.unwrap_or(c.altitude_rms_m),
             position_rms_m: c.position_rms_m.map(|p| self.position_rms_m.unwrap_or(p)),
             ..c
+        }
+    }
+
+    /// Every given tolerance positive and finite; the error names it.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let all = Criteria {
+            position_rms_m: Some(1.0),
+            ..Criteria::default()
         };
-        out.validate()?;
-        Ok(out)
+        self.apply(all).validate()
     }
 }
 
