@@ -36,11 +36,10 @@ impl Builder {
         let s = n.get_ref();
         let problem = if s.trim().is_empty() {
             Some(format!("{kind} name is empty"))
-        } else if let Some(c) = s.chars().find(|c| c.is_control()) {
+        } else if let Some(p) = crate::input::name_problem(s) {
             Some(format!(
-                "{kind} name \"{}\" contains the control character U+{:04X}",
-                s.escape_debug(),
-                c as u32
+                "{kind} name \"{}\" {p}",
+                crate::input::shown_name(s)
             ))
         } else if kind == "task" && s.contains('>') {
             Some(format!(

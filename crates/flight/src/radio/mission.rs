@@ -25,6 +25,8 @@
 
 use crate::error::{in_range, ConfigError};
 use crate::wind::{Dryden, Intensity};
+use rtpipe_model::input::{self, Kind};
+use rtpipe_model::{SpecError, MAX_TIME};
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -195,6 +197,10 @@ impl PilotIntent {
     }
 }
 
+/// The most steps a mission may have (each one is a pilot's action; a
+/// mission of ten thousand is already a script, not a flight).
+pub const MAX_MISSION_STEPS: usize = 10_000;
+
 /// A parsed mission.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mission {
@@ -208,6 +214,9 @@ pub struct Mission {
     pub criteria: Criteria,
     /// The world it flies in (`[world]`, calm otherwise).
     pub world: World,
+    /// The intent after each step (steps `0..=k` folded), so that
+    /// [`Mission::intent_at`] is a binary search.
+    intents: Vec<PilotIntent>,
 }
 
 /// Parse "2.5s", "250ms", "1500us" or "2" (seconds) into ns.
@@ -228,18 +237,33 @@ pub fn parse_time(s: &str) -> Result<u64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("not a time: {s:?} (use e.g. \"2.5s\" or \"250ms\")"))?;
-    seconds_to_ns(v * scale / 1e9).ok_or_else(|| format!("time must be finite and >= 0, got {s:?}"))
+    seconds_to_ns(v * scale / 1e9).ok_or_else(|| at_range(format!("{s:?}")))
 }
 
+/// The latest `at` of a step, s: the model's longest time
+/// ([`rtpipe_model::MAX_TIME`], about 104 days).
+pub const MAX_AT_S: f64 = MAX_TIME as f64 * 1e-9;
+
 fn seconds_to_ns(v: f64) -> Option<u64> {
-    (v.is_finite() && (0.0..1.8e10).contains(&v)).then(|| (v * 1e9).round() as u64)
+    (v.is_finite() && (0.0..=MAX_AT_S).contains(&v)).then(|| (v * 1e9).round() as u64)
+}
+
+/// The message for an `at` outside `0..=MAX_AT_S`.
+fn at_range(got: impl std::fmt::Display) -> String {
+    format!("must be a time from 0 to {MAX_AT_S:.0} s (about 104 days), got {got}")
 }
 
 fn check_step(i: usize, f: &StepFile) -> Result<MissionStep, ConfigError> {
     let field = |n: &str| format!("step[{i}].{n}");
     let t_ns = match &f.at {
-        TimeSpec::Seconds(v) => seconds_to_ns(*v)
-            .ok_or_else(|| ConfigError::new(field("at"), format!("must be >= 0 s, got {v}")))?,
+        TimeSpec::Seconds(v) => {
+            let shown = if v.abs() >= 1e6 {
+                format!("{v:e}")
+            } else {
+                v.to_string()
+            };
+            seconds_to_ns(*v).ok_or_else(|| ConfigError::new(field("at"), at_range(shown)))?
+        }
         TimeSpec::Text(s) => parse_time(s).map_err(|e| ConfigError::new(field("at"), e))?,
     };
     let opt = |n: &str, v: Option<f64>, lo: f64, hi: f64| -> Result<Option<f64>, ConfigError> {
@@ -275,6 +299,29 @@ impl Mission {
     pub fn from_toml_str(src: &str) -> Result<Self, ConfigError> {
         let f: MissionFile = toml::from_str(src)
             .map_err(|e| ConfigError::new("mission", e.message().to_string()))?;
+        Self::from_parsed(f)
+    }
+
+    /// Read and parse a mission file by the rules of every input file
+    /// ([`rtpipe_model::input`]); errors name the file, and the line and
+    /// column of a syntax error or the offending field.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
+        let f: MissionFile = input::load_toml(path, &Kind::MISSION)?;
+        Self::from_parsed(f).map_err(|e| crate::error::in_file(path, e, &Kind::MISSION))
+    }
+
+    fn from_parsed(f: MissionFile) -> Result<Self, ConfigError> {
+        crate::error::check_name("name", &f.name)?;
+        crate::error::check_text("description", &f.description)?;
+        if f.step.len() > MAX_MISSION_STEPS {
+            return Err(ConfigError::new(
+                "step",
+                format!(
+                    "the mission has {} steps, more than the {MAX_MISSION_STEPS} rtpipe flies; merge steps or split the mission",
+                    f.step.len()
+                ),
+            ));
+        }
         let mut steps = Vec::with_capacity(f.step.len());
         for (i, s) in f.step.iter().enumerate() {
             let st = check_step(i, s)?;
@@ -288,18 +335,22 @@ impl Mission {
         }
         f.criteria.validate()?;
         f.world.dryden()?;
+        let mut now = PilotIntent::default();
+        let intents = steps
+            .iter()
+            .map(|s| {
+                now.apply(s);
+                now
+            })
+            .collect();
         Ok(Self {
             name: f.name,
             description: f.description,
             steps,
             criteria: f.criteria,
             world: f.world,
+            intents,
         })
-    }
-
-    /// Read and parse a mission file.
-    pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
-        Self::from_toml_str(&crate::error::read_file(path)?)
     }
 
     /// A built-in mission by name (`hover`, `steps`, `paper`, `gusty`).
@@ -316,13 +367,14 @@ impl Mission {
         }
     }
 
-    /// The pilot's intent at `t_ns` (no allocation).
+    /// The pilot's intent at `t_ns`: every step at or before it folded
+    /// (a binary search, O(log steps); no allocation).
     pub fn intent_at(&self, t_ns: u64) -> PilotIntent {
-        let mut p = PilotIntent::default();
-        for s in self.steps.iter().take_while(|s| s.t_ns <= t_ns) {
-            p.apply(s);
+        let k = self.steps.partition_point(|s| s.t_ns <= t_ns);
+        match k.checked_sub(1).and_then(|k| self.intents.get(k)) {
+            Some(p) => *p,
+            None => PilotIntent::default(),
         }
-        p
     }
 
     /// Time of the last step, ns.
@@ -364,6 +416,15 @@ impl Default for Criteria {
 }
 
 impl Criteria {
+    /// Read a criterion file (`fly --sweep --criterion`) by the rules of
+    /// every input file ([`rtpipe_model::input`]) and validate it.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
+        let c: Criteria = input::load_toml(path, &Kind::CRITERION)?;
+        c.validate()
+            .map_err(|e| crate::error::in_file(path, e, &Kind::CRITERION))?;
+        Ok(c)
+    }
+
     /// Every tolerance positive and finite.
     pub fn validate(&self) -> Result<(), ConfigError> {
         for (name, v) in [
