@@ -111,7 +111,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let s = match setup_of(&spec, a) {
+    let s = match setup_of(&spec, a).and_then(|s| check_outputs(a).map(|()| s)) {
         Ok(s) => s,
         Err(b) => return command::fail(b),
     };
@@ -425,6 +425,25 @@ fn csv(spec: &Spec, f: &Flight) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The output paths, checked before flying (they are checked again when
+/// written): a bad one is reported at once, not after the flight.
+fn check_outputs(a: &FlyArgs) -> Result<(), Diagnostic> {
+    if let Some(dir) = &a.plot {
+        output::check_dir(dir)?;
+    }
+    let mut outs = Vec::new();
+    for (flag, p) in [
+        ("--log", &a.log),
+        ("--samples", &a.samples),
+        ("--write-limits", &a.write_limits),
+    ] {
+        if let Some(p) = p {
+            outs.push(output::prepare(flag, p, &a.spec, None)?);
+        }
+    }
+    output::distinct(&outs)
 }
 
 /// Renders `--plot` and `--log` and writes them all or none.
