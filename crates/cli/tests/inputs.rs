@@ -316,3 +316,65 @@ fn names_print_as_themselves() {
         &["from 0 to 9007199 s", "got 1e30"],
     );
 }
+
+/// The binary on mutated missions, presets and criteria: exit 0, 1 or 2,
+/// never a panic, and a refusal is one located message.
+#[test]
+fn mutated_missions_presets_and_criteria_are_refused_plainly() {
+    let d = scratch("inputs-fuzz");
+    let spec = example("cleanflight.toml");
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let valid: Vec<(&str, Vec<u8>)> = [
+        ("--mission", "missions/steps.toml"),
+        ("--mission", "missions/gusty.toml"),
+        ("--vehicle", "presets/racer5.toml"),
+        ("--criterion", ""),
+    ]
+    .map(|(flag, f)| {
+        let text = if f.is_empty() {
+            b"overshoot = 0.3\nsettling_s = 0.5\n".to_vec()
+        } else {
+            read(Path::new(&format!("{dir}/../flight/{f}")))
+        };
+        (flag, text)
+    })
+    .into();
+    let mut seed: u64 = 0x2400;
+    let mut next = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as usize
+    };
+    for case in 0..60 {
+        let (flag, text) = &valid[case % valid.len()];
+        let mut b = text.clone();
+        for _ in 0..1 + next() % 4 {
+            let i = next() % b.len().max(1);
+            let byte = (next() % 256) as u8;
+            match next() % 3 {
+                0 if i < b.len() => b[i] = byte,
+                1 => b.insert(i.min(b.len()), byte),
+                _ => b.truncate(i),
+            }
+        }
+        write(&d.join("f.toml"), &b);
+        let mut args = vec!["fly", spec.as_str(), flag, "f.toml", "--duration", "0.2s"];
+        if *flag == "--criterion" {
+            args.insert(2, "--sweep");
+        }
+        let o = rtpipe_in(&d, &args, &[], LIMIT);
+        let err = stderr(&o);
+        match o.status.code() {
+            Some(0 | 1) => {}
+            Some(2) => {
+                assert!(
+                    err.starts_with(&format!("error: {flag} f.toml")),
+                    "case {case}: {err}"
+                );
+                assert!(!err.contains("panicked"), "{err}");
+            }
+            other => panic!("case {case}: exit {other:?}: {err}"),
+        }
+    }
+}

@@ -10,8 +10,8 @@ mod mission;
 pub use autopilot::{Autopilot, AutopilotConfig, VehicleState};
 pub use failsafe::{Failsafe, FailsafeAction, FailsafeConfig, FailsafePhase};
 pub use mission::{
-    parse_time, Criteria, Mission, MissionStep, PilotIntent, World, BUILTIN_MISSIONS, MAX_AT_S,
-    MAX_MISSION_STEPS,
+    parse_time, Criteria, Mission, MissionStep, PilotIntent, World, BUILTIN_MISSIONS, GUSTY_TOML,
+    HOVER_TOML, MAX_AT_S, MAX_MISSION_STEPS, PAPER_TOML, STEPS_TOML,
 };
 
 use crate::math::deg;
