@@ -80,12 +80,18 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
             command::parse_time(spec, d)
-                .ok()
-                .filter(|&h| h > 0)
-                .ok_or_else(|| {
+                .and_then(|h| {
+                    (h > 0)
+                        .then_some(h)
+                        .ok_or_else(|| "the flight must last a positive time".to_string())
+                })
+                .map_err(|why| {
                     Diagnostic::error(
-                        format!("invalid value `{d}` for --duration"),
-                        "write a positive time like --duration 30s",
+                        format!("invalid value `{d}` for --duration: {why}"),
+                        format!(
+                            "write a positive time up to {:.0} s (about 104 days), like --duration 30s",
+                            rtpipe_model::MAX_TIME as f64 * 1e-9
+                        ),
                     )
                 })?,
         ),

@@ -119,7 +119,11 @@ fn example_name(flag: &str) -> &'static str {
         "--write" => "designed.toml",
         "--log" => "flight.csv",
         "--write-limits" => "limits.toml",
-        _ => "gantt.svg",
+        "--gantt" => "gantt.svg",
+        "--export-rt-app" => "rt-app.json",
+        "--samples" => "samples.csv",
+        "OUTFILE" => "spec.toml",
+        _ => "out.txt",
     }
 }
 

@@ -378,3 +378,44 @@ fn mutated_missions_presets_and_criteria_are_refused_plainly() {
         }
     }
 }
+
+/// Issue 24 item 9: a refused value names the limit it broke; examples in
+/// errors fit their flag; no "-0.0000".
+#[test]
+fn messages_name_the_limit_and_fitting_examples() {
+    let d = scratch("inputs-messages");
+    let spec = example("cleanflight.toml");
+    let table2 =
+        String::from_utf8_lossy(&read(Path::new(&example("paper-table2.toml")))).into_owned();
+    let bw = table2.replacen("bandwidth = ", "bandwidth = 1e15 #", 1);
+    assert_ne!(bw, table2);
+    write(&d.join("bw.toml"), bw.as_bytes());
+    write(&d.join("t2.toml"), table2.as_bytes());
+    refused(
+        &d,
+        &["analyze", "bw.toml"],
+        &["must be > 0 and below 1e15, found 1e15"],
+    );
+    refused(
+        &d,
+        &["fly", &spec, "--duration", "1e9s"],
+        &["--duration: time is too large", "up to 9007199 s"],
+    );
+    refused(
+        &d,
+        &["simulate", "t2.toml", "--outputs", "1000000000"],
+        &["the longest the model allows, 9007199 s (about 104 days)"],
+    );
+    std::fs::create_dir_all(d.join("dir")).ok();
+    refused(
+        &d,
+        &["run", &spec, "--export-rt-app", "dir"],
+        &["--export-rt-app dir is a directory", "dir/rt-app.json"],
+    );
+    // A CPU with background tasks only: U = 0, not -0.
+    let bg = "[system]\nname = \"bg\"\n[tasks.a]\nperiod = 10\nexec = 1\n[tasks.b]\nperiod = 10\nexec = 1\ncpu = 1\nserver = \"background\"\n";
+    write(&d.join("bg.toml"), bg.as_bytes());
+    let o = rtpipe_in(&d, &["analyze", "bg.toml"], &[], LIMIT);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("U = 0.0000") && !out.contains("-0.0"), "{out}");
+}

@@ -419,7 +419,7 @@ fn toml_help(msg: &str) -> Option<String> {
     } else if msg.contains("missing field") {
         Some("add the missing key (see the spec format in the README)".into())
     } else if msg.contains("too large to fit") {
-        Some("whole numbers must fit in 64 bits; times are limited to about 106 days: write a smaller value, or a time with a unit such as \"250us\"".into())
+        Some("whole numbers must fit in 64 bits; times are limited to about 104 days: write a smaller value, or a time with a unit such as \"250us\"".into())
     } else if msg.contains("invalid type") {
         Some("times are numbers in the system's time_unit or strings like \"250us\"".into())
     } else {

@@ -365,7 +365,7 @@ fn time(
 fn to_ns(ms: f64, r: Round) -> Result<(Nanos, bool), String> {
     let s = format!("{ms}");
     let (int, frac) = s.split_once('.').unwrap_or((&s, ""));
-    let too_large = || format!("{ms} ms is larger than rtpipe's largest time (about 106 days)");
+    let too_large = || format!("{ms} ms is larger than rtpipe's largest time (about 104 days)");
     if int.len() > 12 {
         return Err(too_large());
     }
