@@ -35,10 +35,23 @@ pub fn register_input(flag: &'static str, path: &Path) {
     }
 }
 
-/// The registered input `target` is, if any: its flag and path.
-fn registered_input(target: &Path) -> Option<(&'static str, PathBuf)> {
-    let inputs = INPUTS.lock().ok()?;
-    inputs.iter().find(|(_, p)| same_file(target, p)).cloned()
+/// An error when `target` (the output `flag` names as `path`) is a
+/// registered input.
+fn refuse_inputs(flag: &str, path: &Path, target: &Path) -> Result<(), Diagnostic> {
+    let Ok(inputs) = INPUTS.lock() else {
+        return Ok(());
+    };
+    match inputs.iter().find(|(_, p)| same_file(target, p)) {
+        None => Ok(()),
+        Some((by, read)) => Err(err(
+            format!(
+                "{flag} {} would overwrite {by} {}, a file this command reads",
+                path.display(),
+                read.display()
+            ),
+            format!("write to another file, e.g. {flag} {}", example_name(flag)),
+        )),
+    }
 }
 
 /// An output path that cannot be written, or a failed write: the flag and
@@ -180,16 +193,7 @@ pub fn prepare(
                 ),
             ));
         }
-        if let Some((by, read)) = registered_input(&target) {
-            return Err(err(
-                format!(
-                    "{flag} {} would overwrite {by} {}, a file this command reads",
-                    path.display(),
-                    read.display()
-                ),
-                format!("write to another file, e.g. {flag} {}", example_name(flag)),
-            ));
-        }
+        refuse_inputs(flag, path, &target)?;
         if same_file(&target, input) {
             match overwrite_input {
                 Some((true, _)) => {}
