@@ -486,6 +486,37 @@ mod tests {
     }
 
     #[test]
+    fn intent_lookup_is_the_fold_of_the_steps_so_far() {
+        let m = Mission::builtin("steps").unwrap();
+        let ends: Vec<u64> = m.steps.iter().map(|s| s.t_ns).collect();
+        for t in ends
+            .iter()
+            .flat_map(|&t| [t.saturating_sub(1), t, t + 1])
+            .chain([0, u64::MAX])
+        {
+            let mut p = PilotIntent::default();
+            for s in m.steps.iter().take_while(|s| s.t_ns <= t) {
+                p.apply(s);
+            }
+            assert_eq!(m.intent_at(t), p, "at {t}");
+        }
+    }
+
+    #[test]
+    fn too_many_steps_and_far_times_are_refused_with_the_limit() {
+        let mut text = String::from("name = \"x\"\n");
+        for k in 0..=MAX_MISSION_STEPS {
+            text.push_str(&format!("[[step]]\nat = {k}\n"));
+        }
+        let e = Mission::from_toml_str(&text).unwrap_err();
+        assert!(e.reason.contains("more than the 10000"), "{e}");
+        let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = \"1e9s\"\n").unwrap_err();
+        assert!(e.reason.contains("from 0 to 9007199 s"), "{e}");
+        let e = Mission::from_toml_str("name = \"a\\u202Eb\"\n").unwrap_err();
+        assert!(e.reason.contains("bidirectional"), "{e}");
+    }
+
+    #[test]
     fn bad_missions_name_the_field() {
         let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = \"2 s\"\nroll_deg = 90\n")
             .unwrap_err();
