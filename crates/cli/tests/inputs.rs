@@ -129,6 +129,16 @@ fn text_rules_are_the_same_for_every_file_kind() {
         &["fly", &spec, "--mission", "t.toml"],
         &["--mission t.toml:3:6: "],
     );
+    // A value out of range: the line and column of its key.
+    write(
+        &d.join("r.toml"),
+        b"name = \"m\"\n[[step]]\nat = 1\n[[step]]\nat = 2\nroll_deg = 90\n",
+    );
+    refused(
+        &d,
+        &["fly", &spec, "--mission", "r.toml"],
+        &["--mission r.toml:6:1: invalid `step[1].roll_deg`: must be in [-60, 60]"],
+    );
     write(&d.join("k.toml"), b"\novershot = 0.3\n");
     refused(
         &d,

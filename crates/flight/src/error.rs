@@ -30,18 +30,38 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
-/// A configuration error found in the file `path` of `kind`, as the
-/// file's error (named by the file; the field names the place).
+/// A configuration error found in the file `path` of `kind`, whose text
+/// is `text`, as the file's error: at the line and column of the field
+/// when the text writes it the usual way, else named by the file.
 pub fn in_file(
     path: &std::path::Path,
+    text: &str,
     e: ConfigError,
     kind: &rtpipe_model::input::Kind,
 ) -> rtpipe_model::SpecError {
+    let span = rtpipe_model::input::locate(text, &e.field);
     rtpipe_model::SpecError {
         file: path.display().to_string(),
-        source: String::new(),
-        diagnostics: vec![rtpipe_model::Diagnostic::error(e.to_string(), kind.help)],
+        source: if span.is_some() {
+            text.to_string()
+        } else {
+            String::new()
+        },
+        diagnostics: vec![rtpipe_model::Diagnostic::new(e.to_string(), span).help(kind.help)],
     }
+}
+
+/// Reads the file `path` of `kind` by the rules of every input file
+/// ([`rtpipe_model::input`]), parses it into `T` and checks it with
+/// `check`; every error names the file, and its line and column when known.
+pub fn load<T: serde::de::DeserializeOwned, U>(
+    path: &std::path::Path,
+    kind: &rtpipe_model::input::Kind,
+    check: impl FnOnce(T) -> Result<U, ConfigError>,
+) -> Result<U, rtpipe_model::SpecError> {
+    let text = rtpipe_model::input::read_text(path, kind)?;
+    let parsed: T = rtpipe_model::input::parse_toml(&path.display().to_string(), &text, kind)?;
+    check(parsed).map_err(|e| in_file(path, &text, e, kind))
 }
 
 /// Ok if `name` (the field `field`) is a name that prints as itself: not

@@ -152,11 +152,10 @@ impl Preset {
     /// ([`rtpipe_model::input`]); errors name the file, and the line and
     /// column of a syntax error or the offending field.
     pub fn from_file(path: &std::path::Path) -> Result<Self, rtpipe_model::SpecError> {
-        let kind = &rtpipe_model::input::Kind::PRESET;
-        let p: Preset = rtpipe_model::input::load_toml(path, kind)?;
-        p.validate_all()
-            .map_err(|e| crate::error::in_file(path, e, kind))?;
-        Ok(p)
+        crate::error::load(path, &rtpipe_model::input::Kind::PRESET, |p: Preset| {
+            p.validate_all()?;
+            Ok(p)
+        })
     }
 
     /// A built-in preset by name.

@@ -352,6 +352,57 @@ pub fn load_toml<T: serde::de::DeserializeOwned>(path: &Path, kind: &Kind) -> Re
     parse_toml(&path.display().to_string(), &text, kind)
 }
 
+/// Where the field a dotted path names (`name`, `body.mass_kg`,
+/// `step[3].at`, `rotors.positions_m[2]`) is written in TOML `text`: the
+/// byte range of its key, or of its table's header when the key is not
+/// written (a default that fails with the others). `None` when the text
+/// writes it another way (inline tables, dotted keys).
+pub fn locate(text: &str, field: &str) -> Option<std::ops::Range<usize>> {
+    let strip = |s: &str| s.split('[').next().unwrap_or(s).to_string();
+    let (table, key) = match field.rsplit_once('.') {
+        Some((t, k)) => (t, strip(k)),
+        None => ("", strip(field)),
+    };
+    let index: usize = table
+        .rsplit_once('[')
+        .and_then(|(_, i)| i.trim_end_matches(']').parse().ok())
+        .unwrap_or(0);
+    let header = strip(table);
+    let mut current = String::new();
+    let mut seen = 0usize;
+    let mut header_at = None;
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let start = offset;
+        offset += line.len();
+        let t = line.trim();
+        if let Some(h) = t.strip_prefix('[') {
+            let name = h.trim_start_matches('[');
+            current = name.split(']').next().unwrap_or("").trim().to_string();
+            if current == header {
+                seen += 1;
+                if seen == index + 1 {
+                    header_at = Some(start..start + line.trim_end().len());
+                }
+            }
+            continue;
+        }
+        let here = if header.is_empty() {
+            current.is_empty()
+        } else {
+            current == header && seen == index + 1
+        };
+        let Some(rest) = t.strip_prefix(key.as_str()) else {
+            continue;
+        };
+        if here && rest.trim_start().starts_with('=') {
+            let col = line.len() - line.trim_start().len();
+            return Some(start + col..start + col + key.len());
+        }
+    }
+    header_at
+}
+
 /// What is wrong with a name shown on terminals and in files, if anything:
 /// empty, longer than [`MAX_NAME_CHARS`], or holding a control character,
 /// a bidirectional control or an invisible (zero-width) character, any of

@@ -25,7 +25,7 @@
 
 use crate::error::{in_range, ConfigError};
 use crate::wind::{Dryden, Intensity};
-use rtpipe_model::input::{self, Kind};
+use rtpipe_model::input::Kind;
 use rtpipe_model::{SpecError, MAX_TIME};
 use serde::Deserialize;
 
@@ -306,8 +306,7 @@ impl Mission {
     /// ([`rtpipe_model::input`]); errors name the file, and the line and
     /// column of a syntax error or the offending field.
     pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
-        let f: MissionFile = input::load_toml(path, &Kind::MISSION)?;
-        Self::from_parsed(f).map_err(|e| crate::error::in_file(path, e, &Kind::MISSION))
+        crate::error::load(path, &Kind::MISSION, Self::from_parsed)
     }
 
     fn from_parsed(f: MissionFile) -> Result<Self, ConfigError> {
@@ -419,10 +418,14 @@ impl Criteria {
     /// Read a criterion file (`fly --sweep --criterion`) by the rules of
     /// every input file ([`rtpipe_model::input`]) and validate it.
     pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
-        let c: Criteria = input::load_toml(path, &Kind::CRITERION)?;
-        c.validate()
-            .map_err(|e| crate::error::in_file(path, e, &Kind::CRITERION))?;
-        Ok(c)
+        crate::error::load(path, &Kind::CRITERION, |c: Criteria| {
+            // The file's keys are the table's, at its top level.
+            c.validate().map_err(|e| {
+                let field = e.field.trim_start_matches("criteria.");
+                ConfigError::new(field, e.reason)
+            })?;
+            Ok(c)
+        })
     }
 
     /// Every tolerance positive and finite.

@@ -86,3 +86,15 @@ fn names_that_print_as_something_else_are_refused() {
     assert!(name_problem("a\u{1b}[31mb").is_some_and(|m| m.contains("control")));
     assert!(name_problem(" ").is_some());
 }
+
+#[test]
+fn fields_are_located_in_the_usual_toml() {
+    let text = "name = \"m\"\n[body]\nmass_kg = 1\n[[step]]\nat = 0\n[[step]]\nat = 2\nroll_deg = 90\n[criteria]\n";
+    let at = |f: &str| locate(text, f).map(|r| crate::line_col(text, r.start));
+    assert_eq!(at("name"), Some((1, 1)));
+    assert_eq!(at("body.mass_kg"), Some((3, 1)));
+    assert_eq!(at("step[1].roll_deg"), Some((8, 1)));
+    assert_eq!(at("step[0].at"), Some((5, 1)));
+    assert_eq!(at("criteria.overshoot"), Some((9, 1)));
+    assert_eq!(at("world.speed_mps"), None);
+}
