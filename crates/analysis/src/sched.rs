@@ -186,7 +186,8 @@ const UTIL_EPS: f64 = 1e-12;
 /// its guaranteed tasks: (value, bound, passes).
 pub fn utilization_test(test: SchedTest, us: &[f64]) -> (f64, f64, bool) {
     let n = us.len();
-    let u: f64 = us.iter().sum();
+    // An empty sum is -0.0 (shown "-0.0000"); adding 0.0 makes it 0.
+    let u: f64 = us.iter().sum::<f64>() + 0.0;
     match test {
         SchedTest::LiuLayland => {
             let b = if n == 0 {
@@ -381,7 +382,8 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
         .iter()
         .map(|&i| timings[i].budget as f64 / timings[i].period as f64)
         .collect();
-    let u: f64 = us.iter().sum();
+    // An empty sum is -0.0 (shown "-0.0000"); adding 0.0 makes it 0.
+    let u: f64 = us.iter().sum::<f64>() + 0.0;
     let (value, bound, ok) = match spec.schedulability {
         SchedTest::Rta => rta_test(&ids, timings),
         SchedTest::Qpa => crate::qpa::qpa_verdict(spec, &ids),

@@ -251,7 +251,7 @@ fn sched_view(s: &rtpipe_analysis::Schedulability) -> SchedView {
         .collect();
     SchedView {
         test: s.test.name(),
-        utilization: s.cpus.iter().map(|c| c.utilization).sum(),
+        utilization: s.cpus.iter().map(|c| c.utilization).sum::<f64>() + 0.0,
         bound,
         schedulable: s.schedulable,
         cpus,

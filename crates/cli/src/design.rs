@@ -509,7 +509,7 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
         o.status.name(),
     );
     if let (Some(u), Some(s)) = (o.objective, &o.spec) {
-        out.push_str(&format!("total utilisation {u:.4}"));
+        out.push_str(&format!("total utilisation {:.4}", u + 0.0));
         if let Some(g) = o.gap {
             out.push_str(&format!(
                 " (lower bound {:.4}, gap {:.2} %)",

@@ -80,12 +80,18 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
             command::parse_time(spec, d)
-                .ok()
-                .filter(|&h| h > 0)
-                .ok_or_else(|| {
+                .and_then(|h| {
+                    (h > 0)
+                        .then_some(h)
+                        .ok_or_else(|| "the flight must last a positive time".to_string())
+                })
+                .map_err(|why| {
                     Diagnostic::error(
-                        format!("invalid value `{d}` for --duration"),
-                        "write a positive time like --duration 30s",
+                        format!("invalid value `{d}` for --duration: {why}"),
+                        format!(
+                            "write a positive time up to {:.0} s (about 104 days), like --duration 30s",
+                            rtpipe_model::MAX_TIME as f64 * 1e-9
+                        ),
                     )
                 })?,
         ),
@@ -111,7 +117,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let s = match setup_of(&spec, a) {
+    let s = match setup_of(&spec, a).and_then(|s| check_outputs(a).map(|()| s)) {
         Ok(s) => s,
         Err(b) => return command::fail(b),
     };
@@ -425,6 +431,25 @@ fn csv(spec: &Spec, f: &Flight) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The output paths, checked before flying (they are checked again when
+/// written): a bad one is reported at once, not after the flight.
+fn check_outputs(a: &FlyArgs) -> Result<(), Diagnostic> {
+    if let Some(dir) = &a.plot {
+        output::check_dir(dir)?;
+    }
+    let mut outs = Vec::new();
+    for (flag, p) in [
+        ("--log", &a.log),
+        ("--samples", &a.samples),
+        ("--write-limits", &a.write_limits),
+    ] {
+        if let Some(p) = p {
+            outs.push(output::prepare(flag, p, &a.spec, None)?);
+        }
+    }
+    output::distinct(&outs)
 }
 
 /// Renders `--plot` and `--log` and writes them all or none.

@@ -178,5 +178,6 @@ fn utilisation(spec: &Spec, cpu: u32) -> f64 {
         .iter()
         .filter(|t| t.cpu == cpu)
         .map(|t| t.exec as f64 / t.fixed_period().unwrap_or(1) as f64)
-        .sum()
+        .sum::<f64>()
+        + 0.0 // an empty sum is -0.0
 }

@@ -35,6 +35,13 @@ pub enum ImportCommand {
     },
 }
 
+/// The file an import reads, which no output may replace.
+pub fn register_inputs(cmd: &ImportCommand) {
+    match cmd {
+        ImportCommand::E2eeval { file, .. } => output::register_input("FILE", file),
+    }
+}
+
 /// Runs `rtpipe import`.
 pub fn run(cmd: &ImportCommand) -> ExitCode {
     match cmd {

@@ -224,6 +224,31 @@ fn exit_on_panic() {
     }));
 }
 
+/// Every file the command reads besides its spec, so that no output flag
+/// replaces one ([`output::register_input`]); built-in vehicles and
+/// missions are names, not files.
+fn register_inputs(command: &Command) {
+    let world = |vehicle: &str, mission: &str| {
+        if !rtpipe_flight::preset::BUILTIN.contains(&vehicle) {
+            output::register_input("--vehicle", std::path::Path::new(vehicle));
+        }
+        if !rtpipe_flight::radio::BUILTIN_MISSIONS.contains(&mission) {
+            output::register_input("--mission", std::path::Path::new(mission));
+        }
+    };
+    match command {
+        Command::Fly(a) => {
+            world(&a.vehicle, &a.mission);
+            if let Some(c) = &a.criterion {
+                output::register_input("--criterion", c);
+            }
+        }
+        Command::Run(a) => world(&a.vehicle, &a.mission),
+        Command::Import { format } => import::register_inputs(format),
+        _ => {}
+    }
+}
+
 fn main() -> ExitCode {
     exit_on_panic();
     let matches = Cli::command().get_matches();
@@ -238,6 +263,7 @@ fn main() -> ExitCode {
         })
     };
     let (seed_given, steps_given) = (given("seed"), given("search_steps"));
+    register_inputs(&cli.command);
     match cli.command {
         Command::Analyze {
             spec,

@@ -6,7 +6,10 @@
 //!   and sockets are refused with an error naming the flag and the path
 //!   (rtpipe never replaces them, and never writes into them);
 //! - the input spec is never overwritten unless the command allows it
-//!   (`design --overwrite-spec`);
+//!   (`design --overwrite-spec`), and no other file the command reads
+//!   (`--mission`, `--vehicle`, `--criterion`, the file `import` reads:
+//!   [`register_input`]) ever is, whatever path names it (symlinks and
+//!   hard links are the same file);
 //! - the text goes to a fresh temporary file beside the real target, which
 //!   is then renamed over it, so the target holds either its old content or
 //!   the complete new one; on any error the temporaries are removed.
@@ -18,6 +21,38 @@ use rtpipe_model::Diagnostic;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The files this process reads besides its spec, with the flag that named
+/// each: no output replaces them.
+static INPUTS: Mutex<Vec<(&'static str, PathBuf)>> = Mutex::new(Vec::new());
+
+/// Registers a file the command reads (named by `flag`): [`prepare`]
+/// refuses every output that would replace it.
+pub fn register_input(flag: &'static str, path: &Path) {
+    if let Ok(mut v) = INPUTS.lock() {
+        v.push((flag, path.to_path_buf()));
+    }
+}
+
+/// An error when `target` (the output `flag` names as `path`) is a
+/// registered input.
+fn refuse_inputs(flag: &str, path: &Path, target: &Path) -> Result<(), Diagnostic> {
+    let Ok(inputs) = INPUTS.lock() else {
+        return Ok(());
+    };
+    match inputs.iter().find(|(_, p)| same_file(target, p)) {
+        None => Ok(()),
+        Some((by, read)) => Err(err(
+            format!(
+                "{flag} {} would overwrite {by} {}, a file this command reads",
+                path.display(),
+                read.display()
+            ),
+            format!("write to another file, e.g. {flag} {}", example_name(flag)),
+        )),
+    }
+}
 
 /// An output path that cannot be written, or a failed write: the flag and
 /// path, and how to fix it.
@@ -97,7 +132,11 @@ fn example_name(flag: &str) -> &'static str {
         "--write" => "designed.toml",
         "--log" => "flight.csv",
         "--write-limits" => "limits.toml",
-        _ => "gantt.svg",
+        "--gantt" => "gantt.svg",
+        "--export-rt-app" => "rt-app.json",
+        "--samples" => "samples.csv",
+        "OUTFILE" => "spec.toml",
+        _ => "out.txt",
     }
 }
 
@@ -154,6 +193,7 @@ pub fn prepare(
                 ),
             ));
         }
+        refuse_inputs(flag, path, &target)?;
         if same_file(&target, input) {
             match overwrite_input {
                 Some((true, _)) => {}
@@ -273,11 +313,26 @@ pub fn write_files(
     write_all(&pairs)
 }
 
+/// Refuses a `--plot` directory that exists as something else (a file).
+pub fn check_dir(dir: &Path) -> Result<(), Diagnostic> {
+    match fs::metadata(dir) {
+        Ok(m) if !m.is_dir() => Err(err(
+            format!(
+                "--plot {} exists and is not a directory: --plot names the directory the plots are written into",
+                dir.display()
+            ),
+            "give a new or existing directory, e.g. --plot plots",
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Creates the `--plot` directory when it is missing.
 pub fn ensure_dir(dir: &Path) -> Result<(), Diagnostic> {
     if dir.is_dir() {
         return Ok(());
     }
+    check_dir(dir)?;
     std::fs::create_dir_all(dir).map_err(|e| {
         Diagnostic::error(
             format!("--plot {}: cannot create the directory: {e}", dir.display()),

@@ -253,5 +253,6 @@ pub fn utilization(spec: &Spec) -> f64 {
         .iter()
         .filter(|t| t.server != Server::Background)
         .filter_map(|t| t.fixed_period().map(|p| t.budget() as f64 / p as f64))
-        .sum()
+        .sum::<f64>()
+        + 0.0 // an empty sum is -0.0
 }

@@ -30,11 +30,72 @@ impl fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
-/// The text of a user's configuration file (a preset or a mission); an
-/// error names the file.
-pub fn read_file(path: &std::path::Path) -> Result<String, ConfigError> {
-    std::fs::read_to_string(path)
-        .map_err(|e| ConfigError::new(path.display().to_string(), e.to_string()))
+/// A configuration error found in the file `path` of `kind`, whose text
+/// is `text`, as the file's error: at the line and column of the field
+/// when the text writes it the usual way, else named by the file.
+pub fn in_file(
+    path: &std::path::Path,
+    text: &str,
+    e: ConfigError,
+    kind: &rtpipe_model::input::Kind,
+) -> rtpipe_model::SpecError {
+    let span = rtpipe_model::input::locate(text, &e.field);
+    rtpipe_model::SpecError {
+        file: path.display().to_string(),
+        source: if span.is_some() {
+            text.to_string()
+        } else {
+            String::new()
+        },
+        diagnostics: vec![rtpipe_model::Diagnostic::new(e.to_string(), span).help(kind.help)],
+    }
+}
+
+/// Reads the file `path` of `kind` by the rules of every input file
+/// ([`rtpipe_model::input`]), parses it into `T` and checks it with
+/// `check`; every error names the file, and its line and column when known.
+pub fn load<T: serde::de::DeserializeOwned, U>(
+    path: &std::path::Path,
+    kind: &rtpipe_model::input::Kind,
+    check: impl FnOnce(T) -> Result<U, ConfigError>,
+) -> Result<U, rtpipe_model::SpecError> {
+    let text = rtpipe_model::input::read_text(path, kind)?;
+    let parsed: T = rtpipe_model::input::parse_toml(&path.display().to_string(), &text, kind)?;
+    check(parsed).map_err(|e| in_file(path, &text, e, kind))
+}
+
+/// Ok if `name` (the field `field`) is a name that prints as itself: not
+/// empty, at most 256 characters, no control, bidirectional or invisible
+/// characters ([`rtpipe_model::input::name_problem`]).
+pub fn check_name(field: &str, name: &str) -> Result<(), ConfigError> {
+    match rtpipe_model::input::name_problem(name) {
+        None => Ok(()),
+        Some(p) => Err(ConfigError::new(
+            field,
+            format!(
+                "\"{}\" {p}; use a short printable name",
+                rtpipe_model::input::shown_name(name)
+            ),
+        )),
+    }
+}
+
+/// Ok if free text (the field `field`) holds no control character other
+/// than line feeds and tabs (a terminal would obey it when it is shown).
+pub fn check_text(field: &str, text: &str) -> Result<(), ConfigError> {
+    match text
+        .chars()
+        .find(|&c| c.is_control() && !matches!(c, '\n' | '\t'))
+    {
+        None => Ok(()),
+        Some(c) => Err(ConfigError::new(
+            field,
+            format!(
+                "contains the control character U+{:04X}; remove it",
+                c as u32
+            ),
+        )),
+    }
 }
 
 /// Ok if `v` is finite and `v > 0`, else an error naming `field`.

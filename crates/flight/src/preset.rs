@@ -138,18 +138,29 @@ impl Preset {
                 .unwrap_or_default();
             ConfigError::new("preset", format!("{}{at}", e.message()))
         })?;
-        p.plant_params().validate()?;
-        p.battery.validate()?;
-        p.pid.validate()?;
-        p.autopilot.validate()?;
-        p.imu.validate()?;
-        p.criteria.validate()?;
+        p.validate_all()?;
         Ok(p)
     }
 
-    /// Read a user preset file.
-    pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
-        Self::from_toml_str(&crate::error::read_file(path)?)
+    /// Every part checked, and the name printable.
+    fn validate_all(&self) -> Result<(), ConfigError> {
+        crate::error::check_name("name", &self.name)?;
+        self.plant_params().validate()?;
+        self.battery.validate()?;
+        self.pid.validate()?;
+        self.autopilot.validate()?;
+        self.imu.validate()?;
+        self.criteria.validate()
+    }
+
+    /// Read a user preset file by the rules of every input file
+    /// ([`rtpipe_model::input`]); errors name the file, and the line and
+    /// column of a syntax error or the offending field.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, rtpipe_model::SpecError> {
+        crate::error::load(path, &rtpipe_model::input::Kind::PRESET, |p: Preset| {
+            p.validate_all()?;
+            Ok(p)
+        })
     }
 
     /// A built-in preset by name.

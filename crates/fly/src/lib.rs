@@ -70,33 +70,34 @@ pub struct Flight {
 }
 
 fn vehicle(v: &str) -> Result<Preset, Diagnostic> {
-    let r = if BUILTIN.contains(&v) {
-        Preset::builtin(v)
-    } else {
-        Preset::from_file(Path::new(v))
-    };
-    r.map_err(|e| {
-        Diagnostic::error(
-            format!("--vehicle {v}: {e}"),
-            format!(
-                "name a built-in preset ({}) or a preset file",
-                BUILTIN.join(", ")
-            ),
+    let help = || {
+        format!(
+            "name a built-in preset ({}) or a preset file",
+            BUILTIN.join(", ")
         )
-    })
+    };
+    if BUILTIN.contains(&v) {
+        return Preset::builtin(v)
+            .map_err(|e| Diagnostic::error(format!("--vehicle {v}: {e}"), help()));
+    }
+    Preset::from_file(Path::new(v)).map_err(|e| from_file("--vehicle", &e, &help()))
+}
+
+/// A file's error as the error of the flag that named it:
+/// `--mission m.toml:3:5: message`, with the file's help or else `help`.
+pub fn from_file(flag: &str, e: &rtpipe_model::SpecError, help: &str) -> Diagnostic {
+    let d = e.located();
+    let help = d.help.unwrap_or_else(|| help.to_string());
+    Diagnostic::error(format!("{flag} {}", d.message), help)
 }
 
 fn mission(m: &str) -> Result<Mission, Diagnostic> {
-    let r = match m {
-        _ if BUILTIN_MISSIONS.contains(&m) => Mission::builtin(m),
-        _ => Mission::from_file(Path::new(m)),
-    };
-    r.map_err(|e| {
-        Diagnostic::error(
-            format!("--mission {m}: {e}"),
-            "name a built-in mission (hover, steps, paper, gusty) or a mission file",
-        )
-    })
+    let help = "name a built-in mission (hover, steps, paper, gusty) or a mission file";
+    if BUILTIN_MISSIONS.contains(&m) {
+        return Mission::builtin(m)
+            .map_err(|e| Diagnostic::error(format!("--mission {m}: {e}"), help));
+    }
+    Mission::from_file(Path::new(m)).map_err(|e| from_file("--mission", &e, help))
 }
 
 /// The role of every task from its `body`; the pipeline must be complete.

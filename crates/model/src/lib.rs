@@ -12,6 +12,7 @@
 mod error;
 pub mod gen;
 pub mod import;
+pub mod input;
 pub mod policy;
 mod raw;
 pub mod time;
@@ -23,8 +24,9 @@ pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
 pub use policy::{Communication, Priorities, SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
-/// The largest spec file `Spec::load` reads: 16 MiB.
-pub const MAX_SPEC_BYTES: u64 = 16 << 20;
+/// The largest spec file `Spec::load` reads: 16 MiB (every TOML input's
+/// cap, [`input::MAX_INPUT_BYTES`]).
+pub const MAX_SPEC_BYTES: u64 = input::MAX_INPUT_BYTES;
 
 use raw::RawSpec;
 use std::collections::BTreeMap;
@@ -311,56 +313,10 @@ impl Spec {
 
     /// Reads and parses a spec file of at most [`MAX_SPEC_BYTES`]; larger
     /// files and endless streams (`/dev/zero`) are refused after reading at
-    /// most that much.
+    /// most that much (the rules of every input file: [`input`]).
     pub fn load(path: &std::path::Path) -> Result<Spec, SpecError> {
-        let file = path.display().to_string();
-        let fail = |msg: String, help: &str| SpecError {
-            file: file.clone(),
-            source: String::new(),
-            diagnostics: vec![Diagnostic::new(msg, None).help(help)],
-        };
-        let cap_help = "specs are small TOML files; check the path (a device, log or binary file is not a spec)";
-        let too_big = || {
-            fail(
-                format!(
-                    "the spec is larger than {} MiB, the most rtpipe reads",
-                    MAX_SPEC_BYTES >> 20
-                ),
-                cap_help,
-            )
-        };
-        let read_help = "check the path; specs are TOML files such as examples/paper-table2.toml";
-        let f = std::fs::File::open(path)
-            .map_err(|e| fail(format!("cannot read the spec: {e}"), read_help))?;
-        if let Ok(m) = f.metadata() {
-            if m.is_dir() {
-                return Err(fail(
-                    "cannot read the spec: it is a directory".into(),
-                    read_help,
-                ));
-            }
-            if m.is_file() && m.len() > MAX_SPEC_BYTES {
-                return Err(too_big());
-            }
-        }
-        let mut bytes = Vec::new();
-        use std::io::Read;
-        f.take(MAX_SPEC_BYTES + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|e| fail(format!("cannot read the spec: {e}"), read_help))?;
-        if bytes.len() as u64 > MAX_SPEC_BYTES {
-            return Err(too_big());
-        }
-        match String::from_utf8(bytes) {
-            Ok(text) => Spec::parse(&file, &text),
-            Err(e) => Err(fail(
-                format!(
-                    "cannot read the spec: not UTF-8 text (invalid byte at offset {})",
-                    e.utf8_error().valid_up_to()
-                ),
-                cap_help,
-            )),
-        }
+        let text = input::read_text(path, &input::Kind::SPEC)?;
+        Spec::parse(&path.display().to_string(), &text)
     }
 
     /// The index of the task called `name`.
@@ -463,7 +419,7 @@ fn toml_help(msg: &str) -> Option<String> {
     } else if msg.contains("missing field") {
         Some("add the missing key (see the spec format in the README)".into())
     } else if msg.contains("too large to fit") {
-        Some("whole numbers must fit in 64 bits; times are limited to about 106 days: write a smaller value, or a time with a unit such as \"250us\"".into())
+        Some("whole numbers must fit in 64 bits; times are limited to about 104 days: write a smaller value, or a time with a unit such as \"250us\"".into())
     } else if msg.contains("invalid type") {
         Some("times are numbers in the system's time_unit or strings like \"250us\"".into())
     } else {

@@ -70,7 +70,7 @@ impl fmt::Display for TimeUnit {
     }
 }
 
-/// Largest time we accept: about 106 days, far beyond any period, and small
+/// Largest time we accept: about 104 days, far beyond any period, and small
 /// enough that sums of a few thousand of them cannot overflow an i64.
 pub const MAX_TIME: Nanos = 1 << 53;
 
@@ -106,7 +106,10 @@ impl fmt::Display for TimeError {
                     "time is below the model's 1 ns resolution (not a whole number of nanoseconds)"
                 )
             }
-            TimeError::TooLarge => write!(f, "time is too large (the limit is about 106 days)"),
+            TimeError::TooLarge => write!(
+                f,
+                "time is too large (the limit is 2^53 ns = 9007199 s, about 104 days)"
+            ),
             TimeError::NotFinite => write!(f, "not a finite number"),
         }
     }

@@ -17,6 +17,10 @@ pub(crate) struct Builder {
     unit: Option<TimeUnit>,
 }
 
+/// The bound on plain numbers (sizes, bandwidths): far beyond any real
+/// one, and small enough that transfer times stay exact in f64.
+pub(crate) const MAX_NUMBER: f64 = 1e15;
+
 pub(crate) fn span<T>(s: &S<T>) -> Option<Range<usize>> {
     Some(s.span())
 }
@@ -36,11 +40,10 @@ impl Builder {
         let s = n.get_ref();
         let problem = if s.trim().is_empty() {
             Some(format!("{kind} name is empty"))
-        } else if let Some(c) = s.chars().find(|c| c.is_control()) {
+        } else if let Some(p) = crate::input::name_problem(s) {
             Some(format!(
-                "{kind} name \"{}\" contains the control character U+{:04X}",
-                s.escape_debug(),
-                c as u32
+                "{kind} name \"{}\" {p}",
+                crate::input::shown_name(s)
             ))
         } else if kind == "task" && s.contains('>') {
             Some(format!(
@@ -125,7 +128,7 @@ impl Builder {
         Some(t)
     }
 
-    /// A plain number (sizes, bandwidths).
+    /// A plain number (sizes, bandwidths), below [`MAX_NUMBER`].
     fn number(&mut self, v: &S<toml::Value>, what: &str, positive: bool) -> Option<f64> {
         let x = match v.get_ref() {
             toml::Value::Integer(i) => *i as f64,
@@ -139,22 +142,13 @@ impl Builder {
                 return None;
             }
         };
-        let ok = x.is_finite() && x < 1e15 && if positive { x > 0.0 } else { x >= 0.0 };
+        let ok = x.is_finite() && x < MAX_NUMBER && if positive { x > 0.0 } else { x >= 0.0 };
         if !ok {
+            let low = if positive { "> 0" } else { ">= 0" };
             self.err(
-                format!(
-                    "{what} must be a finite number {} zero, found {x}",
-                    if positive {
-                        "greater than"
-                    } else {
-                        "of at least"
-                    }
-                ),
+                format!("{what} must be {low} and below {MAX_NUMBER:e}, found {x:e}"),
                 span(v),
-                format!(
-                    "give {what} a value {}",
-                    if positive { "> 0" } else { ">= 0" }
-                ),
+                format!("give {what} a value {low} and < {MAX_NUMBER:e}"),
             );
             return None;
         }

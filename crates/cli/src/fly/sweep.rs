@@ -23,21 +23,7 @@ fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let Some(path) = &a.criterion else {
         return Ok(s.criteria());
     };
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        Diagnostic::error(
-            format!("--criterion {}: {e}", path.display()),
-            "name a TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m",
-        )
-    })?;
-    let c: Criteria = toml::from_str(&text).map_err(|e| {
-        Diagnostic::error(
-            format!("--criterion {}: {}", path.display(), e.message()),
-            "keys: attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m (omitted keys keep their defaults; position is judged only when given)",
-        )
-    })?;
-    c.validate()
-        .map_err(|e| Diagnostic::error(format!("--criterion {}: {e}", path.display()), ""))?;
-    Ok(c)
+    Criteria::from_file(path).map_err(|e| rtpipe_fly::from_file("--criterion", &e, ""))
 }
 
 fn ms(ns: Option<Nanos>) -> String {

@@ -80,8 +80,8 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Dia
                 None => {
                     return Err(Diagnostic::error(
                         format!(
-                            "--outputs {n} needs more than {} of simulated time (the longest the model allows)",
-                            spec.fmt_time(MAX_TIME)
+                            "--outputs {n} needs more simulated time than the longest the model allows, {:.0} s (about 104 days)",
+                            MAX_TIME as f64 * 1e-9
                         ),
                         "ask for fewer outputs, e.g. --outputs 10000",
                     ))

@@ -25,6 +25,8 @@
 
 use crate::error::{in_range, ConfigError};
 use crate::wind::{Dryden, Intensity};
+use rtpipe_model::input::Kind;
+use rtpipe_model::{SpecError, MAX_TIME};
 use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -195,6 +197,10 @@ impl PilotIntent {
     }
 }
 
+/// The most steps a mission may have (each one is a pilot's action; a
+/// mission of ten thousand is already a script, not a flight).
+pub const MAX_MISSION_STEPS: usize = 10_000;
+
 /// A parsed mission.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mission {
@@ -208,6 +214,9 @@ pub struct Mission {
     pub criteria: Criteria,
     /// The world it flies in (`[world]`, calm otherwise).
     pub world: World,
+    /// The intent after each step (steps `0..=k` folded), so that
+    /// [`Mission::intent_at`] is a binary search.
+    intents: Vec<PilotIntent>,
 }
 
 /// Parse "2.5s", "250ms", "1500us" or "2" (seconds) into ns.
@@ -228,18 +237,33 @@ pub fn parse_time(s: &str) -> Result<u64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("not a time: {s:?} (use e.g. \"2.5s\" or \"250ms\")"))?;
-    seconds_to_ns(v * scale / 1e9).ok_or_else(|| format!("time must be finite and >= 0, got {s:?}"))
+    seconds_to_ns(v * scale / 1e9).ok_or_else(|| at_range(format!("{s:?}")))
 }
 
+/// The latest `at` of a step, s: the model's longest time
+/// ([`rtpipe_model::MAX_TIME`], about 104 days).
+pub const MAX_AT_S: f64 = MAX_TIME as f64 * 1e-9;
+
 fn seconds_to_ns(v: f64) -> Option<u64> {
-    (v.is_finite() && (0.0..1.8e10).contains(&v)).then(|| (v * 1e9).round() as u64)
+    (v.is_finite() && (0.0..=MAX_AT_S).contains(&v)).then(|| (v * 1e9).round() as u64)
+}
+
+/// The message for an `at` outside `0..=MAX_AT_S`.
+fn at_range(got: impl std::fmt::Display) -> String {
+    format!("must be a time from 0 to {MAX_AT_S:.0} s (about 104 days), got {got}")
 }
 
 fn check_step(i: usize, f: &StepFile) -> Result<MissionStep, ConfigError> {
     let field = |n: &str| format!("step[{i}].{n}");
     let t_ns = match &f.at {
-        TimeSpec::Seconds(v) => seconds_to_ns(*v)
-            .ok_or_else(|| ConfigError::new(field("at"), format!("must be >= 0 s, got {v}")))?,
+        TimeSpec::Seconds(v) => {
+            let shown = if v.abs() >= 1e6 {
+                format!("{v:e}")
+            } else {
+                v.to_string()
+            };
+            seconds_to_ns(*v).ok_or_else(|| ConfigError::new(field("at"), at_range(shown)))?
+        }
         TimeSpec::Text(s) => parse_time(s).map_err(|e| ConfigError::new(field("at"), e))?,
     };
     let opt = |n: &str, v: Option<f64>, lo: f64, hi: f64| -> Result<Option<f64>, ConfigError> {
@@ -275,6 +299,28 @@ impl Mission {
     pub fn from_toml_str(src: &str) -> Result<Self, ConfigError> {
         let f: MissionFile = toml::from_str(src)
             .map_err(|e| ConfigError::new("mission", e.message().to_string()))?;
+        Self::from_parsed(f)
+    }
+
+    /// Read and parse a mission file by the rules of every input file
+    /// ([`rtpipe_model::input`]); errors name the file, and the line and
+    /// column of a syntax error or the offending field.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
+        crate::error::load(path, &Kind::MISSION, Self::from_parsed)
+    }
+
+    fn from_parsed(f: MissionFile) -> Result<Self, ConfigError> {
+        crate::error::check_name("name", &f.name)?;
+        crate::error::check_text("description", &f.description)?;
+        if f.step.len() > MAX_MISSION_STEPS {
+            return Err(ConfigError::new(
+                "step",
+                format!(
+                    "the mission has {} steps, more than the {MAX_MISSION_STEPS} rtpipe flies; merge steps or split the mission",
+                    f.step.len()
+                ),
+            ));
+        }
         let mut steps = Vec::with_capacity(f.step.len());
         for (i, s) in f.step.iter().enumerate() {
             let st = check_step(i, s)?;
@@ -288,18 +334,22 @@ impl Mission {
         }
         f.criteria.validate()?;
         f.world.dryden()?;
+        let mut now = PilotIntent::default();
+        let intents = steps
+            .iter()
+            .map(|s| {
+                now.apply(s);
+                now
+            })
+            .collect();
         Ok(Self {
             name: f.name,
             description: f.description,
             steps,
             criteria: f.criteria,
             world: f.world,
+            intents,
         })
-    }
-
-    /// Read and parse a mission file.
-    pub fn from_file(path: &std::path::Path) -> Result<Self, ConfigError> {
-        Self::from_toml_str(&crate::error::read_file(path)?)
     }
 
     /// A built-in mission by name (`hover`, `steps`, `paper`, `gusty`).
@@ -316,13 +366,14 @@ impl Mission {
         }
     }
 
-    /// The pilot's intent at `t_ns` (no allocation).
+    /// The pilot's intent at `t_ns`: every step at or before it folded
+    /// (a binary search, O(log steps); no allocation).
     pub fn intent_at(&self, t_ns: u64) -> PilotIntent {
-        let mut p = PilotIntent::default();
-        for s in self.steps.iter().take_while(|s| s.t_ns <= t_ns) {
-            p.apply(s);
+        let k = self.steps.partition_point(|s| s.t_ns <= t_ns);
+        match k.checked_sub(1).and_then(|k| self.intents.get(k)) {
+            Some(p) => *p,
+            None => PilotIntent::default(),
         }
-        p
     }
 
     /// Time of the last step, ns.
@@ -411,6 +462,19 @@ impl CriteriaOverride {
 }
 
 impl Criteria {
+    /// Read a criterion file (`fly --sweep --criterion`) by the rules of
+    /// every input file ([`rtpipe_model::input`]) and validate it.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, SpecError> {
+        crate::error::load(path, &Kind::CRITERION, |c: Criteria| {
+            // The file's keys are the table's, at its top level.
+            c.validate().map_err(|e| {
+                let field = e.field.trim_start_matches("criteria.");
+                ConfigError::new(field, e.reason)
+            })?;
+            Ok(c)
+        })
+    }
+
     /// Every tolerance positive and finite.
     pub fn validate(&self) -> Result<(), ConfigError> {
         for (name, v) in [
@@ -469,6 +533,37 @@ mod tests {
         let s = Mission::builtin("steps").unwrap();
         assert!(s.steps.iter().any(|x| x.roll_deg == Some(20.0)));
         assert!(Mission::builtin("loop").is_err());
+    }
+
+    #[test]
+    fn intent_lookup_is_the_fold_of_the_steps_so_far() {
+        let m = Mission::builtin("steps").unwrap();
+        let ends: Vec<u64> = m.steps.iter().map(|s| s.t_ns).collect();
+        for t in ends
+            .iter()
+            .flat_map(|&t| [t.saturating_sub(1), t, t + 1])
+            .chain([0, u64::MAX])
+        {
+            let mut p = PilotIntent::default();
+            for s in m.steps.iter().take_while(|s| s.t_ns <= t) {
+                p.apply(s);
+            }
+            assert_eq!(m.intent_at(t), p, "at {t}");
+        }
+    }
+
+    #[test]
+    fn too_many_steps_and_far_times_are_refused_with_the_limit() {
+        let mut text = String::from("name = \"x\"\n");
+        for k in 0..=MAX_MISSION_STEPS {
+            text.push_str(&format!("[[step]]\nat = {k}\n"));
+        }
+        let e = Mission::from_toml_str(&text).unwrap_err();
+        assert!(e.reason.contains("more than the 10000"), "{e}");
+        let e = Mission::from_toml_str("name = \"x\"\n[[step]]\nat = \"1e9s\"\n").unwrap_err();
+        assert!(e.reason.contains("from 0 to 9007199 s"), "{e}");
+        let e = Mission::from_toml_str("name = \"a\\u202Eb\"\n").unwrap_err();
+        assert!(e.reason.contains("bidirectional"), "{e}");
     }
 
     #[test]

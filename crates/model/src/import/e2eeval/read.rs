@@ -2,6 +2,7 @@
 //! what rtpipe can model, times in whole ns) and its `Chains`.
 
 use super::{ImportError, MAX_BYTES};
+use crate::input::{self, Kind, Syntax};
 use crate::{format_in, Diagnostic, Nanos, TimeUnit, MAX_TIME};
 use serde_yaml::{Mapping, Value};
 use std::collections::HashMap;
@@ -36,36 +37,28 @@ pub(super) struct E2eFile {
     pub(super) rounded: usize,
 }
 
-/// The file as text, at most [`MAX_BYTES`].
-pub(super) fn read_text(file: &Path) -> Result<String, Diagnostic> {
-    use std::io::Read;
-    let help = "give the cause_effect_chains.yaml that E2EEvaluation wrote";
-    let f =
-        std::fs::File::open(file).map_err(|e| bad(format!("cannot read the file: {e}"), help))?;
-    if f.metadata().is_ok_and(|m| m.is_dir()) {
-        return Err(bad("cannot read the file: it is a directory", help));
-    }
-    let mut bytes = Vec::new();
-    f.take(MAX_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| bad(format!("cannot read the file: {e}"), help))?;
-    if bytes.len() as u64 > MAX_BYTES {
-        return Err(bad(
-            format!(
-                "the file is larger than {} MiB, the most rtpipe reads",
-                MAX_BYTES >> 20
-            ),
-            "split the chains over several files",
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        bad(
-            format!(
-                "not UTF-8 text (invalid byte at offset {})",
-                e.utf8_error().valid_up_to()
-            ),
-            help,
-        )
+/// The file as text, at most [`MAX_BYTES`], by the rules of every input
+/// file ([`crate::input`]: UTF-8, no control characters, nesting bounded
+/// before the YAML parser sees it).
+pub(super) fn read_text(file: &Path) -> Result<String, ImportError> {
+    let kind = Kind {
+        name: "file",
+        max_bytes: MAX_BYTES,
+        syntax: Syntax::Yaml,
+        help: "give the cause_effect_chains.yaml that E2EEvaluation wrote",
+    };
+    input::read_text(file, &kind).map_err(|e| {
+        let d = e.diagnostics.into_iter().next();
+        let at = d
+            .as_ref()
+            .and_then(|d| d.span.clone())
+            .map(|s| crate::line_col(&e.source, s.start));
+        let mut diagnostic = d.unwrap_or_else(|| bad("cannot read the file", kind.help));
+        diagnostic.span = None;
+        if diagnostic.message.contains("larger than") {
+            diagnostic.help = Some("split the chains over several files".into());
+        }
+        ImportError { at, diagnostic }
     })
 }
 
@@ -372,7 +365,7 @@ fn time(
 fn to_ns(ms: f64, r: Round) -> Result<(Nanos, bool), String> {
     let s = format!("{ms}");
     let (int, frac) = s.split_once('.').unwrap_or((&s, ""));
-    let too_large = || format!("{ms} ms is larger than rtpipe's largest time (about 106 days)");
+    let too_large = || format!("{ms} ms is larger than rtpipe's largest time (about 104 days)");
     if int.len() > 12 {
         return Err(too_large());
     }
