@@ -244,6 +244,12 @@ fn register_inputs(command: &Command) {
             }
         }
         Command::Run(a) => world(&a.vehicle, &a.mission),
+        Command::Design {
+            missions, vehicles, ..
+        } => {
+            vehicles.iter().for_each(|v| world(v, "steps"));
+            missions.iter().for_each(|m| world("racer5", m));
+        }
         Command::Import { format } => import::register_inputs(format),
         _ => {}
     }

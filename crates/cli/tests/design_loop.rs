@@ -114,6 +114,26 @@ fn fly_flags_need_fly() {
     assert_exit(&o, 2);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--fly"), "{err}");
+    // A vehicle file is an input: --write may not replace it.
+    let dir = scratch("design-fly-inputs");
+    let v = dir.join("v.toml");
+    let preset = concat!(env!("CARGO_MANIFEST_DIR"), "/../flight/presets/racer5.toml");
+    assert!(std::fs::copy(preset, &v).is_ok());
+    let o = rtpipe(&[
+        "design",
+        &example("cleanflight-design.toml"),
+        "--fly",
+        "steps",
+        "--vehicle",
+        &s(&v),
+        "--write",
+        &s(&v),
+    ]);
+    assert_exit(&o, 2);
+    assert_eq!(
+        std::fs::read_to_string(&v).ok(),
+        std::fs::read_to_string(preset).ok()
+    );
     // The MILP has no acceptance check.
     let o = rtpipe(&[
         "design",
