@@ -130,12 +130,12 @@ pub fn run(a: Args) -> ExitCode {
     }
 }
 
+/// The acceptance check of `--fly` and what it flies, in words.
+type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
+
 /// `--fly`'s flights (and what they are, for the report); `--vehicle` or
 /// `--seed` without `--fly` is an error, not a silently ignored flag.
-fn flight_check(
-    a: &Args,
-    spec: &Spec,
-) -> Result<Option<(Arc<dyn rtpipe_design::Acceptance>, String)>, rtpipe_model::Diagnostic> {
+fn flight_check(a: &Args, spec: &Spec) -> Result<Option<FlightCheck>, rtpipe_model::Diagnostic> {
     if a.missions.is_empty() {
         if !a.vehicles.is_empty() || !a.seeds.is_empty() {
             return Err(rtpipe_model::Diagnostic::error(
