@@ -41,6 +41,13 @@ pub struct Relaxed {
     /// grow linearly with the periods; the sound freshness is F. `None` when
     /// the chain is unbounded everywhere. Empty unless asked for.
     pub forms: Vec<Option<(Affine, Affine)>>,
+    /// Per declared chain: a lower bound on its sound reaction from the
+    /// event (the maximum reaction time: no reachability options, T_1 more;
+    /// `latency::sound_event_reaction`); `None` when unbounded everywhere.
+    pub event_reaction: Vec<Option<Nanos>>,
+    /// Per declared chain: the same as an affine form. Empty unless asked
+    /// for.
+    pub event_forms: Vec<Option<Affine>>,
     /// Per declared chain: lower bounds on its paper-mode (reaction,
     /// freshness), Eqs. 1–14. Valid when [`paper_monotone`] holds.
     pub paper: Vec<(Nanos, Nanos)>,
@@ -290,23 +297,32 @@ pub fn relax(
         .iter()
         .map(|ch| chain_bounds(spec, &order, &job_response, &ch.path))
         .collect();
+    let event_reaction = spec
+        .chains
+        .iter()
+        .map(|ch| event_reaction_bound(spec, &order, &job_response, &ch.path))
+        .collect();
     let paper = spec
         .chains
         .iter()
         .map(|ch| paper_bounds(spec, &order, &ch.path))
         .collect();
-    let (forms, paper_forms) = match forms {
+    let (forms, event_forms, paper_forms) = match forms {
         true => (
             spec.chains
                 .iter()
-                .map(|ch| chain_forms(spec, &order, &job_response, &ch.path))
+                .map(|ch| chain_forms(spec, &order, &job_response, &ch.path, true))
+                .collect(),
+            spec.chains
+                .iter()
+                .map(|ch| event_form(spec, &order, &job_response, &ch.path))
                 .collect(),
             spec.chains
                 .iter()
                 .map(|ch| paper_forms(spec, &order, &ch.path))
                 .collect(),
         ),
-        false => (Vec::new(), Vec::new()),
+        false => (Vec::new(), Vec::new(), Vec::new()),
     };
     Relaxed {
         job_response,
@@ -314,9 +330,42 @@ pub fn relax(
         cpus,
         chains,
         forms,
+        event_reaction,
+        event_forms,
         paper,
         paper_forms,
     }
+}
+
+/// A lower bound on the chain's sound reaction from the event: its links'
+/// reaction terms without the reachability options, the tail's response
+/// time and the head's shortest period (`latency::sound_event_reaction`).
+fn event_reaction_bound(
+    spec: &Spec,
+    order: &Order,
+    r: &[Option<Nanos>],
+    path: &[usize],
+) -> Option<Nanos> {
+    let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
+    let mut sum = Some(0);
+    for w in path.windows(2) {
+        let (p, c) = (low(w[0]), low(w[1]));
+        let orders = order.link_orders(w[0], w[1]);
+        let l = SoundLink::least(orders.iter().map(|&o| SoundLink::new_in(o, &p, &c, false)));
+        sum = sum.zip(l.reaction).map(|(a, b)| a + b);
+    }
+    sum.zip(r[path[path.len() - 1]])
+        .map(|(a, b)| a + b + order.lo[path[0]])
+}
+
+/// [`event_reaction_bound`] as an affine form over the box: the reaction
+/// sum E without reachability, plus T_1.
+fn event_form(spec: &Spec, order: &Order, r: &[Option<Nanos>], path: &[usize]) -> Option<Affine> {
+    let (mut e, _) = chain_forms(spec, order, r, path, false)?;
+    let head = path[0];
+    e.base += order.lo[head] as f64;
+    e.slopes.push((head, 1.0));
+    Some(e)
 }
 
 fn cpu_ids(spec: &Spec) -> Vec<u32> {
@@ -400,7 +449,8 @@ fn chain_bounds(
 }
 
 /// The sums E and F of a chain (see [`chain_bounds`]) as affine bounds over
-/// the box. Each link term is the least of options that grow with unit
+/// the box; `reach`: with the reachability options (from the read) or
+/// without (the reaction from the event). Each link term is the least of options that grow with unit
 /// slope in T_p or T_c (response times held at their lower bounds), so it is
 /// concave in (T_p, T_c); an affine function below it at the four corners of
 /// the (T_p, T_c) rectangle is below it on the whole rectangle.
@@ -409,6 +459,7 @@ fn chain_forms(
     order: &Order,
     r: &[Option<Nanos>],
     path: &[usize],
+    reach: bool,
 ) -> Option<(Affine, Affine)> {
     let tail = path[path.len() - 1];
     // The tail's response time: its lower bound, or T where a response
@@ -425,7 +476,7 @@ fn chain_forms(
         return Some((e.clone(), e));
     }
     let mut f = Affine::default();
-    let mut distinct = true;
+    let mut distinct = reach;
     for (k, w) in path.windows(2).enumerate() {
         let (pi, ci) = (w[0], w[1]);
         let last = k + 2 == path.len();

@@ -140,6 +140,37 @@ fn forms_below(r: &Relaxed, lo: &[Nanos], t: &[Nanos], report: &Report, what: &s
     }
 }
 
+fn sound_event_reaction(report: &Report, chain: usize) -> Option<Nanos> {
+    report
+        .chains
+        .iter()
+        .find(|c| c.chain == chain && c.metric == Metric::Reaction)
+        .and_then(|c| c.bound.sound(Anchor::Event))
+}
+
+/// The sound reaction from the event: its lower bound (exact at a point
+/// box) and its affine form below the analysis at `t`.
+fn event_below(r: &Relaxed, lo: &[Nanos], t: &[Nanos], report: &Report, what: &str, exact: bool) {
+    for k in 0..r.event_reaction.len() {
+        let x = sound_event_reaction(report, k);
+        let l = r.event_reaction[k];
+        if exact {
+            assert_eq!(l, x, "{what}: chain {k} reaction from the event");
+        } else {
+            assert!(below(l, x), "{what}: chain {k} event {l:?} vs {x:?}");
+        }
+        match (&r.event_forms[k], x) {
+            (Some(f), Some(x)) => assert!(
+                f.at(lo, t) <= x as f64 + 1e-6,
+                "{what}: chain {k} event reaction form {} above {x}",
+                f.at(lo, t)
+            ),
+            (None, Some(_)) => panic!("{what}: chain {k} has no event form but is bounded"),
+            _ => {}
+        }
+    }
+}
+
 /// `lower` is at most `exact`, reading `None` as +∞.
 fn below(lower: Option<Nanos>, exact: Option<Nanos>) -> bool {
     match (lower, exact) {
@@ -198,6 +229,7 @@ fn a_point_box_is_the_analysis() {
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
         let report = analyze(&spec);
         bounds_point(&r, &spec, &report, &format!("seed {seed}"), true);
+        event_below(&r, &t, &t, &report, &format!("seed {seed}"), true);
         paper_below(&r, &spec, &t, &t, &report, &format!("seed {seed}"), true);
     }
     let monotone = (0..SYSTEMS)
@@ -253,6 +285,14 @@ fn a_box_bounds_every_point_inside_from_below() {
                 &point,
                 &report,
                 &format!("seed {seed} probe {probe}"),
+            );
+            event_below(
+                &r,
+                &lo,
+                &point,
+                &report,
+                &format!("seed {seed} probe {probe}"),
+                false,
             );
             paper_below(
                 &r,
@@ -325,6 +365,14 @@ fn imposed_orders_bound_the_points_that_have_them() {
             false,
         );
         forms_below(&r, &lo, &point, &report, &format!("seed {seed} imposed"));
+        event_below(
+            &r,
+            &lo,
+            &point,
+            &report,
+            &format!("seed {seed} imposed"),
+            false,
+        );
         paper_below(
             &r,
             &spec,

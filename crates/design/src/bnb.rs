@@ -217,12 +217,17 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         self.groups.iter().all(|g| match *g {
             Group::Limit(k, m) => {
                 // From the event every bound is at least the one from the
-                // read plus the head's period (`limit_forms`).
+                // read plus the head's period (`limit_forms`); the sound
+                // reaction from the event has a bound of its own.
                 let head = lo[spec.chains[k].path[0]];
                 Anchor::ALL.into_iter().all(|a| {
-                    let shift = if a == Anchor::Event { head } else { 0 };
+                    let least = match (a, sound, m) {
+                        (Anchor::Event, true, Metric::Reaction) => r.event_reaction[k],
+                        (Anchor::Event, _, _) => least(k, m).map(|b| b + head),
+                        (Anchor::Read, _, _) => least(k, m),
+                    };
                     m.limit(&spec.chains[k], a)
-                        .is_none_or(|l| least(k, m).is_some_and(|b| b + shift <= l))
+                        .is_none_or(|l| least.is_some_and(|b| b <= l))
                 })
             }
             Group::Sched(cpu) => r.cpus.iter().any(|&(c, ok)| c == cpu && ok),
@@ -268,6 +273,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let Some(limit) = m.limit(ch, a) else {
                 continue;
             };
+            if (a, m, self.mode()) == (Anchor::Event, Metric::Reaction, Mode::Sound) {
+                // Its own form: no reachability options, T_1 included.
+                out.push((limit as f64, vec![r.event_forms[k].clone()?]));
+                continue;
+            }
             let shifted = forms.iter().map(|f| match a {
                 Anchor::Read => (*f).clone(),
                 Anchor::Event => {
