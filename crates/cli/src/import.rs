@@ -155,7 +155,7 @@ fn print_summary(shown: &str, f: &Import, plans: &[Planned]) {
     println!();
     let mut t = Table::new(&["file", "ECUs", "tasks", "chains"]).numeric(&[2, 3]);
     for p in plans {
-        let e: Vec<String> = p.spec.ecus.iter().map(i64::to_string).collect();
+        let e: Vec<String> = p.spec.ecus.clone();
         t.row(vec![
             p.path.display().to_string(),
             e.join("+"),

@@ -149,6 +149,41 @@ fn golden_case_is_written_exactly_and_analyses_to_davare_48() {
 }
 
 #[test]
+fn ids_of_any_size_import_and_analyse_as_the_small_ones() {
+    let (o, out) = import("imp-uuid", &data("e2eeval-uuid.yaml"));
+    assert_exit(&o, 0);
+    let ecu = "271828182845904523536028747135266249775";
+    let name = format!("e2eeval-uuid-ecu{ecu}.toml");
+    assert_eq!(listing(&out), std::slice::from_ref(&name));
+    let spec = load(&out.join(&name));
+    let names: Vec<&str> = spec.tasks.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "t52188295052327366710525154717987669201",
+            "t340282366920938463463374607431768211455",
+            "t9223372036854775808"
+        ]
+    );
+    // The same system as the golden case: the same bounds.
+    let a = json_of(&rtpipe(&[
+        "analyze",
+        &out.join(&name).to_string_lossy(),
+        "--json",
+    ]));
+    let (golden, g_out) = import("imp-uuid-golden", &data("e2eeval-golden.yaml"));
+    assert_exit(&golden, 0);
+    let g = json_of(&rtpipe(&[
+        "analyze",
+        &g_out.join("e2eeval-golden-ecu0.toml").to_string_lossy(),
+        "--json",
+    ]));
+    assert_eq!(a["chains"][0]["davare"], g["chains"][0]["davare"]);
+    assert_eq!(a["chains"][0]["from_event"], g["chains"][0]["from_event"]);
+    assert_eq!(a["chains"][0]["sound"], g["chains"][0]["sound"]);
+}
+
+#[test]
 fn local_chains_give_one_spec_per_ecu_with_offsets() {
     let (o, out) = import("imp-local", &data("e2eeval-local.yaml"));
     assert_exit(&o, 0);

@@ -40,11 +40,13 @@
 //! chain; nothing here writes a file, so a caller can build every spec
 //! before it writes the first.
 
+mod id;
 mod read;
 
 use crate::{
     to_toml, Chain, Channel, Diagnostic, SchedTest, Scheduler, Server, Spec, Task, TimeUnit,
 };
+use id::Id;
 use read::{fmt_ms, E2eFile, E2eTask};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -92,8 +94,9 @@ pub struct Import {
 /// One spec of an [`Import`].
 #[derive(Debug, Clone)]
 pub struct ImportedSpec {
-    /// The ECUs it holds, ascending (ECU `ecus[k]` is `cpu = k`).
-    pub ecus: Vec<i64>,
+    /// The ECU ids it holds (decimal, of any size), ascending (ECU
+    /// `ecus[k]` is `cpu = k`).
+    pub ecus: Vec<String>,
     /// Its name, also the file name without `.toml`.
     pub name: String,
     /// The spec as TOML, with comment lines saying where it came from.
@@ -132,7 +135,7 @@ pub fn import(file: &Path, text: &str) -> Result<Import, ImportError> {
         ecus: parsed
             .tasks
             .iter()
-            .map(|t| t.ecu)
+            .map(|t| &t.ecu)
             .collect::<BTreeSet<_>>()
             .len(),
         chains: parsed.chains.len(),
@@ -142,11 +145,11 @@ pub fn import(file: &Path, text: &str) -> Result<Import, ImportError> {
 
 /// The groups of ECUs joined by chains (a union–find over ECUs), each in
 /// ascending order, the groups ordered by their first ECU.
-fn ecu_groups(f: &E2eFile) -> Vec<Vec<i64>> {
-    let ecu_of: HashMap<i64, i64> = f.tasks.iter().map(|t| (t.id, t.ecu)).collect();
-    let mut parent: BTreeMap<i64, i64> = f.tasks.iter().map(|t| (t.ecu, t.ecu)).collect();
-    fn root(p: &BTreeMap<i64, i64>, mut x: i64) -> i64 {
-        while let Some(&up) = p.get(&x).filter(|&&up| up != x) {
+fn ecu_groups(f: &E2eFile) -> Vec<Vec<Id>> {
+    let ecu_of: HashMap<&Id, &Id> = f.tasks.iter().map(|t| (&t.id, &t.ecu)).collect();
+    let mut parent: BTreeMap<&Id, &Id> = f.tasks.iter().map(|t| (&t.ecu, &t.ecu)).collect();
+    fn root<'a>(p: &BTreeMap<&'a Id, &'a Id>, mut x: &'a Id) -> &'a Id {
+        while let Some(&up) = p.get(x).filter(|&&up| up != x) {
             x = up;
         }
         x
@@ -160,11 +163,11 @@ fn ecu_groups(f: &E2eFile) -> Vec<Vec<i64>> {
             parent.insert(a.max(b), a.min(b));
         }
     }
-    let mut groups: BTreeMap<i64, Vec<i64>> = BTreeMap::new();
-    let ecus: Vec<i64> = parent.keys().copied().collect();
+    let mut groups: BTreeMap<&Id, Vec<Id>> = BTreeMap::new();
+    let ecus: Vec<&Id> = parent.keys().copied().collect();
     for e in ecus {
         let r = root(&parent, e);
-        groups.entry(r).or_default().push(e);
+        groups.entry(r).or_default().push(e.clone());
     }
     groups.into_values().collect()
 }
@@ -199,7 +202,7 @@ fn plan_specs(f: &E2eFile, file: &Path) -> Result<Vec<ImportedSpec>, Diagnostic>
             name,
             tasks: spec.tasks.len(),
             chains: spec.chains.len(),
-            ecus,
+            ecus: ecus.iter().map(Id::to_string).collect(),
             text,
         });
     }
@@ -208,8 +211,8 @@ fn plan_specs(f: &E2eFile, file: &Path) -> Result<Vec<ImportedSpec>, Diagnostic>
 
 /// `<stem>-ecu<N>`, or `<stem>-ecu<N>+<M>...` for ECUs joined by chains
 /// (`<stem>-ecu<N>-and-<k>-more` when that gets long).
-fn spec_name(stem: &str, ecus: &[i64]) -> String {
-    let joined: Vec<String> = ecus.iter().map(i64::to_string).collect();
+fn spec_name(stem: &str, ecus: &[Id]) -> String {
+    let joined: Vec<String> = ecus.iter().map(Id::to_string).collect();
     let name = format!("{stem}-ecu{}", joined.join("+"));
     if name.len() <= 120 {
         name
@@ -219,7 +222,7 @@ fn spec_name(stem: &str, ecus: &[i64]) -> String {
 }
 
 /// Comment lines that say where the spec came from and how ECUs map to CPUs.
-fn header(source: &str, ecus: &[i64]) -> String {
+fn header(source: &str, ecus: &[Id]) -> String {
     let mut h = format!(
         "# Imported by `rtpipe import e2eeval` from {source} (E2EEvaluation): task tN is TaskID N,\n\
          # exec = WCET, exec_min = BCET, times in ms, declared in the file's priority order.\n"
@@ -243,16 +246,19 @@ fn header(source: &str, ecus: &[i64]) -> String {
 
 /// The tasks of these ECUs in declaration order: by ECU, then the file's
 /// priority (0 first; none given: last), then the file's order.
-fn ordered<'a>(f: &'a E2eFile, ecus: &[i64]) -> Vec<&'a E2eTask> {
+fn ordered<'a>(f: &'a E2eFile, ecus: &[Id]) -> Vec<&'a E2eTask> {
     let mut ts: Vec<&E2eTask> = f.tasks.iter().filter(|t| ecus.contains(&t.ecu)).collect();
-    ts.sort_by_key(|t| (t.ecu, t.priority.unwrap_or(i64::MAX), t.index));
+    ts.sort_by(|a, b| {
+        let key = |t: &E2eTask| (t.priority.unwrap_or(i64::MAX), t.index);
+        a.ecu.cmp(&b.ecu).then(key(a).cmp(&key(b)))
+    });
     ts
 }
 
 /// The spec of one group of ECUs (see the module documentation).
-fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
+fn build_spec(f: &E2eFile, ecus: &[Id], name: &str) -> Spec {
     let ts = ordered(f, ecus);
-    let at: HashMap<i64, usize> = ts.iter().enumerate().map(|(k, t)| (t.id, k)).collect();
+    let at: HashMap<&Id, usize> = ts.iter().enumerate().map(|(k, t)| (&t.id, k)).collect();
     let one_ecu = ecus.len() == 1;
     let mut tasks: Vec<Task> = ts
         .iter()
@@ -261,7 +267,7 @@ fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
             exec_min: t.bcet,
             budget_given: Some(t.wcet),
             server: Server::None,
-            cpu: ecus.iter().position(|&e| e == t.ecu).unwrap_or(0) as u32,
+            cpu: ecus.iter().position(|e| *e == t.ecu).unwrap_or(0) as u32,
             offset: if one_ecu { t.phase } else { None },
             ..Task::periodic(t.wcet, t.period)
         })
@@ -309,9 +315,9 @@ fn file_stem(file: &Path) -> String {
 /// Pairs of one ECU, in the file's priority order, where the higher-priority
 /// task has the longer period.
 fn inversions(f: &E2eFile) -> Vec<String> {
-    let mut by_ecu: BTreeMap<i64, Vec<&E2eTask>> = BTreeMap::new();
+    let mut by_ecu: BTreeMap<&Id, Vec<&E2eTask>> = BTreeMap::new();
     for t in f.tasks.iter().filter(|t| t.priority.is_some()) {
-        by_ecu.entry(t.ecu).or_default().push(t);
+        by_ecu.entry(&t.ecu).or_default().push(t);
     }
     let mut out = Vec::new();
     for (ecu, mut ts) in by_ecu {

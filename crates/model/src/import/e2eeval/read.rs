@@ -1,6 +1,7 @@
 //! Reading the YAML: the file's text, its `Tasks` (each checked against
 //! what rtpipe can model, times in whole ns) and its `Chains`.
 
+use super::id::{quote_big_integers, Id};
 use super::{ImportError, MAX_BYTES};
 use crate::input::{self, Kind, Syntax};
 use crate::{format_in, Diagnostic, Nanos, TimeUnit, MAX_TIME};
@@ -16,8 +17,8 @@ fn bad(msg: impl Into<String>, help: impl Into<String>) -> Diagnostic {
 /// One `!Task`, its times in ns.
 #[derive(Debug, Clone)]
 pub(super) struct E2eTask {
-    pub(super) id: i64,
-    pub(super) ecu: i64,
+    pub(super) id: Id,
+    pub(super) ecu: Id,
     /// Position in the file's `Tasks` list.
     pub(super) index: usize,
     pub(super) period: Nanos,
@@ -33,7 +34,7 @@ pub(super) struct E2eTask {
 /// What reading the file found, and what it had to round.
 pub(super) struct E2eFile {
     pub(super) tasks: Vec<E2eTask>,
-    pub(super) chains: Vec<Vec<i64>>,
+    pub(super) chains: Vec<Vec<Id>>,
     pub(super) rounded: usize,
 }
 
@@ -63,9 +64,10 @@ pub(super) fn read_text(file: &Path) -> Result<String, ImportError> {
 }
 
 /// The YAML document; a syntax error names its line and column (as the
-/// YAML parser counts them).
+/// YAML parser counts them, on a line with an id of 19 digits or more a
+/// column later per such id: they are quoted first, see [`Id`]).
 pub(super) fn parse_yaml(text: &str) -> Result<Value, ImportError> {
-    serde_yaml::from_str::<Value>(text).map_err(|e| ImportError {
+    serde_yaml::from_str::<Value>(&quote_big_integers(text)).map_err(|e| ImportError {
         at: e.location().map(|l| (l.line(), l.column())),
         diagnostic: bad(
             format!("not valid YAML: {e}"),
@@ -110,7 +112,7 @@ fn field<'a>(m: &'a Mapping, key: &str) -> Option<&'a Value> {
 }
 
 /// `Tasks[k]`, or its task id once known, for messages.
-fn task_place(k: usize, id: Option<i64>) -> String {
+fn task_place(k: usize, id: Option<&Id>) -> String {
     match id {
         Some(id) => format!("task {id} (Tasks[{k}])"),
         None => format!("Tasks[{k}]"),
@@ -140,7 +142,21 @@ fn task_mapping(v: &Value, k: usize) -> Result<&Mapping, Diagnostic> {
     })
 }
 
-/// An integer field (`TaskID`, `ECU`, `Priority`); `None` when absent.
+/// An id field (`TaskID`, `ECU`): an integer of any size; `None` when
+/// absent.
+fn id_field(m: &Mapping, key: &str, place: &str) -> Result<Option<Id>, Diagnostic> {
+    match field(m, key) {
+        None => Ok(None),
+        Some(v) => Id::of(v).map(Some).ok_or_else(|| {
+            bad(
+                format!("{place}: {key} must be an integer, found {}", show(v)),
+                format!("write e.g. {key}: 3"),
+            )
+        }),
+    }
+}
+
+/// An integer field (`Priority`); `None` when absent.
 fn integer(m: &Mapping, key: &str, place: &str) -> Result<Option<i64>, Diagnostic> {
     match field(m, key) {
         None => Ok(None),
@@ -195,15 +211,15 @@ fn text<'a>(m: &'a Mapping, key: &str) -> Option<&'a str> {
 /// One `!Task`, checked: what rtpipe cannot model is an error.
 fn read_task(v: &Value, k: usize, rounded: &mut usize) -> Result<E2eTask, Diagnostic> {
     let m = task_mapping(v, k)?;
-    let id = integer(m, "TaskID", &task_place(k, None))?.ok_or_else(|| {
+    let id = id_field(m, "TaskID", &task_place(k, None))?.ok_or_else(|| {
         bad(
             format!("{}: no TaskID", task_place(k, None)),
             "give every task a TaskID",
         )
     })?;
-    let place = task_place(k, Some(id));
+    let place = task_place(k, Some(&id));
     check_model(m, &place)?;
-    let ecu = integer(m, "ECU", &place)?.ok_or_else(|| {
+    let ecu = id_field(m, "ECU", &place)?.ok_or_else(|| {
         bad(
             format!("{place}: no ECU"),
             "give every task the ECU it runs on, e.g. ECU: 0",
@@ -393,9 +409,9 @@ pub(super) fn fmt_ms(ns: Nanos) -> String {
 
 /// Every TaskID once.
 fn check_unique(tasks: &[E2eTask]) -> Result<(), Diagnostic> {
-    let mut seen: HashMap<i64, usize> = HashMap::new();
+    let mut seen: HashMap<&Id, usize> = HashMap::new();
     for t in tasks {
-        if let Some(first) = seen.insert(t.id, t.index) {
+        if let Some(first) = seen.insert(&t.id, t.index) {
             return Err(bad(
                 format!(
                     "TaskID {} appears twice (Tasks[{first}] and Tasks[{}])",
@@ -409,14 +425,14 @@ fn check_unique(tasks: &[E2eTask]) -> Result<(), Diagnostic> {
 }
 
 /// `Chains`: lists of known TaskIDs, no task twice in a row.
-fn read_chains(top: &Mapping, tasks: &[E2eTask]) -> Result<Vec<Vec<i64>>, Diagnostic> {
+fn read_chains(top: &Mapping, tasks: &[E2eTask]) -> Result<Vec<Vec<Id>>, Diagnostic> {
     let Some(list) = field(top, "Chains") else {
         return Ok(Vec::new());
     };
     let list = list
         .as_sequence()
         .ok_or_else(|| bad("`Chains` is not a list", "write Chains: [[1, 2, 3], ...]"))?;
-    let known: HashMap<i64, usize> = tasks.iter().map(|t| (t.id, t.index)).collect();
+    let known: HashMap<&Id, usize> = tasks.iter().map(|t| (&t.id, t.index)).collect();
     list.iter()
         .enumerate()
         .map(|(k, c)| read_chain(c, k, &known))
@@ -424,11 +440,11 @@ fn read_chains(top: &Mapping, tasks: &[E2eTask]) -> Result<Vec<Vec<i64>>, Diagno
 }
 
 /// One chain, `Chains[k]`.
-fn read_chain(c: &Value, k: usize, known: &HashMap<i64, usize>) -> Result<Vec<i64>, Diagnostic> {
+fn read_chain(c: &Value, k: usize, known: &HashMap<&Id, usize>) -> Result<Vec<Id>, Diagnostic> {
     let place = format!("chain Chains[{k}]");
-    let ids: Option<Vec<i64>> = c
+    let ids: Option<Vec<Id>> = c
         .as_sequence()
-        .map(|s| s.iter().map(Value::as_i64).collect::<Option<Vec<_>>>())
+        .map(|s| s.iter().map(Id::of).collect::<Option<Vec<_>>>())
         .unwrap_or(None);
     let ids = ids.ok_or_else(|| {
         bad(
