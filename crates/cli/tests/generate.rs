@@ -181,3 +181,30 @@ fn bad_flags_and_paths_exit_2_and_write_nothing() {
     assert_eq!(listing(&dir), ["sub"]);
     assert!(listing(&sub).is_empty());
 }
+
+#[test]
+fn synchronous_release_gives_every_task_offset_zero_and_known_offset_bounds() {
+    let dir = scratch("gen-sync");
+    let flags = ["--tasks", "12", "--chains", "3", "--seed", "4"];
+    let (o, sync) = generate(
+        &dir,
+        "s.toml",
+        &[&flags[..], &["--release", "synchronous"]].concat(),
+    );
+    assert_exit(&o, 0);
+    let (o, free) = generate(&dir, "a.toml", &flags);
+    assert_exit(&o, 0);
+    let (s, a) = (parse(&sync), parse(&free));
+    assert!(s.tasks.iter().all(|t| t.offset == Some(0)));
+    assert!(a.tasks.iter().all(|t| t.offset.is_none()));
+    // The same task set and chains otherwise.
+    let strip = |sp: &Spec| {
+        let mut sp = sp.clone();
+        sp.tasks.iter_mut().for_each(|t| t.offset = None);
+        rtpipe_model::to_toml(&sp)
+    };
+    assert_eq!(strip(&s), strip(&a));
+    let r = rtpipe(&["analyze", &dir.join("s.toml").to_string_lossy()]);
+    assert_exit(&r, 0);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("known release offsets"));
+}

@@ -154,6 +154,9 @@ pub struct WatersConfig {
     /// Chains to generate (fewer when the task set offers fewer: a chain
     /// needs two tasks of each of its periods on one CPU).
     pub chains: usize,
+    /// Every task released at 0 (offset 0), as E2EEvaluation's task sets
+    /// are; otherwise the phasing is unknown and every bound holds for any.
+    pub synchronous: bool,
 }
 
 impl Default for WatersConfig {
@@ -163,6 +166,7 @@ impl Default for WatersConfig {
             cpus: 1,
             utilization: 0.5,
             chains: 5,
+            synchronous: false,
         }
     }
 }
@@ -187,6 +191,7 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
     };
     for (i, t) in tasks.iter_mut().enumerate() {
         t.name = format!("t{i}");
+        t.offset = cfg.synchronous.then_some(0);
     }
     let chains = waters_chains(&mut rng, &mut tasks, cfg.chains);
     let channels = vec![Channel {
@@ -403,6 +408,7 @@ mod tests {
             cpus,
             utilization: u,
             chains,
+            synchronous: false,
         }
     }
 
