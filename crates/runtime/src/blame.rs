@@ -352,16 +352,26 @@ impl<'r> Blame<'r> {
                 by_jobs += j.demand.min(span.max(0));
             }
             // The thread's CPU time over the probes around the window
-            // bounds it too (it covers a little more than the window).
+            // bounds it too (it covers a little more than the window). A
+            // counter that could not be read (a thread gone at the run's
+            // end reads 0) says nothing: a falling counter is ignored.
             let by_probes = match (p0, p1) {
-                (Some(p0), Some(p1)) if p0.at <= a && p1.at >= b => {
-                    p1.run.get(t).zip(p0.run.get(t)).map(|(x, y)| x - y)
-                }
+                (Some(p0), Some(p1)) if p0.at <= a && p1.at >= b => p1
+                    .run
+                    .get(t)
+                    .zip(p0.run.get(t))
+                    .map(|(x, y)| x - y)
+                    .filter(|&d| d >= 0),
                 _ => None,
             };
             used += by_probes.map_or(by_jobs, |p| p.min(by_jobs));
         }
-        let ns = union_length(pending) - used;
+        let union = union_length(pending);
+        assert!(
+            used >= 0,
+            "CPU time used in a window is not negative: {used}"
+        );
+        let ns = union - used;
         (ns > 0).then_some(Cause::Foreign { cpu, ns })
     }
 }
@@ -527,6 +537,23 @@ output = { channel = "shm", size = 0 }
         assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
         // Outside them, no evidence.
         assert_eq!(Blame::total(&at((0, 9 * MS), &[0])), 0);
+    }
+
+    #[test]
+    fn a_thread_counter_that_falls_says_nothing() {
+        // a's thread ran 1 ms by 30 ms; at 40 ms its counter reads 0 (the
+        // thread is gone): the job log alone bounds its CPU time.
+        let (spec, mut res) = run();
+        for (k, p) in res.probes.iter_mut().enumerate() {
+            p.run = vec![if k == 3 { MS } else { 0 }, 0];
+        }
+        let b = Blame::new(&spec, &res);
+        let w = b.extend((31 * MS, 39 * MS), &[0]);
+        let foreign = Cause::Foreign {
+            cpu: Some(0),
+            ns: 5 * MS / 2,
+        };
+        assert_eq!(b.causes(w, &[0]), vec![foreign]);
     }
 
     #[test]
