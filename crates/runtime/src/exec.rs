@@ -154,6 +154,16 @@ fn watch(
 /// Largest number of jobs logged in one run (memory: ~48 bytes a job).
 const MAX_JOBS: u64 = 20_000_000;
 
+/// Most tasks one run starts: a real-time thread each, whose stack
+/// (`TASK_STACK`) mlockall locks under SCHED_FIFO/SCHED_DEADLINE (3,000
+/// tasks with default stacks locked 6.2 GB).
+pub const MAX_TASKS: usize = 512;
+
+/// Stack of a task thread: the bodies need little, and under mlockall every
+/// byte of it is locked (the default 2 MiB made a thread cost 2 MiB; the
+/// flight bodies run in well under 256 KiB).
+pub const TASK_STACK: usize = 512 * 1024;
+
 /// Checks that `spec` can run under `cfg` before any thread starts.
 pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
     if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration) {
@@ -185,6 +195,15 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
         if cfg.policy == Policy::Deadline {
             deadline_rules(&t.name, t.budget(), period)?;
         }
+    }
+    if spec.tasks.len() > MAX_TASKS {
+        return Err(RunError::config(
+            format!(
+                "the spec has {} tasks, more than the {MAX_TASKS} one run starts (a real-time thread each, its memory locked)",
+                spec.tasks.len()
+            ),
+            "run a smaller spec, or study this one with `rtpipe simulate` (no thread per task)",
+        ));
     }
     privileges(spec, cfg.policy)?;
     if jobs > MAX_JOBS {
@@ -473,7 +492,12 @@ fn start<'a, V: Copy + Send>(
             .into_iter()
             .map(|th| {
                 let name = spec.tasks[th.task].name.as_str();
-                s.spawn(move || task_thread(th, name, policy, (duration, grace), env, shared))
+                std::thread::Builder::new()
+                    .stack_size(TASK_STACK)
+                    .spawn_scoped(s, move || {
+                        task_thread(th, name, policy, (duration, grace), env, shared)
+                    })
+                    .unwrap_or_else(|e| panic!("cannot start the thread of task {name}: {e}"))
             })
             .collect();
         shared.setup.wait();
