@@ -100,6 +100,7 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     };
     let mut s = setup(spec, &r)?;
     s.log_jobs = a.samples.is_some() || a.log.is_some();
+    s.keep_trace = a.log.is_some() || a.plot.is_some();
     if let Some(t) = a.turbulence {
         s.mission.world.turbulence = t;
     }
