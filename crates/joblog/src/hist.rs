@@ -6,7 +6,7 @@
 //! stay exact either way.
 
 use rtpipe_model::Nanos;
-use std::collections::BTreeMap;
+use std::collections::HashMap;
 
 /// Distinct values kept exactly; beyond it the histogram turns coarse.
 pub const EXACT_CAP: usize = 1 << 16;
@@ -18,8 +18,9 @@ pub const COARSE_BITS: u32 = 7;
 /// Counts of observed values (see the module docs).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Histogram {
-    /// Value (exact) or bucket's lower end (coarse) → count.
-    counts: BTreeMap<Nanos, u64>,
+    /// Value (exact) or bucket's lower end (coarse) → count (hashed: a
+    /// push is O(1); the queries sort, and they are few).
+    counts: HashMap<Nanos, u64>,
     coarse: bool,
     count: u64,
     sum: i128,
@@ -102,16 +103,22 @@ impl Histogram {
 
     /// Each distinct value (coarse: each bucket's upper end, clamped to the
     /// observed range) with its count, in ascending order.
-    pub fn entries(&self) -> impl Iterator<Item = (Nanos, u64)> + '_ {
+    pub fn entries(&self) -> Vec<(Nanos, u64)> {
         let (lo, hi) = (self.min.unwrap_or(0), self.max.unwrap_or(0));
-        self.counts.iter().map(move |(&k, &n)| {
-            let v = if self.coarse {
-                (bucket_end(k) - 1).clamp(lo, hi)
-            } else {
-                k
-            };
-            (v, n)
-        })
+        let mut v: Vec<(Nanos, u64)> = self
+            .counts
+            .iter()
+            .map(|(&k, &n)| {
+                let v = if self.coarse {
+                    (bucket_end(k) - 1).clamp(lo, hi)
+                } else {
+                    k
+                };
+                (v, n)
+            })
+            .collect();
+        v.sort_unstable();
+        v
     }
 
     /// The value of nearest rank `rank` (1-based, clamped to the count);
@@ -136,12 +143,17 @@ impl Histogram {
     /// How many values satisfy `f` (coarse: judged on each bucket's value
     /// as [`entries`](Histogram::entries) gives it).
     pub fn count_where(&self, f: impl Fn(Nanos) -> bool) -> u64 {
-        self.entries().filter(|&(v, _)| f(v)).map(|(_, n)| n).sum()
+        self.entries()
+            .into_iter()
+            .filter(|&(v, _)| f(v))
+            .map(|(_, n)| n)
+            .sum()
     }
 
     /// Every value in ascending order (coarse: as `entries` gives them).
     pub fn sorted(&self) -> Vec<Nanos> {
         self.entries()
+            .into_iter()
             .flat_map(|(v, n)| std::iter::repeat_n(v, n as usize))
             .collect()
     }
