@@ -276,6 +276,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
     for n in &res.notes {
         eprintln!("{n}");
     }
+    if let Err(b) = &written {
+        eprint!("{b}");
+    }
     if res.interrupted {
         eprintln!(
             "error: interrupted by Ctrl-C after {} of {} {u} (the report above covers that span)",
@@ -285,8 +288,8 @@ pub fn run(a: &RunArgs) -> ExitCode {
         );
         return ExitCode::from(crate::EXIT_INTERRUPTED);
     }
-    if let Err(b) = written {
-        return fail(b);
+    if written.is_err() {
+        return ExitCode::from(crate::EXIT_BAD_INPUT);
     }
     exit_status(&verdict)
 }
