@@ -284,7 +284,9 @@ pub fn run<'a, V: Copy + Send>(
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
-    let mut notes: Vec<String> = lock_memory(cfg.policy).into_iter().collect();
+    let mut notes: Vec<String> = lock_memory(cfg.policy, spec.tasks.len())
+        .into_iter()
+        .collect();
     let threads = threads(spec, cfg, bodies);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
