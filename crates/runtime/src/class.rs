@@ -135,6 +135,11 @@ pub(crate) fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
     ))
 }
 
+/// Stack of a task thread: the bodies need little, and under mlockall every
+/// byte of it is locked (the default 2 MiB made a thread cost 2 MiB; the
+/// flight bodies run in well under 256 KiB).
+pub(crate) const TASK_STACK: usize = 512 * 1024;
+
 /// Locks memory for a real-time run where that cannot starve thread
 /// stacks; the warning when it does not.
 pub(crate) fn lock_memory(policy: Policy, threads: usize) -> Option<String> {
@@ -142,7 +147,7 @@ pub(crate) fn lock_memory(policy: Policy, threads: usize) -> Option<String> {
         return None;
     }
     // What mlockall will hold at least: every task thread's whole stack.
-    let stacks = threads as u64 * crate::exec::TASK_STACK as u64;
+    let stacks = threads as u64 * TASK_STACK as u64;
     if let Some(avail) = mem_available().filter(|&a| 2 * stacks > a) {
         return Some(format!(
             "warning: memory not locked: the {threads} task threads' stacks alone would lock {} MiB, more than half of the {} MiB available; page faults may delay jobs (run fewer tasks)",

@@ -3,7 +3,7 @@
 //! every job, replayed after the run through the simulator's own sample
 //! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
-use crate::class::{configure, lock_memory, privileges, Placement};
+use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
 pub use crate::config::{
     fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
@@ -159,11 +159,6 @@ const MAX_JOBS: u64 = 20_000_000;
 /// tasks with default stacks locked 6.2 GB).
 pub const MAX_TASKS: usize = 512;
 
-/// Stack of a task thread: the bodies need little, and under mlockall every
-/// byte of it is locked (the default 2 MiB made a thread cost 2 MiB; the
-/// flight bodies run in well under 256 KiB).
-pub const TASK_STACK: usize = 512 * 1024;
-
 /// Checks that `spec` can run under `cfg` before any thread starts.
 pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
     if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration) {
@@ -284,9 +279,7 @@ pub fn run<'a, V: Copy + Send>(
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
-    let mut notes: Vec<String> = lock_memory(cfg.policy, spec.tasks.len())
-        .into_iter()
-        .collect();
+    let mut notes: Vec<String> = lock_memory(cfg.policy, n).into_iter().collect();
     let threads = threads(spec, cfg, bodies);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
