@@ -105,7 +105,8 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
         seed: a.seed,
     };
     let mut s = setup(spec, &r)?;
-    s.log_jobs = a.samples.is_some();
+    s.log_jobs = a.samples.is_some() || a.log.is_some();
+    s.keep_trace = a.log.is_some() || a.plot.is_some();
     if let Some(t) = a.turbulence {
         s.mission.world.turbulence = t;
     }
@@ -345,18 +346,20 @@ rate_x_dps,rate_y_dps,rate_z_dps,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,alt_target_m,\
 motor1,motor2,motor3,motor4,armed,on_ground,crashed,battery_v";
 
 /// A chain's latency as a step function of time: the value of the latest
-/// observation that ended at or before each trace instant.
-struct LatencyColumn<'a> {
-    obs: &'a rtpipe_joblog::Observed,
+/// observation that ended at or before each trace instant. `series` holds
+/// (instant the value became known, value) in time order, from the job log
+/// (`--log` keeps it: the per-sample record only where it is asked for).
+struct LatencyColumn {
+    series: Vec<(i64, i64)>,
     next: usize,
 }
 
-impl LatencyColumn<'_> {
+impl LatencyColumn {
     fn at(&mut self, t: i64) -> Option<i64> {
-        while self.next < self.obs.at.len() && self.obs.at[self.next] <= t {
+        while self.next < self.series.len() && self.series[self.next].0 <= t {
             self.next += 1;
         }
-        self.next.checked_sub(1).map(|k| self.obs.values[k])
+        self.next.checked_sub(1).map(|k| self.series[k].1)
     }
 }
 
@@ -374,12 +377,18 @@ fn csv(spec: &Spec, f: &Flight) -> String {
     let mut out = String::with_capacity(240 * (trace.len() + 1));
     out.push_str(CSV_HEADER);
     let mut cols = Vec::new();
-    for (k, cs) in f.sim.chains.iter().enumerate() {
+    let rows = rtpipe_joblog::sample_rows(spec, &f.sim.jobs);
+    for (k, rows) in rows.iter().enumerate() {
         let label = spec.chain_label(k);
-        for (what, obs) in [("reaction", &cs.reaction), ("freshness", &cs.freshness)] {
+        let reaction = rows.iter().filter_map(|r| Some((r.first?, r.reaction()?)));
+        let freshness = rows.iter().filter_map(|r| Some((r.last?, r.freshness()?)));
+        for (what, series) in [
+            ("reaction", reaction.collect()),
+            ("freshness", freshness.collect()),
+        ] {
             out.push(',');
             out.push_str(&column(&label, what));
-            cols.push(LatencyColumn { obs, next: 0 });
+            cols.push(LatencyColumn { series, next: 0 });
         }
     }
     out.push('\n');

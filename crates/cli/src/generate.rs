@@ -34,7 +34,7 @@ pub struct WatersArgs {
     /// each CPU's utilisation is within 1 % below --utilization.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     tasks: Option<u32>,
-    /// Total utilisation of each CPU (WCET over period), in (0, 1].
+    /// Total utilisation of each CPU (WCET over period), in [0.001, 1].
     #[arg(long, default_value_t = 0.5, value_parser = parse_utilization)]
     utilization: f64,
     /// Cause-effect chains to generate (fewer when the task set has too few
@@ -65,11 +65,17 @@ pub enum ReleaseArg {
     Arbitrary,
 }
 
-/// `--utilization`: a number in (0, 1].
+/// The smallest `--utilization`: far below it the generator's tasks round
+/// to nothing (1e-9 gave a spec without tasks).
+const MIN_UTILIZATION: f64 = 0.001;
+
+/// `--utilization`: a number in [0.001, 1].
 fn parse_utilization(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(u) if u > 0.0 && u <= 1.0 => Ok(u),
-        _ => Err("must be a number in (0, 1], e.g. --utilization 0.6 (per CPU)".into()),
+        Ok(u) if (MIN_UTILIZATION..=1.0).contains(&u) => Ok(u),
+        _ => Err(format!(
+            "must be a number in [{MIN_UTILIZATION}, 1], e.g. --utilization 0.6 (per CPU)"
+        )),
     }
 }
 

@@ -61,6 +61,18 @@ struct Planned<'a> {
 
 fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
     let shown = file.display().to_string();
+    // The specs' names and header comments come from the file's name: a
+    // newline there would break them (issue 24: it exited 3).
+    if shown.chars().any(char::is_control) {
+        eprint!(
+            "{}",
+            Diagnostic::error(
+                format!("the file name {shown:?} contains a control character (newline, tab, ...)"),
+                "rename the file to a name without control characters, e.g. cause_effect_chains.yaml",
+            )
+        );
+        return Err(ExitCode::from(EXIT_BAD_INPUT));
+    }
     let imported = e2eeval::load(file).map_err(|e| {
         let at = e.at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
         eprint!("{shown}{at}: {}", e.diagnostic);

@@ -265,23 +265,52 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Err(b) => return fail(b),
     };
     let obs = observe(&report, &res.sim);
-    if let Err(b) = write_outputs(&spec, a, &res, &obs) {
-        return fail(b);
-    }
+    // A file that cannot be written (disk full) does not drop the report of
+    // a run that happened: the report first, then the error (exit 2).
+    let written = write_outputs(&spec, a, &res, &obs);
     let verdict = verdict::judge(&spec, &report, &res);
     let flight = flown.as_ref().zip(setup.as_ref());
-    if a.json {
-        let mut v = to_json(&spec, &report, &res, &obs, spin, &verdict);
-        v.flight = flight.map(|(f, s)| flight_json(f, s));
-        if let Err(code) = command::print_json(&v) {
-            return code;
-        }
-    } else {
-        print!(
-            "{}",
-            to_text(&spec, &report, &res, &obs, spin, flown.is_some())
+    if let Err(code) = print_report(&spec, a, (&report, &res, &obs), spin, &verdict, flight) {
+        return code;
+    }
+    for n in &res.notes {
+        eprintln!("{n}");
+    }
+    if let Err(b) = &written {
+        eprint!("{b}");
+    }
+    if res.interrupted {
+        eprintln!(
+            "error: interrupted by Ctrl-C after {} of {} {u} (the report above covers that span)",
+            spec.fmt_time(res.sim.horizon),
+            spec.fmt_time(cfg.duration),
+            u = spec.time_unit
         );
-        print!("\n{}", verdict.text(&spec, 10));
+        return ExitCode::from(crate::EXIT_INTERRUPTED);
+    }
+    if written.is_err() {
+        return ExitCode::from(crate::EXIT_BAD_INPUT);
+    }
+    exit_status(&verdict)
+}
+
+/// The report on stdout: JSON, or the text with the verdict and the flight.
+fn print_report(
+    spec: &Spec,
+    a: &RunArgs,
+    (report, res, obs): (&Report, &RunResult, &[ChainObs]),
+    spin: Spin,
+    verdict: &Verdict,
+    flight: Option<(&Flight, &Setup)>,
+) -> Result<(), ExitCode> {
+    let flown = flight.is_some();
+    if a.json {
+        let mut v = to_json(spec, report, res, obs, spin, verdict);
+        v.flight = flight.map(|(f, s)| flight_json(f, s));
+        command::print_json(&v)?;
+    } else {
+        print!("{}", to_text(spec, report, res, obs, spin, flown));
+        print!("\n{}", verdict.text(spec, 10));
         if let Some((f, s)) = flight {
             let failures = f.quality.failures(&s.criteria());
             println!(
@@ -294,10 +323,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
             );
         }
     }
-    for n in &res.notes {
-        eprintln!("{n}");
-    }
-    exit_status(&verdict)
+    Ok(())
 }
 
 /// Everything that is checked before the run: the flight's setup when the

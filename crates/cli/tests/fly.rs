@@ -134,3 +134,31 @@ fn bad_flight_input_exits_2() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("body = \"gyro\""), "{err}");
 }
+
+#[test]
+fn a_sweep_where_nothing_flies_writes_no_limits_and_exits_1() {
+    // Issue 24: it wrote "wrote l.toml with these limits" (every limit "-")
+    // and exited 0.
+    let dir = scratch("fly-sweep-none");
+    let crit = dir.join("c.toml");
+    if let Err(e) = std::fs::write(&crit, "attitude_rms_deg = 0.000001\n") {
+        panic!("{e}");
+    }
+    let out = dir.join("l.toml");
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--sweep",
+        "--scale",
+        "1..1",
+        "--criterion",
+        &crit.to_string_lossy(),
+        "--write-limits",
+        &out.to_string_lossy(),
+    ]);
+    assert_exit(&o, 1);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no chain limit could be derived"), "{err}");
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("wrote"));
+    assert!(!out.exists());
+}

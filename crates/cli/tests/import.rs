@@ -449,3 +449,14 @@ fn a_failed_import_leaves_an_existing_outdir_as_it_was() {
     assert_eq!(listing(&out), ["e2eeval-golden-ecu0.toml"]);
     assert_eq!(read(&out.join("e2eeval-golden-ecu0.toml")), before);
 }
+
+#[test]
+fn a_file_name_with_a_newline_is_refused_with_exit_2() {
+    // Issue 24: the name reached the specs' header comments and names, and
+    // the import exited 3 ("internal error").
+    let text = read(Path::new(&data("e2eeval-golden.yaml")));
+    let (o, out) = import_text("import-newline", "a\nb.yaml", &text);
+    assert_exit(&o, 2);
+    assert!(stderr(&o).contains("control character"), "{}", stderr(&o));
+    assert!(!out.exists());
+}

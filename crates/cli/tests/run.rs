@@ -273,11 +273,64 @@ fn ctrl_c_stops_the_run_cleanly() {
         "took {:?} to stop",
         started.elapsed()
     );
-    assert_exit(&o, 0);
+    // Issue 24: the truncated report, then exit 130 as every other command.
+    assert_exit(&o, 130);
+    assert!(
+        stderr(&o).contains("interrupted by Ctrl-C"),
+        "{}",
+        stderr(&o)
+    );
     let v = json_of(&o);
     assert_eq!(v["run"]["interrupted"], true);
     assert_eq!(v["run"]["load"], 2);
     every_chain_observed(&v);
+}
+
+#[test]
+fn a_trace_that_cannot_be_written_keeps_the_report_and_exits_2() {
+    // Issue 24: a full disk under --trace dropped the whole report of a
+    // completed run. A file-size limit stands in for the full disk (SIGXFSZ
+    // ignored, so the write fails with EFBIG instead of killing).
+    let _one = serial();
+    let spec = write_spec("run-trace-full", &small("rm", 0, ""));
+    let trace = std::path::Path::new(&spec).with_file_name("t.json");
+    let o = std::process::Command::new("sh")
+        .args(["-c", "trap '' XFSZ; ulimit -f 2; exec \"$0\" \"$@\""])
+        .arg(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(["run", &spec, "--duration", "300ms", "--policy", "other"])
+        .args(["--best-effort", "--trace", &trace.to_string_lossy()])
+        .output();
+    let Ok(o) = o else {
+        panic!("cannot start sh");
+    };
+    assert_exit(&o, 2);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("ran 300 ms"), "{out}");
+    assert!(stderr(&o).contains("cannot write"), "{}", stderr(&o));
+    assert!(!trace.exists());
+}
+
+#[test]
+fn a_spec_with_more_tasks_than_run_starts_is_refused() {
+    // Issue 24: 3,000 tasks under SCHED_FIFO locked 6.2 GB of thread stacks.
+    let spec = write_spec("run-many", "");
+    let o = rtpipe(&["generate", "waters", &spec, "--tasks", "600", "--cpus", "1"]);
+    assert_exit(&o, 0);
+    let o = rtpipe(&[
+        "run",
+        &spec,
+        "--duration",
+        "100ms",
+        "--policy",
+        "other",
+        "--best-effort",
+    ]);
+    assert_exit(&o, 2);
+    assert!(
+        stderr(&o).contains("600 tasks, more than the 512"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// The keys of a JSON object, sorted.

@@ -355,3 +355,57 @@ fn same_seed_same_json() {
     let b = run("43");
     assert_ne!(a["simulation"]["offsets"], b["simulation"]["offsets"]);
 }
+
+/// Runs `rtpipe ARGS` and samples its peak resident memory (VmHWM, kB)
+/// from /proc while it runs: its stdout and the last peak seen.
+fn peak_kb(args: &[&str]) -> (String, u64) {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn();
+    let Ok(mut child) = child else {
+        panic!("cannot start rtpipe");
+    };
+    let status = format!("/proc/{}/status", child.id());
+    let mut stdout = child.stdout.take();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(o) = stdout.as_mut() {
+            let _ = std::io::Read::read_to_string(o, &mut s);
+        }
+        s
+    });
+    let mut peak = 0;
+    while matches!(child.try_wait(), Ok(None)) {
+        let text = std::fs::read_to_string(&status).unwrap_or_default();
+        let hwm = text
+            .lines()
+            .find_map(|l| l.strip_prefix("VmHWM:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok());
+        peak = peak.max(hwm.unwrap_or(0));
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    (reader.join().unwrap_or_default(), peak)
+}
+
+#[test]
+fn memory_does_not_grow_with_the_simulated_span() {
+    // Issue 24: 20000 s of cleanflight peaked at 1.46 GB (73 KB per
+    // simulated second); 5020 s (100x the default horizon) at 371 MB.
+    let spec = example("cleanflight.toml");
+    let (out, kb) = peak_kb(&["simulate", &spec, "--duration", "5020s"]);
+    assert!(out.contains("simulated 5020000000 us"), "{out}");
+    assert!(kb < 64 * 1024, "peak {kb} kB");
+    // Many distinct latencies: the histograms turn coarse, said with a ~.
+    let (out, kb) = peak_kb(&[
+        "simulate",
+        &spec,
+        "--exec",
+        "uniform",
+        "--duration",
+        "1000s",
+    ]);
+    assert!(out.contains("~ p99 within 0.78 %"), "{out}");
+    assert!(kb < 64 * 1024, "peak {kb} kB");
+}

@@ -11,6 +11,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// Without a time limit, the whole MILP search (before the conflict search
+/// of an infeasible problem, which has its own effort) spends at most this
+/// many times [`Options::patience`] of work.
+pub const SEARCH_EFFORT: u64 = 1;
+
 /// The work, time and iterations of one search (the conflict search's
 /// sub-searches get one of their own, see [`Budget::sub`]).
 pub(crate) struct Budget {
@@ -26,6 +31,9 @@ pub(crate) struct Budget {
     /// No solve may run past this much work (the patience after a verified
     /// design, the conflict search's effort).
     pub(crate) work_cap: Option<u64>,
+    /// The whole MILP search's work without a time limit (see
+    /// [`Budget::bound_search`]).
+    pub(crate) search_cap: Option<u64>,
     /// Numerical failures of the solver and what became of them.
     pub(crate) numerical: NumLog,
 }
@@ -40,6 +48,7 @@ impl Budget {
             iterations: 0,
             work: 0,
             work_cap: None,
+            search_cap: None,
             numerical: NumLog::default(),
         }
     }
@@ -54,6 +63,7 @@ impl Budget {
             iterations: 0,
             work: self.work,
             work_cap: self.work_cap,
+            search_cap: self.search_cap,
             numerical: NumLog::default(),
         }
     }
@@ -79,7 +89,7 @@ impl Budget {
     pub(crate) fn out_of_time(&self) -> bool {
         self.cancelled()
             || self.time_limit.is_some_and(|t| self.elapsed() >= t)
-            || self.work_cap.is_some_and(|c| self.work >= c)
+            || self.cap().is_some_and(|c| self.work >= c)
     }
 
     /// Why a search stopped early, for the user.
@@ -93,11 +103,30 @@ impl Budget {
         }
     }
 
+    /// Without a time limit, the MILP search spends at most
+    /// [`SEARCH_EFFORT`] times the patience, verified design or not, so it
+    /// ends on any machine (a harmonic design once searched for ten
+    /// minutes without a design and without a bound on its work).
+    pub(crate) fn bound_search(&mut self, opts: &Options) {
+        self.search_cap = match (opts.time_limit, opts.patience) {
+            (None, Some(p)) => Some(self.work.saturating_add(p.saturating_mul(SEARCH_EFFORT))),
+            _ => None,
+        };
+    }
+
+    /// The work no solve may pass: the smaller of the two caps.
+    fn cap(&self) -> Option<u64> {
+        match (self.work_cap, self.search_cap) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// What is left of the time and work budgets.
     pub(crate) fn left(&self) -> Limits {
         Limits {
             time: self.time_limit.map(|t| (t - self.elapsed()).max(0.01)),
-            nodes: self.work_cap.map(|c| c.saturating_sub(self.work)),
+            nodes: self.cap().map(|c| c.saturating_sub(self.work)),
         }
     }
 

@@ -754,7 +754,8 @@ impl Chunked<'_> {
     fn debug(&self, out: &microlp::SolveOutcome, nodes: u64) {
         let st = out.stats();
         eprintln!(
-            "  microlp: {nodes} nodes, incumbent {:?}, bound {:?}, {:.1} s",
+            "  microlp: {nodes} nodes, {} pivots, incumbent {:?}, bound {:?}, {:.1} s",
+            st.lp_iterations,
             self.best.as_ref().map(|b| b.objective),
             st.best_bound,
             self.started.elapsed().as_secs_f64()

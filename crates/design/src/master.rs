@@ -101,7 +101,13 @@ impl<'a> Master<'a> {
         }
     }
 
-    /// No two choices that are not harmonic (fixed ones are filtered).
+    /// No two choices that are not harmonic (fixed ones are filtered): per
+    /// choice of one task, it plus every choice of the other that is not
+    /// harmonic with it is at most 1 (each task picks one choice), both
+    /// ways. The same integer points as one row per forbidden pair, a
+    /// tighter relaxation, and |A| + |B| rows instead of up to |A|·|B|
+    /// (two free periods up to 10^6 gave 210,892 rows and a root LP that
+    /// did not end).
     fn forbid_non_harmonic(&mut self) {
         let n = self.spec.tasks.len();
         for a in 0..n {
@@ -109,14 +115,26 @@ impl<'a> Master<'a> {
                 let (Dom::Choice(va), Dom::Choice(vb)) = (&self.dom[a], &self.dom[b]) else {
                     continue;
                 };
-                for (x, &p) in va.iter().enumerate() {
-                    for (y, &q) in vb.iter().enumerate() {
-                        if !harmonic_pair(p, q) {
-                            let (ya, yb) = (self.yvars[a][x], self.yvars[b][y]);
-                            self.lp.row(vec![(ya, 1.0), (yb, 1.0)], Cmp::Le, 1.0);
-                        }
-                    }
-                }
+                let (va, vb) = (va.clone(), vb.clone());
+                self.forbid_one_way((a, &va), (b, &vb));
+                self.forbid_one_way((b, &vb), (a, &va));
+            }
+        }
+    }
+
+    /// For each choice x of task a: y_a[x] + Σ y_b[y] over the choices of
+    /// b not harmonic with x ≤ 1.
+    fn forbid_one_way(&mut self, (a, va): (usize, &[i64]), (b, vb): (usize, &[i64])) {
+        for (x, &p) in va.iter().enumerate() {
+            let mut row = vec![(self.yvars[a][x], 1.0)];
+            row.extend(
+                vb.iter()
+                    .enumerate()
+                    .filter(|&(_, &q)| !harmonic_pair(p, q))
+                    .map(|(y, _)| (self.yvars[b][y], 1.0)),
+            );
+            if row.len() > 1 {
+                self.lp.row(row, Cmp::Le, 1.0);
             }
         }
     }

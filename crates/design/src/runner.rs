@@ -21,6 +21,7 @@ pub(crate) fn solve_all(
     learnt: &mut Learnt,
     budget: &mut Budget,
 ) -> Result<Outcome, DesignError> {
+    budget.bound_search(p.opts);
     Milp { p, learnt, budget }.solve_all()
 }
 
@@ -143,6 +144,8 @@ impl Milp<'_, '_> {
     /// The master is infeasible: the problem is. Explaining it gets a
     /// bounded effort unless a time limit says otherwise.
     fn infeasible(&mut self, groups: &[Group], mut s: Search) -> Outcome {
+        // The conflict search has an effort of its own.
+        self.budget.search_cap = None;
         if let (None, Some(p)) = (self.p.opts.time_limit, self.p.opts.patience) {
             self.budget.work_cap = Some(
                 self.budget
@@ -339,7 +342,11 @@ impl Milp<'_, '_> {
         notes.push(if self.budget.numerical.last_skipped {
             "stopped by a numerical failure of the solver before a verified design".into()
         } else {
-            "stopped by the time or iteration limit before a verified design".into()
+            if self.p.opts.time_limit.is_some() {
+                "stopped by the time or iteration limit before a verified design".into()
+            } else {
+                "stopped by the work budget before a verified design (--time-limit S searches for S seconds instead)".into()
+            }
         });
         let mut o = self.budget.outcome(
             self.p,

@@ -534,3 +534,80 @@ fn when_every_design_is_rejected_there_is_no_answer() {
     assert!(o.checked.iter().all(|c| c.failure.is_some()));
     assert!(!o.checked.is_empty());
 }
+
+/// Two free periods up to 10^6 µs, harmonic, one chain limit.
+fn wide_harmonic(reaction_us: i64) -> Spec {
+    let text = format!(
+        r#"[system]
+name = "harm"
+time_unit = "us"
+scheduler = "rm"
+harmonic = true
+[channels.mem]
+bandwidth = 1
+overhead = 0
+[tasks.a]
+exec = 1
+output = {{ channel = "mem", size = 0 }}
+period = {{ max = 1000000 }}
+[tasks.b]
+exec = 3
+reads = ["a"]
+output = {{ channel = "mem", size = 0 }}
+period = {{ max = 1000000 }}
+[[chain]]
+path = ["a", "b"]
+reaction = {reaction_us}
+"#
+    );
+    match Spec::parse("harm.toml", &text) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}\n{text}"),
+    }
+}
+
+#[test]
+fn a_wide_harmonic_design_ends_without_a_time_limit() {
+    // Issue 24: unfinished after 590 s and 423 MB (a master of 210,892 rows
+    // over 507 choices per task, no work bound before a verified design).
+    let started = std::time::Instant::now();
+    for limit in [7_777, 50_000, 1_000_000] {
+        let o = match design(&wide_harmonic(limit), &Options::default()) {
+            Ok(o) => o,
+            Err(e) => panic!("{e}"),
+        };
+        assert!(o.status == Status::Optimal || o.gap.is_some(), "{o:?}");
+        assert!(
+            passes_both(&o) || o.status == Status::Unknown,
+            "{:?}",
+            o.notes
+        );
+        assert!(
+            o.notes.iter().any(|n| n.contains("2^a·3^b grid steps")),
+            "{:?}",
+            o.notes
+        );
+    }
+    assert!(started.elapsed().as_secs() < 60, "{:?}", started.elapsed());
+}
+
+#[test]
+fn the_milp_search_has_a_work_budget_without_a_time_limit() {
+    // Table II's sound MILP search went on for minutes before proving
+    // infeasibility; by default it stops at its work budget and says so.
+    let o = match design(
+        &load_with("table2-design.toml", |t| t.to_string()),
+        &Options {
+            method: Method::Milp,
+            ..Options::default()
+        },
+    ) {
+        Ok(o) => o,
+        Err(e) => panic!("{e}"),
+    };
+    assert!(
+        o.status != Status::Unknown || o.notes.iter().any(|n| n.contains("work budget")),
+        "{:?}",
+        o.notes
+    );
+}

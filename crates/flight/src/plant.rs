@@ -59,13 +59,39 @@ fn default_crash_tilt() -> f64 {
     80.0
 }
 
+/// One entry per rotor: exactly four (serde would cut five to four
+/// silently).
+fn four<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+    field: &str,
+) -> Result<[T; 4], D::Error> {
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let n = v.len();
+    v.try_into().map_err(|_| {
+        serde::de::Error::custom(format!(
+            "{field} needs exactly 4 entries, one per rotor (the vehicle is a quadrotor), found {n}"
+        ))
+    })
+}
+
+fn four_positions<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[[f64; 2]; 4], D::Error> {
+    four(d, "rotors.positions_m")
+}
+
+fn four_spins<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[Spin; 4], D::Error> {
+    four(d, "rotors.spin")
+}
+
 /// Rotor parameters (the `[rotors]` table of a preset).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotorParams {
-    /// Rotor hub positions (x, y) in the body, m, Betaflight motor order.
+    /// Rotor hub positions (x, y) in the body, m, Betaflight motor order
+    /// (exactly four: the mixer is a quadrotor's).
+    #[serde(deserialize_with = "four_positions")]
     pub positions_m: [[f64; 2]; 4],
     /// Spin directions, Betaflight motor order.
+    #[serde(deserialize_with = "four_spins")]
     pub spin: [Spin; 4],
     /// Thrust coefficient: F = k_f·ω², N/(rad/s)².
     pub k_f: f64,
@@ -102,9 +128,11 @@ impl PlantParams {
     /// Check every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let b = &self.body;
-        positive("body.mass_kg", b.mass_kg)?;
+        // Physically plausible ranges: a 10 g micro quad to a 100 kg lifter
+        // (far outside, the integration diverges: 1e-30 kg flew NaNs).
+        in_range("body.mass_kg", b.mass_kg, 0.01, 100.0)?;
         for (i, v) in b.inertia_kg_m2.iter().enumerate() {
-            positive(&format!("body.inertia_kg_m2[{i}]"), *v)?;
+            in_range(&format!("body.inertia_kg_m2[{i}]"), *v, 1e-6, 100.0)?;
         }
         non_negative("body.drag_linear", b.drag_linear)?;
         non_negative("body.drag_angular", b.drag_angular)?;
@@ -120,7 +148,16 @@ impl PlantParams {
         non_negative("rotors.k_m", r.k_m)?;
         positive("rotors.omega_max_rad_s", r.omega_max_rad_s)?;
         in_range("rotors.idle_fraction", r.idle_fraction, 0.0, 0.5)?;
-        positive("rotors.time_constant_s", r.time_constant_s)?;
+        in_range("rotors.time_constant_s", r.time_constant_s, 1e-3, 2.0)?;
+        let lift = 4.0 * r.k_f * r.omega_max_rad_s.powi(2) / (b.mass_kg * GRAVITY);
+        if !(lift.is_finite() && (1.0..=100.0).contains(&lift)) {
+            return Err(ConfigError::new(
+                "rotors.omega_max_rad_s",
+                format!(
+                    "full thrust over weight (4·k_f·omega_max_rad_s² / (mass_kg·g)) must be in [1, 100], got {lift:.3e}: set k_f, omega_max_rad_s and body.mass_kg so the rotors can lift the vehicle"
+                ),
+            ));
+        }
         if self.substep_ns == 0 {
             return Err(ConfigError::new("substep_ns", "must be > 0"));
         }
@@ -162,6 +199,17 @@ pub struct State {
 }
 
 impl State {
+    /// Every component finite.
+    fn is_finite(&self) -> bool {
+        let v = |a: Vec3| a.x.is_finite() && a.y.is_finite() && a.z.is_finite();
+        let q = self.q;
+        v(self.pos)
+            && v(self.vel)
+            && v(self.rate)
+            && [q.w, q.x, q.y, q.z].iter().all(|c| c.is_finite())
+            && self.omega.iter().all(|o| o.is_finite())
+    }
+
     fn add_scaled(&self, d: &State, s: f64) -> State {
         let mut omega = self.omega;
         for (o, od) in omega.iter_mut().zip(d.omega.iter()) {
@@ -379,7 +427,15 @@ impl Plant {
         n = n.add_scaled(&k3, h / 3.0);
         n = n.add_scaled(&k4, h / 6.0);
         n.q = n.q.normalized();
-        self.s = n;
+        if n.is_finite() {
+            self.s = n;
+        } else {
+            // The integration diverged (a preset the plant cannot fly
+            // stably): the vehicle is lost, not flying NaNs "landed".
+            self.crashed = true;
+            self.s.vel = Vec3::ZERO;
+            self.s.rate = Vec3::ZERO;
+        }
     }
 
     /// Ground contact after a step: no penetration; a touch-down faster
@@ -498,6 +554,46 @@ mod tests {
             .omega
             .iter()
             .all(|w| *w == 0.0 && !w.is_subnormal()));
+    }
+
+    #[test]
+    fn implausible_presets_are_refused_naming_the_field() {
+        // Issue 24: mass_kg = 1e-30 flew NaNs and "landed"; five rotor
+        // positions were cut to four while three were refused.
+        use crate::preset::RACER5_TOML;
+        let err = |text: String| match Preset::from_toml_str(&text) {
+            Ok(_) => panic!("accepted: {text}"),
+            Err(e) => e.to_string(),
+        };
+        let e = err(RACER5_TOML.replace("mass_kg = 0.830", "mass_kg = 1e-30"));
+        assert!(
+            e.contains("body.mass_kg") && e.contains("[0.01, 100]"),
+            "{e}"
+        );
+        let e = err(RACER5_TOML.replace("k_f = 7.7237e-7", "k_f = 1e-12"));
+        assert!(e.contains("thrust over weight"), "{e}");
+        let five = "positions_m = [[0.1, 0.1], [-0.085, -0.0675],";
+        let e = err(RACER5_TOML.replace("positions_m = [[-0.085, -0.0675],", five));
+        assert!(e.contains("rotors.positions_m needs exactly 4"), "{e}");
+        let e = err(RACER5_TOML.replace("[-0.085, -0.0675], [0.085, -0.0675],", ""));
+        assert!(e.contains("found 2") || e.contains("exactly 4"), "{e}");
+        let e =
+            err(RACER5_TOML.replace(r#"spin = ["cw", "ccw", "ccw", "cw"]"#, r#"spin = ["cw"]"#));
+        assert!(e.contains("rotors.spin needs exactly 4"), "{e}");
+    }
+
+    #[test]
+    fn a_diverging_integration_is_a_crash_not_nans() {
+        let p = Preset::builtin("racer5").map(|p| p.plant_params());
+        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
+        let mut s = *plant.state();
+        s.pos.z = 10.0;
+        s.rate = Vec3::new(1e200, 1e200, 1e200);
+        plant.set_state(s);
+        plant.advance_to(10_000_000);
+        let t = plant.truth();
+        assert!(t.crashed);
+        assert!(t.pos.x.is_finite() && t.pos.z.is_finite(), "{:?}", t.pos);
     }
 
     #[test]

@@ -38,22 +38,6 @@ pub struct ErrorStats {
     pub count: usize,
 }
 
-impl ErrorStats {
-    fn of(errors: impl Iterator<Item = f64>) -> ErrorStats {
-        let (mut s, mut m, mut n) = (0.0, 0.0f64, 0usize);
-        for e in errors {
-            s += e * e;
-            m = m.max(e.abs());
-            n += 1;
-        }
-        ErrorStats {
-            rms: if n == 0 { 0.0 } else { (s / n as f64).sqrt() },
-            max: m,
-            count: n,
-        }
-    }
-}
-
 /// Which angle a stick step moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Axis {
@@ -153,81 +137,218 @@ fn secs(p: &TracePoint) -> f64 {
 /// Rates the flight in `trace` (one point per fixed interval) against the
 /// `mission` it flew.
 pub fn assess(trace: &[TracePoint], mission: &Mission) -> FlightQuality {
-    let changes = stick_changes(mission);
-    let first_alt = mission
-        .steps
-        .iter()
-        .find(|s| s.altitude_m.is_some())
-        .map(|s| s.t_ns as f64 * 1e-9);
-    let land = mission
-        .steps
-        .iter()
-        .find(|s| s.land == Some(true))
-        .map_or(f64::INFINITY, |s| s.t_ns as f64 * 1e-9);
-    let first_step = changes.first().map_or(f64::INFINITY, |c| c.0);
-    let hover = |p: &TracePoint| {
+    let mut a = Assessor::new(mission);
+    for p in trace {
+        a.push(p);
+    }
+    a.finish()
+}
+
+/// Sums of squares and the largest magnitude of an error, as it streams.
+#[derive(Debug, Clone, Copy, Default)]
+struct Running {
+    sum_sq: f64,
+    max: f64,
+    count: usize,
+}
+
+impl Running {
+    fn push(&mut self, e: f64) {
+        self.sum_sq += e * e;
+        self.max = self.max.max(e.abs());
+        self.count += 1;
+    }
+
+    fn stats(self) -> ErrorStats {
+        let n = self.count;
+        ErrorStats {
+            rms: if n == 0 {
+                0.0
+            } else {
+                (self.sum_sq / n as f64).sqrt()
+            },
+            max: self.max,
+            count: n,
+        }
+    }
+}
+
+/// Where the first hover window is: not begun, begun at a position, over.
+#[derive(Debug, Clone, Copy)]
+enum Window {
+    Before,
+    In(crate::math::Vec3),
+    After,
+}
+
+/// [`assess`] point by point, in memory bounded by the mission (not by the
+/// flight's length): the hover figures stream; only the points the steps
+/// are judged on (up to the last step's window) are kept.
+#[derive(Debug, Clone)]
+pub struct Assessor {
+    changes: Vec<(f64, Axis, f64)>,
+    first_alt: Option<f64>,
+    /// Hover points come before this (the landing or the first step).
+    hover_end: f64,
+    /// Points before this are kept for the steps.
+    keep_until: f64,
+    kept: Vec<TracePoint>,
+    first_two: (Option<f64>, Option<f64>),
+    crashed_s: Option<f64>,
+    end_s: f64,
+    attitude: Running,
+    altitude: Running,
+    position: Running,
+    origin: Option<crate::math::Vec3>,
+    window: Window,
+    drift: f64,
+    saturated: usize,
+    airborne: usize,
+    flew: bool,
+    /// The start of the current run of disarmed points on the ground after
+    /// the first flying one.
+    resting_since: Option<f64>,
+}
+
+impl Assessor {
+    /// Nothing flown yet.
+    pub fn new(mission: &Mission) -> Assessor {
+        let changes = stick_changes(mission);
+        let first_alt = mission
+            .steps
+            .iter()
+            .find(|s| s.altitude_m.is_some())
+            .map(|s| s.t_ns as f64 * 1e-9);
+        let land = mission
+            .steps
+            .iter()
+            .find(|s| s.land == Some(true))
+            .map_or(f64::INFINITY, |s| s.t_ns as f64 * 1e-9);
+        let first_step = changes.first().map_or(f64::INFINITY, |c| c.0);
+        let keep_until = (0..changes.len())
+            .map(|k| step_end(&changes, k))
+            .fold(f64::NEG_INFINITY, f64::max);
+        Assessor {
+            changes,
+            first_alt,
+            hover_end: land.min(first_step),
+            keep_until,
+            kept: Vec::new(),
+            first_two: (None, None),
+            crashed_s: None,
+            end_s: 0.0,
+            attitude: Running::default(),
+            altitude: Running::default(),
+            position: Running::default(),
+            origin: None,
+            window: Window::Before,
+            drift: 0.0,
+            saturated: 0,
+            airborne: 0,
+            flew: false,
+            resting_since: None,
+        }
+    }
+
+    fn hover(&self, p: &TracePoint) -> bool {
         let t = secs(p);
         p.armed
             && !p.on_ground
             && p.alt_target.is_some()
-            && first_alt.is_some_and(|a| t >= a + CLIMB_S)
-            && t < land.min(first_step)
-    };
-    let hovering: Vec<&TracePoint> = trace.iter().filter(|p| hover(p)).collect();
-    let dt = match trace {
-        [a, b, ..] => secs(b) - secs(a),
-        _ => 0.0,
-    };
-    FlightQuality {
-        crashed: trace.iter().any(|p| p.crashed),
-        crashed_s: trace.iter().find(|p| p.crashed).map(secs),
-        end_s: trace.last().map_or(0.0, secs),
-        attitude_error_deg: ErrorStats::of(hovering.iter().map(|p| {
-            let (er, ep) = (p.euler.roll - p.sp.roll, p.euler.pitch - p.sp.pitch);
-            (er * er + ep * ep).sqrt().to_degrees()
-        })),
-        altitude_error_m: ErrorStats::of(
-            hovering
-                .iter()
-                .map(|p| p.pos.z - p.alt_target.unwrap_or(p.pos.z)),
-        ),
-        drift_m: first_window_drift(trace, &hover),
-        position_error_m: position_error(&hovering),
-        steps: steps(trace, &changes),
-        saturation_s: dt
-            * trace
-                .iter()
-                .filter(|p| p.armed && p.motors.iter().any(|&m| m <= 0.0 || m >= 1.0))
-                .count() as f64,
-        airborne_s: dt * trace.iter().filter(|p| p.armed && !p.on_ground).count() as f64,
-        landed_s: landed(trace),
-        hovers: first_alt.is_some(),
+            && self.first_alt.is_some_and(|a| t >= a + CLIMB_S)
+            && t < self.hover_end
+    }
+
+    /// The next trace point (in time order).
+    pub fn push(&mut self, p: &TracePoint) {
+        let t = secs(p);
+        match self.first_two {
+            (None, _) => self.first_two.0 = Some(t),
+            (Some(_), None) => self.first_two.1 = Some(t),
+            _ => {}
+        }
+        if p.crashed && self.crashed_s.is_none() {
+            self.crashed_s = Some(t);
+        }
+        self.end_s = t;
+        if t < self.keep_until {
+            self.kept.push(*p);
+        }
+        self.push_hover(p);
+        if p.armed && p.motors.iter().any(|&m| m <= 0.0 || m >= 1.0) {
+            self.saturated += 1;
+        }
+        if p.armed && !p.on_ground {
+            self.airborne += 1;
+            self.flew = true;
+        }
+        if self.flew {
+            if !p.armed && p.on_ground {
+                self.resting_since.get_or_insert(t);
+            } else {
+                self.resting_since = None;
+            }
+        }
+    }
+
+    /// The hover figures of one point.
+    fn push_hover(&mut self, p: &TracePoint) {
+        let hover = self.hover(p);
+        self.window = match (self.window, hover) {
+            (Window::Before, true) => Window::In(p.pos),
+            (Window::In(_), false) => Window::After,
+            (w, _) => w,
+        };
+        if let Window::In(o) = self.window {
+            let d = ((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt();
+            self.drift = self.drift.max(d);
+        }
+        if !hover {
+            return;
+        }
+        let (er, ep) = (p.euler.roll - p.sp.roll, p.euler.pitch - p.sp.pitch);
+        self.attitude.push((er * er + ep * ep).sqrt().to_degrees());
+        self.altitude
+            .push(p.pos.z - p.alt_target.unwrap_or(p.pos.z));
+        let o = *self.origin.get_or_insert(p.pos);
+        self.position
+            .push(((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt());
+    }
+
+    /// The figures of the flight so far.
+    pub fn finish(self) -> FlightQuality {
+        let dt = match self.first_two {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        };
+        let crashed = self.crashed_s.is_some();
+        FlightQuality {
+            crashed,
+            crashed_s: self.crashed_s,
+            end_s: self.end_s,
+            attitude_error_deg: self.attitude.stats(),
+            altitude_error_m: self.altitude.stats(),
+            drift_m: self.drift,
+            position_error_m: self.position.stats(),
+            steps: steps(&self.kept, &self.changes),
+            saturation_s: dt * self.saturated as f64,
+            airborne_s: dt * self.airborne as f64,
+            landed_s: if crashed { None } else { self.resting_since },
+            hovers: self.first_alt.is_some(),
+        }
     }
 }
 
-fn first_window_drift(trace: &[TracePoint], hover: &impl Fn(&TracePoint) -> bool) -> f64 {
-    let window = trace
+/// Where the judging window of change `k` ends: the next change after it,
+/// or 2 s on.
+fn step_end(changes: &[(f64, Axis, f64)], k: usize) -> f64 {
+    let t = changes[k].0;
+    changes
         .iter()
-        .skip_while(|p| !hover(p))
-        .take_while(|p| hover(p));
-    let mut origin = None;
-    let mut drift = 0.0f64;
-    for p in window {
-        let o = *origin.get_or_insert(p.pos);
-        drift = drift.max(((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt());
-    }
-    drift
-}
-
-fn position_error(hovering: &[&TracePoint]) -> ErrorStats {
-    let Some(o) = hovering.first().map(|p| p.pos) else {
-        return ErrorStats::default();
-    };
-    ErrorStats::of(
-        hovering
-            .iter()
-            .map(|p| ((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt()),
-    )
+        .skip(k + 1)
+        .map(|c| c.0)
+        .find(|&c| c > t)
+        .unwrap_or(t + 2.0)
 }
 
 fn angle(axis: Axis, e: &crate::math::Euler) -> f64 {
@@ -250,12 +371,7 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
         if from != 0.0 || to == 0.0 {
             continue;
         }
-        let end = changes
-            .iter()
-            .skip(k + 1)
-            .map(|c| c.0)
-            .find(|&c| c > t)
-            .unwrap_or(t + 2.0);
+        let end = step_end(changes, k);
         let judge = |est: bool| {
             let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
             step_response(trace, signal, t, end, 0.0, to, 0.05)
@@ -275,21 +391,6 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
         });
     }
     out
-}
-
-/// When the vehicle was last disarmed on the ground after flying; never
-/// after a crash (a wreck is not a landing).
-fn landed(trace: &[TracePoint]) -> Option<f64> {
-    if trace.iter().any(|p| p.crashed) {
-        return None;
-    }
-    let flew = trace.iter().position(|p| p.armed && !p.on_ground)?;
-    trace[flew..]
-        .iter()
-        .rev()
-        .take_while(|p| !p.armed && p.on_ground)
-        .last()
-        .map(secs)
 }
 
 impl FlightQuality {

@@ -594,8 +594,14 @@ pub struct Cosim {
     progress: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
     /// First time each battery alert level was raised, ns.
     pub alerts: Vec<(u64, BatteryAlert)>,
-    /// The recorded trajectory, one point every `trace_every_ns`.
+    /// The recorded trajectory, one point every `trace_every_ns` (when
+    /// `keep_trace`; the flight's quality streams into `assessor` anyway).
     pub trace: Vec<TracePoint>,
+    /// Keep every trace point (plots, logs); off, memory does not grow with
+    /// the flight.
+    pub keep_trace: bool,
+    /// The flight's quality, point by point.
+    pub assessor: crate::quality::Assessor,
     /// The mission's turbulence, if any, and the next instant it steps at.
     wind: Option<(Wind, u64)>,
 }
@@ -626,6 +632,7 @@ impl Cosim {
             cfg.imu
         };
         let wind = mission.world.dryden()?;
+        let assessor = crate::quality::Assessor::new(&mission);
         Ok(Cosim {
             plant: Plant::new(pp)?,
             imu: Imu::new(imu, cfg.seed),
@@ -642,6 +649,8 @@ impl Cosim {
             delayed: cfg.sense_delay_ns.map(DelayLine::new),
             alerts: Vec::new(),
             trace: Vec::new(),
+            keep_trace: true,
+            assessor,
             cfg,
         })
     }
@@ -708,7 +717,7 @@ impl Cosim {
 
     fn record(&mut self) {
         let truth = self.plant.truth();
-        self.trace.push(TracePoint {
+        let p = TracePoint {
             t_ns: self.now,
             pos: truth.pos,
             vel: truth.vel,
@@ -722,7 +731,11 @@ impl Cosim {
             crashed: truth.crashed,
             motors: self.seen.motors.motors,
             voltage: self.battery.voltage(),
-        });
+        };
+        self.assessor.push(&p);
+        if self.keep_trace {
+            self.trace.push(p);
+        }
     }
 
     /// The IMU's vibration follows the rotors (a no-op without vibration).

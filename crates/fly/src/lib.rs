@@ -14,7 +14,7 @@ pub mod sweep;
 use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_flight::battery::BatteryAlert;
 use rtpipe_flight::preset::{Preset, BUILTIN};
-use rtpipe_flight::quality::{assess, FlightQuality};
+use rtpipe_flight::quality::FlightQuality;
 use rtpipe_flight::radio::{Mission, BUILTIN_MISSIONS};
 use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
@@ -44,6 +44,10 @@ pub struct Setup {
     pub world: CosimConfig,
     /// Keep the job log (`Flight::sim.jobs`), for per-sample figures.
     pub log_jobs: bool,
+    /// Keep every trace point (`Flight::trace`, for plots and logs); off,
+    /// the trace is empty and a flight's memory does not grow with its
+    /// length (its quality is assessed as it flies).
+    pub keep_trace: bool,
 }
 
 impl Setup {
@@ -215,6 +219,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
         horizon,
         world: CosimConfig::new(r.seed),
         log_jobs: false,
+        keep_trace: true,
     })
 }
 
@@ -248,8 +253,9 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
             None => Box::new(idle),
         });
     }
-    let world = Cosim::new(&s.preset, s.mission.clone(), s.kinds.clone(), s.world)
+    let mut world = Cosim::new(&s.preset, s.mission.clone(), s.kinds.clone(), s.world)
         .map_err(|e| Diagnostic::error(format!("--vehicle: {e}"), "check the preset file"))?;
+    world.keep_trace = s.keep_trace;
     Ok((bodies, world))
 }
 
@@ -280,7 +286,7 @@ pub fn fly_with_progress(
         )
     })?;
     world.advance(u64::try_from(s.horizon).unwrap_or(0));
-    let quality = assess(&world.trace, &s.mission);
+    let quality = world.assessor.clone().finish();
     Ok(Flight {
         sim,
         trace: std::mem::take(&mut world.trace),
@@ -304,8 +310,11 @@ pub fn fly_real(
     // whole run now, so that no job doubles the vector (copying megabytes,
     // faulting in fresh locked pages) under the lock. Measured: a 486 us
     // gyro job at 8.192 s, when the trace reached 4,096 points.
-    let points = cfg.duration.max(0) as u64 / s.world.trace_every_ns.max(1) + 2;
-    world.trace.reserve(usize::try_from(points).unwrap_or(0));
+    world.keep_trace = s.keep_trace;
+    if s.keep_trace {
+        let points = cfg.duration.max(0) as u64 / s.world.trace_every_ns.max(1) + 2;
+        world.trace.reserve(usize::try_from(points).unwrap_or(0));
+    }
     // Priority inheritance: a background task preempted while it holds the
     // world must not delay the gyro for longer than its critical section.
     let world = rtpipe_runtime::PiMutex::new(world).map_err(|e| {
@@ -320,7 +329,7 @@ pub fn fly_real(
     let last = res.sim.jobs.iter().map(|j| j.finish).max().unwrap_or(0);
     let end = u64::try_from(cfg.duration.max(last)).unwrap_or(0);
     world.advance(end);
-    let quality = assess(&world.trace, &s.mission);
+    let quality = world.assessor.clone().finish();
     let flight = Flight {
         sim: res.sim.clone(),
         trace: std::mem::take(&mut world.trace),
@@ -484,6 +493,25 @@ mod tests {
             flown(&spec, &s4).trace != a.trace,
             "the seed changes nothing"
         );
+    }
+
+    #[test]
+    fn a_flight_without_its_trace_streams_the_same_quality() {
+        // Issue 24: fly kept every 2 ms trace point (~0.1 MB per flown
+        // second) to assess the flight at the end.
+        let (spec, path) = cleanflight();
+        let mut s = setup_of(&spec, &path, &["--duration", "30s"]);
+        let kept = flown(&spec, &s);
+        s.keep_trace = false;
+        let streamed = flown(&spec, &s);
+        assert!(streamed.trace.is_empty());
+        assert_eq!(kept.trace.len(), 15_001);
+        assert_eq!(
+            format!("{:?}", streamed.quality),
+            format!("{:?}", kept.quality)
+        );
+        let again = rtpipe_flight::quality::assess(&kept.trace, &s.mission);
+        assert_eq!(format!("{:?}", again), format!("{:?}", kept.quality));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! What a run measured per chain: every observation of each latency,
 //! from the head's read and from the event.
 
+use crate::Histogram;
 use rtpipe_model::Nanos;
 
 /// The life of one sample at the tail of a chain, as one observation saw it.
@@ -37,19 +38,16 @@ pub struct Observed {
     pub max: Option<Nanos>,
     /// The observation that gave it (the first one, on ties).
     pub witness: Option<Witness>,
-    /// Every value, in sample order.
-    pub values: Vec<Nanos>,
-    /// When each value became known (the tail output that ended it), in
-    /// the same order: a time series of the latency.
-    pub at: Vec<Nanos>,
+    /// Every value, counted (bounded memory whatever the run's length; the
+    /// per-sample record is [`SampleRow`]'s, on request).
+    pub hist: Histogram,
 }
 
 impl Observed {
-    /// A value that ended at `at`.
-    pub(crate) fn push(&mut self, value: Nanos, at: Nanos, w: Witness) {
+    /// A value.
+    pub(crate) fn push(&mut self, value: Nanos, w: Witness) {
         assert!(value >= 0, "a latency is never negative: {w:?}");
-        self.values.push(value);
-        self.at.push(at);
+        self.hist.push(value);
         if self.max.is_none_or(|m| value > m) {
             self.max = Some(value);
             self.witness = Some(w);

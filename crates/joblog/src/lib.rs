@@ -35,11 +35,13 @@
 #![deny(missing_docs)]
 
 mod chain;
+pub mod hist;
 mod log;
 mod provenance;
 pub mod trace;
 mod tracker;
 
 pub use chain::{ChainStats, Observed, SampleRow, Witness};
+pub use hist::Histogram;
 pub use log::{Carried, JobRecord, Segment, SimResult, TaskStats};
 pub use provenance::{chains_from_jobs, sample_rows, BadChain, Provenance, Slot};

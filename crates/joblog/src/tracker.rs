@@ -3,10 +3,16 @@
 
 use crate::{ChainStats, SampleRow, Witness};
 use rtpipe_model::Nanos;
+use std::collections::VecDeque;
 
 /// Per chain: stamps of the samples and the sample the tail currently outputs.
 pub(crate) struct Tracker {
-    pub(crate) stamps: Vec<Nanos>,
+    /// Stamps of samples `base..`: older samples never reach the tail
+    /// again (samples reach it in order), so they are dropped and a run's
+    /// memory does not grow with its length.
+    stamps: VecDeque<Nanos>,
+    /// The id of `stamps[0]`.
+    base: u64,
     /// (sample, first, last) of the newest sample seen at the tail.
     pub(crate) current: Option<(u64, Nanos, Nanos)>,
     /// The smallest sample whose from-event reaction is not known yet:
@@ -20,7 +26,8 @@ pub(crate) struct Tracker {
 impl Tracker {
     pub(crate) fn new() -> Tracker {
         Tracker {
-            stamps: Vec::new(),
+            stamps: VecDeque::new(),
+            base: 0,
             current: None,
             // Sample 0 has no head read before it, so no event window.
             event_pending: 1,
@@ -45,12 +52,36 @@ impl Tracker {
             rows.push(SampleRow::new(
                 rows.len() as u64,
                 t,
-                self.stamps.last().copied(),
+                self.stamps.back().copied(),
             ));
         }
-        self.stamps.push(t);
+        self.stamps.push_back(t);
         self.stats.samples += 1;
-        self.stamps.len() as u64 - 1
+        self.base + self.stamps.len() as u64 - 1
+    }
+
+    /// The read instant of `sample` (held: from the one before the tail's).
+    fn stamp(&self, sample: u64) -> Nanos {
+        self.stamps[(sample - self.base) as usize]
+    }
+
+    /// Whether the head has read `sample`.
+    pub(crate) fn has(&self, sample: u64) -> bool {
+        (self.base..self.base + self.stamps.len() as u64).contains(&sample)
+    }
+
+    /// How many stamps are held (bounded by the samples in flight).
+    #[cfg(test)]
+    pub(crate) fn held(&self) -> usize {
+        self.stamps.len()
+    }
+
+    /// Forgets the stamps of samples before `sample`.
+    fn drop_before(&mut self, sample: u64) {
+        while self.base < sample && !self.stamps.is_empty() {
+            self.stamps.pop_front();
+            self.base += 1;
+        }
     }
 
     /// The head's reads, known beforehand (a finished job log): sample k
@@ -62,7 +93,8 @@ impl Tracker {
                 .collect();
         }
         self.stats.samples = stamps.len() as u64;
-        self.stamps = stamps;
+        self.stamps = stamps.into();
+        self.base = 0;
     }
 
     /// The tail publishes a value carrying `sample` at t.
@@ -79,6 +111,8 @@ impl Tracker {
                 self.stats.reached += 1;
                 self.current = Some((sample, t, t));
                 self.first_output(sample, t);
+                // Its finalising needs the stamp before it.
+                self.drop_before(sample.saturating_sub(1));
             }
         }
     }
@@ -88,23 +122,23 @@ impl Tracker {
     /// waiting (samples between the previous one to reach the tail and this
     /// one never reach it; this is the first output that reflects them).
     pub(crate) fn first_output(&mut self, sample: u64, t: Nanos) {
-        let stamp = self.stamps[sample as usize];
+        let stamp = self.stamp(sample);
         let w = Witness {
             sample,
             read: stamp,
             first: t,
             last: t,
         };
-        self.stats.reaction.push(t - stamp, t, w);
+        self.stats.reaction.push(t - stamp, w);
         for s in self.event_pending..=sample {
-            let event = self.stamps[s as usize - 1];
+            let event = self.stamp(s - 1);
             let w = Witness {
                 sample: s,
                 read: event,
                 first: t,
                 last: t,
             };
-            self.stats.event_reaction.push(t - event, t, w);
+            self.stats.event_reaction.push(t - event, w);
             if let Some(rows) = &mut self.rows {
                 rows[s as usize].event_first = Some(t);
             }
@@ -118,22 +152,20 @@ impl Tracker {
     pub(crate) fn finalise(&mut self, sample: u64, first: Nanos, last: Nanos) {
         let w = Witness {
             sample,
-            read: self.stamps[sample as usize],
+            read: self.stamp(sample),
             first,
             last,
         };
         if let Some(rows) = &mut self.rows {
             rows[sample as usize].last = Some(last);
         }
+        let before = (sample > 0).then(|| self.stamp(sample - 1));
         let st = &mut self.stats;
         st.finalised += 1;
-        st.freshness.push(w.freshness(), last, w);
-        if sample > 0 {
-            let event = Witness {
-                read: self.stamps[sample as usize - 1],
-                ..w
-            };
-            st.event_freshness.push(event.freshness(), last, event);
+        st.freshness.push(w.freshness(), w);
+        if let Some(read) = before {
+            let event = Witness { read, ..w };
+            st.event_freshness.push(event.freshness(), event);
         }
     }
 }

@@ -3,7 +3,7 @@
 //! every job, replayed after the run through the simulator's own sample
 //! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
-use crate::class::{configure, lock_memory, privileges, Placement};
+use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
 pub use crate::config::{
     fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
@@ -154,6 +154,11 @@ fn watch(
 /// Largest number of jobs logged in one run (memory: ~48 bytes a job).
 const MAX_JOBS: u64 = 20_000_000;
 
+/// Most tasks one run starts: a real-time thread each, whose stack
+/// (`TASK_STACK`) mlockall locks under SCHED_FIFO/SCHED_DEADLINE (3,000
+/// tasks with default stacks locked 6.2 GB).
+pub const MAX_TASKS: usize = 512;
+
 /// Checks that `spec` can run under `cfg` before any thread starts.
 pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
     if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration) {
@@ -185,6 +190,15 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
         if cfg.policy == Policy::Deadline {
             deadline_rules(&t.name, t.budget(), period)?;
         }
+    }
+    if spec.tasks.len() > MAX_TASKS {
+        return Err(RunError::config(
+            format!(
+                "the spec has {} tasks, more than the {MAX_TASKS} one run starts (a real-time thread each, its memory locked)",
+                spec.tasks.len()
+            ),
+            "run a smaller spec, or study this one with `rtpipe simulate` (no thread per task)",
+        ));
     }
     privileges(spec, cfg.policy)?;
     if jobs > MAX_JOBS {
@@ -265,7 +279,7 @@ pub fn run<'a, V: Copy + Send>(
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
-    let mut notes: Vec<String> = lock_memory(cfg.policy).into_iter().collect();
+    let mut notes: Vec<String> = lock_memory(cfg.policy, n).into_iter().collect();
     let threads = threads(spec, cfg, bodies);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
@@ -473,7 +487,12 @@ fn start<'a, V: Copy + Send>(
             .into_iter()
             .map(|th| {
                 let name = spec.tasks[th.task].name.as_str();
-                s.spawn(move || task_thread(th, name, policy, (duration, grace), env, shared))
+                std::thread::Builder::new()
+                    .stack_size(TASK_STACK)
+                    .spawn_scoped(s, move || {
+                        task_thread(th, name, policy, (duration, grace), env, shared)
+                    })
+                    .unwrap_or_else(|e| panic!("cannot start the thread of task {name}: {e}"))
             })
             .collect();
         shared.setup.wait();

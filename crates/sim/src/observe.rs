@@ -4,7 +4,7 @@
 //! `simulate` and `fly` report these; the oracle tests check them.
 
 use rtpipe_analysis::{Anchor, Metric, OffsetBound, Report};
-use rtpipe_joblog::{ChainStats, Observed, SimResult};
+use rtpipe_joblog::{ChainStats, Histogram, Observed, SimResult};
 use rtpipe_model::{Nanos, Spec, MAX_TIME};
 
 /// A chain's observations by the analysis' names for them (the job log
@@ -34,28 +34,32 @@ pub struct Summary {
     pub min: Nanos,
     /// In nanoseconds, not rounded.
     pub mean: f64,
-    /// Nearest-rank 99th percentile.
+    /// Nearest-rank 99th percentile: exact while the observations take at
+    /// most [`rtpipe_joblog::hist::EXACT_CAP`] distinct values, within a
+    /// relative error of 2^-[`rtpipe_joblog::hist::COARSE_BITS`] beyond
+    /// (`exact` says which); count, min, mean and max are always exact.
     pub p99: Nanos,
     /// The largest.
     pub max: Nanos,
+    /// Whether `p99` is exact.
+    pub exact: bool,
 }
 
 impl Summary {
     /// `None` without observations.
     pub fn of(values: &[Nanos]) -> Option<Summary> {
-        if values.is_empty() {
-            return None;
-        }
-        let mut s = values.to_vec();
-        s.sort_unstable();
-        let n = s.len();
-        let rank = (n * 99).div_ceil(100).clamp(1, n);
+        Summary::of_hist(&Histogram::of(values))
+    }
+
+    /// The summary of a histogram; `None` when it is empty.
+    pub fn of_hist(h: &Histogram) -> Option<Summary> {
         Some(Summary {
-            count: n,
-            min: s[0],
-            mean: s.iter().map(|&x| x as f64).sum::<f64>() / n as f64,
-            p99: s[rank - 1],
-            max: s[n - 1],
+            count: usize::try_from(h.count()).unwrap_or(usize::MAX),
+            min: h.min()?,
+            mean: h.mean()?,
+            p99: h.percentile(99)?,
+            max: h.max()?,
+            exact: h.is_exact(),
         })
     }
 }
@@ -78,12 +82,20 @@ pub struct Judged {
 impl Judged {
     /// `values` against the two bounds.
     pub fn of(values: &[Nanos], paper: Nanos, sound: Option<Nanos>) -> Judged {
+        Judged::of_hist(&Histogram::of(values), paper, sound)
+    }
+
+    /// The values counted in `h` against the two bounds (counts above a
+    /// bound are exact while `h` is; beyond, values within its relative
+    /// error of a bound may count as above it, never a value above as not).
+    pub fn of_hist(h: &Histogram, paper: Nanos, sound: Option<Nanos>) -> Judged {
+        let above = |b: Nanos| usize::try_from(h.count_where(|x| x > b)).unwrap_or(usize::MAX);
         Judged {
-            observed: Summary::of(values),
+            observed: Summary::of_hist(h),
             paper,
             sound,
-            over_paper: values.iter().filter(|&&x| x > paper).count(),
-            over_sound: sound.map(|s| values.iter().filter(|&&x| x > s).count()),
+            over_paper: above(paper),
+            over_sound: sound.map(above),
         }
     }
 }
@@ -157,20 +169,17 @@ pub fn observe(report: &Report, res: &SimResult) -> Vec<ChainObs> {
         .chains
         .iter()
         .map(|c| {
-            let judge = |a: Anchor| {
-                let values = res
-                    .chains
+            let empty = Histogram::default();
+            let hist = |a: Anchor| {
+                res.chains
                     .get(c.chain)
-                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
-                Judged::of(values, c.bound.paper(a), c.bound.sound(a))
+                    .map_or(&empty, |cs| &cs.observed(c.metric, a).hist)
             };
+            let judge = |a: Anchor| Judged::of_hist(hist(a), c.bound.paper(a), c.bound.sound(a));
             let known = |a: Anchor| {
                 let bound = report.offset_bound(c.chain, c.metric, a)?.clone();
-                let values = res
-                    .chains
-                    .get(c.chain)
-                    .map_or(&[][..], |cs| &cs.observed(c.metric, a).values[..]);
-                let over = values.iter().filter(|&&v| bound.exceeded_by(v)).count();
+                let over = hist(a).count_where(|v| bound.exceeded_by(v));
+                let over = usize::try_from(over).unwrap_or(usize::MAX);
                 Some(KnownJudged { bound, over })
             };
             ChainObs {

@@ -134,7 +134,7 @@ fn check(
             let Some(seen) = obs.max else { continue };
             if let Some(b) = c.bound.sound(a) {
                 t.checks += 1;
-                t.samples += obs.values.len() as u64;
+                t.samples += obs.hist.count();
                 let i = usize::from(a == Anchor::Event);
                 t.see(i, seen, b, || {
                     tag(&format!(

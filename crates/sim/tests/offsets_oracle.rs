@@ -269,7 +269,7 @@ fn check_run(
                 continue;
             }
             let Some(k) = o.known_from(a) else { continue };
-            let values = &res.chains[o.chain].observed(m, a).values;
+            let values = res.chains[o.chain].observed(m, a).hist.sorted();
             st.checks += 1;
             st.observations += values.len() as u64;
             let Some(&seen) = values.iter().max() else {

@@ -503,7 +503,7 @@ fn check_quantity(
     }
     let bound = c.bound.sound(q.anchor)?;
     st.checks += 1;
-    st.samples += obs.values.len() as u64;
+    st.samples += obs.hist.count();
     let l = spec.chains[q.chain].path.len().clamp(1, 3) - 1;
     let ratio = seen as f64 / bound as f64;
     if count_mean {

@@ -251,7 +251,15 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
     }
     let points = fly_all(spec, s, a, &c, &vars);
     let limits = derived_limits(spec, s, &points);
-    if let Err(b) = write_files(spec, s, a, &c, &points, &limits) {
+    // Nothing flew: a spec "with these limits" would carry none of them.
+    let nothing = limits
+        .read
+        .iter()
+        .chain(&limits.event)
+        .all(|l| l.0.is_none() && l.1.is_none())
+        && limits.max_period.iter().all(Option::is_none);
+    let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
+    if let Err(b) = write_files(spec, s, a, &c, &points, &limits, write_limits) {
         return command::fail(b);
     }
     if a.json {
@@ -259,12 +267,24 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
             return code;
         }
     } else {
-        print!(
-            "{}",
-            text(spec, s, &c, &points, &limits, a.write_limits.as_deref())
-        );
+        print!("{}", text(spec, s, &c, &points, &limits, write_limits));
     }
-    ExitCode::SUCCESS
+    match &a.write_limits {
+        Some(out) if nothing => {
+            eprint!(
+                "{}",
+                Diagnostic::error(
+                    format!(
+                        "no flight of the sweep met the criterion, so no chain limit could be derived: {} was not written",
+                        out.display()
+                    ),
+                    "check that the vehicle flies the mission at the spec's own periods (rtpipe fly), relax the criterion, or widen --scale",
+                )
+            );
+            ExitCode::from(1)
+        }
+        _ => ExitCode::SUCCESS,
+    }
 }
 
 /// Flies every variation (on a worker thread) while a progress bar on
@@ -297,8 +317,9 @@ fn fly_all(spec: &Spec, s: &Setup, a: &FlyArgs, c: &Criteria, vars: &[Variation]
     }
 }
 
-/// `--write-limits` (the spec with the derived limits) and `--plot`
-/// (DIR/sweep.svg), all written or none.
+/// `--write-limits` (the spec with the derived limits; `write_limits`,
+/// `None` when no limit was derived) and `--plot` (DIR/sweep.svg), all
+/// written or none.
 fn write_files(
     spec: &Spec,
     s: &Setup,
@@ -306,9 +327,10 @@ fn write_files(
     c: &Criteria,
     points: &[Point],
     limits: &Derived,
+    write_limits: Option<&Path>,
 ) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
-    if let Some(out) = &a.write_limits {
+    if let Some(out) = write_limits {
         let text = rtpipe_model::to_toml(&with_limits(spec, s, limits, a.free_periods));
         files.push(("--write-limits", out.to_path_buf(), text));
     }

@@ -392,6 +392,7 @@ mod tests {
 
     #[test]
     fn samples_above_a_sound_bound_are_counted() {
+        use rtpipe_joblog::Histogram;
         let s = spec();
         let report = rtpipe_analysis::analyze(&s);
         let sound = report.chains[0].bound.sound(Anchor::Read).unwrap_or(0);
@@ -405,9 +406,9 @@ mod tests {
             events: 0,
             horizon: 1,
         };
-        res.chains[0].reaction.values = vec![1, paper + 1, sound + 1, sound];
+        res.chains[0].reaction.hist = Histogram::of(&[1, paper + 1, sound + 1, sound]);
         let event = report.chains[0].bound.sound(Anchor::Event).unwrap_or(0);
-        res.chains[0].event_reaction.values = vec![event, event + 1, event + 2];
+        res.chains[0].event_reaction.hist = Histogram::of(&[event, event + 1, event + 2]);
         let obs = observe(&report, &res);
         assert_eq!(obs[0].metric, Metric::Reaction);
         assert_eq!(obs[0].read.over_sound, Some(1));

@@ -329,7 +329,7 @@ pub(crate) fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
                 s.count.to_string(),
                 spec.fmt_time(s.min),
                 fmt_mean(spec, s.mean),
-                spec.fmt_time(s.p99),
+                format!("{}{}", if s.exact { "" } else { "~" }, spec.fmt_time(s.p99)),
                 spec.fmt_time(s.max),
             ),
             None => ("0".into(), dash(), dash(), dash(), dash()),
@@ -359,7 +359,18 @@ pub(crate) fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
             ratio,
         ]);
     }
-    t.render()
+    let mut out = t.render();
+    if obs
+        .iter()
+        .any(|o| o.from(a).observed.is_some_and(|s| !s.exact))
+    {
+        out.push_str(&format!(
+            "  ~ p99 within {:.2} % (more than {} distinct values: log-bucketed; count, min, mean, max and the counts above a bound stay exact but for values that close to it)\n",
+            100.0 / f64::from(1u32 << rtpipe_joblog::hist::COARSE_BITS),
+            rtpipe_joblog::hist::EXACT_CAP
+        ));
+    }
+    out
 }
 
 /// The observations against the bounds under the spec's known offsets,
