@@ -328,13 +328,9 @@ fn a_full_stdout_is_a_plain_error_for_every_printing_command() {
     let dir = scratch("full");
     let w = dir.join("w.toml");
     let w = w.to_string_lossy();
-    let cases: Vec<Vec<&str>> = vec![
-        vec!["analyze", &t2],
-        vec!["analyze", &t2, "--json"],
-        vec!["simulate", &t2, "--outputs", "20"],
-        vec!["design", &t2],
-        vec!["generate", "waters", "--tasks", "10", "--chains", "2", &w],
-    ];
+    let out = dir.join("imported");
+    let out = out.to_string_lossy();
+    let cases = printing_commands(&t2, &w, &out);
     for args in cases {
         let o = into_full_disk(&args);
         let err = String::from_utf8_lossy(&o.stderr);
@@ -343,6 +339,72 @@ fn a_full_stdout_is_a_plain_error_for_every_printing_command() {
             err.contains("error: cannot write the output: No space left on device"),
             "{args:?}: {err}"
         );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// One invocation of every subcommand that prints to stdout.
+fn printing_commands<'a>(t2: &'a str, w: &'a str, out: &'a str) -> Vec<Vec<&'a str>> {
+    let yaml = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/e2eeval-golden.yaml"
+    );
+    vec![
+        vec!["analyze", t2],
+        vec!["analyze", t2, "--json"],
+        vec!["simulate", t2, "--outputs", "20"],
+        vec!["design", t2],
+        vec!["generate", "waters", "--tasks", "10", "--chains", "2", w],
+        vec!["import", "e2eeval", yaml, out],
+        vec![
+            "fly",
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../examples/cleanflight.toml"
+            ),
+            "--mission",
+            "hover",
+            "--duration",
+            "3s",
+        ],
+        vec![
+            "run",
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../examples/paper-table3.toml"
+            ),
+            "--policy",
+            "other",
+            "--best-effort",
+            "--duration",
+            "100ms",
+        ],
+    ]
+}
+
+#[test]
+fn a_closed_pipe_ends_every_printing_command_quietly() {
+    let t2 = example("paper-table2.toml");
+    let dir = scratch("pipe-all");
+    let (w, out) = (dir.join("w.toml"), dir.join("imported"));
+    let (w, out) = (w.to_string_lossy(), out.to_string_lossy());
+    for args in printing_commands(&t2, &w, &out) {
+        let _ = std::fs::remove_dir_all(dir.join("imported"));
+        // The reader is gone before the command starts: its first write
+        // to stdout fails, whatever its size.
+        let Ok((reader, writer)) = std::io::pipe() else {
+            panic!("no pipe");
+        };
+        drop(reader);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+            .args(&args)
+            .stdout(writer)
+            .output();
+        let Ok(o) = o else {
+            panic!("cannot run rtpipe");
+        };
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(141), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
