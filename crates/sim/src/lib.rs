@@ -48,6 +48,7 @@
 
 mod bodies;
 mod config;
+mod cpus;
 mod engine;
 mod let_comm;
 pub mod observe;
