@@ -1,7 +1,7 @@
 //! The CPUs without a scan per event (issue 25): each CPU's running job is
 //! charged lazily, only when something happens on that CPU, and the CPUs'
-//! next events (a completion or a budget running out) wait in a heap. An
-//! instant visits only the CPUs whose event it is and those whose
+//! next events (a completion or a budget running out) wait in a tournament
+//! tree. An instant visits only the CPUs whose event it is and those whose
 //! contenders changed, so an event costs O(log n) in the number of CPUs as
 //! in the number of tasks.
 //!
@@ -17,6 +17,40 @@
 use crate::engine::{Hooks, Sim};
 use rtpipe_model::Nanos;
 use std::cmp::Reverse;
+
+/// The CPUs' next events in a tournament tree: the earliest (then the
+/// lowest CPU) at the root, an update O(log CPUs), no stale entries.
+#[derive(Debug, Clone)]
+pub(crate) struct CpuEvents {
+    /// Leaves from `leaves` on; (`Nanos::MAX`, _) where a CPU has none.
+    tree: Vec<(Nanos, usize)>,
+    leaves: usize,
+}
+
+impl CpuEvents {
+    pub(crate) fn new(cpus: usize) -> CpuEvents {
+        let leaves = cpus.next_power_of_two().max(1);
+        CpuEvents {
+            tree: vec![(Nanos::MAX, usize::MAX); 2 * leaves],
+            leaves,
+        }
+    }
+
+    /// The earliest event and its CPU.
+    pub(crate) fn first(&self) -> Option<(Nanos, usize)> {
+        Some(self.tree[1]).filter(|&(at, _)| at != Nanos::MAX)
+    }
+
+    /// `cpu`'s event is now `at`.
+    pub(crate) fn set(&mut self, cpu: usize, at: Option<Nanos>) {
+        let mut k = self.leaves + cpu;
+        self.tree[k] = (at.unwrap_or(Nanos::MAX), cpu);
+        while k > 1 {
+            k /= 2;
+            self.tree[k] = self.tree[2 * k].min(self.tree[2 * k + 1]);
+        }
+    }
+}
 
 impl<H: Hooks> Sim<H> {
     /// Charges the job running on `cpu` for the time since the CPU was last
@@ -49,15 +83,13 @@ impl<H: Hooks> Sim<H> {
     /// marked for a pick.
     pub(crate) fn pop_due(&mut self, t: Nanos, due: &mut Vec<usize>) {
         due.clear();
-        while let Some(&Reverse((at, cpu))) = self.cpu_events.peek() {
+        while let Some((at, cpu)) = self.cpu_events.first() {
             if at > t {
                 break;
             }
-            self.cpu_events.pop();
-            if self.cpu_event[cpu] != Some(at) {
-                continue;
-            }
             debug_assert_eq!(at, t, "cpu {cpu}: event at {at} missed");
+            debug_assert_eq!(self.cpu_event[cpu], Some(at));
+            self.cpu_events.set(cpu, None);
             self.cpu_event[cpu] = None;
             self.sync(cpu, t);
             self.mark(cpu);
@@ -98,22 +130,13 @@ impl<H: Hooks> Sim<H> {
         });
         if next != self.cpu_event[cpu] {
             self.cpu_event[cpu] = next;
-            if let Some(at) = next {
-                self.cpu_events.push(Reverse((at, cpu)));
-            }
+            self.cpu_events.set(cpu, next);
         }
     }
 
-    /// The earliest CPU event (dropping the entries that no longer hold).
-    pub(crate) fn next_cpu_event(&mut self) -> Option<Nanos> {
-        loop {
-            match self.cpu_events.peek() {
-                Some(&Reverse((at, cpu))) if self.cpu_event[cpu] != Some(at) => {
-                    self.cpu_events.pop();
-                }
-                top => return top.map(|&Reverse((at, _))| at),
-            }
-        }
+    /// The earliest CPU event.
+    pub(crate) fn next_cpu_event(&self) -> Option<Nanos> {
+        self.cpu_events.first().map(|(at, _)| at)
     }
 
     /// Runs the job on `cpu` from t for dt and charges its server.

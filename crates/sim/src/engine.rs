@@ -275,11 +275,13 @@ pub(crate) struct Sim<H> {
     pub(crate) since: Vec<Nanos>,
     /// Per CPU: its next event (a completion or the capacity running out).
     pub(crate) cpu_event: Vec<Option<Nanos>>,
-    /// The CPUs' events, earliest first: valid while equal to `cpu_event`.
-    pub(crate) cpu_events: BinaryHeap<Reverse<(Nanos, usize)>>,
+    /// The CPUs' events, earliest first (the same as `cpu_event`).
+    pub(crate) cpu_events: crate::cpus::CpuEvents,
     /// The CPUs to pick for again at this instant (`is_dirty` per CPU).
     pub(crate) dirty: Vec<usize>,
     pub(crate) is_dirty: Vec<bool>,
+    /// Scratch lists of an instant: the CPUs due, the CPUs picked for.
+    pub(crate) scratch: (Vec<usize>, Vec<usize>),
     /// LET communication (`let_comm.rs`): reads at releases and publishes
     /// at period ends feed the provenance, not the schedule's instants.
     pub(crate) let_comm: bool,
@@ -329,9 +331,10 @@ impl<H: Hooks> Sim<H> {
             contenders: vec![BTreeSet::new(); n_cpus],
             since: vec![0; n_cpus],
             cpu_event: vec![None; n_cpus],
-            cpu_events: BinaryHeap::new(),
+            cpu_events: crate::cpus::CpuEvents::new(n_cpus),
             dirty: Vec::new(),
             is_dirty: vec![false; n_cpus],
+            scratch: (Vec::new(), Vec::new()),
             let_comm: spec.communication == Communication::Let,
             let_open: vec![None; spec.tasks.len()],
         })
@@ -347,7 +350,8 @@ impl<H: Hooks> Sim<H> {
     /// contenders (an ordered set kept up to date by [`Sim::refresh`]).
     pub(crate) fn instant(&mut self, t: Nanos) {
         self.events += 1;
-        let (mut due, mut picked) = (Vec::new(), Vec::new());
+        // Scratch lists kept across instants (no allocation per event).
+        let (mut due, mut picked) = std::mem::take(&mut self.scratch);
         self.pop_due(t, &mut due);
         self.replenish_throttled(t);
         loop {
@@ -366,6 +370,7 @@ impl<H: Hooks> Sim<H> {
             }
             self.pop_due(t, &mut due);
         }
+        self.scratch = (due, picked);
     }
 
     /// CBS replenishment timers due at t (every throttled server has an
