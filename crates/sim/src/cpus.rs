@@ -18,40 +18,6 @@ use crate::engine::{Hooks, Sim};
 use rtpipe_model::Nanos;
 use std::cmp::Reverse;
 
-/// The CPUs' next events in a tournament tree: the earliest (then the
-/// lowest CPU) at the root, an update O(log CPUs), no stale entries.
-#[derive(Debug, Clone)]
-pub(crate) struct CpuEvents {
-    /// Leaves from `leaves` on; (`Nanos::MAX`, _) where a CPU has none.
-    tree: Vec<(Nanos, usize)>,
-    leaves: usize,
-}
-
-impl CpuEvents {
-    pub(crate) fn new(cpus: usize) -> CpuEvents {
-        let leaves = cpus.next_power_of_two().max(1);
-        CpuEvents {
-            tree: vec![(Nanos::MAX, usize::MAX); 2 * leaves],
-            leaves,
-        }
-    }
-
-    /// The earliest event and its CPU.
-    pub(crate) fn first(&self) -> Option<(Nanos, usize)> {
-        Some(self.tree[1]).filter(|&(at, _)| at != Nanos::MAX)
-    }
-
-    /// `cpu`'s event is now `at`.
-    pub(crate) fn set(&mut self, cpu: usize, at: Option<Nanos>) {
-        let mut k = self.leaves + cpu;
-        self.tree[k] = (at.unwrap_or(Nanos::MAX), cpu);
-        while k > 1 {
-            k /= 2;
-            self.tree[k] = self.tree[2 * k].min(self.tree[2 * k + 1]);
-        }
-    }
-}
-
 impl<H: Hooks> Sim<H> {
     /// Charges the job running on `cpu` for the time since the CPU was last
     /// brought up to date, up to t.

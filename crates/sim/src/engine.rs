@@ -276,7 +276,7 @@ pub(crate) struct Sim<H> {
     /// Per CPU: its next event (a completion or the capacity running out).
     pub(crate) cpu_event: Vec<Option<Nanos>>,
     /// The CPUs' events, earliest first (the same as `cpu_event`).
-    pub(crate) cpu_events: crate::cpus::CpuEvents,
+    pub(crate) cpu_events: crate::cpu_events::CpuEvents,
     /// The CPUs to pick for again at this instant (`is_dirty` per CPU).
     pub(crate) dirty: Vec<usize>,
     pub(crate) is_dirty: Vec<bool>,
@@ -331,7 +331,7 @@ impl<H: Hooks> Sim<H> {
             contenders: vec![BTreeSet::new(); n_cpus],
             since: vec![0; n_cpus],
             cpu_event: vec![None; n_cpus],
-            cpu_events: crate::cpus::CpuEvents::new(n_cpus),
+            cpu_events: crate::cpu_events::CpuEvents::new(n_cpus),
             dirty: Vec::new(),
             is_dirty: vec![false; n_cpus],
             scratch: (Vec::new(), Vec::new()),

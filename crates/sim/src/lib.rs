@@ -48,6 +48,7 @@
 
 mod bodies;
 mod config;
+mod cpu_events;
 mod cpus;
 mod engine;
 mod let_comm;
