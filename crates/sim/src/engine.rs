@@ -45,12 +45,14 @@ pub(crate) fn run_with_progress<H: Hooks>(
             progress(t);
         }
         match sim.next_event(t) {
-            Some(next) if next <= cfg.horizon => {
-                sim.advance(t, next - t);
-                t = next;
-            }
+            Some(next) if next <= cfg.horizon => t = next,
             _ => break,
         }
+    }
+    sim.sync_all(t);
+    if let Some(seg) = &mut sim.segments {
+        // The order the every-CPU scans recorded them in.
+        seg.sort_by_key(|s| (s.start, s.cpu));
     }
     Ok(sim.finish())
 }
@@ -268,6 +270,18 @@ pub(crate) struct Sim<H> {
     /// Per CPU: (class, key, task) of every task that may run; the pick is
     /// the least.
     pub(crate) contenders: Vec<BTreeSet<(u8, Nanos, usize)>>,
+    /// Per CPU: the instant its running job has been charged up to
+    /// (`cpus.rs`).
+    pub(crate) since: Vec<Nanos>,
+    /// Per CPU: its next event (a completion or the capacity running out).
+    pub(crate) cpu_event: Vec<Option<Nanos>>,
+    /// The CPUs' events, earliest first (the same as `cpu_event`).
+    pub(crate) cpu_events: crate::cpu_events::CpuEvents,
+    /// The CPUs to pick for again at this instant (`is_dirty` per CPU).
+    pub(crate) dirty: Vec<usize>,
+    pub(crate) is_dirty: Vec<bool>,
+    /// Scratch lists of an instant: the CPUs due, the CPUs picked for.
+    pub(crate) scratch: (Vec<usize>, Vec<usize>),
     /// LET communication (`let_comm.rs`): reads at releases and publishes
     /// at period ends feed the provenance, not the schedule's instants.
     pub(crate) let_comm: bool,
@@ -315,6 +329,12 @@ impl<H: Hooks> Sim<H> {
             throttled: BinaryHeap::new(),
             timers: BinaryHeap::new(),
             contenders: vec![BTreeSet::new(); n_cpus],
+            since: vec![0; n_cpus],
+            cpu_event: vec![None; n_cpus],
+            cpu_events: crate::cpu_events::CpuEvents::new(n_cpus),
+            dirty: Vec::new(),
+            is_dirty: vec![false; n_cpus],
+            scratch: (Vec::new(), Vec::new()),
             let_comm: spec.communication == Communication::Let,
             let_open: vec![None; spec.tasks.len()],
         })
@@ -330,9 +350,12 @@ impl<H: Hooks> Sim<H> {
     /// contenders (an ordered set kept up to date by [`Sim::refresh`]).
     pub(crate) fn instant(&mut self, t: Nanos) {
         self.events += 1;
+        // Scratch lists kept across instants (no allocation per event).
+        let (mut due, mut picked) = std::mem::take(&mut self.scratch);
+        self.pop_due(t, &mut due);
         self.replenish_throttled(t);
         loop {
-            self.complete_finished(t);
+            self.complete_finished(t, &due);
             self.release(t);
             self.fire_timers(t);
             // Debug builds: the full check costs O(tasks) per pick, which
@@ -341,15 +364,13 @@ impl<H: Hooks> Sim<H> {
             if self.tasks.len() <= 512 {
                 self.check(t);
             }
-            for cpu in 0..self.running.len() {
-                let picked = self.pick(cpu);
-                self.running[cpu] = picked.map(|(i, _)| i);
-                self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
-            }
-            if !self.read_started(t) {
+            self.pick_marked(t, &mut picked);
+            if !self.read_started(t, &picked) {
                 break;
             }
+            self.pop_due(t, &mut due);
         }
+        self.scratch = (due, picked);
     }
 
     /// CBS replenishment timers due at t (every throttled server has an
@@ -367,9 +388,10 @@ impl<H: Hooks> Sim<H> {
         }
     }
 
-    /// Running jobs with nothing left to do complete (and publish) at t.
-    fn complete_finished(&mut self, t: Nanos) {
-        for cpu in 0..self.running.len() {
+    /// Running jobs with nothing left to do complete (and publish) at t
+    /// (only those on the CPUs `due` at t can).
+    fn complete_finished(&mut self, t: Nanos, due: &[usize]) {
+        for &cpu in due {
             if let Some(i) = self.running[cpu] {
                 if self.tasks[i]
                     .queue
@@ -403,9 +425,9 @@ impl<H: Hooks> Sim<H> {
 
     /// Picked jobs that start now read their inputs; true when one of them
     /// has zero demand (it completes at this same instant: go round again).
-    fn read_started(&mut self, t: Nanos) -> bool {
+    fn read_started(&mut self, t: Nanos, picked: &[usize]) -> bool {
         let mut again = false;
-        for cpu in 0..self.running.len() {
+        for &cpu in picked {
             if let Some(i) = self.running[cpu] {
                 if self.tasks[i]
                     .queue
@@ -534,6 +556,10 @@ impl<H: Hooks> Sim<H> {
                 set.insert((class, key, i));
             }
             ts.entry = entry;
+            if !self.is_dirty[ts.cpu] {
+                self.is_dirty[ts.cpu] = true;
+                self.dirty.push(ts.cpu);
+            }
         }
         if ts.timer != timer {
             ts.timer = timer;
@@ -659,49 +685,9 @@ impl<H: Hooks> Sim<H> {
             }
         };
         debug_assert!(refill.is_none_or(|r| r > t));
-        let running = self.running.iter().enumerate().filter_map(|(cpu, r)| {
-            let ts = &self.tasks[(*r)?];
-            let job = ts.queue.front()?;
-            let mut next = t + job.remaining;
-            if !self.in_slack[cpu] {
-                let cap = ts.budget.capacity(t);
-                if cap < job.remaining {
-                    next = t + cap;
-                }
-            }
-            Some(next)
-        });
+        let running = self.next_cpu_event();
         // The earliest of the three kinds of event.
         release.into_iter().chain(running).chain(refill).min()
-    }
-
-    /// Runs every CPU's chosen job from t for dt and charges its server.
-    pub(crate) fn advance(&mut self, t: Nanos, dt: Nanos) {
-        for cpu in 0..self.running.len() {
-            let Some(i) = self.running[cpu] else { continue };
-            let slack = self.in_slack[cpu];
-            let ts = &mut self.tasks[i];
-            let Some(job) = ts.queue.front_mut() else {
-                continue;
-            };
-            job.remaining -= dt;
-            let (index, remaining) = (job.index, job.remaining);
-            ts.stats.busy += dt;
-            if !slack {
-                let throttled = ts.budget.throttled_until();
-                ts.budget.charge(t + dt, dt);
-                if remaining > 0 && ts.budget.capacity(t + dt) == 0 {
-                    ts.stats.exhaustions += 1;
-                }
-                if let Some(until) = ts.budget.throttled_until() {
-                    if throttled != Some(until) {
-                        self.throttled.push(Reverse((until, i)));
-                    }
-                }
-                self.refresh(i, t + dt);
-            }
-            self.record_segment(cpu, i, index, t, dt, slack);
-        }
     }
 
     /// Records that task i ran job `index` on `cpu` over [t, t + dt) (for

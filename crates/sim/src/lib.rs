@@ -48,6 +48,8 @@
 
 mod bodies;
 mod config;
+mod cpu_events;
+mod cpus;
 mod engine;
 mod let_comm;
 pub mod observe;

@@ -1,0 +1,155 @@
+//! Simulator throughput along every axis of a system's size (issue 25):
+//! tasks, CPUs, chains and fan-in (reads per task), each varied alone
+//! around a base of 1,000 tasks on 40 CPUs with 50 chains, plus WATERS
+//! systems (`rtpipe generate waters`) of 1,000 tasks on 40 CPUs and of
+//! 10,000 tasks on 40 and on 400 CPUs.
+//!
+//! `cargo bench -p rtpipe-sim --bench axes` (about three minutes). Every
+//! run is about 400,000 events long (random phasing, uniform demands);
+//! criterion reports events per second as elements/s. The cost per event
+//! must grow at most logarithmically along each axis.
+//!
+//! Each system is described on stderr (events per run, reads, chains)
+//! before it is measured.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use rtpipe_joblog::SimResult;
+use rtpipe_model::gen::{random_system, waters_system, GenConfig, WatersConfig};
+use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+const SEED: u64 = 2018;
+const MS: Nanos = 1_000_000;
+
+/// The base of the axes: 1,000 tasks on 40 CPUs, 50 chains, fan-in ≤ 2.
+fn base() -> GenConfig {
+    GenConfig {
+        tasks: 1_000,
+        cpus: 40,
+        utilization: 0.6,
+        scheduler: Scheduler::Rm,
+        mixed_servers: true,
+        chains: 50,
+        max_fan_in: 2,
+        ..GenConfig::default()
+    }
+}
+
+fn waters(tasks: usize, cpus: u32, chains: usize) -> Spec {
+    waters_system(
+        SEED,
+        &WatersConfig {
+            tasks: Some(tasks),
+            cpus,
+            utilization: 0.5,
+            chains,
+        },
+    )
+}
+
+/// A simulated span with about `events` events: two per job (release and
+/// completion) at the system's job rate.
+fn span_for(spec: &Spec, events: f64) -> Nanos {
+    let jobs_per_ns: f64 = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .map(|p| 1.0 / p as f64)
+        .sum();
+    ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
+}
+
+fn run(spec: &Spec, cfg: &SimConfig) -> SimResult {
+    match simulate(spec, cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("{}: {e}", spec.name),
+    }
+}
+
+/// One run outside the timed loop: its event count and a description.
+fn describe(label: &str, spec: &Spec, cfg: &SimConfig) -> u64 {
+    let t0 = Instant::now();
+    let r = run(spec, cfg);
+    let wall = t0.elapsed();
+    let reads: usize = spec.tasks.iter().map(|t| t.reads.len()).sum();
+    eprintln!(
+        "{label}: {} tasks, {} reads, {} chains, {} events in {} ms simulated; \
+         one run {wall:.2?} ({:.2} M events/s)",
+        spec.tasks.len(),
+        reads,
+        spec.chains.len(),
+        r.events,
+        cfg.horizon / MS,
+        r.events as f64 / wall.as_secs_f64() / 1e6
+    );
+    r.events
+}
+
+/// The systems measured: (axis, label, spec).
+fn systems() -> Vec<(&'static str, String, Spec)> {
+    let mut v = Vec::new();
+    for (tasks, cpus, chains) in [(1_000, 40, 50), (10_000, 40, 50), (10_000, 400, 500)] {
+        let label = format!("{tasks}t-{cpus}cpu-{chains}ch");
+        v.push(("waters", label, waters(tasks, cpus, chains)));
+    }
+    let gen = |cfg: GenConfig| random_system(SEED, &cfg);
+    for tasks in [100, 1_000, 10_000] {
+        v.push((
+            "tasks",
+            format!("{tasks}t"),
+            gen(GenConfig { tasks, ..base() }),
+        ));
+    }
+    for cpus in [1, 4, 40, 400] {
+        v.push((
+            "cpus",
+            format!("{cpus}cpu"),
+            gen(GenConfig { cpus, ..base() }),
+        ));
+    }
+    for chains in [0, 5, 50, 500] {
+        v.push((
+            "chains",
+            format!("{chains}ch"),
+            gen(GenConfig { chains, ..base() }),
+        ));
+    }
+    for max_fan_in in [1, 4, 16, 64] {
+        let cfg = GenConfig {
+            max_fan_in,
+            ..base()
+        };
+        v.push(("fan-in", format!("fan-in-{max_fan_in}"), gen(cfg)));
+    }
+    v
+}
+
+fn axes(c: &mut Criterion) {
+    let mut group = c.benchmark_group("axes");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    for (axis, label, spec) in systems() {
+        let cfg = SimConfig {
+            horizon: span_for(&spec, 400_000.0),
+            seed: SEED,
+            phasing: Phasing::Random,
+            exec: ExecModel::Uniform,
+            log_jobs: false,
+            jitter: rtpipe_sim::Jitter::Uniform,
+        };
+        let id = format!("{axis}/{label}");
+        let n = describe(&id, &spec, &cfg);
+        group.throughput(Throughput::Elements(n));
+        group.bench_function(BenchmarkId::from_parameter(&id), |b| {
+            b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, axes);
+criterion_main!(benches);
