@@ -45,6 +45,7 @@ fn waters(tasks: usize, cpus: u32, chains: usize) -> Spec {
             cpus,
             utilization: 0.5,
             chains,
+            ..WatersConfig::default()
         },
     )
 }
