@@ -274,6 +274,8 @@ pub(crate) struct Sim<H> {
     /// Under LET, per task: the job that read at its release and publishes
     /// at the end of its period.
     pub(crate) let_open: Vec<Option<LetJob>>,
+    /// Critical sections and the resources' holders (`locks.rs`).
+    pub(crate) locks: Locks,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -295,6 +297,10 @@ impl<H: Hooks> Sim<H> {
             .map(|(i, ts)| Reverse((ts.next_release, i)))
             .collect();
         let n_cpus = cpu_tasks.len();
+        let locks = Locks::new(spec);
+        if locks.any() && !spec.policy().fixed_priority() {
+            return Err(SimError::Resources(spec.scheduler.name()));
+        }
         Ok(Sim {
             hooks,
             edf: spec.policy().preemption == Preemption::EarliestDeadline,
@@ -317,6 +323,7 @@ impl<H: Hooks> Sim<H> {
             contenders: vec![BTreeSet::new(); n_cpus],
             let_comm: spec.communication == Communication::Let,
             let_open: vec![None; spec.tasks.len()],
+            locks,
         })
     }
 
@@ -345,6 +352,9 @@ impl<H: Hooks> Sim<H> {
                 let picked = self.pick(cpu);
                 self.running[cpu] = picked.map(|(i, _)| i);
                 self.in_slack[cpu] = picked.is_some_and(|(_, slack)| slack);
+            }
+            if self.lock_step(t) {
+                continue;
             }
             if !self.read_started(t) {
                 break;
@@ -490,6 +500,9 @@ impl<H: Hooks> Sim<H> {
         let Some(job) = ts.queue.front() else {
             return (None, None);
         };
+        if self.locks.waiting[i].is_some() {
+            return (None, None);
+        }
         let has_budget = ts.budget.capacity(t) > 0;
         let timer = if has_budget {
             None
@@ -505,12 +518,16 @@ impl<H: Hooks> Sim<H> {
         let key = match (&ts.budget, self.edf) {
             (Budget::Cbs(c), _) => c.deadline,
             (_, true) => job.release + ts.deadline,
-            (_, false) => match ts.serves {
-                // PIBS inheritance: the better (smaller) rank of the server
-                // and the Main VCPU it serves while that one has a job.
-                Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
-                _ => ts.rank,
-            },
+            // Keys 2·rank leave 2·rank − 1 to a resource holder (`locks.rs`).
+            (_, false) => self.locks.key(
+                i,
+                2 * match ts.serves {
+                    // PIBS inheritance: the better (smaller) rank of the server
+                    // and the Main VCPU it serves while that one has a job.
+                    Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
+                    _ => ts.rank,
+                },
+            ),
         };
         (Some((class, key)), timer)
     }
@@ -669,9 +686,13 @@ impl<H: Hooks> Sim<H> {
                     next = t + cap;
                 }
             }
+            // Entering or leaving a critical section.
+            if let Some(b) = self.locks.until_boundary((*r)?, job) {
+                next = next.min(t + b);
+            }
             Some(next)
         });
-        // The earliest of the three kinds of event.
+        // The earliest of the kinds of event.
         release.into_iter().chain(running).chain(refill).min()
     }
 
@@ -700,6 +721,7 @@ impl<H: Hooks> Sim<H> {
                 }
                 self.refresh(i, t + dt);
             }
+            self.unlock_passed(i, t + dt);
             self.record_segment(cpu, i, index, t, dt, slack);
         }
     }

@@ -50,6 +50,7 @@ mod bodies;
 mod config;
 mod engine;
 mod let_comm;
+mod locks;
 pub mod observe;
 mod rng;
 pub mod search;
@@ -57,6 +58,7 @@ pub mod server;
 
 pub use config::*;
 pub(crate) use engine::*;
+pub(crate) use locks::Locks;
 
 pub use bodies::simulate_bodies;
 use rtpipe_joblog::SimResult;

@@ -288,6 +288,8 @@ fn build_spec(f: &E2eFile, ecus: &[i64], name: &str) -> Spec {
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
         communication: crate::Communication::Implicit,
+        resource_protocol: crate::ResourceProtocol::Pcp,
+        resources: Vec::new(),
         channels: vec![Channel {
             name: "mem".into(),
             bandwidth: 1.0,

@@ -1,0 +1,193 @@
+//! Validation of shared resources (issue 22): `[resources.NAME]`, `[system]
+//! resource_protocol` and each task's `critical_sections = [{ resource =
+//! "bus", length = "200us" }, ...]`.
+//!
+//! Refused, each with its place and a fix:
+//! - a section on a resource that is not declared, of zero length, longer
+//!   than the task's `exec`, or sections that together exceed it;
+//! - more than [`MAX_SECTIONS`] sections in one task;
+//! - a section in a task with a budget server (`main`, `io`) or in a
+//!   background task: a server out of budget would hold the resource while
+//!   it waits, which no protocol here bounds (`server = "none"` runs it);
+//! - one resource used on two CPUs (that needs a multiprocessor protocol,
+//!   MPCP or MSRP);
+//! - resources under a policy that implements no protocol (EDF:
+//!   [`crate::SchedPolicy::resource_protocols`]).
+
+use super::{span, Builder};
+use crate::raw::{RawResource, RawSection, RawSystem, RawTask, S};
+use crate::*;
+use std::collections::HashMap;
+
+/// The most critical sections one task may have.
+pub const MAX_SECTIONS: usize = 16;
+
+impl Builder {
+    /// `[resources]`, `resource_protocol` and every task's sections (set on
+    /// `tasks`).
+    pub(super) fn resources(
+        &mut self,
+        sys: &RawSystem,
+        raw: &[(S<String>, S<RawResource>)],
+        raw_tasks: &[(S<String>, S<RawTask>)],
+        tasks: &mut [Task],
+        scheduler: Option<Scheduler>,
+    ) -> (ResourceProtocol, Vec<Resource>) {
+        let protocol = match &sys.resource_protocol {
+            Some(p) => {
+                let options = ResourceProtocol::ALL.map(|p| (p.name(), p));
+                self.choice(p, "resource protocol", &options)
+                    .unwrap_or_default()
+            }
+            None => ResourceProtocol::Pcp,
+        };
+        let mut resources = Vec::new();
+        let mut index = HashMap::new();
+        for (k, _) in raw {
+            if self.check_name("resource", k, "[resources.bus]") {
+                index.insert(k.get_ref().clone(), resources.len());
+                resources.push(Resource {
+                    name: k.get_ref().clone(),
+                });
+            }
+        }
+        if let (Some(s), Some((k, _))) = (scheduler, raw.first()) {
+            let at = sys.resource_protocol.as_ref().map_or_else(|| span(k), span);
+            if !s.policy().resource_protocols.contains(&protocol) {
+                self.err(
+                    format!(
+                        "resource protocol \"{}\" does not apply to scheduler \"{}\"",
+                        protocol.name(),
+                        s.name()
+                    ),
+                    at,
+                    s.policy().resources_help,
+                );
+            }
+        }
+        let mut cpu_of: Vec<Option<u32>> = vec![None; resources.len()];
+        for ((k, v), t) in raw_tasks.iter().zip(tasks.iter_mut()) {
+            if let Some(cs) = &v.get_ref().critical_sections {
+                t.sections = self.sections(k, cs, t, &index, &resources, &mut cpu_of);
+            }
+        }
+        (protocol, resources)
+    }
+
+    /// One task's `critical_sections`.
+    fn sections(
+        &mut self,
+        k: &S<String>,
+        cs: &S<Vec<S<RawSection>>>,
+        t: &Task,
+        index: &HashMap<String, usize>,
+        resources: &[Resource],
+        cpu_of: &mut [Option<u32>],
+    ) -> Vec<CriticalSection> {
+        let name = k.get_ref();
+        if !matches!(t.server, Server::None) {
+            self.err(
+                format!(
+                    "task `{name}` has critical sections but server \"{}\"",
+                    t.server.name()
+                ),
+                span(cs),
+                "a budget server that runs out inside a section would hold the resource while it waits (and a background task has no guarantee): give the task server = \"none\", or move the shared work to such a task",
+            );
+        }
+        if cs.get_ref().len() > MAX_SECTIONS {
+            self.err(
+                format!(
+                    "task `{name}` has {} critical sections, more than {MAX_SECTIONS}",
+                    cs.get_ref().len()
+                ),
+                span(cs),
+                "merge sections on the same resource: the analysis uses the longest one per resource",
+            );
+        }
+        let mut out = Vec::new();
+        for s in cs.get_ref() {
+            let s = s.get_ref();
+            let Some(length) = self.positive_time(&s.length, "critical section length") else {
+                continue;
+            };
+            if length > t.exec {
+                self.err(
+                    format!(
+                        "critical section of `{name}` on `{}` ({}) is longer than its exec ({})",
+                        s.resource.get_ref(),
+                        format_in(length, self.unit()),
+                        format_in(t.exec, self.unit())
+                    ),
+                    span(&s.length),
+                    "a section is part of the job's processing: make it at most exec, or raise exec",
+                );
+            }
+            let Some(r) = self.section_resource(&s.resource, t, resources, index, cpu_of) else {
+                continue;
+            };
+            out.push(CriticalSection {
+                resource: r,
+                length,
+            });
+        }
+        let total = out.iter().fold(0, |a: Nanos, s| a.saturating_add(s.length));
+        if total > t.exec && out.iter().all(|s| s.length <= t.exec) {
+            self.err(
+                format!(
+                    "the critical sections of `{name}` take {} together, more than its exec ({})",
+                    format_in(total, self.unit()),
+                    format_in(t.exec, self.unit())
+                ),
+                span(cs),
+                "sections run one after the other within the job's processing: shorten them, or raise exec",
+            );
+        }
+        out
+    }
+
+    /// The resource a section names: declared, and on one CPU only.
+    fn section_resource(
+        &mut self,
+        r: &S<String>,
+        t: &Task,
+        resources: &[Resource],
+        index: &HashMap<String, usize>,
+        cpu_of: &mut [Option<u32>],
+    ) -> Option<usize> {
+        let Some(&i) = index.get(r.get_ref()) else {
+            let help = match suggest(r.get_ref(), resources.iter().map(|x| x.name.as_str())) {
+                Some(n) => format!(
+                    "did you mean \"{n}\"? Or declare it: [resources.{}]",
+                    r.get_ref()
+                ),
+                None => format!("declare it: [resources.{}]", r.get_ref()),
+            };
+            self.err(
+                format!("unknown resource \"{}\"", r.get_ref()),
+                span(r),
+                help,
+            );
+            return None;
+        };
+        match cpu_of[i] {
+            Some(c) if c != t.cpu => {
+                self.err(
+                    format!(
+                        "resource `{}` is used on cpu {c} and on cpu {} (by `{}`)",
+                        r.get_ref(),
+                        t.cpu,
+                        t.name
+                    ),
+                    span(r),
+                    "a resource shared across CPUs needs a multiprocessor protocol (MPCP, MSRP), which rtpipe does not implement: put the tasks that use it on one cpu, or give each CPU its own resource",
+                );
+                None
+            }
+            _ => {
+                cpu_of[i] = Some(t.cpu);
+                Some(i)
+            }
+        }
+    }
+}
