@@ -98,3 +98,42 @@ fn sum_of_max(
     }
     longest.values().sum()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rtpipe_model::policy::ranks;
+
+    /// h (rank 1) uses r1 and r2; m (2) holds r1 for 2 and r3 for 4; l (3)
+    /// holds r1 for 3, r2 for 1 and r3 for 5. r3's ceiling is m's rank, so
+    /// r3 never blocks h. By hand:
+    /// - PCP/SRP: B_h = max(2, 3, 1) = 3; B_m = max(3, 1, 5) = 5 (every
+    ///   resource l uses has a ceiling at or above m); B_l = 0;
+    /// - PIP: B_h = min(per task 2 + 3 = 5, per resource r1 max(2, 3) + r2
+    ///   1 = 4) = 4; B_m = min(per task 5, per resource 3 + 1 + 5 = 9) = 5.
+    #[test]
+    fn the_rules_by_hand() {
+        let src = |p: &str| {
+            format!(
+                "[system]\nname = \"b\"\nresource_protocol = \"{p}\"\n\
+                 [resources.r1]\n[resources.r2]\n[resources.r3]\n\
+                 [tasks.h]\nexec = 1\nperiod = 10\nserver = \"none\"\n\
+                 critical_sections = [{{ resource = \"r1\", length = 0.5 }}, {{ resource = \"r2\", length = 0.5 }}]\n\
+                 [tasks.m]\nexec = 6\nperiod = 20\nserver = \"none\"\n\
+                 critical_sections = [{{ resource = \"r1\", length = 2 }}, {{ resource = \"r3\", length = 4 }}]\n\
+                 [tasks.l]\nexec = 9\nperiod = 40\nserver = \"none\"\n\
+                 critical_sections = [{{ resource = \"r1\", length = 3 }}, {{ resource = \"r2\", length = 1 }}, {{ resource = \"r3\", length = 5 }}]\n"
+            )
+        };
+        let b = |p: &str| -> Vec<Nanos> {
+            let spec = Spec::parse("b.toml", &src(p)).unwrap_or_else(|e| panic!("{e}"));
+            let prio = ranks(&spec);
+            (0..3)
+                .map(|i| blocking(&spec, &prio, i) / 1_000_000)
+                .collect()
+        };
+        assert_eq!(b("pcp"), vec![3, 5, 0]);
+        assert_eq!(b("srp"), vec![3, 5, 0]);
+        assert_eq!(b("pip"), vec![4, 5, 0]);
+    }
+}

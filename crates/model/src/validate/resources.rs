@@ -54,15 +54,15 @@ impl Builder {
         if let (Some(s), Some((k, _))) = (scheduler, raw.first()) {
             let at = sys.resource_protocol.as_ref().map_or_else(|| span(k), span);
             if !s.policy().resource_protocols.contains(&protocol) {
-                self.err(
-                    format!(
+                let msg = match &sys.resource_protocol {
+                    Some(_) => format!(
                         "resource protocol \"{}\" does not apply to scheduler \"{}\"",
                         protocol.name(),
                         s.name()
                     ),
-                    at,
-                    s.policy().resources_help,
-                );
+                    None => format!("shared resources under scheduler \"{}\"", s.name()),
+                };
+                self.err(msg, at, s.policy().resources_help);
             }
         }
         let mut cpu_of: Vec<Option<u32>> = vec![None; resources.len()];
@@ -105,6 +105,7 @@ impl Builder {
                 "merge sections on the same resource: the analysis uses the longest one per resource",
             );
         }
+        let u = self.unit();
         let mut out = Vec::new();
         for s in cs.get_ref() {
             let s = s.get_ref();
@@ -114,10 +115,10 @@ impl Builder {
             if length > t.exec {
                 self.err(
                     format!(
-                        "critical section of `{name}` on `{}` ({}) is longer than its exec ({})",
+                        "critical section of `{name}` on `{}` ({}{u}) is longer than its exec ({}{u})",
                         s.resource.get_ref(),
-                        format_in(length, self.unit()),
-                        format_in(t.exec, self.unit())
+                        format_in(length, u),
+                        format_in(t.exec, u)
                     ),
                     span(&s.length),
                     "a section is part of the job's processing: make it at most exec, or raise exec",
@@ -135,9 +136,9 @@ impl Builder {
         if total > t.exec && out.iter().all(|s| s.length <= t.exec) {
             self.err(
                 format!(
-                    "the critical sections of `{name}` take {} together, more than its exec ({})",
-                    format_in(total, self.unit()),
-                    format_in(t.exec, self.unit())
+                    "the critical sections of `{name}` take {}{u} together, more than its exec ({}{u})",
+                    format_in(total, u),
+                    format_in(t.exec, u)
                 ),
                 span(cs),
                 "sections run one after the other within the job's processing: shorten them, or raise exec",
@@ -189,5 +190,103 @@ impl Builder {
                 Some(i)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::*;
+
+    const BASE: &str = r#"[system]
+name = "r"
+time_unit = "ms"
+
+[resources.bus]
+
+[tasks.a]
+exec = 1
+period = 5
+server = "none"
+critical_sections = [{ resource = "bus", length = 0.5 }]
+
+[tasks.b]
+exec = 2
+period = 10
+server = "none"
+"#;
+
+    /// The spec with task b's extra lines; its first diagnostic as
+    /// (file:line:column, message, help).
+    fn first_error(system: &str, b: &str) -> (String, String, String) {
+        let src = BASE.replace(
+            "time_unit = \"ms\"\n",
+            &format!("time_unit = \"ms\"\n{system}"),
+        ) + b;
+        match Spec::parse("r.toml", &src) {
+            Ok(_) => panic!("expected an error:\n{src}"),
+            Err(e) => {
+                let d = &e.diagnostics[0];
+                let help = d.help.clone().unwrap_or_default();
+                (e.locations()[0].clone(), d.message.clone(), help)
+            }
+        }
+    }
+
+    #[test]
+    fn sections_parse_and_round_trip() {
+        let src =
+            BASE.to_string() + "critical_sections = [{ resource = \"bus\", length = \"300us\" }]\n";
+        let s = Spec::parse("r.toml", &src).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.resources.len(), 1);
+        assert_eq!(s.resource_protocol, ResourceProtocol::Pcp);
+        assert_eq!(
+            s.tasks[1].sections,
+            vec![CriticalSection {
+                resource: 0,
+                length: 300_000
+            }]
+        );
+        let back = Spec::parse("w.toml", &to_toml(&s)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back, s);
+        let pip = src.replace(
+            "time_unit = \"ms\"\n",
+            "time_unit = \"ms\"\nresource_protocol = \"pip\"\n",
+        );
+        let s = Spec::parse("r.toml", &pip).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(Spec::parse("w.toml", &to_toml(&s)).ok(), Some(s));
+    }
+
+    #[test]
+    fn bad_combinations_are_located_with_a_fix() {
+        let cases: [(&str, &str, &str, &str); 7] = [
+            ("", "critical_sections = [{ resource = \"bus\", length = 3 }]\n", "r.toml:17:51", "longer than its exec"),
+            ("", "critical_sections = [{ resource = \"bsu\", length = 1 }]\n", "r.toml:17:35", "unknown resource"),
+            ("", "critical_sections = [{ resource = \"bus\", length = 0 }]\n", "r.toml:17:51", "must be positive"),
+            (
+                "",
+                "critical_sections = [{ resource = \"bus\", length = 1.5 }, { resource = \"bus\", length = 1 }]\n",
+                "r.toml:17:21",
+                "together, more than its exec",
+            ),
+            ("", "cpu = 1\ncritical_sections = [{ resource = \"bus\", length = 1 }]\n", "r.toml:18:35", "on cpu 0 and on cpu 1"),
+            ("scheduler = \"edf\"\n", "", "r.toml:6:12", "under scheduler \"edf\""),
+            ("resource_protocol = \"pi\"\n", "", "r.toml:4:21", "unknown resource protocol"),
+        ];
+        for (system, b, at, what) in cases {
+            let (loc, msg, help) = first_error(system, b);
+            assert_eq!(loc, at, "{msg}");
+            assert!(msg.contains(what), "{msg}");
+            assert!(!help.is_empty(), "{msg}: no fix");
+        }
+        let main = BASE.replace("server = \"none\"\ncritical", "server = \"main\"\ncritical");
+        let e = Spec::parse("r.toml", &main)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("r.toml:11:21: error: task `a` has critical sections but server \"main\""),
+            "{e}"
+        );
+        assert!(e.contains("server = \"none\""), "{e}");
     }
 }
