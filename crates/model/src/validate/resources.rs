@@ -85,16 +85,7 @@ impl Builder {
         cpu_of: &mut [Option<u32>],
     ) -> Vec<CriticalSection> {
         let name = k.get_ref();
-        if !matches!(t.server, Server::None) {
-            self.err(
-                format!(
-                    "task `{name}` has critical sections but server \"{}\"",
-                    t.server.name()
-                ),
-                span(cs),
-                "a budget server that runs out inside a section would hold the resource while it waits (and a background task has no guarantee): give the task server = \"none\", or move the shared work to such a task",
-            );
-        }
+        self.section_server(cs, t);
         if cs.get_ref().len() > MAX_SECTIONS {
             self.err(
                 format!(
@@ -145,6 +136,21 @@ impl Builder {
             );
         }
         out
+    }
+
+    /// Sections only in a task no budget suspends.
+    fn section_server(&mut self, cs: &S<Vec<S<RawSection>>>, t: &Task) {
+        if !matches!(t.server, Server::None) {
+            self.err(
+                format!(
+                    "task `{}` has critical sections but server \"{}\"",
+                    t.name,
+                    t.server.name()
+                ),
+                span(cs),
+                "a budget server that runs out inside a section would hold the resource while it waits (and a background task has no guarantee): give the task server = \"none\", or move the shared work to such a task",
+            );
+        }
     }
 
     /// The resource a section names: declared, and on one CPU only.
