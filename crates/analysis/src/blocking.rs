@@ -2,7 +2,8 @@
 //! fixed-priority response-time analysis, R_i = J_i + w_i with
 //! w_i = C_i + B_i + Σ_{j ∈ hp(i)} ⌈(w_i + J_j) / T_j⌉ · I_j
 //! (Audsley, Burns, Richardson, Tindell, Wellings 1993; Burns and Wellings,
-//! "Real-Time Systems and Programming Languages", 4th ed., Section 13.10).
+//! "Real-Time Systems and Programming Languages", the response-time
+//! equation with blocking).
 //!
 //! The ceiling of a resource is the highest rank (smallest number) among
 //! the tasks that use it; every user is on one CPU (validation). With
@@ -11,11 +12,13 @@
 //!
 //! - PCP and SRP (and the immediate ceiling the simulator runs):
 //!   B_i = max over the sections of lp(i) able to block i of their length
-//!   (Sha, Rajkumar, Lehoczky 1990, Theorem 12; Baker 1991);
+//!   (Sha, Rajkumar, Lehoczky 1990, the priority ceiling protocol; Baker
+//!   1991);
 //! - PIP: B_i = min(Σ_{j ∈ lp(i)} max_{s ∈ j able to block i} |s|,
 //!   Σ_k max_{j ∈ lp(i), s ∈ j on k able to block i} |s|): at most one
 //!   section per lower-priority task and one per resource (Sha, Rajkumar,
-//!   Lehoczky 1990, Theorems 5 and 6; sections are not nested).
+//!   Lehoczky 1990, the basic inheritance protocol; sections are not
+//!   nested).
 //!
 //! This module is the one home of the rule: `sched::response_times` adds it
 //! to a job's own demand, `disturbance` adds a disturbance on top of it.
