@@ -46,9 +46,11 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     let Some(period) = t.fixed_period() else {
         return Nanos::MAX;
     };
+    // Lower-priority critical sections block the job as a disturbance does.
+    let blocked = crate::blocking::blocking(spec, &prio, task);
     match (
-        busy_response(t.demand(), 0, period, &hp),
-        busy_response(t.demand(), b, period, &hp),
+        busy_response(t.demand(), blocked, period, &hp),
+        busy_response(t.demand(), blocked.saturating_add(b), period, &hp),
     ) {
         (Some(r), Some(rb)) => rb - r,
         _ => Nanos::MAX,

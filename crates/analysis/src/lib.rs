@@ -16,6 +16,7 @@
 //!   offsets, job by job over the hyperperiod.
 #![deny(missing_docs)]
 
+pub mod blocking;
 pub mod disturbance;
 pub mod edf;
 pub mod latency;

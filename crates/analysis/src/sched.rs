@@ -22,9 +22,13 @@ pub struct TaskTiming {
     pub jitter: Nanos,
     /// Rank on its CPU, 1 = highest; `None` under EDF and for background tasks.
     pub priority: Option<usize>,
-    /// The highest rank the task can run at: its own, or the rank of the Main
-    /// VCPU it serves (PIBS priority inheritance).
+    /// The highest rank the task can run at: its own, the rank of the Main
+    /// VCPU it serves (PIBS priority inheritance), or the ceiling of a
+    /// resource it locks ([`crate::blocking::locking_rank`]).
     pub top_priority: Option<usize>,
+    /// B: the longest a job can wait for lower-priority critical sections
+    /// ([`crate::blocking::blocking`]); included in the response times.
+    pub blocking: Nanos,
     /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
@@ -233,7 +237,8 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 deadline: t.deadline().unwrap_or(MAX_TIME),
                 jitter: t.jitter,
                 priority: prio[i],
-                top_priority: top[i],
+                top_priority: top[i].min(crate::blocking::locking_rank(spec, &prio, i)),
+                blocking: crate::blocking::blocking(spec, &prio, i),
                 cpu: t.cpu,
                 response_time: rt,
                 job_response_time: jrt,
@@ -279,10 +284,12 @@ fn response_times(
     match spec.policy().response {
         ResponseAnalysis::Rta => {
             let hp = hp_load(spec, prio, top, i);
-            (
-                response_time_jitter(t.budget(), t.jitter, &hp),
-                response_time_jitter(t.demand(), t.jitter, &hp),
-            )
+            let b = crate::blocking::blocking(spec, prio, i);
+            let r = |own: Nanos| {
+                own.checked_add(b)
+                    .and_then(|own| response_time_jitter(own, t.jitter, &hp))
+            };
+            (r(t.budget()), r(t.demand()))
         }
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
         ResponseAnalysis::EdfRta => edf_response_times(spec, i),

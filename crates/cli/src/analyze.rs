@@ -106,6 +106,10 @@ pub struct TaskView<'a> {
     /// J, when the task has release jitter (left out when 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     jitter: Option<f64>,
+    /// B, blocking by lower-priority critical sections (left out when the
+    /// spec declares no resources).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    blocking: Option<f64>,
     /// The task's `max_period` and whether its period keeps to it (both
     /// left out when the spec gives none).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -209,6 +213,7 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
             period: spec.in_unit(tm.period),
             deadline: t.deadline_given.map(|d| spec.in_unit(d)),
             jitter: (t.jitter > 0).then(|| spec.in_unit(t.jitter)),
+            blocking: (!spec.resources.is_empty()).then(|| spec.in_unit(tm.blocking)),
             max_period: t.max_period.map(|m| spec.in_unit(m)),
             period_ok: t.max_period.map(|m| tm.period <= m),
             utilization: tm.budget as f64 / tm.period as f64,
@@ -361,6 +366,10 @@ fn task_table(spec: &Spec, r: &Report) -> String {
     if extra {
         heads.extend(["deadline D", "jitter J"]);
     }
+    let blocking = !spec.resources.is_empty();
+    if blocking {
+        heads.push("blocking B");
+    }
     heads.extend(["C/T", "R(C)", "R(job)"]);
     let numeric: Vec<usize> = (2..heads.len()).collect();
     let mut t = Table::new(&heads).numeric(&numeric);
@@ -381,6 +390,9 @@ fn task_table(spec: &Spec, r: &Report) -> String {
         if extra {
             row.push(spec.fmt_time(tm.deadline));
             row.push(spec.fmt_time(tm.jitter));
+        }
+        if blocking {
+            row.push(spec.fmt_time(tm.blocking));
         }
         row.extend([
             format!("{:.4}", tm.budget as f64 / tm.period as f64),

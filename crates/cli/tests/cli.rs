@@ -247,6 +247,44 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Shared resources (issue 22): a critical section longer than its task's
+/// exec, an undeclared resource and sections under EDF exit 2 with the
+/// place and a fix; `design` and `run` refuse specs with sections (exit 2)
+/// rather than ignore them.
+#[test]
+fn bad_critical_sections_exit_2_with_location() {
+    let dir = scratch("cli-resources");
+    let text = match std::fs::read_to_string(example("resources.toml")) {
+        Ok(t) => t,
+        Err(e) => panic!("{e}"),
+    };
+    let cases = [
+        ("length = 1.5 }", "length = 4 }", "bad.toml:45:51: error: critical section of `l` on `log` (4ms) is longer than its exec (3ms)"),
+        ("\"log\", length = 1.5", "\"lgo\", length = 1.5", "bad.toml:45:35: error: unknown resource \"lgo\""),
+        ("resource_protocol = \"pcp\"", "scheduler = \"edf\"", "bad.toml:18:12: error: shared resources under scheduler \"edf\""),
+    ];
+    for (from, to, want) in cases {
+        let f = dir.join("bad.toml");
+        if let Err(e) = std::fs::write(&f, text.replacen(from, to, 1)) {
+            panic!("{e}");
+        }
+        let o = rtpipe(&["analyze", &f.to_string_lossy()]);
+        assert_eq!(o.status.code(), Some(2), "{to}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(want), "{err}");
+        assert!(err.contains("help:"), "{err}");
+    }
+    for args in [&["design"][..], &["run", "--duration", "1s"][..]] {
+        let mut a = args.to_vec();
+        let ex = example("resources.toml");
+        a.push(&ex);
+        let o = rtpipe(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// sense (C 1, T 10) → act (C 2, T 20): sound reaction from the event
 /// T_sense + 20 + R_act = 33 ms, freshness from the event 13 + 10 = 23 ms.
 const EVENT_LIMITS: &str = "[system]\nname = \"small\"\ntime_unit = \"ms\"\n\

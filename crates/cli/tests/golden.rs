@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 14] = [
+const EXAMPLES: [&str; 15] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -42,6 +42,7 @@ const EXAMPLES: [&str; 14] = [
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",
+    "resources",
     "table2-design-rta",
     "table2-design",
 ];

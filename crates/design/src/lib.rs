@@ -91,6 +91,12 @@ fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
             "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
         ));
     }
+    if spec.tasks.iter().any(|t| !t.sections.is_empty()) {
+        // Its RTA encodings have no blocking term.
+        return Err(DesignError::input(
+            "critical sections (critical_sections, [resources]): `design` does not model blocking yet; design with the sections removed, then add them back and check with `analyze`",
+        ));
+    }
     if spec.priorities != rtpipe_model::Priorities::RateMonotonic {
         return Err(DesignError::input(format!(
             "priorities = \"{}\": `design` orders tasks rate-monotonically as it chooses their periods; use priorities = \"rate-monotonic\" to design, then restore your order and check with `analyze`",

@@ -223,6 +223,8 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
         communication: crate::Communication::Implicit,
+        resource_protocol: crate::ResourceProtocol::Pcp,
+        resources: Vec::new(),
         channels,
         tasks,
         chains,

@@ -21,7 +21,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
-pub use policy::{Communication, Priorities, SchedPolicy, SchedTest, Scheduler};
+pub use policy::{Communication, Priorities, ResourceProtocol, SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB (every TOML input's
@@ -142,6 +142,11 @@ pub struct Task {
     /// actuation or sampling rate); a fixed period above it fails the
     /// verdict and the design keeps a free period at or under it.
     pub max_period: Option<Nanos>,
+    /// Its critical sections, in the order a job runs them: back to back,
+    /// not nested, the first starting when the job's processing does (after
+    /// Δin). A job whose processing time is shorter than the sections
+    /// runs them cut to its length.
+    pub sections: Vec<CriticalSection>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -175,6 +180,7 @@ impl Task {
             deadline_given: None,
             jitter: 0,
             max_period: None,
+            sections: Vec::new(),
             delta_in: 0,
             delta_out: 0,
         }
@@ -207,6 +213,24 @@ impl Task {
             _ => None,
         }
     }
+}
+
+/// A shared resource (`[resources.NAME]`), locked by the critical sections
+/// of the tasks of one CPU.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resource {
+    /// Its name in the spec.
+    pub name: String,
+}
+
+/// One critical section of a task: `length` of its processing time spent
+/// holding `resource`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CriticalSection {
+    /// The resource (index into `Spec::resources`).
+    pub resource: usize,
+    /// How long the job holds it (at most the task's `exec`).
+    pub length: Nanos,
 }
 
 /// A path along edges (producer → consumer) with optional limits.
@@ -268,6 +292,11 @@ pub struct Spec {
     pub priorities: Priorities,
     /// When jobs read and publish (implicit by default; LET).
     pub communication: Communication,
+    /// How the tasks of a CPU share resources (`[system]
+    /// resource_protocol`, PCP by default).
+    pub resource_protocol: ResourceProtocol,
+    /// The shared resources, in declaration order.
+    pub resources: Vec<Resource>,
     /// The channels, in declaration order.
     pub channels: Vec<Channel>,
     /// The tasks, in declaration order.

@@ -145,6 +145,50 @@ impl Communication {
     }
 }
 
+/// How tasks of one CPU share a resource (`[system] resource_protocol`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ResourceProtocol {
+    /// Priority ceiling (Sha, Rajkumar, Lehoczky 1990), run as its
+    /// immediate form: a job holding a resource runs at the resource's
+    /// ceiling (the highest rank of the tasks that use it). A job is
+    /// blocked at most once, for one critical section of a lower-priority
+    /// task on a resource whose ceiling is at or above its rank.
+    #[default]
+    Pcp,
+    /// The stack resource policy (Baker 1991) under fixed priorities: the
+    /// same preemption ceilings, the same bound and the same schedule as
+    /// the immediate priority ceiling.
+    Srp,
+    /// Priority inheritance (Sha, Rajkumar, Lehoczky 1990): a job holding
+    /// a resource runs at the highest rank of the jobs it blocks; a job
+    /// can be blocked once per lower-priority task and once per resource.
+    Pip,
+}
+
+impl ResourceProtocol {
+    /// Every protocol, in the order specs list them.
+    pub const ALL: [ResourceProtocol; 3] = [
+        ResourceProtocol::Pcp,
+        ResourceProtocol::Srp,
+        ResourceProtocol::Pip,
+    ];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResourceProtocol::Pcp => "pcp",
+            ResourceProtocol::Srp => "srp",
+            ResourceProtocol::Pip => "pip",
+        }
+    }
+
+    /// A job holding a resource runs at the resource's ceiling (PCP, SRP),
+    /// not at the rank of the jobs it blocks (PIP).
+    pub fn ceiling(self) -> bool {
+        self != ResourceProtocol::Pip
+    }
+}
+
 /// Who preempts whom on a CPU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preemption {
@@ -211,6 +255,11 @@ pub struct SchedPolicy {
     pub tests_help: &'static str,
     /// The Linux class that runs it.
     pub linux: LinuxClass,
+    /// The resource protocols the analysis and the simulator implement
+    /// under this policy (none: specs with resources are refused).
+    pub resource_protocols: &'static [ResourceProtocol],
+    /// What to do instead of a resource this policy cannot analyse.
+    pub resources_help: &'static str,
 }
 
 const RM: SchedPolicy = SchedPolicy {
@@ -222,6 +271,8 @@ const RM: SchedPolicy = SchedPolicy {
     tests: &[SchedTest::Rta, SchedTest::LiuLayland, SchedTest::Hyperbolic],
     tests_help: "with scheduler = \"rm\" use \"liu-layland\", \"hyperbolic\" or \"rta\"",
     linux: LinuxClass::Fifo,
+    resource_protocols: &ResourceProtocol::ALL,
+    resources_help: "with scheduler = \"rm\" use resource_protocol = \"pcp\", \"srp\" or \"pip\"",
 };
 
 const EDF: SchedPolicy = SchedPolicy {
@@ -233,6 +284,8 @@ const EDF: SchedPolicy = SchedPolicy {
     tests: &[SchedTest::Edf, SchedTest::Qpa],
     tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test) or \"qpa\" (the processor-demand test, for deadlines below periods)",
     linux: LinuxClass::Deadline,
+    resource_protocols: &[],
+    resources_help: "critical sections under EDF need the stack resource policy with Baker's test (1991), which rtpipe does not implement yet: use scheduler = \"rm\", or remove [resources] and the tasks' critical_sections",
 };
 
 impl SchedPolicy {

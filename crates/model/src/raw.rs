@@ -15,6 +15,8 @@ pub struct RawSpec {
     #[serde(default)]
     pub channels: Ordered<RawChannel>,
     #[serde(default)]
+    pub resources: Ordered<RawResource>,
+    #[serde(default)]
     pub tasks: Ordered<RawTask>,
     #[serde(default)]
     pub chain: Vec<S<RawChain>>,
@@ -32,6 +34,20 @@ pub struct RawSystem {
     pub release: Option<S<String>>,
     pub priorities: Option<S<String>>,
     pub communication: Option<S<String>>,
+    pub resource_protocol: Option<S<String>>,
+}
+
+/// `[resources.NAME]`: no keys yet (the protocol is the system's).
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawResource {}
+
+/// One entry of a task's `critical_sections`.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSection {
+    pub resource: S<String>,
+    pub length: S<toml::Value>,
 }
 
 #[derive(Debug, serde::Deserialize)]
@@ -68,6 +84,7 @@ pub struct RawTask {
     pub deadline: Option<S<toml::Value>>,
     pub jitter: Option<S<toml::Value>>,
     pub max_period: Option<S<toml::Value>>,
+    pub critical_sections: Option<S<Vec<S<RawSection>>>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

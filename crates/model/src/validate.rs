@@ -10,6 +10,7 @@ use std::ops::Range;
 
 mod comm;
 mod prio;
+mod resources;
 
 #[derive(Default)]
 pub(crate) struct Builder {
@@ -206,6 +207,8 @@ impl Builder {
         self.budgets_and_periods(raw_tasks, &tasks);
         self.priorities_and_deadlines(raw_tasks, &tasks, order, scheduler);
         let communication = self.communication(sys, raw_tasks, &tasks);
+        let (resource_protocol, resources) =
+            self.resources(sys, &raw.resources.0, raw_tasks, &mut tasks, scheduler);
         let test = scheduler
             .zip(test)
             .map(|(s, t)| self.test_for_tasks(sys, s, t, order, &tasks));
@@ -218,11 +221,8 @@ impl Builder {
             return None;
         }
         let harmonic = sys.harmonic.as_ref().is_some_and(|h| *h.get_ref());
-        if harmonic {
-            self.check_harmonic(&tasks, raw_tasks);
-            if !self.diags.is_empty() {
-                return None;
-            }
+        if harmonic && !self.check_harmonic(&tasks, raw_tasks) {
+            return None;
         }
         let resolution = match &sys.resolution {
             Some(r) => self.positive_time(r, "resolution")?,
@@ -237,6 +237,8 @@ impl Builder {
             harmonic,
             priorities: order,
             communication,
+            resource_protocol,
+            resources,
             channels,
             tasks,
             chains,
@@ -660,8 +662,10 @@ impl Builder {
     }
 
     /// `harmonic = true`: every pair of fixed periods divides one way.
-    fn check_harmonic(&mut self, tasks: &[Task], raw_tasks: &[(S<String>, S<RawTask>)]) {
+    /// Whether the fixed periods are harmonic (a diagnostic per clash).
+    fn check_harmonic(&mut self, tasks: &[Task], raw_tasks: &[(S<String>, S<RawTask>)]) -> bool {
         let unit = self.unit();
+        let before = self.diags.len();
         for b in 0..tasks.len() {
             let Some(pb) = tasks[b].fixed_period() else {
                 continue;
@@ -691,6 +695,7 @@ impl Builder {
                 ),
             );
         }
+        self.diags.len() == before
     }
 
     fn unknown_task(&mut self, n: &S<String>, names: &[String]) {
@@ -797,6 +802,7 @@ impl Builder {
             deadline_given: deadline?,
             jitter: jitter?,
             max_period: max_period?,
+            sections: Vec::new(),
             delta_in: 0,
             delta_out: 0,
         })

@@ -93,6 +93,16 @@ fn system(o: &mut String, spec: &Spec) {
     if spec.communication != crate::Communication::Implicit {
         let _ = writeln!(o, "communication = \"{}\"", spec.communication.name());
     }
+    if spec.resource_protocol != crate::ResourceProtocol::Pcp {
+        let _ = writeln!(
+            o,
+            "resource_protocol = \"{}\"",
+            spec.resource_protocol.name()
+        );
+    }
+    for r in &spec.resources {
+        let _ = writeln!(o, "\n[resources.{}]", key(&r.name));
+    }
 }
 
 /// One `[channels.NAME]` table.
@@ -132,6 +142,20 @@ fn task(o: &mut String, spec: &Spec, t: &Task) {
     }
     if t.jitter != 0 {
         let _ = writeln!(o, "jitter = {}", time(spec, t.jitter));
+    }
+    if !t.sections.is_empty() {
+        let cs: Vec<String> = t
+            .sections
+            .iter()
+            .map(|s| {
+                format!(
+                    "{{ resource = {}, length = {} }}",
+                    quoted(&spec.resources[s.resource].name),
+                    time(spec, s.length)
+                )
+            })
+            .collect();
+        let _ = writeln!(o, "critical_sections = [{}]", cs.join(", "));
     }
     if let Some(m) = t.max_period {
         let _ = writeln!(o, "max_period = {}", time(spec, m));

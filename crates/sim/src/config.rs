@@ -113,6 +113,9 @@ pub enum SimError {
     /// A task's best-case demand is negative or above its worst case
     /// (validated specs never have one).
     BadDemand(String),
+    /// Critical sections under a scheduler with no resource protocol
+    /// (validated specs never have them).
+    Resources(&'static str),
 }
 
 impl fmt::Display for SimError {
@@ -139,6 +142,10 @@ impl fmt::Display for SimError {
             SimError::BadDemand(t) => write!(
                 f,
                 "task `{t}`: its demands must satisfy 0 <= best case <= worst case"
+            ),
+            SimError::Resources(s) => write!(
+                f,
+                "critical sections under scheduler \"{s}\", which has no resource protocol: use scheduler = \"rm\""
             ),
         }
     }

@@ -79,8 +79,9 @@ impl<H: Hooks> Sim<H> {
         }
     }
 
-    /// The next event of `cpu` (brought up to t): its job completes, or its
-    /// server's capacity runs out.
+    /// The next event of `cpu` (brought up to t): its job completes, its
+    /// server's capacity runs out, or it enters or leaves a critical
+    /// section.
     fn schedule(&mut self, cpu: usize, t: Nanos) {
         let next = self.running[cpu].and_then(|i| {
             let ts = &self.tasks[i];
@@ -91,6 +92,9 @@ impl<H: Hooks> Sim<H> {
                 if cap < job.remaining {
                     next = t + cap;
                 }
+            }
+            if let Some(b) = self.locks.until_boundary(i, job) {
+                next = next.min(t + b);
             }
             Some(next)
         });
@@ -129,6 +133,7 @@ impl<H: Hooks> Sim<H> {
             }
             self.refresh(i, t + dt);
         }
+        self.unlock_passed(i, t + dt);
         self.record_segment(cpu, i, index, t, dt, slack);
     }
 }

@@ -288,6 +288,8 @@ pub(crate) struct Sim<H> {
     /// Under LET, per task: the job that read at its release and publishes
     /// at the end of its period.
     pub(crate) let_open: Vec<Option<LetJob>>,
+    /// Critical sections and the resources' holders (`locks.rs`).
+    pub(crate) locks: Locks,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -309,6 +311,10 @@ impl<H: Hooks> Sim<H> {
             .map(|(i, ts)| Reverse((ts.next_release, i)))
             .collect();
         let n_cpus = cpu_tasks.len();
+        let locks = Locks::new(spec);
+        if locks.any() && !spec.policy().fixed_priority() {
+            return Err(SimError::Resources(spec.scheduler.name()));
+        }
         Ok(Sim {
             hooks,
             edf: spec.policy().preemption == Preemption::EarliestDeadline,
@@ -337,6 +343,7 @@ impl<H: Hooks> Sim<H> {
             scratch: (Vec::new(), Vec::new()),
             let_comm: spec.communication == Communication::Let,
             let_open: vec![None; spec.tasks.len()],
+            locks,
         })
     }
 
@@ -365,6 +372,9 @@ impl<H: Hooks> Sim<H> {
                 self.check(t);
             }
             self.pick_marked(t, &mut picked);
+            if self.locks.any() && self.lock_step(t) {
+                continue;
+            }
             if !self.read_started(t, &picked) {
                 break;
             }
@@ -512,6 +522,9 @@ impl<H: Hooks> Sim<H> {
         let Some(job) = ts.queue.front() else {
             return (None, None);
         };
+        if self.locks.waiting[i].is_some() {
+            return (None, None);
+        }
         let has_budget = ts.budget.capacity(t) > 0;
         let timer = if has_budget {
             None
@@ -527,12 +540,16 @@ impl<H: Hooks> Sim<H> {
         let key = match (&ts.budget, self.edf) {
             (Budget::Cbs(c), _) => c.deadline,
             (_, true) => job.release + ts.deadline,
-            (_, false) => match ts.serves {
-                // PIBS inheritance: the better (smaller) rank of the server
-                // and the Main VCPU it serves while that one has a job.
-                Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
-                _ => ts.rank,
-            },
+            // Keys 2·rank leave 2·rank − 1 to a resource holder (`locks.rs`).
+            (_, false) => self.locks.key(
+                i,
+                2 * match ts.serves {
+                    // PIBS inheritance: the better (smaller) rank of the server
+                    // and the Main VCPU it serves while that one has a job.
+                    Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
+                    _ => ts.rank,
+                },
+            ),
         };
         (Some((class, key)), timer)
     }

@@ -52,6 +52,7 @@ mod cpu_events;
 mod cpus;
 mod engine;
 mod let_comm;
+mod locks;
 pub mod observe;
 mod rng;
 pub mod search;
@@ -59,6 +60,7 @@ pub mod server;
 
 pub use config::*;
 pub(crate) use engine::*;
+pub(crate) use locks::Locks;
 
 pub use bodies::simulate_bodies;
 use rtpipe_joblog::SimResult;

@@ -209,6 +209,8 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
         communication: crate::Communication::Implicit,
+        resource_protocol: crate::ResourceProtocol::Pcp,
+        resources: Vec::new(),
         channels,
         tasks,
         chains,

@@ -294,6 +294,8 @@ fn build_spec(f: &E2eFile, ecus: &[Id], name: &str) -> Spec {
         harmonic: false,
         priorities: crate::Priorities::RateMonotonic,
         communication: crate::Communication::Implicit,
+        resource_protocol: crate::ResourceProtocol::Pcp,
+        resources: Vec::new(),
         channels: vec![Channel {
             name: "mem".into(),
             bandwidth: 1.0,

@@ -1,0 +1,205 @@
+//! Shared resources on the simulated schedule (issue 22): each task's
+//! critical sections, who holds each resource, who waits for it, and the
+//! priority a holder runs at.
+//!
+//! Placement: a job runs its sections back to back, in the spec's order,
+//! from the start of its processing (after Δin): section k covers the
+//! job's progress [Δin + Σ_{l<k} |s_l|, Δin + Σ_{l≤k} |s_l|), cut at the
+//! job's demand (a job shorter than its sections runs them cut). Placing
+//! them first makes a lower-priority job hold its resource as soon as it
+//! starts, which is where the blocking bound is reached.
+//!
+//! Protocols, under fixed priorities (keys are 2·rank, so 2·rank − 1 sits
+//! just above a rank, ahead of its task):
+//! - PCP and SRP run as the immediate priority ceiling: a holder's key is
+//!   at most 2·ceiling − 1. A job then never finds its resource held on a
+//!   uniprocessor (validation keeps resources on one CPU and their users
+//!   unbudgeted), and waits at most one section before it starts;
+//! - PIP: a job that reaches a section whose resource is held waits (it is
+//!   no contender) and the holder's key is at most 2·rank − 1 of every
+//!   waiter; at the release every waiter contends again and the first to
+//!   run takes the resource.
+
+use crate::engine::Job;
+use rtpipe_model::policy::ranks;
+use rtpipe_model::{Nanos, ResourceProtocol, Spec};
+
+pub(crate) struct Locks {
+    /// The holder's key is capped by the ceiling (PCP, SRP), or by its
+    /// waiters' ranks (PIP).
+    ceiling_protocol: bool,
+    /// Per resource: 2·ceiling − 1 (the best key of a holder under PCP/SRP).
+    ceiling: Vec<Nanos>,
+    /// Per resource: the task whose front job holds it.
+    holder: Vec<Option<usize>>,
+    /// Per resource: the tasks waiting for it (PIP only).
+    waiters: Vec<Vec<usize>>,
+    /// Per task: its sections as (start, end, resource) in progress.
+    sections: Vec<Vec<(Nanos, Nanos, usize)>>,
+    /// Per task: the section its front job is in while it holds the
+    /// section's resource, as (section, resource): two sections in a row
+    /// on one resource are two acquisitions.
+    pub(crate) holding: Vec<Option<(usize, usize)>>,
+    /// Per task: the resource its front job waits for.
+    pub(crate) waiting: Vec<Option<usize>>,
+    /// Per task: its rank (the waiters' under PIP).
+    rank: Vec<Nanos>,
+    /// Some task has a section (asked at every instant: kept, not scanned).
+    active: bool,
+}
+
+impl Locks {
+    pub(crate) fn new(spec: &Spec) -> Locks {
+        let rk: Vec<Nanos> = ranks(spec)
+            .iter()
+            .enumerate()
+            .map(|(i, r)| r.map_or(i as Nanos, |r| r as Nanos))
+            .collect();
+        let mut ceiling = vec![Nanos::MAX; spec.resources.len()];
+        let mut sections = Vec::with_capacity(spec.tasks.len());
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let mut at = t.delta_in;
+            let mut own = Vec::new();
+            for s in &t.sections {
+                own.push((at, at + s.length, s.resource));
+                at += s.length;
+                if let Some(c) = ceiling.get_mut(s.resource) {
+                    *c = (*c).min(2 * rk[i] - 1);
+                }
+            }
+            sections.push(own);
+        }
+        let n = spec.tasks.len();
+        let active = sections.iter().any(|s: &Vec<_>| !s.is_empty());
+        Locks {
+            ceiling_protocol: spec.resource_protocol != ResourceProtocol::Pip,
+            holder: vec![None; ceiling.len()],
+            waiters: vec![Vec::new(); ceiling.len()],
+            ceiling,
+            sections,
+            holding: vec![None; n],
+            waiting: vec![None; n],
+            rank: rk,
+            active,
+        }
+    }
+
+    /// Some task has a critical section.
+    pub(crate) fn any(&self) -> bool {
+        self.active
+    }
+
+    /// The section `job` of task i is in, if any, as (section, resource).
+    pub(crate) fn section_at(&self, i: usize, job: &Job) -> Option<(usize, usize)> {
+        let p = job.demand - job.remaining;
+        self.sections[i]
+            .iter()
+            .position(|&(s, e, _)| s <= p && p < e.min(job.demand))
+            .map(|k| (k, self.sections[i][k].2))
+    }
+
+    /// How much more `job` of task i runs before it enters or leaves a
+    /// section (`None`: no boundary ahead).
+    pub(crate) fn until_boundary(&self, i: usize, job: &Job) -> Option<Nanos> {
+        let p = job.demand - job.remaining;
+        self.sections[i]
+            .iter()
+            .flat_map(|&(s, e, _)| [s, e.min(job.demand)])
+            .filter(|&b| b > p && b <= job.demand)
+            .min()
+            .map(|b| b - p)
+    }
+
+    /// The key of task i, whose own fixed-priority key is `base`: raised
+    /// while it holds a resource.
+    pub(crate) fn key(&self, i: usize, base: Nanos) -> Nanos {
+        let Some((_, r)) = self.holding[i] else {
+            return base;
+        };
+        if self.ceiling_protocol {
+            return base.min(self.ceiling[r]);
+        }
+        self.waiters[r]
+            .iter()
+            .map(|&w| 2 * self.rank[w] - 1)
+            .fold(base, Nanos::min)
+    }
+
+    /// Task i's front job, picked to run, is at its section `k` on `r`: it
+    /// takes the resource (`None`), or waits for its holder (`Some(holder)`).
+    pub(crate) fn acquire(&mut self, i: usize, (k, r): (usize, usize)) -> Option<usize> {
+        match self.holder[r] {
+            None => {
+                self.holder[r] = Some(i);
+                self.holding[i] = Some((k, r));
+                None
+            }
+            Some(h) => {
+                self.waiting[i] = Some(r);
+                self.waiters[r].push(i);
+                Some(h)
+            }
+        }
+    }
+
+    /// Task i gives its resource back: the tasks that waited for it.
+    pub(crate) fn release(&mut self, i: usize) -> Vec<usize> {
+        let Some((_, r)) = self.holding[i].take() else {
+            return Vec::new();
+        };
+        self.holder[r] = None;
+        let woken = std::mem::take(&mut self.waiters[r]);
+        for &w in &woken {
+            self.waiting[w] = None;
+        }
+        woken
+    }
+}
+
+impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
+    /// The running jobs at a section they do not hold take its resource or
+    /// wait for it; true when one waits (its CPU must pick again).
+    pub(crate) fn lock_step(&mut self, t: Nanos) -> bool {
+        let mut again = false;
+        for cpu in 0..self.running.len() {
+            let Some(i) = self.running[cpu] else { continue };
+            let Some(job) = self.tasks[i].queue.front() else {
+                continue;
+            };
+            let Some(at) = self.locks.section_at(i, job) else {
+                continue;
+            };
+            if self.locks.holding[i] == Some(at) {
+                continue;
+            }
+            match self.locks.acquire(i, at) {
+                None => self.refresh(i, t),
+                Some(h) => {
+                    self.refresh(i, t);
+                    self.refresh(h, t);
+                    again = true;
+                }
+            }
+        }
+        again
+    }
+
+    /// Task i's front job has run to t: it gives back a resource whose
+    /// section it has left, and the tasks that waited for it contend again.
+    pub(crate) fn unlock_passed(&mut self, i: usize, t: Nanos) {
+        let Some(held) = self.locks.holding[i] else {
+            return;
+        };
+        let inside = self.tasks[i]
+            .queue
+            .front()
+            .and_then(|job| self.locks.section_at(i, job));
+        if inside == Some(held) {
+            return;
+        }
+        for w in self.locks.release(i) {
+            self.refresh(w, t);
+        }
+        self.refresh(i, t);
+    }
+}
