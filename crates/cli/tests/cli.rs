@@ -216,21 +216,15 @@ fn design_survives_numerical_failures() {
     );
 }
 
-/// Issue 22's bad combinations exit 2 with the place and a fix; `design`
-/// refuses jitter with exit 2.
-#[test]
-fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
-    let dir = scratch("cli-timing");
-    let text = match std::fs::read_to_string(example("jitter-deadlines.toml")) {
+/// `analyze` on an example with each (from, to) edit exits 2 with the
+/// expected located message and a help line.
+fn mutated_exit_2(tag: &str, name: &str, cases: &[(&str, &str, &str)]) {
+    let dir = scratch(tag);
+    let text = match std::fs::read_to_string(example(name)) {
         Ok(t) => t,
         Err(e) => panic!("{e}"),
     };
-    let cases = [
-        ("deadline = 1.5", "deadline = 2.5", "bad.toml:24:12: error: deadline 2.5 of task `gyro` is above its period (2)"),
-        ("jitter = 0.4 ", "jitter = 2 ", "bad.toml:23:10: error: jitter 2 of task `gyro` is not below its period (2)"),
-        ("period = 2\n", "period = 2\npriority = 1\n", "bad.toml:23:12: error: task `gyro` gives a priority, but priorities are deadline-monotonic"),
-    ];
-    for (from, to, want) in cases {
+    for &(from, to, want) in cases {
         let f = dir.join("bad.toml");
         if let Err(e) = std::fs::write(&f, text.replacen(from, to, 1)) {
             panic!("{e}");
@@ -241,10 +235,22 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
         assert!(err.contains(want), "{err}");
         assert!(err.contains("help:"), "{err}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 22's bad combinations exit 2 with the place and a fix; `design`
+/// refuses jitter with exit 2.
+#[test]
+fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
+    let cases = [
+        ("deadline = 1.5", "deadline = 2.5", "bad.toml:24:12: error: deadline 2.5 of task `gyro` is above its period (2)"),
+        ("jitter = 0.4 ", "jitter = 2 ", "bad.toml:23:10: error: jitter 2 of task `gyro` is not below its period (2)"),
+        ("period = 2\n", "period = 2\npriority = 1\n", "bad.toml:23:12: error: task `gyro` gives a priority, but priorities are deadline-monotonic"),
+    ];
+    mutated_exit_2("cli-timing", "jitter-deadlines.toml", &cases);
     let o = rtpipe(&["design", &example("jitter-deadlines.toml")]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("release jitter"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Shared resources (issue 22): a critical section longer than its task's
@@ -253,27 +259,12 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
 /// rather than ignore them.
 #[test]
 fn bad_critical_sections_exit_2_with_location() {
-    let dir = scratch("cli-resources");
-    let text = match std::fs::read_to_string(example("resources.toml")) {
-        Ok(t) => t,
-        Err(e) => panic!("{e}"),
-    };
     let cases = [
         ("length = 1.5 }", "length = 4 }", "bad.toml:45:51: error: critical section of `l` on `log` (4ms) is longer than its exec (3ms)"),
         ("\"log\", length = 1.5", "\"lgo\", length = 1.5", "bad.toml:45:35: error: unknown resource \"lgo\""),
         ("resource_protocol = \"pcp\"", "scheduler = \"edf\"", "bad.toml:18:12: error: shared resources under scheduler \"edf\""),
     ];
-    for (from, to, want) in cases {
-        let f = dir.join("bad.toml");
-        if let Err(e) = std::fs::write(&f, text.replacen(from, to, 1)) {
-            panic!("{e}");
-        }
-        let o = rtpipe(&["analyze", &f.to_string_lossy()]);
-        assert_eq!(o.status.code(), Some(2), "{to}");
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(err.contains(want), "{err}");
-        assert!(err.contains("help:"), "{err}");
-    }
+    mutated_exit_2("cli-resources", "resources.toml", &cases);
     for args in [&["design"][..], &["run", "--duration", "1s"][..]] {
         let mut a = args.to_vec();
         let ex = example("resources.toml");
@@ -282,7 +273,6 @@ fn bad_critical_sections_exit_2_with_location() {
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// sense (C 1, T 10) → act (C 2, T 20): sound reaction from the event

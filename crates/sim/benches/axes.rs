@@ -12,16 +12,16 @@
 //! Each system is described on stderr (events per run, reads, chains)
 //! before it is measured.
 
+mod common;
+use common::{run, MS};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, waters_system, GenConfig, WatersConfig};
 use rtpipe_model::{Nanos, Scheduler, Spec};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
+use rtpipe_sim::{ExecModel, Phasing, SimConfig};
 use std::hint::black_box;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const SEED: u64 = 2018;
-const MS: Nanos = 1_000_000;
 
 /// The base of the axes: 1,000 tasks on 40 CPUs, 50 chains, fan-in ≤ 2.
 fn base() -> GenConfig {
@@ -62,30 +62,16 @@ fn span_for(spec: &Spec, events: f64) -> Nanos {
     ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
 }
 
-fn run(spec: &Spec, cfg: &SimConfig) -> SimResult {
-    match simulate(spec, cfg) {
-        Ok(r) => r,
-        Err(e) => panic!("{}: {e}", spec.name),
-    }
-}
-
-/// One run outside the timed loop: its event count and a description.
+/// One run outside the timed loop (see `common::describe`).
 fn describe(label: &str, spec: &Spec, cfg: &SimConfig) -> u64 {
-    let t0 = Instant::now();
-    let r = run(spec, cfg);
-    let wall = t0.elapsed();
-    let reads: usize = spec.tasks.iter().map(|t| t.reads.len()).sum();
-    eprintln!(
-        "{label}: {} tasks, {} reads, {} chains, {} events in {} ms simulated; \
-         one run {wall:.2?} ({:.2} M events/s)",
-        spec.tasks.len(),
-        reads,
-        spec.chains.len(),
-        r.events,
-        cfg.horizon / MS,
-        r.events as f64 / wall.as_secs_f64() / 1e6
-    );
-    r.events
+    common::describe(label, spec, cfg, |r| {
+        let reads: usize = spec.tasks.iter().map(|t| t.reads.len()).sum();
+        format!(
+            "{reads} reads, {} chains, {} events",
+            spec.chains.len(),
+            r.events
+        )
+    })
 }
 
 /// The systems measured: (axis, label, spec).

@@ -19,19 +19,19 @@
 //! Each system is described on stderr (events per run, late jobs) before it
 //! is measured.
 
+mod common;
+use common::{run, MS};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_analysis::Metric;
-use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::search::{search, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
+use rtpipe_sim::{ExecModel, Phasing, SimConfig};
 use std::hint::black_box;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 const SEED: u64 = 2018;
-const MS: Nanos = 1_000_000;
 
 fn system(tasks: usize, cpus: u32, scheduler: Scheduler) -> Spec {
     random_system(
@@ -49,29 +49,13 @@ fn system(tasks: usize, cpus: u32, scheduler: Scheduler) -> Spec {
     )
 }
 
-fn run(spec: &Spec, cfg: &SimConfig) -> SimResult {
-    match simulate(spec, cfg) {
-        Ok(r) => r,
-        Err(e) => panic!("{}: {e}", spec.name),
-    }
-}
-
-/// One run outside the timed loop: its event count and a description.
+/// One run outside the timed loop (see `common::describe`).
 fn describe(label: &str, spec: &Spec, cfg: &SimConfig) -> u64 {
-    let t0 = Instant::now();
-    let r = run(spec, cfg);
-    let wall = t0.elapsed();
-    let late: u64 = r.tasks.iter().map(|t| t.late).sum();
-    let completed: u64 = r.tasks.iter().map(|t| t.completed).sum();
-    eprintln!(
-        "{label}: {} tasks, {} events, {completed} jobs ({late} late) in {} ms simulated; \
-         one run {wall:.2?} ({:.2} M events/s)",
-        spec.tasks.len(),
-        r.events,
-        cfg.horizon / MS,
-        r.events as f64 / wall.as_secs_f64() / 1e6
-    );
-    r.events
+    common::describe(label, spec, cfg, |r| {
+        let late: u64 = r.tasks.iter().map(|t| t.late).sum();
+        let completed: u64 = r.tasks.iter().map(|t| t.completed).sum();
+        format!("{} events, {completed} jobs ({late} late)", r.events)
+    })
 }
 
 fn events(c: &mut Criterion) {

@@ -1,0 +1,37 @@
+//! What the simulator's benches share: a run that names its system when
+//! it fails, and one run outside the timed loop that says what is measured.
+
+use rtpipe_joblog::SimResult;
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::{simulate, SimConfig};
+use std::time::Instant;
+
+pub const MS: Nanos = 1_000_000;
+
+pub fn run(spec: &Spec, cfg: &SimConfig) -> SimResult {
+    match simulate(spec, cfg) {
+        Ok(r) => r,
+        Err(e) => panic!("{}: {e}", spec.name),
+    }
+}
+
+/// One run outside the timed loop: its event count, and on stderr a line
+/// with the bench's `details` of it, the span and the rate.
+pub fn describe(
+    label: &str,
+    spec: &Spec,
+    cfg: &SimConfig,
+    details: impl Fn(&SimResult) -> String,
+) -> u64 {
+    let t0 = Instant::now();
+    let r = run(spec, cfg);
+    let wall = t0.elapsed();
+    eprintln!(
+        "{label}: {} tasks, {} in {} ms simulated; one run {wall:.2?} ({:.2} M events/s)",
+        spec.tasks.len(),
+        details(&r),
+        cfg.horizon / MS,
+        r.events as f64 / wall.as_secs_f64() / 1e6
+    );
+    r.events
+}
