@@ -18,7 +18,7 @@ use crate::command;
 use crate::output;
 use crate::plot;
 use crate::report::flight::{quality_text, RmsMax};
-use crate::report::samples::samples_csv;
+use crate::report::samples::{Prepared, SamplesFile};
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::trace::metrics::StepResponse;
@@ -38,8 +38,13 @@ use std::sync::Arc;
 fn with_progress_bar<T: Send>(
     msg: String,
     horizon: i64,
+    interruptible: bool,
     f: impl FnOnce(Arc<AtomicU64>) -> T + Send,
 ) -> T {
+    if interruptible {
+        // Files are written as the flight goes: Ctrl-C must take them away.
+        rtpipe_runtime::sys::catch_sigint();
+    }
     let done = Arc::new(AtomicU64::new(0));
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(u64::try_from(horizon).unwrap_or(0) / 1_000_000),
@@ -61,6 +66,10 @@ fn with_progress_bar<T: Send>(
             match rx.recv_timeout(std::time::Duration::from_millis(50)) {
                 Ok(v) => break Some(v),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if interruptible && rtpipe_runtime::sys::stop_requested() {
+                        pb.finish_and_clear();
+                        crate::report::samples::exit_interrupted();
+                    }
                     pb.set_position(done.load(Ordering::Relaxed) / 1_000_000);
                 }
                 // The worker panicked (main's hook ends the process first).
@@ -105,7 +114,8 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
         seed: a.seed,
     };
     let mut s = setup(spec, &r)?;
-    s.log_jobs = a.samples.is_some() || a.log.is_some();
+    // `--samples` streams its rows; `--log` reads the job log.
+    s.log_jobs = a.log.is_some();
     s.keep_trace = a.log.is_some() || a.plot.is_some();
     if let Some(t) = a.turbulence {
         s.mission.world.turbulence = t;
@@ -142,8 +152,13 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         s.horizon as f64 * 1e-9
     );
     let started = std::time::Instant::now();
-    let flight = match with_progress_bar(msg, s.horizon, |p| {
-        fly_with_progress(&spec, &s, a.exec.model(), Some(p))
+    let samples = match SamplesFile::open(a.samples.as_ref(), &a.spec, &spec) {
+        Ok(s) => s,
+        Err(b) => return command::fail(b),
+    };
+    let sink = samples.as_ref().map(SamplesFile::sink);
+    let flight = match with_progress_bar(msg, s.horizon, samples.is_some(), |p| {
+        fly_with_progress(&spec, &s, a.exec.model(), Some(p), sink)
     }) {
         Ok(f) => f,
         Err(b) => return command::fail(b),
@@ -151,7 +166,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(&spec);
     let obs = observe(&report, &flight.sim);
-    if let Err(b) = write_outputs(&spec, a, &flight, &obs) {
+    if let Err(b) = write_outputs(&spec, a, &flight, &obs, samples) {
         return command::fail(b);
     }
     let failures = flight.quality.failures(&s.criteria());
@@ -461,8 +476,16 @@ fn check_outputs(a: &FlyArgs) -> Result<(), Diagnostic> {
     output::distinct(&outs)
 }
 
-/// Renders `--plot` and `--log` and writes them all or none.
-fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Result<(), Diagnostic> {
+/// Renders `--plot` and `--log` and writes them all or none, then puts
+/// `--samples` (written as the flight went) in place.
+fn write_outputs(
+    spec: &Spec,
+    a: &FlyArgs,
+    f: &Flight,
+    obs: &[ChainObs],
+    samples: Option<SamplesFile>,
+) -> Result<(), Diagnostic> {
+    let prepared: Option<Prepared> = samples.map(SamplesFile::finish).transpose()?;
     let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
     if let Some(dir) = &a.plot {
         output::ensure_dir(dir)?;
@@ -480,9 +503,6 @@ fn write_outputs(spec: &Spec, a: &FlyArgs, f: &Flight, obs: &[ChainObs]) -> Resu
     if let Some(path) = &a.log {
         files.push(("--log", path.clone(), csv(spec, f)));
     }
-    if let Some(path) = &a.samples {
-        let rows = rtpipe_joblog::sample_rows(spec, &f.sim.jobs);
-        files.push(("--samples", path.clone(), samples_csv(spec, &rows)));
-    }
-    output::write_files(&a.spec, &files)
+    output::write_files(&a.spec, &files)?;
+    prepared.map_or(Ok(()), Prepared::commit)
 }

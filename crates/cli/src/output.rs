@@ -240,6 +240,16 @@ pub fn distinct(outs: &[Output]) -> Result<(), Diagnostic> {
     Ok(())
 }
 
+/// A fresh temporary path beside `target` (same directory, so a rename
+/// puts it in place), told apart by `what` and this process.
+pub fn temp_beside(target: &Path, what: &str) -> PathBuf {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parent_dir(target).join(format!(".{name}.{}.{what}.tmp", std::process::id()))
+}
+
 /// Writes every file to a fresh temporary file beside its real target, then
 /// renames them all over their targets. A failed write removes every
 /// temporary and changes no target; a failed rename (rare: same directory)
@@ -252,12 +262,7 @@ pub fn write_all(files: &[(&Output, &str)]) -> Result<(), Diagnostic> {
         }
     };
     for (k, (out, text)) in files.iter().enumerate() {
-        let name = out
-            .target
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = parent_dir(&out.target).join(format!(".{name}.{}.{k}.tmp", std::process::id()));
+        let tmp = temp_beside(&out.target, &k.to_string());
         let written = fs::OpenOptions::new()
             .write(true)
             .create_new(true)

@@ -396,6 +396,28 @@ fn too_many_period_steps_name_the_task_and_a_resolution() {
 
 // 3. Ctrl-C stops the design search and prints the best verified design.
 
+/// `--samples` is written as the run goes (simulate and fly): Ctrl-C in
+/// the middle leaves no file, partial or temporary, and exits 130.
+#[test]
+fn ctrl_c_leaves_no_streamed_samples() {
+    for cmd in ["simulate", "fly"] {
+        let dir = scratch(&format!("ctrl-c-samples-{cmd}"));
+        let spec = example("cleanflight.toml");
+        let (o, after) = rtpipe_interrupted(
+            &dir,
+            &[cmd, &spec, "--duration", "20000s", "--samples", "s.csv"],
+            Duration::from_millis(700),
+            LIMIT,
+        );
+        assert_exit(&o, 130);
+        assert!(
+            after < Duration::from_secs(2),
+            "{cmd}: {after:?} after SIGINT"
+        );
+        assert_eq!(listing(&dir), Vec::<String>::new(), "{cmd}");
+    }
+}
+
 /// Sound-mode Cleanflight runs for minutes under the MILP with microlp
 /// (the box search ends in a second, so the MILP is asked for); Ctrl-C after 3 s
 /// must end it within a few seconds with a verified design printed and

@@ -20,7 +20,7 @@ use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
-use rtpipe_sim::{simulate_bodies, ExecModel, Phasing, SimConfig};
+use rtpipe_sim::{simulate_bodies_with_rows, ExecModel, Phasing, SimConfig};
 use std::path::Path;
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
@@ -231,7 +231,7 @@ fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
 /// Flies `spec` as `setup` says: bodies on the simulated schedule, the
 /// world co-simulated at their read and publish instants.
 pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, Diagnostic> {
-    fly_with_progress(spec, s, exec, None)
+    fly_with_progress(spec, s, exec, None, None)
 }
 
 /// One body per task of a spec, in task order.
@@ -259,12 +259,15 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
     Ok((bodies, world))
 }
 
-/// [`fly`], publishing the simulated time (ns) to `progress` as it goes.
+/// [`fly`], publishing the simulated time (ns) to `progress` as it goes
+/// and, with `rows`, handing every chain's sample rows on as they complete
+/// (`rtpipe_sim::simulate_with_rows`).
 pub fn fly_with_progress(
     spec: &Spec,
     s: &Setup,
     exec: ExecModel,
     progress: Option<Arc<AtomicU64>>,
+    rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<Flight, Diagnostic> {
     let seed = s.world.seed;
     let (mut bodies, mut world) = bodies_and_world(spec, s)?;
@@ -279,12 +282,13 @@ pub fn fly_with_progress(
         log_jobs: s.log_jobs,
         jitter: rtpipe_sim::Jitter::Uniform,
     };
-    let sim = simulate_bodies(spec, &cfg, &mut bodies, &mut world).map_err(|e| {
-        Diagnostic::error(
-            format!("cannot simulate: {e}"),
-            "give every task a fixed positive period",
-        )
-    })?;
+    let sim =
+        simulate_bodies_with_rows(spec, &cfg, &mut bodies, &mut world, rows).map_err(|e| {
+            Diagnostic::error(
+                format!("cannot simulate: {e}"),
+                "give every task a fixed positive period",
+            )
+        })?;
     world.advance(u64::try_from(s.horizon).unwrap_or(0));
     let quality = world.assessor.clone().finish();
     Ok(Flight {
@@ -355,6 +359,32 @@ mod tests {
             Ok(s) => (s, p),
             Err(e) => panic!("{e}"),
         }
+    }
+
+    #[test]
+    fn a_flight_streams_the_rows_its_job_log_would_give() {
+        use std::sync::{Arc, Mutex};
+        let (spec, p) = cleanflight();
+        let mut s = setup_of(&spec, &p, &["--mission", "hover", "--duration", "6s"]);
+        s.log_jobs = true;
+        let got = Arc::new(Mutex::new(vec![Vec::new(); spec.chains.len()]));
+        let sink = got.clone();
+        let f = fly_with_progress(
+            &spec,
+            &s,
+            ExecModel::Uniform,
+            None,
+            Some(Box::new(move |c, r| {
+                if let Ok(mut g) = sink.lock() {
+                    g[c].push(*r);
+                }
+            })),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let want = rtpipe_joblog::sample_rows(&spec, &f.sim.jobs);
+        let got = got.lock().map(|g| g.clone()).unwrap_or_default();
+        assert!(want.iter().all(|c| c.len() > 100), "rows per chain");
+        assert_eq!(got, want);
     }
 
     fn setup_of(spec: &Spec, path: &Path, flags: &[&str]) -> Setup {

@@ -38,6 +38,7 @@ mod chain;
 pub mod hist;
 mod log;
 mod provenance;
+mod rows;
 pub mod trace;
 mod tracker;
 
@@ -45,3 +46,4 @@ pub use chain::{ChainStats, Observed, SampleRow, Witness};
 pub use hist::Histogram;
 pub use log::{Carried, JobRecord, Segment, SimResult, TaskStats};
 pub use provenance::{chains_from_jobs, sample_rows, BadChain, Provenance, Slot};
+pub use rows::RowSink;

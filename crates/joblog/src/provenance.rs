@@ -2,6 +2,7 @@
 //! the head's reads along the chain's edges to the tail's publishes, and
 //! the chains' figures that follow from it.
 
+use crate::rows::{RowSink, Rows};
 use crate::tracker::Tracker;
 use crate::{Carried, ChainStats, JobRecord, SampleRow};
 use rtpipe_model::{Nanos, Spec};
@@ -51,6 +52,8 @@ pub struct Provenance {
     tasks: Vec<TaskSlots>,
     /// Per chain: its samples' stamps and figures so far.
     chains: Vec<Tracker>,
+    /// Where complete sample rows go, when the run streams them.
+    sink: Option<RowSink>,
 }
 
 /// One task's chain positions and the samples at each.
@@ -96,7 +99,19 @@ impl Provenance {
         Ok(Provenance {
             tasks,
             chains: spec.chains.iter().map(|_| Tracker::new()).collect(),
+            sink: None,
         })
+    }
+
+    /// Hands every chain's [`SampleRow`]s to `sink` as they complete
+    /// (before any job runs), the rest at [`finish`](Provenance::finish):
+    /// the per-sample record of a run in memory bounded by the samples in
+    /// flight.
+    pub fn stream_rows(&mut self, sink: RowSink) {
+        for tr in &mut self.chains {
+            tr.rows = Some(Rows::default());
+        }
+        self.sink = Some(sink);
     }
 
     /// The chain positions `task` occupies, in chain order.
@@ -152,8 +167,16 @@ impl Provenance {
         let ts = &mut self.tasks[task];
         ts.published.clone_from(&ts.carried);
         for (slot, v) in ts.slots.iter().zip(&ts.carried) {
+            if let (0, Some(sample)) = (slot.pos, v) {
+                let tr = &mut self.chains[slot.chain];
+                tr.head_done = tr.head_done.max(sample + 1);
+            }
             if let (true, Some(sample)) = (slot.tail, v) {
-                self.chains[slot.chain].output(*sample, t);
+                let tr = &mut self.chains[slot.chain];
+                tr.output(*sample, t);
+                if let (Some(sink), Some(rows)) = (&mut self.sink, &mut tr.rows) {
+                    rows.drain(slot.chain, sink, false);
+                }
             }
         }
     }
@@ -173,8 +196,17 @@ impl Provenance {
             .collect()
     }
 
-    /// Every chain's figures, indexed like `Spec::chains`.
-    pub fn finish(self) -> Vec<ChainStats> {
+    /// Every chain's figures, indexed like `Spec::chains`; a streaming run
+    /// hands on its last rows, chain by chain.
+    pub fn finish(mut self) -> Vec<ChainStats> {
+        if let Some(sink) = &mut self.sink {
+            for (c, tr) in self.chains.iter_mut().enumerate() {
+                if let Some(rows) = &mut tr.rows {
+                    rows.truncate(tr.head_done);
+                    rows.drain(c, sink, true);
+                }
+            }
+        }
         self.chains.into_iter().map(|c| c.stats).collect()
     }
 }
@@ -198,7 +230,7 @@ pub fn chains_from_jobs(spec: &Spec, jobs: &[JobRecord]) -> Vec<ChainStats> {
 pub fn sample_rows(spec: &Spec, jobs: &[JobRecord]) -> Vec<Vec<SampleRow>> {
     replay(spec, jobs, Tracker::with_rows)
         .into_iter()
-        .map(|t| t.rows.unwrap_or_default())
+        .map(|t| t.rows.map(Rows::into_vec).unwrap_or_default())
         .collect()
 }
 

@@ -1,6 +1,7 @@
 //! Provenance of samples along one chain, and the reaction and freshness
 //! of each sample that reaches the tail.
 
+use crate::rows::Rows;
 use crate::{ChainStats, SampleRow, Witness};
 use rtpipe_model::Nanos;
 use std::collections::VecDeque;
@@ -19,8 +20,11 @@ pub(crate) struct Tracker {
     /// the first tail output carrying it or a newer one has not happened.
     pub(crate) event_pending: u64,
     pub(crate) stats: ChainStats,
-    /// One row per head sample, indexed by sample id, when asked for.
-    pub(crate) rows: Option<Vec<SampleRow>>,
+    /// One row per head sample, by sample id, when asked for.
+    pub(crate) rows: Option<Rows>,
+    /// Samples below this one were published by the head (its jobs that
+    /// read later had not finished: a job log holds no such job).
+    pub(crate) head_done: u64,
 }
 
 impl Tracker {
@@ -33,13 +37,14 @@ impl Tracker {
             event_pending: 1,
             stats: ChainStats::default(),
             rows: None,
+            head_done: 0,
         }
     }
 
     /// A tracker that also keeps one [`SampleRow`] per head sample.
     pub(crate) fn with_rows() -> Tracker {
         Tracker {
-            rows: Some(Vec::new()),
+            rows: Some(Rows::default()),
             ..Tracker::new()
         }
     }
@@ -49,11 +54,8 @@ impl Tracker {
     #[inline]
     pub(crate) fn sample(&mut self, t: Nanos) -> u64 {
         if let Some(rows) = &mut self.rows {
-            rows.push(SampleRow::new(
-                rows.len() as u64,
-                t,
-                self.stamps.back().copied(),
-            ));
+            let id = rows.next_id();
+            rows.push(SampleRow::new(id, t, self.stamps.back().copied()));
         }
         self.stamps.push_back(t);
         self.stats.samples += 1;
@@ -88,9 +90,13 @@ impl Tracker {
     /// is the k-th read.
     pub(crate) fn set_stamps(&mut self, stamps: Vec<Nanos>) {
         if let Some(rows) = &mut self.rows {
-            *rows = (0..stamps.len())
-                .map(|k| SampleRow::new(k as u64, stamps[k], k.checked_sub(1).map(|e| stamps[e])))
-                .collect();
+            *rows = Rows::from_vec(
+                (0..stamps.len())
+                    .map(|k| {
+                        SampleRow::new(k as u64, stamps[k], k.checked_sub(1).map(|e| stamps[e]))
+                    })
+                    .collect(),
+            );
         }
         self.stats.samples = stamps.len() as u64;
         self.stamps = stamps.into();
@@ -111,6 +117,11 @@ impl Tracker {
                 self.stats.reached += 1;
                 self.current = Some((sample, t, t));
                 self.first_output(sample, t);
+                // Every older sample is final now: it reached the tail for
+                // the last time, or never will.
+                if let Some(rows) = &mut self.rows {
+                    rows.complete_below(sample);
+                }
                 // Its finalising needs the stamp before it.
                 self.drop_before(sample.saturating_sub(1));
             }
@@ -140,11 +151,11 @@ impl Tracker {
             };
             self.stats.event_reaction.push(t - event, w);
             if let Some(rows) = &mut self.rows {
-                rows[s as usize].event_first = Some(t);
+                rows.get_mut(s).event_first = Some(t);
             }
         }
         if let Some(rows) = &mut self.rows {
-            rows[sample as usize].first = Some(t);
+            rows.get_mut(sample).first = Some(t);
         }
         self.event_pending = self.event_pending.max(sample + 1);
     }
@@ -157,7 +168,7 @@ impl Tracker {
             last,
         };
         if let Some(rows) = &mut self.rows {
-            rows[sample as usize].last = Some(last);
+            rows.get_mut(sample).last = Some(last);
         }
         let before = (sample > 0).then(|| self.stamp(sample - 1));
         let st = &mut self.stats;

@@ -8,7 +8,7 @@
 //! Its output stays private until the job's publish instant, when it
 //! overwrites the task's register and reaches the environment.
 
-use crate::{run, Hooks, SimConfig, SimError};
+use crate::{Hooks, SimConfig, SimError};
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::Spec;
@@ -26,6 +26,18 @@ pub fn simulate_bodies<V: Copy>(
     bodies: &mut [Box<dyn Body<V> + '_>],
     env: &mut dyn Environment<V>,
 ) -> Result<SimResult, SimError> {
+    simulate_bodies_with_rows(spec, cfg, bodies, env, None)
+}
+
+/// [`simulate_bodies`] that, with `rows`, hands every chain's sample rows
+/// on as they complete (see [`crate::simulate_with_rows`]).
+pub fn simulate_bodies_with_rows<V: Copy>(
+    spec: &Spec,
+    cfg: &SimConfig,
+    bodies: &mut [Box<dyn Body<V> + '_>],
+    env: &mut dyn Environment<V>,
+    rows: Option<rtpipe_joblog::RowSink>,
+) -> Result<SimResult, SimError> {
     assert_eq!(
         bodies.len(),
         spec.tasks.len(),
@@ -41,7 +53,7 @@ pub fn simulate_bodies<V: Copy>(
         pending: vec![None; n],
         inputs: Vec::with_capacity(max_reads),
     };
-    run(spec, cfg, driver)
+    crate::run_with_progress(spec, cfg, driver, &mut |_| {}, rows)
 }
 
 /// Runs bodies at the instants the simulator reports.

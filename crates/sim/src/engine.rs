@@ -28,16 +28,22 @@ impl Hooks for NoHooks {
 }
 
 pub(crate) fn run<H: Hooks>(spec: &Spec, cfg: &SimConfig, hooks: H) -> Result<SimResult, SimError> {
-    run_with_progress(spec, cfg, hooks, &mut |_| {})
+    run_with_progress(spec, cfg, hooks, &mut |_| {}, None)
 }
 
+/// A run that calls `progress` every [`PROGRESS_EVENTS`] events and, with
+/// `rows`, hands every chain's sample rows on as they complete.
 pub(crate) fn run_with_progress<H: Hooks>(
     spec: &Spec,
     cfg: &SimConfig,
     hooks: H,
     progress: &mut dyn FnMut(Nanos),
+    rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<SimResult, SimError> {
     let mut sim = Sim::new(spec, cfg, hooks)?;
+    if let Some(sink) = rows {
+        sim.prov.stream_rows(sink);
+    }
     let mut t = 0;
     loop {
         sim.instant(t);

@@ -62,7 +62,7 @@ pub use config::*;
 pub(crate) use engine::*;
 pub(crate) use locks::Locks;
 
-pub use bodies::simulate_bodies;
+pub use bodies::{simulate_bodies, simulate_bodies_with_rows};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
 
@@ -83,7 +83,20 @@ pub fn simulate_with_progress(
     cfg: &SimConfig,
     progress: &mut dyn FnMut(Nanos),
 ) -> Result<SimResult, SimError> {
-    run_with_progress(spec, cfg, NoHooks, progress)
+    run_with_progress(spec, cfg, NoHooks, progress, None)
+}
+
+/// [`simulate_with_progress`] that also hands every chain's sample rows
+/// (`rtpipe_joblog::sample_rows`' rows, the same values) to `rows` as they
+/// complete: the per-sample record of a run of any length without its job
+/// log.
+pub fn simulate_with_rows(
+    spec: &Spec,
+    cfg: &SimConfig,
+    progress: &mut dyn FnMut(Nanos),
+    rows: rtpipe_joblog::RowSink,
+) -> Result<SimResult, SimError> {
+    run_with_progress(spec, cfg, NoHooks, progress, Some(rows))
 }
 
 #[cfg(test)]

@@ -2,9 +2,14 @@
 //! `run`): every chain's head samples with the instants that end their
 //! latencies, for pandas, polars or a spreadsheet.
 
-use rtpipe_joblog::SampleRow;
-use rtpipe_model::Spec;
+use crate::output::{self, Output};
+use rtpipe_joblog::{RowSink, SampleRow};
+use rtpipe_model::{Diagnostic, Spec};
 use std::fmt::Write;
+use std::fs::File;
+use std::io::{BufWriter, Write as _};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 /// The header: instants and latencies in integer nanoseconds; an empty
 /// cell where the run ended before the instant (a sample that never
@@ -19,27 +24,222 @@ pub fn samples_csv(spec: &Spec, rows: &[Vec<SampleRow>]) -> String {
     for (c, rows) in rows.iter().enumerate() {
         let label = quoted(&spec.chain_label(c));
         for r in rows {
-            let cells = [
-                Some(r.read),
-                r.event,
-                r.first,
-                r.last,
-                r.reaction(),
-                r.freshness(),
-                r.event_reaction(),
-                r.event_freshness(),
-            ];
-            let _ = write!(out, "{label},{}", r.sample);
-            for v in cells {
-                out.push(',');
-                if let Some(v) = v {
-                    let _ = write!(out, "{v}");
-                }
-            }
-            out.push('\n');
+            row_line(&mut out, &label, r);
         }
     }
     out
+}
+
+/// One row of the CSV, with its line end.
+fn row_line(out: &mut String, label: &str, r: &SampleRow) {
+    let cells = [
+        Some(r.read),
+        r.event,
+        r.first,
+        r.last,
+        r.reaction(),
+        r.freshness(),
+        r.event_reaction(),
+        r.event_freshness(),
+    ];
+    let _ = write!(out, "{label},{}", r.sample);
+    for v in cells {
+        out.push(',');
+        if let Some(v) = v {
+            let _ = write!(out, "{v}");
+        }
+    }
+    out.push('\n');
+}
+
+/// `--samples` written as the run makes the rows: each chain's rows go to
+/// a temporary file beside the target as they complete, and
+/// [`finish`](SamplesFile::finish) joins them (header, then chain by
+/// chain, as [`samples_csv`]) into one more temporary that
+/// [`commit`](SamplesFile::commit) renames over the target. Memory holds
+/// only the rows in flight, whatever the run's length.
+pub struct SamplesFile {
+    out: Output,
+    parts: Arc<Mutex<Parts>>,
+}
+
+struct Parts {
+    labels: Vec<String>,
+    files: Vec<(PathBuf, BufWriter<File>)>,
+    rows: u64,
+    error: Option<std::io::Error>,
+    line: String,
+}
+
+impl SamplesFile {
+    /// `--samples PATH` (checked as every output flag is) opened for a run
+    /// of `spec`, read from `spec_path`; `None` without the flag.
+    pub fn open(
+        path: Option<&PathBuf>,
+        spec_path: &std::path::Path,
+        spec: &Spec,
+    ) -> Result<Option<SamplesFile>, Diagnostic> {
+        let Some(path) = path else { return Ok(None) };
+        let out = output::prepare("--samples", path, spec_path, None)?;
+        SamplesFile::create(out, spec).map(Some)
+    }
+
+    /// One temporary per chain beside `out`'s target.
+    pub fn create(out: Output, spec: &Spec) -> Result<SamplesFile, Diagnostic> {
+        let mut files = Vec::with_capacity(spec.chains.len());
+        for c in 0..spec.chains.len() {
+            let path = output::temp_beside(&out.target, &format!("chain{c}"));
+            register(&path);
+            match File::create(&path) {
+                Ok(f) => files.push((path, BufWriter::new(f))),
+                Err(e) => {
+                    files
+                        .iter()
+                        .for_each(|(p, _)| drop(std::fs::remove_file(p)));
+                    return Err(cannot(&out, &e));
+                }
+            }
+        }
+        let labels = (0..spec.chains.len())
+            .map(|c| quoted(&spec.chain_label(c)))
+            .collect();
+        let parts = Parts {
+            labels,
+            files,
+            rows: 0,
+            error: None,
+            line: String::new(),
+        };
+        Ok(SamplesFile {
+            out,
+            parts: Arc::new(Mutex::new(parts)),
+        })
+    }
+
+    /// Where the run hands its rows.
+    pub fn sink(&self) -> RowSink {
+        let parts = self.parts.clone();
+        Box::new(move |c, r| {
+            let Ok(mut p) = parts.lock() else { return };
+            let p = &mut *p;
+            p.line.clear();
+            row_line(&mut p.line, &p.labels[c], r);
+            p.rows += 1;
+            if let Err(e) = p.files[c].1.write_all(p.line.as_bytes()) {
+                p.error.get_or_insert(e);
+            }
+        })
+    }
+
+    /// Joins the parts into one temporary beside the target: the rows
+    /// written, and that temporary (not yet in place).
+    pub fn finish(self) -> Result<Prepared, Diagnostic> {
+        let parts = Arc::try_unwrap(self.parts)
+            .ok()
+            .and_then(|m| m.into_inner().ok());
+        let Some(mut p) = parts else {
+            return Err(Diagnostic::error(
+                "internal: the run still holds the --samples rows",
+                "",
+            ));
+        };
+        let joined = output::temp_beside(&self.out.target, "joined");
+        register(&joined);
+        // Made now, so that it goes whatever happens next.
+        let prepared = Prepared {
+            out: self.out,
+            temp: Some(joined.clone()),
+            rows: p.rows,
+        };
+        join(&mut p, &joined).map_err(|e| cannot(&prepared.out, &e))?;
+        Ok(prepared)
+    }
+}
+
+impl Drop for Parts {
+    /// The per-chain temporaries never outlive the run.
+    fn drop(&mut self) {
+        for (path, _) in &self.files {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+/// The header and every chain's part, in chain order, into `joined`.
+fn join(p: &mut Parts, joined: &PathBuf) -> std::io::Result<()> {
+    if let Some(e) = p.error.take() {
+        return Err(e);
+    }
+    let mut w = BufWriter::new(File::create(joined)?);
+    w.write_all(HEADER.as_bytes())?;
+    w.write_all(b"\n")?;
+    for (path, part) in &mut p.files {
+        part.flush()?;
+        std::io::copy(&mut File::open(&*path)?, &mut w)?;
+    }
+    w.flush()?;
+    w.get_ref().sync_all()
+}
+
+/// A `--samples` file written beside its target, to be renamed into place
+/// (removed if it never is).
+pub struct Prepared {
+    out: Output,
+    temp: Option<PathBuf>,
+    /// Rows written.
+    pub rows: u64,
+}
+
+impl Prepared {
+    /// Renames the file into place (after the command's other outputs).
+    pub fn commit(mut self) -> Result<(), Diagnostic> {
+        let Some(temp) = self.temp.take() else {
+            return Ok(());
+        };
+        std::fs::rename(&temp, &self.out.target).map_err(|e| {
+            let _ = std::fs::remove_file(&temp);
+            cannot(&self.out, &e)
+        })
+    }
+
+    /// Drops the file (another output failed).
+    pub fn discard(self) {}
+}
+
+impl Drop for Prepared {
+    fn drop(&mut self) {
+        if let Some(temp) = &self.temp {
+            let _ = std::fs::remove_file(temp);
+        }
+    }
+}
+
+/// The temporaries of a `--samples` being written, for Ctrl-C.
+static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn register(path: &std::path::Path) {
+    if let Ok(mut t) = TEMPS.lock() {
+        t.push(path.to_path_buf());
+    }
+}
+
+/// Ctrl-C during a run that streams `--samples`: its temporaries go, the
+/// command ends with 130 like every other one stopped by Ctrl-C.
+pub fn exit_interrupted() -> ! {
+    if let Ok(t) = TEMPS.lock() {
+        for p in t.iter() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+    eprintln!("interrupted (Ctrl-C): nothing written");
+    std::process::exit(crate::EXIT_INTERRUPTED.into())
+}
+
+fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
+    Diagnostic::error(
+        format!("{} {}: cannot write: {e}", out.flag, out.given.display()),
+        "check that the directory is writable and the disk not full",
+    )
 }
 
 /// A CSV field (RFC 4180): quoted when it holds a comma, quote or newline.

@@ -105,16 +105,5 @@ pub(super) fn render_outputs(
         ));
         out.files.push(("--gantt", path.clone(), svg));
     }
-    if let Some(path) = &a.samples {
-        let rows = rtpipe_joblog::sample_rows(spec, &res.jobs);
-        let n: usize = rows.iter().map(Vec::len).sum();
-        out.notes
-            .push(format!("wrote {}: {n} samples", path.display()));
-        out.files.push((
-            "--samples",
-            path.clone(),
-            crate::report::samples::samples_csv(spec, &rows),
-        ));
-    }
     Ok(out)
 }

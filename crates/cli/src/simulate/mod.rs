@@ -9,6 +9,7 @@ use crate::analyze;
 use crate::command::{self, fail, parse_time, ExecArg};
 use crate::output;
 use crate::plot;
+use crate::report::samples::{Prepared, SamplesFile};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 pub(crate) use files::with_spinner;
@@ -17,11 +18,14 @@ use plan::*;
 pub(crate) use report::*;
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_joblog::trace::{chrome_trace_with, TraceOptions};
+use rtpipe_joblog::RowSink;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
-use rtpipe_sim::{simulate_with_progress, Jitter, Phasing, SimConfig, SimError};
+use rtpipe_sim::{
+    simulate_with_progress, simulate_with_rows, Jitter, Phasing, SimConfig, SimError,
+};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -132,6 +136,7 @@ fn run_simulation(
     a: &SimulateArgs,
     p: &Plan,
     progress: &mut dyn FnMut(Nanos),
+    rows: Option<RowSink>,
 ) -> Result<SimResult, SimError> {
     let phasing = match a.phasing {
         PhasingArg::Sync => Phasing::Sync,
@@ -151,7 +156,20 @@ fn run_simulation(
         },
         log_jobs: p.log_jobs,
     };
-    simulate_with_progress(spec, &cfg, progress)
+    match rows {
+        Some(sink) => {
+            // Its rows are on disk as it goes: Ctrl-C must take them away.
+            rtpipe_runtime::sys::catch_sigint();
+            let mut checked = |t: Nanos| {
+                if rtpipe_runtime::sys::stop_requested() {
+                    crate::report::samples::exit_interrupted();
+                }
+                progress(t);
+            };
+            simulate_with_rows(spec, &cfg, &mut checked, sink)
+        }
+        None => simulate_with_progress(spec, &cfg, progress),
+    }
 }
 
 pub fn run(a: &SimulateArgs) -> ExitCode {
@@ -164,16 +182,21 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         Err(b) => return fail(b),
     };
     let report = rtpipe_analysis::analyze(&spec);
-    let (res, searches, seconds) = match simulate_and_search(&spec, a, &p) {
+    let samples = match SamplesFile::open(a.samples.as_ref(), &a.spec, &spec) {
+        Ok(s) => s,
+        Err(b) => return fail(b),
+    };
+    let sink = samples.as_ref().map(SamplesFile::sink);
+    let (res, searches, seconds) = match simulate_and_search(&spec, a, &p, sink) {
         Ok(r) => r,
         Err(b) => return fail(b),
     };
     let obs = observe(&report, &res);
-    let outputs = match render_outputs(&spec, a, &p, &res, &obs) {
+    let mut outputs = match render_outputs(&spec, a, &p, &res, &obs) {
         Ok(o) => o,
         Err(b) => return fail(b),
     };
-    if let Err(b) = output::write_files(&a.spec, &outputs.files) {
+    if let Err(b) = write_all_outputs(a, &mut outputs, samples) {
         return fail(b);
     }
     if a.json {
@@ -197,12 +220,35 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
     exit_status(&spec, a, &report, &res, &obs, &searches)
 }
 
+/// The files `render_outputs` made, then `--samples` (written as the run
+/// went) renamed into place; nothing of it stays when a write fails.
+fn write_all_outputs(
+    a: &SimulateArgs,
+    outputs: &mut files::Outputs,
+    samples: Option<SamplesFile>,
+) -> Result<(), Diagnostic> {
+    let prepared: Option<Prepared> = samples.map(SamplesFile::finish).transpose()?;
+    if let Err(b) = output::write_files(&a.spec, &outputs.files) {
+        prepared.into_iter().for_each(Prepared::discard);
+        return Err(b);
+    }
+    if let (Some(pr), Some(path)) = (prepared, &a.samples) {
+        let n = pr.rows;
+        pr.commit()?;
+        outputs
+            .notes
+            .push(format!("wrote {}: {n} samples", path.display()));
+    }
+    Ok(())
+}
+
 /// The simulation, and the adversarial searches under `--phasing search`,
 /// with their progress shown; and the seconds they took.
 fn simulate_and_search(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
+    rows: Option<RowSink>,
 ) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
     let started = Instant::now();
     let msg = format!(
@@ -213,7 +259,7 @@ fn simulate_and_search(
         human(spec, p.horizon)
     );
     let res = with_horizon_bar(msg, p.horizon, |progress| {
-        run_simulation(spec, a, p, progress)
+        run_simulation(spec, a, p, progress, rows)
     })
     .map_err(|e| {
         Diagnostic::error(

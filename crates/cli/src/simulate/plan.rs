@@ -47,7 +47,8 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Diagnostic> {
         horizon,
         outputs,
         window,
-        log_jobs: a.trace.is_some() || a.gantt.is_some() || a.samples.is_some(),
+        // `--samples` streams its rows (report::samples::SamplesFile).
+        log_jobs: a.trace.is_some() || a.gantt.is_some(),
     })
 }
 
