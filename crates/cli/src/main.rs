@@ -212,6 +212,10 @@ fn exit_on_panic() {
             if why.contains("Broken pipe") {
                 std::process::exit(i32::from(EXIT_BROKEN_PIPE));
             }
+            if why.starts_with("err") {
+                // Nowhere left to say it (printing would panic again).
+                std::process::exit(i32::from(EXIT_BAD_INPUT));
+            }
             let why = why.trim_start_matches("out: ").trim_start_matches("err: ");
             eprintln!("error: cannot write the output: {why}");
             std::process::exit(i32::from(EXIT_BAD_INPUT));

@@ -438,6 +438,31 @@ fn a_closed_pipe_ends_every_printing_command_quietly() {
 }
 
 #[test]
+fn a_full_or_closed_stderr_is_no_panic() {
+    // An error message that cannot be written: exit 2 (the error's own
+    // status) or 141 on a closed pipe, never an abort.
+    let Ok(full) = std::fs::OpenOptions::new().write(true).open("/dev/full") else {
+        panic!("no /dev/full");
+    };
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(["analyze", "/nonexistent/spec.toml"])
+        .stderr(full)
+        .output();
+    let o = o.unwrap_or_else(|e| panic!("cannot run rtpipe: {e}"));
+    assert_eq!(o.status.code(), Some(2));
+    let Ok((reader, writer)) = std::io::pipe() else {
+        panic!("no pipe");
+    };
+    drop(reader);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .args(["analyze", "/nonexistent/spec.toml"])
+        .stderr(writer)
+        .output();
+    let o = o.unwrap_or_else(|e| panic!("cannot run rtpipe: {e}"));
+    assert_eq!(o.status.code(), Some(141));
+}
+
+#[test]
 fn a_closed_pipe_ends_quietly() {
     let dir = scratch("pipe");
     let big = dir.join("big.toml");
