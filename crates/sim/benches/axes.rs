@@ -13,10 +13,10 @@
 //! before it is measured.
 
 mod common;
-use common::{run, MS};
+use common::{run, span_for};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_model::gen::{random_system, waters_system, GenConfig, WatersConfig};
-use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_model::{Scheduler, Spec};
 use rtpipe_sim::{ExecModel, Phasing, SimConfig};
 use std::hint::black_box;
 use std::time::Duration;
@@ -48,18 +48,6 @@ fn waters(tasks: usize, cpus: u32, chains: usize) -> Spec {
             ..WatersConfig::default()
         },
     )
-}
-
-/// A simulated span with about `events` events: two per job (release and
-/// completion) at the system's job rate.
-fn span_for(spec: &Spec, events: f64) -> Nanos {
-    let jobs_per_ns: f64 = spec
-        .tasks
-        .iter()
-        .filter_map(|t| t.fixed_period())
-        .map(|p| 1.0 / p as f64)
-        .sum();
-    ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
 }
 
 /// One run outside the timed loop (see `common::describe`).

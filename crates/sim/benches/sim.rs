@@ -20,11 +20,11 @@
 //! is measured.
 
 mod common;
-use common::{run, MS};
+use common::{run, span_for, MS};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_analysis::Metric;
 use rtpipe_model::gen::{random_system, GenConfig};
-use rtpipe_model::{Nanos, Scheduler, Spec};
+use rtpipe_model::{Scheduler, Spec};
 use rtpipe_sim::search::{search, SearchConfig};
 use rtpipe_sim::{ExecModel, Phasing, SimConfig};
 use std::hint::black_box;
@@ -153,18 +153,6 @@ fn search_bench(c: &mut Criterion) {
         b.iter(|| black_box(search(black_box(&spec), black_box(&cfg))))
     });
     group.finish();
-}
-
-/// A simulated span with about `events` events: two per job (release and
-/// completion) at the system's job rate.
-fn span_for(spec: &Spec, events: f64) -> Nanos {
-    let jobs_per_ns: f64 = spec
-        .tasks
-        .iter()
-        .filter_map(|t| t.fixed_period())
-        .map(|p| 1.0 / p as f64)
-        .sum();
-    ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
 }
 
 fn scaling(c: &mut Criterion) {

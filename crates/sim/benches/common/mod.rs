@@ -35,3 +35,15 @@ pub fn describe(
     );
     r.events
 }
+
+/// A simulated span with about `events` events: two per job (release and
+/// completion) at the system's job rate.
+pub fn span_for(spec: &Spec, events: f64) -> Nanos {
+    let jobs_per_ns: f64 = spec
+        .tasks
+        .iter()
+        .filter_map(|t| t.fixed_period())
+        .map(|p| 1.0 / p as f64)
+        .sum();
+    ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
+}
