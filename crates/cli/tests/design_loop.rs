@@ -39,6 +39,12 @@ fn loop_closes_on(vehicle: &str) {
     assert!(written.contains("period = \"200000us\""), "{written}");
     let o = rtpipe(&["design", &s(&limits), "--write", &s(&design)]);
     assert_exit(&o, 0);
+    // Every freed period has an upper end of its own.
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        !out.contains("longest period its free range allows"),
+        "{out}"
+    );
     for mission in ["steps", "gusty"] {
         let o = rtpipe(&[
             "fly",
@@ -101,6 +107,19 @@ fn design_fly_returns_a_design_that_flies_both_missions_on_both_vehicles() {
     let free = json_of(&rtpipe(&["design", &spec, "--json"]));
     let u0 = free["design"]["objective"].as_f64().unwrap_or(f64::NAN);
     assert!(u0 - 1e-12 <= u && u < 0.68, "{u0} {u}");
+}
+
+#[test]
+fn a_period_at_an_upper_end_it_did_not_set_is_named() {
+    // cleanflight-design.toml frees PWM without a max: the design gives it
+    // the largest chain limit, 44 ms, and says so.
+    let o = rtpipe(&["design", &example("cleanflight-design.toml")]);
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("note: task `pwm` got the longest period its free range allows (44000us)"),
+        "{out}"
+    );
 }
 
 #[test]

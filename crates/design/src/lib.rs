@@ -145,6 +145,7 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     if spec.harmonic {
         domain::harmonic_domains(spec, &mut domains.dom, &mut notes)?;
     }
+    let tops = implicit_tops(spec, &domains);
     let boxes = choose_method(spec, opts)?;
     if opts.accept.is_some() && !boxes {
         return Err(DesignError::input(
@@ -162,12 +163,55 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
         runner::solve_all(&p, &mut learnt, &mut budget)?
     };
     o.notes.splice(0..0, notes);
+    o.notes.extend(at_implicit_tops(spec, &o, &tops));
     if let Some(s) = o.spec.as_mut() {
         for (t, &x) in s.tasks.iter_mut().zip(&offsets) {
             t.offset = x;
         }
     }
     Ok(o)
+}
+
+/// Per task whose free period has no upper end of its own (no `max`, no
+/// `max_period`): the top of its domain, which the spec's largest chain
+/// limit or fixed period set (ns).
+fn implicit_tops(spec: &Spec, d: &domain::Domains) -> Vec<Option<Nanos>> {
+    spec.tasks
+        .iter()
+        .zip(&d.dom)
+        .map(|(t, dom)| {
+            let own_max = match &t.period {
+                rtpipe_model::PeriodSpec::Free => false,
+                rtpipe_model::PeriodSpec::Range { max, .. } => max.is_some(),
+                _ => true,
+            };
+            (!own_max && t.max_period.is_none()).then(|| dom.max() * d.g)
+        })
+        .collect()
+}
+
+/// A note for each designed period at the top it did not choose: control
+/// may need that task faster than any chain limit says (a motor output).
+fn at_implicit_tops(spec: &Spec, o: &Outcome, tops: &[Option<Nanos>]) -> Vec<String> {
+    let Some(designed) = &o.spec else {
+        return Vec::new();
+    };
+    designed
+        .tasks
+        .iter()
+        .zip(tops)
+        .filter_map(|(t, top)| {
+            let (p, top) = (t.fixed_period()?, (*top)?);
+            (p == top).then(|| {
+                format!(
+                    "task `{}` got the longest period its free range allows ({}{u}), an upper end it does not set itself: the spec's largest chain limit or fixed period; if control needs it faster (a motor output), give it `max_period` or period = {{ max = ... }}",
+                    t.name,
+                    spec.fmt_time(p),
+                    u = spec.time_unit
+                )
+            })
+        })
+        .collect()
 }
 
 /// The search `design` runs for `spec` with `opts` ([`Method::Boxes`] or
