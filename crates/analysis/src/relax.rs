@@ -346,14 +346,10 @@ fn event_reaction_bound(
     r: &[Option<Nanos>],
     path: &[usize],
 ) -> Option<Nanos> {
-    let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
-    let mut sum = Some(0);
-    for w in path.windows(2) {
-        let (p, c) = (low(w[0]), low(w[1]));
-        let orders = order.link_orders(w[0], w[1]);
-        let l = SoundLink::least(orders.iter().map(|&o| SoundLink::new_in(o, &p, &c, false)));
-        sum = sum.zip(l.reaction).map(|(a, b)| a + b);
-    }
+    let sum: Option<Nanos> = low_links(spec, order, r, path, false)
+        .iter()
+        .map(|l| l.reaction)
+        .sum();
     sum.zip(r[path[path.len() - 1]])
         .map(|(a, b)| a + b + order.lo[path[0]])
 }
@@ -428,10 +424,26 @@ fn chain_bounds(
     r: &[Option<Nanos>],
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    compose_sound(
+        r[path[path.len() - 1]],
+        &low_links(spec, order, r, path, true),
+    )
+}
+
+/// Each link's least terms at the box's shortest periods, over the orders
+/// the box leaves open; `reach`: with the reachability options where they
+/// may hold (from the read), or without (the reaction from the event).
+fn low_links(
+    spec: &Spec,
+    order: &Order,
+    r: &[Option<Nanos>],
+    path: &[usize],
+    reach: bool,
+) -> Vec<SoundLink> {
     let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
     // Reachability needs the producer's samples distinct; take it where it
     // may hold (more options, smaller terms).
-    let mut distinct = true;
+    let mut distinct = reach;
     let mut links = Vec::with_capacity(path.len() - 1);
     for w in path.windows(2) {
         let (p, c) = (low(w[0]), low(w[1]));
@@ -445,7 +457,7 @@ fn chain_bounds(
         let c_late = link_task(spec, order.hi[w[1]], r[w[1]], w[1]);
         distinct = distinct_passes(&p, &c_late, distinct);
     }
-    compose_sound(r[path[path.len() - 1]], &links)
+    links
 }
 
 /// The sums E and F of a chain (see [`chain_bounds`]) as affine bounds over
