@@ -18,7 +18,7 @@ use crate::command;
 use crate::output;
 use crate::plot;
 use crate::report::flight::{quality_text, RmsMax};
-use crate::report::samples::{Prepared, SamplesFile};
+use crate::report::samples::{self, SamplesFile};
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::trace::metrics::StepResponse;
@@ -485,7 +485,6 @@ fn write_outputs(
     obs: &[ChainObs],
     samples: Option<SamplesFile>,
 ) -> Result<(), Diagnostic> {
-    let prepared: Option<Prepared> = samples.map(SamplesFile::finish).transpose()?;
     let mut files: Vec<(&'static str, PathBuf, String)> = Vec::new();
     if let Some(dir) = &a.plot {
         output::ensure_dir(dir)?;
@@ -503,6 +502,5 @@ fn write_outputs(
     if let Some(path) = &a.log {
         files.push(("--log", path.clone(), csv(spec, f)));
     }
-    output::write_files(&a.spec, &files)?;
-    prepared.map_or(Ok(()), Prepared::commit)
+    samples::write_with(&a.spec, &files, samples).map(|_| ())
 }

@@ -133,7 +133,7 @@ impl SamplesFile {
 
     /// Joins the parts into one temporary beside the target: the rows
     /// written, and that temporary (not yet in place).
-    pub fn finish(self) -> Result<Prepared, Diagnostic> {
+    fn finish(self) -> Result<Prepared, Diagnostic> {
         let parts = Arc::try_unwrap(self.parts)
             .ok()
             .and_then(|m| m.into_inner().ok());
@@ -181,18 +181,37 @@ fn join(p: &mut Parts, joined: &PathBuf) -> std::io::Result<()> {
     w.get_ref().sync_all()
 }
 
+/// Writes a command's `files` all or none ([`output::write_files`]), then
+/// puts its `--samples` (written as the run went) in place: the rows
+/// written, if any. When a write fails no `--samples` file stays behind.
+pub fn write_with(
+    spec_path: &std::path::Path,
+    files: &[(&'static str, PathBuf, String)],
+    samples: Option<SamplesFile>,
+) -> Result<Option<u64>, Diagnostic> {
+    let prepared = samples.map(SamplesFile::finish).transpose()?;
+    // A failed write drops `prepared`, which removes its temporary.
+    output::write_files(spec_path, files)?;
+    prepared
+        .map(|p| {
+            let rows = p.rows;
+            p.commit().map(|()| rows)
+        })
+        .transpose()
+}
+
 /// A `--samples` file written beside its target, to be renamed into place
 /// (removed if it never is).
-pub struct Prepared {
+struct Prepared {
     out: Output,
     temp: Option<PathBuf>,
     /// Rows written.
-    pub rows: u64,
+    rows: u64,
 }
 
 impl Prepared {
     /// Renames the file into place (after the command's other outputs).
-    pub fn commit(mut self) -> Result<(), Diagnostic> {
+    fn commit(mut self) -> Result<(), Diagnostic> {
         let Some(temp) = self.temp.take() else {
             return Ok(());
         };
@@ -201,9 +220,6 @@ impl Prepared {
             cannot(&self.out, &e)
         })
     }
-
-    /// Drops the file (another output failed).
-    pub fn discard(self) {}
 }
 
 impl Drop for Prepared {

@@ -9,7 +9,7 @@ use crate::analyze;
 use crate::command::{self, fail, parse_time, ExecArg};
 use crate::output;
 use crate::plot;
-use crate::report::samples::{Prepared, SamplesFile};
+use crate::report::samples::{self, SamplesFile};
 use crate::table::Table;
 use clap::{Args, ValueEnum};
 pub(crate) use files::with_spinner;
@@ -227,14 +227,8 @@ fn write_all_outputs(
     outputs: &mut files::Outputs,
     samples: Option<SamplesFile>,
 ) -> Result<(), Diagnostic> {
-    let prepared: Option<Prepared> = samples.map(SamplesFile::finish).transpose()?;
-    if let Err(b) = output::write_files(&a.spec, &outputs.files) {
-        prepared.into_iter().for_each(Prepared::discard);
-        return Err(b);
-    }
-    if let (Some(pr), Some(path)) = (prepared, &a.samples) {
-        let n = pr.rows;
-        pr.commit()?;
+    let rows = samples::write_with(&a.spec, &outputs.files, samples)?;
+    if let (Some(n), Some(path)) = (rows, &a.samples) {
         outputs
             .notes
             .push(format!("wrote {}: {n} samples", path.display()));
