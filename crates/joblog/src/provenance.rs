@@ -167,7 +167,8 @@ impl Provenance {
         let ts = &mut self.tasks[task];
         ts.published.clone_from(&ts.carried);
         for (slot, v) in ts.slots.iter().zip(&ts.carried) {
-            if let (0, Some(sample)) = (slot.pos, v) {
+            // Only a streaming run needs to know which head reads published.
+            if let (0, Some(sample), true) = (slot.pos, v, self.sink.is_some()) {
                 let tr = &mut self.chains[slot.chain];
                 tr.head_done = tr.head_done.max(sample + 1);
             }
