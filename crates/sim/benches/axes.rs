@@ -13,12 +13,11 @@
 //! before it is measured.
 
 mod common;
-use common::{run, span_for};
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use common::{bench_events, span_for};
+use criterion::{criterion_group, criterion_main, Criterion};
 use rtpipe_model::gen::{random_system, waters_system, GenConfig, WatersConfig};
 use rtpipe_model::{Scheduler, Spec};
 use rtpipe_sim::{ExecModel, Phasing, SimConfig};
-use std::hint::black_box;
 use std::time::Duration;
 
 const SEED: u64 = 2018;
@@ -118,10 +117,7 @@ fn axes(c: &mut Criterion) {
         };
         let id = format!("{axis}/{label}");
         let n = describe(&id, &spec, &cfg);
-        group.throughput(Throughput::Elements(n));
-        group.bench_function(BenchmarkId::from_parameter(&id), |b| {
-            b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
-        });
+        bench_events(&mut group, &id, &spec, &cfg, n);
     }
     group.finish();
 }

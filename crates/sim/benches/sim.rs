@@ -20,8 +20,8 @@
 //! is measured.
 
 mod common;
-use common::{run, span_for, MS};
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use common::{bench_events, run, span_for, MS};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rtpipe_analysis::Metric;
 use rtpipe_model::gen::{random_system, GenConfig};
 use rtpipe_model::{Scheduler, Spec};
@@ -82,10 +82,7 @@ fn events(c: &mut Criterion) {
                 };
                 let label = format!("{tasks}t-{cpus}cpu-{sched}");
                 let n = describe(&label, &spec, &cfg);
-                group.throughput(Throughput::Elements(n));
-                group.bench_function(BenchmarkId::from_parameter(&label), |b| {
-                    b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
-                });
+                bench_events(&mut group, &label, &spec, &cfg, n);
             }
         }
     }
@@ -184,10 +181,7 @@ fn scaling(c: &mut Criterion) {
                 _ => format!("{tasks}t-{cpus}cpu-{sched}"),
             };
             let n = describe(&label, &spec, &cfg);
-            group.throughput(Throughput::Elements(n));
-            group.bench_function(BenchmarkId::from_parameter(&label), |b| {
-                b.iter(|| black_box(run(black_box(&spec), black_box(&cfg))))
-            });
+            bench_events(&mut group, &label, &spec, &cfg, n);
         }
     }
     group.finish();

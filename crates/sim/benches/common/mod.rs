@@ -1,9 +1,12 @@
 //! What the simulator's benches share: a run that names its system when
 //! it fails, and one run outside the timed loop that says what is measured.
 
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, BenchmarkId, Throughput};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::{simulate, SimConfig};
+use std::hint::black_box;
 use std::time::Instant;
 
 pub const MS: Nanos = 1_000_000;
@@ -46,4 +49,19 @@ pub fn span_for(spec: &Spec, events: f64) -> Nanos {
         .map(|p| 1.0 / p as f64)
         .sum();
     ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
+}
+
+/// Measures `spec` under `cfg` in `group` as `label`, at `events` events
+/// per run (the throughput criterion reports).
+pub fn bench_events(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    label: &str,
+    spec: &Spec,
+    cfg: &SimConfig,
+    events: u64,
+) {
+    group.throughput(Throughput::Elements(events));
+    group.bench_function(BenchmarkId::from_parameter(label), |b| {
+        b.iter(|| black_box(run(black_box(spec), black_box(cfg))))
+    });
 }
