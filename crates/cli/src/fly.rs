@@ -38,13 +38,8 @@ use std::sync::Arc;
 fn with_progress_bar<T: Send>(
     msg: String,
     horizon: i64,
-    interruptible: bool,
     f: impl FnOnce(Arc<AtomicU64>) -> T + Send,
 ) -> T {
-    if interruptible {
-        // Files are written as the flight goes: Ctrl-C must take them away.
-        rtpipe_runtime::sys::catch_sigint();
-    }
     let done = Arc::new(AtomicU64::new(0));
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(u64::try_from(horizon).unwrap_or(0) / 1_000_000),
@@ -66,10 +61,8 @@ fn with_progress_bar<T: Send>(
             match rx.recv_timeout(std::time::Duration::from_millis(50)) {
                 Ok(v) => break Some(v),
                 Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
-                    if interruptible && rtpipe_runtime::sys::stop_requested() {
-                        pb.finish_and_clear();
-                        crate::report::samples::exit_interrupted();
-                    }
+                    // `--samples` is written as the flight goes.
+                    samples::stop_if_interrupted(|| pb.finish_and_clear());
                     pb.set_position(done.load(Ordering::Relaxed) / 1_000_000);
                 }
                 // The worker panicked (main's hook ends the process first).
@@ -157,7 +150,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Err(b) => return command::fail(b),
     };
     let sink = samples.as_ref().map(SamplesFile::sink);
-    let flight = match with_progress_bar(msg, s.horizon, samples.is_some(), |p| {
+    let flight = match with_progress_bar(msg, s.horizon, |p| {
         fly_with_progress(&spec, &s, a.exec.model(), Some(p), sink)
     }) {
         Ok(f) => f,

@@ -84,8 +84,10 @@ impl SamplesFile {
         SamplesFile::create(out, spec).map(Some)
     }
 
-    /// One temporary per chain beside `out`'s target.
+    /// One temporary per chain beside `out`'s target. From here on Ctrl-C
+    /// is caught, so that [`stop_if_interrupted`] can take them away.
     pub fn create(out: Output, spec: &Spec) -> Result<SamplesFile, Diagnostic> {
+        rtpipe_runtime::sys::catch_sigint();
         let mut files = Vec::with_capacity(spec.chains.len());
         for c in 0..spec.chains.len() {
             let path = output::temp_beside(&out.target, &format!("chain{c}"));
@@ -239,9 +241,18 @@ fn register(path: &std::path::Path) {
     }
 }
 
-/// Ctrl-C during a run that streams `--samples`: its temporaries go, the
-/// command ends with 130 like every other one stopped by Ctrl-C.
-pub fn exit_interrupted() -> ! {
+/// Called as a run that streams `--samples` goes: after Ctrl-C (caught
+/// since [`SamplesFile::create`]) it runs `before` (clear a progress bar),
+/// removes the temporaries and ends the command with 130, like every other
+/// one stopped by Ctrl-C. Without a `--samples` file it does nothing.
+pub fn stop_if_interrupted(before: impl FnOnce()) {
+    if rtpipe_runtime::sys::stop_requested() {
+        before();
+        exit_interrupted();
+    }
+}
+
+fn exit_interrupted() -> ! {
     if let Ok(t) = TEMPS.lock() {
         for p in t.iter() {
             let _ = std::fs::remove_file(p);

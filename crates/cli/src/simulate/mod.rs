@@ -159,11 +159,8 @@ fn run_simulation(
     match rows {
         Some(sink) => {
             // Its rows are on disk as it goes: Ctrl-C must take them away.
-            rtpipe_runtime::sys::catch_sigint();
             let mut checked = |t: Nanos| {
-                if rtpipe_runtime::sys::stop_requested() {
-                    crate::report::samples::exit_interrupted();
-                }
+                samples::stop_if_interrupted(|| {});
                 progress(t);
             };
             simulate_with_rows(spec, &cfg, &mut checked, sink)
