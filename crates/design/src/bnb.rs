@@ -647,9 +647,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 };
                 debug_assert!(ok);
                 let u = utilization(&spec);
-                let better = best.is_none_or(|b| u < b);
-                return (better && matches!(self.judge(&k, &spec), Verdict::Accepted))
-                    .then_some((spec, report, u));
+                // No gate here: `visit` dives only without one.
+                debug_assert!(self.gate.is_none());
+                return best.is_none_or(|b| u < b).then_some((spec, report, u));
             }
             node = self.branch(&node, &report)?.0;
         }
