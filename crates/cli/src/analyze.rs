@@ -1,16 +1,35 @@
 //! `rtpipe analyze`.
 
 use crate::command;
+use crate::command::mode_parser;
 use crate::report::{time, Pairs};
 use crate::table::Table;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
 use serde::Serialize;
-use std::path::Path;
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-pub fn run(path: &Path, json_out: bool, all_paths: bool, mode: Mode) -> ExitCode {
+/// `rtpipe analyze`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct AnalyzeArgs {
+    /// The system spec (TOML), e.g. examples/paper-table2.toml.
+    pub spec: PathBuf,
+    /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Also list the worst path between every source and sink.
+    #[arg(long)]
+    pub all_paths: bool,
+    /// The analysis the verdict and the exit status follow (both are
+    /// always shown).
+    #[arg(long, value_parser = mode_parser(), default_value = "sound")]
+    pub mode: Mode,
+}
+
+pub fn run(a: &AnalyzeArgs) -> ExitCode {
+    let (path, json_out, all_paths, mode) = (&a.spec, a.json, a.all_paths, a.mode);
     let spec = match command::load(path) {
         Ok(s) => s,
         Err(code) => return code,

@@ -3,7 +3,9 @@
 //! share.
 
 use crate::EXIT_BAD_INPUT;
+use clap::builder::TypedValueParser;
 use clap::ValueEnum;
+use rtpipe_analysis::Mode;
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Diagnostic, Nanos, Spec, SpecError};
 use rtpipe_sim::ExecModel;
@@ -90,4 +92,11 @@ impl ExecArg {
             ExecArg::Extremes => ExecModel::Extremes,
         }
     }
+}
+
+/// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
+/// the help and in errors.
+pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Mode> {
+    clap::builder::PossibleValuesParser::new(Mode::ALL.map(Mode::name))
+        .try_map(|s| s.parse::<Mode>())
 }

@@ -4,6 +4,7 @@ mod flights;
 
 use crate::analyze::{report_text, report_view, ReportView};
 use crate::command;
+use crate::command::mode_parser;
 use crate::output;
 use crate::report::Pairs;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
@@ -13,7 +14,7 @@ use rtpipe_design::{
 };
 use rtpipe_model::{PeriodSpec, Spec};
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
@@ -32,20 +33,56 @@ pub enum SolverArg {
     Highs,
 }
 
-pub struct Args<'a> {
-    pub spec: &'a Path,
+/// `rtpipe design`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct DesignArgs {
+    /// The system spec (TOML); tasks without a fixed period are designed.
+    pub spec: PathBuf,
+    /// The analysis the chain limits are judged by.
+    #[arg(long, value_parser = mode_parser(), default_value = "sound")]
     pub mode: Mode,
+    /// Print one JSON object: the analysis of the design plus "design".
+    #[arg(long)]
     pub json: bool,
-    pub write: Option<&'a Path>,
+    /// Write the complete designed spec here (accepted by `analyze`).
+    /// Symlinks are followed; only regular files are replaced, atomically;
+    /// never the input spec unless --overwrite-spec is given.
+    #[arg(long, value_name = "OUT.toml")]
+    pub write: Option<PathBuf>,
+    /// Allow --write to replace the input spec (its comments and period
+    /// ranges are lost).
+    #[arg(long, requires = "write")]
     pub overwrite_spec: bool,
+    /// The exact search: `boxes` (branch and bound over period boxes,
+    /// pruned by the sound analysis; sound mode without harmonic
+    /// periods), `milp` (the mixed-integer model; every case), or `auto`
+    /// (boxes where they apply, else milp).
+    #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
+    /// MILP backend [default: highs when built with `--features highs`,
+    /// else microlp].
+    #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
+    /// Stop after this many seconds (at most 1000000) and report the best
+    /// verified design and its gap. Without it the search is bounded by
+    /// work, not time, so the answer is the same on every machine.
+    #[arg(long, value_name = "S", value_parser = parse_time_limit, allow_hyphen_values = true)]
     pub time_limit: Option<f64>,
-    /// `--fly`: missions every answer must fly (empty: no flights).
+    /// Fly every design the search would return on this mission (built-in
+    /// steps, hover, paper, gusty, or a mission file; repeat or separate
+    /// with commas for several): one that misses the mission's criteria is
+    /// cut, with every design no faster than 95 % of it, and the search
+    /// goes on. The answer is the least-utilisation design that both
+    /// verifies and flies. Box search only (sound mode, no harmonic periods).
+    #[arg(long = "fly", value_name = "MISSION", value_delimiter = ',')]
     pub missions: Vec<String>,
-    /// `--vehicle`: with `--fly`, the vehicles (default racer5).
+    /// With --fly: the vehicles (built-in racer5, aero1kg, or preset files;
+    /// repeat or separate with commas) [default: racer5].
+    #[arg(long = "vehicle", value_name = "PRESET|FILE", value_delimiter = ',')]
     pub vehicles: Vec<String>,
-    /// `--seed`: with `--fly`, the seeds (default 0).
+    /// With --fly: the seeds of the sensor noise and execution times
+    /// (repeat or separate with commas) [default: 0].
+    #[arg(long = "seed", value_name = "S", value_delimiter = ',')]
     pub seeds: Vec<u64>,
 }
 
@@ -65,8 +102,8 @@ pub fn parse_time_limit(s: &str) -> Result<f64, String> {
     }
 }
 
-pub fn run(a: Args) -> ExitCode {
-    let spec = match Spec::load(a.spec) {
+pub fn run(a: &DesignArgs) -> ExitCode {
+    let spec = match Spec::load(&a.spec) {
         Ok(s) => s,
         Err(e) => {
             eprint!("{e}");
@@ -86,11 +123,11 @@ pub fn run(a: Args) -> ExitCode {
         }
     }
     // The output path is checked before the (possibly long) search.
-    let write = match a.write.map(|w| {
+    let write = match a.write.as_deref().map(|w| {
         output::prepare(
             "--write",
             w,
-            a.spec,
+            &a.spec,
             Some((a.overwrite_spec, "--overwrite-spec")),
         )
     }) {
@@ -101,8 +138,8 @@ pub fn run(a: Args) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    let mut opts = options(&a);
-    let flying = match flight_check(&a, &spec) {
+    let mut opts = options(a);
+    let flying = match flight_check(a, &spec) {
         Ok(f) => f,
         Err(d) => return command::fail(d),
     };
@@ -112,7 +149,7 @@ pub fn run(a: Args) -> ExitCode {
     let (out, stopped) = match with_progress(&spec, &opts) {
         Ended::Finished(Ok(o)) => (o, false),
         Ended::Interrupted(o) => (o, true),
-        Ended::Finished(Err(e)) => return design_error(a.spec, &e),
+        Ended::Finished(Err(e)) => return design_error(&a.spec, &e),
     };
     if let Err(code) = write_design(write.as_ref(), &out) {
         return code;
@@ -135,7 +172,10 @@ type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
 
 /// `--fly`'s flights (and what they are, for the report); `--vehicle` or
 /// `--seed` without `--fly` is an error, not a silently ignored flag.
-fn flight_check(a: &Args, spec: &Spec) -> Result<Option<FlightCheck>, rtpipe_model::Diagnostic> {
+fn flight_check(
+    a: &DesignArgs,
+    spec: &Spec,
+) -> Result<Option<FlightCheck>, rtpipe_model::Diagnostic> {
     if a.missions.is_empty() {
         if !a.vehicles.is_empty() || !a.seeds.is_empty() {
             return Err(rtpipe_model::Diagnostic::error(
@@ -160,13 +200,13 @@ fn flight_check(a: &Args, spec: &Spec) -> Result<Option<FlightCheck>, rtpipe_mod
         vehicles: &vehicles,
         seeds: &seeds,
     };
-    let f = flights::flights(a.spec, spec, &r)?;
+    let f = flights::flights(&a.spec, spec, &r)?;
     Ok(Some((Arc::new(f), r.describe())))
 }
 
 /// The search's options from the flags: the solver named, else HiGHS when
 /// it is built in, else microlp; and a progress line for the spinner.
-fn options(a: &Args) -> Options {
+fn options(a: &DesignArgs) -> Options {
     Options {
         mode: a.mode,
         solver: match a.solver {

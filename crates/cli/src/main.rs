@@ -1,23 +1,11 @@
 //! `rtpipe`: analyse pipe systems (Cheng, West, Einstein, EMSOFT 2018).
 
-mod analyze;
-mod command;
-mod design;
-mod fly;
-mod generate;
-mod import;
-mod output;
-mod plot;
-mod report;
-mod run;
-mod simulate;
-mod table;
-
-use clap::builder::TypedValueParser;
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use rtpipe_analysis::Mode;
-use std::path::PathBuf;
+use rtpipe::{
+    analyze, design, fly, generate, import, output, run, simulate, EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE, EXIT_INTERNAL,
+};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -38,20 +26,7 @@ enum Command {
     /// Exit status: 0 when every limit and the schedulability test hold (under
     /// the analysis --mode names, sound by default), 1 when one fails, 2 on bad
     /// input, 3 on an internal error (a bug).
-    Analyze {
-        /// The system spec (TOML), e.g. examples/paper-table2.toml.
-        spec: PathBuf,
-        /// Print one JSON object instead of tables.
-        #[arg(long)]
-        json: bool,
-        /// Also list the worst path between every source and sink.
-        #[arg(long)]
-        all_paths: bool,
-        /// The analysis the verdict and the exit status follow (both are
-        /// always shown).
-        #[arg(long, value_parser = mode_parser(), default_value = "sound")]
-        mode: Mode,
-    },
+    Analyze(analyze::AnalyzeArgs),
     /// Simulate the system and hold observed reaction and freshness times
     /// against the analysis' bounds.
     ///
@@ -86,56 +61,7 @@ enum Command {
     /// solver fails or on an internal error (a bug), 130 when Ctrl-C stopped
     /// the search (the best verified design so far is printed, and written
     /// with --write).
-    Design {
-        /// The system spec (TOML); tasks without a fixed period are designed.
-        spec: PathBuf,
-        /// The analysis the chain limits are judged by.
-        #[arg(long, value_parser = mode_parser(), default_value = "sound")]
-        mode: Mode,
-        /// Print one JSON object: the analysis of the design plus "design".
-        #[arg(long)]
-        json: bool,
-        /// Write the complete designed spec here (accepted by `analyze`).
-        /// Symlinks are followed; only regular files are replaced, atomically;
-        /// never the input spec unless --overwrite-spec is given.
-        #[arg(long, value_name = "OUT.toml")]
-        write: Option<PathBuf>,
-        /// Allow --write to replace the input spec (its comments and period
-        /// ranges are lost).
-        #[arg(long, requires = "write")]
-        overwrite_spec: bool,
-        /// The exact search: `boxes` (branch and bound over period boxes,
-        /// pruned by the sound analysis; sound mode without harmonic
-        /// periods), `milp` (the mixed-integer model; every case), or `auto`
-        /// (boxes where they apply, else milp).
-        #[arg(long, value_enum, default_value = "auto")]
-        method: design::MethodArg,
-        /// MILP backend [default: highs when built with `--features highs`,
-        /// else microlp].
-        #[arg(long, value_enum)]
-        solver: Option<design::SolverArg>,
-        /// Stop after this many seconds (at most 1000000) and report the best
-        /// verified design and its gap. Without it the search is bounded by
-        /// work, not time, so the answer is the same on every machine.
-        #[arg(long, value_name = "S", value_parser = design::parse_time_limit, allow_hyphen_values = true)]
-        time_limit: Option<f64>,
-        /// Fly every design the search would return on this mission (built-in
-        /// steps, hover, paper, gusty, or a mission file; repeat or separate
-        /// with commas for several): one that misses the mission's criteria is
-        /// cut, with every design no faster than 95 % of it, and the search
-        /// goes on. The answer is the least-utilisation design that both
-        /// verifies and flies. Box search only (sound mode, no harmonic periods).
-        #[arg(long = "fly", value_name = "MISSION", value_delimiter = ',')]
-        missions: Vec<String>,
-        /// With --fly: the vehicles (built-in racer5, aero1kg, or preset files;
-        /// repeat or separate with commas) [default: racer5].
-        #[arg(long = "vehicle", value_name = "PRESET|FILE", value_delimiter = ',')]
-        vehicles: Vec<String>,
-        /// With --fly: the seeds of the sensor noise and execution times
-        /// (repeat or separate with commas) [default: 0].
-        #[arg(long = "seed", value_name = "S", value_delimiter = ',')]
-        seeds: Vec<u64>,
-    },
+    Design(design::DesignArgs),
     /// Turn the task sets of other tools into rtpipe specs: `import e2eeval
     /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework.
     ///
@@ -155,43 +81,6 @@ enum Command {
         kind: generate::GenerateCommand,
     },
 }
-
-/// `--mode`: the one [`Mode`] of the analysis crate, its names listed in
-/// the help and in errors.
-fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Mode> {
-    clap::builder::PossibleValuesParser::new(Mode::ALL.map(Mode::name))
-        .try_map(|s| s.parse::<Mode>())
-}
-
-/// A spinner with a message and the elapsed time on stderr (hidden when
-/// stderr is not a terminal).
-pub fn spinner(msg: String) -> indicatif::ProgressBar {
-    let pb =
-        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} {msg} [{elapsed_precise}]")
-    {
-        pb.set_style(style);
-    }
-    pb.set_message(msg);
-    pb.enable_steady_tick(std::time::Duration::from_millis(100));
-    pb
-}
-
-/// Exit status for bad input (clap uses 2 for bad flags too).
-pub const EXIT_BAD_INPUT: u8 = 2;
-
-/// Exit status for an internal error: a panic (a bug) or a solver failure.
-pub const EXIT_INTERNAL: u8 = 3;
-
-/// Exit status when Ctrl-C stopped `design` (128 + SIGINT, as a shell
-/// reports a process that SIGINT ended), whether or not a design was found
-/// and printed: the answer is not the one the complete search gives.
-pub const EXIT_INTERRUPTED: u8 = 130;
-
-/// Exit status when the reader of stdout went away (128 + SIGPIPE, what a
-/// shell reports for a process a broken pipe ends).
-pub const EXIT_BROKEN_PIPE: u8 = 141;
 
 /// A panic anywhere (any thread) prints its message and ends the process
 /// with [`EXIT_INTERNAL`]: it never leaves a waiting thread behind. A
@@ -248,11 +137,9 @@ fn register_inputs(command: &Command) {
             }
         }
         Command::Run(a) => world(&a.vehicle, &a.mission),
-        Command::Design {
-            missions, vehicles, ..
-        } => {
-            vehicles.iter().for_each(|v| world(v, "steps"));
-            missions.iter().for_each(|m| world("racer5", m));
+        Command::Design(a) => {
+            a.vehicles.iter().for_each(|v| world(v, "steps"));
+            a.missions.iter().for_each(|m| world("racer5", m));
         }
         Command::Import { format } => import::register_inputs(format),
         _ => {}
@@ -275,12 +162,7 @@ fn main() -> ExitCode {
     let (seed_given, steps_given) = (given("seed"), given("search_steps"));
     register_inputs(&cli.command);
     match cli.command {
-        Command::Analyze {
-            spec,
-            json,
-            all_paths,
-            mode,
-        } => analyze::run(&spec, json, all_paths, mode),
+        Command::Analyze(args) => analyze::run(&args),
         Command::Simulate(mut args) => {
             args.seed_given = seed_given;
             args.search_steps_given = steps_given;
@@ -291,31 +173,7 @@ fn main() -> ExitCode {
             args.world_given = given("vehicle") || given("mission");
             run::run(&args)
         }
-        Command::Design {
-            spec,
-            mode,
-            json,
-            write,
-            overwrite_spec,
-            method,
-            solver,
-            time_limit,
-            missions,
-            vehicles,
-            seeds,
-        } => design::run(design::Args {
-            spec: &spec,
-            mode,
-            json,
-            write: write.as_deref(),
-            overwrite_spec,
-            method,
-            solver,
-            time_limit,
-            missions,
-            vehicles,
-            seeds,
-        }),
+        Command::Design(args) => design::run(&args),
         Command::Import { format } => import::run(&format),
         Command::Generate { kind } => generate::run(&kind),
     }
