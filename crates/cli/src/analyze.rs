@@ -1,12 +1,12 @@
 //! `rtpipe analyze`.
 
-use crate::command;
 use crate::command::mode_parser;
+use crate::command::{self, Answer, Rendered};
 use crate::report::{time, Pairs};
 use crate::table::Table;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Diagnostic, Nanos, Spec};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -29,32 +29,39 @@ pub struct AnalyzeArgs {
 }
 
 pub fn run(a: &AnalyzeArgs) -> ExitCode {
-    let (path, json_out, all_paths, mode) = (&a.spec, a.json, a.all_paths, a.mode);
-    let spec = match command::load(path) {
+    let spec = match command::load(&a.spec) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let report = rtpipe_analysis::analyze(&spec);
-    let paths = all_paths.then(|| rtpipe_analysis::all_paths(&spec, &report.timing));
-    if json_out {
-        let v = AnalyzeView {
-            report: report_view(&spec, &report),
-            all_paths: paths.as_ref().map(|p| paths_view(&spec, p)),
-        };
-        if let Err(code) = command::print_json(&v) {
-            return code;
-        }
+    match execute(&spec, a) {
+        Ok(answer) => answer.emit(),
+        Err(b) => command::fail(b),
+    }
+}
+
+/// `analyze` on a loaded spec (with every period fixed).
+pub fn execute(spec: &Spec, a: &AnalyzeArgs) -> Result<Answer, Diagnostic> {
+    let report = rtpipe_analysis::analyze(spec);
+    let paths = a
+        .all_paths
+        .then(|| rtpipe_analysis::all_paths(spec, &report.timing));
+    let out = if a.json {
+        Rendered::Json(command::to_value(&AnalyzeView {
+            report: report_view(spec, &report),
+            all_paths: paths.as_ref().map(|p| paths_view(spec, p)),
+        })?)
     } else {
-        print!("{}", report_text(&spec, &report, mode));
+        let mut t = report_text(spec, &report, a.mode);
         if let Some(p) = &paths {
-            print!("{}", paths_text(&spec, p));
+            t.push_str(&paths_text(spec, p));
         }
-    }
-    if report.ok_in(mode) {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
-    }
+        Rendered::Text(t)
+    };
+    Ok(Answer {
+        report: out,
+        notes: Vec::new(),
+        status: if report.ok_in(a.mode) { 0 } else { 1 },
+    })
 }
 
 fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {

@@ -100,3 +100,88 @@ pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Mode> {
     clap::builder::PossibleValuesParser::new(Mode::ALL.map(Mode::name))
         .try_map(|s| s.parse::<Mode>())
 }
+
+/// What a command answers: its report (text for people, JSON for
+/// scripts), the lines it has for stderr (notes, warnings, why it
+/// failed), and its exit status. The binary prints it ([`Answer::emit`]);
+/// the Python package returns the JSON and logs the notes.
+pub struct Answer {
+    pub report: Rendered,
+    pub notes: Vec<String>,
+    pub status: u8,
+}
+
+/// A command's report, as `--json` asks.
+pub enum Rendered {
+    Text(String),
+    Json(serde_json::Value),
+    /// No report: the command failed (its notes say why).
+    Nothing,
+}
+
+impl Answer {
+    /// Prints the report on stdout and the notes on stderr; the exit status.
+    pub fn emit(self) -> ExitCode {
+        match &self.report {
+            Rendered::Text(t) => print!("{t}"),
+            Rendered::Nothing => {}
+            Rendered::Json(v) => {
+                if let Err(code) = print_json(v) {
+                    return code;
+                }
+            }
+        }
+        for n in &self.notes {
+            eprintln!("{n}");
+        }
+        ExitCode::from(self.status)
+    }
+}
+
+/// The JSON value of a report (keys in the order the views declare them).
+pub fn to_value(v: &impl serde::Serialize) -> Result<serde_json::Value, Diagnostic> {
+    serde_json::to_value(v).map_err(|e| {
+        Diagnostic::error(
+            format!("internal: cannot encode JSON: {e}"),
+            "please report it with the spec and the command line",
+        )
+    })
+}
+
+/// What a caller of a long command adds: a second place for the sample
+/// rows (the Python package's arrays), and a flag that stops the run.
+#[derive(Default)]
+pub struct Hooks {
+    pub rows: Option<rtpipe_joblog::RowSink>,
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+}
+
+/// The panic payload with which a run stopped by [`Hooks::stop`] unwinds
+/// (the simulator has no cancellation path of its own; the caller that set
+/// the flag catches it).
+#[derive(Debug)]
+pub struct Stopped;
+
+impl Hooks {
+    /// Unwinds with [`Stopped`] once the stop flag is set. `resume_unwind`
+    /// runs no panic hook: this is not a bug being reported.
+    pub fn check_stop(stop: Option<&std::sync::atomic::AtomicBool>) {
+        if stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
+            std::panic::resume_unwind(Box::new(Stopped));
+        }
+    }
+}
+
+/// Both row sinks, or the one given.
+pub fn tee(
+    a: Option<rtpipe_joblog::RowSink>,
+    b: Option<rtpipe_joblog::RowSink>,
+) -> Option<rtpipe_joblog::RowSink> {
+    match (a, b) {
+        (Some(mut a), Some(mut b)) => Some(Box::new(move |c, r| {
+            a(c, r);
+            b(c, r);
+        })),
+        (a, b) => a.or(b),
+    }
+}

@@ -3,8 +3,8 @@
 mod flights;
 
 use crate::analyze::{report_text, report_view, ReportView};
-use crate::command;
 use crate::command::mode_parser;
+use crate::command::{self, Answer, Rendered};
 use crate::output;
 use crate::report::Pairs;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
@@ -12,7 +12,7 @@ use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{
     design, DesignError, ErrorKind, Incumbent, Method, Mode, Options, Outcome, Status,
 };
-use rtpipe_model::{PeriodSpec, Spec};
+use rtpipe_model::{Diagnostic, PeriodSpec, Spec};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -110,61 +110,70 @@ pub fn run(a: &DesignArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    rtpipe_runtime::sys::catch_sigint();
+    match execute(&spec, a, &rtpipe_runtime::sys::stop_requested) {
+        Ok((answer, _)) => answer.emit(),
+        Err(b) => command::fail(b),
+    }
+}
+
+/// `design` on a loaded spec; `stop` says when to stop the search and
+/// answer with the best verified design so far. The answer, and the
+/// designed spec when there is one.
+pub fn execute(
+    spec: &Spec,
+    a: &DesignArgs,
+    stop: &dyn Fn() -> bool,
+) -> Result<(Answer, Option<Spec>), Diagnostic> {
     if let (MethodArg::Boxes, Some(_)) = (a.method, a.solver) {
-        return crate::command::fail(rtpipe_model::Diagnostic::error(
+        return Err(Diagnostic::error(
             "--solver picks the MILP's LP solver, but --method boxes solves no LP",
             "drop --solver, or use --method milp (or auto)",
         ));
     }
     if let Some(t) = a.time_limit {
-        if let Err(e) = parse_time_limit(&t.to_string()) {
-            eprintln!("error: --time-limit {t}: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
+        parse_time_limit(&t.to_string()).map_err(|e| {
+            Diagnostic::error(format!("--time-limit {t}: {e}"), "give it in seconds")
+        })?;
     }
     // The output path is checked before the (possibly long) search.
-    let write = match a.write.as_deref().map(|w| {
-        output::prepare(
-            "--write",
-            w,
-            &a.spec,
-            Some((a.overwrite_spec, "--overwrite-spec")),
-        )
-    }) {
-        None => None,
-        Some(Ok(o)) => Some(o),
-        Some(Err(e)) => {
-            eprint!("{e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    };
+    let write = a
+        .write
+        .as_deref()
+        .map(|w| {
+            output::prepare(
+                "--write",
+                w,
+                &a.spec,
+                Some((a.overwrite_spec, "--overwrite-spec")),
+            )
+        })
+        .transpose()?;
     let mut opts = options(a);
-    let flying = match flight_check(a, &spec) {
-        Ok(f) => f,
-        Err(d) => return command::fail(d),
-    };
+    let flying = flight_check(a, spec)?;
     if let Some((check, _)) = &flying {
         opts.accept = Some(check.clone());
     }
-    let (out, stopped) = match with_progress(&spec, &opts) {
+    let (out, stopped) = match with_progress(spec, &opts, stop) {
         Ended::Finished(Ok(o)) => (o, false),
         Ended::Interrupted(o) => (o, true),
-        Ended::Finished(Err(e)) => return design_error(&a.spec, &e),
+        Ended::Finished(Err(e)) => return Ok((design_error(&a.spec, &e), None)),
     };
-    if let Err(code) = write_design(write.as_ref(), &out) {
-        return code;
-    }
+    let mut notes = Vec::new();
+    write_design(write.as_ref(), &out, &mut notes)?;
     let what = flying.map(|(_, w)| w);
-    if let Err(code) = print_design(&spec, &out, a.json, opts.mode, stopped, what.as_deref()) {
-        return code;
-    }
-    if stopped {
-        return ExitCode::from(EXIT_INTERRUPTED);
-    }
-    match out.status {
-        Status::Optimal | Status::Feasible => ExitCode::SUCCESS,
-        _ => ExitCode::from(1),
-    }
+    let report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
+    let status = match (stopped, out.status) {
+        (true, _) => EXIT_INTERRUPTED,
+        (false, Status::Optimal | Status::Feasible) => 0,
+        (false, _) => 1,
+    };
+    let answer = Answer {
+        report,
+        notes,
+        status,
+    };
+    Ok((answer, out.spec))
 }
 
 /// The acceptance check of `--fly` and what it flies, in words.
@@ -172,13 +181,10 @@ type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
 
 /// `--fly`'s flights (and what they are, for the report); `--vehicle` or
 /// `--seed` without `--fly` is an error, not a silently ignored flag.
-fn flight_check(
-    a: &DesignArgs,
-    spec: &Spec,
-) -> Result<Option<FlightCheck>, rtpipe_model::Diagnostic> {
+fn flight_check(a: &DesignArgs, spec: &Spec) -> Result<Option<FlightCheck>, Diagnostic> {
     if a.missions.is_empty() {
         if !a.vehicles.is_empty() || !a.seeds.is_empty() {
-            return Err(rtpipe_model::Diagnostic::error(
+            return Err(Diagnostic::error(
                 "--vehicle and --seed choose the flights of --fly, which is not given",
                 "add --fly MISSION (e.g. --fly steps), or drop them",
             ));
@@ -229,42 +235,47 @@ fn options(a: &DesignArgs) -> Options {
 
 /// Reports why no design could be attempted; the exit status says whose
 /// fault it is (bad input, or the solver and rtpipe itself).
-fn design_error(spec: &Path, e: &DesignError) -> ExitCode {
-    eprint!("{}: {}", spec.display(), e.diagnostic);
-    ExitCode::from(match e.kind {
-        ErrorKind::Input => EXIT_BAD_INPUT,
-        ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
-    })
+fn design_error(spec: &Path, e: &DesignError) -> Answer {
+    let text = format!("{}: {}", spec.display(), e.diagnostic);
+    Answer {
+        report: Rendered::Nothing,
+        notes: vec![text.trim_end().to_string()],
+        status: match e.kind {
+            ErrorKind::Input => EXIT_BAD_INPUT,
+            ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
+        },
+    }
 }
 
 /// `--write`: the designed spec, whole or not at all.
-fn write_design(write: Option<&output::Output>, out: &Outcome) -> Result<(), ExitCode> {
+fn write_design(
+    write: Option<&output::Output>,
+    out: &Outcome,
+    notes: &mut Vec<String>,
+) -> Result<(), Diagnostic> {
     match (write, &out.spec) {
         (Some(w), Some(s)) => {
             let text = rtpipe_model::to_toml(s);
-            if let Err(e) = output::write_all(&[(w, &text)]) {
-                eprint!("{e}");
-                return Err(ExitCode::from(EXIT_BAD_INPUT));
-            }
+            output::write_all(&[(w, &text)])?;
         }
-        (Some(w), None) => eprintln!(
+        (Some(w), None) => notes.push(format!(
             "note: nothing written to {}: no verified design",
             w.given.display()
-        ),
+        )),
         _ => {}
     }
     Ok(())
 }
 
-/// The answer on stdout, as text or JSON.
-fn print_design(
+/// The answer, as text or JSON.
+fn render_design(
     spec: &Spec,
     out: &Outcome,
     json_out: bool,
     mode: Mode,
     stopped: bool,
     flown: Option<&str>,
-) -> Result<(), ExitCode> {
+) -> Result<Rendered, Diagnostic> {
     if json_out {
         let head = match (&out.spec, &out.report) {
             (Some(s), Some(r)) => Head::Report(report_view(s, r)),
@@ -277,14 +288,14 @@ fn print_design(
             head,
             design: design_json(spec, out, mode, stopped),
         };
-        command::print_json(&v)?;
+        Ok(Rendered::Json(command::to_value(&v)?))
     } else {
-        print!("{}", design_text(spec, out, mode, stopped));
+        let mut t = design_text(spec, out, mode, stopped);
         if let Some(what) = flown {
-            print!("{}", flights::flown_text(spec, what, &out.checked));
+            t.push_str(&flights::flown_text(spec, what, &out.checked));
         }
+        Ok(Rendered::Text(t))
     }
-    Ok(())
 }
 
 /// How long `design` waits for the search to notice Ctrl-C before it
@@ -306,7 +317,7 @@ enum Ended {
 /// cancels the search; if the worker has not returned [`CTRL_C_GRACE`]
 /// later, the answer is built from the designs it published, and the worker
 /// is left to die with the process.
-fn with_progress(spec: &Spec, opts: &Options) -> Ended {
+fn with_progress(spec: &Spec, opts: &Options, stop: &dyn Fn() -> bool) -> Ended {
     let pb = crate::spinner(format!(
         "designing {} ({} mode)",
         spec.name,
@@ -320,7 +331,6 @@ fn with_progress(spec: &Spec, opts: &Options) -> Ended {
         incumbent: Some(sink.clone()),
         ..opts.clone()
     };
-    rtpipe_runtime::sys::catch_sigint();
     let (tx, rx) = mpsc::channel();
     let (spec2, opts2) = (spec.clone(), opts.clone());
     std::thread::spawn(move || {
@@ -350,7 +360,7 @@ fn with_progress(spec: &Spec, opts: &Options) -> Ended {
                 pb.set_message(shown.clone());
             }
         }
-        if stopped.is_none() && rtpipe_runtime::sys::stop_requested() {
+        if stopped.is_none() && stop() {
             cancel.store(true, Ordering::Relaxed);
             stopped = Some(Instant::now());
             pb.set_message("interrupted (Ctrl-C): stopping the search");

@@ -14,7 +14,7 @@ mod sweep;
 pub use args::FlyArgs;
 
 use crate::analyze::{ReportView, TaskView};
-use crate::command;
+use crate::command::{self, Answer, Hooks, Rendered};
 use crate::output;
 use crate::plot;
 use crate::report::flight::{quality_text, RmsMax};
@@ -121,21 +121,29 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let s = match setup_of(&spec, a).and_then(|s| check_outputs(a).map(|()| s)) {
-        Ok(s) => s,
-        Err(b) => return command::fail(b),
-    };
+    match execute(&spec, a, Hooks::default()) {
+        Ok(answer) => answer.emit(),
+        Err(b) => command::fail(b),
+    }
+}
+
+/// `fly` (one flight, or `--sweep`) on a loaded spec, with `hooks`' extra
+/// row sink. A flight is short (under a second at the default lengths) and
+/// has no stop point: the stop flag is not consulted.
+pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
+    let s = setup_of(spec, a)?;
+    check_outputs(a)?;
     if a.sweep {
         if let Some(flag) = [("--log", &a.log), ("--samples", &a.samples)]
             .into_iter()
             .find_map(|(flag, p)| p.as_ref().map(|_| flag))
         {
-            return command::fail(Diagnostic::error(
+            return Err(Diagnostic::error(
                 format!("{flag} describes one flight; --sweep flies many"),
                 format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
             ));
         }
-        return sweep::run(&spec, &s, a);
+        return sweep::execute(spec, &s, a);
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",
@@ -145,43 +153,34 @@ pub fn run(a: &FlyArgs) -> ExitCode {
         s.horizon as f64 * 1e-9
     );
     let started = std::time::Instant::now();
-    let samples = match SamplesFile::open(a.samples.as_ref(), &a.spec, &spec) {
-        Ok(s) => s,
-        Err(b) => return command::fail(b),
-    };
-    let sink = samples.as_ref().map(SamplesFile::sink);
-    let flight = match with_progress_bar(msg, s.horizon, |p| {
-        fly_with_progress(&spec, &s, a.exec.model(), Some(p), sink)
-    }) {
-        Ok(f) => f,
-        Err(b) => return command::fail(b),
-    };
+    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec)?;
+    let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
+    let flight = with_progress_bar(msg, s.horizon, |p| {
+        fly_with_progress(spec, &s, a.exec.model(), Some(p), sink)
+    })?;
     let seconds = started.elapsed().as_secs_f64();
-    let report = rtpipe_analysis::analyze(&spec);
+    let report = rtpipe_analysis::analyze(spec);
     let obs = observe(&report, &flight.sim);
-    if let Err(b) = write_outputs(&spec, a, &flight, &obs, samples) {
-        return command::fail(b);
-    }
+    write_outputs(spec, a, &flight, &obs, samples)?;
     let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
-    if a.json {
-        let v = to_json(&spec, &report, &s, &flight, &obs, &failures, seconds);
-        if let Err(code) = command::print_json(&v) {
-            return code;
-        }
+    let out = if a.json {
+        let v = to_json(spec, &report, &s, &flight, &obs, &failures, seconds);
+        Rendered::Json(command::to_value(&v)?)
     } else {
-        print!("{}", to_text(&spec, &s, &flight, &obs, &failures, seconds));
-    }
+        Rendered::Text(to_text(spec, &s, &flight, &obs, &failures, seconds))
+    };
+    let mut notes = Vec::new();
     if over_sound > 0 || !late_rt.is_empty() {
-        eprintln!("error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound (a bug in the analysis or the simulator)");
-        return ExitCode::from(1);
+        notes.push(format!("error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound (a bug in the analysis or the simulator)"));
     }
-    if failures.is_empty() {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
-    }
+    let status = u8::from(!notes.is_empty() || !failures.is_empty());
+    Ok(Answer {
+        report: out,
+        notes,
+        status,
+    })
 }
 
 fn to_text(

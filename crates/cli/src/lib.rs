@@ -3,6 +3,7 @@
 //! The binary (`main.rs`) is only the command line in front of them.
 
 pub mod analyze;
+pub mod api;
 pub mod command;
 pub mod design;
 pub mod fly;

@@ -4,7 +4,7 @@
 //! that follow, and optionally writes them into a spec.
 
 use super::args::FlyArgs;
-use crate::command;
+use crate::command::{self, Answer, Rendered};
 use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::Criteria;
@@ -16,7 +16,6 @@ use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use serde::Serialize;
 use std::path::Path;
-use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
@@ -237,17 +236,12 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
 }
 
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.
-pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
-    let c = match criteria(a, s) {
-        Ok(c) => c,
-        Err(b) => return command::fail(b),
-    };
+pub fn execute(spec: &Spec, s: &Setup, a: &FlyArgs) -> Result<Answer, Diagnostic> {
+    let c = criteria(a, s)?;
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
-        if let Err(b) = crate::output::prepare("--write-limits", out, &a.spec, None) {
-            return command::fail(b);
-        }
+        crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let points = fly_all(spec, s, a, &c, &vars);
     let limits = derived_limits(spec, s, &points);
@@ -259,32 +253,32 @@ pub fn run(spec: &Spec, s: &Setup, a: &FlyArgs) -> ExitCode {
         .all(|l| l.0.is_none() && l.1.is_none())
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
-    if let Err(b) = write_files(spec, s, a, &c, &points, &limits, write_limits) {
-        return command::fail(b);
-    }
-    if a.json {
-        if let Err(code) = command::print_json(&sweep_json(spec, s, &c, &points, &limits)) {
-            return code;
-        }
+    write_files(spec, s, a, &c, &points, &limits, write_limits)?;
+    let report = if a.json {
+        Rendered::Json(command::to_value(&sweep_json(
+            spec, s, &c, &points, &limits,
+        ))?)
     } else {
-        print!("{}", text(spec, s, &c, &points, &limits, write_limits));
+        Rendered::Text(text(spec, s, &c, &points, &limits, write_limits))
+    };
+    let mut notes = Vec::new();
+    if let (Some(out), true) = (&a.write_limits, nothing) {
+        let d = Diagnostic::error(
+            format!(
+                "no flight of the sweep met the criterion, so no chain limit could be derived: {} was not written",
+                out.display()
+            ),
+            "check that the vehicle flies the mission at the spec's own periods (rtpipe fly), relax the criterion, or widen --scale",
+        );
+        // A diagnostic ends its own last line; a note gets one when printed.
+        notes.push(d.to_string().trim_end().to_string());
     }
-    match &a.write_limits {
-        Some(out) if nothing => {
-            eprint!(
-                "{}",
-                Diagnostic::error(
-                    format!(
-                        "no flight of the sweep met the criterion, so no chain limit could be derived: {} was not written",
-                        out.display()
-                    ),
-                    "check that the vehicle flies the mission at the spec's own periods (rtpipe fly), relax the criterion, or widen --scale",
-                )
-            );
-            ExitCode::from(1)
-        }
-        _ => ExitCode::SUCCESS,
-    }
+    let status = u8::from(!notes.is_empty());
+    Ok(Answer {
+        report,
+        notes,
+        status,
+    })
 }
 
 /// Flies every variation (on a worker thread) while a progress bar on

@@ -6,7 +6,7 @@ mod plan;
 mod report;
 
 use crate::analyze;
-use crate::command::{self, fail, parse_time, ExecArg};
+use crate::command::{self, fail, parse_time, Answer, ExecArg, Hooks, Rendered};
 use crate::output;
 use crate::plot;
 use crate::report::samples::{self, SamplesFile};
@@ -28,6 +28,7 @@ use rtpipe_sim::{
 };
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 /// Tail outputs simulated when neither `--outputs` nor `--duration` is given.
@@ -174,47 +175,45 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let p = match plan(&spec, a) {
-        Ok(p) => p,
-        Err(b) => return fail(b),
-    };
-    let report = rtpipe_analysis::analyze(&spec);
-    let samples = match SamplesFile::open(a.samples.as_ref(), &a.spec, &spec) {
-        Ok(s) => s,
-        Err(b) => return fail(b),
-    };
-    let sink = samples.as_ref().map(SamplesFile::sink);
-    let (res, searches, seconds) = match simulate_and_search(&spec, a, &p, sink) {
-        Ok(r) => r,
-        Err(b) => return fail(b),
-    };
+    match execute(&spec, a, Hooks::default()) {
+        Ok(answer) => answer.emit(),
+        Err(b) => fail(b),
+    }
+}
+
+/// `simulate` on a loaded spec (every period fixed), with `hooks`' extra
+/// row sink and stop flag.
+pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
+    let p = plan(spec, a)?;
+    let report = rtpipe_analysis::analyze(spec);
+    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec)?;
+    let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
+    let stop = hooks.stop.as_deref();
+    let (res, searches, seconds) = simulate_and_search(spec, a, &p, sink, stop)?;
     let obs = observe(&report, &res);
-    let mut outputs = match render_outputs(&spec, a, &p, &res, &obs) {
-        Ok(o) => o,
-        Err(b) => return fail(b),
-    };
-    if let Err(b) = write_all_outputs(a, &mut outputs, samples) {
-        return fail(b);
-    }
-    if a.json {
-        let mut v = to_json(&spec, &report, a, &res, &obs, seconds);
-        v.search = search_json(&spec, &searches);
-        if let Err(code) = command::print_json(&v) {
-            return code;
-        }
+    let mut outputs = render_outputs(spec, a, &p, &res, &obs)?;
+    write_all_outputs(a, &mut outputs, samples)?;
+    let out = if a.json {
+        let mut v = to_json(spec, &report, a, &res, &obs, seconds);
+        v.search = search_json(spec, &searches);
+        Rendered::Json(command::to_value(&v)?)
     } else {
-        print!("{}", to_text(&spec, &report, a, &p, &res, &obs, seconds));
+        let mut t = to_text(spec, &report, a, &p, &res, &obs, seconds);
         if !searches.is_empty() {
-            print!("{}", search_text(&spec, &searches));
+            t.push_str(&search_text(spec, &searches));
         }
-    }
-    for n in &outputs.notes {
-        eprintln!("{n}");
-    }
+        Rendered::Text(t)
+    };
+    let mut notes = outputs.notes;
     if let Some(n) = p.outputs {
-        note_short_tails(&spec, &res, n);
+        notes.extend(short_tails(spec, &res, n));
     }
-    exit_status(&spec, a, &report, &res, &obs, &searches)
+    let status = exit_status(spec, a, &report, &res, &obs, &searches, &mut notes);
+    Ok(Answer {
+        report: out,
+        notes,
+        status,
+    })
 }
 
 /// The files `render_outputs` made, then `--samples` (written as the run
@@ -240,6 +239,7 @@ fn simulate_and_search(
     a: &SimulateArgs,
     p: &Plan,
     rows: Option<RowSink>,
+    stop: Option<&AtomicBool>,
 ) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
     let started = Instant::now();
     let msg = format!(
@@ -250,7 +250,11 @@ fn simulate_and_search(
         human(spec, p.horizon)
     );
     let res = with_horizon_bar(msg, p.horizon, |progress| {
-        run_simulation(spec, a, p, progress, rows)
+        let mut checked = |t: Nanos| {
+            Hooks::check_stop(stop);
+            progress(t);
+        };
+        run_simulation(spec, a, p, &mut checked, rows)
     })
     .map_err(|e| {
         Diagnostic::error(
@@ -260,7 +264,7 @@ fn simulate_and_search(
     })?;
     let searches = if a.phasing == PhasingArg::Search {
         with_spinner(format!("searching worst cases of {}", spec.name), || {
-            run_searches(spec, a, p)
+            run_searches(spec, a, p, stop)
         })
         .map_err(|e| {
             Diagnostic::error(
@@ -274,8 +278,8 @@ fn simulate_and_search(
     Ok((res, searches, started.elapsed().as_secs_f64()))
 }
 
-/// Says which chain tails published fewer than the `n` outputs asked for.
-fn note_short_tails(spec: &Spec, res: &SimResult, n: u64) {
+/// Which chain tails published fewer than the `n` outputs asked for.
+fn short_tails(spec: &Spec, res: &SimResult, n: u64) -> Option<String> {
     let short: Vec<String> = spec
         .chains
         .iter()
@@ -283,14 +287,14 @@ fn note_short_tails(spec: &Spec, res: &SimResult, n: u64) {
         .filter(|&&t| res.tasks.get(t).is_some_and(|ts| ts.completed < n))
         .map(|&t| spec.tasks[t].name.clone())
         .collect();
-    if !short.is_empty() {
-        eprintln!(
+    (!short.is_empty()).then(|| {
+        format!(
             "note: tail task(s) {} completed fewer than {n} jobs (late or starved jobs); the run stopped at {} {}",
             short.join(", "),
             spec.fmt_time(res.horizon),
             spec.time_unit
-        );
-    }
+        )
+    })
 }
 
 /// 1 (with the replay command) when a sample, a response time or a search
@@ -302,25 +306,26 @@ fn exit_status(
     res: &SimResult,
     obs: &[ChainObs],
     searches: &[SearchResult],
-) -> ExitCode {
+    notes: &mut Vec<String>,
+) -> u8 {
     let late_rt = response_violations(report, res);
     // The bound that holds for these runs: under known offsets when the
     // chain has them (ChainObs::violations).
     let over_sound: usize = obs.iter().map(ChainObs::violations).sum();
     let over_search = searches.iter().filter(|r| r.exceeds_sound()).count();
     if over_search > 0 {
-        eprintln!("error: SOUND BOUND EXCEEDED by an adversarial search ({over_search} chain metric(s)); the replayable offsets are in --json");
-        return ExitCode::from(1);
+        notes.push(format!("error: SOUND BOUND EXCEEDED by an adversarial search ({over_search} chain metric(s)); the replayable offsets are in --json"));
+        return 1;
     }
     if over_sound > 0 || !late_rt.is_empty() {
-        eprintln!(
+        notes.push(format!(
             "error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound, {} task(s) above their analysed response time",
             late_rt.len()
+        ));
+        notes.push(
+            "  = this is a bug in the analysis or the simulator: please report it with the spec and this command line:".into()
         );
-        eprintln!(
-            "  = this is a bug in the analysis or the simulator: please report it with the spec and this command line:"
-        );
-        eprintln!(
+        notes.push(format!(
             "    rtpipe simulate {} --duration {}{} --seed {} --exec {} --phasing {}",
             a.spec.display(),
             spec.fmt_time(res.horizon),
@@ -328,14 +333,19 @@ fn exit_status(
             a.seed,
             flag_name(&a.exec),
             flag_name(&a.phasing)
-        );
-        return ExitCode::from(1);
+        ));
+        return 1;
     }
-    ExitCode::SUCCESS
+    0
 }
 
 /// One adversarial search per chain, metric and anchor (`--phasing search`).
-fn run_searches(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<Vec<SearchResult>, SimError> {
+fn run_searches(
+    spec: &Spec,
+    a: &SimulateArgs,
+    p: &Plan,
+    stop: Option<&AtomicBool>,
+) -> Result<Vec<SearchResult>, SimError> {
     let longest = spec
         .tasks
         .iter()
@@ -352,6 +362,7 @@ fn run_searches(spec: &Spec, a: &SimulateArgs, p: &Plan) -> Result<Vec<SearchRes
                 cfg.anchor = anchor;
                 cfg.steps = a.search_steps;
                 cfg.seed = a.seed;
+                Hooks::check_stop(stop);
                 out.push(search(spec, &cfg)?);
             }
         }

@@ -1,0 +1,244 @@
+//! The entry points of the Python package (`crates/python`): a command on a
+//! loaded spec, its flags given as on the command line (so they are
+//! checked by the same parser, with the same messages), answering the JSON
+//! of `--json`. Nothing here prints, reads a clock or catches a signal: the
+//! caller owns the process (Python's SIGINT handler stays Python's).
+
+use crate::analyze::AnalyzeArgs;
+use crate::command::{self, Answer, Hooks, Rendered};
+use crate::design::DesignArgs;
+use crate::fly::FlyArgs;
+use crate::simulate::SimulateArgs;
+use clap::{Args, FromArgMatches};
+use rtpipe_joblog::SampleRow;
+use rtpipe_model::{Diagnostic, Spec};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// The commands the API runs.
+pub const COMMANDS: [&str; 4] = ["analyze", "simulate", "fly", "design"];
+
+/// What a command answered.
+pub struct Reply {
+    /// The `--json` report (absent when the command failed: see `notes`).
+    pub json: Option<serde_json::Value>,
+    /// The command line's exit status (0 ok, 1 a verdict failed, 2 bad
+    /// input, 3 internal error, 130 stopped).
+    pub status: u8,
+    /// What the command line prints on stderr.
+    pub notes: Vec<String>,
+    /// One column per field of `--samples`, when asked for.
+    pub samples: Option<Columns>,
+    /// `design`'s designed spec, when there is one.
+    pub designed: Option<Spec>,
+}
+
+/// Why a command gave no reply.
+#[derive(Debug)]
+pub enum Failure {
+    /// A flag or a value is wrong: what and how to fix it.
+    Input(Diagnostic),
+    /// The stop flag was set.
+    Stopped,
+    /// A bug: a panic's message.
+    Internal(String),
+}
+
+/// `--samples` as columns (integer nanoseconds; `None` where the CSV
+/// leaves a cell empty), rows grouped by chain, each chain's in sample
+/// order.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Columns {
+    pub chain: Vec<u32>,
+    pub sample: Vec<u64>,
+    pub read_ns: Vec<i64>,
+    pub event_ns: Vec<Option<i64>>,
+    pub first_output_ns: Vec<Option<i64>>,
+    pub last_output_ns: Vec<Option<i64>>,
+    pub reaction_ns: Vec<Option<i64>>,
+    pub freshness_ns: Vec<Option<i64>>,
+    pub event_reaction_ns: Vec<Option<i64>>,
+    pub event_freshness_ns: Vec<Option<i64>>,
+}
+
+impl Columns {
+    fn push(&mut self, chain: usize, r: &SampleRow) {
+        self.chain.push(u32::try_from(chain).unwrap_or(u32::MAX));
+        self.sample.push(r.sample);
+        self.read_ns.push(r.read);
+        self.event_ns.push(r.event);
+        self.first_output_ns.push(r.first);
+        self.last_output_ns.push(r.last);
+        self.reaction_ns.push(r.reaction());
+        self.freshness_ns.push(r.freshness());
+        self.event_reaction_ns.push(r.event_reaction());
+        self.event_freshness_ns.push(r.event_freshness());
+    }
+
+    /// The rows sorted by chain (a run hands them on chain by chain as
+    /// they complete, interleaved), each chain's in sample order.
+    fn sorted(self) -> Columns {
+        let mut idx: Vec<usize> = (0..self.chain.len()).collect();
+        idx.sort_by_key(|&i| (self.chain[i], self.sample[i]));
+        let pick = |v: &[Option<i64>]| idx.iter().map(|&i| v[i]).collect();
+        Columns {
+            chain: idx.iter().map(|&i| self.chain[i]).collect(),
+            sample: idx.iter().map(|&i| self.sample[i]).collect(),
+            read_ns: idx.iter().map(|&i| self.read_ns[i]).collect(),
+            event_ns: pick(&self.event_ns),
+            first_output_ns: pick(&self.first_output_ns),
+            last_output_ns: pick(&self.last_output_ns),
+            reaction_ns: pick(&self.reaction_ns),
+            freshness_ns: pick(&self.freshness_ns),
+            event_reaction_ns: pick(&self.event_reaction_ns),
+            event_freshness_ns: pick(&self.event_freshness_ns),
+        }
+    }
+}
+
+/// Runs `command` (one of [`COMMANDS`]) on `spec`, read from `label` (a
+/// path or a name for messages), with `flags` as the command line takes
+/// them after the spec (`--json` is implied); `samples` collects
+/// `--samples`' rows as columns (simulate and fly). `stop` stops a
+/// simulation or a design search early ([`Failure::Stopped`]).
+pub fn run(
+    command: &str,
+    spec: &Spec,
+    label: &str,
+    flags: &[String],
+    samples: bool,
+    stop: Arc<AtomicBool>,
+) -> Result<Reply, Failure> {
+    let cols = Arc::new(Mutex::new(Columns::default()));
+    let rows: Option<rtpipe_joblog::RowSink> = samples.then(|| {
+        let cols = Arc::clone(&cols);
+        Box::new(move |c: usize, r: &SampleRow| {
+            if let Ok(mut g) = cols.lock() {
+                g.push(c, r);
+            }
+        }) as rtpipe_joblog::RowSink
+    });
+    let hooks = Hooks {
+        rows,
+        stop: Some(Arc::clone(&stop)),
+    };
+    let argv = || std::iter::once(label.to_string()).chain(flags.iter().cloned());
+    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        dispatch(command, spec, argv().collect(), hooks, &stop)
+    }));
+    let (answer, designed) = match caught {
+        Ok(r) => r?,
+        Err(p) if p.downcast_ref::<command::Stopped>().is_some() => return Err(Failure::Stopped),
+        Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
+    };
+    if stop.load(Ordering::Relaxed) {
+        return Err(Failure::Stopped);
+    }
+    let samples = samples.then(|| {
+        let taken = cols.lock().map(|mut g| std::mem::take(&mut *g));
+        taken.unwrap_or_default().sorted()
+    });
+    Ok(reply(answer, samples, designed))
+}
+
+fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Reply {
+    Reply {
+        json: match answer.report {
+            Rendered::Json(v) => Some(v),
+            Rendered::Text(_) | Rendered::Nothing => None,
+        },
+        status: answer.status,
+        notes: answer.notes,
+        samples,
+        designed,
+    }
+}
+
+/// The command's flags parsed, then the command run.
+fn dispatch(
+    command: &str,
+    spec: &Spec,
+    mut argv: Vec<String>,
+    hooks: Hooks,
+    stop: &AtomicBool,
+) -> Result<(Answer, Option<Spec>), Failure> {
+    argv.push("--json".into());
+    let input = Failure::Input;
+    match command {
+        "analyze" => {
+            let a: AnalyzeArgs = parse(command, &argv)?;
+            Ok((crate::analyze::execute(spec, &a).map_err(input)?, None))
+        }
+        "simulate" => {
+            let a: SimulateArgs = parse(command, &argv)?;
+            refuse_files(&[("samples", a.samples.is_some())])?;
+            Ok((
+                crate::simulate::execute(spec, &a, hooks).map_err(input)?,
+                None,
+            ))
+        }
+        "fly" => {
+            let a: FlyArgs = parse(command, &argv)?;
+            refuse_files(&[("samples", a.samples.is_some())])?;
+            Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
+        }
+        "design" => {
+            let a: DesignArgs = parse(command, &argv)?;
+            let stop = || stop.load(Ordering::Relaxed);
+            crate::design::execute(spec, &a, &stop).map_err(input)
+        }
+        _ => Err(Failure::Input(Diagnostic::error(
+            format!("no command `{command}`"),
+            format!("use one of {}", COMMANDS.join(", ")),
+        ))),
+    }
+}
+
+/// `--samples FILE` catches Ctrl-C to remove its temporaries, which is not
+/// the API's to do: the API hands the rows over as columns instead.
+fn refuse_files(flags: &[(&str, bool)]) -> Result<(), Failure> {
+    match flags.iter().find(|(_, given)| *given) {
+        Some((name, _)) => Err(Failure::Input(Diagnostic::error(
+            format!("`{name}` takes no file here"),
+            format!("pass {name}=True and write the returned columns (e.g. with pandas)"),
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// `argv` (the spec's label, then the flags) parsed as the command line
+/// would parse `rtpipe COMMAND ...`.
+fn parse<A: Args + FromArgMatches>(command: &str, argv: &[String]) -> Result<A, Failure> {
+    let name = COMMANDS
+        .iter()
+        .find(|c| **c == command)
+        .copied()
+        .unwrap_or("rtpipe");
+    let cmd = A::augment_args(clap::Command::new(name))
+        .no_binary_name(true)
+        .disable_help_flag(true);
+    let parsed = cmd
+        .try_get_matches_from(argv)
+        .and_then(|m| A::from_arg_matches(&m));
+    parsed.map_err(|e| Failure::Input(flag_error(&e)))
+}
+
+/// A parser error as a diagnostic: its first line, without clap's usage
+/// and help lines.
+fn flag_error(e: &clap::Error) -> Diagnostic {
+    let text = e.render().to_string();
+    let first = text.lines().next().unwrap_or("invalid arguments");
+    let message = first.trim_start_matches("error: ").to_string();
+    let help = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("tip: "))
+        .unwrap_or("see `rtpipe COMMAND --help` for the flags and their values");
+    Diagnostic::error(message, help)
+}
+
+fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<String>()
+        .cloned()
+        .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "a panic without a message".into())
+}

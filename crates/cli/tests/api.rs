@@ -1,0 +1,194 @@
+//! `rtpipe::api` (what the Python package calls) answers what the binary's
+//! `--json` prints, hands `--samples`' rows over as the CSV's columns,
+//! refuses bad flags with the parser's message, and stops when asked.
+
+use rtpipe::api::{self, Columns, Failure, Reply};
+use rtpipe_model::Spec;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+}
+
+fn load(path: &Path) -> Spec {
+    match Spec::load(path) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn call(cmd: &str, path: &Path, flags: &[&str], samples: bool) -> Result<Reply, Failure> {
+    let spec = load(path);
+    let flags: Vec<String> = flags.iter().map(|s| s.to_string()).collect();
+    let label = path.display().to_string();
+    let stop = Arc::new(AtomicBool::new(false));
+    api::run(cmd, &spec, &label, &flags, samples, stop)
+}
+
+/// The binary's `--json` for the same command line.
+fn binary_json(cmd: &str, path: &Path, flags: &[&str]) -> (Value, i32) {
+    let out = Command::new(env!("CARGO_BIN_EXE_rtpipe"))
+        .arg(cmd)
+        .arg(path)
+        .args(flags)
+        .arg("--json")
+        .output()
+        .expect("the binary runs");
+    let v = serde_json::from_slice(&out.stdout).expect("JSON on stdout");
+    (v, out.status.code().unwrap_or(-1))
+}
+
+/// Wall-clock figures differ between two runs of the same command.
+fn without_clock(v: &mut Value) {
+    match v {
+        Value::Object(m) => {
+            m.retain(|k, _| !k.contains("seconds") && !k.contains("real_time"));
+            m.values_mut().for_each(without_clock);
+        }
+        Value::Array(a) => a.iter_mut().for_each(without_clock),
+        _ => {}
+    }
+}
+
+fn same_as_binary(cmd: &str, file: &str, flags: &[&str]) {
+    let path = example(file);
+    let reply = match call(cmd, &path, flags, false) {
+        Ok(r) => r,
+        Err(e) => panic!("{cmd} {file}: {e:?}"),
+    };
+    let (mut expected, status) = binary_json(cmd, &path, flags);
+    let mut got = reply.json.expect("a JSON report");
+    without_clock(&mut expected);
+    without_clock(&mut got);
+    assert_eq!(got, expected, "{cmd} {file} {flags:?}");
+    assert_eq!(i32::from(reply.status), status, "{cmd} {file} {flags:?}");
+}
+
+#[test]
+fn every_command_answers_what_the_binary_prints() {
+    same_as_binary("analyze", "paper-table3.toml", &["--all-paths"]);
+    same_as_binary("analyze", "paper-table2.toml", &["--mode", "paper"]);
+    same_as_binary("simulate", "paper-table3.toml", &["--outputs", "50"]);
+    same_as_binary(
+        "simulate",
+        "resources.toml",
+        &[
+            "--duration",
+            "2s",
+            "--phasing",
+            "search",
+            "--search-steps",
+            "3",
+        ],
+    );
+    same_as_binary("fly", "cleanflight.toml", &["--mission", "hover"]);
+    same_as_binary("design", "table2-design.toml", &[]);
+    same_as_binary("design", "cleanflight-design.toml", &[]);
+}
+
+#[test]
+fn design_hands_over_the_designed_spec() {
+    let reply = call("design", &example("cleanflight-design.toml"), &[], false);
+    let reply = reply.unwrap_or_else(|e| panic!("{e:?}"));
+    let designed = reply.designed.expect("a design");
+    assert!(designed.tasks.iter().all(|t| t.fixed_period().is_some()));
+    let json = reply.json.expect("a report");
+    assert_eq!(json["design"]["status"], "optimal");
+}
+
+/// The columns of `--samples`' CSV, as the binary writes it.
+fn csv_columns(path: &Path, labels: &[String]) -> Columns {
+    let text = std::fs::read_to_string(path).expect("the CSV");
+    let mut c = Columns::default();
+    let cell = |s: &str| (!s.is_empty()).then(|| s.parse::<i64>().expect("an integer"));
+    for line in text.lines().skip(1) {
+        // A label with a comma or a quote is quoted: split after it.
+        let end = match line.strip_prefix('"') {
+            Some(rest) => rest.rfind('"').map_or(0, |i| i + 2),
+            None => line.find(',').unwrap_or(0),
+        };
+        let (label, rest) = line.split_at(end);
+        let f: Vec<&str> = rest.trim_start_matches(',').split(',').collect();
+        let label = label.trim_matches('"').replace("\"\"", "\"");
+        let chain = labels.iter().position(|l| *l == label).expect("a chain");
+        c.chain.push(chain as u32);
+        c.sample.push(f[0].parse().expect("a sample id"));
+        c.read_ns.push(f[1].parse().expect("a read"));
+        c.event_ns.push(cell(f[2]));
+        c.first_output_ns.push(cell(f[3]));
+        c.last_output_ns.push(cell(f[4]));
+        c.reaction_ns.push(cell(f[5]));
+        c.freshness_ns.push(cell(f[6]));
+        c.event_reaction_ns.push(cell(f[7]));
+        c.event_freshness_ns.push(cell(f[8]));
+    }
+    c
+}
+
+#[test]
+fn samples_are_the_csv_columns() {
+    let dir = std::env::temp_dir().join(format!("rtpipe-api-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temp dir");
+    for (cmd, file, flags) in [
+        ("simulate", "paper-table3.toml", vec!["--outputs", "40"]),
+        ("fly", "cleanflight.toml", vec!["--duration", "3s"]),
+    ] {
+        let path = example(file);
+        let csv = dir.join(format!("{cmd}.csv"));
+        let mut with_file = flags.clone();
+        with_file.extend(["--samples", csv.to_str().expect("utf-8")]);
+        binary_json(cmd, &path, &with_file);
+        let spec = load(&path);
+        let labels: Vec<String> = (0..spec.chains.len())
+            .map(|c| spec.chain_label(c))
+            .collect();
+        let reply = call(cmd, &path, &flags, true).unwrap_or_else(|e| panic!("{e:?}"));
+        let got = reply.samples.expect("columns");
+        assert!(got.read_ns.len() > 10, "{cmd}: {} rows", got.read_ns.len());
+        assert_eq!(got, csv_columns(&csv, &labels), "{cmd} {file}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_flags_are_input_failures_with_the_parsers_message() {
+    let path = example("paper-table3.toml");
+    let Err(Failure::Input(d)) = call("simulate", &path, &["--exec", "often"], false) else {
+        panic!("an input failure");
+    };
+    assert!(d.message.contains("--exec"), "{}", d.message);
+    assert!(d.message.contains("often"), "{}", d.message);
+    let Err(Failure::Input(d)) = call("simulate", &path, &["--samples", "x.csv"], false) else {
+        panic!("an input failure");
+    };
+    assert!(d.message.contains("samples"), "{}", d.message);
+    let flight = example("cleanflight.toml");
+    let Err(Failure::Input(d)) = call("fly", &flight, &["--vehicle", "zeppelin"], false) else {
+        panic!("an input failure");
+    };
+    assert!(d.message.contains("zeppelin"), "{}", d.message);
+    assert!(matches!(
+        call("launch", &path, &[], false),
+        Err(Failure::Input(_))
+    ));
+}
+
+#[test]
+fn a_set_stop_flag_stops_a_simulation_and_a_design() {
+    for (cmd, file) in [
+        ("simulate", "paper-table3.toml"),
+        ("design", "table2-design.toml"),
+    ] {
+        let path = example(file);
+        let spec = load(&path);
+        let stop = Arc::new(AtomicBool::new(true));
+        let r = api::run(cmd, &spec, "spec.toml", &[], false, stop);
+        assert!(matches!(r, Err(Failure::Stopped)), "{cmd}");
+    }
+}
