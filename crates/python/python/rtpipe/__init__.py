@@ -1,0 +1,243 @@
+"""rtpipe from Python: the same analysis, simulator, design and flights as
+the ``rtpipe`` command line, on the same crates.
+
+>>> import rtpipe
+>>> system = rtpipe.load("examples/paper-table3.toml")
+>>> report = system.analyze()              # the dict of `rtpipe analyze --json`
+>>> run = system.simulate(outputs=1000, samples=True)
+>>> run["samples"]["reaction_ns"]          # one numpy value per head sample
+
+Every method returns a plain dict: exactly what the command's ``--json``
+prints (the same keys, order and values), plus ``samples`` (numpy
+columns) when asked for, and ``spec`` (a :class:`System`) from
+:meth:`System.design`. Keyword arguments are the command's flags with
+underscores (``search_steps=3`` is ``--search-steps 3``), and one left at
+None takes the command line's default (``rtpipe COMMAND --help`` lists
+them); the values are checked by the command line's own parser. Errors raise :class:`SpecError`
+(with each problem's place) or :class:`InputError` (with ``help``). A run
+whose verdict fails (a limit missed, a flight that crashed) still returns
+its dict (``ok``, ``criteria_met`` say so), and the command line's exit
+status is under ``"exit_status"``.
+
+Long calls release the GIL (other Python threads run meanwhile) and
+Ctrl-C stops them with KeyboardInterrupt.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _rtpipe
+from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
+
+__all__ = [
+    "load",
+    "System",
+    "RtpipeError",
+    "SpecError",
+    "InputError",
+    "InternalError",
+    "__version__",
+]
+
+__version__: str = _rtpipe.__version__
+
+log = logging.getLogger("rtpipe")
+
+Source = Union[str, "os.PathLike[str]", Mapping[str, Any]]
+
+
+def load(source: Source, *, name: Optional[str] = None) -> "System":
+    """Loads a system spec.
+
+    ``source`` is a path to a spec file (TOML), TOML text (a ``str`` holding
+    a newline), or a dict of the spec's tables (as ``tomllib.load`` gives
+    them). ``name`` labels a text or dict spec in messages.
+    """
+    if isinstance(source, Mapping):
+        text = _rtpipe.dict_to_toml(dict(source))
+        return System(_rtpipe.load_text(text, name or "<dict>"))
+    if isinstance(source, str) and "\n" in source:
+        return System(_rtpipe.load_text(source, name or "<text>"))
+    if isinstance(source, (str, os.PathLike)):
+        return System(_rtpipe.load_path(os.fspath(source)))
+    raise TypeError(
+        f"load() takes a path, TOML text or a dict, not {type(source).__name__}"
+    )
+
+
+def _flags(options: Mapping[str, Any]) -> list:
+    """Keyword arguments as command-line flags: None and False leave a flag
+    out, True gives it bare, a list joins its items with commas."""
+    out = []
+    for key, value in options.items():
+        if value is None or value is False:
+            continue
+        flag = "--" + key.replace("_", "-")
+        if value is True:
+            out.append(flag)
+        elif isinstance(value, (list, tuple)):
+            out += [flag, ",".join(str(v) for v in value)]
+        else:
+            out += [flag, os.fspath(value) if isinstance(value, os.PathLike) else str(value)]
+    return out
+
+
+def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
+    """The native module's buffers as numpy arrays: int64, or masked int64
+    where the run ended before the instant (the CSV's empty cells)."""
+    cols: Dict[str, np.ndarray] = {}
+    for name, value in raw.items():
+        if isinstance(value, tuple):
+            data, mask = value
+            cols[name] = np.ma.MaskedArray(
+                np.frombuffer(data, dtype="<i8"), mask=np.frombuffer(mask, dtype=np.bool_)
+            )
+        else:
+            cols[name] = np.frombuffer(value, dtype="<i8")
+    cols["chain"] = cols["chain"].astype(np.int32)
+    return cols
+
+
+class System:
+    """A loaded spec: its tasks and chains, and the commands that run on it."""
+
+    def __init__(self, handle: "_rtpipe.Spec"):
+        self._spec = handle
+
+    @property
+    def name(self) -> str:
+        return self._spec.name
+
+    @property
+    def tasks(self) -> list:
+        """The task names, in the spec's order."""
+        return self._spec.tasks
+
+    @property
+    def chains(self) -> list:
+        """The chain labels, in the spec's order (the ``chain`` column of
+        ``samples`` indexes this list)."""
+        return self._spec.chains
+
+    @property
+    def free_tasks(self) -> list:
+        """Tasks without a fixed period: what :meth:`design` chooses."""
+        return self._spec.free_tasks()
+
+    def to_toml(self) -> str:
+        """The spec as TOML (as ``design --write`` writes it)."""
+        return self._spec.to_toml()
+
+    def __repr__(self) -> str:
+        return repr(self._spec)
+
+    def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
+        report, status, notes, cols, designed = _rtpipe.run(
+            command, self._spec, _flags(options), samples
+        )
+        for note in notes:
+            (log.error if note.startswith("error") else log.info)(note)
+        if report is None:
+            # No report: the command failed, and its notes say why.
+            text = "\n".join(notes) or f"{command} failed with exit status {status}"
+            raise (InputError if status == 2 else InternalError)(text)
+        report["exit_status"] = status
+        if cols is not None:
+            report["samples"] = _columns(cols)
+        if command == "design":
+            report["spec"] = System(designed) if designed is not None else None
+        return report
+
+    def analyze(self, *, mode: Optional[str] = None, all_paths: bool = False) -> dict:
+        """Schedulability and the worst-case bounds of every chain
+        (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
+        ``ok``."""
+        return self._run("analyze", {"mode": mode, "all_paths": all_paths})
+
+    def simulate(
+        self,
+        *,
+        outputs: Optional[int] = None,
+        duration: Union[str, float, None] = None,
+        seed: Optional[int] = None,
+        exec: Optional[str] = None,
+        phasing: Optional[str] = None,
+        search_steps: Optional[int] = None,
+        samples: bool = False,
+        trace: Optional[str] = None,
+        plot: Optional[str] = None,
+        gantt: Optional[str] = None,
+        window: Optional[str] = None,
+    ) -> dict:
+        """The simulator against the bounds (``rtpipe simulate --json``).
+
+        ``samples=True`` adds ``"samples"``: one numpy column per field of
+        ``--samples`` (``chain``, ``sample``, ``read_ns``, ``event_ns``,
+        ``first_output_ns``, ``last_output_ns``, ``reaction_ns``,
+        ``freshness_ns``, ``event_reaction_ns``, ``event_freshness_ns``),
+        masked where the run ended first. ``trace``, ``plot`` and ``gantt``
+        write files as the flags do.
+        """
+        options = dict(
+            outputs=outputs, duration=duration, seed=seed, exec=exec, phasing=phasing,
+            search_steps=search_steps, trace=trace, plot=plot, gantt=gantt, window=window,
+        )
+        return self._run("simulate", options, samples)
+
+    def fly(
+        self,
+        *,
+        vehicle: Optional[str] = None,
+        mission: Optional[str] = None,
+        turbulence: Optional[str] = None,
+        duration: Union[str, float, None] = None,
+        seed: Optional[int] = None,
+        exec: Optional[str] = None,
+        samples: bool = False,
+        plot: Optional[str] = None,
+        log: Optional[str] = None,
+        sweep: bool = False,
+        scale: Optional[str] = None,
+        per_octave: Optional[int] = None,
+        criterion: Optional[str] = None,
+        write_limits: Optional[str] = None,
+        free_periods: bool = False,
+    ) -> dict:
+        """A software-in-the-loop flight on the simulated schedule
+        (``rtpipe fly --json``), or with ``sweep=True`` the timing sweep
+        that derives the limits the flight depends on."""
+        options = dict(
+            vehicle=vehicle, mission=mission, turbulence=turbulence, duration=duration,
+            seed=seed, exec=exec, plot=plot, log=log, sweep=sweep, scale=scale,
+            per_octave=per_octave, criterion=criterion, write_limits=write_limits,
+            free_periods=free_periods,
+        )
+        return self._run("fly", options, samples)
+
+    def design(
+        self,
+        *,
+        mode: Optional[str] = None,
+        method: Optional[str] = None,
+        solver: Optional[str] = None,
+        time_limit: Optional[float] = None,
+        fly: Union[str, Sequence[str], None] = None,
+        vehicle: Union[str, Sequence[str], None] = None,
+        seed: Union[int, Iterable[int], None] = None,
+        write: Optional[str] = None,
+        overwrite_spec: bool = False,
+    ) -> dict:
+        """Periods that meet every limit at least utilisation
+        (``rtpipe design --json``), plus ``"spec"``: the designed
+        :class:`System`, or None when there is no verified design."""
+        seeds = list(seed) if seed is not None and not isinstance(seed, int) else seed
+        options = dict(
+            mode=mode, method=method, solver=solver, time_limit=time_limit, fly=fly,
+            vehicle=vehicle, seed=seeds, write=write, overwrite_spec=overwrite_spec,
+        )
+        return self._run("design", options)

@@ -1,0 +1,43 @@
+"""Type stubs of the native module (crates/python/src/lib.rs)."""
+
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+__version__: str
+COMMANDS: List[str]
+
+class RtpipeError(Exception): ...
+
+class SpecError(RtpipeError):
+    file: str
+    # Each problem: {"message": str, "help": str | None, "line": int | None, "column": int | None}
+    diagnostics: List[Dict[str, Any]]
+
+class InputError(RtpipeError):
+    message: str
+    help: Optional[str]
+
+class InternalError(RtpipeError): ...
+
+class Spec:
+    @property
+    def name(self) -> str: ...
+    @property
+    def label(self) -> str: ...
+    @property
+    def tasks(self) -> List[str]: ...
+    @property
+    def chains(self) -> List[str]: ...
+    def free_tasks(self) -> List[str]: ...
+    def to_toml(self) -> str: ...
+
+def load_path(path: str) -> Spec: ...
+def load_text(text: str, label: str) -> Spec: ...
+def dict_to_toml(value: Dict[str, Any]) -> str: ...
+
+# The raw sample columns: little-endian int64 buffers, with a mask buffer
+# (one byte per row, 1 where the cell is empty) for the optional columns.
+RawColumns = Dict[str, Union[bytes, Tuple[bytes, bytes]]]
+
+def run(
+    command: str, spec: Spec, flags: List[str], samples: bool = False
+) -> Tuple[Optional[Dict[str, Any]], int, List[str], Optional[RawColumns], Optional[Spec]]: ...

@@ -1,0 +1,381 @@
+//! `rtpipe._rtpipe`: the native module under the `rtpipe` Python package
+//! (python/rtpipe/__init__.py is the API people use). A thin layer over
+//! `rtpipe::api`: a spec is loaded once and held; a command runs with the
+//! flags of the command line on a worker thread while the interpreter is
+//! free (the GIL released) and Ctrl-C is honoured; the answer comes back as
+//! the `--json` value turned into Python objects.
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyList};
+use rtpipe::api::{self, Columns, Failure, Reply};
+use rtpipe_model::{Diagnostic, SpecError as ModelError};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+
+create_exception!(
+    _rtpipe,
+    RtpipeError,
+    PyException,
+    "Every error rtpipe raises."
+);
+create_exception!(
+    _rtpipe,
+    SpecError,
+    RtpipeError,
+    "The spec is wrong: `diagnostics` holds each problem with its place (file, line, column) and a fix."
+);
+create_exception!(
+    _rtpipe,
+    InputError,
+    RtpipeError,
+    "An argument or a file it names is wrong: `help` says how to fix it."
+);
+create_exception!(
+    _rtpipe,
+    InternalError,
+    RtpipeError,
+    "A bug in rtpipe (or a solver's failure): please report it with the spec and the call."
+);
+
+/// A loaded spec: what `rtpipe.load` returns inside `rtpipe.System`.
+#[pyclass(frozen, module = "rtpipe._rtpipe")]
+struct Spec {
+    spec: rtpipe_model::Spec,
+    /// The path it was read from, or a name for messages.
+    label: String,
+}
+
+#[pymethods]
+impl Spec {
+    #[getter]
+    fn name(&self) -> &str {
+        &self.spec.name
+    }
+
+    #[getter]
+    fn label(&self) -> &str {
+        &self.label
+    }
+
+    #[getter]
+    fn tasks(&self) -> Vec<String> {
+        self.spec.tasks.iter().map(|t| t.name.clone()).collect()
+    }
+
+    #[getter]
+    fn chains(&self) -> Vec<String> {
+        (0..self.spec.chains.len())
+            .map(|c| self.spec.chain_label(c))
+            .collect()
+    }
+
+    /// Tasks without a fixed period (what `design` chooses).
+    fn free_tasks(&self) -> Vec<String> {
+        rtpipe_analysis_missing(&self.spec)
+    }
+
+    /// The spec as TOML, as `design --write` writes it.
+    fn to_toml(&self) -> String {
+        rtpipe_model::to_toml(&self.spec)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<rtpipe spec {:?} from {:?}: {} tasks, {} chains>",
+            self.spec.name,
+            self.label,
+            self.spec.tasks.len(),
+            self.spec.chains.len()
+        )
+    }
+}
+
+fn rtpipe_analysis_missing(spec: &rtpipe_model::Spec) -> Vec<String> {
+    spec.tasks
+        .iter()
+        .filter(|t| t.fixed_period().is_none())
+        .map(|t| t.name.clone())
+        .collect()
+}
+
+/// Reads a spec file.
+#[pyfunction]
+fn load_path(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Spec> {
+    let label = path.display().to_string();
+    match py.detach(|| rtpipe_model::Spec::load(&path)) {
+        Ok(spec) => Ok(Spec { spec, label }),
+        Err(e) => Err(spec_error(py, &e)),
+    }
+}
+
+/// Parses a spec from TOML text; `label` names it in messages.
+#[pyfunction]
+fn load_text(py: Python<'_>, text: &str, label: &str) -> PyResult<Spec> {
+    match rtpipe_model::Spec::parse(label, text) {
+        Ok(spec) => Ok(Spec {
+            spec,
+            label: label.to_string(),
+        }),
+        Err(e) => Err(spec_error(py, &e)),
+    }
+}
+
+/// TOML text from a dict of TOML tables (`None` has no TOML form).
+#[pyfunction]
+fn dict_to_toml(value: &Bound<'_, PyAny>) -> PyResult<String> {
+    let v = to_json(value, "spec")?;
+    let t = toml::Value::try_from(&v).map_err(|e| InputError::new_err(format!("{e}")))?;
+    toml::to_string(&t).map_err(|e| InputError::new_err(format!("{e}")))
+}
+
+/// A Python value as JSON (what TOML can hold).
+fn to_json(v: &Bound<'_, PyAny>, at: &str) -> PyResult<serde_json::Value> {
+    use serde_json::Value as J;
+    if v.is_none() {
+        return Err(InputError::new_err(format!(
+            "{at} is None, which a spec cannot hold: leave the key out"
+        )));
+    }
+    if let Ok(b) = v.cast::<pyo3::types::PyBool>() {
+        return Ok(J::Bool(b.is_true()));
+    }
+    if let Ok(i) = v.extract::<i64>() {
+        return Ok(J::from(i));
+    }
+    if let Ok(f) = v.extract::<f64>() {
+        return Ok(J::from(f));
+    }
+    if let Ok(s) = v.extract::<String>() {
+        return Ok(J::String(s));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        let mut m = serde_json::Map::new();
+        for (k, x) in d.iter() {
+            let k: String = k
+                .extract()
+                .map_err(|_| InputError::new_err(format!("{at} has a key that is not a string")))?;
+            let place = format!("{at}.{k}");
+            m.insert(k, to_json(&x, &place)?);
+        }
+        return Ok(J::Object(m));
+    }
+    if let Ok(items) = v.try_iter() {
+        let mut out = Vec::new();
+        for (i, x) in items.enumerate() {
+            out.push(to_json(&x?, &format!("{at}[{i}]"))?);
+        }
+        return Ok(J::Array(out));
+    }
+    Err(InputError::new_err(format!(
+        "{at} is a {}, which a spec cannot hold: use a str, number, bool, list or dict",
+        v.get_type().name()?
+    )))
+}
+
+/// Runs `command` on `spec` with command-line `flags` (the interpreter
+/// free meanwhile; Ctrl-C raises KeyboardInterrupt and stops the run).
+/// Returns (report, exit status, notes, sample columns or None, designed
+/// spec or None).
+#[pyfunction]
+#[pyo3(signature = (command, spec, flags, samples=false))]
+fn run(
+    py: Python<'_>,
+    command: &str,
+    spec: Py<Spec>,
+    flags: Vec<String>,
+    samples: bool,
+) -> PyResult<Py<PyAny>> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let (tx, rx) = mpsc::channel();
+    let (worker_stop, command_owned, held) =
+        (Arc::clone(&stop), command.to_string(), spec.clone_ref(py));
+    std::thread::spawn(move || {
+        let s = held.get();
+        let r = api::run(
+            &command_owned,
+            &s.spec,
+            &s.label,
+            &flags,
+            samples,
+            worker_stop,
+        );
+        // The receiver is gone only when Ctrl-C already answered.
+        let _ = tx.send(r);
+    });
+    let mut rx = rx;
+    let reply = loop {
+        // The receiver goes into the GIL-free wait and comes back out.
+        let (got, back) = py.detach(move || (rx.recv_timeout(Duration::from_millis(50)), rx));
+        rx = back;
+        match got {
+            Ok(r) => break r,
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    // The worker sees the flag at its next stop point.
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(InternalError::new_err(
+                    "the worker thread ended without an answer",
+                ))
+            }
+        }
+    };
+    match reply {
+        Ok(r) => reply_to_py(py, r),
+        Err(Failure::Input(d)) => Err(input_error(py, &d)),
+        Err(Failure::Stopped) => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped")),
+        Err(Failure::Internal(m)) => Err(InternalError::new_err(format!(
+            "internal error (a bug in rtpipe): {m}; please report it with the spec and the call"
+        ))),
+    }
+}
+
+/// (report, status, notes, columns, designed spec) as a Python tuple.
+fn reply_to_py(py: Python<'_>, r: Reply) -> PyResult<Py<PyAny>> {
+    let report = match &r.json {
+        Some(v) => json_to_py(py, v)?,
+        None => py.None(),
+    };
+    let cols = match &r.samples {
+        Some(c) => columns_to_py(py, c)?.into_any().unbind(),
+        None => py.None(),
+    };
+    let designed = match r.designed {
+        Some(spec) => Py::new(
+            py,
+            Spec {
+                spec,
+                label: "<designed>".into(),
+            },
+        )?
+        .into_any(),
+        None => py.None(),
+    };
+    let notes = PyList::new(py, &r.notes)?.into_any().unbind();
+    let status = r.status.into_pyobject(py)?.into_any().unbind();
+    let t = pyo3::types::PyTuple::new(py, [report, status, notes, cols, designed])?;
+    Ok(t.into_any().unbind())
+}
+
+/// The JSON value as Python objects (dicts keep the report's key order).
+fn json_to_py(py: Python<'_>, v: &serde_json::Value) -> PyResult<Py<PyAny>> {
+    use serde_json::Value as J;
+    Ok(match v {
+        J::Null => py.None(),
+        J::Bool(b) => b.into_pyobject(py)?.to_owned().into_any().unbind(),
+        J::Number(n) => match (n.as_i64(), n.as_u64(), n.as_f64()) {
+            (Some(i), _, _) => i.into_pyobject(py)?.into_any().unbind(),
+            (None, Some(u), _) => u.into_pyobject(py)?.into_any().unbind(),
+            (None, None, f) => f.unwrap_or(f64::NAN).into_pyobject(py)?.into_any().unbind(),
+        },
+        J::String(s) => s.into_pyobject(py)?.into_any().unbind(),
+        J::Array(a) => {
+            let items = a
+                .iter()
+                .map(|x| json_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
+            PyList::new(py, items)?.into_any().unbind()
+        }
+        J::Object(m) => {
+            let d = PyDict::new(py);
+            for (k, x) in m {
+                d.set_item(k, json_to_py(py, x)?)?;
+            }
+            d.into_any().unbind()
+        }
+    })
+}
+
+/// The sample columns as raw little-endian buffers (the Python side views
+/// them as numpy arrays without copying): `name -> bytes` for int64
+/// columns, `name -> (bytes, mask bytes)` for columns with empty cells.
+fn columns_to_py<'py>(py: Python<'py>, c: &Columns) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let ints = |v: &[i64]| {
+        PyBytes::new(
+            py,
+            &v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(),
+        )
+    };
+    let chain: Vec<i64> = c.chain.iter().map(|&x| i64::from(x)).collect();
+    let sample: Vec<i64> = c
+        .sample
+        .iter()
+        .map(|&x| i64::try_from(x).unwrap_or(i64::MAX))
+        .collect();
+    d.set_item("chain", ints(&chain))?;
+    d.set_item("sample", ints(&sample))?;
+    d.set_item("read_ns", ints(&c.read_ns))?;
+    let optional = [
+        ("event_ns", &c.event_ns),
+        ("first_output_ns", &c.first_output_ns),
+        ("last_output_ns", &c.last_output_ns),
+        ("reaction_ns", &c.reaction_ns),
+        ("freshness_ns", &c.freshness_ns),
+        ("event_reaction_ns", &c.event_reaction_ns),
+        ("event_freshness_ns", &c.event_freshness_ns),
+    ];
+    for (name, col) in optional {
+        let values: Vec<i64> = col.iter().map(|x| x.unwrap_or(0)).collect();
+        let missing: Vec<u8> = col.iter().map(|x| u8::from(x.is_none())).collect();
+        d.set_item(name, (ints(&values), PyBytes::new(py, &missing)))?;
+    }
+    Ok(d)
+}
+
+/// A bad argument as [`InputError`]: its message, with `help` set.
+fn input_error(py: Python<'_>, d: &Diagnostic) -> PyErr {
+    let text = d.to_string();
+    let e = InputError::new_err(text.trim_end().to_string());
+    let _ = e.value(py).setattr("help", d.help.clone());
+    let _ = e.value(py).setattr("message", d.message.clone());
+    e
+}
+
+/// A spec's errors as [`SpecError`]: the whole report as its message, and
+/// `file` and `diagnostics` (message, help, line, column) as attributes.
+fn spec_error(py: Python<'_>, e: &ModelError) -> PyErr {
+    let err = SpecError::new_err(e.to_string().trim_end().to_string());
+    let items = e.diagnostics.iter().map(|d| {
+        let (line, column) = match &d.span {
+            Some(s) => {
+                let (l, c) = e.line_col(s.start);
+                (Some(l), Some(c))
+            }
+            None => (None, None),
+        };
+        let item = PyDict::new(py);
+        let _ = item.set_item("message", &d.message);
+        let _ = item.set_item("help", &d.help);
+        let _ = item.set_item("line", line);
+        let _ = item.set_item("column", column);
+        item
+    });
+    let list: Vec<_> = items.collect();
+    let _ = err.value(py).setattr("file", &e.file);
+    let _ = err.value(py).setattr("diagnostics", list);
+    err
+}
+
+#[pymodule]
+fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<Spec>()?;
+    m.add_function(wrap_pyfunction!(load_path, m)?)?;
+    m.add_function(wrap_pyfunction!(load_text, m)?)?;
+    m.add_function(wrap_pyfunction!(dict_to_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add("RtpipeError", py.get_type::<RtpipeError>())?;
+    m.add("SpecError", py.get_type::<SpecError>())?;
+    m.add("InputError", py.get_type::<InputError>())?;
+    m.add("InternalError", py.get_type::<InternalError>())?;
+    m.add("COMMANDS", api::COMMANDS.to_vec())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

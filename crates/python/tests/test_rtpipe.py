@@ -1,0 +1,202 @@
+"""The Python package against the command line it wraps: the same reports,
+the same samples, errors with their places, the GIL free during long calls
+and Ctrl-C honoured."""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rtpipe
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "examples"
+BIN = Path(os.environ.get("RTPIPE_BIN", ROOT / "target" / "release" / "rtpipe"))
+CLOCK_KEYS = ("seconds", "real_time")
+
+
+def without_clock(v):
+    """Wall-clock figures differ between two runs of the same command."""
+    if isinstance(v, dict):
+        return {k: without_clock(x) for k, x in v.items() if not any(c in k for c in CLOCK_KEYS)}
+    if isinstance(v, list):
+        return [without_clock(x) for x in v]
+    return v
+
+
+def binary(command, spec, *flags):
+    """The command line's --json and exit status."""
+    if not BIN.exists():
+        pytest.skip(f"no rtpipe binary at {BIN} (cargo build --release, or set RTPIPE_BIN)")
+    out = subprocess.run(
+        [str(BIN), command, str(spec), *flags, "--json"], capture_output=True, check=False
+    )
+    return json.loads(out.stdout), out.returncode
+
+
+def test_analyze_is_the_command_lines_json():
+    spec = EXAMPLES / "paper-table3.toml"
+    got = rtpipe.load(spec).analyze(all_paths=True)
+    expected, status = binary("analyze", spec, "--all-paths")
+    assert got.pop("exit_status") == status
+    assert got == expected
+    assert list(got) == list(expected)  # the same key order
+
+
+@pytest.mark.parametrize(
+    "command,file,kwargs,flags",
+    [
+        ("simulate", "paper-table3.toml", {"outputs": 50, "exec": "uniform", "seed": 7},
+         ["--outputs", "50", "--exec", "uniform", "--seed", "7"]),
+        ("simulate", "resources.toml", {"duration": "1s", "phasing": "random"},
+         ["--duration", "1s", "--phasing", "random"]),
+        ("fly", "cleanflight.toml", {"mission": "hover", "seed": 2},
+         ["--mission", "hover", "--seed", "2"]),
+        ("design", "cleanflight-design.toml", {}, []),
+    ],
+)
+def test_commands_answer_what_the_binary_prints(command, file, kwargs, flags):
+    spec = EXAMPLES / file
+    got = getattr(rtpipe.load(spec), command)(**kwargs)
+    got.pop("spec", None)
+    expected, status = binary(command, spec, *flags)
+    assert got.pop("exit_status") == status
+    assert without_clock(got) == without_clock(expected)
+
+
+def test_load_takes_a_path_text_or_a_dict():
+    path = EXAMPLES / "paper-table2.toml"
+    text = path.read_text()
+    with open(path, "rb") as f:
+        tables = tomllib.load(f)
+    reports = [rtpipe.load(s).analyze() for s in (path, str(path), text, tables)]
+    assert all(r == reports[0] for r in reports)
+    system = rtpipe.load(tables)
+    assert system.tasks == rtpipe.load(path).tasks
+    assert "<dict>" in repr(system)
+
+
+def test_samples_are_numpy_columns_equal_to_the_csv(tmp_path):
+    spec = EXAMPLES / "paper-table3.toml"
+    out = tmp_path / "s.csv"
+    binary("simulate", spec, "--outputs", "60", "--samples", str(out))
+    system = rtpipe.load(spec)
+    cols = system.simulate(outputs=60, samples=True)["samples"]
+    with open(out, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(cols["read_ns"]) > 100
+    assert cols["read_ns"].dtype == np.int64 and cols["chain"].dtype == np.int32
+    for i, row in enumerate(rows):
+        assert system.chains[cols["chain"][i]] == row["chain"]
+        assert cols["sample"][i] == int(row["sample"])
+        for name in ("read_ns", "event_ns", "first_output_ns", "reaction_ns", "freshness_ns",
+                     "event_reaction_ns", "event_freshness_ns"):
+            value = cols[name][i]
+            if row[name] == "":
+                assert value is np.ma.masked, (name, i)
+            else:
+                assert int(value) == int(row[name]), (name, i)
+    # Reaction is the first output less the read, wherever both exist.
+    both = ~np.ma.getmaskarray(cols["reaction_ns"])
+    assert both.sum() > 100
+    assert np.array_equal(
+        (cols["first_output_ns"] - cols["read_ns"])[both], cols["reaction_ns"][both]
+    )
+
+
+def test_a_flight_reports_its_quality_and_samples():
+    r = rtpipe.load(EXAMPLES / "cleanflight.toml").fly(mission="hover", samples=True)
+    assert r["flight"]["criteria_met"] is True and r["exit_status"] == 0
+    assert r["flight"]["attitude_error_deg"]["rms"] < 1.0
+    fresh = r["samples"]["freshness_ns"].compressed()
+    assert len(fresh) > 1000 and fresh.min() > 0
+
+
+def test_design_returns_the_designed_system():
+    r = rtpipe.load(EXAMPLES / "cleanflight-design.toml").design()
+    assert r["design"]["status"] == "optimal"
+    designed = r["spec"]
+    assert designed.free_tasks == []
+    again = designed.analyze()
+    assert again["ok"] is True
+    assert again["schedulability"]["utilization"] == pytest.approx(r["design"]["objective"])
+
+
+def test_a_bad_spec_raises_spec_error_with_its_place(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[system]\nname = "x"\n\n[tasks.a]\nperiod = "ten ms"\nexec = 1\n')
+    with pytest.raises(rtpipe.SpecError) as e:
+        rtpipe.load(bad)
+    assert e.value.file == str(bad)
+    (d,) = e.value.diagnostics
+    assert d["line"] == 5 and d["column"] is not None
+    assert "period" in str(e.value)
+    with pytest.raises(rtpipe.SpecError):
+        rtpipe.load("[system]\nname = 1\n")
+
+
+def test_bad_arguments_raise_input_error_with_help():
+    system = rtpipe.load(EXAMPLES / "paper-table3.toml")
+    with pytest.raises(rtpipe.InputError) as e:
+        system.simulate(exec="often")
+    assert "often" in str(e.value) and e.value.help
+    with pytest.raises(rtpipe.InputError) as e:
+        system.simulate(duration="-3s")
+    with pytest.raises(rtpipe.InputError, match="zeppelin"):
+        rtpipe.load(EXAMPLES / "cleanflight.toml").fly(vehicle="zeppelin")
+    with pytest.raises(rtpipe.InputError, match="None"):
+        rtpipe.load({"system": {"name": None}})
+    with pytest.raises(TypeError):
+        rtpipe.load(42)
+    assert issubclass(rtpipe.SpecError, rtpipe.RtpipeError)
+
+
+def test_the_gil_is_free_during_a_long_call():
+    system = rtpipe.load(EXAMPLES / "paper-table3.toml")
+    ticks = 0
+    done = threading.Event()
+
+    def count():
+        nonlocal ticks
+        while not done.is_set():
+            ticks += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=count)
+    t.start()
+    start = time.monotonic()
+    system.simulate(duration="50000s")
+    elapsed = time.monotonic() - start
+    done.set()
+    t.join()
+    # The counter ran all along: about one tick per ms of the call.
+    assert elapsed > 0.2, elapsed
+    assert ticks > 0.3 * elapsed * 1000, (ticks, elapsed)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT")
+def test_ctrl_c_stops_a_long_call():
+    system = rtpipe.load(EXAMPLES / "paper-table3.toml")
+    start = time.monotonic()
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        system.simulate(duration="5000000s")
+    # The full run takes about a minute; the interrupt ends it at once.
+    assert time.monotonic() - start < 3.0
+    # And the simulation stopped with it (no worker burning on behind).
+    time.sleep(0.1)
+    cpu = time.process_time()
+    time.sleep(0.5)
+    assert time.process_time() - cpu < 0.1
+    # The package still works after it.
+    assert system.analyze()["ok"] is True

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The tests: every Rust test of the workspace, then the Python package's
+# (its wheel built with maturin and installed in a virtual environment under
+# target/, then pytest). Installs what it needs from PyPI; exits non-zero on
+# the first failure.
+set -euo pipefail
+cd "$(dirname "$0")"
+cargo test --workspace --release
+
+echo "== Python package: wheel (maturin), install, pytest"
+target="${CARGO_TARGET_DIR:-target}"
+venv="$target/pyenv"
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv" 2>/dev/null || {
+    apt-get update -qq && apt-get install -y -qq python3-venv python3-pip
+    python3 -m venv "$venv"
+  }
+fi
+"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20"
+rm -rf "$target/wheels"
+"$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o "$target/wheels"
+"$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall "$target"/wheels/rtpipe-*.whl
+RTPIPE_BIN="$PWD/$target/release/rtpipe" "$venv/bin/python" -m pytest -q -p no:cacheprovider crates/python/tests
