@@ -4,6 +4,7 @@
 
 pub mod analyze;
 pub mod api;
+pub mod campaign;
 pub mod command;
 pub mod design;
 pub mod fly;

@@ -3,7 +3,7 @@
 use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use rtpipe::{
-    analyze, design, fly, generate, import, output, run, simulate, EXIT_BAD_INPUT,
+    analyze, campaign, design, fly, generate, import, output, run, simulate, EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE, EXIT_INTERNAL,
 };
 use std::process::ExitCode;
@@ -80,6 +80,14 @@ enum Command {
         #[command(subcommand)]
         kind: generate::GenerateCommand,
     },
+    /// Generate, analyse (and simulate) many task sets on every core, into
+    /// sharded Parquet: deterministic per seed, resumable, `--shard i/n` to
+    /// fan out over machines.
+    ///
+    /// Exit status: 0 when every shard of the part is written, 2 on bad
+    /// input (config, flags, output directory), 3 on an internal error, 130
+    /// when Ctrl-C stopped it (the shards written stay; run again to resume).
+    Campaign(campaign::CampaignArgs),
 }
 
 /// A panic anywhere (any thread) prints its message and ends the process
@@ -176,5 +184,6 @@ fn main() -> ExitCode {
         Command::Design(args) => design::run(&args),
         Command::Import { format } => import::run(&format),
         Command::Generate { kind } => generate::run(&kind),
+        Command::Campaign(args) => campaign::run(&args),
     }
 }

@@ -1,0 +1,170 @@
+//! `rtpipe campaign CONFIG OUTDIR`: generate, analyse (and simulate) many
+//! task sets on every core, into sharded Parquet (`rtpipe_campaign`).
+
+use crate::command::{self, Answer, Rendered};
+use rtpipe_campaign::{config, Part, Summary};
+use rtpipe_model::Diagnostic;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// `rtpipe campaign`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct CampaignArgs {
+    /// The campaign (TOML), e.g. examples/campaigns/waters.toml.
+    pub config: PathBuf,
+    /// The directory of the shards (created; a run skips the shards it
+    /// already holds, so an interrupted campaign resumes).
+    #[arg(value_name = "OUTDIR")]
+    pub out: PathBuf,
+    /// Run only the shards k with k mod n = i, so that n machines (or
+    /// processes) share a campaign; together they write exactly the files
+    /// one run writes.
+    #[arg(long, value_name = "i/n", value_parser = Part::parse)]
+    pub shard: Option<Part>,
+    /// Worker threads [default: every core].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub jobs: Option<u32>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: &CampaignArgs) -> ExitCode {
+    rtpipe_runtime::sys::catch_sigint();
+    let stop = Arc::new(AtomicBool::new(false));
+    let watcher = Arc::clone(&stop);
+    // Ctrl-C's handler only sets a flag: pass it on to the run.
+    std::thread::spawn(move || loop {
+        if rtpipe_runtime::sys::stop_requested() {
+            watcher.store(true, std::sync::atomic::Ordering::Relaxed);
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    });
+    match execute(a, &stop) {
+        Ok(answer) => answer.emit(),
+        Err(b) => command::fail(b),
+    }
+}
+
+/// The campaign `a` names, stopped early when `stop` is set.
+pub fn execute(a: &CampaignArgs, stop: &AtomicBool) -> Result<Answer, Diagnostic> {
+    let text = rtpipe_model::input::read_text(&a.config, &config::KIND).map_err(|e| e.located())?;
+    let cfg = config::parse(&a.config.display().to_string(), &text).map_err(|e| e.located())?;
+    let jobs = a.jobs.map_or_else(cores, |j| j as usize);
+    let part = a.shard.unwrap_or(Part::ALL);
+    let total = rtpipe_campaign::shard_count(&cfg);
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(cfg.systems.div_ceil(part.count)),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "campaign {msg} [{bar:30}] {pos}/{len} systems, {per_sec}, ETA {eta}",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(cfg.name.clone());
+    let tick = || pb.inc(1);
+    let s = rtpipe_campaign::run(&cfg, &text, &a.out, part, jobs, &tick, stop)
+        .map_err(|e| Diagnostic::error(e.message, e.help))?;
+    pb.finish_and_clear();
+    let view = View::of(&cfg, a, part, total, &s);
+    let report = if a.json {
+        Rendered::Json(command::to_value(&view)?)
+    } else {
+        Rendered::Text(view.text())
+    };
+    let notes = if s.stopped {
+        vec![format!(
+            "interrupted (Ctrl-C): {} shard(s) written; run the same command again to resume",
+            s.written
+        )]
+    } else {
+        Vec::new()
+    };
+    let status = if s.stopped {
+        crate::EXIT_INTERRUPTED
+    } else {
+        0
+    };
+    Ok(Answer {
+        report,
+        notes,
+        status,
+    })
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, usize::from)
+}
+
+/// `campaign --json`.
+#[derive(Serialize)]
+struct View {
+    campaign: String,
+    out: String,
+    systems: u64,
+    shard_size: u64,
+    shards: u64,
+    part: String,
+    part_shards: u64,
+    written: u64,
+    skipped: u64,
+    systems_run: u64,
+    rows: u64,
+    seconds: f64,
+    jobs: usize,
+    systems_per_second: f64,
+    systems_per_second_per_job: f64,
+    stopped: bool,
+}
+
+impl View {
+    fn of(cfg: &config::Config, a: &CampaignArgs, part: Part, total: u64, s: &Summary) -> View {
+        let rate = s.systems as f64 / s.seconds.max(1e-9);
+        View {
+            campaign: cfg.name.clone(),
+            out: a.out.display().to_string(),
+            systems: cfg.systems,
+            shard_size: cfg.shard_size,
+            shards: total,
+            part: format!("{}/{}", part.index, part.count),
+            part_shards: s.shards,
+            written: s.written,
+            skipped: s.skipped,
+            systems_run: s.systems,
+            rows: s.rows,
+            seconds: s.seconds,
+            jobs: s.jobs,
+            systems_per_second: rate,
+            systems_per_second_per_job: rate / s.jobs as f64,
+            stopped: s.stopped,
+        }
+    }
+
+    fn text(&self) -> String {
+        format!(
+            "campaign {}: {} systems in {} shards of {}; part {} owns {}\n\
+             wrote {} shard(s) to {} ({} already there): {} systems, {} rows in {:.2} s on {} thread(s)\n\
+             throughput: {:.0} systems/s, {:.0} per thread\n",
+            self.campaign,
+            self.systems,
+            self.shards,
+            self.shard_size,
+            self.part,
+            self.part_shards,
+            self.written,
+            self.out,
+            self.skipped,
+            self.systems_run,
+            self.rows,
+            self.seconds,
+            self.jobs,
+            self.systems_per_second,
+            self.systems_per_second_per_job
+        )
+    }
+}
