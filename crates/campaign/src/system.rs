@@ -1,10 +1,10 @@
 //! One system of a campaign: generated from its seed, analysed, simulated
 //! when asked; one row per chain and metric.
 
-use crate::config::Config;
-use rtpipe_analysis::{Anchor, Bound, Metric};
+use crate::config::{Config, Simulate};
+use rtpipe_analysis::{Anchor, Bound, Metric, Report};
 use rtpipe_model::gen::{waters_system, Rng, WatersConfig};
-use rtpipe_model::Nanos;
+use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::observe::{observe, ChainObs};
 use rtpipe_sim::{ExecModel, Jitter, Phasing, SimConfig};
 
@@ -52,44 +52,12 @@ pub struct Observed {
 /// Generates, analyses (and simulates) system `i` of `cfg`.
 pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
     let seed = system_seed(cfg.seed, i);
-    let g = &cfg.generate;
-    let mut rng = Rng::new(seed);
-    let tasks = g
-        .tasks
-        .map(|(lo, hi)| rng.range(u64::from(lo), u64::from(hi)) as usize);
-    let target = g.utilization.0 + (g.utilization.1 - g.utilization.0) * rng.unit();
-    let w = WatersConfig {
-        tasks,
-        cpus: g.cpus,
-        utilization: target,
-        chains: g.chains as usize,
-        synchronous: g.synchronous,
-    };
-    let spec = waters_system(seed, &w);
+    let (spec, target) = generate(cfg, seed);
     let report = rtpipe_analysis::analyze(&spec);
-    let obs = cfg.simulate.as_ref().map(|s| {
-        let sim = SimConfig {
-            horizon: s.horizon,
-            seed,
-            phasing: if s.random_phasing {
-                Phasing::Random
-            } else {
-                Phasing::Sync
-            },
-            exec: if s.uniform_exec {
-                ExecModel::Uniform
-            } else {
-                ExecModel::Worst
-            },
-            jitter: Jitter::Uniform,
-            log_jobs: false,
-        };
-        match rtpipe_sim::simulate(&spec, &sim) {
-            Ok(res) => observe(&report, &res),
-            // A generated system has fixed positive periods: a refusal is a bug.
-            Err(e) => panic!("system {i} (seed {seed}) cannot be simulated: {e}"),
-        }
-    });
+    let obs = cfg
+        .simulate
+        .as_ref()
+        .map(|s| simulate(&spec, &report, s, seed, i));
     let utilization = report
         .schedulability
         .cpus
@@ -106,7 +74,7 @@ pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
             system: i,
             seed,
             tasks: spec.tasks.len() as u32,
-            cpus: g.cpus,
+            cpus: cfg.generate.cpus,
             utilization_target: target,
             utilization,
             schedulable: report.schedulability.schedulable,
@@ -125,6 +93,49 @@ pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
         });
     }
     rows
+}
+
+/// The system of `seed` and the utilisation drawn for each of its CPUs.
+fn generate(cfg: &Config, seed: u64) -> (Spec, f64) {
+    let g = &cfg.generate;
+    let mut rng = Rng::new(seed);
+    let tasks = g
+        .tasks
+        .map(|(lo, hi)| rng.range(u64::from(lo), u64::from(hi)) as usize);
+    let target = g.utilization.0 + (g.utilization.1 - g.utilization.0) * rng.unit();
+    let w = WatersConfig {
+        tasks,
+        cpus: g.cpus,
+        utilization: target,
+        chains: g.chains as usize,
+        synchronous: g.synchronous,
+    };
+    (waters_system(seed, &w), target)
+}
+
+/// One simulation of system `i` against its report.
+fn simulate(spec: &Spec, report: &Report, s: &Simulate, seed: u64, i: u64) -> Vec<ChainObs> {
+    let sim = SimConfig {
+        horizon: s.horizon,
+        seed,
+        phasing: if s.random_phasing {
+            Phasing::Random
+        } else {
+            Phasing::Sync
+        },
+        exec: if s.uniform_exec {
+            ExecModel::Uniform
+        } else {
+            ExecModel::Worst
+        },
+        jitter: Jitter::Uniform,
+        log_jobs: false,
+    };
+    match rtpipe_sim::simulate(spec, &sim) {
+        Ok(res) => observe(report, &res),
+        // A generated system has fixed positive periods: a refusal is a bug.
+        Err(e) => panic!("system {i} (seed {seed}) cannot be simulated: {e}"),
+    }
 }
 
 fn observed(o: &ChainObs) -> Observed {
