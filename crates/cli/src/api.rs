@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The commands the API runs.
-pub const COMMANDS: [&str; 4] = ["analyze", "simulate", "fly", "design"];
+pub const COMMANDS: [&str; 5] = ["analyze", "simulate", "fly", "design", "campaign"];
 
 /// What a command answered.
 pub struct Reply {
@@ -139,6 +139,32 @@ pub fn run(
         taken.unwrap_or_default().sorted()
     });
     Ok(reply(answer, samples, designed))
+}
+
+/// Runs `command` without a spec (`campaign`), with `flags` as the command
+/// line takes them (`--json` implied); `stop` ends it after the shard in
+/// progress ([`Failure::Stopped`]).
+pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Result<Reply, Failure> {
+    let mut argv = flags.to_vec();
+    argv.push("--json".into());
+    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command {
+        "campaign" => {
+            let a: crate::campaign::CampaignArgs = parse(command, &argv)?;
+            crate::campaign::execute(&a, &stop).map_err(Failure::Input)
+        }
+        _ => Err(Failure::Input(Diagnostic::error(
+            format!("no command `{command}` without a spec"),
+            "use campaign",
+        ))),
+    }));
+    let answer = match caught {
+        Ok(r) => r?,
+        Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
+    };
+    if stop.load(Ordering::Relaxed) {
+        return Err(Failure::Stopped);
+    }
+    Ok(reply(answer, None, None))
 }
 
 fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Reply {

@@ -30,6 +30,11 @@ pub struct CampaignArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Only check the configuration and print the plan (systems, shards,
+    /// which of them this part owns and which OUTDIR already holds): nothing
+    /// is run or written.
+    #[arg(long)]
+    pub plan: bool,
 }
 
 pub fn run(a: &CampaignArgs) -> ExitCode {
@@ -57,6 +62,9 @@ pub fn execute(a: &CampaignArgs, stop: &AtomicBool) -> Result<Answer, Diagnostic
     let jobs = a.jobs.map_or_else(cores, |j| j as usize);
     let part = a.shard.unwrap_or(Part::ALL);
     let total = rtpipe_campaign::shard_count(&cfg);
+    if a.plan {
+        return plan(&cfg, a, part, total);
+    }
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(cfg.systems.div_ceil(part.count)),
         indicatif::ProgressDrawTarget::stderr(),
@@ -94,6 +102,53 @@ pub fn execute(a: &CampaignArgs, stop: &AtomicBool) -> Result<Answer, Diagnostic
         report,
         notes,
         status,
+    })
+}
+
+/// `--plan`: the shards, without running any.
+fn plan(
+    cfg: &config::Config,
+    a: &CampaignArgs,
+    part: Part,
+    total: u64,
+) -> Result<Answer, Diagnostic> {
+    let mine: Vec<u64> = (0..total)
+        .filter(|k| k % part.count == part.index)
+        .collect();
+    let done: Vec<u64> = mine
+        .iter()
+        .copied()
+        .filter(|&k| rtpipe_campaign::shard_path(&a.out, k).exists())
+        .collect();
+    let v = serde_json::json!({
+        "campaign": cfg.name,
+        "out": a.out.display().to_string(),
+        "systems": cfg.systems,
+        "shard_size": cfg.shard_size,
+        "shards": total,
+        "part": format!("{}/{}", part.index, part.count),
+        "part_shards": mine,
+        "written": done,
+    });
+    let report = if a.json {
+        Rendered::Json(v)
+    } else {
+        Rendered::Text(format!(
+            "campaign {}: {} systems in {total} shards of {}; part {}/{} owns {} ({} already in {})\n",
+            cfg.name,
+            cfg.systems,
+            cfg.shard_size,
+            part.index,
+            part.count,
+            mine.len(),
+            done.len(),
+            a.out.display()
+        ))
+    };
+    Ok(Answer {
+        report,
+        notes: Vec::new(),
+        status: 0,
     })
 }
 

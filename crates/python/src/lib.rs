@@ -188,33 +188,46 @@ fn run(
     flags: Vec<String>,
     samples: bool,
 ) -> PyResult<Py<PyAny>> {
+    let (command, held) = (command.to_string(), spec.clone_ref(py));
+    let reply = in_worker(py, move |stop| {
+        let s = held.get();
+        api::run(&command, &s.spec, &s.label, &flags, samples, stop)
+    })?;
+    answer(py, reply)
+}
+
+/// Runs `command` (one without a spec: `campaign`) with command-line
+/// `flags`, as [`run`] does.
+#[pyfunction]
+fn run_plain(py: Python<'_>, command: &str, flags: Vec<String>) -> PyResult<Py<PyAny>> {
+    let command = command.to_string();
+    let reply = in_worker(py, move |stop| api::run_plain(&command, &flags, stop))?;
+    answer(py, reply)
+}
+
+/// `work` on a worker thread while this thread waits with the GIL
+/// released, checking for Ctrl-C every 50 ms: on one, the stop flag is set
+/// (the worker sees it at its next stop point) and KeyboardInterrupt raised.
+fn in_worker(
+    py: Python<'_>,
+    work: impl FnOnce(Arc<AtomicBool>) -> Result<Reply, Failure> + Send + 'static,
+) -> PyResult<Result<Reply, Failure>> {
     let stop = Arc::new(AtomicBool::new(false));
     let (tx, rx) = mpsc::channel();
-    let (worker_stop, command_owned, held) =
-        (Arc::clone(&stop), command.to_string(), spec.clone_ref(py));
+    let worker_stop = Arc::clone(&stop);
     std::thread::spawn(move || {
-        let s = held.get();
-        let r = api::run(
-            &command_owned,
-            &s.spec,
-            &s.label,
-            &flags,
-            samples,
-            worker_stop,
-        );
         // The receiver is gone only when Ctrl-C already answered.
-        let _ = tx.send(r);
+        let _ = tx.send(work(worker_stop));
     });
     let mut rx = rx;
-    let reply = loop {
+    loop {
         // The receiver goes into the GIL-free wait and comes back out.
         let (got, back) = py.detach(move || (rx.recv_timeout(Duration::from_millis(50)), rx));
         rx = back;
         match got {
-            Ok(r) => break r,
+            Ok(r) => return Ok(r),
             Err(mpsc::RecvTimeoutError::Timeout) => {
                 if let Err(e) = py.check_signals() {
-                    // The worker sees the flag at its next stop point.
                     stop.store(true, Ordering::Relaxed);
                     return Err(e);
                 }
@@ -225,7 +238,11 @@ fn run(
                 ))
             }
         }
-    };
+    }
+}
+
+/// A command's reply as Python objects, or its failure as an exception.
+fn answer(py: Python<'_>, reply: Result<Reply, Failure>) -> PyResult<Py<PyAny>> {
     match reply {
         Ok(r) => reply_to_py(py, r),
         Err(Failure::Input(d)) => Err(input_error(py, &d)),
@@ -371,6 +388,7 @@ fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_text, m)?)?;
     m.add_function(wrap_pyfunction!(dict_to_toml, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(run_plain, m)?)?;
     m.add("RtpipeError", py.get_type::<RtpipeError>())?;
     m.add("SpecError", py.get_type::<SpecError>())?;
     m.add("InputError", py.get_type::<InputError>())?;

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import logging
 import os
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -36,6 +36,7 @@ from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
 
 __all__ = [
     "load",
+    "campaign",
     "System",
     "RtpipeError",
     "SpecError",
@@ -103,6 +104,44 @@ def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
     return cols
 
 
+def _finish(command: str, result: tuple) -> dict:
+    """A native reply as the dict a method returns."""
+    report, status, notes, cols, designed = result
+    for note in notes:
+        (log.error if note.startswith("error") else log.info)(note)
+    if report is None:
+        # No report: the command failed, and its notes say why.
+        text = "\n".join(notes) or f"{command} failed with exit status {status}"
+        raise (InputError if status == 2 else InternalError)(text)
+    report["exit_status"] = status
+    if cols is not None:
+        report["samples"] = _columns(cols)
+    if command == "design":
+        report["spec"] = System(designed) if designed is not None else None
+    return report
+
+
+def campaign(
+    config: Union[str, "os.PathLike[str]"],
+    out: Union[str, "os.PathLike[str]"],
+    *,
+    shard: Union[str, Tuple[int, int], None] = None,
+    jobs: Optional[int] = None,
+    plan: bool = False,
+) -> dict:
+    """Runs a campaign (``rtpipe campaign CONFIG OUTDIR --json``): its
+    systems generated, analysed and simulated on ``jobs`` threads (every
+    core by default) into Parquet shards in ``out``; shards already there
+    are skipped. ``shard=(i, n)`` (or ``"i/n"``) runs only the shards
+    ``k % n == i``; ``plan=True`` only lists the shards (``part_shards``,
+    and ``written``: those ``out`` holds) without running any.
+    """
+    if isinstance(shard, tuple):
+        shard = f"{shard[0]}/{shard[1]}"
+    flags = [os.fspath(config), os.fspath(out)] + _flags(dict(shard=shard, jobs=jobs, plan=plan))
+    return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+
+
 class System:
     """A loaded spec: its tasks and chains, and the commands that run on it."""
 
@@ -137,21 +176,7 @@ class System:
         return repr(self._spec)
 
     def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
-        report, status, notes, cols, designed = _rtpipe.run(
-            command, self._spec, _flags(options), samples
-        )
-        for note in notes:
-            (log.error if note.startswith("error") else log.info)(note)
-        if report is None:
-            # No report: the command failed, and its notes say why.
-            text = "\n".join(notes) or f"{command} failed with exit status {status}"
-            raise (InputError if status == 2 else InternalError)(text)
-        report["exit_status"] = status
-        if cols is not None:
-            report["samples"] = _columns(cols)
-        if command == "design":
-            report["spec"] = System(designed) if designed is not None else None
-        return report
+        return _finish(command, _rtpipe.run(command, self._spec, _flags(options), samples))
 
     def analyze(self, *, mode: Optional[str] = None, all_paths: bool = False) -> dict:
         """Schedulability and the worst-case bounds of every chain

@@ -41,3 +41,6 @@ RawColumns = Dict[str, Union[bytes, Tuple[bytes, bytes]]]
 def run(
     command: str, spec: Spec, flags: List[str], samples: bool = False
 ) -> Tuple[Optional[Dict[str, Any]], int, List[str], Optional[RawColumns], Optional[Spec]]: ...
+def run_plain(
+    command: str, flags: List[str]
+) -> Tuple[Optional[Dict[str, Any]], int, List[str], None, None]: ...
