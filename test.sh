@@ -19,5 +19,5 @@ fi
 "$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20" "pyarrow>=12" "ray>=2.9"
 rm -rf "$target/wheels"
 "$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o "$target/wheels"
-"$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall "$target"/wheels/rtpipe-*.whl
+"$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels/rtpipe-*.whl
 RTPIPE_BIN="$PWD/$target/release/rtpipe" "$venv/bin/python" -m pytest -q -p no:cacheprovider crates/python/tests
