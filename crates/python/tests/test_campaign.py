@@ -84,3 +84,25 @@ def test_ray_writes_what_one_machine_writes(tmp_path):
         assert shard_bytes(tmp_path / "ray") == shard_bytes(tmp_path / "one")
     finally:
         ray.shutdown()
+
+
+def test_the_e2e_figure_is_regenerated(tmp_path):
+    pytest.importorskip("matplotlib")
+    spec = importlib.util.spec_from_file_location(
+        "e2e_figure", ROOT / "crates" / "python" / "examples" / "e2e_figure.py"
+    )
+    fig = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fig)
+    text = (ROOT / "examples" / "campaigns" / "e2e-figure.toml").read_text()
+    config = tmp_path / "e.toml"
+    config.write_text(text.replace("systems = 1000", "systems = 60").replace("shard_size = 250", "shard_size = 30"))
+    assert fig.main([str(config), str(tmp_path / "out"), str(tmp_path / "f.svg")]) == 0
+    assert (tmp_path / "f.svg").read_text().lstrip().startswith("<?xml")
+    red = fig.reductions(fig.run(config, tmp_path / "out"))
+    for metric in ("reaction", "freshness"):
+        sound, known = red[metric]["rtpipe sound"], red[metric]["rtpipe, known offsets"]
+        assert len(sound) > 100
+        # No bound above Davare's, and the known offsets never loosen one.
+        assert (sound >= -1e-12).all() and (known >= sound - 1e-12).all()
+        assert (red[metric]["Dürr et al. (CASES'19)"] >= -1e-12).all()
+    assert "| maximum data age | rtpipe sound |" in fig.summary(red)
