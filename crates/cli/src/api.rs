@@ -167,6 +167,15 @@ pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Resu
     Ok(reply(answer, None, None))
 }
 
+/// The WATERS task set `rtpipe generate waters FLAGS` writes, as a spec
+/// (no file: the flags' OUTFILE is not given).
+pub fn waters(flags: &[String]) -> Result<Spec, Failure> {
+    let mut argv = flags.to_vec();
+    argv.push("<python>".into());
+    let a: crate::generate::WatersArgs = parse("waters", &argv)?;
+    Ok(crate::generate::waters_spec(&a))
+}
+
 fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Reply {
     Reply {
         json: match answer.report {

@@ -89,8 +89,8 @@ pub fn run(cmd: &GenerateCommand) -> ExitCode {
     }
 }
 
-fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
-    let out = check_output(&a.out)?;
+/// The WATERS task set the flags describe (its OUTFILE aside).
+pub fn waters_spec(a: &WatersArgs) -> Spec {
     let cfg = WatersConfig {
         tasks: a.tasks.map(|n| n as usize),
         cpus: a.cpus,
@@ -98,7 +98,12 @@ fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
         chains: a.chains as usize,
         synchronous: a.release == ReleaseArg::Synchronous,
     };
-    let spec = waters_system(a.seed, &cfg);
+    waters_system(a.seed, &cfg)
+}
+
+fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
+    let out = check_output(&a.out)?;
+    let spec = waters_spec(a);
     let text = format!("{}{}", header(a), rtpipe_model::to_toml(&spec));
     if let Err(e) = Spec::parse(&a.out.display().to_string(), &text) {
         eprint!("{e}");

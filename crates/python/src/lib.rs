@@ -123,6 +123,19 @@ fn load_text(py: Python<'_>, text: &str, label: &str) -> PyResult<Spec> {
     }
 }
 
+/// The WATERS task set of `rtpipe generate waters FLAGS` (no file).
+#[pyfunction]
+fn waters(py: Python<'_>, flags: Vec<String>) -> PyResult<Spec> {
+    match api::waters(&flags) {
+        Ok(spec) => Ok(Spec {
+            label: format!("<{}>", spec.name),
+            spec,
+        }),
+        Err(Failure::Input(d)) => Err(input_error(py, &d)),
+        Err(_) => Err(InternalError::new_err("the generator failed")),
+    }
+}
+
 /// TOML text from a dict of TOML tables (`None` has no TOML form).
 #[pyfunction]
 fn dict_to_toml(value: &Bound<'_, PyAny>) -> PyResult<String> {
@@ -389,6 +402,7 @@ fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dict_to_toml, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(run_plain, m)?)?;
+    m.add_function(wrap_pyfunction!(waters, m)?)?;
     m.add("RtpipeError", py.get_type::<RtpipeError>())?;
     m.add("SpecError", py.get_type::<SpecError>())?;
     m.add("InputError", py.get_type::<InputError>())?;

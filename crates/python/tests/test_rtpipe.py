@@ -200,3 +200,17 @@ def test_ctrl_c_stops_a_long_call():
     assert time.process_time() - cpu < 0.1
     # The package still works after it.
     assert system.analyze()["ok"] is True
+
+
+def test_waters_is_the_generated_file(tmp_path):
+    out = tmp_path / "w.toml"
+    if not BIN.exists():
+        pytest.skip("no rtpipe binary")
+    subprocess.run([str(BIN), "generate", "waters", "--tasks", "24", "--seed", "5",
+                    "--release", "synchronous", str(out)], check=True, capture_output=True)
+    from_file = rtpipe.load(out)
+    generated = rtpipe.waters(tasks=24, seed=5, release="synchronous")
+    assert generated.to_toml() == from_file.to_toml()
+    assert generated.analyze() == from_file.analyze()
+    with pytest.raises(rtpipe.InputError, match="utilization"):
+        rtpipe.waters(utilization=3)

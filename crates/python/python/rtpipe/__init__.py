@@ -36,6 +36,7 @@ from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
 
 __all__ = [
     "load",
+    "waters",
     "campaign",
     "System",
     "RtpipeError",
@@ -69,6 +70,23 @@ def load(source: Source, *, name: Optional[str] = None) -> "System":
     raise TypeError(
         f"load() takes a path, TOML text or a dict, not {type(source).__name__}"
     )
+
+
+def waters(
+    *,
+    seed: Optional[int] = None,
+    tasks: Optional[int] = None,
+    utilization: Optional[float] = None,
+    chains: Optional[int] = None,
+    cpus: Optional[int] = None,
+    release: Optional[str] = None,
+) -> "System":
+    """A WATERS 2015 task set with cause-effect chains, as ``rtpipe generate
+    waters`` writes it (the same flags give the same system), without a
+    file. ``release="synchronous"`` releases every task at 0."""
+    options = dict(seed=seed, tasks=tasks, utilization=utilization, chains=chains,
+                   cpus=cpus, release=release)
+    return System(_rtpipe.waters(_flags(options)))
 
 
 def _flags(options: Mapping[str, Any]) -> list:
