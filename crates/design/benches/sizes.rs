@@ -53,12 +53,18 @@ fn child(tasks: usize, seed: u64, mode: Mode, limit: f64) {
         ..Options::default()
     };
     let t0 = std::time::Instant::now();
-    let (status, gap, method) = match design(&spec, &opts) {
-        Ok(o) => (o.status.name(), o.gap.unwrap_or(f64::NAN), o.method.name()),
-        Err(_) => ("error", f64::NAN, "-"),
+    let (status, gap, method, work) = match design(&spec, &opts) {
+        Ok(o) => (
+            o.status.name(),
+            o.gap.unwrap_or(f64::NAN),
+            o.method.name(),
+            o.iterations,
+        ),
+        Err(_) => ("error", f64::NAN, "-", 0),
     };
     let secs = t0.elapsed().as_secs_f64();
-    println!("{status} {secs} {gap} {} {method}", peak_kib());
+    // The work (boxes or master solves) last: the same on every machine.
+    println!("{status} {secs} {gap} {} {method} {work}", peak_kib());
 }
 
 struct Row {
@@ -83,7 +89,7 @@ fn run_child(tasks: usize, seed: u64, mode: Mode, limit: f64) -> Option<Row> {
         .ok()?;
     let text = String::from_utf8_lossy(&out.stdout);
     let f: Vec<&str> = text.split_whitespace().collect();
-    (f.len() == 5).then(|| Row {
+    (f.len() == 6).then(|| Row {
         status: f[0].to_string(),
         secs: f[1].parse().unwrap_or(f64::NAN),
         gap: f[2].parse().unwrap_or(f64::NAN),
