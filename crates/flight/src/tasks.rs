@@ -816,7 +816,7 @@ impl Environment<Value> for Cosim {
             }
             BodyKind::Accel => {
                 self.tell_rotors(t);
-                let sf = self.plant.truth().specific_force;
+                let sf = self.plant.specific_force();
                 (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
             }
             BodyKind::Radio => (2, self.radio_frame(t)),
