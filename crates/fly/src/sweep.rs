@@ -144,6 +144,9 @@ pub fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
 
 fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) -> Point {
     let mut setup = s.clone();
+    // A point keeps only the flight's quality: the bounds are the analysis's.
+    setup.track_chains = false;
+    setup.keep_trace = false;
     let timing = match v {
         Variation::Scale(k) => scaled(spec, k),
         Variation::Rate(k) => {
