@@ -329,6 +329,16 @@ impl Plant {
         &self.s
     }
 
+    /// Resting on the ground ([`Truth::on_ground`]).
+    pub fn on_ground(&self) -> bool {
+        self.on_ground
+    }
+
+    /// Crashed ([`Truth::crashed`]).
+    pub fn crashed(&self) -> bool {
+        self.crashed
+    }
+
     /// Overwrite the state (tests and scenarios); `on_ground` is re-derived.
     pub fn set_state(&mut self, s: State) {
         self.s = s;

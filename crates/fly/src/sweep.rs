@@ -448,3 +448,51 @@ mod tests {
         assert!(gp.bounds[0].0 < gf.bounds[0].0);
     }
 }
+
+#[cfg(test)]
+mod threads {
+    use super::*;
+    use crate::{setup, Request};
+    use std::path::Path;
+
+    /// The points are the same, in the same order, on 1, 2 or 3 threads:
+    /// each flight is deterministic and the results keep the variations'
+    /// order whoever flies them.
+    #[test]
+    fn a_sweep_is_the_same_on_any_number_of_threads() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let r = Request {
+            spec_path: &p,
+            vehicle: "racer5",
+            mission: "steps",
+            horizon: None,
+            seed: 3,
+        };
+        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let vars: Vec<Variation> = default_variations(&spec, &s, 0.5, 8.0)
+            .into_iter()
+            .step_by(4)
+            .collect();
+        assert!(vars.len() >= 12, "{}", vars.len());
+        let on = |n: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            let done = AtomicU64::new(0);
+            let c = s.criteria();
+            pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done))
+        };
+        let one = on(1);
+        assert_eq!(
+            one.iter().map(|p| p.variation).collect::<Vec<_>>(),
+            vars,
+            "in the variations' order"
+        );
+        assert!(one.iter().any(Point::pass) && one.iter().any(|p| !p.pass()));
+        for n in [2, 3] {
+            assert_eq!(format!("{:?}", on(n)), format!("{one:?}"), "{n} threads");
+        }
+    }
+}
