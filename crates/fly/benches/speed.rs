@@ -1,10 +1,14 @@
-//! Flight speed along its axes (issue 25): flight length (the hover mission
-//! flown 26 s, 600 s and 3,600 s, and the 26 s steps mission, mostly
-//! airborne) and the timing sweep (`rtpipe fly --sweep`: the issue's 37
+//! Flight speed along its axes (issue 25): flight length (26 s, 600 s and
+//! 3,600 s of an airborne hold (`benches/hold.toml`) and of the built-in
+//! hover, which lands at 16 s, and the 26 s steps mission) and the timing sweep (`rtpipe fly --sweep`: the issue's 37
 //! flights, period scales and chain delays, and today's default 53, rate
 //! sweep included) on 1 and 2 threads. Criterion reports simulated
-//! milliseconds per second as elements/s for the flights (1,000× real time
-//! = 1 M elements/s) and flights per second for the sweeps.
+//! milliseconds per CPU second as elements/s for the flights (1,000× real
+//! time = 1 M elements/s; group `flight-cpu`, measured in the process's
+//! CPU time, which the other processes of a shared machine do not
+//! inflate) and flights per CPU second for the sweeps (all threads': on
+//! an idle machine the 2-thread sweep's wall time is about half its CPU
+//! time).
 //!
 //! `cargo bench -p rtpipe-fly --bench speed` (about three minutes).
 //!
@@ -21,6 +25,7 @@
 //! RTPIPE_BEFORE=/tmp/before/target/release/rtpipe cargo bench -p rtpipe-fly --bench speed
 //! ```
 
+use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_fly::sweep::{default_variations, sweep, Variation};
 use rtpipe_fly::{fly, setup, Request, Setup};
@@ -51,17 +56,64 @@ fn setup_of(spec: &Spec, mission: &str, seconds: Option<i64>) -> Setup {
     s
 }
 
-/// The flights of the length axis: (label, mission, seconds).
-const FLIGHTS: [(&str, &str, Option<i64>); 4] = [
+/// The airborne mission (take off, hold 1 m until the end): hold.toml.
+const HOLD: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/hold.toml");
+
+/// The flights of the length axis: (label, mission, seconds). The built-in
+/// hover lands at 16 s: its long flights are mostly on the ground.
+const FLIGHTS: [(&str, &str, Option<i64>); 7] = [
     ("steps-26s", "steps", None),
+    ("hold-26s", HOLD, Some(26)),
+    ("hold-600s", HOLD, Some(600)),
+    ("hold-3600s", HOLD, Some(3600)),
     ("hover-26s", "hover", Some(26)),
     ("hover-600s", "hover", Some(600)),
     ("hover-3600s", "hover", Some(3600)),
 ];
 
-fn flights(c: &mut Criterion) {
+/// CPU time of this process (`CLOCK_PROCESS_CPUTIME_ID`): on a shared
+/// machine a single-threaded flight's wall time counts the other
+/// processes' turns too, its CPU time only its own work.
+struct CpuTime;
+
+fn cpu_now() -> Duration {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid timespec for the call to fill in.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime(CLOCK_PROCESS_CPUTIME_ID)");
+    Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+}
+
+impl Measurement for CpuTime {
+    type Intermediate = Duration;
+    type Value = Duration;
+    fn start(&self) -> Duration {
+        cpu_now()
+    }
+    fn end(&self, i: Duration) -> Duration {
+        cpu_now().saturating_sub(i)
+    }
+    fn add(&self, a: &Duration, b: &Duration) -> Duration {
+        *a + *b
+    }
+    fn zero(&self) -> Duration {
+        Duration::ZERO
+    }
+    fn to_f64(&self, v: &Duration) -> f64 {
+        v.as_nanos() as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        static WALL: WallTime = WallTime;
+        WALL.formatter()
+    }
+}
+
+fn flights(c: &mut Criterion<CpuTime>) {
     let spec = Spec::load(&cleanflight()).unwrap_or_else(|e| panic!("{e}"));
-    let mut group = c.benchmark_group("flight");
+    let mut group = c.benchmark_group("flight-cpu");
     group
         .sample_size(10)
         .warm_up_time(Duration::from_millis(500))
@@ -85,7 +137,7 @@ fn flights(c: &mut Criterion) {
     group.finish();
 }
 
-fn sweeps(c: &mut Criterion) {
+fn sweeps(c: &mut Criterion<CpuTime>) {
     let spec = Spec::load(&cleanflight()).unwrap_or_else(|e| panic!("{e}"));
     let s = setup_of(&spec, "steps", None);
     let all = default_variations(&spec, &s, 0.5, 8.0);
@@ -101,7 +153,7 @@ fn sweeps(c: &mut Criterion) {
     group
         .sample_size(10)
         .warm_up_time(Duration::from_millis(500))
-        .measurement_time(Duration::from_secs(8));
+        .measurement_time(Duration::from_secs(6));
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -163,8 +215,9 @@ fn before_after(_: &mut Criterion) {
         return;
     };
     let after = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/release/rtpipe");
-    let cases: [(&str, &[&str]); 5] = [
+    let cases: [(&str, &[&str]); 6] = [
         ("steps, 26 s", &[]),
+        ("hold, 600 s", &["--mission", HOLD, "--duration", "600s"]),
         ("hover, 26 s", &["--mission", "hover", "--duration", "26s"]),
         (
             "hover, 600 s",
@@ -200,5 +253,10 @@ fn before_after(_: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, flights, sweeps, before_after);
-criterion_main!(benches);
+criterion_group!(
+    name = cpu;
+    config = Criterion::default().with_measurement(CpuTime);
+    targets = flights, sweeps
+);
+criterion_group!(wall, before_after);
+criterion_main!(cpu, wall);
