@@ -1,8 +1,9 @@
 //! Flight speed along its axes (issue 25): flight length (26 s, 600 s and
 //! 3,600 s of an airborne hold (`benches/hold.toml`) and of the built-in
-//! hover, which lands at 16 s, and the 26 s steps mission) and the timing sweep (`rtpipe fly --sweep`: the issue's 37
-//! flights, period scales and chain delays, and today's default 53, rate
-//! sweep included) on 1 and 2 threads. Criterion reports simulated
+//! hover, which lands at 16 s, and the 26 s steps mission) and the timing
+//! sweep (`rtpipe fly --sweep`: the issue's 37 flights, period scales and
+//! chain delays, and today's default 53, rate sweep included) on 1 and 2
+//! threads. Criterion reports simulated
 //! milliseconds per CPU second as elements/s for the flights (1,000× real
 //! time = 1 M elements/s; group `flight-cpu`, measured in the process's
 //! CPU time, which the other processes of a shared machine do not
@@ -10,7 +11,8 @@
 //! an idle machine the 2-thread sweep's wall time is about half its CPU
 //! time).
 //!
-//! `cargo bench -p rtpipe-fly --bench speed` (about three minutes).
+//! `cargo bench -p rtpipe-fly --bench speed` (about eight minutes on a
+//! shared 2-core machine, the 3,600 s flights a minute each).
 //!
 //! Before and after, side by side in one run: build the commit before in
 //! its own tree and name its binary in `RTPIPE_BEFORE`; the bench then
