@@ -270,11 +270,25 @@ pub struct Plant {
     crashed: bool,
 }
 
+/// `a` wrapped into [0, 2π), bit for bit as `a.rem_euclid(TAU)`: for a
+/// in [2π, 4π) (a step turns a rotor by less than 2π) the subtraction
+/// a − 2π is exact (Sterbenz), as fmod's remainder is, without its cost
+/// (fmod was 3 % of a flight).
+fn wrap_tau(a: f64) -> f64 {
+    use std::f64::consts::TAU;
+    if (0.0..TAU).contains(&a) {
+        a
+    } else if (TAU..2.0 * TAU).contains(&a) {
+        a - TAU
+    } else {
+        a.rem_euclid(TAU)
+    }
+}
+
 /// Forces and torques at a state (shared by the derivative and the truth).
 struct Wrench {
     accel_world: Vec3,
     ang_accel: Vec3,
-    thrust: f64,
 }
 
 impl Plant {
@@ -313,6 +327,16 @@ impl Plant {
     /// The raw state.
     pub fn state(&self) -> &State {
         &self.s
+    }
+
+    /// Resting on the ground ([`Truth::on_ground`]).
+    pub fn on_ground(&self) -> bool {
+        self.on_ground
+    }
+
+    /// Crashed ([`Truth::crashed`]).
+    pub fn crashed(&self) -> bool {
+        self.crashed
     }
 
     /// Overwrite the state (tests and scenarios); `on_ground` is re-derived.
@@ -362,6 +386,13 @@ impl Plant {
             .sum()
     }
 
+    /// Total rotor thrust at rotor speeds `omega`, N (Σ k_f·ω², summed in
+    /// rotor order as [`Plant::wrench`] does).
+    fn thrust(&self, omega: &[f64; 4]) -> f64 {
+        let k_f = self.p.rotors.k_f;
+        omega.iter().fold(0.0, |t, w| t + k_f * (w * w))
+    }
+
     fn wrench(&self, s: &State) -> Wrench {
         let (b, r) = (&self.p.body, &self.p.rotors);
         let mut thrust = 0.0;
@@ -384,27 +415,22 @@ impl Plant {
         Wrench {
             accel_world,
             ang_accel,
-            thrust,
         }
     }
 
-    fn derivative(&self, s: &State) -> State {
+    /// The rotors' speed derivative: first-order lag toward the target.
+    fn omega_rate(&self, omega: &[f64; 4]) -> [f64; 4] {
         let tau_m = self.p.rotors.time_constant_s;
         let mut domega = [0.0; 4];
         for (i, d) in domega.iter_mut().enumerate() {
-            *d = (self.target[i] - s.omega[i]) / tau_m;
+            *d = (self.target[i] - omega[i]) / tau_m;
         }
-        if self.on_ground || self.crashed {
-            // Held by the ground: only the rotors move.
-            let zero = State {
-                pos: Vec3::ZERO,
-                vel: Vec3::ZERO,
-                q: Quat::new(0.0, 0.0, 0.0, 0.0),
-                rate: Vec3::ZERO,
-                omega: domega,
-            };
-            return zero;
-        }
+        domega
+    }
+
+    /// The derivative in free flight (the ground holds nothing).
+    fn derivative(&self, s: &State) -> State {
+        let domega = self.omega_rate(&s.omega);
         let w = self.wrench(s);
         State {
             pos: s.vel,
@@ -415,7 +441,8 @@ impl Plant {
         }
     }
 
-    fn rk4(&mut self, h: f64) {
+    /// One RK4 step of `h` s in free flight.
+    fn rk4_free(&self, h: f64) -> State {
         let s = self.s;
         let k1 = self.derivative(&s);
         let k2 = self.derivative(&s.add_scaled(&k1, 0.5 * h));
@@ -425,7 +452,52 @@ impl Plant {
         n = n.add_scaled(&k1, h / 6.0);
         n = n.add_scaled(&k2, h / 3.0);
         n = n.add_scaled(&k3, h / 3.0);
-        n = n.add_scaled(&k4, h / 6.0);
+        n.add_scaled(&k4, h / 6.0)
+    }
+
+    /// One RK4 step of `h` s held by the ground (or wrecked): only the
+    /// rotors move. The same arithmetic as [`Plant::rk4_free`] with the
+    /// body's derivatives zero, without evaluating them: the rotors' RK4 as
+    /// there, and every other component plus the zero increments (x + 0.0,
+    /// which turns a -0.0 into 0.0 as the full step did).
+    fn rk4_held(&self, h: f64) -> State {
+        let s = self.s;
+        let at = |k: &[f64; 4], c: f64| {
+            let mut o = s.omega;
+            for (o, d) in o.iter_mut().zip(k) {
+                *o += d * c;
+            }
+            o
+        };
+        let k1 = self.omega_rate(&s.omega);
+        let k2 = self.omega_rate(&at(&k1, 0.5 * h));
+        let k3 = self.omega_rate(&at(&k2, 0.5 * h));
+        let k4 = self.omega_rate(&at(&k3, h));
+        let mut omega = s.omega;
+        for (k, c) in [(k1, h / 6.0), (k2, h / 3.0), (k3, h / 3.0), (k4, h / 6.0)] {
+            for (o, d) in omega.iter_mut().zip(k) {
+                *o += d * c;
+            }
+        }
+        let still = State {
+            pos: Vec3::ZERO,
+            vel: Vec3::ZERO,
+            q: Quat::new(0.0, 0.0, 0.0, 0.0),
+            rate: Vec3::ZERO,
+            omega: [0.0; 4],
+        };
+        State {
+            omega,
+            ..s.add_scaled(&still, 1.0)
+        }
+    }
+
+    fn rk4(&mut self, h: f64) {
+        let mut n = if self.on_ground || self.crashed {
+            self.rk4_held(h)
+        } else {
+            self.rk4_free(h)
+        };
         n.q = n.q.normalized();
         if n.is_finite() {
             self.s = n;
@@ -447,8 +519,7 @@ impl Plant {
             return;
         }
         if self.on_ground {
-            let w = self.wrench(&self.s);
-            if w.thrust * self.s.q.body_z_world().z > b.mass_kg * GRAVITY {
+            if self.thrust(&self.s.omega) * self.s.q.body_z_world().z > b.mass_kg * GRAVITY {
                 self.on_ground = false; // lift-off
             }
             return;
@@ -486,8 +557,7 @@ impl Plant {
             if *target == 0.0 && w.abs() < OMEGA_AT_REST {
                 *w = 0.0;
             }
-            let a = *angle + 0.5 * h * (w0 + *w);
-            *angle = a.rem_euclid(std::f64::consts::TAU);
+            *angle = wrap_tau(*angle + 0.5 * h * (w0 + *w));
         }
     }
 
@@ -505,16 +575,34 @@ impl Plant {
         }
     }
 
+    /// Linear (world) and angular (body) acceleration now: zero while the
+    /// ground holds the vehicle.
+    fn accelerations(&self) -> (Vec3, Vec3) {
+        if self.on_ground || self.crashed {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            let w = self.wrench(&self.s);
+            (w.accel_world, w.ang_accel)
+        }
+    }
+
+    /// The specific force in the body now, m/s²: what an ideal
+    /// accelerometer reads ([`Truth::specific_force`], without the rest of
+    /// the truth's cost: its Euler angles are three inverse trigonometric
+    /// calls).
+    pub fn specific_force(&self) -> Vec3 {
+        self.felt(self.accelerations().0)
+    }
+
+    /// The specific force in the body at world acceleration `accel`.
+    fn felt(&self, accel: Vec3) -> Vec3 {
+        self.s.q.rotate_inv(accel + Vec3::new(0.0, 0.0, GRAVITY))
+    }
+
     /// The observable truth at the current time.
     pub fn truth(&self) -> Truth {
         let s = &self.s;
-        let (accel, ang_accel) = if self.on_ground || self.crashed {
-            (Vec3::ZERO, Vec3::ZERO)
-        } else {
-            let w = self.wrench(s);
-            (w.accel_world, w.ang_accel)
-        };
-        let sf = s.q.rotate_inv(accel + Vec3::new(0.0, 0.0, GRAVITY));
+        let (accel, ang_accel) = self.accelerations();
         Truth {
             t_ns: self.t_ns,
             pos: s.pos,
@@ -522,7 +610,7 @@ impl Plant {
             q: s.q,
             euler: s.q.to_euler(),
             rate: s.rate,
-            specific_force: sf,
+            specific_force: self.felt(accel),
             ang_accel,
             omega: s.omega,
             on_ground: self.on_ground,
@@ -535,6 +623,56 @@ impl Plant {
 mod tests {
     use super::*;
     use crate::preset::Preset;
+
+    #[test]
+    fn wrap_tau_is_rem_euclid_bit_for_bit() {
+        use std::f64::consts::TAU;
+        let mut rng = crate::rng::Rng::new(5);
+        let mut cases = vec![0.0, -0.0, TAU, 2.0 * TAU, TAU.next_down(), -1e-300, 1e300];
+        cases.extend((0..100_000).map(|_| 5.0 * TAU * rng.uniform() - TAU));
+        for a in cases {
+            assert_eq!(wrap_tau(a).to_bits(), a.rem_euclid(TAU).to_bits(), "{a}");
+        }
+    }
+
+    /// The step on the ground is the full RK4 with the body's derivatives
+    /// zero, bit for bit (the plant's code before the two were split).
+    #[test]
+    fn the_held_step_is_the_full_step_with_a_still_body() {
+        let p = Preset::builtin("racer5").map(|p| p.plant_params());
+        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
+        let mut rng = crate::rng::Rng::new(9);
+        for k in 0..2_000 {
+            let mut u = || rng.gaussian();
+            let mut s = *plant.state();
+            s.pos = Vec3::new(u(), -0.0, 0.0);
+            s.vel = Vec3::new(-0.0, u(), u());
+            s.q = Quat::new(u(), u(), -0.0, u()).normalized();
+            s.rate = Vec3::new(u(), u(), -0.0);
+            s.omega = [u().abs() * 900.0, 0.0, u() * 3.0, 1e-5];
+            plant.s = s;
+            plant.on_ground = true;
+            plant.set_motor_commands([0.2, 0.0, 1.0, 0.5], k % 2 == 0);
+            let h = (1 + k * 131 % 250_000) as f64 * 1e-9;
+            let still = |x: &State| State {
+                pos: Vec3::ZERO,
+                vel: Vec3::ZERO,
+                q: Quat::new(0.0, 0.0, 0.0, 0.0),
+                rate: Vec3::ZERO,
+                omega: plant.omega_rate(&x.omega),
+            };
+            let k1 = still(&s);
+            let k2 = still(&s.add_scaled(&k1, 0.5 * h));
+            let k3 = still(&s.add_scaled(&k2, 0.5 * h));
+            let k4 = still(&s.add_scaled(&k3, h));
+            let want = s
+                .add_scaled(&k1, h / 6.0)
+                .add_scaled(&k2, h / 3.0)
+                .add_scaled(&k3, h / 3.0)
+                .add_scaled(&k4, h / 6.0);
+            assert_eq!(format!("{:?}", plant.rk4_held(h)), format!("{want:?}"));
+        }
+    }
 
     #[test]
     fn stopped_rotors_come_to_rest_at_zero_not_in_subnormals() {

@@ -716,19 +716,20 @@ impl Cosim {
     }
 
     fn record(&mut self) {
-        let truth = self.plant.truth();
+        // The state, not the whole truth: its accelerations cost a wrench.
+        let st = self.plant.state();
         let p = TracePoint {
             t_ns: self.now,
-            pos: truth.pos,
-            vel: truth.vel,
-            euler: truth.euler,
-            rate: truth.rate,
+            pos: st.pos,
+            vel: st.vel,
+            euler: st.q.to_euler(),
+            rate: st.rate,
             est: self.seen.est,
             sp: self.seen.sp,
             alt_target: self.mission.intent_at(self.now).altitude_m,
             armed: self.seen.motors.armed,
-            on_ground: truth.on_ground,
-            crashed: truth.crashed,
+            on_ground: self.plant.on_ground(),
+            crashed: self.plant.crashed(),
             motors: self.seen.motors.motors,
             voltage: self.battery.voltage(),
         };
@@ -754,12 +755,12 @@ impl Cosim {
         {
             return None;
         }
-        let truth = self.plant.truth();
+        let now = self.plant.state();
         let st = VehicleState {
-            pos: truth.pos,
-            vel: truth.vel,
-            euler: truth.euler,
-            on_ground: truth.on_ground,
+            pos: now.pos,
+            vel: now.vel,
+            euler: now.q.to_euler(),
+            on_ground: self.plant.on_ground(),
         };
         let intent = self.mission.intent_at(t);
         let cmd = self.autopilot.update(t, &intent, &st);
@@ -816,7 +817,7 @@ impl Environment<Value> for Cosim {
             }
             BodyKind::Accel => {
                 self.tell_rotors(t);
-                let sf = self.plant.truth().specific_force;
+                let sf = self.plant.specific_force();
                 (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
             }
             BodyKind::Radio => (2, self.radio_frame(t)),

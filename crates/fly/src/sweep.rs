@@ -142,8 +142,14 @@ pub fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
     DELAY_LINES.iter().position(|&r| r == role)
 }
 
-fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) -> Point {
-    let mut setup = s.clone();
+/// What a variation flies: the timing (or why it cannot be flown), the
+/// delay on each delay line, and the delay it adds to the bounds of the
+/// chains of a line (none when 0). Equal plans give equal points.
+type Plan = (Result<Spec, String>, [u64; 3], Option<(usize, u64)>);
+
+fn plan(spec: &Spec, s: &Setup, v: Variation) -> Plan {
+    let mut delays = s.world.sense_delay_ns;
+    let mut added = None;
     let timing = match v {
         Variation::Scale(k) => scaled(spec, k),
         Variation::Rate(k) => {
@@ -151,10 +157,21 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
             scaled_where(spec, k, |i| tails.contains(&i))
         }
         Variation::Delay { line, ns } => {
-            setup.world.sense_delay_ns[line] = ns;
+            delays[line] = ns;
+            added = (ns > 0).then_some((line, ns));
             Ok(spec.clone())
         }
     };
+    (timing, delays, added)
+}
+
+fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) -> Point {
+    let mut setup = s.clone();
+    // A point keeps only the flight's quality: the bounds are the analysis's.
+    setup.track_chains = false;
+    setup.keep_trace = false;
+    let (timing, delays, added) = plan(spec, s, v);
+    setup.world.sense_delay_ns = delays;
     let timing = match timing {
         Ok(x) => x,
         Err(why) => {
@@ -169,7 +186,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
         }
     };
     let (mut bounds, mut event, schedulable) = sound_bounds(&timing);
-    if let Variation::Delay { line, ns } = v {
+    if let Some((line, ns)) = added {
         for k in 0..bounds.len() {
             if head_line(&timing, s, k) == Some(line) {
                 let d = ns as Nanos;
@@ -196,8 +213,11 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
     }
 }
 
-/// Flies every variation (in parallel; each point is deterministic) and
-/// counts finished points in `done`.
+/// Flies every variation (in parallel; each point is deterministic; the
+/// points in the variations' order) and counts finished points in `done`.
+/// Variations that fly the same timing with the same delays (the nominal
+/// timing is in each of the default sweeps five times: ×1 scale, ×1 rate,
+/// three 0 ms delays) are flown once.
 pub fn sweep(
     spec: &Spec,
     s: &Setup,
@@ -206,11 +226,34 @@ pub fn sweep(
     variations: &[Variation],
     done: &AtomicU64,
 ) -> Vec<Point> {
-    variations
-        .par_iter()
+    // (timing, delays) decide a point, all but its variation (`flown`).
+    let mut distinct: Vec<(Variation, Plan)> = Vec::new();
+    let slot: Vec<usize> = variations
+        .iter()
         .map(|&v| {
-            let p = flown(spec, s, v, exec, c);
-            done.fetch_add(1, Ordering::Relaxed);
+            let p = plan(spec, s, v);
+            distinct.iter().position(|d| d.1 == p).unwrap_or_else(|| {
+                distinct.push((v, p));
+                distinct.len() - 1
+            })
+        })
+        .collect();
+    let points: Vec<Point> = distinct
+        .par_iter()
+        .enumerate()
+        .map(|(k, (v, _))| {
+            let p = flown(spec, s, *v, exec, c);
+            let copies = slot.iter().filter(|&&i| i == k).count();
+            done.fetch_add(copies as u64, Ordering::Relaxed);
+            p
+        })
+        .collect();
+    variations
+        .iter()
+        .zip(slot)
+        .map(|(&v, k)| {
+            let mut p = points[k].clone();
+            p.variation = v;
             p
         })
         .collect()
@@ -443,5 +486,93 @@ mod tests {
             panic!("the gyro delay sweep never failed: {g:?}");
         };
         assert!(gp.bounds[0].0 < gf.bounds[0].0);
+    }
+}
+
+#[cfg(test)]
+mod threads {
+    use super::*;
+    use crate::{setup, Request};
+    use std::path::Path;
+
+    /// The nominal timing, in the sweep as ×1 scale, ×1 rate and 0 ms
+    /// delays, is flown once and gives each of them the point its own
+    /// flight would.
+    #[test]
+    fn variations_of_the_same_flight_are_flown_once_with_the_same_points() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let r = Request {
+            spec_path: &p,
+            vehicle: "racer5",
+            mission: "hover",
+            horizon: Some(4_000_000_000),
+            seed: 2,
+        };
+        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let vars = [
+            Variation::Scale(1.0),
+            Variation::Delay { line: 0, ns: 0 },
+            Variation::Rate(1.0),
+            Variation::Delay { line: 2, ns: 0 },
+            Variation::Delay {
+                line: 1,
+                ns: 2_000_000,
+            },
+            Variation::Scale(0.5),
+        ];
+        let plans: Vec<Plan> = vars.iter().map(|&v| plan(&spec, &s, v)).collect();
+        assert!(plans[..4].iter().all(|p| *p == plans[0]));
+        assert!(plans[4] != plans[0] && plans[5] != plans[0]);
+        let c = s.criteria();
+        let done = AtomicU64::new(0);
+        let got = sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done);
+        assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
+        for (v, g) in vars.iter().zip(&got) {
+            let alone = flown(&spec, &s, *v, ExecModel::Uniform, &c);
+            assert_eq!(format!("{g:?}"), format!("{alone:?}"));
+        }
+        assert!(!got[5].schedulable, "{:?}", got[5]);
+    }
+
+    /// The points are the same, in the same order, on 1, 2 or 3 threads:
+    /// each flight is deterministic and the results keep the variations'
+    /// order whoever flies them.
+    #[test]
+    fn a_sweep_is_the_same_on_any_number_of_threads() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let r = Request {
+            spec_path: &p,
+            vehicle: "racer5",
+            mission: "steps",
+            horizon: None,
+            seed: 3,
+        };
+        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let vars: Vec<Variation> = default_variations(&spec, &s, 0.5, 8.0)
+            .into_iter()
+            .step_by(4)
+            .collect();
+        assert!(vars.len() >= 12, "{}", vars.len());
+        let on = |n: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            let done = AtomicU64::new(0);
+            let c = s.criteria();
+            pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done))
+        };
+        let one = on(1);
+        assert_eq!(
+            one.iter().map(|p| p.variation).collect::<Vec<_>>(),
+            vars,
+            "in the variations' order"
+        );
+        assert!(one.iter().any(Point::pass) && one.iter().any(|p| !p.pass()));
+        for n in [2, 3] {
+            assert_eq!(format!("{:?}", on(n)), format!("{one:?}"), "{n} threads");
+        }
     }
 }
