@@ -56,7 +56,9 @@ pub fn flights(path: &Path, spec: &Spec, r: &FlyRequest) -> Result<Flights, Diag
                     horizon: None,
                     seed,
                 };
-                let s = setup(spec, &req)?;
+                let mut s = setup(spec, &req)?;
+                // Only the flight's quality is judged: chains only observe.
+                s.track_chains = false;
                 let label = if r.seeds.len() > 1 {
                     format!("{}/{}/seed {seed}", s.preset.name, s.mission.name)
                 } else {
