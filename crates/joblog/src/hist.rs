@@ -7,6 +7,36 @@
 
 use rtpipe_model::Nanos;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// Hashes an integer key by one multiplication (Fibonacci hashing): the
+/// keys are latencies, not attacker-chosen, and SipHash's cost showed in
+/// every sample a run counts. Fixed, so iteration order is too.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct IntHasher(u64);
+
+impl Hasher for IntHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+
+    fn write_i64(&mut self, v: i64) {
+        // The product's high bits are the well-mixed ones: hashbrown takes
+        // its control byte from the top 7 and the bucket from the low bits,
+        // so the high half is folded into the low (latencies are often
+        // multiples of 1000, whose low bits a product alone keeps at 0).
+        let x = (v as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 = x ^ (x >> 32);
+    }
+}
+
+type Counts = HashMap<Nanos, u64, BuildHasherDefault<IntHasher>>;
 
 /// Distinct values kept exactly; beyond it the histogram turns coarse.
 pub const EXACT_CAP: usize = 1 << 16;
@@ -20,7 +50,7 @@ pub const COARSE_BITS: u32 = 7;
 pub struct Histogram {
     /// Value (exact) or bucket's lower end (coarse) → count (hashed: a
     /// push is O(1); the queries sort, and they are few).
-    counts: HashMap<Nanos, u64>,
+    counts: Counts,
     coarse: bool,
     count: u64,
     sum: i128,
@@ -104,21 +134,22 @@ impl Histogram {
     /// Each distinct value (coarse: each bucket's upper end, clamped to the
     /// observed range) with its count, in ascending order.
     pub fn entries(&self) -> Vec<(Nanos, u64)> {
-        let (lo, hi) = (self.min.unwrap_or(0), self.max.unwrap_or(0));
-        let mut v: Vec<(Nanos, u64)> = self
-            .counts
-            .iter()
-            .map(|(&k, &n)| {
-                let v = if self.coarse {
-                    (bucket_end(k) - 1).clamp(lo, hi)
-                } else {
-                    k
-                };
-                (v, n)
-            })
-            .collect();
+        let mut v: Vec<(Nanos, u64)> = self.unordered().collect();
         v.sort_unstable();
         v
+    }
+
+    /// [`entries`](Histogram::entries) in no particular order.
+    fn unordered(&self) -> impl Iterator<Item = (Nanos, u64)> + '_ {
+        let (lo, hi) = (self.min.unwrap_or(0), self.max.unwrap_or(0));
+        self.counts.iter().map(move |(&k, &n)| {
+            let v = if self.coarse {
+                (bucket_end(k) - 1).clamp(lo, hi)
+            } else {
+                k
+            };
+            (v, n)
+        })
     }
 
     /// The value of nearest rank `rank` (1-based, clamped to the count);
@@ -143,8 +174,7 @@ impl Histogram {
     /// How many values satisfy `f` (coarse: judged on each bucket's value
     /// as [`entries`](Histogram::entries) gives it).
     pub fn count_where(&self, f: impl Fn(Nanos) -> bool) -> u64 {
-        self.entries()
-            .into_iter()
+        self.unordered()
             .filter(|&(v, _)| f(v))
             .map(|(_, n)| n)
             .sum()
