@@ -48,6 +48,10 @@ pub struct EdfTask {
     pub work: Nanos,
     /// Period and relative deadline.
     pub period: Nanos,
+    /// Kernel work each release brings at top priority, whatever the
+    /// deadlines (the release handler and a server's replenishment,
+    /// [`crate::overheads`]; 0 without overheads).
+    pub kernel: Nanos,
 }
 
 /// Jobs of `tasks` released in `[0, w)` under synchronous release.
@@ -63,8 +67,10 @@ fn jobs_within(tasks: &[EdfTask], w: Nanos) -> u64 {
 /// It exists exactly when `Σ I_j/T_j ≤ 1` (with a larger load every
 /// iterate grows), so a value proves the CPU is not overloaded.
 pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
-    assert!(tasks.iter().all(|t| t.period > 0 && t.work >= 0));
-    let mut l: Nanos = tasks.iter().map(|t| t.work).sum();
+    assert!(tasks
+        .iter()
+        .all(|t| t.period > 0 && t.work >= 0 && t.kernel >= 0));
+    let mut l: Nanos = tasks.iter().map(|t| t.work + t.kernel).sum();
     if l == 0 {
         return Some(0);
     }
@@ -74,7 +80,7 @@ pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
         }
         let next: Nanos = tasks
             .iter()
-            .map(|t| ((l + t.period - 1) / t.period) * t.work)
+            .map(|t| ((l + t.period - 1) / t.period) * (t.work + t.kernel))
             .sum();
         if next == l {
             return Some(l);
@@ -146,6 +152,12 @@ pub fn response_time(tasks: &[EdfTask], i: usize, own: Nanos, l: Nanos) -> Nanos
                     .enumerate()
                     .filter(|&(j, _)| j != i)
                     .map(|(_, t)| ((w + t.period - 1) / t.period).min(cap(t)) * t.work)
+                    .sum::<Nanos>()
+                // Every release in the window runs its kernel work, whatever
+                // its deadline (i's own included).
+                + tasks
+                    .iter()
+                    .map(|t| (w + t.period - 1) / t.period * t.kernel)
                     .sum::<Nanos>();
             assert!(next >= w, "Spuri's iteration must not fall");
             if next == w {
@@ -164,7 +176,11 @@ mod tests {
 
     fn set(v: &[(Nanos, Nanos)]) -> Vec<EdfTask> {
         v.iter()
-            .map(|&(work, period)| EdfTask { work, period })
+            .map(|&(work, period)| EdfTask {
+                work,
+                period,
+                kernel: 0,
+            })
             .collect()
     }
 
