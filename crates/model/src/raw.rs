@@ -35,7 +35,7 @@ pub struct RawSystem {
     pub priorities: Option<S<String>>,
     pub communication: Option<S<String>>,
     pub resource_protocol: Option<S<String>>,
-    pub overheads: Option<S<RawOverheads>>,
+    pub overheads: Option<RawOverheads>,
 }
 
 /// `[system] overheads`: the system's costs and per-CPU tables.

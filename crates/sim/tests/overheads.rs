@@ -86,6 +86,21 @@ fn the_hand_example_reaches_its_bounds() {
     assert_eq!(worst(&bare, vec![10 * US, 0])[1], 3000 * US);
 }
 
+/// EDF by hand (`analysis/tests/overheads.rs`: R = (1.4, 3.4) ms): both
+/// released at 0, a's handlers (0.1), a's switch and a (1.1), b's switch
+/// and b (2.1): b ends at 3.4, its bound, exactly.
+#[test]
+fn edf_reaches_its_bound_by_hand() {
+    let text = "[system]\nname = \"edf\"\nscheduler = \"edf\"\n\
+                overheads = { context_switch = \"100us\", release = \"50us\" }\n\
+                [tasks.a]\nexec = 1\nperiod = 4\nserver = \"none\"\n\
+                [tasks.b]\nexec = 2\nperiod = 6\nserver = \"none\"\n";
+    let spec = Spec::parse("edf.toml", text).unwrap_or_else(|e| panic!("{e}"));
+    let rep = analyze(&spec);
+    assert_eq!(rep.timing[1].job_response_time, Some(3_400 * US));
+    assert_eq!(worst(&spec, vec![0, 0])[1], 3_400 * US);
+}
+
 /// One draw of the three costs, in whole µs.
 fn costs(r: &mut Rng) -> Costs {
     Costs {

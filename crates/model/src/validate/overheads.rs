@@ -23,6 +23,19 @@ use crate::overheads::{Costs, CpuCosts, Overheads};
 use crate::raw::{RawCosts, RawOverheads, RawSystem, RawTask, S};
 use crate::*;
 
+/// Where a refusal points: the first key given (the table itself has no
+/// span of its own: a table made implicit by `[system.overheads.cpu.N]`
+/// does not deserialise with one).
+fn overheads_span(raw: &RawOverheads) -> Option<std::ops::Range<usize>> {
+    [&raw.context_switch, &raw.release, &raw.replenish]
+        .into_iter()
+        .flatten()
+        .map(span)
+        .chain(raw.cpu.0.iter().map(|(k, _)| span(k)))
+        .flatten()
+        .min_by_key(|r| r.start)
+}
+
 /// The largest overhead a spec may give: far beyond any kernel path, so a
 /// larger value is a unit slip (`context_switch = 5` in a spec whose
 /// time unit is ms).
@@ -42,7 +55,8 @@ impl Builder {
         let Some(raw) = &sys.overheads else {
             return Overheads::default();
         };
-        let out = self.overhead_values(raw.get_ref(), tasks);
+        let out = self.overhead_values(raw, tasks);
+        let at = overheads_span(raw);
         if out.is_zero() {
             return out;
         }
@@ -50,12 +64,14 @@ impl Builder {
         {
             self.err(
                 format!("overheads with schedulability = \"{}\"", t.name()),
-                span(raw),
+                at.clone(),
                 "utilisation bounds for rate-monotonic order do not cover release handlers at top priority: use schedulability = \"rta\" (the response-time test charges every overhead)",
             );
         }
-        if let Some(msg) = self.overhead_refusal(raw_tasks, tasks, scheduler, protocol) {
-            self.err(msg.0, span(raw), msg.1);
+        if let Some((msg, help, place)) =
+            self.overhead_refusal(raw_tasks, tasks, scheduler, protocol)
+        {
+            self.err(msg, place.or(at), help);
         }
         out
     }
@@ -129,25 +145,26 @@ impl Builder {
         }
     }
 
-    /// (what is wrong, how to fix it) when the analysis cannot bound the
-    /// overheads of this spec.
+    /// (what is wrong, how to fix it, where when not at the overheads) when
+    /// the analysis cannot bound the overheads of this spec.
     fn overhead_refusal(
         &self,
         raw_tasks: &[(S<String>, S<RawTask>)],
         tasks: &[Task],
         scheduler: Option<Scheduler>,
         protocol: ResourceProtocol,
-    ) -> Option<(String, String)> {
+    ) -> Option<(String, String, Option<std::ops::Range<usize>>)> {
         let policy = scheduler?.policy();
         let jittered = tasks
             .iter()
             .zip(raw_tasks)
             .find(|(t, _)| t.jitter > 0 && policy.budget(t.server).is_some());
         if policy.fixed_priority() {
-            if let Some((t, _)) = jittered {
+            if let Some((t, (_, rt))) = jittered {
                 return Some((
                     format!("overheads with release jitter on task `{}`, a budget server", t.name),
                     "a jittered server may wait for its budget and run in slack, switching at instants the overhead analysis does not count: give the task server = \"none\" or remove its jitter".into(),
+                    rt.get_ref().jitter.as_ref().and_then(span),
                 ));
             }
         }
@@ -156,6 +173,7 @@ impl Builder {
             return Some((
                 "overheads with resource_protocol = \"pip\"".into(),
                 "a job waiting for a lock under priority inheritance causes context switches the overhead analysis does not count: use resource_protocol = \"pcp\" or \"srp\"".into(),
+                None,
             ));
         }
         let constrained = tasks
@@ -165,6 +183,7 @@ impl Builder {
             return Some((
                 "overheads under EDF with deadlines below periods (the processor-demand test)".into(),
                 "the demand test has no term for the release handlers of later deadlines: remove the deadlines (Spuri's response-time analysis then charges the overheads), or use scheduler = \"rm\"".into(),
+                None,
             ));
         }
         None
