@@ -32,6 +32,19 @@ impl<H: Hooks> Sim<H> {
         }
     }
 
+    /// `released` jobs of task i were released at t: their kernel work
+    /// (`overheads.rs`) joins its CPU's, which is charged up to t first.
+    pub(crate) fn release_overheads(&mut self, i: usize, released: u64, t: Nanos) {
+        let work = self.ovh.release_work(i, released);
+        if work == 0 {
+            return;
+        }
+        let cpu = self.tasks[i].cpu;
+        self.sync(cpu, t);
+        self.ovh.add_kernel(cpu, work);
+        self.mark(cpu);
+    }
+
     /// Brings every CPU up to t (at the end of a run).
     pub(crate) fn sync_all(&mut self, t: Nanos) {
         for cpu in 0..self.running.len() {

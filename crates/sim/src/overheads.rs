@@ -12,7 +12,6 @@
 //! work starts (after both), takes a resource only then, and completes
 //! only when nothing of either is left.
 
-use crate::engine::{Hooks, Sim};
 use rtpipe_model::{Nanos, Spec};
 
 /// One CPU's overhead state.
@@ -53,6 +52,19 @@ impl Overheads {
                 .iter()
                 .map(|t| spec.overheads.on(t.cpu).per_release(spec, t.server))
                 .collect(),
+        }
+    }
+
+    /// The kernel work `released` jobs of task `i` bring.
+    pub(crate) fn release_work(&self, i: usize, released: u64) -> Nanos {
+        self.per_release[i].saturating_mul(released as Nanos)
+    }
+
+    /// Kernel work joins `cpu`'s (charged up to now first: the caller's
+    /// part).
+    pub(crate) fn add_kernel(&mut self, cpu: usize, work: Nanos) {
+        if let Some(c) = self.cpus.get_mut(cpu) {
+            c.kernel += work;
         }
     }
 
@@ -98,20 +110,5 @@ impl Overheads {
         }
         c.target = job;
         c.switch_left = c.switch_cost;
-    }
-}
-
-impl<H: Hooks> Sim<H> {
-    /// `released` jobs of task i were released at t: their kernel work
-    /// joins its CPU's, which must be charged up to t first.
-    pub(crate) fn release_overheads(&mut self, i: usize, released: u64, t: Nanos) {
-        let work = self.ovh.per_release[i].saturating_mul(released as Nanos);
-        if work == 0 {
-            return;
-        }
-        let cpu = self.tasks[i].cpu;
-        self.sync(cpu, t);
-        self.ovh.cpus[cpu].kernel += work;
-        self.mark(cpu);
     }
 }

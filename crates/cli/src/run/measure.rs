@@ -9,7 +9,6 @@ use super::{policy_of, RunArgs};
 use crate::command::fail;
 use crate::output;
 use crate::table::Table;
-use rtpipe_model::overheads::CpuCosts;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_runtime::overheads::{measure, CpuOverheads};
 use std::process::ExitCode;
@@ -47,9 +46,8 @@ pub(super) fn run(spec: &Spec, a: &RunArgs) -> ExitCode {
     print!("{}", table(&measured));
     let out = with_overheads(spec, &measured);
     println!(
-        "written as: overheads = {} (the 99th percentiles; replenish is kept: {})",
-        overheads_line(&out),
-        "the runtime has no budget path of its own, SCHED_DEADLINE replenishes inside the measured release"
+        "written as: overheads = {} (the 99th percentiles; replenish is kept: the runtime has no budget path of its own, SCHED_DEADLINE replenishes inside the measured release)",
+        overheads_line(&out)
     );
     let Some(path) = &a.write_spec else {
         return ExitCode::SUCCESS;
@@ -109,11 +107,7 @@ fn with_overheads(spec: &Spec, m: &[CpuOverheads]) -> Spec {
                 (own.context_switch, own.release) = (None, None);
             }
         } else {
-            let own = out
-                .overheads
-                .cpus
-                .entry(c.cpu as u32)
-                .or_insert(CpuCosts::default());
+            let own = out.overheads.cpus.entry(c.cpu as u32).or_default();
             (own.context_switch, own.release) = (Some(cs), Some(rel));
         }
     }
