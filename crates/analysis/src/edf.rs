@@ -31,6 +31,13 @@
 //! the instants where the right-hand side steps: `k·T_i` and
 //! `(k + 1)·T_j − T_i` (k ≥ 0). Between two of them `w_i(a)` is constant and
 //! `w_i(a) − a` falls, so the maximum over every real `a` is at one of them.
+//!
+//! With scheduling overheads ([`crate::overheads`]) each task's `I_j`
+//! carries its two context switches and every release brings kernel work
+//! (`EdfTask::kernel`) that runs whatever its deadline: `+ Σ_k ⌈w/T_k⌉·K_k`
+//! in `w_i(a)` (not capped by deadlines, independent of `a`, so the
+//! candidates stay the same) and `K_j` beside `I_j` in `L`
+//! (docs/analysis.md, "Scheduling overheads").
 
 use rtpipe_model::{Nanos, MAX_TIME};
 

@@ -24,6 +24,14 @@ fn a_bad_overhead_is_exit_2_with_its_place() {
 }
 
 #[test]
+fn design_refuses_overheads() {
+    let o = rtpipe(&["design", &example("overheads.toml")]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("does not model scheduling overheads"), "{err}");
+}
+
+#[test]
 fn measured_overheads_go_into_a_copy_of_the_spec() {
     let spec = example("overheads.toml");
     let dir = scratch("ovh-measure");
