@@ -564,10 +564,15 @@ fn to_text(
         );
         out.push_str(&fig10_table(spec, obs));
     }
-    out.push_str(
-        "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
-         switching overhead; start = read - release; demand = CPU time of one job):\n",
-    );
+    let overheads = if spec.overheads.is_zero() {
+        "which has no wake-up latency or switching overhead"
+    } else {
+        "with the spec's [system] overheads (`--measure-overheads` measures this machine's)"
+    };
+    out.push_str(&format!(
+        "\ntasks (R = publish - release; R(job): the analysed worst case, {overheads}; \
+         start = read - release; demand = CPU time of one job):\n",
+    ));
     out.push_str(&task_table(spec, report, res));
     out.push_str(&format!(
         "\nsteal time during the run: {}\n",
