@@ -276,7 +276,12 @@ mod tests {
 
     #[test]
     fn examples_roundtrip() {
-        for f in ["paper-table2.toml", "cleanflight.toml", "paper-table3.toml"] {
+        for f in [
+            "paper-table2.toml",
+            "cleanflight.toml",
+            "paper-table3.toml",
+            "overheads.toml",
+        ] {
             let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("../../examples")
                 .join(f);
