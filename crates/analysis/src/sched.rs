@@ -253,6 +253,19 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             }
         })
         .collect();
+    let mut timings = timings;
+    let bounded: Vec<bool> = timings
+        .iter()
+        .map(|t| t.bounded_response().is_some())
+        .collect();
+    let fixed = spec.policy().fixed_priority();
+    let above = |j: usize, i: usize| {
+        spec.tasks[j].cpu == spec.tasks[i].cpu
+            && (!fixed || interferers(spec, &prio, &top, i).contains(&j))
+    };
+    for i in crate::overheads::unaccounted(spec, &bounded, above) {
+        (timings[i].response_time, timings[i].job_response_time) = (None, None);
+    }
     let verdicts: Vec<CpuVerdict> = cpus
         .into_iter()
         .map(|cpu| cpu_verdict(spec, &timings, cpu))

@@ -116,3 +116,48 @@ period = 5000
     assert_eq!(job_responses(&s), vec![Some(3000 * US), Some(120_000 * US)]);
     assert_eq!(rep.timing[1].bounded_response(), None);
 }
+
+/// A budget server that falls behind (R > T) may run out of budget behind
+/// its backlog and switch the CPU at instants no release or completion
+/// pays for: with overheads, the tasks it can run above lose their
+/// response times (the simulator found one 9 ms past its bound, a PIBS
+/// server with a backlog inheriting a high rank). Here the server j (2500
+/// µs per 3000, below `top`'s 1000 per 10000) responds in 2500 + 1 +
+/// (1000 + 2) = 3503 > 3000, and i below it (100 per 100000, 8600 µs without
+/// overheads) loses its R; `top` and j keep theirs.
+#[test]
+fn a_server_behind_its_period_voids_the_tasks_it_runs_above() {
+    let text = r#"
+[system]
+name = "behind"
+time_unit = "us"
+priorities = "explicit"
+overheads = { context_switch = "1us" }
+[tasks.top]
+exec = 1000
+period = 10000
+server = "none"
+priority = 1
+[tasks.j]
+exec = 2500
+period = 3000
+priority = 2
+[tasks.i]
+exec = 100
+period = 100000
+priority = 3
+"#;
+    let s = spec(text);
+    // top: 1000 + its switch; j: 2500 + 1 + (1000 + 2).
+    assert_eq!(
+        job_responses(&s),
+        vec![Some(1001 * US), Some(3503 * US), None]
+    );
+    assert!(!analyze(&s).schedulability.schedulable);
+    let mut bare = s.clone();
+    bare.overheads = rtpipe_model::Overheads::default();
+    assert_eq!(
+        job_responses(&bare),
+        vec![Some(1000 * US), Some(3500 * US), Some(8600 * US)]
+    );
+}

@@ -4,7 +4,7 @@
 //! sporadic servers, PIBS with inheritance and plain tasks, or EDF with
 //! constant-bandwidth servers; one or two CPUs, some with a CPU table of
 //! their own, some with a background task, some plain tasks with release
-//! jitter) no simulated job response time, reaction or freshness
+//! jitter, some with critical sections under PCP or SRP) no simulated job response time, reaction or freshness
 //! exceeds its bound, while some tasks come within 3 % of their `R(job)`.
 //!
 //! `RTPIPE_OVERHEAD_SYSTEMS` (default 1,500) sets the number of systems;
@@ -14,7 +14,7 @@ use rtpipe_analysis::{analyze, Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::overheads::{Costs, CpuCosts};
-use rtpipe_model::{Nanos, Scheduler, Server, Spec};
+use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
 use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
@@ -139,6 +139,9 @@ fn system(seed: u64) -> Spec {
             },
         );
     }
+    if !edf && r.chance(0.25) {
+        add_sections(&mut spec, &mut r);
+    }
     // Plain tasks may have release jitter under fixed priorities (a
     // server may not: validation).
     let jitter = !edf && r.chance(0.3);
@@ -157,6 +160,7 @@ fn system(seed: u64) -> Spec {
     if let Some(i) = free.filter(|_| r.chance(0.5)) {
         let t = &mut spec.tasks[i];
         (t.server, t.serves, t.budget_given, t.jitter) = (Server::Background, None, None, 0);
+        t.sections.clear();
     }
     if r.chance(0.3) {
         for t in spec.tasks.iter_mut() {
@@ -169,6 +173,35 @@ fn system(seed: u64) -> Spec {
     })
 }
 
+/// Every task plain, with up to two critical sections each on one or two
+/// resources of its CPU, under PCP or SRP (PIP is refused with overheads).
+fn add_sections(spec: &mut Spec, r: &mut Rng) {
+    spec.resource_protocol = [ResourceProtocol::Pcp, ResourceProtocol::Srp][r.range(0, 1) as usize];
+    let cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+    // Two resources per CPU (0 and 1 on the lowest, 2 and 3 on the next),
+    // each used on one CPU only.
+    let lowest = cpus.iter().copied().min().unwrap_or(0);
+    spec.resources = (0..4)
+        .map(|k| Resource {
+            name: format!("r{k}"),
+        })
+        .collect();
+    for t in spec.tasks.iter_mut() {
+        (t.server, t.serves, t.budget_given) = (Server::None, None, None);
+        let base = if t.cpu == lowest { 0 } else { 2 };
+        let mut left = t.exec;
+        for _ in 0..r.range(0, 2) {
+            if left < 2 {
+                break;
+            }
+            let length = r.range(1, (left / 2) as u64) as Nanos;
+            left -= length;
+            let resource = base + r.range(0, 1) as usize;
+            t.sections.push(CriticalSection { resource, length });
+        }
+    }
+}
+
 #[derive(Default)]
 struct Tally {
     systems: u64,
@@ -178,8 +211,10 @@ struct Tally {
     /// worst response came within 3 % of it.
     bounded: u64,
     near: u64,
-    /// Systems with EDF, a background task, release jitter.
+    /// Systems with EDF, a background task, release jitter, critical
+    /// sections.
     edf: u64,
+    sections: u64,
     background: u64,
     jittered: u64,
     /// The system's best observed / sound of a chain of two or more
@@ -265,6 +300,7 @@ fn check_system(seed: u64, t: &mut Tally) {
     t.edf += u64::from(spec.scheduler == Scheduler::Edf);
     t.background += u64::from(spec.tasks.iter().any(|x| x.server == Server::Background));
     t.jittered += u64::from(spec.tasks.iter().any(|x| x.jitter > 0));
+    t.sections += u64::from(spec.tasks.iter().any(|x| !x.sections.is_empty()));
     let mut ratios = vec![0.0; spec.tasks.len()];
     let runs = [
         (Phasing::Sync, ExecModel::Worst),
@@ -329,8 +365,8 @@ fn overheads_never_exceed_the_bounds() {
         );
     }
     println!(
-        "{} systems ({} EDF, {} with a background task, {} with jitter), {} runs, {} checks; {} of {} bounded tasks within 3 % of R(job); {} systems with a chain of two or more tasks within 3 % of its sound bound",
-        t.systems, t.edf, t.background, t.jittered, t.runs, t.checks, t.near, t.bounded, t.chains_near
+        "{} systems ({} EDF, {} with a background task, {} with jitter, {} with critical sections), {} runs, {} checks; {} of {} bounded tasks within 3 % of R(job); {} systems with a chain of two or more tasks within 3 % of its sound bound",
+        t.systems, t.edf, t.background, t.jittered, t.sections, t.runs, t.checks, t.near, t.bounded, t.chains_near
     );
     assert!(t.chains_near > 0, "no chain came near its bound");
     assert!(t.near > 0, "no task came near its bound");
