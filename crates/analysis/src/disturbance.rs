@@ -48,9 +48,10 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     };
     // Lower-priority critical sections block the job as a disturbance does.
     let blocked = crate::blocking::blocking(spec, &prio, task);
+    let cs = crate::overheads::own(spec, task);
     match (
-        busy_response(t.demand(), blocked, period, &hp),
-        busy_response(t.demand(), blocked.saturating_add(b), period, &hp),
+        busy_response(t.demand(), cs, blocked, period, &hp),
+        busy_response(t.demand(), cs, blocked.saturating_add(b), period, &hp),
     ) {
         (Some(r), Some(rb)) => rb - r,
         _ => Nanos::MAX,
@@ -64,11 +65,23 @@ const MAX_JOBS: Nanos = 100_000;
 /// The worst response of a job of demand `x` and period `period` with
 /// blocking `b`: max over the q-th own job of the level-i busy period of
 /// w_q − q·T (`None`: unbounded or beyond the search). Own release jitter
-/// adds the same J to every term, so it cancels in [`inflation`].
-fn busy_response(x: Nanos, b: Nanos, period: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+/// adds the same J to every term, so it cancels in [`inflation`]. With a
+/// context switch cost `cs` the q earlier own jobs pay two switches each,
+/// the q-th one (`crate::overheads`).
+fn busy_response(
+    x: Nanos,
+    cs: Nanos,
+    b: Nanos,
+    period: Nanos,
+    hp: &[(Nanos, Nanos, Nanos)],
+) -> Option<Nanos> {
     let mut worst = 0;
     for q in 0..MAX_JOBS {
-        let w = busy_window((q + 1).checked_mul(x)?.checked_add(b)?, hp)?;
+        let own = (q + 1)
+            .checked_mul(x)?
+            .checked_add((2 * q + 1).checked_mul(cs)?)?
+            .checked_add(b)?;
+        let w = busy_window(own, hp)?;
         worst = worst.max(w - q * period);
         if w <= (q + 1) * period {
             return Some(worst);

@@ -31,6 +31,13 @@
 //! the instants where the right-hand side steps: `k·T_i` and
 //! `(k + 1)·T_j − T_i` (k ≥ 0). Between two of them `w_i(a)` is constant and
 //! `w_i(a) − a` falls, so the maximum over every real `a` is at one of them.
+//!
+//! With scheduling overheads ([`crate::overheads`]) each task's `I_j`
+//! carries its two context switches and every release brings kernel work
+//! (`EdfTask::kernel`) that runs whatever its deadline: `+ Σ_k ⌈w/T_k⌉·K_k`
+//! in `w_i(a)` (not capped by deadlines, independent of `a`, so the
+//! candidates stay the same) and `K_j` beside `I_j` in `L`
+//! (docs/analysis.md, "Scheduling overheads").
 
 use rtpipe_model::{Nanos, MAX_TIME};
 
@@ -48,6 +55,10 @@ pub struct EdfTask {
     pub work: Nanos,
     /// Period and relative deadline.
     pub period: Nanos,
+    /// Kernel work each release brings at top priority, whatever the
+    /// deadlines (the release handler and a server's replenishment,
+    /// [`crate::overheads`]; 0 without overheads).
+    pub kernel: Nanos,
 }
 
 /// Jobs of `tasks` released in `[0, w)` under synchronous release.
@@ -63,8 +74,10 @@ fn jobs_within(tasks: &[EdfTask], w: Nanos) -> u64 {
 /// It exists exactly when `Σ I_j/T_j ≤ 1` (with a larger load every
 /// iterate grows), so a value proves the CPU is not overloaded.
 pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
-    assert!(tasks.iter().all(|t| t.period > 0 && t.work >= 0));
-    let mut l: Nanos = tasks.iter().map(|t| t.work).sum();
+    assert!(tasks
+        .iter()
+        .all(|t| t.period > 0 && t.work >= 0 && t.kernel >= 0));
+    let mut l: Nanos = tasks.iter().map(|t| t.work + t.kernel).sum();
     if l == 0 {
         return Some(0);
     }
@@ -74,7 +87,7 @@ pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
         }
         let next: Nanos = tasks
             .iter()
-            .map(|t| ((l + t.period - 1) / t.period) * t.work)
+            .map(|t| ((l + t.period - 1) / t.period) * (t.work + t.kernel))
             .sum();
         if next == l {
             return Some(l);
@@ -146,6 +159,12 @@ pub fn response_time(tasks: &[EdfTask], i: usize, own: Nanos, l: Nanos) -> Nanos
                     .enumerate()
                     .filter(|&(j, _)| j != i)
                     .map(|(_, t)| ((w + t.period - 1) / t.period).min(cap(t)) * t.work)
+                    .sum::<Nanos>()
+                // Every release in the window runs its kernel work, whatever
+                // its deadline (i's own included).
+                + tasks
+                    .iter()
+                    .map(|t| (w + t.period - 1) / t.period * t.kernel)
                     .sum::<Nanos>();
             assert!(next >= w, "Spuri's iteration must not fall");
             if next == w {
@@ -164,7 +183,11 @@ mod tests {
 
     fn set(v: &[(Nanos, Nanos)]) -> Vec<EdfTask> {
         v.iter()
-            .map(|&(work, period)| EdfTask { work, period })
+            .map(|&(work, period)| EdfTask {
+                work,
+                period,
+                kernel: 0,
+            })
             .collect()
     }
 

@@ -22,6 +22,7 @@ pub mod edf;
 pub mod latency;
 pub mod let_bound;
 pub mod offsets;
+pub mod overheads;
 pub mod paths;
 pub mod qpa;
 pub mod relax;

@@ -116,20 +116,28 @@ pub fn interferers(
 }
 
 /// What the tasks that can run above task `i` impose, as (I_j, T_j, J_j):
-/// the `hp` of [`response_time_jitter`].
+/// the `hp` of [`response_time_jitter`], with the spec's overheads
+/// ([`crate::overheads`]: `I_j + 2·cs` per job, and the kernel work of
+/// every release on the CPU as interferers of their own).
 pub fn hp_load(
     spec: &Spec,
     prio: &[Option<usize>],
     top: &[Option<usize>],
     i: usize,
 ) -> Vec<(Nanos, Nanos, Nanos)> {
-    interferers(spec, prio, top, i)
+    // Each interfering job also pays the two switches it causes; every
+    // release on the CPU its kernel work (`overheads`).
+    let switches = crate::overheads::per_job(spec, i);
+    let mut hp: Vec<(Nanos, Nanos, Nanos)> = interferers(spec, prio, top, i)
         .into_iter()
         .map(|j| {
             let o = &spec.tasks[j];
-            (interference(o), period_or_max(o), o.jitter)
+            let c = interference(o).saturating_add(switches);
+            (c, period_or_max(o), o.jitter)
         })
-        .collect()
+        .collect();
+    hp.extend(crate::overheads::kernel_load(spec, spec.tasks[i].cpu));
+    hp
 }
 
 /// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
@@ -245,6 +253,19 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             }
         })
         .collect();
+    let mut timings = timings;
+    let bounded: Vec<bool> = timings
+        .iter()
+        .map(|t| t.bounded_response().is_some())
+        .collect();
+    let fixed = spec.policy().fixed_priority();
+    let above = |j: usize, i: usize| {
+        spec.tasks[j].cpu == spec.tasks[i].cpu
+            && (!fixed || interferers(spec, &prio, &top, i).contains(&j))
+    };
+    for i in crate::overheads::unaccounted(spec, &bounded, above) {
+        (timings[i].response_time, timings[i].job_response_time) = (None, None);
+    }
     let verdicts: Vec<CpuVerdict> = cpus
         .into_iter()
         .map(|cpu| cpu_verdict(spec, &timings, cpu))
@@ -284,7 +305,9 @@ fn response_times(
     match spec.policy().response {
         ResponseAnalysis::Rta => {
             let hp = hp_load(spec, prio, top, i);
-            let b = crate::blocking::blocking(spec, prio, i);
+            // The own job's switch to it (`overheads`) counts as blocking does.
+            let b = crate::blocking::blocking(spec, prio, i)
+                .saturating_add(crate::overheads::own(spec, i));
             let r = |own: Nanos| {
                 own.checked_add(b)
                     .and_then(|own| response_time_jitter(own, t.jitter, &hp))
@@ -321,8 +344,16 @@ fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, us
                 at = out.len();
             }
             out.push(edf::EdfTask {
-                work: interference(t),
+                work: interference(t).saturating_add(crate::overheads::per_job(spec, j)),
                 period: periods[j],
+                kernel: crate::overheads::per_release(spec, j),
+            });
+        } else if t.cpu == cpu && crate::overheads::per_release(spec, j) > 0 {
+            // A background task's releases still run their handlers.
+            out.push(edf::EdfTask {
+                work: 0,
+                period: periods[j],
+                kernel: crate::overheads::per_release(spec, j),
             });
         }
     }
@@ -360,24 +391,51 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
         .filter(|&j| spec.tasks[j].server != Server::Background)
         .map(|j| spec.tasks[j].budget() as f64 / periods[j] as f64)
         .sum();
-    if u > 1.0 + UTIL_EPS {
+    let overheads = !crate::overheads::costs(spec, i).is_zero();
+    if u + edf_overhead_load(spec, periods, i) > 1.0 + UTIL_EPS {
         return (None, None);
     }
     let t = &spec.tasks[i];
     let Some(l) = edf::busy_period(&tasks, edf::MAX_BUSY_JOBS) else {
-        return (Some(periods[i]), Some(periods[i]));
+        // The server period is a bound only without overheads: a release
+        // handler of a later deadline runs first.
+        return if overheads {
+            (None, None)
+        } else {
+            (Some(periods[i]), Some(periods[i]))
+        };
     };
-    let job = edf::response_time(&tasks, at, t.demand(), l);
+    let own = crate::overheads::own(spec, i);
+    let job = edf::response_time(&tasks, at, t.demand().saturating_add(own), l);
     // Spuri's demand argument: with Σ I/T ≤ 1 (the busy period exists) a
     // job of demand x ≤ I meets its deadline, so the bound is within the
-    // period.
+    // period. Release handlers of later deadlines break the argument:
+    // with overheads the bound may pass the period (then it is no
+    // guarantee, `bounded_response`, and the verdict fails).
     assert!(
-        job <= periods[i],
+        overheads || job <= periods[i],
         "EDF response time {job} above the period {}",
         periods[i]
     );
-    let budget = edf::response_time(&tasks, at, t.budget(), l);
+    let budget = edf::response_time(&tasks, at, t.budget().saturating_add(own), l);
     (Some(budget), Some(job))
+}
+
+/// What the overheads add to the utilisation of task `i`'s CPU under EDF:
+/// `Σ (2·cs + K_k) / T_k` over its guaranteed tasks, `Σ K_k / T_k` over
+/// its background ones (0 without overheads).
+fn edf_overhead_load(spec: &Spec, periods: &[Nanos], i: usize) -> f64 {
+    let cpu = spec.tasks[i].cpu;
+    (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu)
+        .map(|j| {
+            let mut c = crate::overheads::per_release(spec, j);
+            if spec.tasks[j].server != Server::Background {
+                c = c.saturating_add(crate::overheads::per_job(spec, j));
+            }
+            c as f64 / periods[j] as f64
+        })
+        .sum()
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.
@@ -394,6 +452,9 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
     let (value, bound, ok) = match spec.schedulability {
         SchedTest::Rta => rta_test(&ids, timings),
         SchedTest::Qpa => crate::qpa::qpa_verdict(spec, &ids),
+        SchedTest::Edf if !spec.overheads.on(cpu).is_zero() => {
+            edf_overhead_test(spec, &ids, timings, u)
+        }
         test => utilization_test(test, &us),
     };
     CpuVerdict {
@@ -404,6 +465,26 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
         bound,
         schedulable: ok,
     }
+}
+
+/// EDF with overheads on one CPU: Σ U with what the overheads add must
+/// stay within 1, and, since release handlers of later deadlines break the
+/// processor-demand argument behind `Σ U ≤ 1`, every budget's response
+/// time (Spuri's, with the overheads) must be within its deadline: (that
+/// Σ U, its bound 1, both hold).
+fn edf_overhead_test(
+    spec: &Spec,
+    ids: &[usize],
+    timings: &[TaskTiming],
+    u: f64,
+) -> (f64, f64, bool) {
+    let Some(&first) = ids.first() else {
+        return (u, 1.0, true);
+    };
+    let periods: Vec<Nanos> = timings.iter().map(|t| t.period).collect();
+    let value = u + edf_overhead_load(spec, &periods, first);
+    let (_, _, responses) = rta_test(ids, timings);
+    (value, 1.0, value <= 1.0 + UTIL_EPS && responses)
 }
 
 /// The exact RTA test on the tasks `ids` of one CPU: (the largest R/D, its

@@ -176,6 +176,18 @@ struct CpuView {
     value: Option<f64>,
     bound: f64,
     schedulable: bool,
+    /// The CPU's scheduling overheads, in the spec's unit (left out
+    /// without any).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    overheads: Option<OverheadsView>,
+}
+
+/// `[system] overheads` on one CPU.
+#[derive(Serialize)]
+struct OverheadsView {
+    context_switch: f64,
+    release: f64,
+    replenish: f64,
 }
 
 /// One chain and metric of the report; `known_offsets` only for a chain
@@ -256,14 +268,14 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
         communication: (spec.communication == rtpipe_model::Communication::Let)
             .then_some(spec.communication.name()),
         tasks,
-        schedulability: sched_view(&r.schedulability),
+        schedulability: sched_view(spec, &r.schedulability),
         chains: r.chains.iter().map(|c| chain_view(spec, r, c)).collect(),
         ok: r.all_ok(),
         paper_ok: r.all_ok_paper(),
     }
 }
 
-fn sched_view(s: &rtpipe_analysis::Schedulability) -> SchedView {
+fn sched_view(spec: &Spec, s: &rtpipe_analysis::Schedulability) -> SchedView {
     let bound = match s.cpus.as_slice() {
         [one] => OneOrMany::One(one.bound),
         cpus => OneOrMany::Many(cpus.iter().map(|c| c.bound).collect()),
@@ -278,6 +290,13 @@ fn sched_view(s: &rtpipe_analysis::Schedulability) -> SchedView {
             value: c.value.is_finite().then_some(c.value),
             bound: c.bound,
             schedulable: c.schedulable,
+            overheads: Some(spec.overheads.on(c.cpu))
+                .filter(|o| !o.is_zero())
+                .map(|o| OverheadsView {
+                    context_switch: spec.in_unit(o.context_switch),
+                    release: spec.in_unit(o.release),
+                    replenish: spec.in_unit(o.replenish),
+                }),
         })
         .collect();
     SchedView {
@@ -487,8 +506,34 @@ fn schedulability_text(spec: &Spec, r: &Report) -> String {
             "  cpu {} ({} tasks): {detail} -> {verdict}\n",
             c.cpu, c.tasks
         ));
+        out.push_str(&overheads_text(spec, c));
     }
     out
+}
+
+/// A CPU's overheads under its verdict (nothing without any): what every
+/// R above charges (docs/analysis.md, "Scheduling overheads").
+fn overheads_text(spec: &Spec, c: &rtpipe_analysis::sched::CpuVerdict) -> String {
+    let o = spec.overheads.on(c.cpu);
+    if o.is_zero() {
+        return String::new();
+    }
+    let t = |ns| format!("{} {}", spec.fmt_time(ns), spec.time_unit);
+    let edf = if spec.schedulability == rtpipe_model::SchedTest::Edf {
+        format!(
+            "; the test: U with them = {:.4} {} 1 and every R(C) <= D",
+            c.value,
+            if c.value <= 1.0 { "<=" } else { ">" }
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "    overheads charged in R: context switch {}, release {}, replenish {}{edf}\n",
+        t(o.context_switch),
+        t(o.release),
+        t(o.replenish)
+    )
 }
 
 /// Every chain's bounds in both modes, from the read and from the event,

@@ -12,6 +12,7 @@ use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
 use crate::table::Table;
 use verdict::Verdict;
 
+mod measure;
 mod verdict;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
@@ -83,6 +84,16 @@ pub struct RunArgs {
     /// freshness from the read and from the event, integer ns.
     #[arg(long, value_name = "FILE.csv")]
     pub samples: Option<PathBuf>,
+    /// Instead of running the spec, measure this machine's scheduling
+    /// overheads (context switch, timer release) on each CPU the spec uses,
+    /// with threads in the class of --policy, and print them.
+    #[arg(long)]
+    pub measure_overheads: bool,
+    /// With --measure-overheads: write a copy of the spec with the measured
+    /// overheads (99th percentiles) in `[system] overheads` (never the
+    /// input spec).
+    #[arg(long, value_name = "OUT.toml", requires = "measure_overheads")]
+    pub write_spec: Option<PathBuf>,
     /// --vehicle or --mission was given on the command line (set by main).
     #[arg(skip)]
     pub world_given: bool,
@@ -248,6 +259,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
+    if a.measure_overheads {
+        return measure::run(&spec, a);
+    }
     let (setup, cfg) = match prepare(&spec, a) {
         Ok(x) => x,
         Err(b) => return fail(b),
@@ -550,10 +564,15 @@ fn to_text(
         );
         out.push_str(&fig10_table(spec, obs));
     }
-    out.push_str(
-        "\ntasks (R = publish - release; R(job): the analysed worst case, which has no wake-up latency or \
-         switching overhead; start = read - release; demand = CPU time of one job):\n",
-    );
+    let overheads = if spec.overheads.is_zero() {
+        "which has no wake-up latency or switching overhead"
+    } else {
+        "with the spec's [system] overheads (`--measure-overheads` measures this machine's)"
+    };
+    out.push_str(&format!(
+        "\ntasks (R = publish - release; R(job): the analysed worst case, {overheads}; \
+         start = read - release; demand = CPU time of one job):\n",
+    ));
     out.push_str(&task_table(spec, report, res));
     out.push_str(&format!(
         "\nsteal time during the run: {}\n",

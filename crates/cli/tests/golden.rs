@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 15] = [
+const EXAMPLES: [&str; 16] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -39,6 +39,7 @@ const EXAMPLES: [&str; 15] = [
     "paper-table2-edf",
     "jitter-deadlines",
     "let",
+    "overheads",
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",

@@ -68,8 +68,8 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Release jitter, priorities other than rate monotonic, the QPA test and
-/// LET communication are refused: the box search and the MILP branch on rate-monotonic orders
+/// Release jitter, priorities other than rate monotonic, the QPA test,
+/// scheduling overheads and LET communication are refused: the box search and the MILP branch on rate-monotonic orders
 /// of free periods, encode jitter-free response times and have no cut for
 /// a failed processor-demand test. Deadlines under fixed priorities are
 /// honoured (every answer passes R ≤ D, re-checked by `analyze`).
@@ -95,6 +95,12 @@ fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
         // Its RTA encodings have no blocking term.
         return Err(DesignError::input(
             "critical sections (critical_sections, [resources]): `design` does not model blocking yet; design with the sections removed, then add them back and check with `analyze`",
+        ));
+    }
+    if !spec.overheads.is_zero() {
+        // Its RTA encodings charge no release handlers or switches.
+        return Err(DesignError::input(
+            "[system] overheads: `design` does not model scheduling overheads yet; design without them, then add them back and check with `analyze`",
         ));
     }
     if spec.priorities != rtpipe_model::Priorities::RateMonotonic {

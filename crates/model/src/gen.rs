@@ -225,6 +225,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         communication: crate::Communication::Implicit,
         resource_protocol: crate::ResourceProtocol::Pcp,
         resources: Vec::new(),
+        overheads: crate::Overheads::default(),
         channels,
         tasks,
         chains,

@@ -13,6 +13,7 @@ mod error;
 pub mod gen;
 pub mod import;
 pub mod input;
+pub mod overheads;
 pub mod policy;
 mod raw;
 pub mod time;
@@ -21,6 +22,7 @@ mod write;
 pub use write::to_toml;
 
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
+pub use overheads::Overheads;
 pub use policy::{Communication, Priorities, ResourceProtocol, SchedPolicy, SchedTest, Scheduler};
 pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
@@ -297,6 +299,9 @@ pub struct Spec {
     pub resource_protocol: ResourceProtocol,
     /// The shared resources, in declaration order.
     pub resources: Vec<Resource>,
+    /// Context switch, release and replenishment costs per CPU (`[system]
+    /// overheads`; none by default).
+    pub overheads: Overheads,
     /// The channels, in declaration order.
     pub channels: Vec<Channel>,
     /// The tasks, in declaration order.

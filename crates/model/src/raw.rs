@@ -35,6 +35,27 @@ pub struct RawSystem {
     pub priorities: Option<S<String>>,
     pub communication: Option<S<String>>,
     pub resource_protocol: Option<S<String>>,
+    pub overheads: Option<RawOverheads>,
+}
+
+/// `[system] overheads`: the system's costs and per-CPU tables.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawOverheads {
+    pub context_switch: Option<S<toml::Value>>,
+    pub release: Option<S<toml::Value>>,
+    pub replenish: Option<S<toml::Value>>,
+    #[serde(default)]
+    pub cpu: Ordered<RawCosts>,
+}
+
+/// `[system.overheads.cpu.N]`: the keys one CPU overrides.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCosts {
+    pub context_switch: Option<S<toml::Value>>,
+    pub release: Option<S<toml::Value>>,
+    pub replenish: Option<S<toml::Value>>,
 }
 
 /// `[resources.NAME]`: no keys yet (the protocol is the system's).

@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 
 mod comm;
+mod overheads;
 mod prio;
 mod resources;
 
@@ -212,6 +213,7 @@ impl Builder {
         let test = scheduler
             .zip(test)
             .map(|(s, t)| self.test_for_tasks(sys, s, t, order, &tasks));
+        let overheads = self.overheads(sys, raw_tasks, &tasks, scheduler, resource_protocol, test);
         let chains: Vec<Chain> = raw
             .chain
             .iter()
@@ -239,6 +241,7 @@ impl Builder {
             communication,
             resource_protocol,
             resources,
+            overheads,
             channels,
             tasks,
             chains,

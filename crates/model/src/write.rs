@@ -100,9 +100,44 @@ fn system(o: &mut String, spec: &Spec) {
             spec.resource_protocol.name()
         );
     }
+    overheads(o, spec);
     for r in &spec.resources {
         let _ = writeln!(o, "\n[resources.{}]", key(&r.name));
     }
+}
+
+/// `overheads = { ..., cpu = { N = { ... } } }`, only the keys given.
+fn overheads(o: &mut String, spec: &Spec) {
+    let ov = &spec.overheads;
+    if *ov == crate::Overheads::default() {
+        return;
+    }
+    let s = ov.system;
+    let mut keys = costs(
+        spec,
+        [Some(s.context_switch), Some(s.release), Some(s.replenish)],
+    );
+    if !ov.cpus.is_empty() {
+        let cpus: Vec<String> = ov
+            .cpus
+            .iter()
+            .map(|(n, c)| {
+                let kv = costs(spec, [c.context_switch, c.release, c.replenish]);
+                format!("{n} = {{ {} }}", kv.join(", "))
+            })
+            .collect();
+        keys.push(format!("cpu = {{ {} }}", cpus.join(", ")));
+    }
+    let _ = writeln!(o, "overheads = {{ {} }}", keys.join(", "));
+}
+
+/// `key = "time"` for each cost given.
+fn costs(spec: &Spec, v: [Option<Nanos>; 3]) -> Vec<String> {
+    ["context_switch", "release", "replenish"]
+        .iter()
+        .zip(v)
+        .filter_map(|(k, v)| Some(format!("{k} = {}", time(spec, v?))))
+        .collect()
 }
 
 /// One `[channels.NAME]` table.
@@ -241,7 +276,12 @@ mod tests {
 
     #[test]
     fn examples_roundtrip() {
-        for f in ["paper-table2.toml", "cleanflight.toml", "paper-table3.toml"] {
+        for f in [
+            "paper-table2.toml",
+            "cleanflight.toml",
+            "paper-table3.toml",
+            "overheads.toml",
+        ] {
             let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("../../examples")
                 .join(f);

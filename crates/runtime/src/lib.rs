@@ -13,6 +13,7 @@ mod config;
 pub mod exec;
 pub mod four_slot;
 pub mod load;
+pub mod overheads;
 pub mod partition;
 pub mod pi;
 pub mod probe;

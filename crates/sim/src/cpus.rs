@@ -25,9 +25,24 @@ impl<H: Hooks> Sim<H> {
         let since = std::mem::replace(&mut self.since[cpu], t);
         let dt = t - since;
         debug_assert!(dt >= 0, "cpu {cpu} synced back in time to {t}");
-        if dt > 0 && self.running[cpu].is_some() {
-            self.advance_cpu(cpu, since, dt);
+        // Kernel work and a switch in progress run first (`overheads.rs`).
+        let left = if dt > 0 { self.ovh.run(cpu, dt) } else { 0 };
+        if left > 0 && self.running[cpu].is_some() {
+            self.advance_cpu(cpu, t - left, left);
         }
+    }
+
+    /// `released` jobs of task i were released at t: their kernel work
+    /// (`overheads.rs`) joins its CPU's, which is charged up to t first.
+    pub(crate) fn release_overheads(&mut self, i: usize, released: u64, t: Nanos) {
+        let work = self.ovh.release_work(i, released);
+        if work == 0 {
+            return;
+        }
+        let cpu = self.tasks[i].cpu;
+        self.sync(cpu, t);
+        self.ovh.add_kernel(cpu, work);
+        self.mark(cpu);
     }
 
     /// Brings every CPU up to t (at the end of a run).
@@ -74,6 +89,8 @@ impl<H: Hooks> Sim<H> {
             self.sync(cpu, t);
             let pick = self.pick(cpu);
             self.running[cpu] = pick.map(|(i, _)| i);
+            let job = pick.and_then(|(i, _)| Some((i, self.tasks[i].queue.front()?.index)));
+            self.ovh.choose(cpu, job);
             self.in_slack[cpu] = pick.is_some_and(|(_, slack)| slack);
             self.schedule(cpu, t);
         }
@@ -83,9 +100,15 @@ impl<H: Hooks> Sim<H> {
     /// server's capacity runs out, or it enters or leaves a critical
     /// section.
     fn schedule(&mut self, cpu: usize, t: Nanos) {
+        let lead = self.ovh.lead(cpu);
         let next = self.running[cpu].and_then(|i| {
             let ts = &self.tasks[i];
             let job = ts.queue.front()?;
+            if lead > 0 {
+                // The job's own work starts after the overheads: it reads,
+                // locks or completes only then.
+                return Some(t + lead);
+            }
             let mut next = t + job.remaining;
             if !self.in_slack[cpu] {
                 let cap = ts.budget.capacity(t);

@@ -296,6 +296,9 @@ pub(crate) struct Sim<H> {
     pub(crate) let_open: Vec<Option<LetJob>>,
     /// Critical sections and the resources' holders (`locks.rs`).
     pub(crate) locks: Locks,
+    /// Release handlers, replenishments and context switches
+    /// (`overheads.rs`).
+    pub(crate) ovh: crate::overheads::Overheads,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -318,6 +321,9 @@ impl<H: Hooks> Sim<H> {
             .collect();
         let n_cpus = cpu_tasks.len();
         let locks = Locks::new(spec);
+        let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
+        cpu_ids.sort_unstable();
+        cpu_ids.dedup();
         if locks.any() && !spec.policy().fixed_priority() {
             return Err(SimError::Resources(spec.scheduler.name()));
         }
@@ -350,6 +356,7 @@ impl<H: Hooks> Sim<H> {
             let_comm: spec.communication == Communication::Let,
             let_open: vec![None; spec.tasks.len()],
             locks,
+            ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
         })
     }
 
@@ -409,10 +416,11 @@ impl<H: Hooks> Sim<H> {
     fn complete_finished(&mut self, t: Nanos, due: &[usize]) {
         for &cpu in due {
             if let Some(i) = self.running[cpu] {
-                if self.tasks[i]
-                    .queue
-                    .front()
-                    .is_some_and(|j| j.remaining == 0)
+                if self.ovh.lead(cpu) == 0
+                    && self.tasks[i]
+                        .queue
+                        .front()
+                        .is_some_and(|j| j.remaining == 0 && j.read.is_some())
                 {
                     self.complete(i, t);
                     self.running[cpu] = None;
@@ -444,6 +452,11 @@ impl<H: Hooks> Sim<H> {
     fn read_started(&mut self, t: Nanos, picked: &[usize]) -> bool {
         let mut again = false;
         for &cpu in picked {
+            // A job reads when its own work starts, after the CPU's
+            // overheads (its event comes then).
+            if self.ovh.lead(cpu) > 0 {
+                continue;
+            }
             if let Some(i) = self.running[cpu] {
                 if self.tasks[i]
                     .queue
@@ -500,12 +513,14 @@ impl<H: Hooks> Sim<H> {
                     }));
                 }
                 *top = Reverse((ts.next_release, i));
-                if !was_idle {
-                    // Queued behind the front job: nothing the pick sees changed.
-                    continue;
-                }
-                i
+                (i, ts.next_index - before, was_idle)
             };
+            let (i, new, was_idle) = i;
+            self.release_overheads(i, new, t);
+            if !was_idle {
+                // Queued behind the front job: nothing the pick sees changed.
+                continue;
+            }
             self.refresh(i, t);
             self.refresh_servers(i, t);
         }

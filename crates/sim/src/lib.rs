@@ -54,6 +54,7 @@ mod engine;
 mod let_comm;
 mod locks;
 pub mod observe;
+mod overheads;
 mod rng;
 pub mod search;
 pub mod server;

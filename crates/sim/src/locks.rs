@@ -166,6 +166,10 @@ impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
             let Some(job) = self.tasks[i].queue.front() else {
                 continue;
             };
+            if self.ovh.lead(cpu) > 0 {
+                // Not yet running its own work (overheads first).
+                continue;
+            }
             let Some(at) = self.locks.section_at(i, job) else {
                 continue;
             };

@@ -211,6 +211,7 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
         communication: crate::Communication::Implicit,
         resource_protocol: crate::ResourceProtocol::Pcp,
         resources: Vec::new(),
+        overheads: crate::Overheads::default(),
         channels,
         tasks,
         chains,

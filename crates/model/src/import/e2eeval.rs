@@ -296,6 +296,7 @@ fn build_spec(f: &E2eFile, ecus: &[Id], name: &str) -> Spec {
         communication: crate::Communication::Implicit,
         resource_protocol: crate::ResourceProtocol::Pcp,
         resources: Vec::new(),
+        overheads: crate::Overheads::default(),
         channels: vec![Channel {
             name: "mem".into(),
             bandwidth: 1.0,

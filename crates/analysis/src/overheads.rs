@@ -1,0 +1,109 @@
+//! Scheduling overheads in the response times (`[system] overheads`,
+//! issue 22; docs/analysis.md, "Scheduling overheads"): the one home of
+//! the accounting, which `sched` (RTA), `edf` (Spuri) and `disturbance`
+//! use.
+//!
+//! With `cs`, `rel`, `rep` the costs of the task's CPU
+//! ([`rtpipe_model::overheads::Costs`]):
+//!
+//! - every release of every task `k` of the CPU (background tasks
+//!   included) runs a handler of `rel` at top priority, and a budget
+//!   server's release its replenishment `rep` with it: kernel work
+//!   `K_k = rel + rep_k` per release, interfering with every job;
+//! - every context switch costs `cs`. A switch happens only when the
+//!   CPU's choice changes, and (within the refusals of
+//!   `model/src/validate/overheads.rs`) the choice changes only at a
+//!   release or a completion; so a job is charged `2·cs` (the switch to it,
+//!   and the one back when it completes), the analysed job `cs` (its own
+//!   completion ends its response).
+//!
+//! So under fixed priorities (the release handler as a top-priority
+//! interferer per release, as Katcher, Arakawa and Strosnider, *Engineering
+//! and analysis of fixed priority schedulers*, IEEE TSE 19(9), 1993, for
+//! event-driven schedulers; two switches per job as Burns and Wellings,
+//! *Real-Time Systems and Programming Languages*, in their response-time
+//! analysis with context-switch costs):
+//!
+//! ```text
+//! w_i = own_i + cs + B_i + Σ_{j ∈ hp(i)} ⌈(w_i + J_j)/T_j⌉ (I_j + 2cs)
+//!                        + Σ_{k on the CPU} ⌈(w_i + J_k)/T_k⌉ K_k
+//! ```
+
+use rtpipe_model::overheads::Costs;
+use rtpipe_model::{Nanos, Spec, MAX_TIME};
+
+/// The costs on task `i`'s CPU.
+pub fn costs(spec: &Spec, i: usize) -> Costs {
+    spec.overheads.on(spec.tasks[i].cpu)
+}
+
+/// The switch charge of one interfering job: `2·cs`.
+pub fn per_job(spec: &Spec, i: usize) -> Nanos {
+    costs(spec, i).context_switch.saturating_mul(2)
+}
+
+/// The switch charge of the analysed job: `cs`.
+pub fn own(spec: &Spec, i: usize) -> Nanos {
+    costs(spec, i).context_switch
+}
+
+/// The kernel work of one release of task `k`: `rel`, plus `rep` on a
+/// budget server.
+pub fn per_release(spec: &Spec, k: usize) -> Nanos {
+    let t = &spec.tasks[k];
+    costs(spec, k).per_release(spec, t.server)
+}
+
+/// The kernel work of every task on `cpu` as `(K_k, T_k, J_k)` (the form
+/// of `sched::busy_window`'s interferers), without the tasks whose `K_k`
+/// is 0.
+pub fn kernel_load(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos, Nanos)> {
+    spec.tasks
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.cpu == cpu)
+        .map(|(k, t)| {
+            let p = t.fixed_period().unwrap_or(MAX_TIME);
+            (per_release(spec, k), p, t.jitter)
+        })
+        .filter(|&(c, _, _)| c > 0)
+        .collect()
+}
+
+/// The accounting counts the switches of releases and completions only; a
+/// budget server whose job can still be pending at its next release (no
+/// bounded response, `R > T`) may run out of budget behind its backlog, and
+/// its throttling and refill switch the CPU at instants nothing pays for.
+/// So with overheads, a task such a server can run above (under EDF: any
+/// task of its CPU) has no response time either, and again for the servers
+/// that makes unbounded, until none changes. Such a CPU already fails its
+/// verdict (that server's `R > T ≥ D`); this keeps its other figures from
+/// claiming what the accounting does not cover. (Found by the simulator:
+/// a PIBS server with a backlog preempting a task 9 ms past its bound.)
+///
+/// `bounded[j]`: task j has a bounded job response; `above(j, i)`: j can
+/// run above i. Returns the tasks to leave without a response time.
+pub fn unaccounted(
+    spec: &Spec,
+    bounded: &[bool],
+    above: impl Fn(usize, usize) -> bool,
+) -> Vec<usize> {
+    let n = spec.tasks.len();
+    let server = |j: usize| spec.policy().budget(spec.tasks[j].server).is_some();
+    let mut dropped = vec![false; n];
+    loop {
+        let behind: Vec<usize> = (0..n)
+            .filter(|&j| server(j) && (!bounded[j] || dropped[j]))
+            .collect();
+        let mut changed = false;
+        for (i, d) in dropped.iter_mut().enumerate() {
+            if !*d && !costs(spec, i).is_zero() && behind.iter().any(|&j| j != i && above(j, i)) {
+                *d = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            return (0..n).filter(|&i| dropped[i]).collect();
+        }
+    }
+}
