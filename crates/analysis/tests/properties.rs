@@ -426,8 +426,8 @@ fn monotone_in_exec() {
 
 // (b) A longer period never gives a smaller paper bound while the priority
 // order and the paper's cases stay the same, nor a smaller sound bound while,
-// in addition, no other task's response time and no distinct flag of the
-// chain changes.
+// in addition, no other task's response time or read-to-publish bound and
+// no distinct flag of the chain changes.
 //
 // Restriction 1 (sound mode): a longer period of a task h lowers the
 // interference ⌈R/T_h⌉·C_h it imposes on lower-priority tasks of its CPU, so
@@ -475,8 +475,13 @@ fn monotone_in_period() {
             if old.cases != new.cases {
                 return Ok("skipped: paper cases changed");
             }
+            // Response times and read-to-publish bounds (a longer period
+            // lets fewer jobs of t_i go before another's under EDF).
             let others_same = (0..spec.tasks.len()).all(|j| {
-                j == i || old.timing[j].job_response_time == new.timing[j].job_response_time
+                let (a, b) = (&old.timing[j], &new.timing[j]);
+                j == i
+                    || (a.job_response_time, a.read_to_publish)
+                        == (b.job_response_time, b.read_to_publish)
             });
             let mut sound_compared = false;
             for (k, (o, n)) in all_bounds(&spec, &old)
@@ -568,13 +573,17 @@ fn sound_reaction_unclamped(spec: &Spec, timing: &[TaskTiming], path: &[usize]) 
         .iter()
         .map(|&i| LinkTask::new(spec, timing, i))
         .collect();
-    // From the head's release: the links' terms, then the tail's R.
+    // From the head's read: a task alone is its read-to-publish bound W;
+    // else the head link's term from the read, the others' from releases,
+    // then the tail's R.
+    if lt.len() == 1 {
+        return lt[0].w;
+    }
     let mut acc = Some(0);
     let mut distinct = true;
-    for w in lt.windows(2) {
-        acc = acc
-            .zip(sound_reaction_link(spec.scheduler, &w[0], &w[1], distinct))
-            .map(|(a, b)| a + b);
+    for (k, w) in lt.windows(2).enumerate() {
+        let term = sound_reaction_link(spec.scheduler, &w[0], &w[1], distinct, k == 0);
+        acc = acc.zip(term).map(|(a, b)| a + b);
         distinct = distinct_passes(&w[0], &w[1], distinct);
     }
     acc.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b)
