@@ -176,25 +176,28 @@ fn fixed_point(
 /// deadlines): the least `w` with
 ///
 /// ```text
-/// w = own + Σ_{j≠i} min(⌈w/T_j⌉, (1 + ⌊(D_i − D_j)/T_j⌋)⁺) · I_j
+/// w = own + Σ_{j≠i, D_j < D_i} min(⌈w/T_j⌉, ⌈(D_i − D_j)/T_j⌉) · I_j
 /// ```
 ///
-/// Once the job has started, every job pending then with an earlier
-/// deadline has finished (the simulator picks by (deadline, task index),
-/// and no guaranteed job is ever throttled while pending), and jobs
-/// pending with a later deadline, or an equal one and a larger index, never
-/// run before it completes; so only jobs released at or after the start
-/// with a deadline at or before the job's can run first, and the later the
-/// job started after its release the fewer of them there are: the count
-/// above is that of a start at the release. It is Spuri's `w_i(0)` for
-/// implicit deadlines, so never above the response time; docs/analysis.md
-/// proves it. Never below `own` (nor 1).
+/// The simulator releases every job due at an instant before it picks at
+/// that instant, and picks by (deadline, task index) among pending jobs,
+/// none of which is ever throttled under EDF. So every job pending when
+/// the analysed job starts at `s` (released at or before `s`) either
+/// finished before or ranks after it and never runs before it completes;
+/// what runs in between is released strictly after `s` with a deadline at
+/// most `d = r + D_i`: for task j, releases in `(s, d − D_j]`, at most
+/// `⌈(D_i − D_j − (s − r))/T_j⌉` of them (none when `D_j ≥ D_i`), and in
+/// `(s, s + w)` at most `⌈w/T_j⌉`. Starting at the release is the worst
+/// case. It never exceeds Spuri's `w_i(0)`, which counts a job of every
+/// task released at the start itself, so it is never above the response
+/// time; docs/analysis.md proves it. Never below `own` (nor 1).
 pub fn start_to_finish(tasks: &[EdfTask], deadline: &[Nanos], i: usize, own: Nanos) -> Nanos {
     assert_eq!(tasks.len(), deadline.len());
     let di = deadline[i];
     let cap = |j: usize| {
-        if di >= deadline[j] {
-            1 + (di - deadline[j]) / tasks[j].period
+        let l = di - deadline[j];
+        if l > 0 {
+            (l + tasks[j].period - 1) / tasks[j].period
         } else {
             0
         }
@@ -278,12 +281,15 @@ mod tests {
     /// The start-to-finish bound by hand. (2, 5), (4, 7): τ1 (D = 5)
     /// meets no deadline of τ2 (7 > 5) after it starts: W = 2, where its
     /// response time is 4 (it may wait behind τ2's job of deadline 7 ≤ 10
-    /// first, `spuri_by_hand`); τ2 (D = 7): one job of τ1 (1 + ⌊(7 −
-    /// 5)/5⌋ = 1), w = 4 + 2 = 6, so W = R = 6. (1, 4), (2, 6), (3, 13):
-    /// τ3 admits 1 + ⌊9/4⌋ = 3 jobs of τ1 and 1 + ⌊7/6⌋ = 2 of τ2: 3 + 1 +
-    /// 2 = 6 → 3 + 2 + 2 = 7 → 3 + 2 + 4 = 9 → 3 + 3 + 4 = 10, W = 10 = R.
-    /// Constrained, (C, T, D) = (2, 5, 3), (4, 7, 7): τ2 admits 1 + ⌊(7 −
-    /// 3)/5⌋ = 1 job of τ1, W = 6; τ1 none, W = 2.
+    /// first, `spuri_by_hand`); τ2 (D = 7): ⌈(7 − 5)/5⌉ = 1 job of τ1,
+    /// w = 4 + 2 = 6, so W = R = 6. (1, 4), (2, 6), (3, 13): τ3 admits
+    /// ⌈9/4⌉ = 3 jobs of τ1 and ⌈7/6⌉ = 2 of τ2: 3 + 1 + 2 = 6 → 3 + 2 + 2
+    /// = 7 → 3 + 2 + 4 = 9 → 3 + 3 + 4 = 10, W = 10 = R. Ties: (2, 4),
+    /// (3, 8): τ2 admits ⌈4/4⌉ = 1 job of τ1 (the one released at 4 after
+    /// the start has the deadline 8 + what the start lost), W = 3 + 2 = 5
+    /// where Spuri's w(0) is 7; (1, 8), (3, 8): none, W = 3. Constrained,
+    /// (C, T, D) = (2, 5, 3), (4, 7, 7): τ2 admits ⌈(7 − 3)/5⌉ = 1 job of
+    /// τ1, W = 6; τ1 none, W = 2.
     #[test]
     fn start_to_finish_by_hand() {
         let s = set(&[(2, 5), (4, 7)]);
@@ -296,6 +302,11 @@ mod tests {
             .map(|i| start_to_finish(&s, &[4, 6, 13], i, s[i].work))
             .collect();
         assert_eq!(w, vec![1, 3, 10]);
+        let s = set(&[(2, 4), (3, 8)]);
+        assert_eq!(start_to_finish(&s, &[4, 8], 1, 3), 5);
+        let l = busy_period(&s, 1000).unwrap_or(0);
+        assert_eq!(response_time(&s, 1, 3, l), 7);
+        assert_eq!(start_to_finish(&set(&[(1, 8), (3, 8)]), &[8, 8], 1, 3), 3);
         // No demand: analysed as 1 ns, like the response time.
         assert_eq!(start_to_finish(&set(&[(3, 10)]), &[10], 0, 0), 1);
     }

@@ -254,7 +254,8 @@ struct Times {
 /// fixes every period of i's CPU; otherwise Spuri's bound at `a = 0`, which
 /// holds the job's own demand and one job of every task whose deadline is
 /// never after i's (`T_j ≤ T_i`), a figure that only grows as the box
-/// shrinks, and which `W` (Spuri's `w_i(0)`) holds too. docs/analysis.md.
+/// shrinks; for `W` (`edf::start_to_finish`) the same with the tasks whose
+/// deadline is always before i's. docs/analysis.md.
 fn edf_lower_bounds(
     spec: &Spec,
     lo: &[Nanos],
@@ -276,8 +277,19 @@ fn edf_lower_bounds(
         .filter(|&&j| j != i && hi[j] <= lo[i])
         .map(|&j| interference(&spec.tasks[j]))
         .sum();
-    let job = t.demand().max(1) + before;
-    (Some(t.budget().max(1) + before), Some(job), Some(job))
+    // W counts only tasks whose deadline is before i's at every point (a
+    // job of equal deadline released after the start never runs first).
+    let d = |j: usize, t: Nanos| spec.tasks[j].deadline_given.map_or(t, |d| d.min(t));
+    let sooner: Nanos = mates
+        .iter()
+        .filter(|&&j| j != i && d(j, hi[j]) < d(i, lo[i]))
+        .map(|&j| interference(&spec.tasks[j]))
+        .sum();
+    (
+        Some(t.budget().max(1) + before),
+        Some(t.demand().max(1) + before),
+        Some(t.demand().max(1) + sooner),
+    )
 }
 
 /// Lower bounds of the sound analysis over the periods `lo[i] ≤ T_i ≤ hi[i]`

@@ -5,7 +5,7 @@
 //! same for the read-to-publish bound `W` (`edf::start_to_finish`): no job
 //! publishes later than `W` after its read, and the start pattern (the
 //! analysed job alone at its release, every other task released just after
-//! its read) comes within the lost ties of it.
+//! its read) reaches it.
 //!
 //! Systems are small and on a 1 ms grid (periods 2–24 ms, one CPU, servers
 //! or plain tasks, budgets at or above the demands), so a few hyperperiods
@@ -237,18 +237,17 @@ fn no_job_exceeds_the_read_to_publish_bound() {
     );
 }
 
-/// The start pattern: the analysed task declared last (it loses every tie
-/// after its start) and released at 0 with its worst demand, every other
-/// task at 1 ns (just after the read) and then as often as it may. Never
-/// above `W`; `W` itself counts a job of deadline equal to the analysed
-/// one's released at the read, which a release 1 ns later misses, so the
-/// pattern reaches `W` exactly where no deadline `D_j ≤ D_i` differs from
-/// `D_i` by a multiple of `T_j`, and within those jobs' work elsewhere.
+/// The start pattern: the analysed task released at 0 with its worst
+/// demand, every other task at 1 ns (just after the read) and then as often
+/// as it may, budgets equal to demands (the analysis charges a server its
+/// budget). On the 1 ms grid the jobs released after the read with a
+/// deadline before the analysed one's are exactly those `W` counts, so the
+/// read-to-publish time is `W` on every system.
 #[test]
 fn the_start_pattern_reaches_the_bound() {
     let mut rng = rtpipe_model::gen::Rng::new(2027);
     let periods = [2i64, 3, 4, 5, 6, 8, 10, 12, 24];
-    let (mut systems, mut exact, mut reached, mut below_r) = (0, 0, 0, 0);
+    let (mut systems, mut below_r) = (0, 0);
     while systems < 400 {
         let n = rng.range(2, 5) as usize;
         let tasks: Vec<Params> = (0..n)
@@ -263,34 +262,18 @@ fn the_start_pattern_reaches_the_bound() {
         };
         systems += 1;
         let report = analyze(&spec);
-        let last = n - 1;
-        let tm = &report.timing[last];
+        let i = rng.range(0, n as u64 - 1) as usize;
+        let tm = &report.timing[i];
         let w = tm.read_to_publish.unwrap_or(0);
         let mut offs = vec![1; n];
-        offs[last] = 0;
-        let found = worst_read_to_publish(&spec, &offs, ExecModel::Worst, 1)[last];
-        assert!(found <= w, "{tasks:?}: {found} > {w}");
-        // The jobs a release 1 ns after the read misses: D_i − D_j a
-        // multiple of T_j (D = T here).
-        let ti = tasks[last].2;
-        let lost: i64 = tasks[..last]
-            .iter()
-            .filter(|&&(_, _, t, _)| t <= ti && (ti - t) % t == 0)
-            .map(|&(x, e, _, s)| if s { x + e } else { x })
-            .sum();
-        if lost == 0 {
-            exact += 1;
-            assert_eq!(found, w, "{tasks:?}: the pattern misses W");
-        }
-        reached += usize::from(found + lost * MS >= w);
+        offs[i] = 0;
+        let found = worst_read_to_publish(&spec, &offs, ExecModel::Worst, 1)[i];
+        assert_eq!(
+            found, w,
+            "{tasks:?}, task {i}: the pattern gives {found}, W = {w}"
+        );
         below_r += usize::from(w < tm.job_response_time.unwrap_or(0));
     }
-    println!(
-        "start pattern: {systems} systems, W < R on {below_r}; W reached on all {exact} without ties, within the lost ties on {reached}"
-    );
-    assert!(exact >= 40, "only {exact} systems without ties");
-    assert!(
-        reached * 10 >= systems * 9,
-        "within the lost ties on {reached} of {systems}"
-    );
+    println!("start pattern: W reached on all {systems} systems, below R on {below_r}");
+    assert!(below_r >= 40, "W below R on only {below_r} systems");
 }
