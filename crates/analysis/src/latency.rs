@@ -46,6 +46,9 @@ pub struct LinkTask {
     pub budgeted: bool,
     /// The CPU it runs on.
     pub cpu: u32,
+    /// Picked by its jobs' absolute deadlines (EDF), which stay fixed while
+    /// a job is pending.
+    pub edf: bool,
     /// Own RM rank (the lowest priority the task runs at).
     pub prio: Option<usize>,
     /// Highest rank it can inherit (PIBS).
@@ -68,6 +71,7 @@ impl LinkTask {
             j: tm.jitter,
             budgeted: spec.policy().budget(spec.tasks[i].server).is_some(),
             cpu: tm.cpu,
+            edf: !spec.policy().fixed_priority(),
             prio: tm.priority,
             top: tm.top_priority,
         }
@@ -252,6 +256,11 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // c) and publishes within W_c of its read (W_c = R_c under fixed
         // priority).
         Some(Case::Two) => p.t + p.j + wc,
+        // EDF on one CPU: if it reads before p's next release it publishes
+        // within W_c of that; else it reads while p's next job is pending,
+        // so it was picked over that job, whose deadline it precedes, and
+        // publishes before it (docs/analysis.md).
+        None if p.edf && c.edf && p.cpu == c.cpu => p.t + rp.max(wc),
         None => p.t + rp + wc,
     })
 }
@@ -695,6 +704,7 @@ mod tests {
             j: 0,
             budgeted: true,
             cpu: 0,
+            edf: false,
             prio: Some(prio),
             top: Some(prio),
         }

@@ -438,6 +438,7 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
         j: task.jitter,
         budgeted: spec.policy().budget(task.server).is_some(),
         cpu: task.cpu,
+        edf: !spec.policy().fixed_priority(),
         prio: None,
         top: None,
     }

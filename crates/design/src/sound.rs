@@ -435,7 +435,14 @@ fn sound_link(
     } else {
         m.ge_option(l, &o1, &[(b, false)]);
         m.ge_option(l, &o3, &[(b, true)]);
-        m.ge_option(gq, &q1, &[]);
+        let cpu = |i: usize| m.spec.tasks[i].cpu;
+        if last && !m.spec.policy().fixed_priority() && cpu(p) == cpu(c) {
+            // EDF on one CPU: T_p + max(R_p, W_c).
+            m.ge_option(gq, &tp.plus(&rp), &[]);
+            m.ge_option(gq, &tp.plus(&wc), &[]);
+        } else {
+            m.ge_option(gq, &q1, &[]);
+        }
     }
     (l, gq)
 }
