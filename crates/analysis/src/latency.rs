@@ -25,6 +25,9 @@ pub struct LinkTask {
     pub c: Nanos,
     /// Period T.
     pub t: Nanos,
+    /// Relative deadline D (T unless the spec gives one); under EDF a job's
+    /// priority is its release plus D.
+    pub d: Nanos,
     /// Demand x = Δin + exec + Δout.
     pub x: Nanos,
     /// Least demand x_min.
@@ -62,6 +65,7 @@ impl LinkTask {
         LinkTask {
             c: tm.budget,
             t: tm.period,
+            d: tm.deadline.min(tm.period),
             x: tm.demand,
             x_min: tm.demand_min,
             delta_out: spec.tasks[i].delta_out,
@@ -195,6 +199,10 @@ pub fn sound_reaction_link_in(
         // (Dürr et al. 2019). J_k is released up to J_p after its nominal
         // release, where the term starts.
         Some(Case::Two) => l = l.min(c.t + p.j),
+        // EDF on one CPU: a c job released at or after J_k's release with
+        // a later deadline cannot start before J_k has published, and one
+        // is released less than T_c + (D_p − D_c)⁺ after J_k's release.
+        None if edf_together(p, c) => l = l.min(c.t + (p.d - c.d).max(0)),
         None => {}
     }
     if p_distinct {
@@ -207,8 +215,21 @@ pub fn sound_reaction_link_in(
             // T_p + J_p after J_k's nominal one.
             l = l.min(p.t + p.j);
         }
+        if order.is_none() && edf_together(p, c) {
+            // EDF on one CPU: J_{k+1} reads before p's next release, or
+            // while p's next job is pending, so with a deadline no later
+            // than that job's: released by T_p + (D_p − D_c)⁺.
+            l = l.min(p.t + (p.d - c.d).max(0));
+        }
     }
     Some(l)
+}
+
+/// Both tasks are picked by deadline (EDF) on one CPU: a job picked while
+/// another is pending has the earlier deadline (or wins the tie), and the
+/// other does not run until it completes (docs/analysis.md).
+fn edf_together(p: &LinkTask, c: &LinkTask) -> bool {
+    p.edf && c.edf && p.cpu == c.cpu
 }
 
 /// Sound mode, freshness link p → c, anchored on releases: from the release
@@ -260,7 +281,7 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
         // within W_c of that; else it reads while p's next job is pending,
         // so it was picked over that job, whose deadline it precedes, and
         // publishes before it (docs/analysis.md).
-        None if p.edf && c.edf && p.cpu == c.cpu => p.t + rp.max(wc),
+        None if edf_together(p, c) => p.t + rp.max(wc),
         None => p.t + rp + wc,
     })
 }
@@ -695,6 +716,7 @@ mod tests {
         LinkTask {
             c,
             t,
+            d: t,
             x: c,
             x_min: c / 2,
             delta_out,

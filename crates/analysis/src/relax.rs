@@ -429,6 +429,7 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
     LinkTask {
         c: task.budget(),
         t,
+        d: deadline_at(spec, i, t),
         x: task.demand(),
         x_min: task.demand_min(),
         delta_out: task.delta_out,
@@ -442,6 +443,27 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
         prio: None,
         top: None,
     }
+}
+
+/// Task i's relative deadline at period t.
+fn deadline_at(spec: &Spec, i: usize, t: Nanos) -> Nanos {
+    spec.tasks[i].deadline_given.map_or(t, |d| d.min(t))
+}
+
+/// The link's two tasks with the deadlines that make `(D_p − D_c)⁺` (the
+/// EDF options of `latency`) least over the box: D_p at p's shortest
+/// period, D_c at c's longest. That keeps those options below the
+/// analysis' at every point and affine in the periods.
+fn least_deadlines(
+    order: &Order,
+    spec: &Spec,
+    pi: usize,
+    ci: usize,
+    p: &mut LinkTask,
+    c: &mut LinkTask,
+) {
+    p.d = deadline_at(spec, pi, order.lo[pi]);
+    c.d = deadline_at(spec, ci, order.hi[ci]);
 }
 
 /// Lower bounds on a chain's sound reaction and freshness from the read,
@@ -477,7 +499,8 @@ fn low_links(spec: &Spec, order: &Order, r: &Times, path: &[usize], reach: bool)
     let mut distinct = reach;
     let mut links = Vec::with_capacity(path.len() - 1);
     for (k, w) in path.windows(2).enumerate() {
-        let (p, c) = (low(w[0]), low(w[1]));
+        let (mut p, mut c) = (low(w[0]), low(w[1]));
+        least_deadlines(order, spec, w[0], w[1], &mut p, &mut c);
         let orders = order.link_orders(w[0], w[1]);
         let head = reach && k == 0;
         links.push(SoundLink::least(
@@ -540,8 +563,9 @@ fn chain_forms(
         };
         let head = reach && k == 0;
         let at = |tp: Nanos, tc: Nanos| {
-            let p = link_task(spec, tp, resp(pi, tp), pi);
-            let c = link_task(spec, tc, resp(ci, tc), ci);
+            let mut p = link_task(spec, tp, resp(pi, tp), pi);
+            let mut c = link_task(spec, tc, resp(ci, tc), ci);
+            least_deadlines(order, spec, pi, ci, &mut p, &mut c);
             let l = SoundLink::least(
                 orders
                     .iter()

@@ -1011,7 +1011,11 @@ fn edf_exec_no_longer_crosses_the_distinct_threshold() {
     // "distinct" on: 232 ms (= the freshness) with x_b = 2, 142 ms with
     // x_b = 3. With Spuri's response times R_b − x_b only grows with x_b
     // (R = 0.1, 3.4, 4.5, 3.4 ms, then 0.1, 4.5, 5.6, 4.5 ms), every flag
-    // stays as it was and the bound grows with the demand.
+    // stays as it was and the bound grows with the demand. With the EDF
+    // deadline-order terms (one CPU): a → b from a's read min(W_a + T_b,
+    // T_a + R_a, T_b, T_a) = T_a = 1, b → c T_b + (D_b − D_c)⁺ = 10 (was
+    // T_b + R_b = 13.4), c → d R_c + T_d = 14.5, + R_d = 3.4: 28.9 ms (was
+    // 32.4); with x_b = 3: 1 + 10 + 15.6 + 4.5 = 31.1 ms (was 35.7).
     let path = &lo.chains[0].path;
     let flags = vec![true, true, true, false];
     assert_eq!(distinct_flags(&lo, &ro.timing, path), flags);
@@ -1021,8 +1025,8 @@ fn edf_exec_no_longer_crosses_the_distinct_threshold() {
     };
     assert_eq!(r(&ro), [100, 3400, 4500, 3400].map(|x| Some(x * US)));
     assert_eq!(r(&rn), [100, 4500, 5600, 4500].map(|x| Some(x * US)));
-    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(32_400 * US));
-    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(35_700 * US));
+    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(28_900 * US));
+    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(31_100 * US));
 }
 
 #[test]

@@ -400,8 +400,18 @@ fn sound_link(
     } else {
         (tp.plus(&rp), tp.plus(&rp).add_c(-xmin(m, c)), tp.clone())
     };
+    // EDF on one CPU, implicit deadlines (the design's): the options
+    // T_c + (T_p − T_c)⁺ = max(T_c, T_p) and T_p + (T_p − T_c)⁺.
+    let cpu = |i: usize| m.spec.tasks[i].cpu;
+    let implicit = |i: usize| m.spec.tasks[i].deadline_given.is_none();
+    let edf = !m.spec.policy().fixed_priority() && cpu(p) == cpu(c) && implicit(p) && implicit(c);
+    let o6 = tp.scale(2.0).plus(&tc.scale(-1.0));
     // Bounded by their options, so that the switches get tight big-Ms.
-    let (llo, lhi) = span(&[&o1, &o2, &o3, &o4, &o5], &m.lp, big);
+    let mut opts = vec![&o1, &o2, &o3, &o4, &o5];
+    if edf {
+        opts.push(&o6);
+    }
+    let (llo, lhi) = span(&opts, &m.lp, big);
     let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp, big);
     // HiGHS gets the bounds declared; microlp's basis can go singular
     // when both the bounds and the big-Ms are tight, so there they are
@@ -432,19 +442,39 @@ fn sound_link(
         m.ge_option(l, &o4, &[(o, false), (b, true)]);
         m.ge_option(gq, &q2, &[(o, true)]);
         m.ge_option(gq, &q3, &[(o, false)]);
+    } else if edf {
+        // Freshness: T_p + R_p on a middle link, T_p + max(R_p, W_c) on the
+        // last.
+        let mut fresh = vec![tp.plus(&rp)];
+        if last {
+            fresh.push(tp.plus(&wc));
+        }
+        sound_link_edf(m, (l, gq), b, [&o1, &o3, &o4, &o5, &o6], &fresh);
     } else {
         m.ge_option(l, &o1, &[(b, false)]);
         m.ge_option(l, &o3, &[(b, true)]);
-        let cpu = |i: usize| m.spec.tasks[i].cpu;
-        if last && !m.spec.policy().fixed_priority() && cpu(p) == cpu(c) {
-            // EDF on one CPU: T_p + max(R_p, W_c).
-            m.ge_option(gq, &tp.plus(&rp), &[]);
-            m.ge_option(gq, &tp.plus(&wc), &[]);
-        } else {
-            m.ge_option(gq, &q1, &[]);
-        }
+        m.ge_option(gq, &q1, &[]);
     }
     (l, gq)
+}
+
+/// The options of an EDF link on one CPU (`latency`'s `edf_together`):
+/// a binary e picks the deadline-order options, `b` reachability as
+/// elsewhere; `o` = [R_p + T_c (or W_p + T_c), T_p + R_p, T_p, T_c,
+/// 2 T_p − T_c]; the freshness variable is at least every `fresh` option.
+fn sound_link_edf(m: &mut Master, (l, gq): (usize, usize), b: Bin, o: [&Lin; 5], fresh: &[Lin]) {
+    let e = Bin::Var(m.lp.binary());
+    m.ge_option(l, o[0], &[(b, false), (e, false)]);
+    m.ge_option(l, o[1], &[(b, true), (e, false)]);
+    // T_c + (T_p − T_c)⁺ = max(T_c, T_p).
+    m.ge_option(l, o[3], &[(b, false), (e, true)]);
+    m.ge_option(l, o[2], &[(b, false), (e, true)]);
+    // T_p + (T_p − T_c)⁺ = max(T_p, 2 T_p − T_c).
+    m.ge_option(l, o[2], &[(b, true), (e, true)]);
+    m.ge_option(l, o[4], &[(b, true), (e, true)]);
+    for f in fresh {
+        m.ge_option(gq, f, &[]);
+    }
 }
 
 /// Distinct passes to c when c's reads are further apart than p's
