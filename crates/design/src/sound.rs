@@ -379,7 +379,6 @@ fn sound_link(
     last: bool,
     p_read: bool,
 ) -> (usize, usize) {
-    let big = m.big_m;
     let rp = response(m, p);
     let wc = read_response(m, c);
     // p's publish from where the term starts.
@@ -406,34 +405,13 @@ fn sound_link(
     let implicit = |i: usize| m.spec.tasks[i].deadline_given.is_none();
     let edf = !m.spec.policy().fixed_priority() && cpu(p) == cpu(c) && implicit(p) && implicit(c);
     let o6 = tp.scale(2.0).plus(&tc.scale(-1.0));
-    // Bounded by their options, so that the switches get tight big-Ms.
     let mut opts = vec![&o1, &o2, &o3, &o4, &o5];
     if edf {
         opts.push(&o6);
     }
-    let (llo, lhi) = span(&opts, &m.lp, big);
-    let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp, big);
-    // HiGHS gets the bounds declared; microlp's basis can go singular
-    // when both the bounds and the big-Ms are tight, so there they are
-    // only known (used for the big-Ms).
-    let (l, gq) = if m.tight_bounds {
-        (m.lp.var(llo, lhi, false), m.lp.var(qlo, qhi, false))
-    } else {
-        (m.lp.var(-big, big, false), m.lp.var(-big, big, false))
-    };
-    m.floor.insert(l, llo);
-    m.floor.insert(gq, qlo);
-    // b = 1 picks a reachability option; allowed only when d = 1.
-    let b = match d {
-        Bin::Const(false) => Bin::Const(false),
-        _ => {
-            let v = m.lp.binary();
-            if let Bin::Var(dv) = d {
-                m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
-            }
-            Bin::Var(v)
-        }
-    };
+    let l = option_var(m, &opts);
+    let gq = option_var(m, &[&q1, &q2, &q3]);
+    let b = reach_binary(m, d);
     if same {
         let o = m.above(c, p); // 1: c ≻ p (P1), 0: p ≻ c (P2)
         m.ge_option(l, &o2, &[(o, true), (b, false)]);
@@ -456,6 +434,36 @@ fn sound_link(
         m.ge_option(gq, &q1, &[]);
     }
     (l, gq)
+}
+
+/// A variable for the least of some options, bounded by them so that the
+/// switches get tight big-Ms. HiGHS gets the bounds declared; microlp's
+/// basis can go singular when both the bounds and the big-Ms are tight,
+/// so there they are only known (used for the big-Ms).
+fn option_var(m: &mut Master, opts: &[&Lin]) -> usize {
+    let big = m.big_m;
+    let (lo, hi) = span(opts, &m.lp, big);
+    let v = if m.tight_bounds {
+        m.lp.var(lo, hi, false)
+    } else {
+        m.lp.var(-big, big, false)
+    };
+    m.floor.insert(v, lo);
+    v
+}
+
+/// b = 1 picks a reachability option; allowed only when d = 1.
+fn reach_binary(m: &mut Master, d: Bin) -> Bin {
+    match d {
+        Bin::Const(false) => Bin::Const(false),
+        _ => {
+            let v = m.lp.binary();
+            if let Bin::Var(dv) = d {
+                m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+            }
+            Bin::Var(v)
+        }
+    }
 }
 
 /// The options of an EDF link on one CPU (`latency`'s `edf_together`):
