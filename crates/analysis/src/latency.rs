@@ -25,6 +25,9 @@ pub struct LinkTask {
     pub c: Nanos,
     /// Period T.
     pub t: Nanos,
+    /// Relative deadline D (T unless the spec gives one); under EDF a job's
+    /// priority is its release plus D.
+    pub d: Nanos,
     /// Demand x = Δin + exec + Δout.
     pub x: Nanos,
     /// Least demand x_min.
@@ -36,6 +39,9 @@ pub struct LinkTask {
     /// Job response time from the nominal release (release jitter
     /// included), when it is at most the period.
     pub r: Option<Nanos>,
+    /// A bound on the time from a job's read to its publish (`W`, at most
+    /// `r`; equal to it under fixed priority), when `r` is bounded.
+    pub w: Option<Nanos>,
     /// Release jitter J: a job is released in [nominal, nominal + J].
     pub j: Nanos,
     /// A server enforces its budget: a jittered job may then wait for it
@@ -43,6 +49,9 @@ pub struct LinkTask {
     pub budgeted: bool,
     /// The CPU it runs on.
     pub cpu: u32,
+    /// Picked by its jobs' absolute deadlines (EDF), which stay fixed while
+    /// a job is pending.
+    pub edf: bool,
     /// Own RM rank (the lowest priority the task runs at).
     pub prio: Option<usize>,
     /// Highest rank it can inherit (PIBS).
@@ -56,14 +65,17 @@ impl LinkTask {
         LinkTask {
             c: tm.budget,
             t: tm.period,
+            d: tm.deadline.min(tm.period),
             x: tm.demand,
             x_min: tm.demand_min,
             delta_out: spec.tasks[i].delta_out,
             l: eq1_single_pipe(tm.demand, tm.budget, tm.period),
             r: tm.bounded_response(),
+            w: tm.bounded_read_to_publish(),
             j: tm.jitter,
             budgeted: spec.policy().budget(spec.tasks[i].server).is_some(),
             cpu: tm.cpu,
+            edf: !spec.policy().fixed_priority(),
             prio: tm.priority,
             top: tm.top_priority,
         }
@@ -152,47 +164,72 @@ pub fn sound_reaction_link(
     p: &LinkTask,
     c: &LinkTask,
     p_distinct: bool,
+    p_read: bool,
 ) -> Option<Nanos> {
-    sound_reaction_link_in(fp_order(sched, p, c), p, c, p_distinct)
+    sound_reaction_link_in(fp_order(sched, p, c), p, c, p_distinct, p_read)
 }
 
 /// [`sound_reaction_link`] with the priority order of the link given
 /// (`fp_order`), so that a relaxation can take each order that is possible
 /// over a set of periods. Every option grows with every period and response
-/// time, which the relaxation relies on.
+/// time, which the relaxation relies on. `p_read`: the term starts at
+/// `J_k`'s read rather than its release (the chain's head, from the read),
+/// so `J_k` publishes within `W_p` of it; every other option starts at or
+/// before the read and holds unchanged.
 pub fn sound_reaction_link_in(
     order: Option<Case>,
     p: &LinkTask,
     c: &LinkTask,
     p_distinct: bool,
+    p_read: bool,
 ) -> Option<Nanos> {
     let (rp, _) = (p.r?, c.r?);
-    // Davare et al.: J_k publishes within R_p of its release, and the first
-    // c release after the publish is less than T_c later.
-    let mut l = rp + c.t;
+    // J_k publishes within R_p of its release, W_p of its read.
+    let to_publish = if p_read { p.w? } else { rp };
+    // Davare et al.: the first c release after the publish is less than T_c
+    // later.
+    let mut l = to_publish + c.t;
     match order {
         // P1, c preempts p: at the publish c has no pending job, and its last
         // job (which ran ≥ x_min(c) before the publish) was released
         // ≥ x_min(c) earlier.
-        Some(Case::One) => l = l.min(rp + c.t - c.x_min),
+        Some(Case::One) => l = l.min(to_publish + c.t - c.x_min),
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
         // (Dürr et al. 2019). J_k is released up to J_p after its nominal
         // release, where the term starts.
         Some(Case::Two) => l = l.min(c.t + p.j),
+        // EDF on one CPU: a c job released at or after J_k's release with
+        // a later deadline cannot start before J_k has published, and one
+        // is released less than T_c + (D_p − D_c)⁺ after J_k's release.
+        None if edf_together(p, c) => l = l.min(c.t + (p.d - c.d).max(0)),
         None => {}
     }
     if p_distinct {
         // Reachability: J_{k+1} reads, so is released, before p's next
-        // publish, which the next p job makes within T_p + R_p of J_k's release.
+        // publish, which the next p job makes within T_p + R_p of J_k's
+        // release (at or before its read).
         l = l.min(p.t + rp);
         if order == Some(Case::Two) {
             // p preempts c: J_{k+1} starts before p's next release, at most
             // T_p + J_p after J_k's nominal one.
             l = l.min(p.t + p.j);
         }
+        if order.is_none() && edf_together(p, c) {
+            // EDF on one CPU: J_{k+1} reads before p's next release, or
+            // while p's next job is pending, so with a deadline no later
+            // than that job's: released by T_p + (D_p − D_c)⁺.
+            l = l.min(p.t + (p.d - c.d).max(0));
+        }
     }
     Some(l)
+}
+
+/// Both tasks are picked by deadline (EDF) on one CPU: a job picked while
+/// another is pending has the earlier deadline (or wins the tie), and the
+/// other does not run until it completes (docs/analysis.md).
+fn edf_together(p: &LinkTask, c: &LinkTask) -> bool {
+    p.edf && c.edf && p.cpu == c.cpu
 }
 
 /// Sound mode, freshness link p → c, anchored on releases: from the release
@@ -230,17 +267,22 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_freshness_last`] with the priority order given; every option
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
-    let (rp, rc) = (p.r?, c.r?);
+    let (rp, _, wc) = (p.r?, c.r?, c.w?);
     Some(match order {
         // c preempts p: the last c job carrying the sample has published
         // before p publishes again (nothing of c is pending while p runs).
         Some(Case::One) => p.t + rp,
         // Otherwise: it reads before that publish (started before p's next
         // release, at most T_p + J_p after the nominal one, when p preempts
-        // c) and publishes within R_c of its (nominal) release, which is no
-        // later than its read.
-        Some(Case::Two) => p.t + p.j + rc,
-        None => p.t + rp + rc,
+        // c) and publishes within W_c of its read (W_c = R_c under fixed
+        // priority).
+        Some(Case::Two) => p.t + p.j + wc,
+        // EDF on one CPU: if it reads before p's next release it publishes
+        // within W_c of that; else it reads while p's next job is pending,
+        // so it was picked over that job, whose deadline it precedes, and
+        // publishes before it (docs/analysis.md).
+        None if edf_together(p, c) => p.t + rp.max(wc),
+        None => p.t + rp + wc,
     })
 }
 
@@ -256,10 +298,17 @@ pub struct SoundLink {
 }
 
 impl SoundLink {
-    /// The terms of link p → c in a given order.
-    pub fn new_in(order: Option<Case>, p: &LinkTask, c: &LinkTask, p_distinct: bool) -> SoundLink {
+    /// The terms of link p → c in a given order; `p_read`: the reaction
+    /// term starts at p's read ([`sound_reaction_link_in`]).
+    pub fn new_in(
+        order: Option<Case>,
+        p: &LinkTask,
+        c: &LinkTask,
+        p_distinct: bool,
+        p_read: bool,
+    ) -> SoundLink {
         SoundLink {
-            reaction: sound_reaction_link_in(order, p, c, p_distinct),
+            reaction: sound_reaction_link_in(order, p, c, p_distinct, p_read),
             freshness: sound_freshness_link_in(order, p, c),
             freshness_last: sound_freshness_last_in(order, p, c),
         }
@@ -288,10 +337,21 @@ impl SoundLink {
 /// A chain's sound (reaction, freshness) from the head's read, composed from
 /// its links' terms and the tail's response time: reaction ≤ Σ reaction
 /// terms + R_n, freshness ≤ Σ freshness terms of all links but the last +
-/// the last link's `freshness_last` (R_n for a chain of one task), and
-/// reaction ≤ freshness (a sample's first output is never after its last).
-/// The head's read comes after its release, where both sums start.
-pub fn compose_sound(tail_r: Option<Nanos>, links: &[SoundLink]) -> (Option<Nanos>, Option<Nanos>) {
+/// the last link's `freshness_last` (`W_1` for a chain of one task, from
+/// its read to its publish: `one`), and reaction ≤ freshness (a sample's
+/// first output is never after its last). The sums start at the head's
+/// release, at or before its read, but for the head link's reaction term
+/// when it starts at the read (`SoundLink::new_in`'s `p_read`). With
+/// `one = R_1` and no term from the read, the bounds start at the head's
+/// release (what the bounds from the event add `T_1` to).
+pub fn compose_sound(
+    tail_r: Option<Nanos>,
+    one: Option<Nanos>,
+    links: &[SoundLink],
+) -> (Option<Nanos>, Option<Nanos>) {
+    if links.is_empty() {
+        return (one, one);
+    }
     let react = links
         .iter()
         .map(|l| l.reaction)
@@ -299,7 +359,7 @@ pub fn compose_sound(tail_r: Option<Nanos>, links: &[SoundLink]) -> (Option<Nano
         .zip(tail_r)
         .map(|(a, b)| a + b);
     let fresh = match links.split_last() {
-        None => tail_r,
+        None => one,
         Some((last, rest)) => rest
             .iter()
             .map(|l| l.freshness)
@@ -311,7 +371,7 @@ pub fn compose_sound(tail_r: Option<Nanos>, links: &[SoundLink]) -> (Option<Nano
         (Some(e), Some(f)) => Some(e.min(f)),
         (e, _) => e,
     };
-    // Every term is a time: both sums start at the head's release.
+    // Every term is a time: both sums run forward from the head's job.
     assert!(react.is_none_or(|e| e >= 0) && fresh.is_none_or(|f| f >= 0));
     (react, fresh)
 }
@@ -484,19 +544,26 @@ fn sound_event_reaction(sched: Scheduler, lt: &[LinkTask]) -> Option<Nanos> {
     let mut sum = Some(0);
     for w in lt.windows(2) {
         sum = sum
-            .zip(sound_reaction_link(sched, &w[0], &w[1], false))
+            .zip(sound_reaction_link(sched, &w[0], &w[1], false, false))
             .map(|(a, b)| a + b);
     }
     from_event(&lt[0], sum.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b))
 }
 
-/// The sound links of a chain, with "distinct" passed along from the head.
+/// The sound links of a chain from the head's read, with "distinct" passed
+/// along from the head.
 fn sound_links(sched: Scheduler, lt: &[LinkTask]) -> Vec<SoundLink> {
     let mut distinct = true;
     let mut links = Vec::with_capacity(lt.len().saturating_sub(1));
-    for w in lt.windows(2) {
+    for (k, w) in lt.windows(2).enumerate() {
         let (p, c) = (&w[0], &w[1]);
-        links.push(SoundLink::new_in(fp_order(sched, p, c), p, c, distinct));
+        links.push(SoundLink::new_in(
+            fp_order(sched, p, c),
+            p,
+            c,
+            distinct,
+            k == 0,
+        ));
         distinct = distinct_passes(p, c, distinct);
     }
     links
@@ -573,11 +640,14 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
     let sched = spec.scheduler;
     let head = &lt[0];
     let (paper_reaction, paper_freshness, cases) = paper(&lt);
-    let (sound_reaction, sound_freshness) =
-        compose_sound(lt[lt.len() - 1].r, &sound_links(sched, &lt));
+    let links = sound_links(sched, &lt);
+    let tail_r = lt[lt.len() - 1].r;
+    let (sound_reaction, sound_freshness) = compose_sound(tail_r, head.w, &links);
+    // From the event the freshness runs from the head's release: a chain of
+    // one task by R_1, not W_1 (the freshness terms never start at a read).
     let mut sound_event = (
         sound_event_reaction(sched, &lt),
-        from_event(head, sound_freshness),
+        from_event(head, compose_sound(tail_r, head.r, &links).1),
     );
     let (sound_reaction, sound_freshness) = if spec.communication == Communication::Let {
         // Under LET the sound bound is LET's (`let_bound.rs`): the data
@@ -646,14 +716,17 @@ mod tests {
         LinkTask {
             c,
             t,
+            d: t,
             x: c,
             x_min: c / 2,
             delta_out,
             l: c,
             r: Some(r),
+            w: Some(r),
             j: 0,
             budgeted: true,
             cpu: 0,
+            edf: false,
             prio: Some(prio),
             top: Some(prio),
         }

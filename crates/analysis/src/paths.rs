@@ -313,9 +313,10 @@ impl Scratch {
                 continue;
             }
             let distinct = d == 1;
+            // From the source's read: its link's term starts there.
             let cand = add(
                 self.sound_reaction.val[sv],
-                sound_reaction_link(sched, p, q, distinct),
+                sound_reaction_link(sched, p, q, distinct, v == s),
             );
             let sc = 2 * c + usize::from(distinct_passes(p, q, distinct));
             if self.sound_reached[sc] != s || cand > self.sound_reaction.val[sc] {
@@ -328,10 +329,10 @@ impl Scratch {
     /// The bounds of source `s` and sink `v`, both reached.
     fn pair(&self, s: usize, v: usize, lt: &[LinkTask]) -> PairBounds {
         let fin = |x: Nanos| if x == INF { None } else { Some(x) };
-        // A path of one task is its response time; a longer one ends with its
-        // last link's term.
+        // A path of one task is its read-to-publish bound; a longer one ends
+        // with its last link's term.
         let (fresh, fresh_path) = if v == s {
-            (lt[v].r, vec![v])
+            (lt[v].w, vec![v])
         } else {
             let mut path = self.sound_freshness.walk(self.sound_last.from[v]);
             path.push(v);
@@ -352,7 +353,8 @@ impl Scratch {
                 .map(|x| x / 2)
                 .collect()
         });
-        let react = best.and_then(|b| fin(add(self.sound_reaction.val[b], lt[v].r)));
+        let tail = if v == s { lt[v].w } else { lt[v].r };
+        let react = best.and_then(|b| fin(add(self.sound_reaction.val[b], tail)));
         PairBounds {
             source: s,
             sink: v,

@@ -28,6 +28,9 @@ pub struct Relaxed {
     /// Per task: a lower bound on the job response time (demand x), `None`
     /// when it exceeds the period at every point of the box (or diverges).
     pub job_response: Vec<Option<Nanos>>,
+    /// Per task: a lower bound on the read-to-publish bound `W`
+    /// (`TaskTiming::read_to_publish`), `None` where `job_response` is.
+    pub read_to_publish: Vec<Option<Nanos>>,
     /// Per task: the same at budget level (the RTA test's figure).
     pub budget_response: Vec<Option<Nanos>>,
     /// Per CPU, ascending: whether its schedulability test may pass
@@ -193,73 +196,99 @@ impl<'a> Order<'a> {
     }
 }
 
-/// Per task, lower bounds on the job-level and budget-level response times
-/// over the box (see the module documentation); `None` when above the
-/// longest period.
-fn response_lower_bounds(spec: &Spec, order: &Order) -> (Vec<Option<Nanos>>, Vec<Option<Nanos>>) {
+/// Per task, lower bounds on the job-level response times and the
+/// read-to-publish bounds, and on the budget-level response times, over the
+/// box (see the module documentation); `None` when above the longest
+/// period.
+fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos>>) {
     let (n, lo, hi) = (spec.tasks.len(), order.lo, order.hi);
     let util_ok = |cpu: u32| cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() <= 1.0 + 1e-12;
     let mut job_response = vec![None; n];
+    let mut read_to_publish = vec![None; n];
     let mut budget_response = vec![None; n];
     for (i, t) in spec.tasks.iter().enumerate() {
         if t.server == Server::Background {
             continue;
         }
-        let (rb, rj) = match spec.policy().response {
+        let (rb, rj, rw) = match spec.policy().response {
             ResponseAnalysis::Rta => {
                 let hp: Vec<(Nanos, Nanos, Nanos)> = (0..n)
                     .filter(|&j| order.surely_interferes(j, i))
                     .map(|j| (interference(&spec.tasks[j]), hi[j], spec.tasks[j].jitter))
                     .collect();
-                (
-                    response_time_jitter(t.budget(), t.jitter, &hp),
-                    response_time_jitter(t.demand(), t.jitter, &hp),
-                )
+                let rj = response_time_jitter(t.demand(), t.jitter, &hp);
+                (response_time_jitter(t.budget(), t.jitter, &hp), rj, rj)
             }
             // Servers get their budget by the end of each period, or by
             // the deadline when one is given (`sched`).
             ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => {
                 let d = t.deadline_given.map_or(lo[i], |d| d.min(lo[i]));
-                (Some(d), Some(d))
+                (Some(d), Some(d), Some(d))
             }
-            ResponseAnalysis::ServerPeriod => (None, None),
+            ResponseAnalysis::ServerPeriod => (None, None, None),
             ResponseAnalysis::EdfRta if util_ok(t.cpu) => edf_lower_bounds(spec, lo, hi, i),
-            ResponseAnalysis::EdfRta => (None, None),
+            ResponseAnalysis::EdfRta => (None, None, None),
         };
         // The RTA test asks R ≤ D (D = T unless given).
         let d = t.deadline_given.map_or(hi[i], |d| d.min(hi[i]));
         budget_response[i] = rb.filter(|&r| r <= d);
         job_response[i] = rj.filter(|&r| r <= hi[i]);
+        read_to_publish[i] = rw.filter(|_| job_response[i].is_some());
     }
-    (job_response, budget_response)
+    let times = Times {
+        r: job_response,
+        w: read_to_publish,
+    };
+    (times, budget_response)
 }
 
-/// Lower bounds on task `i`'s (budget, job) EDF response times over the
-/// box: the analysis itself when the box fixes every period of i's CPU;
-/// otherwise Spuri's bound at `a = 0`, which holds the job's own demand and
-/// one job of every task whose deadline is never after i's (`T_j ≤ T_i`),
-/// a figure that only grows as the box shrinks. docs/analysis.md.
+/// Per task, lower bounds on the job response time `R` and on the
+/// read-to-publish bound `W` over the box.
+struct Times {
+    r: Vec<Option<Nanos>>,
+    w: Vec<Option<Nanos>>,
+}
+
+/// Lower bounds on task `i`'s (budget, job) EDF response times and its
+/// read-to-publish bound over the box: the analysis itself when the box
+/// fixes every period of i's CPU; otherwise Spuri's bound at `a = 0`, which
+/// holds the job's own demand and one job of every task whose deadline is
+/// never after i's (`T_j ≤ T_i`), a figure that only grows as the box
+/// shrinks; for `W` (`edf::start_to_finish`) the same with the tasks whose
+/// deadline is always before i's. docs/analysis.md.
 fn edf_lower_bounds(
     spec: &Spec,
     lo: &[Nanos],
     hi: &[Nanos],
     i: usize,
-) -> (Option<Nanos>, Option<Nanos>) {
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
     let t = &spec.tasks[i];
     let mates: Vec<usize> = (0..spec.tasks.len())
         .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
         .collect();
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        return crate::sched::edf_response_at(spec, lo, i);
+        let (b, j) = crate::sched::edf_response_at(spec, lo, i);
+        // As `sched::analyze` takes it.
+        let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
+        return (b, j, w);
     }
     let before: Nanos = mates
         .iter()
         .filter(|&&j| j != i && hi[j] <= lo[i])
         .map(|&j| interference(&spec.tasks[j]))
         .sum();
+    // W counts only tasks whose deadline is before i's at every point (a
+    // job of equal deadline released after the start never runs first).
+    let d = |j: usize, t: Nanos| spec.tasks[j].deadline_given.map_or(t, |d| d.min(t));
+    let sooner: Nanos = mates
+        .iter()
+        .filter(|&&j| j != i && d(j, hi[j]) < d(i, lo[i]))
+        .map(|&j| interference(&spec.tasks[j]))
+        .sum();
     (
         Some(t.budget().max(1) + before),
         Some(t.demand().max(1) + before),
+        Some(t.demand().max(1) + sooner),
     )
 }
 
@@ -287,7 +316,7 @@ pub fn relax(
     );
     let order = Order::new(spec, lo, hi, imposed);
     let cpus = cpu_ids(spec);
-    let (job_response, budget_response) = response_lower_bounds(spec, &order);
+    let (times, budget_response) = response_lower_bounds(spec, &order);
     let cpus = cpus
         .into_iter()
         .map(|cpu| (cpu, cpu_may_pass(spec, hi, &budget_response, cpu)))
@@ -295,12 +324,12 @@ pub fn relax(
     let chains = spec
         .chains
         .iter()
-        .map(|ch| chain_bounds(spec, &order, &job_response, &ch.path))
+        .map(|ch| chain_bounds(spec, &order, &times, &ch.path))
         .collect();
     let event_reaction = spec
         .chains
         .iter()
-        .map(|ch| event_reaction_bound(spec, &order, &job_response, &ch.path))
+        .map(|ch| event_reaction_bound(spec, &order, &times, &ch.path))
         .collect();
     let paper = spec
         .chains
@@ -311,11 +340,11 @@ pub fn relax(
         true => (
             spec.chains
                 .iter()
-                .map(|ch| chain_forms(spec, &order, &job_response, &ch.path, true))
+                .map(|ch| chain_forms(spec, &order, &times, &ch.path, true))
                 .collect(),
             spec.chains
                 .iter()
-                .map(|ch| event_form(spec, &order, &job_response, &ch.path))
+                .map(|ch| event_form(spec, &order, &times, &ch.path))
                 .collect(),
             spec.chains
                 .iter()
@@ -325,7 +354,8 @@ pub fn relax(
         false => (Vec::new(), Vec::new(), Vec::new()),
     };
     Relaxed {
-        job_response,
+        job_response: times.r,
+        read_to_publish: times.w,
         budget_response,
         cpus,
         chains,
@@ -340,23 +370,18 @@ pub fn relax(
 /// A lower bound on the chain's sound reaction from the event: its links'
 /// reaction terms without the reachability options, the tail's response
 /// time and the head's shortest period (`latency::sound_event_reaction`).
-fn event_reaction_bound(
-    spec: &Spec,
-    order: &Order,
-    r: &[Option<Nanos>],
-    path: &[usize],
-) -> Option<Nanos> {
+fn event_reaction_bound(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<Nanos> {
     let sum: Option<Nanos> = low_links(spec, order, r, path, false)
         .iter()
         .map(|l| l.reaction)
         .sum();
-    sum.zip(r[path[path.len() - 1]])
+    sum.zip(r.r[path[path.len() - 1]])
         .map(|(a, b)| a + b + order.lo[path[0]])
 }
 
 /// [`event_reaction_bound`] as an affine form over the box: the reaction
 /// sum E without reachability, plus T_1.
-fn event_form(spec: &Spec, order: &Order, r: &[Option<Nanos>], path: &[usize]) -> Option<Affine> {
+fn event_form(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<Affine> {
     let (mut e, _) = chain_forms(spec, order, r, path, false)?;
     let head = path[0];
     e.base += order.lo[head] as f64;
@@ -397,23 +422,48 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
     }
 }
 
-/// The link terms' view of task `i` at the box's most favourable values.
-fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
+/// The link terms' view of task `i` at the box's most favourable values:
+/// period `t`, job response time and read-to-publish bound `(r, w)`.
+fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: usize) -> LinkTask {
     let task = &spec.tasks[i];
     LinkTask {
         c: task.budget(),
         t,
+        d: deadline_at(spec, i, t),
         x: task.demand(),
         x_min: task.demand_min(),
         delta_out: task.delta_out,
         l: crate::latency::eq1_single_pipe(task.demand(), task.budget(), t),
         r,
+        w,
         j: task.jitter,
         budgeted: spec.policy().budget(task.server).is_some(),
         cpu: task.cpu,
+        edf: !spec.policy().fixed_priority(),
         prio: None,
         top: None,
     }
+}
+
+/// Task i's relative deadline at period t.
+fn deadline_at(spec: &Spec, i: usize, t: Nanos) -> Nanos {
+    spec.tasks[i].deadline_given.map_or(t, |d| d.min(t))
+}
+
+/// The link's two tasks with the deadlines that make `(D_p − D_c)⁺` (the
+/// EDF options of `latency`) least over the box: D_p at p's shortest
+/// period, D_c at c's longest. That keeps those options below the
+/// analysis' at every point and affine in the periods.
+fn least_deadlines(
+    order: &Order,
+    spec: &Spec,
+    pi: usize,
+    ci: usize,
+    p: &mut LinkTask,
+    c: &mut LinkTask,
+) {
+    p.d = deadline_at(spec, pi, order.lo[pi]);
+    c.d = deadline_at(spec, ci, order.hi[ci]);
 }
 
 /// Lower bounds on a chain's sound reaction and freshness from the read,
@@ -421,40 +471,45 @@ fn link_task(spec: &Spec, t: Nanos, r: Option<Nanos>, i: usize) -> LinkTask {
 fn chain_bounds(
     spec: &Spec,
     order: &Order,
-    r: &[Option<Nanos>],
+    r: &Times,
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
     compose_sound(
-        r[path[path.len() - 1]],
+        r.r[path[path.len() - 1]],
+        r.w[path[0]],
         &low_links(spec, order, r, path, true),
     )
 }
 
+impl Times {
+    /// Task i's (R, W) lower bounds.
+    fn of(&self, i: usize) -> (Option<Nanos>, Option<Nanos>) {
+        (self.r[i], self.w[i])
+    }
+}
+
 /// Each link's least terms at the box's shortest periods, over the orders
-/// the box leaves open; `reach`: with the reachability options where they
-/// may hold (from the read), or without (the reaction from the event).
-fn low_links(
-    spec: &Spec,
-    order: &Order,
-    r: &[Option<Nanos>],
-    path: &[usize],
-    reach: bool,
-) -> Vec<SoundLink> {
-    let low = |i: usize| link_task(spec, order.lo[i], r[i], i);
+/// the box leaves open; `reach`: from the read, with the reachability
+/// options where they may hold and the head's term from its read, or
+/// without both (the reaction from the event).
+fn low_links(spec: &Spec, order: &Order, r: &Times, path: &[usize], reach: bool) -> Vec<SoundLink> {
+    let low = |i: usize| link_task(spec, order.lo[i], r.of(i), i);
     // Reachability needs the producer's samples distinct; take it where it
     // may hold (more options, smaller terms).
     let mut distinct = reach;
     let mut links = Vec::with_capacity(path.len() - 1);
-    for w in path.windows(2) {
-        let (p, c) = (low(w[0]), low(w[1]));
+    for (k, w) in path.windows(2).enumerate() {
+        let (mut p, mut c) = (low(w[0]), low(w[1]));
+        least_deadlines(order, spec, w[0], w[1], &mut p, &mut c);
         let orders = order.link_orders(w[0], w[1]);
+        let head = reach && k == 0;
         links.push(SoundLink::least(
             orders
                 .iter()
-                .map(|&o| SoundLink::new_in(o, &p, &c, distinct)),
+                .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
         ));
         // The condition grows with T_c: test it at c's longest period.
-        let c_late = link_task(spec, order.hi[w[1]], r[w[1]], w[1]);
+        let c_late = link_task(spec, order.hi[w[1]], r.of(w[1]), w[1]);
         distinct = distinct_passes(&p, &c_late, distinct);
     }
     links
@@ -469,7 +524,7 @@ fn low_links(
 fn chain_forms(
     spec: &Spec,
     order: &Order,
-    r: &[Option<Nanos>],
+    r: &Times,
     path: &[usize],
     reach: bool,
 ) -> Option<(Affine, Affine)> {
@@ -480,13 +535,20 @@ fn chain_forms(
         ResponseAnalysis::ServerPeriod => vec![(i, 1.0)],
         ResponseAnalysis::Rta | ResponseAnalysis::EdfRta => Vec::new(),
     };
-    let mut e = Affine {
-        base: r[tail]? as f64,
-        slopes: own(tail),
-    };
     if path.len() == 1 {
+        // From the read a task alone is its read-to-publish bound (from
+        // the event, the caller's reaction sum has no such term: R).
+        let one = if reach { r.w[tail] } else { r.r[tail] };
+        let e = Affine {
+            base: one? as f64,
+            slopes: own(tail),
+        };
         return Some((e.clone(), e));
     }
+    let mut e = Affine {
+        base: r.r[tail]? as f64,
+        slopes: own(tail),
+    };
     let mut f = Affine::default();
     let mut distinct = reach;
     for (k, w) in path.windows(2).enumerate() {
@@ -496,16 +558,18 @@ fn chain_forms(
         // Where a response time is the period itself it moves with the
         // corner; otherwise it stays at its lower bound.
         let resp = |i: usize, t: Nanos| match spec.policy().response {
-            ResponseAnalysis::ServerPeriod => r[i].map(|_| t),
-            ResponseAnalysis::Rta | ResponseAnalysis::EdfRta => r[i],
+            ResponseAnalysis::ServerPeriod => (r.r[i].map(|_| t), r.w[i].map(|_| t)),
+            ResponseAnalysis::Rta | ResponseAnalysis::EdfRta => r.of(i),
         };
+        let head = reach && k == 0;
         let at = |tp: Nanos, tc: Nanos| {
-            let p = link_task(spec, tp, resp(pi, tp), pi);
-            let c = link_task(spec, tc, resp(ci, tc), ci);
+            let mut p = link_task(spec, tp, resp(pi, tp), pi);
+            let mut c = link_task(spec, tc, resp(ci, tc), ci);
+            least_deadlines(order, spec, pi, ci, &mut p, &mut c);
             let l = SoundLink::least(
                 orders
                     .iter()
-                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct)),
+                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
             );
             let fresh = if last { l.freshness_last } else { l.freshness };
             Some((l.reaction?, fresh?))
@@ -514,8 +578,8 @@ fn chain_forms(
         let corners = [at(lp, lc)?, at(hp, lc)?, at(lp, hc)?, at(hp, hc)?];
         add_link(&mut e, pi, ci, hp - lp, hc - lc, corners.map(|x| x.0));
         add_link(&mut f, pi, ci, hp - lp, hc - lc, corners.map(|x| x.1));
-        let c_late = link_task(spec, hc, r[ci], ci);
-        distinct = distinct_passes(&link_task(spec, lp, r[pi], pi), &c_late, distinct);
+        let c_late = link_task(spec, hc, r.of(ci), ci);
+        distinct = distinct_passes(&link_task(spec, lp, r.of(pi), pi), &c_late, distinct);
     }
     Some((e, f))
 }
@@ -570,7 +634,10 @@ fn paper_link(
     tp: Nanos,
     tc: Nanos,
 ) -> (Nanos, Nanos) {
-    let (lp, lc) = (link_task(spec, tp, None, p), link_task(spec, tc, None, c));
+    let (lp, lc) = (
+        link_task(spec, tp, (None, None), p),
+        link_task(spec, tc, (None, None), c),
+    );
     let cases = order.paper_cases(p, c);
     let e = cases
         .iter()
@@ -586,7 +653,7 @@ fn paper_link(
 /// Lower bounds on a chain's paper reaction and freshness: the head's L
 /// plus each link's least term, at the shortest periods.
 fn paper_bounds(spec: &Spec, order: &Order, path: &[usize]) -> (Nanos, Nanos) {
-    let head = link_task(spec, order.lo[path[0]], None, path[0]).l;
+    let head = link_task(spec, order.lo[path[0]], (None, None), path[0]).l;
     let (mut e, mut f) = (head, head);
     for w in path.windows(2) {
         let (a, b) = paper_link(spec, order, w[0], w[1], order.lo[w[0]], order.lo[w[1]]);
@@ -601,7 +668,7 @@ fn paper_bounds(spec: &Spec, order: &Order, path: &[usize]) -> (Nanos, Nanos) {
 /// fixed demand and budget), so the least over the cases is concave.
 fn paper_forms(spec: &Spec, order: &Order, path: &[usize]) -> (Affine, Affine) {
     let h = path[0];
-    let l_at = |t: Nanos| link_task(spec, t, None, h).l as f64;
+    let l_at = |t: Nanos| link_task(spec, t, (None, None), h).l as f64;
     let (lo, hi) = (order.lo[h], order.hi[h]);
     let slope = if hi > lo {
         (l_at(hi) - l_at(lo)) / (hi - lo) as f64

@@ -38,12 +38,24 @@ pub struct TaskTiming {
     /// Worst-case response time of a job of demand x (≤ response_time), the
     /// figure the latency bounds use.
     pub job_response_time: Option<Nanos>,
+    /// W: a bound on the time from a job's read (its start) to its publish
+    /// (its completion), at most `job_response_time`: the same figure under
+    /// fixed priority (nothing of higher priority is pending at the start),
+    /// Spuri's `w_i(0)` under EDF ([`edf::start_to_finish`]), where a job's
+    /// response is mostly waiting to start. docs/analysis.md.
+    pub read_to_publish: Option<Nanos>,
 }
 
 impl TaskTiming {
     /// A job's latest finish after release, if it finishes within its period.
     pub fn bounded_response(&self) -> Option<Nanos> {
         self.job_response_time.filter(|&r| r <= self.period)
+    }
+
+    /// [`TaskTiming::read_to_publish`] where the response is bounded
+    /// ([`TaskTiming::bounded_response`]).
+    pub fn bounded_read_to_publish(&self) -> Option<Nanos> {
+        self.bounded_response().and(self.read_to_publish)
     }
 }
 
@@ -236,7 +248,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
         .iter()
         .enumerate()
         .map(|(i, t)| {
-            let (rt, jrt) = response_times(spec, &prio, &top, i);
+            let (rt, jrt, w) = response_times(spec, &prio, &top, i);
             TaskTiming {
                 budget: t.budget(),
                 demand: t.demand(),
@@ -250,6 +262,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 cpu: t.cpu,
                 response_time: rt,
                 job_response_time: jrt,
+                read_to_publish: w,
             }
         })
         .collect();
@@ -288,21 +301,22 @@ fn period_or_max(t: &Task) -> Nanos {
     t.fixed_period().unwrap_or(MAX_TIME)
 }
 
-/// Task `i`'s (budget, job) response times: under RM the exact RTA against
-/// the tasks that can run above it; under EDF with constant-bandwidth
+/// Task `i`'s (budget, job) response times and its read-to-publish bound:
+/// under RM the exact RTA against the tasks that can run above it (the
+/// job figure for both of the latter); under EDF with constant-bandwidth
 /// servers Spuri's analysis, when its CPU is not overloaded. A background
-/// task has neither: nothing guarantees it the CPU.
+/// task has none: nothing guarantees it the CPU.
 fn response_times(
     spec: &Spec,
     prio: &[Option<usize>],
     top: &[Option<usize>],
     i: usize,
-) -> (Option<Nanos>, Option<Nanos>) {
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
     let t = &spec.tasks[i];
     if t.server == Server::Background {
-        return (None, None);
+        return (None, None, None);
     }
-    match spec.policy().response {
+    let (rt, jrt) = match spec.policy().response {
         ResponseAnalysis::Rta => {
             let hp = hp_load(spec, prio, top, i);
             // The own job's switch to it (`overheads`) counts as blocking does.
@@ -316,7 +330,50 @@ fn response_times(
         }
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
         ResponseAnalysis::EdfRta => edf_response_times(spec, i),
-    }
+    };
+    let w = match spec.policy().response {
+        ResponseAnalysis::EdfRta => jrt.map(|r| edf_read_to_publish(spec, i).min(r)),
+        ResponseAnalysis::Rta | ResponseAnalysis::ServerPeriod => jrt,
+    };
+    (rt, jrt, w)
+}
+
+/// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),
+/// with the spec's periods and relative deadlines.
+fn edf_read_to_publish(spec: &Spec, i: usize) -> Nanos {
+    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
+    edf_read_to_publish_at(spec, &periods, i)
+}
+
+/// [`edf_read_to_publish`] at the given periods (one per task); a relative
+/// deadline is the spec's, else the period.
+pub fn edf_read_to_publish_at(spec: &Spec, periods: &[Nanos], i: usize) -> Nanos {
+    let (tasks, at) = edf_tasks(spec, periods, i);
+    let deadlines: Vec<Nanos> = edf_members(spec, i)
+        .map(|j| match spec.tasks[j].server {
+            // Releases whose only work is their handlers' (overheads):
+            // never a job that runs first.
+            Server::Background => Nanos::MAX,
+            _ => spec.tasks[j]
+                .deadline_given
+                .map_or(periods[j], |d| d.min(periods[j])),
+        })
+        .collect();
+    let own = spec.tasks[i]
+        .demand()
+        .saturating_add(crate::overheads::own(spec, i));
+    edf::start_to_finish(&tasks, &deadlines, at, own)
+}
+
+/// The tasks [`edf_tasks`] lists for task `i`'s CPU, in its order: the
+/// guaranteed ones, and background ones whose releases run handlers.
+fn edf_members(spec: &Spec, i: usize) -> impl Iterator<Item = usize> + '_ {
+    let cpu = spec.tasks[i].cpu;
+    (0..spec.tasks.len()).filter(move |&j| {
+        let t = &spec.tasks[j];
+        t.cpu == cpu
+            && (t.server != Server::Background || crate::overheads::per_release(spec, j) > 0)
+    })
 }
 
 /// EDF with constant-bandwidth servers: every server gets its budget by
@@ -335,27 +392,22 @@ fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
 /// The guaranteed tasks of `cpu` as the EDF analysis sees them, and the
 /// place of task `i` among them (when it is one).
 fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
-    let cpu = spec.tasks[i].cpu;
     let mut at = 0;
     let mut out = Vec::new();
-    for (j, t) in spec.tasks.iter().enumerate() {
-        if t.cpu == cpu && t.server != Server::Background {
-            if j == i {
-                at = out.len();
-            }
-            out.push(edf::EdfTask {
-                work: interference(t).saturating_add(crate::overheads::per_job(spec, j)),
-                period: periods[j],
-                kernel: crate::overheads::per_release(spec, j),
-            });
-        } else if t.cpu == cpu && crate::overheads::per_release(spec, j) > 0 {
-            // A background task's releases still run their handlers.
-            out.push(edf::EdfTask {
-                work: 0,
-                period: periods[j],
-                kernel: crate::overheads::per_release(spec, j),
-            });
+    for j in edf_members(spec, i) {
+        let t = &spec.tasks[j];
+        if j == i {
+            at = out.len();
         }
+        out.push(edf::EdfTask {
+            // A background task's releases still run their handlers.
+            work: match t.server {
+                Server::Background => 0,
+                _ => interference(t).saturating_add(crate::overheads::per_job(spec, j)),
+            },
+            period: periods[j],
+            kernel: crate::overheads::per_release(spec, j),
+        });
     }
     (out, at)
 }

@@ -426,8 +426,8 @@ fn monotone_in_exec() {
 
 // (b) A longer period never gives a smaller paper bound while the priority
 // order and the paper's cases stay the same, nor a smaller sound bound while,
-// in addition, no other task's response time and no distinct flag of the
-// chain changes.
+// in addition, no other task's response time or read-to-publish bound and
+// no distinct flag of the chain changes.
 //
 // Restriction 1 (sound mode): a longer period of a task h lowers the
 // interference ⌈R/T_h⌉·C_h it imposes on lower-priority tasks of its CPU, so
@@ -475,8 +475,13 @@ fn monotone_in_period() {
             if old.cases != new.cases {
                 return Ok("skipped: paper cases changed");
             }
+            // Response times and read-to-publish bounds (a longer period
+            // lets fewer jobs of t_i go before another's under EDF).
             let others_same = (0..spec.tasks.len()).all(|j| {
-                j == i || old.timing[j].job_response_time == new.timing[j].job_response_time
+                let (a, b) = (&old.timing[j], &new.timing[j]);
+                j == i
+                    || (a.job_response_time, a.read_to_publish)
+                        == (b.job_response_time, b.read_to_publish)
             });
             let mut sound_compared = false;
             for (k, (o, n)) in all_bounds(&spec, &old)
@@ -568,13 +573,17 @@ fn sound_reaction_unclamped(spec: &Spec, timing: &[TaskTiming], path: &[usize]) 
         .iter()
         .map(|&i| LinkTask::new(spec, timing, i))
         .collect();
-    // From the head's release: the links' terms, then the tail's R.
+    // From the head's read: a task alone is its read-to-publish bound W;
+    // else the head link's term from the read, the others' from releases,
+    // then the tail's R.
+    if lt.len() == 1 {
+        return lt[0].w;
+    }
     let mut acc = Some(0);
     let mut distinct = true;
-    for w in lt.windows(2) {
-        acc = acc
-            .zip(sound_reaction_link(spec.scheduler, &w[0], &w[1], distinct))
-            .map(|(a, b)| a + b);
+    for (k, w) in lt.windows(2).enumerate() {
+        let term = sound_reaction_link(spec.scheduler, &w[0], &w[1], distinct, k == 0);
+        acc = acc.zip(term).map(|(a, b)| a + b);
         distinct = distinct_passes(&w[0], &w[1], distinct);
     }
     acc.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b)
@@ -1002,7 +1011,11 @@ fn edf_exec_no_longer_crosses_the_distinct_threshold() {
     // "distinct" on: 232 ms (= the freshness) with x_b = 2, 142 ms with
     // x_b = 3. With Spuri's response times R_b − x_b only grows with x_b
     // (R = 0.1, 3.4, 4.5, 3.4 ms, then 0.1, 4.5, 5.6, 4.5 ms), every flag
-    // stays as it was and the bound grows with the demand.
+    // stays as it was and the bound grows with the demand. With the EDF
+    // deadline-order terms (one CPU): a → b from a's read min(W_a + T_b,
+    // T_a + R_a, T_b, T_a) = T_a = 1, b → c T_b + (D_b − D_c)⁺ = 10 (was
+    // T_b + R_b = 13.4), c → d R_c + T_d = 14.5, + R_d = 3.4: 28.9 ms (was
+    // 32.4); with x_b = 3: 1 + 10 + 15.6 + 4.5 = 31.1 ms (was 35.7).
     let path = &lo.chains[0].path;
     let flags = vec![true, true, true, false];
     assert_eq!(distinct_flags(&lo, &ro.timing, path), flags);
@@ -1012,8 +1025,8 @@ fn edf_exec_no_longer_crosses_the_distinct_threshold() {
     };
     assert_eq!(r(&ro), [100, 3400, 4500, 3400].map(|x| Some(x * US)));
     assert_eq!(r(&rn), [100, 4500, 5600, 4500].map(|x| Some(x * US)));
-    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(32_400 * US));
-    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(35_700 * US));
+    assert_eq!(bounds(&ro, 0).0.sound(Anchor::Read), Some(28_900 * US));
+    assert_eq!(bounds(&rn, 0).0.sound(Anchor::Read), Some(31_100 * US));
 }
 
 #[test]

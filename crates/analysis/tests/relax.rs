@@ -197,6 +197,12 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
             same(r.budget_response[i], budget),
             "{what}: budget R of task {i}"
         );
+        assert!(
+            same(r.read_to_publish[i], tm.bounded_read_to_publish()),
+            "{what}: W of task {i}: {:?} vs {:?}",
+            r.read_to_publish[i],
+            tm.bounded_read_to_publish()
+        );
     }
     for (v, &(cpu, may)) in report.schedulability.cpus.iter().zip(&r.cpus) {
         assert_eq!(v.cpu, cpu);

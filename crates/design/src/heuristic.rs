@@ -182,6 +182,7 @@ pub(crate) fn heuristic(
         }
         let model = SoundModel {
             rlow: sm.rlow.clone(),
+            wlow: sm.wlow.clone(),
             cuts: Vec::new(),
             fixed: Some(fixed.clone()),
         };

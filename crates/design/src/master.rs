@@ -213,6 +213,9 @@ impl<'a> Master<'a> {
             self.rvar[i] = Some(r);
             self.at_most_period(i, r);
         }
+        if self.spec.policy().response == ResponseAnalysis::EdfRta {
+            self.add_read_responses(groups, sm, p);
+        }
         if sm.fixed.is_some() {
             return;
         }
@@ -225,6 +228,29 @@ impl<'a> Master<'a> {
         }
         for cut in &sm.cuts {
             add_r_cut(self, cut);
+        }
+    }
+
+    /// Under EDF, read-to-publish variables W_i ≤ R_i of the chain tasks
+    /// with their lower bounds (pinned with the response times: to the
+    /// given W, else to R); the cuts learnt from candidates come with the
+    /// response times' (`RCut::read`).
+    fn add_read_responses(&mut self, groups: &[Group], sm: &SoundModel, p: &Problem) {
+        let n = self.spec.tasks.len();
+        for i in (0..n).filter(|&i| p.on_chain[i]) {
+            let Some(r) = self.rvar[i] else { continue };
+            let w = match &sm.fixed {
+                Some(f) => {
+                    let v = f.get(n + i).copied().unwrap_or(f[i]);
+                    self.lp.var(v, v, false)
+                }
+                None => {
+                    let hi = rmax_of(self, groups, i).max(sm.wlow[i]);
+                    self.lp.var(sm.wlow[i].min(hi), hi, false)
+                }
+            };
+            self.lp.row(vec![(w, 1.0), (r, -1.0)], Cmp::Le, 0.0);
+            self.wvar[i] = Some(w);
         }
     }
 

@@ -30,6 +30,9 @@ pub(crate) struct Master<'a> {
     pub(crate) big_m: f64,
     /// Response-time variables (sound mode, RM).
     pub(crate) rvar: Vec<Option<usize>>,
+    /// Read-to-publish variables (W ≤ R) where they can be below R: under
+    /// EDF (`sound::read_response`).
+    pub(crate) wvar: Vec<Option<usize>>,
     /// Valid lower ends of option variables (for their big-Ms).
     pub(crate) floor: HashMap<usize, f64>,
     /// Declare the option variables' bounds (see `sound_chain`).
@@ -178,6 +181,7 @@ impl<'a> Master<'a> {
             lt_cache: HashMap::new(),
             big_m: p.big_m,
             rvar: vec![None; n],
+            wvar: vec![None; n],
             floor: HashMap::new(),
             tight_bounds: p.opts.solver == SolverKind::Highs,
             chains: Vec::new(),

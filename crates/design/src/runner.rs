@@ -9,7 +9,7 @@ use crate::heuristic::{descent, heuristic};
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 use crate::solve::{solve_master, Solved};
-use crate::sound::{learn_r_cuts, rhat_lower, SoundModel};
+use crate::sound::{learn_r_cuts, rhat_lower, w_lower, SoundModel};
 use rtpipe_analysis::{Mode, Report};
 use rtpipe_model::{Nanos, Server, Spec};
 
@@ -103,6 +103,7 @@ impl Milp<'_, '_> {
             Mode::Paper => None,
             Mode::Sound => Some(SoundModel {
                 rlow: rhat_lower(self.p),
+                wlow: w_lower(self.p),
                 cuts: Vec::new(),
                 fixed: None,
             }),

@@ -28,7 +28,8 @@ pub(crate) enum Solved {
         objective: f64,
         /// Proven optimal for the master.
         optimal: bool,
-        /// The model's job response times (grid units) where it has them.
+        /// The model's job response times (grid units) where it has them,
+        /// one per task, then its read-to-publish bounds likewise.
         responses: Vec<Option<f64>>,
     },
     Error(DesignError),
@@ -149,7 +150,12 @@ fn read(p: &Problem, m: &Master, solved: Result<LpSolution, LpError>, numerical:
                 .collect(),
             objective: sol.objective,
             optimal: sol.optimal,
-            responses: m.rvar.iter().map(|v| v.map(|v| sol.values[v])).collect(),
+            responses: m
+                .rvar
+                .iter()
+                .chain(&m.wvar)
+                .map(|v| v.map(|v| sol.values[v]))
+                .collect(),
         },
     }
 }

@@ -17,9 +17,13 @@ use rtpipe_model::{Nanos, Server, Spec};
 pub(crate) struct SoundModel {
     /// R_i ≥ this whatever the periods (grid units).
     pub(crate) rlow: Vec<f64>,
+    /// W_i (the read-to-publish bound, modelled under EDF) ≥ this whatever
+    /// the periods (grid units).
+    pub(crate) wlow: Vec<f64>,
     pub(crate) cuts: Vec<RCut>,
     /// Heuristic phase: response times pinned to these estimates (not a
-    /// relaxation; its candidates still go through the analysis).
+    /// relaxation; its candidates still go through the analysis). One per
+    /// task (R; W is pinned to R), or two (R of every task, then W).
     pub(crate) fixed: Option<Vec<f64>>,
 }
 
@@ -36,6 +40,10 @@ pub(crate) struct RCut {
     pub(crate) hp: Vec<usize>,
     pub(crate) periods: Vec<(usize, i64)>,
     pub(crate) own: Option<i64>,
+    /// A cut on W_i rather than R_i (EDF): the read-to-publish bound is
+    /// monotone in the same way (`edf::start_to_finish`: fewer and later
+    /// jobs of others can only lower it).
+    pub(crate) read: bool,
 }
 
 /// Lower bounds on job response times that hold for every choice of
@@ -75,6 +83,34 @@ pub(crate) fn rhat_lower(p: &Problem) -> Vec<f64> {
         .collect()
 }
 
+/// Lower bounds on the read-to-publish bounds W_i for every choice of
+/// periods: own demand plus one job of each task whose deadline is before
+/// i's whatever the periods (`edf::start_to_finish` counts no task of a
+/// deadline at or after i's; `analysis::relax` uses the same bound). Only
+/// modelled under EDF, where W can be below R.
+pub(crate) fn w_lower(p: &Problem) -> Vec<f64> {
+    let spec = p.spec;
+    let n = spec.tasks.len();
+    let d = |j: usize, t: i64| {
+        let t = t * p.g;
+        spec.tasks[j].deadline_given.map_or(t, |d| d.min(t))
+    };
+    (0..n)
+        .map(|i| {
+            let mut w = spec.tasks[i].demand().max(1);
+            for j in 0..n {
+                let mate = j != i
+                    && spec.tasks[j].cpu == spec.tasks[i].cpu
+                    && spec.tasks[j].server != Server::Background;
+                if mate && d(j, p.dom[j].max()) < d(i, p.dom[i].min()) {
+                    w += interference(&spec.tasks[j]);
+                }
+            }
+            grid_units(w, p.g)
+        })
+        .collect()
+}
+
 /// An upper end for R_i: T_i (it finishes within its period) and every
 /// active freshness limit of a chain through i (T_p and the tail's R both
 /// appear in the freshness sum).
@@ -91,8 +127,10 @@ pub(crate) fn rmax_of(m: &Master, groups: &[Group], i: usize) -> f64 {
     r
 }
 
-/// Adds a cut for every chain task whose response time the model
-/// under-estimated at this candidate; false when there was none.
+/// Adds a cut for every chain task whose response time (or, under EDF,
+/// read-to-publish bound) the model under-estimated at this candidate;
+/// false when there was none. `rmodel` holds the model's R of every task,
+/// then its W of every task (`solve.rs`).
 pub(crate) fn learn_r_cuts(
     g: i64,
     cand: &Spec,
@@ -104,13 +142,22 @@ pub(crate) fn learn_r_cuts(
     let prio = rtpipe_model::policy::rate_monotonic(cand);
     let top = rtpipe_analysis::sched::top_priorities(cand, &prio);
     let mut learnt = false;
-    for (i, mv) in rmodel.iter().enumerate() {
-        let (Some(mv), Some(tr)) = (mv, report.timing[i].job_response_time) else {
+    let n = cand.tasks.len();
+    for (k, mv) in rmodel.iter().enumerate() {
+        let (i, read) = (k % n, k >= n);
+        let tm = &report.timing[i];
+        let analysed = if read {
+            tm.read_to_publish
+        } else {
+            tm.job_response_time
+        };
+        let (Some(mv), Some(tr)) = (mv, analysed) else {
             continue;
         };
         let tr = grid_units(tr, g);
         if tr > mv + 1e-6 {
-            sm.cuts.push(r_cut(g, cand, &prio, &top, periods, i, tr));
+            let cut = r_cut(g, cand, &prio, &top, periods, i, tr);
+            sm.cuts.push(RCut { read, ..cut });
             learnt = true;
         }
     }
@@ -137,6 +184,7 @@ fn r_cut(
             hp,
             periods,
             own: None,
+            read: false,
         };
     }
     let t = &cand.tasks[i];
@@ -152,12 +200,18 @@ fn r_cut(
         hp: Vec::new(),
         periods,
         own,
+        read: false,
     }
 }
 
 /// R_i ≥ r − M·(Σ [hp period grew] + Σ [left the hp set] + [T_i moved]).
 pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
-    let Some(rv) = m.rvar[cut.i] else { return };
+    let var = if cut.read {
+        m.wvar[cut.i]
+    } else {
+        m.rvar[cut.i]
+    };
+    let Some(rv) = var else { return };
     let big = m.big_m;
     let mut terms: Vec<(usize, f64)> = vec![(rv, 1.0)];
     let mut rhs = cut.r;
@@ -184,12 +238,14 @@ pub(crate) fn add_r_cut(m: &mut Master, cut: &RCut) {
     m.lp.row(terms, Cmp::Ge, rhs);
 }
 
-/// Sound mode (docs/analysis.md): both sums anchored on the head's release,
-/// each link term the smallest valid option, the priority cases and the
-/// "distinct" property of each stage as binaries. Returns the sums [E, F]:
-/// E the reaction sum (links + the tail's R), F the freshness sum (links,
-/// the last one to the tail's publish); the reaction limit holds when either
-/// fits, as the reported reaction is min(E, F).
+/// Sound mode (docs/analysis.md): both sums from the head's read (from the
+/// event, with `shift` the head period: from its release), each link term
+/// the smallest valid option, the priority cases and the "distinct"
+/// property of each stage as binaries. Returns the sums [E, F]: E the
+/// reaction sum (links + the tail's R; W for a task alone from its read),
+/// F the freshness sum (links, the last one to the tail's publish); the
+/// reaction limit holds when either fits, as the reported reaction is
+/// min(E, F).
 pub(crate) fn sound_chain(
     m: &mut Master,
     path: &[usize],
@@ -198,17 +254,20 @@ pub(crate) fn sound_chain(
     shift: &Lin,
 ) -> Vec<Lin> {
     let tail = *path.last().unwrap_or(&0);
+    let from_read = shift.terms.is_empty() && shift.c == 0.0;
     let mut e = response(m, tail);
-    let mut f = if path.len() == 1 {
-        response(m, tail)
-    } else {
-        Lin::default()
-    };
+    let mut f = Lin::default();
+    if path.len() == 1 {
+        // From the read a task alone is its read-to-publish bound; from the
+        // event its release anchors the freshness (R).
+        e = if from_read { read_response(m, tail) } else { e };
+        f = e.clone();
+    }
     // d = 1: the stage's jobs carry distinct samples (true at the head).
     let mut d = Bin::Const(true);
     for (k, w) in path.windows(2).enumerate() {
         let (p, c) = (w[0], w[1]);
-        let (l, gq) = sound_link(m, p, c, d, k + 2 == path.len());
+        let (l, gq) = sound_link(m, p, c, d, k + 2 == path.len(), from_read && k == 0);
         e = e.plus(&Lin {
             terms: vec![(l, 1.0)],
             c: 0.0,
@@ -247,7 +306,7 @@ pub(crate) fn sound_event_reaction(m: &mut Master, path: &[usize], limit: f64) -
     let tail = *path.last().unwrap_or(&0);
     let mut e = response(m, tail).plus(&m.period[path[0]]);
     for (k, w) in path.windows(2).enumerate() {
-        let (l, _) = sound_link(m, w[0], w[1], Bin::Const(false), k + 2 == path.len());
+        let (l, _) = sound_link(m, w[0], w[1], Bin::Const(false), k + 2 == path.len(), false);
         e = e.plus(&Lin {
             terms: vec![(l, 1.0)],
             c: 0.0,
@@ -266,6 +325,18 @@ fn response(m: &Master, i: usize) -> Lin {
             c: 0.0,
         },
         _ => m.period[i].clone(),
+    }
+}
+
+/// The read-to-publish bound W of task i: its variable under EDF, else its
+/// response time (the same figure under fixed priority).
+fn read_response(m: &Master, i: usize) -> Lin {
+    match m.wvar[i] {
+        Some(v) => Lin {
+            terms: vec![(v, 1.0)],
+            c: 0.0,
+        },
+        None => response(m, i),
     }
 }
 
@@ -297,46 +368,50 @@ fn span(opts: &[&Lin], lp: &Lp, big: f64) -> (f64, f64) {
 /// variable (≥ the option of the priority order; to the consumer's publish
 /// when `last`). The options are `rtpipe_analysis::latency`'s
 /// `sound_reaction_link_in`, `sound_freshness_link_in` and
-/// `sound_freshness_last_in`, release-anchored.
-fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin, last: bool) -> (usize, usize) {
-    let big = m.big_m;
-    let (rp, rc) = (response(m, p), response(m, c));
+/// `sound_freshness_last_in`, release-anchored but for the head's reaction
+/// term from its read (`p_read`: W_p in place of R_p to its publish); the
+/// last freshness link ends W_c after the tail's read.
+fn sound_link(
+    m: &mut Master,
+    p: usize,
+    c: usize,
+    d: Bin,
+    last: bool,
+    p_read: bool,
+) -> (usize, usize) {
+    let rp = response(m, p);
+    let wc = read_response(m, c);
+    // p's publish from where the term starts.
+    let fp = if p_read {
+        read_response(m, p)
+    } else {
+        rp.clone()
+    };
     let same = m.spec.policy().fixed_priority() && m.spec.tasks[p].cpu == m.spec.tasks[c].cpu;
     let (tp, tc) = (m.period[p].clone(), m.period[c].clone());
-    let o1 = rp.plus(&tc);
-    let o2 = rp.plus(&tc).add_c(-xmin(m, c));
+    let o1 = fp.plus(&tc);
+    let o2 = fp.plus(&tc).add_c(-xmin(m, c));
     let o3 = tp.plus(&rp);
     let o4 = tp.clone();
     let o5 = tc.clone();
     let (q1, q2, q3) = if last {
-        (tp.plus(&rp).plus(&rc), tp.plus(&rp), tp.plus(&rc))
+        (tp.plus(&rp).plus(&wc), tp.plus(&rp), tp.plus(&wc))
     } else {
         (tp.plus(&rp), tp.plus(&rp).add_c(-xmin(m, c)), tp.clone())
     };
-    // Bounded by their options, so that the switches get tight big-Ms.
-    let (llo, lhi) = span(&[&o1, &o2, &o3, &o4, &o5], &m.lp, big);
-    let (qlo, qhi) = span(&[&q1, &q2, &q3], &m.lp, big);
-    // HiGHS gets the bounds declared; microlp's basis can go singular
-    // when both the bounds and the big-Ms are tight, so there they are
-    // only known (used for the big-Ms).
-    let (l, gq) = if m.tight_bounds {
-        (m.lp.var(llo, lhi, false), m.lp.var(qlo, qhi, false))
-    } else {
-        (m.lp.var(-big, big, false), m.lp.var(-big, big, false))
-    };
-    m.floor.insert(l, llo);
-    m.floor.insert(gq, qlo);
-    // b = 1 picks a reachability option; allowed only when d = 1.
-    let b = match d {
-        Bin::Const(false) => Bin::Const(false),
-        _ => {
-            let v = m.lp.binary();
-            if let Bin::Var(dv) = d {
-                m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
-            }
-            Bin::Var(v)
-        }
-    };
+    // EDF on one CPU, implicit deadlines (the design's): the options
+    // T_c + (T_p − T_c)⁺ = max(T_c, T_p) and T_p + (T_p − T_c)⁺.
+    let cpu = |i: usize| m.spec.tasks[i].cpu;
+    let implicit = |i: usize| m.spec.tasks[i].deadline_given.is_none();
+    let edf = !m.spec.policy().fixed_priority() && cpu(p) == cpu(c) && implicit(p) && implicit(c);
+    let o6 = tp.scale(2.0).plus(&tc.scale(-1.0));
+    let mut opts = vec![&o1, &o2, &o3, &o4, &o5];
+    if edf {
+        opts.push(&o6);
+    }
+    let l = option_var(m, &opts);
+    let gq = option_var(m, &[&q1, &q2, &q3]);
+    let b = reach_binary(m, d);
     if same {
         let o = m.above(c, p); // 1: c ≻ p (P1), 0: p ≻ c (P2)
         m.ge_option(l, &o2, &[(o, true), (b, false)]);
@@ -345,12 +420,69 @@ fn sound_link(m: &mut Master, p: usize, c: usize, d: Bin, last: bool) -> (usize,
         m.ge_option(l, &o4, &[(o, false), (b, true)]);
         m.ge_option(gq, &q2, &[(o, true)]);
         m.ge_option(gq, &q3, &[(o, false)]);
+    } else if edf {
+        // Freshness: T_p + R_p on a middle link, T_p + max(R_p, W_c) on the
+        // last.
+        let mut fresh = vec![tp.plus(&rp)];
+        if last {
+            fresh.push(tp.plus(&wc));
+        }
+        sound_link_edf(m, (l, gq), b, [&o1, &o3, &o4, &o5, &o6], &fresh);
     } else {
         m.ge_option(l, &o1, &[(b, false)]);
         m.ge_option(l, &o3, &[(b, true)]);
         m.ge_option(gq, &q1, &[]);
     }
     (l, gq)
+}
+
+/// A variable for the least of some options, bounded by them so that the
+/// switches get tight big-Ms. HiGHS gets the bounds declared; microlp's
+/// basis can go singular when both the bounds and the big-Ms are tight,
+/// so there they are only known (used for the big-Ms).
+fn option_var(m: &mut Master, opts: &[&Lin]) -> usize {
+    let big = m.big_m;
+    let (lo, hi) = span(opts, &m.lp, big);
+    let v = if m.tight_bounds {
+        m.lp.var(lo, hi, false)
+    } else {
+        m.lp.var(-big, big, false)
+    };
+    m.floor.insert(v, lo);
+    v
+}
+
+/// b = 1 picks a reachability option; allowed only when d = 1.
+fn reach_binary(m: &mut Master, d: Bin) -> Bin {
+    match d {
+        Bin::Const(false) => Bin::Const(false),
+        _ => {
+            let v = m.lp.binary();
+            if let Bin::Var(dv) = d {
+                m.lp.row(vec![(v, 1.0), (dv, -1.0)], Cmp::Le, 0.0);
+            }
+            Bin::Var(v)
+        }
+    }
+}
+
+/// The options of an EDF link on one CPU (`latency`'s `edf_together`):
+/// a binary e picks the deadline-order options, `b` reachability as
+/// elsewhere; `o` = [R_p + T_c (or W_p + T_c), T_p + R_p, T_p, T_c,
+/// 2 T_p − T_c]; the freshness variable is at least every `fresh` option.
+fn sound_link_edf(m: &mut Master, (l, gq): (usize, usize), b: Bin, o: [&Lin; 5], fresh: &[Lin]) {
+    let e = Bin::Var(m.lp.binary());
+    m.ge_option(l, o[0], &[(b, false), (e, false)]);
+    m.ge_option(l, o[1], &[(b, true), (e, false)]);
+    // T_c + (T_p − T_c)⁺ = max(T_c, T_p).
+    m.ge_option(l, o[3], &[(b, false), (e, true)]);
+    m.ge_option(l, o[2], &[(b, false), (e, true)]);
+    // T_p + (T_p − T_c)⁺ = max(T_p, 2 T_p − T_c).
+    m.ge_option(l, o[2], &[(b, true), (e, true)]);
+    m.ge_option(l, o[4], &[(b, true), (e, true)]);
+    for f in fresh {
+        m.ge_option(gq, f, &[]);
+    }
 }
 
 /// Distinct passes to c when c's reads are further apart than p's

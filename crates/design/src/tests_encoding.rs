@@ -31,7 +31,7 @@ use crate::master::build;
 use crate::model::ChainExpr;
 use crate::problem::{Group, Problem};
 use crate::solve::fix_periods;
-use crate::sound::{rhat_lower, SoundModel};
+use crate::sound::{rhat_lower, w_lower, SoundModel};
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{Metric, Report};
 use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig};
@@ -59,6 +59,7 @@ fn least_chain_values(
         .collect();
     let pinned = SoundModel {
         rlow: rhat_lower(&p),
+        wlow: w_lower(&p),
         cuts: Vec::new(),
         fixed: Some(responses.iter().map(|&r| grid_units(r, p.g)).collect()),
     };

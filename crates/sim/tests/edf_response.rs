@@ -1,7 +1,11 @@
 //! EDF response times (Spuri 1996, `rtpipe_analysis::edf`) against the
 //! simulator's reservations: no job of any phasing or demand responds later
 //! than the analysis says, and Spuri's critical pattern (every other task
-//! released at 0, the analysed one at some offset) reaches the bound.
+//! released at 0, the analysed one at some offset) reaches the bound. The
+//! same for the read-to-publish bound `W` (`edf::start_to_finish`): no job
+//! publishes later than `W` after its read, and the start pattern (the
+//! analysed job alone at its release, every other task released just after
+//! its read) reaches it.
 //!
 //! Systems are small and on a 1 ms grid (periods 2–24 ms, one CPU, servers
 //! or plain tasks, budgets at or above the demands), so a few hyperperiods
@@ -10,6 +14,7 @@
 
 use proptest::prelude::*;
 use rtpipe_analysis::analyze;
+use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 use rtpipe_testkit::check;
@@ -43,28 +48,43 @@ fn lcm(a: i64, b: i64) -> i64 {
     a / rtpipe_model::gcd(a, b) * b
 }
 
-/// Every job's worst response per task, from a run of `offsets` (ms) over
-/// three hyperperiods past the last offset.
-fn worst_responses(spec: &Spec, offsets: &[i64], exec: ExecModel, seed: u64) -> Vec<Nanos> {
+/// A run of `offsets` (ns) over three hyperperiods past the last offset.
+fn run(spec: &Spec, offsets: &[Nanos], exec: ExecModel, seed: u64, log_jobs: bool) -> SimResult {
     let h = spec
         .tasks
         .iter()
         .filter_map(|t| t.fixed_period())
         .fold(1, lcm);
-    let last = offsets.iter().copied().max().unwrap_or(0) * MS;
+    let last = offsets.iter().copied().max().unwrap_or(0);
     let cfg = SimConfig {
         horizon: last + 3 * h,
         seed,
-        phasing: Phasing::Given(offsets.iter().map(|o| o * MS).collect()),
+        phasing: Phasing::Given(offsets.to_vec()),
         exec,
-        log_jobs: false,
+        log_jobs,
         jitter: rtpipe_sim::Jitter::default(),
     };
-    let r = simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
-    r.tasks
+    simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every job's worst response per task, from a run of `offsets` (ms).
+fn worst_responses(spec: &Spec, offsets: &[i64], exec: ExecModel, seed: u64) -> Vec<Nanos> {
+    let offsets: Vec<Nanos> = offsets.iter().map(|o| o * MS).collect();
+    run(spec, &offsets, exec, seed, false)
+        .tasks
         .iter()
         .map(|t| t.max_response.unwrap_or(0))
         .collect()
+}
+
+/// Every job's longest time from its read to its publish per task, from a
+/// run of `offsets` (ns).
+fn worst_read_to_publish(spec: &Spec, offsets: &[Nanos], exec: ExecModel, seed: u64) -> Vec<Nanos> {
+    let mut worst = vec![0; spec.tasks.len()];
+    for j in run(spec, offsets, exec, seed, true).jobs {
+        worst[j.task] = worst[j.task].max(j.finish - j.read);
+    }
+    worst
 }
 
 fn params() -> impl Strategy<Value = Params> {
@@ -164,4 +184,96 @@ fn the_critical_pattern_reaches_the_bound() {
         reached * 10 >= systems * 9,
         "reached on {reached} of {systems}"
     );
+}
+
+/// No job of any phasing (on the 1 ms grid, each offset shifted by 0, 1 or
+/// 2 ns so that releases fall just after reads) or demand model publishes
+/// later than its task's `W` after its read; `W ≤ R ≤ T`.
+#[test]
+fn no_job_exceeds_the_read_to_publish_bound() {
+    let strategy = (
+        prop::collection::vec(params(), 2..=5),
+        prop::collection::vec((0i64..24, 0i64..=2), 5),
+        any::<bool>(),
+        any::<u64>(),
+    );
+    check(
+        "no_job_exceeds_the_read_to_publish_bound",
+        10_000,
+        strategy,
+        |(tasks, offsets, uniform, seed)| {
+            let Some(spec) = spec_of(&tasks) else {
+                return Ok("overloaded");
+            };
+            let report = analyze(&spec);
+            let offs: Vec<Nanos> = (0..tasks.len())
+                .map(|k| (offsets[k].0 % tasks[k].2) * MS + offsets[k].1)
+                .collect();
+            let exec = if uniform {
+                ExecModel::Uniform
+            } else {
+                ExecModel::Worst
+            };
+            let seen = worst_read_to_publish(&spec, &offs, exec, seed);
+            let mut below_r = false;
+            for (k, t) in report.timing.iter().enumerate() {
+                let (Some(w), Some(r)) = (t.read_to_publish, t.job_response_time) else {
+                    return Err(TestCaseError::fail(format!("task {k}: no W or R")));
+                };
+                prop_assert!(w <= r && r <= t.period, "task {k}: W {w}, R {r}");
+                prop_assert!(
+                    seen[k] <= w,
+                    "task {k}: read to publish {} > W {w}, offsets {offs:?}",
+                    seen[k]
+                );
+                below_r |= seen[k] == w && w < r;
+            }
+            Ok(if below_r {
+                "checked, some task at a W below its R"
+            } else {
+                "checked"
+            })
+        },
+    );
+}
+
+/// The start pattern: the analysed task released at 0 with its worst
+/// demand, every other task at 1 ns (just after the read) and then as often
+/// as it may, budgets equal to demands (the analysis charges a server its
+/// budget). On the 1 ms grid the jobs released after the read with a
+/// deadline before the analysed one's are exactly those `W` counts, so the
+/// read-to-publish time is `W` on every system.
+#[test]
+fn the_start_pattern_reaches_the_bound() {
+    let mut rng = rtpipe_model::gen::Rng::new(2027);
+    let periods = [2i64, 3, 4, 5, 6, 8, 10, 12, 24];
+    let (mut systems, mut below_r) = (0, 0);
+    while systems < 400 {
+        let n = rng.range(2, 5) as usize;
+        let tasks: Vec<Params> = (0..n)
+            .map(|_| {
+                let t = periods[rng.range(0, periods.len() as u64 - 1) as usize];
+                let x = (rng.range(1, 4) as i64).min(t);
+                (x, 0, t, rng.chance(0.5))
+            })
+            .collect();
+        let Some(spec) = spec_of(&tasks) else {
+            continue;
+        };
+        systems += 1;
+        let report = analyze(&spec);
+        let i = rng.range(0, n as u64 - 1) as usize;
+        let tm = &report.timing[i];
+        let w = tm.read_to_publish.unwrap_or(0);
+        let mut offs = vec![1; n];
+        offs[i] = 0;
+        let found = worst_read_to_publish(&spec, &offs, ExecModel::Worst, 1)[i];
+        assert_eq!(
+            found, w,
+            "{tasks:?}, task {i}: the pattern gives {found}, W = {w}"
+        );
+        below_r += usize::from(w < tm.job_response_time.unwrap_or(0));
+    }
+    println!("start pattern: W reached on all {systems} systems, below R on {below_r}");
+    assert!(below_r >= 40, "W below R on only {below_r} systems");
 }
