@@ -15,7 +15,6 @@ use verdict::Verdict;
 mod verdict;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
-use rtpipe_body::Body;
 use rtpipe_fly::{Flight, Setup};
 use rtpipe_joblog::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_model::policy::LinuxClass;
@@ -454,12 +453,8 @@ fn execute(
             Err(e) => Err(e.within(a.spec.display())),
         };
     }
-    let bodies: Vec<Box<dyn Body<u64>>> = spec
-        .tasks
-        .iter()
-        .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
-        .collect();
-    match rtpipe_runtime::run(spec, cfg, bodies, None) {
+    // Synthetic bodies, each task's critical sections held by the runtime.
+    match rtpipe_runtime::run_synthetic(spec, cfg, spin) {
         Ok(r) => Ok((r, None)),
         Err(e) => {
             let b = e.diagnostic.within(a.spec.display());

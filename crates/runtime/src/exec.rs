@@ -8,22 +8,26 @@ pub use crate::config::{
     fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 use crate::four_slot::{self, Reader, Writer};
+use crate::let_comm::{self, Cell, LetIn, LetOut};
 use crate::load::Load;
+use crate::locks::{Held, Resources, Sections};
 use crate::partition::Partition;
 use crate::pi::PiMutex;
 use crate::probe::{probe, Probe, PROBE_PERIOD};
+use crate::spin::{synthetic, Spin};
 use crate::sys;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::LinuxClass;
-use rtpipe_model::Spec;
+use rtpipe_model::{Communication, Spec};
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
 
 /// Per task, what the run measured beyond [`TaskStats`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TaskRun {
-    /// finish − release of every job.
+    /// Completion − release of every job, in index order: the schedule's
+    /// response (under LET too, where the job log holds the period's end).
     pub responses: Vec<Nanos>,
     /// Jobs whose CPU time (read to publish) exceeded the task's budget C
     /// by more than [`OVERRUN_TOLERANCE`].
@@ -38,6 +42,12 @@ pub struct TaskRun {
     pub max_start: Nanos,
     /// The SCHED_FIFO priority (fifo only).
     pub priority: Option<i32>,
+    /// The critical sections its jobs held, in order ([`run_synthetic`]).
+    pub sections: Vec<Held>,
+    /// LET: reads that found another producer job than LET's in their slot
+    /// (`let_comm`): the producer overran its period, or the reader came
+    /// later than the edge keeps jobs for.
+    pub let_misses: u64,
 }
 
 /// A finished run.
@@ -74,16 +84,30 @@ pub struct RunResult {
     /// SCHED_DEADLINE ran partitioned EDF (a root domain per CPU, each
     /// thread pinned to its task's CPU) rather than global EDF.
     pub partitioned: bool,
+    /// Under LET, every job at the schedule's instants (read: when its
+    /// thread read, finish: when it completed), where `sim.jobs` holds
+    /// LET's (release, period end); `None` otherwise ([`RunResult::scheduled`]).
+    pub schedule: Option<Vec<JobRecord>>,
 }
 
-/// The value a register holds: `None` until the producer first publishes.
-type Cell<V> = Option<Stamped<V>>;
+impl RunResult {
+    /// Every job as the threads ran it (read, completion): what the
+    /// response times and the causes of a delay are measured on.
+    pub fn scheduled(&self) -> &[JobRecord] {
+        self.schedule.as_deref().unwrap_or(&self.sim.jobs)
+    }
+}
 
 /// One job as a thread logs it (no allocation in the periodic path).
 #[derive(Debug, Clone, Copy, Default)]
 struct Rec {
     index: u64,
     release: Nanos,
+    /// When the thread read its inputs, and when it published.
+    start: Nanos,
+    done: Nanos,
+    /// The communication instants: `start` and `done`, or under LET the
+    /// release and the period's end.
     read: Nanos,
     finish: Nanos,
     demand: Nanos,
@@ -106,6 +130,13 @@ struct Thread<'a, V> {
     recs: Vec<Rec>,
     /// Per job, the producer job read on each input (u64::MAX: none yet).
     inputs: Vec<u64>,
+    /// Under LET, its edges instead of `readers` and `writers`.
+    let_in: Vec<LetIn<V>>,
+    let_out: Vec<LetOut<V>>,
+    let_comm: bool,
+    let_misses: u64,
+    /// Its critical sections, run before the body (synthetic bodies).
+    sections: Option<Sections>,
 }
 
 /// How long after the last release a thread may still be running before it
@@ -274,13 +305,39 @@ pub fn run<'a, V: Copy + Send>(
     bodies: Vec<Box<dyn Body<V> + 'a>>,
     env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
 ) -> Result<RunResult, RunError> {
+    if let Some((msg, help)) = crate::comm::bodies_refusal(spec, env.is_some()) {
+        return Err(RunError::config(msg, help));
+    }
+    execute(spec, cfg, bodies, env, None)
+}
+
+/// Runs `spec` with synthetic bodies burning each task's demand
+/// ([`crate::synthetic`]), its critical sections (`[resources]`) held under
+/// the spec's protocol where the simulator places them (`crate::locks`),
+/// each section's instants logged in [`TaskRun::sections`].
+pub fn run_synthetic(spec: &Spec, cfg: &RunConfig, spin: Spin) -> Result<RunResult, RunError> {
+    let bodies: Vec<Box<dyn Body<u64>>> = (0..spec.tasks.len())
+        .map(|i| Box::new(synthetic(spin, Sections::rest(spec, i))) as Box<dyn Body<u64>>)
+        .collect();
+    execute(spec, cfg, bodies, None, Some(spin))
+}
+
+/// [`run`], the sections run with `spin` when given.
+fn execute<'a, V: Copy + Send>(
+    spec: &Spec,
+    cfg: &RunConfig,
+    bodies: Vec<Box<dyn Body<V> + 'a>>,
+    env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
+    spin: Option<Spin>,
+) -> Result<RunResult, RunError> {
     assert_eq!(bodies.len(), spec.tasks.len(), "one body per task");
     check(spec, cfg)?;
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
     let mut notes: Vec<String> = lock_memory(cfg.policy, n).into_iter().collect();
-    let threads = threads(spec, cfg, bodies);
+    notes.extend(crate::locks::note(spec, cfg.policy));
+    let threads = threads(spec, cfg, bodies, spin);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
         RunError::config(
@@ -290,6 +347,12 @@ pub fn run<'a, V: Copy + Send>(
     })?;
     sys::catch_sigint();
     let mut shared = Shared::new(n);
+    shared.resources = Some(Resources::new(spec, cfg.policy).map_err(|e| {
+        RunError::config(
+            format!("cannot create the resources' locks: {e}"),
+            "resource_protocol = \"pip\" needs PTHREAD_PRIO_INHERIT mutexes (glibc on Linux)",
+        )
+    })?);
     if cfg.policy == Policy::Deadline {
         match Partition::create(sys::online_cpus()) {
             Ok(p) => shared.partition = Some(p),
@@ -387,8 +450,10 @@ fn threads<'a, V: Copy + Send>(
     spec: &Spec,
     cfg: &RunConfig,
     bodies: Vec<Box<dyn Body<V> + 'a>>,
+    spin: Option<Spin>,
 ) -> Vec<Thread<'a, V>> {
     let prios = fifo_priorities(spec);
+    let let_comm = spec.communication == Communication::Let;
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
         .enumerate()
@@ -412,15 +477,27 @@ fn threads<'a, V: Copy + Send>(
                 writers: Vec::new(),
                 recs: Vec::with_capacity(cap),
                 inputs: Vec::with_capacity(cap * t.reads.len()),
+                let_in: Vec::new(),
+                let_out: Vec::new(),
+                let_comm,
+                let_misses: 0,
+                sections: spin.and_then(|s| Sections::of(spec, i, s, cap)),
             }
         })
         .collect();
-    // One register per (producer, consumer) edge.
+    // One register per (producer, consumer) edge; under LET, a ring of them.
     for c in 0..spec.tasks.len() {
         for &p in &spec.tasks[c].reads {
-            let (w, r) = four_slot::register::<Cell<V>>(None);
-            threads[p].writers.push(w);
-            threads[c].readers.push(r);
+            if let_comm {
+                let from = (threads[p].phase, threads[p].period);
+                let (w, r) = let_comm::edge::<V>(from, threads[c].period);
+                threads[p].let_out.push(w);
+                threads[c].let_in.push(r);
+            } else {
+                let (w, r) = four_slot::register::<Cell<V>>(None);
+                threads[p].writers.push(w);
+                threads[c].readers.push(r);
+            }
         }
     }
     threads
@@ -445,6 +522,8 @@ struct Shared {
     /// SCHED_DEADLINE: one root domain per CPU (partitioned EDF), when the
     /// machine allows it; `None`: global EDF.
     partition: Option<Partition>,
+    /// The resources' locks and ceilings (`crate::locks`).
+    resources: Option<Resources>,
 }
 
 impl Shared {
@@ -459,6 +538,7 @@ impl Shared {
             tids: (0..n).map(|_| AtomicI32::new(0)).collect(),
             done: (0..n).map(|_| AtomicBool::new(false)).collect(),
             partition: None,
+            resources: None,
         }
     }
 }
@@ -543,7 +623,8 @@ fn task_thread<'a, V: Copy>(
     shared.go.wait();
     if !shared.abort.load(Ordering::SeqCst) {
         let e = shared.epoch.load(Ordering::SeqCst);
-        periodic(&mut th, e, (duration, duration + grace), env);
+        let res = shared.resources.as_ref();
+        periodic(&mut th, e, (duration, duration + grace), env, res);
     }
     done.store(true, Ordering::SeqCst);
     th
@@ -557,8 +638,9 @@ fn periodic<V: Copy>(
     epoch: Nanos,
     (duration, stop): (Nanos, Nanos),
     env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    res: Option<&Resources>,
 ) {
-    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len());
+    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len() + th.let_in.len());
     let mut k: u64 = 0;
     loop {
         let offset = th.phase + k as i64 * th.period;
@@ -583,19 +665,25 @@ fn periodic<V: Copy>(
             // span ends at the stop, so this job is not part of it.
             break;
         }
-        job(th, k, epoch, env, &mut inputs);
+        job(th, k, epoch, (env, res), &mut inputs);
         k += 1;
     }
 }
 
 /// Job `k` of the task, released at epoch + φ + k·T: read the registers, run
-/// the body, publish to the registers, and log it. `inputs` is the job's
-/// buffer for the values read (kept across jobs: no allocation here).
+/// its critical sections and the body, publish to the registers, and log
+/// it. `inputs` is the job's buffer for the values read (kept across jobs:
+/// no allocation here). Under LET (`let_comm`) it reads what was visible at
+/// its release and its output is visible from its period's end: those are
+/// the instants it logs and stamps.
 fn job<V: Copy>(
     th: &mut Thread<'_, V>,
     k: u64,
     epoch: Nanos,
-    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    (env, res): (
+        Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+        Option<&Resources>,
+    ),
     inputs: &mut Vec<Cell<V>>,
 ) {
     let offset = th.phase + k as i64 * th.period;
@@ -606,30 +694,51 @@ fn job<V: Copy>(
         th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
         inputs.push(v);
     }
-    let (read, device) = sense(th.task, epoch, env);
+    for r in &mut th.let_in {
+        let (v, exact) = r.read(offset);
+        th.let_misses += u64::from(!exact);
+        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+        inputs.push(v);
+    }
+    let (start, device) = sense(th.task, epoch, env);
+    let start = start - epoch;
+    let read = if th.let_comm { offset } else { start };
     let job = Job {
         task: th.task,
         index: k,
         release: offset,
-        read: read - epoch,
+        read,
     };
+    if let (Some(s), Some(res)) = (&mut th.sections, res) {
+        s.run(res, k, th.priority, epoch);
+    }
     let value = th.body.run(&job, inputs, device);
-    let publish = actuate(th.task, epoch, env, &value);
+    let done = actuate(th.task, epoch, env, &value) - epoch;
+    let finish = if th.let_comm {
+        offset + th.period
+    } else {
+        done
+    };
     let stamp = Stamp {
         task: th.task,
         job: k,
-        read: read - epoch,
-        publish: publish - epoch,
+        read,
+        publish: finish,
     };
     for w in &mut th.writers {
         w.write(Some(Stamped { value, stamp }));
+    }
+    for w in &mut th.let_out {
+        w.write(Stamped { value, stamp });
     }
     let demand = sys::thread_cpu_time() - cpu0;
     th.recs.push(Rec {
         index: k,
         release: offset,
-        read: read - epoch,
-        finish: publish - epoch,
+        start,
+        done,
+        read,
+        finish,
         demand,
     });
 }
@@ -687,13 +796,19 @@ fn assemble<V>(
     notes: Vec<String>,
 ) -> RunResult {
     let n = spec.tasks.len();
-    let jobs = job_log(spec, &threads, &mut prov);
+    let jobs = job_log(spec, &threads, &mut prov, horizon);
+    let schedule = threads
+        .iter()
+        .any(|th| th.let_comm)
+        .then(|| schedule(&threads));
     let chains = prov.finish();
     let segments = spans(spec, &jobs);
     let mut tasks = Vec::with_capacity(n);
     let mut runs = Vec::with_capacity(n);
+    let mut notes = notes;
     for th in &threads {
         let (stats, run) = task_figures(th);
+        notes.extend(thread_notes(&spec.tasks[th.task].name, th));
         tasks.push(stats);
         runs.push(run);
     }
@@ -718,6 +833,7 @@ fn assemble<V>(
         probes: Vec::new(),
         demoted: Vec::new(),
         partitioned: false,
+        schedule,
     }
 }
 
@@ -727,11 +843,20 @@ fn assemble<V>(
 /// read instant (the publish instant is taken before the register write),
 /// so a job takes its samples from the producer job its thread logged
 /// reading; publish order guarantees that job's record exists by then.
-fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> Vec<JobRecord> {
+fn job_log<V>(
+    spec: &Spec,
+    threads: &[Thread<'_, V>],
+    prov: &mut Provenance,
+    horizon: Nanos,
+) -> Vec<JobRecord> {
     let mut order: Vec<(Nanos, Nanos, usize, usize)> = Vec::new();
     for (i, th) in threads.iter().enumerate() {
         for (j, r) in th.recs.iter().enumerate() {
-            order.push((r.finish, r.read, i, j));
+            // Under LET a period ending at or after the horizon has not
+            // published (as in the simulator, where no release ends it).
+            if !th.let_comm || r.finish < horizon {
+                order.push((r.finish, r.read, i, j));
+            }
         }
     }
     order.sort_unstable();
@@ -744,7 +869,7 @@ fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> 
     for &(_, _, i, j) in &order {
         let th = &threads[i];
         let r = th.recs[j];
-        let nreads = th.readers.len();
+        let nreads = th.readers.len() + th.let_in.len();
         let inputs = th.inputs.get(j * nreads..(j + 1) * nreads).unwrap_or(&[]);
         let reads = &spec.tasks[i].reads;
         prov.read_with(i, r.read, |p, ps| {
@@ -768,11 +893,49 @@ fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> 
     jobs
 }
 
+/// Every job at the schedule's instants, in completion order.
+fn schedule<V>(threads: &[Thread<'_, V>]) -> Vec<JobRecord> {
+    let mut out: Vec<JobRecord> = threads
+        .iter()
+        .flat_map(|th| {
+            th.recs.iter().map(|r| JobRecord {
+                task: th.task,
+                index: r.index,
+                release: r.release,
+                demand: r.demand,
+                read: r.start,
+                finish: r.done,
+                carried: Vec::new(),
+            })
+        })
+        .collect();
+    out.sort_by_key(|j| (j.finish, j.read, j.task));
+    out
+}
+
+/// Warnings about what a thread could not do as the model says.
+fn thread_notes<V>(name: &str, th: &Thread<'_, V>) -> Vec<String> {
+    let mut out = Vec::new();
+    if th.let_misses > 0 {
+        out.push(format!(
+            "warning: task {name}: {} LET read(s) found another producer job than LET's (a producer overran its period, or this task read too late): their data flow is logged as it happened",
+            th.let_misses
+        ));
+    }
+    if let Some(f) = th.sections.as_ref().map(|s| s.failed).filter(|&f| f > 0) {
+        out.push(format!(
+            "warning: task {name}: the kernel refused {f} priority change(s) or lock(s) of its critical sections"
+        ));
+    }
+    out
+}
+
 /// One task's figures from its thread's log: in the simulator's terms
 /// (late = missed periods, exhaustions = budget overruns beyond
 /// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
 fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
-    let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
+    // The schedule's response (completion, not LET's period end).
+    let responses: Vec<Nanos> = th.recs.iter().map(|r| r.done - r.release).collect();
     // Against D (the period unless the spec gives a deadline).
     let missed = responses.iter().filter(|&&r| r > th.deadline).count() as u64;
     let overruns = th
@@ -793,13 +956,18 @@ fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
         max_start: th
             .recs
             .iter()
-            .map(|r| r.read - r.release)
+            .map(|r| r.start - r.release)
             .max()
             .unwrap_or(0),
         responses,
         overruns,
         missed,
         priority: th.priority,
+        sections: th
+            .sections
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.held.clone()),
+        let_misses: th.let_misses,
     };
     (stats, run)
 }
