@@ -107,7 +107,14 @@ fn the_high_task_waits_for_the_low_task_s_section_and_never_longer() {
         let max = h.responses.iter().copied().max().unwrap_or(0);
         assert!(max < 6 * MS, "{protocol}: h responded in {max} ns");
         // The others run alone (≈ 1 ms).
-        let free = h.responses.iter().skip(1).step_by(2).min().copied().unwrap_or(0);
+        let free = h
+            .responses
+            .iter()
+            .skip(1)
+            .step_by(2)
+            .min()
+            .copied()
+            .unwrap_or(0);
         assert!(free < 2 * MS, "{protocol}: h alone responded in {free} ns");
         // l's section ran at its start and was held 3 ms of CPU time.
         let l = &res.tasks[2];
@@ -115,9 +122,16 @@ fn the_high_task_waits_for_the_low_task_s_section_and_never_longer() {
         assert!(first.exit - first.enter >= 3 * MS, "{first:?}");
         for (t, bound) in [(1, 9 * MS), (2, 11 * MS)] {
             let m = res.tasks[t].responses.iter().copied().max().unwrap_or(0);
-            assert!(m < bound + 2 * MS, "{protocol}: task {t} responded in {m} ns");
+            assert!(
+                m < bound + 2 * MS,
+                "{protocol}: task {t} responded in {m} ns"
+            );
         }
-        assert!(res.notes.iter().all(|n| !n.contains("refused")), "{:?}", res.notes);
+        assert!(
+            res.notes.iter().all(|n| !n.contains("refused")),
+            "{:?}",
+            res.notes
+        );
     }
 }
 
@@ -129,7 +143,9 @@ fn best_effort_keeps_mutual_exclusion_and_says_the_protocol_is_off() {
         let res = run(&spec, Policy::Other, 200);
         exclusive(&res);
         assert!(
-            res.notes.iter().any(|n| n.contains("SCHED_OTHER has no priorities")),
+            res.notes
+                .iter()
+                .any(|n| n.contains("SCHED_OTHER has no priorities")),
             "{:?}",
             res.notes
         );
@@ -160,9 +176,10 @@ fn let_runs_give_the_simulator_s_exact_latencies() {
     let res = run(&spec, policy, 400);
     let rows = |jobs| rtpipe_joblog::sample_rows(&spec, jobs);
     let (real, model) = (rows(&res.sim.jobs), rows(&sim.jobs));
-    let lat = |rows: &Vec<Vec<rtpipe_joblog::SampleRow>>| -> Vec<(Nanos, Option<Nanos>, Option<Nanos>)> {
-        rows[0].iter().map(|r| (r.read, r.first, r.last)).collect()
-    };
+    let lat =
+        |rows: &Vec<Vec<rtpipe_joblog::SampleRow>>| -> Vec<(Nanos, Option<Nanos>, Option<Nanos>)> {
+            rows[0].iter().map(|r| (r.read, r.first, r.last)).collect()
+        };
     let (a, b) = (lat(&real), lat(&model));
     assert!(a.len() >= 70, "{} samples", a.len());
     // The same samples, read and output at the same instants.
