@@ -550,6 +550,13 @@ fn to_text(
          switching overhead; start = read - release; demand = CPU time of one job):\n",
     );
     out.push_str(&task_table(spec, report, res));
+    if !spec.resources.is_empty() {
+        out.push_str(&format!(
+            "\ncritical sections (resource_protocol = \"{}\"; held: lock taken to given back, wall time; overlaps: holds of one resource that overlapped, 0 when mutual exclusion held):\n",
+            spec.resource_protocol.name()
+        ));
+        out.push_str(&sections_table(spec, res));
+    }
     out.push_str(&format!(
         "\nsteal time during the run: {}\n",
         res.steal
@@ -645,6 +652,27 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
     t.render()
 }
 
+/// One row per resource: the sections that held it, the longest hold, the
+/// overlaps.
+fn sections_table(spec: &Spec, res: &RunResult) -> String {
+    let holds: Vec<_> = res
+        .tasks
+        .iter()
+        .flat_map(|t| t.sections.iter().copied())
+        .collect();
+    let mut t = Table::new(&["resource", "holds", "max held", "overlaps"]).numeric(&[1, 2, 3]);
+    let rows = rtpipe_runtime::locks::summary(spec.resources.len(), &holds);
+    for (r, (n, longest, overlaps)) in spec.resources.iter().zip(rows) {
+        t.row(vec![
+            r.name.clone(),
+            n.to_string(),
+            spec.fmt_time(longest),
+            overlaps.to_string(),
+        ]);
+    }
+    t.render()
+}
+
 /// `run --json`: the observations report with each task's measurements,
 /// the Fig. 10 figures, the run, and the flight when bodies flew.
 #[derive(Serialize)]
@@ -688,6 +716,36 @@ struct RunInfo<'a> {
     edf: Option<&'static str>,
     sound_bound_violations: &'a Verdict,
     notes: &'a [String],
+    /// Per resource: its sections as the threads held them.
+    critical_sections: Vec<HeldView<'a>>,
+}
+
+/// One resource's sections in a run.
+#[derive(Serialize)]
+struct HeldView<'a> {
+    resource: &'a str,
+    holds: usize,
+    max_held: f64,
+    overlaps: usize,
+}
+
+fn held_json<'a>(spec: &'a Spec, res: &RunResult) -> Vec<HeldView<'a>> {
+    let holds: Vec<_> = res
+        .tasks
+        .iter()
+        .flat_map(|t| t.sections.iter().copied())
+        .collect();
+    let rows = rtpipe_runtime::locks::summary(spec.resources.len(), &holds);
+    spec.resources
+        .iter()
+        .zip(rows)
+        .map(|(r, (holds, longest, overlaps))| HeldView {
+            resource: &r.name,
+            holds,
+            max_held: spec.in_unit(longest),
+            overlaps,
+        })
+        .collect()
 }
 
 fn to_json<'a>(
@@ -743,6 +801,7 @@ fn to_json<'a>(
         spin_iterations_per_us: spin.iters_per_us,
         sound_bound_violations: verdict,
         notes: &res.notes,
+        critical_sections: held_json(spec, res),
     };
     RunView {
         report,

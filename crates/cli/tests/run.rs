@@ -761,6 +761,14 @@ fn resources_run_under_their_protocol_within_the_sound_bounds() {
         assert!(notes.contains(says), "{protocol}: {notes}");
         // 1 s of h's 5 ms periods, every job done.
         assert_eq!(v["tasks"][0]["observed"]["completed"], 200, "{protocol}");
+        // bus: h's 200 jobs and m's 100 held it; log: h's 200 and l's 50;
+        // no two holds of one resource overlapped.
+        let held = &v["run"]["critical_sections"];
+        for (k, name, holds) in [(0, "bus", 300), (1, "log", 250)] {
+            assert_eq!(held[k]["resource"], name, "{held}");
+            assert_eq!(held[k]["holds"], holds, "{protocol}: {held}");
+            assert_eq!(held[k]["overlaps"], 0, "{protocol}: {held}");
+        }
     }
 }
 

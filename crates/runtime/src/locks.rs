@@ -182,11 +182,7 @@ pub(crate) fn note(spec: &Spec, policy: Policy) -> Option<String> {
     if spec.tasks.iter().all(|t| t.sections.is_empty()) {
         return None;
     }
-    let name = match spec.resource_protocol {
-        ResourceProtocol::Pcp => "pcp",
-        ResourceProtocol::Srp => "srp",
-        ResourceProtocol::Pip => "pip",
-    };
+    let name = spec.resource_protocol.name();
     Some(match policy {
         Policy::Other => format!(
             "note: resource_protocol = \"{name}\" not applied: SCHED_OTHER has no priorities to raise or lend; the critical sections keep mutual exclusion only, and the blocking bound does not hold"
@@ -196,4 +192,41 @@ pub(crate) fn note(spec: &Spec, policy: Policy) -> Option<String> {
             _ => format!("note: critical sections under the immediate priority ceiling (resource_protocol = \"{name}\"): a holder runs at its resource's ceiling"),
         },
     })
+}
+
+/// Per resource (of `resources`): how many sections held it, the longest
+/// hold (wall time, preemptions included), and how many holds began
+/// before the previous one on it ended (0 when mutual exclusion held).
+pub fn summary(resources: usize, holds: &[Held]) -> Vec<(usize, Nanos, usize)> {
+    let mut by: Vec<Vec<Held>> = vec![Vec::new(); resources];
+    for h in holds {
+        if let Some(v) = by.get_mut(h.resource) {
+            v.push(*h);
+        }
+    }
+    by.into_iter()
+        .map(|mut v| {
+            v.sort_by_key(|h| h.enter);
+            let longest = v.iter().map(|h| h.exit - h.enter).max().unwrap_or(0);
+            let overlaps = v.windows(2).filter(|w| w[1].enter < w[0].exit).count();
+            (v.len(), longest, overlaps)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_counts_overlapping_holds() {
+        let h = |resource, enter, exit| Held {
+            job: 0,
+            resource,
+            enter,
+            exit,
+        };
+        let holds = [h(0, 0, 5), h(0, 5, 9), h(1, 2, 4), h(0, 8, 10), h(1, 4, 5)];
+        assert_eq!(summary(2, &holds), vec![(3, 5, 1), (2, 2, 0)]);
+    }
 }

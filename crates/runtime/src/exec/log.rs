@@ -26,7 +26,8 @@ pub(super) fn assemble<V>(
         .any(|th| th.let_comm)
         .then(|| schedule(&threads));
     let chains = prov.finish();
-    let segments = spans(spec, &jobs);
+    // The trace's spans: when the threads ran (under LET too).
+    let segments = spans(spec, schedule.as_deref().unwrap_or(&jobs));
     let mut tasks = Vec::with_capacity(n);
     let mut runs = Vec::with_capacity(n);
     let mut notes = notes;
