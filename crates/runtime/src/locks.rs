@@ -12,8 +12,8 @@
 //!   exit it unlocks, then restores its priority (lowered, Linux puts it at
 //!   the head of its priority's queue: sched(7)). A plain mutex keeps
 //!   mutual exclusion; under the ceiling on one CPU it is never contended.
-//!   Not a `PTHREAD_PRIO_PROTECT` mutex: glibc refuses to lock one from a
-//!   SCHED_OTHER thread (EINVAL), and best-effort runs must lock too;
+//!   Not a `PTHREAD_PRIO_PROTECT` mutex: glibc's fail to lock from a
+//!   SCHED_OTHER thread, and best-effort runs must lock too;
 //! - PIP: a `PTHREAD_PRIO_INHERIT` mutex ([`PiMutex`]): the kernel lends a
 //!   waiter's priority to the holder.
 //!

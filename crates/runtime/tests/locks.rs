@@ -18,7 +18,7 @@ const MS: Nanos = 1_000_000;
 /// runs 1–3.5 ms, R = 3.5 ms). With a plain lock m would preempt l and h
 /// would wait for m's 5 ms too (R ≈ 8 ms); without any lock h would respond
 /// in 1 ms. Bounds (docs/analysis.md, "Blocking"): B_h = 3, R_h = 4 ms;
-/// R_m = 5 + 3 + 1 = 9 ms; R_l = 4 + 2·1 + 5 = 11 ms.
+/// R_m = 5 + 3 + 1 = 9 ms; R_l = 4 + 1 + 5 = 10 ms.
 fn blocking(protocol: &str) -> Spec {
     let src = format!(
         r#"[system]
@@ -120,7 +120,7 @@ fn the_high_task_waits_for_the_low_task_s_section_and_never_longer() {
         let l = &res.tasks[2];
         let first = l.sections[0];
         assert!(first.exit - first.enter >= 3 * MS, "{first:?}");
-        for (t, bound) in [(1, 9 * MS), (2, 11 * MS)] {
+        for (t, bound) in [(1, 9 * MS), (2, 10 * MS)] {
             let m = res.tasks[t].responses.iter().copied().max().unwrap_or(0);
             assert!(
                 m < bound + 2 * MS,
