@@ -205,3 +205,32 @@ fn let_runs_give_the_simulator_s_exact_latencies() {
     // The schedule's responses stay the threads' (well under the period).
     assert!(res.tasks[0].responses.iter().all(|&r| r < 5 * MS));
 }
+
+/// The caller's own bodies cannot have the runtime's sections placed in
+/// them: refused before any thread starts, with the fix.
+#[test]
+fn sections_with_the_caller_s_bodies_are_refused() {
+    let spec = blocking("pcp");
+    let cfg = RunConfig {
+        duration: 10 * MS,
+        policy: Policy::Other,
+        load: 0,
+    };
+    let bodies: Vec<Box<dyn rtpipe_body::Body<u64>>> = (0..3)
+        .map(|_| {
+            Box::new(
+                |_: &rtpipe_body::Job, _: &[Option<rtpipe_body::Stamped<u64>>], _: Option<u64>| {
+                    0u64
+                },
+            ) as Box<dyn rtpipe_body::Body<u64>>
+        })
+        .collect();
+    let Err(e) = rtpipe_runtime::run(&spec, &cfg, bodies, None) else {
+        panic!("ran a spec with sections on foreign bodies");
+    };
+    assert_eq!(e.kind, rtpipe_runtime::ErrorKind::Config);
+    assert!(
+        e.diagnostic.message.contains("synthetic bodies only"),
+        "{e}"
+    );
+}
