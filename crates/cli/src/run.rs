@@ -16,7 +16,6 @@ mod measure;
 mod verdict;
 use clap::{Args, ValueEnum};
 use rtpipe_analysis::{Anchor, Metric, Report};
-use rtpipe_body::Body;
 use rtpipe_fly::{Flight, Setup};
 use rtpipe_joblog::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_model::policy::LinuxClass;
@@ -468,12 +467,8 @@ fn execute(
             Err(e) => Err(e.within(a.spec.display())),
         };
     }
-    let bodies: Vec<Box<dyn Body<u64>>> = spec
-        .tasks
-        .iter()
-        .map(|t| Box::new(rtpipe_runtime::synthetic(spin, t.demand())) as Box<dyn Body<u64>>)
-        .collect();
-    match rtpipe_runtime::run(spec, cfg, bodies, None) {
+    // Synthetic bodies, each task's critical sections held by the runtime.
+    match rtpipe_runtime::run_synthetic(spec, cfg, spin) {
         Ok(r) => Ok((r, None)),
         Err(e) => {
             let b = e.diagnostic.within(a.spec.display());
@@ -574,6 +569,13 @@ fn to_text(
          start = read - release; demand = CPU time of one job):\n",
     ));
     out.push_str(&task_table(spec, report, res));
+    if !spec.resources.is_empty() {
+        out.push_str(&format!(
+            "\ncritical sections (resource_protocol = \"{}\"; held: lock taken to given back, wall time; overlaps: holds of one resource that overlapped, 0 when mutual exclusion held):\n",
+            spec.resource_protocol.name()
+        ));
+        out.push_str(&sections_table(spec, res));
+    }
     out.push_str(&format!(
         "\nsteal time during the run: {}\n",
         res.steal
@@ -669,6 +671,27 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
     t.render()
 }
 
+/// One row per resource: the sections that held it, the longest hold, the
+/// overlaps.
+fn sections_table(spec: &Spec, res: &RunResult) -> String {
+    let holds: Vec<_> = res
+        .tasks
+        .iter()
+        .flat_map(|t| t.sections.iter().copied())
+        .collect();
+    let mut t = Table::new(&["resource", "holds", "max held", "overlaps"]).numeric(&[1, 2, 3]);
+    let rows = rtpipe_runtime::locks::summary(spec.resources.len(), &holds);
+    for (r, (n, longest, overlaps)) in spec.resources.iter().zip(rows) {
+        t.row(vec![
+            r.name.clone(),
+            n.to_string(),
+            spec.fmt_time(longest),
+            overlaps.to_string(),
+        ]);
+    }
+    t.render()
+}
+
 /// `run --json`: the observations report with each task's measurements,
 /// the Fig. 10 figures, the run, and the flight when bodies flew.
 #[derive(Serialize)]
@@ -712,6 +735,36 @@ struct RunInfo<'a> {
     edf: Option<&'static str>,
     sound_bound_violations: &'a Verdict,
     notes: &'a [String],
+    /// Per resource: its sections as the threads held them.
+    critical_sections: Vec<HeldView<'a>>,
+}
+
+/// One resource's sections in a run.
+#[derive(Serialize)]
+struct HeldView<'a> {
+    resource: &'a str,
+    holds: usize,
+    max_held: f64,
+    overlaps: usize,
+}
+
+fn held_json<'a>(spec: &'a Spec, res: &RunResult) -> Vec<HeldView<'a>> {
+    let holds: Vec<_> = res
+        .tasks
+        .iter()
+        .flat_map(|t| t.sections.iter().copied())
+        .collect();
+    let rows = rtpipe_runtime::locks::summary(spec.resources.len(), &holds);
+    spec.resources
+        .iter()
+        .zip(rows)
+        .map(|(r, (holds, longest, overlaps))| HeldView {
+            resource: &r.name,
+            holds,
+            max_held: spec.in_unit(longest),
+            overlaps,
+        })
+        .collect()
 }
 
 fn to_json<'a>(
@@ -767,6 +820,7 @@ fn to_json<'a>(
         spin_iterations_per_us: spin.iters_per_us,
         sound_bound_violations: verdict,
         notes: &res.notes,
+        critical_sections: held_json(spec, res),
     };
     RunView {
         report,

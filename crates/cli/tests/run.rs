@@ -713,3 +713,87 @@ fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
         assert_eq!(x["excused"], true, "{x}");
     }
 }
+
+/// The chain's `observed` figures of `metric` (from the head's read).
+fn observed(v: &Value, metric: &str) -> Value {
+    let chains = v["chains"].as_array().cloned().unwrap_or_default();
+    let Some(c) = chains.iter().find(|c| c["metric"] == metric) else {
+        panic!("no {metric} chain in {v}");
+    };
+    c["observed"].clone()
+}
+
+/// Issue 22: a spec with critical sections runs under its protocol
+/// (PCP, and PIP) and nothing it observes breaks a sound bound unexcused.
+#[test]
+fn resources_run_under_their_protocol_within_the_sound_bounds() {
+    let _one = serial();
+    let text = std::fs::read_to_string(example("resources.toml")).unwrap_or_default();
+    for protocol in ["pcp", "pip"] {
+        let spec = write_spec(
+            &format!("run-resources-{protocol}"),
+            &text.replace(
+                "resource_protocol = \"pcp\"",
+                &format!("resource_protocol = \"{protocol}\""),
+            ),
+        );
+        let o = rtpipe(&["run", &spec, "--duration", "1s", "--json"]);
+        if unprivileged(
+            &o,
+            "resources_run_under_their_protocol_within_the_sound_bounds",
+        ) {
+            return;
+        }
+        assert_exit(&o, 0);
+        let v = json_of(&o);
+        every_chain_observed(&v);
+        assert_eq!(
+            v["run"]["sound_bound_violations"]["unexcused"], 0,
+            "{protocol}: {}",
+            v["run"]["sound_bound_violations"]
+        );
+        let notes = v["run"]["notes"].to_string();
+        let says = if protocol == "pip" {
+            "priority inheritance"
+        } else {
+            "immediate priority ceiling"
+        };
+        assert!(notes.contains(says), "{protocol}: {notes}");
+        // 1 s of h's 5 ms periods, every job done.
+        assert_eq!(v["tasks"][0]["observed"]["completed"], 200, "{protocol}");
+        // bus: h's 200 jobs and m's 100 held it; log: h's 200 and l's 50;
+        // no two holds of one resource overlapped.
+        let held = &v["run"]["critical_sections"];
+        for (k, name, holds) in [(0, "bus", 300), (1, "log", 250)] {
+            assert_eq!(held[k]["resource"], name, "{held}");
+            assert_eq!(held[k]["holds"], holds, "{protocol}: {held}");
+            assert_eq!(held[k]["overlaps"], 0, "{protocol}: {held}");
+        }
+    }
+}
+
+/// Issue 22: LET on real threads measures exactly what the simulator does
+/// on examples/let.toml (reaction 20 ms, freshness 25 ms from the head's
+/// read on every sample, the known-offset bounds 20 and 25 reached).
+#[test]
+fn let_runs_measure_the_simulator_s_exact_latencies() {
+    let _one = serial();
+    let o = rtpipe(&["run", &example("let.toml"), "--duration", "1s", "--json"]);
+    if unprivileged(&o, "let_runs_measure_the_simulator_s_exact_latencies") {
+        return;
+    }
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    every_chain_observed(&v);
+    for (metric, exact) in [("reaction", 20.0), ("freshness", 25.0)] {
+        let obs = observed(&v, metric);
+        assert_eq!(obs["min"].as_f64(), Some(exact), "{metric}: {obs}");
+        assert_eq!(obs["max"].as_f64(), Some(exact), "{metric}: {obs}");
+    }
+    assert_eq!(v["run"]["sound_bound_violations"]["unexcused"], 0);
+    // The tasks' responses are the schedule's, not LET's period ends.
+    let r = v["tasks"][0]["observed"]["max_response"]
+        .as_f64()
+        .unwrap_or(9.9);
+    assert!(r < 5.0, "sensor's max response {r} ms");
+}

@@ -156,10 +156,10 @@ pub struct Blame<'r> {
 }
 
 impl<'r> Blame<'r> {
-    /// Indexes `res`'s job log.
+    /// Indexes `res`'s jobs as the threads ran them.
     pub fn new(spec: &'r Spec, res: &'r RunResult) -> Blame<'r> {
         let mut jobs: Vec<Vec<&JobRecord>> = vec![Vec::new(); spec.tasks.len()];
-        for j in &res.sim.jobs {
+        for j in res.scheduled() {
             if let Some(v) = jobs.get_mut(j.task) {
                 v.push(j);
             }
@@ -505,6 +505,7 @@ output = { channel = "shm", size = 0 }
             probes,
             demoted: Vec::new(),
             partitioned: false,
+            schedule: None,
         };
         (spec, res)
     }

@@ -1,26 +1,29 @@
-//! What no run can do, whatever the machine: a non-positive duration,
-//! critical sections (`[resources]`: the threads do not take a ceiling
-//! lock yet, so a run would not follow the protocol the analysis bounds),
-//! or LET communication (`[system] communication = "let"`). The executor's
-//! threads read when a job starts and publish when it completes (implicit
-//! communication); LET's timer-driven copies at releases and period ends
-//! are simulated exactly (`rtpipe simulate`) but not implemented here.
+//! What no run can do, whatever the machine (a non-positive duration), and
+//! what a run with the caller's own bodies cannot: critical sections, which
+//! the runtime holds itself around synthetic bodies only (`crate::locks`,
+//! [`crate::run_synthetic`]: it cannot place them inside foreign code), and
+//! LET with a world, whose reads happen at releases a thread need not be
+//! running at (`crate::let_comm` keeps LET's data flow by index; a world
+//! sensed at the release would have to be sensed in the past).
 
 use rtpipe_model::{Communication, Nanos, Spec};
 
 /// (what is wrong, how to fix it) when `spec` cannot run for `duration`.
-pub(crate) fn refusal(spec: &Spec, duration: Nanos) -> Option<(&'static str, &'static str)> {
-    if duration <= 0 {
-        return Some(("the duration must be positive", "e.g. --duration 2s"));
-    }
+pub(crate) fn refusal(_spec: &Spec, duration: Nanos) -> Option<(&'static str, &'static str)> {
+    (duration <= 0).then_some(("the duration must be positive", "e.g. --duration 2s"))
+}
+
+/// (what is wrong, how to fix it) when `spec` cannot run with the caller's
+/// bodies (`world`: with an environment).
+pub(crate) fn bodies_refusal(spec: &Spec, world: bool) -> Option<(&'static str, &'static str)> {
     if spec.tasks.iter().any(|t| !t.sections.is_empty()) {
         return Some((
-            "critical sections (critical_sections, [resources]): the runtime does not run the resource protocol yet",
-            "remove the tasks' critical_sections to run it (`rtpipe simulate` runs the protocol exactly, `rtpipe analyze` bounds it)",
+            "critical sections (critical_sections, [resources]) run with synthetic bodies only: the runtime holds them around the body, which it cannot do inside task code",
+            "run it with synthetic bodies (`rtpipe run --synthetic`), or remove the tasks' critical_sections (`rtpipe simulate` runs the protocol with any body)",
         ));
     }
-    (spec.communication == Communication::Let).then_some((
-        "communication = \"let\": the runtime executes implicit communication only",
-        "use communication = \"implicit\" to run it (`rtpipe simulate` runs LET exactly)",
+    (world && spec.communication == Communication::Let).then_some((
+        "communication = \"let\" with a world (flight bodies): LET reads at the release, when the thread need not be running, and a world cannot be sensed in the past",
+        "use communication = \"implicit\" to fly it on real threads, `rtpipe fly` to fly it under LET, or `rtpipe run --synthetic`",
     ))
 }

@@ -3,27 +3,34 @@
 //! every job, replayed after the run through the simulator's own sample
 //! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
+mod log;
+
 use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
 pub use crate::config::{
     fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 use crate::four_slot::{self, Reader, Writer};
+use crate::let_comm::{self, Cell, LetIn, LetOut};
 use crate::load::Load;
+use crate::locks::{Held, Resources, Sections};
 use crate::partition::Partition;
 use crate::pi::PiMutex;
 use crate::probe::{probe, Probe, PROBE_PERIOD};
+use crate::spin::{synthetic, Spin};
 use crate::sys;
+use log::assemble;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
-use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
+use rtpipe_joblog::{JobRecord, Provenance, SimResult};
 use rtpipe_model::policy::LinuxClass;
-use rtpipe_model::Spec;
+use rtpipe_model::{Communication, Spec};
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
 
 /// Per task, what the run measured beyond [`TaskStats`].
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TaskRun {
-    /// finish − release of every job.
+    /// Completion − release of every job, in index order: the schedule's
+    /// response (under LET too, where the job log holds the period's end).
     pub responses: Vec<Nanos>,
     /// Jobs whose CPU time (read to publish) exceeded the task's budget C
     /// by more than [`OVERRUN_TOLERANCE`].
@@ -38,6 +45,12 @@ pub struct TaskRun {
     pub max_start: Nanos,
     /// The SCHED_FIFO priority (fifo only).
     pub priority: Option<i32>,
+    /// The critical sections its jobs held, in order ([`run_synthetic`]).
+    pub sections: Vec<Held>,
+    /// LET: reads that found another producer job than LET's in their slot
+    /// (`let_comm`): the producer overran its period, or the reader came
+    /// later than the edge keeps jobs for.
+    pub let_misses: u64,
 }
 
 /// A finished run.
@@ -74,16 +87,30 @@ pub struct RunResult {
     /// SCHED_DEADLINE ran partitioned EDF (a root domain per CPU, each
     /// thread pinned to its task's CPU) rather than global EDF.
     pub partitioned: bool,
+    /// Under LET, every job at the schedule's instants (read: when its
+    /// thread read, finish: when it completed), where `sim.jobs` holds
+    /// LET's (release, period end); `None` otherwise ([`RunResult::scheduled`]).
+    pub schedule: Option<Vec<JobRecord>>,
 }
 
-/// The value a register holds: `None` until the producer first publishes.
-type Cell<V> = Option<Stamped<V>>;
+impl RunResult {
+    /// Every job as the threads ran it (read, completion): what the
+    /// response times and the causes of a delay are measured on.
+    pub fn scheduled(&self) -> &[JobRecord] {
+        self.schedule.as_deref().unwrap_or(&self.sim.jobs)
+    }
+}
 
 /// One job as a thread logs it (no allocation in the periodic path).
 #[derive(Debug, Clone, Copy, Default)]
 struct Rec {
     index: u64,
     release: Nanos,
+    /// When the thread read its inputs, and when it published.
+    start: Nanos,
+    done: Nanos,
+    /// The communication instants: `start` and `done`, or under LET the
+    /// release and the period's end.
     read: Nanos,
     finish: Nanos,
     demand: Nanos,
@@ -106,6 +133,13 @@ struct Thread<'a, V> {
     recs: Vec<Rec>,
     /// Per job, the producer job read on each input (u64::MAX: none yet).
     inputs: Vec<u64>,
+    /// Under LET, its edges instead of `readers` and `writers`.
+    let_in: Vec<LetIn<V>>,
+    let_out: Vec<LetOut<V>>,
+    let_comm: bool,
+    let_misses: u64,
+    /// Its critical sections, run before the body (synthetic bodies).
+    sections: Option<Sections>,
 }
 
 /// How long after the last release a thread may still be running before it
@@ -274,13 +308,39 @@ pub fn run<'a, V: Copy + Send>(
     bodies: Vec<Box<dyn Body<V> + 'a>>,
     env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
 ) -> Result<RunResult, RunError> {
+    if let Some((msg, help)) = crate::comm::bodies_refusal(spec, env.is_some()) {
+        return Err(RunError::config(msg, help));
+    }
+    execute(spec, cfg, bodies, env, None)
+}
+
+/// Runs `spec` with synthetic bodies burning each task's demand
+/// ([`crate::synthetic`]), its critical sections (`[resources]`) held under
+/// the spec's protocol where the simulator places them (`crate::locks`),
+/// each section's instants logged in [`TaskRun::sections`].
+pub fn run_synthetic(spec: &Spec, cfg: &RunConfig, spin: Spin) -> Result<RunResult, RunError> {
+    let bodies: Vec<Box<dyn Body<u64>>> = (0..spec.tasks.len())
+        .map(|i| Box::new(synthetic(spin, Sections::rest(spec, i))) as Box<dyn Body<u64>>)
+        .collect();
+    execute(spec, cfg, bodies, None, Some(spin))
+}
+
+/// [`run`], the sections run with `spin` when given.
+fn execute<'a, V: Copy + Send>(
+    spec: &Spec,
+    cfg: &RunConfig,
+    bodies: Vec<Box<dyn Body<V> + 'a>>,
+    env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
+    spin: Option<Spin>,
+) -> Result<RunResult, RunError> {
     assert_eq!(bodies.len(), spec.tasks.len(), "one body per task");
     check(spec, cfg)?;
     let prov = Provenance::new(spec)
         .map_err(|e| RunError::config(e.to_string(), "name only the spec's tasks on a chain"))?;
     let n = spec.tasks.len();
     let mut notes: Vec<String> = lock_memory(cfg.policy, n).into_iter().collect();
-    let threads = threads(spec, cfg, bodies);
+    notes.extend(crate::locks::note(spec, cfg.policy));
+    let threads = threads(spec, cfg, bodies, spin);
     // Stopped and joined when `_load` drops: on every way out of `run`.
     let _load = Load::start(cfg.load).map_err(|e| {
         RunError::config(
@@ -289,15 +349,7 @@ pub fn run<'a, V: Copy + Send>(
         )
     })?;
     sys::catch_sigint();
-    let mut shared = Shared::new(n);
-    if cfg.policy == Policy::Deadline {
-        match Partition::create(sys::online_cpus()) {
-            Ok(p) => shared.partition = Some(p),
-            Err(why) => notes.push(format!(
-                "note: global EDF on all CPUs (partitioned EDF needs one cpuset per CPU: {why})"
-            )),
-        }
-    }
+    let shared = shared(spec, cfg.policy, &mut notes)?;
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
@@ -337,6 +389,28 @@ pub fn run<'a, V: Copy + Send>(
     res.demoted = demoted;
     res.partitioned = shared.partition.is_some();
     Ok(res)
+}
+
+/// What the task threads of a run under `policy` share: the resources'
+/// locks, and under SCHED_DEADLINE a root domain per CPU where the machine
+/// allows it (else a note says EDF is global).
+fn shared(spec: &Spec, policy: Policy, notes: &mut Vec<String>) -> Result<Shared, RunError> {
+    let mut shared = Shared::new(spec.tasks.len());
+    shared.resources = Some(Resources::new(spec, policy).map_err(|e| {
+        RunError::config(
+            format!("cannot create the resources' locks: {e}"),
+            "resource_protocol = \"pip\" needs PTHREAD_PRIO_INHERIT mutexes (glibc on Linux)",
+        )
+    })?);
+    if policy == Policy::Deadline {
+        match Partition::create(sys::online_cpus()) {
+            Ok(p) => shared.partition = Some(p),
+            Err(why) => notes.push(format!(
+                "note: global EDF on all CPUs (partitioned EDF needs one cpuset per CPU: {why})"
+            )),
+        }
+    }
+    Ok(shared)
 }
 
 /// The span in which jobs were released: the whole duration, or up to
@@ -387,8 +461,10 @@ fn threads<'a, V: Copy + Send>(
     spec: &Spec,
     cfg: &RunConfig,
     bodies: Vec<Box<dyn Body<V> + 'a>>,
+    spin: Option<Spin>,
 ) -> Vec<Thread<'a, V>> {
     let prios = fifo_priorities(spec);
+    let let_comm = spec.communication == Communication::Let;
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
         .enumerate()
@@ -412,15 +488,27 @@ fn threads<'a, V: Copy + Send>(
                 writers: Vec::new(),
                 recs: Vec::with_capacity(cap),
                 inputs: Vec::with_capacity(cap * t.reads.len()),
+                let_in: Vec::new(),
+                let_out: Vec::new(),
+                let_comm,
+                let_misses: 0,
+                sections: spin.and_then(|s| Sections::of(spec, i, s, cap)),
             }
         })
         .collect();
-    // One register per (producer, consumer) edge.
+    // One register per (producer, consumer) edge; under LET, a ring of them.
     for c in 0..spec.tasks.len() {
         for &p in &spec.tasks[c].reads {
-            let (w, r) = four_slot::register::<Cell<V>>(None);
-            threads[p].writers.push(w);
-            threads[c].readers.push(r);
+            if let_comm {
+                let from = (threads[p].phase, threads[p].period);
+                let (w, r) = let_comm::edge::<V>(from, threads[c].period);
+                threads[p].let_out.push(w);
+                threads[c].let_in.push(r);
+            } else {
+                let (w, r) = four_slot::register::<Cell<V>>(None);
+                threads[p].writers.push(w);
+                threads[c].readers.push(r);
+            }
         }
     }
     threads
@@ -445,6 +533,8 @@ struct Shared {
     /// SCHED_DEADLINE: one root domain per CPU (partitioned EDF), when the
     /// machine allows it; `None`: global EDF.
     partition: Option<Partition>,
+    /// The resources' locks and ceilings (`crate::locks`).
+    resources: Option<Resources>,
 }
 
 impl Shared {
@@ -459,6 +549,7 @@ impl Shared {
             tids: (0..n).map(|_| AtomicI32::new(0)).collect(),
             done: (0..n).map(|_| AtomicBool::new(false)).collect(),
             partition: None,
+            resources: None,
         }
     }
 }
@@ -543,7 +634,8 @@ fn task_thread<'a, V: Copy>(
     shared.go.wait();
     if !shared.abort.load(Ordering::SeqCst) {
         let e = shared.epoch.load(Ordering::SeqCst);
-        periodic(&mut th, e, (duration, duration + grace), env);
+        let res = shared.resources.as_ref();
+        periodic(&mut th, e, (duration, duration + grace), env, res);
     }
     done.store(true, Ordering::SeqCst);
     th
@@ -557,8 +649,9 @@ fn periodic<V: Copy>(
     epoch: Nanos,
     (duration, stop): (Nanos, Nanos),
     env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    res: Option<&Resources>,
 ) {
-    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len());
+    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len() + th.let_in.len());
     let mut k: u64 = 0;
     loop {
         let offset = th.phase + k as i64 * th.period;
@@ -583,19 +676,25 @@ fn periodic<V: Copy>(
             // span ends at the stop, so this job is not part of it.
             break;
         }
-        job(th, k, epoch, env, &mut inputs);
+        job(th, k, epoch, (env, res), &mut inputs);
         k += 1;
     }
 }
 
 /// Job `k` of the task, released at epoch + φ + k·T: read the registers, run
-/// the body, publish to the registers, and log it. `inputs` is the job's
-/// buffer for the values read (kept across jobs: no allocation here).
+/// its critical sections and the body, publish to the registers, and log
+/// it. `inputs` is the job's buffer for the values read (kept across jobs:
+/// no allocation here). Under LET (`let_comm`) it reads what was visible at
+/// its release and its output is visible from its period's end: those are
+/// the instants it logs and stamps.
 fn job<V: Copy>(
     th: &mut Thread<'_, V>,
     k: u64,
     epoch: Nanos,
-    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+    (env, res): (
+        Option<&PiMutex<dyn Environment<V> + Send + '_>>,
+        Option<&Resources>,
+    ),
     inputs: &mut Vec<Cell<V>>,
 ) {
     let offset = th.phase + k as i64 * th.period;
@@ -606,30 +705,51 @@ fn job<V: Copy>(
         th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
         inputs.push(v);
     }
-    let (read, device) = sense(th.task, epoch, env);
+    for r in &mut th.let_in {
+        let (v, exact) = r.read(offset);
+        th.let_misses += u64::from(!exact);
+        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+        inputs.push(v);
+    }
+    let (start, device) = sense(th.task, epoch, env);
+    let start = start - epoch;
+    let read = if th.let_comm { offset } else { start };
     let job = Job {
         task: th.task,
         index: k,
         release: offset,
-        read: read - epoch,
+        read,
     };
+    if let (Some(s), Some(res)) = (&mut th.sections, res) {
+        s.run(res, k, th.priority, epoch);
+    }
     let value = th.body.run(&job, inputs, device);
-    let publish = actuate(th.task, epoch, env, &value);
+    let done = actuate(th.task, epoch, env, &value) - epoch;
+    let finish = if th.let_comm {
+        offset + th.period
+    } else {
+        done
+    };
     let stamp = Stamp {
         task: th.task,
         job: k,
-        read: read - epoch,
-        publish: publish - epoch,
+        read,
+        publish: finish,
     };
     for w in &mut th.writers {
         w.write(Some(Stamped { value, stamp }));
+    }
+    for w in &mut th.let_out {
+        w.write(Stamped { value, stamp });
     }
     let demand = sys::thread_cpu_time() - cpu0;
     th.recs.push(Rec {
         index: k,
         release: offset,
-        read: read - epoch,
-        finish: publish - epoch,
+        start,
+        done,
+        read,
+        finish,
         demand,
     });
 }
@@ -671,159 +791,6 @@ fn actuate<V>(
         }
         _ => sys::now(),
     }
-}
-
-/// The job log in the simulator's terms, the chains `prov` measures on it,
-/// and the per-task figures.
-#[allow(clippy::too_many_arguments)]
-fn assemble<V>(
-    spec: &Spec,
-    (threads, mut prov): (Vec<Thread<'_, V>>, Provenance),
-    horizon: Nanos,
-    policy: Policy,
-    interrupted: bool,
-    steal: Option<Nanos>,
-    elapsed: Nanos,
-    notes: Vec<String>,
-) -> RunResult {
-    let n = spec.tasks.len();
-    let jobs = job_log(spec, &threads, &mut prov);
-    let chains = prov.finish();
-    let segments = spans(spec, &jobs);
-    let mut tasks = Vec::with_capacity(n);
-    let mut runs = Vec::with_capacity(n);
-    for th in &threads {
-        let (stats, run) = task_figures(th);
-        tasks.push(stats);
-        runs.push(run);
-    }
-    RunResult {
-        sim: SimResult {
-            offsets: spec.tasks.iter().map(|t| t.offset.unwrap_or(0)).collect(),
-            tasks,
-            chains,
-            jobs,
-            segments,
-            events: 0,
-            horizon,
-        },
-        tasks: runs,
-        policy,
-        load: 0,
-        epoch: 0,
-        interrupted,
-        steal,
-        elapsed,
-        notes,
-        probes: Vec::new(),
-        demoted: Vec::new(),
-        partitioned: false,
-    }
-}
-
-/// Every job the threads logged, in publish order (ties: read order, then
-/// task), replayed through `prov` for the chain samples it carried. A
-/// register read need not return the latest value published before the
-/// read instant (the publish instant is taken before the register write),
-/// so a job takes its samples from the producer job its thread logged
-/// reading; publish order guarantees that job's record exists by then.
-fn job_log<V>(spec: &Spec, threads: &[Thread<'_, V>], prov: &mut Provenance) -> Vec<JobRecord> {
-    let mut order: Vec<(Nanos, Nanos, usize, usize)> = Vec::new();
-    for (i, th) in threads.iter().enumerate() {
-        for (j, r) in th.recs.iter().enumerate() {
-            order.push((r.finish, r.read, i, j));
-        }
-    }
-    order.sort_unstable();
-    // at[task][k] = where job k of the task is in `jobs`.
-    let mut at: Vec<Vec<usize>> = threads
-        .iter()
-        .map(|th| Vec::with_capacity(th.recs.len()))
-        .collect();
-    let mut jobs: Vec<JobRecord> = Vec::with_capacity(order.len());
-    for &(_, _, i, j) in &order {
-        let th = &threads[i];
-        let r = th.recs[j];
-        let nreads = th.readers.len();
-        let inputs = th.inputs.get(j * nreads..(j + 1) * nreads).unwrap_or(&[]);
-        let reads = &spec.tasks[i].reads;
-        prov.read_with(i, r.read, |p, ps| {
-            let input = reads.iter().position(|&q| q == p)?;
-            let k = *at[p].get(*inputs.get(input)? as usize)?;
-            jobs[k].carried.get(ps)?.sample
-        });
-        prov.publish(i, r.finish);
-        // Jobs of one task publish in index order, so this is job j.
-        at[i].push(jobs.len());
-        jobs.push(JobRecord {
-            task: i,
-            index: r.index,
-            release: r.release,
-            demand: r.demand,
-            read: r.read,
-            finish: r.finish,
-            carried: prov.record(i),
-        });
-    }
-    jobs
-}
-
-/// One task's figures from its thread's log: in the simulator's terms
-/// (late = missed periods, exhaustions = budget overruns beyond
-/// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
-fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
-    let responses: Vec<Nanos> = th.recs.iter().map(|r| r.finish - r.release).collect();
-    // Against D (the period unless the spec gives a deadline).
-    let missed = responses.iter().filter(|&&r| r > th.deadline).count() as u64;
-    let overruns = th
-        .recs
-        .iter()
-        .filter(|r| r.demand > th.budget + OVERRUN_TOLERANCE)
-        .count() as u64;
-    let stats = TaskStats {
-        released: th.recs.len() as u64,
-        completed: th.recs.len() as u64,
-        max_response: responses.iter().copied().max(),
-        late: missed,
-        exhaustions: overruns,
-        busy: th.recs.iter().map(|r| r.demand).sum(),
-    };
-    let run = TaskRun {
-        max_demand: th.recs.iter().map(|r| r.demand).max().unwrap_or(0),
-        max_start: th
-            .recs
-            .iter()
-            .map(|r| r.read - r.release)
-            .max()
-            .unwrap_or(0),
-        responses,
-        overruns,
-        missed,
-        priority: th.priority,
-    };
-    (stats, run)
-}
-
-/// One "slice" per job from its read to its publish, for the trace writer:
-/// the span the job occupied, preemptions included (the kernel does not
-/// tell a thread when it was switched out), in time order.
-fn spans(spec: &Spec, jobs: &[JobRecord]) -> Vec<Segment> {
-    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpus.sort_unstable();
-    cpus.dedup();
-    let mut out: Vec<Segment> = jobs
-        .iter()
-        .map(|j| Segment {
-            cpu: cpus.binary_search(&spec.tasks[j.task].cpu).unwrap_or(0),
-            task: j.task,
-            job: j.index,
-            start: j.read,
-            end: j.finish,
-            background: false,
-        })
-        .collect();
-    out.sort_by_key(|s| (s.start, s.task));
-    out
 }
 
 #[cfg(test)]

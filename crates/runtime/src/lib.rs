@@ -12,7 +12,9 @@ mod comm;
 mod config;
 pub mod exec;
 pub mod four_slot;
+mod let_comm;
 pub mod load;
+pub mod locks;
 pub mod overheads;
 pub mod partition;
 pub mod pi;
@@ -23,8 +25,8 @@ pub mod spin;
 pub mod sys;
 
 pub use exec::{
-    check, fifo_priorities, run, ErrorKind, Policy, RunConfig, RunError, RunResult, TaskRun,
-    OVERRUN_TOLERANCE, RESERVATION_MARGIN,
+    check, fifo_priorities, run, run_synthetic, ErrorKind, Policy, RunConfig, RunError, RunResult,
+    TaskRun, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 pub use load::Load;
 pub use pi::PiMutex;

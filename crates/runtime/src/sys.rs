@@ -77,6 +77,20 @@ pub fn set_fifo(priority: i32) -> io::Result<()> {
     Ok(())
 }
 
+/// Changes the calling SCHED_FIFO thread's priority, keeping its class (a
+/// ceiling's raise and restore). Lowered, the thread goes to the head of
+/// its new priority's queue; raised, to the tail (sched(7)).
+pub fn set_priority(priority: i32) -> io::Result<()> {
+    let p = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: `p` is a valid sched_param; pid 0 is the calling thread.
+    if unsafe { libc::sched_setparam(0, &p) } != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
 /// `SCHED_DEADLINE` with runtime, deadline and period (ns) for the calling
 /// thread.
 pub fn set_deadline(runtime: u64, deadline: u64, period: u64) -> io::Result<()> {

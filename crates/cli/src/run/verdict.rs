@@ -82,7 +82,8 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
             }
         }
     }
-    for j in &res.sim.jobs {
+    // The schedule's responses (under LET the job log holds period ends).
+    for j in res.scheduled() {
         let Some(bound) = report.timing.get(j.task).and_then(|t| t.bounded_response()) else {
             continue;
         };

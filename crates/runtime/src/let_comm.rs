@@ -1,0 +1,143 @@
+//! LET communication on real threads (`[system] communication = "let"`,
+//! Kirsch and Sokolova 2012), as the simulator runs it (`rtpipe_sim`'s
+//! let_comm.rs): a job reads the inputs visible at its release and its
+//! output becomes visible at the end of its period, release + T; at one
+//! instant, every period that ends publishes before any release reads.
+//!
+//! What a job of a consumer released at t reads is then fixed by the
+//! periods and offsets alone: job j* of the producer, the latest whose
+//! period has ended, φp + (j* + 1)·Tp ≤ t. The runtime enforces that by
+//! index rather than by a timer: the producer writes job j's output, when
+//! it completes, into slot j mod N of the edge (each slot a four-slot
+//! register), and the consumer takes slot j* mod N. No thread has to act at
+//! the exact instants (a preempted thread cannot), yet the data flow is
+//! exactly LET's, and the job log holds LET's instants: read = release,
+//! publish = release + T. It holds when the producer finishes each job
+//! within its period (R ≤ T, which LET needs and `rtpipe analyze` checks)
+//! and the consumer reads within N − 2 producer periods of its release,
+//! N = ⌈Tc / Tp⌉ + 3 (a consumer reads at the start of its job, before its
+//! deadline Dc ≤ Tc); a read that finds another job in its slot is counted
+//! ([`LetIn::read`]), its data flow logged as it happened.
+
+use crate::four_slot::{self, Reader, Writer};
+use rtpipe_body::{Nanos, Stamped};
+
+/// The value a register holds: `None` until the producer first publishes.
+pub(crate) type Cell<V> = Option<Stamped<V>>;
+
+/// A consumer's end of one LET edge.
+pub(crate) struct LetIn<V> {
+    slots: Vec<Reader<Cell<V>>>,
+    /// The producer's offset and period.
+    phase: Nanos,
+    period: Nanos,
+}
+
+/// A producer's end of one LET edge.
+pub(crate) struct LetOut<V> {
+    slots: Vec<Writer<Cell<V>>>,
+}
+
+/// One edge from a producer (offset, period) to a consumer of period
+/// `consumer`.
+pub(crate) fn edge<V: Copy + Send>(
+    (phase, period): (Nanos, Nanos),
+    consumer: Nanos,
+) -> (LetOut<V>, LetIn<V>) {
+    assert!(period > 0 && consumer > 0, "positive periods");
+    let n = (consumer + period - 1) / period + 3;
+    let (w, r): (Vec<_>, Vec<_>) = (0..n).map(|_| four_slot::register(None)).unzip();
+    (
+        LetOut { slots: w },
+        LetIn {
+            slots: r,
+            phase,
+            period,
+        },
+    )
+}
+
+/// The producer job whose output is visible at `release` (relative to the
+/// epoch) on an edge from a producer released at φ + k·T: the latest whose
+/// period has ended by then.
+pub(crate) fn visible(release: Nanos, (phase, period): (Nanos, Nanos)) -> Option<u64> {
+    let ended = (release - phase).div_euclid(period);
+    (ended >= 1).then(|| (ended - 1) as u64)
+}
+
+impl<V: Copy> LetIn<V> {
+    /// The value visible at `release`, and whether it is the job LET
+    /// prescribes (false: the producer had not written it yet, or had
+    /// already written over it).
+    pub(crate) fn read(&mut self, release: Nanos) -> (Cell<V>, bool) {
+        let Some(j) = visible(release, (self.phase, self.period)) else {
+            return (None, true);
+        };
+        let n = self.slots.len() as u64;
+        let v = self.slots[(j % n) as usize].read();
+        (v, v.is_some_and(|s| s.stamp.job == j))
+    }
+}
+
+impl<V: Copy> LetOut<V> {
+    /// Job `value.stamp.job`'s output, for the consumer jobs released once
+    /// its period has ended.
+    pub(crate) fn write(&mut self, value: Stamped<V>) {
+        let n = self.slots.len() as u64;
+        self.slots[(value.stamp.job % n) as usize].write(Some(value));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rtpipe_body::Stamp;
+
+    #[test]
+    fn a_release_sees_the_periods_ended_by_then() {
+        // Producer at 1 + 5k: job 0's period ends at 6.
+        assert_eq!(visible(5, (1, 5)), None);
+        assert_eq!(
+            visible(6, (1, 5)),
+            Some(0),
+            "publish before read at one instant"
+        );
+        assert_eq!(visible(10, (1, 5)), Some(0));
+        assert_eq!(visible(11, (1, 5)), Some(1));
+        assert_eq!(
+            visible(0, (3, 5)),
+            None,
+            "before the producer's first release"
+        );
+    }
+
+    #[test]
+    fn the_consumer_gets_the_prescribed_job_though_newer_ones_completed() {
+        let (mut w, mut r) = edge::<u64>((0, 2), 10);
+        let put = |w: &mut LetOut<u64>, job: u64| {
+            let stamp = Stamp {
+                task: 0,
+                job,
+                read: 0,
+                publish: 0,
+            };
+            w.write(Stamped {
+                value: 100 + job,
+                stamp,
+            });
+        };
+        // Jobs 0..=4 done; at 6 job 2 is visible (its period ended at 6),
+        // though 3 and 4 completed before the consumer read.
+        for j in 0..=4 {
+            put(&mut w, j);
+        }
+        let (v, ok) = r.read(6);
+        assert!(ok);
+        assert_eq!(v.map(|s| s.value), Some(102));
+        // Far too late a reader finds its slot written over: counted.
+        for j in 5..=12 {
+            put(&mut w, j);
+        }
+        assert!(!r.read(6).1);
+    }
+}
