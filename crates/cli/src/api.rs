@@ -199,6 +199,11 @@ fn dispatch(
 ) -> Result<(Answer, Option<Spec>), Failure> {
     argv.push("--json".into());
     let input = Failure::Input;
+    if command != "design" {
+        if let Some(d) = command::missing_periods(spec) {
+            return Err(input(d));
+        }
+    }
     match command {
         "analyze" => {
             let a: AnalyzeArgs = parse(command, &argv)?;

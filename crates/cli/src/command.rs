@@ -21,25 +21,33 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
             return Err(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
-    let missing = rtpipe_analysis::missing_periods(&spec);
-    if !missing.is_empty() {
-        let msg = format!(
-            "no fixed period for task{} {}",
-            if missing.len() > 1 { "s" } else { "" },
-            missing.join(", ")
-        );
+    if let Some(d) = missing_periods(&spec) {
         // A spec's problem without a place in its text, shown as the spec's
         // own diagnostics are (task names hold no control characters).
         let e = SpecError {
             file: path.display().to_string(),
             source: String::new(),
-            diagnostics: vec![Diagnostic::new(msg, None)
-                .help("give each a `period = ...`, or let `rtpipe design` choose them")],
+            diagnostics: vec![d],
         };
         eprint!("{e}");
         return Err(ExitCode::from(EXIT_BAD_INPUT));
     }
     Ok(spec)
+}
+
+/// Why `spec` cannot be analysed, simulated or flown: tasks without a
+/// fixed period (what `design` chooses).
+pub fn missing_periods(spec: &Spec) -> Option<Diagnostic> {
+    let missing = rtpipe_analysis::missing_periods(spec);
+    (!missing.is_empty()).then(|| {
+        let msg = format!(
+            "no fixed period for task{} {}",
+            if missing.len() > 1 { "s" } else { "" },
+            missing.join(", ")
+        );
+        Diagnostic::new(msg, None)
+            .help("give each a `period = ...`, or let `rtpipe design` choose them")
+    })
 }
 
 /// Prints a JSON value on stdout; an encoding failure is an error exit.

@@ -177,6 +177,18 @@ fn bad_flags_are_input_failures_with_the_parsers_message() {
         call("launch", &path, &[], false),
         Err(Failure::Input(_))
     ));
+    // Free periods are design's to choose, as on the command line.
+    let free = example("cleanflight-design.toml");
+    for cmd in ["analyze", "simulate", "fly"] {
+        let Err(Failure::Input(d)) = call(cmd, &free, &[], false) else {
+            panic!("{cmd}: an input failure");
+        };
+        assert!(
+            d.message.contains("no fixed period for tasks"),
+            "{cmd}: {}",
+            d.message
+        );
+    }
 }
 
 #[test]

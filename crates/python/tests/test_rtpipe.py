@@ -157,6 +157,11 @@ def test_bad_arguments_raise_input_error_with_help():
         rtpipe.load({"system": {"name": None}})
     with pytest.raises(TypeError):
         rtpipe.load(42)
+    free = rtpipe.load(EXAMPLES / "cleanflight-design.toml")
+    for command in (free.analyze, free.simulate, free.fly):
+        with pytest.raises(rtpipe.InputError, match="no fixed period for tasks") as e:
+            command()
+        assert "rtpipe design" in e.value.help
     assert issubclass(rtpipe.SpecError, rtpipe.RtpipeError)
 
 
