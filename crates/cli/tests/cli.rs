@@ -255,8 +255,8 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
 
 /// Shared resources (issue 22): a critical section longer than its task's
 /// exec, an undeclared resource and sections under EDF exit 2 with the
-/// place and a fix; `design` and `run` refuse specs with sections (exit 2)
-/// rather than ignore them.
+/// place and a fix; `design` refuses specs with sections (exit 2) rather
+/// than ignore them (`run` runs them: tests/run.rs).
 #[test]
 fn bad_critical_sections_exit_2_with_location() {
     let cases = [
@@ -265,14 +265,9 @@ fn bad_critical_sections_exit_2_with_location() {
         ("resource_protocol = \"pcp\"", "scheduler = \"edf\"", "bad.toml:18:12: error: shared resources under scheduler \"edf\""),
     ];
     mutated_exit_2("cli-resources", "resources.toml", &cases);
-    for args in [&["design"][..], &["run", "--duration", "1s"][..]] {
-        let mut a = args.to_vec();
-        let ex = example("resources.toml");
-        a.push(&ex);
-        let o = rtpipe(&a);
-        assert_eq!(o.status.code(), Some(2), "{args:?}");
-        assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
-    }
+    let o = rtpipe(&["design", &example("resources.toml")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
 }
 
 /// sense (C 1, T 10) → act (C 2, T 20): sound reaction from the event

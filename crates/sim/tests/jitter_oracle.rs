@@ -14,13 +14,14 @@
 //! `RTPIPE_JITTER_SYSTEMS` (default 5,000) sets the number of systems;
 //! run with `--nocapture` for the tally.
 
+mod common;
+
 use rtpipe_analysis::{analyze, Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, Priorities, SchedTest, Scheduler, Spec};
 use rtpipe_sim::observe::ChainStatsExt;
-use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
+use rtpipe_sim::{ExecModel, Jitter, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;
@@ -209,42 +210,15 @@ fn check_system(seed: u64, t: &mut Tally) {
         .unwrap_or(MS);
     let horizon = (12 * t_max).min(2_000 * MS);
     t.systems += 1;
-    let mut best: Option<(f64, usize, SimConfig, Vec<Nanos>)> = None;
-    for (run, (phasing, exec, jitter)) in runs().into_iter().enumerate() {
-        let cfg = SimConfig {
-            horizon,
-            seed: seed.wrapping_mul(17).wrapping_add(run as u64),
-            phasing,
-            exec,
-            jitter,
-            log_jobs: false,
-        };
-        let res = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let (ratio, k) = check(&spec, &rep, &cfg, &res, t);
-        if best.as_ref().is_none_or(|b| ratio > b.0) {
-            best = Some((ratio, k, cfg, res.offsets));
-        }
-    }
-    let Some((_, k, cfg, offsets)) = best.filter(|_| !rep.chains.is_empty()) else {
-        return;
+    let how = common::Probe {
+        runs: runs().to_vec(),
+        stride: 17,
+        salt: 0x0022,
+        horizon,
     };
-    let c = &rep.chains[k];
-    let scfg = SearchConfig {
-        restarts: 1,
-        steps: 6,
-        seed: seed ^ 0x0022,
-        start: vec![Candidate {
-            offsets,
-            exec: cfg.exec,
-            seed: cfg.seed,
-            jitter: cfg.jitter,
-        }],
-        ..SearchConfig::new(c.chain, c.metric, horizon)
-    };
-    let observe = |sc: &SimConfig, res: &SimResult| {
-        check(&spec, &rep, sc, res, t);
-    };
-    search_with(&spec, &scfg, observe).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+    common::probe(&spec, &rep, seed, &how, &mut |cfg, res| {
+        check(&spec, &rep, cfg, res, t)
+    });
 }
 
 #[test]

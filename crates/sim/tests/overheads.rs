@@ -10,14 +10,16 @@
 //! `RTPIPE_OVERHEAD_SYSTEMS` (default 1,500) sets the number of systems;
 //! run with `--nocapture` for the tally.
 
+mod common;
+
+use common::worst;
 use rtpipe_analysis::{analyze, Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::overheads::{Costs, CpuCosts};
 use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
 use rtpipe_sim::observe::ChainStatsExt;
-use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
+use rtpipe_sim::SimConfig;
 use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;
@@ -42,19 +44,6 @@ exec = 2000
 period = 10000
 reads = ["a"]
 "#;
-
-/// The worst response of each task from a run with the given offsets (ns).
-fn worst(spec: &Spec, offsets: Vec<Nanos>) -> Vec<Nanos> {
-    let cfg = SimConfig {
-        phasing: Phasing::Given(offsets),
-        ..SimConfig::new(100 * MS)
-    };
-    let res = simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
-    res.tasks
-        .iter()
-        .map(|t| t.max_response.unwrap_or(0))
-        .collect()
-}
 
 /// By hand (docs/analysis.md, "Scheduling overheads"), in µs:
 /// a: w = 1000 + 5 + ⌈w/4000⌉·3 + ⌈w/10000⌉·3 = 1011.
@@ -302,47 +291,15 @@ fn check_system(seed: u64, t: &mut Tally) {
     t.jittered += u64::from(spec.tasks.iter().any(|x| x.jitter > 0));
     t.sections += u64::from(spec.tasks.iter().any(|x| !x.sections.is_empty()));
     let mut ratios = vec![0.0; spec.tasks.len()];
-    let runs = [
-        (Phasing::Sync, ExecModel::Worst),
-        (Phasing::Random, ExecModel::Worst),
-        (Phasing::Random, ExecModel::Extremes),
-        (Phasing::Grid(MS), ExecModel::Uniform),
-    ];
-    let mut best: Option<(f64, usize, SimConfig, Vec<Nanos>)> = None;
-    for (run, (phasing, exec)) in runs.into_iter().enumerate() {
-        let cfg = SimConfig {
-            horizon,
-            seed: seed.wrapping_mul(31).wrapping_add(run as u64),
-            phasing,
-            exec,
-            jitter: Jitter::None,
-            log_jobs: false,
-        };
-        let res = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let (ratio, k) = check(&spec, &rep, &cfg, &res, t, &mut ratios);
-        if best.as_ref().is_none_or(|b| ratio > b.0) {
-            best = Some((ratio, k, cfg, res.offsets));
-        }
-    }
-    if let Some((_, k, cfg, offsets)) = best.filter(|_| !rep.chains.is_empty()) {
-        let c = &rep.chains[k];
-        let scfg = SearchConfig {
-            restarts: 1,
-            steps: 6,
-            seed: seed ^ 0x0e0e,
-            start: vec![Candidate {
-                offsets,
-                exec: cfg.exec,
-                seed: cfg.seed,
-                jitter: cfg.jitter,
-            }],
-            ..SearchConfig::new(c.chain, c.metric, horizon)
-        };
-        let observe = |sc: &SimConfig, res: &SimResult| {
-            check(&spec, &rep, sc, res, t, &mut ratios);
-        };
-        search_with(&spec, &scfg, observe).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-    }
+    let how = common::Probe {
+        runs: common::plain_runs(),
+        stride: 31,
+        salt: 0x0e0e,
+        horizon,
+    };
+    common::probe(&spec, &rep, seed, &how, &mut |cfg, res| {
+        check(&spec, &rep, cfg, res, t, &mut ratios)
+    });
     t.chains_near += u64::from(t.chain_best >= 0.97);
     for (i, tm) in rep.timing.iter().enumerate() {
         if tm.bounded_response().is_some() {

@@ -9,13 +9,15 @@
 //! `RTPIPE_RESOURCE_SYSTEMS` (default 1,500) sets the number of systems;
 //! run with `--nocapture` for the tally.
 
+mod common;
+
+use common::worst;
 use rtpipe_analysis::{analyze, Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
 use rtpipe_sim::observe::ChainStatsExt;
-use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
-use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
+use rtpipe_sim::SimConfig;
 use rtpipe_testkit::env_u64;
 
 const MS: Nanos = 1_000_000;
@@ -27,19 +29,6 @@ fn example(protocol: &str) -> Spec {
         &format!("resource_protocol = \"{protocol}\""),
     );
     Spec::parse("resources.toml", &src).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The worst response of each task from a run with the given offsets (ns).
-fn worst(spec: &Spec, offsets: Vec<Nanos>) -> Vec<Nanos> {
-    let cfg = SimConfig {
-        phasing: Phasing::Given(offsets),
-        ..SimConfig::new(100 * MS)
-    };
-    let res = simulate(spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
-    res.tasks
-        .iter()
-        .map(|t| t.max_response.unwrap_or(0))
-        .collect()
 }
 
 /// The example's bounds, computed by hand in its comments (ms): under PCP
@@ -244,47 +233,15 @@ fn check_system(seed: u64, t: &mut Tally) {
     let horizon = (12 * t_max).min(2_000 * MS);
     t.systems += 1;
     let mut ratios = vec![0.0; spec.tasks.len()];
-    let runs = [
-        (Phasing::Sync, ExecModel::Worst),
-        (Phasing::Random, ExecModel::Worst),
-        (Phasing::Random, ExecModel::Extremes),
-        (Phasing::Grid(MS), ExecModel::Uniform),
-    ];
-    let mut best: Option<(f64, usize, SimConfig, Vec<Nanos>)> = None;
-    for (run, (phasing, exec)) in runs.into_iter().enumerate() {
-        let cfg = SimConfig {
-            horizon,
-            seed: seed.wrapping_mul(31).wrapping_add(run as u64),
-            phasing,
-            exec,
-            jitter: Jitter::None,
-            log_jobs: false,
-        };
-        let res = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-        let (ratio, k) = check(&spec, &rep, &cfg, &res, t, &mut ratios);
-        if best.as_ref().is_none_or(|b| ratio > b.0) {
-            best = Some((ratio, k, cfg, res.offsets));
-        }
-    }
-    if let Some((_, k, cfg, offsets)) = best.filter(|_| !rep.chains.is_empty()) {
-        let c = &rep.chains[k];
-        let scfg = SearchConfig {
-            restarts: 1,
-            steps: 6,
-            seed: seed ^ 0x0022,
-            start: vec![Candidate {
-                offsets,
-                exec: cfg.exec,
-                seed: cfg.seed,
-                jitter: cfg.jitter,
-            }],
-            ..SearchConfig::new(c.chain, c.metric, horizon)
-        };
-        let observe = |sc: &SimConfig, res: &SimResult| {
-            check(&spec, &rep, sc, res, t, &mut ratios);
-        };
-        search_with(&spec, &scfg, observe).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
-    }
+    let how = common::Probe {
+        runs: common::plain_runs(),
+        stride: 31,
+        salt: 0x0022,
+        horizon,
+    };
+    common::probe(&spec, &rep, seed, &how, &mut |cfg, res| {
+        check(&spec, &rep, cfg, res, t, &mut ratios)
+    });
     for (i, tm) in rep.timing.iter().enumerate() {
         if tm.blocking > 0 && tm.bounded_response().is_some() {
             t.blocked += 1;
