@@ -202,13 +202,7 @@ fn runs() -> [(Phasing, ExecModel, Jitter); 4] {
 fn check_system(seed: u64, t: &mut Tally) {
     let spec = system(seed);
     let rep = analyze(&spec);
-    let t_max = spec
-        .tasks
-        .iter()
-        .filter_map(|x| x.fixed_period())
-        .max()
-        .unwrap_or(MS);
-    let horizon = (12 * t_max).min(2_000 * MS);
+    let horizon = common::horizon(&spec);
     t.systems += 1;
     let how = common::Probe {
         runs: runs().to_vec(),

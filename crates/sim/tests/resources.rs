@@ -224,13 +224,7 @@ fn check(
 fn check_system(seed: u64, t: &mut Tally) {
     let spec = system(seed);
     let rep = analyze(&spec);
-    let t_max = spec
-        .tasks
-        .iter()
-        .filter_map(|x| x.fixed_period())
-        .max()
-        .unwrap_or(MS);
-    let horizon = (12 * t_max).min(2_000 * MS);
+    let horizon = common::horizon(&spec);
     t.systems += 1;
     let mut ratios = vec![0.0; spec.tasks.len()];
     let how = common::Probe {

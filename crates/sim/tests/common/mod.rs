@@ -25,6 +25,17 @@ pub fn worst(spec: &Spec, offsets: Vec<Nanos>) -> Vec<Nanos> {
         .collect()
 }
 
+/// A random system's run: twelve of its longest periods, at most 2 s.
+pub fn horizon(spec: &Spec) -> Nanos {
+    let t_max = spec
+        .tasks
+        .iter()
+        .filter_map(|x| x.fixed_period())
+        .max()
+        .unwrap_or(MS);
+    (12 * t_max).min(2_000 * MS)
+}
+
 /// The runs of [`probe`] without jitter: synchronous, random offsets
 /// (worst and extreme demands), and a 1 ms grid (uniform demands).
 pub fn plain_runs() -> Vec<(Phasing, ExecModel, Jitter)> {
