@@ -12,11 +12,10 @@
 mod common;
 
 use common::worst;
-use rtpipe_analysis::{analyze, Anchor, Report};
+use rtpipe_analysis::{analyze, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
-use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::SimConfig;
 use rtpipe_testkit::env_u64;
 
@@ -161,9 +160,7 @@ struct Tally {
     failures: Vec<String>,
 }
 
-/// Every bound against one run; the best observed/sound of a multi-task
-/// chain, with its chain entry, for the search. Per task, the best
-/// observed/R of the run.
+/// Every bound against one run (`common::check_run`), tallied.
 fn check(
     spec: &Spec,
     rep: &Report,
@@ -173,51 +170,8 @@ fn check(
     ratios: &mut [f64],
 ) -> (f64, usize) {
     t.runs += 1;
-    let mut best = (0.0, 0);
-    let tag = |what: String| format!("{what}; {cfg:?}\n{}", rtpipe_model::to_toml(spec));
-    for (k, c) in rep.chains.iter().enumerate() {
-        for a in Anchor::ALL {
-            let obs = res.chains[c.chain].observed(c.metric, a);
-            let (Some(seen), Some(b)) = (obs.max, c.bound.sound(a)) else {
-                continue;
-            };
-            t.checks += 1;
-            if seen > b {
-                t.failures.push(tag(format!(
-                    "chain {k} {} from {}: {seen} > sound {b}",
-                    c.metric.name(),
-                    a.name()
-                )));
-            }
-            let ratio = seen as f64 / b as f64;
-            if spec.chains[c.chain].path.len() > 1 && ratio > best.0 {
-                best = (ratio, k);
-            }
-            if let Some(o) = rep.offset_bound(c.chain, c.metric, a).and_then(|o| o.value) {
-                t.checks += 1;
-                if seen > o {
-                    t.failures.push(tag(format!(
-                        "chain {k} {} from {}: {seen} > known-offset {o}",
-                        c.metric.name(),
-                        a.name()
-                    )));
-                }
-            }
-        }
-    }
-    for (i, ts) in res.tasks.iter().enumerate() {
-        let Some(r) = rep.timing[i].bounded_response() else {
-            continue;
-        };
-        if let Some(seen) = ts.max_response {
-            t.checks += 1;
-            if seen > r {
-                t.failures
-                    .push(tag(format!("task {i}: response {seen} > R(job) {r}")));
-            }
-            ratios[i] = ratios[i].max(seen as f64 / r as f64);
-        }
-    }
+    let (checks, best) = common::check_run(spec, rep, cfg, res, ratios, &mut t.failures);
+    t.checks += checks;
     best
 }
 

@@ -3,9 +3,10 @@
 //! then a search from the closest of them).
 #![allow(dead_code)] // each test file uses its own subset
 
-use rtpipe_analysis::Report;
+use rtpipe_analysis::{Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
+use rtpipe_sim::observe::ChainStatsExt;
 use rtpipe_sim::search::{search_with, Candidate, SearchConfig};
 use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
 
@@ -104,4 +105,64 @@ pub fn probe(
         check(sc, res);
     };
     search_with(spec, &scfg, observe).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+}
+
+/// Every bound of `rep` against one run: each chain's sound bound and its
+/// known-offset bound from both anchors, each task's R(job); a bound
+/// exceeded goes into `failures` with the run and the spec. Raises
+/// `ratios[i]` to task i's worst observed/R. Returns the bounds checked
+/// and the best observed/sound of a chain of two or more tasks, with its
+/// entry in `rep.chains` (for the search).
+pub fn check_run(
+    spec: &Spec,
+    rep: &Report,
+    cfg: &SimConfig,
+    res: &SimResult,
+    ratios: &mut [f64],
+    failures: &mut Vec<String>,
+) -> (u64, (f64, usize)) {
+    let (mut checks, mut best) = (0, (0.0, 0));
+    let tag = |what: String| format!("{what}; {cfg:?}\n{}", rtpipe_model::to_toml(spec));
+    for (k, c) in rep.chains.iter().enumerate() {
+        for a in Anchor::ALL {
+            let obs = res.chains[c.chain].observed(c.metric, a);
+            let (Some(seen), Some(b)) = (obs.max, c.bound.sound(a)) else {
+                continue;
+            };
+            let m = c.metric.name();
+            checks += 1;
+            if seen > b {
+                failures.push(tag(format!(
+                    "chain {k} {m} from {}: {seen} > sound {b}",
+                    a.name()
+                )));
+            }
+            let ratio = seen as f64 / b as f64;
+            if spec.chains[c.chain].path.len() > 1 && ratio > best.0 {
+                best = (ratio, k);
+            }
+            if let Some(o) = rep.offset_bound(c.chain, c.metric, a).and_then(|o| o.value) {
+                checks += 1;
+                if seen > o {
+                    failures.push(tag(format!(
+                        "chain {k} {m} from {}: {seen} > known-offset {o}",
+                        a.name()
+                    )));
+                }
+            }
+        }
+    }
+    for (i, ts) in res.tasks.iter().enumerate() {
+        let Some(r) = rep.timing[i].bounded_response() else {
+            continue;
+        };
+        if let Some(seen) = ts.max_response {
+            checks += 1;
+            if seen > r {
+                failures.push(tag(format!("task {i}: response {seen} > R(job) {r}")));
+            }
+            ratios[i] = ratios[i].max(seen as f64 / r as f64);
+        }
+    }
+    (checks, best)
 }
