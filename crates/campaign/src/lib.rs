@@ -23,7 +23,6 @@ pub use system::{run_system, system_seed, Row};
 
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Which shards a run takes: `index` of `count` (`--shard index/count`).
@@ -103,7 +102,8 @@ pub fn shard_path(dir: &Path, k: u64) -> PathBuf {
 }
 
 /// Runs the shards of `part` not yet in `dir` on `jobs` threads;
-/// `on_system` is called once per system done; `stop` ends the run after
+/// `on_system` is called once per system done; `stop` (asked from every
+/// worker) ends the run after
 /// the shard in progress (nothing half-written stays).
 pub fn run(
     cfg: &Config,
@@ -112,7 +112,7 @@ pub fn run(
     part: Part,
     jobs: usize,
     on_system: &(dyn Fn() + Sync),
-    stop: &AtomicBool,
+    stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Summary, Error> {
     assert!(part.index < part.count && jobs >= 1);
     prepare_dir(dir, config_text)?;
@@ -139,7 +139,7 @@ pub fn run(
             s.skipped += 1;
             continue;
         }
-        if stop.load(Ordering::Relaxed) {
+        if stop() {
             s.stopped = true;
             break;
         }
@@ -165,14 +165,14 @@ fn run_shard(
     dir: &Path,
     k: u64,
     on_system: &(dyn Fn() + Sync),
-    stop: &AtomicBool,
+    stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<(Option<u64>, u64), Error> {
     let first = k * cfg.shard_size;
     let last = (first + cfg.shard_size).min(cfg.systems);
     let per_system: Vec<Option<Vec<Row>>> = (first..last)
         .into_par_iter()
         .map(|i| {
-            if stop.load(Ordering::Relaxed) {
+            if stop() {
                 return None;
             }
             let rows = run_system(cfg, i);

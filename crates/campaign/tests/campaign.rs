@@ -43,9 +43,9 @@ fn files(d: &Path) -> Vec<(String, Vec<u8>)> {
     v
 }
 
-fn go(d: &Path, part: Part, jobs: usize, stop: &AtomicBool) -> rtpipe_campaign::Summary {
+fn go(d: &Path, part: Part, jobs: usize) -> rtpipe_campaign::Summary {
     let cfg = config::parse("test.toml", CONFIG).expect("a valid config");
-    match run(&cfg, CONFIG, d, part, jobs, &|| {}, stop) {
+    match run(&cfg, CONFIG, d, part, jobs, &|| {}, &|| false) {
         Ok(s) => s,
         Err(e) => panic!("{}: {}", e.message, e.help),
     }
@@ -53,9 +53,8 @@ fn go(d: &Path, part: Part, jobs: usize, stop: &AtomicBool) -> rtpipe_campaign::
 
 #[test]
 fn the_same_files_whatever_the_threads_and_the_shards() {
-    let never = AtomicBool::new(false);
     let one = dir("one");
-    let s = go(&one, Part::ALL, 1, &never);
+    let s = go(&one, Part::ALL, 1);
     assert_eq!((s.shards, s.written, s.systems), (4, 4, 60));
     // Up to three chains of two metrics each (a small set may offer fewer).
     assert!(
@@ -63,12 +62,12 @@ fn the_same_files_whatever_the_threads_and_the_shards() {
         "{s:?}"
     );
     let two = dir("two");
-    go(&two, Part::ALL, 2, &never);
+    go(&two, Part::ALL, 2);
     assert_eq!(files(&one), files(&two), "threads change nothing");
     let split = dir("split");
     let mut owned = 0;
     for i in 0..3 {
-        owned += go(&split, Part { index: i, count: 3 }, 2, &never).written;
+        owned += go(&split, Part { index: i, count: 3 }, 2).written;
     }
     assert_eq!(owned, 4);
     assert_eq!(
@@ -112,7 +111,8 @@ fn a_stopped_run_resumes_and_leaves_no_partial_file() {
             stop.store(true, Ordering::Relaxed);
         }
     };
-    let s = run(&cfg, CONFIG, &d, Part::ALL, 1, &tick, &stop).expect("a run");
+    let stopped = || stop.load(Ordering::Relaxed);
+    let s = run(&cfg, CONFIG, &d, Part::ALL, 1, &tick, &stopped).expect("a run");
     assert!(s.stopped && s.written >= 1 && s.written < 4, "{s:?}");
     let names: Vec<String> = files(&d).into_iter().map(|(n, _)| n).collect();
     assert!(
@@ -122,10 +122,10 @@ fn a_stopped_run_resumes_and_leaves_no_partial_file() {
         "{names:?}"
     );
     assert_eq!(names.len() as u64, 1 + s.written);
-    let again = go(&d, Part::ALL, 2, &AtomicBool::new(false));
+    let again = go(&d, Part::ALL, 2);
     assert_eq!((again.skipped, again.written), (s.written, 4 - s.written));
     let whole = dir("whole");
-    go(&whole, Part::ALL, 2, &AtomicBool::new(false));
+    go(&whole, Part::ALL, 2);
     assert_eq!(files(&d), files(&whole), "resumed = uninterrupted");
     assert!(shard_path(&d, 3).exists());
     for x in [d, whole] {
@@ -136,18 +136,10 @@ fn a_stopped_run_resumes_and_leaves_no_partial_file() {
 #[test]
 fn another_config_is_refused_in_the_same_directory() {
     let d = dir("other");
-    go(&d, Part { index: 0, count: 4 }, 1, &AtomicBool::new(false));
+    go(&d, Part { index: 0, count: 4 }, 1);
     let other = CONFIG.replace("seed = 11", "seed = 12");
     let cfg = config::parse("o.toml", &other).expect("a valid config");
-    let r = run(
-        &cfg,
-        &other,
-        &d,
-        Part::ALL,
-        1,
-        &|| {},
-        &AtomicBool::new(false),
-    );
+    let r = run(&cfg, &other, &d, Part::ALL, 1, &|| {}, &|| false);
     let e = r.expect_err("refused");
     assert!(e.message.contains("another campaign"), "{}", e.message);
     let _ = std::fs::remove_dir_all(d);

@@ -122,18 +122,10 @@ pub fn run(
         rows,
         stop: Some(Arc::clone(&stop)),
     };
-    let argv = || std::iter::once(label.to_string()).chain(flags.iter().cloned());
-    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        dispatch(command, spec, argv().collect(), hooks, &stop)
-    }));
-    let (answer, designed) = match caught {
-        Ok(r) => r?,
-        Err(p) if p.downcast_ref::<command::Stopped>().is_some() => return Err(Failure::Stopped),
-        Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
-    };
-    if stop.load(Ordering::Relaxed) {
-        return Err(Failure::Stopped);
-    }
+    let argv = std::iter::once(label.to_string())
+        .chain(flags.iter().cloned())
+        .collect();
+    let (answer, designed) = guarded(&stop, || dispatch(command, spec, argv, hooks, &stop))?;
     let samples = samples.then(|| {
         let taken = cols.lock().map(|mut g| std::mem::take(&mut *g));
         taken.unwrap_or_default().sorted()
@@ -147,24 +139,33 @@ pub fn run(
 pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Result<Reply, Failure> {
     let mut argv = flags.to_vec();
     argv.push("--json".into());
-    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match command {
+    let answer = guarded(&stop, || match command {
         "campaign" => {
             let a: crate::campaign::CampaignArgs = parse(command, &argv)?;
-            crate::campaign::execute(&a, &stop).map_err(Failure::Input)
+            let stopped = || stop.load(Ordering::Relaxed);
+            crate::campaign::execute(&a, &stopped).map_err(Failure::Input)
         }
         _ => Err(Failure::Input(Diagnostic::error(
             format!("no command `{command}` without a spec"),
             "use campaign",
         ))),
-    }));
-    let answer = match caught {
+    })?;
+    Ok(reply(answer, None, None))
+}
+
+/// `work`'s answer; a panic in it is [`Failure::Internal`] (or
+/// [`Failure::Stopped`], the unwinding of a run that saw `stop`), and so
+/// is an answer that came after `stop` was set: it is not the whole run.
+fn guarded<T>(stop: &AtomicBool, work: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
+    let answer = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)) {
         Ok(r) => r?,
+        Err(p) if p.downcast_ref::<command::Stopped>().is_some() => return Err(Failure::Stopped),
         Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
     };
     if stop.load(Ordering::Relaxed) {
         return Err(Failure::Stopped);
     }
-    Ok(reply(answer, None, None))
+    Ok(answer)
 }
 
 /// The WATERS task set `rtpipe generate waters FLAGS` writes, as a spec
@@ -211,7 +212,7 @@ fn dispatch(
         }
         "simulate" => {
             let a: SimulateArgs = parse(command, &argv)?;
-            refuse_files(&[("samples", a.samples.is_some())])?;
+            no_samples_file(a.samples.is_some())?;
             Ok((
                 crate::simulate::execute(spec, &a, hooks).map_err(input)?,
                 None,
@@ -219,7 +220,7 @@ fn dispatch(
         }
         "fly" => {
             let a: FlyArgs = parse(command, &argv)?;
-            refuse_files(&[("samples", a.samples.is_some())])?;
+            no_samples_file(a.samples.is_some())?;
             Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
         }
         "design" => {
@@ -236,14 +237,14 @@ fn dispatch(
 
 /// `--samples FILE` catches Ctrl-C to remove its temporaries, which is not
 /// the API's to do: the API hands the rows over as columns instead.
-fn refuse_files(flags: &[(&str, bool)]) -> Result<(), Failure> {
-    match flags.iter().find(|(_, given)| *given) {
-        Some((name, _)) => Err(Failure::Input(Diagnostic::error(
-            format!("`{name}` takes no file here"),
-            format!("pass {name}=True and write the returned columns (e.g. with pandas)"),
-        ))),
-        None => Ok(()),
+fn no_samples_file(given: bool) -> Result<(), Failure> {
+    if given {
+        return Err(Failure::Input(Diagnostic::error(
+            "`samples` takes no file here",
+            "pass samples=True and write the returned columns (e.g. with pandas)",
+        )));
     }
+    Ok(())
 }
 
 /// `argv` (the spec's label, then the flags) parsed as the command line

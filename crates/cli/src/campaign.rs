@@ -7,8 +7,6 @@ use rtpipe_model::Diagnostic;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
 /// `rtpipe campaign`'s flags.
 #[derive(clap::Args, Debug)]
@@ -39,24 +37,15 @@ pub struct CampaignArgs {
 
 pub fn run(a: &CampaignArgs) -> ExitCode {
     rtpipe_runtime::sys::catch_sigint();
-    let stop = Arc::new(AtomicBool::new(false));
-    let watcher = Arc::clone(&stop);
-    // Ctrl-C's handler only sets a flag: pass it on to the run.
-    std::thread::spawn(move || loop {
-        if rtpipe_runtime::sys::stop_requested() {
-            watcher.store(true, std::sync::atomic::Ordering::Relaxed);
-            return;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    });
-    match execute(a, &stop) {
+    match execute(a, &rtpipe_runtime::sys::stop_requested) {
         Ok(answer) => answer.emit(),
         Err(b) => command::fail(b),
     }
 }
 
-/// The campaign `a` names, stopped early when `stop` is set.
-pub fn execute(a: &CampaignArgs, stop: &AtomicBool) -> Result<Answer, Diagnostic> {
+/// The campaign `a` names, stopped after the shard in progress once `stop`
+/// says so.
+pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Answer, Diagnostic> {
     let text = rtpipe_model::input::read_text(&a.config, &config::KIND).map_err(|e| e.located())?;
     let cfg = config::parse(&a.config.display().to_string(), &text).map_err(|e| e.located())?;
     let jobs = a.jobs.map_or_else(cores, |j| j as usize);
