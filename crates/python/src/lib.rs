@@ -74,7 +74,10 @@ impl Spec {
 
     /// Tasks without a fixed period (what `design` chooses).
     fn free_tasks(&self) -> Vec<String> {
-        rtpipe_analysis_missing(&self.spec)
+        rtpipe_analysis::missing_periods(&self.spec)
+            .into_iter()
+            .map(String::from)
+            .collect()
     }
 
     /// The spec as TOML, as `design --write` writes it.
@@ -91,14 +94,6 @@ impl Spec {
             self.spec.chains.len()
         )
     }
-}
-
-fn rtpipe_analysis_missing(spec: &rtpipe_model::Spec) -> Vec<String> {
-    spec.tasks
-        .iter()
-        .filter(|t| t.fixed_period().is_none())
-        .map(|t| t.name.clone())
-        .collect()
 }
 
 /// Reads a spec file.
@@ -131,8 +126,7 @@ fn waters(py: Python<'_>, flags: Vec<String>) -> PyResult<Spec> {
             label: format!("<{}>", spec.name),
             spec,
         }),
-        Err(Failure::Input(d)) => Err(input_error(py, &d)),
-        Err(_) => Err(InternalError::new_err("the generator failed")),
+        Err(f) => Err(raise(py, f)),
     }
 }
 
@@ -256,13 +250,17 @@ fn in_worker(
 
 /// A command's reply as Python objects, or its failure as an exception.
 fn answer(py: Python<'_>, reply: Result<Reply, Failure>) -> PyResult<Py<PyAny>> {
-    match reply {
-        Ok(r) => reply_to_py(py, r),
-        Err(Failure::Input(d)) => Err(input_error(py, &d)),
-        Err(Failure::Stopped) => Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped")),
-        Err(Failure::Internal(m)) => Err(InternalError::new_err(format!(
+    reply.map_or_else(|f| Err(raise(py, f)), |r| reply_to_py(py, r))
+}
+
+/// A failure as the Python exception that says it.
+fn raise(py: Python<'_>, f: Failure) -> PyErr {
+    match f {
+        Failure::Input(d) => input_error(py, &d),
+        Failure::Stopped => pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"),
+        Failure::Internal(m) => InternalError::new_err(format!(
             "internal error (a bug in rtpipe): {m}; please report it with the spec and the call"
-        ))),
+        )),
     }
 }
 
