@@ -635,6 +635,8 @@ fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
         eprintln!("SKIPPED the FIFO hog test: SCHED_FIFO needs root");
         return;
     }
+    // Alone: another test's FIFO run on CPU 0 is a second stall.
+    let _one = serial();
     let spec = write_spec("hog", &small("rm", 0, ""));
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
         .args(["run", &spec, "--duration", "1s", "--json"])
@@ -697,20 +699,24 @@ fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
         .iter()
         .filter(|x| x["value"].as_f64().unwrap_or(0.0) - x["bound"].as_f64().unwrap_or(0.0) > 2.0)
         .collect();
-    assert!(
-        !big.is_empty(),
-        "the stall delayed nothing by 2 ms: {verdict}"
-    );
-    for x in big {
+    let in_stall = |x: &&&Value| {
         let (a, b) = (
             x["window"][0].as_f64().unwrap_or(0.0),
             x["window"][1].as_f64().unwrap_or(0.0),
         );
-        assert!(
-            a < s1 && b > s0,
-            "{x} lies outside the stall [{s0}, {s1}] ms"
-        );
+        a < s1 && b > s0
+    };
+    assert!(
+        big.iter().any(|x| in_stall(&x)),
+        "the stall [{s0}, {s1}] ms delayed nothing by 2 ms: {verdict}"
+    );
+    // A stall the test did not make (an interrupt storm, a process outside
+    // the test) may delay samples too; each must be excused all the same.
+    for x in &big {
         assert_eq!(x["excused"], true, "{x}");
+        if !in_stall(&x) {
+            eprintln!("a stall outside the hog's, excused: {x}");
+        }
     }
 }
 
