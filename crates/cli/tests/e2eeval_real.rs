@@ -1,0 +1,176 @@
+//! E2EEvaluation's own export, as its generator writes it, imported and
+//! analysed; the bounds set against the figures E2EEvaluation's own
+//! analyses printed for the same chains (tests/data/README.md says how both
+//! files were made, and at which commit).
+
+mod common;
+
+use common::{assert_exit, json_of, rtpipe, scratch};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// The file's times are in ms with up to 17 digits; rtpipe rounds WCETs up
+/// to whole ns (by < 1 ns each). A bound is monotone in the WCETs and
+/// counts each WCET once per job it charges, so rounding raises it by less
+/// than 1 ns per job charged; 1 µs allows a thousand of them (the chains
+/// here charge at most a few hundred). The same holds for a completion
+/// time in a schedule, which moves by less than 1 ns per job run before it
+/// in its busy period.
+const ROUNDING_MS: f64 = 0.001;
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+/// E2EEvaluation's `results.csv`: one column per analysis (its short name),
+/// one row per chain in the file's order.
+fn results(name: &str) -> Vec<std::collections::HashMap<String, f64>> {
+    let text = std::fs::read_to_string(data(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let mut lines = text.lines();
+    let head: Vec<String> = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    lines
+        .map(|l| {
+            let cells = l.split(',').map(|c| c.parse::<f64>().unwrap_or(f64::NAN));
+            head.iter().cloned().zip(cells).collect()
+        })
+        .collect()
+}
+
+/// Imports `yaml` and returns the one spec written and the import's stdout.
+fn import_one(tag: &str, yaml: &str) -> (PathBuf, String) {
+    let out = scratch(tag).join("out");
+    let o = rtpipe(&[
+        "import",
+        "e2eeval",
+        &data(yaml).to_string_lossy(),
+        &out.to_string_lossy(),
+    ]);
+    assert_exit(&o, 0);
+    let specs = common::listing(&out);
+    assert_eq!(specs.len(), 1, "{specs:?}");
+    (
+        out.join(&specs[0]),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+    )
+}
+
+/// The chains of `metric`, in the file's order.
+fn chains<'a>(v: &'a Value, metric: &str) -> Vec<&'a Value> {
+    let all = v["chains"].as_array().map(Vec::as_slice).unwrap_or(&[]);
+    all.iter().filter(|c| c["metric"] == metric).collect()
+}
+
+fn num(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+/// rtpipe's figure is E2EEvaluation's, raised only by the rounding.
+fn same_bound(what: &str, k: usize, ours: f64, theirs: f64) {
+    assert!(
+        theirs <= ours && ours - theirs < ROUNDING_MS,
+        "chain {k}, {what}: rtpipe {ours} ms, E2EEvaluation {theirs} ms"
+    );
+}
+
+/// WATERS task sets at E2EEvaluation's default settings: one ECU, 95
+/// tasks, 55 local chains, synchronous release, BCET = WCET.
+#[test]
+fn the_real_waters_export_imports_and_its_bounds_are_the_literature_s() {
+    let (spec, table) = import_one("e2e-real", "e2eeval-waters.yaml");
+    assert!(table.contains("95 tasks on 1 ECU, 55 chains"), "{table}");
+    let a = rtpipe(&["analyze", &spec.to_string_lossy(), "--json"]);
+    assert_exit(&a, 0);
+    let v = json_of(&a);
+    let (reaction, freshness) = (chains(&v, "reaction"), chains(&v, "freshness"));
+    let theirs = results("e2eeval-waters-results.csv");
+    assert_eq!(
+        (reaction.len(), freshness.len(), theirs.len()),
+        (55, 55, 55)
+    );
+    for (k, t) in theirs.iter().enumerate() {
+        let (r, f) = (reaction[k], freshness[k]);
+        // Davare et al. 2007 and Dürr et al. 2019 from the event.
+        same_bound("D07", k, num(&r["from_event"]["davare"]), t["D07"]);
+        same_bound("D19(MRT)", k, num(&r["from_event"]["duerr"]), t["D19(MRT)"]);
+        // Dürr's reduced data age is freshness from the head's read.
+        same_bound("D19(MRDA)", k, num(&f["duerr"]), t["D19(MRDA)"]);
+        // Kloda et al. 2018 (synchronous release): the known-offset bound.
+        let known = num(&r["known_offsets"]["from_event"]["sound"]);
+        same_bound("K18", k, known, t["K18"]);
+        // Every rtpipe bound holds Günzel et al.'s exact schedule-based
+        // figures (the schedule with every job at its WCET, which BCET =
+        // WCET makes the only one).
+        assert!(known >= t["G23(L-MRT)"] - ROUNDING_MS, "chain {k}");
+        assert!(num(&r["from_event"]["sound"]) >= t["G23(L-MRT)"] - ROUNDING_MS);
+    }
+}
+
+/// The simulator, releasing every task at 0 with its WCET, measures exactly
+/// what Günzel et al.'s schedule-based analyses compute on the same
+/// schedule: the maximum reaction time from the event (MRT) and the
+/// maximum reduced data age, freshness from the head's read (MRDA).
+#[test]
+fn the_simulated_waters_schedule_gives_guenzel_s_exact_figures() {
+    let (spec, _) = import_one("e2e-real-sim", "e2eeval-waters.yaml");
+    // Ten hyperperiods (1 s): the longest chains (up to 4.6 s from the
+    // event) complete several times.
+    let s = rtpipe(&[
+        "simulate",
+        &spec.to_string_lossy(),
+        "--duration",
+        "10s",
+        "--json",
+    ]);
+    assert_exit(&s, 0);
+    let v = json_of(&s);
+    let (reaction, freshness) = (chains(&v, "reaction"), chains(&v, "freshness"));
+    for (k, t) in results("e2eeval-waters-results.csv").iter().enumerate() {
+        let mrt = num(&reaction[k]["observed_from_event"]["max"]);
+        let mrda = num(&freshness[k]["observed"]["max"]);
+        assert!(
+            (mrt - t["G23(L-MRT)"]).abs() < ROUNDING_MS,
+            "chain {k}: {mrt}"
+        );
+        assert!(
+            (mrda - t["G23(L-MRDA)"]).abs() < ROUNDING_MS,
+            "chain {k}: {mrda}"
+        );
+        for c in [reaction[k], freshness[k]] {
+            assert_eq!(c["violations"]["sound"], 0, "chain {k}");
+            assert_eq!(c["known_offsets"]["violations"], 0, "chain {k}");
+        }
+    }
+}
+
+/// Interconnected chains over three ECUs (three WATERS task sets, 20
+/// chains): one spec, each ECU a CPU; Davare's and Dürr's inter-ECU bounds
+/// as E2EEvaluation computes them.
+#[test]
+fn the_real_interconnected_export_gives_davare_and_duerr_across_ecus() {
+    let (spec, table) = import_one("e2e-real-inter", "e2eeval-waters-inter.yaml");
+    assert!(table.contains("182 tasks on 3 ECUs, 20 chains"), "{table}");
+    let a = rtpipe(&["analyze", &spec.to_string_lossy(), "--json"]);
+    assert_exit(&a, 0);
+    let v = json_of(&a);
+    let (reaction, freshness) = (chains(&v, "reaction"), chains(&v, "freshness"));
+    let theirs = results("e2eeval-waters-inter-results.csv");
+    assert_eq!(
+        (reaction.len(), freshness.len(), theirs.len()),
+        (20, 20, 20)
+    );
+    for (k, t) in theirs.iter().enumerate() {
+        let (r, f) = (reaction[k], freshness[k]);
+        same_bound("D07-I", k, num(&r["from_event"]["davare"]), t["D07-I"]);
+        same_bound("D19(MRT)", k, num(&r["from_event"]["duerr"]), t["D19(MRT)"]);
+        same_bound("D19(MRDA)", k, num(&f["duerr"]), t["D19(MRDA)"]);
+        let sound = num(&r["from_event"]["sound"]);
+        assert!(sound <= num(&r["from_event"]["davare"]), "chain {k}");
+    }
+}
