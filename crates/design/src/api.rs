@@ -10,7 +10,8 @@ use std::sync::{Arc, Mutex};
 /// How the exact search runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Method {
-    /// The box search where it applies (sound mode, periods not harmonic),
+    /// The box search where it applies (sound mode; paper mode where Eq. 12
+    /// does not fall as a period grows),
     /// the MILP otherwise.
     Auto,
     /// Branch and bound over boxes of periods, pruned by the sound

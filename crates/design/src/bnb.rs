@@ -22,6 +22,7 @@ use crate::api::{utilization, Checked, Incumbent};
 use crate::axis::{Axis, Node};
 use crate::budget::Budget;
 use crate::gate::{Gate, Verdict};
+use crate::harmonic;
 use crate::joint::{joint_bound, least_under, Row};
 use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
@@ -295,15 +296,18 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// The analysis of one point, and whether it meets the active groups
     /// (and, in sound mode, bounds every chain).
     fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
-        let spec = self.p.with_periods(&self.periods(k));
+        let periods = self.periods(k);
+        let spec = self.p.with_periods(&periods);
         let report = rtpipe_analysis::analyze(&spec);
         let mode = self.mode();
+        let harmonic = !self.p.spec.harmonic || harmonic::all_pairs(&periods);
         let bounded = mode == Mode::Paper
             || report
                 .chains
                 .iter()
                 .all(|c| c.bound.sound(rtpipe_analysis::Anchor::Read).is_some());
-        let ok = bounded
+        let ok = harmonic
+            && bounded
             && self.groups.iter().all(|g| match *g {
                 Group::Limit(k, m) => report
                     .chains
@@ -325,6 +329,9 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     fn narrow(&self, node: &mut Node, best: Option<f64>) -> bool {
         for _ in 0..NARROW_ROUNDS {
             if !self.enforce_orders(node) {
+                return false;
+            }
+            if self.p.spec.harmonic && !harmonic::propagate(&self.axes, node) {
                 return false;
             }
             if let Some(u) = best {
@@ -593,6 +600,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 blamed[i] |= t.cpu == v.cpu;
             }
         }
+        // A corner the analysis accepts but that breaks a harmonic pair:
+        // the split goes to the tasks of the broken pairs.
+        if spec.harmonic && !blamed.contains(&true) {
+            return harmonic::broken(&self.periods(&node.hi));
+        }
         blamed
     }
 
@@ -665,25 +677,47 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let u = |i: usize| self.budget[i] / self.axes[i].value(k[i]) as f64;
             order.sort_by(|&a, &b| u(b).total_cmp(&u(a)));
             for i in order {
-                // Invariant: k[i] = a verifies; the search is for a longer one.
-                let (mut a, mut b) = (k[i], self.axes[i].len());
-                while b - a > 1 {
-                    let m = a + (b - a) / 2;
-                    k[i] = m;
-                    if self.verify(&k).2 {
-                        a = m;
-                    } else {
-                        b = m;
-                    }
-                }
-                moved |= k[i] != a;
-                k[i] = a;
+                let from = k[i];
+                k[i] = self.lengthen(&mut k.clone(), i);
+                moved |= k[i] != from;
             }
             if !moved {
                 break;
             }
         }
         k
+    }
+
+    /// The longest period index for task i found by bisection over the
+    /// values it may move to (under `harmonic`, those harmonic with every
+    /// other period of `k`) with the design still verified; `k` verifies.
+    fn lengthen(&self, k: &mut [u32], i: usize) -> u32 {
+        let from = k[i];
+        let ups = self
+            .p
+            .spec
+            .harmonic
+            .then(|| harmonic::moves_up(&self.axes, k, i));
+        let at = |x: u32| match &ups {
+            None => from + x,
+            Some(_) if x == 0 => from,
+            Some(u) => u[x as usize - 1],
+        };
+        let count = ups
+            .as_ref()
+            .map_or(self.axes[i].len() - from, |u| u.len() as u32 + 1);
+        // Invariant: position a verifies; the search is for a longer one.
+        let (mut a, mut b) = (0, count);
+        while b - a > 1 {
+            let m = a + (b - a) / 2;
+            k[i] = at(m);
+            if self.verify(k).2 {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        at(a)
     }
 
     /// Runs the search from the whole domain, starting from `seed` (a

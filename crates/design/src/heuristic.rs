@@ -2,8 +2,10 @@
 //! analysis alone, and the master with response times pinned to estimates.
 
 use crate::api::utilization;
+use crate::axis::Axis;
 use crate::budget::Budget;
 use crate::domain::{grid_units, Dom};
+use crate::harmonic;
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 use crate::solve::{solve_master, Solved};
@@ -44,8 +46,23 @@ pub(crate) fn descent(p: &Problem, budget: &Budget) -> Option<(Spec, Report, f64
             break;
         }
     }
+    if p.spec.harmonic {
+        best = harmonize(p, &values, &idx)?;
+    }
     let u = utilization(&best.0);
     Some((best.0, best.1, u))
+}
+
+/// Under `harmonic = true`: the descent's periods rounded down to a
+/// harmonic point (`harmonic::round_down`), if that point verifies.
+fn harmonize(p: &Problem, values: &[Vec<Nanos>], idx: &[usize]) -> Option<(Spec, Report)> {
+    let axes: Vec<Axis> = p.dom.iter().map(|d| Axis::new(d, p.g)).collect();
+    let periods: Vec<Nanos> = (0..values.len()).map(|i| values[i][idx[i]]).collect();
+    let k = harmonic::round_down(&axes, &periods)?;
+    let rounded: Vec<Nanos> = k.iter().zip(&axes).map(|(&x, a)| a.value(x)).collect();
+    let cand = p.with_periods(&rounded);
+    let report = rtpipe_analysis::analyze(&cand);
+    passes(p, cand, report)
 }
 
 /// Candidate values per task (ns): every choice, or a geometric ladder
@@ -85,6 +102,11 @@ fn at_rungs(p: &Problem, values: &[Vec<Nanos>], idx: &[usize]) -> (Spec, Report)
 /// The design at these rungs, if it verifies.
 fn check(p: &Problem, values: &[Vec<Nanos>], idx: &[usize]) -> Option<(Spec, Report)> {
     let (cand, report) = at_rungs(p, values, idx);
+    passes(p, cand, report)
+}
+
+/// A candidate with its analysis, if it verifies.
+fn passes(p: &Problem, cand: Spec, report: Report) -> Option<(Spec, Report)> {
     (report.schedulability.schedulable && p.limits_ok(&report)).then_some((cand, report))
 }
 

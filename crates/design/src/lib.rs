@@ -36,6 +36,7 @@ mod budget;
 mod domain;
 mod explain;
 mod gate;
+mod harmonic;
 mod heuristic;
 mod joint;
 mod learnt;
@@ -155,9 +156,9 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let boxes = choose_method(spec, opts)?;
     if opts.accept.is_some() && !boxes {
         return Err(DesignError::input(
-            "an acceptance check (`--fly`) needs the box search: sound mode (or paper mode where it applies) and periods that are not `harmonic = true`",
+            "an acceptance check (`--fly`) needs the box search: sound mode, or paper mode where it applies",
         )
-        .help("leave out --fly, or design in sound mode without harmonic periods"));
+        .help("leave out --fly, or design in sound mode"));
     }
     let method = if boxes { Method::Boxes } else { Method::Milp };
     let p = Problem::new(spec, opts, domains, method);
@@ -231,17 +232,16 @@ pub fn method_for(spec: &Spec, opts: &Options) -> Method {
 
 /// Whether the box search runs (true) or the MILP.
 fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
-    let fits = !spec.harmonic
-        && match opts.mode {
-            Mode::Sound => true,
-            Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
-        };
+    let fits = match opts.mode {
+        Mode::Sound => true,
+        Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
+    };
     match opts.method {
         Method::Auto => Ok(fits),
         Method::Milp => Ok(false),
         Method::Boxes if fits => Ok(true),
         Method::Boxes => Err(DesignError::input(
-            "the box search needs periods that are not `harmonic = true` and, in paper mode, no chain task whose demand exceeds three budgets (Eq. 12 then falls as its period grows)",
+            "in paper mode the box search needs no chain task whose demand exceeds three budgets (Eq. 12 then falls as its period grows)",
         )
         .help("use --method milp (or leave --method out)")),
     }

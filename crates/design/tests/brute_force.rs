@@ -169,7 +169,7 @@ fn brute_force(spec: &Spec, mode: Mode) -> (Option<(f64, Vec<Nanos>)>, usize) {
             t.period = PeriodSpec::Fixed(doms[i][idx[i]]);
         }
         count += 1;
-        if passes(&analyze(&s), mode) {
+        if harmonic_ok(&s) && passes(&analyze(&s), mode) {
             let u = utilization(&s);
             if best.as_ref().is_none_or(|(b, _)| u < *b) {
                 best = Some((u, s.tasks.iter().filter_map(|t| t.fixed_period()).collect()));
@@ -189,6 +189,25 @@ fn brute_force(spec: &Spec, mode: Mode) -> (Option<(f64, Vec<Nanos>)>, usize) {
             k += 1;
         }
     }
+}
+
+/// Under `harmonic = true`, whether every pair of periods divides one way.
+fn harmonic_ok(s: &Spec) -> bool {
+    let p = periods(s);
+    !s.harmonic
+        || p.iter()
+            .enumerate()
+            .all(|(a, &x)| p[a + 1..].iter().all(|&y| x % y == 0 || y % x == 0))
+}
+
+/// Instance `seed` with ranges under `harmonic = true`; `None` when its
+/// fixed periods are not harmonic (the spec would be refused).
+fn harmonic_instance(seed: u64, mode: Mode) -> Option<Spec> {
+    let mut spec = instance_with_ranges(seed, mode);
+    spec.harmonic = true;
+    let mut only_fixed = spec.clone();
+    only_fixed.tasks.retain(|t| t.fixed_period().is_some());
+    harmonic_ok(&only_fixed).then_some(spec)
 }
 
 /// Writes a reproducer and returns its path.
@@ -218,6 +237,9 @@ fn check(spec: &Spec, o: &Outcome, mode: Mode) -> Result<(), String> {
                     o.status,
                     periods(d)
                 ));
+            }
+            if !harmonic_ok(d) {
+                return Err(format!("periods {:?} are not harmonic", periods(d)));
             }
             if mode == Mode::Sound && !report.all_ok() {
                 return Err("sound design: all_ok() is false".into());
@@ -312,6 +334,25 @@ fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
     spec
 }
 
+/// The period domains of the instances.
+#[derive(Clone, Copy)]
+enum Shape {
+    Choices,
+    Ranges,
+    /// Ranges under `harmonic = true`.
+    Harmonic,
+}
+
+impl Shape {
+    fn name(self) -> &'static str {
+        match self {
+            Shape::Choices => "",
+            Shape::Ranges => ", with ranges",
+            Shape::Harmonic => ", harmonic ranges",
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 fn run(
     mode: Mode,
@@ -319,7 +360,7 @@ fn run(
     first_seed: u64,
     n: usize,
     time_limit: f64,
-    ranges: bool,
+    shape: Shape,
     event: bool,
 ) {
     let verbose = std::env::var_os("RTPIPE_DESIGN_VERBOSE").is_some();
@@ -328,10 +369,18 @@ fn run(
     let mut slowest = (0.0f64, 0u64);
     let start = Instant::now();
     for seed in first_seed..first_seed + n as u64 {
-        let spec = if ranges {
-            instance_with_ranges(seed, mode)
-        } else {
-            instance(seed, mode)
+        let spec = match shape {
+            Shape::Choices => instance(seed, mode),
+            Shape::Ranges => instance_with_ranges(seed, mode),
+            Shape::Harmonic => match harmonic_instance(seed, mode) {
+                Some(s) => s,
+                None => {
+                    *tally
+                        .entry("skipped (fixed periods not harmonic)")
+                        .or_default() += 1;
+                    continue;
+                }
+            },
         };
         let spec = if event {
             with_event_limits(spec, seed)
@@ -382,7 +431,7 @@ fn run(
         "{} mode ({}){}: {n} instances {tally:?} in {:.1} s (slowest: seed {} {:.2} s)",
         mode.name(),
         method.name(),
-        if ranges { ", with ranges" } else { "" },
+        shape.name(),
         start.elapsed().as_secs_f64(),
         slowest.1,
         slowest.0
@@ -396,12 +445,28 @@ fn run(
 
 #[test]
 fn sound_mode_agrees_with_brute_force() {
-    run(Mode::Sound, Method::Boxes, 0, cases(300), 3.0, false, false);
+    run(
+        Mode::Sound,
+        Method::Boxes,
+        0,
+        cases(300),
+        3.0,
+        Shape::Choices,
+        false,
+    );
 }
 
 #[test]
 fn sound_mode_milp_agrees_with_brute_force() {
-    run(Mode::Sound, Method::Milp, 0, cases(300), 3.0, false, false);
+    run(
+        Mode::Sound,
+        Method::Milp,
+        0,
+        cases(300),
+        3.0,
+        Shape::Choices,
+        false,
+    );
 }
 
 #[test]
@@ -412,7 +477,7 @@ fn paper_mode_agrees_with_brute_force() {
         100_000,
         cases(300),
         3.0,
-        false,
+        Shape::Choices,
         false,
     );
 }
@@ -425,7 +490,7 @@ fn paper_mode_milp_agrees_with_brute_force() {
         100_000,
         cases(300) / 3,
         3.0,
-        false,
+        Shape::Choices,
         false,
     );
 }
@@ -433,8 +498,24 @@ fn paper_mode_milp_agrees_with_brute_force() {
 #[test]
 fn ranges_agree_with_brute_force() {
     let n = cases(300) / 3;
-    run(Mode::Sound, Method::Boxes, 200_000, n, 3.0, true, false);
-    run(Mode::Paper, Method::Auto, 300_000, n, 3.0, true, false);
+    run(
+        Mode::Sound,
+        Method::Boxes,
+        200_000,
+        n,
+        3.0,
+        Shape::Ranges,
+        false,
+    );
+    run(
+        Mode::Paper,
+        Method::Auto,
+        300_000,
+        n,
+        3.0,
+        Shape::Ranges,
+        false,
+    );
 }
 
 #[test]
@@ -445,7 +526,7 @@ fn ranges_agree_with_brute_force_milp() {
         200_000,
         cases(300) / 3,
         3.0,
-        true,
+        Shape::Ranges,
         false,
     );
 }
@@ -453,9 +534,65 @@ fn ranges_agree_with_brute_force_milp() {
 #[test]
 fn event_limits_agree_with_brute_force() {
     let n = cases(300) / 3;
-    run(Mode::Sound, Method::Boxes, 400_000, n, 3.0, false, true);
-    run(Mode::Sound, Method::Milp, 400_000, n, 3.0, false, true);
-    run(Mode::Paper, Method::Milp, 500_000, n, 3.0, false, true);
+    run(
+        Mode::Sound,
+        Method::Boxes,
+        400_000,
+        n,
+        3.0,
+        Shape::Choices,
+        true,
+    );
+    run(
+        Mode::Sound,
+        Method::Milp,
+        400_000,
+        n,
+        3.0,
+        Shape::Choices,
+        true,
+    );
+    run(
+        Mode::Paper,
+        Method::Milp,
+        500_000,
+        n,
+        3.0,
+        Shape::Choices,
+        true,
+    );
+}
+
+#[test]
+fn harmonic_ranges_agree_with_brute_force() {
+    let n = cases(300) / 3;
+    run(
+        Mode::Sound,
+        Method::Boxes,
+        600_000,
+        n,
+        3.0,
+        Shape::Harmonic,
+        false,
+    );
+    run(
+        Mode::Sound,
+        Method::Milp,
+        600_000,
+        n / 3,
+        3.0,
+        Shape::Harmonic,
+        false,
+    );
+    run(
+        Mode::Sound,
+        Method::Boxes,
+        700_000,
+        n,
+        3.0,
+        Shape::Harmonic,
+        true,
+    );
 }
 
 #[test]
