@@ -149,18 +149,18 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
                 .to_string(),
         );
     }
+    let boxes = choose_method(spec, opts)?;
+    let method = if boxes { Method::Boxes } else { Method::Milp };
     if spec.harmonic {
-        domain::harmonic_domains(spec, &mut domains.dom, &mut notes)?;
+        domain::harmonic_domains(spec, &mut domains.dom, &mut notes, method)?;
     }
     let tops = implicit_tops(spec, &domains);
-    let boxes = choose_method(spec, opts)?;
     if opts.accept.is_some() && !boxes {
         return Err(DesignError::input(
             "an acceptance check (`--fly`) needs the box search: sound mode, or paper mode where it applies",
         )
         .help("leave out --fly, or design in sound mode"));
     }
-    let method = if boxes { Method::Boxes } else { Method::Milp };
     let p = Problem::new(spec, opts, domains, method);
     let mut learnt = Learnt::new(spec.tasks.len());
     let mut budget = Budget::new(opts, start);

@@ -583,7 +583,7 @@ fn a_wide_harmonic_design_ends_without_a_time_limit() {
             o.notes
         );
         assert!(
-            o.notes.iter().any(|n| n.contains("2^a·3^b grid steps")),
+            o.notes.iter().any(|n| n.contains("2^a·3^b·5^c grid steps")),
             "{:?}",
             o.notes
         );

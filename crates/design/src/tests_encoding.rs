@@ -49,7 +49,8 @@ fn least_chain_values(
 ) -> Vec<(ChainExpr, Vec<f64>)> {
     let mut d = domains(spec).expect("domains");
     if spec.harmonic {
-        harmonic_domains(spec, &mut d.dom, &mut Vec::new()).expect("harmonic domains");
+        harmonic_domains(spec, &mut d.dom, &mut Vec::new(), Method::Milp)
+            .expect("harmonic domains");
     }
     let p = Problem::new(spec, opts, d, Method::Milp);
     let groups: Vec<Group> = p
