@@ -7,12 +7,16 @@
 //! RTA; ranges around the generating design; limits at its sound bounds
 //! times [0.8, 1.5]), seeds 2018.. (`RTPIPE_BENCH_SEEDS`, default 10 per
 //! size), each solved once with `--method auto` and a 10 s time limit
-//! (`RTPIPE_BENCH_LIMIT`). Each solve runs in a child process so that its
+//! (`RTPIPE_BENCH_LIMIT`); `RTPIPE_BENCH_SIZES=200` picks other sizes
+//! (200 tasks: 8 CPUs, 10 chains); `-- --spec TASKS SEED` prints one
+//! problem as a spec for `rtpipe design`. A second table solves Cleanflight
+//! with `harmonic = true` on a 100 µs grid by the MILP (what harmonic
+//! periods always used before) and by the box search. Each solve runs in a child process so that its
 //! peak resident memory (VmHWM) is its own. Prints a Markdown table.
 
 use rtpipe_analysis::bounds_per_chain;
 use rtpipe_analysis::Anchor;
-use rtpipe_design::{design, Mode, Options, Status};
+use rtpipe_design::{design, Method, Mode, Options, Status};
 use rtpipe_model::gen::{benchmark_config, design_problem, DesignGenConfig};
 use std::collections::BTreeMap;
 use std::process::Command;
@@ -41,30 +45,71 @@ fn peak_kib() -> u64 {
         .unwrap_or(0)
 }
 
-/// The child: one solve, one line "status seconds gap peak_kib method".
-fn child(tasks: usize, seed: u64, mode: Mode, limit: f64) {
-    let cfg = config(tasks);
-    let spec = design_problem(seed, &cfg, &|s| {
+/// The generated problem of `tasks` tasks and `seed`.
+fn problem(tasks: usize, seed: u64) -> rtpipe_model::Spec {
+    design_problem(seed, &config(tasks), &|s| {
         bounds_per_chain(s, |b| b.sound(Anchor::Read))
-    });
+    })
+}
+
+/// Cleanflight with Table V's budgets, `harmonic = true` and a 100 µs grid
+/// (issue 25: the MILP did not finish it in 120 s).
+fn cleanflight_harmonic() -> rtpipe_model::Spec {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/cleanflight-design.toml"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_default().replace(
+        "schedulability = \"rta\"",
+        "schedulability = \"rta\"\nharmonic = true\nresolution = \"100us\"",
+    );
+    match rtpipe_model::Spec::parse(path, &text) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// A problem by name: a number of tasks (generated with `seed`) or
+/// `cleanflight-harmonic`.
+fn problem_of(kind: &str, seed: u64) -> rtpipe_model::Spec {
+    match kind {
+        "cleanflight-harmonic" => cleanflight_harmonic(),
+        n => problem(n.parse().unwrap_or(6), seed),
+    }
+}
+
+fn method_named(name: &str) -> Method {
+    match name {
+        "boxes" => Method::Boxes,
+        "milp" => Method::Milp,
+        _ => Method::Auto,
+    }
+}
+
+/// The child: one solve, one line "status seconds gap peak_kib method work
+/// objective".
+fn child(kind: &str, seed: u64, mode: Mode, limit: f64, method: Method) {
+    let spec = problem_of(kind, seed);
     let opts = Options {
         mode,
+        method,
         time_limit: Some(limit),
         ..Options::default()
     };
     let t0 = std::time::Instant::now();
-    let (status, gap, method, work) = match design(&spec, &opts) {
+    let (status, gap, method, work, u) = match design(&spec, &opts) {
         Ok(o) => (
             o.status.name(),
             o.gap.unwrap_or(f64::NAN),
             o.method.name(),
             o.iterations,
+            o.objective.unwrap_or(f64::NAN),
         ),
-        Err(_) => ("error", f64::NAN, "-", 0),
+        Err(_) => ("error", f64::NAN, "-", 0, f64::NAN),
     };
     let secs = t0.elapsed().as_secs_f64();
-    // The work (boxes or master solves) last: the same on every machine.
-    println!("{status} {secs} {gap} {} {method} {work}", peak_kib());
+    // The work (boxes or master solves): the same on every machine.
+    println!("{status} {secs} {gap} {} {method} {work} {u}", peak_kib());
 }
 
 struct Row {
@@ -73,28 +118,31 @@ struct Row {
     gap: f64,
     kib: u64,
     method: String,
+    objective: f64,
 }
 
-fn run_child(tasks: usize, seed: u64, mode: Mode, limit: f64) -> Option<Row> {
+fn run_child(kind: &str, seed: u64, mode: Mode, limit: f64, method: Method) -> Option<Row> {
     let exe = std::env::current_exe().ok()?;
     let out = Command::new(exe)
         .args([
             "--one",
-            &tasks.to_string(),
+            kind,
             &seed.to_string(),
             mode.name(),
             &limit.to_string(),
+            method.name(),
         ])
         .output()
         .ok()?;
     let text = String::from_utf8_lossy(&out.stdout);
     let f: Vec<&str> = text.split_whitespace().collect();
-    (f.len() == 6).then(|| Row {
+    (f.len() == 7).then(|| Row {
         status: f[0].to_string(),
         secs: f[1].parse().unwrap_or(f64::NAN),
         gap: f[2].parse().unwrap_or(f64::NAN),
         kib: f[3].parse().unwrap_or(0),
         method: f[4].to_string(),
+        objective: f[6].parse().unwrap_or(f64::NAN),
     })
 }
 
@@ -116,25 +164,41 @@ fn main() {
             Mode::Sound
         };
         child(
-            args[i + 1].parse().unwrap_or(6),
+            &args[i + 1],
             args[i + 2].parse().unwrap_or(FIRST_SEED),
             mode,
             args[i + 4].parse().unwrap_or(10.0),
+            method_named(&args[i + 5]),
         );
+        return;
+    }
+    if let Some(i) = args.iter().position(|a| a == "--spec") {
+        // The problem of one size and seed as a spec, for `rtpipe design`.
+        let tasks = args.get(i + 1).and_then(|v| v.parse().ok()).unwrap_or(6);
+        let seed = args
+            .get(i + 2)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(FIRST_SEED);
+        print!("{}", rtpipe_model::to_toml(&problem(tasks, seed)));
         return;
     }
     if args.iter().any(|a| a == "--list") {
         return; // cargo bench -- --list
     }
     let seeds: u64 = env("RTPIPE_BENCH_SEEDS", 10);
+    // `RTPIPE_BENCH_SIZES=200` (comma-separated) for other sizes.
+    let sizes: Vec<usize> = std::env::var("RTPIPE_BENCH_SIZES")
+        .ok()
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|| SIZES.to_vec());
     let limit: f64 = env("RTPIPE_BENCH_LIMIT", 10.0);
     println!("| tasks | mode | method | statuses | median s | max s | median gap of feasible | median peak MiB | max peak MiB |");
     println!("|---|---|---|---|---|---|---|---|---|");
-    for tasks in SIZES {
+    for tasks in sizes {
         for mode in [Mode::Paper, Mode::Sound] {
             let rows: Vec<Row> = (FIRST_SEED..FIRST_SEED + seeds)
                 .filter_map(|seed| {
-                    let r = run_child(tasks, seed, mode, limit);
+                    let r = run_child(&tasks.to_string(), seed, mode, limit, Method::Auto);
                     if let Some(r) = &r {
                         eprintln!("{tasks} tasks, {} mode, seed {seed}: {} in {:.2} s, gap {:.4}, peak {} KiB", mode.name(), r.status, r.secs, r.gap, r.kib);
                     }
@@ -167,6 +231,43 @@ fn main() {
                 },
                 median(rows.iter().map(|r| mib(r.kib)).collect()),
                 rows.iter().map(|r| mib(r.kib)).fold(0.0, f64::max),
+            );
+        }
+    }
+    harmonic_table(limit);
+}
+
+/// Harmonic Cleanflight, the MILP (before: `harmonic = true` always used
+/// it) beside the box search, each mode, one solve each
+/// (`RTPIPE_BENCH_HARMONIC=0` skips it).
+fn harmonic_table(limit: f64) {
+    if env("RTPIPE_BENCH_HARMONIC", 1) == 0 {
+        return;
+    }
+    println!();
+    println!(
+        "| cleanflight, harmonic, 100 us grid | mode | method | status | U | gap | s | peak MiB |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for mode in [Mode::Sound, Mode::Paper] {
+        for method in [Method::Milp, Method::Boxes] {
+            let Some(r) = run_child("cleanflight-harmonic", 0, mode, limit, method) else {
+                println!(
+                    "| | {} | {} | (no answer) | | | | |",
+                    mode.name(),
+                    method.name()
+                );
+                continue;
+            };
+            println!(
+                "| | {} | {} | {} | {:.4} | {:.2} % | {:.2} | {:.1} |",
+                mode.name(),
+                r.method,
+                r.status,
+                r.objective,
+                100.0 * r.gap,
+                r.secs,
+                r.kib as f64 / 1024.0
             );
         }
     }
