@@ -54,8 +54,8 @@ pub struct DesignArgs {
     #[arg(long, requires = "write")]
     pub overwrite_spec: bool,
     /// The exact search: `boxes` (branch and bound over period boxes,
-    /// pruned by the sound analysis; sound mode without harmonic
-    /// periods), `milp` (the mixed-integer model; every case), or `auto`
+    /// pruned by the sound analysis; sound mode, and paper mode where
+    /// Eq. 12 does not fall as a period grows), `milp` (the mixed-integer model; every case), or `auto`
     /// (boxes where they apply, else milp).
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,

@@ -123,9 +123,7 @@ pub(crate) fn harmonic_domains(
     Ok(())
 }
 
-pub(crate) fn harmonic_pair(a: i64, b: i64) -> bool {
-    a > 0 && b > 0 && (a % b == 0 || b % a == 0)
-}
+pub(crate) use rtpipe_model::harmonic_pair;
 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn range_dom(

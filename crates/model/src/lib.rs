@@ -24,7 +24,7 @@ pub use write::to_toml;
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
 pub use overheads::Overheads;
 pub use policy::{Communication, Priorities, ResourceProtocol, SchedPolicy, SchedTest, Scheduler};
-pub use time::{format_in, gcd, parse_time_str, Nanos, TimeUnit, MAX_TIME};
+pub use time::{format_in, gcd, harmonic_pair, parse_time_str, Nanos, TimeUnit, MAX_TIME};
 
 /// The largest spec file `Spec::load` reads: 16 MiB (every TOML input's
 /// cap, [`input::MAX_INPUT_BYTES`]).

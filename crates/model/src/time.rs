@@ -314,6 +314,13 @@ pub fn gcd(a: Nanos, b: Nanos) -> Nanos {
     }
 }
 
+/// Whether two periods are harmonic (`harmonic = true`): both positive and
+/// one divides the other. The model checks fixed periods with it, the
+/// design every candidate pair.
+pub fn harmonic_pair(a: Nanos, b: Nanos) -> bool {
+    a > 0 && b > 0 && (a % b == 0 || b % a == 0)
+}
+
 /// Formats nanoseconds in a unit with up to 6 significant decimals, trimming zeros.
 pub fn format_in(ns: Nanos, unit: TimeUnit) -> String {
     let whole = ns / unit.nanos();

@@ -676,7 +676,7 @@ impl Builder {
             let clash = (0..b).find(|&a| {
                 tasks[a]
                     .fixed_period()
-                    .is_some_and(|pa| pa % pb != 0 && pb % pa != 0)
+                    .is_some_and(|pa| !crate::time::harmonic_pair(pa, pb))
             });
             let (Some(a), Some(ps)) = (clash, &raw_tasks[b].1.get_ref().period) else {
                 continue;
