@@ -634,7 +634,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             .clamp(node.lo[i], node.hi[i] - 1);
         let mut low = node.clone();
         low.hi[i] = k;
-        low.bound = self.bound(&low.hi);
+        // A sub-box: the parent's bound holds for it too.
+        low.bound = self.bound(&low.hi).max(node.bound);
         let mut high = node.clone();
         high.lo[i] = k + 1;
         (low, high)
