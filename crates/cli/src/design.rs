@@ -419,6 +419,7 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
         seconds: start.elapsed().as_secs_f64(),
         iterations: 0,
         peak_open: 0,
+        peak_open_bytes: 0,
         conflicts: Vec::new(),
         notes: Vec::new(),
         checked: Vec::new(),
@@ -490,6 +491,8 @@ struct DesignView<'a> {
     /// `None` when interrupted: the worker may still be inside a solve.
     iterations: Option<usize>,
     peak_open_boxes: Option<usize>,
+    /// Their bytes, counted from their sizes (the search stops at 1 GiB).
+    peak_open_box_bytes: Option<usize>,
     periods: Pairs<&'a str, Option<f64>>,
     conflicts: Vec<ConflictView<'a>>,
     notes: &'a [String],
@@ -527,6 +530,7 @@ fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> De
         seconds: o.seconds,
         iterations: (!stopped).then_some(o.iterations),
         peak_open_boxes: (o.method == Method::Boxes).then_some(o.peak_open),
+        peak_open_box_bytes: (o.method == Method::Boxes).then_some(o.peak_open_bytes),
         periods: Pairs(periods),
         conflicts: conflicts.collect(),
         notes: &o.notes,

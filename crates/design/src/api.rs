@@ -172,6 +172,9 @@ pub struct Outcome {
     pub iterations: usize,
     /// The most boxes the box search held open at once (memory).
     pub peak_open: usize,
+    /// The most bytes they took at once, counted from their sizes (the
+    /// search stops at [`MAX_OPEN_BYTES`](crate::MAX_OPEN_BYTES)).
+    pub peak_open_bytes: usize,
     /// A small set of constraints that cannot hold together (infeasible).
     pub conflicts: Vec<Conflict>,
     /// What the user should know about the answer.

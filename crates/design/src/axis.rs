@@ -90,6 +90,19 @@ pub(crate) struct Node {
     pub(crate) bound: f64,
 }
 
+impl Node {
+    /// The heap memory of the box: the node, its index vectors and imposed
+    /// orders, and an allocator's header per vector.
+    pub(crate) fn bytes(&self) -> usize {
+        const HEADER: usize = 16;
+        std::mem::size_of::<Node>()
+            + self.lo.capacity() * 4
+            + self.hi.capacity() * 4
+            + self.above.capacity() * std::mem::size_of::<(usize, usize)>()
+            + 3 * HEADER
+    }
+}
+
 impl PartialEq for Node {
     fn eq(&self, o: &Self) -> bool {
         self.cmp(o) == CmpOrdering::Equal

@@ -43,6 +43,11 @@ const NARROW_ROUNDS: usize = 2;
 /// span is at least this share of the widest period split's.
 const ORDER_FIRST: f64 = 0.5;
 
+/// Most bytes the open boxes may take (`Node::bytes`, counted from their
+/// sizes, so the same on every machine): the search stops there with its
+/// best design and bound, as at a time limit.
+pub const MAX_OPEN_BYTES: usize = 1 << 30;
+
 /// A dive for a better verified design every this many boxes.
 const DIVE_EVERY: u64 = 64;
 
@@ -58,6 +63,8 @@ pub(crate) struct BoxResult {
     /// The most boxes held open at once (memory: each holds two indices
     /// per task).
     pub(crate) peak_open: usize,
+    /// The most bytes they took at once (`Node::bytes`).
+    pub(crate) peak_bytes: usize,
     /// Every design the acceptance check judged (`Options::accept`).
     pub(crate) checked: Vec<Checked>,
 }
@@ -75,9 +82,26 @@ struct Frontier {
     peak_open: usize,
     /// The time ran out with boxes still open.
     stopped: bool,
+    /// The bytes the open boxes take (`Node::bytes`).
+    open_bytes: usize,
+    /// The most bytes they took at once.
+    peak_bytes: usize,
 }
 
 impl Frontier {
+    fn push(&mut self, node: Node) {
+        self.open_bytes += node.bytes();
+        self.open.push(node);
+        self.peak_open = self.peak_open.max(self.open.len());
+        self.peak_bytes = self.peak_bytes.max(self.open_bytes);
+    }
+
+    fn pop(&mut self) -> Option<Node> {
+        let node = self.open.pop()?;
+        self.open_bytes -= node.bytes();
+        Some(node)
+    }
+
     /// What the search proved: the best design, and as the lower bound the
     /// least bound of the boxes still open (or the best design's U, if
     /// smaller; 0 when there is neither).
@@ -101,6 +125,7 @@ impl Frontier {
             complete: !self.stopped,
             nodes: self.nodes,
             peak_open: self.peak_open,
+            peak_bytes: self.peak_bytes,
             checked,
         }
     }
@@ -540,9 +565,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
 
     /// The two children of an order branch: a above b, and b above a.
     fn ordered(node: &Node, (a, b): (usize, usize)) -> (Node, Node) {
+        // Exactly one more order each (a push would double the capacity,
+        // and the orders are most of an open box's memory).
         let mut ab = node.clone();
+        ab.above.reserve_exact(1);
         ab.above.push((a, b));
         let mut ba = node.clone();
+        ba.above.reserve_exact(1);
         ba.above.push((b, a));
         (ab, ba)
     }
@@ -737,16 +766,18 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             nodes: 0,
             peak_open: 0,
             stopped: false,
+            open_bytes: 0,
+            peak_bytes: 0,
         };
         root.bound = self.bound(&root.hi);
-        f.open.push(root);
+        f.push(root);
         if let Some((spec, _, _)) = &f.best {
             let k = self.indices(spec);
             if !matches!(self.judge(&k, spec), Verdict::Accepted) {
                 f.best = None;
             }
         }
-        while let Some(node) = f.open.pop() {
+        while let Some(node) = f.pop() {
             if self.visit(&mut f, node).is_break() {
                 break;
             }
@@ -774,8 +805,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
             return ControlFlow::Continue(());
         }
-        if self.effort.out_of_time() || self.gate_exhausted() {
-            f.open.push(node);
+        let full = f.open_bytes > MAX_OPEN_BYTES;
+        if full || self.effort.out_of_time() || self.gate_exhausted() {
+            self.effort.memory_full |= full;
+            f.push(node);
             f.stopped = true;
             return ControlFlow::Break(());
         }
@@ -815,7 +848,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                         return ControlFlow::Continue(());
                     }
                     Verdict::Exhausted => {
-                        f.open.push(node);
+                        f.push(node);
                         f.stopped = true;
                         return ControlFlow::Break(());
                     }
@@ -836,9 +869,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let Some((low, high)) = self.branch(&node, &report) else {
             return ControlFlow::Continue(()); // a single point that fails
         };
-        f.open.push(low);
-        f.open.push(high);
-        f.peak_open = f.peak_open.max(f.open.len());
+        f.push(low);
+        f.push(high);
         ControlFlow::Continue(())
     }
 
@@ -847,9 +879,8 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         let Some(g) = &self.gate else { return };
         for mut part in g.borrow().outside(node, c) {
             part.bound = self.bound(&part.hi).max(node.bound);
-            f.open.push(part);
+            f.push(part);
         }
-        f.peak_open = f.peak_open.max(f.open.len());
     }
 
     fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {

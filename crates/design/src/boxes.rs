@@ -82,6 +82,7 @@ pub(crate) fn solve_boxes(
         }
     };
     o.peak_open = found.peak_open;
+    o.peak_open_bytes = found.peak_bytes;
     o.checked = checked;
     Ok(o)
 }

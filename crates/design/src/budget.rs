@@ -36,6 +36,9 @@ pub(crate) struct Budget {
     pub(crate) search_cap: Option<u64>,
     /// Numerical failures of the solver and what became of them.
     pub(crate) numerical: NumLog,
+    /// The box search stopped because its open boxes reached
+    /// [`MAX_OPEN_BYTES`](crate::bnb::MAX_OPEN_BYTES).
+    pub(crate) memory_full: bool,
 }
 
 impl Budget {
@@ -49,6 +52,7 @@ impl Budget {
             work: 0,
             work_cap: None,
             search_cap: None,
+            memory_full: false,
             numerical: NumLog::default(),
         }
     }
@@ -65,12 +69,14 @@ impl Budget {
             work_cap: self.work_cap,
             search_cap: self.search_cap,
             numerical: NumLog::default(),
+            memory_full: false,
         }
     }
 
     /// A sub-search's spending counts against this budget.
     pub(crate) fn absorb(&mut self, sub: &Budget) {
         self.work = sub.work;
+        self.memory_full |= sub.memory_full;
         self.numerical.absorb(&sub.numerical);
     }
 
@@ -96,6 +102,8 @@ impl Budget {
     pub(crate) fn stop_cause(&self) -> &'static str {
         if self.cancelled() {
             "interrupted"
+        } else if self.memory_full {
+            "memory cap: the open boxes reached 1 GiB"
         } else if self.time_limit.is_some() {
             "time limit"
         } else {
@@ -159,6 +167,7 @@ impl Budget {
             seconds: self.elapsed(),
             iterations: self.iterations,
             peak_open: 0,
+            peak_open_bytes: 0,
             conflicts,
             notes,
             checked: Vec::new(),

@@ -56,6 +56,7 @@ pub use api::{
     utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options,
     Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
 };
+pub use bnb::MAX_OPEN_BYTES;
 use budget::Budget;
 use domain::domains;
 pub use gate::{CUT_MARGIN, MAX_CHECKS};
