@@ -25,13 +25,7 @@ pub(crate) fn solve_boxes(
     if let Some((spec, _, u)) = &seed {
         bnb::publish(p, spec, *u, 0.0);
     }
-    if let (None, Some(pat)) = (p.opts.time_limit, p.opts.patience) {
-        budget.work_cap = Some(
-            budget
-                .work
-                .saturating_add(pat.saturating_mul(BOX_WORK_PER_PATIENCE)),
-        );
-    }
+    cap_work(p, budget);
     let mut found = bnb::search(p, budget, &groups, seed);
     budget.iterations = found.nodes as usize;
     let mut notes = Vec::new();
@@ -85,6 +79,18 @@ pub(crate) fn solve_boxes(
     o.peak_open_bytes = found.peak_bytes;
     o.checked = checked;
     Ok(o)
+}
+
+/// Without a time limit, the box search examines at most
+/// [`BOX_WORK_PER_PATIENCE`] boxes per unit of patience from here.
+fn cap_work(p: &Problem, budget: &mut Budget) {
+    if let (None, Some(pat)) = (p.opts.time_limit, p.opts.patience) {
+        budget.work_cap = Some(
+            budget
+                .work
+                .saturating_add(pat.saturating_mul(BOX_WORK_PER_PATIENCE)),
+        );
+    }
 }
 
 /// Every box was decided and none verified: the problem is infeasible.
