@@ -18,19 +18,14 @@
 //! Nothing is approximated: the answer is verified by the analysis, and
 //! every pruned box provably holds nothing better. docs/design.md argues it.
 
-use crate::api::{utilization, Checked, Incumbent};
+use crate::api::utilization;
 use crate::axis::{Axis, Node};
-use crate::budget::Budget;
-use crate::gate::{Gate, Verdict};
 use crate::harmonic;
 use crate::joint::{joint_bound, least_under, Row};
 use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::{Nanos, Server, Spec};
-use std::cell::RefCell;
-use std::collections::BinaryHeap;
-use std::ops::ControlFlow;
 
 /// Relative tolerance under which a box's bound counts as no better than
 /// the incumbent (the same as the MILP search's "closed" gap).
@@ -43,111 +38,43 @@ const NARROW_ROUNDS: usize = 2;
 /// span is at least this share of the widest period split's.
 const ORDER_FIRST: f64 = 0.5;
 
-/// Most bytes the open boxes may take (`Node::bytes`, counted from their
-/// sizes, so the same on every machine): the search stops there with its
-/// best design and bound, as at a time limit.
-pub const MAX_OPEN_BYTES: usize = 1 << 30;
-
-/// A dive for a better verified design every this many boxes.
-const DIVE_EVERY: u64 = 64;
-
-/// What the box search ended with.
-pub(crate) struct BoxResult {
-    /// The best verified design: the spec with its periods, the analysis, U.
-    pub(crate) best: Option<(Spec, Report, f64)>,
-    /// A proven lower bound on the optimum (over the active groups).
-    pub(crate) lower_bound: f64,
-    /// Every box was decided: `best` is optimal, or there is none.
-    pub(crate) complete: bool,
-    pub(crate) nodes: u64,
-    /// The most boxes held open at once (memory: each holds two indices
-    /// per task).
-    pub(crate) peak_open: usize,
-    /// The most bytes they took at once (`Node::bytes`).
-    pub(crate) peak_bytes: usize,
-    /// Every design the acceptance check judged (`Options::accept`).
-    pub(crate) checked: Vec<Checked>,
+/// How a box whose corner fails is split in two.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Branching {
+    /// On the RM rank order of two tasks: (a above b) and (b above a).
+    Order((usize, usize)),
+    /// On task i's period, at its utilisation midpoint.
+    Split(usize),
 }
 
-/// The state of a running box search: the best design so far and the boxes
-/// still to examine.
-struct Frontier {
-    /// The best verified design so far: its spec, analysis and U.
-    best: Option<(Spec, Report, f64)>,
-    /// The open boxes, smallest bound first.
-    open: BinaryHeap<Node>,
-    /// Boxes examined.
-    nodes: u64,
-    /// The most boxes open at once.
-    peak_open: usize,
-    /// The time ran out with boxes still open.
-    stopped: bool,
-    /// The bytes the open boxes take (`Node::bytes`).
-    open_bytes: usize,
-    /// The most bytes they took at once.
-    peak_bytes: usize,
+/// What examining a box found.
+pub(crate) enum Fate {
+    /// Nothing in it is feasible and better than the incumbent.
+    Pruned,
+    /// Its corner of longest periods verifies (the box narrowed, the
+    /// verified design, its analysis and U): nothing in the box is better.
+    Verified(Node, Box<(Spec, Report)>, f64),
+    /// Its corner fails: the box narrowed, and how to split it.
+    Open(Node, Branching),
 }
 
-impl Frontier {
-    fn push(&mut self, node: Node) {
-        self.open_bytes += node.bytes();
-        self.open.push(node);
-        self.peak_open = self.peak_open.max(self.open.len());
-        self.peak_bytes = self.peak_bytes.max(self.open_bytes);
-    }
-
-    fn pop(&mut self) -> Option<Node> {
-        let node = self.open.pop()?;
-        self.open_bytes -= node.bytes();
-        Some(node)
-    }
-
-    /// What the search proved: the best design, and as the lower bound the
-    /// least bound of the boxes still open (or the best design's U, if
-    /// smaller; 0 when there is neither).
-    fn result(self, checked: Vec<Checked>) -> BoxResult {
-        let open_bound = self
-            .open
-            .iter()
-            .map(|n| n.bound)
-            .fold(f64::INFINITY, f64::min);
-        let lower_bound = match &self.best {
-            Some((_, _, u)) => open_bound.min(*u),
-            None => open_bound,
-        };
-        BoxResult {
-            best: self.best,
-            lower_bound: if lower_bound.is_finite() {
-                lower_bound
-            } else {
-                0.0
-            },
-            complete: !self.stopped,
-            nodes: self.nodes,
-            peak_open: self.peak_open,
-            peak_bytes: self.peak_bytes,
-            checked,
-        }
-    }
+/// A box's bound `bound` cannot beat the incumbent's U.
+pub(crate) fn beaten(bound: f64, incumbent: Option<f64>) -> bool {
+    incumbent.is_some_and(|u| bound >= u * (1.0 - GAP_TOLERANCE))
 }
 
-/// The box search of one problem: which constraint groups count, the axes.
-struct BoxSearch<'r, 'a> {
-    p: &'r Problem<'a>,
-    /// Each box examined is one unit of work.
-    effort: &'r mut Budget,
+/// The examination of boxes of one problem: which constraint groups count,
+/// the axes. Pure (`&self` only), so boxes are examined in parallel.
+pub(crate) struct Examiner<'r, 'a> {
+    pub(crate) p: &'r Problem<'a>,
     groups: &'r [Group],
-    axes: Vec<Axis>,
+    pub(crate) axes: Vec<Axis>,
     /// Budgets C_i of guaranteed tasks (0 for background ones).
     budget: Vec<f64>,
-    /// Stop at the first verified design (a feasibility probe).
-    first_only: bool,
-    /// The check beyond the analysis a design must pass, if any.
-    gate: Option<RefCell<Gate>>,
 }
 
-impl<'r, 'a> BoxSearch<'r, 'a> {
-    fn new(p: &'r Problem<'a>, effort: &'r mut Budget, groups: &'r [Group]) -> Self {
+impl<'r, 'a> Examiner<'r, 'a> {
+    pub(crate) fn new(p: &'r Problem<'a>, groups: &'r [Group]) -> Self {
         let axes = p.dom.iter().map(|d| Axis::new(d, p.g)).collect();
         let budget = p
             .spec
@@ -158,35 +85,19 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 _ => t.budget() as f64,
             })
             .collect();
-        BoxSearch {
+        Examiner {
             p,
-            effort,
             groups,
             axes,
             budget,
-            first_only: false,
-            gate: p.opts.accept.clone().map(|a| RefCell::new(Gate::new(a))),
         }
     }
 
-    /// The gate's verdict on the verified point `k` (accepted without one).
-    fn judge(&self, k: &[u32], spec: &Spec) -> Verdict {
-        match &self.gate {
-            None => Verdict::Accepted,
-            Some(g) => g.borrow_mut().judge(&self.axes, k, spec),
-        }
-    }
-
-    /// The check budget of the gate is spent.
-    fn gate_exhausted(&self) -> bool {
-        self.gate.as_ref().is_some_and(|g| g.borrow().exhausted())
-    }
-
-    fn periods(&self, k: &[u32]) -> Vec<Nanos> {
+    pub(crate) fn periods(&self, k: &[u32]) -> Vec<Nanos> {
         k.iter().zip(&self.axes).map(|(&k, a)| a.value(k)).collect()
     }
 
-    fn bound(&self, hi: &[u32]) -> f64 {
+    pub(crate) fn bound(&self, hi: &[u32]) -> f64 {
         self.utilization_at(&self.periods(hi))
     }
 
@@ -320,7 +231,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
 
     /// The analysis of one point, and whether it meets the active groups
     /// (and, in sound mode, bounds every chain).
-    fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
+    pub(crate) fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
         let periods = self.periods(k);
         let spec = self.p.with_periods(&periods);
         let report = rtpipe_analysis::analyze(&spec);
@@ -373,7 +284,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 return false;
             };
             node.bound = bound;
-            if best.is_some_and(|u| bound >= u * (1.0 - GAP_TOLERANCE)) {
+            if beaten(bound, best) {
                 return false;
             }
             let raised = match self.raise_to_responses(node, &r) {
@@ -544,7 +455,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// tasks of a failing constraint that the box leaves open (a response
     /// time there jumps with the order, which no box split separates), else
     /// on the period of one task.
-    fn branch(&self, node: &Node, report: &Report) -> Option<(Node, Node)> {
+    fn branch(&self, node: &Node, report: &Report) -> Option<Branching> {
         let blamed = self.blamed(node, report);
         let split = self.split_task(node, &blamed);
         let widest = split.map_or(0.0, |i| self.span(node, i));
@@ -555,11 +466,38 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             .open_order(node, &blamed)
             .filter(|&(a, b)| self.span(node, a).min(self.span(node, b)) >= ORDER_FIRST * widest);
         if let Some(pair) = order {
-            return Some(Self::ordered(node, pair));
+            return Some(Branching::Order(pair));
         }
         match split {
-            Some(i) => Some(self.split(node, i)),
-            None => Some(Self::ordered(node, self.open_order(node, &blamed)?)),
+            Some(i) => Some(Branching::Split(i)),
+            None => Some(Branching::Order(self.open_order(node, &blamed)?)),
+        }
+    }
+
+    /// The two halves of `node` by branching `b`.
+    pub(crate) fn children(&self, node: &Node, b: Branching) -> (Node, Node) {
+        match b {
+            Branching::Order(pair) => Self::ordered(node, pair),
+            Branching::Split(i) => self.split(node, i),
+        }
+    }
+
+    /// Examines `node`: drops it when it cannot beat `incumbent`, narrows
+    /// it, then checks the corner of its longest periods: if that verifies,
+    /// nothing in the box is better; otherwise says how to split it. Pure,
+    /// so the halves of a split are examined in parallel.
+    pub(crate) fn examine(&self, mut node: Node, incumbent: Option<f64>) -> Fate {
+        if beaten(node.bound, incumbent) || !self.narrow(&mut node, incumbent) {
+            return Fate::Pruned;
+        }
+        let (spec, report, ok) = self.verify(&node.hi);
+        if ok {
+            let u = utilization(&spec);
+            return Fate::Verified(node, Box::new((spec, report)), u);
+        }
+        match self.branch(&node, &report) {
+            Some(b) => Fate::Open(node, b),
+            None => Fate::Pruned, // a single point that fails
         }
     }
 
@@ -673,7 +611,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// A verified point near the frontier below `node`: follow the low child
     /// of the split (shorter periods) until the corner verifies, then
     /// lengthen each period as far as the design still verifies.
-    fn dive(&self, node: &Node, best: Option<f64>) -> Option<(Spec, Report, f64)> {
+    pub(crate) fn dive(&self, node: &Node, best: Option<f64>) -> Option<(Spec, Report, f64)> {
         let mut node = node.clone();
         for _ in 0..256 {
             if !self.narrow(&mut node, best) {
@@ -689,11 +627,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 };
                 debug_assert!(ok);
                 let u = utilization(&spec);
-                // No gate here: `visit` dives only without one.
-                debug_assert!(self.gate.is_none());
                 return best.is_none_or(|b| u < b).then_some((spec, report, u));
             }
-            node = self.branch(&node, &report)?.0;
+            let b = self.branch(&node, &report)?;
+            node = self.children(&node, b).0;
         }
         None
     }
@@ -750,191 +687,12 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         at(a)
     }
 
-    /// Runs the search from the whole domain, starting from `seed` (a
-    /// verified design, if any).
-    fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
-        let n = self.axes.len();
-        let mut root = Node {
-            lo: vec![0; n],
-            hi: self.axes.iter().map(|a| a.len() - 1).collect(),
-            above: Vec::new(),
-            bound: 0.0,
-        };
-        let mut f = Frontier {
-            best: seed,
-            open: BinaryHeap::new(),
-            nodes: 0,
-            peak_open: 0,
-            stopped: false,
-            open_bytes: 0,
-            peak_bytes: 0,
-        };
-        root.bound = self.bound(&root.hi);
-        f.push(root);
-        if let Some((spec, _, _)) = &f.best {
-            let k = self.indices(spec);
-            if !matches!(self.judge(&k, spec), Verdict::Accepted) {
-                f.best = None;
-            }
-        }
-        while let Some(node) = f.pop() {
-            if self.visit(&mut f, node).is_break() {
-                break;
-            }
-        }
-        let checked = self.gate.take().map_or(Vec::new(), |g| g.into_inner().log);
-        f.result(checked)
-    }
-
     /// The axis index of every period of `spec` (on the grid).
-    fn indices(&self, spec: &Spec) -> Vec<u32> {
+    pub(crate) fn indices(&self, spec: &Spec) -> Vec<u32> {
         spec.tasks
             .iter()
             .zip(&self.axes)
             .map(|(t, a)| a.first_at_least(t.fixed_period().unwrap_or(0) as f64))
             .collect()
-    }
-
-    /// Examines the box `node` just taken from the frontier: drops it when
-    /// it cannot beat the best design, narrows it, now and then dives from
-    /// it for a better design, then settles it. Breaks when the search must
-    /// stop (out of time: the box goes back to the frontier, whose bounds
-    /// still count for the lower bound).
-    fn visit(&mut self, f: &mut Frontier, mut node: Node) -> ControlFlow<()> {
-        let incumbent = f.best.as_ref().map(|b| b.2);
-        if incumbent.is_some_and(|u| node.bound >= u * (1.0 - GAP_TOLERANCE)) {
-            return ControlFlow::Continue(());
-        }
-        let full = f.open_bytes > MAX_OPEN_BYTES;
-        if full || self.effort.out_of_time() || self.gate_exhausted() {
-            self.effort.memory_full |= full;
-            f.push(node);
-            f.stopped = true;
-            return ControlFlow::Break(());
-        }
-        f.nodes += 1;
-        self.effort.work += 1;
-        if f.nodes % 256 == 1 {
-            self.progress(f.nodes, f.open.len(), node.bound, incumbent);
-        }
-        if !self.narrow(&mut node, incumbent) {
-            return ControlFlow::Continue(());
-        }
-        // With a gate every dive's design would be checked (flown): the
-        // best-first order alone reaches the answer with fewer checks.
-        if f.nodes % DIVE_EVERY == 1 && self.gate.is_none() {
-            if let Some(found) = self.dive(&node, f.best.as_ref().map(|b| b.2)) {
-                publish(self.p, &found.0, found.2, node.bound);
-                f.best = Some(found);
-            }
-        }
-        self.settle(f, node)
-    }
-
-    /// Checks the corner of longest periods of `node`: if it verifies,
-    /// nothing in the box is better, so it may be the new best design;
-    /// otherwise the box is split and both halves join the frontier. Breaks
-    /// at the first verified design of a feasibility probe.
-    fn settle(&mut self, f: &mut Frontier, node: Node) -> ControlFlow<()> {
-        let incumbent = f.best.as_ref().map(|b| b.2);
-        let (spec, report, ok) = self.verify(&node.hi);
-        if ok {
-            let u = utilization(&spec);
-            if incumbent.is_none_or(|b| u < b) {
-                match self.judge(&node.hi, &spec) {
-                    Verdict::Accepted => {}
-                    Verdict::Cut(c) => {
-                        self.push_outside(f, &node, c);
-                        return ControlFlow::Continue(());
-                    }
-                    Verdict::Exhausted => {
-                        f.push(node);
-                        f.stopped = true;
-                        return ControlFlow::Break(());
-                    }
-                }
-                publish(
-                    self.p,
-                    &spec,
-                    u,
-                    f.open.iter().map(|n| n.bound).fold(node.bound, f64::min),
-                );
-                f.best = Some((spec, report, u));
-            }
-            if self.first_only {
-                return ControlFlow::Break(());
-            }
-            return ControlFlow::Continue(());
-        }
-        let Some((low, high)) = self.branch(&node, &report) else {
-            return ControlFlow::Continue(()); // a single point that fails
-        };
-        f.push(low);
-        f.push(high);
-        ControlFlow::Continue(())
-    }
-
-    /// Puts the parts of `node` outside cut `c` on the frontier.
-    fn push_outside(&self, f: &mut Frontier, node: &Node, c: usize) {
-        let Some(g) = &self.gate else { return };
-        for mut part in g.borrow().outside(node, c) {
-            part.bound = self.bound(&part.hi).max(node.bound);
-            f.push(part);
-        }
-    }
-
-    fn progress(&self, nodes: u64, open: usize, bound: f64, best: Option<f64>) {
-        self.p.say(|| {
-            let best = best.map_or(String::new(), |u| {
-                let gap = if u > 0.0 {
-                    (u - bound).max(0.0) / u
-                } else {
-                    0.0
-                };
-                format!(", best verified U = {u:.4}, gap {:.2} %", 100.0 * gap)
-            });
-            format!("branch and bound: {nodes} boxes, {open} open, lower bound {bound:.4}{best}")
-        });
-    }
-}
-
-/// The box search of `p` over `groups` from the whole domain, starting from
-/// `seed` (a verified design, if any); each box is a unit of `budget`'s
-/// work.
-pub(crate) fn search(
-    p: &Problem,
-    budget: &mut Budget,
-    groups: &[Group],
-    seed: Option<(Spec, Report, f64)>,
-) -> BoxResult {
-    BoxSearch::new(p, budget, groups).run(seed)
-}
-
-/// Whether `groups` can hold together: a box search that stops at the
-/// first verified design. `None` when it ran out of time or work.
-pub(crate) fn probe(p: &Problem, budget: &mut Budget, groups: &[Group]) -> Option<bool> {
-    let mut search = BoxSearch::new(p, budget, groups);
-    search.first_only = true;
-    search.gate = None;
-    let r = search.run(None);
-    match (r.best, r.complete) {
-        (Some(_), _) => Some(true),
-        (None, true) => Some(false),
-        (None, false) => None,
-    }
-}
-
-/// Hands a better verified design (its Σ C/T `u`, the least open bound
-/// then) to [`Options::incumbent`](crate::api::Options::incumbent), so that a caller that stops
-/// waiting (Ctrl-C) can still report it.
-pub(crate) fn publish(p: &Problem, spec: &Spec, u: f64, lower_bound: f64) {
-    if let Some(sink) = &p.opts.incumbent {
-        if let Ok(mut g) = sink.lock() {
-            *g = Some(Incumbent {
-                periods: crate::gate::periods_ns(spec),
-                utilization: u,
-                lower_bound: Some(lower_bound),
-            });
-        }
     }
 }

@@ -2,9 +2,9 @@
 //! search (`bnb`), and on infeasibility the conflicting constraints.
 
 use crate::api::{DesignError, Outcome, Status, EXPLAIN_EFFORT};
-use crate::bnb;
 use crate::budget::Budget;
 use crate::explain::explain;
+use crate::frontier;
 use crate::heuristic::descent;
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
@@ -23,10 +23,10 @@ pub(crate) fn solve_boxes(
     let groups = p.all_groups();
     let seed = descent(p, budget);
     if let Some((spec, _, u)) = &seed {
-        bnb::publish(p, spec, *u, 0.0);
+        frontier::publish(p, spec, *u, 0.0);
     }
     cap_work(p, budget);
-    let mut found = bnb::search(p, budget, &groups, seed);
+    let mut found = frontier::search(p, budget, &groups, seed);
     budget.iterations = found.nodes as usize;
     let mut notes = Vec::new();
     let checked = std::mem::take(&mut found.checked);

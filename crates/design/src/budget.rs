@@ -37,7 +37,7 @@ pub(crate) struct Budget {
     /// Numerical failures of the solver and what became of them.
     pub(crate) numerical: NumLog,
     /// The box search stopped because its open boxes reached
-    /// [`MAX_OPEN_BYTES`](crate::bnb::MAX_OPEN_BYTES).
+    /// [`MAX_OPEN_BYTES`](crate::frontier::MAX_OPEN_BYTES).
     pub(crate) memory_full: bool,
 }
 

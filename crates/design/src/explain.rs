@@ -2,8 +2,8 @@
 //! (deletion filter) and how far each chain limit would have to move.
 
 use crate::api::{Conflict, Method};
-use crate::bnb;
 use crate::budget::Budget;
+use crate::frontier;
 use crate::learnt::Learnt;
 use crate::problem::{Group, Problem};
 use crate::solve::{solve_master, Solved};
@@ -28,7 +28,7 @@ pub(crate) fn probe(
     sound: Option<&SoundModel>,
 ) -> Option<bool> {
     if p.method == Method::Boxes {
-        return bnb::probe(p, budget, groups);
+        return frontier::probe(p, budget, groups);
     }
     let mut sm = sound.cloned();
     for _ in 0..100 {

@@ -54,43 +54,45 @@ impl Row {
 pub(crate) fn joint_bound(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
     let n = lo.len();
     let mut lambda = vec![0.0f64; rows.len()];
-    let t_at = |w: &[f64], i: usize| {
+    // The minimising T_i at weight w_i.
+    let t_at = |i: usize, w: f64| {
         let (l, h) = (lo[i] as f64, hi[i] as f64);
-        match (budget[i] == 0.0, w[i] > 0.0) {
+        match (budget[i] == 0.0, w > 0.0) {
             (true, _) => l,
             (false, false) => h,
-            (false, true) => (budget[i] / w[i]).sqrt().clamp(l, h),
+            (false, true) => (budget[i] / w).sqrt().clamp(l, h),
         }
     };
-    let weights = |lambda: &[f64]| {
-        let mut w = vec![0.0; n];
+    let weights = |lambda: &[f64], w: &mut Vec<f64>| {
+        w.clear();
+        w.resize(n, 0.0);
         for (row, &l) in rows.iter().zip(lambda) {
             row.slopes.iter().for_each(|&(i, s)| w[i] += l * s);
         }
-        w
     };
+    let mut w = Vec::with_capacity(n);
     // One multiplier is maximised in one pass.
     let sweeps = if rows.len() > 1 { JOINT_SWEEPS } else { 1 };
     for _ in 0..sweeps {
-        for c in 0..rows.len() {
+        for (c, row) in rows.iter().enumerate() {
+            // The weights of the other limits; λ_c adds λ_c s_c to them.
+            lambda[c] = 0.0;
+            weights(&lambda, &mut w);
             // d dual / d λ_c = Σ s_ci T_i − S_c falls as λ_c grows.
-            let slack = |x: f64, lambda: &mut Vec<f64>| {
-                lambda[c] = x;
-                let w = weights(lambda);
-                rows[c]
-                    .slopes
+            let slack = |x: f64| {
+                row.slopes
                     .iter()
-                    .map(|&(i, s)| s * t_at(&w, i))
+                    .map(|&(i, s)| s * t_at(i, w[i] + x * s))
                     .sum::<f64>()
-                    - rows[c].room
+                    - row.room
             };
-            if slack(0.0, &mut lambda) <= 0.0 {
+            if slack(0.0) <= 0.0 {
                 continue;
             }
             let (mut a, mut b) = (-60.0f64, 20.0f64);
             for _ in 0..40 {
                 let m = 0.5 * (a + b);
-                if slack(m.exp2(), &mut lambda) > 0.0 {
+                if slack(m.exp2()) > 0.0 {
                     a = m;
                 } else {
                     b = m;
@@ -99,10 +101,11 @@ pub(crate) fn joint_bound(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nano
             lambda[c] = b.exp2();
         }
     }
-    let w = weights(&lambda);
+    // Valid for any λ ≥ 0: the weights afresh from the multipliers found.
+    weights(&lambda, &mut w);
     let primal: f64 = (0..n)
         .map(|i| {
-            let t = t_at(&w, i);
+            let t = t_at(i, w[i]);
             budget[i] / t + w[i] * t
         })
         .sum();

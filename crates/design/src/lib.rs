@@ -11,9 +11,11 @@
 //! Two searches share the problem (`problem`: spec, domains, options;
 //! `domain` the period grids), what the search learns (`learnt`: cuts,
 //! response-time levels, tangent points) and the budget (`budget`: work,
-//! time, iterations). The box search: `boxes` (the whole design) runs `bnb`
-//! (the search), which uses `axis` (boxes of period values) and `joint`
-//! (bounds from the chain limits). The MILP: `runner` (the loop of master
+//! time, iterations). The box search: `boxes` (the whole design) runs
+//! `frontier` (the search's loop, open boxes best bound first, halves
+//! examined in parallel) over `bnb` (the examination of one box), which
+//! uses `axis` (boxes of period values) and `joint` (bounds from the chain
+//! limits). The MILP: `runner` (the loop of master
 //! solves and cuts) runs `solve` (one master solve) on `master` (the master
 //! problem assembled from `model`, its variables and switches, and the
 //! encodings `paper` / `sound` / `rta`, written with `linear` expressions
@@ -26,7 +28,7 @@
 
 // Layers, bottom up; a module uses only modules of lower layers:
 // lp < api, linear < domain < problem < budget, model < paper, rta, sound
-// < learnt < master < solve < heuristic, axis, joint < bnb < explain
+// < learnt < master < solve < heuristic, axis, joint < bnb < frontier < explain
 // < boxes, runner < lib.rs (`design`).
 mod api;
 mod axis;
@@ -35,6 +37,7 @@ mod boxes;
 mod budget;
 mod domain;
 mod explain;
+mod frontier;
 mod gate;
 mod harmonic;
 mod heuristic;
@@ -56,9 +59,9 @@ pub use api::{
     utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options,
     Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
 };
-pub use bnb::MAX_OPEN_BYTES;
 use budget::Budget;
 use domain::domains;
+pub use frontier::MAX_OPEN_BYTES;
 pub use gate::{CUT_MARGIN, MAX_CHECKS};
 use learnt::Learnt;
 use lp::LpError;

@@ -1,0 +1,434 @@
+//! The box search's loop: the open boxes, best bound first, and the best
+//! verified design (`bnb` examines a box; this decides what becomes of it).
+//!
+//! Each box taken from the frontier was examined when it was made: it is
+//! narrowed, its corner failed, and how to split it is known. Taking it
+//! splits it, and the two halves are examined in parallel (`rayon::join`)
+//! against the incumbent of that moment, then settled in order, low half
+//! first. Every examination is a pure function of the box and that
+//! incumbent, so the search is the same on any number of cores: the same
+//! boxes, the same answer and bound for a given work budget.
+
+use crate::api::{Checked, Incumbent};
+use crate::axis::Node;
+use crate::bnb::{beaten, Branching, Examiner, Fate};
+use crate::budget::Budget;
+use crate::gate::{Gate, Verdict};
+use crate::problem::{Group, Problem};
+use rayon::prelude::*;
+use rtpipe_analysis::Report;
+use rtpipe_model::Spec;
+use std::cmp::Ordering as CmpOrdering;
+use std::collections::BinaryHeap;
+use std::ops::ControlFlow;
+
+/// Most bytes the open boxes may take (`Node::bytes`, counted from their
+/// sizes, so the same on every machine): the search stops there with its
+/// best design and bound, as at a time limit.
+pub const MAX_OPEN_BYTES: usize = 1 << 30;
+
+/// A dive for a better verified design every this many boxes split.
+const DIVE_EVERY: u64 = 32;
+
+/// Progress is said every this many boxes split.
+const SAY_EVERY: u64 = 128;
+
+/// What the box search ended with.
+pub(crate) struct BoxResult {
+    /// The best verified design: the spec with its periods, the analysis, U.
+    pub(crate) best: Option<(Spec, Report, f64)>,
+    /// A proven lower bound on the optimum (over the active groups).
+    pub(crate) lower_bound: f64,
+    /// Every box was decided: `best` is optimal, or there is none.
+    pub(crate) complete: bool,
+    /// Boxes examined.
+    pub(crate) nodes: u64,
+    /// The most boxes held open at once (memory: each holds two indices
+    /// per task).
+    pub(crate) peak_open: usize,
+    /// The most bytes they took at once (`Node::bytes`).
+    pub(crate) peak_bytes: usize,
+    /// Every design the acceptance check judged (`Options::accept`).
+    pub(crate) checked: Vec<Checked>,
+}
+
+/// What taking an open box does.
+#[derive(Clone, Copy)]
+enum Next {
+    /// Its corner failed: split it so.
+    Split(Branching),
+    /// Its corner verified (U = its bound): check it with the gate, in
+    /// best-first order, so that the first design accepted is the best.
+    Check,
+    /// Put back when the search stopped: it counts for the lower bound.
+    Stopped,
+}
+
+/// An open box, examined.
+struct Open {
+    node: Node,
+    next: Next,
+}
+
+impl Open {
+    fn bytes(&self) -> usize {
+        self.node.bytes() + std::mem::size_of::<Next>()
+    }
+}
+
+impl PartialEq for Open {
+    fn eq(&self, o: &Self) -> bool {
+        self.node == o.node
+    }
+}
+impl Eq for Open {}
+impl PartialOrd for Open {
+    fn partial_cmp(&self, o: &Self) -> Option<CmpOrdering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Open {
+    fn cmp(&self, o: &Self) -> CmpOrdering {
+        self.node.cmp(&o.node)
+    }
+}
+
+/// The state of a running box search: the best design so far and the boxes
+/// still to split.
+struct Frontier {
+    /// The best verified design so far: its spec, analysis and U.
+    best: Option<(Spec, Report, f64)>,
+    /// The open boxes, smallest bound first.
+    open: BinaryHeap<Open>,
+    /// Boxes examined.
+    nodes: u64,
+    /// Boxes taken and split.
+    splits: u64,
+    /// The most boxes open at once.
+    peak_open: usize,
+    /// The time ran out with boxes still open.
+    stopped: bool,
+    /// The bytes the open boxes take.
+    open_bytes: usize,
+    /// The most bytes they took at once.
+    peak_bytes: usize,
+}
+
+impl Frontier {
+    fn new(best: Option<(Spec, Report, f64)>) -> Self {
+        Frontier {
+            best,
+            open: BinaryHeap::new(),
+            nodes: 0,
+            splits: 0,
+            peak_open: 0,
+            stopped: false,
+            open_bytes: 0,
+            peak_bytes: 0,
+        }
+    }
+
+    fn incumbent(&self) -> Option<f64> {
+        self.best.as_ref().map(|b| b.2)
+    }
+
+    fn push(&mut self, node: Node, next: Next) {
+        let open = Open { node, next };
+        self.open_bytes += open.bytes();
+        self.open.push(open);
+        self.peak_open = self.peak_open.max(self.open.len());
+        self.peak_bytes = self.peak_bytes.max(self.open_bytes);
+    }
+
+    fn pop(&mut self) -> Option<Open> {
+        let open = self.open.pop()?;
+        self.open_bytes -= open.bytes();
+        Some(open)
+    }
+
+    /// The least bound of the open boxes and `floor`.
+    fn least_open(&self, floor: f64) -> f64 {
+        self.open.iter().map(|o| o.node.bound).fold(floor, f64::min)
+    }
+
+    /// What the search proved: the best design, and as the lower bound the
+    /// least bound of the boxes still open (or the best design's U, if
+    /// smaller; 0 when there is neither).
+    fn result(self, checked: Vec<Checked>) -> BoxResult {
+        let open_bound = self.least_open(f64::INFINITY);
+        let lower_bound = match &self.best {
+            Some((_, _, u)) => open_bound.min(*u),
+            None => open_bound,
+        };
+        BoxResult {
+            best: self.best,
+            lower_bound: if lower_bound.is_finite() {
+                lower_bound
+            } else {
+                0.0
+            },
+            complete: !self.stopped,
+            nodes: self.nodes,
+            peak_open: self.peak_open,
+            peak_bytes: self.peak_bytes,
+            checked,
+        }
+    }
+}
+
+/// A box search: the examiner, the budget each examined box spends, and
+/// the acceptance check, if any.
+struct BoxSearch<'r, 'a> {
+    ex: Examiner<'r, 'a>,
+    /// Each box examined is one unit of work.
+    effort: &'r mut Budget,
+    /// Stop at the first verified design (a feasibility probe).
+    first_only: bool,
+    /// The check beyond the analysis a design must pass, if any.
+    gate: Option<Gate>,
+}
+
+impl<'r, 'a> BoxSearch<'r, 'a> {
+    fn new(p: &'r Problem<'a>, effort: &'r mut Budget, groups: &'r [Group]) -> Self {
+        BoxSearch {
+            ex: Examiner::new(p, groups),
+            effort,
+            first_only: false,
+            gate: p.opts.accept.clone().map(Gate::new),
+        }
+    }
+
+    /// The gate's verdict on the verified point `k` (accepted without one).
+    fn judge(&mut self, k: &[u32], spec: &Spec) -> Verdict {
+        match &mut self.gate {
+            None => Verdict::Accepted,
+            Some(g) => g.judge(&self.ex.axes, k, spec),
+        }
+    }
+
+    /// Runs the search from the whole domain, starting from `seed` (a
+    /// verified design, if any).
+    fn run(&mut self, seed: Option<(Spec, Report, f64)>) -> BoxResult {
+        let n = self.ex.axes.len();
+        let mut root = Node {
+            lo: vec![0; n],
+            hi: self.ex.axes.iter().map(|a| a.len() - 1).collect(),
+            above: Vec::new(),
+            bound: 0.0,
+        };
+        root.bound = self.ex.bound(&root.hi);
+        let mut f = Frontier::new(seed);
+        if let Some((spec, _, _)) = &f.best {
+            let k = self.ex.indices(spec);
+            if !matches!(self.judge(&k, spec), Verdict::Accepted) {
+                f.best = None;
+            }
+        }
+        let floor = root.bound;
+        let mut flow = self.examine_all(&mut f, floor, vec![root]);
+        while flow.is_continue() {
+            let Some(open) = f.pop() else { break };
+            flow = self.visit(&mut f, open);
+        }
+        let checked = self.gate.take().map_or(Vec::new(), |g| g.log);
+        f.result(checked)
+    }
+
+    /// Takes the open box `open`: drops it when it can no longer beat the
+    /// best design; a verified corner goes to the gate; otherwise, now and
+    /// then dives from it for a better design, then splits it and examines
+    /// both halves. Breaks when the search must stop (out of time or
+    /// memory: the box goes back to the frontier, whose bounds still count
+    /// for the lower bound).
+    fn visit(&mut self, f: &mut Frontier, open: Open) -> ControlFlow<()> {
+        let Open { node, next } = open;
+        let incumbent = f.incumbent();
+        if beaten(node.bound, incumbent) {
+            return ControlFlow::Continue(());
+        }
+        let full = f.open_bytes > MAX_OPEN_BYTES;
+        let exhausted = self.gate.as_ref().is_some_and(|g| g.exhausted());
+        if full || exhausted || self.effort.out_of_time() || matches!(next, Next::Stopped) {
+            self.effort.memory_full |= full;
+            f.push(node, Next::Stopped);
+            f.stopped = true;
+            return ControlFlow::Break(());
+        }
+        let Next::Split(how) = next else {
+            let (spec, report, ok) = self.ex.verify(&node.hi);
+            assert!(ok, "a verified corner no longer verifies");
+            let u = node.bound;
+            return self.accept(f, node, (spec, report, u));
+        };
+        f.splits += 1;
+        if f.splits % SAY_EVERY == 1 {
+            self.progress(f, node.bound, incumbent);
+        }
+        // With a gate every dive's design would be checked (flown): the
+        // best-first order alone reaches the answer with fewer checks.
+        if f.splits % DIVE_EVERY == 1 && self.gate.is_none() {
+            if let Some(found) = self.ex.dive(&node, incumbent) {
+                publish(self.ex.p, &found.0, found.2, node.bound);
+                f.best = Some(found);
+            }
+        }
+        let (low, high) = self.ex.children(&node, how);
+        self.examine_all(f, node.bound, vec![low, high])
+    }
+
+    /// Examines `boxes` in parallel against the incumbent of now, then
+    /// settles each in order. `floor` is at most the bound of every box
+    /// not yet on the frontier (the parent's).
+    fn examine_all(&mut self, f: &mut Frontier, floor: f64, boxes: Vec<Node>) -> ControlFlow<()> {
+        let incumbent = f.incumbent();
+        let ex = &self.ex;
+        let fates: Vec<Fate> = match <[Node; 2]>::try_from(boxes) {
+            // Two halves (the common case): one join, no splitting overhead.
+            Ok([a, b]) => {
+                let (x, y) = rayon::join(|| ex.examine(a, incumbent), || ex.examine(b, incumbent));
+                vec![x, y]
+            }
+            Err(boxes) => boxes
+                .into_par_iter()
+                .map(|n| ex.examine(n, incumbent))
+                .collect(),
+        };
+        f.nodes += fates.len() as u64;
+        self.effort.work += fates.len() as u64;
+        for fate in fates {
+            self.settle(f, floor, fate)?;
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// What becomes of an examined box: a failing one joins the frontier; a
+    /// verified corner may be the new best design (with a gate, once it is
+    /// taken from the frontier in best-first order). `floor` is at most the
+    /// bound of every box not yet on the frontier.
+    fn settle(&mut self, f: &mut Frontier, floor: f64, fate: Fate) -> ControlFlow<()> {
+        match fate {
+            Fate::Pruned => ControlFlow::Continue(()),
+            Fate::Open(node, how) => {
+                f.push(node, Next::Split(how));
+                ControlFlow::Continue(())
+            }
+            Fate::Verified(mut node, found, u) => {
+                let (spec, report) = *found;
+                if self.gate.is_some() {
+                    // U is the box's least value: it is its bound.
+                    node.bound = u;
+                    f.push(node, Next::Check);
+                    return ControlFlow::Continue(());
+                }
+                if f.incumbent().is_none_or(|b| u < b) {
+                    publish(self.ex.p, &spec, u, f.least_open(floor));
+                    f.best = Some((spec, report, u));
+                }
+                // A feasibility probe stops at its first verified design.
+                if self.first_only {
+                    return ControlFlow::Break(());
+                }
+                ControlFlow::Continue(())
+            }
+        }
+    }
+
+    /// The gate's judgement of the verified design `found` of box `node`,
+    /// taken from the frontier: the new best design if accepted, else the
+    /// parts of the box outside the cut are examined.
+    fn accept(
+        &mut self,
+        f: &mut Frontier,
+        node: Node,
+        found: (Spec, Report, f64),
+    ) -> ControlFlow<()> {
+        match self.judge(&node.hi, &found.0) {
+            Verdict::Accepted => {
+                publish(self.ex.p, &found.0, found.2, f.least_open(node.bound));
+                f.best = Some(found);
+                ControlFlow::Continue(())
+            }
+            Verdict::Cut(c) => self.examine_outside(f, &node, c),
+            Verdict::Exhausted => {
+                f.push(node, Next::Stopped);
+                f.stopped = true;
+                ControlFlow::Break(())
+            }
+        }
+    }
+
+    /// Examines the parts of `node` outside cut `c`.
+    fn examine_outside(&mut self, f: &mut Frontier, node: &Node, c: usize) -> ControlFlow<()> {
+        let Some(g) = &self.gate else {
+            return ControlFlow::Continue(());
+        };
+        let parts = g.outside(node, c);
+        let parts = parts
+            .into_iter()
+            .map(|mut part| {
+                part.bound = self.ex.bound(&part.hi).max(node.bound);
+                part
+            })
+            .collect();
+        self.examine_all(f, node.bound, parts)
+    }
+
+    fn progress(&self, f: &Frontier, bound: f64, best: Option<f64>) {
+        let (nodes, open) = (f.nodes, f.open.len());
+        self.ex.p.say(|| {
+            let best = best.map_or(String::new(), |u| {
+                let gap = if u > 0.0 {
+                    (u - bound).max(0.0) / u
+                } else {
+                    0.0
+                };
+                format!(", best verified U = {u:.4}, gap {:.2} %", 100.0 * gap)
+            });
+            format!("branch and bound: {nodes} boxes, {open} open, lower bound {bound:.4}{best}")
+        });
+    }
+}
+
+/// The box search of `p` over `groups` from the whole domain, starting from
+/// `seed` (a verified design, if any); each box is a unit of `budget`'s
+/// work.
+pub(crate) fn search(
+    p: &Problem,
+    budget: &mut Budget,
+    groups: &[Group],
+    seed: Option<(Spec, Report, f64)>,
+) -> BoxResult {
+    // The loop runs on a worker of the pool, so that each split's second
+    // half waits where the other workers look for work (a join from
+    // outside the pool would hand both halves over and wake one).
+    rayon::scope(|_| BoxSearch::new(p, budget, groups).run(seed))
+}
+
+/// Whether `groups` can hold together: a box search that stops at the
+/// first verified design. `None` when it ran out of time or work.
+pub(crate) fn probe(p: &Problem, budget: &mut Budget, groups: &[Group]) -> Option<bool> {
+    let mut search = BoxSearch::new(p, budget, groups);
+    search.first_only = true;
+    search.gate = None;
+    let r = search.run(None);
+    match (r.best, r.complete) {
+        (Some(_), _) => Some(true),
+        (None, true) => Some(false),
+        (None, false) => None,
+    }
+}
+
+/// Hands a better verified design (its Σ C/T `u`, the least open bound
+/// then) to [`Options::incumbent`](crate::api::Options::incumbent), so that a caller that stops
+/// waiting (Ctrl-C) can still report it.
+pub(crate) fn publish(p: &Problem, spec: &Spec, u: f64, lower_bound: f64) {
+    if let Some(sink) = &p.opts.incumbent {
+        if let Ok(mut g) = sink.lock() {
+            *g = Some(Incumbent {
+                periods: crate::gate::periods_ns(spec),
+                utilization: u,
+                lower_bound: Some(lower_bound),
+            });
+        }
+    }
+}
