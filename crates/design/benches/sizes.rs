@@ -11,7 +11,9 @@
 //! (200 tasks: 8 CPUs, 10 chains); `-- --spec TASKS SEED` prints one
 //! problem as a spec for `rtpipe design`. A second table solves Cleanflight
 //! with `harmonic = true` on a 100 µs grid by the MILP (what harmonic
-//! periods always used before) and by the box search. Each solve runs in a child process so that its
+//! periods always used before) and by the box search. A third table runs
+//! the box search on one thread beside every core (`RTPIPE_BENCH_THREADS`,
+//! `RTPIPE_BENCH_THREAD_SEEDS`). Each solve runs in a child process so that its
 //! peak resident memory (VmHWM) is its own. Prints a Markdown table.
 
 use rtpipe_analysis::bounds_per_chain;
@@ -118,12 +120,30 @@ struct Row {
     gap: f64,
     kib: u64,
     method: String,
+    work: u64,
     objective: f64,
 }
 
 fn run_child(kind: &str, seed: u64, mode: Mode, limit: f64, method: Method) -> Option<Row> {
+    run_child_on(None, kind, seed, mode, limit, method)
+}
+
+/// One solve in a child process, on `threads` threads (rayon's default,
+/// every core, when `None`).
+fn run_child_on(
+    threads: Option<usize>,
+    kind: &str,
+    seed: u64,
+    mode: Mode,
+    limit: f64,
+    method: Method,
+) -> Option<Row> {
     let exe = std::env::current_exe().ok()?;
-    let out = Command::new(exe)
+    let mut cmd = Command::new(exe);
+    if let Some(n) = threads {
+        cmd.env("RAYON_NUM_THREADS", n.to_string());
+    }
+    let out = cmd
         .args([
             "--one",
             kind,
@@ -142,6 +162,7 @@ fn run_child(kind: &str, seed: u64, mode: Mode, limit: f64, method: Method) -> O
         gap: f[2].parse().unwrap_or(f64::NAN),
         kib: f[3].parse().unwrap_or(0),
         method: f[4].to_string(),
+        work: f[5].parse().unwrap_or(0),
         objective: f[6].parse().unwrap_or(f64::NAN),
     })
 }
@@ -235,6 +256,81 @@ fn main() {
         }
     }
     harmonic_table(limit);
+    threads_table(limit);
+}
+
+/// The box search on one thread beside all cores, on the same problems:
+/// wall time, and whether the two decided the same (status, boxes, U; a
+/// search stopped by the time limit does more work on more cores, so
+/// there the gap is what to compare). `RTPIPE_BENCH_THREADS=50,100` picks
+/// the sizes (0 skips), `RTPIPE_BENCH_THREAD_SEEDS` the seeds per size.
+fn threads_table(limit: f64) {
+    let sizes: Vec<usize> = std::env::var("RTPIPE_BENCH_THREADS")
+        .unwrap_or_else(|_| "20,50".to_string())
+        .split(',')
+        .filter_map(|x| x.trim().parse().ok())
+        .filter(|&n| n > 0)
+        .collect();
+    if sizes.is_empty() {
+        return;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let seeds: u64 = env("RTPIPE_BENCH_THREAD_SEEDS", 10);
+    println!();
+    println!("| box search | mode | 1 thread: median s | {cores} threads: median s | median speed-up | same answer and boxes | median gap at the limit, 1 / {cores} |");
+    println!("|---|---|---|---|---|---|---|");
+    for tasks in sizes {
+        for mode in [Mode::Paper, Mode::Sound] {
+            let pairs: Vec<(Row, Row)> = (FIRST_SEED..FIRST_SEED + seeds)
+                .filter_map(|seed| {
+                    let kind = tasks.to_string();
+                    let one = run_child_on(Some(1), &kind, seed, mode, limit, Method::Boxes)?;
+                    let all = run_child_on(Some(cores), &kind, seed, mode, limit, Method::Boxes)?;
+                    eprintln!(
+                        "{tasks} tasks, {} mode, seed {seed}: {:.2} s / {:.2} s, boxes {} / {}",
+                        mode.name(),
+                        one.secs,
+                        all.secs,
+                        one.work,
+                        all.work
+                    );
+                    Some((one, all))
+                })
+                .collect();
+            let same = pairs
+                .iter()
+                .filter(|(a, b)| {
+                    a.status == b.status
+                        && a.work == b.work
+                        && a.objective.to_bits() == b.objective.to_bits()
+                })
+                .count();
+            let stopped = |r: &Row| r.status != Status::Optimal.name();
+            let gaps = |pick: fn(&(Row, Row)) -> &Row| {
+                let g: Vec<f64> = pairs
+                    .iter()
+                    .map(pick)
+                    .filter(|r| stopped(r))
+                    .map(|r| 100.0 * r.gap)
+                    .collect();
+                if g.is_empty() {
+                    "-".to_string()
+                } else {
+                    format!("{:.2} %", median(g))
+                }
+            };
+            println!(
+                "| {tasks} tasks | {} | {:.2} | {:.2} | {:.2}x | {same} of {} | {} / {} |",
+                mode.name(),
+                median(pairs.iter().map(|p| p.0.secs).collect()),
+                median(pairs.iter().map(|p| p.1.secs).collect()),
+                median(pairs.iter().map(|p| p.0.secs / p.1.secs).collect()),
+                pairs.len(),
+                gaps(|p| &p.0),
+                gaps(|p| &p.1),
+            );
+        }
+    }
 }
 
 /// Harmonic Cleanflight, the MILP (before: `harmonic = true` always used

@@ -1,13 +1,14 @@
 //! The box search's loop: the open boxes, best bound first, and the best
 //! verified design (`bnb` examines a box; this decides what becomes of it).
 //!
-//! Each box taken from the frontier was examined when it was made: it is
-//! narrowed, its corner failed, and how to split it is known. Taking it
-//! splits it, and the two halves are examined in parallel (`rayon::join`)
-//! against the incumbent of that moment, then settled in order, low half
-//! first. Every examination is a pure function of the box and that
-//! incumbent, so the search is the same on any number of cores: the same
-//! boxes, the same answer and bound for a given work budget.
+//! Each box on the frontier was examined when it was made: it is narrowed,
+//! its corner failed, and how to split it is known. A round takes the
+//! [`ROUND`] best boxes and splits them; their halves are examined in
+//! parallel (rayon) against the incumbent of that moment, then settled in
+//! order. Every examination is a pure function of the box and that
+//! incumbent, and the round's size is a constant, so the search is the
+//! same on any number of cores: the same boxes, the same answer and bound
+//! for a given work budget (tests/parallel.rs).
 
 use crate::api::{Checked, Incumbent};
 use crate::axis::Node;
@@ -29,6 +30,12 @@ pub const MAX_OPEN_BYTES: usize = 1 << 30;
 
 /// A dive for a better verified design every this many boxes split.
 const DIVE_EVERY: u64 = 32;
+
+/// Boxes taken from the frontier per round: the halves of those split are
+/// examined together, in parallel. A constant, not the number of cores, so
+/// that the search is the same on every machine; small, since the boxes of
+/// a round cannot use each other's designs to prune.
+const ROUND: usize = 4;
 
 /// Progress is said every this many boxes split.
 const SAY_EVERY: u64 = 128;
@@ -226,25 +233,54 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         }
         let floor = root.bound;
         let mut flow = self.examine_all(&mut f, floor, vec![root]);
-        while flow.is_continue() {
-            let Some(open) = f.pop() else { break };
-            flow = self.visit(&mut f, open);
+        while flow.is_continue() && !f.open.is_empty() {
+            flow = self.round(&mut f);
         }
         let checked = self.gate.take().map_or(Vec::new(), |g| g.log);
         f.result(checked)
     }
 
+    /// One round: takes up to [`ROUND`] boxes from the frontier, best
+    /// first, and examines the halves of those it splits together. Breaks
+    /// when the search must stop; halves not examined then go back to the
+    /// frontier with their parents' bounds.
+    fn round(&mut self, f: &mut Frontier) -> ControlFlow<()> {
+        let mut halves = Vec::with_capacity(2 * ROUND);
+        // The first box taken has the least bound of all not yet examined.
+        let floor = f.open.peek().map_or(0.0, |o| o.node.bound);
+        let mut taken = 0;
+        while taken < ROUND {
+            // A verified corner is checked only when it has the least bound
+            // of all, as in a one-box-at-a-time search (each check may be
+            // flights): not after boxes whose halves are not examined yet.
+            if taken > 0 && f.open.peek().is_some_and(|o| matches!(o.next, Next::Check)) {
+                break;
+            }
+            let Some(open) = f.pop() else { break };
+            taken += 1;
+            match self.take(f, open) {
+                ControlFlow::Continue(None) => {}
+                ControlFlow::Continue(Some((low, high))) => halves.extend([low, high]),
+                ControlFlow::Break(()) => {
+                    halves.into_iter().for_each(|h| f.push(h, Next::Stopped));
+                    return ControlFlow::Break(());
+                }
+            }
+        }
+        self.examine_all(f, floor, halves)
+    }
+
     /// Takes the open box `open`: drops it when it can no longer beat the
     /// best design; a verified corner goes to the gate; otherwise, now and
-    /// then dives from it for a better design, then splits it and examines
-    /// both halves. Breaks when the search must stop (out of time or
+    /// then dives from it for a better design, then splits it into the
+    /// halves returned. Breaks when the search must stop (out of time or
     /// memory: the box goes back to the frontier, whose bounds still count
     /// for the lower bound).
-    fn visit(&mut self, f: &mut Frontier, open: Open) -> ControlFlow<()> {
+    fn take(&mut self, f: &mut Frontier, open: Open) -> ControlFlow<(), Option<(Node, Node)>> {
         let Open { node, next } = open;
         let incumbent = f.incumbent();
         if beaten(node.bound, incumbent) {
-            return ControlFlow::Continue(());
+            return ControlFlow::Continue(None);
         }
         let full = f.open_bytes > MAX_OPEN_BYTES;
         let exhausted = self.gate.as_ref().is_some_and(|g| g.exhausted());
@@ -258,7 +294,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let (spec, report, ok) = self.ex.verify(&node.hi);
             assert!(ok, "a verified corner no longer verifies");
             let u = node.bound;
-            return self.accept(f, node, (spec, report, u));
+            return self
+                .accept(f, node, (spec, report, u))
+                .map_break(|_| ())
+                .map_continue(|_| None);
         };
         f.splits += 1;
         if f.splits % SAY_EVERY == 1 {
@@ -272,8 +311,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 f.best = Some(found);
             }
         }
-        let (low, high) = self.ex.children(&node, how);
-        self.examine_all(f, node.bound, vec![low, high])
+        ControlFlow::Continue(Some(self.ex.children(&node, how)))
     }
 
     /// Examines `boxes` in parallel against the incumbent of now, then
