@@ -213,8 +213,10 @@ fn main() {
         .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
         .unwrap_or_else(|| SIZES.to_vec());
     let limit: f64 = env("RTPIPE_BENCH_LIMIT", 10.0);
-    println!("| tasks | mode | method | statuses | median s | max s | median gap of feasible | median peak MiB | max peak MiB |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    if !sizes.is_empty() {
+        println!("| tasks | mode | method | statuses | median s | max s | median gap of feasible | median peak MiB | max peak MiB |");
+        println!("|---|---|---|---|---|---|---|---|---|");
+    }
     for tasks in sizes {
         for mode in [Mode::Paper, Mode::Sound] {
             let rows: Vec<Row> = (FIRST_SEED..FIRST_SEED + seeds)
@@ -277,8 +279,8 @@ fn threads_table(limit: f64) {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let seeds: u64 = env("RTPIPE_BENCH_THREAD_SEEDS", 10);
     println!();
-    println!("| box search | mode | 1 thread: median s | {cores} threads: median s | median speed-up | same answer and boxes | median gap at the limit, 1 / {cores} |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| box search | mode | finished on both | same answer and boxes | 1 thread: median s | {cores} threads: median s | median speed-up | stopped at the limit | median boxes, {cores} threads / 1 | median gap, 1 / {cores} threads |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for tasks in sizes {
         for mode in [Mode::Paper, Mode::Sound] {
             let pairs: Vec<(Row, Row)> = (FIRST_SEED..FIRST_SEED + seeds)
@@ -297,40 +299,47 @@ fn threads_table(limit: f64) {
                     Some((one, all))
                 })
                 .collect();
-            let same = pairs
-                .iter()
-                .filter(|(a, b)| {
-                    a.status == b.status
-                        && a.work == b.work
-                        && a.objective.to_bits() == b.objective.to_bits()
-                })
-                .count();
-            let stopped = |r: &Row| r.status != Status::Optimal.name();
-            let gaps = |pick: fn(&(Row, Row)) -> &Row| {
-                let g: Vec<f64> = pairs
-                    .iter()
-                    .map(pick)
-                    .filter(|r| stopped(r))
-                    .map(|r| 100.0 * r.gap)
-                    .collect();
-                if g.is_empty() {
-                    "-".to_string()
-                } else {
-                    format!("{:.2} %", median(g))
-                }
-            };
-            println!(
-                "| {tasks} tasks | {} | {:.2} | {:.2} | {:.2}x | {same} of {} | {} / {} |",
-                mode.name(),
-                median(pairs.iter().map(|p| p.0.secs).collect()),
-                median(pairs.iter().map(|p| p.1.secs).collect()),
-                median(pairs.iter().map(|p| p.0.secs / p.1.secs).collect()),
-                pairs.len(),
-                gaps(|p| &p.0),
-                gaps(|p| &p.1),
-            );
+            println!("{}", threads_row(tasks, mode, &pairs));
         }
     }
+}
+
+/// One row of the threads table from (one thread, every core) pairs.
+fn threads_row(tasks: usize, mode: Mode, pairs: &[(Row, Row)]) -> String {
+    let done =
+        |r: &Row| [Status::Optimal.name(), Status::Infeasible.name()].contains(&r.status.as_str());
+    type Pairs<'p> = Vec<&'p (Row, Row)>;
+    let (finished, stopped): (Pairs, Pairs) = pairs.iter().partition(|(a, b)| done(a) && done(b));
+    let same = finished
+        .iter()
+        .filter(|(a, b)| {
+            a.status == b.status
+                && a.work == b.work
+                && a.objective.to_bits() == b.objective.to_bits()
+        })
+        .count();
+    let med = |v: Vec<f64>| {
+        if v.is_empty() {
+            "-".to_string()
+        } else {
+            format!("{:.2}", median(v))
+        }
+    };
+    format!(
+        "| {tasks} tasks | {} | {} | {same} | {} | {} | {}x | {} | {}x | {} % / {} % |",
+        mode.name(),
+        finished.len(),
+        med(finished.iter().map(|p| p.0.secs).collect()),
+        med(finished.iter().map(|p| p.1.secs).collect()),
+        med(finished.iter().map(|p| p.0.secs / p.1.secs).collect()),
+        stopped.len(),
+        med(stopped
+            .iter()
+            .map(|p| p.1.work as f64 / p.0.work as f64)
+            .collect()),
+        med(stopped.iter().map(|p| 100.0 * p.0.gap).collect()),
+        med(stopped.iter().map(|p| 100.0 * p.1.gap).collect()),
+    )
 }
 
 /// Harmonic Cleanflight, the MILP (before: `harmonic = true` always used
