@@ -224,6 +224,21 @@ mod tests {
                 .collect()
         };
         assert_eq!(b("pcp"), vec![3, 5, 0]);
+        // Under EDF (D = T = 10, 20, 40), Baruah's b(t): b(10) = the
+        // longest section of m or l on a resource h uses (r1, r2):
+        // max(2, 3, 1) = 3; b(20) = every section of l, its resources all
+        // used by h or m: max(3, 1, 5) = 5; b(40) = 0.
+        let edf = src("srp").replace("name = \"b\"", "name = \"b\"\nscheduler = \"edf\"");
+        let spec = Spec::parse("b.toml", &edf).unwrap_or_else(|e| panic!("{e}"));
+        let ms = 1_000_000;
+        assert_eq!(
+            srp_spec_steps(&spec, 0),
+            vec![(10 * ms, 3 * ms), (20 * ms, 5 * ms), (40 * ms, 0)]
+        );
+        assert_eq!(srp_at(&srp_spec_steps(&spec, 0), 9 * ms), 0);
+        let prio = vec![None; 3];
+        let got: Vec<Nanos> = (0..3).map(|i| blocking(&spec, &prio, i) / ms).collect();
+        assert_eq!(got, vec![3, 5, 0]);
         assert_eq!(b("srp"), vec![3, 5, 0]);
         assert_eq!(b("pip"), vec![4, 5, 0]);
     }

@@ -378,6 +378,31 @@ mod tests {
         assert_eq!(start_to_finish(&set(&[(3, 10)]), &[10], 0, 0), 1);
     }
 
+    /// Spuri with SRP blocking by hand (`examples/edf-srp.toml`): (1, 4),
+    /// (2, 6), (3, 12), b(4) = b(6) = 2, b(12) = 0; L = 2 + 6 = 8 → 11 →
+    /// 12. τ1: a = 0: 1 + b(4) = 3; a = 2: 1 + b(6) + τ2's first = 5, 3;
+    /// a = 4: 2 + b(8) + 2 = 6, 2; a = 8: 3 + b(12) + 2·2 + 3 = 10, 2:
+    /// R = 3. τ2: a = 0: 2 + b(6) + 1 = 5. τ3: b(12 + a) = 0: 10.
+    #[test]
+    fn spuri_with_blocking_by_hand() {
+        let s = set(&[(1, 4), (2, 6), (3, 12)]);
+        let block = [(4, 2), (6, 2), (12, 0)];
+        let l = busy_period(&s, 2, 1000).unwrap_or(0);
+        assert_eq!(l, 12);
+        let r: Vec<Nanos> = (0..3)
+            .map(|i| response_time(&s, i, s[i].work, l, &block))
+            .collect();
+        assert_eq!(r, vec![3, 5, 10]);
+        // Without the blocking the deadline ties at 12 decide: τ1 at a = 8
+        // (own 3, τ2's jobs of deadlines 6 and 12, τ3's): 10 − 8 = 2; τ2 at
+        // a = 6 (own 4, three of τ1, τ3): 10 − 6 = 4.
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        let r: Vec<Nanos> = (0..3)
+            .map(|i| response_time(&s, i, s[i].work, l, &[]))
+            .collect();
+        assert_eq!(r, vec![2, 4, 10]);
+    }
+
     #[test]
     fn candidates_are_the_steps() {
         // T = (4, 6), i = 1, L = 12: own 6; the other's deadlines reach
