@@ -121,12 +121,18 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
 /// section.
 pub fn srp_steps(spec: &Spec, deadline: &[Nanos], cpu: u32) -> Vec<(Nanos, Nanos)> {
     assert_eq!(deadline.len(), spec.tasks.len());
+    // Asked for every task and every box of the design: nothing to build
+    // (or allocate) on a CPU without sections.
+    if !spec
+        .tasks
+        .iter()
+        .any(|t| t.cpu == cpu && !t.sections.is_empty())
+    {
+        return Vec::new();
+    }
     let on: Vec<usize> = (0..spec.tasks.len())
         .filter(|&j| spec.tasks[j].cpu == cpu && spec.tasks[j].server != Server::Background)
         .collect();
-    if on.iter().all(|&j| spec.tasks[j].sections.is_empty()) {
-        return Vec::new();
-    }
     let mut thetas: Vec<Nanos> = on.iter().map(|&j| deadline[j]).collect();
     thetas.sort_unstable();
     thetas.dedup();
