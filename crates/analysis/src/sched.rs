@@ -448,8 +448,13 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
         return (None, None);
     }
     let t = &spec.tasks[i];
-    // The stack resource policy's blocking, deadlines being the periods.
-    let block = crate::blocking::srp_steps(spec, periods, t.cpu);
+    // The stack resource policy's blocking, deadlines being the periods,
+    // with the switch to the blocking job (`overheads::blocking_switch`).
+    let cs = crate::overheads::blocking_switch(spec, i);
+    let block: Vec<(Nanos, Nanos)> = crate::blocking::srp_steps(spec, periods, t.cpu)
+        .into_iter()
+        .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }))
+        .collect();
     let b_max = crate::blocking::srp_max(&block);
     let Some(l) = edf::busy_period(&tasks, b_max, edf::MAX_BUSY_JOBS) else {
         // The server period is a bound only without overheads (a release

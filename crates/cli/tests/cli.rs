@@ -271,7 +271,7 @@ fn bad_critical_sections_exit_2_with_location() {
 }
 
 /// Shared resources under EDF (issue 22): only the stack resource policy,
-/// named; no overheads with sections there; sections only in plain tasks
+/// named; sections only in plain tasks
 /// and within exec, as under RM. `run` refuses the spec at its protocol
 /// (SCHED_DEADLINE cannot run SRP), `analyze` and `simulate` run it.
 #[test]
@@ -280,7 +280,6 @@ fn edf_sections_need_srp_and_exit_2_otherwise() {
         ("resource_protocol = \"srp\"", "resource_protocol = \"pcp\"", "bad.toml:22:21: error: resource protocol \"pcp\" does not apply to scheduler \"edf\""),
         ("resource_protocol = \"srp\"", "resource_protocol = \"pip\"", "bad.toml:22:21: error: resource protocol \"pip\" does not apply to scheduler \"edf\""),
         ("resource_protocol = \"srp\"", "", "bad.toml:24:12: error: shared resources under scheduler \"edf\" with the default resource protocol \"pcp\""),
-        ("resource_protocol = \"srp\"", "resource_protocol = \"srp\"\noverheads = { context_switch = \"5us\" }", "bad.toml:23:32: error: overheads with critical sections under EDF"),
         ("server = \"none\"\ncritical_sections = [{ resource = \"bus\", length = 2 }]", "server = \"main\"\ncritical_sections = [{ resource = \"bus\", length = 2 }]", "bad.toml:49:21: error: task `c` has critical sections but server \"main\""),
         ("length = 2 }", "length = 4 }", "bad.toml:49:51: error: critical section of `c` on `bus` (4ms) is longer than its exec (3ms)"),
     ];

@@ -18,6 +18,7 @@ mod common;
 use common::{worst, MS};
 use rtpipe_analysis::{analyze, Report};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::overheads::Costs;
 use rtpipe_model::{
     Communication, CriticalSection, Nanos, Resource, ResourceProtocol, SchedTest, Scheduler,
     Server, Spec,
@@ -89,6 +90,40 @@ fn the_example_by_hand() {
     );
 }
 
+/// With a 10 µs context switch (no release or replenishment cost: plain
+/// tasks), by hand: every other job costs I + 2·cs, the analysed one
+/// x + cs, a blocking section b + cs (`overheads::blocking_switch`). τa at
+/// a = 0: 1.01 + 2.01 = 3.02; at a = 2: 1.01 + b(6) + cs + τb's 2.02 =
+/// 5.04, 3.04; at a = 4: 2.03 + 2.01 + 2.02 = 6.06, 2.06; later less:
+/// R_a = 3.04 ms. The simulator (c locks at 0, a and b at 1 ns, or any
+/// phasing on the 0.25 ms grid) stays below.
+#[test]
+fn the_example_with_overheads() {
+    let src = include_str!("../../../examples/edf-srp.toml").replace(
+        "resource_protocol = \"srp\"",
+        "resource_protocol = \"srp\"\noverheads = { context_switch = \"10us\" }",
+    );
+    let spec = Spec::parse("edf-srp.toml", &src).unwrap_or_else(|e| panic!("{e}"));
+    let rep = analyze(&spec);
+    assert_eq!(rep.timing[0].job_response_time, Some(3_040 * US));
+    assert!(rep.schedulability.schedulable);
+    for pa in (0..4 * MS).step_by(250 * US as usize) {
+        for pb in [0, 1, 2 * MS, 3 * MS] {
+            for pc in [0, 1] {
+                let seen = worst(&spec, vec![pa + pc, pb + pc, 0]);
+                for (i, t) in rep.timing.iter().enumerate() {
+                    let r = t.job_response_time.unwrap_or(0);
+                    assert!(
+                        seen[i] <= r,
+                        "({pa}, {pb}, {pc}): task {i} {} > {r}",
+                        seen[i]
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// The simulator at the example's critical instants: synchronous release
 /// gives c its bound exactly (a's third job, released at 8 with deadline
 /// 12, wins the tie with c); c locking bus at 0 with a (and b) released
@@ -149,6 +184,15 @@ fn system(seed: u64) -> Spec {
     };
     if r.chance(0.1) {
         spec.communication = Communication::Let;
+    }
+    // Overheads with the utilisation test and implicit deadlines (the
+    // demand test refuses them).
+    if !constrained && spec.schedulability == SchedTest::Edf && r.chance(0.4) {
+        spec.overheads.system = Costs {
+            context_switch: r.range(0, 60) as Nanos * US,
+            release: r.range(0, 40) as Nanos * US,
+            replenish: r.range(0, 30) as Nanos * US,
+        };
     }
     let per_cpu = r.range(1, 2) as usize;
     spec.resources = (0..gen.cpus as usize * per_cpu)

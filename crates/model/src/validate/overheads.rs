@@ -8,9 +8,7 @@
 //! a CPU table for a CPU no task runs on; overheads with the QPA test
 //! (its demand walk has no term for release handlers of later deadlines);
 //! with priority inheritance over critical sections (a job waiting for a
-//! lock causes switches no release or completion pays for); with critical
-//! sections under EDF (the blocking section's switches are not charged by
-//! the EDF analysis, docs/analysis.md "Shared resources under EDF"); with release
+//! lock causes switches no release or completion pays for); with release
 //! jitter on a budget server under fixed priorities (it may wait for its
 //! budget and run in slack, switching without a release or completion).
 //! The utilisation bounds `liu-layland` and `hyperbolic` are refused with
@@ -175,13 +173,6 @@ impl Builder {
             return Some((
                 "overheads with resource_protocol = \"pip\"".into(),
                 "a job waiting for a lock under priority inheritance causes context switches the overhead analysis does not count: use resource_protocol = \"pcp\" or \"srp\"".into(),
-                None,
-            ));
-        }
-        if sections && !policy.fixed_priority() {
-            return Some((
-                "overheads with critical sections under EDF (the stack resource policy)".into(),
-                "the EDF analysis does not charge the switches around a blocking section: remove the overheads, or use scheduler = \"rm\" (whose response-time analysis charges them with \"pcp\" or \"srp\")".into(),
                 None,
             ));
         }
