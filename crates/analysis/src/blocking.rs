@@ -20,10 +20,22 @@
 //!   Lehoczky 1990, the basic inheritance protocol; sections are not
 //!   nested).
 //!
-//! This module is the one home of the rule: `sched::response_times` adds it
-//! to a job's own demand, `disturbance` adds a disturbance on top of it.
+//! Under EDF with the stack resource policy (Baker 1991), the blocking a
+//! deadline interval of length t can hold is Baruah's
+//! b(t) = max { |s| : s a section of a task j with D_j > t, on a resource
+//! used by some task k with D_k ≤ t } ([`srp_steps`], [`srp_at`]; Baruah,
+//! "Resource sharing in EDF-scheduled systems: a closer look", RTSS 2006):
+//! at most one job, released before the interval with its deadline after
+//! it, runs in it, and only for the rest of one section on a resource whose
+//! ceiling is at or above the level of a job the interval holds
+//! (docs/analysis.md, "Shared resources under EDF").
+//!
+//! This module is the one home of the rules: `sched::response_times` adds
+//! B_i to a job's own demand, `disturbance` adds a disturbance on top of
+//! it; `qpa` (h(t) + b(t) ≤ t), `sched` (Baker's density test) and `edf`
+//! (Spuri's busy window) take b(t) from here.
 
-use rtpipe_model::{Nanos, ResourceProtocol, Spec};
+use rtpipe_model::{Nanos, ResourceProtocol, Server, Spec};
 
 /// Each resource's ceiling: the highest rank (smallest number) of a task
 /// that uses it; `None` for a resource no ranked task uses.
@@ -54,7 +66,20 @@ pub fn locking_rank(spec: &Spec, prio: &[Option<usize>], i: usize) -> Option<usi
 /// B_i: the longest time a job of task `i` can wait for lower-priority
 /// tasks' critical sections under the spec's protocol (0 without
 /// resources, for a background task, and for the lowest-ranked task).
+///
+/// Under EDF (the stack resource policy) B_i = b(D_i) ([`srp_at`]): what
+/// a job of i can wait before it starts when its deadline interval starts
+/// at its release (Baker's B_i of the density test); the busy-window
+/// analysis (`edf.rs`) takes b at every interval length instead.
 pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
+    let t = &spec.tasks[i];
+    if !spec.policy().fixed_priority() {
+        if t.server == Server::Background {
+            return 0;
+        }
+        let d = t.deadline().unwrap_or(rtpipe_model::MAX_TIME);
+        return srp_at(&srp_spec_steps(spec, t.cpu), d);
+    }
     let Some(own) = prio[i] else {
         return 0;
     };
@@ -87,6 +112,75 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
             per_task.min(per_resource)
         }
     }
+}
+
+/// Baruah's b(t) on `cpu` under EDF with the stack resource policy, as
+/// steps `(θ, b(θ))` at every distinct relative deadline θ of the CPU's
+/// guaranteed tasks, ascending ([`srp_at`] reads it), from `deadline[j]`,
+/// each task's relative deadline. Empty when no task of the CPU has a
+/// section.
+pub fn srp_steps(spec: &Spec, deadline: &[Nanos], cpu: u32) -> Vec<(Nanos, Nanos)> {
+    assert_eq!(deadline.len(), spec.tasks.len());
+    // Asked for every task and every box of the design: nothing to build
+    // (or allocate) on a CPU without sections.
+    if !spec
+        .tasks
+        .iter()
+        .any(|t| t.cpu == cpu && !t.sections.is_empty())
+    {
+        return Vec::new();
+    }
+    let on: Vec<usize> = (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu && spec.tasks[j].server != Server::Background)
+        .collect();
+    let mut thetas: Vec<Nanos> = on.iter().map(|&j| deadline[j]).collect();
+    thetas.sort_unstable();
+    thetas.dedup();
+    let used_by_some = |r: usize, t: Nanos| {
+        on.iter()
+            .any(|&k| deadline[k] <= t && spec.tasks[k].sections.iter().any(|s| s.resource == r))
+    };
+    thetas
+        .into_iter()
+        .map(|t| {
+            let b = on
+                .iter()
+                .filter(|&&j| deadline[j] > t)
+                .flat_map(|&j| spec.tasks[j].sections.iter())
+                .filter(|s| used_by_some(s.resource, t))
+                .map(|s| s.length)
+                .max()
+                .unwrap_or(0);
+            (t, b)
+        })
+        .collect()
+}
+
+/// [`srp_steps`] with the spec's relative deadlines (D, else T; a task
+/// without a fixed period counts as never released).
+pub fn srp_spec_steps(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos)> {
+    let d: Vec<Nanos> = spec
+        .tasks
+        .iter()
+        .map(|t| t.deadline().unwrap_or(rtpipe_model::MAX_TIME))
+        .collect();
+    srp_steps(spec, &d, cpu)
+}
+
+/// b(t) from [`srp_steps`]: the value of the last step at or below t (0
+/// below the first, and for no steps).
+pub fn srp_at(steps: &[(Nanos, Nanos)], t: Nanos) -> Nanos {
+    let k = steps.partition_point(|&(theta, _)| theta <= t);
+    if k == 0 {
+        0
+    } else {
+        steps[k - 1].1
+    }
+}
+
+/// The largest b(t) of [`srp_steps`] (0 for none).
+pub fn srp_max(steps: &[(Nanos, Nanos)]) -> Nanos {
+    steps.iter().map(|&(_, b)| b).max().unwrap_or(0)
 }
 
 /// Σ over the groups of `key` of the longest section in each.
@@ -136,6 +230,21 @@ mod tests {
                 .collect()
         };
         assert_eq!(b("pcp"), vec![3, 5, 0]);
+        // Under EDF (D = T = 10, 20, 40), Baruah's b(t): b(10) = the
+        // longest section of m or l on a resource h uses (r1, r2):
+        // max(2, 3, 1) = 3; b(20) = every section of l, its resources all
+        // used by h or m: max(3, 1, 5) = 5; b(40) = 0.
+        let edf = src("srp").replace("name = \"b\"", "name = \"b\"\nscheduler = \"edf\"");
+        let spec = Spec::parse("b.toml", &edf).unwrap_or_else(|e| panic!("{e}"));
+        let ms = 1_000_000;
+        assert_eq!(
+            srp_spec_steps(&spec, 0),
+            vec![(10 * ms, 3 * ms), (20 * ms, 5 * ms), (40 * ms, 0)]
+        );
+        assert_eq!(srp_at(&srp_spec_steps(&spec, 0), 9 * ms), 0);
+        let prio = vec![None; 3];
+        let got: Vec<Nanos> = (0..3).map(|i| blocking(&spec, &prio, i) / ms).collect();
+        assert_eq!(got, vec![3, 5, 0]);
         assert_eq!(b("srp"), vec![3, 5, 0]);
         assert_eq!(b("pip"), vec![4, 5, 0]);
     }

@@ -32,6 +32,15 @@
 //! `(k + 1)·T_j − T_i` (k ≥ 0). Between two of them `w_i(a)` is constant and
 //! `w_i(a) − a` falls, so the maximum over every real `a` is at one of them.
 //!
+//! With critical sections under the stack resource policy, a job of the
+//! window may also wait, before it starts, for the rest of one section of
+//! a job released before the window with a deadline after it (Baker 1991):
+//! `+ b(a + T_i)` in `w_i(a)`, Baruah's blocking of an interval of that
+//! length ([`crate::blocking::srp_at`]; its steps at `T_k − T_i` are
+//! candidates already), and the longest such section `B*` in `L`
+//! (`L = B* + Σ ⌈L/T_j⌉ I_j`). docs/analysis.md, "Shared resources under
+//! EDF", proves both.
+//!
 //! With scheduling overheads ([`crate::overheads`]) each task's `I_j`
 //! carries its two context switches and every release brings kernel work
 //! (`EdfTask::kernel`) that runs whatever its deadline: `+ Σ_k ⌈w/T_k⌉·K_k`
@@ -69,15 +78,19 @@ fn jobs_within(tasks: &[EdfTask], w: Nanos) -> u64 {
         .sum()
 }
 
-/// The synchronous busy period `L = Σ ⌈L/T_j⌉ I_j` (least fixed point), or
-/// `None` when it holds more than `max_jobs` jobs or passes [`MAX_TIME`].
-/// It exists exactly when `Σ I_j/T_j ≤ 1` (with a larger load every
-/// iterate grows), so a value proves the CPU is not overloaded.
-pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
-    assert!(tasks
-        .iter()
-        .all(|t| t.period > 0 && t.work >= 0 && t.kernel >= 0));
-    let mut l: Nanos = tasks.iter().map(|t| t.work + t.kernel).sum();
+/// The busy period `L = blocking + Σ ⌈L/T_j⌉ I_j` (least fixed point;
+/// the synchronous one for `blocking = 0`), or `None` when it holds more
+/// than `max_jobs` jobs or passes [`MAX_TIME`]. Without blocking it exists
+/// exactly when `Σ I_j/T_j ≤ 1` (with a larger load every iterate grows),
+/// so a value proves the CPU is not overloaded.
+pub fn busy_period(tasks: &[EdfTask], blocking: Nanos, max_jobs: u64) -> Option<Nanos> {
+    assert!(
+        blocking >= 0
+            && tasks
+                .iter()
+                .all(|t| t.period > 0 && t.work >= 0 && t.kernel >= 0)
+    );
+    let mut l: Nanos = blocking + tasks.iter().map(|t| t.work + t.kernel).sum::<Nanos>();
     if l == 0 {
         return Some(0);
     }
@@ -85,10 +98,11 @@ pub fn busy_period(tasks: &[EdfTask], max_jobs: u64) -> Option<Nanos> {
         if l > MAX_TIME || jobs_within(tasks, l) > max_jobs {
             return None;
         }
-        let next: Nanos = tasks
-            .iter()
-            .map(|t| ((l + t.period - 1) / t.period) * (t.work + t.kernel))
-            .sum();
+        let next: Nanos = blocking
+            + tasks
+                .iter()
+                .map(|t| ((l + t.period - 1) / t.period) * (t.work + t.kernel))
+                .sum::<Nanos>();
         if next == l {
             return Some(l);
         }
@@ -124,8 +138,17 @@ fn candidates(tasks: &[EdfTask], i: usize, l: Nanos) -> Vec<Nanos> {
 /// Spuri's worst-case response time of a job of task `i` with demand `own`
 /// (`own ≤ I_i` for a bound within the period), against the other tasks
 /// of `tasks` (one CPU's guaranteed tasks, `i` among them), given the
-/// synchronous busy period `l` ([`busy_period`]). Never below `own`.
-pub fn response_time(tasks: &[EdfTask], i: usize, own: Nanos, l: Nanos) -> Nanos {
+/// busy period `l` ([`busy_period`], with the largest blocking), and the
+/// blocking steps `block` of the stack resource policy
+/// ([`crate::blocking::srp_steps`] with deadlines = periods; empty without
+/// critical sections). Never below `own`.
+pub fn response_time(
+    tasks: &[EdfTask],
+    i: usize,
+    own: Nanos,
+    l: Nanos,
+    block: &[(Nanos, Nanos)],
+) -> Nanos {
     let me = tasks[i];
     let mut worst = own;
     // A job of no demand still waits for the jobs it may not overtake; it
@@ -133,8 +156,19 @@ pub fn response_time(tasks: &[EdfTask], i: usize, own: Nanos, l: Nanos) -> Nanos
     // start), which the half-open release count below handles.
     let own = own.max(1);
     let mut w: Nanos = 0;
-    for a in candidates(tasks, i, l) {
-        let own_a = (a / me.period) * me.work + own;
+    let mut at = candidates(tasks, i, l);
+    // Where b(a + T_i) steps (already there when every threshold is a
+    // period; kept for any other).
+    at.extend(
+        block
+            .iter()
+            .map(|&(theta, _)| theta - me.period)
+            .filter(|&a| a > 0 && a < l),
+    );
+    at.sort_unstable();
+    at.dedup();
+    for a in at {
+        let own_a = (a / me.period) * me.work + own + crate::blocking::srp_at(block, a + me.period);
         // Jobs of j with a deadline at or before the analysed one's.
         let cap = |t: &EdfTask| {
             if a + me.period >= t.period {
@@ -151,7 +185,14 @@ pub fn response_time(tasks: &[EdfTask], i: usize, own: Nanos, l: Nanos) -> Nanos
             .filter(|&(j, t)| j != i && cap(t) > 0)
             .map(|(_, t)| t.work)
             .sum();
-        w = fixed_point(tasks, i, own_a, |j| cap(&tasks[j]), w.max(own_a + first));
+        // Blocking may fall as a grows: then only the fresh start is below
+        // the least fixed point.
+        let start = if block.is_empty() {
+            w.max(own_a + first)
+        } else {
+            own_a + first
+        };
+        w = fixed_point(tasks, i, own_a, |j| cap(&tasks[j]), start);
         worst = worst.max(w - a);
     }
     worst
@@ -250,22 +291,22 @@ mod tests {
         // (1, 4), (2, 6), (3, 13): L = 6 → 1·2 + 2 + 3 = 7 → 2 + 4 + 3 = 9
         // → 3 + 4 + 3 = 10 → 10.
         assert_eq!(
-            busy_period(&set(&[(1, 4), (2, 6), (3, 13)]), 1000),
+            busy_period(&set(&[(1, 4), (2, 6), (3, 13)]), 0, 1000),
             Some(10)
         );
         // U = 1 exactly: the busy period is the hyperperiod.
-        assert_eq!(busy_period(&set(&[(1, 2), (2, 4)]), 1000), Some(4));
+        assert_eq!(busy_period(&set(&[(1, 2), (2, 4)]), 0, 1000), Some(4));
         // U > 1: no fixed point, the job bound stops the iteration.
-        assert_eq!(busy_period(&set(&[(3, 4), (2, 4)]), 1000), None);
-        assert_eq!(busy_period(&[], 1000), Some(0));
+        assert_eq!(busy_period(&set(&[(3, 4), (2, 4)]), 0, 1000), None);
+        assert_eq!(busy_period(&[], 0, 1000), Some(0));
     }
 
     #[test]
     fn a_single_task_responds_in_its_demand() {
         let s = set(&[(3, 10)]);
-        let l = busy_period(&s, 1000).unwrap_or(0);
-        assert_eq!(response_time(&s, 0, 3, l), 3);
-        assert_eq!(response_time(&s, 0, 1, l), 1);
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        assert_eq!(response_time(&s, 0, 3, l, &[]), 3);
+        assert_eq!(response_time(&s, 0, 1, l, &[]), 1);
     }
 
     /// Spuri's iteration by hand on two task sets.
@@ -289,16 +330,18 @@ mod tests {
     #[test]
     fn spuri_by_hand() {
         let s = set(&[(2, 5), (4, 7)]);
-        let l = busy_period(&s, 1000).unwrap_or(0);
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
         assert_eq!(l, 14);
         assert_eq!(candidates(&s, 0, l), vec![0, 2, 5, 9, 10]);
         assert_eq!(candidates(&s, 1, l), vec![0, 3, 7, 8, 13]);
-        assert_eq!(response_time(&s, 0, 2, l), 4);
-        assert_eq!(response_time(&s, 1, 4, l), 6);
-        assert_eq!(response_time(&s, 1, 1, l), 3);
+        assert_eq!(response_time(&s, 0, 2, l, &[]), 4);
+        assert_eq!(response_time(&s, 1, 4, l, &[]), 6);
+        assert_eq!(response_time(&s, 1, 1, l, &[]), 3);
         let s = set(&[(1, 4), (2, 6), (3, 13)]);
-        let l = busy_period(&s, 1000).unwrap_or(0);
-        let r: Vec<Nanos> = (0..3).map(|i| response_time(&s, i, s[i].work, l)).collect();
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        let r: Vec<Nanos> = (0..3)
+            .map(|i| response_time(&s, i, s[i].work, l, &[]))
+            .collect();
         assert_eq!(r, vec![1, 3, 10]);
     }
 
@@ -328,11 +371,36 @@ mod tests {
         assert_eq!(w, vec![1, 3, 10]);
         let s = set(&[(2, 4), (3, 8)]);
         assert_eq!(start_to_finish(&s, &[4, 8], 1, 3), 5);
-        let l = busy_period(&s, 1000).unwrap_or(0);
-        assert_eq!(response_time(&s, 1, 3, l), 7);
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        assert_eq!(response_time(&s, 1, 3, l, &[]), 7);
         assert_eq!(start_to_finish(&set(&[(1, 8), (3, 8)]), &[8, 8], 1, 3), 3);
         // No demand: analysed as 1 ns, like the response time.
         assert_eq!(start_to_finish(&set(&[(3, 10)]), &[10], 0, 0), 1);
+    }
+
+    /// Spuri with SRP blocking by hand (`examples/edf-srp.toml`): (1, 4),
+    /// (2, 6), (3, 12), b(4) = b(6) = 2, b(12) = 0; L = 2 + 6 = 8 → 11 →
+    /// 12. τ1: a = 0: 1 + b(4) = 3; a = 2: 1 + b(6) + τ2's first = 5, 3;
+    /// a = 4: 2 + b(8) + 2 = 6, 2; a = 8: 3 + b(12) + 2·2 + 3 = 10, 2:
+    /// R = 3. τ2: a = 0: 2 + b(6) + 1 = 5. τ3: b(12 + a) = 0: 10.
+    #[test]
+    fn spuri_with_blocking_by_hand() {
+        let s = set(&[(1, 4), (2, 6), (3, 12)]);
+        let block = [(4, 2), (6, 2), (12, 0)];
+        let l = busy_period(&s, 2, 1000).unwrap_or(0);
+        assert_eq!(l, 12);
+        let r: Vec<Nanos> = (0..3)
+            .map(|i| response_time(&s, i, s[i].work, l, &block))
+            .collect();
+        assert_eq!(r, vec![3, 5, 10]);
+        // Without the blocking the deadline ties at 12 decide: τ1 at a = 8
+        // (own 3, τ2's jobs of deadlines 6 and 12, τ3's): 10 − 8 = 2; τ2 at
+        // a = 6 (own 4, three of τ1, τ3): 10 − 6 = 4.
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        let r: Vec<Nanos> = (0..3)
+            .map(|i| response_time(&s, i, s[i].work, l, &[]))
+            .collect();
+        assert_eq!(r, vec![2, 4, 10]);
     }
 
     #[test]

@@ -47,6 +47,18 @@ pub fn own(spec: &Spec, i: usize) -> Nanos {
     costs(spec, i).context_switch
 }
 
+/// Under EDF with the stack resource policy, what a blocking section costs
+/// besides its length: `cs`, the switch to the blocking job at the start
+/// of the window, which no job of the window pays (it comes after a
+/// completion before the window, or is that job's own switch back). Every
+/// other switch of the window is to a job of the window (the one away
+/// from the blocker when its section ends is the switch to the job it
+/// blocked), so `2·cs` per job and `cs` for the analysed one still pay
+/// them (docs/analysis.md, "Shared resources under EDF").
+pub fn blocking_switch(spec: &Spec, i: usize) -> Nanos {
+    costs(spec, i).context_switch
+}
+
 /// The kernel work of one release of task `k`: `rel`, plus `rep` on a
 /// budget server.
 pub fn per_release(spec: &Spec, k: usize) -> Nanos {

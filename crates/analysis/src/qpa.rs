@@ -137,6 +137,65 @@ pub fn qpa(tasks: &[Demand]) -> Qpa {
     }
 }
 
+/// The processor-demand test with blocking under the stack resource
+/// policy: h(t) + b(t) ≤ t at every absolute deadline t below
+/// max(L, D_max), with b(t) Baruah's blocking as `steps`
+/// ([`crate::blocking::srp_steps`]); the plain [`qpa`] when nothing blocks.
+///
+/// Above D_max, b = 0 and QPA's interval L bounds where h(t) > t can
+/// first happen; below D_max, b is constant between two consecutive
+/// relative deadlines, so on each such piece h + b is non-decreasing and
+/// QPA's backward jump t ← h(t) + b(t) stays valid as long as it does not
+/// leave the piece; past the piece's lower end the walk goes on from the
+/// largest deadline below it.
+pub fn qpa_srp(tasks: &[Demand], steps: &[(Nanos, Nanos)]) -> Qpa {
+    if crate::blocking::srp_max(steps) == 0 {
+        return qpa(tasks);
+    }
+    let plain = qpa(tasks);
+    if plain.l == 0 && !plain.schedulable {
+        // Overloaded, or no interval: blocking only adds demand.
+        return plain;
+    }
+    let dmax = tasks.iter().map(|&(_, _, d)| d).max().unwrap_or(0);
+    let mut visited = Vec::new();
+    let mut next = deadline_below(tasks, plain.l.max(dmax));
+    while let Some(t) = next {
+        let g = demand(tasks, t) + i128::from(crate::blocking::srp_at(steps, t));
+        visited.push(t);
+        if g > i128::from(t) {
+            return Qpa {
+                schedulable: false,
+                l: plain.l,
+                visited,
+                failure: Some(t),
+            };
+        }
+        // The piece of t: from the largest relative deadline at or below
+        // it (one exists: t is an absolute deadline).
+        let lo = tasks
+            .iter()
+            .map(|&(_, _, d)| d)
+            .filter(|&d| d <= t)
+            .max()
+            .unwrap_or(0);
+        next = if g < i128::from(t) && g >= i128::from(lo) {
+            // h + b ≤ g on [g, t], within the piece.
+            Some(g as Nanos)
+        } else if g < i128::from(t) {
+            deadline_below(tasks, lo)
+        } else {
+            deadline_below(tasks, t)
+        };
+    }
+    Qpa {
+        schedulable: true,
+        l: plain.l,
+        visited,
+        failure: None,
+    }
+}
+
 /// The (C, T, D) of the guaranteed tasks `ids`.
 fn demands(spec: &Spec, ids: &[usize]) -> Vec<Demand> {
     ids.iter()
@@ -156,7 +215,8 @@ fn guaranteed(spec: &Spec, cpu: u32) -> Vec<usize> {
 }
 
 /// EDF meets every deadline on `cpu`: Σ U ≤ 1 when every deadline is the
-/// period (exactly as before deadlines existed), QPA otherwise.
+/// period and nothing blocks (exactly as before deadlines existed), QPA
+/// otherwise, with the stack resource policy's blocking ([`qpa_srp`]).
 pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
     let ids = guaranteed(spec, cpu);
     if ids.iter().all(|&i| {
@@ -173,9 +233,15 @@ pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
                 t.budget() as f64 / t.fixed_period().unwrap_or(MAX_TIME) as f64
             })
             .sum();
-        return u <= 1.0 + 1e-12;
+        if crate::blocking::srp_spec_steps(spec, cpu).is_empty() {
+            return u <= 1.0 + 1e-12;
+        }
     }
-    qpa(&demands(spec, &ids)).schedulable
+    qpa_srp(
+        &demands(spec, &ids),
+        &crate::blocking::srp_spec_steps(spec, cpu),
+    )
+    .schedulable
 }
 
 /// The QPA test on the tasks `ids` of one CPU: (Σ U, its bound 1, QPA's
@@ -183,5 +249,9 @@ pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
 pub fn qpa_verdict(spec: &Spec, ids: &[usize]) -> (f64, f64, bool) {
     let ds = demands(spec, ids);
     let u: f64 = ds.iter().map(|&(c, p, _)| c as f64 / p as f64).sum();
-    (u, 1.0, qpa(&ds).schedulable)
+    let steps = ids
+        .first()
+        .map(|&i| crate::blocking::srp_spec_steps(spec, spec.tasks[i].cpu))
+        .unwrap_or_default();
+    (u, 1.0, qpa_srp(&ds, &steps).schedulable)
 }

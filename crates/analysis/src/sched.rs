@@ -448,28 +448,39 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
         return (None, None);
     }
     let t = &spec.tasks[i];
-    let Some(l) = edf::busy_period(&tasks, edf::MAX_BUSY_JOBS) else {
-        // The server period is a bound only without overheads: a release
-        // handler of a later deadline runs first.
-        return if overheads {
-            (None, None)
-        } else {
+    // The stack resource policy's blocking, deadlines being the periods,
+    // with the switch to the blocking job (`overheads::blocking_switch`).
+    let cs = crate::overheads::blocking_switch(spec, i);
+    let block: Vec<(Nanos, Nanos)> = crate::blocking::srp_steps(spec, periods, t.cpu)
+        .into_iter()
+        .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }))
+        .collect();
+    let b_max = crate::blocking::srp_max(&block);
+    let Some(l) = edf::busy_period(&tasks, b_max, edf::MAX_BUSY_JOBS) else {
+        // The server period is a bound only without overheads (a release
+        // handler of a later deadline runs first) and, with blocking, when
+        // the demand test with blocking passes.
+        let ok = !overheads && (b_max == 0 || crate::qpa::edf_feasible(spec, t.cpu));
+        return if ok {
             (Some(periods[i]), Some(periods[i]))
+        } else {
+            (None, None)
         };
     };
     let own = crate::overheads::own(spec, i);
-    let job = edf::response_time(&tasks, at, t.demand().saturating_add(own), l);
+    let job = edf::response_time(&tasks, at, t.demand().saturating_add(own), l, &block);
     // Spuri's demand argument: with Σ I/T ≤ 1 (the busy period exists) a
     // job of demand x ≤ I meets its deadline, so the bound is within the
-    // period. Release handlers of later deadlines break the argument:
-    // with overheads the bound may pass the period (then it is no
-    // guarantee, `bounded_response`, and the verdict fails).
+    // period. Release handlers of later deadlines break the argument, and
+    // so does blocking unless the demand test with it passes: then the
+    // bound may pass the period (it is no guarantee, `bounded_response`,
+    // and the verdict fails).
     assert!(
-        overheads || job <= periods[i],
+        overheads || b_max > 0 || job <= periods[i],
         "EDF response time {job} above the period {}",
         periods[i]
     );
-    let budget = edf::response_time(&tasks, at, t.budget().saturating_add(own), l);
+    let budget = edf::response_time(&tasks, at, t.budget().saturating_add(own), l, &block);
     (Some(budget), Some(job))
 }
 
@@ -507,6 +518,9 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
         SchedTest::Edf if !spec.overheads.on(cpu).is_zero() => {
             edf_overhead_test(spec, &ids, timings, u)
         }
+        SchedTest::Edf if !crate::blocking::srp_spec_steps(spec, cpu).is_empty() => {
+            srp_density_test(spec, &ids, timings, cpu)
+        }
         test => utilization_test(test, &us),
     };
     CpuVerdict {
@@ -517,6 +531,34 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
         bound,
         schedulable: ok,
     }
+}
+
+/// Baker's density condition for EDF with the stack resource policy
+/// (Baker 1991), on the tasks `ids` of `cpu`: for every task k in the
+/// order of relative deadlines, `Σ_{D_i ≤ D_k} C_i/D_i + b(D_k)/D_k ≤ 1`
+/// with b Baruah's blocking ([`crate::blocking::srp_at`]; for the last of
+/// equal deadlines it is Baker's B_k, the others' sums are smaller). It
+/// implies the demand test h(t) + b(t) ≤ t (docs/analysis.md). Returns
+/// (the largest left-hand side, its bound 1, it holds).
+fn srp_density_test(
+    spec: &Spec,
+    ids: &[usize],
+    timings: &[TaskTiming],
+    cpu: u32,
+) -> (f64, f64, bool) {
+    let steps = crate::blocking::srp_spec_steps(spec, cpu);
+    let mut worst: f64 = 0.0;
+    for &k in ids {
+        let dk = timings[k].deadline;
+        let sum: f64 = ids
+            .iter()
+            .filter(|&&i| timings[i].deadline <= dk)
+            .map(|&i| timings[i].budget as f64 / timings[i].deadline as f64)
+            .sum();
+        let b = crate::blocking::srp_at(&steps, dk) as f64 / dk as f64;
+        worst = worst.max(sum + b);
+    }
+    (worst, 1.0, worst <= 1.0 + UTIL_EPS)
 }
 
 /// EDF with overheads on one CPU: Σ U with what the overheads add must

@@ -468,6 +468,13 @@ fn schedulability_text(spec: &Spec, r: &Report) -> String {
         } else {
             "NOT schedulable"
         };
+        // Critical sections under EDF: the tests carry SRP's blocking.
+        let blocked = !spec.policy().fixed_priority()
+            && spec
+                .tasks
+                .iter()
+                .any(|t| t.cpu == c.cpu && !t.sections.is_empty());
+        let o_zero = spec.overheads.on(c.cpu).is_zero();
         let detail = match s.test {
             rtpipe_model::SchedTest::LiuLayland => format!(
                 "U = {:.4} {} n(2^(1/n)-1) = {:.4}",
@@ -491,14 +498,21 @@ fn schedulability_text(spec: &Spec, r: &Report) -> String {
                     "unbounded".into()
                 }
             ),
+            rtpipe_model::SchedTest::Edf if blocked && o_zero => format!(
+                "U = {:.4}, density with blocking max_k (sum_(D_i<=D_k) C_i/D_i + B_k/D_k) = {:.4} {} 1 (Baker)",
+                c.utilization,
+                c.value,
+                if c.schedulable { "<=" } else { ">" }
+            ),
             rtpipe_model::SchedTest::Edf => format!(
                 "U = {:.4} {} 1",
                 c.utilization,
                 if c.schedulable { "<=" } else { ">" }
             ),
             rtpipe_model::SchedTest::Qpa => format!(
-                "U = {:.4}, processor demand h(t) {} t (QPA)",
+                "U = {:.4}, processor demand h(t){} {} t (QPA)",
                 c.utilization,
+                if blocked { " + b(t)" } else { "" },
                 if c.schedulable { "<=" } else { "> some" }
             ),
         };

@@ -258,6 +258,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
+    if let Some(code) = refuse_unrunnable(&spec, a) {
+        return code;
+    }
     if a.measure_overheads {
         return measure::run(&spec, a);
     }
@@ -337,6 +340,25 @@ fn print_report(
         }
     }
     Ok(())
+}
+
+/// A spec the runtime cannot run as written (sections under EDF,
+/// `rtpipe_runtime::locks::unrunnable`): the error at its
+/// `resource_protocol` (else its first `[resources]` table), exit 2.
+fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
+    let (msg, help) = rtpipe_runtime::locks::unrunnable(spec)?;
+    let source = std::fs::read_to_string(&a.spec).unwrap_or_default();
+    let span = rtpipe_model::input::locate(&source, "system.resource_protocol").or_else(|| {
+        let r = spec.resources.first()?;
+        rtpipe_model::input::locate(&source, &format!("resources.{}.x", r.name))
+    });
+    let e = rtpipe_model::SpecError {
+        file: a.spec.display().to_string(),
+        source,
+        diagnostics: vec![Diagnostic::new(msg, span).help(help)],
+    };
+    eprint!("{e}");
+    Some(ExitCode::from(crate::EXIT_BAD_INPUT))
 }
 
 /// Everything that is checked before the run: the flight's setup when the

@@ -270,6 +270,37 @@ fn bad_critical_sections_exit_2_with_location() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
 }
 
+/// Shared resources under EDF (issue 22): only the stack resource policy,
+/// named; sections only in plain tasks
+/// and within exec, as under RM. `run` refuses the spec at its protocol
+/// (SCHED_DEADLINE cannot run SRP), `analyze` and `simulate` run it.
+#[test]
+fn edf_sections_need_srp_and_exit_2_otherwise() {
+    let cases = [
+        ("resource_protocol = \"srp\"", "resource_protocol = \"pcp\"", "bad.toml:22:21: error: resource protocol \"pcp\" does not apply to scheduler \"edf\""),
+        ("resource_protocol = \"srp\"", "resource_protocol = \"pip\"", "bad.toml:22:21: error: resource protocol \"pip\" does not apply to scheduler \"edf\""),
+        ("resource_protocol = \"srp\"", "", "bad.toml:24:12: error: shared resources under scheduler \"edf\" with the default resource protocol \"pcp\""),
+        ("server = \"none\"\ncritical_sections = [{ resource = \"bus\", length = 2 }]", "server = \"main\"\ncritical_sections = [{ resource = \"bus\", length = 2 }]", "bad.toml:49:21: error: task `c` has critical sections but server \"main\""),
+        ("length = 2 }", "length = 4 }", "bad.toml:49:51: error: critical section of `c` on `bus` (4ms) is longer than its exec (3ms)"),
+    ];
+    mutated_exit_2("cli-edf-srp", "edf-srp.toml", &cases);
+    let o = rtpipe(&["run", &example("edf-srp.toml"), "--duration", "10ms"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("edf-srp.toml:22:1: error: critical sections under scheduler = \"edf\""),
+        "{err}"
+    );
+    assert!(
+        err.contains("SCHED_DEADLINE") && err.contains("help:"),
+        "{err}"
+    );
+    for cmd in ["analyze", "simulate"] {
+        let o = rtpipe(&[cmd, &example("edf-srp.toml")]);
+        assert_eq!(o.status.code(), Some(0), "{cmd}");
+    }
+}
+
 /// sense (C 1, T 10) → act (C 2, T 20): sound reaction from the event
 /// T_sense + 20 + R_act = 33 ms, freshness from the event 13 + 10 = 23 ms.
 const EVENT_LIMITS: &str = "[system]\nname = \"small\"\ntime_unit = \"ms\"\n\

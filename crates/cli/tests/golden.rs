@@ -29,13 +29,14 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 16] = [
+const EXAMPLES: [&str; 17] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
     "cleanflight-event-limits",
     "cleanflight",
     "e2e-golden",
+    "edf-srp",
     "paper-table2-edf",
     "jitter-deadlines",
     "let",

@@ -155,9 +155,11 @@ pub enum ResourceProtocol {
     /// task on a resource whose ceiling is at or above its rank.
     #[default]
     Pcp,
-    /// The stack resource policy (Baker 1991) under fixed priorities: the
+    /// The stack resource policy (Baker 1991). Under fixed priorities the
     /// same preemption ceilings, the same bound and the same schedule as
-    /// the immediate priority ceiling.
+    /// the immediate priority ceiling; under EDF a job starts only when its
+    /// deadline is the earliest of the ready jobs and its preemption level
+    /// ([`preemption_levels`]) is above the ceilings of the resources held.
     Srp,
     /// Priority inheritance (Sha, Rajkumar, Lehoczky 1990): a job holding
     /// a resource runs at the highest rank of the jobs it blocks; a job
@@ -284,8 +286,8 @@ const EDF: SchedPolicy = SchedPolicy {
     tests: &[SchedTest::Edf, SchedTest::Qpa],
     tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test) or \"qpa\" (the processor-demand test, for deadlines below periods)",
     linux: LinuxClass::Deadline,
-    resource_protocols: &[],
-    resources_help: "critical sections under EDF need the stack resource policy with Baker's test (1991), which rtpipe does not implement yet: use scheduler = \"rm\", or remove [resources] and the tasks' critical_sections",
+    resource_protocols: &[ResourceProtocol::Srp],
+    resources_help: "under scheduler = \"edf\" shared resources need the stack resource policy (Baker 1991): write resource_protocol = \"srp\" in [system]",
 };
 
 impl SchedPolicy {
@@ -360,6 +362,19 @@ pub fn ranks(spec: &Spec) -> Vec<Option<usize>> {
 /// ties by declaration order.
 pub fn deadline_monotonic(spec: &Spec) -> Vec<Option<usize>> {
     ranked_by(spec, |t| t.deadline().unwrap_or(Nanos::MAX))
+}
+
+/// The stack resource policy's preemption levels under EDF, per CPU, as
+/// ranks (1 = the highest level): shorter relative deadline (D, else T)
+/// first, ties by declaration order, the order in which EDF breaks ties of
+/// absolute deadlines; background tasks get none. A job of a higher level
+/// has a shorter relative deadline or, on a tie, wins every tie of
+/// absolute deadlines, which is Baker's condition (a job may preempt
+/// another only when its level is higher). The analysis
+/// (`analysis/src/blocking.rs`) and the simulator (`sim/src/locks.rs`)
+/// take them from here.
+pub fn preemption_levels(spec: &Spec) -> Vec<Option<usize>> {
+    deadline_monotonic(spec)
 }
 
 /// Rate-monotonic ranks per CPU: shorter period first, ties by declaration

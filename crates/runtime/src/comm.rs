@@ -1,4 +1,5 @@
-//! What no run can do, whatever the machine (a non-positive duration), and
+//! What no run can do, whatever the machine (a non-positive duration,
+//! sections under EDF: `crate::locks::unrunnable`), and
 //! what a run with the caller's own bodies cannot: critical sections, which
 //! the runtime holds itself around synthetic bodies only (`crate::locks`,
 //! [`crate::run_synthetic`]: it cannot place them inside foreign code), and
@@ -9,7 +10,10 @@
 use rtpipe_model::{Communication, Nanos, Spec};
 
 /// (what is wrong, how to fix it) when `spec` cannot run for `duration`.
-pub(crate) fn refusal(_spec: &Spec, duration: Nanos) -> Option<(&'static str, &'static str)> {
+pub(crate) fn refusal(spec: &Spec, duration: Nanos) -> Option<(&'static str, &'static str)> {
+    if let Some(r) = crate::locks::unrunnable(spec) {
+        return Some(r);
+    }
     (duration <= 0).then_some(("the duration must be positive", "e.g. --duration 2s"))
 }
 

@@ -27,6 +27,20 @@ use crate::sys;
 use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 use std::sync::Mutex;
 
+/// (what is wrong, how to fix it) when `spec` has critical sections under
+/// a policy whose resource protocol the runtime cannot run: under EDF the
+/// stack resource policy needs preemption levels and a system ceiling
+/// that hold a job back from starting, which SCHED_DEADLINE does not
+/// have (it picks by deadline alone, and a ceiling cannot be raised in
+/// it as SCHED_FIFO's priority is).
+pub fn unrunnable(spec: &Spec) -> Option<(&'static str, &'static str)> {
+    let sections = spec.tasks.iter().any(|t| !t.sections.is_empty());
+    (sections && !spec.policy().fixed_priority()).then_some((
+        "critical sections under scheduler = \"edf\" (resource_protocol = \"srp\"): SCHED_DEADLINE picks by deadline alone and has no preemption levels or system ceiling, so the stack resource policy cannot run on Linux threads as is",
+        "`rtpipe analyze` and `rtpipe simulate` run the stack resource policy under EDF; to run the sections on threads use scheduler = \"rm\" (PCP, SRP or PIP under SCHED_FIFO)",
+    ))
+}
+
 /// One critical section a job ran: which, and when it held its resource
 /// (ns from the epoch: from just after the lock to just before the unlock).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -113,8 +113,8 @@ pub enum SimError {
     /// A task's best-case demand is negative or above its worst case
     /// (validated specs never have one).
     BadDemand(String),
-    /// Critical sections under a scheduler with no resource protocol
-    /// (validated specs never have them).
+    /// Critical sections under a resource protocol the scheduler does not
+    /// implement (validated specs never have them).
     Resources(&'static str),
 }
 
@@ -145,7 +145,7 @@ impl fmt::Display for SimError {
             ),
             SimError::Resources(s) => write!(
                 f,
-                "critical sections under scheduler \"{s}\", which has no resource protocol: use scheduler = \"rm\""
+                "critical sections under scheduler \"{s}\" with a resource protocol it does not implement: under \"edf\" use resource_protocol = \"srp\""
             ),
         }
     }

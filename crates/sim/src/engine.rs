@@ -324,7 +324,12 @@ impl<H: Hooks> Sim<H> {
         let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
         cpu_ids.sort_unstable();
         cpu_ids.dedup();
-        if locks.any() && !spec.policy().fixed_priority() {
+        if locks.any()
+            && !spec
+                .policy()
+                .resource_protocols
+                .contains(&spec.resource_protocol)
+        {
             return Err(SimError::Resources(spec.scheduler.name()));
         }
         Ok(Sim {
@@ -530,9 +535,16 @@ impl<H: Hooks> Sim<H> {
     /// slack (a sporadic server out of budget drops to background priority):
     /// the least (class, key, task) among the CPU's contenders.
     pub(crate) fn pick(&self, cpu: usize) -> Option<(usize, bool)> {
-        self.contenders[cpu]
+        let first = self.contenders[cpu]
             .first()
-            .map(|&(class, _, i)| (i, class == 2))
+            .map(|&(class, _, i)| (i, class == 2));
+        match first {
+            // The stack resource policy may hold the first back (`locks.rs`).
+            Some((i, _)) if self.locks.srp() => {
+                self.srp_instead(cpu, i).map(|h| (h, false)).or(first)
+            }
+            _ => first,
+        }
     }
 
     /// Where task i stands at t, from scratch: its (class, priority key) when

@@ -19,9 +19,19 @@
 //!   no contender) and the holder's key is at most 2·rank − 1 of every
 //!   waiter; at the release every waiter contends again and the first to
 //!   run takes the resource.
+//!
+//! Under EDF, the stack resource policy (Baker 1991), keys unchanged (the
+//! absolute deadline): a job that has not started may start only when it
+//! is the first contender of its CPU and its preemption level
+//! (`rtpipe_model::policy::preemption_levels`) is above the system ceiling,
+//! the highest ceiling of the resources held on the CPU; when the first
+//! contender may not, the first contender that has started runs (the job
+//! on top of the stack, which holds the resource). A job then never finds
+//! its resource held, and the ceiling drops only when a section ends,
+//! where the CPU picks again.
 
 use crate::engine::Job;
-use rtpipe_model::policy::ranks;
+use rtpipe_model::policy::{preemption_levels, ranks};
 use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 
 pub(crate) struct Locks {
@@ -31,7 +41,7 @@ pub(crate) struct Locks {
     /// Per resource: 2·ceiling − 1 (the best key of a holder under PCP/SRP).
     ceiling: Vec<Nanos>,
     /// Per resource: the task whose front job holds it.
-    holder: Vec<Option<usize>>,
+    pub(crate) holder: Vec<Option<usize>>,
     /// Per resource: the tasks waiting for it (PIP only).
     waiters: Vec<Vec<usize>>,
     /// Per task: its sections as (start, end, resource) in progress.
@@ -46,6 +56,12 @@ pub(crate) struct Locks {
     rank: Vec<Nanos>,
     /// Some task has a section (asked at every instant: kept, not scanned).
     active: bool,
+    /// The stack resource policy under EDF.
+    srp: bool,
+    /// Per task: its preemption level as a rank, 1 the highest (EDF).
+    level: Vec<Nanos>,
+    /// Per resource: the best level rank of its users (EDF).
+    srp_ceiling: Vec<Nanos>,
 }
 
 impl Locks {
@@ -71,6 +87,20 @@ impl Locks {
         }
         let n = spec.tasks.len();
         let active = sections.iter().any(|s: &Vec<_>| !s.is_empty());
+        let srp =
+            !spec.policy().fixed_priority() && spec.resource_protocol == ResourceProtocol::Srp;
+        let level: Vec<Nanos> = preemption_levels(spec)
+            .iter()
+            .map(|r| r.map_or(Nanos::MAX, |r| r as Nanos))
+            .collect();
+        let mut srp_ceiling = vec![Nanos::MAX; spec.resources.len()];
+        for (i, t) in spec.tasks.iter().enumerate() {
+            for s in &t.sections {
+                if let Some(c) = srp_ceiling.get_mut(s.resource) {
+                    *c = (*c).min(level[i]);
+                }
+            }
+        }
         Locks {
             ceiling_protocol: spec.resource_protocol != ResourceProtocol::Pip,
             holder: vec![None; ceiling.len()],
@@ -81,7 +111,15 @@ impl Locks {
             waiting: vec![None; n],
             rank: rk,
             active,
+            srp,
+            level,
+            srp_ceiling,
         }
+    }
+
+    /// The stack resource policy runs (EDF with sections).
+    pub(crate) fn srp(&self) -> bool {
+        self.srp && self.active
     }
 
     /// Some task has a critical section.
@@ -128,6 +166,12 @@ impl Locks {
     /// Task i's front job, picked to run, is at its section `k` on `r`: it
     /// takes the resource (`None`), or waits for its holder (`Some(holder)`).
     pub(crate) fn acquire(&mut self, i: usize, (k, r): (usize, usize)) -> Option<usize> {
+        // Under the stack resource policy a job starts only above the
+        // ceiling of every held resource, its own included.
+        assert!(
+            !self.srp || self.holder[r].is_none(),
+            "SRP: task {i} finds resource {r} held"
+        );
         match self.holder[r] {
             None => {
                 self.holder[r] = Some(i);
@@ -157,6 +201,35 @@ impl Locks {
 }
 
 impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
+    /// Under the stack resource policy, when `first` (the first contender
+    /// of `cpu`) may not start: the first contender that has started,
+    /// which then runs instead. `None` when `first` may run.
+    pub(crate) fn srp_instead(&self, cpu: usize, first: usize) -> Option<usize> {
+        let started = |i: usize| {
+            self.tasks[i]
+                .queue
+                .front()
+                .is_some_and(|j| j.read.is_some())
+        };
+        // The system ceiling: the best ceiling of a resource held on cpu.
+        let ceiling = (0..self.locks.holder.len())
+            .filter(|&r| self.locks.holder[r].is_some_and(|h| self.tasks[h].cpu == cpu))
+            .map(|r| self.locks.srp_ceiling[r])
+            .min()?;
+        if started(first) || self.locks.level[first] < ceiling {
+            return None;
+        }
+        let top = self.contenders[cpu]
+            .iter()
+            .map(|&(_, _, i)| i)
+            .find(|&i| started(i));
+        assert!(
+            top.is_some(),
+            "SRP: a resource held on cpu {cpu} by no started job"
+        );
+        top
+    }
+
     /// The running jobs at a section they do not hold take its resource or
     /// wait for it; true when one waits (its CPU must pick again).
     pub(crate) fn lock_step(&mut self, t: Nanos) -> bool {
@@ -205,5 +278,9 @@ impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
             self.refresh(w, t);
         }
         self.refresh(i, t);
+        if self.locks.srp() {
+            // The system ceiling dropped: a blocked job may start.
+            self.mark(self.tasks[i].cpu);
+        }
     }
 }

@@ -11,8 +11,9 @@
 //!   it waits, which no protocol here bounds (`server = "none"` runs it);
 //! - one resource used on two CPUs (that needs a multiprocessor protocol,
 //!   MPCP or MSRP);
-//! - resources under a policy that implements no protocol (EDF:
-//!   [`crate::SchedPolicy::resource_protocols`]).
+//! - a protocol the policy does not implement
+//!   ([`crate::SchedPolicy::resource_protocols`]: under EDF only the stack
+//!   resource policy, `"srp"`, which a spec must name there).
 
 use super::{span, Builder};
 use crate::raw::{RawResource, RawSection, RawSystem, RawTask, S};
@@ -60,7 +61,11 @@ impl Builder {
                         protocol.name(),
                         s.name()
                     ),
-                    None => format!("shared resources under scheduler \"{}\"", s.name()),
+                    None => format!(
+                        "shared resources under scheduler \"{}\" with the default resource protocol \"{}\"",
+                        s.name(),
+                        protocol.name()
+                    ),
                 };
                 self.err(msg, at, s.policy().resources_help);
             }
