@@ -124,6 +124,42 @@ fn burn_between(spin: &Spin, length: Nanos) -> (Nanos, Nanos) {
     (enter, sys::now())
 }
 
+/// Where a job of a task with critical sections spends its demand, as the
+/// simulator places it: Δin first, then the sections back to back in the
+/// spec's order (cut at the demand), then the rest (the body's).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Plan {
+    /// Δin, before the first section.
+    pub(crate) lead: Nanos,
+    /// (length, resource) in order.
+    pub(crate) list: Vec<(Nanos, usize)>,
+    /// The demand after the sections.
+    pub(crate) rest: Nanos,
+}
+
+/// Task `i`'s plan; `None` when it has no sections.
+pub(crate) fn plan(spec: &Spec, i: usize) -> Option<Plan> {
+    let t = &spec.tasks[i];
+    if t.sections.is_empty() {
+        return None;
+    }
+    let demand = t.demand();
+    let lead = t.delta_in.min(demand);
+    let mut at = lead;
+    let mut list = Vec::with_capacity(t.sections.len());
+    for s in &t.sections {
+        let end = (at + s.length).min(demand);
+        list.push((end - at, s.resource));
+        at = end;
+    }
+    assert!(at <= demand, "sections placed past the demand");
+    Some(Plan {
+        lead,
+        list,
+        rest: demand - at,
+    })
+}
+
 /// One task's sections as its jobs run them.
 pub(crate) struct Sections {
     spin: Spin,
@@ -142,35 +178,19 @@ impl Sections {
     /// Task `i`'s sections for `jobs` jobs; `None` when it has none. The
     /// rest of its demand is the body's: [`Sections::rest`].
     pub(crate) fn of(spec: &Spec, i: usize, spin: Spin, jobs: usize) -> Option<Sections> {
-        let t = &spec.tasks[i];
-        if t.sections.is_empty() {
-            return None;
-        }
-        let demand = t.demand();
-        let mut at = t.delta_in;
-        let mut list = Vec::with_capacity(t.sections.len());
-        for s in &t.sections {
-            let end = (at + s.length).min(demand);
-            list.push(((end - at).max(0), s.resource));
-            at = end.max(at);
-        }
+        let p = plan(spec, i)?;
         Some(Sections {
             spin,
-            lead: t.delta_in.min(demand),
-            list,
+            lead: p.lead,
+            held: Vec::with_capacity(jobs * p.list.len()),
+            list: p.list,
             failed: 0,
-            held: Vec::with_capacity(jobs * t.sections.len()),
         })
     }
 
     /// What a job's body burns: after its sections, or all its demand.
     pub(crate) fn rest(spec: &Spec, i: usize) -> Nanos {
-        let t = &spec.tasks[i];
-        if t.sections.is_empty() {
-            return t.demand();
-        }
-        let used: Nanos = t.sections.iter().map(|s| s.length).sum();
-        (t.demand() - t.delta_in - used).max(0)
+        plan(spec, i).map_or(spec.tasks[i].demand(), |p| p.rest)
     }
 
     /// Job `job`'s Δin and sections, at the thread's own priority `own`.

@@ -2,11 +2,14 @@
 //! rt-app, doc/tutorial.txt), for users who measure with rt-app: one thread
 //! per task with its scheduling class and parameters, a `run` event of the
 //! task's demand and a `timer` event of its period (both in µs), plus the
-//! `--load` hogs as SCHED_OTHER threads that always run. rt-app has no
-//! registers: the data flow between tasks is not part of the file.
+//! `--load` hogs as SCHED_OTHER threads that always run. Critical sections
+//! lock and unlock one mutex per resource around their share of the run
+//! (priority inheritance on under PIP; rt-app has no ceiling protocol).
+//! rt-app has no registers: the data flow between tasks is not part of the
+//! file.
 
 use crate::exec::{fifo_priorities, Policy, RunConfig};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 use serde_json::{json, Map, Value};
 
 /// The rt-app file and notes on what it rounds.
@@ -59,15 +62,80 @@ fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<Strin
             o.insert("cpus".into(), json!([t.cpu]));
         }
     }
-    // Events run in the order listed: the job's demand, then the wait for
-    // the next release (a timer keeps the period whatever the preemptions).
-    let demand = us_up(t.demand(), &format!("task {} demand", t.name), notes);
-    o.insert("run".into(), json!(demand));
+    // Events run in the order listed: the job's demand (its critical
+    // sections held as the runtime holds them), then the wait for the next
+    // release (a timer keeps the period whatever the preemptions).
+    events(spec, i, &mut o, notes);
     o.insert(
         "timer".into(),
         json!({"ref": format!("unique_{}", t.name), "period": period_us}),
     );
     Value::Object(o)
+}
+
+/// The name of resource `r`'s mutex in the workload.
+fn mutex(spec: &Spec, r: usize) -> String {
+    format!("rtpipe_{}", spec.resources[r].name)
+}
+
+/// Task `i`'s demand as `run` events, its critical sections between
+/// `lock` and `unlock` of their mutexes (placed as [`crate::locks::plan`]
+/// places them). rt-app tells events apart by their names' prefixes, so
+/// repeated ones get a number.
+fn events(spec: &Spec, i: usize, o: &mut Map<String, Value>, notes: &mut Vec<String>) {
+    let t = &spec.tasks[i];
+    let Some(plan) = crate::locks::plan(spec, i) else {
+        let demand = us_up(t.demand(), &format!("task {} demand", t.name), notes);
+        o.insert("run".into(), json!(demand));
+        return;
+    };
+    let mut count = std::collections::BTreeMap::<&str, usize>::new();
+    let mut push = |o: &mut Map<String, Value>, kind: &'static str, v: Value| {
+        let n = count.entry(kind).or_default();
+        let key = if *n == 0 {
+            kind.to_string()
+        } else {
+            format!("{kind}{n}")
+        };
+        *n += 1;
+        o.insert(key, v);
+    };
+    let mut run = |o: &mut Map<String, Value>, ns: Nanos, what: &str, notes: &mut Vec<String>| {
+        if ns > 0 {
+            let us = us_up(ns, &format!("task {} {what}", t.name), notes);
+            push(o, "run", json!(us));
+        }
+    };
+    run(o, plan.lead, "input time", notes);
+    for (k, &(length, r)) in plan.list.iter().enumerate() {
+        let m = mutex(spec, r);
+        o.insert(
+            format!("lock{}", if k == 0 { String::new() } else { k.to_string() }),
+            json!(m),
+        );
+        run(o, length, &format!("section {k}"), notes);
+        o.insert(
+            format!(
+                "unlock{}",
+                if k == 0 { String::new() } else { k.to_string() }
+            ),
+            json!(m),
+        );
+    }
+    run(o, plan.rest, "rest of the demand", notes);
+}
+
+/// What rt-app cannot do of the spec's resource protocol.
+fn protocol_note(spec: &Spec) -> Option<String> {
+    if spec.tasks.iter().all(|t| t.sections.is_empty()) {
+        return None;
+    }
+    (spec.resource_protocol != ResourceProtocol::Pip).then(|| {
+        format!(
+            "rt-app has no priority-ceiling mutex: under {} the sections lock plain mutexes (pi_enabled = false), so a job may wait longer than the analysis' blocking; with resource_protocol = \"pip\" the export turns on the kernel's priority inheritance",
+            spec.resource_protocol.name()
+        )
+    })
 }
 
 /// The rt-app workload equivalent to running `spec` under `cfg`.
@@ -86,6 +154,7 @@ pub fn rt_app(spec: &Spec, cfg: &RunConfig) -> RtApp {
             json!({"instance": 1, "loop": -1, "policy": "SCHED_OTHER", "run": 1_000_000}),
         );
     }
+    notes.extend(protocol_note(spec));
     let seconds = (cfg.duration.max(1) as u64).div_ceil(1_000_000_000);
     if seconds as i64 * 1_000_000_000 != cfg.duration {
         notes.push(format!(
@@ -98,7 +167,7 @@ pub fn rt_app(spec: &Spec, cfg: &RunConfig) -> RtApp {
             "duration": seconds,
             "calibration": "CPU0",
             "default_policy": "SCHED_OTHER",
-            "pi_enabled": false,
+            "pi_enabled": spec.resource_protocol == ResourceProtocol::Pip,
             "lock_pages": true,
             "logdir": "./",
             "log_basename": format!("rtpipe-{}", spec.name),
@@ -189,5 +258,58 @@ output = { channel = "m", size = 0 }
         );
         assert!(dst.get("priority").is_none());
         assert_eq!(r.json["tasks"].as_object().map(|o| o.len()), Some(2));
+    }
+
+    #[test]
+    fn sections_lock_their_resources_mutex_around_their_share_of_the_run() {
+        let text = include_str!("../../../examples/resources.toml");
+        let pcp = Spec::parse("resources.toml", text).unwrap_or_else(|e| panic!("{e}"));
+        let r = rt_app(&pcp, &cfg(Policy::Fifo, 0));
+        let h = &r.json["tasks"]["h"];
+        let events: Vec<(String, Value)> = h
+            .as_object()
+            .map_or(vec![], |o| {
+                o.iter().map(|(k, v)| (k.clone(), v.clone())).collect()
+            })
+            .into_iter()
+            .filter(|(k, _)| {
+                ["run", "lock", "unlock", "timer"]
+                    .iter()
+                    .any(|e| k.starts_with(e))
+            })
+            .collect();
+        let want = [
+            ("lock", json!("rtpipe_bus")),
+            ("run", json!(250)),
+            ("unlock", json!("rtpipe_bus")),
+            ("lock1", json!("rtpipe_log")),
+            ("run1", json!(250)),
+            ("unlock1", json!("rtpipe_log")),
+            ("run2", json!(500)),
+        ];
+        let got: Vec<(&str, &Value)> = events
+            .iter()
+            .map(|(k, v)| (k.as_str(), v))
+            .take(7)
+            .collect();
+        let want: Vec<(&str, &Value)> = want.iter().map(|(k, v)| (*k, v)).collect();
+        assert_eq!(got, want);
+        assert_eq!(events[7].0, "timer");
+        // l: its one section of 1.5 ms, then the rest of its 3 ms.
+        assert_eq!(r.json["tasks"]["l"]["run"], 1500);
+        assert_eq!(r.json["tasks"]["l"]["run1"], 1500);
+        assert_eq!(r.json["global"]["pi_enabled"], false);
+        assert!(
+            r.notes
+                .iter()
+                .any(|n| n.contains("no priority-ceiling mutex")),
+            "{:?}",
+            r.notes
+        );
+        let pip = Spec::parse("r.toml", &text.replace("\"pcp\"", "\"pip\""))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = rt_app(&pip, &cfg(Policy::Fifo, 0));
+        assert_eq!(r.json["global"]["pi_enabled"], true);
+        assert!(r.notes.iter().all(|n| n.starts_with("duration")), "{:?}", r.notes);
     }
 }
