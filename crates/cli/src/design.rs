@@ -236,7 +236,10 @@ fn options(a: &DesignArgs) -> Options {
 /// Reports why no design could be attempted; the exit status says whose
 /// fault it is (bad input, or the solver and rtpipe itself).
 fn design_error(spec: &Path, e: &DesignError) -> Answer {
-    let text = format!("{}: {}", spec.display(), e.diagnostic);
+    let text = match located(spec, e) {
+        Some(located) => located.to_string(),
+        None => format!("{}: {}", spec.display(), e.diagnostic),
+    };
     Answer {
         report: Rendered::Nothing,
         notes: vec![text.trim_end().to_string()],
@@ -245,6 +248,21 @@ fn design_error(spec: &Path, e: &DesignError) -> Answer {
             ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
         },
     }
+}
+
+/// The error at its key in the spec's text (file:line:column), when it
+/// names one and the text still writes it there.
+fn located(spec: &Path, e: &DesignError) -> Option<rtpipe_model::SpecError> {
+    let key = e.key.as_deref()?;
+    let source = rtpipe_model::input::read_text(spec, &rtpipe_model::input::Kind::SPEC).ok()?;
+    let span = rtpipe_model::input::locate(&source, key)?;
+    let mut d = e.diagnostic.clone();
+    d.span = Some(span);
+    Some(rtpipe_model::SpecError {
+        file: spec.display().to_string(),
+        source,
+        diagnostics: vec![d],
+    })
 }
 
 /// `--write`: the designed spec, whole or not at all.
