@@ -255,7 +255,19 @@ fn design_error(spec: &Path, e: &DesignError) -> Answer {
 fn located(spec: &Path, e: &DesignError) -> Option<rtpipe_model::SpecError> {
     let key = e.key.as_deref()?;
     let source = rtpipe_model::input::read_text(spec, &rtpipe_model::input::Kind::SPEC).ok()?;
-    let span = rtpipe_model::input::locate(&source, key)?;
+    // A key written as a table of its own (`[system.overheads]`) is placed
+    // at its header; `locate` would give its parent's.
+    let header = format!("[{key}]");
+    let mut at = 0;
+    let table = source.split_inclusive('\n').find_map(|line| {
+        let start = at;
+        at += line.len();
+        (line.trim() == header).then(|| {
+            let col = line.len() - line.trim_start().len();
+            start + col..start + col + header.len()
+        })
+    });
+    let span = table.or_else(|| rtpipe_model::input::locate(&source, key))?;
     let mut d = e.diagnostic.clone();
     d.span = Some(span);
     Some(rtpipe_model::SpecError {

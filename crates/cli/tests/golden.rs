@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 16] = [
+const EXAMPLES: [&str; 17] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -44,6 +44,7 @@ const EXAMPLES: [&str; 16] = [
     "paper-table3-loaded",
     "paper-table3",
     "resources",
+    "resources-design",
     "table2-design-rta",
     "table2-design",
 ];
@@ -244,6 +245,11 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-derived",
         &["design", "@cleanflight-derived-design"],
+    ),
+    case("design-resources", &["design", "@resources-design"]),
+    case(
+        "design-resources-milp",
+        &["design", "@resources-design", "--method", "milp"],
     ),
     case(
         "design-cleanflight-event-limits",
