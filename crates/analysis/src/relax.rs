@@ -10,8 +10,11 @@
 //! possible orders is taken. Response times come from the same recurrence
 //! ([`response_time`]) with only the tasks that are above whatever the
 //! periods, at their longest periods: fewer and rarer interferers can only
-//! shorten the fixed point. At a box of one point every figure equals the
-//! analysis' (a test checks it), and shrinking a box never lowers a figure.
+//! shorten the fixed point. Blocking counts only the sections that can block
+//! at every point of the box, overheads their per-job and per-release
+//! charges at the longest periods (docs/design.md, "Critical sections and
+//! overheads"). At a box of one point every figure equals the analysis' (a
+//! test checks it), and shrinking a box never lowers a figure.
 //! docs/design.md gives the argument.
 
 use crate::latency::{
