@@ -362,10 +362,19 @@ fn edf_lower_bounds(
         let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
         return (b, j, w);
     }
+    // With overheads each of those jobs brings its two switches, the own
+    // job its one, and every release at 0 on the CPU its kernel work
+    // (`edf::response_time` at a = 0 counts each at least once).
+    let switches = crate::overheads::per_job(spec, i);
+    let kernel: Nanos = (0..spec.tasks.len())
+        .filter(|&k| spec.tasks[k].cpu == t.cpu)
+        .map(|k| crate::overheads::per_release(spec, k))
+        .sum();
+    let own = |x: Nanos| x.saturating_add(crate::overheads::own(spec, i)).max(1) + kernel;
     let before: Nanos = mates
         .iter()
         .filter(|&&j| j != i && hi[j] <= lo[i])
-        .map(|&j| interference(&spec.tasks[j]))
+        .map(|&j| interference(&spec.tasks[j]).saturating_add(switches))
         .sum();
     // W counts only tasks whose deadline is before i's at every point (a
     // job of equal deadline released after the start never runs first).
@@ -376,8 +385,8 @@ fn edf_lower_bounds(
         .map(|&j| interference(&spec.tasks[j]))
         .sum();
     (
-        Some(t.budget().max(1) + before),
-        Some(t.demand().max(1) + before),
+        Some(own(t.budget()) + before),
+        Some(own(t.demand()) + before),
         Some(t.demand().max(1) + sooner),
     )
 }
