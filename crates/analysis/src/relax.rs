@@ -149,19 +149,40 @@ impl<'a> Order<'a> {
     /// every point, on resources with a user at or above i at every point.
     /// Any order the box allows admits at least those, so B_i is at least
     /// this; at a box of one point it is B_i.
+    ///
+    /// Under PCP and SRP (B a maximum) a section of length ℓ, on such a
+    /// resource, of a task j whose order against i the box leaves open
+    /// counts too: at each point j is either below i (ℓ is in the maximum)
+    /// or above it, where it interferes with at least its demand, at least
+    /// ℓ, on top of B; the response-time bounds count j as an interferer
+    /// only where it is above i at every point, so adding ℓ to B stays below
+    /// either case.
     fn least_blocking(&self, i: usize) -> Nanos {
         if self.users.is_empty() || !self.ranked(i) {
             return 0;
         }
-        crate::blocking::blocking_by(
+        let able = |r: usize| {
+            self.users[r]
+                .iter()
+                .any(|&u| u == i || self.surely_above(u, i))
+        };
+        let sure = crate::blocking::blocking_by(
             self.spec,
             |j| self.ranked(j) && self.surely_above(i, j),
-            |r| {
-                self.users[r]
-                    .iter()
-                    .any(|&u| u == i || self.surely_above(u, i))
-            },
-        )
+            able,
+        );
+        if self.spec.resource_protocol == rtpipe_model::ResourceProtocol::Pip {
+            return sure;
+        }
+        let open = |j: usize| {
+            j != i
+                && self.ranked(j)
+                && self.spec.tasks[j].cpu == self.spec.tasks[i].cpu
+                && !self.surely_above(i, j)
+                && !self.surely_interferes(j, i)
+        };
+        let either = crate::blocking::blocking_by(self.spec, open, able);
+        sure.max(either)
     }
 
     fn is_imposed(&self, a: usize, b: usize) -> bool {

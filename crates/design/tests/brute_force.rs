@@ -496,6 +496,9 @@ fn run(
             }
         };
         *tally.entry(o.status.name()).or_default() += 1;
+        if let Shape::Contended = shape {
+            *tally.entry("boxes or masters").or_default() += o.iterations;
+        }
         if verbose {
             eprintln!(
                 "{} seed {seed}: {} tasks {} chains, grid {}, {} obj {:?} in {secs:.2} s",
