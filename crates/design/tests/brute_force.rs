@@ -368,19 +368,24 @@ fn contended_instance(seed: u64, mode: Mode) -> Option<Spec> {
 /// `design` refuses critical sections and overheads with the MILP, and in
 /// paper mode where the box search does not apply.
 fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
-    let contended = spec.tasks.iter().any(|t| !t.sections.is_empty()) || !spec.overheads.is_zero();
     let boxes_apply = mode == Mode::Sound || rtpipe_analysis::relax::paper_monotone(spec);
-    contended && (method == Method::Milp || !boxes_apply)
+    contended(spec) && (method == Method::Milp || !boxes_apply)
+}
+
+/// The spec has critical sections or overheads.
+fn contended(spec: &Spec) -> bool {
+    spec.tasks.iter().any(|t| !t.sections.is_empty()) || !spec.overheads.is_zero()
 }
 
 /// How many optimal designs with sections and overheads each run simulates.
-const SIMULATED: usize = 12;
+const SIMULATED: usize = 30;
 
 /// Simulates a designed spec (a few phasings and demand models, then a
 /// short search from the closest run; `common::probe`) and checks every
 /// job response time and chain latency against its bound
-/// (`common::check_run`). Returns the violations.
-fn simulate_design(d: &Spec, seed: u64) -> Vec<String> {
+/// (`common::check_run`). Returns the violations, the bounds checked and
+/// the largest observed / bound of a job response time.
+fn simulate_design(d: &Spec, seed: u64) -> (Vec<String>, u64, f64) {
     let rep = analyze(d);
     let how = common::Probe {
         runs: common::plain_runs(),
@@ -390,13 +395,17 @@ fn simulate_design(d: &Spec, seed: u64) -> Vec<String> {
     };
     let mut ratios = vec![0.0; d.tasks.len()];
     let mut failures = Vec::new();
+    let mut checks = 0;
     common::probe(d, &rep, seed, &how, &mut |cfg, res| {
-        common::check_run(d, &rep, cfg, res, &mut ratios, &mut failures).1
+        let (n, best) = common::check_run(d, &rep, cfg, res, &mut ratios, &mut failures);
+        checks += n;
+        best
     });
-    failures
+    let failures = failures
         .into_iter()
         .map(|f| format!("seed {seed}: the simulated design exceeds a bound: {f}"))
-        .collect()
+        .collect();
+    (failures, checks, ratios.iter().copied().fold(0.0, f64::max))
 }
 
 /// The period domains of the instances.
@@ -435,7 +444,7 @@ fn run(
     let mut tally: BTreeMap<&'static str, usize> = BTreeMap::new();
     let mut failures = Vec::new();
     let mut slowest = (0.0f64, 0u64);
-    let mut simulated = 0;
+    let (mut simulated, mut checks, mut closest) = (0, 0, 0.0f64);
     let start = Instant::now();
     for seed in first_seed..first_seed + n as u64 {
         let spec = match shape {
@@ -515,14 +524,22 @@ fn run(
             failures.push(format!("seed {seed}: {e} ({path})"));
         }
         if let (Shape::Contended, Some(d)) = (shape, o.spec.as_ref()) {
-            if simulated < SIMULATED && o.status == Status::Optimal && mode == Mode::Sound {
+            let sound = o.status == Status::Optimal && mode == Mode::Sound;
+            if simulated < SIMULATED && sound && contended(d) {
                 simulated += 1;
-                failures.extend(simulate_design(d, seed));
+                let (f, n, ratio) = simulate_design(d, seed);
+                failures.extend(f);
+                checks += n;
+                closest = closest.max(ratio);
             }
         }
     }
-    if let Shape::Contended = shape {
-        eprintln!("simulated {simulated} designs");
+    if simulated > 0 {
+        eprintln!(
+            "simulated {simulated} designs: {checks} bounds checked, worst response {:.1} % of its bound",
+            100.0 * closest
+        );
+        assert!(checks > 100 * simulated as u64, "{checks} checks");
     }
     let unknown = tally.get("unknown").copied().unwrap_or(0);
     eprintln!(
