@@ -55,7 +55,7 @@ pub struct DesignArgs {
     pub overwrite_spec: bool,
     /// The exact search: `boxes` (branch and bound over period boxes,
     /// pruned by the sound analysis; sound mode, and paper mode where
-    /// Eq. 12 does not fall as a period grows), `milp` (the mixed-integer model; every case), or `auto`
+    /// Eq. 12 does not fall as a period grows), `milp` (the mixed-integer model; every case but critical sections and scheduling overheads), or `auto`
     /// (boxes where they apply, else milp).
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
