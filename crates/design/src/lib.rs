@@ -74,8 +74,9 @@ pub use rtpipe_analysis::Mode;
 /// LET communication are refused: the box search and the MILP branch on
 /// rate-monotonic orders of free periods, encode jitter-free response
 /// times and have no cut for a failed processor-demand test. (Critical
-/// sections and overheads: the box search only, [`contention`].) Deadlines under fixed priorities are
-/// honoured (every answer passes R ≤ D, re-checked by `analyze`).
+/// sections and overheads: the box search only, [`contention`].)
+/// Deadlines under fixed priorities are honoured (every answer passes
+/// R ≤ D, re-checked by `analyze`).
 fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
     if let Some(t) = spec.tasks.iter().find(|t| t.jitter > 0) {
         return Err(DesignError::input(format!(
@@ -232,7 +233,8 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
         )
     };
     match (opts.method, contention(spec)) {
-        (Method::Auto | Method::Boxes, Some(_)) if !fits => Err(paper_refusal()
+        (Method::Auto | Method::Boxes, Some((_, key))) if !fits => Err(paper_refusal()
+            .at(key)
             .help("the MILP does not model critical sections or overheads: design in sound mode (leave --mode out)")),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
             "{what}: the MILP (--method milp) has no blocking or overhead term; the box search models them"
