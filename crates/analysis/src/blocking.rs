@@ -85,30 +85,41 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
     };
     let ceil = ceilings(spec, prio);
     let cpu = spec.tasks[i].cpu;
+    blocking_by(
+        spec,
+        |j| spec.tasks[j].cpu == cpu && prio[j].is_some_and(|p| p > own),
+        |r| ceil.get(r).copied().flatten().is_some_and(|c| c <= own),
+    )
+}
+
+/// The rule behind [`blocking`], given which tasks are ranked below the
+/// blocked task on its CPU (`below`) and which resources have a ceiling at
+/// or above its rank (`able`). Both the PCP/SRP maximum and each of PIP's
+/// two sums only grow when `below` or `able` admit more, so predicates
+/// that admit a subset of the true sets give a lower bound (what
+/// `relax` takes over a box of periods).
+pub fn blocking_by(
+    spec: &Spec,
+    below: impl Fn(usize) -> bool,
+    able: impl Fn(usize) -> bool,
+) -> Nanos {
     // (task, resource, length) of every section able to block i.
-    let mut able: Vec<(usize, usize, Nanos)> = Vec::new();
+    let mut sections: Vec<(usize, usize, Nanos)> = Vec::new();
     for (j, t) in spec.tasks.iter().enumerate() {
-        if t.cpu != cpu || prio[j].is_none_or(|p| p <= own) {
+        if !below(j) {
             continue;
         }
-        for s in &t.sections {
-            if ceil
-                .get(s.resource)
-                .copied()
-                .flatten()
-                .is_some_and(|c| c <= own)
-            {
-                able.push((j, s.resource, s.length));
-            }
+        for s in t.sections.iter().filter(|s| able(s.resource)) {
+            sections.push((j, s.resource, s.length));
         }
     }
     match spec.resource_protocol {
         ResourceProtocol::Pcp | ResourceProtocol::Srp => {
-            able.iter().map(|&(_, _, l)| l).max().unwrap_or(0)
+            sections.iter().map(|&(_, _, l)| l).max().unwrap_or(0)
         }
         ResourceProtocol::Pip => {
-            let per_task = sum_of_max(&able, |&(j, _, _)| j);
-            let per_resource = sum_of_max(&able, |&(_, r, _)| r);
+            let per_task = sum_of_max(&sections, |&(j, _, _)| j);
+            let per_resource = sum_of_max(&sections, |&(_, r, _)| r);
             per_task.min(per_resource)
         }
     }

@@ -70,14 +70,22 @@ pub fn per_release(spec: &Spec, k: usize) -> Nanos {
 /// of `sched::busy_window`'s interferers), without the tasks whose `K_k`
 /// is 0.
 pub fn kernel_load(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos, Nanos)> {
+    let periods: Vec<Nanos> = spec
+        .tasks
+        .iter()
+        .map(|t| t.fixed_period().unwrap_or(MAX_TIME))
+        .collect();
+    kernel_load_at(spec, cpu, &periods)
+}
+
+/// [`kernel_load`] at the given periods (one per task): `relax` takes
+/// each task's longest, the fewest releases in any window.
+pub fn kernel_load_at(spec: &Spec, cpu: u32, periods: &[Nanos]) -> Vec<(Nanos, Nanos, Nanos)> {
     spec.tasks
         .iter()
         .enumerate()
         .filter(|(_, t)| t.cpu == cpu)
-        .map(|(k, t)| {
-            let p = t.fixed_period().unwrap_or(MAX_TIME);
-            (per_release(spec, k), p, t.jitter)
-        })
+        .map(|(k, t)| (per_release(spec, k), periods[k], t.jitter))
         .filter(|&(c, _, _)| c > 0)
         .collect()
 }

@@ -10,8 +10,11 @@
 //! possible orders is taken. Response times come from the same recurrence
 //! ([`response_time`]) with only the tasks that are above whatever the
 //! periods, at their longest periods: fewer and rarer interferers can only
-//! shorten the fixed point. At a box of one point every figure equals the
-//! analysis' (a test checks it), and shrinking a box never lowers a figure.
+//! shorten the fixed point. Blocking counts only the sections that can block
+//! at every point of the box, overheads their per-job and per-release
+//! charges at the longest periods (docs/design.md, "Critical sections and
+//! overheads"). At a box of one point every figure equals the analysis' (a
+//! test checks it), and shrinking a box never lowers a figure.
 //! docs/design.md gives the argument.
 
 use crate::latency::{
@@ -98,6 +101,9 @@ struct Order<'a> {
     hi: &'a [Nanos],
     /// Rank orders imposed besides the box: `imposed[a·n + b]` = a above b.
     imposed: Vec<bool>,
+    /// Per resource, the ranked tasks that use it (its ceiling is the
+    /// highest rank among them, `blocking::ceilings`).
+    users: Vec<Vec<usize>>,
 }
 
 impl<'a> Order<'a> {
@@ -111,12 +117,72 @@ impl<'a> Order<'a> {
                 matrix[a * n + b] = true;
             }
         }
+        let mut users = vec![Vec::new(); spec.resources.len()];
+        for (j, t) in spec.tasks.iter().enumerate() {
+            for s in &t.sections {
+                let ranked = spec.policy().fixed_priority() && t.server != Server::Background;
+                if ranked && !users[s.resource].contains(&j) {
+                    users[s.resource].push(j);
+                }
+            }
+        }
         Order {
             spec,
             lo,
             hi,
             imposed: matrix,
+            users,
         }
+    }
+
+    /// The ranked users of the resources task `b` locks: while b holds one
+    /// it runs at its ceiling, the highest of their ranks.
+    fn lock_mates(&self, b: usize) -> impl Iterator<Item = usize> + '_ {
+        self.spec.tasks[b]
+            .sections
+            .iter()
+            .flat_map(|s| self.users[s.resource].iter().copied())
+    }
+
+    /// A lower bound on task i's blocking B_i over the box
+    /// (`blocking::blocking_by`): only the sections of tasks below i at
+    /// every point, on resources with a user at or above i at every point.
+    /// Any order the box allows admits at least those, so B_i is at least
+    /// this; at a box of one point it is B_i.
+    ///
+    /// Under PCP and SRP (B a maximum) a section of length ℓ, on such a
+    /// resource, of a task j whose order against i the box leaves open
+    /// counts too: at each point j is either below i (ℓ is in the maximum)
+    /// or above it, where it interferes with at least its demand, at least
+    /// ℓ, on top of B; the response-time bounds count j as an interferer
+    /// only where it is above i at every point, so adding ℓ to B stays below
+    /// either case.
+    fn least_blocking(&self, i: usize) -> Nanos {
+        if self.users.is_empty() || !self.ranked(i) {
+            return 0;
+        }
+        let able = |r: usize| {
+            self.users[r]
+                .iter()
+                .any(|&u| u == i || self.surely_above(u, i))
+        };
+        let sure = crate::blocking::blocking_by(
+            self.spec,
+            |j| self.ranked(j) && self.surely_above(i, j),
+            able,
+        );
+        if self.spec.resource_protocol == rtpipe_model::ResourceProtocol::Pip {
+            return sure;
+        }
+        let open = |j: usize| {
+            j != i
+                && self.ranked(j)
+                && self.spec.tasks[j].cpu == self.spec.tasks[i].cpu
+                && !self.surely_above(i, j)
+                && !self.surely_interferes(j, i)
+        };
+        let either = crate::blocking::blocking_by(self.spec, open, able);
+        sure.max(either)
     }
 
     fn is_imposed(&self, a: usize, b: usize) -> bool {
@@ -160,11 +226,14 @@ impl<'a> Order<'a> {
 
     /// `a` above `b` at every instant (`latency::fp_order`: a's own rank
     /// above b's own and inherited ones) at some point of the box.
+    /// Critical sections raise b to their ceilings (`TaskTiming::top_priority`),
+    /// so a must also be above every user of b's resources.
     fn maybe_preempts(&self, a: usize, b: usize) -> bool {
         self.maybe_above(a, b)
             && self.spec.tasks[b]
                 .serves
                 .is_none_or(|m| m != a && self.maybe_above(a, m))
+            && self.lock_mates(b).all(|u| u != a && self.maybe_above(a, u))
     }
 
     /// The link orders (`fp_order`) possible over the box; `[None]` when the
@@ -193,6 +262,9 @@ impl<'a> Order<'a> {
             && self.spec.tasks[b]
                 .serves
                 .is_none_or(|m| m != a && self.surely_above(a, m))
+            && self
+                .lock_mates(b)
+                .all(|u| u != a && self.surely_above(a, u))
     }
 }
 
@@ -211,14 +283,7 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
             continue;
         }
         let (rb, rj, rw) = match spec.policy().response {
-            ResponseAnalysis::Rta => {
-                let hp: Vec<(Nanos, Nanos, Nanos)> = (0..n)
-                    .filter(|&j| order.surely_interferes(j, i))
-                    .map(|j| (interference(&spec.tasks[j]), hi[j], spec.tasks[j].jitter))
-                    .collect();
-                let rj = response_time_jitter(t.demand(), t.jitter, &hp);
-                (response_time_jitter(t.budget(), t.jitter, &hp), rj, rj)
-            }
+            ResponseAnalysis::Rta => rta_lower_bounds(spec, order, i),
             // Servers get their budget by the end of each period, or by
             // the deadline when one is given (`sched`).
             ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => {
@@ -235,11 +300,57 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
         job_response[i] = rj.filter(|&r| r <= hi[i]);
         read_to_publish[i] = rw.filter(|_| job_response[i].is_some());
     }
+    // Responses the overheads' accounting leaves without a bound at every
+    // point of the box (`overheads::unaccounted`).
+    if !spec.overheads.is_zero() {
+        let bounded: Vec<bool> = job_response.iter().map(Option::is_some).collect();
+        let fixed = spec.policy().fixed_priority();
+        let above = |j: usize, i: usize| {
+            spec.tasks[j].cpu == spec.tasks[i].cpu && (!fixed || order.surely_interferes(j, i))
+        };
+        for i in crate::overheads::unaccounted(spec, &bounded, above) {
+            (job_response[i], read_to_publish[i], budget_response[i]) = (None, None, None);
+        }
+    }
     let times = Times {
         r: job_response,
         w: read_to_publish,
     };
     (times, budget_response)
+}
+
+/// Lower bounds on task i's (budget, job) response times and its
+/// read-to-publish bound (`W = R`) under RM over the box: the recurrence of
+/// `sched::response_times` with the interferers above i at every point, at
+/// their longest periods, each job with its switches (`2·cs`); the kernel
+/// work of every release on the CPU at each task's longest period; and the
+/// own switch and the least blocking over the box ([`Order::least_blocking`])
+/// added to the own demand. Each term is at most the analysis' at every
+/// point, and the fixed point grows with each term.
+fn rta_lower_bounds(
+    spec: &Spec,
+    order: &Order,
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+    let (t, hi) = (&spec.tasks[i], order.hi);
+    let switches = crate::overheads::per_job(spec, i);
+    let mut hp: Vec<(Nanos, Nanos, Nanos)> = (0..spec.tasks.len())
+        .filter(|&j| order.surely_interferes(j, i))
+        .map(|j| {
+            let c = interference(&spec.tasks[j]).saturating_add(switches);
+            (c, hi[j], spec.tasks[j].jitter)
+        })
+        .collect();
+    hp.extend(crate::overheads::kernel_load_at(spec, t.cpu, hi));
+    let b = order
+        .least_blocking(i)
+        .saturating_add(crate::overheads::own(spec, i));
+    let r = |own: Nanos| {
+        own.checked_add(b)
+            .and_then(|own| response_time_jitter(own, t.jitter, &hp))
+    };
+    let rj = r(t.demand());
+    (r(t.budget()), rj, rj)
 }
 
 /// Per task, lower bounds on the job response time `R` and on the
@@ -272,10 +383,19 @@ fn edf_lower_bounds(
         let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
         return (b, j, w);
     }
+    // With overheads each of those jobs brings its two switches, the own
+    // job its one, and every release at 0 on the CPU its kernel work
+    // (`edf::response_time` at a = 0 counts each at least once).
+    let switches = crate::overheads::per_job(spec, i);
+    let kernel: Nanos = (0..spec.tasks.len())
+        .filter(|&k| spec.tasks[k].cpu == t.cpu)
+        .map(|k| crate::overheads::per_release(spec, k))
+        .sum();
+    let own = |x: Nanos| x.saturating_add(crate::overheads::own(spec, i)).max(1) + kernel;
     let before: Nanos = mates
         .iter()
         .filter(|&&j| j != i && hi[j] <= lo[i])
-        .map(|&j| interference(&spec.tasks[j]))
+        .map(|&j| interference(&spec.tasks[j]).saturating_add(switches))
         .sum();
     // W counts only tasks whose deadline is before i's at every point (a
     // job of equal deadline released after the start never runs first).
@@ -286,8 +406,8 @@ fn edf_lower_bounds(
         .map(|&j| interference(&spec.tasks[j]))
         .sum();
     (
-        Some(t.budget().max(1) + before),
-        Some(t.demand().max(1) + before),
+        Some(own(t.budget()) + before),
+        Some(own(t.demand()) + before),
         Some(t.demand().max(1) + sooner),
     )
 }
@@ -418,6 +538,20 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
             .all(|(i, _)| budget_r[i].is_some()),
         // QPA needs Σ U ≤ 1 first.
         SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
+        // With overheads (`sched::edf_overhead_test`): the utilisation with
+        // what the overheads add, least at the longest periods, and every
+        // budget within its deadline.
+        SchedTest::Edf if !spec.overheads.on(cpu).is_zero() => {
+            let mates: Vec<usize> = (0..spec.tasks.len())
+                .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+                .collect();
+            let Some(&first) = mates.first() else {
+                return true;
+            };
+            let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>()
+                + crate::sched::edf_overhead_load(spec, hi, first);
+            u <= 1.0 + 1e-12 && mates.iter().all(|&i| budget_r[i].is_some())
+        }
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
     }
 }

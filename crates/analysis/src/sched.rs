@@ -487,7 +487,7 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
 /// What the overheads add to the utilisation of task `i`'s CPU under EDF:
 /// `Σ (2·cs + K_k) / T_k` over its guaranteed tasks, `Σ K_k / T_k` over
 /// its background ones (0 without overheads).
-fn edf_overhead_load(spec: &Spec, periods: &[Nanos], i: usize) -> f64 {
+pub(crate) fn edf_overhead_load(spec: &Spec, periods: &[Nanos], i: usize) -> f64 {
     let cpu = spec.tasks[i].cpu;
     (0..spec.tasks.len())
         .filter(|&j| spec.tasks[j].cpu == cpu)

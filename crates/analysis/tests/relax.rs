@@ -5,7 +5,7 @@
 use rtpipe_analysis::relax::{paper_monotone, relax, Relaxed};
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric, Report};
-use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::gen::{add_contention, random_system, Contention, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
 
 const SYSTEMS: u64 = 1500;
@@ -36,6 +36,24 @@ fn with_test(mut spec: Spec, seed: u64) -> Spec {
         _ => SchedTest::Edf,
     };
     spec
+}
+
+/// System `seed` of the tests: for odd seeds with critical sections
+/// and scheduling overheads where `add_contention` draws them (written and
+/// parsed back; a spec validation refuses stays without them).
+fn system(seed: u64) -> Spec {
+    let spec = with_test(random_system(seed, &config(seed)), seed);
+    if seed.is_multiple_of(2) {
+        return spec;
+    }
+    let mut s = spec.clone();
+    let c = Contention {
+        sections: 0.6,
+        overheads: 0.6,
+        max_cost: 40_000,
+    };
+    add_contention(&mut s, &mut Rng::new(seed ^ 0xc0de), &c);
+    Spec::parse("c.toml", &rtpipe_model::to_toml(&s)).unwrap_or(spec)
 }
 
 fn periods(spec: &Spec) -> Vec<Nanos> {
@@ -228,8 +246,11 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
 #[test]
 fn a_point_box_is_the_analysis() {
     let mut bounded = 0;
+    let (mut blocked, mut charged) = (0, 0);
     for seed in 0..SYSTEMS {
-        let spec = with_test(random_system(seed, &config(seed)), seed);
+        let spec = system(seed);
+        blocked += usize::from(spec.tasks.iter().any(|t| !t.sections.is_empty()));
+        charged += usize::from(!spec.overheads.is_zero());
         let t = periods(&spec);
         let r = relax(&spec, &t, &t, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
@@ -247,6 +268,11 @@ fn a_point_box_is_the_analysis() {
     );
     // Most generated chains are bounded: the comparison is not vacuous.
     assert!(bounded > SYSTEMS as usize, "only {bounded} bounded chains");
+    // A fair share of the systems have sections and overheads.
+    assert!(
+        blocked > SYSTEMS as usize / 8 && charged > SYSTEMS as usize / 8,
+        "{blocked} systems with sections, {charged} with overheads"
+    );
 }
 
 #[test]
@@ -254,7 +280,7 @@ fn a_box_bounds_every_point_inside_from_below() {
     let mut checked = 0;
     let mut bounded = 0;
     for seed in 0..SYSTEMS {
-        let spec = with_test(random_system(seed, &config(seed)), seed);
+        let spec = system(seed);
         let t = periods(&spec);
         let mut rng = Rng::new(seed);
         // A box around the generated periods, up to halving and doubling.
@@ -337,7 +363,7 @@ fn a_box_bounds_every_point_inside_from_below() {
 #[test]
 fn imposed_orders_bound_the_points_that_have_them() {
     for seed in 0..SYSTEMS {
-        let spec = with_test(random_system(seed, &config(seed)), seed);
+        let spec = system(seed);
         if spec.scheduler != Scheduler::Rm {
             continue;
         }

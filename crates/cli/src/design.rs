@@ -55,7 +55,7 @@ pub struct DesignArgs {
     pub overwrite_spec: bool,
     /// The exact search: `boxes` (branch and bound over period boxes,
     /// pruned by the sound analysis; sound mode, and paper mode where
-    /// Eq. 12 does not fall as a period grows), `milp` (the mixed-integer model; every case), or `auto`
+    /// Eq. 12 does not fall as a period grows), `milp` (the mixed-integer model; every case but critical sections and scheduling overheads), or `auto`
     /// (boxes where they apply, else milp).
     #[arg(long, value_enum, default_value = "auto")]
     pub method: MethodArg,
@@ -236,7 +236,10 @@ fn options(a: &DesignArgs) -> Options {
 /// Reports why no design could be attempted; the exit status says whose
 /// fault it is (bad input, or the solver and rtpipe itself).
 fn design_error(spec: &Path, e: &DesignError) -> Answer {
-    let text = format!("{}: {}", spec.display(), e.diagnostic);
+    let text = match located(spec, e) {
+        Some(located) => located.to_string(),
+        None => format!("{}: {}", spec.display(), e.diagnostic),
+    };
     Answer {
         report: Rendered::Nothing,
         notes: vec![text.trim_end().to_string()],
@@ -245,6 +248,33 @@ fn design_error(spec: &Path, e: &DesignError) -> Answer {
             ErrorKind::Solver | ErrorKind::Internal => EXIT_INTERNAL,
         },
     }
+}
+
+/// The error at its key in the spec's text (file:line:column), when it
+/// names one and the text still writes it there.
+fn located(spec: &Path, e: &DesignError) -> Option<rtpipe_model::SpecError> {
+    let key = e.key.as_deref()?;
+    let source = rtpipe_model::input::read_text(spec, &rtpipe_model::input::Kind::SPEC).ok()?;
+    // A key written as a table of its own (`[system.overheads]`) is placed
+    // at its header; `locate` would give its parent's.
+    let header = format!("[{key}]");
+    let mut at = 0;
+    let table = source.split_inclusive('\n').find_map(|line| {
+        let start = at;
+        at += line.len();
+        (line.trim() == header).then(|| {
+            let col = line.len() - line.trim_start().len();
+            start + col..start + col + header.len()
+        })
+    });
+    let span = table.or_else(|| rtpipe_model::input::locate(&source, key))?;
+    let mut d = e.diagnostic.clone();
+    d.span = Some(span);
+    Some(rtpipe_model::SpecError {
+        file: spec.display().to_string(),
+        source,
+        diagnostics: vec![d],
+    })
 }
 
 /// `--write`: the designed spec, whole or not at all.

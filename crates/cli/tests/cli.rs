@@ -255,8 +255,9 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
 
 /// Shared resources (issue 22): a critical section longer than its task's
 /// exec, an undeclared resource and sections under EDF exit 2 with the
-/// place and a fix; `design` refuses specs with sections (exit 2) rather
-/// than ignore them (`run` runs them: tests/run.rs).
+/// place and a fix; `design`'s MILP refuses specs with sections (exit 2)
+/// at the first section rather than ignore them, the box search models
+/// them (`run` runs them: tests/run.rs).
 #[test]
 fn bad_critical_sections_exit_2_with_location() {
     let cases = [
@@ -265,9 +266,14 @@ fn bad_critical_sections_exit_2_with_location() {
         ("resource_protocol = \"pcp\"", "scheduler = \"edf\"", "bad.toml:18:12: error: shared resources under scheduler \"edf\""),
     ];
     mutated_exit_2("cli-resources", "resources.toml", &cases);
-    let o = rtpipe(&["design", &example("resources.toml")]);
+    let o = rtpipe(&["design", &example("resources.toml"), "--method", "milp"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("critical sections"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("resources.toml:30:1: error: critical sections (blocking)"),
+        "{err}"
+    );
+    assert_exit(&rtpipe(&["design", &example("resources.toml")]), 0);
 }
 
 /// Shared resources under EDF (issue 22): only the stack resource policy,

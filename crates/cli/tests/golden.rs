@@ -45,6 +45,7 @@ const EXAMPLES: [&str; 17] = [
     "paper-table3-loaded",
     "paper-table3",
     "resources",
+    "resources-design",
     "table2-design-rta",
     "table2-design",
 ];
@@ -245,6 +246,11 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-derived",
         &["design", "@cleanflight-derived-design"],
+    ),
+    case("design-resources", &["design", "@resources-design"]),
+    case(
+        "design-resources-milp",
+        &["design", "@resources-design", "--method", "milp"],
     ),
     case(
         "design-cleanflight-event-limits",

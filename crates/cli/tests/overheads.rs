@@ -23,12 +23,20 @@ fn a_bad_overhead_is_exit_2_with_its_place() {
     );
 }
 
+/// `design`'s box search charges overheads (the example's periods are
+/// fixed and verify); the MILP has no term for them and says so at the
+/// table that gives them.
 #[test]
-fn design_refuses_overheads() {
+fn design_charges_overheads_and_the_milp_refuses_them() {
     let o = rtpipe(&["design", &example("overheads.toml")]);
+    assert_exit(&o, 0);
+    let o = rtpipe(&["design", &example("overheads.toml"), "--method", "milp"]);
     assert_exit(&o, 2);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("does not model scheduling overheads"), "{err}");
+    assert!(
+        err.contains("overheads.toml:30:1: error: [system] overheads (scheduling overheads): the MILP (--method milp) has no blocking or overhead term"),
+        "{err}"
+    );
 }
 
 #[test]

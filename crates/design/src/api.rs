@@ -203,6 +203,10 @@ pub struct DesignError {
     pub kind: ErrorKind,
     /// What went wrong and what to change, when we can tell.
     pub diagnostic: Diagnostic,
+    /// The spec key it is about, as a dotted path
+    /// (`rtpipe_model::input::locate`'s form, e.g. `system.overheads`),
+    /// for a caller holding the spec's text to place it.
+    pub key: Option<String>,
 }
 
 impl DesignError {
@@ -210,6 +214,7 @@ impl DesignError {
         DesignError {
             kind,
             diagnostic: Diagnostic::new(message, None),
+            key: None,
         }
     }
 
@@ -226,6 +231,12 @@ impl DesignError {
     /// A bug: rtpipe's model and analysis disagree.
     pub fn internal(message: impl Into<String>) -> Self {
         DesignError::of(ErrorKind::Internal, message)
+    }
+
+    /// The same error, about the spec key `key` (a dotted path).
+    pub(crate) fn at(mut self, key: impl Into<String>) -> Self {
+        self.key = Some(key.into());
+        self
     }
 
     pub(crate) fn help(mut self, help: impl Into<String>) -> Self {

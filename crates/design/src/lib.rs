@@ -73,11 +73,13 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Release jitter, priorities other than rate monotonic, the QPA test,
-/// scheduling overheads and LET communication are refused: the box search and the MILP branch on rate-monotonic orders
-/// of free periods, encode jitter-free response times and have no cut for
-/// a failed processor-demand test. Deadlines under fixed priorities are
-/// honoured (every answer passes R ≤ D, re-checked by `analyze`).
+/// Release jitter, priorities other than rate monotonic, the QPA test and
+/// LET communication are refused: the box search and the MILP branch on
+/// rate-monotonic orders of free periods, encode jitter-free response
+/// times and have no cut for a failed processor-demand test. (Critical
+/// sections and overheads: the box search only, [`contention`].)
+/// Deadlines under fixed priorities are honoured (every answer passes
+/// R ≤ D, re-checked by `analyze`).
 fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
     if let Some(t) = spec.tasks.iter().find(|t| t.jitter > 0) {
         return Err(DesignError::input(format!(
@@ -94,18 +96,6 @@ fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
         // Its encodings are implicit communication's link terms.
         return Err(DesignError::input(
             "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
-        ));
-    }
-    if spec.tasks.iter().any(|t| !t.sections.is_empty()) {
-        // Its RTA encodings have no blocking term.
-        return Err(DesignError::input(
-            "critical sections (critical_sections, [resources]): `design` does not model blocking yet; design with the sections removed, then add them back and check with `analyze`",
-        ));
-    }
-    if !spec.overheads.is_zero() {
-        // Its RTA encodings charge no release handlers or switches.
-        return Err(DesignError::input(
-            "[system] overheads: `design` does not model scheduling overheads yet; design without them, then add them back and check with `analyze`",
         ));
     }
     if spec.priorities != rtpipe_model::Priorities::RateMonotonic {
@@ -240,15 +230,45 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
         Mode::Sound => true,
         Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
     };
-    match opts.method {
-        Method::Auto => Ok(fits),
-        Method::Milp => Ok(false),
-        Method::Boxes if fits => Ok(true),
-        Method::Boxes => Err(DesignError::input(
+    let paper_refusal = || {
+        DesignError::input(
             "in paper mode the box search needs no chain task whose demand exceeds three budgets (Eq. 12 then falls as its period grows)",
         )
-        .help("use --method milp (or leave --method out)")),
+    };
+    match (opts.method, contention(spec)) {
+        (Method::Auto | Method::Boxes, Some((_, key))) if !fits => Err(paper_refusal()
+            .at(key)
+            .help("the MILP does not model critical sections or overheads: design in sound mode (leave --mode out)")),
+        (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
+            "{what}: the MILP (--method milp) has no blocking or overhead term; the box search models them"
+        ))
+        .at(key)
+        .help("leave --method out (or use --method boxes)")),
+        (Method::Auto, _) => Ok(fits),
+        (Method::Milp, None) => Ok(false),
+        (Method::Boxes, _) if fits => Ok(true),
+        (Method::Boxes, _) => {
+            Err(paper_refusal().help("use --method milp (or leave --method out)"))
+        }
     }
+}
+
+/// What only the box search models, and the spec key that gives it:
+/// critical sections (their blocking, `analysis::blocking`, enters its
+/// relaxation as the least over the orders a box leaves open) and
+/// scheduling overheads (`analysis::overheads`, charged per job and per
+/// release). docs/design.md, "Critical sections and overheads".
+fn contention(spec: &Spec) -> Option<(&'static str, String)> {
+    if let Some(t) = spec.tasks.iter().find(|t| !t.sections.is_empty()) {
+        let key = format!("tasks.{}.critical_sections", t.name);
+        return Some(("critical sections (blocking)", key));
+    }
+    (!spec.overheads.is_zero()).then(|| {
+        (
+            "[system] overheads (scheduling overheads)",
+            "system.overheads".to_string(),
+        )
+    })
 }
 
 #[cfg(test)]

@@ -15,12 +15,21 @@
 //! `RTPIPE_DESIGN_CASES=N` sets the number of instances per mode (default
 //! 300 in each mode); `RTPIPE_DESIGN_VERBOSE=1` prints
 //! every instance. Run with `--nocapture` to see the tallies.
+//!
+//! `contention_agrees_with_brute_force` adds critical sections and
+//! scheduling overheads (issue 22) and simulates some of the designs
+//! (`sim/tests/common`'s probe and check).
+
+#[path = "../../sim/tests/common/mod.rs"]
+mod common;
 
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, bounds_per_chain, Report};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
-use rtpipe_model::gen::{design_problem, ChainBounds, DesignGenConfig, GenConfig, Rng};
+use rtpipe_model::gen::{
+    add_contention, design_problem, ChainBounds, Contention, DesignGenConfig, GenConfig, Rng,
+};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -334,6 +343,71 @@ fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
     spec
 }
 
+/// Instance `seed` (choices, or ranges for every other seed) with critical
+/// sections and overheads (`gen::add_contention`, costs up to 200 µs: a
+/// tenth of the shortest generated executions), written and parsed back;
+/// `None` when neither was drawn or validation refuses the result.
+fn contended_instance(seed: u64, mode: Mode) -> Option<Spec> {
+    let mut spec = if seed.is_multiple_of(2) {
+        instance(seed, mode)
+    } else {
+        instance_with_ranges(seed, mode)
+    };
+    let c = Contention {
+        sections: 0.75,
+        overheads: 0.6,
+        max_cost: 200_000,
+    };
+    let (sections, overheads) = add_contention(&mut spec, &mut Rng::new(seed ^ 0xb10c), &c);
+    if !(sections || overheads) {
+        return None;
+    }
+    Spec::parse("contended.toml", &rtpipe_model::to_toml(&spec)).ok()
+}
+
+/// `design` refuses critical sections and overheads with the MILP, and in
+/// paper mode where the box search does not apply.
+fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
+    let boxes_apply = mode == Mode::Sound || rtpipe_analysis::relax::paper_monotone(spec);
+    contended(spec) && (method == Method::Milp || !boxes_apply)
+}
+
+/// The spec has critical sections or overheads.
+fn contended(spec: &Spec) -> bool {
+    spec.tasks.iter().any(|t| !t.sections.is_empty()) || !spec.overheads.is_zero()
+}
+
+/// How many optimal designs with sections and overheads each run simulates.
+const SIMULATED: usize = 30;
+
+/// Simulates a designed spec (a few phasings and demand models, then a
+/// short search from the closest run; `common::probe`) and checks every
+/// job response time and chain latency against its bound
+/// (`common::check_run`). Returns the violations, the bounds checked and
+/// the largest observed / bound of a job response time.
+fn simulate_design(d: &Spec, seed: u64) -> (Vec<String>, u64, f64) {
+    let rep = analyze(d);
+    let how = common::Probe {
+        runs: common::plain_runs(),
+        stride: 7,
+        salt: 0xd5,
+        horizon: common::horizon(d),
+    };
+    let mut ratios = vec![0.0; d.tasks.len()];
+    let mut failures = Vec::new();
+    let mut checks = 0;
+    common::probe(d, &rep, seed, &how, &mut |cfg, res| {
+        let (n, best) = common::check_run(d, &rep, cfg, res, &mut ratios, &mut failures);
+        checks += n;
+        best
+    });
+    let failures = failures
+        .into_iter()
+        .map(|f| format!("seed {seed}: the simulated design exceeds a bound: {f}"))
+        .collect();
+    (failures, checks, ratios.iter().copied().fold(0.0, f64::max))
+}
+
 /// The period domains of the instances.
 #[derive(Clone, Copy)]
 enum Shape {
@@ -341,6 +415,8 @@ enum Shape {
     Ranges,
     /// Ranges under `harmonic = true`.
     Harmonic,
+    /// Choices or ranges with critical sections and overheads.
+    Contended,
 }
 
 impl Shape {
@@ -349,6 +425,7 @@ impl Shape {
             Shape::Choices => "",
             Shape::Ranges => ", with ranges",
             Shape::Harmonic => ", harmonic ranges",
+            Shape::Contended => ", sections and overheads",
         }
     }
 }
@@ -367,6 +444,7 @@ fn run(
     let mut tally: BTreeMap<&'static str, usize> = BTreeMap::new();
     let mut failures = Vec::new();
     let mut slowest = (0.0f64, 0u64);
+    let (mut simulated, mut checks, mut closest) = (0, 0, 0.0f64);
     let start = Instant::now();
     for seed in first_seed..first_seed + n as u64 {
         let spec = match shape {
@@ -381,12 +459,25 @@ fn run(
                     continue;
                 }
             },
+            Shape::Contended => match contended_instance(seed, mode) {
+                Some(s) => s,
+                None => {
+                    *tally.entry("skipped (nothing added)").or_default() += 1;
+                    continue;
+                }
+            },
         };
         let spec = if event {
             with_event_limits(spec, seed)
         } else {
             spec
         };
+        if spec.tasks.iter().any(|t| !t.sections.is_empty()) {
+            *tally.entry("with sections").or_default() += 1;
+        }
+        if !spec.overheads.is_zero() {
+            *tally.entry("with overheads").or_default() += 1;
+        }
         let opts = Options {
             mode,
             method,
@@ -402,6 +493,10 @@ fn run(
         }
         let o = match outcome {
             Ok(o) => o,
+            Err(_) if refused(&spec, mode, method) => {
+                *tally.entry("refused (MILP or paper)").or_default() += 1;
+                continue;
+            }
             Err(e) => {
                 *tally.entry("error").or_default() += 1;
                 let path = save_bug(&spec, seed, mode);
@@ -410,6 +505,9 @@ fn run(
             }
         };
         *tally.entry(o.status.name()).or_default() += 1;
+        if let Shape::Contended = shape {
+            *tally.entry("boxes or masters").or_default() += o.iterations;
+        }
         if verbose {
             eprintln!(
                 "{} seed {seed}: {} tasks {} chains, grid {}, {} obj {:?} in {secs:.2} s",
@@ -425,6 +523,23 @@ fn run(
             let path = save_bug(&spec, seed, mode);
             failures.push(format!("seed {seed}: {e} ({path})"));
         }
+        if let (Shape::Contended, Some(d)) = (shape, o.spec.as_ref()) {
+            let sound = o.status == Status::Optimal && mode == Mode::Sound;
+            if simulated < SIMULATED && sound && contended(d) {
+                simulated += 1;
+                let (f, n, ratio) = simulate_design(d, seed);
+                failures.extend(f);
+                checks += n;
+                closest = closest.max(ratio);
+            }
+        }
+    }
+    if simulated > 0 {
+        eprintln!(
+            "simulated {simulated} designs: {checks} bounds checked, worst response {:.1} % of its bound",
+            100.0 * closest
+        );
+        assert!(checks > 100 * simulated as u64, "{checks} checks");
     }
     let unknown = tally.get("unknown").copied().unwrap_or(0);
     eprintln!(
@@ -592,6 +707,41 @@ fn harmonic_ranges_agree_with_brute_force() {
         3.0,
         Shape::Harmonic,
         true,
+    );
+}
+
+/// Critical sections and scheduling overheads: the box search against
+/// brute force in sound mode (and in paper mode where it applies; the
+/// MILP is refused), some designs simulated.
+#[test]
+fn contention_agrees_with_brute_force() {
+    let n = cases(300);
+    run(
+        Mode::Sound,
+        Method::Auto,
+        800_000,
+        n,
+        3.0,
+        Shape::Contended,
+        false,
+    );
+    run(
+        Mode::Paper,
+        Method::Auto,
+        900_000,
+        n / 3,
+        3.0,
+        Shape::Contended,
+        false,
+    );
+    run(
+        Mode::Sound,
+        Method::Milp,
+        800_000,
+        n / 10,
+        3.0,
+        Shape::Contended,
+        false,
     );
 }
 

@@ -12,7 +12,9 @@ use crate::{
     TimeUnit,
 };
 
+mod contention;
 mod waters;
+pub use contention::{add_contention, Contention};
 pub use waters::{
     sample_acet_us, waters_exec, waters_share, waters_system, WatersConfig, WatersExec, WATERS_EXEC,
 };
