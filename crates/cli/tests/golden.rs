@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 17] = [
+const EXAMPLES: [&str; 18] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
