@@ -14,7 +14,7 @@ use crate::{
 
 mod contention;
 mod waters;
-pub use contention::{add_contention, Contention};
+pub use contention::{add_contention, random_sections, Contention};
 pub use waters::{
     sample_acet_us, waters_exec, waters_share, waters_system, WatersConfig, WatersExec, WATERS_EXEC,
 };

@@ -310,6 +310,10 @@ output = { channel = "m", size = 0 }
             .unwrap_or_else(|e| panic!("{e}"));
         let r = rt_app(&pip, &cfg(Policy::Fifo, 0));
         assert_eq!(r.json["global"]["pi_enabled"], true);
-        assert!(r.notes.iter().all(|n| n.starts_with("duration")), "{:?}", r.notes);
+        assert!(
+            r.notes.iter().all(|n| n.starts_with("duration")),
+            "{:?}",
+            r.notes
+        );
     }
 }

@@ -17,11 +17,10 @@ mod common;
 
 use common::{worst, MS};
 use rtpipe_analysis::{analyze, Report};
-use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::gen::{random_sections, random_system, GenConfig, Rng};
 use rtpipe_model::overheads::Costs;
 use rtpipe_model::{
-    Communication, CriticalSection, Nanos, Resource, ResourceProtocol, SchedTest, Scheduler,
-    Server, Spec,
+    Communication, Nanos, Resource, ResourceProtocol, SchedTest, Scheduler, Server, Spec,
 };
 use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
 use rtpipe_testkit::env_u64;
@@ -214,19 +213,10 @@ fn system(seed: u64) -> Spec {
         }
         t.server = Server::None;
         t.serves = None;
-        let mut left = t.exec;
-        for _ in 0..r.range(1, 2) {
-            if left < 2 {
-                break;
-            }
-            let length = r.range(1, (left * 3 / 4) as u64) as Nanos;
-            left -= length;
-            let k = t.cpu as usize * per_cpu + r.range(0, per_cpu as u64 - 1) as usize;
-            t.sections.push(CriticalSection {
-                resource: k,
-                length,
-            });
-        }
+        let count = r.range(1, 2);
+        t.sections = random_sections(&mut r, t.exec, count, (3, 4), |r| {
+            t.cpu as usize * per_cpu + r.range(0, per_cpu as u64 - 1) as usize
+        });
     }
     // A served task that is now plain serves no one; LET has no I/O VCPUs.
     let plain: Vec<bool> = spec

@@ -15,9 +15,9 @@ mod common;
 use common::worst;
 use rtpipe_analysis::{analyze, Report};
 use rtpipe_joblog::SimResult;
-use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::gen::{random_sections, random_system, GenConfig, Rng};
 use rtpipe_model::overheads::{Costs, CpuCosts};
-use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
+use rtpipe_model::{Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
 use rtpipe_sim::SimConfig;
 use rtpipe_testkit::env_u64;
 
@@ -177,16 +177,8 @@ fn add_sections(spec: &mut Spec, r: &mut Rng) {
     for t in spec.tasks.iter_mut() {
         (t.server, t.serves, t.budget_given) = (Server::None, None, None);
         let base = if t.cpu == lowest { 0 } else { 2 };
-        let mut left = t.exec;
-        for _ in 0..r.range(0, 2) {
-            if left < 2 {
-                break;
-            }
-            let length = r.range(1, (left / 2) as u64) as Nanos;
-            left -= length;
-            let resource = base + r.range(0, 1) as usize;
-            t.sections.push(CriticalSection { resource, length });
-        }
+        let count = r.range(0, 2);
+        t.sections = random_sections(r, t.exec, count, (1, 2), |r| base + r.range(0, 1) as usize);
     }
 }
 

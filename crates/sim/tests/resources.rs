@@ -14,8 +14,8 @@ mod common;
 use common::worst;
 use rtpipe_analysis::{analyze, Report};
 use rtpipe_joblog::SimResult;
-use rtpipe_model::gen::{random_system, GenConfig, Rng};
-use rtpipe_model::{CriticalSection, Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
+use rtpipe_model::gen::{random_sections, random_system, GenConfig, Rng};
+use rtpipe_model::{Nanos, Resource, ResourceProtocol, Scheduler, Server, Spec};
 use rtpipe_sim::SimConfig;
 use rtpipe_testkit::env_u64;
 
@@ -130,18 +130,10 @@ fn system(seed: u64) -> Spec {
         if synchronous {
             t.offset = Some(0);
         }
-        let mut left = t.exec;
-        for _ in 0..r.range(0, 2) {
-            if left < 2 {
-                break;
-            }
-            let length = r.range(1, (left / 2) as u64) as Nanos;
-            left -= length;
-            t.sections.push(CriticalSection {
-                resource: r.range(0, n_res as u64 - 1) as usize,
-                length,
-            });
-        }
+        let count = r.range(0, 2);
+        t.sections = random_sections(&mut r, t.exec, count, (1, 2), |r| {
+            r.range(0, n_res as u64 - 1) as usize
+        });
     }
     let text = rtpipe_model::to_toml(&spec);
     Spec::parse("res.toml", &text).unwrap_or_else(|e| {

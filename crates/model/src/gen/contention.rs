@@ -22,6 +22,34 @@ pub struct Contention {
     pub max_cost: Nanos,
 }
 
+/// Up to `count` critical sections for a task of `exec` ns, drawn in
+/// order: each at most `share` = (num, den) of what the earlier ones left
+/// (at least 1 ns), on the resource `pick` draws; none once less than 2 ns
+/// is left. The one generator of sections, for this module and the
+/// simulator's property tests.
+pub fn random_sections(
+    r: &mut Rng,
+    exec: Nanos,
+    count: u64,
+    share: (Nanos, Nanos),
+    mut pick: impl FnMut(&mut Rng) -> usize,
+) -> Vec<CriticalSection> {
+    let mut left = exec;
+    let mut out = Vec::new();
+    for _ in 0..count {
+        if left < 2 {
+            break;
+        }
+        let length = r.range(1, (left * share.0 / share.1) as u64) as Nanos;
+        left -= length;
+        out.push(CriticalSection {
+            resource: pick(r),
+            length,
+        });
+    }
+    out
+}
+
 /// Draws the three costs, each in [0, max] on a grid of max / 8.
 fn costs(r: &mut Rng, max: Nanos) -> Costs {
     let step = (max / 8).max(1);
@@ -92,15 +120,10 @@ fn add_sections(spec: &mut Spec, r: &mut Rng, overheads: bool) {
             continue;
         }
         let base = 2 * cpus.iter().position(|&c| c == t.cpu).unwrap_or(0);
-        let mut left = t.exec;
-        for _ in 0..r.range(0, 2) {
-            if left < 2 {
-                break;
-            }
-            let length = r.range(1, (left / 2) as u64) as Nanos;
-            left -= length;
-            let resource = base + r.range(0, 1) as usize;
-            t.sections.push(CriticalSection { resource, length });
+        let count = r.range(0, 2);
+        let sections = random_sections(r, t.exec, count, (1, 2), |r| base + r.range(0, 1) as usize);
+        if !sections.is_empty() {
+            t.sections.extend(sections);
             (t.server, t.budget_given) = (Server::None, None);
         }
     }
