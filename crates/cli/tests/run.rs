@@ -558,25 +558,24 @@ fn unprivileged_runs_are_refused_with_the_fix_or_run() {
     assert_exit(&o, 0);
 }
 
-/// The rt-app export runs under the real rt-app (CI installs Debian's
-/// package): every thread runs its jobs and logs them, one row per
-/// period of the exported timer.
-#[test]
-fn the_rt_app_export_runs_under_rt_app() {
-    if std::process::Command::new("rt-app")
+/// Whether rt-app is installed (CI installs Debian's package); says why
+/// a test is skipped otherwise.
+fn have_rt_app(test: &str) -> bool {
+    let there = std::process::Command::new("rt-app")
         .arg("--help")
         .output()
-        .is_err()
-    {
-        eprintln!("SKIPPED the_rt_app_export_runs_under_rt_app: rt-app is not installed (apt-get install rt-app)");
-        return;
+        .is_ok();
+    if !there {
+        eprintln!("SKIPPED {test}: rt-app is not installed (apt-get install rt-app)");
     }
-    let dir = scratch("rtapp");
-    let spec = dir.join("spec.toml");
-    if let Err(e) = std::fs::write(&spec, small("rm", 0, "")) {
-        panic!("cannot write the spec: {e}");
-    }
-    let json = dir.join("small.json");
+    there
+}
+
+/// Exports `spec` for one second, runs the file under rt-app in `dir`
+/// and checks that each of `tasks` (name, jobs in a second) logged about
+/// its jobs: one row per period of the exported timer.
+fn runs_under_rt_app(dir: &std::path::Path, spec: &std::path::Path, tasks: &[(&str, usize)]) {
+    let json = dir.join("workload.json");
     let (s, j) = (spec.to_string_lossy(), json.to_string_lossy());
     let args = [
         "run",
@@ -592,15 +591,14 @@ fn the_rt_app_export_runs_under_rt_app() {
     assert_exit(&rtpipe(&args), 0);
     let o = std::process::Command::new("rt-app")
         .arg(&json)
-        .current_dir(&dir)
+        .current_dir(dir)
         .output();
     let Ok(o) = o else {
         panic!("cannot run rt-app");
     };
     assert_exit(&o, 0);
-    // Periods 2, 5 and 10 ms over 1 s: about 500, 200 and 100 jobs each.
-    for (task, jobs) in [("sensor", 500), ("filter", 200), ("actuator", 100)] {
-        let Some(log) = std::fs::read_dir(&dir).ok().and_then(|d| {
+    for &(task, jobs) in tasks {
+        let Some(log) = std::fs::read_dir(dir).ok().and_then(|d| {
             d.filter_map(Result::ok)
                 .map(|e| e.path())
                 .find(|p| p.to_string_lossy().contains(&format!("-{task}-")))
@@ -621,6 +619,41 @@ fn the_rt_app_export_runs_under_rt_app() {
             log.display()
         );
     }
+}
+
+/// The rt-app export runs under the real rt-app: every thread runs its
+/// jobs and logs them.
+#[test]
+fn the_rt_app_export_runs_under_rt_app() {
+    if !have_rt_app("the_rt_app_export_runs_under_rt_app") {
+        return;
+    }
+    let dir = scratch("rtapp");
+    let spec = dir.join("spec.toml");
+    if let Err(e) = std::fs::write(&spec, small("rm", 0, "")) {
+        panic!("cannot write the spec: {e}");
+    }
+    // Periods 2, 5 and 10 ms over 1 s: about 500, 200 and 100 jobs each.
+    runs_under_rt_app(
+        &dir,
+        &spec,
+        &[("sensor", 500), ("filter", 200), ("actuator", 100)],
+    );
+}
+
+/// With critical sections the export locks and unlocks one mutex per
+/// resource around each section, and rt-app runs it (examples/
+/// resources.toml: periods 5, 10 and 20 ms).
+#[test]
+fn the_rt_app_export_with_critical_sections_runs_under_rt_app() {
+    if !have_rt_app("the_rt_app_export_with_critical_sections_runs_under_rt_app") {
+        return;
+    }
+    let dir = scratch("rtapp-sections");
+    let spec = std::path::PathBuf::from(example("resources.toml"));
+    runs_under_rt_app(&dir, &spec, &[("h", 200), ("m", 100), ("l", 50)]);
+    let text = std::fs::read_to_string(dir.join("workload.json")).unwrap_or_default();
+    assert!(text.contains("\"lock\": \"rtpipe_bus\""), "{text}");
 }
 
 /// A real interference: while `rtpipe run` runs the small pipeline on CPU
