@@ -250,7 +250,11 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     mutated_exit_2("cli-timing", "jitter-deadlines.toml", &cases);
     let o = rtpipe(&["design", &example("jitter-deadlines.toml")]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("release jitter"));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("deadline-monotonic"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// Shared resources (issue 22): a critical section longer than its task's

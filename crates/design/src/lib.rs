@@ -73,20 +73,14 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Release jitter, priorities other than rate monotonic, the QPA test and
-/// LET communication are refused: the box search and the MILP branch on
-/// rate-monotonic orders of free periods, encode jitter-free response
-/// times and have no cut for a failed processor-demand test. (Critical
-/// sections and overheads: the box search only, [`contention`].)
+/// Priorities other than rate monotonic, the QPA test and LET
+/// communication are refused: the box search and the MILP branch on
+/// rate-monotonic orders of free periods and have no cut for a failed
+/// processor-demand test. (Critical sections, overheads and release
+/// jitter: the box search only, [`contention`].)
 /// Deadlines under fixed priorities are honoured (every answer passes
 /// R ≤ D, re-checked by `analyze`).
 fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
-    if let Some(t) = spec.tasks.iter().find(|t| t.jitter > 0) {
-        return Err(DesignError::input(format!(
-            "task `{}` has release jitter, which `design` does not model yet; remove it to design, then add it back and check with `analyze`",
-            t.name
-        )));
-    }
     if spec.schedulability == rtpipe_model::SchedTest::Qpa {
         return Err(DesignError::input(
             "schedulability = \"qpa\" (EDF with deadlines below periods): `design` does not model the processor-demand test yet; design with the deadlines removed (schedulability = \"edf\"), then add them back and check with `analyze`",
@@ -238,9 +232,9 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
     match (opts.method, contention(spec)) {
         (Method::Auto | Method::Boxes, Some((_, key))) if !fits => Err(paper_refusal()
             .at(key)
-            .help("the MILP does not model critical sections or overheads: design in sound mode (leave --mode out)")),
+            .help("the MILP does not model critical sections, overheads or release jitter: design in sound mode (leave --mode out)")),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) has no blocking or overhead term; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
@@ -255,13 +249,18 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
 
 /// What only the box search models, and the spec key that gives it:
 /// critical sections (their blocking, `analysis::blocking`, enters its
-/// relaxation as the least over the orders a box leaves open) and
-/// scheduling overheads (`analysis::overheads`, charged per job and per
-/// release). docs/design.md, "Critical sections and overheads".
+/// relaxation as the least over the orders a box leaves open), release
+/// jitter (the relaxation's response times are R = J + w, Audsley et al.)
+/// and scheduling overheads (`analysis::overheads`, charged per job and
+/// per release). docs/design.md, "Critical sections and overheads".
 fn contention(spec: &Spec) -> Option<(&'static str, String)> {
     if let Some(t) = spec.tasks.iter().find(|t| !t.sections.is_empty()) {
         let key = format!("tasks.{}.critical_sections", t.name);
         return Some(("critical sections (blocking)", key));
+    }
+    if let Some(t) = spec.tasks.iter().find(|t| t.jitter > 0) {
+        let key = format!("tasks.{}.jitter", t.name);
+        return Some(("release jitter", key));
     }
     (!spec.overheads.is_zero()).then(|| {
         (

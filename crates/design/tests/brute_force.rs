@@ -345,8 +345,9 @@ fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
 
 /// Instance `seed` (choices, or ranges for every other seed) with critical
 /// sections and overheads (`gen::add_contention`, costs up to 200 µs: a
-/// tenth of the shortest generated executions), written and parsed back;
-/// `None` when neither was drawn or validation refuses the result.
+/// tenth of the shortest generated executions) and, on about half, release
+/// jitter, written and parsed back (without the jitter when validation
+/// refuses it); `None` when nothing was added or validation refuses it.
 fn contended_instance(seed: u64, mode: Mode) -> Option<Spec> {
     let mut spec = if seed.is_multiple_of(2) {
         instance(seed, mode)
@@ -358,11 +359,34 @@ fn contended_instance(seed: u64, mode: Mode) -> Option<Spec> {
         overheads: 0.6,
         max_cost: 200_000,
     };
-    let (sections, overheads) = add_contention(&mut spec, &mut Rng::new(seed ^ 0xb10c), &c);
+    let mut r = Rng::new(seed ^ 0xb10c);
+    let (sections, overheads) = add_contention(&mut spec, &mut r, &c);
+    let parsed = |s: &Spec| Spec::parse("contended.toml", &rtpipe_model::to_toml(s)).ok();
+    let mut jittered = spec.clone();
+    // Jitter where validation takes it (RTA, not beside some overheads).
+    if r.chance(0.5) && add_jitter(&mut jittered, &mut r) {
+        if let Some(s) = parsed(&jittered) {
+            return Some(s);
+        }
+    }
     if !(sections || overheads) {
         return None;
     }
-    Spec::parse("contended.toml", &rtpipe_model::to_toml(&spec)).ok()
+    parsed(&spec)
+}
+
+/// Release jitter on about half the tasks, each below a quarter of the
+/// task's shortest possible period; whether any was added.
+fn add_jitter(spec: &mut Spec, r: &mut Rng) -> bool {
+    let mut added = false;
+    for i in 0..spec.tasks.len() {
+        let least = domain(spec, i).into_iter().min().unwrap_or(0);
+        if least >= 8 && r.chance(0.5) {
+            spec.tasks[i].jitter = r.range(1, (least / 4) as u64) as Nanos;
+            added = true;
+        }
+    }
+    added
 }
 
 /// `design` refuses critical sections and overheads with the MILP, and in
@@ -372,9 +396,12 @@ fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
     contended(spec) && (method == Method::Milp || !boxes_apply)
 }
 
-/// The spec has critical sections or overheads.
+/// The spec has critical sections, overheads or release jitter.
 fn contended(spec: &Spec) -> bool {
-    spec.tasks.iter().any(|t| !t.sections.is_empty()) || !spec.overheads.is_zero()
+    spec.tasks
+        .iter()
+        .any(|t| !t.sections.is_empty() || t.jitter > 0)
+        || !spec.overheads.is_zero()
 }
 
 /// How many optimal designs with sections and overheads each run simulates.
@@ -477,6 +504,9 @@ fn run(
         }
         if !spec.overheads.is_zero() {
             *tally.entry("with overheads").or_default() += 1;
+        }
+        if spec.tasks.iter().any(|t| t.jitter > 0) {
+            *tally.entry("with jitter").or_default() += 1;
         }
         let opts = Options {
             mode,
