@@ -190,6 +190,8 @@ def test_the_gil_is_free_during_a_long_call():
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT")
 def test_ctrl_c_stops_a_long_call():
+    # Python's own Ctrl-C handler, whatever an earlier test (Ray) left.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     system = rtpipe.load(EXAMPLES / "paper-table3.toml")
     start = time.monotonic()
     timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
