@@ -34,7 +34,7 @@ fn design_charges_overheads_and_the_milp_refuses_them() {
     assert_exit(&o, 2);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("overheads.toml:30:1: error: [system] overheads (scheduling overheads): the MILP (--method milp) has no blocking or overhead term"),
+        err.contains("overheads.toml:30:1: error: [system] overheads (scheduling overheads): the MILP (--method milp) has no blocking, overhead or jitter term"),
         "{err}"
     );
 }
