@@ -296,8 +296,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             let u = node.bound;
             return self
                 .accept(f, node, (spec, report, u))
-                .map_break(|_| ())
-                .map_continue(|_| None);
+                .map_continue(|()| None);
         };
         f.splits += 1;
         if f.splits % SAY_EVERY == 1 {
@@ -320,17 +319,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     fn examine_all(&mut self, f: &mut Frontier, floor: f64, boxes: Vec<Node>) -> ControlFlow<()> {
         let incumbent = f.incumbent();
         let ex = &self.ex;
-        let fates: Vec<Fate> = match <[Node; 2]>::try_from(boxes) {
-            // Two halves (the common case): one join, no splitting overhead.
-            Ok([a, b]) => {
-                let (x, y) = rayon::join(|| ex.examine(a, incumbent), || ex.examine(b, incumbent));
-                vec![x, y]
-            }
-            Err(boxes) => boxes
-                .into_par_iter()
-                .map(|n| ex.examine(n, incumbent))
-                .collect(),
-        };
+        let fates: Vec<Fate> = boxes
+            .into_par_iter()
+            .map(|n| ex.examine(n, incumbent))
+            .collect();
         f.nodes += fates.len() as u64;
         self.effort.work += fates.len() as u64;
         for fate in fates {

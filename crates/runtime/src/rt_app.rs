@@ -78,10 +78,19 @@ fn mutex(spec: &Spec, r: usize) -> String {
     format!("rtpipe_{}", spec.resources[r].name)
 }
 
+/// The key of the `n`-th event of `kind` (from 0): rt-app tells events
+/// apart by their names' prefixes, so `run`, `run1`, `run2`, ...
+fn numbered(kind: &str, n: usize) -> String {
+    if n == 0 {
+        kind.to_string()
+    } else {
+        format!("{kind}{n}")
+    }
+}
+
 /// Task `i`'s demand as `run` events, its critical sections between
 /// `lock` and `unlock` of their mutexes (placed as [`crate::locks::plan`]
-/// places them). rt-app tells events apart by their names' prefixes, so
-/// repeated ones get a number.
+/// places them), each kind numbered by [`numbered`].
 fn events(spec: &Spec, i: usize, o: &mut Map<String, Value>, notes: &mut Vec<String>) {
     let t = &spec.tasks[i];
     let Some(plan) = crate::locks::plan(spec, i) else {
@@ -89,38 +98,20 @@ fn events(spec: &Spec, i: usize, o: &mut Map<String, Value>, notes: &mut Vec<Str
         o.insert("run".into(), json!(demand));
         return;
     };
-    let mut count = std::collections::BTreeMap::<&str, usize>::new();
-    let mut push = |o: &mut Map<String, Value>, kind: &'static str, v: Value| {
-        let n = count.entry(kind).or_default();
-        let key = if *n == 0 {
-            kind.to_string()
-        } else {
-            format!("{kind}{n}")
-        };
-        *n += 1;
-        o.insert(key, v);
-    };
+    let mut runs = 0;
     let mut run = |o: &mut Map<String, Value>, ns: Nanos, what: &str, notes: &mut Vec<String>| {
         if ns > 0 {
             let us = us_up(ns, &format!("task {} {what}", t.name), notes);
-            push(o, "run", json!(us));
+            o.insert(numbered("run", runs), json!(us));
+            runs += 1;
         }
     };
     run(o, plan.lead, "input time", notes);
     for (k, &(length, r)) in plan.list.iter().enumerate() {
         let m = mutex(spec, r);
-        o.insert(
-            format!("lock{}", if k == 0 { String::new() } else { k.to_string() }),
-            json!(m),
-        );
+        o.insert(numbered("lock", k), json!(m));
         run(o, length, &format!("section {k}"), notes);
-        o.insert(
-            format!(
-                "unlock{}",
-                if k == 0 { String::new() } else { k.to_string() }
-            ),
-            json!(m),
-        );
+        o.insert(numbered("unlock", k), json!(m));
     }
     run(o, plan.rest, "rest of the demand", notes);
 }

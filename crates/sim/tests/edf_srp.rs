@@ -15,7 +15,7 @@
 
 mod common;
 
-use common::{worst, MS};
+use common::{assert_within_responses, worst, MS};
 use rtpipe_analysis::{analyze, Report};
 use rtpipe_model::gen::{random_sections, random_system, GenConfig, Rng};
 use rtpipe_model::overheads::Costs;
@@ -109,15 +109,8 @@ fn the_example_with_overheads() {
     for pa in (0..4 * MS).step_by(250 * US as usize) {
         for pb in [0, 1, 2 * MS, 3 * MS] {
             for pc in [0, 1] {
-                let seen = worst(&spec, vec![pa + pc, pb + pc, 0]);
-                for (i, t) in rep.timing.iter().enumerate() {
-                    let r = t.job_response_time.unwrap_or(0);
-                    assert!(
-                        seen[i] <= r,
-                        "({pa}, {pb}, {pc}): task {i} {} > {r}",
-                        seen[i]
-                    );
-                }
+                let at = format!("({pa}, {pb}, {pc})");
+                assert_within_responses(&spec, &rep, vec![pa + pc, pb + pc, 0], &at);
             }
         }
     }
@@ -142,15 +135,8 @@ fn the_example_reaches_its_bounds() {
     for pa in (0..4 * MS).step_by(250 * US as usize) {
         for pb in (0..6 * MS).step_by(250 * US as usize) {
             for pc in [0, 1, 2 * MS] {
-                let seen = worst(&spec, vec![pa, pb, pc]);
-                for (i, t) in rep.timing.iter().enumerate() {
-                    let r = t.job_response_time.unwrap_or(0);
-                    assert!(
-                        seen[i] <= r,
-                        "({pa}, {pb}, {pc}): task {i} {} > {r}",
-                        seen[i]
-                    );
-                }
+                let at = format!("({pa}, {pb}, {pc})");
+                assert_within_responses(&spec, &rep, vec![pa, pb, pc], &at);
             }
         }
     }

@@ -11,7 +11,7 @@
 
 mod common;
 
-use common::worst;
+use common::{assert_within_responses, worst};
 use rtpipe_analysis::{analyze, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::gen::{random_sections, random_system, GenConfig, Rng};
@@ -85,15 +85,8 @@ fn the_example_reaches_its_bounds() {
             .into_iter()
             .enumerate()
             {
-                let seen = worst(&spec, offs);
-                for (i, t) in rep.timing.iter().enumerate() {
-                    let bound = t.job_response_time.unwrap_or(0);
-                    assert!(
-                        seen[i] <= bound,
-                        "{p}, pattern {k}, φ {phi}: task {i} {} > {bound}",
-                        seen[i]
-                    );
-                }
+                let at = format!("{p}, pattern {k}, φ {phi}");
+                assert_within_responses(&spec, &rep, offs, &at);
             }
         }
     }

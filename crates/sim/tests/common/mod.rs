@@ -26,6 +26,17 @@ pub fn worst(spec: &Spec, offsets: Vec<Nanos>) -> Vec<Nanos> {
         .collect()
 }
 
+/// Asserts that no task's worst response in the run at `offsets` ([`worst`])
+/// is above its job response time bound in `rep`; `at` names the run in the
+/// message.
+pub fn assert_within_responses(spec: &Spec, rep: &Report, offsets: Vec<Nanos>, at: &str) {
+    let seen = worst(spec, offsets);
+    for (i, t) in rep.timing.iter().enumerate() {
+        let r = t.job_response_time.unwrap_or(0);
+        assert!(seen[i] <= r, "{at}: task {i} {} > {r}", seen[i]);
+    }
+}
+
 /// A random system's run: twelve of its longest periods, at most 2 s.
 pub fn horizon(spec: &Spec) -> Nanos {
     let t_max = spec
