@@ -121,10 +121,46 @@ pub struct PlantParams {
 /// notices.
 pub const OMEGA_AT_REST: f64 = 1e-3;
 
-/// Default RK4 sub-step: 250 µs.
-pub const SUBSTEP_NS_DEFAULT: u64 = 250_000;
+/// The longest RK4 sub-step: 1 ms, the turbulence's own step
+/// ([`crate::wind`]), so a sub-step never straddles a change of the wind.
+pub const SUBSTEP_NS_MAX: u64 = 2_000_000;
+
+/// Sub-steps per time constant of the plant's fastest mode, at least.
+const STEPS_PER_TIME_CONSTANT: f64 = 10.0;
 
 impl PlantParams {
+    /// The plant of `body` and `rotors` with its RK4 sub-step: the longest
+    /// of 1 ms, 500 µs, 250 µs, … (each divides the ones above, so the
+    /// grids nest) that puts [`STEPS_PER_TIME_CONSTANT`] steps in the
+    /// fastest of the plant's time constants: the rotors' lag τ_m, the
+    /// body's rate damping I/c_ω and its velocity damping m/c_v. At h ≤
+    /// τ/20 the RK4 local error is below (h/τ)⁵/120 ≈ 3e-9 relative; the
+    /// rest of the plant (rates, attitude, position) integrates the rotors
+    /// without a faster mode of its own (docs/flight.md).
+    pub fn with_substep(body: BodyParams, rotors: RotorParams) -> PlantParams {
+        let mut fastest = rotors.time_constant_s;
+        if body.drag_angular > 0.0 {
+            let i_min = body
+                .inertia_kg_m2
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            fastest = fastest.min(i_min / body.drag_angular);
+        }
+        if body.drag_linear > 0.0 {
+            fastest = fastest.min(body.mass_kg / body.drag_linear);
+        }
+        let mut substep_ns = SUBSTEP_NS_MAX;
+        while substep_ns > 1 && substep_ns as f64 * 1e-9 * STEPS_PER_TIME_CONSTANT > fastest {
+            substep_ns /= 2;
+        }
+        PlantParams {
+            body,
+            rotors,
+            substep_ns,
+        }
+    }
+
     /// Check every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let b = &self.body;
@@ -183,6 +219,8 @@ impl PlantParams {
     }
 }
 
+mod dense;
+
 /// The integrated state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct State {
@@ -208,6 +246,32 @@ impl State {
             && v(self.rate)
             && [q.w, q.x, q.y, q.z].iter().all(|c| c.is_finite())
             && self.omega.iter().all(|o| o.is_finite())
+    }
+
+    /// `self + Σ w_i·k_i` in one pass (RK4's end and its dense output).
+    fn plus_combination(&self, k: &[State; 4], w: [f64; 4]) -> State {
+        let v = |f: fn(&State) -> Vec3| {
+            f(self) + f(&k[0]) * w[0] + f(&k[1]) * w[1] + f(&k[2]) * w[2] + f(&k[3]) * w[3]
+        };
+        let q = self
+            .q
+            .add_scaled(k[0].q, w[0])
+            .add_scaled(k[1].q, w[1])
+            .add_scaled(k[2].q, w[2])
+            .add_scaled(k[3].q, w[3]);
+        State {
+            pos: v(|s| s.pos),
+            vel: v(|s| s.vel),
+            q,
+            rate: v(|s| s.rate),
+            omega: std::array::from_fn(|i| {
+                self.omega[i]
+                    + k[0].omega[i] * w[0]
+                    + k[1].omega[i] * w[1]
+                    + k[2].omega[i] * w[2]
+                    + k[3].omega[i] * w[3]
+            }),
+        }
     }
 
     fn add_scaled(&self, d: &State, s: f64) -> State {
@@ -256,6 +320,7 @@ pub struct Truth {
 #[derive(Debug, Clone)]
 pub struct Plant {
     p: PlantParams,
+    k: Coefficients,
     s: State,
     t_ns: u64,
     target: [f64; 4],
@@ -268,6 +333,16 @@ pub struct Plant {
     rotor_angle: [f64; 4],
     on_ground: bool,
     crashed: bool,
+    /// The instant observed: `t_ns`, or an instant inside the sub-step
+    /// from `t_ns` to the next grid point whose state `view` interpolates
+    /// (`dense`); `view` and `view_angle` are the state and rotor angles
+    /// then (equal to `s` and `rotor_angle` at `t_ns`).
+    view_t: u64,
+    view: State,
+    view_angle: [f64; 4],
+    /// The sub-step from `t_ns` computed ahead for the views inside it;
+    /// dropped when an input changes.
+    ahead: Option<dense::Ahead>,
 }
 
 /// `a` wrapped into [0, 2π), bit for bit as `a.rem_euclid(TAU)`: for a
@@ -285,6 +360,34 @@ fn wrap_tau(a: f64) -> f64 {
     }
 }
 
+/// The parameters as the derivative uses them, worked out once: the
+/// reciprocals (a division costs several multiplications, and the
+/// derivative is most of a flight's plant) and each rotor's torque per
+/// ω², r × (0, 0, k_f) + (0, 0, s·k_m) = (y·k_f, −x·k_f, s·k_m).
+#[derive(Debug, Clone, Copy)]
+struct Coefficients {
+    torque_per_w2: [Vec3; 4],
+    inv_inertia: Vec3,
+    inv_mass: f64,
+    inv_tau_m: f64,
+}
+
+impl Coefficients {
+    fn of(p: &PlantParams) -> Coefficients {
+        let r = &p.rotors;
+        let inertia = p.body.inertia_kg_m2;
+        Coefficients {
+            torque_per_w2: std::array::from_fn(|i| {
+                let [x, y] = r.positions_m[i];
+                Vec3::new(y * r.k_f, -x * r.k_f, r.spin[i].reaction_sign() * r.k_m)
+            }),
+            inv_inertia: Vec3::new(1.0 / inertia[0], 1.0 / inertia[1], 1.0 / inertia[2]),
+            inv_mass: 1.0 / p.body.mass_kg,
+            inv_tau_m: 1.0 / r.time_constant_s,
+        }
+    }
+}
+
 /// Forces and torques at a state (shared by the derivative and the truth).
 struct Wrench {
     accel_world: Vec3,
@@ -295,15 +398,17 @@ impl Plant {
     /// A plant at rest on the ground at the origin, level, rotors stopped.
     pub fn new(params: PlantParams) -> Result<Self, ConfigError> {
         params.validate()?;
+        let rest = State {
+            pos: Vec3::ZERO,
+            vel: Vec3::ZERO,
+            q: Quat::IDENTITY,
+            rate: Vec3::ZERO,
+            omega: [0.0; 4],
+        };
         Ok(Self {
             p: params,
-            s: State {
-                pos: Vec3::ZERO,
-                vel: Vec3::ZERO,
-                q: Quat::IDENTITY,
-                rate: Vec3::ZERO,
-                omega: [0.0; 4],
-            },
+            k: Coefficients::of(&params),
+            s: rest,
             t_ns: 0,
             target: [0.0; 4],
             ext_torque: Vec3::ZERO,
@@ -311,6 +416,10 @@ impl Plant {
             rotor_angle: [0.0; 4],
             on_ground: true,
             crashed: false,
+            view_t: 0,
+            view: rest,
+            view_angle: [0.0; 4],
+            ahead: None,
         })
     }
 
@@ -321,12 +430,12 @@ impl Plant {
 
     /// Current time, ns.
     pub fn time_ns(&self) -> u64 {
-        self.t_ns
+        self.view_t
     }
 
     /// The raw state.
     pub fn state(&self) -> &State {
-        &self.s
+        &self.view
     }
 
     /// Resting on the ground ([`Truth::on_ground`]).
@@ -341,13 +450,16 @@ impl Plant {
 
     /// Overwrite the state (tests and scenarios); `on_ground` is re-derived.
     pub fn set_state(&mut self, s: State) {
+        self.settle();
         self.s = s;
         self.on_ground = s.pos.z <= 0.0 && s.vel.z <= 0.0;
+        self.sync_view();
     }
 
     /// Apply motor commands in [0, 1] (Betaflight order); held until the
     /// next call (zero-order hold, as an ESC holds the last pulse).
     pub fn set_motor_commands(&mut self, cmd: [f64; 4], armed: bool) {
+        self.settle();
         for (t, c) in self.target.iter_mut().zip(cmd.iter()) {
             *t = if armed { self.p.omega_for_cmd(*c) } else { 0.0 };
         }
@@ -355,6 +467,7 @@ impl Plant {
 
     /// A constant external torque in the body (a disturbance), N·m.
     pub fn set_external_torque(&mut self, tau: Vec3) {
+        self.settle();
         self.ext_torque = tau;
     }
 
@@ -362,56 +475,55 @@ impl Plant {
     /// linear drag acts on the airspeed v − wind. With no wind the
     /// arithmetic is the calm plant's, bit for bit (v − 0 = v).
     pub fn set_wind(&mut self, wind: Vec3) {
+        self.settle();
         self.wind = wind;
     }
 
     /// The rotor angles, rad in [0, 2π), Betaflight order.
     pub fn rotor_angles(&self) -> [f64; 4] {
-        self.rotor_angle
+        self.view_angle
     }
 
     /// An instantaneous angular impulse in the body, N·m·s.
     pub fn apply_torque_impulse(&mut self, j: Vec3) {
+        self.settle();
         let i = Vec3::from_array(self.p.body.inertia_kg_m2);
         self.s.rate += Vec3::new(j.x / i.x, j.y / i.y, j.z / i.z);
         self.on_ground = false;
+        self.sync_view();
     }
 
     /// Mechanical shaft power of the four rotors, W (Σ k_m·ω³).
     pub fn shaft_power(&self) -> f64 {
-        self.s
+        self.view
             .omega
             .iter()
             .map(|w| self.p.rotors.k_m * w.abs().powi(3))
             .sum()
     }
 
-    /// Total rotor thrust at rotor speeds `omega`, N (Σ k_f·ω², summed in
-    /// rotor order as [`Plant::wrench`] does).
+    /// Total rotor thrust at rotor speeds `omega`, N (k_f·Σω², as
+    /// [`Plant::wrench`] takes it).
     fn thrust(&self, omega: &[f64; 4]) -> f64 {
-        let k_f = self.p.rotors.k_f;
-        omega.iter().fold(0.0, |t, w| t + k_f * (w * w))
+        self.p.rotors.k_f * omega.iter().fold(0.0, |t, w| t + w * w)
     }
 
     fn wrench(&self, s: &State) -> Wrench {
-        let (b, r) = (&self.p.body, &self.p.rotors);
-        let mut thrust = 0.0;
+        let (b, k) = (&self.p.body, &self.k);
+        let mut w2_sum = 0.0;
         let mut tau = Vec3::ZERO;
-        for i in 0..4 {
-            let w2 = s.omega[i] * s.omega[i];
-            let f = r.k_f * w2;
-            let [x, y] = r.positions_m[i];
-            // r × (0, 0, F) = (y·F, −x·F, 0)
-            tau += Vec3::new(y * f, -x * f, r.spin[i].reaction_sign() * r.k_m * w2);
-            thrust += f;
+        for (w, c) in s.omega.iter().zip(&k.torque_per_w2) {
+            let w2 = w * w;
+            tau += *c * w2;
+            w2_sum += w2;
         }
+        let thrust = self.p.rotors.k_f * w2_sum;
         tau += self.ext_torque - s.rate * b.drag_angular;
         let inertia = Vec3::from_array(b.inertia_kg_m2);
         let gyro = s.rate.cross(s.rate.hadamard(inertia));
-        let t = tau - gyro;
-        let ang_accel = Vec3::new(t.x / inertia.x, t.y / inertia.y, t.z / inertia.z);
+        let ang_accel = (tau - gyro).hadamard(k.inv_inertia);
         let f_world = s.q.rotate(Vec3::new(0.0, 0.0, thrust)) - (s.vel - self.wind) * b.drag_linear;
-        let accel_world = f_world / b.mass_kg - Vec3::new(0.0, 0.0, GRAVITY);
+        let accel_world = f_world * k.inv_mass - Vec3::new(0.0, 0.0, GRAVITY);
         Wrench {
             accel_world,
             ang_accel,
@@ -420,12 +532,7 @@ impl Plant {
 
     /// The rotors' speed derivative: first-order lag toward the target.
     fn omega_rate(&self, omega: &[f64; 4]) -> [f64; 4] {
-        let tau_m = self.p.rotors.time_constant_s;
-        let mut domega = [0.0; 4];
-        for (i, d) in domega.iter_mut().enumerate() {
-            *d = (self.target[i] - omega[i]) / tau_m;
-        }
-        domega
+        std::array::from_fn(|i| (self.target[i] - omega[i]) * self.k.inv_tau_m)
     }
 
     /// The derivative in free flight (the ground holds nothing).
@@ -443,16 +550,19 @@ impl Plant {
 
     /// One RK4 step of `h` s in free flight.
     fn rk4_free(&self, h: f64) -> State {
+        self.rk4_stages(h).1
+    }
+
+    /// RK4's four stages over `h` s in free flight, and the step's end.
+    fn rk4_stages(&self, h: f64) -> ([State; 4], State) {
         let s = self.s;
         let k1 = self.derivative(&s);
         let k2 = self.derivative(&s.add_scaled(&k1, 0.5 * h));
         let k3 = self.derivative(&s.add_scaled(&k2, 0.5 * h));
         let k4 = self.derivative(&s.add_scaled(&k3, h));
-        let mut n = s;
-        n = n.add_scaled(&k1, h / 6.0);
-        n = n.add_scaled(&k2, h / 3.0);
-        n = n.add_scaled(&k3, h / 3.0);
-        n.add_scaled(&k4, h / 6.0)
+        let k = [k1, k2, k3, k4];
+        let end = s.plus_combination(&k, [h / 6.0, h / 3.0, h / 3.0, h / 6.0]);
+        (k, end)
     }
 
     /// One RK4 step of `h` s held by the ground (or wrecked): only the
@@ -492,11 +602,13 @@ impl Plant {
         }
     }
 
-    fn rk4(&mut self, h: f64) {
-        let mut n = if self.on_ground || self.crashed {
-            self.rk4_held(h)
-        } else {
-            self.rk4_free(h)
+    fn rk4(&mut self, h_ns: u64) {
+        let h = h_ns as f64 * 1e-9;
+        let ahead = self.ahead.take();
+        let mut n = match &ahead {
+            Some(a) if a.start_ns == self.t_ns && a.h_ns == h_ns => a.end,
+            _ if self.on_ground || self.crashed => self.rk4_held(h),
+            _ => self.rk4_free(h),
         };
         n.q = n.q.normalized();
         if n.is_finite() {
@@ -561,18 +673,93 @@ impl Plant {
         }
     }
 
-    /// Integrate to `t_ns` in fixed sub-steps, the last one partial.
-    /// Times before the current time are ignored (the plant never rewinds).
+    /// Integrate to `t_ns` on the sub-step grid (multiples of the
+    /// sub-step, so instants on it cut no step short). An instant between
+    /// two grid points is viewed by dense output from the whole sub-step
+    /// computed ahead, in free flight; on the ground, at a touch-down, or
+    /// when an input changes there (`settle`), the step is cut at it.
+    /// Times before the observed time are ignored (the plant never rewinds).
     pub fn advance_to(&mut self, t_ns: u64) {
-        while self.t_ns < t_ns {
-            let h_ns = (t_ns - self.t_ns).min(self.p.substep_ns);
-            let before = self.s.omega;
-            let h = h_ns as f64 * 1e-9;
-            self.rk4(h);
-            self.t_ns += h_ns;
-            self.rotors_after_step(&before, h);
-            self.ground_contact();
+        if t_ns <= self.view_t {
+            return;
         }
+        let grid = self.p.substep_ns;
+        loop {
+            let end = (self.t_ns / grid + 1) * grid;
+            if t_ns < end {
+                break;
+            }
+            self.step(end - self.t_ns);
+        }
+        if t_ns > self.t_ns && !self.view_inside(t_ns) {
+            self.step(t_ns - self.t_ns);
+        }
+        if self.view_t < self.t_ns {
+            self.sync_view();
+        }
+    }
+
+    /// One RK4 step of `h_ns` from `t_ns`, with the ground and the rotors'
+    /// bookkeeping after it.
+    fn step(&mut self, h_ns: u64) {
+        let before = self.s.omega;
+        self.rk4(h_ns);
+        self.t_ns += h_ns;
+        self.rotors_after_step(&before, h_ns as f64 * 1e-9);
+        self.ground_contact();
+    }
+
+    /// Views `t_ns` (inside the sub-step from `t_ns` to the next grid
+    /// point) by dense output; false when it cannot (on the ground,
+    /// crashed, or the step would touch down or diverge).
+    fn view_inside(&mut self, t_ns: u64) -> bool {
+        if self.on_ground || self.crashed {
+            return false;
+        }
+        let grid = self.p.substep_ns;
+        let h_ns = (self.t_ns / grid + 1) * grid - self.t_ns;
+        if !self
+            .ahead
+            .as_ref()
+            .is_some_and(|a| a.start_ns == self.t_ns && a.h_ns == h_ns)
+        {
+            let (k, end) = self.rk4_stages(h_ns as f64 * 1e-9);
+            self.ahead = Some(dense::Ahead {
+                start_ns: self.t_ns,
+                h_ns,
+                k,
+                end,
+            });
+        }
+        let Some(a) = self.ahead.as_ref() else {
+            unreachable!("the step ahead was just made")
+        };
+        if !(a.end.is_finite() && a.end.pos.z > 0.0) {
+            return false;
+        }
+        self.view = a.state_at(&self.s, t_ns);
+        let dt = (t_ns - self.t_ns) as f64 * 1e-9;
+        self.view_angle = dense::angles_at(&self.rotor_angle, &self.s.omega, &self.view.omega, dt);
+        self.view_t = t_ns;
+        true
+    }
+
+    /// The view is the integrated state (after a step or a change).
+    fn sync_view(&mut self) {
+        self.view = self.s;
+        self.view_angle = self.rotor_angle;
+        self.view_t = self.t_ns;
+    }
+
+    /// Before an input changes at the observed instant: integrate to it
+    /// (a step cut there, as the inputs hold only until then) and drop
+    /// the step computed ahead with the old inputs.
+    fn settle(&mut self) {
+        if self.view_t > self.t_ns {
+            self.step(self.view_t - self.t_ns);
+            self.sync_view();
+        }
+        self.ahead = None;
     }
 
     /// Linear (world) and angular (body) acceleration now: zero while the
@@ -581,7 +768,7 @@ impl Plant {
         if self.on_ground || self.crashed {
             (Vec3::ZERO, Vec3::ZERO)
         } else {
-            let w = self.wrench(&self.s);
+            let w = self.wrench(&self.view);
             (w.accel_world, w.ang_accel)
         }
     }
@@ -596,15 +783,15 @@ impl Plant {
 
     /// The specific force in the body at world acceleration `accel`.
     fn felt(&self, accel: Vec3) -> Vec3 {
-        self.s.q.rotate_inv(accel + Vec3::new(0.0, 0.0, GRAVITY))
+        self.view.q.rotate_inv(accel + Vec3::new(0.0, 0.0, GRAVITY))
     }
 
     /// The observable truth at the current time.
     pub fn truth(&self) -> Truth {
-        let s = &self.s;
+        let s = &self.view;
         let (accel, ang_accel) = self.accelerations();
         Truth {
-            t_ns: self.t_ns,
+            t_ns: self.view_t,
             pos: s.pos,
             vel: s.vel,
             q: s.q,

@@ -7,7 +7,7 @@ use crate::error::ConfigError;
 use crate::imu::{ImuConfig, Vibration};
 use crate::math::Vec3;
 use crate::pid::PidConfig;
-use crate::plant::{BodyParams, PlantParams, RotorParams, SUBSTEP_NS_DEFAULT};
+use crate::plant::{BodyParams, PlantParams, RotorParams};
 use crate::radio::AutopilotConfig;
 use serde::Deserialize;
 
@@ -181,13 +181,10 @@ impl Preset {
         pp.omega_for_cmd(pp.hover_cmd())
     }
 
-    /// The plant parameters with the default RK4 sub-step.
+    /// The plant parameters, with the RK4 sub-step its dynamics call for
+    /// ([`PlantParams::with_substep`]).
     pub fn plant_params(&self) -> PlantParams {
-        PlantParams {
-            body: self.body,
-            rotors: self.rotors,
-            substep_ns: SUBSTEP_NS_DEFAULT,
-        }
+        PlantParams::with_substep(self.body, self.rotors)
     }
 }
 

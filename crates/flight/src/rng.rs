@@ -1,5 +1,5 @@
 //! A tiny deterministic PRNG: xoshiro256** seeded through splitmix64, with
-//! Box–Muller Gaussians. The same seed gives the same stream on every
+//! Gaussians by Marsaglia's polar method. The same seed gives the same stream on every
 //! platform (integer arithmetic plus IEEE `ln`/`sqrt`/`sin_cos` in f64).
 
 /// splitmix64 step (used to expand a 64-bit seed into xoshiro's state).
@@ -11,7 +11,7 @@ pub fn splitmix64(state: &mut u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// xoshiro256** generator with a cached second Box–Muller deviate.
+/// xoshiro256** generator with a cached second Gaussian deviate.
 #[derive(Debug, Clone)]
 pub struct Rng {
     s: [u64; 4],
@@ -50,18 +50,24 @@ impl Rng {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// Standard normal deviate (Box–Muller, both outputs used).
+    /// Standard normal deviate (Marsaglia's polar method, both outputs
+    /// used: Box–Muller without its sine and cosine, which were most of
+    /// the IMU noise's cost).
     pub fn gaussian(&mut self) -> f64 {
         if let Some(z) = self.spare.take() {
             return z;
         }
-        // 1 − U is in (0, 1], so ln never sees 0.
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        let r = (-2.0 * u1.ln()).sqrt();
-        let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
-        self.spare = Some(r * s);
-        r * c
+        loop {
+            let u = 2.0 * self.uniform() - 1.0;
+            let v = 2.0 * self.uniform() - 1.0;
+            let s = u * u + v * v;
+            // Inside the unit disc, not its centre (ln 0); π/4 of pairs.
+            if s > 0.0 && s < 1.0 {
+                let f = (-2.0 * s.ln() / s).sqrt();
+                self.spare = Some(v * f);
+                return u * f;
+            }
+        }
     }
 }
 
@@ -87,6 +93,15 @@ mod tests {
         v = v / n as f64 - m * m;
         assert!(m.abs() < 0.01, "mean {m}");
         assert!((v - 1.0).abs() < 0.02, "variance {v}");
+        // A normal's shape, not only its two moments: kurtosis 3 and
+        // 4.55 % of deviates beyond 2σ (0.27 % beyond 3σ); the standard
+        // errors at n = 200,000 are about 0.011, 0.047 % and 0.012 %.
+        let g: Vec<f64> = (0..n).map(|_| r.gaussian()).collect();
+        let k = g.iter().map(|x| x.powi(4)).sum::<f64>() / n as f64;
+        let beyond = |c: f64| g.iter().filter(|x| x.abs() > c).count() as f64 / n as f64;
+        assert!((k - 3.0).abs() < 0.06, "kurtosis {k}");
+        assert!((beyond(2.0) - 0.0455).abs() < 0.0025, "{}", beyond(2.0));
+        assert!((beyond(3.0) - 0.0027).abs() < 0.0007, "{}", beyond(3.0));
         // splitmix64 reference value for seed 0 (first output).
         let mut s = 0u64;
         assert_eq!(splitmix64(&mut s), 0xE220_A839_7B1D_CDAF);

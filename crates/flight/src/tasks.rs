@@ -139,6 +139,16 @@ pub enum BodyKind {
 }
 
 impl BodyKind {
+    /// Reads the vehicle or its battery when it starts, so the world must be
+    /// integrated to that instant (the other bodies' reads take only the
+    /// schedule's registers).
+    fn observes_world(self) -> bool {
+        matches!(
+            self,
+            BodyKind::Gyro | BodyKind::Accel | BodyKind::Radio | BodyKind::Vbat | BodyKind::Current
+        )
+    }
+
     /// The six tasks of Fig. 11 a flight controller cannot fly without.
     pub const CRITICAL: [BodyKind; 6] = [
         BodyKind::Gyro,
@@ -680,6 +690,20 @@ impl Cosim {
             "the world cannot go back from {} to {t} ns",
             self.now
         );
+        self.trace_to(t);
+        self.step_to(t);
+    }
+
+    /// Records the trace points up to `t` without integrating the plant to
+    /// `t` itself: for the instants that neither observe nor act on it
+    /// (most of the schedule's reads and publishes), where a step to them
+    /// would only cut the plant's sub-steps short.
+    fn trace_to(&mut self, t: u64) {
+        assert!(
+            t >= self.now,
+            "the world cannot go back from {} to {t} ns",
+            self.now
+        );
         while self.next_trace <= t {
             let at = self.next_trace;
             self.step_to(at);
@@ -689,7 +713,6 @@ impl Cosim {
                 p.store(at, std::sync::atomic::Ordering::Relaxed);
             }
         }
-        self.step_to(t);
     }
 
     fn step_to(&mut self, t: u64) {
@@ -808,8 +831,16 @@ fn ns(t: Nanos) -> u64 {
 impl Environment<Value> for Cosim {
     fn sense(&mut self, task: usize, t: Nanos) -> Option<Value> {
         let t = ns(t);
-        self.advance(t);
-        let (line, fresh) = match self.kinds.get(task).copied().flatten()? {
+        let Some(kind) = self.kinds.get(task).copied().flatten() else {
+            self.trace_to(t);
+            return None;
+        };
+        if kind.observes_world() {
+            self.advance(t);
+        } else {
+            self.trace_to(t);
+        }
+        let (line, fresh) = match kind {
             BodyKind::Gyro => {
                 self.tell_rotors(t);
                 let rate = self.plant.state().rate;
@@ -830,14 +861,20 @@ impl Environment<Value> for Cosim {
 
     fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {
         let t = ns(t);
-        self.advance(t);
         match (self.kinds.get(task).copied().flatten(), *value) {
             (Some(BodyKind::Pwm), Value::Motors(m)) => {
+                self.advance(t);
                 self.plant.set_motor_commands(m.motors, m.armed);
                 self.seen.motors = m;
             }
-            (Some(BodyKind::Ahrs), Value::Attitude(a)) => self.seen.est = a.euler,
-            (Some(BodyKind::Radio), Value::Radio(r)) => self.seen.sp = r.cmd.setpoint(),
+            (Some(BodyKind::Ahrs), Value::Attitude(a)) => {
+                self.trace_to(t);
+                self.seen.est = a.euler;
+            }
+            (Some(BodyKind::Radio), Value::Radio(r)) => {
+                self.trace_to(t);
+                self.seen.sp = r.cmd.setpoint();
+            }
             (Some(BodyKind::Alert), Value::Alert(a))
                 if a != BatteryAlert::Ok && self.alerts.last().is_none_or(|&(_, l)| l != a) =>
             {

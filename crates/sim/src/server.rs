@@ -256,7 +256,11 @@ impl Pibs {
     /// time; once started, the server may use it all (running pushes the
     /// eligibility time ahead, which only bars the next replenishment).
     pub fn capacity(&self, now: Nanos) -> Nanos {
-        if self.left < self.budget || now >= self.eligible() {
+        // now ≥ ⌈eC / C⌉ ⇔ now·C ≥ eC (now is whole, C > 0): no 128-bit
+        // division on a path every scheduling decision takes.
+        let due = now as i128 * self.budget as i128 >= self.eligible_scaled;
+        debug_assert_eq!(due, now >= self.eligible());
+        if self.left < self.budget || due {
             self.left
         } else {
             0
