@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 18] = [
+const EXAMPLES: [&str; 20] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -44,6 +44,8 @@ const EXAMPLES: [&str; 18] = [
     "paper-table2",
     "paper-table3-loaded",
     "paper-table3",
+    "published-audsley1993",
+    "published-let-rosace",
     "resources",
     "resources-design",
     "table2-design-rta",
