@@ -121,8 +121,9 @@ pub struct PlantParams {
 /// notices.
 pub const OMEGA_AT_REST: f64 = 1e-3;
 
-/// The longest RK4 sub-step: 1 ms, the turbulence's own step
-/// ([`crate::wind`]), so a sub-step never straddles a change of the wind.
+/// The longest RK4 sub-step: 2 ms. (Inputs may change inside one: the
+/// motor commands, the turbulence every 1 ms; each change cuts the step
+/// there, so no step straddles one.)
 pub const SUBSTEP_NS_MAX: u64 = 2_000_000;
 
 /// Sub-steps per time constant of the plant's fastest mode, at least.
@@ -130,11 +131,11 @@ const STEPS_PER_TIME_CONSTANT: f64 = 10.0;
 
 impl PlantParams {
     /// The plant of `body` and `rotors` with its RK4 sub-step: the longest
-    /// of 1 ms, 500 µs, 250 µs, … (each divides the ones above, so the
+    /// of 2 ms, 1 ms, 500 µs, … (each divides the ones above, so the
     /// grids nest) that puts [`STEPS_PER_TIME_CONSTANT`] steps in the
     /// fastest of the plant's time constants: the rotors' lag τ_m, the
     /// body's rate damping I/c_ω and its velocity damping m/c_v. At h ≤
-    /// τ/20 the RK4 local error is below (h/τ)⁵/120 ≈ 3e-9 relative; the
+    /// τ/10 the RK4 local error is below (h/τ)⁵/120 ≈ 8e-8 relative; the
     /// rest of the plant (rates, attitude, position) integrates the rotors
     /// without a faster mode of its own (docs/flight.md).
     pub fn with_substep(body: BodyParams, rotors: RotorParams) -> PlantParams {

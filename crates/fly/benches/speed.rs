@@ -217,9 +217,11 @@ fn before_after(_: &mut Criterion) {
         return;
     };
     let after = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/release/rtpipe");
-    let cases: [(&str, &[&str]); 6] = [
+    let cases: [(&str, &[&str]); 8] = [
         ("steps, 26 s", &[]),
+        ("hold, 26 s", &["--mission", HOLD, "--duration", "26s"]),
         ("hold, 600 s", &["--mission", HOLD, "--duration", "600s"]),
+        ("hold, 3600 s", &["--mission", HOLD, "--duration", "3600s"]),
         ("hover, 26 s", &["--mission", "hover", "--duration", "26s"]),
         (
             "hover, 600 s",
