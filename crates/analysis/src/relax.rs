@@ -22,7 +22,7 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::sched::{interference, response_time_jitter, utilization_test};
-use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Nanos, SchedTest, Server, Spec};
 
 /// Lower bounds over a box of periods.
@@ -94,11 +94,17 @@ impl Affine {
     }
 }
 
-/// The priority facts a box decides, for one CPU under RM.
+/// The priority facts a box decides under fixed priorities. A task ranks
+/// by its key (`policy::rank_key`: the period under RM, the deadline or
+/// else the period under DM, the explicit priority), which never falls as
+/// its period grows: over the box it lies in `[key(lo), key(hi)]`.
 struct Order<'a> {
     spec: &'a Spec,
     lo: &'a [Nanos],
     hi: &'a [Nanos],
+    /// Per task, its rank key at `lo` and at `hi`.
+    key_lo: Vec<Nanos>,
+    key_hi: Vec<Nanos>,
     /// Rank orders imposed besides the box: `imposed[a·n + b]` = a above b.
     imposed: Vec<bool>,
     /// Per resource, the ranked tasks that use it (its ceiling is the
@@ -126,10 +132,17 @@ impl<'a> Order<'a> {
                 }
             }
         }
+        let key = |t: &[Nanos]| -> Vec<Nanos> {
+            (spec.tasks.iter().zip(t))
+                .map(|(task, &t)| rank_key(spec.priorities, task).at(t))
+                .collect()
+        };
         Order {
             spec,
             lo,
             hi,
+            key_lo: key(lo),
+            key_hi: key(hi),
             imposed: matrix,
             users,
         }
@@ -194,20 +207,21 @@ impl<'a> Order<'a> {
         self.spec.policy().fixed_priority() && t.server != Server::Background
     }
 
-    /// `a` has the higher RM rank at every point: (T_a, a) < (T_b, b) always.
+    /// `a` has the higher rank at every point: (K_a, a) < (K_b, b) always
+    /// (RM: K = T).
     fn surely_above(&self, a: usize, b: usize) -> bool {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && ((self.hi[a], a) < (self.lo[b], b) || self.is_imposed(a, b))
+            && ((self.key_hi[a], a) < (self.key_lo[b], b) || self.is_imposed(a, b))
     }
 
-    /// `a` has the higher RM rank at some point of the box.
+    /// `a` has the higher rank at some point of the box.
     fn maybe_above(&self, a: usize, b: usize) -> bool {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && (self.lo[a], a) < (self.hi[b], b)
+            && (self.key_lo[a], a) < (self.key_hi[b], b)
             && !self.is_imposed(b, a)
     }
 
@@ -378,11 +392,41 @@ fn edf_lower_bounds(
         .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
         .collect();
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        let (b, j) = crate::sched::edf_response_at(spec, lo, i);
+        let (b, j) = crate::sched::edf_response_times_at(spec, lo, i);
         // As `sched::analyze` takes it.
         let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
         return (b, j, w);
     }
+    let (b, j, w) = spuri_lower_bounds(spec, lo, hi, i, &mates);
+    // Where some task of the CPU has a deadline below its period, the
+    // analysis takes i's deadline for R (`sched::edf_response_times_at`),
+    // least at i's shortest period, and W is at most R. Spuri's figures
+    // hold at the other points.
+    let below = |t: &[Nanos]| {
+        let d = |j: usize| spec.tasks[j].deadline_given.is_some_and(|d| d < t[j]);
+        mates.iter().any(|&j| d(j))
+    };
+    let d = deadline_at(spec, i, lo[i]);
+    let (b, j) = match (below(lo), below(hi)) {
+        (_, false) => return (b, j, w),
+        // At every point.
+        (true, _) => (Some(d), Some(d)),
+        (false, true) => (b.map(|b| b.min(d)), j.map(|j| j.min(d))),
+    };
+    (b, j, w.zip(j).map(|(w, j)| w.min(j)))
+}
+
+/// The part of [`edf_lower_bounds`] for a box that leaves some period of
+/// i's CPU open, at the points where every deadline is its period
+/// (Spuri's analysis applies there).
+fn spuri_lower_bounds(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    i: usize,
+    mates: &[usize],
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+    let t = &spec.tasks[i];
     // With overheads each of those jobs brings its two switches, the own
     // job its one, and every release at 0 on the CPU its kernel work
     // (`edf::response_time` at a = 0 counts each at least once).
@@ -439,7 +483,7 @@ pub fn relax(
     let (times, budget_response) = response_lower_bounds(spec, &order);
     let cpus = cpus
         .into_iter()
-        .map(|cpu| (cpu, cpu_may_pass(spec, hi, &budget_response, cpu)))
+        .map(|cpu| (cpu, cpu_may_pass(spec, (lo, hi), &budget_response, cpu)))
         .collect();
     let chains = spec
         .chains
@@ -528,7 +572,12 @@ fn cpu_utilizations(spec: &Spec, t: &[Nanos], cpu: u32) -> Vec<f64> {
 
 /// The CPU's test may pass in the box: utilisation tests at the longest
 /// periods (the least utilisation), RTA with the response-time bounds.
-fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32) -> bool {
+fn cpu_may_pass(
+    spec: &Spec,
+    (lo, hi): (&[Nanos], &[Nanos]),
+    budget_r: &[Option<Nanos>],
+    cpu: u32,
+) -> bool {
     match spec.schedulability {
         SchedTest::Rta => spec
             .tasks
@@ -536,7 +585,14 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
             .enumerate()
             .filter(|(_, t)| t.cpu == cpu && t.server != Server::Background)
             .all(|(i, _)| budget_r[i].is_some()),
-        // QPA needs Σ U ≤ 1 first.
+        // The processor demand h(t) never falls as a period (and with it
+        // a deadline, D = min(D_given, T)) shortens, so a box where the
+        // demand test fails at the longest periods fails everywhere; with
+        // critical sections (whose blocking moves either way with the
+        // deadlines) only Σ U ≤ 1 at the longest periods is kept.
+        SchedTest::Qpa if fixed_or_unblocked(spec, lo, hi, cpu) => {
+            crate::qpa::edf_feasible_at(spec, hi, cpu)
+        }
         SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
         // With overheads (`sched::edf_overhead_test`): the utilisation with
         // what the overheads add, least at the longest periods, and every
@@ -554,6 +610,19 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
         }
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
     }
+}
+
+/// The box fixes every period of `cpu`, or no task there has a critical
+/// section: where the demand test at the longest periods is exact or a
+/// bound.
+fn fixed_or_unblocked(spec: &Spec, lo: &[Nanos], hi: &[Nanos], cpu: u32) -> bool {
+    let on = |j: &usize| spec.tasks[*j].cpu == cpu;
+    (0..spec.tasks.len())
+        .filter(on)
+        .all(|j| lo[j] == hi[j] || spec.tasks[j].server == Server::Background)
+        || (0..spec.tasks.len())
+            .filter(on)
+            .all(|j| spec.tasks[j].sections.is_empty())
 }
 
 /// The link terms' view of task `i` at the box's most favourable values:
