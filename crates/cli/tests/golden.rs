@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 18] = [
+const EXAMPLES: [&str; 19] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -48,6 +48,7 @@ const EXAMPLES: [&str; 18] = [
     "resources-design",
     "table2-design-rta",
     "table2-design",
+    "timing-design",
 ];
 
 /// Generated systems (run first: later cases read them).
@@ -255,6 +256,11 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-event-limits",
         &["design", "@cleanflight-event-limits"],
+    ),
+    case("design-timing", &["design", "@timing-design"]),
+    case(
+        "design-timing-milp",
+        &["design", "@timing-design", "--method", "milp"],
     ),
     case("fly-cleanflight", &["fly", "@cleanflight"]),
     case(

@@ -222,7 +222,7 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
             .at(key)
             .help(format!("the MILP does not model {what}: design in sound mode (leave --mode out)"))),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) models rate-monotonic priorities, implicit-deadline EDF and no blocking, overhead or jitter term; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks and implicit deadlines under EDF; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
