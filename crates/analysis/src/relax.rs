@@ -21,9 +21,10 @@ use crate::latency::{
     compose_sound, distinct_passes, paper_freshness_link_in, paper_reaction_link_in, Case,
     LinkTask, SoundLink,
 };
+use crate::let_bound::{any_phasing, LetLatencies};
 use crate::sched::{interference, response_time_jitter, utilization_test};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
-use rtpipe_model::{Nanos, SchedTest, Server, Spec};
+use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]
@@ -535,6 +536,9 @@ pub fn relax(
 /// reaction terms without the reachability options, the tail's response
 /// time and the head's shortest period (`latency::sound_event_reaction`).
 fn event_reaction_bound(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<Nanos> {
+    if spec.communication == Communication::Let {
+        return let_low(order, r, path).map(|l| l.reaction_event);
+    }
     let sum: Option<Nanos> = low_links(spec, order, r, path, false)
         .iter()
         .map(|l| l.reaction)
@@ -551,6 +555,45 @@ fn event_form(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<A
     e.base += order.lo[head] as f64;
     e.slopes.push((head, 1.0));
     Some(e)
+}
+
+/// Under LET a chain's sound figures are `let_bound::any_phasing` of its
+/// periods when every task completes within its period
+/// (`latency::let_chain_sound`): each grows with every period, so at the
+/// box's shortest periods they bound it from below. `None` when some
+/// task's response exceeds its period everywhere in the box.
+fn let_low(order: &Order, r: &Times, path: &[usize]) -> Option<LetLatencies> {
+    if path.iter().any(|&i| r.r[i].is_none()) {
+        return None;
+    }
+    any_phasing(&path.iter().map(|&i| order.lo[i]).collect::<Vec<_>>())
+}
+
+/// LET's two sums as affine forms: X (the reaction from the read is
+/// min(X, F), from the event T_1 + X) and F. `any_phasing` is linear in
+/// the periods, so the forms are exact, their slopes its steps when one
+/// period grows by 1 ns.
+fn let_forms(order: &Order, r: &Times, path: &[usize]) -> Option<(Affine, Affine)> {
+    let l0 = let_low(order, r, path)?;
+    let at = |t: &[Nanos]| any_phasing(t).map(|l| (l.reaction_event - t[0], l.freshness_read));
+    let lo: Vec<Nanos> = path.iter().map(|&i| order.lo[i]).collect();
+    let (x0, f0) = (l0.reaction_event - lo[0], l0.freshness_read);
+    let mut e = Affine {
+        base: x0 as f64,
+        slopes: Vec::new(),
+    };
+    let mut f = Affine {
+        base: f0 as f64,
+        slopes: Vec::new(),
+    };
+    for (k, &i) in path.iter().enumerate() {
+        let mut t = lo.clone();
+        t[k] += 1;
+        let (x1, f1) = at(&t)?;
+        e.slopes.push((i, (x1 - x0) as f64));
+        f.slopes.push((i, (f1 - f0) as f64));
+    }
+    Some((e, f))
 }
 
 fn cpu_ids(spec: &Spec) -> Vec<u32> {
@@ -677,6 +720,10 @@ fn chain_bounds(
     r: &Times,
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    if spec.communication == Communication::Let {
+        let l = let_low(order, r, path);
+        return (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read));
+    }
     compose_sound(
         r.r[path[path.len() - 1]],
         r.w[path[0]],
@@ -731,6 +778,9 @@ fn chain_forms(
     path: &[usize],
     reach: bool,
 ) -> Option<(Affine, Affine)> {
+    if spec.communication == Communication::Let {
+        return let_forms(order, r, path);
+    }
     let tail = path[path.len() - 1];
     // The tail's response time: its lower bound, or T where a response
     // time is the server period.

@@ -6,7 +6,9 @@ use rtpipe_analysis::relax::{paper_monotone, relax, Relaxed};
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric, Report};
 use rtpipe_model::gen::{add_contention, add_timing, random_system, Contention, GenConfig, Rng};
-use rtpipe_model::{Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::{
+    Communication, Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Server, Spec,
+};
 
 const SYSTEMS: u64 = 1500;
 
@@ -55,6 +57,12 @@ fn system(seed: u64) -> Spec {
 /// or explicit priorities (RM, with RTA) or QPA (EDF), `gen::add_timing`,
 /// written and parsed back (unchanged when validation refuses it).
 fn timed(spec: Spec, seed: u64) -> Spec {
+    if (seed / 2) % 3 == 2 {
+        // LET communication, where validation takes it.
+        let mut s = spec.clone();
+        s.communication = Communication::Let;
+        return Spec::parse("l.toml", &rtpipe_model::to_toml(&s)).unwrap_or(spec);
+    }
     if (seed / 2) % 3 != 1 {
         return spec;
     }
@@ -276,7 +284,7 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
 fn a_point_box_is_the_analysis() {
     let mut bounded = 0;
     let (mut blocked, mut charged) = (0, 0);
-    let (mut dm, mut explicit, mut qpa) = (0, 0, 0);
+    let (mut dm, mut explicit, mut qpa, mut lets) = (0, 0, 0, 0);
     for seed in 0..SYSTEMS {
         let spec = system(seed);
         blocked += usize::from(spec.tasks.iter().any(|t| !t.sections.is_empty()));
@@ -284,6 +292,7 @@ fn a_point_box_is_the_analysis() {
         dm += usize::from(spec.priorities == Priorities::DeadlineMonotonic);
         explicit += usize::from(spec.priorities == Priorities::Explicit);
         qpa += usize::from(spec.schedulability == SchedTest::Qpa);
+        lets += usize::from(spec.communication == Communication::Let);
         let t = periods(&spec);
         let r = relax(&spec, &t, &t, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
@@ -307,11 +316,12 @@ fn a_point_box_is_the_analysis() {
         "{blocked} systems with sections, {charged} with overheads"
     );
     // And with deadline-monotonic or explicit priorities, or QPA.
-    eprintln!("{dm} deadline-monotonic, {explicit} explicit, {qpa} QPA systems");
+    eprintln!("{dm} deadline-monotonic, {explicit} explicit, {qpa} QPA, {lets} LET systems");
     assert!(
         dm > SYSTEMS as usize / 16 && explicit > SYSTEMS as usize / 16 && qpa > 20,
         "{dm} deadline-monotonic, {explicit} explicit, {qpa} QPA systems"
     );
+    assert!(lets > SYSTEMS as usize / 16, "{lets} LET systems");
 }
 
 #[test]

@@ -73,22 +73,6 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// LET communication is refused: the encodings and the relaxation are
-/// implicit communication's link terms. (Critical sections, overheads,
-/// release jitter, deadline-monotonic or explicit priorities and the
-/// processor-demand test: the box search only, [`contention`].)
-/// Deadlines are honoured (every answer passes R ≤ D, or the demand test
-/// under EDF, re-checked by `analyze`).
-fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
-    if spec.communication == rtpipe_model::Communication::Let {
-        // Its encodings are implicit communication's link terms.
-        return Err(DesignError::input(
-            "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
-        ));
-    }
-    Ok(())
-}
-
 /// Designs the periods of `spec`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
@@ -103,7 +87,6 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             t.name
         )));
     }
-    unsupported_timing(spec)?;
     // Known offsets do not enter the design: its bounds hold for any
     // phasing, and a job-level analysis of every candidate would cost a
     // hyperperiod each. The answer keeps them.
@@ -222,7 +205,7 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
             .at(key)
             .help(format!("the MILP does not model {what}: design in sound mode (leave --mode out)"))),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks and implicit deadlines under EDF; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
@@ -242,9 +225,12 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
 /// scheduling overheads (`analysis::overheads`, charged per job and per
 /// release), deadline-monotonic or explicit priorities (the relaxation
 /// ranks by `policy::rank_key`; the MILP's order binaries compare
-/// periods) and the processor-demand test (its demand bounds no MILP row
-/// writes). docs/design.md, "Critical sections and overheads" and
-/// "Priorities and deadlines".
+/// periods), the processor-demand test (its demand bounds no MILP row
+/// writes) and LET communication (the relaxation takes LET's chain
+/// bounds, linear in the periods; the MILP encodes implicit
+/// communication's). Deadlines are honoured by both (every answer passes
+/// R ≤ D, or the demand test, re-checked by `analyze`). docs/design.md,
+/// "Critical sections and overheads" and "Priorities and deadlines".
 fn contention(spec: &Spec) -> Option<(String, String)> {
     if let Some(x) = ranks_or_demand(spec) {
         return Some(x);
@@ -252,9 +238,13 @@ fn contention(spec: &Spec) -> Option<(String, String)> {
     contention_costs(spec).map(|(what, key)| (what.to_string(), key))
 }
 
-/// A priority order other than rate monotonic, or the processor-demand
-/// test, and its key.
+/// A priority order other than rate monotonic, the processor-demand test
+/// or LET communication, and its key.
 fn ranks_or_demand(spec: &Spec) -> Option<(String, String)> {
+    if spec.communication == rtpipe_model::Communication::Let {
+        let what = "communication = \"let\" (LET chain bounds)".to_string();
+        return Some((what, "system.communication".to_string()));
+    }
     let fixed = spec.policy().fixed_priority();
     if fixed && spec.priorities != rtpipe_model::Priorities::RateMonotonic {
         let what = format!("priorities = \"{}\"", spec.priorities.name());

@@ -312,8 +312,8 @@ fn deadlines_are_honoured() {
     assert_eq!(o.status, Status::Infeasible);
 }
 
-/// Jitter and deadline-monotonic orders are designed by the box search
-/// (the MILP refuses them); LET is refused as input `design` cannot model.
+/// Jitter, deadline-monotonic orders and LET are designed by the box
+/// search (the MILP refuses them).
 #[test]
 fn jitter_and_other_orders_are_designed_by_the_box_search() {
     // 200 µs of release jitter on Cleanflight's radio: its chain's bound
@@ -364,9 +364,18 @@ fn jitter_and_other_orders_are_designed_by_the_box_search() {
         "scheduler = \"rm\"",
         "scheduler = \"rm\"\ncommunication = \"let\"",
     );
+    // LET: the box search (its verdict re-checked by `analyze`), the
+    // MILP refuses it.
     let s = Spec::parse("let.toml", &let_).unwrap_or_else(|e| panic!("{e}"));
-    let e = design(&s, &Options::default()).err();
-    assert_eq!(e.map(|e| e.kind), Some(ErrorKind::Input), "LET");
+    let o = design(&s, &Options::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(o.method, Method::Boxes);
+    assert!(o.report.as_ref().is_none_or(|r| r.ok_in(Mode::Sound)));
+    let e = design(&s, &milp).err();
+    assert_eq!(
+        e.map(|e| e.key),
+        Some(Some("system.communication".to_string())),
+        "LET"
+    );
 }
 
 /// sense → act, both periods free up to 50 ms; `extra` goes into the chain

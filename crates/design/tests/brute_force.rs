@@ -31,7 +31,7 @@ use rtpipe_model::gen::{
     add_contention, add_timing, design_problem, ChainBounds, Contention, DesignGenConfig,
     GenConfig, Rng,
 };
-use rtpipe_model::{Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Spec};
+use rtpipe_model::{Communication, Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Spec};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -393,7 +393,8 @@ fn add_jitter(spec: &mut Spec, r: &mut Rng) -> bool {
 /// Instance `seed` (choices, or ranges for every other seed) with
 /// constrained deadlines and deadline-monotonic or explicit priorities
 /// (RM, under RTA) or the processor-demand test (EDF), `gen::add_timing`,
-/// written and parsed back; `None` when validation refuses it.
+/// and LET communication on about a third, written and parsed back;
+/// `None` when validation refuses it.
 fn timed_instance(seed: u64, mode: Mode) -> Option<Spec> {
     let mut spec = if seed.is_multiple_of(2) {
         instance(seed, mode)
@@ -404,7 +405,28 @@ fn timed_instance(seed: u64, mode: Mode) -> Option<Spec> {
         spec.schedulability = SchedTest::Rta;
     }
     add_timing(&mut spec, &mut Rng::new(seed ^ 0xd1ce));
-    Spec::parse("timed.toml", &rtpipe_model::to_toml(&spec)).ok()
+    let parsed = |s: &Spec| Spec::parse("timed.toml", &rtpipe_model::to_toml(s)).ok();
+    // LET communication on about a third, where validation takes it, with
+    // the limits doubled (LET's bounds run about twice the implicit ones
+    // the limits come from).
+    if Rng::new(seed ^ 0x1e7).chance(0.35) {
+        let mut l = spec.clone();
+        l.communication = Communication::Let;
+        for ch in &mut l.chains {
+            for x in [
+                &mut ch.reaction,
+                &mut ch.freshness,
+                &mut ch.max_reaction_time,
+                &mut ch.max_data_age,
+            ] {
+                *x = x.map(|v| 2 * v);
+            }
+        }
+        if let Some(s) = parsed(&l) {
+            return Some(s);
+        }
+    }
+    parsed(&spec)
 }
 
 /// `design` refuses critical sections, overheads, jitter, DM or explicit
@@ -415,9 +437,11 @@ fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
     (contended(spec) || timed(spec)) && (method == Method::Milp || !boxes_apply)
 }
 
-/// The spec ranks by deadlines or explicit priorities, or uses QPA.
+/// The spec ranks by deadlines or explicit priorities, uses QPA or LET.
 fn timed(spec: &Spec) -> bool {
-    spec.priorities != Priorities::RateMonotonic || spec.schedulability == SchedTest::Qpa
+    spec.priorities != Priorities::RateMonotonic
+        || spec.schedulability == SchedTest::Qpa
+        || spec.communication == Communication::Let
 }
 
 /// The spec has critical sections, overheads or release jitter.
@@ -438,6 +462,9 @@ fn count_timing(spec: &Spec, tally: &mut BTreeMap<&'static str, usize>) {
     }
     if spec.schedulability == SchedTest::Qpa {
         add("qpa");
+    }
+    if spec.communication == Communication::Let {
+        add("let");
     }
     if spec.tasks.iter().any(|t| t.deadline_given.is_some()) {
         add("with deadlines");
@@ -484,7 +511,8 @@ enum Shape {
     Harmonic,
     /// Choices or ranges with critical sections and overheads.
     Contended,
-    /// Choices or ranges with deadlines, DM or explicit priorities, QPA.
+    /// Choices or ranges with deadlines, DM or explicit priorities, QPA,
+    /// LET.
     Timed,
 }
 
@@ -495,7 +523,7 @@ impl Shape {
             Shape::Ranges => ", with ranges",
             Shape::Harmonic => ", harmonic ranges",
             Shape::Contended => ", sections and overheads",
-            Shape::Timed => ", deadlines, DM, explicit priorities, QPA",
+            Shape::Timed => ", deadlines, DM, explicit priorities, QPA, LET",
         }
     }
 }
@@ -586,6 +614,9 @@ fn run(
             }
         };
         *tally.entry(o.status.name()).or_default() += 1;
+        if spec.communication == Communication::Let && o.status == Status::Optimal {
+            *tally.entry("let optimal").or_default() += 1;
+        }
         if let Shape::Contended | Shape::Timed = shape {
             *tally.entry("boxes or masters").or_default() += o.iterations;
         }
@@ -826,8 +857,8 @@ fn contention_agrees_with_brute_force() {
     );
 }
 
-/// Deadlines, deadline-monotonic and explicit priorities and QPA: the box
-/// search against brute force in sound mode (and in paper mode where it
+/// Deadlines, deadline-monotonic and explicit priorities, QPA and LET: the
+/// box search against brute force in sound mode (and in paper mode where it
 /// applies; the MILP is refused), some designs simulated.
 #[test]
 fn timing_agrees_with_brute_force() {

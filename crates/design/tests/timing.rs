@@ -1,6 +1,6 @@
-//! `design` with deadline-monotonic and explicit priorities and with EDF
-//! under the processor-demand test (issue 22), on problems small enough
-//! to solve by hand. The brute-force agreement on random problems is
+//! `design` with deadline-monotonic and explicit priorities, with EDF
+//! under the processor-demand test and with LET communication (issue 22),
+//! on problems small enough to solve by hand. The brute-force agreement on random problems is
 //! `timing_agrees_with_brute_force` in tests/brute_force.rs.
 //!
 //! Two tasks on one CPU: `a` (exec 1 ms, period one of 2–8 ms, no
@@ -122,14 +122,47 @@ fn qpa_by_hand() {
     assert_eq!(o.status, Status::Infeasible);
 }
 
-/// The MILP compares periods for its priority orders and has no demand
-/// test: refused, at the key.
+/// LET (the module's text does not cover it): a (exec 1 ms) → b (exec 2
+/// ms), periods 2–10 ms, RM with RTA. LET's sound bounds with arbitrary
+/// offsets (`let_bound::any_phasing`): X = T_a + 2 T_b, F = 2 T_a + T_b,
+/// reaction from the read min(X, F), from the event T_a + X. Least
+/// U = 1/T_a + 2/T_b over the grid (enumerated by hand, every response
+/// within its period): reaction ≤ 20 gives (5, 10) by F = 20, U = 0.4;
+/// a maximum reaction time of 24 gives 2 T_a + 2 T_b ≤ 24 at (5, 7),
+/// U = 1/5 + 2/7 (next: (4, 8) and (6, 6) at 0.5).
+fn let_chain(limit: &str) -> Spec {
+    let src = format!(
+        "[system]\nname = \"hand\"\ntime_unit = \"ms\"\nschedulability = \"rta\"\n\
+         communication = \"let\"\n\
+         [channels.mem]\nbandwidth = 1\n\
+         [tasks.a]\nexec = 1\nperiod = {{ choices = [2, 3, 4, 5, 6, 7, 8, 9, 10] }}\nserver = \"none\"\n\
+         output = {{ channel = \"mem\", size = 0 }}\n\
+         [tasks.b]\nexec = 2\nperiod = {{ choices = [2, 3, 4, 5, 6, 7, 8, 9, 10] }}\nserver = \"none\"\n\
+         reads = [\"a\"]\n\
+         [[chain]]\npath = [\"a\", \"b\"]\n{limit}\n"
+    );
+    Spec::parse("hand.toml", &src).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn let_by_hand() {
+    let (t, _, u) = solve(&let_chain("reaction = 20"));
+    assert_eq!(t, vec![5_000, 10_000]);
+    close(u, 0.4);
+    let (t, _, u) = solve(&let_chain("max_reaction_time = 24"));
+    assert_eq!(t, vec![5_000, 7_000]);
+    close(u, 0.2 + 2.0 / 7.0);
+}
+
+/// The MILP compares periods for its priority orders, has no demand test
+/// and encodes implicit communication: refused, at the key.
 #[test]
 fn the_milp_refuses_them() {
     for (s, key) in [
         (fixed("deadline-monotonic", None, 6), "system.priorities"),
         (fixed("explicit", Some((2, 1)), 6), "system.priorities"),
         (edf(9), "tasks.b.deadline"),
+        (let_chain("reaction = 20"), "system.communication"),
     ] {
         let e = design(&s, &opts(Method::Milp)).expect_err("refused");
         assert_eq!(e.key.as_deref(), Some(key));
