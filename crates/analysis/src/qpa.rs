@@ -198,13 +198,28 @@ pub fn qpa_srp(tasks: &[Demand], steps: &[(Nanos, Nanos)]) -> Qpa {
 
 /// The (C, T, D) of the guaranteed tasks `ids`.
 fn demands(spec: &Spec, ids: &[usize]) -> Vec<Demand> {
+    demands_at(spec, &spec_periods(spec), ids)
+}
+
+/// The (C, T, D) of the guaranteed tasks `ids` at `periods` (one per task):
+/// D the given deadline, else the period.
+fn demands_at(spec: &Spec, periods: &[Nanos], ids: &[usize]) -> Vec<Demand> {
     ids.iter()
         .map(|&i| {
-            let t = &spec.tasks[i];
-            let p = t.fixed_period().unwrap_or(MAX_TIME);
-            (t.budget(), p, t.deadline().unwrap_or(p))
+            let p = periods[i];
+            (
+                spec.tasks[i].budget(),
+                p,
+                spec.tasks[i].deadline_given.unwrap_or(p),
+            )
         })
         .collect()
+}
+
+/// The spec's periods ([`MAX_TIME`] where none is fixed).
+fn spec_periods(spec: &Spec) -> Vec<Nanos> {
+    let p = |t: &rtpipe_model::Task| t.fixed_period().unwrap_or(MAX_TIME);
+    spec.tasks.iter().map(p).collect()
 }
 
 /// The guaranteed tasks of `cpu`.
@@ -218,30 +233,29 @@ fn guaranteed(spec: &Spec, cpu: u32) -> Vec<usize> {
 /// period and nothing blocks (exactly as before deadlines existed), QPA
 /// otherwise, with the stack resource policy's blocking ([`qpa_srp`]).
 pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
+    edf_feasible_at(spec, &spec_periods(spec), cpu)
+}
+
+/// [`edf_feasible`] at `periods` (one per task; deadlines the given ones,
+/// else the periods), for the design's relaxation at a box of one point.
+pub fn edf_feasible_at(spec: &Spec, periods: &[Nanos], cpu: u32) -> bool {
     let ids = guaranteed(spec, cpu);
-    if ids.iter().all(|&i| {
-        spec.tasks[i]
-            .deadline_given
-            .is_none_or(|d| Some(d) == spec.tasks[i].fixed_period())
-    }) {
+    let deadlines: Vec<Nanos> = (0..spec.tasks.len())
+        .map(|i| spec.tasks[i].deadline_given.unwrap_or(periods[i]))
+        .collect();
+    let steps = crate::blocking::srp_steps(spec, &deadlines, cpu);
+    if ids.iter().all(|&i| deadlines[i] == periods[i]) {
         // Σ C/T over the same tasks in the same order as `sched` sums it,
         // so the verdict is the one the utilisation test gives.
         let u: f64 = ids
             .iter()
-            .map(|&i| {
-                let t = &spec.tasks[i];
-                t.budget() as f64 / t.fixed_period().unwrap_or(MAX_TIME) as f64
-            })
+            .map(|&i| spec.tasks[i].budget() as f64 / periods[i] as f64)
             .sum();
-        if crate::blocking::srp_spec_steps(spec, cpu).is_empty() {
+        if steps.is_empty() {
             return u <= 1.0 + 1e-12;
         }
     }
-    qpa_srp(
-        &demands(spec, &ids),
-        &crate::blocking::srp_spec_steps(spec, cpu),
-    )
-    .schedulable
+    qpa_srp(&demands_at(spec, periods, &ids), &steps).schedulable
 }
 
 /// The QPA test on the tasks `ids` of one CPU: (Σ U, its bound 1, QPA's

@@ -21,9 +21,10 @@ use crate::latency::{
     compose_sound, distinct_passes, paper_freshness_link_in, paper_reaction_link_in, Case,
     LinkTask, SoundLink,
 };
+use crate::let_bound::{any_phasing, LetLatencies};
 use crate::sched::{interference, response_time_jitter, utilization_test};
-use rtpipe_model::policy::ResponseAnalysis;
-use rtpipe_model::{Nanos, SchedTest, Server, Spec};
+use rtpipe_model::policy::{rank_key, ResponseAnalysis};
+use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]
@@ -94,11 +95,17 @@ impl Affine {
     }
 }
 
-/// The priority facts a box decides, for one CPU under RM.
+/// The priority facts a box decides under fixed priorities. A task ranks
+/// by its key (`policy::rank_key`: the period under RM, the deadline or
+/// else the period under DM, the explicit priority), which never falls as
+/// its period grows: over the box it lies in `[key(lo), key(hi)]`.
 struct Order<'a> {
     spec: &'a Spec,
     lo: &'a [Nanos],
     hi: &'a [Nanos],
+    /// Per task, its rank key at `lo` and at `hi`.
+    key_lo: Vec<Nanos>,
+    key_hi: Vec<Nanos>,
     /// Rank orders imposed besides the box: `imposed[a·n + b]` = a above b.
     imposed: Vec<bool>,
     /// Per resource, the ranked tasks that use it (its ceiling is the
@@ -126,10 +133,17 @@ impl<'a> Order<'a> {
                 }
             }
         }
+        let key = |t: &[Nanos]| -> Vec<Nanos> {
+            (spec.tasks.iter().zip(t))
+                .map(|(task, &t)| rank_key(spec.priorities, task).at(t))
+                .collect()
+        };
         Order {
             spec,
             lo,
             hi,
+            key_lo: key(lo),
+            key_hi: key(hi),
             imposed: matrix,
             users,
         }
@@ -194,20 +208,21 @@ impl<'a> Order<'a> {
         self.spec.policy().fixed_priority() && t.server != Server::Background
     }
 
-    /// `a` has the higher RM rank at every point: (T_a, a) < (T_b, b) always.
+    /// `a` has the higher rank at every point: (K_a, a) < (K_b, b) always
+    /// (RM: K = T).
     fn surely_above(&self, a: usize, b: usize) -> bool {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && ((self.hi[a], a) < (self.lo[b], b) || self.is_imposed(a, b))
+            && ((self.key_hi[a], a) < (self.key_lo[b], b) || self.is_imposed(a, b))
     }
 
-    /// `a` has the higher RM rank at some point of the box.
+    /// `a` has the higher rank at some point of the box.
     fn maybe_above(&self, a: usize, b: usize) -> bool {
         self.ranked(a)
             && self.ranked(b)
             && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
-            && (self.lo[a], a) < (self.hi[b], b)
+            && (self.key_lo[a], a) < (self.key_hi[b], b)
             && !self.is_imposed(b, a)
     }
 
@@ -378,11 +393,41 @@ fn edf_lower_bounds(
         .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
         .collect();
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        let (b, j) = crate::sched::edf_response_at(spec, lo, i);
+        let (b, j) = crate::sched::edf_response_times_at(spec, lo, i);
         // As `sched::analyze` takes it.
         let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
         return (b, j, w);
     }
+    let (b, j, w) = spuri_lower_bounds(spec, lo, hi, i, &mates);
+    // Where some task of the CPU has a deadline below its period, the
+    // analysis takes i's deadline for R (`sched::edf_response_times_at`),
+    // least at i's shortest period, and W is at most R. Spuri's figures
+    // hold at the other points.
+    let below = |t: &[Nanos]| {
+        let d = |j: usize| spec.tasks[j].deadline_given.is_some_and(|d| d < t[j]);
+        mates.iter().any(|&j| d(j))
+    };
+    let d = deadline_at(spec, i, lo[i]);
+    let (b, j) = match (below(lo), below(hi)) {
+        (_, false) => return (b, j, w),
+        // At every point.
+        (true, _) => (Some(d), Some(d)),
+        (false, true) => (b.map(|b| b.min(d)), j.map(|j| j.min(d))),
+    };
+    (b, j, w.zip(j).map(|(w, j)| w.min(j)))
+}
+
+/// The part of [`edf_lower_bounds`] for a box that leaves some period of
+/// i's CPU open, at the points where every deadline is its period
+/// (Spuri's analysis applies there).
+fn spuri_lower_bounds(
+    spec: &Spec,
+    lo: &[Nanos],
+    hi: &[Nanos],
+    i: usize,
+    mates: &[usize],
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+    let t = &spec.tasks[i];
     // With overheads each of those jobs brings its two switches, the own
     // job its one, and every release at 0 on the CPU its kernel work
     // (`edf::response_time` at a = 0 counts each at least once).
@@ -439,7 +484,7 @@ pub fn relax(
     let (times, budget_response) = response_lower_bounds(spec, &order);
     let cpus = cpus
         .into_iter()
-        .map(|cpu| (cpu, cpu_may_pass(spec, hi, &budget_response, cpu)))
+        .map(|cpu| (cpu, cpu_may_pass(spec, (lo, hi), &budget_response, cpu)))
         .collect();
     let chains = spec
         .chains
@@ -491,6 +536,9 @@ pub fn relax(
 /// reaction terms without the reachability options, the tail's response
 /// time and the head's shortest period (`latency::sound_event_reaction`).
 fn event_reaction_bound(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<Nanos> {
+    if spec.communication == Communication::Let {
+        return let_low(order, r, path).map(|l| l.reaction_event);
+    }
     let sum: Option<Nanos> = low_links(spec, order, r, path, false)
         .iter()
         .map(|l| l.reaction)
@@ -507,6 +555,45 @@ fn event_form(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<A
     e.base += order.lo[head] as f64;
     e.slopes.push((head, 1.0));
     Some(e)
+}
+
+/// Under LET a chain's sound figures are `let_bound::any_phasing` of its
+/// periods when every task completes within its period
+/// (`latency::let_chain_sound`): each grows with every period, so at the
+/// box's shortest periods they bound it from below. `None` when some
+/// task's response exceeds its period everywhere in the box.
+fn let_low(order: &Order, r: &Times, path: &[usize]) -> Option<LetLatencies> {
+    if path.iter().any(|&i| r.r[i].is_none()) {
+        return None;
+    }
+    any_phasing(&path.iter().map(|&i| order.lo[i]).collect::<Vec<_>>())
+}
+
+/// LET's two sums as affine forms: X (the reaction from the read is
+/// min(X, F), from the event T_1 + X) and F. `any_phasing` is linear in
+/// the periods, so the forms are exact, their slopes its steps when one
+/// period grows by 1 ns.
+fn let_forms(order: &Order, r: &Times, path: &[usize]) -> Option<(Affine, Affine)> {
+    let l0 = let_low(order, r, path)?;
+    let at = |t: &[Nanos]| any_phasing(t).map(|l| (l.reaction_event - t[0], l.freshness_read));
+    let lo: Vec<Nanos> = path.iter().map(|&i| order.lo[i]).collect();
+    let (x0, f0) = (l0.reaction_event - lo[0], l0.freshness_read);
+    let mut e = Affine {
+        base: x0 as f64,
+        slopes: Vec::new(),
+    };
+    let mut f = Affine {
+        base: f0 as f64,
+        slopes: Vec::new(),
+    };
+    for (k, &i) in path.iter().enumerate() {
+        let mut t = lo.clone();
+        t[k] += 1;
+        let (x1, f1) = at(&t)?;
+        e.slopes.push((i, (x1 - x0) as f64));
+        f.slopes.push((i, (f1 - f0) as f64));
+    }
+    Some((e, f))
 }
 
 fn cpu_ids(spec: &Spec) -> Vec<u32> {
@@ -528,7 +615,12 @@ fn cpu_utilizations(spec: &Spec, t: &[Nanos], cpu: u32) -> Vec<f64> {
 
 /// The CPU's test may pass in the box: utilisation tests at the longest
 /// periods (the least utilisation), RTA with the response-time bounds.
-fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32) -> bool {
+fn cpu_may_pass(
+    spec: &Spec,
+    (lo, hi): (&[Nanos], &[Nanos]),
+    budget_r: &[Option<Nanos>],
+    cpu: u32,
+) -> bool {
     match spec.schedulability {
         SchedTest::Rta => spec
             .tasks
@@ -536,7 +628,14 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
             .enumerate()
             .filter(|(_, t)| t.cpu == cpu && t.server != Server::Background)
             .all(|(i, _)| budget_r[i].is_some()),
-        // QPA needs Σ U ≤ 1 first.
+        // The processor demand h(t) never falls as a period (and with it
+        // a deadline, D = min(D_given, T)) shortens, so a box where the
+        // demand test fails at the longest periods fails everywhere; with
+        // critical sections (whose blocking moves either way with the
+        // deadlines) only Σ U ≤ 1 at the longest periods is kept.
+        SchedTest::Qpa if fixed_or_unblocked(spec, lo, hi, cpu) => {
+            crate::qpa::edf_feasible_at(spec, hi, cpu)
+        }
         SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
         // With overheads (`sched::edf_overhead_test`): the utilisation with
         // what the overheads add, least at the longest periods, and every
@@ -554,6 +653,19 @@ fn cpu_may_pass(spec: &Spec, hi: &[Nanos], budget_r: &[Option<Nanos>], cpu: u32)
         }
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
     }
+}
+
+/// The box fixes every period of `cpu`, or no task there has a critical
+/// section: where the demand test at the longest periods is exact or a
+/// bound.
+fn fixed_or_unblocked(spec: &Spec, lo: &[Nanos], hi: &[Nanos], cpu: u32) -> bool {
+    let on = |j: &usize| spec.tasks[*j].cpu == cpu;
+    (0..spec.tasks.len())
+        .filter(on)
+        .all(|j| lo[j] == hi[j] || spec.tasks[j].server == Server::Background)
+        || (0..spec.tasks.len())
+            .filter(on)
+            .all(|j| spec.tasks[j].sections.is_empty())
 }
 
 /// The link terms' view of task `i` at the box's most favourable values:
@@ -608,6 +720,10 @@ fn chain_bounds(
     r: &Times,
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    if spec.communication == Communication::Let {
+        let l = let_low(order, r, path);
+        return (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read));
+    }
     compose_sound(
         r.r[path[path.len() - 1]],
         r.w[path[0]],
@@ -662,6 +778,9 @@ fn chain_forms(
     path: &[usize],
     reach: bool,
 ) -> Option<(Affine, Affine)> {
+    if spec.communication == Communication::Let {
+        return let_forms(order, r, path);
+    }
     let tail = path[path.len() - 1];
     // The tail's response time: its lower bound, or T where a response
     // time is the server period.

@@ -381,8 +381,20 @@ fn edf_members(spec: &Spec, i: usize) -> impl Iterator<Item = usize> + '_ {
 /// constrained deadlines, by its deadline when the processor-demand test
 /// passes (docs/analysis.md).
 fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
+    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
     let d = t.deadline().unwrap_or(MAX_TIME);
-    if crate::qpa::edf_feasible(spec, t.cpu) {
+    server_period_at(spec, &periods, t.cpu, d)
+}
+
+/// [`server_period`] at `periods`: the deadline `d` of a task on `cpu`
+/// when the processor-demand test passes there.
+fn server_period_at(
+    spec: &Spec,
+    periods: &[Nanos],
+    cpu: u32,
+    d: Nanos,
+) -> (Option<Nanos>, Option<Nanos>) {
+    if crate::qpa::edf_feasible_at(spec, periods, cpu) {
         (Some(d), Some(d))
     } else {
         (None, None)
@@ -417,17 +429,33 @@ fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, us
 /// of the CPU has a shorter deadline, the deadline under the
 /// processor-demand test ([`server_period`]).
 fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
-    let cpu = spec.tasks[i].cpu;
-    let constrained = spec
-        .tasks
-        .iter()
-        .filter(|t| t.cpu == cpu && t.server != Server::Background)
-        .any(|t| t.deadline().is_some_and(|d| Some(d) < t.fixed_period()));
-    if constrained {
-        return server_period(spec, &spec.tasks[i]);
-    }
     let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
-    edf_response_at(spec, &periods, i)
+    edf_response_times_at(spec, &periods, i)
+}
+
+/// [`edf_response_times`] at `periods` (one per task; a deadline is the
+/// given one, else the period), for the design's relaxation at a box of
+/// one point: Spuri's bound, or the deadline where some task of the CPU
+/// has one below its period.
+pub fn edf_response_times_at(
+    spec: &Spec,
+    periods: &[Nanos],
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>) {
+    let cpu = spec.tasks[i].cpu;
+    if edf_constrained_at(spec, periods, cpu) {
+        let d = spec.tasks[i].deadline_given.unwrap_or(periods[i]);
+        return server_period_at(spec, periods, cpu, d);
+    }
+    edf_response_at(spec, periods, i)
+}
+
+/// Some guaranteed task of `cpu` has a deadline below its period at
+/// `periods`.
+pub fn edf_constrained_at(spec: &Spec, periods: &[Nanos], cpu: u32) -> bool {
+    (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu && spec.tasks[j].server != Server::Background)
+        .any(|j| spec.tasks[j].deadline_given.is_some_and(|d| d < periods[j]))
 }
 
 /// Task `i`'s (budget, job) response times under EDF (Spuri 1996, see

@@ -5,8 +5,10 @@
 use rtpipe_analysis::relax::{paper_monotone, relax, Relaxed};
 use rtpipe_analysis::Anchor;
 use rtpipe_analysis::{analyze, Metric, Report};
-use rtpipe_model::gen::{add_contention, random_system, Contention, GenConfig, Rng};
-use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Server, Spec};
+use rtpipe_model::gen::{add_contention, add_timing, random_system, Contention, GenConfig, Rng};
+use rtpipe_model::{
+    Communication, Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Server, Spec,
+};
 
 const SYSTEMS: u64 = 1500;
 
@@ -42,6 +44,38 @@ fn with_test(mut spec: Spec, seed: u64) -> Spec {
 /// and scheduling overheads where `add_contention` draws them (written and
 /// parsed back; a spec validation refuses stays without them).
 fn system(seed: u64) -> Spec {
+    let spec = timed(contended(seed), seed);
+    // A box never goes below a deadline (the design's domains keep T ≥ D).
+    assert!(spec
+        .tasks
+        .iter()
+        .all(|t| t.deadline_given.is_none_or(|d| t.fixed_period() >= Some(d))));
+    spec
+}
+
+/// For a third of the seeds: constrained deadlines with deadline-monotonic
+/// or explicit priorities (RM, with RTA) or QPA (EDF), `gen::add_timing`,
+/// written and parsed back (unchanged when validation refuses it).
+fn timed(spec: Spec, seed: u64) -> Spec {
+    if (seed / 2) % 3 == 2 {
+        // LET communication, where validation takes it.
+        let mut s = spec.clone();
+        s.communication = Communication::Let;
+        return Spec::parse("l.toml", &rtpipe_model::to_toml(&s)).unwrap_or(spec);
+    }
+    if (seed / 2) % 3 != 1 {
+        return spec;
+    }
+    let mut s = spec.clone();
+    if s.policy().fixed_priority() {
+        s.schedulability = SchedTest::Rta;
+    }
+    add_timing(&mut s, &mut Rng::new(seed ^ 0x7e57));
+    Spec::parse("t.toml", &rtpipe_model::to_toml(&s)).unwrap_or(spec)
+}
+
+/// The generated system of `seed`, with contention for odd seeds.
+fn contended(seed: u64) -> Spec {
     let spec = with_test(random_system(seed, &config(seed)), seed);
     if seed.is_multiple_of(2) {
         return spec;
@@ -204,7 +238,10 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
         if spec.tasks[i].server == Server::Background {
             continue;
         }
-        let budget = tm.response_time.filter(|&x| x <= tm.period);
+        // The RTA test asks R ≤ D (D = T unless given).
+        let budget = tm
+            .response_time
+            .filter(|&x| x <= tm.deadline.min(tm.period));
         assert!(
             same(r.job_response[i], tm.bounded_response()),
             "{what}: job R of task {i}: {:?} vs {:?}",
@@ -247,10 +284,15 @@ fn bounds_point(r: &Relaxed, spec: &Spec, report: &Report, what: &str, exact: bo
 fn a_point_box_is_the_analysis() {
     let mut bounded = 0;
     let (mut blocked, mut charged) = (0, 0);
+    let (mut dm, mut explicit, mut qpa, mut lets) = (0, 0, 0, 0);
     for seed in 0..SYSTEMS {
         let spec = system(seed);
         blocked += usize::from(spec.tasks.iter().any(|t| !t.sections.is_empty()));
         charged += usize::from(!spec.overheads.is_zero());
+        dm += usize::from(spec.priorities == Priorities::DeadlineMonotonic);
+        explicit += usize::from(spec.priorities == Priorities::Explicit);
+        qpa += usize::from(spec.schedulability == SchedTest::Qpa);
+        lets += usize::from(spec.communication == Communication::Let);
         let t = periods(&spec);
         let r = relax(&spec, &t, &t, &[], true);
         bounded += r.chains.iter().filter(|c| c.0.is_some()).count();
@@ -273,6 +315,13 @@ fn a_point_box_is_the_analysis() {
         blocked > SYSTEMS as usize / 8 && charged > SYSTEMS as usize / 8,
         "{blocked} systems with sections, {charged} with overheads"
     );
+    // And with deadline-monotonic or explicit priorities, or QPA.
+    eprintln!("{dm} deadline-monotonic, {explicit} explicit, {qpa} QPA, {lets} LET systems");
+    assert!(
+        dm > SYSTEMS as usize / 16 && explicit > SYSTEMS as usize / 16 && qpa > 20,
+        "{dm} deadline-monotonic, {explicit} explicit, {qpa} QPA systems"
+    );
+    assert!(lets > SYSTEMS as usize / 16, "{lets} LET systems");
 }
 
 #[test]
@@ -287,6 +336,8 @@ fn a_box_bounds_every_point_inside_from_below() {
         let lo: Vec<Nanos> = t
             .iter()
             .map(|&p| (p - (rng.unit() * p as f64 / 2.0) as Nanos).max(1))
+            .zip(&spec.tasks)
+            .map(|(p, task)| p.max(task.deadline_given.unwrap_or(1)))
             .collect();
         let hi: Vec<Nanos> = t
             .iter()
@@ -369,7 +420,11 @@ fn imposed_orders_bound_the_points_that_have_them() {
         }
         let t = periods(&spec);
         let mut rng = Rng::new(seed ^ 0xabc);
-        let lo: Vec<Nanos> = t.iter().map(|&p| (p / 2).max(1)).collect();
+        let lo: Vec<Nanos> = t
+            .iter()
+            .zip(&spec.tasks)
+            .map(|(&p, task)| (p / 2).max(task.deadline_given.unwrap_or(1)))
+            .collect();
         let hi: Vec<Nanos> = t.iter().map(|&p| 2 * p).collect();
         let point: Vec<Nanos> = (0..t.len())
             .map(|i| lo[i] + (rng.unit() * (hi[i] - lo[i]) as f64) as Nanos)

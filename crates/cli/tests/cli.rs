@@ -239,7 +239,8 @@ fn mutated_exit_2(tag: &str, name: &str, cases: &[(&str, &str, &str)]) {
 }
 
 /// Issue 22's bad combinations exit 2 with the place and a fix; `design`
-/// refuses jitter with exit 2.
+/// checks the deadline-monotonic spec with the box search (every period
+/// fixed: it verifies, exit 0), the MILP refuses it at `priorities`.
 #[test]
 fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     let cases = [
@@ -248,12 +249,20 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
         ("period = 2\n", "period = 2\npriority = 1\n", "bad.toml:23:12: error: task `gyro` gives a priority, but priorities are deadline-monotonic"),
     ];
     mutated_exit_2("cli-timing", "jitter-deadlines.toml", &cases);
-    let o = rtpipe(&["design", &example("jitter-deadlines.toml")]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("deadline-monotonic"),
+    let spec = example("jitter-deadlines.toml");
+    let o = rtpipe(&["design", &spec]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
         "{}",
         String::from_utf8_lossy(&o.stderr)
+    );
+    let o = rtpipe(&["design", &spec, "--method", "milp"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("jitter-deadlines.toml:12:1: error: priorities = \"deadline-monotonic\""),
+        "{err}"
     );
 }
 

@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 20] = [
+const EXAMPLES: [&str; 21] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -50,6 +50,7 @@ const EXAMPLES: [&str; 20] = [
     "resources-design",
     "table2-design-rta",
     "table2-design",
+    "timing-design",
 ];
 
 /// Generated systems (run first: later cases read them).
@@ -257,6 +258,11 @@ const CASES: &[Fixed] = &[
     case(
         "design-cleanflight-event-limits",
         &["design", "@cleanflight-event-limits"],
+    ),
+    case("design-timing", &["design", "@timing-design"]),
+    case(
+        "design-timing-milp",
+        &["design", "@timing-design", "--method", "milp"],
     ),
     case("fly-cleanflight", &["fly", "@cleanflight"]),
     case(

@@ -25,6 +25,7 @@ use crate::joint::{joint_bound, least_under, Row};
 use crate::problem::{Group, Problem};
 use rtpipe_analysis::relax::{relax, Affine, Relaxed};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
+use rtpipe_model::policy::RankKey;
 use rtpipe_model::{Nanos, Server, Spec};
 
 /// Relative tolerance under which a box's bound counts as no better than
@@ -41,7 +42,7 @@ const ORDER_FIRST: f64 = 0.5;
 /// How a box whose corner fails is split in two.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Branching {
-    /// On the RM rank order of two tasks: (a above b) and (b above a).
+    /// On the rank order of two tasks: (a above b) and (b above a).
     Order((usize, usize)),
     /// On task i's period, at its utilisation midpoint.
     Split(usize),
@@ -107,29 +108,46 @@ impl<'r, 'a> Examiner<'r, 'a> {
         t.iter().zip(&self.budget).map(|(&t, c)| c / t as f64).sum()
     }
 
-    /// Shrinks the box to the points that have the imposed orders (RM:
-    /// a above b ⟺ (T_a, a) < (T_b, b)); false when none is left.
+    /// Task i's rank key at its period index k (`policy::rank_key`: the
+    /// period under RM, the deadline or else the period under DM, the
+    /// explicit priority), and whether it is the period itself.
+    fn key(&self, i: usize, k: u32) -> (Nanos, bool) {
+        let spec = self.p.spec;
+        let key = rtpipe_model::policy::rank_key(spec.priorities, &spec.tasks[i]);
+        (key.at(self.axes[i].value(k)), key == RankKey::Period)
+    }
+
+    /// Shrinks the box to the points that have the imposed orders
+    /// (a above b ⟺ (K_a, a) < (K_b, b), K the rank key: only a key that
+    /// is the period moves); false when none is left.
     fn enforce_orders(&self, node: &mut Node) -> bool {
         for _ in 0..node.above.len() + 1 {
             let mut changed = false;
             for &(a, b) in &node.above {
                 let tie = Nanos::from(a > b);
-                // T_a ≤ T_b − tie: a's top and b's bottom move.
-                let top = self.axes[b].value(node.hi[b]) - tie;
-                match self.axes[a].last_at_most(top) {
-                    Some(k) if k >= node.lo[a] => {
-                        changed |= k < node.hi[a];
-                        node.hi[a] = node.hi[a].min(k);
-                    }
-                    _ => return false,
-                }
-                let bottom = self.axes[a].value(node.lo[a]) + tie;
-                let k = self.axes[b].first_at_least(bottom as f64);
-                if k > node.hi[b] {
+                // K_a ≤ K_b − tie: a's top and b's bottom move.
+                let (top, _) = self.key(b, node.hi[b]);
+                let (bottom, _) = self.key(a, node.lo[a]);
+                if bottom + tie > top {
                     return false;
                 }
-                changed |= k > node.lo[b];
-                node.lo[b] = node.lo[b].max(k);
+                if self.key(a, node.hi[a]).1 {
+                    match self.axes[a].last_at_most(top - tie) {
+                        Some(k) if k >= node.lo[a] => {
+                            changed |= k < node.hi[a];
+                            node.hi[a] = node.hi[a].min(k);
+                        }
+                        _ => return false,
+                    }
+                }
+                if self.key(b, node.lo[b]).1 {
+                    let k = self.axes[b].first_at_least((bottom + tie) as f64);
+                    if k > node.hi[b] {
+                        return false;
+                    }
+                    changed |= k > node.lo[b];
+                    node.lo[b] = node.lo[b].max(k);
+                }
             }
             if !changed {
                 return true;
@@ -514,15 +532,16 @@ impl<'r, 'a> Examiner<'r, 'a> {
         (ab, ba)
     }
 
-    /// A pair on one CPU under RM, one of them blamed, whose order the box
-    /// and the imposed orders leave open: the widest narrower span first.
+    /// A pair on one CPU under fixed priorities, one of them blamed, whose
+    /// order the box and the imposed orders leave open (their rank keys'
+    /// intervals overlap): the widest narrower span first.
     fn open_order(&self, node: &Node, blamed: &[bool]) -> Option<(usize, usize)> {
         let spec = self.p.spec;
         if !spec.policy().fixed_priority() {
             return None;
         }
         let ranked = |i: usize| spec.tasks[i].server != Server::Background;
-        let v = |i: usize, k: u32| (self.axes[i].value(k), i);
+        let v = |i: usize, k: u32| (self.key(i, k).0, i);
         let mut best: Option<((usize, usize), f64)> = None;
         for a in 0..node.lo.len() {
             for b in a + 1..node.lo.len() {

@@ -73,34 +73,6 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Priorities other than rate monotonic, the QPA test and LET
-/// communication are refused: the box search and the MILP branch on
-/// rate-monotonic orders of free periods and have no cut for a failed
-/// processor-demand test. (Critical sections, overheads and release
-/// jitter: the box search only, [`contention`].)
-/// Deadlines under fixed priorities are honoured (every answer passes
-/// R ≤ D, re-checked by `analyze`).
-fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
-    if spec.schedulability == rtpipe_model::SchedTest::Qpa {
-        return Err(DesignError::input(
-            "schedulability = \"qpa\" (EDF with deadlines below periods): `design` does not model the processor-demand test yet; design with the deadlines removed (schedulability = \"edf\"), then add them back and check with `analyze`",
-        ));
-    }
-    if spec.communication == rtpipe_model::Communication::Let {
-        // Its encodings are implicit communication's link terms.
-        return Err(DesignError::input(
-            "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
-        ));
-    }
-    if spec.priorities != rtpipe_model::Priorities::RateMonotonic {
-        return Err(DesignError::input(format!(
-            "priorities = \"{}\": `design` orders tasks rate-monotonically as it chooses their periods; use priorities = \"rate-monotonic\" to design, then restore your order and check with `analyze`",
-            spec.priorities.name()
-        )));
-    }
-    Ok(())
-}
-
 /// Designs the periods of `spec`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
@@ -115,7 +87,6 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             t.name
         )));
     }
-    unsupported_timing(spec)?;
     // Known offsets do not enter the design: its bounds hold for any
     // phasing, and a job-level analysis of every candidate would cost a
     // hyperperiod each. The answer keeps them.
@@ -230,11 +201,11 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
         )
     };
     match (opts.method, contention(spec)) {
-        (Method::Auto | Method::Boxes, Some((_, key))) if !fits => Err(paper_refusal()
+        (Method::Auto | Method::Boxes, Some((what, key))) if !fits => Err(paper_refusal()
             .at(key)
-            .help("the MILP does not model critical sections, overheads or release jitter: design in sound mode (leave --mode out)")),
+            .help(format!("the MILP does not model {what}: design in sound mode (leave --mode out)"))),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
@@ -250,10 +221,50 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
 /// What only the box search models, and the spec key that gives it:
 /// critical sections (their blocking, `analysis::blocking`, enters its
 /// relaxation as the least over the orders a box leaves open), release
-/// jitter (the relaxation's response times are R = J + w, Audsley et al.)
-/// and scheduling overheads (`analysis::overheads`, charged per job and
-/// per release). docs/design.md, "Critical sections and overheads".
-fn contention(spec: &Spec) -> Option<(&'static str, String)> {
+/// jitter (the relaxation's response times are R = J + w, Audsley et al.),
+/// scheduling overheads (`analysis::overheads`, charged per job and per
+/// release), deadline-monotonic or explicit priorities (the relaxation
+/// ranks by `policy::rank_key`; the MILP's order binaries compare
+/// periods), the processor-demand test (its demand bounds no MILP row
+/// writes) and LET communication (the relaxation takes LET's chain
+/// bounds, linear in the periods; the MILP encodes implicit
+/// communication's). Deadlines are honoured by both (every answer passes
+/// R ≤ D, or the demand test, re-checked by `analyze`). docs/design.md,
+/// "Critical sections and overheads" and "Priorities and deadlines".
+fn contention(spec: &Spec) -> Option<(String, String)> {
+    if let Some(x) = ranks_or_demand(spec) {
+        return Some(x);
+    }
+    contention_costs(spec).map(|(what, key)| (what.to_string(), key))
+}
+
+/// A priority order other than rate monotonic, the processor-demand test
+/// or LET communication, and its key.
+fn ranks_or_demand(spec: &Spec) -> Option<(String, String)> {
+    if spec.communication == rtpipe_model::Communication::Let {
+        let what = "communication = \"let\" (LET chain bounds)".to_string();
+        return Some((what, "system.communication".to_string()));
+    }
+    let fixed = spec.policy().fixed_priority();
+    if fixed && spec.priorities != rtpipe_model::Priorities::RateMonotonic {
+        let what = format!("priorities = \"{}\"", spec.priorities.name());
+        return Some((what, "system.priorities".to_string()));
+    }
+    if spec.schedulability != rtpipe_model::SchedTest::Qpa {
+        return None;
+    }
+    let what = "schedulability = \"qpa\" (EDF with deadlines, the processor-demand test)";
+    // QPA is the default under EDF with deadlines: the first deadline is
+    // then where the spec asks for it.
+    let key = match spec.tasks.iter().find(|t| t.deadline_given.is_some()) {
+        Some(t) => format!("tasks.{}.deadline", t.name),
+        None => "system.schedulability".to_string(),
+    };
+    Some((what.to_string(), key))
+}
+
+/// Critical sections, release jitter or overheads, and the key.
+fn contention_costs(spec: &Spec) -> Option<(&'static str, String)> {
     if let Some(t) = spec.tasks.iter().find(|t| !t.sections.is_empty()) {
         let key = format!("tasks.{}.critical_sections", t.name);
         return Some(("critical sections (blocking)", key));

@@ -312,10 +312,10 @@ fn deadlines_are_honoured() {
     assert_eq!(o.status, Status::Infeasible);
 }
 
-/// Jitter and non-rate-monotonic orders are refused as input `design`
-/// cannot model.
+/// Jitter, deadline-monotonic orders and LET are designed by the box
+/// search (the MILP refuses them).
 #[test]
-fn jitter_is_designed_by_the_box_search_and_other_orders_are_refused() {
+fn jitter_and_other_orders_are_designed_by_the_box_search() {
     // 200 µs of release jitter on Cleanflight's radio: its chain's bound
     // grows by the jitter, so the optimum shortens the radio's period by
     // exactly that (15,781 → 15,581 µs) and nothing else moves.
@@ -347,12 +347,34 @@ fn jitter_is_designed_by_the_box_search_and_other_orders_are_refused() {
         "scheduler = \"rm\"",
         "scheduler = \"rm\"\npriorities = \"deadline-monotonic\"",
     );
+    // Without deadlines DM ranks by D = T, which is RM: the box search
+    // finds RM's optimum; the MILP refuses the order.
     let s = Spec::parse("dm.toml", &dm).unwrap_or_else(|e| panic!("{e}"));
-    let e = design(&s, &Options::default()).err();
+    let rm = design(&table2_free_rta(false), &Options::default()).unwrap_or_else(|e| panic!("{e}"));
+    let o = design(&s, &Options::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((o.status, o.method), (Status::Optimal, Method::Boxes));
+    assert_eq!((o.status, o.objective), (rm.status, rm.objective));
+    let e = design(&s, &milp).err();
     assert_eq!(
-        e.map(|e| e.kind),
-        Some(ErrorKind::Input),
+        e.map(|e| (e.kind, e.key)),
+        Some((ErrorKind::Input, Some("system.priorities".to_string()))),
         "deadline-monotonic"
+    );
+    let let_ = text.replace(
+        "scheduler = \"rm\"",
+        "scheduler = \"rm\"\ncommunication = \"let\"",
+    );
+    // LET: the box search (its verdict re-checked by `analyze`), the
+    // MILP refuses it.
+    let s = Spec::parse("let.toml", &let_).unwrap_or_else(|e| panic!("{e}"));
+    let o = design(&s, &Options::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(o.method, Method::Boxes);
+    assert!(o.report.as_ref().is_none_or(|r| r.ok_in(Mode::Sound)));
+    let e = design(&s, &milp).err();
+    assert_eq!(
+        e.map(|e| e.key),
+        Some(Some("system.communication".to_string())),
+        "LET"
     );
 }
 

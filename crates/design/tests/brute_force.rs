@@ -28,9 +28,10 @@ use rtpipe_analysis::{analyze, bounds_per_chain, Report};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{design, utilization, Method, Mode, Options, Outcome, Status};
 use rtpipe_model::gen::{
-    add_contention, design_problem, ChainBounds, Contention, DesignGenConfig, GenConfig, Rng,
+    add_contention, add_timing, design_problem, ChainBounds, Contention, DesignGenConfig,
+    GenConfig, Rng,
 };
-use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
+use rtpipe_model::{Communication, Nanos, PeriodSpec, Priorities, SchedTest, Scheduler, Spec};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -389,11 +390,58 @@ fn add_jitter(spec: &mut Spec, r: &mut Rng) -> bool {
     added
 }
 
-/// `design` refuses critical sections and overheads with the MILP, and in
-/// paper mode where the box search does not apply.
+/// Instance `seed` (choices, or ranges for every other seed) with
+/// constrained deadlines and deadline-monotonic or explicit priorities
+/// (RM, under RTA) or the processor-demand test (EDF), `gen::add_timing`,
+/// and LET communication on about a third, written and parsed back;
+/// `None` when validation refuses it.
+fn timed_instance(seed: u64, mode: Mode) -> Option<Spec> {
+    let mut spec = if seed.is_multiple_of(2) {
+        instance(seed, mode)
+    } else {
+        instance_with_ranges(seed, mode)
+    };
+    if spec.policy().fixed_priority() {
+        spec.schedulability = SchedTest::Rta;
+    }
+    add_timing(&mut spec, &mut Rng::new(seed ^ 0xd1ce));
+    let parsed = |s: &Spec| Spec::parse("timed.toml", &rtpipe_model::to_toml(s)).ok();
+    // LET communication on about a third, where validation takes it, with
+    // the limits doubled (LET's bounds run about twice the implicit ones
+    // the limits come from).
+    if Rng::new(seed ^ 0x1e7).chance(0.35) {
+        let mut l = spec.clone();
+        l.communication = Communication::Let;
+        for ch in &mut l.chains {
+            for x in [
+                &mut ch.reaction,
+                &mut ch.freshness,
+                &mut ch.max_reaction_time,
+                &mut ch.max_data_age,
+            ] {
+                *x = x.map(|v| 2 * v);
+            }
+        }
+        if let Some(s) = parsed(&l) {
+            return Some(s);
+        }
+    }
+    parsed(&spec)
+}
+
+/// `design` refuses critical sections, overheads, jitter, DM or explicit
+/// priorities and QPA with the MILP, and in paper mode where the box
+/// search does not apply.
 fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
     let boxes_apply = mode == Mode::Sound || rtpipe_analysis::relax::paper_monotone(spec);
-    contended(spec) && (method == Method::Milp || !boxes_apply)
+    (contended(spec) || timed(spec)) && (method == Method::Milp || !boxes_apply)
+}
+
+/// The spec ranks by deadlines or explicit priorities, uses QPA or LET.
+fn timed(spec: &Spec) -> bool {
+    spec.priorities != Priorities::RateMonotonic
+        || spec.schedulability == SchedTest::Qpa
+        || spec.communication == Communication::Let
 }
 
 /// The spec has critical sections, overheads or release jitter.
@@ -402,6 +450,25 @@ fn contended(spec: &Spec) -> bool {
         .iter()
         .any(|t| !t.sections.is_empty() || t.jitter > 0)
         || !spec.overheads.is_zero()
+}
+
+/// Tallies the priority orders, deadlines and QPA of an instance.
+fn count_timing(spec: &Spec, tally: &mut BTreeMap<&'static str, usize>) {
+    let mut add = |k| *tally.entry(k).or_default() += 1;
+    match spec.priorities {
+        Priorities::DeadlineMonotonic => add("deadline-monotonic"),
+        Priorities::Explicit => add("explicit"),
+        Priorities::RateMonotonic => {}
+    }
+    if spec.schedulability == SchedTest::Qpa {
+        add("qpa");
+    }
+    if spec.communication == Communication::Let {
+        add("let");
+    }
+    if spec.tasks.iter().any(|t| t.deadline_given.is_some()) {
+        add("with deadlines");
+    }
 }
 
 /// How many optimal designs with sections and overheads each run simulates.
@@ -444,6 +511,9 @@ enum Shape {
     Harmonic,
     /// Choices or ranges with critical sections and overheads.
     Contended,
+    /// Choices or ranges with deadlines, DM or explicit priorities, QPA,
+    /// LET.
+    Timed,
 }
 
 impl Shape {
@@ -453,6 +523,7 @@ impl Shape {
             Shape::Ranges => ", with ranges",
             Shape::Harmonic => ", harmonic ranges",
             Shape::Contended => ", sections and overheads",
+            Shape::Timed => ", deadlines, DM, explicit priorities, QPA, LET",
         }
     }
 }
@@ -493,7 +564,15 @@ fn run(
                     continue;
                 }
             },
+            Shape::Timed => match timed_instance(seed, mode) {
+                Some(s) => s,
+                None => {
+                    *tally.entry("skipped (refused)").or_default() += 1;
+                    continue;
+                }
+            },
         };
+        count_timing(&spec, &mut tally);
         let spec = if event {
             with_event_limits(spec, seed)
         } else {
@@ -535,7 +614,10 @@ fn run(
             }
         };
         *tally.entry(o.status.name()).or_default() += 1;
-        if let Shape::Contended = shape {
+        if spec.communication == Communication::Let && o.status == Status::Optimal {
+            *tally.entry("let optimal").or_default() += 1;
+        }
+        if let Shape::Contended | Shape::Timed = shape {
             *tally.entry("boxes or masters").or_default() += o.iterations;
         }
         if verbose {
@@ -553,9 +635,9 @@ fn run(
             let path = save_bug(&spec, seed, mode);
             failures.push(format!("seed {seed}: {e} ({path})"));
         }
-        if let (Shape::Contended, Some(d)) = (shape, o.spec.as_ref()) {
+        if let (Shape::Contended | Shape::Timed, Some(d)) = (shape, o.spec.as_ref()) {
             let sound = o.status == Status::Optimal && mode == Mode::Sound;
-            if simulated < SIMULATED && sound && contended(d) {
+            if simulated < SIMULATED && sound && (contended(d) || timed(d)) {
                 simulated += 1;
                 let (f, n, ratio) = simulate_design(d, seed);
                 failures.extend(f);
@@ -771,6 +853,41 @@ fn contention_agrees_with_brute_force() {
         n / 10,
         3.0,
         Shape::Contended,
+        false,
+    );
+}
+
+/// Deadlines, deadline-monotonic and explicit priorities, QPA and LET: the
+/// box search against brute force in sound mode (and in paper mode where it
+/// applies; the MILP is refused), some designs simulated.
+#[test]
+fn timing_agrees_with_brute_force() {
+    let n = cases(300);
+    run(
+        Mode::Sound,
+        Method::Auto,
+        1_000_000,
+        n,
+        3.0,
+        Shape::Timed,
+        false,
+    );
+    run(
+        Mode::Paper,
+        Method::Auto,
+        1_100_000,
+        n / 3,
+        3.0,
+        Shape::Timed,
+        false,
+    );
+    run(
+        Mode::Sound,
+        Method::Milp,
+        1_000_000,
+        n / 10,
+        3.0,
+        Shape::Timed,
         false,
     );
 }

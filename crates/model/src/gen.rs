@@ -13,8 +13,10 @@ use crate::{
 };
 
 mod contention;
+mod timing;
 mod waters;
 pub use contention::{add_contention, random_sections, Contention};
+pub use timing::{add_timing, Timing};
 pub use waters::{
     sample_acet_us, waters_exec, waters_share, waters_system, WatersConfig, WatersExec, WATERS_EXEC,
 };

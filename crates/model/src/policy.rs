@@ -349,19 +349,52 @@ impl SchedPolicy {
 /// by fixed priority (the analysis, the simulator, the design, the
 /// runtime's SCHED_FIFO priorities) takes its ranks from here.
 pub fn ranks(spec: &Spec) -> Vec<Option<usize>> {
-    match spec.priorities {
-        Priorities::RateMonotonic => rate_monotonic(spec),
-        Priorities::DeadlineMonotonic => deadline_monotonic(spec),
-        // Validation makes them distinct per CPU; a task without one (not a
-        // validated spec) ranks last.
-        Priorities::Explicit => ranked_by(spec, |t| t.priority.map_or(Nanos::MAX, Nanos::from)),
+    ranked_by(spec, |t| {
+        rank_key(spec.priorities, t).at(t.fixed_period().unwrap_or(Nanos::MAX))
+    })
+}
+
+/// What ranks a task under a priority order (smaller ranks higher, ties
+/// by declaration order): its period, or a constant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RankKey {
+    /// The task's period (rate-monotonic; deadline-monotonic without a
+    /// given deadline, D = T).
+    Period,
+    /// A given deadline (deadline-monotonic) or priority (explicit).
+    Fixed(Nanos),
+}
+
+impl RankKey {
+    /// The key's value when the task's period is `period`. It never falls
+    /// as the period grows, which the design's box search uses to bound
+    /// it over an interval of periods.
+    pub fn at(self, period: Nanos) -> Nanos {
+        match self {
+            RankKey::Period => period,
+            RankKey::Fixed(k) => k,
+        }
+    }
+}
+
+/// The key that ranks task `t` under `order`: the period (rate-monotonic),
+/// the given deadline or else the period (deadline-monotonic), the
+/// explicit `priority`. Validation makes explicit priorities distinct per
+/// CPU; a task without one (not a validated spec) ranks last.
+pub fn rank_key(order: Priorities, t: &crate::Task) -> RankKey {
+    match (order, t.deadline_given) {
+        (Priorities::RateMonotonic, _) | (Priorities::DeadlineMonotonic, None) => RankKey::Period,
+        (Priorities::DeadlineMonotonic, Some(d)) => RankKey::Fixed(d),
+        (Priorities::Explicit, _) => RankKey::Fixed(t.priority.map_or(Nanos::MAX, Nanos::from)),
     }
 }
 
 /// Deadline-monotonic ranks per CPU: shorter deadline (D, else T) first,
 /// ties by declaration order.
 pub fn deadline_monotonic(spec: &Spec) -> Vec<Option<usize>> {
-    ranked_by(spec, |t| t.deadline().unwrap_or(Nanos::MAX))
+    ranked_by(spec, |t| {
+        rank_key(Priorities::DeadlineMonotonic, t).at(t.fixed_period().unwrap_or(Nanos::MAX))
+    })
 }
 
 /// The stack resource policy's preemption levels under EDF, per CPU, as
