@@ -192,6 +192,16 @@ pub fn chain_offsets(
     if path.is_empty() || offsets.iter().all(Option::is_none) {
         return None;
     }
+    // A declared chain is all LET or all implicit (the model refuses a
+    // task on chains of different semantics).
+    let lets = path
+        .iter()
+        .filter(|&&i| spec.task_communication(i) == rtpipe_model::Communication::Let)
+        .count();
+    assert!(
+        lets == 0 || lets == path.len(),
+        "chain {chain} mixes LET and implicit tasks"
+    );
     let valid = any_phasing_valid(spec, timing, path, any);
     let late = late_start_delay(spec, timing, path).is_some();
     let fallback = |f: Fallback| {
@@ -209,7 +219,7 @@ pub fn chain_offsets(
         .collect();
     let (bound, job_level) = if !unknown.is_empty() {
         (fallback(Fallback::UnknownOffsets(dedup(unknown))), None)
-    } else if spec.communication == rtpipe_model::Communication::Let {
+    } else if lets == path.len() {
         match let_job_level(spec, timing, path, limit) {
             Err(f) => (fallback(f), None),
             Ok(jl) => (let_reported(&jl), Some(jl)),
@@ -240,7 +250,8 @@ fn let_job_level(
         .iter()
         .map(|&i| LinkTask::new(spec, timing, i))
         .collect();
-    if crate::latency::let_chain_sound(&lt).is_none() {
+    // LET's premise: every job completes within its period.
+    if lt.iter().any(|x| x.publish().is_none()) {
         return Err(Fallback::Unbounded);
     }
     let chain: Vec<crate::let_bound::LetTask> = path

@@ -92,6 +92,14 @@ fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
             "communication = \"let\": `design` encodes implicit communication's bounds; design with communication = \"implicit\", then restore LET and check with `analyze`",
         ));
     }
+    if let Some(k) = (0..spec.chains.len())
+        .find(|&k| spec.chains[k].communication == Some(rtpipe_model::Communication::Let))
+    {
+        return Err(DesignError::input(format!(
+            "chain `{}` has communication = \"let\": `design` encodes implicit communication's bounds; design without the chain's communication key, then restore it and check with `analyze`",
+            spec.chain_label(k)
+        )));
+    }
     if spec.priorities != rtpipe_model::Priorities::RateMonotonic {
         return Err(DesignError::input(format!(
             "priorities = \"{}\": `design` orders tasks rate-monotonically as it chooses their periods; use priorities = \"rate-monotonic\" to design, then restore your order and check with `analyze`",

@@ -205,6 +205,17 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
             "use communication = \"implicit\" to fly it (`rtpipe simulate` runs LET exactly)",
         ));
     }
+    if let Some(k) = (0..spec.chains.len())
+        .find(|&k| spec.chains[k].communication == Some(rtpipe_model::Communication::Let))
+    {
+        return Err(Diagnostic::error(
+            format!(
+                "chain `{}` has communication = \"let\": flights co-simulate implicit communication only",
+                spec.chain_label(k)
+            ),
+            "remove the chain's communication key to fly it (`rtpipe simulate` runs LET exactly)",
+        ));
+    }
     let kinds = body_kinds(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
     let mission = mission(r.mission)?;

@@ -288,9 +288,10 @@ pub(crate) struct Sim<H> {
     pub(crate) is_dirty: Vec<bool>,
     /// Scratch lists of an instant: the CPUs due, the CPUs picked for.
     pub(crate) scratch: (Vec<usize>, Vec<usize>),
-    /// LET communication (`let_comm.rs`): reads at releases and publishes
-    /// at period ends feed the provenance, not the schedule's instants.
-    pub(crate) let_comm: bool,
+    /// Per task, LET communication (`let_comm.rs`): its reads at releases
+    /// and publishes at period ends feed the provenance, not the
+    /// schedule's instants (per chain: `Spec::communications`).
+    pub(crate) let_comm: Vec<bool>,
     /// Under LET, per task: the job that read at its release and publishes
     /// at the end of its period.
     pub(crate) let_open: Vec<Option<LetJob>>,
@@ -358,7 +359,11 @@ impl<H: Hooks> Sim<H> {
             dirty: Vec::new(),
             is_dirty: vec![false; n_cpus],
             scratch: (Vec::new(), Vec::new()),
-            let_comm: spec.communication == Communication::Let,
+            let_comm: spec
+                .communications()
+                .into_iter()
+                .map(|c| c == Communication::Let)
+                .collect(),
             let_open: vec![None; spec.tasks.len()],
             locks,
             ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
@@ -506,7 +511,7 @@ impl<H: Hooks> Sim<H> {
                 let was_idle = ts.queue.is_empty();
                 let before = ts.next_index;
                 release_jobs(ts, exec, t);
-                if self.let_comm {
+                if self.let_comm[i] {
                     let new = (ts.next_index - before) as usize;
                     let skip = ts.queue.len() - new;
                     released.extend(ts.queue.iter().skip(skip).map(|j| LetJob {
@@ -664,7 +669,7 @@ impl<H: Hooks> Sim<H> {
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
-        if !self.let_comm {
+        if !self.let_comm[i] {
             self.prov.read(i, t);
         }
         let Some(job) = self.tasks[i].queue.front_mut() else {
@@ -697,7 +702,7 @@ impl<H: Hooks> Sim<H> {
         if response > ts.deadline {
             ts.stats.late += 1;
         }
-        if self.let_comm {
+        if self.let_comm[i] {
             // LET publishes at the end of the period (`let_comm.rs`).
             if ts.queue.is_empty() {
                 ts.budget.block(t);
