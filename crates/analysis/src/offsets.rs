@@ -177,7 +177,8 @@ impl OffsetBound {
 }
 
 /// The chain along `path` under the spec's known offsets; `None` when no
-/// task of the chain has one (the arbitrary-phasing bound is all there is).
+/// task of the chain has one, or the path mixes LET and implicit tasks (the
+/// arbitrary-phasing bound is all there is).
 /// `any` is the chain's arbitrary-phasing analysis ([`crate::analyze_chain`]);
 /// `limit` caps the jobs analysed ([`MAX_JOBS`]).
 pub fn chain_offsets(
@@ -192,16 +193,17 @@ pub fn chain_offsets(
     if path.is_empty() || offsets.iter().all(Option::is_none) {
         return None;
     }
-    // A declared chain is all LET or all implicit (the model refuses a
-    // task on chains of different semantics).
+    // A parsed spec's chain is all LET or all implicit (the model refuses
+    // a task on chains of different semantics); a mixed path, which only a
+    // spec built in code can declare, has the arbitrary-phasing bound
+    // alone (its mixed link terms, docs/analysis.md).
     let lets = path
         .iter()
         .filter(|&&i| spec.task_communication(i) == rtpipe_model::Communication::Let)
         .count();
-    assert!(
-        lets == 0 || lets == path.len(),
-        "chain {chain} mixes LET and implicit tasks"
-    );
+    if lets != 0 && lets != path.len() {
+        return None;
+    }
     let valid = any_phasing_valid(spec, timing, path, any);
     let late = late_start_delay(spec, timing, path).is_some();
     let fallback = |f: Fallback| {

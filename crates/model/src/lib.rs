@@ -365,7 +365,9 @@ impl Spec {
     /// system's for a task on no chain with its own.
     pub fn communications(&self) -> Vec<Communication> {
         let mut out = vec![self.communication; self.tasks.len()];
-        for ch in &self.chains {
+        // The first chain with a key wins, as in `task_communication` (a
+        // spec built in code may disagree with itself; a parsed one cannot).
+        for ch in self.chains.iter().rev() {
             if let Some(c) = ch.communication {
                 for &i in &ch.path {
                     out[i] = c;
