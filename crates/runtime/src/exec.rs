@@ -714,25 +714,7 @@ fn job<V: Copy>(
 ) {
     let offset = th.phase + k as i64 * th.period;
     let cpu0 = sys::thread_cpu_time();
-    inputs.clear();
-    for r in &mut th.ins {
-        let v = match r {
-            In::Reg(r) => r.read(),
-            In::Let(r) => {
-                // A LET job reads at its release; an implicit one now.
-                let at = if th.let_comm {
-                    offset
-                } else {
-                    sys::now() - epoch
-                };
-                let (v, exact) = r.read(at);
-                th.let_misses += u64::from(!exact);
-                v
-            }
-        };
-        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
-        inputs.push(v);
-    }
+    read_inputs(th, offset, epoch, inputs);
     let (start, device) = sense(th.task, epoch, env);
     let start = start - epoch;
     let read = if th.let_comm { offset } else { start };
@@ -774,6 +756,35 @@ fn job<V: Copy>(
         finish,
         demand,
     });
+}
+
+/// Reads every input of the job released at `offset`, in the spec's
+/// `reads` order, into `inputs`, and logs the producer job read on each.
+fn read_inputs<V: Copy>(
+    th: &mut Thread<'_, V>,
+    offset: Nanos,
+    epoch: Nanos,
+    inputs: &mut Vec<Cell<V>>,
+) {
+    inputs.clear();
+    for r in &mut th.ins {
+        let v = match r {
+            In::Reg(r) => r.read(),
+            In::Let(r) => {
+                // A LET job reads at its release; an implicit one now.
+                let at = if th.let_comm {
+                    offset
+                } else {
+                    sys::now() - epoch
+                };
+                let (v, exact) = r.read(at);
+                th.let_misses += u64::from(!exact);
+                v
+            }
+        };
+        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+        inputs.push(v);
+    }
 }
 
 /// The read instant of a job of `task`, and what the world gives it there.
