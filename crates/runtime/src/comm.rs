@@ -34,6 +34,6 @@ pub(crate) fn bodies_refusal(spec: &Spec, world: bool) -> Option<(&'static str, 
     }
     (world && spec.any_let()).then_some((
         "a chain with communication = \"let\" with a world (flight bodies): LET reads at the release, when the thread need not be running, and a world cannot be sensed in the past",
-        "remove the chain's communication key to fly it on real threads, or use `rtpipe run --synthetic`",
+        "remove the chain's communication key to fly it on real threads, `rtpipe fly` to fly it under LET, or `rtpipe run --synthetic`",
     ))
 }

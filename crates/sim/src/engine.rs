@@ -11,7 +11,9 @@ use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
 /// What the simulator tells the code that runs task bodies: a job reads, a
-/// job publishes. Called in simulated-time order.
+/// job publishes. Called in simulated-time order, at the instants of the
+/// task's semantics: its start and completion (implicit), or its release
+/// and its period's end (LET, `let_comm.rs`).
 pub(crate) trait Hooks {
     /// The front job of `job.task` reads at `job.read`.
     fn read(&mut self, job: &rtpipe_body::Job);
@@ -669,13 +671,15 @@ impl<H: Hooks> Sim<H> {
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
-        if !self.let_comm[i] {
-            self.prov.read(i, t);
-        }
         let Some(job) = self.tasks[i].queue.front_mut() else {
             unreachable!("task {i} reads without a pending job");
         };
         job.read = Some(t);
+        if self.let_comm[i] {
+            // Under LET the job read at its release (`let_comm.rs`).
+            return;
+        }
+        self.prov.read(i, t);
         let job = rtpipe_body::Job {
             task: i,
             index: job.index,
@@ -695,7 +699,9 @@ impl<H: Hooks> Sim<H> {
             job.read.is_some_and(|r| job.release <= r && r <= t),
             "task {i} publishes at {t} a job that did not read after its release"
         );
-        self.hooks.publish(i, t);
+        if !self.let_comm[i] {
+            self.hooks.publish(i, t);
+        }
         let response = t - job.release;
         ts.stats.completed += 1;
         ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
