@@ -56,6 +56,9 @@ pub struct LinkTask {
     pub prio: Option<usize>,
     /// Highest rank it can inherit (PIBS).
     pub top: Option<usize>,
+    /// Reads at its release and publishes at its period's end (LET), not
+    /// at its start and completion.
+    pub let_comm: bool,
 }
 
 impl LinkTask {
@@ -78,6 +81,27 @@ impl LinkTask {
             edf: !spec.policy().fixed_priority(),
             prio: tm.priority,
             top: tm.top_priority,
+            let_comm: spec.task_communication(i) == Communication::Let,
+        }
+    }
+
+    /// A bound on the time from a job's release to its publish: R, or
+    /// under LET the period (LET's premise R ≤ T holds: `r` is bounded).
+    pub fn publish(&self) -> Option<Nanos> {
+        if self.let_comm {
+            self.r.map(|_| self.t)
+        } else {
+            self.r
+        }
+    }
+
+    /// A bound on the time from a job's read to its publish: W, or under
+    /// LET the period (it reads at its release).
+    pub fn read_to_publish(&self) -> Option<Nanos> {
+        if self.let_comm {
+            self.r.map(|_| self.t)
+        } else {
+            self.w
         }
     }
 }
@@ -184,6 +208,9 @@ pub fn sound_reaction_link_in(
     p_read: bool,
 ) -> Option<Nanos> {
     let (rp, _) = (p.r?, c.r?);
+    if p.let_comm || c.let_comm {
+        return let_reaction_link(p, c, p_distinct, p_read);
+    }
     // J_k publishes within R_p of its release, W_p of its read.
     let to_publish = if p_read { p.w? } else { rp };
     // Davare et al.: the first c release after the publish is less than T_c
@@ -225,6 +252,28 @@ pub fn sound_reaction_link_in(
     Some(l)
 }
 
+/// [`sound_reaction_link_in`] when p or c communicates under LET
+/// (docs/analysis.md, "Mixed links"): `J_k` publishes within R_p of its
+/// release (W_p of its read), or at its period's end T_p under LET, and
+/// the first c job reading at or after that is released less than T_c
+/// later (a LET c reads at its release; an implicit one at or after it).
+/// Reachability holds for an implicit p as before (`J_{k+1}` reads before
+/// p's next publish). The priority cases do not apply: a LET publish or
+/// read is a timer instant, not a point of the schedule.
+fn let_reaction_link(p: &LinkTask, c: &LinkTask, p_distinct: bool, p_read: bool) -> Option<Nanos> {
+    let rp = p.r?;
+    let to_publish = if p_read {
+        p.read_to_publish()?
+    } else {
+        p.publish()?
+    };
+    let mut l = to_publish + c.t;
+    if p_distinct && !p.let_comm {
+        l = l.min(p.t + rp);
+    }
+    Some(l)
+}
+
 /// Both tasks are picked by deadline (EDF) on one CPU: a job picked while
 /// another is pending has the earlier deadline (or wins the tie), and the
 /// other does not run until it completes (docs/analysis.md).
@@ -244,6 +293,11 @@ pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_reaction_link_in`]); every option grows with T_p and R_p.
 pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, _) = (p.r?, c.r?);
+    if p.let_comm || c.let_comm {
+        // The same argument with p's publish at its period's end under
+        // LET; no priority case (docs/analysis.md, "Mixed links").
+        return Some(p.t + p.publish()?);
+    }
     // That c job reads, so is released, before p's next publish, which the
     // next p job (released T_p after the one that carried the sample) makes
     // within R_p.
@@ -268,6 +322,11 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
     let (rp, _, wc) = (p.r?, c.r?, c.w?);
+    if p.let_comm || c.let_comm {
+        // L_n reads before p's next publish and publishes within W_c of
+        // its read, or T_c under LET (docs/analysis.md, "Mixed links").
+        return Some(p.t + p.publish()? + c.read_to_publish()?);
+    }
     Some(match order {
         // c preempts p: the last c job carrying the sample has published
         // before p publishes again (nothing of c is pending while p runs).
@@ -378,9 +437,14 @@ pub fn compose_sound(
 
 /// Sound mode: does "each sample is carried by at most one job" pass from p to c?
 /// It does when c's reads are further apart than p's publishes can be.
+/// Under LET a task reads exactly T apart and publishes exactly T apart.
 pub fn distinct_passes(p: &LinkTask, c: &LinkTask, p_distinct: bool) -> bool {
     match (p_distinct, p.r, c.r) {
-        (true, Some(rp), Some(rc)) => c.t - rc + c.x > p.t + rp - p.x_min,
+        (true, Some(rp), Some(rc)) => {
+            let reads = if c.let_comm { c.t } else { c.t - rc + c.x };
+            let publishes = if p.let_comm { p.t } else { p.t + rp - p.x_min };
+            reads > publishes
+        }
         _ => false,
     }
 }
@@ -547,7 +611,10 @@ fn sound_event_reaction(sched: Scheduler, lt: &[LinkTask]) -> Option<Nanos> {
             .zip(sound_reaction_link(sched, &w[0], &w[1], false, false))
             .map(|(a, b)| a + b);
     }
-    from_event(&lt[0], sum.zip(lt[lt.len() - 1].r).map(|(a, b)| a + b))
+    from_event(
+        &lt[0],
+        sum.zip(lt[lt.len() - 1].publish()).map(|(a, b)| a + b),
+    )
 }
 
 /// The sound links of a chain from the head's read, with "distinct" passed
@@ -607,16 +674,6 @@ fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
     (react, age)
 }
 
-/// The sound bound of a chain under LET with arbitrary offsets: the
-/// [`any_phasing`](crate::let_bound::any_phasing) figures, when every task completes within its period
-/// (LET's premise; `None` otherwise).
-pub fn let_chain_sound(lt: &[LinkTask]) -> Option<crate::let_bound::LetLatencies> {
-    if lt.iter().any(|x| x.r.is_none_or(|r| r > x.t)) {
-        return None;
-    }
-    crate::let_bound::any_phasing(&lt.iter().map(|x| x.t).collect::<Vec<_>>())
-}
-
 /// The paper's (reaction, freshness) along the chain: Eq. 1 at the head and
 /// each link's term.
 fn paper(lt: &[LinkTask]) -> (Nanos, Nanos, Vec<Case>) {
@@ -641,23 +698,16 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
     let head = &lt[0];
     let (paper_reaction, paper_freshness, cases) = paper(&lt);
     let links = sound_links(sched, &lt);
-    let tail_r = lt[lt.len() - 1].r;
-    let (sound_reaction, sound_freshness) = compose_sound(tail_r, head.w, &links);
+    // The tail's publish: R_n, or T_n under LET (so are the head's terms:
+    // a chain all under LET gets `let_bound::any_phasing`'s figures).
+    let tail_r = lt[lt.len() - 1].publish();
+    let (sound_reaction, sound_freshness) = compose_sound(tail_r, head.read_to_publish(), &links);
     // From the event the freshness runs from the head's release: a chain of
     // one task by R_1, not W_1 (the freshness terms never start at a read).
-    let mut sound_event = (
+    let sound_event = (
         sound_event_reaction(sched, &lt),
-        from_event(head, compose_sound(tail_r, head.r, &links).1),
+        from_event(head, compose_sound(tail_r, head.publish(), &links).1),
     );
-    let (sound_reaction, sound_freshness) = if spec.communication == Communication::Let {
-        // Under LET the sound bound is LET's (`let_bound.rs`): the data
-        // flow follows the periods, not the schedule.
-        let l = let_chain_sound(&lt);
-        sound_event = (l.map(|l| l.reaction_event), l.map(|l| l.freshness_event));
-        (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read))
-    } else {
-        (sound_reaction, sound_freshness)
-    };
     let (davare_reaction, davare_freshness) = davare(&lt);
     let (duerr_reaction, duerr_freshness) = duerr(sched, &lt);
     // `from_read` in `Bound::ALL` order; from the event, every bound but
@@ -729,6 +779,7 @@ mod tests {
             edf: false,
             prio: Some(prio),
             top: Some(prio),
+            let_comm: false,
         }
     }
 

@@ -177,7 +177,8 @@ impl OffsetBound {
 }
 
 /// The chain along `path` under the spec's known offsets; `None` when no
-/// task of the chain has one (the arbitrary-phasing bound is all there is).
+/// task of the chain has one, or the path mixes LET and implicit tasks (the
+/// arbitrary-phasing bound is all there is).
 /// `any` is the chain's arbitrary-phasing analysis ([`crate::analyze_chain`]);
 /// `limit` caps the jobs analysed ([`MAX_JOBS`]).
 pub fn chain_offsets(
@@ -190,6 +191,17 @@ pub fn chain_offsets(
 ) -> Option<ChainOffsets> {
     let offsets: Vec<Option<Nanos>> = path.iter().map(|&i| spec.tasks[i].offset).collect();
     if path.is_empty() || offsets.iter().all(Option::is_none) {
+        return None;
+    }
+    // A parsed spec's chain is all LET or all implicit (the model refuses
+    // a task on chains of different semantics); a mixed path, which only a
+    // spec built in code can declare, has the arbitrary-phasing bound
+    // alone (its mixed link terms, docs/analysis.md).
+    let lets = path
+        .iter()
+        .filter(|&&i| spec.task_communication(i) == rtpipe_model::Communication::Let)
+        .count();
+    if lets != 0 && lets != path.len() {
         return None;
     }
     let valid = any_phasing_valid(spec, timing, path, any);
@@ -209,7 +221,7 @@ pub fn chain_offsets(
         .collect();
     let (bound, job_level) = if !unknown.is_empty() {
         (fallback(Fallback::UnknownOffsets(dedup(unknown))), None)
-    } else if spec.communication == rtpipe_model::Communication::Let {
+    } else if lets == path.len() {
         match let_job_level(spec, timing, path, limit) {
             Err(f) => (fallback(f), None),
             Ok(jl) => (let_reported(&jl), Some(jl)),
@@ -240,7 +252,8 @@ fn let_job_level(
         .iter()
         .map(|&i| LinkTask::new(spec, timing, i))
         .collect();
-    if crate::latency::let_chain_sound(&lt).is_none() {
+    // LET's premise: every job completes within its period.
+    if lt.iter().any(|x| x.publish().is_none()) {
         return Err(Fallback::Unbounded);
     }
     let chain: Vec<crate::let_bound::LetTask> = path

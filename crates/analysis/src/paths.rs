@@ -15,7 +15,7 @@ use crate::latency::{
     sound_freshness_link, sound_reaction_link, LinkTask,
 };
 use crate::sched::TaskTiming;
-use rtpipe_model::{Communication, Nanos, Scheduler, Server, Spec};
+use rtpipe_model::{Nanos, Scheduler, Server, Spec};
 
 /// Stands for an unbounded sound value inside the DP.
 const INF: Nanos = Nanos::MAX;
@@ -332,7 +332,7 @@ impl Scratch {
         // A path of one task is its read-to-publish bound; a longer one ends
         // with its last link's term.
         let (fresh, fresh_path) = if v == s {
-            (lt[v].w, vec![v])
+            (lt[v].read_to_publish(), vec![v])
         } else {
             let mut path = self.sound_freshness.walk(self.sound_last.from[v]);
             path.push(v);
@@ -353,7 +353,13 @@ impl Scratch {
                 .map(|x| x / 2)
                 .collect()
         });
-        let tail = if v == s { lt[v].w } else { lt[v].r };
+        // The tail's read-to-publish or release-to-publish bound (the
+        // period under LET).
+        let tail = if v == s {
+            lt[v].read_to_publish()
+        } else {
+            lt[v].publish()
+        };
         let react = best.and_then(|b| fin(add(self.sound_reaction.val[b], tail)));
         PairBounds {
             source: s,
@@ -403,95 +409,14 @@ pub fn all_paths(spec: &Spec, timing: &[TaskTiming]) -> AllPaths {
                 }
             }
         }
-        let lets = (spec.communication == Communication::Let).then(|| let_paths(&g, s, &lt));
         for &v in reached {
             if sc.stamp[v] == s && g.dag[v].is_empty() {
-                let mut pair = sc.pair(s, v, &lt);
-                if let Some(l) = &lets {
-                    l.apply(&mut pair, &lt);
-                }
-                pairs.push(pair);
+                pairs.push(sc.pair(s, v, &lt));
             }
         }
     }
     AllPaths {
         pairs,
         cycles: g.cycles,
-    }
-}
-
-/// The worst LET paths from one source (`let_bound::any_phasing`, path by
-/// path): X = T_s + Σ_{v≠s} 2·T_v (first output) and the prefix Σ 2·T_v of
-/// the freshness F = Σ_{v≠sink} 2·T_v + T_sink are sums of positive weights
-/// over the path's tasks, so each is a longest path in the DAG. `unbounded`
-/// marks tasks some path to which crosses a task that may not complete
-/// within its period (no LET bound then).
-struct LetPaths {
-    x: Vec<Option<(Nanos, usize)>>,
-    f: Vec<Option<(Nanos, usize)>>,
-    unbounded: Vec<bool>,
-    source: usize,
-}
-
-fn let_paths(g: &Acyclic, s: usize, lt: &[LinkTask]) -> LetPaths {
-    let n = lt.len();
-    let late = |v: usize| lt[v].r.is_none_or(|r| r > lt[v].t);
-    let mut l = LetPaths {
-        x: vec![None; n],
-        f: vec![None; n],
-        unbounded: vec![false; n],
-        source: s,
-    };
-    l.x[s] = Some((lt[s].t, s));
-    l.f[s] = Some((0, s));
-    l.unbounded[s] = late(s);
-    for &v in &g.order[g.pos[s]..] {
-        let (Some((xv, _)), Some((fv, _))) = (l.x[v], l.f[v]) else {
-            continue;
-        };
-        for &c in &g.dag[v] {
-            let (xc, fc) = (xv + 2 * lt[c].t, fv + 2 * lt[v].t);
-            if l.x[c].is_none_or(|(x, _)| xc > x) {
-                l.x[c] = Some((xc, v));
-            }
-            if l.f[c].is_none_or(|(f, _)| fc > f) {
-                l.f[c] = Some((fc, v));
-            }
-            l.unbounded[c] |= l.unbounded[v] || late(c);
-        }
-    }
-    l
-}
-
-impl LetPaths {
-    fn walk(&self, links: &[Option<(Nanos, usize)>], v: usize) -> Vec<usize> {
-        let mut path = vec![v];
-        let mut at = v;
-        while at != self.source {
-            match links[at] {
-                Some((_, p)) => at = p,
-                None => break,
-            }
-            path.push(at);
-        }
-        path.reverse();
-        path
-    }
-
-    /// The pair's sound figures under LET.
-    fn apply(&self, pair: &mut PairBounds, lt: &[LinkTask]) {
-        let v = pair.sink;
-        let ok = !self.unbounded[v];
-        let x = self.x[v].map(|(x, _)| x).filter(|_| ok);
-        let f = self.f[v].map(|(f, _)| f + lt[v].t).filter(|_| ok);
-        pair.freshness_sound = Worst {
-            path: self.walk(&self.f, v),
-            value: f,
-        };
-        pair.reaction_sound = Worst {
-            path: self.walk(&self.x, v),
-            // Over every path min(X, F) ≤ min(max X, max F).
-            value: x.zip(f).map(|(x, f)| x.min(f)),
-        };
     }
 }

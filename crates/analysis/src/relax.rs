@@ -688,6 +688,7 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
         edf: !spec.policy().fixed_priority(),
         prio: None,
         top: None,
+        let_comm: spec.task_communication(i) == rtpipe_model::Communication::Let,
     }
 }
 

@@ -210,6 +210,9 @@ pub struct ChainView<'a> {
     cases: Vec<u8>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
+    /// The chain's own `communication`, when the spec gives it one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    communication: Option<&'static str>,
 }
 
 /// A chain's bounds of its metric under the spec's known release offsets;
@@ -340,6 +343,7 @@ fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) 
             .get(c.chain)
             .and_then(Option::as_ref)
             .map(|o| known_view(spec, o, c.metric)),
+        communication: ch.communication.map(|m| m.name()),
     }
 }
 
@@ -379,13 +383,36 @@ pub fn system_line(spec: &Spec) -> String {
         spec.chains.len(),
         spec.time_unit,
         spec.scheduler.name(),
-        // Implicit communication, the default, is not named (as always).
-        if spec.communication == rtpipe_model::Communication::Let {
-            "; communication let (the sound bounds are LET's)"
-        } else {
-            ""
-        }
+        comm_note(spec)
     )
+}
+
+/// LET where it applies: system-wide, or on the chains that ask for it
+/// (implicit communication, the default, is not named, as always).
+fn comm_note(spec: &Spec) -> String {
+    use rtpipe_model::Communication;
+    if spec.communication == Communication::Let {
+        let implicit = own_chains(spec, Communication::Implicit);
+        if implicit.is_empty() {
+            return "; communication let (the sound bounds are LET's)".to_string();
+        }
+        return format!("; communication let, implicit on chains {implicit}");
+    }
+    let lets = own_chains(spec, Communication::Let);
+    if lets.is_empty() {
+        String::new()
+    } else {
+        format!("; communication let on chains {lets} (their sound bounds are LET's)")
+    }
+}
+
+/// The chains with their own `communication = c`, labelled and joined.
+fn own_chains(spec: &Spec, c: rtpipe_model::Communication) -> String {
+    let names: Vec<String> = (0..spec.chains.len())
+        .filter(|&k| spec.chains[k].communication == Some(c))
+        .map(|k| format!("`{}`", spec.chain_label(k)))
+        .collect();
+    names.join(", ")
 }
 
 pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {

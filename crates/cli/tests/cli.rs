@@ -266,6 +266,38 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     );
 }
 
+/// Communication per chain (issue 22): a task on chains of two semantics,
+/// and what LET cannot run on a LET chain (jitter, an I/O VCPU), exit 2
+/// with the place and a fix; `design` refuses a LET chain (exit 2).
+#[test]
+fn per_chain_let_misuse_exits_2_with_location() {
+    let cases = [
+        (
+            "path = [\"controller\", \"mixer\"]",
+            "path = [\"estimator\", \"controller\", \"mixer\"]",
+            "bad.toml:66:8: error: task `estimator` is on chain `estimation` (let) and on chain `control` (implicit)",
+        ),
+        (
+            "reads = [\"estimator\"]\nperiod = 20",
+            "reads = [\"estimator\"]\nperiod = 20\njitter = 1",
+            "bad.toml:52:10: error: task `logger` has release jitter, but it is on chain `logging`, whose communication is LET",
+        ),
+        (
+            "reads = [\"imu\"]\n",
+            "reads = [\"imu\"]\nserver = \"io\"\nserves = \"controller\"\n",
+            "task `estimator` is an I/O VCPU, but it is on chain `estimation`, whose communication is LET",
+        ),
+    ];
+    mutated_exit_2("cli-let-chain", "let-mixed.toml", &cases);
+    let o = rtpipe(&["design", &example("let-mixed.toml")]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("chain `estimation` has communication = \"let\""),
+        "{err}"
+    );
+}
+
 /// Shared resources (issue 22): a critical section longer than its task's
 /// exec, an undeclared resource and sections under EDF exit 2 with the
 /// place and a fix; `design`'s MILP refuses specs with sections (exit 2)

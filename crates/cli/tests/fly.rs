@@ -32,6 +32,54 @@ fn a_flight_reports_quality_and_chains_as_json() {
     }
 }
 
+/// Issue 22: a flight honours LET. examples/cleanflight.toml with its three
+/// chains under LET (its I/O VCPUs made Main VCPUs, which LET needs; the
+/// background tasks stay implicit): the bodies read at their releases and
+/// publish at their periods' ends, so the flight's latencies are LET's,
+/// the same as `simulate`'s (LET's data flow does not depend on the
+/// execution times). By hand, gyro path (gyro 1 ms → ahrs 5 → pid 2 → pwm
+/// 5, synchronous): the gyro sample read at 4 ms is out at 5, read by ahrs
+/// at 5 (out 10), pid at 10 (out 12), pwm at 15 (out 20): 16 ms; every
+/// sample that gets through takes the same.
+#[test]
+fn a_flight_honours_let_chains() {
+    let dir = scratch("fly-let");
+    let text = std::fs::read_to_string(example("cleanflight.toml")).unwrap_or_default();
+    let text = text
+        .replace("server = \"io\"", "server = \"main\"")
+        .replace(
+            "\nfreshness = \"23ms\"\n",
+            "\nfreshness = \"23ms\"\ncommunication = \"let\"\n",
+        )
+        .replace(
+            "\nfreshness = \"44ms\"",
+            "\nfreshness = \"44ms\"\ncommunication = \"let\"",
+        );
+    assert_eq!(text.matches("communication = \"let\"").count(), 3);
+    let spec = dir.join("let.toml");
+    if let Err(e) = std::fs::write(&spec, text) {
+        panic!("{e}");
+    }
+    let spec = spec.to_string_lossy().into_owned();
+    let o = rtpipe(&["fly", &spec, "--mission", "hover", "--json"]);
+    assert_exit(&o, 0);
+    let fly = json_of(&o);
+    assert_eq!(fly["flight"]["criteria_met"], true);
+    let o = rtpipe(&["simulate", &spec, "--json"]);
+    let sim = json_of(&o);
+    let (fc, sc) = (&fly["chains"], &sim["chains"]);
+    for k in 0..6 {
+        assert_eq!(fc[k]["communication"], "let");
+        assert_eq!(fc[k]["violations"]["sound"], 0);
+        assert_eq!(fc[k]["violations_from_event"]["sound"], 0);
+        for q in ["min", "max"] {
+            assert_eq!(fc[k]["observed"][q], sc[k]["observed"][q], "chain {k} {q}");
+        }
+    }
+    assert_eq!(fc[0]["observed"]["min"].as_f64(), Some(16_000.0));
+    assert_eq!(fc[0]["observed"]["max"].as_f64(), Some(16_000.0));
+}
+
 #[test]
 fn plots_and_log_are_written_whole() {
     let dir = scratch("fly-out");

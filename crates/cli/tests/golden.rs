@@ -29,7 +29,7 @@ const fn case(name: &'static str, args: &'static [&'static str]) -> Fixed {
 }
 
 /// The bundled examples.
-const EXAMPLES: [&str; 21] = [
+const EXAMPLES: [&str; 22] = [
     "cleanflight-derived-design",
     "cleanflight-derived",
     "cleanflight-design",
@@ -40,6 +40,7 @@ const EXAMPLES: [&str; 21] = [
     "paper-table2-edf",
     "jitter-deadlines",
     "let",
+    "let-mixed",
     "overheads",
     "paper-table2",
     "paper-table3-loaded",
@@ -122,6 +123,10 @@ const CASES: &[Fixed] = &[
     case(
         "analyze-table2-all-paths",
         &["analyze", "@paper-table2", "--all-paths"],
+    ),
+    case(
+        "analyze-let-mixed-all-paths",
+        &["analyze", "@let-mixed", "--all-paths"],
     ),
     case(
         "analyze-cleanflight-all-paths-json",

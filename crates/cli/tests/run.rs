@@ -811,6 +811,50 @@ fn resources_run_under_their_protocol_within_the_sound_bounds() {
     }
 }
 
+/// Issue 22, communication per chain: examples/let-mixed.toml on real
+/// threads. Its LET chains measure exactly the simulator's figures
+/// (estimation 6 and 6 ms, logging 24 and 24 ms from the head's read,
+/// synchronous release), while the implicit control chain reads the LET
+/// estimator's output by period (`rtpipe_runtime`'s let_comm.rs): no read
+/// finds another producer job than LET's.
+#[test]
+fn per_chain_let_runs_measure_the_simulator_s_let_figures() {
+    let _one = serial();
+    let o = rtpipe(&[
+        "run",
+        &example("let-mixed.toml"),
+        "--duration",
+        "1s",
+        "--json",
+    ]);
+    if unprivileged(&o, "per_chain_let_runs_measure_the_simulator_s_let_figures") {
+        return;
+    }
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    every_chain_observed(&v);
+    let chains = v["chains"].as_array().cloned().unwrap_or_default();
+    for (name, metric, exact) in [
+        ("estimation", "reaction", 6.0),
+        ("estimation", "freshness", 6.0),
+        ("logging", "reaction", 24.0),
+        ("logging", "freshness", 24.0),
+    ] {
+        let Some(c) = chains
+            .iter()
+            .find(|c| c["name"] == name && c["metric"] == metric)
+        else {
+            panic!("no {name} {metric} in {v}");
+        };
+        let obs = &c["observed"];
+        assert_eq!(obs["min"].as_f64(), Some(exact), "{name} {metric}: {obs}");
+        assert_eq!(obs["max"].as_f64(), Some(exact), "{name} {metric}: {obs}");
+    }
+    let notes = v["run"]["notes"].to_string();
+    assert!(!notes.contains("LET read"), "{notes}");
+    assert_eq!(v["run"]["sound_bound_violations"]["unexcused"], 0);
+}
+
 /// Issue 22: LET on real threads measures exactly what the simulator does
 /// on examples/let.toml (reaction 20 ms, freshness 25 ms from the head's
 /// read on every sample, the known-offset bounds 20 and 25 reached).

@@ -197,14 +197,6 @@ pub struct Request<'a> {
 
 /// Checks the request against the spec before anything runs.
 pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
-    if spec.communication == rtpipe_model::Communication::Let {
-        // The bodies see the registers at the schedule's read and publish
-        // instants (the simulator's hooks): implicit communication only.
-        return Err(Diagnostic::error(
-            "communication = \"let\": flights co-simulate implicit communication only",
-            "use communication = \"implicit\" to fly it (`rtpipe simulate` runs LET exactly)",
-        ));
-    }
     let kinds = body_kinds(spec, r.spec_path)?;
     let preset = vehicle(r.vehicle)?;
     let mission = mission(r.mission)?;

@@ -250,6 +250,7 @@ fn random_chains(rng: &mut Rng, cfg: &GenConfig, tasks: &[Task], n_sources: usiz
             freshness: None,
             max_reaction_time: None,
             max_data_age: None,
+            communication: None,
         });
     }
     chains
@@ -494,6 +495,7 @@ pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
             freshness: None,
             max_reaction_time: None,
             max_data_age: None,
+            communication: None,
         });
     }
     spec

@@ -252,6 +252,10 @@ pub struct Chain {
     /// Limit on the freshness time from the event (`max_data_age`: the
     /// maximum data age of the same literature).
     pub max_data_age: Option<Nanos>,
+    /// Its own communication semantics (`communication` in `[[chain]]`);
+    /// `None`: the system's. Every task on the chain reads and publishes
+    /// that way ([`Spec::communications`]).
+    pub communication: Option<Communication>,
 }
 
 impl Chain {
@@ -271,6 +275,7 @@ impl Chain {
             freshness: None,
             max_reaction_time: None,
             max_data_age: None,
+            communication: None,
         }
     }
 }
@@ -292,7 +297,9 @@ pub struct Spec {
     pub harmonic: bool,
     /// How fixed priorities are assigned (rate monotonic by default).
     pub priorities: Priorities,
-    /// When jobs read and publish (implicit by default; LET).
+    /// When jobs read and publish (implicit by default; LET): the tasks on
+    /// no chain with its own `communication`, and the chains without one
+    /// ([`Spec::communications`]).
     pub communication: Communication,
     /// How the tasks of a CPU share resources (`[system]
     /// resource_protocol`, PCP by default).
@@ -351,6 +358,37 @@ impl Spec {
     pub fn load(path: &std::path::Path) -> Result<Spec, SpecError> {
         let text = input::read_text(path, &input::Kind::SPEC)?;
         Spec::parse(&path.display().to_string(), &text)
+    }
+
+    /// Each task's communication semantics: that of the chains it is on
+    /// (validation refuses a task on chains of different semantics), the
+    /// system's for a task on no chain with its own.
+    pub fn communications(&self) -> Vec<Communication> {
+        let mut out = vec![self.communication; self.tasks.len()];
+        // The first chain with a key wins, as in `task_communication` (a
+        // spec built in code may disagree with itself; a parsed one cannot).
+        for ch in self.chains.iter().rev() {
+            if let Some(c) = ch.communication {
+                for &i in &ch.path {
+                    out[i] = c;
+                }
+            }
+        }
+        out
+    }
+
+    /// Task `i`'s communication semantics ([`Spec::communications`]).
+    pub fn task_communication(&self, i: usize) -> Communication {
+        self.chains
+            .iter()
+            .filter(|ch| ch.path.contains(&i))
+            .find_map(|ch| ch.communication)
+            .unwrap_or(self.communication)
+    }
+
+    /// Does some task communicate under LET?
+    pub fn any_let(&self) -> bool {
+        self.communications().contains(&Communication::Let)
     }
 
     /// The index of the task called `name`.

@@ -117,6 +117,7 @@ pub struct RawChain {
     pub max_reaction_time: Option<S<toml::Value>>,
     pub max_data_age: Option<S<toml::Value>>,
     pub name: Option<S<String>>,
+    pub communication: Option<S<String>>,
 }
 
 /// A TOML table kept in declaration order (task order breaks RM ties), with

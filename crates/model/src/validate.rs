@@ -207,7 +207,7 @@ impl Builder {
         compute_transfers(&mut tasks, &channels, unit);
         self.budgets_and_periods(raw_tasks, &tasks);
         self.priorities_and_deadlines(raw_tasks, &tasks, order, scheduler);
-        let communication = self.communication(sys, raw_tasks, &tasks);
+        let communication = self.communication(sys);
         let (resource_protocol, resources) =
             self.resources(sys, &raw.resources.0, raw_tasks, &mut tasks, scheduler);
         let test = scheduler
@@ -219,6 +219,10 @@ impl Builder {
             .iter()
             .filter_map(|ch| self.chain(ch.get_ref(), &tasks, &task_index, &names))
             .collect();
+        if !self.diags.is_empty() {
+            return None;
+        }
+        self.task_semantics(&raw.chain, &chains, communication, raw_tasks, &tasks);
         if !self.diags.is_empty() {
             return None;
         }
@@ -613,6 +617,7 @@ impl Builder {
             .max_data_age
             .as_ref()
             .and_then(|v| self.positive_time(v, "max_data_age"));
+        let communication = self.chain_communication(c);
         ok.then(|| Chain {
             name: c.name.as_ref().map(|n| n.get_ref().clone()),
             path,
@@ -620,6 +625,7 @@ impl Builder {
             freshness,
             max_reaction_time,
             max_data_age,
+            communication,
         })
     }
 

@@ -252,6 +252,9 @@ fn chain(o: &mut String, spec: &Spec, c: &Chain) {
     if let Some(l) = c.max_data_age {
         let _ = writeln!(o, "max_data_age = {}", time(spec, l));
     }
+    if let Some(m) = c.communication {
+        let _ = writeln!(o, "communication = \"{}\"", m.name());
+    }
 }
 
 /// Tasks named by index as the items of a TOML list (`"a", "b"`): tasks are

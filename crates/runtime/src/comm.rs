@@ -26,8 +26,14 @@ pub(crate) fn bodies_refusal(spec: &Spec, world: bool) -> Option<(&'static str, 
             "run it with synthetic bodies (`rtpipe run --synthetic`), or remove the tasks' critical_sections (`rtpipe simulate` runs the protocol with any body)",
         ));
     }
-    (world && spec.communication == Communication::Let).then_some((
-        "communication = \"let\" with a world (flight bodies): LET reads at the release, when the thread need not be running, and a world cannot be sensed in the past",
-        "use communication = \"implicit\" to fly it on real threads, `rtpipe fly` to fly it under LET, or `rtpipe run --synthetic`",
+    if world && spec.communication == Communication::Let {
+        return Some((
+            "communication = \"let\" with a world (flight bodies): LET reads at the release, when the thread need not be running, and a world cannot be sensed in the past",
+            "use communication = \"implicit\" to fly it on real threads, `rtpipe fly` to fly it under LET, or `rtpipe run --synthetic`",
+        ));
+    }
+    (world && spec.any_let()).then_some((
+        "a chain with communication = \"let\" with a world (flight bodies): LET reads at the release, when the thread need not be running, and a world cannot be sensed in the past",
+        "remove the chain's communication key to fly it on real threads, `rtpipe fly` to fly it under LET, or `rtpipe run --synthetic`",
     ))
 }

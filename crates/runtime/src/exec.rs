@@ -128,18 +128,28 @@ struct Thread<'a, V> {
     cpu: usize,
     priority: Option<i32>,
     body: Box<dyn Body<V> + 'a>,
-    readers: Vec<Reader<Cell<V>>>,
+    /// Its inputs in the order of the spec's `reads`: a register, or a
+    /// LET edge (`let_comm`: an edge with a LET end).
+    ins: Vec<In<V>>,
     writers: Vec<Writer<Cell<V>>>,
     recs: Vec<Rec>,
     /// Per job, the producer job read on each input (u64::MAX: none yet).
     inputs: Vec<u64>,
-    /// Under LET, its edges instead of `readers` and `writers`.
-    let_in: Vec<LetIn<V>>,
+    /// Its outputs on the edges with a LET end, instead of `writers`.
     let_out: Vec<LetOut<V>>,
+    /// It communicates under LET (its chain's or the system's semantics).
     let_comm: bool,
     let_misses: u64,
     /// Its critical sections, run before the body (synthetic bodies).
     sections: Option<Sections>,
+}
+
+/// One input of a task thread.
+enum In<V> {
+    /// Implicit to implicit: the register's latest value.
+    Reg(Reader<Cell<V>>),
+    /// An edge with a LET end (`let_comm`).
+    Let(LetIn<V>),
 }
 
 /// How long after the last release a thread may still be running before it
@@ -464,7 +474,11 @@ fn threads<'a, V: Copy + Send>(
     spin: Option<Spin>,
 ) -> Vec<Thread<'a, V>> {
     let prios = fifo_priorities(spec);
-    let let_comm = spec.communication == Communication::Let;
+    let lets: Vec<bool> = spec
+        .communications()
+        .into_iter()
+        .map(|c| c == Communication::Let)
+        .collect();
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
         .enumerate()
@@ -484,30 +498,31 @@ fn threads<'a, V: Copy + Send>(
                     _ => None,
                 },
                 body,
-                readers: Vec::with_capacity(t.reads.len()),
+                ins: Vec::with_capacity(t.reads.len()),
                 writers: Vec::new(),
                 recs: Vec::with_capacity(cap),
                 inputs: Vec::with_capacity(cap * t.reads.len()),
-                let_in: Vec::new(),
                 let_out: Vec::new(),
-                let_comm,
+                let_comm: lets[i],
                 let_misses: 0,
                 sections: spin.and_then(|s| Sections::of(spec, i, s, cap)),
             }
         })
         .collect();
-    // One register per (producer, consumer) edge; under LET, a ring of them.
+    // One register per (producer, consumer) edge; with a LET end, a ring
+    // of them (`let_comm`: by the producer's period under a LET producer,
+    // by publish instant under an implicit one).
     for c in 0..spec.tasks.len() {
         for &p in &spec.tasks[c].reads {
-            if let_comm {
+            if lets[p] || lets[c] {
                 let from = (threads[p].phase, threads[p].period);
-                let (w, r) = let_comm::edge::<V>(from, threads[c].period);
+                let (w, r) = let_comm::edge::<V>(from, threads[c].period, lets[p]);
                 threads[p].let_out.push(w);
-                threads[c].let_in.push(r);
+                threads[c].ins.push(In::Let(r));
             } else {
                 let (w, r) = four_slot::register::<Cell<V>>(None);
                 threads[p].writers.push(w);
-                threads[c].readers.push(r);
+                threads[c].ins.push(In::Reg(r));
             }
         }
     }
@@ -651,7 +666,7 @@ fn periodic<V: Copy>(
     env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
     res: Option<&Resources>,
 ) {
-    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.readers.len() + th.let_in.len());
+    let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.ins.len());
     let mut k: u64 = 0;
     loop {
         let offset = th.phase + k as i64 * th.period;
@@ -699,18 +714,7 @@ fn job<V: Copy>(
 ) {
     let offset = th.phase + k as i64 * th.period;
     let cpu0 = sys::thread_cpu_time();
-    inputs.clear();
-    for r in &mut th.readers {
-        let v = r.read();
-        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
-        inputs.push(v);
-    }
-    for r in &mut th.let_in {
-        let (v, exact) = r.read(offset);
-        th.let_misses += u64::from(!exact);
-        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
-        inputs.push(v);
-    }
+    read_inputs(th, offset, epoch, inputs);
     let (start, device) = sense(th.task, epoch, env);
     let start = start - epoch;
     let read = if th.let_comm { offset } else { start };
@@ -752,6 +756,35 @@ fn job<V: Copy>(
         finish,
         demand,
     });
+}
+
+/// Reads every input of the job released at `offset`, in the spec's
+/// `reads` order, into `inputs`, and logs the producer job read on each.
+fn read_inputs<V: Copy>(
+    th: &mut Thread<'_, V>,
+    offset: Nanos,
+    epoch: Nanos,
+    inputs: &mut Vec<Cell<V>>,
+) {
+    inputs.clear();
+    for r in &mut th.ins {
+        let v = match r {
+            In::Reg(r) => r.read(),
+            In::Let(r) => {
+                // A LET job reads at its release; an implicit one now.
+                let at = if th.let_comm {
+                    offset
+                } else {
+                    sys::now() - epoch
+                };
+                let (v, exact) = r.read(at);
+                th.let_misses += u64::from(!exact);
+                v
+            }
+        };
+        th.inputs.push(v.map_or(u64::MAX, |s| s.stamp.job));
+        inputs.push(v);
+    }
 }
 
 /// The read instant of a job of `task`, and what the world gives it there.

@@ -18,6 +18,17 @@
 //! N = ⌈Tc / Tp⌉ + 3 (a consumer reads at the start of its job, before its
 //! deadline Dc ≤ Tc); a read that finds another job in its slot is counted
 //! ([`LetIn::read`]), its data flow logged as it happened.
+//!
+//! Communication per chain (issue 22) makes edges mixed. A LET producer's
+//! edge to an implicit consumer is the same ring: the consumer, reading at
+//! the start of its job, takes the job whose period ended by then. An
+//! implicit producer's edge to a LET consumer cannot go by index (which
+//! job has completed by the consumer's release is the schedule's), so the
+//! consumer takes, among the slots, the latest job whose publish (its
+//! completion, stamped) is at or before its release: exact while the
+//! consumer reads within N − 2 producer periods of its release, as above
+//! (a completion stamped but not yet written when the consumer looks is
+//! missed, as with the implicit registers: the log holds what was read).
 
 use crate::four_slot::{self, Reader, Writer};
 use rtpipe_body::{Nanos, Stamped};
@@ -31,6 +42,12 @@ pub(crate) struct LetIn<V> {
     /// The producer's offset and period.
     phase: Nanos,
     period: Nanos,
+    /// The producer communicates under LET: its jobs are visible by
+    /// period; otherwise by publish instant.
+    by_period: bool,
+    /// The slots' values of one read by publish instant (no allocation
+    /// while a job runs).
+    seen: Vec<Cell<V>>,
 }
 
 /// A producer's end of one LET edge.
@@ -39,10 +56,11 @@ pub(crate) struct LetOut<V> {
 }
 
 /// One edge from a producer (offset, period) to a consumer of period
-/// `consumer`.
+/// `consumer`; `by_period`: the producer communicates under LET.
 pub(crate) fn edge<V: Copy + Send>(
     (phase, period): (Nanos, Nanos),
     consumer: Nanos,
+    by_period: bool,
 ) -> (LetOut<V>, LetIn<V>) {
     assert!(period > 0 && consumer > 0, "positive periods");
     let n = (consumer + period - 1) / period + 3;
@@ -53,6 +71,8 @@ pub(crate) fn edge<V: Copy + Send>(
             slots: r,
             phase,
             period,
+            by_period,
+            seen: Vec::with_capacity(n as usize),
         },
     )
 }
@@ -70,12 +90,38 @@ impl<V: Copy> LetIn<V> {
     /// prescribes (false: the producer had not written it yet, or had
     /// already written over it).
     pub(crate) fn read(&mut self, release: Nanos) -> (Cell<V>, bool) {
+        if !self.by_period {
+            return self.read_published(release);
+        }
         let Some(j) = visible(release, (self.phase, self.period)) else {
             return (None, true);
         };
         let n = self.slots.len() as u64;
         let v = self.slots[(j % n) as usize].read();
         (v, v.is_some_and(|s| s.stamp.job == j))
+    }
+}
+
+impl<V: Copy> LetIn<V> {
+    /// From an implicit producer: the latest job published at or before
+    /// `at`, and whether that is certain (the next job's slot does not
+    /// hold a newer job: nothing between was written over).
+    fn read_published(&mut self, at: Nanos) -> (Cell<V>, bool) {
+        self.seen.clear();
+        self.seen.extend(self.slots.iter_mut().map(|r| r.read()));
+        let cells = &self.seen;
+        let n = cells.len() as u64;
+        let best = cells
+            .iter()
+            .flatten()
+            .filter(|s| s.stamp.publish <= at)
+            .max_by_key(|s| s.stamp.job)
+            .copied();
+        // The job after the one taken (job 0 when none): its slot must
+        // hold it (published after `at`), an older job, or nothing.
+        let next = best.map_or(0, |s| s.stamp.job + 1);
+        let exact = cells[(next % n) as usize].is_none_or(|s| s.stamp.job <= next);
+        (best, exact)
     }
 }
 
@@ -112,8 +158,43 @@ mod tests {
     }
 
     #[test]
+    fn from_an_implicit_producer_the_latest_published_by_the_release() {
+        // Producer T = 2 (implicit: published at its completion, stamped),
+        // consumer T = 4 under LET: N = 2 + 3 = 5 slots.
+        let (mut w, mut r) = edge::<u64>((0, 2), 4, false);
+        let put = |w: &mut LetOut<u64>, job: u64, publish: Nanos| {
+            let stamp = Stamp {
+                task: 0,
+                job,
+                read: 0,
+                publish,
+            };
+            w.write(Stamped {
+                value: 100 + job,
+                stamp,
+            });
+        };
+        assert_eq!(r.read(3).0.map(|s| s.value), None, "nothing published yet");
+        put(&mut w, 0, 1);
+        put(&mut w, 1, 3);
+        put(&mut w, 2, 5);
+        // Released at 4: job 1 (out at 3), though job 2 is out by the read.
+        let (v, ok) = r.read(4);
+        assert!(ok);
+        assert_eq!(v.map(|s| s.value), Some(101));
+        assert_eq!(r.read(3).0.map(|s| s.value), Some(101), "at the instant");
+        // Jobs 3 … 7 overwrite every slot: job 1's successor is gone.
+        for j in 3..=7 {
+            put(&mut w, j, 2 * j as Nanos + 1);
+        }
+        let (v, ok) = r.read(4);
+        assert!(v.is_none() && !ok);
+        assert_eq!(r.read(13).0.map(|s| s.value), Some(106));
+    }
+
+    #[test]
     fn the_consumer_gets_the_prescribed_job_though_newer_ones_completed() {
-        let (mut w, mut r) = edge::<u64>((0, 2), 10);
+        let (mut w, mut r) = edge::<u64>((0, 2), 10, true);
         let put = |w: &mut LetOut<u64>, job: u64| {
             let stamp = Stamp {
                 task: 0,

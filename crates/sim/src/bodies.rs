@@ -192,4 +192,74 @@ mod tests {
         );
         assert!(plant.calls.windows(2).all(|w| w[0].2 <= w[1].2));
     }
+
+    #[test]
+    fn under_let_bodies_read_at_releases_and_publish_at_period_ends() {
+        // The same two tasks on a LET chain: t0 job k reads (and senses)
+        // at 10k and publishes at 10k + 10; t1 job m reads at 20m, after
+        // the publishes of that instant, and publishes at 20m + 20.
+        let mut s = spec(
+            Scheduler::Rm,
+            vec![task(10, 2, &[], 0), task(20, 3, &[0], 0)],
+            &[&[0, 1]],
+        );
+        s.chains[0].communication = Some(rtpipe_model::Communication::Let);
+        let seen = std::sync::Mutex::new(Vec::<Seen>::new());
+        let log = |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
+            let stamps = inputs.iter().map(|x| x.map(|v| (v.stamp, v.value)));
+            if let Ok(mut v) = seen.lock() {
+                v.push((job.task, job.index, job.read, stamps.collect(), device));
+            }
+        };
+        let sensor = move |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
+            log(job, inputs, device);
+            device.unwrap_or(-1)
+        };
+        let controller = move |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
+            log(job, inputs, device);
+            inputs[0].map_or(0, |v| v.value + 1)
+        };
+        let mut bodies: Vec<Box<dyn Body<i64> + '_>> = vec![Box::new(sensor), Box::new(controller)];
+        let mut plant = Plant::default();
+        let cfg = SimConfig {
+            phasing: Phasing::Sync,
+            exec: ExecModel::Worst,
+            ..SimConfig::new(30)
+        };
+        let r = simulate_bodies(&s, &cfg, &mut bodies, &mut plant);
+        assert!(r.is_ok());
+        drop(bodies);
+        let seen = seen.into_inner().unwrap_or_default();
+        let st = |task, job, read, publish| Stamp {
+            task,
+            job,
+            read,
+            publish,
+        };
+        assert_eq!(
+            seen,
+            vec![
+                (0, 0, 0, vec![], Some(0)),
+                // Nothing published by 0, though t0 completes at 2.
+                (1, 0, 0, vec![None], None),
+                (0, 1, 10, vec![], Some(0)),
+                (0, 2, 20, vec![], Some(0)),
+                // t0 job 1 (read 10) became visible at 20, before this read.
+                (1, 1, 20, vec![Some((st(0, 1, 10, 20), 0))], None),
+                (0, 3, 30, vec![], Some(0)),
+            ]
+        );
+        assert_eq!(
+            &plant.calls[..6],
+            &[
+                ('s', 0, 0),
+                ('s', 1, 0),
+                ('a', 0, 10),
+                ('s', 0, 10),
+                ('a', 0, 20),
+                ('a', 1, 20)
+            ]
+        );
+        assert!(plant.calls.windows(2).all(|w| w[0].2 <= w[1].2));
+    }
 }

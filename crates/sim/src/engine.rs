@@ -11,7 +11,9 @@ use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
 /// What the simulator tells the code that runs task bodies: a job reads, a
-/// job publishes. Called in simulated-time order.
+/// job publishes. Called in simulated-time order, at the instants of the
+/// task's semantics: its start and completion (implicit), or its release
+/// and its period's end (LET, `let_comm.rs`).
 pub(crate) trait Hooks {
     /// The front job of `job.task` reads at `job.read`.
     fn read(&mut self, job: &rtpipe_body::Job);
@@ -288,9 +290,10 @@ pub(crate) struct Sim<H> {
     pub(crate) is_dirty: Vec<bool>,
     /// Scratch lists of an instant: the CPUs due, the CPUs picked for.
     pub(crate) scratch: (Vec<usize>, Vec<usize>),
-    /// LET communication (`let_comm.rs`): reads at releases and publishes
-    /// at period ends feed the provenance, not the schedule's instants.
-    pub(crate) let_comm: bool,
+    /// Per task, LET communication (`let_comm.rs`): its reads at releases
+    /// and publishes at period ends feed the provenance, not the
+    /// schedule's instants (per chain: `Spec::communications`).
+    pub(crate) let_comm: Vec<bool>,
     /// Under LET, per task: the job that read at its release and publishes
     /// at the end of its period.
     pub(crate) let_open: Vec<Option<LetJob>>,
@@ -358,7 +361,11 @@ impl<H: Hooks> Sim<H> {
             dirty: Vec::new(),
             is_dirty: vec![false; n_cpus],
             scratch: (Vec::new(), Vec::new()),
-            let_comm: spec.communication == Communication::Let,
+            let_comm: spec
+                .communications()
+                .into_iter()
+                .map(|c| c == Communication::Let)
+                .collect(),
             let_open: vec![None; spec.tasks.len()],
             locks,
             ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
@@ -506,7 +513,7 @@ impl<H: Hooks> Sim<H> {
                 let was_idle = ts.queue.is_empty();
                 let before = ts.next_index;
                 release_jobs(ts, exec, t);
-                if self.let_comm {
+                if self.let_comm[i] {
                     let new = (ts.next_index - before) as usize;
                     let skip = ts.queue.len() - new;
                     released.extend(ts.queue.iter().skip(skip).map(|j| LetJob {
@@ -664,13 +671,15 @@ impl<H: Hooks> Sim<H> {
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
-        if !self.let_comm {
-            self.prov.read(i, t);
-        }
         let Some(job) = self.tasks[i].queue.front_mut() else {
             unreachable!("task {i} reads without a pending job");
         };
         job.read = Some(t);
+        if self.let_comm[i] {
+            // Under LET the job read at its release (`let_comm.rs`).
+            return;
+        }
+        self.prov.read(i, t);
         let job = rtpipe_body::Job {
             task: i,
             index: job.index,
@@ -690,14 +699,16 @@ impl<H: Hooks> Sim<H> {
             job.read.is_some_and(|r| job.release <= r && r <= t),
             "task {i} publishes at {t} a job that did not read after its release"
         );
-        self.hooks.publish(i, t);
+        if !self.let_comm[i] {
+            self.hooks.publish(i, t);
+        }
         let response = t - job.release;
         ts.stats.completed += 1;
         ts.stats.max_response = Some(ts.stats.max_response.map_or(response, |m| m.max(response)));
         if response > ts.deadline {
             ts.stats.late += 1;
         }
-        if self.let_comm {
+        if self.let_comm[i] {
             // LET publishes at the end of the period (`let_comm.rs`).
             if ts.queue.is_empty() {
                 ts.budget.block(t);

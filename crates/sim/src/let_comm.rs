@@ -3,8 +3,16 @@
 //! its output becomes visible at the end of its period, release + T,
 //! whenever the schedule ran it. The schedule still decides when jobs run
 //! (and whether one misses its deadline, which the task's statistics
-//! count); the sample provenance and the job log see only the LET
-//! instants, so the measured reaction and freshness are LET's.
+//! count); the sample provenance, the job log and the bodies' hooks
+//! (`bodies.rs`: a LET task's body runs on what it read at its release,
+//! and its output reaches the registers and the world at its period's
+//! end) see only the LET instants, so the measured reaction and freshness
+//! are LET's, and so is a flight's data flow (`rtpipe fly`).
+//!
+//! Per chain (`Spec::communications`) only the LET tasks communicate here;
+//! the others read at their start and publish at their completion, which
+//! at one instant come first (the engine completes jobs before it
+//! releases), so every publish of an instant precedes every read.
 //!
 //! At one instant every period that ends publishes before any release
 //! reads: a job released when its producer's period ends reads the value
@@ -36,6 +44,12 @@ impl<H: Hooks> Sim<H> {
             for j in &released[at..end] {
                 self.prov.read(j.task, j.release);
                 self.let_open[j.task] = Some(*j);
+                self.hooks.read(&rtpipe_body::Job {
+                    task: j.task,
+                    index: j.index,
+                    release: j.release,
+                    read: j.release,
+                });
             }
             at = end;
         }
@@ -45,6 +59,7 @@ impl<H: Hooks> Sim<H> {
     fn let_publish(&mut self, job: LetJob) {
         let t = job.release + job.period;
         self.prov.publish(job.task, t);
+        self.hooks.publish(job.task, t);
         if let Some(log) = &mut self.log {
             // The log holds the communication instants, which the replay
             // (`chains_from_jobs`) and the traces' data flows read.

@@ -40,6 +40,7 @@ pub(crate) fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize
             freshness: None,
             max_reaction_time: None,
             max_data_age: None,
+            communication: None,
         })
         .collect();
     s
@@ -350,6 +351,7 @@ fn bad_inputs_are_errors() {
         freshness: None,
         max_reaction_time: None,
         max_data_age: None,
+        communication: None,
     }];
     assert_eq!(simulate(&s, &cfg), Err(SimError::BadChain(0)));
     s.chains.clear();

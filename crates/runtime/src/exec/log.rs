@@ -94,7 +94,7 @@ fn job_log<V>(
     for &(_, _, i, j) in &order {
         let th = &threads[i];
         let r = th.recs[j];
-        let nreads = th.readers.len() + th.let_in.len();
+        let nreads = th.ins.len();
         let inputs = th.inputs.get(j * nreads..(j + 1) * nreads).unwrap_or(&[]);
         let reads = &spec.tasks[i].reads;
         prov.read_with(i, r.read, |p, ps| {
