@@ -19,11 +19,11 @@
 //!   5.2: U = 1/3 + 2/10. Then R_b = 2 + 0.1 + ⌈w/3⌉ (1 + 0.2) +
 //!   ⌈w/3⌉ 0.05 + ⌈w/10⌉ 0.05: w = 3.4 → 4.65 → 4.65 ms.
 
-use rtpipe_analysis::analyze;
-use rtpipe_design::{design, utilization, Method, Mode, Options, Status};
-use rtpipe_model::{Nanos, Spec};
+mod common;
 
-const US: Nanos = 1_000;
+use common::solve;
+use rtpipe_design::Method;
+use rtpipe_model::Spec;
 
 fn spec(sections: bool, protocol: &str, overheads: bool) -> Spec {
     let lock = |len: &str| {
@@ -49,27 +49,6 @@ fn spec(sections: bool, protocol: &str, overheads: bool) -> Spec {
         lock("1")
     );
     Spec::parse("hand.toml", &src).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The designed periods and job response times (µs), and the utilisation.
-fn solve(s: &Spec, method: Method) -> (Vec<Nanos>, Vec<Nanos>, f64) {
-    let opts = Options {
-        mode: Mode::Sound,
-        method,
-        ..Options::default()
-    };
-    let o = design(s, &opts).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!((o.status, o.method), (Status::Optimal, Method::Boxes));
-    let d = o.spec.expect("an optimal design");
-    let rep = analyze(&d);
-    assert!(rep.all_ok());
-    let periods: Vec<Nanos> = d.tasks.iter().filter_map(|t| t.fixed_period()).collect();
-    let r = rep
-        .timing
-        .iter()
-        .map(|t| t.job_response_time.expect("bounded") / US)
-        .collect();
-    (periods.iter().map(|p| p / US).collect(), r, utilization(&d))
 }
 
 #[test]

@@ -28,11 +28,10 @@
 //! 0.575; with L = 7 (T_a ≤ 3) no period passes: infeasible, though
 //! Σ U ≤ 1 alone would admit T_a = 3 (U = 0.7).
 
-use rtpipe_analysis::analyze;
-use rtpipe_design::{design, utilization, Method, Mode, Options, Status};
-use rtpipe_model::{Nanos, Spec};
+mod common;
 
-const US: Nanos = 1_000;
+use rtpipe_design::{design, Method, Mode, Options, Status};
+use rtpipe_model::{Nanos, Spec};
 
 /// The problem of the module's text: `order` the `priorities` (with the
 /// explicit ones of a and b), `limit` L (ms).
@@ -70,20 +69,9 @@ fn opts(method: Method) -> Options {
     }
 }
 
-/// The designed periods and job response times (µs), and the utilisation.
+/// The hand problems' designs: by `auto`, which must pick the box search.
 fn solve(s: &Spec) -> (Vec<Nanos>, Vec<Nanos>, f64) {
-    let o = design(s, &opts(Method::Auto)).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!((o.status, o.method), (Status::Optimal, Method::Boxes));
-    let d = o.spec.expect("an optimal design");
-    let rep = analyze(&d);
-    assert!(rep.all_ok());
-    let periods: Vec<Nanos> = d.tasks.iter().filter_map(|t| t.fixed_period()).collect();
-    let r = rep
-        .timing
-        .iter()
-        .map(|t| t.job_response_time.expect("bounded") / US)
-        .collect();
-    (periods.iter().map(|p| p / US).collect(), r, utilization(&d))
+    common::solve(s, Method::Auto)
 }
 
 fn close(u: f64, v: f64) {

@@ -4,6 +4,8 @@
 //! different semantics, and a LET task LET cannot run (an I/O VCPU, release
 //! jitter), are located diagnostics with a fix.
 
+mod common;
+
 use rtpipe_model::{Communication, Spec, SpecError};
 
 /// a → b → c, then the chains; `SYS`, `A`, `B` and `C` are replaced.
@@ -24,17 +26,7 @@ fn parse(sys: &str, tasks: [&str; 3], chains: &str) -> Result<Spec, SpecError> {
 
 /// The single diagnostic: (location, message, help).
 fn error(sys: &str, tasks: [&str; 3], chains: &str) -> (String, String, String) {
-    let e = match parse(sys, tasks, chains) {
-        Ok(_) => panic!("accepted: {sys} / {tasks:?} / {chains}"),
-        Err(e) => e,
-    };
-    assert_eq!(e.diagnostics.len(), 1, "{e}");
-    let d = &e.diagnostics[0];
-    (
-        e.locations()[0].clone(),
-        d.message.clone(),
-        d.help.clone().unwrap_or_default(),
-    )
+    common::single_error(parse(sys, tasks, chains), &format!("{sys} / {tasks:?} / {chains}"))
 }
 
 const NONE: [&str; 3] = ["", "", ""];

@@ -4,6 +4,8 @@
 //! overheads make it unschedulable still analyses (the analysis crate's
 //! tests; here: it validates).
 
+mod common;
+
 use rtpipe_model::overheads::Costs;
 use rtpipe_model::{Spec, SpecError};
 
@@ -19,17 +21,7 @@ fn parse(system: &str, a: &str, b: &str) -> Result<Spec, SpecError> {
 
 /// The single diagnostic: (location, message, help).
 fn error(system: &str, a: &str, b: &str) -> (String, String, String) {
-    let e = match parse(system, a, b) {
-        Ok(_) => panic!("accepted: {system} / {a} / {b}"),
-        Err(e) => e,
-    };
-    assert_eq!(e.diagnostics.len(), 1, "{e}");
-    let d = &e.diagnostics[0];
-    (
-        e.locations()[0].clone(),
-        d.message.clone(),
-        d.help.clone().unwrap_or_default(),
-    )
+    common::single_error(parse(system, a, b), &format!("{system} / {a} / {b}"))
 }
 
 #[test]

@@ -4,6 +4,8 @@
 //! is implicit communication's alternative, refused for the tasks it cannot
 //! run.
 
+mod common;
+
 use rtpipe_model::{Communication, Priorities, SchedTest, Spec, SpecError};
 
 const BASE: &str = "[system]\nname = \"k\"\nSYSTEM\n[tasks.a]\nexec = 1\nperiod = 10\nA\n[tasks.b]\nexec = 1\nperiod = 20\nB\n";
@@ -18,17 +20,7 @@ fn parse(system: &str, a: &str, b: &str) -> Result<Spec, SpecError> {
 
 /// The single diagnostic: (location, message, help).
 fn error(system: &str, a: &str, b: &str) -> (String, String, String) {
-    let e = match parse(system, a, b) {
-        Ok(_) => panic!("accepted: {system} / {a} / {b}"),
-        Err(e) => e,
-    };
-    assert_eq!(e.diagnostics.len(), 1, "{e}");
-    let d = &e.diagnostics[0];
-    (
-        e.locations()[0].clone(),
-        d.message.clone(),
-        d.help.clone().unwrap_or_default(),
-    )
+    common::single_error(parse(system, a, b), &format!("{system} / {a} / {b}"))
 }
 
 #[test]

@@ -129,17 +129,10 @@ mod tests {
         }
     }
 
-    #[test]
-    fn bodies_run_at_reads_and_publish_at_completions() {
-        // t0: T=10, C=2 (rank 1) samples the plant; t1: T=20, C=3 reads t0
-        // and commands the plant with its input + 1. The schedule is the one
-        // of tests::slow_consumer_rm: t0 reads at 10k, publishes at 10k + 2;
-        // t1 job m reads at 20m + 2 and publishes at 20m + 5.
-        let s = spec(
-            Scheduler::Rm,
-            vec![task(10, 2, &[], 0), task(20, 3, &[0], 0)],
-            &[&[0, 1]],
-        );
+    /// Runs a sensor (task 0: the plant's sample) and a controller (task 1:
+    /// its input + 1, commanding the plant) over 30 ns; what each body
+    /// saw, and the plant's calls.
+    fn run_sensor_and_controller(s: &Spec) -> (Vec<Seen>, Plant) {
         let seen = std::sync::Mutex::new(Vec::<Seen>::new());
         let log = |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
             let stamps = inputs.iter().map(|x| x.map(|v| (v.stamp, v.value)));
@@ -162,16 +155,32 @@ mod tests {
             exec: ExecModel::Worst,
             ..SimConfig::new(30)
         };
-        let r = simulate_bodies(&s, &cfg, &mut bodies, &mut plant);
-        assert!(r.is_ok());
+        assert!(simulate_bodies(s, &cfg, &mut bodies, &mut plant).is_ok());
         drop(bodies);
-        let seen = seen.into_inner().unwrap_or_default();
-        let st = |task, job, read, publish| Stamp {
+        (seen.into_inner().unwrap_or_default(), plant)
+    }
+
+    fn st(task: usize, job: u64, read: Nanos, publish: Nanos) -> Stamp {
+        Stamp {
             task,
             job,
             read,
             publish,
-        };
+        }
+    }
+
+    #[test]
+    fn bodies_run_at_reads_and_publish_at_completions() {
+        // t0: T=10, C=2 (rank 1) samples the plant; t1: T=20, C=3 reads t0
+        // and commands the plant with its input + 1. The schedule is the one
+        // of tests::slow_consumer_rm: t0 reads at 10k, publishes at 10k + 2;
+        // t1 job m reads at 20m + 2 and publishes at 20m + 5.
+        let s = spec(
+            Scheduler::Rm,
+            vec![task(10, 2, &[], 0), task(20, 3, &[0], 0)],
+            &[&[0, 1]],
+        );
+        let (seen, plant) = run_sensor_and_controller(&s);
         assert_eq!(
             seen,
             vec![
@@ -204,38 +213,7 @@ mod tests {
             &[&[0, 1]],
         );
         s.chains[0].communication = Some(rtpipe_model::Communication::Let);
-        let seen = std::sync::Mutex::new(Vec::<Seen>::new());
-        let log = |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
-            let stamps = inputs.iter().map(|x| x.map(|v| (v.stamp, v.value)));
-            if let Ok(mut v) = seen.lock() {
-                v.push((job.task, job.index, job.read, stamps.collect(), device));
-            }
-        };
-        let sensor = move |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
-            log(job, inputs, device);
-            device.unwrap_or(-1)
-        };
-        let controller = move |job: &Job, inputs: &[Option<Stamped<i64>>], device: Option<i64>| {
-            log(job, inputs, device);
-            inputs[0].map_or(0, |v| v.value + 1)
-        };
-        let mut bodies: Vec<Box<dyn Body<i64> + '_>> = vec![Box::new(sensor), Box::new(controller)];
-        let mut plant = Plant::default();
-        let cfg = SimConfig {
-            phasing: Phasing::Sync,
-            exec: ExecModel::Worst,
-            ..SimConfig::new(30)
-        };
-        let r = simulate_bodies(&s, &cfg, &mut bodies, &mut plant);
-        assert!(r.is_ok());
-        drop(bodies);
-        let seen = seen.into_inner().unwrap_or_default();
-        let st = |task, job, read, publish| Stamp {
-            task,
-            job,
-            read,
-            publish,
-        };
+        let (seen, plant) = run_sensor_and_controller(&s);
         assert_eq!(
             seen,
             vec![
