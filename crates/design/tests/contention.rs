@@ -22,7 +22,7 @@
 mod common;
 
 use common::solve;
-use rtpipe_design::Method;
+use rtpipe_design::{design, Method, Mode, Options};
 use rtpipe_model::Spec;
 
 fn spec(sections: bool, protocol: &str, overheads: bool) -> Spec {

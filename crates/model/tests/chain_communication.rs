@@ -26,7 +26,10 @@ fn parse(sys: &str, tasks: [&str; 3], chains: &str) -> Result<Spec, SpecError> {
 
 /// The single diagnostic: (location, message, help).
 fn error(sys: &str, tasks: [&str; 3], chains: &str) -> (String, String, String) {
-    common::single_error(parse(sys, tasks, chains), &format!("{sys} / {tasks:?} / {chains}"))
+    common::single_error(
+        parse(sys, tasks, chains),
+        &format!("{sys} / {tasks:?} / {chains}"),
+    )
 }
 
 const NONE: [&str; 3] = ["", "", ""];
