@@ -536,7 +536,7 @@ pub fn relax(
 /// reaction terms without the reachability options, the tail's response
 /// time and the head's shortest period (`latency::sound_event_reaction`).
 fn event_reaction_bound(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<Nanos> {
-    if spec.communication == Communication::Let {
+    if all_let(spec, path) {
         return let_low(order, r, path).map(|l| l.reaction_event);
     }
     let sum: Option<Nanos> = low_links(spec, order, r, path, false)
@@ -555,6 +555,15 @@ fn event_form(spec: &Spec, order: &Order, r: &Times, path: &[usize]) -> Option<A
     e.base += order.lo[head] as f64;
     e.slopes.push((head, 1.0));
     Some(e)
+}
+
+/// Every task of the path reads and publishes under LET (the system's
+/// communication or its chains': `Spec::task_communication`); a path that
+/// mixes the two takes the per-task link terms of `latency`, as the
+/// analysis does.
+fn all_let(spec: &Spec, path: &[usize]) -> bool {
+    path.iter()
+        .all(|&i| spec.task_communication(i) == Communication::Let)
 }
 
 /// Under LET a chain's sound figures are `let_bound::any_phasing` of its
@@ -721,7 +730,7 @@ fn chain_bounds(
     r: &Times,
     path: &[usize],
 ) -> (Option<Nanos>, Option<Nanos>) {
-    if spec.communication == Communication::Let {
+    if all_let(spec, path) {
         let l = let_low(order, r, path);
         return (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read));
     }
@@ -779,7 +788,7 @@ fn chain_forms(
     path: &[usize],
     reach: bool,
 ) -> Option<(Affine, Affine)> {
-    if spec.communication == Communication::Let {
+    if all_let(spec, path) {
         return let_forms(order, r, path);
     }
     let tail = path[path.len() - 1];

@@ -73,25 +73,6 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// A chain whose communication differs from the system's is refused: the
-/// relaxation bounds every chain with the system's link terms (implicit or
-/// LET), not the mixed links of `analysis` (docs/analysis.md, Mixed links).
-fn unsupported_timing(spec: &Spec) -> Result<(), DesignError> {
-    let mixed = (0..spec.chains.len()).find_map(|k| {
-        let c = spec.chains[k].communication?;
-        (c != spec.communication).then_some((k, c))
-    });
-    if let Some((k, c)) = mixed {
-        return Err(DesignError::input(format!(
-            "chain `{}` has communication = \"{}\" where the system's is \"{}\": `design` bounds every chain with the system's communication; design without the chain's communication key (or with the system's set to it), then restore it and check with `analyze`",
-            spec.chain_label(k),
-            c.name(),
-            spec.communication.name()
-        )));
-    }
-    Ok(())
-}
-
 /// Designs the periods of `spec`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
@@ -106,7 +87,6 @@ pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
             t.name
         )));
     }
-    unsupported_timing(spec)?;
     // Known offsets do not enter the design: its bounds hold for any
     // phasing, and a job-level analysis of every candidate would cost a
     // hyperperiod each. The answer keeps them.
@@ -264,6 +244,12 @@ fn ranks_or_demand(spec: &Spec) -> Option<(String, String)> {
     if spec.communication == rtpipe_model::Communication::Let {
         let what = "communication = \"let\" (LET chain bounds)".to_string();
         return Some((what, "system.communication".to_string()));
+    }
+    let let_chain = (0..spec.chains.len())
+        .find(|&k| spec.chains[k].communication == Some(rtpipe_model::Communication::Let));
+    if let Some(k) = let_chain {
+        let what = format!("chain `{}` under LET", spec.chain_label(k));
+        return Some((what, format!("chain[{k}].communication")));
     }
     let fixed = spec.policy().fixed_priority();
     if fixed && spec.priorities != rtpipe_model::Priorities::RateMonotonic {

@@ -409,24 +409,58 @@ fn timed_instance(seed: u64, mode: Mode) -> Option<Spec> {
     // LET communication on about a third, where validation takes it, with
     // the limits doubled (LET's bounds run about twice the implicit ones
     // the limits come from).
-    if Rng::new(seed ^ 0x1e7).chance(0.35) {
-        let mut l = spec.clone();
-        l.communication = Communication::Let;
-        for ch in &mut l.chains {
-            for x in [
-                &mut ch.reaction,
-                &mut ch.freshness,
-                &mut ch.max_reaction_time,
-                &mut ch.max_data_age,
-            ] {
-                *x = x.map(|v| 2 * v);
+    let mut coin = Rng::new(seed ^ 0x1e7);
+    if coin.chance(0.35) {
+        // Half of these per chain (each chain LET with probability one
+        // half, where validation takes the mix), the rest system-wide.
+        if coin.chance(0.5) {
+            if let Some(s) = parsed(&let_chains(&spec, &mut coin)) {
+                return Some(s);
             }
         }
+        let mut l = spec.clone();
+        l.communication = Communication::Let;
+        l.chains.iter_mut().for_each(doubled);
         if let Some(s) = parsed(&l) {
             return Some(s);
         }
     }
     parsed(&spec)
+}
+
+/// A chain's limits doubled.
+fn doubled(ch: &mut rtpipe_model::Chain) {
+    for x in [
+        &mut ch.reaction,
+        &mut ch.freshness,
+        &mut ch.max_reaction_time,
+        &mut ch.max_data_age,
+    ] {
+        *x = x.map(|v| 2 * v);
+    }
+}
+
+/// `spec` with chains of both semantics: under an implicit system some
+/// chains LET, or under a LET system some chains implicit (at least one
+/// either way); the LET chains' limits doubled.
+fn let_chains(spec: &Spec, coin: &mut Rng) -> Spec {
+    let mut l = spec.clone();
+    let (system, other) = if coin.chance(0.5) {
+        (Communication::Implicit, Communication::Let)
+    } else {
+        (Communication::Let, Communication::Implicit)
+    };
+    l.communication = system;
+    let first = coin.range(0, l.chains.len() as u64 - 1) as usize;
+    for (k, ch) in l.chains.iter_mut().enumerate() {
+        if k == first || coin.chance(0.5) {
+            ch.communication = Some(other);
+        }
+        if ch.communication.unwrap_or(system) == Communication::Let {
+            doubled(ch);
+        }
+    }
+    l
 }
 
 /// `design` refuses critical sections, overheads, jitter, DM or explicit
@@ -441,7 +475,7 @@ fn refused(spec: &Spec, mode: Mode, method: Method) -> bool {
 fn timed(spec: &Spec) -> bool {
     spec.priorities != Priorities::RateMonotonic
         || spec.schedulability == SchedTest::Qpa
-        || spec.communication == Communication::Let
+        || spec.any_let()
 }
 
 /// The spec has critical sections, overheads or release jitter.
@@ -463,7 +497,9 @@ fn count_timing(spec: &Spec, tally: &mut BTreeMap<&'static str, usize>) {
     if spec.schedulability == SchedTest::Qpa {
         add("qpa");
     }
-    if spec.communication == Communication::Let {
+    if spec.chains.iter().any(|c| c.communication.is_some()) {
+        add("chains of both semantics");
+    } else if spec.communication == Communication::Let {
         add("let");
     }
     if spec.tasks.iter().any(|t| t.deadline_given.is_some()) {
@@ -614,7 +650,10 @@ fn run(
             }
         };
         *tally.entry(o.status.name()).or_default() += 1;
-        if spec.communication == Communication::Let && o.status == Status::Optimal {
+        let both = spec.chains.iter().any(|c| c.communication.is_some());
+        if both && o.status == Status::Optimal {
+            *tally.entry("both semantics optimal").or_default() += 1;
+        } else if spec.communication == Communication::Let && o.status == Status::Optimal {
             *tally.entry("let optimal").or_default() += 1;
         }
         if let Shape::Contended | Shape::Timed = shape {
