@@ -24,7 +24,7 @@
 //! which changes no pick, so it is one atomic store.
 
 use crate::sys;
-use rtpipe_model::policy::preemption_levels;
+use rtpipe_model::policy::{srp_levels, srp_may_start};
 use rtpipe_model::{Nanos, Server, Spec};
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard, TryLockError};
@@ -54,16 +54,14 @@ pub(crate) struct Ready {
 pub(crate) fn pick(ready: &[Ready], ceiling: Option<Nanos>) -> Option<(usize, bool)> {
     let first = (0..ready.len()).min_by_key(|&k| ready[k].key)?;
     let f = ready[first];
-    match ceiling {
-        Some(c) if !f.started && f.level >= c => {
-            let top = (0..ready.len())
-                .filter(|&k| ready[k].started)
-                .min_by_key(|&k| ready[k].key);
-            assert!(top.is_some(), "SRP: a resource held by no started job");
-            top.map(|k| (k, true))
-        }
-        _ => Some((first, false)),
+    if srp_may_start(f.started, f.level, ceiling) {
+        return Some((first, false));
     }
+    let top = (0..ready.len())
+        .filter(|&k| ready[k].started)
+        .min_by_key(|&k| ready[k].key);
+    assert!(top.is_some(), "SRP: a resource held by no started job");
+    top.map(|k| (k, true))
 }
 
 /// One CPU's released jobs and its pick.
@@ -123,15 +121,10 @@ pub(crate) struct Dispatcher {
 impl Dispatcher {
     /// For `spec`'s tasks and resources.
     pub(crate) fn new(spec: &Spec) -> Dispatcher {
-        let level: Vec<Nanos> = preemption_levels(spec)
-            .iter()
-            .map(|r| r.map_or(Nanos::MAX, |r| r as Nanos))
-            .collect();
-        let mut ceiling = vec![Nanos::MAX; spec.resources.len()];
+        let (level, ceiling) = srp_levels(spec);
         let mut res_cpu = vec![0; spec.resources.len()];
-        for (i, t) in spec.tasks.iter().enumerate() {
+        for t in &spec.tasks {
             for s in &t.sections {
-                ceiling[s.resource] = ceiling[s.resource].min(level[i]);
                 res_cpu[s.resource] = t.cpu as usize;
             }
         }
