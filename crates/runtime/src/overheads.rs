@@ -13,7 +13,7 @@
 //!   costs before the job's first instruction (under SCHED_DEADLINE the
 //!   kernel's CBS replenishment at the wake-up is inside it too; under the
 //!   EDF dispatcher the dispatcher's release and completion work, see
-//!   [`dispatched_releases`]);
+//!   `dispatched_releases`);
 //! - **replenishment**: the runtime has no budget path of its own (under
 //!   SCHED_FIFO budgets are not enforced; SCHED_DEADLINE replenishes in the
 //!   wake-up measured above), so nothing is measured for it.
