@@ -47,7 +47,8 @@ pub struct RunArgs {
     #[arg(long, default_value = "steps")]
     pub mission: String,
     /// Scheduling class of the task threads [default: fifo for scheduler =
-    /// "rm", deadline for "edf"]. `other` needs --best-effort.
+    /// "rm", deadline for "edf", edf-fifo for "edf" with critical
+    /// sections]. `other` needs --best-effort.
     #[arg(long, value_enum)]
     pub policy: Option<PolicyArg>,
     /// Accept --policy other (SCHED_OTHER): every figure is then marked as
@@ -110,6 +111,9 @@ pub enum PolicyArg {
     Deadline,
     /// SCHED_OTHER: no real-time guarantee (needs --best-effort).
     Other,
+    /// SCHED_FIFO under rtpipe's EDF dispatcher (scheduler = "edf"; the
+    /// default when it has critical sections: the stack resource policy).
+    EdfFifo,
 }
 
 fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Diagnostic> {
@@ -117,7 +121,12 @@ fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Diagnostic> {
         (Some(PolicyArg::Fifo), _) => Policy::Fifo,
         (Some(PolicyArg::Deadline), _) => Policy::Deadline,
         (Some(PolicyArg::Other), _) => Policy::Other,
+        (Some(PolicyArg::EdfFifo), _) => Policy::EdfFifo,
         (None, LinuxClass::Fifo) => Policy::Fifo,
+        // SRP needs the dispatcher (`rtpipe_runtime::edf`).
+        (None, LinuxClass::Deadline) if spec.tasks.iter().any(|t| !t.sections.is_empty()) => {
+            Policy::EdfFifo
+        }
         (None, LinuxClass::Deadline) => Policy::Deadline,
     };
     if p == Policy::Other && !a.best_effort {
@@ -219,10 +228,10 @@ fn write_outputs(
             format!(", steal time {:.0} ms", s as f64 / 1e6)
         });
         let subtitle = format!(
-            "{} {} on real threads, SCHED_{}{}{}{steal}",
+            "{} {} on real threads, {}{}{}{steal}",
             spec.fmt_time(res.sim.horizon),
             spec.time_unit,
-            res.policy.name().to_uppercase(),
+            res.policy.class(),
             if a.load > 0 {
                 format!(", {} hog(s)", a.load)
             } else {
@@ -342,11 +351,12 @@ fn print_report(
     Ok(())
 }
 
-/// A spec the runtime cannot run as written (sections under EDF,
-/// `rtpipe_runtime::locks::unrunnable`): the error at its
+/// A spec the runtime cannot run as asked (sections under
+/// SCHED_DEADLINE, `rtpipe_runtime::locks::unrunnable`): the error at its
 /// `resource_protocol` (else its first `[resources]` table), exit 2.
 fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
-    let (msg, help) = rtpipe_runtime::locks::unrunnable(spec)?;
+    let policy = policy_of(spec, a).ok()?;
+    let (msg, help) = rtpipe_runtime::locks::unrunnable(spec, policy)?;
     let source = std::fs::read_to_string(&a.spec).unwrap_or_default();
     let span = rtpipe_model::input::locate(&source, "system.resource_protocol").or_else(|| {
         let r = spec.resources.first()?;
@@ -427,10 +437,10 @@ fn admit(spec: &Spec, a: &RunArgs, cfg: &RunConfig, report: &Report) -> Result<(
         .collect();
     Err(Diagnostic::error(
         format!(
-            "{} is not schedulable ({}): under SCHED_{} its threads can fall behind for good and starve everything else on their CPUs",
+            "{} is not schedulable ({}): under {} its threads can fall behind for good and starve everything else on their CPUs",
             spec.name,
             failing.join(", "),
-            cfg.policy.name().to_uppercase()
+            cfg.policy.class()
         ),
         "fix the budgets or periods (`rtpipe analyze` says where, `rtpipe design` picks periods), run it with --policy other --best-effort, or pass --force to run it anyway",
     ))
@@ -458,11 +468,11 @@ fn duration_of(spec: &Spec, a: &RunArgs, setup: Option<&Setup>) -> Result<Nanos,
 /// Says on stderr what is about to run, and how to stop it.
 fn announce(spec: &Spec, a: &RunArgs, cfg: &RunConfig, flight: bool) {
     eprintln!(
-        "running {} for {} {} under SCHED_{}{}{} (Ctrl-C stops early)...",
+        "running {} for {} {} under {}{}{} (Ctrl-C stops early)...",
         spec.name,
         spec.fmt_time(cfg.duration),
         spec.time_unit,
-        cfg.policy.name().to_uppercase(),
+        cfg.policy.class(),
         if a.load > 0 {
             format!(" with {} background hog(s)", a.load)
         } else {
@@ -569,6 +579,7 @@ fn to_text(
             "SCHED_DEADLINE threads are not pinned (the kernel requires their affinity to span the root domain): global EDF on all CPUs\n"
         });
     }
+    out.extend(res.dispatch.map(|d| d.describe()));
     if !obs.is_empty() {
         out.push_str(
             "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
@@ -616,9 +627,9 @@ fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
         ""
     };
     format!(
-        "ran {} {u} under SCHED_{}{}{}{rt}; {}\n",
+        "ran {} {u} under {}{}{}{rt}; {}\n",
         spec.fmt_time(res.sim.horizon),
-        res.policy.name().to_uppercase(),
+        res.policy.class(),
         match res.load {
             0 => String::new(),
             n => format!(" with {n} background hog(s)"),
@@ -752,13 +763,39 @@ struct RunInfo<'a> {
     interrupted: bool,
     steal: Option<f64>,
     spin_iterations_per_us: f64,
-    /// SCHED_DEADLINE only: `partitioned` (a root domain per CPU) or
-    /// `global` EDF.
+    /// EDF only: `partitioned` (SCHED_DEADLINE with a root domain per CPU,
+    /// or the EDF dispatcher's pinned threads) or `global` EDF.
     edf: Option<&'static str>,
     sound_bound_violations: &'a Verdict,
     notes: &'a [String],
     /// Per resource: its sections as the threads held them.
     critical_sections: Vec<HeldView<'a>>,
+    /// Under `edf-fifo`: what the EDF dispatcher did.
+    dispatcher: Option<DispatchView>,
+}
+
+/// The EDF dispatcher's counts (`rtpipe_runtime::edf::Stats`).
+#[derive(Serialize)]
+struct DispatchView {
+    dispatches: u64,
+    priority_changes: u64,
+    held_back_by_ceiling: u64,
+    quiet_section_exits: u64,
+    contended: u64,
+    refused: u64,
+}
+
+impl From<rtpipe_runtime::edf::Stats> for DispatchView {
+    fn from(s: rtpipe_runtime::edf::Stats) -> DispatchView {
+        DispatchView {
+            dispatches: s.dispatches,
+            priority_changes: s.changes,
+            held_back_by_ceiling: s.held_back,
+            quiet_section_exits: s.quiet_exits,
+            contended: s.contended,
+            refused: s.failed,
+        }
+    }
 }
 
 /// One resource's sections in a run.
@@ -832,17 +869,21 @@ fn to_json<'a>(
         load: res.load,
         epoch_monotonic_ns: res.epoch,
         real_time: res.policy != Policy::Other,
-        edf: (res.policy == Policy::Deadline).then_some(if res.partitioned {
-            "partitioned"
-        } else {
-            "global"
-        }),
+        edf: res
+            .policy
+            .edf()
+            .then_some(if res.partitioned || res.policy == Policy::EdfFifo {
+                "partitioned"
+            } else {
+                "global"
+            }),
         interrupted: res.interrupted,
         steal: res.steal.map(|s| spec.in_unit(s)),
         spin_iterations_per_us: spin.iters_per_us,
         sound_bound_violations: verdict,
         notes: &res.notes,
         critical_sections: held_json(spec, res),
+        dispatcher: res.dispatch.map(DispatchView::from),
     };
     RunView {
         report,

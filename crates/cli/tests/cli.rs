@@ -326,8 +326,9 @@ fn bad_critical_sections_exit_2_with_location() {
 
 /// Shared resources under EDF (issue 22): only the stack resource policy,
 /// named; sections only in plain tasks
-/// and within exec, as under RM. `run` refuses the spec at its protocol
-/// (SCHED_DEADLINE cannot run SRP), `analyze` and `simulate` run it.
+/// and within exec, as under RM. `run --policy deadline` refuses the spec
+/// at its protocol (SCHED_DEADLINE cannot run SRP), `analyze` and
+/// `simulate` run it.
 #[test]
 fn edf_sections_need_srp_and_exit_2_otherwise() {
     let cases = [
@@ -338,7 +339,16 @@ fn edf_sections_need_srp_and_exit_2_otherwise() {
         ("length = 2 }", "length = 4 }", "bad.toml:49:51: error: critical section of `c` on `bus` (4ms) is longer than its exec (3ms)"),
     ];
     mutated_exit_2("cli-edf-srp", "edf-srp.toml", &cases);
-    let o = rtpipe(&["run", &example("edf-srp.toml"), "--duration", "10ms"]);
+    // SCHED_DEADLINE cannot run SRP: asked for, refused at the protocol
+    // (the default, the EDF dispatcher, runs it: crates/runtime/tests/edf_srp.rs).
+    let o = rtpipe(&[
+        "run",
+        &example("edf-srp.toml"),
+        "--duration",
+        "10ms",
+        "--policy",
+        "deadline",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -346,7 +356,7 @@ fn edf_sections_need_srp_and_exit_2_otherwise() {
         "{err}"
     );
     assert!(
-        err.contains("SCHED_DEADLINE") && err.contains("help:"),
+        err.contains("SCHED_DEADLINE") && err.contains("help:") && err.contains("edf-fifo"),
         "{err}"
     );
     for cmd in ["analyze", "simulate"] {

@@ -159,6 +159,35 @@ fn deadline_run_of_an_edf_spec() {
     }
 }
 
+/// EDF with critical sections (the stack resource policy) runs by default
+/// under the EDF dispatcher on SCHED_FIFO; mutual exclusion holds and the
+/// exit status follows the verdict.
+#[test]
+fn edf_with_sections_runs_under_the_edf_dispatcher() {
+    let _one = serial();
+    let o = rtpipe(&[
+        "run",
+        &example("edf-srp.toml"),
+        "--duration",
+        "1s",
+        "--json",
+    ]);
+    if unprivileged(&o, "edf_with_sections_runs_under_the_edf_dispatcher") {
+        return;
+    }
+    let v = json_of(&o);
+    assert_eq!(v["run"]["policy"], "edf-fifo");
+    assert_eq!(v["run"]["edf"], "partitioned");
+    every_chain_observed(&v);
+    let held = &v["run"]["critical_sections"][0];
+    assert!(held["holds"].as_u64().unwrap_or(0) >= 300, "{held}");
+    assert_eq!(held["overlaps"], 0, "{held}");
+    let unexcused = v["run"]["sound_bound_violations"]["unexcused"]
+        .as_u64()
+        .unwrap_or(0);
+    assert_exit(&o, if unexcused > 0 { 1 } else { 0 });
+}
+
 #[test]
 fn best_effort_runs_without_privilege_and_says_so() {
     let _one = serial();

@@ -410,6 +410,37 @@ pub fn preemption_levels(spec: &Spec) -> Vec<Option<usize>> {
     deadline_monotonic(spec)
 }
 
+/// The stack resource policy's numbers, as the simulator
+/// (`sim/src/locks.rs`) and the runtime's EDF dispatcher
+/// (`runtime/src/edf.rs`) apply them: per task its preemption level as a
+/// rank ([`preemption_levels`]; `Nanos::MAX`, the lowest, for a task with
+/// none), per resource its ceiling (the best level of its users;
+/// `Nanos::MAX` for a resource nobody uses).
+pub fn srp_levels(spec: &Spec) -> (Vec<Nanos>, Vec<Nanos>) {
+    let level: Vec<Nanos> = preemption_levels(spec)
+        .iter()
+        .map(|r| r.map_or(Nanos::MAX, |r| r as Nanos))
+        .collect();
+    let mut ceiling = vec![Nanos::MAX; spec.resources.len()];
+    for (i, t) in spec.tasks.iter().enumerate() {
+        for s in &t.sections {
+            if let Some(c) = ceiling.get_mut(s.resource) {
+                *c = (*c).min(level[i]);
+            }
+        }
+    }
+    (level, ceiling)
+}
+
+/// SRP's start rule (Baker 1991): a job that has not started yet may start
+/// only when its level (a rank, smaller is higher) is above the system
+/// ceiling, the best ceiling of the resources held on its CPU (`None`:
+/// none is held). A job that has started runs whatever the ceiling: it
+/// passed the test when it started.
+pub fn srp_may_start(started: bool, level: Nanos, system_ceiling: Option<Nanos>) -> bool {
+    started || system_ceiling.is_none_or(|c| level < c)
+}
+
 /// Rate-monotonic ranks per CPU: shorter period first, ties by declaration
 /// order; background tasks get none. A task without a fixed period ranks
 /// last among its CPU's.

@@ -48,13 +48,17 @@ pub enum Cause {
     },
     /// Time in the window when jobs of the run on a CPU were pending but
     /// none of them used it: the kernel's timer and wake-up latency,
-    /// interrupts, other processes, the hypervisor (steal). The model has
-    /// none of it.
+    /// interrupts, other processes, the hypervisor (steal), and under
+    /// [`Policy::EdfFifo`] the EDF dispatcher's work at releases. The model
+    /// has none of it.
     Foreign {
         /// The CPU (`None`: all of them, under global EDF).
         cpu: Option<u32>,
         /// Pending time minus the CPU time the run's jobs used in it, ns.
         ns: Nanos,
+        /// The run was under the EDF dispatcher (`crate::edf`), whose
+        /// release work is part of this time.
+        dispatcher: bool,
     },
     /// The hypervisor ran something else on a CPU (steal time): named, but
     /// already part of that CPU's [`Cause::Foreign`] time, so it adds no
@@ -129,10 +133,19 @@ impl Cause {
                 us(demand),
                 us(declared)
             ),
-            Cause::Foreign { cpu, ns } => format!(
-                "{} us on {} with jobs of the run pending but none running (kernel latency, interrupts, other processes, steal)",
+            Cause::Foreign {
+                cpu,
+                ns,
+                dispatcher,
+            } => format!(
+                "{} us on {} with jobs of the run pending but none running ({}kernel latency, interrupts, other processes, steal)",
                 us(ns),
-                cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}"))
+                cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
+                if dispatcher {
+                    "the EDF dispatcher's releases, "
+                } else {
+                    ""
+                }
             ),
             Cause::Steal { cpu, ns } => format!(
                 "{} us of steal time on CPU {cpu} (within the foreign time)",
@@ -178,7 +191,7 @@ impl<'r> Blame<'r> {
         match self.res.policy {
             Policy::Other => return vec![Cause::BestEffort],
             Policy::Deadline if !self.res.partitioned => return vec![Cause::GlobalEdf],
-            Policy::Deadline | Policy::Fifo => {}
+            Policy::Deadline | Policy::Fifo | Policy::EdfFifo => {}
         }
         let mut out: Vec<Cause> = tasks
             .iter()
@@ -372,7 +385,11 @@ impl<'r> Blame<'r> {
             "CPU time used in a window is not negative: {used}"
         );
         let ns = union - used;
-        (ns > 0).then_some(Cause::Foreign { cpu, ns })
+        (ns > 0).then_some(Cause::Foreign {
+            cpu,
+            ns,
+            dispatcher: self.res.policy == Policy::EdfFifo,
+        })
     }
 }
 
@@ -505,6 +522,7 @@ output = { channel = "shm", size = 0 }
             probes,
             demoted: Vec::new(),
             partitioned: false,
+            dispatch: None,
             schedule: None,
         };
         (spec, res)
@@ -534,6 +552,7 @@ output = { channel = "shm", size = 0 }
         let foreign = Cause::Foreign {
             cpu: Some(0),
             ns: 5 * MS / 2,
+            dispatcher: false,
         };
         assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
         // Outside them, no evidence.
@@ -553,6 +572,7 @@ output = { channel = "shm", size = 0 }
         let foreign = Cause::Foreign {
             cpu: Some(0),
             ns: 5 * MS / 2,
+            dispatcher: false,
         };
         assert_eq!(b.causes(w, &[0]), vec![foreign]);
     }
@@ -563,6 +583,7 @@ output = { channel = "shm", size = 0 }
             Cause::Foreign {
                 cpu: Some(0),
                 ns: 3 * MS,
+                dispatcher: false,
             },
             Cause::Overrun {
                 task: 0,

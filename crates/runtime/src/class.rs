@@ -39,7 +39,7 @@ pub(crate) fn configure(
         )
     };
     match policy {
-        Policy::Fifo | Policy::Other => {
+        Policy::Fifo | Policy::Other | Policy::EdfFifo => {
             if let Err(e) = sys::pin_to(th.cpu) {
                 return Err(refused(
                     &format!("pinning to cpu {}", th.cpu),
@@ -49,7 +49,14 @@ pub(crate) fn configure(
                     ),
                 ));
             }
-            if let (Policy::Fifo, Some(p)) = (policy, th.priority) {
+            // Under the EDF dispatcher a thread waits for its release at
+            // DISPATCH (`crate::edf`).
+            let fifo = match policy {
+                Policy::Fifo => th.priority,
+                Policy::EdfFifo => Some(crate::edf::DISPATCH),
+                _ => None,
+            };
+            if let Some(p) = fifo {
                 if let Err(e) = sys::set_fifo(p) {
                     let help = if e.raw_os_error() == Some(libc::EPERM) {
                         no_privilege("SCHED_FIFO")
@@ -117,9 +124,12 @@ pub(crate) fn privileges(spec: &Spec, policy: Policy) -> Result<(), RunError> {
     if policy == Policy::Other || sys::is_root() || sys::has_capability(sys::CAP_SYS_NICE) {
         return Ok(());
     }
-    let top = fifo_priorities(spec).into_iter().max().unwrap_or(1);
+    let top = match policy {
+        Policy::EdfFifo => crate::edf::DISPATCH,
+        _ => fifo_priorities(spec).into_iter().max().unwrap_or(1),
+    };
     let rtprio = sys::soft_limit(libc::RLIMIT_RTPRIO);
-    if policy == Policy::Fifo && rtprio >= top as u64 {
+    if matches!(policy, Policy::Fifo | Policy::EdfFifo) && rtprio >= top as u64 {
         return Ok(());
     }
     let (class, need) = match policy {

@@ -1,5 +1,5 @@
 //! What no run can do, whatever the machine (a non-positive duration,
-//! sections under EDF: `crate::locks::unrunnable`), and
+//! sections under SCHED_DEADLINE: `crate::locks::unrunnable`), and
 //! what a run with the caller's own bodies cannot: critical sections, which
 //! the runtime holds itself around synthetic bodies only (`crate::locks`,
 //! [`crate::run_synthetic`]: it cannot place them inside foreign code), and
@@ -7,11 +7,17 @@
 //! running at (`crate::let_comm` keeps LET's data flow by index; a world
 //! sensed at the release would have to be sensed in the past).
 
+use crate::config::Policy;
 use rtpipe_model::{Communication, Nanos, Spec};
 
-/// (what is wrong, how to fix it) when `spec` cannot run for `duration`.
-pub(crate) fn refusal(spec: &Spec, duration: Nanos) -> Option<(&'static str, &'static str)> {
-    if let Some(r) = crate::locks::unrunnable(spec) {
+/// (what is wrong, how to fix it) when `spec` cannot run for `duration`
+/// under `policy`.
+pub(crate) fn refusal(
+    spec: &Spec,
+    duration: Nanos,
+    policy: Policy,
+) -> Option<(&'static str, &'static str)> {
+    if let Some(r) = crate::locks::unrunnable(spec, policy) {
         return Some(r);
     }
     (duration <= 0).then_some(("the duration must be positive", "e.g. --duration 2s"))

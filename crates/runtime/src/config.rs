@@ -16,6 +16,11 @@ pub enum Policy {
     Deadline,
     /// `SCHED_OTHER`, pinned: no real-time guarantee (best effort).
     Other,
+    /// `SCHED_FIFO` threads, pinned, under rtpipe's EDF dispatcher
+    /// (`crate::edf`): the `edf` model with the stack resource policy,
+    /// which SCHED_DEADLINE cannot run (budgets not enforced, as under
+    /// `Fifo`).
+    EdfFifo,
 }
 
 impl Policy {
@@ -25,7 +30,24 @@ impl Policy {
             Policy::Fifo => "fifo",
             Policy::Deadline => "deadline",
             Policy::Other => "other",
+            Policy::EdfFifo => "edf-fifo",
         }
+    }
+
+    /// The kernel's class, as reports name it.
+    pub fn class(self) -> &'static str {
+        match self {
+            Policy::Fifo => "SCHED_FIFO",
+            Policy::Deadline => "SCHED_DEADLINE",
+            Policy::Other => "SCHED_OTHER",
+            Policy::EdfFifo => "SCHED_FIFO (rtpipe's EDF dispatcher)",
+        }
+    }
+
+    /// Jobs are picked by absolute deadline (SCHED_DEADLINE or the EDF
+    /// dispatcher): the `edf` model.
+    pub fn edf(self) -> bool {
+        matches!(self, Policy::Deadline | Policy::EdfFifo)
     }
 }
 

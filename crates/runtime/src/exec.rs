@@ -87,6 +87,8 @@ pub struct RunResult {
     /// SCHED_DEADLINE ran partitioned EDF (a root domain per CPU, each
     /// thread pinned to its task's CPU) rather than global EDF.
     pub partitioned: bool,
+    /// Under [`Policy::EdfFifo`], what the EDF dispatcher did.
+    pub dispatch: Option<crate::edf::Stats>,
     /// Under LET, every job at the schedule's instants (read: when its
     /// thread read, finish: when it completed), where `sim.jobs` holds
     /// LET's (release, period end); `None` otherwise ([`RunResult::scheduled`]).
@@ -205,7 +207,7 @@ pub const MAX_TASKS: usize = 512;
 
 /// Checks that `spec` can run under `cfg` before any thread starts.
 pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
-    if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration) {
+    if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration, cfg.policy) {
         return Err(RunError::config(msg, help));
     }
     let cpus = sys::online_cpus();
@@ -256,8 +258,11 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             "--policy fifo runs the rate-monotonic model, but the spec says scheduler = \"edf\"",
             "use --policy deadline for an edf spec, or set scheduler = \"rm\"",
         )),
-        (Policy::Deadline, LinuxClass::Fifo) => Err(RunError::config(
-            "--policy deadline runs the edf model, but the spec says scheduler = \"rm\"",
+        (Policy::Deadline | Policy::EdfFifo, LinuxClass::Fifo) => Err(RunError::config(
+            format!(
+                "--policy {} runs the edf model, but the spec says scheduler = \"rm\"",
+                cfg.policy.name()
+            ),
             "use --policy fifo for an rm spec, or set scheduler = \"edf\"",
         )),
         (Policy::Deadline, _) if bandwidth > 0.95 * cpus as f64 => Err(RunError::refused(
@@ -373,6 +378,7 @@ fn execute<'a, V: Copy + Send>(
         (Some(a), Some(b)) => Some(b - a),
         _ => None,
     };
+    let dispatch = shared.dispatcher().map(|d| d.stats());
     if let Some(e) = shared
         .errors
         .into_inner()
@@ -398,6 +404,7 @@ fn execute<'a, V: Copy + Send>(
     res.probes = probes;
     res.demoted = demoted;
     res.partitioned = shared.partition.is_some();
+    res.dispatch = dispatch;
     Ok(res)
 }
 
@@ -441,7 +448,9 @@ fn demoted_note(name: &str, policy: Policy, grace: Nanos) -> String {
         Policy::Deadline => {
             "a SCHED_DEADLINE reservation overdrawn by far is throttled until its runtime is paid back"
         }
-        Policy::Fifo => "higher-priority SCHED_FIFO threads kept it from running",
+        Policy::Fifo | Policy::EdfFifo => {
+            "higher-priority SCHED_FIFO threads kept it from running"
+        }
         Policy::Other => "the fair scheduler gave it too little CPU time",
     };
     format!(
@@ -553,6 +562,11 @@ struct Shared {
 }
 
 impl Shared {
+    /// The EDF dispatcher, under [`Policy::EdfFifo`].
+    fn dispatcher(&self) -> Option<&crate::edf::Dispatcher> {
+        self.resources.as_ref().and_then(|r| r.dispatch.as_ref())
+    }
+
     /// For `n` task threads (and the one that starts them).
     fn new(n: usize) -> Shared {
         Shared {
@@ -640,6 +654,9 @@ fn task_thread<'a, V: Copy>(
         deadline: th.deadline,
         period: th.period,
     };
+    if let Some(d) = shared.dispatcher() {
+        d.register(th.task);
+    }
     if let Err(e) = configure(&place, policy, shared.partition.as_ref()) {
         if let Ok(mut v) = shared.errors.lock() {
             v.push(e);
@@ -691,7 +708,16 @@ fn periodic<V: Copy>(
             // span ends at the stop, so this job is not part of it.
             break;
         }
+        // Under the EDF dispatcher the thread wakes at its DISPATCH
+        // priority, ranks its job and runs once it is picked.
+        let dispatch = res.and_then(|r| r.dispatch.as_ref());
+        if let Some(d) = dispatch {
+            d.release(th.task, release + th.deadline);
+        }
         job(th, k, epoch, (env, res), &mut inputs);
+        if let Some(d) = dispatch {
+            d.complete(th.task);
+        }
         k += 1;
     }
 }

@@ -1,7 +1,8 @@
 //! # rtpipe-runtime
 //!
 //! Runs a pipe system for real: one thread per task, released periodically
-//! under `SCHED_FIFO` (rate-monotonic priorities) or `SCHED_DEADLINE`, tasks
+//! under `SCHED_FIFO` (rate-monotonic priorities), `SCHED_DEADLINE`, or
+//! SCHED_FIFO under an EDF dispatcher (EDF with the stack resource policy), tasks
 //! communicating through Simpson's four-slot registers ([`four_slot`]), one
 //! per (producer, consumer) edge. docs/runtime.md describes the design.
 #![deny(missing_docs)]
@@ -10,6 +11,7 @@ pub mod blame;
 mod class;
 mod comm;
 mod config;
+pub mod edf;
 pub mod exec;
 pub mod four_slot;
 mod let_comm;

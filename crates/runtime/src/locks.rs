@@ -21,6 +21,7 @@
 //! keep mutual exclusion only, and the run says so.
 
 use crate::config::{fifo_priorities, Policy};
+use crate::edf::Dispatcher;
 use crate::pi::PiMutex;
 use crate::spin::Spin;
 use crate::sys;
@@ -32,12 +33,13 @@ use std::sync::Mutex;
 /// stack resource policy needs preemption levels and a system ceiling
 /// that hold a job back from starting, which SCHED_DEADLINE does not
 /// have (it picks by deadline alone, and a ceiling cannot be raised in
-/// it as SCHED_FIFO's priority is).
-pub fn unrunnable(spec: &Spec) -> Option<(&'static str, &'static str)> {
+/// it as SCHED_FIFO's priority is); the EDF dispatcher (`crate::edf`,
+/// [`Policy::EdfFifo`]) has them.
+pub fn unrunnable(spec: &Spec, policy: Policy) -> Option<(&'static str, &'static str)> {
     let sections = spec.tasks.iter().any(|t| !t.sections.is_empty());
-    (sections && !spec.policy().fixed_priority()).then_some((
-        "critical sections under scheduler = \"edf\" (resource_protocol = \"srp\"): SCHED_DEADLINE picks by deadline alone and has no preemption levels or system ceiling, so the stack resource policy cannot run on Linux threads as is",
-        "`rtpipe analyze` and `rtpipe simulate` run the stack resource policy under EDF; to run the sections on threads use scheduler = \"rm\" (PCP, SRP or PIP under SCHED_FIFO)",
+    (sections && !spec.policy().fixed_priority() && policy == Policy::Deadline).then_some((
+        "critical sections under scheduler = \"edf\" (resource_protocol = \"srp\") with --policy deadline: SCHED_DEADLINE picks by deadline alone and has no preemption levels or system ceiling, so the stack resource policy cannot run in it",
+        "drop --policy deadline: by default (--policy edf-fifo) rtpipe's EDF dispatcher runs the stack resource policy on SCHED_FIFO threads",
     ))
 }
 
@@ -69,6 +71,9 @@ pub(crate) struct Resources {
     /// Per resource: the SCHED_FIFO priority of its highest-ranked user
     /// (`None`: no priority is raised, PIP or not SCHED_FIFO).
     ceiling: Vec<Option<i32>>,
+    /// Under [`Policy::EdfFifo`]: the EDF dispatcher, which keeps the
+    /// system ceilings of the stack resource policy.
+    pub(crate) dispatch: Option<Dispatcher>,
 }
 
 impl Resources {
@@ -90,14 +95,30 @@ impl Resources {
                 _ => Ok(Lock::Plain(Mutex::new(()))),
             })
             .collect::<std::io::Result<Vec<_>>>()?;
-        Ok(Resources { locks, ceiling })
+        let dispatch = (policy == Policy::EdfFifo).then(|| Dispatcher::new(spec));
+        Ok(Resources {
+            locks,
+            ceiling,
+            dispatch,
+        })
     }
 
-    /// Runs `length` of CPU time holding resource `r`, the thread's own
-    /// SCHED_FIFO priority being `own`: (taken, given back) on CLOCK_MONOTONIC,
-    /// and whether every priority change succeeded.
-    fn hold(&self, r: usize, length: Nanos, own: Option<i32>, spin: &Spin) -> (Nanos, Nanos, bool) {
+    /// Runs `length` of CPU time holding resource `r` for task `task`, the
+    /// thread's own SCHED_FIFO priority being `own`: (taken, given back) on
+    /// CLOCK_MONOTONIC, and whether every priority change succeeded. Under
+    /// the EDF dispatcher the system ceiling rises before the lock and
+    /// drops after it (the dispatcher then picks again).
+    fn hold(
+        &self,
+        (task, r): (usize, usize),
+        length: Nanos,
+        own: Option<i32>,
+        spin: &Spin,
+    ) -> (Nanos, Nanos, bool) {
         let raise = self.ceiling[r].zip(own).filter(|&(c, o)| c > o);
+        if let Some(d) = &self.dispatch {
+            d.enter(r);
+        }
         let mut ok = raise.is_none_or(|(c, _)| sys::set_priority(c).is_ok());
         let (enter, exit) = match &self.locks[r] {
             Lock::Plain(m) => {
@@ -112,6 +133,9 @@ impl Resources {
         };
         if let Some((_, o)) = raise {
             ok &= sys::set_priority(o).is_ok();
+        }
+        if let Some(d) = &self.dispatch {
+            d.exit(task, r);
         }
         (enter, exit, ok)
     }
@@ -162,6 +186,8 @@ pub(crate) fn plan(spec: &Spec, i: usize) -> Option<Plan> {
 
 /// One task's sections as its jobs run them.
 pub(crate) struct Sections {
+    /// The task.
+    task: usize,
     spin: Spin,
     /// Δin, burnt before the first section.
     lead: Nanos,
@@ -180,6 +206,7 @@ impl Sections {
     pub(crate) fn of(spec: &Spec, i: usize, spin: Spin, jobs: usize) -> Option<Sections> {
         let p = plan(spec, i)?;
         Some(Sections {
+            task: i,
             spin,
             lead: p.lead,
             held: Vec::with_capacity(jobs * p.list.len()),
@@ -197,7 +224,7 @@ impl Sections {
     pub(crate) fn run(&mut self, res: &Resources, job: u64, own: Option<i32>, epoch: Nanos) {
         self.spin.burn(self.lead);
         for &(length, r) in &self.list {
-            let (enter, exit, ok) = res.hold(r, length, own, &self.spin);
+            let (enter, exit, ok) = res.hold((self.task, r), length, own, &self.spin);
             self.failed += u64::from(!ok);
             if self.held.len() < self.held.capacity() {
                 self.held.push(Held {
@@ -218,6 +245,7 @@ pub(crate) fn note(spec: &Spec, policy: Policy) -> Option<String> {
     }
     let name = spec.resource_protocol.name();
     Some(match policy {
+        Policy::EdfFifo => "note: critical sections under the stack resource policy, run by rtpipe's EDF dispatcher on SCHED_FIFO (a job starts only as its CPU's earliest deadline and above its system ceiling)".into(),
         Policy::Other => format!(
             "note: resource_protocol = \"{name}\" not applied: SCHED_OTHER has no priorities to raise or lend; the critical sections keep mutual exclusion only, and the blocking bound does not hold"
         ),

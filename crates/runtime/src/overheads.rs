@@ -11,7 +11,9 @@
 //!   CLOCK_MONOTONIC and reads the clock when it runs: the timer
 //!   interrupt, the wake-up and the switch to it, all of what a release
 //!   costs before the job's first instruction (under SCHED_DEADLINE the
-//!   kernel's CBS replenishment at the wake-up is inside it too);
+//!   kernel's CBS replenishment at the wake-up is inside it too; under the
+//!   EDF dispatcher the dispatcher's release and completion work, see
+//!   `dispatched_releases`);
 //! - **replenishment**: the runtime has no budget path of its own (under
 //!   SCHED_FIFO budgets are not enforced; SCHED_DEADLINE replenishes in the
 //!   wake-up measured above), so nothing is measured for it.
@@ -22,6 +24,7 @@
 
 use crate::class::{configure, Placement};
 use crate::config::{Policy, RunError};
+use crate::edf::Dispatcher;
 use crate::partition::Partition;
 use crate::sys;
 use rtpipe_model::Nanos;
@@ -34,6 +37,9 @@ pub const SWITCH_SAMPLES: usize = 20_000;
 pub const RELEASE_SAMPLES: usize = 2_000;
 /// The time between two measured releases.
 pub const RELEASE_GAP: Nanos = 500_000;
+
+/// The spinning job's cycle in [`dispatched_releases`]: it sleeps a tenth.
+const SPIN_CYCLE: Nanos = 10_000_000;
 
 /// A measured distribution, ns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -172,6 +178,9 @@ fn releases(
     cpu: usize,
     partition: Option<Arc<Partition>>,
 ) -> Result<Spread, RunError> {
+    if policy == Policy::EdfFifo {
+        return dispatched_releases(cpu);
+    }
     let probe = std::thread::spawn(move || -> Result<Vec<Nanos>, RunError> {
         configure(&placement(cpu, 60), policy, partition.as_deref())?;
         let mut v = Vec::with_capacity(RELEASE_SAMPLES);
@@ -190,6 +199,72 @@ fn releases(
         Ok(r) => Ok(Spread::of(r?)),
         Err(_) => Err(RunError::config("the overhead probe's thread failed", "")),
     }
+}
+
+/// [`RELEASE_SAMPLES`] releases under the EDF dispatcher on `cpu`, each
+/// with all the dispatcher's work its job brings: a probe thread, woken by
+/// its timer at DISPATCH, preempts a spinning job of a later deadline (the
+/// dispatch that changes the most: the running job to WAIT, the probe to
+/// RUN; one release in ten finds it asleep and the CPU idle), then
+/// completes at once (raise, remove, the spinning job back to
+/// RUN). A sample is the wake-up's lateness to the end of that release
+/// dispatch plus the completion's dispatch: a job's release and its
+/// completion come in pairs, so charging both at the release counts each
+/// once (docs/runtime.md, "Resources under EDF").
+fn dispatched_releases(cpu: usize) -> Result<Spread, RunError> {
+    let d = Arc::new(Dispatcher::bare(cpu, 2));
+    let done = Arc::new(AtomicBool::new(false));
+    let (dd, flag) = (d.clone(), done.clone());
+    let spinner = std::thread::spawn(move || -> Result<(), RunError> {
+        configure(&placement(cpu, 0), Policy::EdfFifo, None)?;
+        dd.register(1);
+        dd.release(1, Nanos::MAX);
+        // A tenth of the time asleep: some releases find the CPU idle (a
+        // wake-up from idle, as in a run), and the class stays below the
+        // kernel's real-time throttling (95 % by default).
+        while !flag.load(Ordering::SeqCst) {
+            let t = sys::now();
+            while sys::now() - t < 9 * SPIN_CYCLE / 10 && !flag.load(Ordering::SeqCst) {
+                std::hint::spin_loop();
+            }
+            sys::sleep_until(sys::now() + SPIN_CYCLE / 10);
+        }
+        dd.complete(1);
+        Ok(())
+    });
+    let probe = std::thread::spawn(move || -> Result<Vec<Nanos>, RunError> {
+        let placed = configure(&placement(cpu, 0), Policy::EdfFifo, None);
+        let v = placed.map(|()| release_samples(&d));
+        done.store(true, Ordering::SeqCst);
+        v
+    });
+    let (v, spun) = (probe.join(), spinner.join());
+    match (v, spun) {
+        (Ok(v), Ok(s)) => {
+            s?;
+            Ok(Spread::of(v?))
+        }
+        _ => Err(RunError::config("the overhead probe's thread failed", "")),
+    }
+}
+
+/// The probe's side of [`dispatched_releases`] (task 0 of `d`).
+fn release_samples(d: &Dispatcher) -> Vec<Nanos> {
+    d.register(0);
+    let mut v = Vec::with_capacity(RELEASE_SAMPLES);
+    let mut at = sys::now() + RELEASE_GAP;
+    for k in 0..RELEASE_SAMPLES + 20 {
+        sys::sleep_until(at);
+        d.release(0, at + RELEASE_GAP);
+        let late = sys::now() - at;
+        let t0 = sys::now();
+        d.complete(0);
+        if k >= 20 {
+            v.push(late + sys::now() - t0);
+        }
+        at = sys::now().max(at) + RELEASE_GAP;
+    }
+    v
 }
 
 #[cfg(test)]

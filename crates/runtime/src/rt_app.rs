@@ -47,7 +47,12 @@ fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<Strin
             o.insert("priority".into(), json!(prio));
             o.insert("cpus".into(), json!([t.cpu]));
         }
-        Policy::Deadline => {
+        // rt-app has no EDF dispatcher: the nearest is its SCHED_DEADLINE
+        // (the sections then run without the stack resource policy).
+        Policy::Deadline | Policy::EdfFifo => {
+            if cfg.policy == Policy::EdfFifo && i == 0 {
+                notes.push("rt-app has no EDF dispatcher: the edf-fifo run is exported as SCHED_DEADLINE reservations, under which the critical sections do not follow the stack resource policy".into());
+            }
             let budget = us_up(t.budget(), &format!("task {} budget", t.name), notes);
             o.insert("policy".into(), json!("SCHED_DEADLINE"));
             o.insert("dl-runtime".into(), json!(budget));

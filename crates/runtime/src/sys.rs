@@ -91,6 +91,20 @@ pub fn set_priority(priority: i32) -> io::Result<()> {
     Ok(())
 }
 
+/// Changes thread `tid`'s SCHED_FIFO priority, keeping its class (the EDF
+/// dispatcher's re-ranking, `crate::edf`).
+pub fn set_priority_of(tid: i32, priority: i32) -> io::Result<()> {
+    let p = libc::sched_param {
+        sched_priority: priority,
+    };
+    // SAFETY: `p` is a valid sched_param; `tid` names a thread of this
+    // process (a wrong id fails with ESRCH, changing nothing).
+    if unsafe { libc::sched_setparam(tid, &p) } != 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(())
+}
+
 /// `SCHED_DEADLINE` with runtime, deadline and period (ns) for the calling
 /// thread.
 pub fn set_deadline(runtime: u64, deadline: u64, period: u64) -> io::Result<()> {

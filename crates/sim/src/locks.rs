@@ -31,7 +31,7 @@
 //! where the CPU picks again.
 
 use crate::engine::Job;
-use rtpipe_model::policy::{preemption_levels, ranks};
+use rtpipe_model::policy::{ranks, srp_levels, srp_may_start};
 use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 
 pub(crate) struct Locks {
@@ -89,18 +89,7 @@ impl Locks {
         let active = sections.iter().any(|s: &Vec<_>| !s.is_empty());
         let srp =
             !spec.policy().fixed_priority() && spec.resource_protocol == ResourceProtocol::Srp;
-        let level: Vec<Nanos> = preemption_levels(spec)
-            .iter()
-            .map(|r| r.map_or(Nanos::MAX, |r| r as Nanos))
-            .collect();
-        let mut srp_ceiling = vec![Nanos::MAX; spec.resources.len()];
-        for (i, t) in spec.tasks.iter().enumerate() {
-            for s in &t.sections {
-                if let Some(c) = srp_ceiling.get_mut(s.resource) {
-                    *c = (*c).min(level[i]);
-                }
-            }
-        }
+        let (level, srp_ceiling) = srp_levels(spec);
         Locks {
             ceiling_protocol: spec.resource_protocol != ResourceProtocol::Pip,
             holder: vec![None; ceiling.len()],
@@ -215,8 +204,8 @@ impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
         let ceiling = (0..self.locks.holder.len())
             .filter(|&r| self.locks.holder[r].is_some_and(|h| self.tasks[h].cpu == cpu))
             .map(|r| self.locks.srp_ceiling[r])
-            .min()?;
-        if started(first) || self.locks.level[first] < ceiling {
+            .min();
+        if srp_may_start(started(first), self.locks.level[first], ceiling) {
             return None;
         }
         let top = self.contenders[cpu]

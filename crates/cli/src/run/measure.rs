@@ -35,9 +35,12 @@ pub(super) fn run(spec: &Spec, a: &RunArgs) -> ExitCode {
         ));
     }
     eprintln!(
-        "measuring context switches and timer releases on CPU {} under SCHED_{} (about 1.5 s per CPU)...",
-        cpus.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", "),
-        policy.name().to_uppercase()
+        "measuring context switches and timer releases on CPU {} under {} (about 1.5 s per CPU)...",
+        cpus.iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        policy.class()
     );
     let measured = match measure(policy, &cpus) {
         Ok(m) => m,

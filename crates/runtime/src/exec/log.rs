@@ -58,6 +58,7 @@ pub(super) fn assemble<V>(
         probes: Vec::new(),
         demoted: Vec::new(),
         partitioned: false,
+        dispatch: None,
         schedule,
     }
 }
