@@ -1,0 +1,165 @@
+//! The EDF dispatcher on random EDF + SRP systems (issue 22): two CPUs,
+//! three or four tasks each, a resource per CPU shared by most of its
+//! tasks. Each run's own log is the oracle: SRP's start rule
+//! (`model::policy::srp_may_start`) at every job's start against every hold
+//! of another task then in progress on its CPU, mutual exclusion, and the
+//! responses against the analysis' R(job). Root only (SCHED_FIFO).
+
+use rtpipe_model::policy::{srp_levels, srp_may_start};
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_runtime::locks::Held;
+use rtpipe_runtime::{run_synthetic, Policy, RunConfig, RunResult, Spin};
+
+const MS: Nanos = 1_000_000;
+/// Systems per run; `RTPIPE_SRP_SEEDS` asks for more.
+fn seeds() -> u64 {
+    std::env::var("RTPIPE_SRP_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(8)
+}
+
+/// A small deterministic generator (splitmix64).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+/// One task's TOML: period from a harmonic-ish menu (hyperperiod 120 ms),
+/// a random offset in 0.1 ms steps, utilisation 0.08–0.22, a section on its CPU's resource two times in
+/// three, of up to half its exec (in 0.1 ms steps).
+fn task(rng: &mut Rng, name: &str, cpu: u64) -> String {
+    let period = [4, 5, 6, 8, 10, 12][rng.below(6) as usize];
+    let exec10 = (period * (8 + rng.below(15)) / 10).max(2);
+    let offset10 = rng.below(period * 10);
+    let mut t = format!(
+        "[tasks.{name}]\nexec = {}\nperiod = {period}\ncpu = {cpu}\nserver = \"none\"\noffset = {}\n",
+        exec10 as f64 / 10.0,
+        offset10 as f64 / 10.0
+    );
+    if rng.below(3) > 0 {
+        let len = 1 + rng.below(exec10 / 2);
+        t += &format!(
+            "critical_sections = [{{ resource = \"r{cpu}\", length = {} }}]\n",
+            len as f64 / 10.0
+        );
+    }
+    t
+}
+
+fn system(seed: u64) -> Spec {
+    let mut rng = Rng(seed);
+    let mut src = "[system]\nname = \"srp-random\"\ntime_unit = \"ms\"\nscheduler = \"edf\"\nresource_protocol = \"srp\"\n[resources.r0]\n[resources.r1]\n".to_string();
+    for cpu in 0..2 {
+        for k in 0..3 + rng.below(2) {
+            src += &task(&mut rng, &format!("t{cpu}{k}"), cpu);
+        }
+    }
+    Spec::parse("srp-random.toml", &src).unwrap_or_else(|e| panic!("seed {seed}: {e}\n{src}"))
+}
+
+/// Every job's start against every other task's hold on its CPU: a job
+/// that starts inside a hold must pass SRP's start test under that
+/// resource's ceiling. Returns the starts that were inside a hold.
+fn check_start_rule(spec: &Spec, res: &RunResult) -> usize {
+    let (level, ceiling) = srp_levels(spec);
+    let mut inside = 0;
+    for j in &res.sim.jobs {
+        let cpu = spec.tasks[j.task].cpu;
+        for (t, run) in res.tasks.iter().enumerate() {
+            if t == j.task || spec.tasks[t].cpu != cpu {
+                continue;
+            }
+            for h in run
+                .sections
+                .iter()
+                .filter(|h| h.enter < j.read && j.read < h.exit)
+            {
+                inside += 1;
+                assert!(
+                    srp_may_start(false, level[j.task], Some(ceiling[h.resource])),
+                    "{} job {} started at {} inside {}'s hold {h:?}",
+                    spec.tasks[j.task].name,
+                    j.index,
+                    j.read,
+                    spec.tasks[t].name
+                );
+            }
+        }
+    }
+    inside
+}
+
+fn check_exclusion(res: &RunResult) {
+    let mut holds: Vec<&Held> = res.tasks.iter().flat_map(|t| &t.sections).collect();
+    holds.sort_by_key(|h| (h.resource, h.enter));
+    for w in holds.windows(2).filter(|w| w[0].resource == w[1].resource) {
+        assert!(w[0].exit <= w[1].enter, "overlapping holds: {w:?}");
+    }
+}
+
+#[test]
+fn random_srp_systems_keep_the_start_rule_exclusion_and_their_bounds() {
+    if !rtpipe_runtime::sys::is_root() {
+        eprintln!("SKIPPED the EDF dispatcher on random systems: SCHED_FIFO needs root");
+        return;
+    }
+    let spin = Spin::calibrate();
+    let (mut ran, mut held_back, mut inside) = (0, 0, 0);
+    let seeds = seeds();
+    for seed in 1..=seeds {
+        let spec = system(seed);
+        let report = rtpipe_analysis::analyze(&spec);
+        if !report.schedulability.schedulable {
+            continue;
+        }
+        let cfg = RunConfig {
+            duration: 600 * MS,
+            policy: Policy::EdfFifo,
+            load: 0,
+        };
+        let res = run_synthetic(&spec, &cfg, spin).unwrap_or_else(|e| panic!("{e}"));
+        let stats = res.dispatch.unwrap_or_else(|| panic!("no dispatcher ran"));
+        assert_eq!(
+            (stats.contended, stats.failed),
+            (0, 0),
+            "seed {seed}: {stats:?}"
+        );
+        held_back += stats.held_back;
+        check_exclusion(&res);
+        inside += check_start_rule(&spec, &res);
+        for (t, timing) in report.timing.iter().enumerate() {
+            let bound = timing.job_response_time.unwrap_or_else(|| panic!("no R"));
+            let r = &res.tasks[t].responses;
+            let within = r.iter().filter(|&&x| x <= bound + MS / 2).count();
+            assert!(
+                !r.is_empty() && 50 * within >= 49 * r.len(),
+                "seed {seed} {}: bound {bound}, responses {r:?}",
+                spec.tasks[t].name
+            );
+        }
+        ran += 1;
+    }
+    assert!(
+        ran >= seeds / 2,
+        "only {ran} of {seeds} systems schedulable"
+    );
+    assert!(
+        held_back > 0 && inside > 0,
+        "held back {held_back}, starts in a hold {inside}"
+    );
+    eprintln!(
+        "{ran} systems: {held_back} jobs held back, {inside} starts inside a hold, all by the rule"
+    );
+}
