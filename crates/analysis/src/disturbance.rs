@@ -15,9 +15,10 @@ use rtpipe_model::{Nanos, Server, Spec};
 
 /// How much longer task `task`'s job response can be with `b` ns of
 /// disturbance in its busy window than without (`Nanos::MAX` when it is
-/// unbounded then). Under EDF (no fixed ranks) the other servers' share of
-/// the CPU stretches it: ⌈b / (1 − U)⌉, U the CPU's utilisation without
-/// the task.
+/// unbounded then). Under EDF with implicit deadlines Spuri's response
+/// time with `b` more blocking ([`edf_inflation`]); with constrained ones
+/// (whose response is taken as D) the other servers' share of the CPU
+/// stretches it: ⌈b / (1 − U)⌉, U the CPU's utilisation without the task.
 pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     assert!(b >= 0, "a disturbance is a duration: {b}");
     let t = &spec.tasks[task];
@@ -25,6 +26,11 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
         return 0;
     }
     let policy = spec.policy();
+    if !policy.fixed_priority()
+        && !crate::sched::edf_constrained_at(spec, &crate::qpa::spec_periods(spec), t.cpu)
+    {
+        return edf_inflation(spec, task, b);
+    }
     if !policy.fixed_priority() {
         let u: f64 = (0..spec.tasks.len())
             .filter(|&j| j != task)
@@ -54,6 +60,22 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
         busy_response(t.demand(), cs, blocked.saturating_add(b), period, &hp),
     ) {
         (Some(r), Some(rb)) => rb - r,
+        _ => Nanos::MAX,
+    }
+}
+
+/// Under EDF with implicit deadlines: Spuri's job response time with `b`
+/// more blocking at every offset minus without (`crate::sched::
+/// edf_response_disturbed`). A disturbance can push a job past a release
+/// of an earlier deadline, which then runs first: the response grows by
+/// more than `b` in steps, as the fixed-priority busy period does.
+fn edf_inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
+    let periods = crate::qpa::spec_periods(spec);
+    match (
+        crate::sched::edf_response_disturbed(spec, &periods, task, 0).1,
+        crate::sched::edf_response_disturbed(spec, &periods, task, b).1,
+    ) {
+        (Some(r), Some(rb)) => rb.saturating_sub(r),
         _ => Nanos::MAX,
     }
 }

@@ -217,7 +217,7 @@ fn demands_at(spec: &Spec, periods: &[Nanos], ids: &[usize]) -> Vec<Demand> {
 }
 
 /// The spec's periods ([`MAX_TIME`] where none is fixed).
-fn spec_periods(spec: &Spec) -> Vec<Nanos> {
+pub(crate) fn spec_periods(spec: &Spec) -> Vec<Nanos> {
     let p = |t: &rtpipe_model::Task| t.fixed_period().unwrap_or(MAX_TIME);
     spec.tasks.iter().map(p).collect()
 }

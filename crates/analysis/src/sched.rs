@@ -463,6 +463,20 @@ pub fn edf_constrained_at(spec: &Spec, periods: &[Nanos], cpu: u32) -> bool {
 /// overloaded, and the server period where the busy period holds more than
 /// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
 pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nanos>, Option<Nanos>) {
+    edf_response_disturbed(spec, periods, i, 0)
+}
+
+/// [`edf_response_at`] with `extra` ns of CPU time taken from the window
+/// whatever the deadlines (a disturbance the model does not have,
+/// `crate::disturbance`): blocking of `extra` at every offset, on top of
+/// the stack resource policy's, and in the busy period.
+pub fn edf_response_disturbed(
+    spec: &Spec,
+    periods: &[Nanos],
+    i: usize,
+    extra: Nanos,
+) -> (Option<Nanos>, Option<Nanos>) {
+    assert!(extra >= 0, "a disturbance is a duration: {extra}");
     let (tasks, at) = edf_tasks(spec, periods, i);
     // The test's utilisation (budgets), as everywhere else (`relax` too); it
     // bounds the work's (x ≤ C), so below it a busy period exists.
@@ -479,10 +493,16 @@ pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nano
     // The stack resource policy's blocking, deadlines being the periods,
     // with the switch to the blocking job (`overheads::blocking_switch`).
     let cs = crate::overheads::blocking_switch(spec, i);
-    let block: Vec<(Nanos, Nanos)> = crate::blocking::srp_steps(spec, periods, t.cpu)
+    let srp = crate::blocking::srp_steps(spec, periods, t.cpu)
         .into_iter()
-        .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }))
-        .collect();
+        .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }));
+    let block: Vec<(Nanos, Nanos)> = if extra > 0 {
+        std::iter::once((0, extra))
+            .chain(srp.map(|(theta, b)| (theta, b.saturating_add(extra))))
+            .collect()
+    } else {
+        srp.collect()
+    };
     let b_max = crate::blocking::srp_max(&block);
     let Some(l) = edf::busy_period(&tasks, b_max, edf::MAX_BUSY_JOBS) else {
         // The server period is a bound only without overheads (a release
