@@ -170,4 +170,19 @@ output = { channel = "shm", size = 0 }
         assert_eq!(inflation(&spec, 1, 2 * MS), 3 * MS);
         assert_eq!(inflation(&spec, 1, 0), 0);
     }
+
+    /// Under EDF a disturbance can push a job past a release of an earlier
+    /// (or equal) deadline, which then runs first: a (1, 4) and c (2, 8).
+    /// Synchronous, c runs 1–3 (R = 3 ms). With 1.01 ms taken from the
+    /// window c reaches 4.01, a's job released at 4 (deadline 8, a tie
+    /// counts) runs first, c ends at 5.01: 2.01 ms longer, where the fluid
+    /// b / (1 − U_a) gave 1.347 ms.
+    #[test]
+    fn under_edf_a_disturbance_grows_the_response_by_spuri_s_steps() {
+        let src = "[system]\nname = \"e\"\nscheduler = \"edf\"\n[tasks.a]\nexec = 1\nperiod = 4\nserver = \"none\"\n[tasks.c]\nexec = 2\nperiod = 8\nserver = \"none\"\n";
+        let spec = Spec::parse("e.toml", src).unwrap_or_else(|e| panic!("{e}"));
+        let ms = 1_000_000;
+        assert_eq!(inflation(&spec, 1, 10_000), 10_000);
+        assert_eq!(inflation(&spec, 1, ms + 10_000), 2 * ms + 10_000);
+    }
 }

@@ -345,6 +345,51 @@ impl<'r> Blame<'r> {
             .collect()
     }
 
+    /// How long job `j` can have run inside `window`: its read → publish
+    /// span there, less, under partitioned EDF (SCHED_DEADLINE or the EDF
+    /// dispatcher), the spans of started jobs of its CPU with an earlier
+    /// absolute deadline, which it cannot run beside (the stack resource
+    /// policy never blocks a started job), and the dispatcher's release and
+    /// completion work there (`RunResult::dispatch_spans`). Without that, a job pending past
+    /// the window's end would be counted as running while the jobs that
+    /// preempted it ran, and hide foreign time.
+    fn could_run(&self, j: &JobRecord, (a, b): (Nanos, Nanos)) -> Nanos {
+        let (lo, hi) = (j.read.max(a), j.finish.min(b));
+        if hi <= lo {
+            return 0;
+        }
+        let edf = matches!(self.res.policy, Policy::EdfFifo | Policy::Deadline);
+        let Some(due) = self.due(j).filter(|_| edf) else {
+            return hi - lo;
+        };
+        let cpu = self.spec.tasks[j.task].cpu;
+        let mine = |t: usize| self.spec.tasks[t].cpu == cpu;
+        let earlier = (0..self.spec.tasks.len())
+            .filter(|&t| t != j.task && mine(t))
+            .flat_map(|t| self.overlapping(t, (lo, hi)))
+            .filter(|e| self.due(e).is_some_and(|d| d < due))
+            .map(|e| (e.read, e.finish));
+        // The EDF dispatcher's releases and completions: no job ran.
+        let dispatching = (0..self.res.dispatch_spans.len())
+            .filter(|&t| mine(t))
+            .flat_map(|t| self.res.dispatch_spans[t].iter().copied());
+        let busy: Vec<(Nanos, Nanos)> = earlier
+            .chain(dispatching)
+            .map(|(x, y)| (x.max(lo), y.min(hi)))
+            .filter(|(x, y)| y > x)
+            .collect();
+        hi - lo - union_length(busy)
+    }
+
+    /// Job `j`'s absolute deadline (release + D), if its task has one.
+    fn due(&self, j: &JobRecord) -> Option<Nanos> {
+        let t = self.spec.tasks.get(j.task)?;
+        if t.server == rtpipe_model::Server::Background {
+            return None;
+        }
+        Some(j.release + t.deadline()?)
+    }
+
     /// The foreign time on `cpu` (all CPUs when `None`) in `window`: how
     /// long some job of the level of `tasks` there was pending (released,
     /// not yet published) less the CPU time those jobs can have used in the
@@ -361,8 +406,7 @@ impl<'r> Blame<'r> {
             let mut by_jobs = 0;
             for j in self.overlapping(t, (a, b)) {
                 pending.push((j.release.max(a), j.finish.min(b)));
-                let span = j.finish.min(b) - j.read.max(a);
-                by_jobs += j.demand.min(span.max(0));
+                by_jobs += j.demand.min(self.could_run(j, (a, b)));
             }
             // The thread's CPU time over the probes around the window
             // bounds it too (it covers a little more than the window). A
@@ -373,6 +417,9 @@ impl<'r> Blame<'r> {
                     .run
                     .get(t)
                     .zip(p0.run.get(t))
+                    // A thread that ran in the window has a counter above
+                    // 0 after it: 0 is one that could not be read.
+                    .filter(|&(&x, _)| x > 0)
                     .map(|(x, y)| x - y)
                     .filter(|&d| d >= 0),
                 _ => None,
@@ -523,6 +570,7 @@ output = { channel = "shm", size = 0 }
             demoted: Vec::new(),
             partitioned: false,
             dispatch: None,
+            dispatch_spans: Vec::new(),
             schedule: None,
         };
         (spec, res)
@@ -601,5 +649,47 @@ output = { channel = "shm", size = 0 }
             Blame::total(&[Cause::BestEffort, Cause::Steal { cpu: 0, ns: 1 }]),
             Nanos::MAX
         );
+    }
+
+    /// Under the EDF dispatcher a job pending past the window's end is not
+    /// credited with the time a job of an earlier deadline ran, nor with
+    /// the dispatcher's release: lo (D 20 ms) runs 0–1 ms, hi (D 5 ms) is
+    /// released at 1, dispatched 1.00–1.02, reads at 1.05 and publishes at
+    /// 2.05; lo ends at 3.05. In hi's window [0, 2.05] lo can have run 1.03
+    /// ms (not its whole 2 ms): the 20 µs dispatch is foreign time; the
+    /// 30 µs after it, where lo may still have run, is not.
+    #[test]
+    fn edf_windows_do_not_credit_a_later_deadline_with_what_preempted_it() {
+        let src = "[system]\nname = \"e\"\nscheduler = \"edf\"\n[tasks.hi]\nexec = 1\nperiod = 4\nserver = \"none\"\n[tasks.lo]\nexec = 2\nperiod = 20\nserver = \"none\"\n";
+        let spec = Spec::parse("e.toml", src).unwrap_or_else(|e| panic!("{e}"));
+        let us = 1_000;
+        let hi = JobRecord {
+            release: MS,
+            read: MS + 50 * us,
+            finish: 2 * MS + 50 * us,
+            ..job(0, 0, MS)
+        };
+        let lo = JobRecord {
+            finish: 3 * MS + 50 * us,
+            ..job(1, 0, 2 * MS)
+        };
+        let (_, mut res) = run();
+        res.sim.jobs = vec![hi, lo];
+        res.probes = Vec::new();
+        res.policy = Policy::EdfFifo;
+        res.dispatch_spans = vec![vec![(MS, MS + 20 * us)], Vec::new()];
+        let b = Blame::new(&spec, &res);
+        let w = b.extend((MS, 2 * MS + 50 * us), &[0]);
+        assert_eq!(w, (0, 2 * MS + 50 * us));
+        let foreign = Cause::Foreign {
+            cpu: Some(0),
+            ns: 20 * us,
+            dispatcher: true,
+        };
+        assert_eq!(b.causes(w, &[0]), vec![foreign]);
+        // Without the dispatcher's spans, nothing is seen.
+        res.dispatch_spans = Vec::new();
+        let b = Blame::new(&spec, &res);
+        assert_eq!(b.causes(w, &[0]), vec![]);
     }
 }

@@ -113,6 +113,9 @@ pub(crate) struct Dispatcher {
     ceiling: Vec<Nanos>,
     res_cpu: Vec<usize>,
     held: Vec<AtomicBool>,
+    /// Per task: its thread's release and completion dispatches
+    /// (CLOCK_MONOTONIC), when no job of the CPU ran ([`Dispatcher::spans`]).
+    spans: Vec<Mutex<Vec<(Nanos, Nanos)>>>,
     /// Per CPU: its last pick was held back by the system ceiling.
     back: Vec<AtomicBool>,
     counters: [AtomicU64; 6],
@@ -142,6 +145,7 @@ impl Dispatcher {
                 .map(|t| t.server == Server::Background)
                 .collect(),
             tids: spec.tasks.iter().map(|_| AtomicI32::new(0)).collect(),
+            spans: spec.tasks.iter().map(|_| Mutex::default()).collect(),
             held: ceiling.iter().map(|_| AtomicBool::new(false)).collect(),
             ceiling,
             res_cpu,
@@ -159,6 +163,7 @@ impl Dispatcher {
             level: (1..=tasks as Nanos).collect(),
             background: vec![false; tasks],
             tids: (0..tasks).map(|_| AtomicI32::new(0)).collect(),
+            spans: (0..tasks).map(|_| Mutex::default()).collect(),
             ceiling: Vec::new(),
             res_cpu: Vec::new(),
             held: Vec::new(),
@@ -180,16 +185,49 @@ impl Dispatcher {
             level: self.level[task],
             started: false,
         };
+        let t0 = sys::now();
         let own = self.dispatch(task, |cpu| cpu.ready.push(entry));
+        // Lowered below the pick, the thread stops inside the call: the
+        // span ends before it.
+        if own != RUN {
+            self.record(task, t0);
+        }
         self.set_own(own);
+        if own == RUN {
+            self.record(task, t0);
+        }
     }
 
     /// Task `task`'s job completed: the next pick runs, and the thread
     /// stays at [`DISPATCH`] for its next release.
     pub(crate) fn complete(&self, task: usize) {
+        let t0 = sys::now();
         self.set_own(DISPATCH);
         let own = self.dispatch(task, |cpu| cpu.ready.retain(|r| r.key.2 != task));
         assert_eq!(own, DISPATCH, "a completed job stays ranked");
+        self.record(task, t0);
+    }
+
+    fn record(&self, task: usize, t0: Nanos) {
+        let span = (t0, sys::now());
+        if let Ok(mut v) = self.spans[task].lock() {
+            v.push(span);
+        }
+    }
+
+    /// Per task, its thread's release and completion dispatches relative
+    /// to `epoch`: the thread ran at DISPATCH, outside every job's read →
+    /// publish span, so no job of its CPU ran then (`crate::blame`). A
+    /// section exit's dispatch is inside its job's span, counted in its
+    /// CPU time, and not here.
+    pub(crate) fn spans(&self, epoch: Nanos) -> Vec<Vec<(Nanos, Nanos)>> {
+        self.spans
+            .iter()
+            .map(|m| {
+                let v = m.lock().map(|v| v.clone()).unwrap_or_default();
+                v.iter().map(|&(a, b)| (a - epoch, b - epoch)).collect()
+            })
+            .collect()
     }
 
     /// Task `task`'s running job takes resource `r`: the ceiling rises

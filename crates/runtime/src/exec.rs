@@ -89,6 +89,10 @@ pub struct RunResult {
     pub partitioned: bool,
     /// Under [`Policy::EdfFifo`], what the EDF dispatcher did.
     pub dispatch: Option<crate::edf::Stats>,
+    /// Under [`Policy::EdfFifo`], per task: its thread's release and
+    /// completion dispatches (relative to the epoch), when no job of its
+    /// CPU ran; empty otherwise.
+    pub dispatch_spans: Vec<Vec<(Nanos, Nanos)>>,
     /// Under LET, every job at the schedule's instants (read: when its
     /// thread read, finish: when it completed), where `sim.jobs` holds
     /// LET's (release, period end); `None` otherwise ([`RunResult::scheduled`]).
@@ -379,6 +383,7 @@ fn execute<'a, V: Copy + Send>(
         _ => None,
     };
     let dispatch = shared.dispatcher().map(|d| d.stats());
+    let dispatch_spans = shared.dispatcher().map(|d| d.spans(e0)).unwrap_or_default();
     if let Some(e) = shared
         .errors
         .into_inner()
@@ -405,6 +410,7 @@ fn execute<'a, V: Copy + Send>(
     res.demoted = demoted;
     res.partitioned = shared.partition.is_some();
     res.dispatch = dispatch;
+    res.dispatch_spans = dispatch_spans;
     Ok(res)
 }
 

@@ -59,6 +59,7 @@ pub(super) fn assemble<V>(
         demoted: Vec::new(),
         partitioned: false,
         dispatch: None,
+        dispatch_spans: Vec::new(),
         schedule,
     }
 }
