@@ -119,9 +119,10 @@ impl Verdict {
     /// Records an observation with the causes found in its window: excused
     /// when their total, as a disturbance of the analysis, can lengthen the
     /// response of one of `tasks` by the excess (a chain's stages add their
-    /// delays, each at most that task's inflation by its share, and the
-    /// inflation is superadditive, so the largest single inflation by the
-    /// total covers them).
+    /// delays, each at most that task's inflation by its share; where the
+    /// inflation is superadditive the largest single inflation by the total
+    /// covers their sum; where its steps make it not, the allowance can
+    /// fall short of that sum: a false alarm, never a false excuse).
     fn push(&mut self, spec: &Spec, o: Obs, causes: Vec<Cause>, tasks: &[usize]) {
         let b = Blame::total(&causes);
         let allowance = tasks
