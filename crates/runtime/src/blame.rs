@@ -352,8 +352,9 @@ impl<'r> Blame<'r> {
     /// policy never blocks a started job), and the dispatcher's release and
     /// completion work there (`RunResult::dispatch_spans`). Without that, a job pending past
     /// the window's end would be counted as running while the jobs that
-    /// preempted it ran, and hide foreign time.
-    fn could_run(&self, j: &JobRecord, (a, b): (Nanos, Nanos)) -> Nanos {
+    /// preempted it ran, and hide foreign time. Public for the runtime's
+    /// tests: a job's own span must leave room for its CPU time.
+    pub fn could_run(&self, j: &JobRecord, (a, b): (Nanos, Nanos)) -> Nanos {
         let (lo, hi) = (j.read.max(a), j.finish.min(b));
         if hi <= lo {
             return 0;

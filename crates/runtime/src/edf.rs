@@ -187,22 +187,21 @@ impl Dispatcher {
         };
         let t0 = sys::now();
         let own = self.dispatch(task, |cpu| cpu.ready.push(entry));
-        // Lowered below the pick, the thread stops inside the call: the
-        // span ends before it.
-        if own != RUN {
-            self.record(task, t0);
-        }
+        // The span ends before the thread lowers itself: from then on
+        // others may run before it (another release of the same instant,
+        // or the pick if it is not this job), and only at DISPATCH is no
+        // job of the CPU running.
+        self.record(task, t0);
         self.set_own(own);
-        if own == RUN {
-            self.record(task, t0);
-        }
     }
 
     /// Task `task`'s job completed: the next pick runs, and the thread
     /// stays at [`DISPATCH`] for its next release.
     pub(crate) fn complete(&self, task: usize) {
-        let t0 = sys::now();
         self.set_own(DISPATCH);
+        // Only from here can no other job of the CPU run (below DISPATCH
+        // a release may preempt the thread and pick another job).
+        let t0 = sys::now();
         let own = self.dispatch(task, |cpu| cpu.ready.retain(|r| r.key.2 != task));
         assert_eq!(own, DISPATCH, "a completed job stays ranked");
         self.record(task, t0);
