@@ -373,13 +373,23 @@ impl<'r> Blame<'r> {
         // The EDF dispatcher's releases and completions: no job ran.
         let dispatching = (0..self.res.dispatch_spans.len())
             .filter(|&t| mine(t))
-            .flat_map(|t| self.res.dispatch_spans[t].iter().copied());
+            .flat_map(|t| self.dispatching(t, (lo, hi)).iter().copied());
         let busy: Vec<(Nanos, Nanos)> = earlier
             .chain(dispatching)
             .map(|(x, y)| (x.max(lo), y.min(hi)))
             .filter(|(x, y)| y > x)
             .collect();
         hi - lo - union_length(busy)
+    }
+
+    /// Task `t`'s dispatch spans that overlap `window`. A thread records
+    /// its own spans one after the other, so they are in order and
+    /// disjoint: two binary searches, not a pass over the run.
+    fn dispatching(&self, t: usize, (a, b): (Nanos, Nanos)) -> &[(Nanos, Nanos)] {
+        let spans = &self.res.dispatch_spans[t];
+        let end = spans.partition_point(|&(x, _)| x < b);
+        let start = spans[..end].partition_point(|&(_, y)| y <= a);
+        &spans[start..end]
     }
 
     /// Job `j`'s absolute deadline (release + D), if its task has one.
