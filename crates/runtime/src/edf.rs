@@ -36,6 +36,14 @@ pub const RUN: i32 = 80;
 /// Every other released job.
 pub const WAIT: i32 = 10;
 
+/// The dispatcher's counters ([`Stats`]), by index.
+const DISPATCHES: usize = 0;
+const CHANGES: usize = 1;
+const HELD_BACK: usize = 2;
+const CONTENDED: usize = 3;
+const REFUSED: usize = 4;
+const QUIET_EXITS: usize = 5;
+
 /// One released job not yet completed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Ready {
@@ -131,42 +139,44 @@ impl Dispatcher {
                 res_cpu[s.resource] = t.cpu as usize;
             }
         }
-        let cpus = spec.tasks.iter().map(|t| t.cpu as usize + 1).max();
-        Dispatcher {
-            cpus: (0..cpus.unwrap_or(0)).map(|_| Mutex::default()).collect(),
-            back: (0..cpus.unwrap_or(0))
-                .map(|_| AtomicBool::new(false))
-                .collect(),
-            cpu_of: spec.tasks.iter().map(|t| t.cpu as usize).collect(),
-            level,
-            background: spec
-                .tasks
-                .iter()
-                .map(|t| t.server == Server::Background)
-                .collect(),
-            tids: spec.tasks.iter().map(|_| AtomicI32::new(0)).collect(),
-            spans: spec.tasks.iter().map(|_| Mutex::default()).collect(),
-            held: ceiling.iter().map(|_| AtomicBool::new(false)).collect(),
-            ceiling,
-            res_cpu,
-            counters: Default::default(),
-        }
+        let background = spec.tasks.iter().map(|t| t.server == Server::Background);
+        Dispatcher::of(
+            spec.tasks.iter().map(|t| t.cpu as usize).collect(),
+            (level, background.collect()),
+            (ceiling, res_cpu),
+        )
     }
 
     /// A dispatcher of `tasks` bare tasks on `cpu` (levels by index, no
     /// resources): `crate::overheads` measures its costs with it.
     pub(crate) fn bare(cpu: usize, tasks: usize) -> Dispatcher {
+        let level = (1..=tasks as Nanos).collect();
+        Dispatcher::of(
+            vec![cpu; tasks],
+            (level, vec![false; tasks]),
+            (Vec::new(), Vec::new()),
+        )
+    }
+
+    /// Per task its CPU, (level, background); per resource (ceiling, CPU).
+    fn of(
+        cpu_of: Vec<usize>,
+        (level, background): (Vec<Nanos>, Vec<bool>),
+        (ceiling, res_cpu): (Vec<Nanos>, Vec<usize>),
+    ) -> Dispatcher {
+        let cpus = cpu_of.iter().map(|&c| c + 1).max().unwrap_or(0);
+        let n = cpu_of.len();
         Dispatcher {
-            cpus: (0..=cpu).map(|_| Mutex::default()).collect(),
-            back: (0..=cpu).map(|_| AtomicBool::new(false)).collect(),
-            cpu_of: vec![cpu; tasks],
-            level: (1..=tasks as Nanos).collect(),
-            background: vec![false; tasks],
-            tids: (0..tasks).map(|_| AtomicI32::new(0)).collect(),
-            spans: (0..tasks).map(|_| Mutex::default()).collect(),
-            ceiling: Vec::new(),
-            res_cpu: Vec::new(),
-            held: Vec::new(),
+            cpus: (0..cpus).map(|_| Mutex::default()).collect(),
+            back: (0..cpus).map(|_| AtomicBool::new(false)).collect(),
+            cpu_of,
+            level,
+            background,
+            tids: (0..n).map(|_| AtomicI32::new(0)).collect(),
+            spans: (0..n).map(|_| Mutex::default()).collect(),
+            held: ceiling.iter().map(|_| AtomicBool::new(false)).collect(),
+            ceiling,
+            res_cpu,
             counters: Default::default(),
         }
     }
@@ -223,8 +233,17 @@ impl Dispatcher {
         self.spans
             .iter()
             .map(|m| {
-                let v = m.lock().map(|v| v.clone()).unwrap_or_default();
-                v.iter().map(|&(a, b)| (a - epoch, b - epoch)).collect()
+                let v: Vec<(Nanos, Nanos)> = m
+                    .lock()
+                    .map(|v| v.iter().map(|&(a, b)| (a - epoch, b - epoch)).collect())
+                    .unwrap_or_default();
+                // One thread records them one after the other (the blame
+                // searches them as such).
+                assert!(
+                    v.iter().all(|&(a, b)| a <= b) && v.windows(2).all(|w| w[0].1 <= w[1].0),
+                    "a thread's dispatch spans are in order and disjoint"
+                );
+                v
             })
             .collect()
     }
@@ -243,7 +262,7 @@ impl Dispatcher {
     pub(crate) fn exit(&self, task: usize, r: usize) {
         self.held[r].store(false, Ordering::SeqCst);
         if !self.back[self.cpu_of[task]].load(Ordering::SeqCst) {
-            self.count(5);
+            self.count(QUIET_EXITS);
             return;
         }
         self.set_own(DISPATCH);
@@ -255,12 +274,12 @@ impl Dispatcher {
     pub(crate) fn stats(&self) -> Stats {
         let c = |k: usize| self.counters[k].load(Ordering::SeqCst);
         Stats {
-            dispatches: c(0),
-            changes: c(1),
-            held_back: c(2),
-            contended: c(3),
-            failed: c(4),
-            quiet_exits: c(5),
+            dispatches: c(DISPATCHES),
+            changes: c(CHANGES),
+            held_back: c(HELD_BACK),
+            contended: c(CONTENDED),
+            failed: c(REFUSED),
+            quiet_exits: c(QUIET_EXITS),
         }
     }
 
@@ -276,19 +295,19 @@ impl Dispatcher {
         let c = self.cpu_of[task];
         let mut cpu = self.lock(c);
         change(&mut cpu);
-        self.count(0);
+        self.count(DISPATCHES);
         let ceiling = (0..self.ceiling.len())
             .filter(|&r| self.res_cpu[r] == c && self.held[r].load(Ordering::SeqCst))
             .map(|r| self.ceiling[r])
             .min();
-        let mut held_back = false;
-        let picked = pick(&cpu.ready, ceiling).map(|(k, back)| {
+        let choice = pick(&cpu.ready, ceiling);
+        let held_back = choice.is_some_and(|(_, back)| back);
+        let picked = choice.map(|(k, _)| {
             cpu.ready[k].started = true;
-            held_back = back;
             cpu.ready[k].key.2
         });
         if held_back {
-            self.count(2);
+            self.count(HELD_BACK);
         }
         self.back[c].store(held_back, Ordering::SeqCst);
         let old = std::mem::replace(&mut cpu.picked, picked);
@@ -316,24 +335,24 @@ impl Dispatcher {
             Ok(g) => g,
             Err(TryLockError::Poisoned(e)) => e.into_inner(),
             Err(TryLockError::WouldBlock) => {
-                self.count(3);
+                self.count(CONTENDED);
                 self.cpus[c].lock().unwrap_or_else(|e| e.into_inner())
             }
         }
     }
 
     fn set(&self, task: usize, priority: i32) {
-        self.count(1);
+        self.count(CHANGES);
         let tid = self.tids[task].load(Ordering::SeqCst);
         if tid <= 0 || sys::set_priority_of(tid, priority).is_err() {
-            self.count(4);
+            self.count(REFUSED);
         }
     }
 
     fn set_own(&self, priority: i32) {
-        self.count(1);
+        self.count(CHANGES);
         if sys::set_priority(priority).is_err() {
-            self.count(4);
+            self.count(REFUSED);
         }
     }
 }
