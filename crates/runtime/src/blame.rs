@@ -49,7 +49,8 @@ pub enum Cause {
     /// Time in the window when jobs of the run on a CPU were pending but
     /// none of them used it: the kernel's timer and wake-up latency,
     /// interrupts, other processes, the hypervisor (steal), and under
-    /// [`Policy::EdfFifo`] the EDF dispatcher's work at releases. The model
+    /// [`Policy::EdfFifo`] the EDF dispatcher's work at releases and
+    /// completions. The model
     /// has none of it.
     Foreign {
         /// The CPU (`None`: all of them, under global EDF).
@@ -57,7 +58,7 @@ pub enum Cause {
         /// Pending time minus the CPU time the run's jobs used in it, ns.
         ns: Nanos,
         /// The run was under the EDF dispatcher (`crate::edf`), whose
-        /// release work is part of this time.
+        /// release and completion work is part of this time.
         dispatcher: bool,
     },
     /// The hypervisor ran something else on a CPU (steal time): named, but
@@ -142,7 +143,7 @@ impl Cause {
                 us(ns),
                 cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
                 if dispatcher {
-                    "the EDF dispatcher's releases, "
+                    "the EDF dispatcher's releases and completions, "
                 } else {
                     ""
                 }
