@@ -7,7 +7,8 @@ mod log;
 
 use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
 pub use crate::config::{
-    fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
+    fifo_priorities, reservation_runtime, ErrorKind, Policy, RunConfig, RunError,
+    OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 use crate::four_slot::{self, Reader, Writer};
 use crate::let_comm::{self, Cell, LetIn, LetOut};
@@ -225,7 +226,8 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             ));
         };
         jobs += (cfg.duration / period) as u64 + 1;
-        bandwidth += (t.budget() + RESERVATION_MARGIN) as f64 / period as f64;
+        let deadline = t.deadline_given.unwrap_or(period);
+        bandwidth += reservation_runtime(t.budget(), deadline) as f64 / period as f64;
         if t.cpu as usize >= cpus {
             return Err(RunError::config(
                 format!(
@@ -367,7 +369,12 @@ fn execute<'a, V: Copy + Send>(
             "lower --load",
         )
     })?;
-    sys::catch_sigint();
+    sys::catch_stop_signals();
+    // What a run killed by SIGKILL left on the machine goes first.
+    match crate::partition::repair() {
+        Ok(done) => notes.extend(done),
+        Err(why) => notes.push(format!("warning: {why}")),
+    }
     let shared = shared(spec, cfg.policy, &mut notes)?;
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
