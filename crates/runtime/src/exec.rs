@@ -370,11 +370,6 @@ fn execute<'a, V: Copy + Send>(
         )
     })?;
     sys::catch_stop_signals();
-    // What a run killed by SIGKILL left on the machine goes first.
-    match crate::partition::repair() {
-        Ok(done) => notes.extend(done),
-        Err(why) => notes.push(format!("warning: {why}")),
-    }
     let shared = shared(spec, cfg.policy, &mut notes)?;
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
@@ -423,8 +418,13 @@ fn execute<'a, V: Copy + Send>(
 
 /// What the task threads of a run under `policy` share: the resources'
 /// locks, and under SCHED_DEADLINE a root domain per CPU where the machine
-/// allows it (else a note says EDF is global).
+/// allows it (else a note says EDF is global). What a run killed by
+/// SIGKILL left on the machine is repaired first, whatever the policy.
 fn shared(spec: &Spec, policy: Policy, notes: &mut Vec<String>) -> Result<Shared, RunError> {
+    match crate::partition::repair() {
+        Ok(done) => notes.extend(done),
+        Err(why) => notes.push(format!("warning: {why}")),
+    }
     let mut shared = Shared::new(spec.tasks.len());
     shared.resources = Some(Resources::new(spec, policy).map_err(|e| {
         RunError::config(
