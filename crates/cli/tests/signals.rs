@@ -127,6 +127,14 @@ fn cpuset_state() -> (Vec<String>, String) {
     (sets, flag.trim().to_string())
 }
 
+/// The cpuset tests one at a time: each compares the whole tree with what
+/// it was before, which another's run would change.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Why the cpuset tests cannot run here, if they cannot: not root, no
 /// cgroup v1 cpuset hierarchy, or another run holding the CPUs (whose
 /// state would not be ours to compare).
@@ -151,8 +159,9 @@ fn cpusets_unavailable() -> Option<String> {
     (!sets.is_empty()).then(|| format!("another run holds cpusets: {sets:?}"))
 }
 
-/// A deadline run of the small pipeline in `dir`, once its cpusets exist;
-/// `None` (the child stopped) when they never appear.
+/// A deadline run of the small pipeline in `dir`, once its partition is
+/// made (its sets exist and load balancing is off); `None` (the child
+/// stopped) when it never is.
 fn partitioned_run(dir: &Path, seconds: &str) -> Option<Child> {
     let spec = dir.join("spec.toml");
     if let Err(e) = std::fs::write(&spec, SMALL_EDF) {
@@ -162,7 +171,8 @@ fn partitioned_run(dir: &Path, seconds: &str) -> Option<Child> {
     let args = ["run", &spec, "--policy", "deadline", "--duration", seconds];
     let mut child = spawn(dir, &args);
     let own = PathBuf::from(CPUSETS).join(format!("rtpipe-{}-cpu0", child.id()));
-    if wait_for(&mut child, || own.exists()) {
+    // The flag goes off once every set is made: the partition is whole.
+    if wait_for(&mut child, || own.exists() && cpuset_state().1 == "0") {
         return Some(child);
     }
     let _ = child.kill();
@@ -176,6 +186,7 @@ fn partitioned_run(dir: &Path, seconds: &str) -> Option<Child> {
 /// report of the span run printed, exit 128 + the signal.
 #[test]
 fn sigterm_and_sighup_leave_no_cpuset_and_balancing_on() {
+    let _one = serial();
     if let Some(why) = cpusets_unavailable() {
         eprintln!("SKIPPED: {why}");
         return;
@@ -203,6 +214,7 @@ fn sigterm_and_sighup_leave_no_cpuset_and_balancing_on() {
 /// restores the flag from its record and runs partitioned itself.
 #[test]
 fn what_sigkill_leaves_the_next_start_repairs() {
+    let _one = serial();
     if let Some(why) = cpusets_unavailable() {
         eprintln!("SKIPPED: {why}");
         return;
