@@ -131,8 +131,8 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 }
 
 /// `fly` (one flight, or `--sweep`) on a loaded spec, with `hooks`' extra
-/// row sink and stop flag (one flight checks it as it goes and unwinds
-/// with [`command::Stopped`]; a sweep's flights do not consult it).
+/// row sink and stop flag (a flight checks it as it goes, a sweep before
+/// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
@@ -146,7 +146,7 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
                 format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
             ));
         }
-        return sweep::execute(spec, &s, a);
+        return sweep::execute(spec, &s, a, hooks.stop.as_deref());
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",

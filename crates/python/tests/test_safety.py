@@ -143,11 +143,18 @@ def assert_idle():
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT")
-def test_ctrl_c_stops_a_flight_before_the_call_returns():
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(mission="hover", duration="100000s"),  # about a quarter of an hour
+        dict(sweep=True, per_octave=12),  # hundreds of flights
+    ],
+)
+def test_ctrl_c_stops_a_flight_before_the_call_returns(kwargs):
     system = rtpipe.load(EXAMPLES / "cleanflight.toml")
     interrupt_after(0.3)
     with pytest.raises(KeyboardInterrupt):
-        system.fly(mission="hover", duration="100000s")  # about a quarter of an hour
+        system.fly(**kwargs)
     assert_idle()
     assert "flight" in system.fly(mission="hover", duration="2s")  # still works
 
