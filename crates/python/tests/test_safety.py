@@ -180,8 +180,23 @@ def test_ctrl_c_stops_a_campaigns_workers_before_the_call_returns(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == written
 
 
-@pytest.mark.parametrize("shard", [(0, 2, 3), (2, 2), (-1, 2), (0, 0), ("0", "2"), (True, 2), [0, 2], 1])
+@pytest.mark.parametrize(
+    "shard", [(0, 2, 3), (2, 2), (-1, 2), (0, 0), ("0", "2"), (True, 2), (0.0, 2), [0, 2], 1]
+)
 def test_a_bad_shard_is_a_value_error_naming_the_argument(tmp_path, shard):
     with pytest.raises(ValueError, match=r"campaign\(shard=.*2-tuple \(index, count\)"):
         rtpipe.campaign(campaign_config(tmp_path), tmp_path / "out", shard=shard)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_good_shard_tuple_takes_any_integers(tmp_path):
+    import numpy as np
+
+    config = campaign_config(tmp_path)
+    plan = rtpipe.campaign(config, tmp_path / "out", shard=(np.int64(1), 4), plan=True)
+    assert plan["part_shards"][:3] == [1, 5, 9] and len(plan["part_shards"]) == 100
+
+
+def test_samples_none_is_no_samples():
+    r = rtpipe.load(EXAMPLES / "paper-table3.toml").simulate(outputs=20, samples=None)
+    assert "samples" not in r

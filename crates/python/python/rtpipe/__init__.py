@@ -34,6 +34,7 @@ file may be and with finite numbers; anything else raises
 from __future__ import annotations
 
 import logging
+import operator
 import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
@@ -180,23 +181,27 @@ def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
     (anything else would run a part the caller did not ask for)."""
     if shard is None or isinstance(shard, str):
         return shard
-    ints = isinstance(shard, tuple) and len(shard) == 2 and all(
-        isinstance(x, int) and not isinstance(x, bool) for x in shard
+    pair = isinstance(shard, tuple) and len(shard) == 2
+    if pair and not any(isinstance(x, bool) for x in shard):
+        try:
+            # Any integer (numpy's too), but not a float or a string.
+            index, count = (operator.index(x) for x in shard)
+            if 0 <= index < count:
+                return f"{index}/{count}"
+        except TypeError:
+            pass
+    raise ValueError(
+        f"campaign(shard={shard!r}): give a 2-tuple (index, count) of ints with "
+        "0 <= index < count, such as shard=(0, 4) for the first of four parts"
     )
-    if not ints or not 0 <= shard[0] < shard[1]:
-        raise ValueError(
-            f"campaign(shard={shard!r}): give a 2-tuple (index, count) of ints with "
-            "0 <= index < count, such as shard=(0, 4) for the first of four parts"
-        )
-    return f"{shard[0]}/{shard[1]}"
 
 
-def _samples(samples: Union[bool, str, "os.PathLike[str]"], options: dict) -> bool:
+def _samples(samples: Union[bool, str, "os.PathLike[str]", None], options: dict) -> bool:
     """``samples``: True returns the rows as columns (held in memory, at most
     :data:`MAX_SAMPLE_ROWS`); a path streams them to that CSV file instead
     (``--samples``, any number of rows), added to ``options``."""
-    if isinstance(samples, bool):
-        return samples
+    if samples is None or isinstance(samples, bool):
+        return bool(samples)
     if isinstance(samples, (str, os.PathLike)):
         options["samples"] = samples
         return False
