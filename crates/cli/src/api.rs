@@ -40,9 +40,18 @@ pub enum Failure {
     Input(Diagnostic),
     /// The stop flag was set.
     Stopped,
+    /// The sample rows asked for would not fit [`MAX_SAMPLE_ROWS`]: what
+    /// and how to get them all (a file).
+    TooManySamples(Diagnostic),
     /// A bug: a panic's message.
     Internal(String),
 }
+
+/// The most sample rows a run hands back as [`Columns`]: they are held in
+/// memory (about 130 bytes a row while collected, twice that while sorted),
+/// so a longer run stops at this many with [`Failure::TooManySamples`]
+/// rather than exhaust the memory; `--samples FILE` streams any number.
+pub const MAX_SAMPLE_ROWS: usize = 2_000_000;
 
 /// `--samples` as columns (integer nanoseconds; `None` where the CSV
 /// leaves a cell empty), rows grouped by chain, each chain's in sample
@@ -98,26 +107,21 @@ impl Columns {
 
 /// Runs `command` (one of [`COMMANDS`]) on `spec`, read from `label` (a
 /// path or a name for messages), with `flags` as the command line takes
-/// them after the spec (`--json` is implied); `samples` collects
-/// `--samples`' rows as columns (simulate and fly). `stop` stops a
+/// them after the spec (`--json` is implied); `samples` collects up to
+/// that many of `--samples`' rows as columns (simulate and fly; at most
+/// [`MAX_SAMPLE_ROWS`], one more is [`Failure::TooManySamples`]). `stop` stops a
 /// simulation or a design search early ([`Failure::Stopped`]).
 pub fn run(
     command: &str,
     spec: &Spec,
     label: &str,
     flags: &[String],
-    samples: bool,
+    samples: Option<usize>,
     stop: Arc<AtomicBool>,
 ) -> Result<Reply, Failure> {
     let cols = Arc::new(Mutex::new(Columns::default()));
-    let rows: Option<rtpipe_joblog::RowSink> = samples.then(|| {
-        let cols = Arc::clone(&cols);
-        Box::new(move |c: usize, r: &SampleRow| {
-            if let Ok(mut g) = cols.lock() {
-                g.push(c, r);
-            }
-        }) as rtpipe_joblog::RowSink
-    });
+    let full = Arc::new(AtomicBool::new(false));
+    let rows = samples.map(|most| column_sink(&cols, most, &stop, &full));
     let hooks = Hooks {
         rows,
         stop: Some(Arc::clone(&stop)),
@@ -125,12 +129,50 @@ pub fn run(
     let argv = std::iter::once(label.to_string())
         .chain(flags.iter().cloned())
         .collect();
-    let (answer, designed) = guarded(&stop, || dispatch(command, spec, argv, hooks, &stop))?;
-    let samples = samples.then(|| {
+    let done = guarded(&stop, || dispatch(command, spec, argv, hooks, &stop));
+    if let (true, Some(most)) = (full.load(Ordering::Relaxed), samples) {
+        return Err(Failure::TooManySamples(too_many_samples(most)));
+    }
+    let (answer, designed) = done?;
+    let samples = samples.map(|_| {
         let taken = cols.lock().map(|mut g| std::mem::take(&mut *g));
         taken.unwrap_or_default().sorted()
     });
     Ok(reply(answer, samples, designed))
+}
+
+/// A row sink that collects into `cols` up to `most` rows (no more than
+/// [`MAX_SAMPLE_ROWS`]); one more sets `full` and `stop`, which ends the
+/// run (nothing more is held).
+fn column_sink(
+    cols: &Arc<Mutex<Columns>>,
+    most: usize,
+    stop: &Arc<AtomicBool>,
+    full: &Arc<AtomicBool>,
+) -> rtpipe_joblog::RowSink {
+    let most = most.min(MAX_SAMPLE_ROWS);
+    let (cols, stop, full) = (Arc::clone(cols), Arc::clone(stop), Arc::clone(full));
+    Box::new(move |c: usize, r: &SampleRow| {
+        let Ok(mut g) = cols.lock() else { return };
+        if g.chain.len() < most {
+            g.push(c, r);
+        } else {
+            full.store(true, Ordering::Relaxed);
+            stop.store(true, Ordering::Relaxed);
+        }
+    })
+}
+
+fn too_many_samples(most: usize) -> Diagnostic {
+    let most = most.min(MAX_SAMPLE_ROWS);
+    Diagnostic::error(
+        format!(
+            "the run has more than {most} sample rows, the most `samples=True` holds in \
+             memory; it was stopped there"
+        ),
+        "stream them to a file instead: pass samples=\"FILE.csv\" (any number of rows, \
+         read it back with pandas or polars), or run a shorter duration",
+    )
 }
 
 /// Runs `command` without a spec (`campaign`), with `flags` as the command
@@ -212,7 +254,6 @@ fn dispatch(
         }
         "simulate" => {
             let a: SimulateArgs = parse(command, &argv)?;
-            no_samples_file(a.samples.is_some())?;
             Ok((
                 crate::simulate::execute(spec, &a, hooks).map_err(input)?,
                 None,
@@ -220,7 +261,6 @@ fn dispatch(
         }
         "fly" => {
             let a: FlyArgs = parse(command, &argv)?;
-            no_samples_file(a.samples.is_some())?;
             Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
         }
         "design" => {
@@ -233,18 +273,6 @@ fn dispatch(
             format!("use one of {}", COMMANDS.join(", ")),
         ))),
     }
-}
-
-/// `--samples FILE` catches Ctrl-C to remove its temporaries, which is not
-/// the API's to do: the API hands the rows over as columns instead.
-fn no_samples_file(given: bool) -> Result<(), Failure> {
-    if given {
-        return Err(Failure::Input(Diagnostic::error(
-            "`samples` takes no file here",
-            "pass samples=True and write the returned columns (e.g. with pandas)",
-        )));
-    }
-    Ok(())
 }
 
 /// `argv` (the spec's label, then the flags) parsed as the command line

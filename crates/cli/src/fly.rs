@@ -22,7 +22,7 @@ use crate::report::samples::{self, SamplesFile};
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::trace::metrics::StepResponse;
-use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup};
+use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup, Watch};
 use rtpipe_model::{Diagnostic, Server, Spec};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
 use serde::Serialize;
@@ -34,7 +34,8 @@ use std::sync::Arc;
 /// Runs `f` in a thread of its own while a progress bar over the simulated
 /// time (`horizon` ns, read from the atomic `f` publishes to) shows the
 /// fraction done and the time left on stderr (hidden when stderr is not a
-/// terminal).
+/// terminal). An unwinding of `f` (a stop flag's [`command::Stopped`])
+/// goes on in the caller's thread with its payload.
 fn with_progress_bar<T: Send>(
     msg: String,
     horizon: i64,
@@ -55,7 +56,8 @@ fn with_progress_bar<T: Send>(
     let out = std::thread::scope(|scope| {
         let for_worker = Arc::clone(&done);
         scope.spawn(move || {
-            let _ = tx.send(f(for_worker));
+            let flown = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(for_worker)));
+            let _ = tx.send(flown);
         });
         loop {
             match rx.recv_timeout(std::time::Duration::from_millis(50)) {
@@ -72,7 +74,8 @@ fn with_progress_bar<T: Send>(
     });
     pb.finish_and_clear();
     match out {
-        Some(v) => v,
+        Some(Ok(v)) => v,
+        Some(Err(payload)) => std::panic::resume_unwind(payload),
         None => unreachable!("the flight thread ended without a result"),
     }
 }
@@ -128,8 +131,8 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 }
 
 /// `fly` (one flight, or `--sweep`) on a loaded spec, with `hooks`' extra
-/// row sink. A flight is short (under a second at the default lengths) and
-/// has no stop point: the stop flag is not consulted.
+/// row sink and stop flag (a flight checks it as it goes, a sweep before
+/// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
@@ -143,7 +146,7 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
                 format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
             ));
         }
-        return sweep::execute(spec, &s, a);
+        return sweep::execute(spec, &s, a, hooks.stop.as_deref());
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",
@@ -153,10 +156,16 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
         s.horizon as f64 * 1e-9
     );
     let started = std::time::Instant::now();
-    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec)?;
+    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
+    let stop = hooks.stop.as_deref();
     let flight = with_progress_bar(msg, s.horizon, |p| {
-        fly_with_progress(spec, &s, a.exec.model(), Some(p), sink)
+        let mut check = |_| Hooks::check_stop(stop);
+        let watch = Watch {
+            progress: Some(p),
+            check: Some(&mut check),
+        };
+        fly_with_progress(spec, &s, a.exec.model(), watch, sink)
     })?;
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(spec);

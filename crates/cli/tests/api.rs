@@ -28,7 +28,8 @@ fn call(cmd: &str, path: &Path, flags: &[&str], samples: bool) -> Result<Reply, 
     let flags: Vec<String> = flags.iter().map(|s| s.to_string()).collect();
     let label = path.display().to_string();
     let stop = Arc::new(AtomicBool::new(false));
-    api::run(cmd, &spec, &label, &flags, samples, stop)
+    let most = samples.then_some(api::MAX_SAMPLE_ROWS);
+    api::run(cmd, &spec, &label, &flags, most, stop)
 }
 
 /// The binary's `--json` for the same command line.
@@ -164,10 +165,6 @@ fn bad_flags_are_input_failures_with_the_parsers_message() {
     };
     assert!(d.message.contains("--exec"), "{}", d.message);
     assert!(d.message.contains("often"), "{}", d.message);
-    let Err(Failure::Input(d)) = call("simulate", &path, &["--samples", "x.csv"], false) else {
-        panic!("an input failure");
-    };
-    assert!(d.message.contains("samples"), "{}", d.message);
     let flight = example("cleanflight.toml");
     let Err(Failure::Input(d)) = call("fly", &flight, &["--vehicle", "zeppelin"], false) else {
         panic!("an input failure");
@@ -196,11 +193,76 @@ fn a_set_stop_flag_stops_a_simulation_and_a_design() {
     for (cmd, file) in [
         ("simulate", "paper-table3.toml"),
         ("design", "table2-design.toml"),
+        ("fly", "cleanflight.toml"),
     ] {
         let path = example(file);
         let spec = load(&path);
         let stop = Arc::new(AtomicBool::new(true));
-        let r = api::run(cmd, &spec, "spec.toml", &[], false, stop);
+        let r = api::run(cmd, &spec, "spec.toml", &[], None, stop);
         assert!(matches!(r, Err(Failure::Stopped)), "{cmd}");
     }
+}
+
+/// A fresh directory of its own under the system's temporary one.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rtpipe-api-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a temp dir");
+    dir
+}
+
+#[test]
+fn more_sample_rows_than_held_stop_the_run_with_a_failure_naming_the_file_option() {
+    let path = example("cleanflight.toml");
+    let spec = load(&path);
+    let stop = Arc::new(AtomicBool::new(false));
+    let flags = ["--duration".to_string(), "60s".to_string()];
+    let r = api::run("fly", &spec, "spec.toml", &flags, Some(1000), stop);
+    let Err(Failure::TooManySamples(d)) = r else {
+        panic!("a too-many-samples failure");
+    };
+    assert!(
+        d.message.contains("more than 1000 sample rows"),
+        "{}",
+        d.message
+    );
+    let help = d.help.unwrap_or_default();
+    assert!(help.contains("samples=\"FILE.csv\""), "{help}");
+    // Asked for more than it holds, it holds no more.
+    let small = load(&example("paper-table3.toml"));
+    let flags = ["--outputs".to_string(), "40".to_string()];
+    let stop = Arc::new(AtomicBool::new(false));
+    let r = api::run("simulate", &small, "s", &flags, Some(usize::MAX), stop);
+    assert!(r.is_ok_and(|r| r.samples.is_some_and(|c| c.read_ns.len() > 10)));
+}
+
+#[test]
+fn a_samples_file_streams_through_the_api_and_a_stopped_run_leaves_none() {
+    let dir = scratch("file");
+    let path = example("cleanflight.toml");
+    let csv = dir.join("rows.csv");
+    let flags = [
+        "--duration",
+        "3s",
+        "--samples",
+        csv.to_str().expect("utf-8"),
+    ];
+    call("fly", &path, &flags, false).unwrap_or_else(|e| panic!("{e:?}"));
+    let labels: Vec<String> = (0..load(&path).chains.len())
+        .map(|c| load(&path).chain_label(c))
+        .collect();
+    let streamed = csv_columns(&csv, &labels);
+    assert!(streamed.read_ns.len() > 1000);
+    std::fs::remove_file(&csv).expect("the file was written");
+    // Stopped in the middle (a flight long enough to reach a stop point):
+    // no file, and no temporary beside it.
+    let spec = load(&path);
+    let mut flags: Vec<String> = flags.iter().map(|s| s.to_string()).collect();
+    flags[1] = "60s".into();
+    let stop = Arc::new(AtomicBool::new(true));
+    let r = api::run("fly", &spec, "spec.toml", &flags, None, stop);
+    assert!(matches!(r, Err(Failure::Stopped)));
+    let left: Vec<_> = std::fs::read_dir(&dir).expect("dir").collect();
+    assert!(left.is_empty(), "{left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -164,7 +164,7 @@ fn sweeps(c: &mut Criterion<CpuTime>) {
         for vars in [&issue, &all] {
             let run = || {
                 let done = AtomicU64::new(0);
-                pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &crit, vars, &done))
+                pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &crit, vars, &done, &|| {}))
             };
             group.throughput(Throughput::Elements(vars.len() as u64));
             let id = format!("{}-flights-{threads}-threads", vars.len());

@@ -20,7 +20,7 @@ use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
-use rtpipe_sim::{simulate_bodies_with_rows, ExecModel, Phasing, SimConfig};
+use rtpipe_sim::{simulate_bodies_with_progress, ExecModel, Phasing, SimConfig};
 use std::path::Path;
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;
@@ -229,7 +229,7 @@ fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
 /// Flies `spec` as `setup` says: bodies on the simulated schedule, the
 /// world co-simulated at their read and publish instants.
 pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, Diagnostic> {
-    fly_with_progress(spec, s, exec, None, None)
+    fly_with_progress(spec, s, exec, Watch::default(), None)
 }
 
 /// One body per task of a spec, in task order.
@@ -257,19 +257,31 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
     Ok((bodies, world))
 }
 
-/// [`fly`], publishing the simulated time (ns) to `progress` as it goes
-/// and, with `rows`, handing every chain's sample rows on as they complete
+/// What a caller watching a flight adds: where to publish the simulated
+/// time (ns) as it goes, and a check called with it every
+/// `rtpipe_sim::PROGRESS_EVENTS` events, which may unwind to abandon the
+/// flight (a stop flag: the flight has no other way out).
+#[derive(Default)]
+pub struct Watch<'a> {
+    /// Receives the world's time as it advances (a progress bar).
+    pub progress: Option<Arc<AtomicU64>>,
+    /// Called with the simulated time every few thousand events.
+    pub check: Option<&'a mut dyn FnMut(i64)>,
+}
+
+/// [`fly`], watched as `watch` says and, with `rows`, handing every
+/// chain's sample rows on as they complete
 /// (`rtpipe_sim::simulate_with_rows`).
 pub fn fly_with_progress(
     spec: &Spec,
     s: &Setup,
     exec: ExecModel,
-    progress: Option<Arc<AtomicU64>>,
+    watch: Watch<'_>,
     rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<Flight, Diagnostic> {
     let seed = s.world.seed;
     let (mut bodies, mut world) = bodies_and_world(spec, s)?;
-    if let Some(p) = progress {
+    if let Some(p) = watch.progress {
         world.report_progress(p);
     }
     let cfg = SimConfig {
@@ -290,8 +302,10 @@ pub fn fly_with_progress(
         };
         &chainless
     };
-    let sim =
-        simulate_bodies_with_rows(spec, &cfg, &mut bodies, &mut world, rows).map_err(|e| {
+    let mut unwatched = |_| {};
+    let check = watch.check.unwrap_or(&mut unwatched);
+    let sim = simulate_bodies_with_progress(spec, &cfg, &mut bodies, &mut world, check, rows)
+        .map_err(|e| {
             Diagnostic::error(
                 format!("cannot simulate: {e}"),
                 "give every task a fixed positive period",
@@ -381,7 +395,7 @@ mod tests {
             &spec,
             &s,
             ExecModel::Uniform,
-            None,
+            Watch::default(),
             Some(Box::new(move |c, r| {
                 if let Ok(mut g) = sink.lock() {
                     g[c].push(*r);
@@ -393,6 +407,35 @@ mod tests {
         let got = got.lock().map(|g| g.clone()).unwrap_or_default();
         assert!(want.iter().all(|c| c.len() > 100), "rows per chain");
         assert_eq!(got, want);
+    }
+
+    #[test]
+    fn a_watch_check_is_called_as_the_flight_goes_and_can_abandon_it() {
+        struct Abandon;
+        let (spec, p) = cleanflight();
+        let s = setup_of(&spec, &p, &["--mission", "hover", "--duration", "600s"]);
+        let mut seen = Vec::new();
+        let flown = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut check = |t: i64| {
+                seen.push(t);
+                if seen.len() == 3 {
+                    std::panic::resume_unwind(Box::new(Abandon));
+                }
+            };
+            let watch = Watch {
+                progress: None,
+                check: Some(&mut check),
+            };
+            fly_with_progress(&spec, &s, ExecModel::Uniform, watch, None)
+        }));
+        let Err(payload) = flown else {
+            panic!("the flight ran to its end")
+        };
+        assert!(payload.downcast_ref::<Abandon>().is_some());
+        // Called at rising times, and abandoned at the third call, seconds
+        // into the flight, not at its end.
+        assert!(seen.len() == 3 && seen[0] < seen[1] && seen[1] < seen[2]);
+        assert!(seen[2] < 60_000_000_000, "{seen:?}");
     }
 
     fn setup_of(spec: &Spec, path: &Path, flags: &[&str]) -> Setup {

@@ -215,6 +215,8 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
 
 /// Flies every variation (in parallel; each point is deterministic; the
 /// points in the variations' order) and counts finished points in `done`.
+/// `check` is called before each flight and may unwind to abandon the
+/// sweep (a stop flag; the unwinding reaches the caller).
 /// Variations that fly the same timing with the same delays (the nominal
 /// timing is in each of the default sweeps five times: ×1 scale, ×1 rate,
 /// three 0 ms delays) are flown once.
@@ -225,6 +227,7 @@ pub fn sweep(
     c: &Criteria,
     variations: &[Variation],
     done: &AtomicU64,
+    check: &(dyn Fn() + Sync),
 ) -> Vec<Point> {
     // (timing, delays) decide a point, all but its variation (`flown`).
     let mut distinct: Vec<(Variation, Plan)> = Vec::new();
@@ -242,6 +245,7 @@ pub fn sweep(
         .par_iter()
         .enumerate()
         .map(|(k, (v, _))| {
+            check();
             let p = flown(spec, s, *v, exec, c);
             let copies = slot.iter().filter(|&&i| i == k).count();
             done.fetch_add(copies as u64, Ordering::Relaxed);
@@ -442,7 +446,15 @@ mod tests {
         let (spec, s) = cleanflight("racer5");
         let vars = default_variations(&spec, &s, 0.5, 8.0);
         let done = AtomicU64::new(0);
-        let points = sweep(&spec, &s, ExecModel::Uniform, &s.criteria(), &vars, &done);
+        let points = sweep(
+            &spec,
+            &s,
+            ExecModel::Uniform,
+            &s.criteria(),
+            &vars,
+            &done,
+            &|| {},
+        );
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         let e = scale_edge(&points);
         let (Some(last), Some(fail)) = (e.last_pass, e.first_fail) else {
@@ -526,13 +538,54 @@ mod threads {
         assert!(plans[4] != plans[0] && plans[5] != plans[0]);
         let c = s.criteria();
         let done = AtomicU64::new(0);
-        let got = sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done);
+        let got = sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &|| {});
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         for (v, g) in vars.iter().zip(&got) {
             let alone = flown(&spec, &s, *v, ExecModel::Uniform, &c);
             assert_eq!(format!("{g:?}"), format!("{alone:?}"));
         }
         assert!(!got[5].schedulable, "{:?}", got[5]);
+    }
+
+    /// A check that unwinds abandons the sweep: the unwinding reaches the
+    /// caller with its payload and no flight is flown after it (rayon
+    /// still calls the check of the items not yet begun).
+    #[test]
+    fn a_check_that_unwinds_abandons_the_sweep() {
+        struct Abandon;
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
+        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        let r = Request {
+            spec_path: &p,
+            vehicle: "racer5",
+            mission: "hover",
+            horizon: Some(1_000_000_000),
+            seed: 2,
+        };
+        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let vars = default_variations(&spec, &s, 0.5, 8.0);
+        assert!(vars.len() > 20, "{}", vars.len());
+        let (done, checks) = (AtomicU64::new(0), AtomicU64::new(0));
+        let check = || {
+            if checks.fetch_add(1, Ordering::Relaxed) >= 2 {
+                std::panic::resume_unwind(Box::new(Abandon));
+            }
+        };
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let swept = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let c = s.criteria();
+            one.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &check))
+        }));
+        let Err(payload) = swept else {
+            panic!("the sweep ran to its end")
+        };
+        assert!(payload.downcast_ref::<Abandon>().is_some());
+        // Two flights were flown (the nominal one stands for five
+        // variations); every later check unwound at once.
+        assert!(done.load(Ordering::Relaxed) <= 6, "{done:?}");
     }
 
     /// The points are the same, in the same order, on 1, 2 or 3 threads:
@@ -562,7 +615,7 @@ mod threads {
                 .unwrap_or_else(|e| panic!("{e}"));
             let done = AtomicU64::new(0);
             let c = s.criteria();
-            pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done))
+            pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &|| {}))
         };
         let one = on(1);
         assert_eq!(

@@ -133,72 +133,143 @@ fn waters(py: Python<'_>, flags: Vec<String>) -> PyResult<Spec> {
 /// TOML text from a dict of TOML tables (`None` has no TOML form).
 #[pyfunction]
 fn dict_to_toml(value: &Bound<'_, PyAny>) -> PyResult<String> {
-    let v = to_json(value, "spec")?;
+    let v = to_json(value, "spec", &mut Vec::new())?;
     let t = toml::Value::try_from(&v).map_err(|e| InputError::new_err(format!("{e}")))?;
     toml::to_string(&t).map_err(|e| InputError::new_err(format!("{e}")))
 }
 
-/// A Python value as JSON (what TOML can hold).
-fn to_json(v: &Bound<'_, PyAny>, at: &str) -> PyResult<serde_json::Value> {
+/// What a dict spec may hold, for the messages that refuse anything else.
+const PLAIN_DATA: &str = "a str, int, float, bool, list, tuple or dict";
+
+/// A Python value as JSON (what TOML can hold), `at` its key path for
+/// messages. Only plain data is read: an iterator or an arbitrary object
+/// could be endless or run code, and `open` (the containers from the root
+/// to here) refuses a value that contains itself and nesting deeper than a
+/// spec file may have, either of which would recurse without end.
+fn to_json(v: &Bound<'_, PyAny>, at: &str, open: &mut Vec<usize>) -> PyResult<serde_json::Value> {
+    use pyo3::types::{PyBool, PyFloat, PyInt, PyString, PyTuple};
     use serde_json::Value as J;
     if v.is_none() {
         return Err(InputError::new_err(format!(
             "{at} is None, which a spec cannot hold: leave the key out"
         )));
     }
-    if let Ok(b) = v.cast::<pyo3::types::PyBool>() {
+    if let Ok(b) = v.cast::<PyBool>() {
         return Ok(J::Bool(b.is_true()));
     }
-    if let Ok(i) = v.extract::<i64>() {
-        return Ok(J::from(i));
+    if v.cast::<PyInt>().is_ok() {
+        return integer(v, at).map(J::from);
     }
-    if let Ok(f) = v.extract::<f64>() {
-        return Ok(J::from(f));
+    if let Ok(f) = v.cast::<PyFloat>() {
+        return finite(f.value(), at);
     }
-    if let Ok(s) = v.extract::<String>() {
-        return Ok(J::String(s));
+    if let Ok(s) = v.cast::<PyString>() {
+        return Ok(J::String(s.to_cow()?.into_owned()));
     }
+    let is_container =
+        v.cast::<PyDict>().is_ok() || v.cast::<PyList>().is_ok() || v.cast::<PyTuple>().is_ok();
+    if !is_container {
+        return Err(InputError::new_err(format!(
+            "{at} is a {}, which a spec cannot hold: use {PLAIN_DATA} (make an iterator or a \
+             generator a list, a numpy number an int or a float, first)",
+            v.get_type().name()?
+        )));
+    }
+    enter(v, at, open)?;
+    let value = container(v, at, open);
+    open.pop();
+    value
+}
+
+/// Refuses a container that is already open on the way from the root (a
+/// cycle) or one nested deeper than a spec file may be; else opens it.
+fn enter(v: &Bound<'_, PyAny>, at: &str, open: &mut Vec<usize>) -> PyResult<()> {
+    let id = v.as_ptr() as usize;
+    if open.contains(&id) {
+        return Err(InputError::new_err(format!(
+            "{at} contains itself (a dict or list that holds itself, directly or \
+             deeper): a spec is a tree; give {at} a copy instead"
+        )));
+    }
+    let deepest = rtpipe_model::input::MAX_NESTING;
+    if open.len() >= deepest {
+        return Err(InputError::new_err(format!(
+            "{at} nests deeper than {deepest} levels of dicts and lists, the most a spec \
+             may have: flatten it"
+        )));
+    }
+    open.push(id);
+    Ok(())
+}
+
+/// The items of a dict, list or tuple (opened by [`enter`]) as JSON.
+fn container(v: &Bound<'_, PyAny>, at: &str, open: &mut Vec<usize>) -> PyResult<serde_json::Value> {
+    use serde_json::Value as J;
     if let Ok(d) = v.cast::<PyDict>() {
         let mut m = serde_json::Map::new();
         for (k, x) in d.iter() {
-            let k: String = k
-                .extract()
-                .map_err(|_| InputError::new_err(format!("{at} has a key that is not a string")))?;
+            let Ok(k) = k.extract::<String>() else {
+                return Err(InputError::new_err(format!(
+                    "{at} has a key that is a {}, not a str: TOML keys are strings",
+                    k.get_type().name()?
+                )));
+            };
             let place = format!("{at}.{k}");
-            m.insert(k, to_json(&x, &place)?);
+            m.insert(k, to_json(&x, &place, open)?);
         }
         return Ok(J::Object(m));
     }
-    if let Ok(items) = v.try_iter() {
-        let mut out = Vec::new();
-        for (i, x) in items.enumerate() {
-            out.push(to_json(&x?, &format!("{at}[{i}]"))?);
-        }
-        return Ok(J::Array(out));
+    // A list or a tuple: its length is known, nothing is iterated lazily.
+    let items = v.cast::<pyo3::types::PySequence>()?;
+    let mut out = Vec::with_capacity(items.len()?);
+    for i in 0..items.len()? {
+        out.push(to_json(&items.get_item(i)?, &format!("{at}[{i}]"), open)?);
     }
-    Err(InputError::new_err(format!(
-        "{at} is a {}, which a spec cannot hold: use a str, number, bool, list or dict",
-        v.get_type().name()?
-    )))
+    Ok(J::Array(out))
+}
+
+/// An int as TOML's 64-bit integer, or an error naming `at`.
+fn integer(v: &Bound<'_, PyAny>, at: &str) -> PyResult<i64> {
+    v.extract::<i64>().map_err(|_| {
+        InputError::new_err(format!(
+            "{at} is an integer outside -2**63 .. 2**63-1, which TOML cannot hold: \
+             write a smaller number"
+        ))
+    })
+}
+
+/// A float, refused with its key path when NaN or infinite (no spec
+/// value is either).
+fn finite(f: f64, at: &str) -> PyResult<serde_json::Value> {
+    if !f.is_finite() {
+        return Err(InputError::new_err(format!(
+            "{at} is {f}, which a spec cannot hold: write a finite number"
+        )));
+    }
+    Ok(serde_json::Value::from(f))
 }
 
 /// Runs `command` on `spec` with command-line `flags` (the interpreter
 /// free meanwhile; Ctrl-C raises KeyboardInterrupt and stops the run).
-/// Returns (report, exit status, notes, sample columns or None, designed
-/// spec or None).
+/// `samples` returns the sample rows as columns, at most `max_samples`
+/// of them (`MAX_SAMPLE_ROWS` by default, the most it takes; a run with
+/// more raises MemoryError). Returns (report, exit status, notes, sample
+/// columns or None, designed spec or None).
 #[pyfunction]
-#[pyo3(signature = (command, spec, flags, samples=false))]
+#[pyo3(signature = (command, spec, flags, samples=false, max_samples=None))]
 fn run(
     py: Python<'_>,
     command: &str,
     spec: Py<Spec>,
     flags: Vec<String>,
     samples: bool,
+    max_samples: Option<usize>,
 ) -> PyResult<Py<PyAny>> {
     let (command, held) = (command.to_string(), spec.clone_ref(py));
+    let most = samples.then(|| max_samples.unwrap_or(api::MAX_SAMPLE_ROWS));
     let reply = in_worker(py, move |stop| {
         let s = held.get();
-        api::run(&command, &s.spec, &s.label, &flags, samples, stop)
+        api::run(&command, &s.spec, &s.label, &flags, most, stop)
     })?;
     answer(py, reply)
 }
@@ -213,8 +284,10 @@ fn run_plain(py: Python<'_>, command: &str, flags: Vec<String>) -> PyResult<Py<P
 }
 
 /// `work` on a worker thread while this thread waits with the GIL
-/// released, checking for Ctrl-C every 50 ms: on one, the stop flag is set
-/// (the worker sees it at its next stop point) and KeyboardInterrupt raised.
+/// released, checking for Ctrl-C every 50 ms: on one, the stop flag is set,
+/// the worker is waited for (it ends at its next stop point, so nothing of
+/// the call runs on, or writes, after it returns) and KeyboardInterrupt
+/// raised.
 fn in_worker(
     py: Python<'_>,
     work: impl FnOnce(Arc<AtomicBool>) -> Result<Reply, Failure> + Send + 'static,
@@ -236,6 +309,9 @@ fn in_worker(
             Err(mpsc::RecvTimeoutError::Timeout) => {
                 if let Err(e) = py.check_signals() {
                     stop.store(true, Ordering::Relaxed);
+                    // Its answer, if it finished meanwhile, is not the
+                    // whole call's: the interrupt is.
+                    let _ = py.detach(move || rx.recv());
                     return Err(e);
                 }
             }
@@ -258,6 +334,11 @@ fn raise(py: Python<'_>, f: Failure) -> PyErr {
     match f {
         Failure::Input(d) => input_error(py, &d),
         Failure::Stopped => pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"),
+        // MemoryError, as Python says it; raised before memory runs out.
+        Failure::TooManySamples(d) => {
+            let text = format!("{}: {}", d.message, d.help.unwrap_or_default());
+            pyo3::exceptions::PyMemoryError::new_err(text)
+        }
         Failure::Internal(m) => InternalError::new_err(format!(
             "internal error (a bug in rtpipe): {m}; please report it with the spec and the call"
         )),
@@ -406,6 +487,7 @@ fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     m.add("COMMANDS", api::COMMANDS.to_vec())?;
+    m.add("MAX_SAMPLE_ROWS", api::MAX_SAMPLE_ROWS)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

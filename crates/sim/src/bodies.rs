@@ -38,6 +38,25 @@ pub fn simulate_bodies_with_rows<V: Copy>(
     env: &mut dyn Environment<V>,
     rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<SimResult, SimError> {
+    simulate_bodies_with_progress(spec, cfg, bodies, env, &mut |_| {}, rows)
+}
+
+/// [`simulate_bodies_with_rows`], calling `progress` with the simulated
+/// time reached every [`crate::PROGRESS_EVENTS`] events, as
+/// [`crate::simulate_with_progress`] does: the one place a caller can
+/// abandon a run of task code (by unwinding from it), since the bodies and
+/// the environment cannot end it.
+///
+/// # Panics
+/// As [`simulate_bodies`].
+pub fn simulate_bodies_with_progress<V: Copy>(
+    spec: &Spec,
+    cfg: &SimConfig,
+    bodies: &mut [Box<dyn Body<V> + '_>],
+    env: &mut dyn Environment<V>,
+    progress: &mut dyn FnMut(Nanos),
+    rows: Option<rtpipe_joblog::RowSink>,
+) -> Result<SimResult, SimError> {
     assert_eq!(
         bodies.len(),
         spec.tasks.len(),
@@ -53,7 +72,7 @@ pub fn simulate_bodies_with_rows<V: Copy>(
         pending: vec![None; n],
         inputs: Vec::with_capacity(max_reads),
     };
-    crate::run_with_progress(spec, cfg, driver, &mut |_| {}, rows)
+    crate::run_with_progress(spec, cfg, driver, progress, rows)
 }
 
 /// Runs bodies at the instants the simulator reports.

@@ -63,7 +63,7 @@ pub use config::*;
 pub(crate) use engine::*;
 pub(crate) use locks::Locks;
 
-pub use bodies::{simulate_bodies, simulate_bodies_with_rows};
+pub use bodies::{simulate_bodies, simulate_bodies_with_progress, simulate_bodies_with_rows};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
 

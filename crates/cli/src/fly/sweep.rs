@@ -16,7 +16,7 @@ use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use serde::Serialize;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 fn criteria(a: &FlyArgs, s: &Setup) -> Result<Criteria, Diagnostic> {
     let Some(path) = &a.criterion else {
@@ -236,14 +236,19 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
 }
 
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.
-pub fn execute(spec: &Spec, s: &Setup, a: &FlyArgs) -> Result<Answer, Diagnostic> {
+pub fn execute(
+    spec: &Spec,
+    s: &Setup,
+    a: &FlyArgs,
+    stop: Option<&AtomicBool>,
+) -> Result<Answer, Diagnostic> {
     let c = criteria(a, s)?;
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
-    let points = fly_all(spec, s, a, &c, &vars);
+    let points = fly_all(spec, s, a, &c, &vars, stop);
     let limits = derived_limits(spec, s, &points);
     // Nothing flew: a spec "with these limits" would carry none of them.
     let nothing = limits
@@ -284,7 +289,16 @@ pub fn execute(spec: &Spec, s: &Setup, a: &FlyArgs) -> Result<Answer, Diagnostic
 /// Flies every variation (on a worker thread) while a progress bar on
 /// stderr counts the flights done; a panic in the sweep goes on unwinding
 /// here.
-fn fly_all(spec: &Spec, s: &Setup, a: &FlyArgs, c: &Criteria, vars: &[Variation]) -> Vec<Point> {
+/// Every variation flown, with a progress bar; `stop` (checked before each
+/// flight) unwinds with [`crate::command::Stopped`].
+fn fly_all(
+    spec: &Spec,
+    s: &Setup,
+    a: &FlyArgs,
+    c: &Criteria,
+    vars: &[Variation],
+    stop: Option<&AtomicBool>,
+) -> Vec<Point> {
     let done = AtomicU64::new(0);
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(vars.len() as u64),
@@ -296,8 +310,9 @@ fn fly_all(spec: &Spec, s: &Setup, a: &FlyArgs, c: &Criteria, vars: &[Variation]
         pb.set_style(style);
     }
     pb.set_message(spec.name.clone());
+    let check = || crate::command::Hooks::check_stop(stop);
     let points = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), c, vars, &done));
+        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), c, vars, &done, &check));
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));
             std::thread::sleep(std::time::Duration::from_millis(50));

@@ -73,21 +73,28 @@ struct Parts {
 
 impl SamplesFile {
     /// `--samples PATH` (checked as every output flag is) opened for a run
-    /// of `spec`, read from `spec_path`; `None` without the flag.
+    /// of `spec`, read from `spec_path`; `None` without the flag. `hooks`
+    /// with a stop flag means the caller owns Ctrl-C (the Python package):
+    /// then a stop unwinds the run and dropping the file removes its
+    /// temporaries; else Ctrl-C, SIGTERM and SIGHUP are caught here.
     pub fn open(
         path: Option<&PathBuf>,
         spec_path: &std::path::Path,
         spec: &Spec,
+        hooks: &crate::command::Hooks,
     ) -> Result<Option<SamplesFile>, Diagnostic> {
         let Some(path) = path else { return Ok(None) };
         let out = output::prepare("--samples", path, spec_path, None)?;
+        if hooks.stop.is_none() {
+            rtpipe_runtime::sys::catch_stop_signals();
+        }
         SamplesFile::create(out, spec).map(Some)
     }
 
-    /// One temporary per chain beside `out`'s target. From here on Ctrl-C
-    /// is caught, so that [`stop_if_interrupted`] can take them away.
+    /// One temporary per chain beside `out`'s target. A stop signal, when it is
+    /// caught ([`SamplesFile::open`]), lets [`stop_if_interrupted`] take
+    /// them away; they also go when the file is dropped unfinished.
     pub fn create(out: Output, spec: &Spec) -> Result<SamplesFile, Diagnostic> {
-        rtpipe_runtime::sys::catch_stop_signals();
         let mut files = Vec::with_capacity(spec.chains.len());
         for c in 0..spec.chains.len() {
             let path = output::temp_beside(&out.target, &format!("chain{c}"));
@@ -242,7 +249,7 @@ fn register(path: &std::path::Path) {
 }
 
 /// Called as a run that streams `--samples` goes: after Ctrl-C (caught
-/// since [`SamplesFile::create`]) it runs `before` (clear a progress bar),
+/// since [`SamplesFile::open`]) it runs `before` (clear a progress bar),
 /// removes the temporaries and ends the command with 130, like every other
 /// one stopped by Ctrl-C. Without a `--samples` file it does nothing.
 pub fn stop_if_interrupted(before: impl FnOnce()) {

@@ -186,7 +186,7 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
 pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     let p = plan(spec, a)?;
     let report = rtpipe_analysis::analyze(spec);
-    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec)?;
+    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
     let stop = hooks.stop.as_deref();
     let (res, searches, seconds) = simulate_and_search(spec, a, &p, sink, stop)?;

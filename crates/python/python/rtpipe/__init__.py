@@ -20,12 +20,21 @@ its dict (``ok``, ``criteria_met`` say so), and the command line's exit
 status is under ``"exit_status"``.
 
 Long calls release the GIL (other Python threads run meanwhile) and
-Ctrl-C stops them with KeyboardInterrupt.
+Ctrl-C stops them with KeyboardInterrupt: the work itself stops (a
+simulation, a flight, a design search, a campaign's workers) before the
+call returns, and nothing it was writing is left behind.
+
+Nothing passed from Python can crash the interpreter: a dict spec holds
+plain data only (str, int, float, bool, list, tuple, dict: no iterators,
+generators or other objects), without cycles, nested no deeper than a spec
+file may be and with finite numbers; anything else raises
+:class:`InputError` naming the key path.
 """
 
 from __future__ import annotations
 
 import logging
+import operator
 import os
 from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
 
@@ -43,10 +52,16 @@ __all__ = [
     "SpecError",
     "InputError",
     "InternalError",
+    "MAX_SAMPLE_ROWS",
     "__version__",
 ]
 
 __version__: str = _rtpipe.__version__
+
+#: The most sample rows ``samples=True`` holds in memory (about 130 bytes
+#: each while collected); a run with more stops there with MemoryError:
+#: pass ``samples="FILE.csv"`` to stream any number to a file instead.
+MAX_SAMPLE_ROWS: int = _rtpipe.MAX_SAMPLE_ROWS
 
 log = logging.getLogger("rtpipe")
 
@@ -154,10 +169,46 @@ def campaign(
     ``k % n == i``; ``plan=True`` only lists the shards (``part_shards``,
     and ``written``: those ``out`` holds) without running any.
     """
-    if isinstance(shard, tuple):
-        shard = f"{shard[0]}/{shard[1]}"
-    flags = [os.fspath(config), os.fspath(out)] + _flags(dict(shard=shard, jobs=jobs, plan=plan))
+    flags = [os.fspath(config), os.fspath(out)] + _flags(
+        dict(shard=_shard(shard), jobs=jobs, plan=plan)
+    )
     return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+
+
+def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
+    """``shard`` as ``--shard``'s ``i/n``: a string is the command line's
+    to check; a tuple must be ``(index, count)`` with ``0 <= index < count``
+    (anything else would run a part the caller did not ask for)."""
+    if shard is None or isinstance(shard, str):
+        return shard
+    pair = isinstance(shard, tuple) and len(shard) == 2
+    if pair and not any(isinstance(x, bool) for x in shard):
+        try:
+            # Any integer (numpy's too), but not a float or a string.
+            index, count = (operator.index(x) for x in shard)
+            if 0 <= index < count:
+                return f"{index}/{count}"
+        except TypeError:
+            pass
+    raise ValueError(
+        f"campaign(shard={shard!r}): give a 2-tuple (index, count) of ints with "
+        "0 <= index < count, such as shard=(0, 4) for the first of four parts"
+    )
+
+
+def _samples(samples: Union[bool, str, "os.PathLike[str]", None], options: dict) -> bool:
+    """``samples``: True returns the rows as columns (held in memory, at most
+    :data:`MAX_SAMPLE_ROWS`); a path streams them to that CSV file instead
+    (``--samples``, any number of rows), added to ``options``."""
+    if samples is None or isinstance(samples, bool):
+        return bool(samples)
+    if isinstance(samples, (str, os.PathLike)):
+        options["samples"] = samples
+        return False
+    raise TypeError(
+        f"samples={samples!r}: give True (numpy columns) or a path (a CSV file streamed as "
+        "the run goes)"
+    )
 
 
 class System:
@@ -196,6 +247,10 @@ class System:
     def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
         return _finish(command, _rtpipe.run(command, self._spec, _flags(options), samples))
 
+    def _run_samples(self, command: str, options: dict, samples: Any) -> dict:
+        columns = _samples(samples, options)
+        return self._run(command, options, columns)
+
     def analyze(self, *, mode: Optional[str] = None, all_paths: bool = False) -> dict:
         """Schedulability and the worst-case bounds of every chain
         (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
@@ -211,7 +266,7 @@ class System:
         exec: Optional[str] = None,
         phasing: Optional[str] = None,
         search_steps: Optional[int] = None,
-        samples: bool = False,
+        samples: Union[bool, str, "os.PathLike[str]"] = False,
         trace: Optional[str] = None,
         plot: Optional[str] = None,
         gantt: Optional[str] = None,
@@ -223,14 +278,18 @@ class System:
         ``--samples`` (``chain``, ``sample``, ``read_ns``, ``event_ns``,
         ``first_output_ns``, ``last_output_ns``, ``reaction_ns``,
         ``freshness_ns``, ``event_reaction_ns``, ``event_freshness_ns``),
-        masked where the run ended first. ``trace``, ``plot`` and ``gantt``
-        write files as the flags do.
+        masked where the run ended first. They are held in memory: a run with
+        more than :data:`MAX_SAMPLE_ROWS` rows is stopped there with
+        MemoryError. ``samples="FILE.csv"`` streams any number of rows to
+        that file instead (``--samples``; nothing of it stays when the call
+        fails or is interrupted). ``trace``, ``plot`` and ``gantt`` write
+        files as the flags do.
         """
         options = dict(
             outputs=outputs, duration=duration, seed=seed, exec=exec, phasing=phasing,
             search_steps=search_steps, trace=trace, plot=plot, gantt=gantt, window=window,
         )
-        return self._run("simulate", options, samples)
+        return self._run_samples("simulate", options, samples)
 
     def fly(
         self,
@@ -241,7 +300,7 @@ class System:
         duration: Union[str, float, None] = None,
         seed: Optional[int] = None,
         exec: Optional[str] = None,
-        samples: bool = False,
+        samples: Union[bool, str, "os.PathLike[str]"] = False,
         plot: Optional[str] = None,
         log: Optional[str] = None,
         sweep: bool = False,
@@ -253,14 +312,15 @@ class System:
     ) -> dict:
         """A software-in-the-loop flight on the simulated schedule
         (``rtpipe fly --json``), or with ``sweep=True`` the timing sweep
-        that derives the limits the flight depends on."""
+        that derives the limits the flight depends on. ``samples`` as in
+        :meth:`simulate`."""
         options = dict(
             vehicle=vehicle, mission=mission, turbulence=turbulence, duration=duration,
             seed=seed, exec=exec, plot=plot, log=log, sweep=sweep, scale=scale,
             per_octave=per_octave, criterion=criterion, write_limits=write_limits,
             free_periods=free_periods,
         )
-        return self._run("fly", options, samples)
+        return self._run_samples("fly", options, samples)
 
     def design(
         self,

@@ -4,6 +4,7 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 
 __version__: str
 COMMANDS: List[str]
+MAX_SAMPLE_ROWS: int
 
 class RtpipeError(Exception): ...
 
@@ -39,7 +40,11 @@ def dict_to_toml(value: Dict[str, Any]) -> str: ...
 RawColumns = Dict[str, Union[bytes, Tuple[bytes, bytes]]]
 
 def run(
-    command: str, spec: Spec, flags: List[str], samples: bool = False
+    command: str,
+    spec: Spec,
+    flags: List[str],
+    samples: bool = False,
+    max_samples: Optional[int] = None,
 ) -> Tuple[Optional[Dict[str, Any]], int, List[str], Optional[RawColumns], Optional[Spec]]: ...
 def run_plain(
     command: str, flags: List[str]
