@@ -204,3 +204,32 @@ fn a_billion_shards_are_counted_never_listed() {
     let found = survey(&d, &cfg, part).expect("a survey of nothing");
     assert!(found.done.is_empty() && !found.kept);
 }
+
+/// A shard is written a row group at a time: its rows are never all held
+/// at once (the groups end at the first system past `ROW_GROUP_ROWS`).
+#[test]
+fn a_large_shard_is_written_in_bounded_row_groups() {
+    use parquet::file::reader::{FileReader, SerializedFileReader};
+    let text = CONFIG
+        .replace("systems = 12", "systems = 4000")
+        .replace("shard_size = 4", "shard_size = 4000")
+        .replace("chains = 2", "chains = 5")
+        .replace("tasks = [5, 12]", "tasks = [20, 40]");
+    let d = dir("groups");
+    let s = go_with(&text, &d).unwrap_or_else(|e| panic!("{}", e.message));
+    assert!(s.rows > 2 * rtpipe_campaign::ROW_GROUP_ROWS as u64, "{s:?}");
+    let file = std::fs::File::open(shard_path(&d, 0)).expect("the shard");
+    let reader = SerializedFileReader::new(file).expect("a footer");
+    let groups: Vec<i64> = reader
+        .metadata()
+        .row_groups()
+        .iter()
+        .map(|g| g.num_rows())
+        .collect();
+    assert!(groups.len() >= 3, "{groups:?}");
+    // One system adds at most 2 × 5 rows past the limit.
+    let most = rtpipe_campaign::ROW_GROUP_ROWS as i64 + 10;
+    assert!(groups.iter().all(|&n| n <= most), "{groups:?}");
+    assert_eq!(groups.iter().sum::<i64>() as u64, s.rows);
+    let _ = std::fs::remove_dir_all(d);
+}
