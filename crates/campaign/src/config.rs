@@ -36,6 +36,38 @@ pub struct Config {
     pub simulate: Option<Simulate>,
 }
 
+impl Config {
+    /// The campaign's identity: a hash (FNV-1a, 64 bits, hex) of every
+    /// value that decides its rows (the name included) and of the columns.
+    /// Written in every shard's footer and compared with the directory's
+    /// `_campaign.toml`, so a directory holds one campaign's shards only.
+    /// Comments and layout of the file do not change it.
+    pub fn fingerprint(&self) -> String {
+        let g = &self.generate;
+        let sim = self.simulate.as_ref().map_or("none".to_string(), |s| {
+            format!("{} {} {}", s.horizon, s.random_phasing, s.uniform_exec)
+        });
+        let canonical = format!(
+            "rtpipe campaign\ncolumns {}\nname {:?}\nsystems {}\nseed {}\nshard_size {}\n\
+             tasks {:?}\nutilization {:?}\nchains {}\ncpus {}\nsynchronous {}\nsimulate {sim}\n",
+            crate::COLUMNS.join(","),
+            self.name,
+            self.systems,
+            self.seed,
+            self.shard_size,
+            g.tasks,
+            g.utilization,
+            g.chains,
+            g.cpus,
+            g.synchronous,
+        );
+        let hash = canonical.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+        format!("{hash:016x}")
+    }
+}
+
 /// WATERS 2015 task sets, as E2EEvaluation generates them; a range is
 /// drawn uniformly per system.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,19 +9,30 @@
 //!   `k ≡ i (mod n)`, so `n` machines together write exactly the files one
 //!   machine writes.
 //! - **Resumable.** A shard's file appears whole (written beside, then
-//!   renamed) or not at all; a run skips the shards already written. The
-//!   directory keeps the configuration (`_campaign.toml`) and refuses a
-//!   different one.
+//!   renamed: `rtpipe_model::output`) or not at all; a run skips the shards
+//!   already written, and only those: a shard counts when its footer names
+//!   this campaign's [`Config::fingerprint`], its index and its systems
+//!   ([`survey`]). The directory keeps the configuration (`_campaign.toml`)
+//!   and refuses another campaign's.
+//! - **Bounded.** Shards are planned by index, never listed, and written a
+//!   row group at a time ([`ROW_GROUP_ROWS`]), so memory does not grow with
+//!   the campaign or the shard; the stop flag is asked inside each
+//!   system's simulation too.
 
 pub mod config;
+mod folder;
 mod parquet_out;
 mod system;
 
 pub use config::Config;
-pub use parquet_out::COLUMNS;
-pub use system::{run_system, system_seed, Row};
+pub use folder::{survey, Survey, KEPT};
+pub use parquet_out::{COLUMNS, ROW_GROUP_ROWS};
+pub use system::{run_system, run_system_until, system_seed, Row};
 
+use parquet_out::{ShardMeta, ShardWriter};
 use rayon::prelude::*;
+use rtpipe_model::output;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -52,6 +63,21 @@ impl Part {
         }
         Ok(Part { index: i, count: n })
     }
+
+    /// How many of `total` shards this part owns.
+    pub fn shard_count(self, total: u64) -> u64 {
+        if self.index >= total {
+            0
+        } else {
+            (total - 1 - self.index) / self.count + 1
+        }
+    }
+
+    /// The shards of `total` this part owns, in order, one at a time
+    /// (a campaign of 10⁹ shards is never listed).
+    pub fn shards(self, total: u64) -> impl Iterator<Item = u64> {
+        (0..self.shard_count(total)).map(move |j| self.index + j * self.count)
+    }
 }
 
 /// What a run did.
@@ -61,10 +87,16 @@ pub struct Summary {
     pub shards: u64,
     /// Of them, written by this run.
     pub written: u64,
+    /// Of those written, found unfinished or damaged and written again.
+    pub rewritten: u64,
     /// Of them, found already written and skipped.
     pub skipped: u64,
     /// Systems generated and analysed by this run.
     pub systems: u64,
+    /// Of them, with fewer chains than asked (the generator found too few).
+    pub short: u64,
+    /// Of those, with no chain at all: no rows.
+    pub chainless: u64,
     /// Rows written by this run.
     pub rows: u64,
     /// Wall-clock seconds of this run.
@@ -96,15 +128,33 @@ pub fn shard_count(cfg: &Config) -> u64 {
     cfg.systems.div_ceil(cfg.shard_size)
 }
 
+/// The systems of shard `k`.
+pub fn shard_systems(cfg: &Config, k: u64) -> Range<u64> {
+    let first = k.saturating_mul(cfg.shard_size).min(cfg.systems);
+    first..first.saturating_add(cfg.shard_size).min(cfg.systems)
+}
+
 /// The file of shard `k`.
 pub fn shard_path(dir: &Path, k: u64) -> PathBuf {
     dir.join(format!("shard-{k:06}.parquet"))
 }
 
+/// What a run shares with its shards.
+struct Work<'a> {
+    cfg: &'a Config,
+    fingerprint: String,
+    dir: &'a Path,
+    pool: rayon::ThreadPool,
+    jobs: usize,
+    on_system: &'a (dyn Fn() + Sync),
+    stop: &'a (dyn Fn() -> bool + Sync),
+}
+
 /// Runs the shards of `part` not yet in `dir` on `jobs` threads;
 /// `on_system` is called once per system done; `stop` (asked from every
-/// worker) ends the run after
-/// the shard in progress (nothing half-written stays).
+/// worker, and inside each simulation) ends the run: the shard in progress
+/// is dropped (nothing half-written stays). A directory of another
+/// campaign is refused before anything is written ([`survey`]).
 pub fn run(
     cfg: &Config,
     config_text: &str,
@@ -115,27 +165,37 @@ pub fn run(
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Summary, Error> {
     assert!(part.index < part.count && jobs >= 1);
-    prepare_dir(dir, config_text)?;
+    let found = prepare_dir(dir, cfg, config_text, part)?;
     let started = Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
         .map_err(|e| Error::io("start threads for", dir, &e))?;
-    let mine: Vec<u64> = (0..shard_count(cfg))
-        .filter(|k| k % part.count == part.index)
-        .collect();
+    let work = Work {
+        cfg,
+        fingerprint: cfg.fingerprint(),
+        dir,
+        pool,
+        jobs,
+        on_system,
+        stop,
+    };
+    let total = shard_count(cfg);
     let mut s = Summary {
-        shards: mine.len() as u64,
+        shards: part.shard_count(total),
         written: 0,
+        rewritten: 0,
         skipped: 0,
         systems: 0,
+        short: 0,
+        chainless: 0,
         rows: 0,
         seconds: 0.0,
         jobs,
         stopped: false,
     };
-    for &k in &mine {
-        if shard_path(dir, k).exists() {
+    for k in part.shards(total) {
+        if found.done.contains(&k) {
             s.skipped += 1;
             continue;
         }
@@ -143,69 +203,115 @@ pub fn run(
             s.stopped = true;
             break;
         }
-        let (systems, rows) = pool.install(|| run_shard(cfg, dir, k, on_system, stop))?;
-        if systems.is_none() {
+        let Some(t) = run_shard(&work, k)? else {
             s.stopped = true;
             break;
-        }
-        (s.written, s.systems, s.rows) = (
-            s.written + 1,
-            s.systems + systems.unwrap_or(0),
-            s.rows + rows,
-        );
+        };
+        s.written += 1;
+        s.rewritten += u64::from(found.rerun.contains_key(&k));
+        s.systems += t.systems;
+        s.short += t.short;
+        s.chainless += t.chainless;
+        s.rows += t.rows;
     }
     s.seconds = started.elapsed().as_secs_f64();
     Ok(s)
 }
 
-/// Shard `k`: its systems in parallel (in order), then its file. `None`
-/// systems when stopped (nothing written).
-fn run_shard(
-    cfg: &Config,
-    dir: &Path,
-    k: u64,
-    on_system: &(dyn Fn() + Sync),
-    stop: &(dyn Fn() -> bool + Sync),
-) -> Result<(Option<u64>, u64), Error> {
-    let first = k * cfg.shard_size;
-    let last = (first + cfg.shard_size).min(cfg.systems);
-    let per_system: Vec<Option<Vec<Row>>> = (first..last)
-        .into_par_iter()
-        .map(|i| {
-            if stop() {
-                return None;
-            }
-            let rows = run_system(cfg, i);
-            on_system();
-            Some(rows)
-        })
-        .collect();
-    if per_system.iter().any(Option::is_none) {
-        return Ok((None, 0));
-    }
-    let rows: Vec<Row> = per_system.into_iter().flatten().flatten().collect();
-    parquet_out::write_atomically(&shard_path(dir, k), &rows)?;
-    Ok((Some(last - first), rows.len() as u64))
+/// What a shard's systems came to.
+#[derive(Debug, Default, Clone, Copy)]
+struct Tally {
+    systems: u64,
+    short: u64,
+    chainless: u64,
+    rows: u64,
 }
 
-/// Creates `dir` with the configuration, or checks that the one it holds
-/// is this one (a resumed campaign must be the same campaign).
-fn prepare_dir(dir: &Path, config_text: &str) -> Result<(), Error> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io("create", dir, &e))?;
-    // `_` and `.` files are not data to Parquet readers (pyarrow, polars, Spark).
-    let kept = dir.join("_campaign.toml");
-    match std::fs::read_to_string(&kept) {
-        Ok(old) if old == config_text => Ok(()),
-        Ok(_) => Err(Error {
-            message: format!(
-                "{} holds the shards of another campaign configuration",
-                dir.display()
-            ),
-            help: "write to another --out directory, or remove that one to start again".into(),
-        }),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            parquet_out::write_bytes_atomically(&kept, config_text.as_bytes())
-        }
-        Err(e) => Err(Error::io("read", &kept, &e)),
+impl Tally {
+    fn add(&mut self, cfg: &Config, rows: &[Row]) {
+        let got = rows.first().map_or(0, |r| r.chains);
+        self.systems += 1;
+        self.short += u64::from(got < cfg.generate.chains);
+        self.chainless += u64::from(got == 0 && cfg.generate.chains > 0);
+        self.rows += rows.len() as u64;
     }
+}
+
+/// Shard `k`: its systems in parallel, a batch at a time, their rows in
+/// index order into row groups of [`ROW_GROUP_ROWS`] (the same groups
+/// whatever the threads), into a temporary renamed into place at the end.
+/// `None` when stopped (nothing written).
+fn run_shard(w: &Work, k: u64) -> Result<Option<Tally>, Error> {
+    let path = shard_path(w.dir, k);
+    let systems = shard_systems(w.cfg, k);
+    let meta = ShardMeta {
+        campaign: w.fingerprint.clone(),
+        shard: k,
+        systems: systems.clone(),
+    };
+    let written = output::write_atomically(&path, "shard", |file| {
+        let mut out = ShardWriter::new(file, &meta)?;
+        let mut pending: Vec<Row> = Vec::new();
+        let mut tally = Tally::default();
+        let batch = 4 * w.jobs as u64;
+        for first in systems.clone().step_by(batch as usize) {
+            let last = (first + batch).min(systems.end);
+            for rows in run_batch(w, first..last) {
+                let rows = rows.ok_or_else(stopped)?;
+                tally.add(w.cfg, &rows);
+                pending.extend(rows);
+                if pending.len() >= ROW_GROUP_ROWS {
+                    out.row_group(&pending)?;
+                    pending.clear();
+                }
+            }
+        }
+        out.row_group(&pending)?;
+        out.finish()?;
+        Ok(tally)
+    });
+    match written {
+        Ok(t) => Ok(Some(t)),
+        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => Ok(None),
+        Err(e) => Err(Error::io("write", &path, &e)),
+    }
+}
+
+/// The rows of `systems`, in order, computed in parallel; `None` for a
+/// system the stop flag ended or skipped.
+fn run_batch(w: &Work, systems: Range<u64>) -> Vec<Option<Vec<Row>>> {
+    w.pool.install(|| {
+        systems
+            .into_par_iter()
+            .map(|i| {
+                if (w.stop)() {
+                    return None;
+                }
+                let rows = run_system_until(w.cfg, i, w.stop)?;
+                (w.on_system)();
+                Some(rows)
+            })
+            .collect()
+    })
+}
+
+/// The error that ends a shard's write when the stop flag is set: the
+/// temporary is removed and nothing is renamed.
+fn stopped() -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::Interrupted, "stopped")
+}
+
+/// Checks `dir` ([`survey`]: another campaign's directory is refused),
+/// creates it and writes its `_campaign.toml` when it has none.
+fn prepare_dir(dir: &Path, cfg: &Config, config_text: &str, part: Part) -> Result<Survey, Error> {
+    let found = survey(dir, cfg, part)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io("create", dir, &e))?;
+    if !found.kept {
+        let kept = dir.join(KEPT);
+        output::write_atomically(&kept, "config", |f| {
+            std::io::Write::write_all(f, config_text.as_bytes())
+        })
+        .map_err(|e| Error::io("write", &kept, &e))?;
+    }
+    Ok(found)
 }

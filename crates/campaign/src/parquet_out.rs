@@ -1,15 +1,18 @@
-//! A shard's rows as one Parquet file (one row group, Snappy), written
-//! beside its target and renamed into place.
+//! A shard's rows as one Parquet file (Snappy), written a row group at a
+//! time into a temporary beside its target and renamed into place
+//! (`rtpipe_model::output`), with the campaign's fingerprint, the shard's
+//! index and its systems in the footer; and the footer read back, to tell
+//! a complete shard of this campaign from anything else.
 
 use crate::system::Row;
-use crate::Error;
 use parquet::basic::Compression;
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int32Type, Int64Type};
+use parquet::file::metadata::KeyValue;
 use parquet::file::properties::WriterProperties;
+use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::{SerializedColumnWriter, SerializedFileWriter};
 use parquet::schema::parser::parse_message_type;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 /// A column's values.
@@ -40,11 +43,12 @@ impl Values {
 /// it): bounds are `{paper,sound,davare,duerr}_ns` from the read and
 /// `event_*` from the event; `offsets_*` under the known offsets;
 /// `observed_*` from the simulation.
-pub const COLUMNS: [&str; 25] = [
+pub const COLUMNS: [&str; 26] = [
     "system",
     "seed",
     "tasks",
     "cpus",
+    "chains",
     "utilization_target",
     "utilization",
     "schedulable",
@@ -77,6 +81,7 @@ fn columns(rows: &[Row]) -> Vec<Values> {
         u64s(|r| r.seed),
         i32s(|r| r.tasks),
         i32s(|r| r.cpus),
+        i32s(|r| r.chains),
         Values::F64(rows.iter().map(|r| r.utilization_target).collect()),
         Values::F64(rows.iter().map(|r| r.utilization).collect()),
         Values::Bool(rows.iter().map(|r| r.schedulable).collect()),
@@ -115,62 +120,117 @@ fn schema(cols: &[Values]) -> String {
     format!("message rtpipe_campaign {{\n{}\n}}", fields.join("\n"))
 }
 
-/// Writes `rows` as the Parquet file `path`, whole or not at all.
-pub(crate) fn write_atomically(path: &Path, rows: &[Row]) -> Result<(), Error> {
-    let tmp = temp_beside(path);
-    let written = write(&tmp, rows)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io("rename into", path, &e)));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+/// Rows per row group: a shard is written a row group at a time, so a
+/// run holds at most about this many rows (plus the systems in flight),
+/// whatever the shard's size.
+pub const ROW_GROUP_ROWS: usize = 16_384;
+
+/// Key-value metadata keys of a shard's footer: the campaign's
+/// [`Config::fingerprint`](crate::Config::fingerprint), the shard's index
+/// and its systems (`first..last`).
+pub(crate) const KEY_CAMPAIGN: &str = "rtpipe.campaign";
+pub(crate) const KEY_SHARD: &str = "rtpipe.shard";
+pub(crate) const KEY_SYSTEMS: &str = "rtpipe.systems";
+
+/// What a shard's footer says it is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct ShardMeta {
+    pub campaign: String,
+    pub shard: u64,
+    pub systems: std::ops::Range<u64>,
+}
+
+impl ShardMeta {
+    fn key_values(&self) -> Vec<KeyValue> {
+        let (a, b) = (self.systems.start, self.systems.end);
+        vec![
+            KeyValue::new(KEY_CAMPAIGN.into(), self.campaign.clone()),
+            KeyValue::new(KEY_SHARD.into(), self.shard.to_string()),
+            KeyValue::new(KEY_SYSTEMS.into(), format!("{a}..{b}")),
+        ]
     }
-    written
-}
 
-/// Writes `bytes` as `path`, whole or not at all.
-pub(crate) fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<(), Error> {
-    let tmp = temp_beside(path);
-    let written = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| Error::io("write", path, &e));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    /// The metadata of a footer's key-value pairs; `None` when one is
+    /// missing or malformed (not a shard rtpipe wrote).
+    fn from_key_values(kv: &[KeyValue]) -> Option<ShardMeta> {
+        let get = |key: &str| {
+            kv.iter()
+                .find(|p| p.key == key)
+                .and_then(|p| p.value.clone())
+        };
+        let systems = get(KEY_SYSTEMS)?;
+        let (a, b) = systems.split_once("..")?;
+        Some(ShardMeta {
+            campaign: get(KEY_CAMPAIGN)?,
+            shard: get(KEY_SHARD)?.parse().ok()?,
+            systems: a.parse().ok()?..b.parse().ok()?,
+        })
     }
-    written
 }
 
-fn temp_beside(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+/// A shard file being written, a row group at a time, into `file` (the
+/// temporary [`rtpipe_model::output::write_atomically`] hands over).
+pub(crate) struct ShardWriter<'f> {
+    writer: SerializedFileWriter<std::io::BufWriter<&'f mut std::fs::File>>,
 }
 
-fn write(path: &Path, rows: &[Row]) -> Result<(), Error> {
-    let fail = |e: &dyn std::fmt::Display| Error::io("write", path, e);
-    let cols = columns(rows);
-    let schema = Arc::new(parse_message_type(&schema(&cols)).map_err(|e| fail(&e))?);
-    let props = Arc::new(
-        WriterProperties::builder()
-            .set_compression(Compression::SNAPPY)
-            .set_created_by("rtpipe campaign".into())
-            .build(),
-    );
-    let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
-    let mut w = SerializedFileWriter::new(file, schema, props).map_err(|e| fail(&e))?;
-    if !rows.is_empty() {
-        let mut group = w.next_row_group().map_err(|e| fail(&e))?;
-        for values in &cols {
-            let Some(col) = group.next_column().map_err(|e| fail(&e))? else {
+impl<'f> ShardWriter<'f> {
+    pub fn new(file: &'f mut std::fs::File, meta: &ShardMeta) -> std::io::Result<Self> {
+        let schema = Arc::new(parse_message_type(&schema(&columns(&[]))).map_err(io)?);
+        let props = Arc::new(
+            WriterProperties::builder()
+                .set_compression(Compression::SNAPPY)
+                .set_created_by("rtpipe campaign".into())
+                .set_key_value_metadata(Some(meta.key_values()))
+                .build(),
+        );
+        let buffered = std::io::BufWriter::new(file);
+        let writer = SerializedFileWriter::new(buffered, schema, props).map_err(io)?;
+        Ok(ShardWriter { writer })
+    }
+
+    /// Writes `rows` as one row group (none when empty).
+    pub fn row_group(&mut self, rows: &[Row]) -> std::io::Result<()> {
+        if rows.is_empty() {
+            return Ok(());
+        }
+        let mut group = self.writer.next_row_group().map_err(io)?;
+        for values in &columns(rows) {
+            let Some(col) = group.next_column().map_err(io)? else {
                 unreachable!("the schema has a column per value list");
             };
-            write_column(col, values).map_err(|e| fail(&e))?;
+            write_column(col, values).map_err(io)?;
         }
-        group.close().map_err(|e| fail(&e))?;
+        group.close().map_err(io)?;
+        Ok(())
     }
-    let file = w.into_inner().map_err(|e| fail(&e))?;
-    file.sync_all().map_err(|e| fail(&e))
+
+    /// Writes the footer and flushes the file (the caller syncs it).
+    pub fn finish(self) -> std::io::Result<()> {
+        let buffered = self.writer.into_inner().map_err(io)?;
+        buffered.into_inner().map_err(|e| e.into_error())?;
+        Ok(())
+    }
+}
+
+fn io(e: parquet::errors::ParquetError) -> std::io::Error {
+    std::io::Error::other(e)
+}
+
+/// The footer of the regular file `path`: its metadata and row count, or
+/// why it is not a complete shard rtpipe wrote (unreadable, truncated, not
+/// Parquet, no rtpipe metadata).
+pub(crate) fn read_footer(path: &Path) -> Result<(ShardMeta, u64), String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot be opened: {e}"))?;
+    let reader =
+        SerializedFileReader::new(file).map_err(|e| format!("has no Parquet footer ({e})"))?;
+    let meta = reader.metadata().file_metadata();
+    let kv = meta.key_value_metadata().map_or(&[][..], Vec::as_slice);
+    let shard = ShardMeta::from_key_values(kv)
+        .ok_or_else(|| "is Parquet without a campaign's metadata".to_string())?;
+    let rows =
+        u64::try_from(meta.num_rows()).map_err(|_| "has a negative row count".to_string())?;
+    Ok((shard, rows))
 }
 
 fn write_column(

@@ -22,6 +22,10 @@ pub struct Row {
     pub seed: u64,
     pub tasks: u32,
     pub cpus: u32,
+    /// The chains the system got: fewer than asked when the generator
+    /// found too few (a system with none has no rows; [`run_system`]'s
+    /// caller counts those).
+    pub chains: u32,
     /// The utilisation drawn for each CPU.
     pub utilization_target: f64,
     /// The largest CPU's Σ C/T as generated.
@@ -51,13 +55,22 @@ pub struct Observed {
 
 /// Generates, analyses (and simulates) system `i` of `cfg`.
 pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
+    match run_system_until(cfg, i, &|| false) {
+        Some(rows) => rows,
+        None => unreachable!("a run never stopped ends"),
+    }
+}
+
+/// [`run_system`], its simulation asking `stop` as it goes (every
+/// `rtpipe_sim::PROGRESS_EVENTS` events): `None` when stopped.
+pub fn run_system_until(cfg: &Config, i: u64, stop: &dyn Fn() -> bool) -> Option<Vec<Row>> {
     let seed = system_seed(cfg.seed, i);
     let (spec, target) = generate(cfg, seed);
     let report = rtpipe_analysis::analyze(&spec);
-    let obs = cfg
-        .simulate
-        .as_ref()
-        .map(|s| simulate(&spec, &report, s, seed, i));
+    let obs = match &cfg.simulate {
+        Some(s) => Some(simulate(&spec, &report, s, (seed, i), stop)?),
+        None => None,
+    };
     let utilization = report
         .schedulability
         .cpus
@@ -75,6 +88,7 @@ pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
             seed,
             tasks: spec.tasks.len() as u32,
             cpus: cfg.generate.cpus,
+            chains: spec.chains.len() as u32,
             utilization_target: target,
             utilization,
             schedulable: report.schedulability.schedulable,
@@ -92,7 +106,7 @@ pub fn run_system(cfg: &Config, i: u64) -> Vec<Row> {
             }),
         });
     }
-    rows
+    Some(rows)
 }
 
 /// The system of `seed` and the utilisation drawn for each of its CPUs.
@@ -113,8 +127,15 @@ fn generate(cfg: &Config, seed: u64) -> (Spec, f64) {
     (waters_system(seed, &w), target)
 }
 
-/// One simulation of system `i` against its report.
-fn simulate(spec: &Spec, report: &Report, s: &Simulate, seed: u64, i: u64) -> Vec<ChainObs> {
+/// One simulation of system `i` (seeded `seed`) against its report; `None`
+/// when `stop` ended it.
+fn simulate(
+    spec: &Spec,
+    report: &Report,
+    s: &Simulate,
+    (seed, i): (u64, u64),
+    stop: &dyn Fn() -> bool,
+) -> Option<Vec<ChainObs>> {
     let sim = SimConfig {
         horizon: s.horizon,
         seed,
@@ -131,8 +152,8 @@ fn simulate(spec: &Spec, report: &Report, s: &Simulate, seed: u64, i: u64) -> Ve
         jitter: Jitter::Uniform,
         log_jobs: false,
     };
-    match rtpipe_sim::simulate(spec, &sim) {
-        Ok(res) => observe(report, &res),
+    match rtpipe_sim::simulate_until(spec, &sim, stop) {
+        Ok(res) => res.map(|res| observe(report, &res)),
         // A generated system has fixed positive periods: a refusal is a bug.
         Err(e) => panic!("system {i} (seed {seed}) cannot be simulated: {e}"),
     }

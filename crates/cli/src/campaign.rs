@@ -94,49 +94,61 @@ pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Ans
     })
 }
 
-/// `--plan`: the shards, without running any.
+/// `--plan`: the shards, without running any: which the directory holds
+/// whole (this campaign's, checked by their footers) and which it holds
+/// unfinished or damaged (run again). A directory of another campaign is
+/// refused, as a run refuses it.
 fn plan(
     cfg: &config::Config,
     a: &CampaignArgs,
     part: Part,
     total: u64,
 ) -> Result<Answer, Diagnostic> {
-    let mine: Vec<u64> = (0..total)
-        .filter(|k| k % part.count == part.index)
-        .collect();
-    let done: Vec<u64> = mine
-        .iter()
-        .copied()
-        .filter(|&k| rtpipe_campaign::shard_path(&a.out, k).exists())
-        .collect();
+    let found = rtpipe_campaign::survey(&a.out, cfg, part)
+        .map_err(|e| Diagnostic::error(e.message, e.help))?;
+    let owned = part.shard_count(total);
+    let rerun: Vec<u64> = found.rerun.keys().copied().collect();
     let v = serde_json::json!({
         "campaign": cfg.name,
+        "fingerprint": cfg.fingerprint(),
         "out": a.out.display().to_string(),
         "systems": cfg.systems,
         "shard_size": cfg.shard_size,
         "shards": total,
         "part": format!("{}/{}", part.index, part.count),
-        "part_shards": mine,
-        "written": done,
+        "part_shards": owned,
+        "written": found.done,
+        "rerun": rerun,
     });
     let report = if a.json {
         Rendered::Json(v)
     } else {
         Rendered::Text(format!(
-            "campaign {}: {} systems in {total} shards of {}; part {}/{} owns {} ({} already in {})\n",
+            "campaign {}: {} systems in {total} shards of {}; part {}/{} owns {} ({} already in {}, {} to run again)\n",
             cfg.name,
             cfg.systems,
             cfg.shard_size,
             part.index,
             part.count,
-            mine.len(),
-            done.len(),
-            a.out.display()
+            owned,
+            found.done.len(),
+            a.out.display(),
+            rerun.len()
         ))
     };
+    let notes = found
+        .rerun
+        .iter()
+        .map(|(k, why)| {
+            format!(
+                "{} {why}: it will be run again",
+                rtpipe_campaign::shard_path(&a.out, *k).display()
+            )
+        })
+        .collect();
     Ok(Answer {
         report,
-        notes: Vec::new(),
+        notes,
         status: 0,
     })
 }
@@ -156,8 +168,12 @@ struct View {
     part: String,
     part_shards: u64,
     written: u64,
+    rewritten: u64,
     skipped: u64,
     systems_run: u64,
+    systems_short: u64,
+    systems_without_chains: u64,
+    chains_asked: u32,
     rows: u64,
     seconds: f64,
     jobs: usize,
@@ -178,8 +194,12 @@ impl View {
             part: format!("{}/{}", part.index, part.count),
             part_shards: s.shards,
             written: s.written,
+            rewritten: s.rewritten,
             skipped: s.skipped,
             systems_run: s.systems,
+            systems_short: s.short,
+            systems_without_chains: s.chainless,
+            chains_asked: cfg.generate.chains,
             rows: s.rows,
             seconds: s.seconds,
             jobs: s.jobs,
@@ -190,9 +210,9 @@ impl View {
     }
 
     fn text(&self) -> String {
-        format!(
+        let mut t = format!(
             "campaign {}: {} systems in {} shards of {}; part {} owns {}\n\
-             wrote {} shard(s) to {} ({} already there): {} systems, {} rows in {:.2} s on {} thread(s)\n\
+             wrote {} shard(s) to {} ({} already there{}): {} systems, {} rows in {:.2} s on {} thread(s)\n\
              throughput: {:.0} systems/s, {:.0} per thread\n",
             self.campaign,
             self.systems,
@@ -203,12 +223,24 @@ impl View {
             self.written,
             self.out,
             self.skipped,
+            match self.rewritten {
+                0 => String::new(),
+                n => format!(", {n} unfinished or damaged and written again"),
+            },
             self.systems_run,
             self.rows,
             self.seconds,
             self.jobs,
             self.systems_per_second,
             self.systems_per_second_per_job
-        )
+        );
+        if self.systems_short > 0 {
+            t += &format!(
+                "short: {} of {} systems have fewer than the {} chains asked ({} have none, so no rows): \
+                 the generator found too few; their rows' `chains` column says how many they got\n",
+                self.systems_short, self.systems_run, self.chains_asked, self.systems_without_chains
+            );
+        }
+        t
     }
 }

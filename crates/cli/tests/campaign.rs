@@ -125,3 +125,120 @@ fn bad_input_exits_2_with_the_place() {
     let o = rtpipe(&["campaign", &config, &config]);
     assert_exit(&o, 2);
 }
+
+#[test]
+fn another_campaigns_directory_is_refused_by_plan_and_run() {
+    let dir = scratch("campaign-foreign");
+    let config = small(&dir, 30, "100ms");
+    let out = dir.join("out");
+    let out_s = out.to_str().expect("utf-8");
+    assert_exit(&rtpipe(&["campaign", &config, out_s]), 0);
+    let kept = std::fs::read(out.join("_campaign.toml")).expect("the configuration");
+    let other = dir.join("other.toml");
+    let text = std::fs::read_to_string(&config).expect("the config");
+    std::fs::write(&other, text.replace("seed = 0", "seed = 1")).expect("a config");
+    let other = other.to_str().expect("utf-8");
+    for extra in [&["--plan"][..], &[][..], &["--plan", "--json"][..]] {
+        let o = rtpipe(&[&["campaign", other, out_s][..], extra].concat());
+        assert_exit(&o, 2);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("another campaign"), "{extra:?}: {err}");
+    }
+    assert_eq!(std::fs::read(out.join("_campaign.toml")).ok(), Some(kept));
+    // A damaged shard is reported by --plan and written again by a run.
+    std::fs::write(out.join("shard-000001.parquet"), "PAR1").expect("a file");
+    let o = rtpipe(&["campaign", &config, out_s, "--plan", "--json"]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    assert_eq!(v["written"], serde_json::json!([0]), "{v}");
+    assert_eq!(v["rerun"], serde_json::json!([1]), "{v}");
+    let o = rtpipe(&["campaign", &config, out_s, "--json"]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    assert_eq!(
+        (v["written"].as_u64(), v["rewritten"].as_u64()),
+        (Some(1), Some(1))
+    );
+}
+
+/// Ten to the nine shards are planned in bounded memory: under a 1 GiB
+/// address-space limit (a list of them would take 8 GB).
+#[cfg(unix)]
+#[test]
+fn a_billion_shards_plan_in_bounded_memory() {
+    let dir = scratch("campaign-billion");
+    let config = small(&dir, 1_000_000_000, "1s");
+    let text = std::fs::read_to_string(&config).expect("the config");
+    std::fs::write(&config, text.replace("shard_size = 25", "shard_size = 1")).expect("a config");
+    let out = dir.join("out");
+    let o = std::process::Command::new("sh")
+        .args(["-c", "ulimit -v 1048576 && exec \"$0\" \"$@\""])
+        .arg(env!("CARGO_BIN_EXE_rtpipe"))
+        .args([
+            "campaign",
+            &config,
+            out.to_str().expect("utf-8"),
+            "--plan",
+            "--json",
+        ])
+        .output()
+        .expect("sh runs");
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    assert_eq!(v["part_shards"].as_u64(), Some(1_000_000_000), "{v}");
+    assert_eq!(v["written"], serde_json::json!([]), "{v}");
+}
+
+#[test]
+fn systems_with_fewer_chains_than_asked_are_counted() {
+    let dir = scratch("campaign-short");
+    let config = dir.join("short.toml");
+    std::fs::write(
+        &config,
+        "[campaign]\nname = \"short\"\nsystems = 40\nseed = 3\n\n[generate]\nkind = \"waters\"\n\
+         tasks = [3, 8]\nutilization = 0.5\nchains = 8\n",
+    )
+    .expect("a config");
+    let config = config.to_str().expect("utf-8");
+    let out = dir.join("out");
+    let o = rtpipe(&["campaign", config, out.to_str().expect("utf-8"), "--json"]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let short = v["systems_short"].as_u64().unwrap_or(0);
+    let none = v["systems_without_chains"].as_u64().unwrap_or(0);
+    assert!(short > 0 && none > 0 && none <= short && short <= 40, "{v}");
+    let o = rtpipe(&[
+        "campaign",
+        config,
+        dir.join("text").to_str().expect("utf-8"),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!(
+            "short: {short} of 40 systems have fewer than the 8 chains asked ({none} have none"
+        )),
+        "{text}"
+    );
+}
+
+/// Ctrl-C during one long system (an hour simulated) stops it: the
+/// simulation asks the stop flag as it goes, so the command does not wait
+/// for the system to end (it would take many minutes).
+#[test]
+fn ctrl_c_stops_a_long_system() {
+    let dir = scratch("campaign-long");
+    let config = small(&dir, 1, "3600s");
+    let text = std::fs::read_to_string(&config).expect("the config");
+    std::fs::write(&config, text.replace("tasks = [10, 40]", "tasks = 40")).expect("a config");
+    let out = dir.join("out");
+    let args = ["campaign", &config, out.to_str().expect("utf-8")];
+    let (o, after) = rtpipe_interrupted(
+        &dir,
+        &args,
+        Duration::from_millis(700),
+        Duration::from_secs(240),
+    );
+    assert_exit(&o, 130);
+    assert!(after < Duration::from_secs(60), "{after:?}");
+    assert!(parquet_files(&out).is_empty());
+}

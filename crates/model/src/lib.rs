@@ -13,6 +13,7 @@ mod error;
 pub mod gen;
 pub mod import;
 pub mod input;
+pub mod output;
 pub mod overheads;
 pub mod policy;
 mod raw;

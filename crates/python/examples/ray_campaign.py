@@ -3,9 +3,11 @@
 One Ray task per shard: each runs ``rtpipe.campaign(config, tmp, shard=(k,
 shards), jobs=1)`` in a scratch directory of its own node and returns the
 shard's Parquet bytes; the driver writes them into OUTDIR. No shared file
-system is needed, shards already in OUTDIR are skipped (resumable), and the
-files are byte for byte those one machine writes (``rtpipe campaign CONFIG
-OUTDIR``): a shard is a function of the configuration alone.
+system is needed, shards already in OUTDIR are skipped (resumable: only
+complete shards of this campaign count, as ``rtpipe campaign`` counts them),
+a directory of another campaign is refused, and the files are byte for byte
+those one machine writes (``rtpipe campaign CONFIG OUTDIR``): a shard is a
+function of the configuration alone.
 
     python ray_campaign.py CONFIG OUTDIR                 # a local cluster, every core
     python ray_campaign.py CONFIG OUTDIR --workers 4     # a local cluster of 4 workers
@@ -43,17 +45,36 @@ def run_shard(config_text: str, k: int, shards: int) -> dict:
 
 
 def write_atomically(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
+    """`path` whole or not at all: a fresh temporary beside it, created
+    exclusively (never through a planted link, never over a file), renamed
+    into place."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def run(config: Path, out: Path, workers: int | None = None, address: str | None = None) -> dict:
-    """Runs every shard `out` lacks on the cluster; returns what was done."""
+    """Runs every shard `out` lacks on the cluster; returns what was done.
+    A directory of another campaign is refused (``rtpipe.InputError``)
+    before anything is written, as ``rtpipe campaign`` refuses it; a shard
+    file that is not a complete shard of this campaign is run again."""
+    # The plan checks `out` as a run does: its `_campaign.toml` and every
+    # shard's footer must be this campaign's, else it raises.
     plan = rtpipe.campaign(config, out, plan=True)
-    missing = [k for k in range(plan["shards"]) if k not in set(plan["written"])]
+    done = set(plan["written"])
+    missing = [k for k in range(plan["shards"]) if k not in done]
     out.mkdir(parents=True, exist_ok=True)
-    (out / "_campaign.toml").write_text(config.read_text())
+    kept = out / "_campaign.toml"
+    if not kept.exists():
+        # Checked by the plan: absent, or this campaign's (kept as it is).
+        write_atomically(kept, config.read_bytes())
     if not ray.is_initialized():
         ray.init(address=address, num_cpus=workers, include_dashboard=False,
                  log_to_driver=False)

@@ -86,6 +86,22 @@ def test_ray_writes_what_one_machine_writes(tmp_path):
         ray.shutdown()
 
 
+def test_ray_refuses_another_campaigns_directory(tmp_path):
+    pytest.importorskip("ray")
+    config = small_config(tmp_path)
+    rtpipe.campaign(config, tmp_path / "out")
+    kept = (tmp_path / "out" / "_campaign.toml").read_bytes()
+    shards = shard_bytes(tmp_path / "out")
+    other = tmp_path / "other.toml"
+    other.write_text(config.read_text().replace("seed = 0", "seed = 1"))
+    with pytest.raises(rtpipe.InputError, match="another campaign"):
+        rtpipe.campaign(other, tmp_path / "out", plan=True)
+    with pytest.raises(rtpipe.InputError, match="another campaign"):
+        load_recipe().run(other, tmp_path / "out", workers=1)
+    assert (tmp_path / "out" / "_campaign.toml").read_bytes() == kept
+    assert shard_bytes(tmp_path / "out") == shards
+
+
 def test_the_e2e_figure_is_regenerated(tmp_path):
     pytest.importorskip("matplotlib")
     spec = importlib.util.spec_from_file_location(

@@ -42,6 +42,26 @@ pub(crate) fn run_with_progress<H: Hooks>(
     progress: &mut dyn FnMut(Nanos),
     rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<SimResult, SimError> {
+    let mut going_on = |t| {
+        progress(t);
+        true
+    };
+    match run_until(spec, cfg, hooks, &mut going_on, rows)? {
+        Some(result) => Ok(result),
+        None => unreachable!("a progress that always goes on never stops the run"),
+    }
+}
+
+/// The event loop: `progress` is called every [`PROGRESS_EVENTS`] events
+/// with the simulated time reached and ends the run (`None`) by returning
+/// false (the caller's cancellation check).
+pub(crate) fn run_until<H: Hooks>(
+    spec: &Spec,
+    cfg: &SimConfig,
+    hooks: H,
+    progress: &mut dyn FnMut(Nanos) -> bool,
+    rows: Option<rtpipe_joblog::RowSink>,
+) -> Result<Option<SimResult>, SimError> {
     let mut sim = Sim::new(spec, cfg, hooks)?;
     if let Some(sink) = rows {
         sim.prov.stream_rows(sink);
@@ -49,8 +69,8 @@ pub(crate) fn run_with_progress<H: Hooks>(
     let mut t = 0;
     loop {
         sim.instant(t);
-        if sim.events % PROGRESS_EVENTS == 0 {
-            progress(t);
+        if sim.events % PROGRESS_EVENTS == 0 && !progress(t) {
+            return Ok(None);
         }
         match sim.next_event(t) {
             Some(next) if next <= cfg.horizon => t = next,
@@ -62,7 +82,7 @@ pub(crate) fn run_with_progress<H: Hooks>(
         // The order the every-CPU scans recorded them in.
         seg.sort_by_key(|s| (s.start, s.cpu));
     }
-    Ok(sim.finish())
+    Ok(Some(sim.finish()))
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -87,6 +87,17 @@ pub fn simulate_with_progress(
     run_with_progress(spec, cfg, NoHooks, progress, None)
 }
 
+/// [`simulate`] that asks `stop` every [`PROGRESS_EVENTS`] events and ends
+/// the run early when it says so: `Ok(None)`, no result. A long run is
+/// cancelled within one such stretch of events (a campaign's Ctrl-C).
+pub fn simulate_until(
+    spec: &Spec,
+    cfg: &SimConfig,
+    stop: &dyn Fn() -> bool,
+) -> Result<Option<SimResult>, SimError> {
+    run_until(spec, cfg, NoHooks, &mut |_| !stop(), None)
+}
+
 /// [`simulate_with_progress`] that also hands every chain's sample rows
 /// (`rtpipe_joblog::sample_rows`' rows, the same values) to `rows` as they
 /// complete: the per-sample record of a run of any length without its job

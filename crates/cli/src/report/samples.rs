@@ -97,10 +97,12 @@ impl SamplesFile {
     pub fn create(out: Output, spec: &Spec) -> Result<SamplesFile, Diagnostic> {
         let mut files = Vec::with_capacity(spec.chains.len());
         for c in 0..spec.chains.len() {
-            let path = output::temp_beside(&out.target, &format!("chain{c}"));
-            register(&path);
-            match File::create(&path) {
-                Ok(f) => files.push((path, BufWriter::new(f))),
+            // Exclusively created: never through a link planted at the name.
+            match output::create_temp(&out.target, &format!("chain{c}")) {
+                Ok((path, f)) => {
+                    register(&path);
+                    files.push((path, BufWriter::new(f)));
+                }
                 Err(e) => {
                     files
                         .iter()
@@ -152,15 +154,16 @@ impl SamplesFile {
                 "",
             ));
         };
-        let joined = output::temp_beside(&self.out.target, "joined");
+        let (joined, file) =
+            output::create_temp(&self.out.target, "joined").map_err(|e| cannot(&self.out, &e))?;
         register(&joined);
         // Made now, so that it goes whatever happens next.
         let prepared = Prepared {
             out: self.out,
-            temp: Some(joined.clone()),
+            temp: Some(joined),
             rows: p.rows,
         };
-        join(&mut p, &joined).map_err(|e| cannot(&prepared.out, &e))?;
+        join(&mut p, file).map_err(|e| cannot(&prepared.out, &e))?;
         Ok(prepared)
     }
 }
@@ -175,11 +178,11 @@ impl Drop for Parts {
 }
 
 /// The header and every chain's part, in chain order, into `joined`.
-fn join(p: &mut Parts, joined: &PathBuf) -> std::io::Result<()> {
+fn join(p: &mut Parts, joined: File) -> std::io::Result<()> {
     if let Some(e) = p.error.take() {
         return Err(e);
     }
-    let mut w = BufWriter::new(File::create(joined)?);
+    let mut w = BufWriter::new(joined);
     w.write_all(HEADER.as_bytes())?;
     w.write_all(b"\n")?;
     for (path, part) in &mut p.files {

@@ -165,9 +165,12 @@ def campaign(
     """Runs a campaign (``rtpipe campaign CONFIG OUTDIR --json``): its
     systems generated, analysed and simulated on ``jobs`` threads (every
     core by default) into Parquet shards in ``out``; shards already there
-    are skipped. ``shard=(i, n)`` (or ``"i/n"``) runs only the shards
-    ``k % n == i``; ``plan=True`` only lists the shards (``part_shards``,
-    and ``written``: those ``out`` holds) without running any.
+    are skipped (only complete shards of this campaign count; a directory
+    of another campaign raises ``InputError``). ``shard=(i, n)`` (or
+    ``"i/n"``) runs only the shards ``k % n == i``; ``plan=True`` only
+    counts the part's shards (``part_shards``) and lists those ``out``
+    holds whole (``written``) and those it holds damaged (``rerun``)
+    without running any.
     """
     flags = [os.fspath(config), os.fspath(out)] + _flags(
         dict(shard=_shard(shard), jobs=jobs, plan=plan)
