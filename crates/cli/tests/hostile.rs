@@ -1,0 +1,170 @@
+//! Every command checks its outputs before the work, never drops a result
+//! it computed, and handles hostile input (odd file names, huge ids, pipes,
+//! terminal escapes, implausible physics, spreadsheet formulas) with a
+//! located error instead of a panic or a hang.
+
+mod common;
+
+use common::{assert_exit, example, listing, rtpipe_in, scratch};
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::Duration;
+
+const LIMIT: Duration = Duration::from_secs(60);
+
+fn write(p: &Path, text: &str) {
+    if let Err(e) = std::fs::write(p, text) {
+        panic!("cannot write {}: {e}", p.display());
+    }
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// The three commands that write after a long piece of work, each writing
+/// into `dir`.
+fn long_writers(dir: &str) -> Vec<Vec<String>> {
+    let at = |name: &str| format!("{dir}/{name}");
+    vec![
+        vec![
+            "design".into(),
+            example("table2-design.toml"),
+            "--mode".into(),
+            "paper".into(),
+            "--write".into(),
+            at("designed.toml"),
+        ],
+        vec![
+            "fly".into(),
+            example("cleanflight.toml"),
+            "--sweep".into(),
+            "--per-octave".into(),
+            "1".into(),
+            "--write-limits".into(),
+            at("limits.toml"),
+        ],
+        vec![
+            "simulate".into(),
+            example("paper-table2.toml"),
+            "--plot".into(),
+            at("fig9.svg"),
+        ],
+        vec![
+            "fly".into(),
+            example("cleanflight.toml"),
+            "--plot".into(),
+            at("plots"),
+        ],
+    ]
+}
+
+/// Runs the binary as the unprivileged user `nobody`, when this process
+/// may switch users and `nobody` can run the binary; `None` otherwise.
+fn as_nobody(dir: &Path, args: &[String]) -> Option<Output> {
+    let run = |args: &[String]| {
+        Command::new("setpriv")
+            .args(["--reuid=nobody", "--regid=nogroup", "--clear-groups"])
+            .arg(env!("CARGO_BIN_EXE_rtpipe"))
+            .args(args)
+            .current_dir(dir)
+            .output()
+            .ok()
+    };
+    let works = run(&["--version".to_string()]).is_some_and(|o| o.status.success());
+    works.then(|| run(args)).flatten()
+}
+
+#[test]
+fn an_unwritable_output_directory_is_refused_before_the_work() {
+    let dir = scratch("h-readonly");
+    // Root's scratch directory (0755) is read-only to `nobody`.
+    let Some(_) = as_nobody(&dir, &["--version".to_string()]) else {
+        eprintln!("cannot run rtpipe as nobody (setpriv missing or not root): skipped");
+        return;
+    };
+    for args in long_writers(&dir.display().to_string()) {
+        let started = std::time::Instant::now();
+        let Some(o) = as_nobody(&dir, &args) else {
+            panic!("setpriv stopped working")
+        };
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(err.contains("cannot write in"), "{args:?}: {err}");
+        assert!(err.contains("Permission denied"), "{args:?}: {err}");
+        // Refused at once: no report, and far less than a sweep's time.
+        assert!(stdout(&o).is_empty(), "{args:?}: {}", stdout(&o));
+        assert!(started.elapsed() < Duration::from_secs(30));
+    }
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_output_under_a_regular_file_is_refused_before_the_work() {
+    let dir = scratch("h-under-file");
+    write(&dir.join("file"), "x");
+    let under = dir.join("file").display().to_string();
+    for args in long_writers(&under) {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = rtpipe_in(&dir, &args, &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(
+            err.contains("is a file, not a directory"),
+            "{args:?}: {err}"
+        );
+        assert!(stdout(&o).is_empty(), "{args:?}: {}", stdout(&o));
+    }
+    assert_eq!(listing(&dir), vec!["file"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_write_that_fails_after_the_work_keeps_the_result() {
+    let dir = scratch("h-keep");
+    let d = dir.display().to_string();
+    for (args, shows) in
+        long_writers(&d)
+            .into_iter()
+            .zip(["verdict:", "derived chain limits", "chain", "flight:"])
+    {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = rtpipe_in(&dir, &args, &[("RTPIPE_TEST_WRITE_FAILS", "1")], LIMIT);
+        assert_exit(&o, 2);
+        assert!(stdout(&o).contains(shows), "{args:?}: {}", stdout(&o));
+        let err = stderr(&o);
+        assert!(err.contains("cannot write"), "{args:?}: {err}");
+        assert!(!err.contains("wrote "), "{args:?}: {err}");
+        assert!(!stdout(&o).contains("wrote "), "{args:?}: {}", stdout(&o));
+    }
+    // Nothing half-written; only the plot directory `fly --plot` created.
+    assert!(
+        listing(&dir).iter().all(|f| f == "plots"),
+        "{:?}",
+        listing(&dir)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn output_names_near_the_longest_allowed_are_written() {
+    let dir = scratch("h-long-name");
+    for len in [240, 250, 255] {
+        let name = format!("{}.svg", "p".repeat(len - 4));
+        let o = rtpipe_in(
+            &dir,
+            &["simulate", &example("paper-table2.toml"), "--plot", &name],
+            &[],
+            LIMIT,
+        );
+        assert_exit(&o, 0);
+        assert!(dir.join(&name).is_file(), "{len}: {}", stderr(&o));
+    }
+    assert_eq!(listing(&dir).len(), 3, "{:?}", listing(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
