@@ -168,3 +168,67 @@ fn output_names_near_the_longest_allowed_are_written() {
     assert_eq!(listing(&dir).len(), 3, "{:?}", listing(&dir));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[cfg(unix)]
+#[test]
+fn a_named_pipe_as_any_input_is_refused_not_waited_on() {
+    let dir = scratch("h-fifo");
+    let fifo = dir.join("pipe.toml");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if !made {
+        eprintln!("no mkfifo here: skipped");
+        return;
+    }
+    let f = fifo.display().to_string();
+    let spec = example("cleanflight.toml");
+    for args in [
+        vec!["analyze", &f],
+        vec!["simulate", &f],
+        vec!["design", &f],
+        vec!["fly", &spec, "--mission", &f],
+        vec!["fly", &spec, "--vehicle", &f],
+        vec!["fly", &spec, "--sweep", "--criterion", &f],
+        vec!["run", &spec, "--mission", &f],
+        vec!["import", "e2eeval", &f, "out"],
+    ] {
+        // A blocked open would hang until the supervisor's limit fails it.
+        let o = rtpipe_in(&dir, &args, &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(
+            err.contains("named pipe (FIFO), not a regular file"),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("pipe.toml"), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_chain_name_that_is_a_formula_reaches_the_samples_csv_neutralised() {
+    let dir = scratch("h-csv");
+    let text = std::fs::read_to_string(example("paper-table2.toml")).unwrap_or_default();
+    let text = text.replacen(
+        "[[chain]]\npath = [\"t1\", \"t4\"]",
+        "[[chain]]\nname = \"=HYPERLINK(\\\"http://x\\\",\\\"y\\\")\"\npath = [\"t1\", \"t4\"]",
+        1,
+    );
+    assert!(text.contains("HYPERLINK"), "the example changed");
+    let spec = dir.join("spec.toml");
+    write(&spec, &text);
+    let s = spec.display().to_string();
+    let args = ["simulate", &s, "--outputs", "5", "--samples", "s.csv"];
+    let o = rtpipe_in(&dir, &args, &[], LIMIT);
+    assert_exit(&o, 0);
+    let csv = std::fs::read_to_string(dir.join("s.csv")).unwrap_or_default();
+    let first = csv.lines().nth(1).unwrap_or_default();
+    assert!(
+        first.starts_with("\"'=HYPERLINK(\"\"http://x\"\",\"\"y\"\")\","),
+        "{first}"
+    );
+    assert!(!csv.lines().any(|l| l.starts_with('=')), "{csv}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

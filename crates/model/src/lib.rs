@@ -353,8 +353,8 @@ impl Spec {
     }
 
     /// Reads and parses a spec file of at most [`MAX_SPEC_BYTES`]; larger
-    /// files and endless streams (`/dev/zero`) are refused after reading at
-    /// most that much (the rules of every input file: [`input`]).
+    /// files, and anything but a regular file (a pipe, `/dev/zero`), are
+    /// refused (the rules of every input file: [`input`]).
     pub fn load(path: &std::path::Path) -> Result<Spec, SpecError> {
         let text = input::read_text(path, &input::Kind::SPEC)?;
         Spec::parse(&path.display().to_string(), &text)
