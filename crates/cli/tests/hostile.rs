@@ -232,3 +232,49 @@ fn a_chain_name_that_is_a_formula_reaches_the_samples_csv_neutralised() {
     assert!(!csv.lines().any(|l| l.starts_with('=')), "{csv}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The Cleanflight example with its `ahrs` body renamed `body`.
+fn cleanflight_with_body(dir: &Path, body: &str) -> String {
+    let text = std::fs::read_to_string(example("cleanflight.toml")).unwrap_or_default();
+    assert!(text.contains("body = \"ahrs\""), "the example changed");
+    let spec = dir.join("spec.toml");
+    write(
+        &spec,
+        &text.replacen("body = \"ahrs\"", &format!("body = \"{body}\""), 1),
+    );
+    spec.display().to_string()
+}
+
+#[test]
+fn a_misspelled_body_is_refused_at_its_key_by_every_command() {
+    let dir = scratch("h-body");
+    let spec = cleanflight_with_body(&dir, "ahsr");
+    let text = std::fs::read_to_string(&spec).unwrap_or_default();
+    let line = text.lines().position(|l| l.contains("ahsr")).unwrap_or(0) + 1;
+    let place = format!("spec.toml:{line}:");
+    for cmd in ["analyze", "simulate", "fly", "run", "design"] {
+        let o = rtpipe_in(&dir, &[cmd, &spec], &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(err.contains("unknown body \"ahsr\""), "{cmd}: {err}");
+        assert!(err.contains(&place), "{cmd}: {place} not in {err}");
+        assert!(err.contains("gyro, accel, ahrs, radio"), "{cmd}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_terminal_escape_in_a_body_is_shown_escaped() {
+    let dir = scratch("h-body-esc");
+    let spec = cleanflight_with_body(&dir, "\\u001b]0;pwned\\u0007");
+    for cmd in ["fly", "run", "analyze"] {
+        let o = rtpipe_in(&dir, &[cmd, &spec], &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(!err.contains('\u{1b}'), "{cmd}: raw escape in {err:?}");
+        assert!(!err.contains('\u{7}'), "{cmd}: raw bell in {err:?}");
+        assert!(err.contains("unknown body"), "{cmd}: {err}");
+        assert!(err.contains("\\u{1b}]0;pwned"), "{cmd}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
