@@ -278,3 +278,61 @@ fn a_terminal_escape_in_a_body_is_shown_escaped() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+fn e2eeval_yaml() -> String {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/e2eeval-golden.yaml");
+    std::fs::read_to_string(&p).unwrap_or_default()
+}
+
+#[test]
+fn import_refuses_an_unprintable_file_name_and_cuts_a_long_one() {
+    let dir = scratch("h-e2e-name");
+    let yaml = e2eeval_yaml();
+    for (name, shown) in [
+        ("a\u{202e}lmy.yaml", "U+202E"),
+        ("a\u{200b}b.yaml", "U+200B"),
+    ] {
+        write(&dir.join(name), &yaml);
+        let o = rtpipe_in(&dir, &["import", "e2eeval", name, "out"], &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(err.contains(shown), "{name:?}: {err}");
+        assert!(!err.contains(name), "{name:?} printed raw: {err}");
+        assert!(!dir.join("out").exists());
+    }
+    let long = format!("{}.yaml", "s".repeat(250));
+    write(&dir.join(&long), &yaml);
+    let o = rtpipe_in(&dir, &["import", "e2eeval", &long, "out"], &[], LIMIT);
+    assert_exit(&o, 0);
+    let written = listing(&dir.join("out"));
+    assert_eq!(written, vec![format!("{}-ecu0.toml", "s".repeat(100))]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_five_million_digit_task_id_is_refused_briefly() {
+    let dir = scratch("h-e2e-id");
+    let yaml = e2eeval_yaml();
+    let big = "7".repeat(5_000_000);
+    assert!(yaml.contains("TaskID: 10,") && yaml.contains("[20, 5, 10]"));
+    let cases = [
+        (
+            "task.yaml",
+            yaml.replace("TaskID: 10,", &format!("TaskID: {big},")),
+        ),
+        (
+            "chain.yaml",
+            yaml.replace("[20, 5, 10]", &format!("[20, 5, {big}]")),
+        ),
+    ];
+    for (name, text) in cases {
+        write(&dir.join(name), &text);
+        let o = rtpipe_in(&dir, &["import", "e2eeval", name, "out"], &[], LIMIT);
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(err.len() < 1000, "{name}: {} bytes of stderr", err.len());
+        assert!(err.contains("5000000"), "{name}: {err}");
+        assert!(!dir.join("out").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
