@@ -336,3 +336,35 @@ fn a_five_million_digit_task_id_is_refused_briefly() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_implausible_drag_is_refused_at_its_line_not_flown_for_half_an_hour() {
+    let dir = scratch("h-drag");
+    let preset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../flight/presets/racer5.toml");
+    let text = std::fs::read_to_string(preset).unwrap_or_default();
+    for (key, good) in [
+        ("drag_linear", "drag_linear = 0.06"),
+        ("drag_angular", "drag_angular = 0.0001"),
+    ] {
+        assert!(text.contains(good), "the preset changed");
+        let line = text.lines().position(|l| l.starts_with(good)).unwrap_or(0) + 1;
+        write(
+            &dir.join("p.toml"),
+            &text.replace(good, &format!("{key} = 1e9")),
+        );
+        let started = std::time::Instant::now();
+        let o = rtpipe_in(
+            &dir,
+            &["fly", &example("cleanflight.toml"), "--vehicle", "p.toml"],
+            &[],
+            LIMIT,
+        );
+        assert_exit(&o, 2);
+        let err = stderr(&o);
+        assert!(err.contains(&format!("p.toml:{line}:")), "{key}: {err}");
+        assert!(err.contains(&format!("body.{key}")), "{key}: {err}");
+        assert!(err.contains("damping time"), "{key}: {err}");
+        assert!(started.elapsed() < Duration::from_secs(30));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
