@@ -128,6 +128,19 @@ pub enum Rendered {
 }
 
 impl Answer {
+    /// This answer after writing its files: when the write failed, the
+    /// report of the work that was done is kept (a result computed is never
+    /// dropped), notes that claim a file was written are taken back, and
+    /// the failure ends the notes with exit status 2.
+    pub fn after_write(mut self, written: Result<(), Diagnostic>) -> Answer {
+        if let Err(d) = written {
+            self.notes.retain(|n| !n.starts_with("wrote "));
+            self.notes.push(d.to_string().trim_end().to_string());
+            self.status = EXIT_BAD_INPUT;
+        }
+        self
+    }
+
     /// Prints the report on stdout and the notes on stderr; the exit status.
     pub fn emit(self) -> ExitCode {
         match &self.report {

@@ -160,7 +160,7 @@ pub fn execute(
         Ended::Finished(Err(e)) => return Ok((design_error(&a.spec, &e), None)),
     };
     let mut notes = Vec::new();
-    write_design(write.as_ref(), &out, &mut notes)?;
+    let written = write_design(write.as_ref(), &out, &mut notes);
     let what = flying.map(|(_, w)| w);
     let report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
     let status = match (stopped, out.status) {
@@ -173,7 +173,7 @@ pub fn execute(
         notes,
         status,
     };
-    Ok((answer, out.spec))
+    Ok((answer.after_write(written), out.spec))
 }
 
 /// The acceptance check of `--fly` and what it flies, in words.

@@ -170,7 +170,7 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(spec);
     let obs = observe(&report, &flight.sim);
-    write_outputs(spec, a, &flight, &obs, samples)?;
+    let written = write_outputs(spec, a, &flight, &obs, samples);
     let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
@@ -185,11 +185,12 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
         notes.push(format!("error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound (a bug in the analysis or the simulator)"));
     }
     let status = u8::from(!notes.is_empty() || !failures.is_empty());
-    Ok(Answer {
+    let answer = Answer {
         report: out,
         notes,
         status,
-    })
+    };
+    Ok(answer.after_write(written))
 }
 
 fn to_text(

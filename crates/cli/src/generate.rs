@@ -105,6 +105,10 @@ fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
     let out = check_output(&a.out)?;
     let spec = waters_spec(a);
     let text = format!("{}{}", header(a), rtpipe_model::to_toml(&spec));
+    if let Err(d) = fits_the_reader(text.len(), spec.tasks.len()) {
+        eprint!("{d}");
+        return Err(ExitCode::from(EXIT_BAD_INPUT));
+    }
     if let Err(e) = Spec::parse(&a.out.display().to_string(), &text) {
         eprint!("{e}");
         eprintln!("error: internal error: the generated spec does not parse; please report it with the command line");
@@ -116,6 +120,25 @@ fn waters(a: &WatersArgs) -> Result<(), ExitCode> {
     })?;
     summary(a, &spec);
     Ok(())
+}
+
+/// Refuses a spec of `bytes` (with `tasks` tasks) larger than every
+/// command reads ([`rtpipe_model::MAX_SPEC_BYTES`]): a file nothing could
+/// load is no use. The help estimates how many tasks fit.
+fn fits_the_reader(bytes: usize, tasks: usize) -> Result<(), Diagnostic> {
+    let cap = rtpipe_model::MAX_SPEC_BYTES;
+    if bytes as u64 <= cap {
+        return Ok(());
+    }
+    let fit = (tasks as u64).saturating_mul(cap) / (bytes as u64).max(1);
+    Err(Diagnostic::error(
+        format!(
+            "the spec would be {:.1} MiB, more than the {} MiB rtpipe reads: no command could load it",
+            bytes as f64 / f64::from(1 << 20),
+            cap >> 20
+        ),
+        format!("generate fewer tasks or chains, e.g. --tasks {}", fit * 9 / 10),
+    ))
 }
 
 /// The output path, checked before any work: a directory gets its own
@@ -208,4 +231,18 @@ fn utilisation(spec: &Spec, cpu: u32) -> f64 {
         .map(|t| t.exec as f64 / t.fixed_period().unwrap_or(1) as f64)
         .sum::<f64>()
         + 0.0 // an empty sum is -0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fits_the_reader;
+
+    #[test]
+    fn a_spec_larger_than_the_reader_takes_is_refused() {
+        let cap = rtpipe_model::MAX_SPEC_BYTES as usize;
+        assert!(fits_the_reader(cap, 100_000).is_ok());
+        let e = fits_the_reader(cap + cap / 8, 100_000);
+        assert!(e.is_err_and(|d| d.message.contains("more than the 16 MiB")
+            && d.help.is_some_and(|h| h.contains("--tasks 79999"))));
+    }
 }

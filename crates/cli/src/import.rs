@@ -60,19 +60,11 @@ struct Planned<'a> {
 }
 
 fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
-    let shown = file.display().to_string();
-    // The specs' names and header comments come from the file's name: a
-    // newline there would break them (issue 24: it exited 3).
-    if shown.chars().any(char::is_control) {
-        eprint!(
-            "{}",
-            Diagnostic::error(
-                format!("the file name {shown:?} contains a control character (newline, tab, ...)"),
-                "rename the file to a name without control characters, e.g. cause_effect_chains.yaml",
-            )
-        );
+    if let Err(d) = check_file_name(file) {
+        eprint!("{d}");
         return Err(ExitCode::from(EXIT_BAD_INPUT));
     }
+    let shown = file.display().to_string();
     let imported = e2eeval::load(file).map_err(|e| {
         let at = e.at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
         eprint!("{shown}{at}: {}", e.diagnostic);
@@ -93,6 +85,33 @@ fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
     write_specs(&plans, outdir)?;
     print_summary(&shown, &imported, &plans);
     Ok(())
+}
+
+/// The specs' names, their files' names and their header comments come
+/// from the file's name: it must print as what it is (no control,
+/// bidirectional or invisible character: the one printable-name rule,
+/// `name_problem`), or the names would not parse back or would lie.
+fn check_file_name(file: &Path) -> Result<(), Diagnostic> {
+    let path = file.to_string_lossy();
+    let name = file.file_name().map(|n| n.to_string_lossy());
+    // A file name has at most 255 bytes: only its characters can be wrong.
+    let problem = name.as_deref().and_then(rtpipe_model::input::name_problem);
+    // The directories are printed in messages: no control character there.
+    let problem = problem.or_else(|| {
+        path.chars()
+            .any(char::is_control)
+            .then(|| "contains a control character (newline, tab, ...)".to_string())
+    });
+    match problem {
+        None => Ok(()),
+        Some(p) => Err(Diagnostic::error(
+            format!(
+                "the file name \"{}\" {p}; the specs' names are made from it",
+                path.escape_debug()
+            ),
+            "rename the file to a printable name, e.g. cause_effect_chains.yaml",
+        )),
+    }
 }
 
 /// Every spec text parses as it will be read (a failure is a bug: exit 3).

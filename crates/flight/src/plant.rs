@@ -129,6 +129,11 @@ pub const SUBSTEP_NS_MAX: u64 = 2_000_000;
 /// Sub-steps per time constant of the plant's fastest mode, at least.
 const STEPS_PER_TIME_CONSTANT: f64 = 10.0;
 
+/// The shortest time constant a plant may have, s: the floor of the rotors'
+/// lag (`rotors.time_constant_s`), and of the body's damping times, so the
+/// RK4 sub-step stays at 62.5 µs or longer.
+pub const MIN_TIME_CONSTANT_S: f64 = 1e-3;
+
 impl PlantParams {
     /// The plant of `body` and `rotors` with its RK4 sub-step: the longest
     /// of 2 ms, 1 ms, 500 µs, … (each divides the ones above, so the
@@ -173,6 +178,7 @@ impl PlantParams {
         }
         non_negative("body.drag_linear", b.drag_linear)?;
         non_negative("body.drag_angular", b.drag_angular)?;
+        self.damping_is_plausible()?;
         positive("body.crash_speed_mps", b.crash_speed_mps)?;
         in_range("body.crash_tilt_deg", b.crash_tilt_deg, 0.0, 180.0)?;
         let r = &self.rotors;
@@ -185,7 +191,12 @@ impl PlantParams {
         non_negative("rotors.k_m", r.k_m)?;
         positive("rotors.omega_max_rad_s", r.omega_max_rad_s)?;
         in_range("rotors.idle_fraction", r.idle_fraction, 0.0, 0.5)?;
-        in_range("rotors.time_constant_s", r.time_constant_s, 1e-3, 2.0)?;
+        in_range(
+            "rotors.time_constant_s",
+            r.time_constant_s,
+            MIN_TIME_CONSTANT_S,
+            2.0,
+        )?;
         let lift = 4.0 * r.k_f * r.omega_max_rad_s.powi(2) / (b.mass_kg * GRAVITY);
         if !(lift.is_finite() && (1.0..=100.0).contains(&lift)) {
             return Err(ConfigError::new(
@@ -197,6 +208,47 @@ impl PlantParams {
         }
         if self.substep_ns == 0 {
             return Err(ConfigError::new("substep_ns", "must be > 0"));
+        }
+        Ok(())
+    }
+
+    /// The body's damping times (m/c_v, I/c_ω) are at least
+    /// [`MIN_TIME_CONSTANT_S`], the floor of the rotors' lag: the RK4
+    /// sub-step follows the fastest time constant ([`Self::with_substep`]),
+    /// so an implausible drag (1e9) would take it to 1 ns and a flight to
+    /// half an hour of CPU. A real quadrotor's are seconds.
+    fn damping_is_plausible(&self) -> Result<(), ConfigError> {
+        let b = &self.body;
+        let i_min = b
+            .inertia_kg_m2
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let times = [
+            (
+                "body.drag_linear",
+                "body.mass_kg / body.drag_linear",
+                b.mass_kg,
+                b.drag_linear,
+            ),
+            (
+                "body.drag_angular",
+                "the least body.inertia_kg_m2 / body.drag_angular",
+                i_min,
+                b.drag_angular,
+            ),
+        ];
+        for (field, what, inertia, drag) in times {
+            if drag > 0.0 && inertia / drag < MIN_TIME_CONSTANT_S {
+                return Err(ConfigError::new(
+                    field,
+                    format!(
+                        "is {drag}: the damping time {what} is {:.3e} s, under the {MIN_TIME_CONSTANT_S} s the plant integrates (a real quadrotor's is seconds); give a drag of at most {:.3e}",
+                        inertia / drag,
+                        inertia / MIN_TIME_CONSTANT_S
+                    ),
+                ));
+            }
         }
         Ok(())
     }

@@ -173,20 +173,10 @@ impl BodyKind {
         BodyKind::Alert,
     ];
 
-    /// The name a spec uses.
+    /// The name a spec uses: `rtpipe_model::BODY_NAMES`, the list the
+    /// spec's validation checks, holds them in [`BodyKind::ALL`]'s order.
     pub fn name(self) -> &'static str {
-        match self {
-            BodyKind::Gyro => "gyro",
-            BodyKind::Accel => "accel",
-            BodyKind::Ahrs => "ahrs",
-            BodyKind::Radio => "radio",
-            BodyKind::Pid => "pid",
-            BodyKind::Pwm => "pwm",
-            BodyKind::Load => "system_load",
-            BodyKind::Vbat => "battery_voltage",
-            BodyKind::Current => "battery_current",
-            BodyKind::Alert => "battery_alert",
-        }
+        rtpipe_model::BODY_NAMES[self as usize]
     }
 
     /// The role a spec names, if any.
@@ -876,6 +866,19 @@ impl Environment<Value> for Cosim {
                 self.alerts.push((t, a));
             }
             _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BodyKind;
+
+    #[test]
+    fn every_body_is_named_by_its_place_in_the_models_list() {
+        for (i, k) in BodyKind::ALL.into_iter().enumerate() {
+            assert_eq!(k as usize, i, "{k:?}");
+            assert_eq!(BodyKind::parse(k.name()), Some(k));
         }
     }
 }

@@ -19,6 +19,7 @@ use rtpipe_flight::radio::{Mission, BUILTIN_MISSIONS};
 use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
 use rtpipe_joblog::SimResult;
+use rtpipe_model::input::shown_name;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
 use rtpipe_sim::{simulate_bodies_with_progress, ExecModel, Phasing, SimConfig};
 use std::path::Path;
@@ -118,9 +119,10 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
             Some(b) => Some(BodyKind::parse(b).ok_or_else(|| {
                 Diagnostic::error(
                     format!(
-                        "{}: task `{}` names an unknown body `{b}`",
+                        "{}: task `{}` names an unknown body `{}`",
                         path.display(),
-                        t.name
+                        shown_name(&t.name),
+                        shown_name(b)
                     ),
                     format!("use one of: {}", BodyKind::names()),
                 )

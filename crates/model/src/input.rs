@@ -2,9 +2,13 @@
 //! vehicle preset, a criterion or a YAML file to import. Every kind gets
 //! the same rules:
 //!
-//! - at most [`Kind::max_bytes`] bytes are read (a larger regular file is
-//!   refused from its size before reading; an endless stream such as
-//!   `/dev/zero` after that many bytes), directories are refused;
+//! - only regular files are read (symlinks followed): directories, named
+//!   pipes, devices and sockets are refused before the file is opened (a
+//!   pipe would block the open until a writer came, a device can stream
+//!   forever);
+//! - at most [`Kind::max_bytes`] bytes are read (a larger file is refused
+//!   from its size before reading, one that grows while read after that
+//!   many bytes);
 //! - the text must be UTF-8; a leading byte-order mark is dropped; a
 //!   control character other than tab, line feed and carriage return is
 //!   refused with its line and column (TOML and YAML allow none, and a
@@ -110,19 +114,11 @@ fn read_bytes(path: &Path, kind: &Kind) -> Result<Vec<u8>, SpecError> {
             kind.help,
         )
     };
+    refuse_non_regular(path, kind)?;
     let f = std::fs::File::open(path)
         .map_err(|e| fail(&file, format!("cannot read the {what}: {e}"), kind.help))?;
-    if let Ok(m) = f.metadata() {
-        if m.is_dir() {
-            return Err(fail(
-                &file,
-                format!("cannot read the {what}: it is a directory"),
-                kind.help,
-            ));
-        }
-        if m.is_file() && m.len() > kind.max_bytes {
-            return Err(too_big());
-        }
+    if f.metadata().is_ok_and(|m| m.len() > kind.max_bytes) {
+        return Err(too_big());
     }
     let mut bytes = Vec::new();
     f.take(kind.max_bytes + 1)
@@ -132,6 +128,51 @@ fn read_bytes(path: &Path, kind: &Kind) -> Result<Vec<u8>, SpecError> {
         return Err(too_big());
     }
     Ok(bytes)
+}
+
+/// Refuses, before opening it, a path that is not a regular file (symlinks
+/// followed): opening a named pipe for reading blocks until a writer
+/// comes, and a device or socket can stream forever or block.
+fn refuse_non_regular(path: &Path, kind: &Kind) -> Result<(), SpecError> {
+    let file = path.display().to_string();
+    let what = kind.name;
+    let m = std::fs::metadata(path)
+        .map_err(|e| fail(&file, format!("cannot read the {what}: {e}"), kind.help))?;
+    let t = m.file_type();
+    let is = if t.is_file() {
+        return Ok(());
+    } else if t.is_dir() {
+        "a directory"
+    } else {
+        special_kind(&t)
+    };
+    Err(fail(
+        &file,
+        format!("cannot read the {what}: it is {is}, not a regular file"),
+        &format!(
+            "save the {what} as a regular file and give its path ({})",
+            kind.help
+        ),
+    ))
+}
+
+/// What a special file is, in words.
+fn special_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a named pipe (FIFO)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+    }
+    let _ = t;
+    "a special file"
 }
 
 /// The text of `path` by the rules of the module documentation.

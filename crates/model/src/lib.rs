@@ -31,6 +31,22 @@ pub use time::{format_in, gcd, harmonic_pair, parse_time_str, Nanos, TimeUnit, M
 /// cap, [`input::MAX_INPUT_BYTES`]).
 pub const MAX_SPEC_BYTES: u64 = input::MAX_INPUT_BYTES;
 
+/// The task bodies a spec's `body` may name: the flight controller's tasks
+/// (crate `flight`'s `BodyKind`, whose names these are, in its order). They
+/// live here so that the spec's validation refuses a misspelling at its key.
+pub const BODY_NAMES: [&str; 10] = [
+    "gyro",
+    "accel",
+    "ahrs",
+    "radio",
+    "pid",
+    "pwm",
+    "system_load",
+    "battery_voltage",
+    "battery_current",
+    "battery_alert",
+];
+
 use raw::RawSpec;
 use std::collections::BTreeMap;
 use validate::Builder;
@@ -125,8 +141,8 @@ pub struct Task {
     /// I/O VCPUs only: the Main VCPU this one serves. While that task has a
     /// job pending, the I/O VCPU inherits its priority (PIBS, Section II-B).
     pub serves: Option<usize>,
-    /// The task code that runs its jobs (`rtpipe fly`), by name; the timing
-    /// analysis does not use it.
+    /// The task code that runs its jobs (`rtpipe fly`), by name: one of
+    /// [`BODY_NAMES`]; the timing analysis does not use it.
     pub body: Option<String>,
     /// Release offset: the first job is released at this instant and every
     /// later one a period after the previous. `None`: unknown (the analysis
@@ -354,8 +370,8 @@ impl Spec {
     }
 
     /// Reads and parses a spec file of at most [`MAX_SPEC_BYTES`]; larger
-    /// files and endless streams (`/dev/zero`) are refused after reading at
-    /// most that much (the rules of every input file: [`input`]).
+    /// files, and anything but a regular file (a pipe, `/dev/zero`), are
+    /// refused (the rules of every input file: [`input`]).
     pub fn load(path: &std::path::Path) -> Result<Spec, SpecError> {
         let text = input::read_text(path, &input::Kind::SPEC)?;
         Spec::parse(&path.display().to_string(), &text)

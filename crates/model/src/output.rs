@@ -15,7 +15,9 @@
 //!
 //! A command's output paths (named by flags) are checked by [`prepare`]
 //! before the command does its work, so a bad path is reported at once,
-//! not after a long solve:
+//! not after a long solve (its directory exists, is a directory and takes
+//! a new file: [`check_writable`]; a write that fails after the work still
+//! prints the work's report, the cli's `Answer::after_write`):
 //!
 //! - a symlink is followed and its target written (the link stays a link);
 //! - an existing path must be a regular file: directories, devices, pipes
@@ -127,7 +129,15 @@ fn resolve(flag: &str, p: &Path) -> Result<PathBuf, Diagnostic> {
     let dir = parent_dir(&cur);
     match fs::canonicalize(dir) {
         Ok(d) if d.is_dir() => Ok(d.join(name)),
-        _ => Err(err(
+        Ok(_) => Err(err(
+            format!(
+                "{flag} {}: {} is a file, not a directory",
+                p.display(),
+                dir.display()
+            ),
+            format!("write into a directory, e.g. {flag} {}", example_name(flag)),
+        )),
+        Err(_) => Err(err(
             format!(
                 "{flag} {}: directory {} does not exist",
                 p.display(),
@@ -208,32 +218,71 @@ pub fn prepare(
             ));
         }
         refuse_inputs(flag, path, &target)?;
-        if same_file(&target, input) {
-            match overwrite_input {
-                Some((true, _)) => {}
-                Some((false, allow)) => {
-                    return Err(err(
-                        format!(
-                            "{flag} {} would overwrite the input spec (its comments and period ranges would be lost)",
-                            path.display()
-                        ),
-                        format!("write to another file, or add {allow} to replace the spec"),
-                    ))
-                }
-                None => {
-                    return Err(err(
-                        format!("{flag} {} would overwrite the input spec", path.display()),
-                        "write to another file",
-                    ))
-                }
-            }
-        }
+        refuse_input_spec(flag, path, &target, input, overwrite_input)?;
     }
+    check_writable(flag, path, &target)?;
     Ok(Output {
         flag,
         given: path.to_path_buf(),
         target,
     })
+}
+
+/// An error when `target` is the input spec and the command may not
+/// replace it (see [`prepare`]).
+fn refuse_input_spec(
+    flag: &'static str,
+    path: &Path,
+    target: &Path,
+    input: &Path,
+    overwrite_input: Option<(bool, &str)>,
+) -> Result<(), Diagnostic> {
+    if !same_file(target, input) {
+        return Ok(());
+    }
+    match overwrite_input {
+        Some((true, _)) => Ok(()),
+        Some((false, allow)) => Err(err(
+            format!(
+                "{flag} {} would overwrite the input spec (its comments and period ranges would be lost)",
+                path.display()
+            ),
+            format!("write to another file, or add {allow} to replace the spec"),
+        )),
+        None => Err(err(
+            format!("{flag} {} would overwrite the input spec", path.display()),
+            "write to another file",
+        )),
+    }
+}
+
+/// Checks, before the work, that the directory of `target` (the output
+/// `flag` names as `path`) takes a new file: a probe file is created beside
+/// it and removed. Asking the file system itself answers for permissions,
+/// ACLs and read-only mounts alike, which the mode bits alone do not.
+pub fn check_writable(flag: &str, path: &Path, target: &Path) -> Result<(), Diagnostic> {
+    let probe = temp_beside(target, "probe");
+    match fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = fs::remove_file(&probe);
+            Ok(())
+        }
+        // A stale probe of a crashed run with this process id: the
+        // directory took it, so it takes the output.
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(err(
+            format!(
+                "{flag} {}: cannot write in {}: {e}",
+                path.display(),
+                parent_dir(target).display()
+            ),
+            "write into a directory you can write, or fix its permissions",
+        )),
+    }
 }
 
 /// Refuses two outputs that write the same file.
@@ -257,13 +306,26 @@ pub fn distinct(outs: &[Output]) -> Result<(), Diagnostic> {
 /// A temporary path beside `target` (same directory, so a rename puts it
 /// in place), told apart by `what` and this process. The name is
 /// predictable: open it only exclusively ([`write_temp`] does).
+///
+/// The target's name is cut so that the temporary's stays within
+/// [`NAME_MAX`] bytes whatever the target's length (a 250-byte output name
+/// is valid).
 pub fn temp_beside(target: &Path, what: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    parent_dir(target).join(format!(".{name}.{}.{what}.tmp", std::process::id()))
+    let suffix = format!(".{}.{what}.tmp", std::process::id());
+    let room = NAME_MAX.saturating_sub(suffix.len() + 1);
+    let mut cut = name.len().min(room);
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    parent_dir(target).join(format!(".{}{suffix}", &name[..cut]))
 }
+
+/// The longest file name (bytes) Linux file systems take.
+const NAME_MAX: usize = 255;
 
 /// How many names [`write_temp`] tries before it gives up: a name taken
 /// (by a file of a crashed run, or a link planted there) costs one try.
@@ -334,7 +396,7 @@ fn remove_stale_temps(dir: &Path) {
 }
 
 /// The pid in a temporary's name (`.NAME.PID.WHAT.tmp`, WHAT one of the
-/// writers' tags — a number, `chainN`, `joined`, `shard`, `config` —
+/// writers' tags — a number, `chainN`, `joined`, `shard`, `config`, `probe` —
 /// possibly with [`temp_names`]' `-K`); `None` for any other name and for
 /// this process' own.
 fn temp_owner(name: &str) -> Option<u32> {
@@ -347,7 +409,7 @@ fn temp_owner(name: &str) -> Option<u32> {
         _ => what,
     };
     let known = digits(tag)
-        || ["joined", "shard", "config"].contains(&tag)
+        || ["joined", "shard", "config", "probe"].contains(&tag)
         || tag.strip_prefix("chain").is_some_and(digits);
     let pid: u32 = pid.parse().ok().filter(|_| digits(pid))?;
     (known && pid != std::process::id()).then_some(pid)
@@ -401,9 +463,12 @@ pub fn write_all(files: &[(&Output, &str)]) -> Result<(), Diagnostic> {
         }
     };
     for (k, (out, text)) in files.iter().enumerate() {
-        match write_temp(&out.target, &k.to_string(), |f| {
-            f.write_all(text.as_bytes())
-        }) {
+        let written = injected_failure().and_then(|()| {
+            write_temp(&out.target, &k.to_string(), |f| {
+                f.write_all(text.as_bytes())
+            })
+        });
+        match written {
             Ok((tmp, ())) => temps.push(tmp),
             Err(e) => {
                 cleanup(&temps);
@@ -426,6 +491,16 @@ pub fn write_all(files: &[(&Output, &str)]) -> Result<(), Diagnostic> {
     Ok(())
 }
 
+/// A write error the tests inject (`RTPIPE_TEST_WRITE_FAILS` set): a write
+/// that fails after the work cannot be provoked from outside on cue, and
+/// that the work's result is still printed then must be tested.
+fn injected_failure() -> std::io::Result<()> {
+    match std::env::var_os("RTPIPE_TEST_WRITE_FAILS") {
+        Some(_) => Err(std::io::Error::other("RTPIPE_TEST_WRITE_FAILS is set")),
+        None => Ok(()),
+    }
+}
+
 /// Checks the output paths again (they may have changed during the run) and
 /// writes them all or none (see [`write_all`]).
 pub fn write_files(
@@ -444,17 +519,46 @@ pub fn write_files(
     write_all(&pairs)
 }
 
-/// Refuses a `--plot` directory that exists as something else (a file).
+/// Checks a `--plot` directory before the work: it is a directory that
+/// takes new files, or it is missing and its nearest existing ancestor is
+/// one (where [`ensure_dir`] will create it).
 pub fn check_dir(dir: &Path) -> Result<(), Diagnostic> {
-    match fs::metadata(dir) {
-        Ok(m) if !m.is_dir() => Err(err(
+    if let Ok(m) = fs::metadata(dir) {
+        if !m.is_dir() {
+            return Err(err(
+                format!(
+                    "--plot {} exists and is not a directory: --plot names the directory the plots are written into",
+                    dir.display()
+                ),
+                "give a new or existing directory, e.g. --plot plots",
+            ));
+        }
+        return check_writable("--plot", dir, &dir.join("plot"));
+    }
+    let ancestor = dir
+        .ancestors()
+        .skip(1)
+        .map(|a| {
+            if a.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                a
+            }
+        })
+        .find(|a| fs::metadata(a).is_ok());
+    match ancestor {
+        Some(a) if !a.is_dir() => Err(err(
             format!(
-                "--plot {} exists and is not a directory: --plot names the directory the plots are written into",
-                dir.display()
+                "--plot {}: {} is a file, not a directory",
+                dir.display(),
+                a.display()
             ),
             "give a new or existing directory, e.g. --plot plots",
         )),
-        _ => Ok(()),
+        Some(a) => check_writable("--plot", dir, &a.join("plot")),
+        // Nothing of the path exists (not even `/`): creating it fails and
+        // says why.
+        None => Ok(()),
     }
 }
 

@@ -8,6 +8,7 @@ use crate::*;
 use std::collections::HashMap;
 use std::ops::Range;
 
+mod body;
 mod comm;
 mod overheads;
 mod prio;
@@ -793,6 +794,7 @@ impl Builder {
             Some(m) => self.positive_time(m, "max_period").map(Some),
             None => Some(None),
         };
+        let body = self.body(k.get_ref(), t.body.as_ref());
         Some(Task {
             name: k.get_ref().clone(),
             exec: exec?,
@@ -805,7 +807,7 @@ impl Builder {
             server: server?,
             cpu: cpu?,
             serves: None,
-            body: v.get_ref().body.as_ref().map(|b| b.get_ref().clone()),
+            body: body?,
             offset: offset?,
             priority: priority?,
             deadline_given: deadline?,

@@ -258,13 +258,14 @@ pub fn execute(
         .all(|l| l.0.is_none() && l.1.is_none())
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
-    write_files(spec, s, a, &c, &points, &limits, write_limits)?;
+    let written = write_files(spec, s, a, &c, &points, &limits, write_limits);
     let report = if a.json {
         Rendered::Json(command::to_value(&sweep_json(
             spec, s, &c, &points, &limits,
         ))?)
     } else {
-        Rendered::Text(text(spec, s, &c, &points, &limits, write_limits))
+        let shown = write_limits.filter(|_| written.is_ok());
+        Rendered::Text(text(spec, s, &c, &points, &limits, shown))
     };
     let mut notes = Vec::new();
     if let (Some(out), true) = (&a.write_limits, nothing) {
@@ -279,11 +280,12 @@ pub fn execute(
         notes.push(d.to_string().trim_end().to_string());
     }
     let status = u8::from(!notes.is_empty());
-    Ok(Answer {
+    let answer = Answer {
         report,
         notes,
         status,
-    })
+    };
+    Ok(answer.after_write(written))
 }
 
 /// Flies every variation (on a worker thread) while a progress bar on

@@ -283,8 +283,15 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
 }
 
 /// A CSV field (RFC 4180): quoted when it holds a comma, quote or newline.
+/// A field a spreadsheet would run as a formula (it begins with `=`, `+`,
+/// `-`, `@`, tab or carriage return) gets a leading `'` and quotes, as
+/// OWASP's CSV-injection guidance says: names come from the spec, which
+/// may not be the reader's own.
 fn quoted(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
+    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']);
+    if formula {
+        format!("\"'{}\"", s.replace('"', "\"\""))
+    } else if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
         s.to_string()
@@ -300,5 +307,18 @@ mod tests {
         assert_eq!(quoted("gyro→pwm"), "gyro→pwm");
         assert_eq!(quoted("a,b"), "\"a,b\"");
         assert_eq!(quoted("say \"hi\""), "\"say \"\"hi\"\"\"");
+    }
+
+    #[test]
+    fn fields_a_spreadsheet_would_run_are_neutralised() {
+        assert_eq!(quoted("=1+2"), "\"'=1+2\"");
+        assert_eq!(quoted("+cmd"), "\"'+cmd\"");
+        assert_eq!(quoted("-2+3"), "\"'-2+3\"");
+        assert_eq!(quoted("@SUM(A1)"), "\"'@SUM(A1)\"");
+        assert_eq!(quoted("\tx"), "\"'\tx\"");
+        assert_eq!(quoted("\rx"), "\"'\rx\"");
+        assert_eq!(quoted("=HYPERLINK(\"x\")"), "\"'=HYPERLINK(\"\"x\"\")\"");
+        // Inside a name they are harmless.
+        assert_eq!(quoted("a=b"), "a=b");
     }
 }

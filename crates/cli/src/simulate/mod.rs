@@ -192,7 +192,7 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
     let (res, searches, seconds) = simulate_and_search(spec, a, &p, sink, stop)?;
     let obs = observe(&report, &res);
     let mut outputs = render_outputs(spec, a, &p, &res, &obs)?;
-    write_all_outputs(a, &mut outputs, samples)?;
+    let written = write_all_outputs(a, &mut outputs, samples);
     let out = if a.json {
         let mut v = to_json(spec, &report, a, &res, &obs, seconds);
         v.search = search_json(spec, &searches);
@@ -209,11 +209,12 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
         notes.extend(short_tails(spec, &res, n));
     }
     let status = exit_status(spec, a, &report, &res, &obs, &searches, &mut notes);
-    Ok(Answer {
+    let answer = Answer {
         report: out,
         notes,
         status,
-    })
+    };
+    Ok(answer.after_write(written))
 }
 
 /// The files `render_outputs` made, then `--samples` (written as the run

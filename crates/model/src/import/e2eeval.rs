@@ -307,12 +307,24 @@ fn build_spec(f: &E2eFile, ecus: &[Id], name: &str) -> Spec {
     }
 }
 
-/// The file name without its extension (`cause_effect_chains`).
+/// The most bytes of the file's stem a spec's name takes: with `-ecu<N>`
+/// and `.toml` the written file's name stays far within the 255 bytes a
+/// file name may have, whatever the YAML file is called.
+const MAX_STEM_BYTES: usize = 100;
+
+/// The file name without its extension (`cause_effect_chains`), cut to
+/// [`MAX_STEM_BYTES`] on a character boundary.
 fn file_stem(file: &Path) -> String {
-    file.file_stem()
+    let stem = file
+        .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
-        .unwrap_or_else(|| "e2eeval".into())
+        .unwrap_or_else(|| "e2eeval".into());
+    let mut cut = stem.len().min(MAX_STEM_BYTES);
+    while !stem.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    stem[..cut].to_string()
 }
 
 /// Pairs of one ECU, in the file's priority order, where the higher-priority

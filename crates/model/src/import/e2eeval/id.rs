@@ -16,7 +16,17 @@ pub(crate) struct Id {
     digits: String,
 }
 
+/// The most digits an id may have: tasks are named `t<TaskID>` and specs
+/// `<stem>-ecu<ECU>`, which must stay printable names and file names
+/// (E2EEvaluation's largest ids, `uuid4().int`, have 39).
+pub(crate) const MAX_ID_DIGITS: usize = 100;
+
 impl Id {
+    /// How many digits the id has.
+    pub(crate) fn digits(&self) -> usize {
+        self.digits.len()
+    }
+
     /// The id of a YAML value: an integer, or the decimal text of one that
     /// [`quote_big_integers`] quoted. `None` for anything else.
     pub(crate) fn of(v: &Value) -> Option<Id> {

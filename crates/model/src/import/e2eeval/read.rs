@@ -1,7 +1,7 @@
 //! Reading the YAML: the file's text, its `Tasks` (each checked against
 //! what rtpipe can model, times in whole ns) and its `Chains`.
 
-use super::id::{quote_big_integers, Id};
+use super::id::{quote_big_integers, Id, MAX_ID_DIGITS};
 use super::{ImportError, MAX_BYTES};
 use crate::input::{self, Kind, Syntax};
 use crate::{format_in, Diagnostic, Nanos, TimeUnit, MAX_TIME};
@@ -147,12 +147,21 @@ fn task_mapping(v: &Value, k: usize) -> Result<&Mapping, Diagnostic> {
 fn id_field(m: &Mapping, key: &str, place: &str) -> Result<Option<Id>, Diagnostic> {
     match field(m, key) {
         None => Ok(None),
-        Some(v) => Id::of(v).map(Some).ok_or_else(|| {
-            bad(
+        Some(v) => match Id::of(v) {
+            None => Err(bad(
                 format!("{place}: {key} must be an integer, found {}", show(v)),
                 format!("write e.g. {key}: 3"),
-            )
-        }),
+            )),
+            Some(id) if id.digits() > MAX_ID_DIGITS => Err(bad(
+                format!(
+                    "{place}: {key} {} has {} digits, more than the {MAX_ID_DIGITS} rtpipe takes (its tasks and specs are named after it)",
+                    show(v),
+                    id.digits()
+                ),
+                format!("renumber it with at most {MAX_ID_DIGITS} digits"),
+            )),
+            Some(id) => Ok(Some(id)),
+        },
     }
 }
 
@@ -187,15 +196,37 @@ fn number(m: &Mapping, key: &str, place: &str) -> Result<Option<f64>, Diagnostic
     }
 }
 
-/// A value in YAML's flow style, as the file writes it, for messages.
+/// The longest value shown in a message, in characters.
+const MAX_SHOWN_CHARS: usize = 80;
+
+/// A value in YAML's flow style, as the file writes it, for messages; a
+/// long one is cut in the middle (a 5-million-digit id would fill the
+/// terminal), saying how long it is.
 fn show(v: &Value) -> String {
+    cut(show_whole(v))
+}
+
+/// Text for a message, cut in the middle when longer than
+/// [`MAX_SHOWN_CHARS`], saying how long it is.
+fn cut(s: String) -> String {
+    let n = s.chars().count();
+    if n <= MAX_SHOWN_CHARS {
+        return s;
+    }
+    let head: String = s.chars().take(MAX_SHOWN_CHARS - 20).collect();
+    let tail: String = s.chars().skip(n - 10).collect();
+    format!("{head}…{tail} ({n} characters)")
+}
+
+/// A value in YAML's flow style, whole.
+fn show_whole(v: &Value) -> String {
     match v {
         Value::Null => "null".into(),
         Value::Bool(b) => b.to_string(),
         Value::Number(n) => n.to_string(),
         Value::String(s) => format!("{s:?}"),
         Value::Sequence(items) => {
-            let items: Vec<String> = items.iter().map(show).collect();
+            let items: Vec<String> = items.iter().map(show_whole).collect();
             format!("[{}]", items.join(", "))
         }
         Value::Mapping(_) => "a mapping".into(),
@@ -460,7 +491,11 @@ fn read_chain(c: &Value, k: usize, known: &HashMap<&Id, usize>) -> Result<Vec<Id
     }
     if let Some(id) = ids.iter().find(|id| !known.contains_key(id)) {
         return Err(bad(
-            format!("{place} = {}: no task has TaskID {id}", show(c)),
+            format!(
+                "{place} = {}: no task has TaskID {}",
+                show(c),
+                cut(id.to_string())
+            ),
             "every TaskID of a chain must be in Tasks",
         ));
     }
