@@ -8,7 +8,7 @@
 //! terms at `T = lo` and `R = R_lb` bound them from below; where the priority
 //! order of a link is not decided by the box, the smallest term over the
 //! possible orders is taken. Response times come from the same level-i
-//! busy period ([`level_response`]) with only the tasks that are above
+//! busy period ([`crate::sched::level_response`]) with only the tasks that are above
 //! whatever the periods, at their longest periods, and the task's own
 //! longest period: fewer and rarer interferers can only shorten each fixed
 //! point, and a longer own period lets fewer own jobs into the busy period,
@@ -24,7 +24,7 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::let_bound::{any_phasing, LetLatencies};
-use crate::sched::{interference, level_response, utilization_test, OwnJobs};
+use crate::sched::{interference, level_response_within, utilization_test, OwnJobs};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
@@ -338,7 +338,7 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
 
 /// Lower bounds on task i's (budget, job) response times and its
 /// read-to-publish bound (`W = R`) under RM over the box: the level-i busy
-/// period of `sched::response_times` ([`level_response`]) with the
+/// period of `sched::response_times` ([`level_response_within`]) with the
 /// interferers above i at every point, at their longest periods, and i's
 /// own longest period, each job with its switches (`2·cs`); the kernel
 /// work of every release on the CPU at each task's longest period; and the
@@ -369,7 +369,8 @@ fn rta_lower_bounds(
         jitter: t.jitter,
         period: hi[i],
     };
-    let r = |work: Nanos| level_response(own(work), &hp);
+    // Only a figure within the longest period is kept (`response_lower_bounds`).
+    let r = |work: Nanos| level_response_within(own(work), &hp, hi[i]);
     let rj = r(t.demand());
     (r(t.budget()), rj, rj)
 }

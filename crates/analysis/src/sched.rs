@@ -210,6 +210,17 @@ pub const MAX_BUSY_JOBS: Nanos = 100_000;
 /// utilisation (own share `(x + 2cs)/T` with `hp`'s) reaches 1, so the
 /// busy period need not end, on overflow, and past [`MAX_BUSY_JOBS`] jobs.
 pub fn level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+    level_response_within(own, hp, Nanos::MAX)
+}
+
+/// [`level_response`] when it is at most `limit`, `None` otherwise: the
+/// busy period is left as soon as a job responds later (the design's
+/// relaxation only asks whether R is within a period).
+pub fn level_response_within(
+    own: OwnJobs,
+    hp: &[(Nanos, Nanos, Nanos)],
+    limit: Nanos,
+) -> Option<Nanos> {
     let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     if u + share >= 1.0 {
@@ -225,6 +236,9 @@ pub fn level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nano
         // point grows at least by the work added): a valid start.
         w = busy_window_from(demand, hp, w.checked_add(own.work)?)?;
         worst = worst.max(w - q.saturating_mul(own.period));
+        if worst.checked_add(own.jitter)? > limit {
+            return None;
+        }
         if w <= (q + 1).saturating_mul(own.period) - own.jitter {
             return worst.checked_add(own.jitter);
         }
@@ -798,6 +812,9 @@ mod tests {
         let hp = [(26, 70, 0)];
         assert_eq!(response_time(62, &[(26, 70)]), Some(114));
         assert_eq!(level_response(own(62, 0, 100), &hp), Some(118));
+        // Within a limit: the same figure, or none above it.
+        assert_eq!(level_response_within(own(62, 0, 100), &hp, 118), Some(118));
+        assert_eq!(level_response_within(own(62, 0, 100), &hp, 117), None);
     }
 
     #[test]
