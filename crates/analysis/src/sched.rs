@@ -32,11 +32,14 @@ pub struct TaskTiming {
     /// The CPU it runs on.
     pub cpu: u32,
     /// Worst-case time for the VCPU to deliver its whole budget C after a
-    /// release (exact RTA under RM; Spuri's EDF analysis under EDF). `None`
-    /// when it does not exist (overload) or the task is background.
+    /// release, for every job, also one released while an earlier one is
+    /// pending (exact RTA over the level-i busy period under RM,
+    /// [`level_response`]; Spuri's EDF analysis under EDF). `None` when it
+    /// does not exist (overload) or the task is background.
     pub response_time: Option<Nanos>,
-    /// Worst-case response time of a job of demand x (≤ response_time), the
-    /// figure the latency bounds use.
+    /// Worst-case response time of any job of demand x (≤ response_time),
+    /// the figure the latency bounds use where it is within the period
+    /// ([`TaskTiming::bounded_response`]).
     pub job_response_time: Option<Nanos>,
     /// W: a bound on the time from a job's read (its start) to its publish
     /// (its completion), at most `job_response_time`: the same figure under
