@@ -3,14 +3,15 @@
 //! another process, steal, an overrun, a late wake-up) act as blocking.
 //! Under fixed priorities the job's response grows as RTA with a blocking
 //! term over the level-i busy period says (Lehoczky 1990; Audsley et al.
-//! 1993): w_q = (q+1)·x + b + Σ_{j ∈ hp} ⌈w_q / T_j⌉ · I_j for the q-th own
-//! job of the busy period, R = max_q (w_q − q·T): by `b`, by the
+//! 1993; the analysis' own rule, `sched::level_response`): w_q = (q+1)·x +
+//! b + Σ_{j ∈ hp} ⌈w_q / T_j⌉ · I_j for the q-th own job of the busy
+//! period, R = max_q (w_q − q·T): by `b`, by the
 //! higher-priority jobs released in the time it adds, and by the task's own
 //! earlier jobs it pushes into the same busy period. `rtpipe run` excuses an observation above a sound
 //! bound only when the disturbance measured in its window grows the bound
 //! by at least the excess.
 
-use crate::sched::{busy_window, hp_load, top_priorities};
+use crate::sched::{hp_load, level_response, top_priorities, OwnJobs};
 use rtpipe_model::{Nanos, Server, Spec};
 
 /// How much longer task `task`'s job response can be with `b` ns of
@@ -61,9 +62,16 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     // Lower-priority critical sections block the job as a disturbance does.
     let blocked = crate::blocking::blocking(spec, &prio, task);
     let cs = crate::overheads::own(spec, task);
+    let own = |blocking: Nanos| OwnJobs {
+        work: t.demand(),
+        switch: cs,
+        blocking,
+        jitter: t.jitter,
+        period,
+    };
     match (
-        busy_response(t.demand(), cs, blocked, period, &hp),
-        busy_response(t.demand(), cs, blocked.saturating_add(b), period, &hp),
+        level_response(own(blocked), &hp),
+        level_response(own(blocked.saturating_add(b)), &hp),
     ) {
         (Some(r), Some(rb)) => rb - r,
         _ => Nanos::MAX,
@@ -84,38 +92,6 @@ fn edf_inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
         (Some(r), Some(rb)) => rb.saturating_sub(r),
         _ => Nanos::MAX,
     }
-}
-
-/// Most own jobs one busy period is followed through before the response
-/// is called unbounded.
-const MAX_JOBS: Nanos = 100_000;
-
-/// The worst response of a job of demand `x` and period `period` with
-/// blocking `b`: max over the q-th own job of the level-i busy period of
-/// w_q − q·T (`None`: unbounded or beyond the search). Own release jitter
-/// adds the same J to every term, so it cancels in [`inflation`]. With a
-/// context switch cost `cs` the q earlier own jobs pay two switches each,
-/// the q-th one (`crate::overheads`).
-fn busy_response(
-    x: Nanos,
-    cs: Nanos,
-    b: Nanos,
-    period: Nanos,
-    hp: &[(Nanos, Nanos, Nanos)],
-) -> Option<Nanos> {
-    let mut worst = 0;
-    for q in 0..MAX_JOBS {
-        let own = (q + 1)
-            .checked_mul(x)?
-            .checked_add((2 * q + 1).checked_mul(cs)?)?
-            .checked_add(b)?;
-        let w = busy_window(own, hp)?;
-        worst = worst.max(w - q * period);
-        if w <= (q + 1) * period {
-            return Some(worst);
-        }
-    }
-    None
 }
 
 #[cfg(test)]

@@ -7,10 +7,12 @@
 //! every option of every term grows with periods and response times, so the
 //! terms at `T = lo` and `R = R_lb` bound them from below; where the priority
 //! order of a link is not decided by the box, the smallest term over the
-//! possible orders is taken. Response times come from the same recurrence
-//! ([`response_time`]) with only the tasks that are above whatever the
-//! periods, at their longest periods: fewer and rarer interferers can only
-//! shorten the fixed point. Blocking counts only the sections that can block
+//! possible orders is taken. Response times come from the same level-i
+//! busy period ([`crate::sched::level_response`]) with only the tasks that are above
+//! whatever the periods, at their longest periods, and the task's own
+//! longest period: fewer and rarer interferers can only shorten each fixed
+//! point, and a longer own period lets fewer own jobs into the busy period,
+//! each with a smaller `w_q − q·T`. Blocking counts only the sections that can block
 //! at every point of the box, overheads their per-job and per-release
 //! charges at the longest periods (docs/design.md, "Critical sections and
 //! overheads"). At a box of one point every figure equals the analysis' (a
@@ -22,7 +24,7 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::let_bound::{any_phasing, LetLatencies};
-use crate::sched::{interference, response_time_jitter, utilization_test};
+use crate::sched::{interference, level_response_within, utilization_test, OwnJobs};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
@@ -335,9 +337,10 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
 }
 
 /// Lower bounds on task i's (budget, job) response times and its
-/// read-to-publish bound (`W = R`) under RM over the box: the recurrence of
-/// `sched::response_times` with the interferers above i at every point, at
-/// their longest periods, each job with its switches (`2·cs`); the kernel
+/// read-to-publish bound (`W = R`) under RM over the box: the level-i busy
+/// period of `sched::response_times` ([`level_response_within`]) with the
+/// interferers above i at every point, at their longest periods, and i's
+/// own longest period, each job with its switches (`2·cs`); the kernel
 /// work of every release on the CPU at each task's longest period; and the
 /// own switch and the least blocking over the box ([`Order::least_blocking`])
 /// added to the own demand. Each term is at most the analysis' at every
@@ -357,13 +360,17 @@ fn rta_lower_bounds(
         })
         .collect();
     hp.extend(crate::overheads::kernel_load_at(spec, t.cpu, hi));
-    let b = order
-        .least_blocking(i)
-        .saturating_add(crate::overheads::own(spec, i));
-    let r = |own: Nanos| {
-        own.checked_add(b)
-            .and_then(|own| response_time_jitter(own, t.jitter, &hp))
+    // Own period at its longest: later own jobs come later and fewer join
+    // the busy period, so each w_q − q·T and the set of q only shrink.
+    let own = |work: Nanos| OwnJobs {
+        work,
+        switch: crate::overheads::own(spec, i),
+        blocking: order.least_blocking(i),
+        jitter: t.jitter,
+        period: hi[i],
     };
+    // Only a figure within the longest period is kept (`response_lower_bounds`).
+    let r = |work: Nanos| level_response_within(own(work), &hp, hi[i]);
     let rj = r(t.demand());
     (r(t.budget()), rj, rj)
 }

@@ -109,11 +109,12 @@ period = 5000
     let s = spec(text);
     let rep = analyze(&s);
     assert!(!rep.schedulability.schedulable);
-    // a: 1000 + 1000 + 500 + 500 = 3000 ≤ 4000. b: w = 2000 + 1000 +
-    // ⌈w/4000⌉·(3000 + 500) + ⌈w/5000⌉·500, a load of 0.975: the fixed
-    // point is 120000 (30 of a's releases, 24 of b's), far above b's
-    // period: no bounded response, unschedulable.
-    assert_eq!(job_responses(&s), vec![Some(3000 * US), Some(120_000 * US)]);
+    // a: 1000 + 1000 + 500 + 500 = 3000 ≤ 4000. b: its first job's w =
+    // 2000 + 1000 + ⌈w/4000⌉·(3000 + 500) + ⌈w/5000⌉·500, a load of 0.975,
+    // is 120000, far above b's period, and its level's load with its own
+    // jobs (2000 + 2000 per 5000) is 1.775: the busy period never ends, no
+    // response time at all.
+    assert_eq!(job_responses(&s), vec![Some(3000 * US), None]);
     assert_eq!(rep.timing[1].bounded_response(), None);
 }
 

@@ -531,6 +531,9 @@ fn schedulability_text(spec: &Spec, r: &Report) -> String {
                 c.value,
                 if c.schedulable { "<=" } else { ">" }
             ),
+            rtpipe_model::SchedTest::Edf if !o_zero && !c.schedulable => {
+                edf_overheads_failure(spec, r, c)
+            }
             rtpipe_model::SchedTest::Edf => format!(
                 "U = {:.4} {} 1",
                 c.utilization,
@@ -552,6 +555,39 @@ fn schedulability_text(spec: &Spec, r: &Report) -> String {
     out
 }
 
+/// Which part of EDF's test with overheads (`sched::edf_overhead_test`)
+/// failed on CPU `c`: the utilisation with the overheads, or else the
+/// first task whose R(C) is unbounded or above its deadline.
+fn edf_overheads_failure(
+    spec: &Spec,
+    r: &Report,
+    c: &rtpipe_analysis::sched::CpuVerdict,
+) -> String {
+    let with = format!("U = {:.4}, with overheads {:.4}", c.utilization, c.value);
+    if c.value > c.bound {
+        return format!("{with} > 1");
+    }
+    let late = r.timing.iter().enumerate().find(|(i, tm)| {
+        let t = &spec.tasks[*i];
+        t.cpu == c.cpu
+            && t.server != rtpipe_model::Server::Background
+            && tm.response_time.is_none_or(|rc| rc > tm.deadline)
+    });
+    // The verdict failed and the utilisation passed: a response did not.
+    let Some((i, tm)) = late else {
+        panic!(
+            "cpu {}: EDF with overheads failed with every R(C) <= D",
+            c.cpu
+        );
+    };
+    format!(
+        "{with} <= 1, but R(C) of {} = {} > D = {}",
+        spec.tasks[i].name,
+        opt(spec, tm.response_time),
+        spec.fmt_time(tm.deadline)
+    )
+}
+
 /// A CPU's overheads under its verdict (nothing without any): what every
 /// R above charges (docs/analysis.md, "Scheduling overheads").
 fn overheads_text(spec: &Spec, c: &rtpipe_analysis::sched::CpuVerdict) -> String {
@@ -560,14 +596,11 @@ fn overheads_text(spec: &Spec, c: &rtpipe_analysis::sched::CpuVerdict) -> String
         return String::new();
     }
     let t = |ns| format!("{} {}", spec.fmt_time(ns), spec.time_unit);
+    // The verdict line above says which part failed, with its figures.
     let edf = if spec.schedulability == rtpipe_model::SchedTest::Edf {
-        format!(
-            "; the test: U with them = {:.4} {} 1 and every R(C) <= D",
-            c.value,
-            if c.value <= 1.0 { "<=" } else { ">" }
-        )
+        "; the test: U with them <= 1 and every R(C) <= D"
     } else {
-        String::new()
+        ""
     };
     format!(
         "    overheads charged in R: context switch {}, release {}, replenish {}{edf}\n",

@@ -115,3 +115,37 @@ fn a_copy_that_does_not_validate_is_never_said_written() {
     assert!(!out.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Under EDF with overheads the verdict names the part of the test that
+/// failed: the utilisation with the overheads, or a budget's response.
+#[test]
+fn the_edf_verdict_names_the_failed_part_of_the_test() {
+    let dir = scratch("ovh-edf-verdict");
+    let verdict = |release: &str, name: &str| {
+        let p = dir.join(name);
+        let text = format!(
+            "[system]\nname = \"e\"\ntime_unit = \"ms\"\nscheduler = \"edf\"\n\
+             schedulability = \"edf\"\n\
+             overheads = {{ context_switch = \"0.05ms\", release = \"{release}\" }}\n\
+             [tasks.t0]\nexec = 0.28\nperiod = 3\n[tasks.t1]\nexec = 0.54\nperiod = 2\n\
+             [tasks.k]\nexec = 0.001\nperiod = 1\nserver = \"background\"\n"
+        );
+        std::fs::write(&p, text).unwrap_or_else(|e| panic!("{e}"));
+        let o = rtpipe(&["analyze", &p.to_string_lossy()]);
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        let line = out.lines().find(|l| l.contains("cpu 0 ("));
+        line.unwrap_or_else(|| panic!("no verdict line:\n{out}"))
+            .trim()
+            .to_string()
+    };
+    // The utilisation with the overheads passes (0.9967), the busy window
+    // holds too many jobs for a response: R(C) fails, not U (0.3633).
+    assert_eq!(
+        verdict("0.3ms", "r.toml"),
+        "cpu 0 (2 tasks): U = 0.3633, with overheads 0.9967 <= 1, but R(C) of t0 = unbounded > D = 3 -> NOT schedulable"
+    );
+    assert_eq!(
+        verdict("0.4ms", "u.toml"),
+        "cpu 0 (2 tasks): U = 0.3633, with overheads 1.1800 > 1 -> NOT schedulable"
+    );
+}

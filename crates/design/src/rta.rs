@@ -31,7 +31,11 @@ impl<'a> Master<'a> {
     /// W(r) ≤ r, hence r ≥ the least fixed point (the RTA response time),
     /// and the response time itself is allowed: exact when `cap` covers
     /// every job that can fall below `rmax`, a relaxation otherwise (the
-    /// levels grow lazily, see `raise_levels`).
+    /// levels grow lazily, see `raise_levels`). It is the first own job's
+    /// recurrence, where the analysis takes every own job of the level-i
+    /// busy period (`sched::level_response`): with `r ≤ T_i`
+    /// (`at_most_period`, on every response variable) the busy period
+    /// holds that one job, so the two agree wherever the model admits r.
     pub(crate) fn rta_levels(
         &mut self,
         i: usize,
