@@ -6,7 +6,7 @@
 //! grows the bound by at least the excess. Everything else is a violation.
 
 use crate::exec::{Policy, RunResult, RESERVATION_MARGIN};
-use crate::probe::Probe;
+use crate::probe::{Probe, PROBE_PERIOD};
 use rtpipe_joblog::JobRecord;
 use rtpipe_model::{Nanos, Spec};
 
@@ -54,10 +54,11 @@ pub enum Cause {
     },
     /// Time in the window when jobs of the run on a CPU were pending but
     /// none of them used it: the kernel's timer and wake-up latency,
-    /// interrupts, other processes, the hypervisor (steal), and under
+    /// interrupts, other processes (a foreign real-time thread), the
+    /// hypervisor (steal), the kernel's real-time throttling, and under
     /// [`Policy::EdfFifo`] the EDF dispatcher's work at releases and
-    /// completions. The model
-    /// has none of it.
+    /// completions. The model has none of it; it excuses nothing when the
+    /// run's own threads had used the CPU's real-time share (`throttled`).
     Foreign {
         /// The CPU (`None`: all of them, under global EDF).
         cpu: Option<u32>,
@@ -66,6 +67,11 @@ pub enum Cause {
         /// The run was under the EDF dispatcher (`crate::edf`), whose
         /// release and completion work is part of this time.
         dispatcher: bool,
+        /// Around the window the run's own threads on the CPU had used
+        /// its real-time share (`sched_rt_runtime_us` of every
+        /// `sched_rt_period_us`): the kernel throttled them, for the run's
+        /// own overload, and this time is no delay from outside.
+        throttled: bool,
     },
     /// The hypervisor ran something else on a CPU (steal time): named, but
     /// already part of that CPU's [`Cause::Foreign`] time, so it adds no
@@ -99,6 +105,9 @@ impl Cause {
             Cause::Demand {
                 demand, declared, ..
             } => demand - declared,
+            Cause::Foreign {
+                throttled: true, ..
+            } => 0,
             Cause::Foreign { ns, .. } => ns,
         }
     }
@@ -150,15 +159,12 @@ impl Cause {
                 cpu,
                 ns,
                 dispatcher,
+                throttled,
             } => format!(
-                "{} us on {} with jobs of the run pending but none running ({}kernel latency, interrupts, other processes, steal)",
+                "{} us on {} with jobs of the run pending but none running ({})",
                 us(ns),
                 cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
-                if dispatcher {
-                    "the EDF dispatcher's releases and completions, "
-                } else {
-                    ""
-                }
+                foreign_sources(dispatcher, throttled)
             ),
             Cause::Steal { cpu, ns } => format!(
                 "{} us of steal time on CPU {cpu} (within the foreign time)",
@@ -167,6 +173,21 @@ impl Cause {
             Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
         }
     }
+}
+
+/// What a foreign time is made of, as far as the run can tell.
+fn foreign_sources(dispatcher: bool, throttled: bool) -> String {
+    let mut out = String::new();
+    if throttled {
+        out.push_str("the kernel's real-time throttling, which the run's own demand triggered: its threads there had used the CPU's real-time share (sched_rt_runtime_us), so this excuses nothing; ");
+    }
+    if dispatcher {
+        out.push_str("the EDF dispatcher's releases and completions, ");
+    }
+    out.push_str(
+        "kernel latency, interrupts, other processes' threads (a foreign real-time one), steal",
+    );
+    out
 }
 
 fn us(ns: Nanos) -> String {
@@ -179,6 +200,9 @@ pub struct Blame<'r> {
     res: &'r RunResult,
     /// Per task, its jobs in release order.
     jobs: Vec<Vec<&'r JobRecord>>,
+    /// Per CPU, the probe instants where the run's own threads there had
+    /// used the CPU's real-time share over the throttling period before.
+    saturated: Vec<Vec<Nanos>>,
 }
 
 impl<'r> Blame<'r> {
@@ -193,7 +217,23 @@ impl<'r> Blame<'r> {
         for v in &mut jobs {
             v.sort_by_key(|j| j.index);
         }
-        Blame { spec, res, jobs }
+        let saturated = saturated(spec, res);
+        Blame {
+            spec,
+            res,
+            jobs,
+            saturated,
+        }
+    }
+
+    /// Whether the run's own threads on `cpu` had used its real-time share
+    /// around `window` (a probe period either side: the probes' grain).
+    fn self_throttled(&self, cpu: u32, (a, b): (Nanos, Nanos)) -> bool {
+        let Some(list) = self.saturated.get(cpu as usize) else {
+            return false;
+        };
+        let k = list.partition_point(|&x| x < a - PROBE_PERIOD);
+        list.get(k).is_some_and(|&x| x <= b + PROBE_PERIOD)
     }
 
     /// The causes inside `window` (relative to the epoch; callers pass it
@@ -468,8 +508,57 @@ impl<'r> Blame<'r> {
             cpu,
             ns,
             dispatcher: self.res.policy == Policy::EdfFifo,
+            throttled: cpu.is_some_and(|c| self.self_throttled(c, (a, b))),
         })
     }
+}
+
+/// How far below the real-time share a CPU's use by the run still counts
+/// as having reached it: two probe periods, the probes' grain at both
+/// ends of the span.
+const SHARE_SLACK: Nanos = 2 * PROBE_PERIOD;
+
+/// Per CPU, the probe instants where the run's own threads there had used
+/// at least the kernel's real-time share (`RunResult::rt_share`, less
+/// [`SHARE_SLACK`]) over the throttling period before: where the kernel's
+/// real-time throttling is the run's own doing. Only under SCHED_FIFO
+/// (SCHED_DEADLINE's reservations are not throttled so).
+fn saturated(spec: &Spec, res: &RunResult) -> Vec<Vec<Nanos>> {
+    let fifo = matches!(res.policy, Policy::Fifo | Policy::EdfFifo);
+    let Some((runtime, period)) = res.rt_share.filter(|_| fifo) else {
+        return Vec::new();
+    };
+    let cpus = spec
+        .tasks
+        .iter()
+        .map(|t| t.cpu as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut out = vec![Vec::new(); cpus];
+    let probes = &res.probes;
+    for p in probes {
+        let k = probes.partition_point(|q| q.at <= p.at - period);
+        let Some(q) = k.checked_sub(1).and_then(|k| probes.get(k)) else {
+            continue;
+        };
+        let mut used = vec![0; cpus];
+        for (t, task) in spec.tasks.iter().enumerate() {
+            // A counter that falls (a thread gone reads 0) says nothing.
+            if let (Some(&x), Some(&y)) = (p.run.get(t), q.run.get(t)) {
+                used[task.cpu as usize] += (x - y).max(0);
+            }
+        }
+        let span = p.at - q.at;
+        for (cpu, &u) in used.iter().enumerate() {
+            // u / span ≥ (runtime − slack) / period, without division.
+            if i128::from(u) * i128::from(period)
+                >= i128::from(runtime - SHARE_SLACK) * i128::from(span)
+            {
+                out[cpu].push(p.at);
+            }
+        }
+    }
+    out
 }
 
 /// The total length of a set of intervals (overlaps counted once).
@@ -599,6 +688,7 @@ output = { channel = "shm", size = 0 }
             epoch: 0,
             notes: Vec::new(),
             probes,
+            rt_share: None,
             demoted: Vec::new(),
             partitioned: false,
             dispatch: None,
@@ -634,6 +724,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 5 * MS / 2,
             dispatcher: false,
+            throttled: false,
         };
         assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
         // Outside them, no evidence.
@@ -654,6 +745,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 5 * MS / 2,
             dispatcher: false,
+            throttled: false,
         };
         assert_eq!(b.causes(w, &[0]), vec![foreign]);
     }
@@ -665,6 +757,7 @@ output = { channel = "shm", size = 0 }
                 cpu: Some(0),
                 ns: 3 * MS,
                 dispatcher: false,
+                throttled: false,
             },
             Cause::Overrun {
                 task: 0,
@@ -735,6 +828,44 @@ output = { channel = "shm", size = 0 }
         assert_eq!(own[0].delay(), 16 * us, "{own:?}");
     }
 
+    /// Foreign time where the run's own threads had used the CPU's
+    /// real-time share is the kernel's throttling of the run's own
+    /// overload: named, and no excuse. Here a's thread ran all of 0–40 ms
+    /// on CPU 0 under a share of 9 ms per 10 ms; CPU 1's b ran 1 ms in 10.
+    #[test]
+    fn throttling_by_the_run_s_own_demand_excuses_nothing() {
+        let (spec, mut res) = run();
+        for p in &mut res.probes {
+            p.run = vec![p.at, p.at / 10];
+        }
+        res.rt_share = Some((9 * MS, 10 * MS));
+        let b = Blame::new(&spec, &res);
+        let w = b.extend((31 * MS, 39 * MS), &[0]);
+        let throttled = Cause::Foreign {
+            cpu: Some(0),
+            ns: 5 * MS / 2,
+            dispatcher: false,
+            throttled: true,
+        };
+        let causes = b.causes(w, &[0]);
+        assert_eq!(causes, vec![throttled.clone()]);
+        assert_eq!(Blame::total(&causes), 0);
+        assert!(throttled.describe(&spec).contains("excuses nothing"));
+        // Below the share, the same time is foreign and excuses.
+        for p in &mut res.probes {
+            p.run = vec![p.at / 4, 0];
+        }
+        let b = Blame::new(&spec, &res);
+        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
+        // Without throttling (sched_rt_runtime_us = -1), none is the run's.
+        res.rt_share = None;
+        for p in &mut res.probes {
+            p.run = vec![p.at, 0];
+        }
+        let b = Blame::new(&spec, &res);
+        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
+    }
+
     /// Under the EDF dispatcher a job pending past the window's end is not
     /// credited with the time a job of an earlier deadline ran, nor with
     /// the dispatcher's release: lo (D 20 ms) runs 0–1 ms, hi (D 5 ms) is
@@ -769,6 +900,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 20 * us,
             dispatcher: true,
+            throttled: false,
         };
         assert_eq!(b.causes(w, &[0]), vec![foreign]);
         // Without the dispatcher's spans, nothing is seen.

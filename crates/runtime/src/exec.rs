@@ -81,6 +81,9 @@ pub struct RunResult {
     pub notes: Vec<String>,
     /// The counters sampled during the run, in time order.
     pub probes: Vec<Probe>,
+    /// The kernel's real-time share of a CPU, (runtime, period) in ns, as
+    /// the run found it (`crate::probe::rt_share`); `None`: no throttling.
+    pub rt_share: Option<(Nanos, Nanos)>,
     /// Tasks moved to SCHED_OTHER to finish (still running long after the
     /// run's end).
     pub demoted: Vec<usize>,
@@ -407,6 +410,7 @@ fn execute<'a, V: Copy + Send>(
     res.load = cfg.load;
     res.epoch = e0;
     res.probes = probes;
+    res.rt_share = crate::probe::rt_share();
     res.demoted = demoted;
     res.partitioned = shared.partition.is_some();
     res.dispatch = dispatch;

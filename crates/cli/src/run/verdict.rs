@@ -1,11 +1,13 @@
 //! Which observations of a real run break a sound bound, and which of them
 //! a cause in their own window excuses (`rtpipe_runtime::blame`): per chain
-//! sample and quantity, and per job whose response exceeds R(job).
+//! sample and quantity, per job whose response exceeds R(job), and every
+//! job of a task the analysis bounds no response for (never excused: no
+//! disturbance explains an overload the spec itself declares).
 
 use rtpipe_analysis::disturbance::inflation;
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_joblog::{sample_rows, SampleRow};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Nanos, Server, Spec};
 use rtpipe_runtime::blame::{Blame, Cause};
 use rtpipe_runtime::RunResult;
 use serde::Serialize;
@@ -19,9 +21,10 @@ pub(super) struct Violation {
     pub(super) quantity: String,
     /// The sample id (chains) or the job index (tasks).
     pub(super) id: u64,
-    /// The observed value and the bound, in the spec's unit.
+    /// The observed value and the bound, in the spec's unit (`None`: the
+    /// analysis bounds no response of the task).
     pub(super) value: f64,
-    pub(super) bound: f64,
+    pub(super) bound: Option<f64>,
     /// The window the causes were looked for in, in the spec's unit.
     pub(super) window: (f64, f64),
     /// The causes found there; excused when they can explain the excess.
@@ -34,6 +37,8 @@ pub(super) struct Violation {
 pub(super) struct Verdict {
     pub(super) excused: usize,
     pub(super) unexcused: usize,
+    /// Of the unexcused, the jobs of tasks with no bounded response.
+    pub(super) unbounded: usize,
     pub(super) violations: Vec<Violation>,
 }
 
@@ -74,7 +79,7 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
                         quantity,
                         id: r.sample,
                         value,
-                        bound,
+                        bound: Some(bound),
                         window,
                     };
                     v.push(spec, obs, blame.causes(window, path), path);
@@ -82,13 +87,19 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
             }
         }
     }
-    // The schedule's responses (under LET the job log holds period ends).
+    judge_jobs(spec, report, res, &blame, &mut v);
+    v
+}
+
+/// The schedule's responses (under LET the job log holds period ends):
+/// each above its task's R(job), and each of a task with no bounded
+/// response but a guarantee (a background task has none by design).
+fn judge_jobs(spec: &Spec, report: &Report, res: &RunResult, blame: &Blame, v: &mut Verdict) {
     for j in res.scheduled() {
-        let Some(bound) = report.timing.get(j.task).and_then(|t| t.bounded_response()) else {
-            continue;
-        };
+        let bound = report.timing.get(j.task).and_then(|t| t.bounded_response());
+        let guaranteed = spec.tasks[j.task].server != Server::Background;
         let value = j.finish - j.release;
-        if value > bound {
+        if bound.map_or(guaranteed, |b| value > b) {
             let window = blame.extend((j.release, j.finish), &[j.task]);
             let what = spec.tasks[j.task].name.clone();
             let obs = Obs {
@@ -102,7 +113,6 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
             v.push(spec, obs, blame.causes(window, &[j.task]), &[j.task]);
         }
     }
-    v
 }
 
 /// An observation above its bound, before its causes are judged.
@@ -111,7 +121,8 @@ struct Obs {
     quantity: String,
     id: u64,
     value: Nanos,
-    bound: Nanos,
+    /// `None`: no bounded response (an unschedulable task).
+    bound: Option<Nanos>,
     window: (Nanos, Nanos),
 }
 
@@ -122,7 +133,8 @@ impl Verdict {
     /// delays, each at most that task's inflation by its share; where the
     /// inflation is superadditive the largest single inflation by the total
     /// covers their sum; where its steps make it not, the allowance can
-    /// fall short of that sum: a false alarm, never a false excuse).
+    /// fall short of that sum: a false alarm, never a false excuse). An
+    /// observation with no bound is never excused.
     fn push(&mut self, spec: &Spec, o: Obs, causes: Vec<Cause>, tasks: &[usize]) {
         let b = Blame::total(&causes);
         let allowance = tasks
@@ -130,22 +142,34 @@ impl Verdict {
             .map(|&t| inflation(spec, t, b))
             .max()
             .unwrap_or(0);
-        let excused = allowance >= o.value - o.bound;
+        let excused = o.bound.is_some_and(|bound| allowance >= o.value - bound);
         if excused {
             self.excused += 1;
         } else {
             self.unexcused += 1;
+            self.unbounded += usize::from(o.bound.is_none());
         }
         self.violations.push(Violation {
             what: o.what,
             quantity: o.quantity,
             id: o.id,
             value: spec.in_unit(o.value),
-            bound: spec.in_unit(o.bound),
+            bound: o.bound.map(|b| spec.in_unit(b)),
             window: (spec.in_unit(o.window.0), spec.in_unit(o.window.1)),
             causes: causes.iter().map(|c| c.describe(spec)).collect(),
             excused,
         });
+    }
+
+    /// ", N of them jobs of tasks with no bounded response" when there are.
+    pub(super) fn unbounded_note(&self) -> String {
+        if self.unbounded == 0 {
+            return String::new();
+        }
+        format!(
+            " ({} of them job(s) of tasks the analysis bounds no response for)",
+            self.unbounded
+        )
     }
 
     /// The text report's lines (at most `shown` violations listed).
@@ -154,10 +178,11 @@ impl Verdict {
             return "no observation above a sound bound\n".into();
         }
         let mut out = format!(
-            "{} observation(s) above a sound bound: {} excused by what broke the model in their window on their CPUs, {} not\n",
+            "{} observation(s) above a sound bound: {} excused by what broke the model in their window on their CPUs, {} not{}\n",
             self.violations.len(),
             self.excused,
-            self.unexcused
+            self.unexcused,
+            self.unbounded_note()
         );
         for x in self
             .violations
@@ -171,13 +196,19 @@ impl Verdict {
             } else {
                 x.causes.join("; ")
             };
+            let bound = match x.bound {
+                Some(b) => format!("> {b} {}", spec.time_unit),
+                None => format!(
+                    "{}, with no bounded response (the analysis finds the task unschedulable)",
+                    spec.time_unit
+                ),
+            };
             out.push_str(&format!(
-                "  {} {} #{}: {} > {} {u} in [{}, {}] {u}: {} ({because})\n",
+                "  {} {} #{}: {} {bound} in [{}, {}] {u}: {} ({because})\n",
                 x.what,
                 x.quantity,
                 x.id,
                 x.value,
-                x.bound,
                 x.window.0,
                 x.window.1,
                 if x.excused { "excused" } else { "VIOLATION" },

@@ -56,6 +56,7 @@ pub(super) fn assemble<V>(
         elapsed,
         notes,
         probes: Vec::new(),
+        rt_share: None,
         demoted: Vec::new(),
         partitioned: false,
         dispatch: None,
