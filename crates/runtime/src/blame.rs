@@ -184,9 +184,8 @@ fn foreign_sources(dispatcher: bool, throttled: bool) -> String {
     if dispatcher {
         out.push_str("the EDF dispatcher's releases and completions, ");
     }
-    out.push_str(
-        "kernel latency, interrupts, other processes' threads (a foreign real-time one), steal",
-    );
+    // A foreign real-time thread is one of the other processes.
+    out.push_str("kernel latency, interrupts, other processes, steal");
     out
 }
 

@@ -191,11 +191,7 @@ impl Verdict {
             .chain(self.violations.iter().filter(|x| x.excused))
             .take(shown)
         {
-            let because = if x.causes.is_empty() {
-                "no cause found".to_string()
-            } else {
-                x.causes.join("; ")
-            };
+            let because = abridged(&x.causes);
             let bound = match x.bound {
                 Some(b) => format!("> {b} {}", spec.time_unit),
                 None => format!(
@@ -222,5 +218,44 @@ impl Verdict {
             ));
         }
         out
+    }
+}
+
+/// A violation's causes for the text: all of them up to [`CAUSES_SHOWN`];
+/// beyond, the first few (job overruns, which a long busy period gathers
+/// by the hundred) and the last ones (the foreign time and steal of each
+/// CPU), the count of those left out between. `--json` has them all.
+fn abridged(causes: &[String]) -> String {
+    if causes.is_empty() {
+        return "no cause found".to_string();
+    }
+    if causes.len() <= CAUSES_SHOWN {
+        return causes.join("; ");
+    }
+    let (head, tail) = (3, CAUSES_SHOWN - 3);
+    let left_out = causes.len() - head - tail;
+    format!(
+        "{}; ... {left_out} more in --json; {}",
+        causes[..head].join("; "),
+        causes[causes.len() - tail..].join("; ")
+    )
+}
+
+/// The most causes the text lists for one violation.
+const CAUSES_SHOWN: usize = 7;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_list_of_causes_keeps_its_first_and_last_in_the_text() {
+        let causes: Vec<String> = (0..100).map(|k| format!("c{k}")).collect();
+        assert_eq!(
+            abridged(&causes),
+            "c0; c1; c2; ... 93 more in --json; c96; c97; c98; c99"
+        );
+        assert_eq!(abridged(&causes[..7]), "c0; c1; c2; c3; c4; c5; c6");
+        assert_eq!(abridged(&[]), "no cause found");
     }
 }
