@@ -536,8 +536,10 @@ fn saturated(spec: &Spec, res: &RunResult) -> Vec<Vec<Nanos>> {
     let mut out = vec![Vec::new(); cpus];
     let probes = &res.probes;
     for p in probes {
+        // The last probe a period or more before (the first, early on:
+        // the kernel throttles within the run's first period too).
         let k = probes.partition_point(|q| q.at <= p.at - period);
-        let Some(q) = k.checked_sub(1).and_then(|k| probes.get(k)) else {
+        let Some(q) = probes.get(k.saturating_sub(1)) else {
             continue;
         };
         let mut used = vec![0; cpus];
@@ -547,7 +549,9 @@ fn saturated(spec: &Spec, res: &RunResult) -> Vec<Vec<Nanos>> {
                 used[task.cpu as usize] += (x - y).max(0);
             }
         }
-        let span = p.at - q.at;
+        // A span shorter than the period reaches the share only by using
+        // the whole runtime in it.
+        let span = (p.at - q.at).max(period);
         for (cpu, &u) in used.iter().enumerate() {
             // u / span ≥ (runtime − slack) / period, without division.
             if i128::from(u) * i128::from(period)
