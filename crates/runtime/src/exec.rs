@@ -372,6 +372,9 @@ fn execute<'a, V: Copy + Send>(
     })?;
     sys::catch_sigint();
     let shared = shared(spec, cfg.policy, &mut notes)?;
+    if let Some(d) = shared.dispatcher() {
+        d.reserve(threads.iter().map(|t| t.recs.capacity()));
+    }
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
