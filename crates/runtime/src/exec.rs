@@ -372,9 +372,7 @@ fn execute<'a, V: Copy + Send>(
     })?;
     sys::catch_sigint();
     let shared = shared(spec, cfg.policy, &mut notes)?;
-    if let Some(d) = shared.dispatcher() {
-        d.reserve(threads.iter().map(|t| t.recs.capacity()));
-    }
+    shared.reserve_spans(&threads);
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
@@ -413,7 +411,6 @@ fn execute<'a, V: Copy + Send>(
     res.load = cfg.load;
     res.epoch = e0;
     res.probes = probes;
-    res.rt_share = crate::probe::rt_share();
     res.demoted = demoted;
     res.partitioned = shared.partition.is_some();
     res.dispatch = dispatch;
@@ -578,6 +575,14 @@ impl Shared {
     /// The EDF dispatcher, under [`Policy::EdfFifo`].
     fn dispatcher(&self) -> Option<&crate::edf::Dispatcher> {
         self.resources.as_ref().and_then(|r| r.dispatch.as_ref())
+    }
+
+    /// Room in the EDF dispatcher's span log for every job the threads
+    /// can log (none grows a vector on the real-time path).
+    fn reserve_spans<V>(&self, threads: &[Thread<'_, V>]) {
+        if let Some(d) = self.dispatcher() {
+            d.reserve(threads.iter().map(|t| t.recs.capacity()));
+        }
     }
 
     /// For `n` task threads (and the one that starts them).
