@@ -25,6 +25,12 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     if b == 0 {
         return 0;
     }
+    if b == Nanos::MAX {
+        // An unbounded disturbance (a run outside the model: best effort,
+        // global EDF, a demoted thread) has no bound to grow by; the
+        // analyses below would cap it (EDF's at D − R).
+        return Nanos::MAX;
+    }
     let policy = spec.policy();
     if !policy.fixed_priority()
         && !crate::sched::edf_constrained_at(spec, &crate::qpa::spec_periods(spec), t.cpu)
@@ -184,5 +190,22 @@ output = { channel = "shm", size = 0 }
         let ms = 1_000_000;
         assert_eq!(inflation(&spec, 1, 10_000), 10_000);
         assert_eq!(inflation(&spec, 1, ms + 10_000), 2 * ms + 10_000);
+    }
+
+    /// An unbounded disturbance (global EDF, best effort: `Nanos::MAX`)
+    /// grows every response without bound, under EDF as under fixed
+    /// priorities: EDF's analysis used to cap it at T − R(job), so a
+    /// global-EDF run's observations further above their bounds failed.
+    #[test]
+    fn an_unbounded_disturbance_excuses_any_excess() {
+        let src = "[system]\nname = \"e\"\nscheduler = \"edf\"\n[tasks.a]\nexec = 1\nperiod = 4\nserver = \"none\"\n[tasks.c]\nexec = 2\nperiod = 8\nserver = \"none\"\n";
+        let spec = Spec::parse("e.toml", src).unwrap_or_else(|e| panic!("{e}"));
+        for task in 0..2 {
+            assert_eq!(inflation(&spec, task, Nanos::MAX), Nanos::MAX);
+        }
+        let Ok(fp) = Spec::parse("two.toml", SPEC) else {
+            panic!("the spec parses");
+        };
+        assert_eq!(inflation(&fp, 1, Nanos::MAX), Nanos::MAX);
     }
 }

@@ -36,7 +36,7 @@ pub struct CampaignArgs {
 }
 
 pub fn run(a: &CampaignArgs) -> ExitCode {
-    rtpipe_runtime::sys::catch_sigint();
+    rtpipe_runtime::sys::catch_stop_signals();
     match execute(a, &rtpipe_runtime::sys::stop_requested) {
         Ok(answer) => answer.emit(),
         Err(b) => command::fail(b),
@@ -83,7 +83,7 @@ pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Ans
         Vec::new()
     };
     let status = if s.stopped {
-        crate::EXIT_INTERRUPTED
+        crate::interrupted_status()
     } else {
         0
     };

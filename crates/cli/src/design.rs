@@ -7,7 +7,7 @@ use crate::command::mode_parser;
 use crate::command::{self, Answer, Rendered};
 use crate::output;
 use crate::report::Pairs;
-use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED};
+use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_design::lp::SolverKind;
 use rtpipe_design::{
     design, DesignError, ErrorKind, Incumbent, Method, Mode, Options, Outcome, Status,
@@ -110,7 +110,7 @@ pub fn run(a: &DesignArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    rtpipe_runtime::sys::catch_sigint();
+    rtpipe_runtime::sys::catch_stop_signals();
     match execute(&spec, a, &rtpipe_runtime::sys::stop_requested) {
         Ok((answer, _)) => answer.emit(),
         Err(b) => command::fail(b),
@@ -164,7 +164,7 @@ pub fn execute(
     let what = flying.map(|(_, w)| w);
     let report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
     let status = match (stopped, out.status) {
-        (true, _) => EXIT_INTERRUPTED,
+        (true, _) => crate::interrupted_status(),
         (false, Status::Optimal | Status::Feasible) => 0,
         (false, _) => 1,
     };

@@ -43,6 +43,15 @@ pub const EXIT_INTERNAL: u8 = 3;
 /// and printed: the answer is not the one the complete search gives.
 pub const EXIT_INTERRUPTED: u8 = 130;
 
+/// Exit status of a command a stop signal ended early: 128 + the signal,
+/// as a shell reports a process that signal ended (130 for Ctrl-C, 143
+/// for SIGTERM, 129 for SIGHUP; `rtpipe_runtime::sys::STOP_SIGNALS`).
+pub fn interrupted_status() -> u8 {
+    rtpipe_runtime::sys::stop_signal()
+        .and_then(|s| u8::try_from(128 + s).ok())
+        .unwrap_or(EXIT_INTERRUPTED)
+}
+
 /// Exit status when the reader of stdout went away (128 + SIGPIPE, what a
 /// shell reports for a process a broken pipe ends).
 pub const EXIT_BROKEN_PIPE: u8 = 141;

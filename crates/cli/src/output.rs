@@ -242,13 +242,50 @@ pub fn distinct(outs: &[Output]) -> Result<(), Diagnostic> {
 }
 
 /// A fresh temporary path beside `target` (same directory, so a rename
-/// puts it in place), told apart by `what` and this process.
+/// puts it in place), told apart by `what` and this process. The
+/// temporaries an rtpipe killed by SIGKILL left in that directory (it ran
+/// no clean-up) go first ([`remove_stale_temps`]).
 pub fn temp_beside(target: &Path, what: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    parent_dir(target).join(format!(".{name}.{}.{what}.tmp", std::process::id()))
+    let dir = parent_dir(target);
+    remove_stale_temps(dir);
+    dir.join(format!(".{name}.{}.{what}.tmp", std::process::id()))
+}
+
+/// Removes from `dir` every temporary of [`temp_beside`]'s making
+/// (`.NAME.PID.WHAT.tmp`) whose process is gone: a stop signal or an error
+/// removes its own, a SIGKILL cannot. A process of another pid namespace
+/// sharing the directory would look gone; rtpipe writes are not meant to
+/// share one.
+fn remove_stale_temps(dir: &Path) {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.filter_map(Result::ok) {
+        let name = e.file_name();
+        let Some(pid) = name.to_str().and_then(temp_owner) else {
+            continue;
+        };
+        let regular = e.file_type().is_ok_and(|t| t.is_file());
+        if regular && !Path::new("/proc").join(pid.to_string()).exists() {
+            let _ = fs::remove_file(e.path());
+        }
+    }
+}
+
+/// The pid in a temporary's name (`.NAME.PID.WHAT.tmp`, WHAT a number,
+/// `chainN` or `joined`); `None` for any other name.
+fn temp_owner(name: &str) -> Option<u32> {
+    let inner = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (rest, what) = inner.rsplit_once('.')?;
+    let (_, pid) = rest.rsplit_once('.')?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let known = digits(what) || what == "joined" || what.strip_prefix("chain").is_some_and(digits);
+    let pid: u32 = pid.parse().ok().filter(|_| digits(pid))?;
+    (known && pid != std::process::id()).then_some(pid)
 }
 
 /// Writes every file to a fresh temporary file beside its real target, then
@@ -356,6 +393,18 @@ mod tests {
         let _ = fs::remove_dir_all(&d);
         let _ = fs::create_dir_all(&d);
         d
+    }
+
+    #[test]
+    fn only_the_temporaries_of_its_own_making_are_stale_candidates() {
+        assert_eq!(temp_owner(".s.csv.4242.chain0.tmp"), Some(4242));
+        assert_eq!(temp_owner(".s.csv.4242.joined.tmp"), Some(4242));
+        assert_eq!(temp_owner(".out.toml.17.0.tmp"), Some(17));
+        assert_eq!(temp_owner(".s.csv.4242.mine.tmp"), None);
+        assert_eq!(temp_owner("s.csv.4242.0.tmp"), None);
+        assert_eq!(temp_owner(".s.csv.42x.0.tmp"), None);
+        let own = format!(".s.csv.{}.0.tmp", std::process::id());
+        assert_eq!(temp_owner(&own), None);
     }
 
     #[test]

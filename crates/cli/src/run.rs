@@ -306,12 +306,13 @@ pub fn run(a: &RunArgs) -> ExitCode {
     }
     if res.interrupted {
         eprintln!(
-            "error: interrupted by Ctrl-C after {} of {} {u} (the report above covers that span)",
+            "error: interrupted by {} after {} of {} {u} (the report above covers that span)",
+            rtpipe_runtime::sys::stop_name(),
             spec.fmt_time(res.sim.horizon),
             spec.fmt_time(cfg.duration),
             u = spec.time_unit
         );
-        return ExitCode::from(crate::EXIT_INTERRUPTED);
+        return ExitCode::from(crate::interrupted_status());
     }
     if written.is_err() {
         return ExitCode::from(crate::EXIT_BAD_INPUT);
@@ -637,9 +638,9 @@ fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
             n => format!(" with {n} background hog(s)"),
         },
         if res.interrupted {
-            ", interrupted by Ctrl-C"
+            format!(", interrupted by {}", rtpipe_runtime::sys::stop_name())
         } else {
-            ""
+            String::new()
         },
         if flight {
             "the flight bodies, the world co-simulated at the true instants".to_string()

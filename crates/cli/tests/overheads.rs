@@ -75,3 +75,43 @@ fn measured_overheads_go_into_a_copy_of_the_spec() {
     back.overheads = given.overheads.clone();
     assert_eq!(back, given);
 }
+
+/// A copy that does not validate is refused before anything is said to
+/// be written: no "written as" line, no file, exit 2.
+#[test]
+fn a_copy_that_does_not_validate_is_never_said_written() {
+    let dir = scratch("ovh-refused");
+    // Utilisation bounds refuse overheads (they do not cover release
+    // handlers): the measured copy of this spec cannot validate.
+    let text = std::fs::read_to_string(example("paper-table3.toml"))
+        .unwrap_or_default()
+        .replace(
+            "schedulability = \"rta\"",
+            "schedulability = \"liu-layland\"",
+        );
+    let spec = dir.join("ll.toml");
+    if let Err(e) = std::fs::write(&spec, text) {
+        panic!("cannot write {}: {e}", spec.display());
+    }
+    let out = dir.join("measured.toml");
+    let o = rtpipe(&[
+        "run",
+        &spec.to_string_lossy(),
+        "--measure-overheads",
+        "--policy",
+        "other",
+        "--best-effort",
+        "--write-spec",
+        &out.to_string_lossy(),
+    ]);
+    assert_exit(&o, 2);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(!said.contains("written as"), "{said}");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("does not validate"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -3,7 +3,7 @@
 //! its class (SCHED_FIFO pinned to its CPU, or a SCHED_DEADLINE
 //! reservation, partitioned into the CPU's root domain where possible).
 
-use crate::config::{fifo_priorities, Policy, RunError, RESERVATION_MARGIN};
+use crate::config::{fifo_priorities, reservation_runtime, Policy, RunError};
 use crate::partition::Partition;
 use crate::sys;
 use rtpipe_model::{Nanos, Spec};
@@ -90,9 +90,8 @@ fn deadline(
             return Err(refused(&format!("cpu {}'s cpuset", th.cpu), e, help));
         }
     }
-    // The runtime carries the job frame on top of the budget
-    // (RESERVATION_MARGIN).
-    let c = (th.budget + RESERVATION_MARGIN).min(th.deadline) as u64;
+    // The runtime carries the job frame on top of the budget.
+    let c = reservation_runtime(th.budget, th.deadline) as u64;
     let t = th.period as u64;
     if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
         let help = match e.raw_os_error() {

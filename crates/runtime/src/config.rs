@@ -118,6 +118,14 @@ pub const OVERRUN_TOLERANCE: Nanos = 5_000;
 /// demand never catches up (measured: every period missed).
 pub const RESERVATION_MARGIN: Nanos = 50_000;
 
+/// The runtime of the SCHED_DEADLINE reservation of a task of budget C and
+/// relative deadline D: C + [`RESERVATION_MARGIN`], at most D (the kernel
+/// refuses a runtime above the deadline). The one rule `run` reserves by
+/// and the rt-app export writes.
+pub fn reservation_runtime(budget: Nanos, deadline: Nanos) -> Nanos {
+    (budget + RESERVATION_MARGIN).min(deadline)
+}
+
 /// The SCHED_FIFO priority of each task: rank 1 (the highest, in the
 /// spec's priority order: rate monotonic, deadline monotonic or explicit,
 /// `rtpipe_model::policy::ranks`) → 90, rank 2 → 89, ...; background tasks

@@ -7,7 +7,8 @@ mod log;
 
 use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
 pub use crate::config::{
-    fifo_priorities, ErrorKind, Policy, RunConfig, RunError, OVERRUN_TOLERANCE, RESERVATION_MARGIN,
+    fifo_priorities, reservation_runtime, ErrorKind, Policy, RunConfig, RunError,
+    OVERRUN_TOLERANCE, RESERVATION_MARGIN,
 };
 use crate::four_slot::{self, Reader, Writer};
 use crate::let_comm::{self, Cell, LetIn, LetOut};
@@ -228,7 +229,8 @@ pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
             ));
         };
         jobs += (cfg.duration / period) as u64 + 1;
-        bandwidth += (t.budget() + RESERVATION_MARGIN) as f64 / period as f64;
+        let deadline = t.deadline_given.unwrap_or(period);
+        bandwidth += reservation_runtime(t.budget(), deadline) as f64 / period as f64;
         if t.cpu as usize >= cpus {
             return Err(RunError::config(
                 format!(
@@ -370,7 +372,7 @@ fn execute<'a, V: Copy + Send>(
             "lower --load",
         )
     })?;
-    sys::catch_sigint();
+    sys::catch_stop_signals();
     let shared = shared(spec, cfg.policy, &mut notes)?;
     shared.reserve_spans(&threads);
     let steal0 = sys::steal_time();
@@ -420,8 +422,13 @@ fn execute<'a, V: Copy + Send>(
 
 /// What the task threads of a run under `policy` share: the resources'
 /// locks, and under SCHED_DEADLINE a root domain per CPU where the machine
-/// allows it (else a note says EDF is global).
+/// allows it (else a note says EDF is global). What a run killed by
+/// SIGKILL left on the machine is repaired first, whatever the policy.
 fn shared(spec: &Spec, policy: Policy, notes: &mut Vec<String>) -> Result<Shared, RunError> {
+    match crate::partition::repair() {
+        Ok(done) => notes.extend(done),
+        Err(why) => notes.push(format!("warning: {why}")),
+    }
     let mut shared = Shared::new(spec.tasks.len());
     shared.resources = Some(Resources::new(spec, policy).map_err(|e| {
         RunError::config(

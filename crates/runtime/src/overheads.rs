@@ -92,8 +92,15 @@ fn placement(cpu: usize, priority: i32) -> Placement<'static> {
     }
 }
 
-/// Measures every CPU of `cpus` under `policy`.
+/// Measures every CPU of `cpus` under `policy`. A stop signal
+/// (`sys::STOP_SIGNALS`) is held off until the measurement ends (about
+/// 1.5 s per CPU), so that the cpusets it made go with it; the caller
+/// asks [`sys::stop_requested`] then.
 pub fn measure(policy: Policy, cpus: &[usize]) -> Result<Vec<CpuOverheads>, RunError> {
+    sys::catch_stop_signals();
+    // What a run killed by SIGKILL left on the machine goes first.
+    crate::partition::repair()
+        .map_err(|why| RunError::refused(why, "repair the cpuset hierarchy as the message says"))?;
     let partition = if policy == Policy::Deadline {
         Partition::create(sys::online_cpus()).ok().map(Arc::new)
     } else {

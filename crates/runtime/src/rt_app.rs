@@ -8,7 +8,7 @@
 //! rt-app has no registers: the data flow between tasks is not part of the
 //! file.
 
-use crate::exec::{fifo_priorities, Policy, RunConfig};
+use crate::exec::{fifo_priorities, reservation_runtime, Policy, RunConfig};
 use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 use serde_json::{json, Map, Value};
 
@@ -33,6 +33,9 @@ fn us_up(ns: Nanos, what: &str, notes: &mut Vec<String>) -> u64 {
     us
 }
 
+/// What a deadline export cannot carry: `run`'s partition of the CPUs.
+const NO_CPUSETS: &str = "rt-app makes no cpusets: its SCHED_DEADLINE threads run global EDF over all CPUs, where `rtpipe run` makes one exclusive cpuset per CPU (partitioned EDF, as the analysis assumes; docs/runtime.md); for the same schedule, make one exclusive cpuset per CPU, turn the root's cpuset.sched_load_balance off and start each thread in its CPU's set";
+
 /// One task's thread object.
 fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<String>) -> Value {
     let t = &spec.tasks[i];
@@ -53,9 +56,15 @@ fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<Strin
             if cfg.policy == Policy::EdfFifo && i == 0 {
                 notes.push("rt-app has no EDF dispatcher: the edf-fifo run is exported as SCHED_DEADLINE reservations, under which the critical sections do not follow the stack resource policy".into());
             }
-            let budget = us_up(t.budget(), &format!("task {} budget", t.name), notes);
+            if i == 0 {
+                notes.push(NO_CPUSETS.into());
+            }
+            // The reservation `run` makes (`reservation_runtime`), not
+            // the bare budget: rt-app's job frame needs the margin too.
+            let runtime = reservation_runtime(t.budget(), t.deadline_given.unwrap_or(period));
+            let runtime = us_up(runtime, &format!("task {} reservation", t.name), notes);
             o.insert("policy".into(), json!("SCHED_DEADLINE"));
-            o.insert("dl-runtime".into(), json!(budget));
+            o.insert("dl-runtime".into(), json!(runtime));
             o.insert("dl-period".into(), json!(period_us));
             let deadline = t.deadline_given.map_or(period_us, |d| {
                 us_up(d, &format!("task {} deadline", t.name), notes)
@@ -245,7 +254,8 @@ output = { channel = "m", size = 0 }
         let r = rt_app(&spec("edf"), &cfg(Policy::Deadline, 0));
         let dst = &r.json["tasks"]["dst"];
         assert_eq!(dst["policy"], "SCHED_DEADLINE");
-        assert_eq!(dst["dl-runtime"], 400);
+        // The budget (400 us) and the margin `run` reserves with it.
+        assert_eq!(dst["dl-runtime"], 450);
         assert_eq!(dst["dl-period"], 5000);
         assert_eq!(dst["dl-deadline"], 5000);
         assert!(
@@ -254,6 +264,7 @@ output = { channel = "m", size = 0 }
         );
         assert!(dst.get("priority").is_none());
         assert_eq!(r.json["tasks"].as_object().map(|o| o.len()), Some(2));
+        assert!(r.notes.iter().any(|n| n == NO_CPUSETS), "{:?}", r.notes);
     }
 
     #[test]

@@ -212,36 +212,67 @@ pub fn tick_ns() -> i64 {
 }
 
 static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-/// [`now`] when the first Ctrl-C arrived.
+/// [`now`] when the first stop signal arrived.
 static STOP_AT: std::sync::atomic::AtomicI64 = std::sync::atomic::AtomicI64::new(0);
+/// The first stop signal's number.
+static STOP_SIGNAL: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
 
-extern "C" fn on_sigint(_: libc::c_int) {
+/// The signals that stop a command the way Ctrl-C does: SIGINT (Ctrl-C),
+/// SIGTERM (`kill`, `timeout`, a service manager) and SIGHUP (the terminal
+/// closed). Each ends the command through its own clean-up (a run's
+/// cpusets, a `--samples` file's temporaries) rather than killing it
+/// where it stands.
+pub const STOP_SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
+
+extern "C" fn on_stop_signal(signal: libc::c_int) {
     use std::sync::atomic::Ordering::SeqCst;
     // clock_gettime is async-signal-safe (POSIX.1-2008, signal-safety(7)).
-    // The instant is stored before the flag, so whoever sees the flag
-    // sees the instant.
+    // The instant and the signal are stored before the flag, so whoever
+    // sees the flag sees them.
     if !STOP.load(SeqCst) {
         STOP_AT.store(now(), SeqCst);
+        STOP_SIGNAL.store(signal, SeqCst);
     }
     STOP.store(true, SeqCst);
 }
 
-/// Installs a SIGINT handler that sets the stop flag ([`stop_requested`]).
-pub fn catch_sigint() {
+/// Installs the handler of every [`STOP_SIGNALS`] signal: it sets the stop
+/// flag ([`stop_requested`]). The one home of signal handling: every
+/// command that has something to undo when stopped calls it.
+pub fn catch_stop_signals() {
     STOP.store(false, std::sync::atomic::Ordering::SeqCst);
-    let handler: extern "C" fn(libc::c_int) = on_sigint;
-    // SAFETY: the handler only stores to an atomic (async-signal-safe).
-    unsafe { libc::signal(libc::SIGINT, handler as libc::sighandler_t) };
+    let handler: extern "C" fn(libc::c_int) = on_stop_signal;
+    for signal in STOP_SIGNALS {
+        // SAFETY: the handler only reads a clock and stores to atomics
+        // (async-signal-safe).
+        unsafe { libc::signal(signal, handler as libc::sighandler_t) };
+    }
 }
 
-/// Whether Ctrl-C was pressed since [`catch_sigint`].
+/// Whether a stop signal arrived since [`catch_stop_signals`].
 pub fn stop_requested() -> bool {
     STOP.load(std::sync::atomic::Ordering::SeqCst)
 }
 
-/// When Ctrl-C was first pressed since [`catch_sigint`] ([`now`]'s clock).
+/// When the first stop signal arrived since [`catch_stop_signals`]
+/// ([`now`]'s clock).
 pub fn stop_instant() -> Option<i64> {
     stop_requested().then(|| STOP_AT.load(std::sync::atomic::Ordering::SeqCst))
+}
+
+/// The first stop signal since [`catch_stop_signals`], by number.
+pub fn stop_signal() -> Option<libc::c_int> {
+    stop_requested().then(|| STOP_SIGNAL.load(std::sync::atomic::Ordering::SeqCst))
+}
+
+/// How a message names the stop: "Ctrl-C" for SIGINT, else the signal's
+/// name ("SIGTERM", "SIGHUP").
+pub fn stop_name() -> &'static str {
+    match stop_signal() {
+        Some(libc::SIGTERM) => "SIGTERM",
+        Some(libc::SIGHUP) => "SIGHUP",
+        _ => "Ctrl-C",
+    }
 }
 
 /// `CAP_IPC_LOCK`: lock memory beyond RLIMIT_MEMLOCK.

@@ -28,7 +28,7 @@ fn ctrl_c_ends_the_span_at_the_stop() {
         panic!("the spec parses");
     };
     let spin = Spin::calibrate();
-    rtpipe_runtime::sys::catch_sigint();
+    rtpipe_runtime::sys::catch_stop_signals();
     let bodies: Vec<Box<dyn Body<u64>>> = vec![Box::new(rtpipe_runtime::synthetic(spin, 100_000))];
     let cfg = RunConfig {
         duration: 20_000_000_000,
@@ -38,7 +38,7 @@ fn ctrl_c_ends_the_span_at_the_stop() {
     let raiser = std::thread::spawn(|| {
         std::thread::sleep(std::time::Duration::from_millis(400));
         // SAFETY: raise only delivers a signal to this thread; the handler
-        // catch_sigint installed stores to atomics.
+        // catch_stop_signals installed stores to atomics.
         unsafe { libc::raise(libc::SIGINT) };
     });
     let r = run(&spec, &cfg, bodies, None);

@@ -87,7 +87,7 @@ impl SamplesFile {
     /// One temporary per chain beside `out`'s target. From here on Ctrl-C
     /// is caught, so that [`stop_if_interrupted`] can take them away.
     pub fn create(out: Output, spec: &Spec) -> Result<SamplesFile, Diagnostic> {
-        rtpipe_runtime::sys::catch_sigint();
+        rtpipe_runtime::sys::catch_stop_signals();
         let mut files = Vec::with_capacity(spec.chains.len());
         for c in 0..spec.chains.len() {
             let path = output::temp_beside(&out.target, &format!("chain{c}"));
@@ -258,8 +258,11 @@ fn exit_interrupted() -> ! {
             let _ = std::fs::remove_file(p);
         }
     }
-    eprintln!("interrupted (Ctrl-C): nothing written");
-    std::process::exit(crate::EXIT_INTERRUPTED.into())
+    eprintln!(
+        "interrupted ({}): nothing written",
+        rtpipe_runtime::sys::stop_name()
+    );
+    std::process::exit(crate::interrupted_status().into())
 }
 
 fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {

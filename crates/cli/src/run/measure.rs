@@ -46,13 +46,17 @@ pub(super) fn run(spec: &Spec, a: &RunArgs) -> ExitCode {
         Ok(m) => m,
         Err(e) => return fail(e.diagnostic),
     };
+    if rtpipe_runtime::sys::stop_requested() {
+        eprintln!(
+            "interrupted ({}): nothing measured or written",
+            rtpipe_runtime::sys::stop_name()
+        );
+        return ExitCode::from(crate::interrupted_status());
+    }
     print!("{}", table(&measured));
     let out = with_overheads(spec, &measured);
-    println!(
-        "written as: overheads = {} (the 99th percentiles; replenish is kept: the runtime has no budget path of its own, SCHED_DEADLINE replenishes inside the measured release)",
-        overheads_line(&out)
-    );
     let Some(path) = &a.write_spec else {
+        println!("as a spec writes it: {}", overheads_note(&out));
         return ExitCode::SUCCESS;
     };
     let text = rtpipe_model::to_toml(&out);
@@ -66,8 +70,18 @@ pub(super) fn run(spec: &Spec, a: &RunArgs) -> ExitCode {
     if let Err(d) = output::write_files(&a.spec, &[("--write-spec", path.clone(), text)]) {
         return fail(d);
     }
+    // Said only once it is true: the copy validated and is in place.
+    println!("written as: {}", overheads_note(&out));
     eprintln!("wrote {}", path.display());
     ExitCode::SUCCESS
+}
+
+/// The `overheads = { ... }` line of `out`, and where its figures come from.
+fn overheads_note(out: &Spec) -> String {
+    format!(
+        "overheads = {} (the 99th percentiles; replenish is kept: the runtime has no budget path of its own, SCHED_DEADLINE replenishes inside the measured release)",
+        overheads_line(out)
+    )
 }
 
 /// One row per CPU and figure, µs.

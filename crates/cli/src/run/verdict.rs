@@ -172,7 +172,11 @@ impl Verdict {
         )
     }
 
-    /// The text report's lines (at most `shown` violations listed).
+    /// The text report's lines: the observations nothing excuses, each
+    /// (at most `shown`), then the excused ones counted per task or chain
+    /// and quantity, with the worst of each (a partitioned EDF run has
+    /// hundreds, each explained by its own job's start latency: listing
+    /// them hid the few that matter).
     pub(super) fn text(&self, spec: &Spec, shown: usize) -> String {
         if self.violations.is_empty() {
             return "no observation above a sound bound\n".into();
@@ -184,40 +188,76 @@ impl Verdict {
             self.unexcused,
             self.unbounded_note()
         );
-        for x in self
-            .violations
-            .iter()
-            .filter(|x| !x.excused)
-            .chain(self.violations.iter().filter(|x| x.excused))
-            .take(shown)
-        {
-            let because = abridged(&x.causes);
-            let bound = match x.bound {
-                Some(b) => format!("> {b} {}", spec.time_unit),
-                None => format!(
-                    "{}, with no bounded response (the analysis finds the task unschedulable)",
-                    spec.time_unit
-                ),
-            };
+        let unit = spec.time_unit.to_string();
+        for x in self.violations.iter().filter(|x| !x.excused).take(shown) {
             out.push_str(&format!(
-                "  {} {} #{}: {} {bound} in [{}, {}] {u}: {} ({because})\n",
-                x.what,
-                x.quantity,
-                x.id,
-                x.value,
-                x.window.0,
-                x.window.1,
-                if x.excused { "excused" } else { "VIOLATION" },
-                u = spec.time_unit
+                "  {}: VIOLATION ({})\n",
+                x.line(&unit),
+                x.because()
             ));
         }
-        if self.violations.len() > shown {
+        if self.unexcused > shown {
             out.push_str(&format!(
-                "  ... {} more in --json\n",
-                self.violations.len() - shown
+                "  ... {} more not excused in --json\n",
+                self.unexcused - shown
+            ));
+        }
+        for (n, worst) in self.excused_groups() {
+            out.push_str(&format!(
+                "  excused: {} {} above its bound {n} time(s), the worst {}: excused ({})\n",
+                worst.what,
+                worst.quantity,
+                worst.line(&unit),
+                worst.because()
             ));
         }
         out
+    }
+
+    /// The excused observations per (task or chain, quantity), in the order
+    /// first seen: how many, and the one furthest above its bound.
+    fn excused_groups(&self) -> Vec<(usize, &Violation)> {
+        let mut groups: Vec<(usize, &Violation)> = Vec::new();
+        for x in self.violations.iter().filter(|x| x.excused) {
+            let same =
+                |g: &&mut (usize, &Violation)| g.1.what == x.what && g.1.quantity == x.quantity;
+            match groups.iter_mut().find(same) {
+                Some(g) => {
+                    g.0 += 1;
+                    if x.excess() > g.1.excess() {
+                        g.1 = x;
+                    }
+                }
+                None => groups.push((1, x)),
+            }
+        }
+        groups
+    }
+}
+
+impl Violation {
+    /// What was observed, its bound and its window.
+    fn line(&self, unit: &str) -> String {
+        let bound = match self.bound {
+            Some(b) => format!("> {b} {unit}"),
+            None => format!(
+                "{unit}, with no bounded response (the analysis finds the task unschedulable)"
+            ),
+        };
+        format!(
+            "{} {} #{}: {} {bound} in [{}, {}] {unit}",
+            self.what, self.quantity, self.id, self.value, self.window.0, self.window.1,
+        )
+    }
+
+    /// How far above its bound (infinite without one).
+    fn excess(&self) -> f64 {
+        self.bound.map_or(f64::INFINITY, |b| self.value - b)
+    }
+
+    /// Its causes ([`abridged`]), or that none was found.
+    fn because(&self) -> String {
+        abridged(&self.causes)
     }
 }
 
@@ -247,6 +287,58 @@ const CAUSES_SHOWN: usize = 7;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn violation(what: &str, id: u64, value: f64, excused: bool) -> Violation {
+        Violation {
+            what: what.into(),
+            quantity: "response".into(),
+            id,
+            value,
+            bound: Some(1.0),
+            window: (0.0, value),
+            causes: vec![format!("cause of #{id}")],
+            excused,
+        }
+    }
+
+    /// The unexcused are listed one by one; the excused are counted per
+    /// task and quantity, the worst of each named.
+    #[test]
+    fn the_excused_are_counted_the_rest_listed() {
+        let spec = rtpipe_testkit::example("paper-table3.toml");
+        let violations = vec![
+            violation("p2", 0, 1.1, true),
+            violation("p2", 1, 1.3, true),
+            violation("p2", 2, 1.2, true),
+            violation("p3", 7, 2.0, false),
+            violation("p1", 4, 1.05, true),
+        ];
+        let v = Verdict {
+            excused: 4,
+            unexcused: 1,
+            unbounded: 0,
+            violations,
+        };
+        let text = v.text(&spec, 10);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 4, "{text}");
+        assert!(lines[1].starts_with("  p3 response #7: 2 > 1 ms"), "{text}");
+        assert!(lines[1].ends_with("VIOLATION (cause of #7)"), "{text}");
+        assert!(
+            lines[2].starts_with("  excused: p2 response above its bound 3 time(s), the worst p2 response #1: 1.3 > 1 ms"),
+            "{text}"
+        );
+        assert!(
+            lines[3].contains("p1 response above its bound 1 time(s)"),
+            "{text}"
+        );
+        // Past `shown`, the unexcused are counted.
+        let text = v.text(&spec, 0);
+        assert!(
+            text.contains("  ... 1 more not excused in --json"),
+            "{text}"
+        );
+    }
 
     #[test]
     fn a_long_list_of_causes_keeps_its_first_and_last_in_the_text() {
