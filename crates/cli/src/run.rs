@@ -542,12 +542,14 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
 
 /// Exit 1 when an observation above a sound bound has no cause in its
 /// window that adds up to its excess (a violation of the analysis, or of
-/// the model by something rtpipe cannot see); exit 0 otherwise.
+/// the model by something rtpipe cannot see), or a task the analysis bounds
+/// no response for ran a job (`--force`); exit 0 otherwise.
 fn exit_status(v: &Verdict) -> ExitCode {
     if v.unexcused > 0 {
         eprintln!(
-            "error: {} observation(s) above a sound bound with no cause in their own window that explains them (listed above; --json has them all)",
-            v.unexcused
+            "error: {} observation(s) above a sound bound with no cause in their own window that explains them{} (listed above; --json has them all)",
+            v.unexcused,
+            v.unbounded_note()
         );
         return ExitCode::from(1);
     }

@@ -982,3 +982,102 @@ fn let_runs_measure_the_simulator_s_exact_latencies() {
         .unwrap_or(9.9);
     assert!(r < 5.0, "sensor's max response {r} ms");
 }
+
+/// U = 1.05 on CPU 0 (times in ms): a 2/5, b 3.5/10, c 6/20. The analysis
+/// bounds no response of c (no task's under EDF); `--force` runs it anyway.
+fn overloaded(scheduler: &str) -> String {
+    format!(
+        r#"[system]
+name = "overloaded"
+time_unit = "ms"
+scheduler = "{scheduler}"
+
+[tasks.a]
+exec = 2
+period = 5
+
+[tasks.b]
+exec = 3.5
+period = 10
+
+[tasks.c]
+exec = 6
+period = 20
+"#
+    )
+}
+
+/// A forced run of an unschedulable set exits 1 whatever its policy: every
+/// job of a task with no bounded response is a violation no cause excuses
+/// (not the run's own overload, not the RT throttling that overload
+/// triggers, not global EDF), and the report names them.
+#[test]
+fn a_forced_overload_exits_1_naming_the_unbounded_task_s_jobs() {
+    for (scheduler, policy, unbounded) in [
+        ("rm", "fifo", vec!["c"]),
+        ("edf", "deadline", vec!["a", "b", "c"]),
+        ("edf", "edf-fifo", vec!["a", "b", "c"]),
+    ] {
+        let _one = serial();
+        let spec = write_spec(&format!("overload-{policy}"), &overloaded(scheduler));
+        let args = [
+            "run",
+            &spec,
+            "--duration",
+            "1s",
+            "--policy",
+            policy,
+            "--force",
+        ];
+        let o = rtpipe(&[&args[..], &["--json"]].concat());
+        if unprivileged(
+            &o,
+            "a_forced_overload_exits_1_naming_the_unbounded_task_s_jobs",
+        ) {
+            return;
+        }
+        // Partitioned, SCHED_DEADLINE's admission control refuses more than
+        // the CPU's real-time share before anything runs (exit 2).
+        if policy == "deadline" && stderr(&o).contains("the kernel refused SCHED_DEADLINE") {
+            assert_exit(&o, 2);
+            eprintln!("the kernel refused the overload under SCHED_DEADLINE (partitioned)");
+            continue;
+        }
+        assert_exit(&o, 1);
+        assert!(
+            stderr(&o).contains("of tasks the analysis bounds no response for"),
+            "{policy}: {}",
+            stderr(&o)
+        );
+        let v = json_of(&o);
+        let verdict = &v["run"]["sound_bound_violations"];
+        let list = verdict["violations"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        for task in &unbounded {
+            let jobs: Vec<&Value> = list
+                .iter()
+                .filter(|x| x["what"] == *task && x["quantity"] == "response")
+                .collect();
+            // Every job it ran: 1 s of releases every 5 to 20 ms.
+            assert!(jobs.len() >= 40, "{policy}: {task}: {verdict}");
+            for x in jobs {
+                assert_eq!(x["bound"], Value::Null, "{policy}: {x}");
+                assert_eq!(x["excused"], false, "{policy}: {x}");
+            }
+        }
+        assert!(
+            verdict["unbounded"].as_u64().unwrap_or(0) >= 40,
+            "{verdict}"
+        );
+        // The text report lists them as violations too.
+        let o = rtpipe(&args);
+        assert_exit(&o, 1);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            text.contains("c response #") && text.contains("with no bounded response"),
+            "{policy}: {text}"
+        );
+    }
+}

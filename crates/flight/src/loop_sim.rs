@@ -206,8 +206,7 @@ pub fn fly(
     }
     let kinds = TASKS.iter().map(|&(r, _)| Some(r)).collect();
     let mut world = Cosim::new(preset, mission, kinds, cfg.world)?;
-    let points = cfg.duration_ns / cfg.world.trace_every_ns.max(1) + 1;
-    world.trace.reserve(usize::try_from(points).unwrap_or(0));
+    world.reserve(cfg.duration_ns);
     let mut exec = Executor {
         timing: tm,
         bodies,

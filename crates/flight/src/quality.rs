@@ -250,6 +250,27 @@ impl Assessor {
         }
     }
 
+    /// Makes room now for every point a flight of `until_ns` with a point
+    /// every `every_ns` keeps for its steps, so that no later [`push`]
+    /// grows a vector: on a real-time executor a push that doubles one
+    /// copies it inside a job (measured: gyro jobs of 230, 396 and 764 µs
+    /// against a median of 1.1 µs, at 4,096, 8,192 and 16,384 jobs).
+    ///
+    /// [`push`]: Assessor::push
+    pub fn reserve(&mut self, every_ns: u64, until_ns: u64) {
+        let kept_ns = if self.keep_until > 0.0 {
+            (self.keep_until * 1e9).min(until_ns as f64) as u64
+        } else {
+            0
+        };
+        let points = kept_ns / every_ns.max(1) + 2;
+        self.kept.reserve(
+            usize::try_from(points)
+                .unwrap_or(0)
+                .saturating_sub(self.kept.len()),
+        );
+    }
+
     fn hover(&self, p: &TracePoint) -> bool {
         let t = secs(p);
         p.armed

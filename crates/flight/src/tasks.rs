@@ -661,6 +661,20 @@ impl Cosim {
         self.progress = Some(to);
     }
 
+    /// Makes room now for everything the world records up to `until_ns`
+    /// (the trace, when kept, and the points the assessor keeps), so that
+    /// no sense or actuate of a run that long grows a vector: on real
+    /// threads a doubling vector is copied inside a job, under the world's
+    /// lock. Memory still grows with the flight, but only here.
+    pub fn reserve(&mut self, until_ns: u64) {
+        let every = self.cfg.trace_every_ns.max(1);
+        if self.keep_trace {
+            let points = until_ns / every + 2;
+            self.trace.reserve(usize::try_from(points).unwrap_or(0));
+        }
+        self.assessor.reserve(every, until_ns);
+    }
+
     /// The plant (for checks after a run).
     pub fn plant(&self) -> &Plant {
         &self.plant

@@ -6,7 +6,7 @@
 //! grows the bound by at least the excess. Everything else is a violation.
 
 use crate::exec::{Policy, RunResult, RESERVATION_MARGIN};
-use crate::probe::Probe;
+use crate::probe::{Probe, PROBE_PERIOD};
 use rtpipe_joblog::JobRecord;
 use rtpipe_model::{Nanos, Spec};
 
@@ -28,6 +28,12 @@ pub enum Cause {
         demand: Nanos,
         /// The task's budget C, ns.
         budget: Nanos,
+        /// What the analysis assumed of this job, ns: the budget C where it
+        /// interferes with the observed tasks, but the declared demand x
+        /// where it is a job of one of them (R(job) assumes x for the job
+        /// itself), so that all of its CPU time above x delayed it, the
+        /// part below C too.
+        assumed: Nanos,
         /// How long the kernel then withheld the CPU from the task: under
         /// SCHED_DEADLINE a reservation that overruns its runtime is
         /// throttled until its next period (up to T); 0 under SCHED_FIFO.
@@ -48,10 +54,11 @@ pub enum Cause {
     },
     /// Time in the window when jobs of the run on a CPU were pending but
     /// none of them used it: the kernel's timer and wake-up latency,
-    /// interrupts, other processes, the hypervisor (steal), and under
+    /// interrupts, other processes (a foreign real-time thread), the
+    /// hypervisor (steal), the kernel's real-time throttling, and under
     /// [`Policy::EdfFifo`] the EDF dispatcher's work at releases and
-    /// completions. The model
-    /// has none of it.
+    /// completions. The model has none of it; it excuses nothing when the
+    /// run's own threads had used the CPU's real-time share (`throttled`).
     Foreign {
         /// The CPU (`None`: all of them, under global EDF).
         cpu: Option<u32>,
@@ -60,6 +67,11 @@ pub enum Cause {
         /// The run was under the EDF dispatcher (`crate::edf`), whose
         /// release and completion work is part of this time.
         dispatcher: bool,
+        /// Around the window the run's own threads on the CPU had used
+        /// its real-time share (`sched_rt_runtime_us` of every
+        /// `sched_rt_period_us`): the kernel throttled them, for the run's
+        /// own overload, and this time is no delay from outside.
+        throttled: bool,
     },
     /// The hypervisor ran something else on a CPU (steal time): named, but
     /// already part of that CPU's [`Cause::Foreign`] time, so it adds no
@@ -86,13 +98,16 @@ impl Cause {
             Cause::Steal { .. } => 0,
             Cause::Overrun {
                 demand,
-                budget,
+                assumed,
                 throttle,
                 ..
-            } => demand - budget + throttle,
+            } => demand - assumed + throttle,
             Cause::Demand {
                 demand, declared, ..
             } => demand - declared,
+            Cause::Foreign {
+                throttled: true, ..
+            } => 0,
             Cause::Foreign { ns, .. } => ns,
         }
     }
@@ -111,12 +126,18 @@ impl Cause {
                 job,
                 demand,
                 budget,
+                assumed,
                 throttle,
             } => format!(
-                "{} job {job} ran {} us against a budget of {} us{}",
+                "{} job {job} ran {} us against a budget of {} us{}{}",
                 name(task),
                 us(demand),
                 us(budget),
+                if assumed < budget {
+                    format!(" (its own response assumed its demand of {} us)", us(assumed))
+                } else {
+                    String::new()
+                },
                 if throttle > 0 {
                     format!(" (SCHED_DEADLINE throttles it up to {} us)", us(throttle))
                 } else {
@@ -138,15 +159,12 @@ impl Cause {
                 cpu,
                 ns,
                 dispatcher,
+                throttled,
             } => format!(
-                "{} us on {} with jobs of the run pending but none running ({}kernel latency, interrupts, other processes, steal)",
+                "{} us on {} with jobs of the run pending but none running ({})",
                 us(ns),
                 cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
-                if dispatcher {
-                    "the EDF dispatcher's releases and completions, "
-                } else {
-                    ""
-                }
+                foreign_sources(dispatcher, throttled)
             ),
             Cause::Steal { cpu, ns } => format!(
                 "{} us of steal time on CPU {cpu} (within the foreign time)",
@@ -155,6 +173,20 @@ impl Cause {
             Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
         }
     }
+}
+
+/// What a foreign time is made of, as far as the run can tell.
+fn foreign_sources(dispatcher: bool, throttled: bool) -> String {
+    let mut out = String::new();
+    if throttled {
+        out.push_str("the kernel's real-time throttling, which the run's own demand triggered: its threads there had used the CPU's real-time share (sched_rt_runtime_us), so this excuses nothing; ");
+    }
+    if dispatcher {
+        out.push_str("the EDF dispatcher's releases and completions, ");
+    }
+    // A foreign real-time thread is one of the other processes.
+    out.push_str("kernel latency, interrupts, other processes, steal");
+    out
 }
 
 fn us(ns: Nanos) -> String {
@@ -167,6 +199,9 @@ pub struct Blame<'r> {
     res: &'r RunResult,
     /// Per task, its jobs in release order.
     jobs: Vec<Vec<&'r JobRecord>>,
+    /// Per CPU, the probe instants where the run's own threads there had
+    /// used the CPU's real-time share over the throttling period before.
+    saturated: Vec<Vec<Nanos>>,
 }
 
 impl<'r> Blame<'r> {
@@ -181,7 +216,23 @@ impl<'r> Blame<'r> {
         for v in &mut jobs {
             v.sort_by_key(|j| j.index);
         }
-        Blame { spec, res, jobs }
+        let saturated = saturated(spec, res);
+        Blame {
+            spec,
+            res,
+            jobs,
+            saturated,
+        }
+    }
+
+    /// Whether the run's own threads on `cpu` had used its real-time share
+    /// around `window` (a probe period either side: the probes' grain).
+    fn self_throttled(&self, cpu: u32, (a, b): (Nanos, Nanos)) -> bool {
+        let Some(list) = self.saturated.get(cpu as usize) else {
+            return false;
+        };
+        let k = list.partition_point(|&x| x < a - PROBE_PERIOD);
+        list.get(k).is_some_and(|&x| x <= b + PROBE_PERIOD)
     }
 
     /// The causes inside `window` (relative to the epoch; callers pass it
@@ -202,7 +253,7 @@ impl<'r> Blame<'r> {
         let cpus = self.cpus_of(tasks);
         for t in 0..self.spec.tasks.len() {
             if self.on(t, &cpus) && self.level(t, tasks) {
-                out.extend(self.overruns(t, window));
+                out.extend(self.overruns(t, window, tasks.contains(&t)));
             }
         }
         for &t in tasks {
@@ -294,10 +345,17 @@ impl<'r> Blame<'r> {
         })
     }
 
-    /// Jobs of `task` that overlap `window` ([release, finish]) and overran.
-    fn overruns(&self, task: usize, window: (Nanos, Nanos)) -> Vec<Cause> {
+    /// Jobs of `task` that overlap `window` ([release, finish]) and overran;
+    /// `observed`: `task` is one of the observation's own (its jobs count
+    /// from its declared demand, not from its budget).
+    fn overruns(&self, task: usize, window: (Nanos, Nanos), observed: bool) -> Vec<Cause> {
         let t = &self.spec.tasks[task];
         let budget = t.budget();
+        let assumed = if observed {
+            t.demand().min(budget)
+        } else {
+            budget
+        };
         // A SCHED_DEADLINE reservation's runtime is C + its margin; beyond
         // it the kernel throttles the task.
         let throttled = |demand: Nanos| match self.res.policy {
@@ -316,6 +374,7 @@ impl<'r> Blame<'r> {
                 job: j.index,
                 demand: j.demand,
                 budget,
+                assumed,
                 throttle: throttled(j.demand),
             })
             .collect()
@@ -448,8 +507,61 @@ impl<'r> Blame<'r> {
             cpu,
             ns,
             dispatcher: self.res.policy == Policy::EdfFifo,
+            throttled: cpu.is_some_and(|c| self.self_throttled(c, (a, b))),
         })
     }
+}
+
+/// How far below the real-time share a CPU's use by the run still counts
+/// as having reached it: two probe periods, the probes' grain at both
+/// ends of the span.
+const SHARE_SLACK: Nanos = 2 * PROBE_PERIOD;
+
+/// Per CPU, the probe instants where the run's own threads there had used
+/// at least the kernel's real-time share (`RunResult::rt_share`, less
+/// [`SHARE_SLACK`]) over the throttling period before: where the kernel's
+/// real-time throttling is the run's own doing. Only under SCHED_FIFO
+/// (SCHED_DEADLINE's reservations are not throttled so).
+fn saturated(spec: &Spec, res: &RunResult) -> Vec<Vec<Nanos>> {
+    let fifo = matches!(res.policy, Policy::Fifo | Policy::EdfFifo);
+    let Some((runtime, period)) = res.rt_share.filter(|_| fifo) else {
+        return Vec::new();
+    };
+    let cpus = spec
+        .tasks
+        .iter()
+        .map(|t| t.cpu as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut out = vec![Vec::new(); cpus];
+    let probes = &res.probes;
+    for p in probes {
+        // The last probe a period or more before (the first, early on:
+        // the kernel throttles within the run's first period too).
+        let k = probes.partition_point(|q| q.at <= p.at - period);
+        let Some(q) = probes.get(k.saturating_sub(1)) else {
+            continue;
+        };
+        let mut used = vec![0; cpus];
+        for (t, task) in spec.tasks.iter().enumerate() {
+            // A counter that falls (a thread gone reads 0) says nothing.
+            if let (Some(&x), Some(&y)) = (p.run.get(t), q.run.get(t)) {
+                used[task.cpu as usize] += (x - y).max(0);
+            }
+        }
+        // A span shorter than the period reaches the share only by using
+        // the whole runtime in it.
+        let span = (p.at - q.at).max(period);
+        for (cpu, &u) in used.iter().enumerate() {
+            // u / span ≥ (runtime − slack) / period, without division.
+            if i128::from(u) * i128::from(period)
+                >= i128::from(runtime - SHARE_SLACK) * i128::from(span)
+            {
+                out[cpu].push(p.at);
+            }
+        }
+    }
+    out
 }
 
 /// The total length of a set of intervals (overlaps counted once).
@@ -579,6 +691,7 @@ output = { channel = "shm", size = 0 }
             epoch: 0,
             notes: Vec::new(),
             probes,
+            rt_share: None,
             demoted: Vec::new(),
             partitioned: false,
             dispatch: None,
@@ -601,6 +714,7 @@ output = { channel = "shm", size = 0 }
             job: 2,
             demand: 3 * MS,
             budget: MS,
+            assumed: MS,
             throttle: 0,
         };
         assert_eq!(at((21 * MS, 22 * MS), &[0]), vec![overrun]);
@@ -613,6 +727,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 5 * MS / 2,
             dispatcher: false,
+            throttled: false,
         };
         assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
         // Outside them, no evidence.
@@ -633,6 +748,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 5 * MS / 2,
             dispatcher: false,
+            throttled: false,
         };
         assert_eq!(b.causes(w, &[0]), vec![foreign]);
     }
@@ -644,12 +760,14 @@ output = { channel = "shm", size = 0 }
                 cpu: Some(0),
                 ns: 3 * MS,
                 dispatcher: false,
+                throttled: false,
             },
             Cause::Overrun {
                 task: 0,
                 job: 0,
                 demand: 2 * MS,
                 budget: MS,
+                assumed: MS,
                 throttle: 0,
             },
         ];
@@ -661,6 +779,94 @@ output = { channel = "shm", size = 0 }
             Blame::total(&[Cause::BestEffort, Cause::Steal { cpu: 0, ns: 1 }]),
             Nanos::MAX
         );
+    }
+
+    /// A job above its budget delays its own response by all of its CPU
+    /// time above its declared demand x (R(job) assumes x), and another
+    /// task's by its time above the budget C (the analysis charges C): g
+    /// (x 174 µs, C 200 µs) ran 284 µs in a 307 µs response, l (below it)
+    /// waited. Counted from C alone, g's own lateness (133 µs above x) was
+    /// left 26 µs short of what delayed it: a false alarm.
+    #[test]
+    fn an_overrun_counts_from_the_demand_for_its_own_job_and_from_the_budget_for_others() {
+        let src = "[system]\nname = \"o\"\ntime_unit = \"us\"\n[tasks.g]\nexec = 174\nbudget = 200\nperiod = 1000\n[tasks.l]\nexec = 100\nperiod = 5000\n";
+        let spec = Spec::parse("o.toml", src).unwrap_or_else(|e| panic!("{e}"));
+        let us = 1_000;
+        let g = JobRecord {
+            finish: 307 * us,
+            ..job(0, 0, 284 * us)
+        };
+        let l = JobRecord {
+            read: 307 * us,
+            finish: 407 * us,
+            ..job(1, 0, 100 * us)
+        };
+        let (_, mut res) = run();
+        res.sim.jobs = vec![g, l];
+        res.probes = Vec::new();
+        let b = Blame::new(&spec, &res);
+        let overrun = |assumed| Cause::Overrun {
+            task: 0,
+            job: 0,
+            demand: 284 * us,
+            budget: 200 * us,
+            assumed,
+            throttle: 0,
+        };
+        let own = b.causes((0, 307 * us), &[0]);
+        assert_eq!(own[0], overrun(174 * us), "{own:?}");
+        // 110 µs above x, and 23 µs with g pending but not running.
+        assert_eq!(Blame::total(&own), 133 * us, "{own:?}");
+        let other = b.causes((0, 407 * us), &[1]);
+        assert_eq!(other[0], overrun(200 * us), "{other:?}");
+        assert_eq!(other[0].delay(), 84 * us);
+        // A job within its budget is no overrun: its time above x is.
+        res.sim.jobs[0].demand = 190 * us;
+        let b = Blame::new(&spec, &res);
+        let own = b.causes((0, 307 * us), &[0]);
+        assert!(
+            own.iter().all(|c| !matches!(c, Cause::Overrun { .. })),
+            "{own:?}"
+        );
+        assert_eq!(own[0].delay(), 16 * us, "{own:?}");
+    }
+
+    /// Foreign time where the run's own threads had used the CPU's
+    /// real-time share is the kernel's throttling of the run's own
+    /// overload: named, and no excuse. Here a's thread ran all of 0–40 ms
+    /// on CPU 0 under a share of 9 ms per 10 ms; CPU 1's b ran 1 ms in 10.
+    #[test]
+    fn throttling_by_the_run_s_own_demand_excuses_nothing() {
+        let (spec, mut res) = run();
+        for p in &mut res.probes {
+            p.run = vec![p.at, p.at / 10];
+        }
+        res.rt_share = Some((9 * MS, 10 * MS));
+        let b = Blame::new(&spec, &res);
+        let w = b.extend((31 * MS, 39 * MS), &[0]);
+        let throttled = Cause::Foreign {
+            cpu: Some(0),
+            ns: 5 * MS / 2,
+            dispatcher: false,
+            throttled: true,
+        };
+        let causes = b.causes(w, &[0]);
+        assert_eq!(causes, vec![throttled.clone()]);
+        assert_eq!(Blame::total(&causes), 0);
+        assert!(throttled.describe(&spec).contains("excuses nothing"));
+        // Below the share, the same time is foreign and excuses.
+        for p in &mut res.probes {
+            p.run = vec![p.at / 4, 0];
+        }
+        let b = Blame::new(&spec, &res);
+        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
+        // Without throttling (sched_rt_runtime_us = -1), none is the run's.
+        res.rt_share = None;
+        for p in &mut res.probes {
+            p.run = vec![p.at, 0];
+        }
+        let b = Blame::new(&spec, &res);
+        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
     }
 
     /// Under the EDF dispatcher a job pending past the window's end is not
@@ -697,6 +903,7 @@ output = { channel = "shm", size = 0 }
             cpu: Some(0),
             ns: 20 * us,
             dispatcher: true,
+            throttled: false,
         };
         assert_eq!(b.causes(w, &[0]), vec![foreign]);
         // Without the dispatcher's spans, nothing is seen.

@@ -217,6 +217,18 @@ impl Dispatcher {
         self.record(task, t0);
     }
 
+    /// Makes room for the dispatch spans of `jobs[i]` jobs of each task i
+    /// (a release and a completion each), before the run: a span is
+    /// recorded at DISPATCH on the real-time path, where a vector that
+    /// doubles would copy itself.
+    pub(crate) fn reserve(&self, jobs: impl Iterator<Item = usize>) {
+        for (spans, n) in self.spans.iter().zip(jobs) {
+            if let Ok(mut v) = spans.lock() {
+                v.reserve(2 * n);
+            }
+        }
+    }
+
     fn record(&self, task: usize, t0: Nanos) {
         let span = (t0, sys::now());
         if let Ok(mut v) = self.spans[task].lock() {
@@ -373,6 +385,20 @@ mod tests {
     /// a's level) and a (deadline 8) is released: a may not start, c runs;
     /// once bus is given back a runs. b (level 2) is held back as well:
     /// its level is not above 1.
+    #[test]
+    fn reserved_spans_never_grow_in_the_run() {
+        let d = Dispatcher::bare(0, 2);
+        d.reserve([20_000, 3].into_iter());
+        let capacity = |t: usize| d.spans[t].lock().map_or(0, |v| v.capacity());
+        let before = capacity(0);
+        assert!(before >= 40_000);
+        for _ in 0..20_000 {
+            d.record(0, sys::now());
+            d.record(0, sys::now());
+        }
+        assert_eq!(capacity(0), before, "a span vector grew in the run");
+    }
+
     #[test]
     fn the_ceiling_holds_an_earlier_deadline_back_until_it_drops() {
         let ready = [r(12, 2, 3, true), r(8, 0, 1, false)];

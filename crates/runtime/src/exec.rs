@@ -82,6 +82,9 @@ pub struct RunResult {
     pub notes: Vec<String>,
     /// The counters sampled during the run, in time order.
     pub probes: Vec<Probe>,
+    /// The kernel's real-time share of a CPU, (runtime, period) in ns, as
+    /// the run found it (`crate::probe::rt_share`); `None`: no throttling.
+    pub rt_share: Option<(Nanos, Nanos)>,
     /// Tasks moved to SCHED_OTHER to finish (still running long after the
     /// run's end).
     pub demoted: Vec<usize>,
@@ -371,6 +374,7 @@ fn execute<'a, V: Copy + Send>(
     })?;
     sys::catch_stop_signals();
     let shared = shared(spec, cfg.policy, &mut notes)?;
+    shared.reserve_spans(&threads);
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
@@ -578,6 +582,14 @@ impl Shared {
     /// The EDF dispatcher, under [`Policy::EdfFifo`].
     fn dispatcher(&self) -> Option<&crate::edf::Dispatcher> {
         self.resources.as_ref().and_then(|r| r.dispatch.as_ref())
+    }
+
+    /// Room in the EDF dispatcher's span log for every job the threads
+    /// can log (none grows a vector on the real-time path).
+    fn reserve_spans<V>(&self, threads: &[Thread<'_, V>]) {
+        if let Some(d) = self.dispatcher() {
+            d.reserve(threads.iter().map(|t| t.recs.capacity()));
+        }
     }
 
     /// For `n` task threads (and the one that starts them).

@@ -37,6 +37,20 @@ pub(crate) fn probe(epoch: Nanos, tids: &[AtomicI32]) -> Probe {
     }
 }
 
+/// The kernel's real-time throttling: at most `sched_rt_runtime_us` of
+/// every `sched_rt_period_us` of a CPU go to its real-time threads, ns
+/// (`None`: unlimited, -1, or unreadable). [`crate::blame`] tells the
+/// throttling the run's own demand triggers from foreign time by it.
+pub fn rt_share() -> Option<(Nanos, Nanos)> {
+    let read = |name: &str| -> Option<Nanos> {
+        let text = std::fs::read_to_string(format!("/proc/sys/kernel/{name}")).ok()?;
+        text.trim().parse::<Nanos>().ok()
+    };
+    let runtime = read("sched_rt_runtime_us").filter(|&r| r >= 0)?;
+    let period = read("sched_rt_period_us").filter(|&p| p > 0)?;
+    Some((runtime * 1_000, period * 1_000))
+}
+
 /// Thread `tid`'s time on a CPU so far (schedstat's first field), ns.
 fn on_cpu(tid: i32) -> Option<Nanos> {
     if tid <= 0 {

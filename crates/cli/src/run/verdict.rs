@@ -1,11 +1,13 @@
 //! Which observations of a real run break a sound bound, and which of them
 //! a cause in their own window excuses (`rtpipe_runtime::blame`): per chain
-//! sample and quantity, and per job whose response exceeds R(job).
+//! sample and quantity, per job whose response exceeds R(job), and every
+//! job of a task the analysis bounds no response for (never excused: no
+//! disturbance explains an overload the spec itself declares).
 
 use rtpipe_analysis::disturbance::inflation;
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_joblog::{sample_rows, SampleRow};
-use rtpipe_model::{Nanos, Spec};
+use rtpipe_model::{Nanos, Server, Spec};
 use rtpipe_runtime::blame::{Blame, Cause};
 use rtpipe_runtime::RunResult;
 use serde::Serialize;
@@ -19,9 +21,10 @@ pub(super) struct Violation {
     pub(super) quantity: String,
     /// The sample id (chains) or the job index (tasks).
     pub(super) id: u64,
-    /// The observed value and the bound, in the spec's unit.
+    /// The observed value and the bound, in the spec's unit (`None`: the
+    /// analysis bounds no response of the task).
     pub(super) value: f64,
-    pub(super) bound: f64,
+    pub(super) bound: Option<f64>,
     /// The window the causes were looked for in, in the spec's unit.
     pub(super) window: (f64, f64),
     /// The causes found there; excused when they can explain the excess.
@@ -34,6 +37,8 @@ pub(super) struct Violation {
 pub(super) struct Verdict {
     pub(super) excused: usize,
     pub(super) unexcused: usize,
+    /// Of the unexcused, the jobs of tasks with no bounded response.
+    pub(super) unbounded: usize,
     pub(super) violations: Vec<Violation>,
 }
 
@@ -74,7 +79,7 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
                         quantity,
                         id: r.sample,
                         value,
-                        bound,
+                        bound: Some(bound),
                         window,
                     };
                     v.push(spec, obs, blame.causes(window, path), path);
@@ -82,13 +87,19 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
             }
         }
     }
-    // The schedule's responses (under LET the job log holds period ends).
+    judge_jobs(spec, report, res, &blame, &mut v);
+    v
+}
+
+/// The schedule's responses (under LET the job log holds period ends):
+/// each above its task's R(job), and each of a task with no bounded
+/// response but a guarantee (a background task has none by design).
+fn judge_jobs(spec: &Spec, report: &Report, res: &RunResult, blame: &Blame, v: &mut Verdict) {
     for j in res.scheduled() {
-        let Some(bound) = report.timing.get(j.task).and_then(|t| t.bounded_response()) else {
-            continue;
-        };
+        let bound = report.timing.get(j.task).and_then(|t| t.bounded_response());
+        let guaranteed = spec.tasks[j.task].server != Server::Background;
         let value = j.finish - j.release;
-        if value > bound {
+        if bound.map_or(guaranteed, |b| value > b) {
             let window = blame.extend((j.release, j.finish), &[j.task]);
             let what = spec.tasks[j.task].name.clone();
             let obs = Obs {
@@ -102,7 +113,6 @@ pub(super) fn judge(spec: &Spec, report: &Report, res: &RunResult) -> Verdict {
             v.push(spec, obs, blame.causes(window, &[j.task]), &[j.task]);
         }
     }
-    v
 }
 
 /// An observation above its bound, before its causes are judged.
@@ -111,7 +121,8 @@ struct Obs {
     quantity: String,
     id: u64,
     value: Nanos,
-    bound: Nanos,
+    /// `None`: no bounded response (an unschedulable task).
+    bound: Option<Nanos>,
     window: (Nanos, Nanos),
 }
 
@@ -122,7 +133,8 @@ impl Verdict {
     /// delays, each at most that task's inflation by its share; where the
     /// inflation is superadditive the largest single inflation by the total
     /// covers their sum; where its steps make it not, the allowance can
-    /// fall short of that sum: a false alarm, never a false excuse).
+    /// fall short of that sum: a false alarm, never a false excuse). An
+    /// observation with no bound is never excused.
     fn push(&mut self, spec: &Spec, o: Obs, causes: Vec<Cause>, tasks: &[usize]) {
         let b = Blame::total(&causes);
         let allowance = tasks
@@ -130,22 +142,34 @@ impl Verdict {
             .map(|&t| inflation(spec, t, b))
             .max()
             .unwrap_or(0);
-        let excused = allowance >= o.value - o.bound;
+        let excused = o.bound.is_some_and(|bound| allowance >= o.value - bound);
         if excused {
             self.excused += 1;
         } else {
             self.unexcused += 1;
+            self.unbounded += usize::from(o.bound.is_none());
         }
         self.violations.push(Violation {
             what: o.what,
             quantity: o.quantity,
             id: o.id,
             value: spec.in_unit(o.value),
-            bound: spec.in_unit(o.bound),
+            bound: o.bound.map(|b| spec.in_unit(b)),
             window: (spec.in_unit(o.window.0), spec.in_unit(o.window.1)),
             causes: causes.iter().map(|c| c.describe(spec)).collect(),
             excused,
         });
+    }
+
+    /// ", N of them jobs of tasks with no bounded response" when there are.
+    pub(super) fn unbounded_note(&self) -> String {
+        if self.unbounded == 0 {
+            return String::new();
+        }
+        format!(
+            " ({} of them job(s) of tasks the analysis bounds no response for)",
+            self.unbounded
+        )
     }
 
     /// The text report's lines: the observations nothing excuses, each
@@ -158,10 +182,11 @@ impl Verdict {
             return "no observation above a sound bound\n".into();
         }
         let mut out = format!(
-            "{} observation(s) above a sound bound: {} excused by what broke the model in their window on their CPUs, {} not\n",
+            "{} observation(s) above a sound bound: {} excused by what broke the model in their window on their CPUs, {} not{}\n",
             self.violations.len(),
             self.excused,
-            self.unexcused
+            self.unexcused,
+            self.unbounded_note()
         );
         let unit = spec.time_unit.to_string();
         for x in self.violations.iter().filter(|x| !x.excused).take(shown) {
@@ -199,7 +224,7 @@ impl Verdict {
             match groups.iter_mut().find(same) {
                 Some(g) => {
                     g.0 += 1;
-                    if x.value - x.bound > g.1.value - g.1.bound {
+                    if x.excess() > g.1.excess() {
                         g.1 = x;
                     }
                 }
@@ -213,21 +238,51 @@ impl Verdict {
 impl Violation {
     /// What was observed, its bound and its window.
     fn line(&self, unit: &str) -> String {
+        let bound = match self.bound {
+            Some(b) => format!("> {b} {unit}"),
+            None => format!(
+                "{unit}, with no bounded response (the analysis finds the task unschedulable)"
+            ),
+        };
         format!(
-            "{} {} #{}: {} > {} {unit} in [{}, {}] {unit}",
-            self.what, self.quantity, self.id, self.value, self.bound, self.window.0, self.window.1,
+            "{} {} #{}: {} {bound} in [{}, {}] {unit}",
+            self.what, self.quantity, self.id, self.value, self.window.0, self.window.1,
         )
     }
 
-    /// Its causes, or that none was found.
+    /// How far above its bound (infinite without one).
+    fn excess(&self) -> f64 {
+        self.bound.map_or(f64::INFINITY, |b| self.value - b)
+    }
+
+    /// Its causes ([`abridged`]), or that none was found.
     fn because(&self) -> String {
-        if self.causes.is_empty() {
-            "no cause found".to_string()
-        } else {
-            self.causes.join("; ")
-        }
+        abridged(&self.causes)
     }
 }
+
+/// A violation's causes for the text: all of them up to [`CAUSES_SHOWN`];
+/// beyond, the first few (job overruns, which a long busy period gathers
+/// by the hundred) and the last ones (the foreign time and steal of each
+/// CPU), the count of those left out between. `--json` has them all.
+fn abridged(causes: &[String]) -> String {
+    if causes.is_empty() {
+        return "no cause found".to_string();
+    }
+    if causes.len() <= CAUSES_SHOWN {
+        return causes.join("; ");
+    }
+    let (head, tail) = (3, CAUSES_SHOWN - 3);
+    let left_out = causes.len() - head - tail;
+    format!(
+        "{}; ... {left_out} more in --json; {}",
+        causes[..head].join("; "),
+        causes[causes.len() - tail..].join("; ")
+    )
+}
+
+/// The most causes the text lists for one violation.
+const CAUSES_SHOWN: usize = 7;
 
 #[cfg(test)]
 mod tests {
@@ -239,7 +294,7 @@ mod tests {
             quantity: "response".into(),
             id,
             value,
-            bound: 1.0,
+            bound: Some(1.0),
             window: (0.0, value),
             causes: vec![format!("cause of #{id}")],
             excused,
@@ -261,6 +316,7 @@ mod tests {
         let v = Verdict {
             excused: 4,
             unexcused: 1,
+            unbounded: 0,
             violations,
         };
         let text = v.text(&spec, 10);
@@ -282,5 +338,16 @@ mod tests {
             text.contains("  ... 1 more not excused in --json"),
             "{text}"
         );
+    }
+
+    #[test]
+    fn a_long_list_of_causes_keeps_its_first_and_last_in_the_text() {
+        let causes: Vec<String> = (0..100).map(|k| format!("c{k}")).collect();
+        assert_eq!(
+            abridged(&causes),
+            "c0; c1; c2; ... 93 more in --json; c96; c97; c98; c99"
+        );
+        assert_eq!(abridged(&causes[..7]), "c0; c1; c2; c3; c4; c5; c6");
+        assert_eq!(abridged(&[]), "no cause found");
     }
 }

@@ -56,6 +56,8 @@ pub(super) fn assemble<V>(
         elapsed,
         notes,
         probes: Vec::new(),
+        // As the run found it (the setting is the machine's).
+        rt_share: crate::probe::rt_share(),
         demoted: Vec::new(),
         partitioned: false,
         dispatch: None,
