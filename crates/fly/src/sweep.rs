@@ -507,21 +507,28 @@ mod threads {
     use crate::{setup, Request};
     use std::path::Path;
 
-    /// The nominal timing, in the sweep as ×1 scale, ×1 rate and 0 ms
-    /// delays, is flown once and gives each of them the point its own
-    /// flight would.
-    #[test]
-    fn variations_of_the_same_flight_are_flown_once_with_the_same_points() {
+    /// examples/cleanflight.toml and racer5 hovering for `horizon` ns
+    /// (seed 2): the sweeps' flight.
+    fn cleanflight_hover(horizon: rtpipe_model::Nanos) -> (Spec, crate::Setup) {
         let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
         let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
         let r = Request {
             spec_path: &p,
             vehicle: "racer5",
             mission: "hover",
-            horizon: Some(4_000_000_000),
+            horizon: Some(horizon),
             seed: 2,
         };
         let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        (spec, s)
+    }
+
+    /// The nominal timing, in the sweep as ×1 scale, ×1 rate and 0 ms
+    /// delays, is flown once and gives each of them the point its own
+    /// flight would.
+    #[test]
+    fn variations_of_the_same_flight_are_flown_once_with_the_same_points() {
+        let (spec, s) = cleanflight_hover(4_000_000_000);
         let vars = [
             Variation::Scale(1.0),
             Variation::Delay { line: 0, ns: 0 },
@@ -553,16 +560,7 @@ mod threads {
     #[test]
     fn a_check_that_unwinds_abandons_the_sweep() {
         struct Abandon;
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
-        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
-        let r = Request {
-            spec_path: &p,
-            vehicle: "racer5",
-            mission: "hover",
-            horizon: Some(1_000_000_000),
-            seed: 2,
-        };
-        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let (spec, s) = cleanflight_hover(1_000_000_000);
         let vars = default_variations(&spec, &s, 0.5, 8.0);
         assert!(vars.len() > 20, "{}", vars.len());
         let (done, checks) = (AtomicU64::new(0), AtomicU64::new(0));
