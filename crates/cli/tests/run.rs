@@ -4,50 +4,9 @@
 
 mod common;
 
-use common::{assert_exit, example, json_of, rtpipe, scratch};
+use common::{assert_exit, example, json_of, rtpipe, scratch, small_pipeline};
 use serde_json::Value;
 use std::process::Output;
-
-/// A small pipeline: sensor (2 ms) → filter (5 ms) → actuator (10 ms), on
-/// `cpu`, times in ms.
-fn small(scheduler: &str, cpu: u32, extra: &str) -> String {
-    format!(
-        r#"[system]
-name = "small"
-time_unit = "ms"
-scheduler = "{scheduler}"
-
-[channels.shm]
-bandwidth = 1000
-overhead = 0
-
-[tasks.sensor]
-exec = 0.2
-period = 2
-cpu = {cpu}
-output = {{ channel = "shm", size = 0 }}
-{extra}
-
-[tasks.filter]
-exec = 0.5
-reads = ["sensor"]
-period = 5
-cpu = {cpu}
-output = {{ channel = "shm", size = 0 }}
-
-[tasks.actuator]
-exec = 0.5
-reads = ["filter"]
-period = 10
-cpu = {cpu}
-output = {{ channel = "shm", size = 0 }}
-
-[[chain]]
-name = "loop"
-path = ["sensor", "filter", "actuator"]
-"#
-    )
-}
 
 fn write_spec(tag: &str, text: &str) -> String {
     let dir = scratch(tag);
@@ -134,7 +93,7 @@ fn fifo_run_of_paper_table3_observes_every_chain() {
 #[test]
 fn deadline_run_of_an_edf_spec() {
     let _one = serial();
-    let spec = write_spec("run-edf", &small("edf", 0, ""));
+    let spec = write_spec("run-edf", &small_pipeline("edf", 0, ""));
     let o = rtpipe(&["run", &spec, "--duration", "1s", "--json"]);
     if unprivileged(&o, "deadline_run_of_an_edf_spec") {
         return;
@@ -191,7 +150,7 @@ fn edf_with_sections_runs_under_the_edf_dispatcher() {
 #[test]
 fn best_effort_runs_without_privilege_and_says_so() {
     let _one = serial();
-    let spec = write_spec("run-other", &small("rm", 0, ""));
+    let spec = write_spec("run-other", &small_pipeline("rm", 0, ""));
     let o = rtpipe(&["run", &spec, "--duration", "300ms", "--policy", "other"]);
     assert_exit(&o, 2);
     assert!(stderr(&o).contains("--best-effort"), "{}", stderr(&o));
@@ -224,7 +183,7 @@ fn best_effort_runs_without_privilege_and_says_so() {
 #[test]
 fn bad_configurations_exit_2_naming_the_task() {
     // A CPU this machine does not have.
-    let spec = write_spec("run-cpu", &small("rm", 1000, ""));
+    let spec = write_spec("run-cpu", &small_pipeline("rm", 1000, ""));
     let o = rtpipe(&["run", &spec, "--duration", "100ms"]);
     assert_exit(&o, 2);
     assert!(
@@ -235,7 +194,7 @@ fn bad_configurations_exit_2_naming_the_task() {
     // A SCHED_DEADLINE runtime below the kernel's 1024 ns.
     let spec = write_spec(
         "run-dl-min",
-        &small("edf", 0, "budget = 0.0005").replace("exec = 0.2", "exec = 0.0001"),
+        &small_pipeline("edf", 0, "budget = 0.0005").replace("exec = 0.2", "exec = 0.0001"),
     );
     let o = rtpipe(&["run", &spec, "--duration", "100ms"]);
     assert_exit(&o, 2);
@@ -246,7 +205,7 @@ fn bad_configurations_exit_2_naming_the_task() {
     );
     // More bandwidth than the kernel admits (3 tasks at C = T on any machine
     // with fewer than 4 CPUs; the exec is raised to fit the budget).
-    let heavy = small("edf", 0, "")
+    let heavy = small_pipeline("edf", 0, "")
         .replace("exec = 0.2", "exec = 2")
         .replace("exec = 0.5", "exec = 5");
     let spec = write_spec("run-dl-bw", &heavy);
@@ -256,7 +215,7 @@ fn bad_configurations_exit_2_naming_the_task() {
         assert!(stderr(&o).contains("total bandwidth"), "{}", stderr(&o));
     }
     // The policy must match the spec's scheduler.
-    let spec = write_spec("run-mismatch", &small("edf", 0, ""));
+    let spec = write_spec("run-mismatch", &small_pipeline("edf", 0, ""));
     let o = rtpipe(&["run", &spec, "--policy", "fifo", "--duration", "100ms"]);
     assert_exit(&o, 2);
     assert!(stderr(&o).contains("--policy deadline"), "{}", stderr(&o));
@@ -268,7 +227,7 @@ fn bad_configurations_exit_2_naming_the_task() {
 #[test]
 fn ctrl_c_stops_the_run_cleanly() {
     let _one = serial();
-    let spec = write_spec("run-sigint", &small("rm", 0, ""));
+    let spec = write_spec("run-sigint", &small_pipeline("rm", 0, ""));
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
         .args([
             "run",
@@ -321,7 +280,7 @@ fn a_trace_that_cannot_be_written_keeps_the_report_and_exits_2() {
     // completed run. A file-size limit stands in for the full disk (SIGXFSZ
     // ignored, so the write fails with EFBIG instead of killing).
     let _one = serial();
-    let spec = write_spec("run-trace-full", &small("rm", 0, ""));
+    let spec = write_spec("run-trace-full", &small_pipeline("rm", 0, ""));
     let trace = std::path::Path::new(&spec).with_file_name("t.json");
     let o = std::process::Command::new("sh")
         .args(["-c", "trap '' XFSZ; ulimit -f 2; exec \"$0\" \"$@\""])
@@ -380,7 +339,7 @@ fn read_json(path: &std::path::Path) -> Value {
 fn run_writes_a_trace_a_plot_and_an_rt_app_file_and_matches_simulate_json() {
     let _one = serial();
     let dir = scratch("run-files");
-    let spec = write_spec("run-files-spec", &small("rm", 0, ""));
+    let spec = write_spec("run-files-spec", &small_pipeline("rm", 0, ""));
     let (trace, plot, rtapp) = (dir.join("t.json"), dir.join("p.svg"), dir.join("r.json"));
     let o = rtpipe(&[
         "run",
@@ -450,7 +409,7 @@ fn run_writes_a_trace_a_plot_and_an_rt_app_file_and_matches_simulate_json() {
 
 #[test]
 fn too_much_load_exits_2() {
-    let spec = write_spec("run-load", &small("rm", 0, ""));
+    let spec = write_spec("run-load", &small_pipeline("rm", 0, ""));
     let o = rtpipe(&["run", &spec, "--load", "100000", "--duration", "100ms"]);
     assert_exit(&o, 2);
     assert!(stderr(&o).contains("--load 100000"), "{}", stderr(&o));
@@ -487,7 +446,7 @@ fn cleanflight_flies_on_real_threads() {
 fn an_unschedulable_spec_is_refused_without_force() {
     let spec = write_spec(
         "unsched",
-        &small("rm", 0, "").replace("exec = 0.2", "exec = 2"),
+        &small_pipeline("rm", 0, "").replace("exec = 0.2", "exec = 2"),
     );
     let o = rtpipe(&["run", &spec, "--duration", "100ms"]);
     assert_exit(&o, 2);
@@ -531,7 +490,7 @@ fn as_nobody(tag: &str, caps: &str, args: &[&str]) -> Option<Output> {
     let bin = dir.join("rtpipe");
     let spec = dir.join("spec.toml");
     let copied = std::fs::copy(env!("CARGO_BIN_EXE_rtpipe"), &bin)
-        .and_then(|_| std::fs::write(&spec, small("rm", 0, "")))
+        .and_then(|_| std::fs::write(&spec, small_pipeline("rm", 0, "")))
         .and_then(|()| open(&dir, 0o777))
         .and_then(|()| open(&bin, 0o755))
         .and_then(|()| open(&spec, 0o644));
@@ -703,7 +662,7 @@ fn the_rt_app_export_runs_under_rt_app() {
     }
     let dir = scratch("rtapp");
     let spec = dir.join("spec.toml");
-    if let Err(e) = std::fs::write(&spec, small("rm", 0, "")) {
+    if let Err(e) = std::fs::write(&spec, small_pipeline("rm", 0, "")) {
         panic!("cannot write the spec: {e}");
     }
     let tasks = [
@@ -772,7 +731,7 @@ fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
     }
     // Alone: another test's FIFO run on CPU 0 is a second stall.
     let _one = serial();
-    let spec = write_spec("hog", &small("rm", 0, ""));
+    let spec = write_spec("hog", &small_pipeline("rm", 0, ""));
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_rtpipe"))
         .args(["run", &spec, "--duration", "1s", "--json"])
         .stdout(std::process::Stdio::piped())

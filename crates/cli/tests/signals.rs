@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{example, listing, rtpipe_in, scratch};
+use common::{example, listing, rtpipe_in, scratch, small_pipeline};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -16,41 +16,6 @@ use std::time::{Duration, Instant};
 const CPUSETS: &str = "/sys/fs/cgroup/cpuset";
 /// Long enough for a start on a loaded machine, short of hanging CI.
 const LIMIT: Duration = Duration::from_secs(60);
-
-/// The small pipeline of `run.rs` under EDF, on cpu 0, times in ms.
-const SMALL_EDF: &str = r#"[system]
-name = "small"
-time_unit = "ms"
-scheduler = "edf"
-
-[channels.shm]
-bandwidth = 1000
-overhead = 0
-
-[tasks.sensor]
-exec = 0.2
-period = 2
-cpu = 0
-output = { channel = "shm", size = 0 }
-
-[tasks.filter]
-exec = 0.5
-reads = ["sensor"]
-period = 5
-cpu = 0
-output = { channel = "shm", size = 0 }
-
-[tasks.actuator]
-exec = 0.5
-reads = ["filter"]
-period = 10
-cpu = 0
-output = { channel = "shm", size = 0 }
-
-[[chain]]
-name = "loop"
-path = ["sensor", "filter", "actuator"]
-"#;
 
 fn spawn(dir: &Path, args: &[&str]) -> Child {
     let child = Command::new(env!("CARGO_BIN_EXE_rtpipe"))
@@ -164,7 +129,7 @@ fn cpusets_unavailable() -> Option<String> {
 /// stopped) when it never is.
 fn partitioned_run(dir: &Path, seconds: &str) -> Option<Child> {
     let spec = dir.join("spec.toml");
-    if let Err(e) = std::fs::write(&spec, SMALL_EDF) {
+    if let Err(e) = std::fs::write(&spec, small_pipeline("edf", 0, "")) {
         panic!("cannot write {}: {e}", spec.display());
     }
     let spec = spec.to_string_lossy().into_owned();

@@ -178,3 +178,44 @@ pub fn listing(dir: &std::path::Path) -> Vec<String> {
     v.sort();
     v
 }
+
+/// A small pipeline: sensor (2 ms) → filter (5 ms) → actuator (10 ms), on
+/// `cpu`, times in ms.
+pub fn small_pipeline(scheduler: &str, cpu: u32, extra: &str) -> String {
+    format!(
+        r#"[system]
+name = "small"
+time_unit = "ms"
+scheduler = "{scheduler}"
+
+[channels.shm]
+bandwidth = 1000
+overhead = 0
+
+[tasks.sensor]
+exec = 0.2
+period = 2
+cpu = {cpu}
+output = {{ channel = "shm", size = 0 }}
+{extra}
+
+[tasks.filter]
+exec = 0.5
+reads = ["sensor"]
+period = 5
+cpu = {cpu}
+output = {{ channel = "shm", size = 0 }}
+
+[tasks.actuator]
+exec = 0.5
+reads = ["filter"]
+period = 10
+cpu = {cpu}
+output = {{ channel = "shm", size = 0 }}
+
+[[chain]]
+name = "loop"
+path = ["sensor", "filter", "actuator"]
+"#
+    )
+}
