@@ -379,7 +379,19 @@ pub fn create_temp(target: &Path, what: &str) -> std::io::Result<(PathBuf, fs::F
 /// signal or an error removes its own, a SIGKILL cannot. A process of
 /// another pid namespace sharing the directory would look gone; rtpipe
 /// writes are not meant to share one.
+///
+/// Each directory is swept once per process: what it clears was left by
+/// runs before this one, and a campaign writing thousands of shards into
+/// one folder would otherwise read the whole folder at every shard.
 fn remove_stale_temps(dir: &Path) {
+    static SWEPT: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+    {
+        let mut swept = SWEPT.lock().unwrap_or_else(|e| e.into_inner());
+        if swept.iter().any(|d| d == dir) {
+            return;
+        }
+        swept.push(dir.to_path_buf());
+    }
     let Ok(entries) = fs::read_dir(dir) else {
         return;
     };
