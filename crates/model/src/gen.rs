@@ -231,6 +231,7 @@ pub fn random_system(seed: u64, cfg: &GenConfig) -> Spec {
         resources: Vec::new(),
         overheads: crate::Overheads::default(),
         channels,
+        threads: Vec::new(),
         tasks,
         chains,
     }

@@ -112,6 +112,55 @@ pub enum PeriodSpec {
     Choices(Vec<Nanos>),
     /// Not given: a design variable without bounds.
     Free,
+    /// No period: a data-triggered task (`activation = "data"`), released
+    /// by publications of its triggers, not by a timer.
+    Triggered {
+        /// The producers whose publications release it (indices into
+        /// `Spec::tasks`, each one of its `reads`), in declaration order.
+        triggers: Vec<usize>,
+        /// How the triggers combine.
+        join: Join,
+    },
+}
+
+/// How the publications of a data-triggered task's triggers release it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Join {
+    /// A publication of any trigger releases a job (`join = "any"`, the
+    /// default).
+    #[default]
+    Any,
+    /// A job is released once every trigger has published since the last
+    /// release (`join = "all"`: fusion of several inputs).
+    All,
+}
+
+impl Join {
+    /// Every join, in the order specs list them.
+    pub const ALL: [Join; 2] = [Join::Any, Join::All];
+
+    /// The name used in specs and output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Join::Any => "any",
+            Join::All => "all",
+        }
+    }
+}
+
+/// A work-queue thread (`[threads.NAME]`, PX4's `wq:rate_ctrl`): one job
+/// at a time on one CPU, its tasks' jobs run to completion in the order
+/// they were released (jobs released at the same instant in declaration
+/// order); threads and thread-less tasks preempt each other by priority.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Thread {
+    /// Its name in the spec.
+    pub name: String,
+    /// Its fixed priority on its CPU, 1 the highest (shared in one order
+    /// with the thread-less tasks of that CPU).
+    pub priority: u32,
+    /// The CPU it runs on.
+    pub cpu: u32,
 }
 
 /// A task (one pipe, Section III-C), validated.
@@ -166,6 +215,10 @@ pub struct Task {
     /// Δin). A job whose processing time is shorter than the sections
     /// runs them cut to its length.
     pub sections: Vec<CriticalSection>,
+    /// The work-queue thread that runs its jobs (index into
+    /// `Spec::threads`); `None`: the task is a thread of its own. A task in
+    /// a thread has the thread's CPU and priority and no server.
+    pub thread: Option<usize>,
     /// Δin: read stage, summed over input channels (each δ once).
     pub delta_in: Nanos,
     /// Δout: write stage.
@@ -200,9 +253,24 @@ impl Task {
             jitter: 0,
             max_period: None,
             sections: Vec::new(),
+            thread: None,
             delta_in: 0,
             delta_out: 0,
         }
+    }
+
+    /// The producers whose publications release it and how they join, for
+    /// a data-triggered task; `None` for a periodic one.
+    pub fn triggers(&self) -> Option<(&[usize], Join)> {
+        match &self.period {
+            PeriodSpec::Triggered { triggers, join } => Some((triggers, *join)),
+            _ => None,
+        }
+    }
+
+    /// Released by data (`activation = "data"`), not by a timer.
+    pub fn is_triggered(&self) -> bool {
+        self.triggers().is_some()
     }
 
     /// Worst-case demand of one job: Δin + p + Δout.
@@ -328,6 +396,8 @@ pub struct Spec {
     pub overheads: Overheads,
     /// The channels, in declaration order.
     pub channels: Vec<Channel>,
+    /// The work-queue threads (`[threads.NAME]`), in declaration order.
+    pub threads: Vec<Thread>,
     /// The tasks, in declaration order.
     pub tasks: Vec<Task>,
     /// The declared chains.
@@ -381,17 +451,7 @@ impl Spec {
     /// (validation refuses a task on chains of different semantics), the
     /// system's for a task on no chain with its own.
     pub fn communications(&self) -> Vec<Communication> {
-        let mut out = vec![self.communication; self.tasks.len()];
-        // The first chain with a key wins, as in `task_communication` (a
-        // spec built in code may disagree with itself; a parsed one cannot).
-        for ch in self.chains.iter().rev() {
-            if let Some(c) = ch.communication {
-                for &i in &ch.path {
-                    out[i] = c;
-                }
-            }
-        }
-        out
+        task_communications(&self.chains, self.communication, self.tasks.len())
     }
 
     /// Task `i`'s communication semantics ([`Spec::communications`]).
@@ -406,6 +466,27 @@ impl Spec {
     /// Does some task communicate under LET?
     pub fn any_let(&self) -> bool {
         self.communications().contains(&Communication::Let)
+    }
+
+    /// Has the spec threads or data-triggered tasks (the event-triggered
+    /// model of docs/analysis.md), or only periodic tasks each on a thread
+    /// of its own (the paper's)?
+    pub fn event_triggered(&self) -> bool {
+        !self.threads.is_empty() || self.tasks.iter().any(Task::is_triggered)
+    }
+
+    /// The tasks each data-triggered task's publications release: per
+    /// task, the data-triggered consumers that name it a trigger.
+    pub fn triggered_by(&self) -> Vec<Vec<usize>> {
+        let mut out = vec![Vec::new(); self.tasks.len()];
+        for (c, t) in self.tasks.iter().enumerate() {
+            if let Some((triggers, _)) = t.triggers() {
+                for &p in triggers {
+                    out[p].push(c);
+                }
+            }
+        }
+        out
     }
 
     /// The index of the task called `name`.
@@ -460,6 +541,23 @@ impl Spec {
     pub fn in_unit(&self, ns: Nanos) -> f64 {
         self.time_unit.from_nanos(ns)
     }
+}
+
+/// Each of `n` tasks' communication semantics: that of the chains it is
+/// on, else the system's ([`Spec::communications`]; validation asks it
+/// before the spec exists).
+fn task_communications(chains: &[Chain], system: Communication, n: usize) -> Vec<Communication> {
+    let mut out = vec![system; n];
+    // The first chain with a key wins, as in `task_communication` (a
+    // spec built in code may disagree with itself; a parsed one cannot).
+    for ch in chains.iter().rev() {
+        if let Some(c) = ch.communication {
+            for &i in &ch.path {
+                out[i] = c;
+            }
+        }
+    }
+    out
 }
 
 /// Transfer time of `size` data units over a channel: d/W + δ (Eq. 1), in ns,

@@ -345,7 +345,9 @@ impl SchedPolicy {
 
 /// Fixed-priority ranks per CPU in the spec's order (`[system]
 /// priorities`): [`rate_monotonic`], [`deadline_monotonic`] or the explicit
-/// `priority` of each task. Background tasks get none. Whatever runs tasks
+/// `priority` of each task. Background tasks get none. The tasks of one
+/// work-queue thread share the thread's rank (validation makes every
+/// other rank on a CPU distinct). Whatever runs tasks
 /// by fixed priority (the analysis, the simulator, the design, the
 /// runtime's SCHED_FIFO priorities) takes its ranks from here.
 pub fn ranks(spec: &Spec) -> Vec<Option<usize>> {
@@ -460,8 +462,17 @@ fn ranked_by(spec: &Spec, key: impl Fn(&crate::Task) -> Nanos) -> Vec<Option<usi
             .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
             .collect();
         ids.sort_by_key(|&i| (key(&spec.tasks[i]), i));
-        for (rank, i) in ids.into_iter().enumerate() {
-            out[i] = Some(rank + 1);
+        // The tasks of one thread share its rank: they have its priority,
+        // so they sort next to each other, and none preempts another.
+        let mut rank = 0;
+        let mut previous: Option<usize> = None;
+        for i in ids {
+            let thread = spec.tasks[i].thread;
+            if thread.is_none() || thread != previous {
+                rank += 1;
+            }
+            previous = thread;
+            out[i] = Some(rank);
         }
     }
     out

@@ -17,6 +17,8 @@ pub struct RawSpec {
     #[serde(default)]
     pub resources: Ordered<RawResource>,
     #[serde(default)]
+    pub threads: Ordered<RawThread>,
+    #[serde(default)]
     pub tasks: Ordered<RawTask>,
     #[serde(default)]
     pub chain: Vec<S<RawChain>>,
@@ -106,6 +108,18 @@ pub struct RawTask {
     pub jitter: Option<S<toml::Value>>,
     pub max_period: Option<S<toml::Value>>,
     pub critical_sections: Option<S<Vec<S<RawSection>>>>,
+    pub thread: Option<S<String>>,
+    pub activation: Option<S<String>>,
+    pub triggers: Option<S<Vec<S<String>>>>,
+    pub join: Option<S<String>>,
+}
+
+/// `[threads.NAME]`: a work-queue thread.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawThread {
+    pub priority: Option<S<toml::Value>>,
+    pub cpu: Option<S<toml::Value>>,
 }
 
 #[derive(Debug, serde::Deserialize)]

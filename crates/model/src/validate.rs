@@ -10,9 +10,20 @@ use std::ops::Range;
 
 mod body;
 mod comm;
+mod events;
 mod overheads;
 mod prio;
 mod resources;
+
+/// What a task's keys are resolved against: the channels, the tasks and
+/// the threads, by name.
+struct Known<'a> {
+    ch_index: &'a HashMap<String, usize>,
+    channels: &'a [Channel],
+    task_index: &'a HashMap<String, usize>,
+    names: &'a [String],
+    thread_index: &'a HashMap<String, usize>,
+}
 
 #[derive(Default)]
 pub(crate) struct Builder {
@@ -189,18 +200,31 @@ impl Builder {
         let (channels, ch_index) = self.channels(&raw.channels.0);
         let raw_tasks = &raw.tasks.0;
         let (task_index, names) = self.task_names(raw_tasks, &raw.system);
+        let (threads, thread_index) = self.threads(&raw.threads);
+        let known = Known {
+            ch_index: &ch_index,
+            channels: &channels,
+            task_index: &task_index,
+            names: &names,
+            thread_index: &thread_index,
+        };
         let mut tasks = Vec::new();
         for (k, v) in raw_tasks {
-            tasks.push(self.task(k, v, &ch_index, &channels, &task_index, &names));
+            tasks.push(self.task(k, v, &known));
         }
         let mut tasks: Vec<Task> = tasks.into_iter().collect::<Option<Vec<_>>>()?;
+        let threads: Vec<Thread> = threads.into_iter().collect::<Option<Vec<_>>>()?;
         if self.synchronous(sys) {
-            for t in tasks.iter_mut().filter(|t| t.offset.is_none()) {
+            for t in tasks
+                .iter_mut()
+                .filter(|t| t.offset.is_none() && !t.is_triggered())
+            {
                 t.offset = Some(0);
             }
         }
         self.serves(raw_tasks, &mut tasks, &task_index, &names);
         self.producers_write(raw_tasks, &tasks, &task_index, &names);
+        self.events(&raw, &threads, &mut tasks, order, scheduler);
         if !self.diags.is_empty() {
             return None;
         }
@@ -224,6 +248,8 @@ impl Builder {
             return None;
         }
         self.task_semantics(&raw.chain, &chains, communication, raw_tasks, &tasks);
+        let communications = task_communications(&chains, communication, tasks.len());
+        self.no_let_on_triggered(raw_tasks, &tasks, &communications);
         if !self.diags.is_empty() {
             return None;
         }
@@ -248,6 +274,7 @@ impl Builder {
             resources,
             overheads,
             channels,
+            threads,
             tasks,
             chains,
         })
@@ -755,16 +782,9 @@ impl Builder {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn task(
-        &mut self,
-        k: &S<String>,
-        v: &S<RawTask>,
-        ch_index: &HashMap<String, usize>,
-        channels: &[Channel],
-        task_index: &HashMap<String, usize>,
-        names: &[String],
-    ) -> Option<Task> {
+    fn task(&mut self, k: &S<String>, v: &S<RawTask>, known: &Known) -> Option<Task> {
+        let (ch_index, channels) = (known.ch_index, known.channels);
+        let (task_index, names) = (known.task_index, known.names);
         let t = v.get_ref();
         let (exec, exec_min) = self.exec_times(t);
         let input = match &t.input {
@@ -776,10 +796,14 @@ impl Builder {
             None => Some(None),
         };
         let reads = self.reads(t, task_index, names);
-        let period = match &t.period {
-            Some(p) => self.period(p),
-            None => Some(PeriodSpec::Free),
+        let triggered = self.activation(t, reads.as_deref(), task_index, names);
+        let period = match (triggered, &t.period) {
+            (None, _) => None,
+            (Some(Some(triggered)), _) => Some(triggered),
+            (Some(None), Some(p)) => self.period(p),
+            (Some(None), None) => Some(PeriodSpec::Free),
         };
+        let thread = self.task_thread(t, known.thread_index);
         let budget = match &t.budget {
             Some(b) => self.positive_time(b, "budget").map(Some),
             None => Some(None),
@@ -814,6 +838,7 @@ impl Builder {
             jitter: jitter?,
             max_period: max_period?,
             sections: Vec::new(),
+            thread: thread?,
             delta_in: 0,
             delta_out: 0,
         })
@@ -886,23 +911,28 @@ impl Builder {
                     ("background", Server::Background),
                 ],
             ),
-            None => Some(Server::Main),
+            None => Some(Self::default_server(t)),
         };
         let cpu = match &t.cpu {
-            Some(c) => match c.get_ref() {
-                toml::Value::Integer(i) if (0..=1023).contains(i) => Some(*i as u32),
-                _ => {
-                    self.err(
-                        "cpu must be an integer from 0 to 1023",
-                        span(c),
-                        "write the core index, e.g. cpu = 0",
-                    );
-                    None
-                }
-            },
+            Some(c) => self.cpu_index(c),
             None => Some(0),
         };
         (server, cpu)
+    }
+
+    /// A `cpu` key: a core index from 0 to 1023.
+    fn cpu_index(&mut self, c: &S<toml::Value>) -> Option<u32> {
+        match c.get_ref() {
+            toml::Value::Integer(i) if (0..=1023).contains(i) => Some(*i as u32),
+            _ => {
+                self.err(
+                    "cpu must be an integer from 0 to 1023",
+                    span(c),
+                    "write the core index, e.g. cpu = 0",
+                );
+                None
+            }
+        }
     }
 
     /// `period`: a fixed time, or a domain for `design` to choose from.

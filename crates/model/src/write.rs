@@ -63,6 +63,11 @@ pub fn to_toml(spec: &Spec) -> String {
     for c in &spec.channels {
         channel(&mut o, spec, c);
     }
+    for th in &spec.threads {
+        let _ = writeln!(o, "\n[threads.{}]", key(&th.name));
+        let _ = writeln!(o, "priority = {}", th.priority);
+        let _ = writeln!(o, "cpu = {}", th.cpu);
+    }
     for t in &spec.tasks {
         task(&mut o, spec, t);
     }
@@ -195,8 +200,11 @@ fn task(o: &mut String, spec: &Spec, t: &Task) {
     if let Some(m) = t.max_period {
         let _ = writeln!(o, "max_period = {}", time(spec, m));
     }
-    if let Some(p) = t.priority {
+    if let (Some(p), None) = (t.priority, t.thread) {
         let _ = writeln!(o, "priority = {p}");
+    }
+    if let Some(th) = t.thread {
+        let _ = writeln!(o, "thread = {}", quoted(&spec.threads[th].name));
     }
     let _ = writeln!(o, "server = \"{}\"", t.server.name());
     let _ = writeln!(o, "cpu = {}", t.cpu);
@@ -230,6 +238,13 @@ fn period(o: &mut String, spec: &Spec, period: &PeriodSpec) {
             let _ = writeln!(o, "period = {{ choices = [{}] }}", v.join(", "));
         }
         PeriodSpec::Free => {}
+        PeriodSpec::Triggered { triggers, join } => {
+            let _ = writeln!(o, "activation = \"data\"");
+            let _ = writeln!(o, "triggers = [{}]", task_names(spec, triggers));
+            if *join != crate::Join::Any {
+                let _ = writeln!(o, "join = \"{}\"", join.name());
+            }
+        }
     }
 }
 

@@ -48,7 +48,7 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 
 /// How a parse ended.
 enum Parsed {
-    Valid(Spec),
+    Valid(Box<Spec>),
     Rejected,
 }
 
@@ -69,7 +69,7 @@ fn parse_checked(file: &str, text: &str) -> Result<Parsed, TestCaseError> {
     let e = match parsed {
         Ok(spec) => {
             check_valid(&spec)?;
-            return Ok(Parsed::Valid(spec));
+            return Ok(Parsed::Valid(Box::new(spec)));
         }
         Err(e) => e,
     };
@@ -727,7 +727,7 @@ fn printed_random_specs_parse_back() {
         printed_spec(),
         |(text, expected)| {
             let spec = match parse_checked("random.toml", &text)? {
-                Parsed::Valid(spec) => spec,
+                Parsed::Valid(spec) => *spec,
                 _ => return Err(TestCaseError::fail(format!("rejected:\n{text}"))),
             };
             // Field by field: the design fields of `Spec` are not printed.

@@ -213,6 +213,7 @@ pub fn waters_system(seed: u64, cfg: &WatersConfig) -> Spec {
         resources: Vec::new(),
         overheads: crate::Overheads::default(),
         channels,
+        threads: Vec::new(),
         tasks,
         chains,
     }

@@ -302,6 +302,7 @@ fn build_spec(f: &E2eFile, ecus: &[Id], name: &str) -> Spec {
             bandwidth: 1.0,
             overhead: 0,
         }],
+        threads: Vec::new(),
         tasks,
         chains,
     }

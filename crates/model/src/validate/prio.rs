@@ -171,6 +171,10 @@ impl Builder {
     /// `priority = N` exactly where `priorities = "explicit"` asks for it:
     /// on every guaranteed task, on no background task.
     fn priority_fits_order(&mut self, t: &Task, k: &S<String>, rt: &RawTask, order: Priorities) {
+        if t.thread.is_some() {
+            // Its thread's priority applies (`events.rs` refuses its own).
+            return;
+        }
         match (&rt.priority, order, t.server) {
             (Some(p), Priorities::Explicit, Server::Background) => self.err(
                 format!("background task `{}` has a priority", t.name),
@@ -210,9 +214,13 @@ impl Builder {
             else {
                 continue;
             };
-            let Some(a) =
-                (0..b).find(|&a| tasks[a].cpu == tasks[b].cpu && tasks[a].priority == Some(pb))
-            else {
+            // A thread's tasks share its priority; `events.rs` checks
+            // threads against the rest.
+            let Some(a) = (0..b).find(|&a| {
+                tasks[a].thread.is_none()
+                    && tasks[a].cpu == tasks[b].cpu
+                    && tasks[a].priority == Some(pb)
+            }) else {
                 continue;
             };
             let free = (1..=u32::MAX)
