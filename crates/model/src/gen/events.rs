@@ -6,7 +6,7 @@
 //! second trigger from earlier in the system) or periodic. Tasks land on a
 //! few threads or on threads of their own; a few periodic timer items share
 //! the threads. Execution times split each CPU's utilisation (UUniFast) by
-//! each task's release rate (a data-triggered task's rate is its triggers'),
+//! each task's nominal activation rate (`Spec::activation_period`),
 //! and priorities per CPU are rate monotonic with an occasional swap, so
 //! most systems are schedulable and some are not.
 
@@ -29,8 +29,8 @@ pub struct EventGenConfig {
     pub max_threads: usize,
     /// CPUs: 1..=max_cpus, drawn.
     pub max_cpus: u32,
-    /// Total utilisation per CPU (worst-case execution over the release
-    /// rate, a data-triggered task counted at its triggers' rate).
+    /// Total utilisation per CPU (worst-case execution over the nominal
+    /// activation period, `Spec::activation_period`).
     pub utilization: f64,
     /// Probability that a link after a chain's head is data-triggered.
     pub data_fraction: f64,
@@ -90,12 +90,7 @@ pub fn event_triggered_system(seed: u64, cfg: &EventGenConfig) -> Spec {
     }
     place(&mut rng, cfg, &mut tasks, &threads, cpus);
     drop_unused_threads(&mut tasks, &mut threads);
-    let rates = release_rates(&tasks);
-    for cpu in 0..cpus {
-        draw_execs(&mut rng, cfg, &mut tasks, &rates, cpu);
-    }
-    assign_priorities(&mut rng, &mut tasks, &mut threads, &rates, cpus);
-    Spec {
+    let mut spec = Spec {
         name: format!("events-{seed}"),
         time_unit: TimeUnit::Us,
         scheduler: Scheduler::Rm,
@@ -116,7 +111,21 @@ pub fn event_triggered_system(seed: u64, cfg: &EventGenConfig) -> Spec {
         threads,
         tasks,
         chains,
+    };
+    let rates = release_rates(&spec);
+    for cpu in 0..cpus {
+        draw_execs(&mut rng, cfg, &mut spec.tasks, &rates, cpu);
     }
+    assign_priorities(&mut rng, &mut spec.tasks, &mut spec.threads, &rates, cpus);
+    spec
+}
+
+/// Releases per second of each task, at its nominal activation period
+/// (`Spec::activation_period`: a data-triggered task's from its triggers).
+fn release_rates(spec: &Spec) -> Vec<f64> {
+    (0..spec.tasks.len())
+        .map(|i| spec.activation_period(i).map_or(0.0, |p| 1e9 / p as f64))
+        .collect()
 }
 
 /// A periodic task `t{i}` with a drawn period and, sometimes, release
@@ -226,26 +235,6 @@ fn drop_unused_threads(tasks: &mut [Task], threads: &mut Vec<Thread>) {
         th += 1;
         used[th - 1]
     });
-}
-
-/// Releases per second of each task: a periodic task's 1/T; a
-/// data-triggered one's the sum of its triggers' (join any) or the least
-/// of them (join all). Triggers come before the tasks they release.
-fn release_rates(tasks: &[Task]) -> Vec<f64> {
-    let mut rates: Vec<f64> = Vec::with_capacity(tasks.len());
-    for t in tasks {
-        let rate = match (&t.period, t.triggers()) {
-            (PeriodSpec::Fixed(p), _) => 1e9 / *p as f64,
-            (_, Some((triggers, Join::Any))) => triggers.iter().map(|&p| rates[p]).sum(),
-            (_, Some((triggers, Join::All))) => triggers
-                .iter()
-                .map(|&p| rates[p])
-                .fold(f64::INFINITY, f64::min),
-            _ => unreachable!("generated tasks are periodic or data-triggered"),
-        };
-        rates.push(rate);
-    }
-    rates
 }
 
 /// Execution times of the tasks on `cpu`: UUniFast shares of
