@@ -298,6 +298,13 @@ pub fn wrap_pi(a: f64) -> f64 {
     }
 }
 
+/// The difference `a − b` of two angles in degrees, wrapped to
+/// (−180°, 180°]: how far `a` is from `b` the short way round (the one
+/// home of a heading or yaw difference in degrees; [`wrap_pi`] in radians).
+pub fn angle_diff_deg(a: f64, b: f64) -> f64 {
+    wrap_pi((a - b).to_radians()).to_degrees()
+}
+
 /// Degrees to radians.
 pub fn deg(d: f64) -> f64 {
     d.to_radians()

@@ -18,11 +18,15 @@
 //! filter pulls its estimate toward level and the true angle drifts away
 //! (docs/flight.md). Returns to level are not judged: the autopilot's
 //! position hold takes over and brakes the sideways speed with its own
-//! set-points.
+//! set-points. A step's rise, overshoot and settling are measured from
+//! where the response stands at the step instant (a gust may have tilted
+//! the vehicle) to the target; heading steps on the unwrapped heading, and
+//! every heading difference wrapped to (−180°, 180°]
+//! ([`crate::math::angle_diff_deg`]).
 
 pub use crate::radio::Criteria;
 use crate::radio::Mission;
-use crate::trace::metrics::{step_response, StepResponse};
+use crate::trace::metrics::{heading_response, step_response, StepResponse};
 use crate::trace::TracePoint;
 
 const CLIMB_S: f64 = 3.0;
@@ -395,7 +399,13 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
         let end = step_end(changes, k);
         let judge = |est: bool| {
             let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
-            step_response(trace, signal, t, end, 0.0, to, 0.05)
+            if axis == Axis::Yaw {
+                return heading_response(trace, signal, t, end, to, 0.05);
+            }
+            // From where the response starts, not from level: a gust may
+            // have tilted the vehicle when the stick moved.
+            let start = trace.iter().find(|p| secs(p) >= t).map_or(0.0, &signal);
+            step_response(trace, signal, t, end, start, to, 0.05)
         };
         let at_end = trace
             .iter()
@@ -408,7 +418,7 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
             to_deg: to,
             tracked: judge(true),
             truth: judge(false),
-            drift_deg: at_end - to,
+            drift_deg: crate::math::angle_diff_deg(at_end, to),
         });
     }
     out
@@ -619,5 +629,75 @@ attitude_rms_deg = 0.5
         );
         assert!(!f.iter().any(|x| x.contains("overshoot")), "{f:?}");
         assert!(!f.iter().any(|x| x.contains("RMS")), "{f:?}");
+    }
+
+    /// A first-order response from `from` to `to` with a 0.1 s time
+    /// constant from `at` s on, sampled every 2 ms until `until` s.
+    fn first_order(at: f64, until: f64, from: f64, to: f64) -> Vec<(f64, f64)> {
+        (0..(until / 0.002) as usize)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let x = if t < at {
+                    from
+                } else {
+                    to + (from - to) * (-(t - at) / 0.1).exp()
+                };
+                (t, x)
+            })
+            .collect()
+    }
+
+    const STEP_AT_6S: &str = r#"
+name = "one step"
+[[step]]
+at = "0.5s"
+arm = true
+[[step]]
+at = "1s"
+altitude_m = 1.0
+[[step]]
+at = "6s"
+STICK
+"#;
+
+    #[test]
+    fn a_step_is_measured_from_where_the_response_starts() {
+        let m = Mission::from_toml_str(&STEP_AT_6S.replace("STICK", "roll_deg = 20"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        // Tilted 22° by a gust when the stick moves to 20°: the response
+        // comes back 2°. Measured from level it "rose" in 0 s.
+        let trace: Vec<TracePoint> = first_order(6.0, 8.0, 22.0, 20.0)
+            .into_iter()
+            .map(|(t, roll)| point(t, roll, 0.0))
+            .collect();
+        let q = assess(&trace, &m);
+        let roll = q.steps[0];
+        assert!((roll.truth.rise_s - 0.2197).abs() < 0.003, "{roll:?}");
+        assert!((roll.tracked.settling_s - 0.2996).abs() < 0.003, "{roll:?}");
+        assert_eq!(roll.truth.overshoot, 0.0, "{roll:?}");
+    }
+
+    #[test]
+    fn a_half_turn_heading_step_is_measured_on_the_circle() {
+        let m = Mission::from_toml_str(&STEP_AT_6S.replace("STICK", "yaw_deg = 180"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        // The heading turns from 0° to 180° the positive way; the attitude
+        // reports it in (−180°, 180°], so it ends near −179.9°.
+        let trace: Vec<TracePoint> = first_order(6.0, 9.0, 0.0, 180.0)
+            .into_iter()
+            .map(|(t, yaw)| {
+                let mut p = point(t, 0.0, 0.0);
+                p.euler.yaw = crate::math::wrap_pi(yaw.to_radians());
+                p.est.yaw = p.euler.yaw;
+                p
+            })
+            .collect();
+        let q = assess(&trace, &m);
+        let yaw = q.steps[0];
+        assert_eq!(yaw.axis, Axis::Yaw);
+        assert!((yaw.truth.rise_s - 0.2197).abs() < 0.003, "{yaw:?}");
+        assert!((yaw.tracked.settling_s - 0.2996).abs() < 0.003, "{yaw:?}");
+        assert_eq!(yaw.truth.overshoot, 0.0, "{yaw:?}");
+        assert!(yaw.drift_deg.abs() < 0.01, "{yaw:?}");
     }
 }
