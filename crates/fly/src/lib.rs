@@ -242,7 +242,9 @@ fn body_error(
             "give it a fixed period the body can run at",
         );
     }
-    let (ms, hz) = (period as f64 * 1e-6, 1e9 / period as f64);
+    // Three decimals at most: 10.079 ms, not 10.079367999999999.
+    let short = |x: f64| (x * 1e3).round() / 1e3;
+    let (ms, hz) = (short(period as f64 * 1e-6), short(1e9 / period as f64));
     Diagnostic::error(
         format!(
             "{}: `{}` does not suit task `{task}` (body {}), which runs every {ms} ms ({hz} Hz): {}",
