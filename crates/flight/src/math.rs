@@ -376,5 +376,14 @@ mod tests {
         assert!((q.to_euler().yaw - 0.5).abs() < 1e-12);
         assert!((wrap_pi(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+        // Heading differences the short way round, in (−180°, 180°].
+        for (a, b, d) in [
+            (-179.0, 179.0, 2.0),
+            (0.0, 180.0, 180.0),
+            (180.0, 0.0, 180.0),
+            (10.0, 370.0, 0.0),
+        ] {
+            assert!((angle_diff_deg(a, b) - d).abs() < 1e-9, "{a} − {b}");
+        }
     }
 }
