@@ -17,7 +17,7 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, Answer, Hooks, Rendered};
 use crate::output;
 use crate::plot;
-use crate::report::flight::{quality_text, RmsMax};
+use crate::report::flight::{quality_text, EnvelopeView, RmsMax};
 use crate::report::samples::{self, SamplesFile};
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
@@ -275,6 +275,7 @@ struct FlightView<'a> {
     saturation_s: f64,
     airborne_s: f64,
     landed_s: Option<f64>,
+    envelope: EnvelopeView,
     steps: Vec<StepView>,
     criteria_met: bool,
     failures: &'a [String],
@@ -345,6 +346,7 @@ fn to_json<'a>(
         saturation_s: q.saturation_s,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,
+        envelope: q.into(),
         steps: steps.collect(),
         criteria_met: failures.is_empty(),
         failures,

@@ -11,4 +11,4 @@ mod sweep;
 pub use fig9::fig9;
 pub use flight::{flight_altitude, flight_attitude, flight_motors};
 pub use gantt::gantt;
-pub use sweep::{sweep_chart, DotOutcome, SweepDot};
+pub use sweep::{sweep_chart, DotOutcome, SweepDot, SweepMeasure};

@@ -5,7 +5,7 @@ use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
-use crate::report::flight::RmsMax;
+use crate::report::flight::{EnvelopeView, RmsMax};
 use crate::report::samples::samples_csv;
 use crate::report::{self, time};
 use crate::simulate::{chain_table, observations_view, Extended, ObsChain};
@@ -523,6 +523,7 @@ struct FlightView<'a> {
     landed_s: Option<f64>,
     attitude_error_deg: RmsMax,
     altitude_error_m: RmsMax,
+    envelope: EnvelopeView,
     failures: Vec<String>,
 }
 
@@ -536,6 +537,7 @@ fn flight_json<'a>(f: &Flight, s: &'a Setup) -> FlightView<'a> {
         landed_s: q.landed_s,
         attitude_error_deg: (&q.attitude_error_deg).into(),
         altitude_error_m: (&q.altitude_error_m).into(),
+        envelope: q.into(),
         failures: q.failures(&s.criteria()),
     }
 }

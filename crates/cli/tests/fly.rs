@@ -210,3 +210,138 @@ fn a_sweep_where_nothing_flies_writes_no_limits_and_exits_1() {
     assert!(!String::from_utf8_lossy(&o.stdout).contains("wrote"));
     assert!(!out.exists());
 }
+
+/// racer5 with two propellers' spin swapped (rotors 1 and 3): yaw control
+/// is lost after the heading step and the vehicle climbs to 423 m, still
+/// armed, where every window the criteria judge had long closed; `fly`
+/// said "criteria met" and exited 0.
+#[test]
+fn a_flight_that_leaves_the_envelope_fails_naming_what_and_when() {
+    let dir = scratch("fly-envelope");
+    let preset = dir.join("swapped.toml");
+    let text = rtpipe_flight::preset::RACER5_TOML.replace(
+        "spin = [\"cw\", \"ccw\", \"ccw\", \"cw\"]",
+        "spin = [\"ccw\", \"ccw\", \"cw\", \"cw\"]",
+    );
+    assert!(text.contains("[\"ccw\", \"ccw\", \"cw\", \"cw\"]"));
+    if let Err(e) = std::fs::write(&preset, text) {
+        panic!("{e}");
+    }
+    let spec = example("cleanflight.toml");
+    let o = rtpipe(&[
+        "fly",
+        &spec,
+        "--vehicle",
+        &preset.to_string_lossy(),
+        "--seed",
+        "1",
+    ]);
+    assert_exit(&o, 1);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("left the envelope at 16.66 s: altitude above 3 m (highest 423.2 m at 26.00 s; criteria key max_altitude_m)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("did not land: the mission lands from 21.0 s"),
+        "{out}"
+    );
+    // The same flight with the propellers as built stays inside.
+    let o = rtpipe(&["fly", &spec, "--seed", "1", "--json"]);
+    assert_exit(&o, 0);
+    let e = &json_of(&o)["flight"]["envelope"];
+    assert_eq!(e["max_altitude_m"], 3.0);
+    assert!(e["highest_m"].as_f64().is_some_and(|h| h < 1.2), "{e}");
+}
+
+/// A D-term cut-off above the Nyquist frequency of the PID task's rate was
+/// blamed on the task ("give it a fixed period the body can run at") and
+/// the preset file was not named.
+#[test]
+fn a_filter_above_nyquist_names_the_preset_file_and_key() {
+    let dir = scratch("fly-dterm");
+    let preset = dir.join("dterm.toml");
+    let text =
+        rtpipe_flight::preset::RACER5_TOML.replace("dterm_lpf_hz = 75.0", "dterm_lpf_hz = 300.0");
+    if let Err(e) = std::fs::write(&preset, text) {
+        panic!("{e}");
+    }
+    let shown = preset.to_string_lossy();
+    let o = rtpipe(&["fly", &example("cleanflight.toml"), "--vehicle", &shown]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!(
+            "error: preset file {shown}: `pid.dterm_lpf_hz` does not suit task `pid` (body pid), which runs every 2 ms (500 Hz): cut-off 300 Hz must be in (0, 250 Hz) (Nyquist)"
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("change `pid.dterm_lpf_hz` in preset file {shown}")),
+        "{err}"
+    );
+    assert!(!err.contains("give it a fixed period"), "{err}");
+}
+
+/// The sweep's JSON said `"flies": true` of unschedulable points: `flies`
+/// is now "schedulable and met the criterion", the flight alone is
+/// `flight_met_criterion`.
+#[test]
+fn an_unschedulable_sweep_point_does_not_fly() {
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--sweep",
+        "--scale",
+        "0.5..1",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    let unschedulable: Vec<_> = points
+        .iter()
+        .filter(|p| p["schedulable"] == false)
+        .collect();
+    assert!(!unschedulable.is_empty());
+    assert!(
+        unschedulable.iter().all(|p| p["flies"] == false),
+        "{unschedulable:?}"
+    );
+    // ×0.5 and ×0.63 fail the spec's schedulability test, yet their
+    // flights met the criterion in simulation: the two are told apart.
+    assert!(
+        unschedulable
+            .iter()
+            .any(|p| p["flight_met_criterion"] == true),
+        "{unschedulable:?}"
+    );
+    assert!(points.iter().any(|p| p["flies"] == true));
+}
+
+/// The `gusty` mission has no steps: its sweep plot put every point at
+/// "settling 0". It now plots what the mission judges (the hover's
+/// position error against its criterion).
+#[test]
+fn a_sweep_of_a_mission_without_steps_plots_what_it_measures() {
+    let dir = scratch("fly-sweep-gusty");
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--sweep",
+        "--mission",
+        "gusty",
+        "--scale",
+        "1..1",
+        "--plot",
+        &dir.to_string_lossy(),
+    ]);
+    assert!(o.status.code().is_some_and(|c| c <= 1), "{o:?}");
+    let svg = std::fs::read_to_string(dir.join("sweep.svg")).unwrap_or_default();
+    assert!(svg.contains("hover position error RMS (m)"), "{svg}");
+    assert!(
+        svg.contains("criterion: position RMS &lt; 0.5 m")
+            || svg.contains("criterion: position RMS < 0.5 m")
+    );
+    assert!(!svg.contains("settling"), "{svg}");
+}

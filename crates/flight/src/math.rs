@@ -298,6 +298,13 @@ pub fn wrap_pi(a: f64) -> f64 {
     }
 }
 
+/// The difference `a − b` of two angles in degrees, wrapped to
+/// (−180°, 180°]: how far `a` is from `b` the short way round (the one
+/// home of a heading or yaw difference in degrees; [`wrap_pi`] in radians).
+pub fn angle_diff_deg(a: f64, b: f64) -> f64 {
+    wrap_pi((a - b).to_radians()).to_degrees()
+}
+
 /// Degrees to radians.
 pub fn deg(d: f64) -> f64 {
     d.to_radians()
@@ -369,5 +376,14 @@ mod tests {
         assert!((q.to_euler().yaw - 0.5).abs() < 1e-12);
         assert!((wrap_pi(3.0 * std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-12);
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+        // Heading differences the short way round, in (−180°, 180°].
+        for (a, b, d) in [
+            (-179.0, 179.0, 2.0),
+            (0.0, 180.0, 180.0),
+            (180.0, 0.0, 180.0),
+            (10.0, 370.0, 0.0),
+        ] {
+            assert!((angle_diff_deg(a, b) - d).abs() < 1e-9, "{a} − {b}");
+        }
     }
 }

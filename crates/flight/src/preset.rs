@@ -41,6 +41,10 @@ pub struct Preset {
     /// (`[criteria]`; none when omitted).
     #[serde(default)]
     pub criteria: crate::radio::CriteriaOverride,
+    /// Where it came from, for errors that blame one of its keys: "preset
+    /// file PATH" or "built-in preset NAME" (not a key of the file).
+    #[serde(skip)]
+    pub source: String,
 }
 
 /// What a real IMU on this vehicle adds to the datasheet noise: residual
@@ -159,20 +163,27 @@ impl Preset {
     pub fn from_file(path: &std::path::Path) -> Result<Self, rtpipe_model::SpecError> {
         crate::error::load(path, &rtpipe_model::input::Kind::PRESET, |p: Preset| {
             p.validate_all()?;
-            Ok(p)
+            Ok(Preset {
+                source: format!("preset file {}", path.display()),
+                ..p
+            })
         })
     }
 
     /// A built-in preset by name.
     pub fn builtin(name: &str) -> Result<Self, ConfigError> {
-        match name {
+        let p = match name {
             "racer5" => Self::from_toml_str(RACER5_TOML),
             "aero1kg" => Self::from_toml_str(AERO1KG_TOML),
             _ => Err(ConfigError::new(
                 "preset",
                 format!("unknown built-in preset {name:?} (racer5, aero1kg)"),
             )),
-        }
+        }?;
+        Ok(Preset {
+            source: format!("built-in preset {name} (crates/flight/presets/{name}.toml)"),
+            ..p
+        })
     }
 
     /// The rotor speed at which the four rotors carry the weight, rad/s.

@@ -18,11 +18,15 @@
 //! filter pulls its estimate toward level and the true angle drifts away
 //! (docs/flight.md). Returns to level are not judged: the autopilot's
 //! position hold takes over and brakes the sideways speed with its own
-//! set-points.
+//! set-points. A step's rise, overshoot and settling are measured from
+//! where the response stands at the step instant (a gust may have tilted
+//! the vehicle) to the target; heading steps on the unwrapped heading, and
+//! every heading difference wrapped to (−180°, 180°]
+//! ([`crate::math::angle_diff_deg`]).
 
 pub use crate::radio::Criteria;
 use crate::radio::Mission;
-use crate::trace::metrics::{step_response, StepResponse};
+use crate::trace::metrics::{heading_response, step_response, StepResponse};
 use crate::trace::TracePoint;
 
 const CLIMB_S: f64 = 3.0;
@@ -78,6 +82,133 @@ pub struct Step {
     pub drift_deg: f64,
 }
 
+/// What a flight must stay within from start to end, whatever its
+/// mission does (a mission's or criterion file's `max_altitude_m`,
+/// `max_distance_m`, `max_tilt_deg`; the defaults follow the mission:
+/// [`Envelope::of`]). The hover and step criteria judge windows; the
+/// envelope catches what those windows miss, such as a vehicle that climbs
+/// away after its last step.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Envelope {
+    /// Highest altitude, m.
+    pub max_altitude_m: f64,
+    /// Farthest horizontal distance from the launch point, m.
+    pub max_distance_m: f64,
+    /// Largest tilt from level while off the ground, degrees.
+    pub max_tilt_deg: f64,
+    /// When the mission's last landing command comes, s, if it ends
+    /// landing: the vehicle must then be on the ground and disarmed by the
+    /// end of the flight.
+    pub land_s: Option<f64>,
+}
+
+/// Metres of altitude above the mission's highest target the default
+/// envelope allows (an altitude loop that overshoots by this much is
+/// broken, not tuned).
+const ALTITUDE_MARGIN_M: f64 = 2.0;
+/// The default ceiling of a mission that holds no altitude, m.
+const CEILING_WITHOUT_TARGET_M: f64 = 10.0;
+/// The default farthest distance from the launch point, m (Table V's
+/// timing, seeds 0–23: the `steps` mission takes racer5 4.96 m away,
+/// aero1kg in the `gusty` turbulence 7.44 m).
+const MAX_DISTANCE_M: f64 = 20.0;
+/// Degrees of tilt the default envelope allows beyond the mission's
+/// largest stick angle (at least [`LEAST_STICK_DEG`]: the autopilot tilts
+/// up to 15° on its own, and aero1kg's gusts tilt it up to 42.5° over
+/// seeds 0–23 of `gusty`); the default, 60°, stays below the plant's 80°
+/// crash tilt.
+const TILT_MARGIN_DEG: f64 = 40.0;
+/// The least stick angle the default tilt allowance starts from, degrees.
+const LEAST_STICK_DEG: f64 = 20.0;
+/// A landing is judged only on a flight that ran this long after the
+/// landing command (the default flight runs 5 s past the last step).
+pub const LANDING_TIME_S: f64 = 5.0;
+
+impl Envelope {
+    /// The envelope of `mission` under `criteria`: each key the criteria
+    /// set, else the mission's default.
+    pub fn of(mission: &Mission, criteria: &Criteria) -> Envelope {
+        let highest_target = mission
+            .steps
+            .iter()
+            .filter_map(|s| s.altitude_m)
+            .reduce(f64::max);
+        let largest_stick = mission
+            .steps
+            .iter()
+            .flat_map(|s| [s.roll_deg, s.pitch_deg])
+            .flatten()
+            .map(f64::abs)
+            .fold(LEAST_STICK_DEG, f64::max);
+        let last = mission.steps.last().map(|s| s.t_ns);
+        let ends_landing = last.is_some_and(|t| mission.intent_at(t).land);
+        let land_s = mission
+            .steps
+            .iter()
+            .rev()
+            .find(|s| s.land == Some(true))
+            .filter(|_| ends_landing)
+            .map(|s| s.t_ns as f64 * 1e-9);
+        Envelope {
+            max_altitude_m: criteria.max_altitude_m.unwrap_or(
+                highest_target.map_or(CEILING_WITHOUT_TARGET_M, |h| h + ALTITUDE_MARGIN_M),
+            ),
+            max_distance_m: criteria.max_distance_m.unwrap_or(MAX_DISTANCE_M),
+            max_tilt_deg: criteria
+                .max_tilt_deg
+                .unwrap_or(largest_stick + TILT_MARGIN_DEG),
+            land_s,
+        }
+    }
+
+    /// The envelope in words.
+    pub fn describe(&self) -> String {
+        let landing = if self.land_s.is_some() {
+            ", landed and disarmed at the end"
+        } else {
+            ""
+        };
+        format!(
+            "envelope over the whole flight: altitude ≤ {} m, within {} m of the launch point, tilt ≤ {}°{landing}",
+            self.max_altitude_m, self.max_distance_m, self.max_tilt_deg
+        )
+    }
+}
+
+/// How far one quantity of the envelope went: its peak and when, and when
+/// it first left its bound.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Excursion {
+    /// The largest value, over the flight until any crash.
+    pub peak: f64,
+    /// When it was reached, s.
+    pub peak_s: f64,
+    /// When the value first exceeded the envelope's bound, s.
+    pub left_s: Option<f64>,
+}
+
+impl Excursion {
+    fn push(&mut self, t: f64, value: f64, bound: f64) {
+        if value > self.peak {
+            (self.peak, self.peak_s) = (value, t);
+        }
+        if value > bound && self.left_s.is_none() {
+            self.left_s = Some(t);
+        }
+    }
+}
+
+/// The envelope's quantities over a flight.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Excursions {
+    /// Altitude, m.
+    pub altitude_m: Excursion,
+    /// Horizontal distance from the launch point, m.
+    pub distance_m: Excursion,
+    /// Tilt from level while off the ground, degrees.
+    pub tilt_deg: Excursion,
+}
+
 /// Everything `rtpipe fly` reports about a flight.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct FlightQuality {
@@ -107,6 +238,14 @@ pub struct FlightQuality {
     pub landed_s: Option<f64>,
     /// The mission holds an altitude, so there is a hover to judge.
     pub hovers: bool,
+    /// The envelope the flight was judged against.
+    pub envelope: Envelope,
+    /// How far the flight went in each of the envelope's quantities.
+    pub excursions: Excursions,
+    /// Where the vehicle was at the end, m (the landing's figure).
+    pub end_pos: crate::math::Vec3,
+    /// Armed at the end.
+    pub end_armed: bool,
 }
 
 /// A mission stick change: (time s, axis, target deg).
@@ -208,6 +347,10 @@ pub struct Assessor {
     /// The start of the current run of disarmed points on the ground after
     /// the first flying one.
     resting_since: Option<f64>,
+    envelope: Envelope,
+    excursions: Excursions,
+    launch: Option<crate::math::Vec3>,
+    last: Option<TracePoint>,
 }
 
 impl Assessor {
@@ -247,6 +390,10 @@ impl Assessor {
             airborne: 0,
             flew: false,
             resting_since: None,
+            envelope: Envelope::of(mission, &mission.criteria),
+            excursions: Excursions::default(),
+            launch: None,
+            last: None,
         }
     }
 
@@ -296,6 +443,8 @@ impl Assessor {
             self.kept.push(*p);
         }
         self.push_hover(p);
+        self.push_envelope(p);
+        self.last = Some(*p);
         if p.armed && p.motors.iter().any(|&m| m <= 0.0 || m >= 1.0) {
             self.saturated += 1;
         }
@@ -309,6 +458,25 @@ impl Assessor {
             } else {
                 self.resting_since = None;
             }
+        }
+    }
+
+    /// The envelope's figures of one point, until a crash (the crash is
+    /// the verdict; a wreck's attitude is no excursion).
+    fn push_envelope(&mut self, p: &TracePoint) {
+        if self.crashed_s.is_some() {
+            return;
+        }
+        let (t, e, x) = (secs(p), self.envelope, &mut self.excursions);
+        x.altitude_m.push(t, p.pos.z, e.max_altitude_m);
+        let o = *self.launch.get_or_insert(p.pos);
+        let d = ((p.pos.x - o.x).powi(2) + (p.pos.y - o.y).powi(2)).sqrt();
+        x.distance_m.push(t, d, e.max_distance_m);
+        if !p.on_ground {
+            // The angle between the body's z axis and the vertical.
+            let cos_tilt = p.euler.roll.cos() * p.euler.pitch.cos();
+            let tilt = cos_tilt.clamp(-1.0, 1.0).acos().to_degrees();
+            x.tilt_deg.push(t, tilt, e.max_tilt_deg);
         }
     }
 
@@ -356,6 +524,10 @@ impl Assessor {
             airborne_s: dt * self.airborne as f64,
             landed_s: if crashed { None } else { self.resting_since },
             hovers: self.first_alt.is_some(),
+            envelope: self.envelope,
+            excursions: self.excursions,
+            end_pos: self.last.map_or_else(Default::default, |p| p.pos),
+            end_armed: self.last.is_some_and(|p| p.armed),
         }
     }
 }
@@ -395,7 +567,13 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
         let end = step_end(changes, k);
         let judge = |est: bool| {
             let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
-            step_response(trace, signal, t, end, 0.0, to, 0.05)
+            if axis == Axis::Yaw {
+                return heading_response(trace, signal, t, end, to, 0.05);
+            }
+            // From where the response starts, not from level: a gust may
+            // have tilted the vehicle when the stick moved.
+            let start = trace.iter().find(|p| secs(p) >= t).map_or(0.0, &signal);
+            step_response(trace, signal, t, end, start, to, 0.05)
         };
         let at_end = trace
             .iter()
@@ -408,7 +586,7 @@ fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
             to_deg: to,
             tracked: judge(true),
             truth: judge(false),
-            drift_deg: at_end - to,
+            drift_deg: crate::math::angle_diff_deg(at_end, to),
         });
     }
     out
@@ -434,6 +612,68 @@ impl FlightQuality {
         }
     }
 
+    /// What left the envelope, and when, in words; a landing that did not
+    /// happen.
+    pub fn envelope_failures(&self) -> Vec<String> {
+        let (e, x) = (&self.envelope, &self.excursions);
+        let mut out = Vec::new();
+        let left = [
+            (
+                x.altitude_m,
+                format!("altitude above {} m", e.max_altitude_m),
+                "highest",
+                "m",
+                "max_altitude_m",
+            ),
+            (
+                x.distance_m,
+                format!("more than {} m from the launch point", e.max_distance_m),
+                "farthest",
+                "m",
+                "max_distance_m",
+            ),
+            (
+                x.tilt_deg,
+                format!("tilt above {}°", e.max_tilt_deg),
+                "most",
+                "°",
+                "max_tilt_deg",
+            ),
+        ];
+        for (ex, what, peak, unit, key) in left {
+            if let Some(t) = ex.left_s {
+                let space = if unit == "m" { " " } else { "" };
+                out.push(format!(
+                    "left the envelope at {t:.2} s: {what} ({peak} {:.1}{space}{unit} at {:.2} s; criteria key {key})",
+                    ex.peak, ex.peak_s
+                ));
+            }
+        }
+        if let Some(why) = self.not_landed() {
+            out.push(why);
+        }
+        out
+    }
+
+    /// Why the flight did not end landed as its mission does; `None` when
+    /// it did, when it crashed (that is the verdict), or when it ended too
+    /// soon after the landing command to judge.
+    fn not_landed(&self) -> Option<String> {
+        let land = self.envelope.land_s?;
+        if self.crashed || self.landed_s.is_some() || self.end_s < land + LANDING_TIME_S {
+            return None;
+        }
+        let state = if self.end_armed {
+            "still armed"
+        } else {
+            "disarmed"
+        };
+        Some(format!(
+            "did not land: the mission lands from {land:.1} s, but at the end ({:.2} s) the vehicle is {state} at {:.1} m",
+            self.end_s, self.end_pos.z
+        ))
+    }
+
     /// What fails `c`, in words; empty when the flight meets it.
     pub fn failures(&self, c: &Criteria) -> Vec<String> {
         let mut out = Vec::new();
@@ -442,6 +682,7 @@ impl FlightQuality {
             None if self.crashed => out.push("crashed".to_string()),
             None => {}
         }
+        out.extend(self.envelope_failures());
         let never = self.hovers && self.attitude_error_deg.count == 0;
         if never {
             out.push("never hovered (no sample to judge)".to_string());
@@ -619,5 +860,144 @@ attitude_rms_deg = 0.5
         );
         assert!(!f.iter().any(|x| x.contains("overshoot")), "{f:?}");
         assert!(!f.iter().any(|x| x.contains("RMS")), "{f:?}");
+    }
+
+    /// A first-order response from `from` to `to` with a 0.1 s time
+    /// constant from `at` s on, sampled every 2 ms until `until` s.
+    fn first_order(at: f64, until: f64, from: f64, to: f64) -> Vec<(f64, f64)> {
+        (0..(until / 0.002) as usize)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let x = if t < at {
+                    from
+                } else {
+                    to + (from - to) * (-(t - at) / 0.1).exp()
+                };
+                (t, x)
+            })
+            .collect()
+    }
+
+    const STEP_AT_6S: &str = r#"
+name = "one step"
+[[step]]
+at = "0.5s"
+arm = true
+[[step]]
+at = "1s"
+altitude_m = 1.0
+[[step]]
+at = "6s"
+STICK
+"#;
+
+    #[test]
+    fn a_step_is_measured_from_where_the_response_starts() {
+        let m = Mission::from_toml_str(&STEP_AT_6S.replace("STICK", "roll_deg = 20"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        // Tilted 22° by a gust when the stick moves to 20°: the response
+        // comes back 2°. Measured from level it "rose" in 0 s.
+        let trace: Vec<TracePoint> = first_order(6.0, 8.0, 22.0, 20.0)
+            .into_iter()
+            .map(|(t, roll)| point(t, roll, 0.0))
+            .collect();
+        let q = assess(&trace, &m);
+        let roll = q.steps[0];
+        assert!((roll.truth.rise_s - 0.2197).abs() < 0.003, "{roll:?}");
+        assert!((roll.tracked.settling_s - 0.2996).abs() < 0.003, "{roll:?}");
+        assert_eq!(roll.truth.overshoot, 0.0, "{roll:?}");
+    }
+
+    #[test]
+    fn a_half_turn_heading_step_is_measured_on_the_circle() {
+        let m = Mission::from_toml_str(&STEP_AT_6S.replace("STICK", "yaw_deg = 180"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        // The heading turns from 0° to 180° the positive way; the attitude
+        // reports it in (−180°, 180°], so it ends near −179.9°.
+        let trace: Vec<TracePoint> = first_order(6.0, 9.0, 0.0, 180.0)
+            .into_iter()
+            .map(|(t, yaw)| {
+                let mut p = point(t, 0.0, 0.0);
+                p.euler.yaw = crate::math::wrap_pi(yaw.to_radians());
+                p.est.yaw = p.euler.yaw;
+                p
+            })
+            .collect();
+        let q = assess(&trace, &m);
+        let yaw = q.steps[0];
+        assert_eq!(yaw.axis, Axis::Yaw);
+        assert!((yaw.truth.rise_s - 0.2197).abs() < 0.003, "{yaw:?}");
+        assert!((yaw.tracked.settling_s - 0.2996).abs() < 0.003, "{yaw:?}");
+        assert_eq!(yaw.truth.overshoot, 0.0, "{yaw:?}");
+        assert!(yaw.drift_deg.abs() < 0.01, "{yaw:?}");
+    }
+
+    #[test]
+    fn a_flight_that_climbs_away_after_its_steps_leaves_the_envelope() {
+        let m = Mission::builtin("steps").unwrap_or_else(|e| panic!("{e}"));
+        // Hovers level at 1 m, then from 17 s climbs at 40 m/s, still
+        // armed at the end (26 s); every window the criteria judge is calm.
+        let trace: Vec<TracePoint> = (0..=13_000)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let mut p = point(t, 0.0, 0.0);
+                p.pos.z = 1.0 + 40.0 * (t - 17.0).max(0.0);
+                p
+            })
+            .collect();
+        let q = assess(&trace, &m);
+        assert_eq!(q.envelope.max_altitude_m, 3.0, "{q:?}");
+        let f = q.failures(&Criteria::default());
+        assert!(
+            f.iter().any(|x| x.starts_with(
+                "left the envelope at 17.05 s: altitude above 3 m (highest 361.0 m at 26.00 s"
+            )),
+            "{f:?}"
+        );
+        assert!(
+            f.iter().any(|x| x.starts_with(
+                "did not land: the mission lands from 21.0 s, but at the end (26.00 s) the vehicle is still armed at 361.0 m"
+            )),
+            "{f:?}"
+        );
+        // A mission's criteria move the ceiling (and name the key).
+        let high = STEP_AT_6S.replace("STICK", "[criteria]\nmax_altitude_m = 400");
+        let m = Mission::from_toml_str(&high).unwrap_or_else(|e| panic!("{e}"));
+        let q = assess(&trace, &m);
+        assert!(q.envelope_failures().is_empty(), "{q:?}");
+    }
+
+    #[test]
+    fn the_envelope_judges_distance_and_tilt_and_its_keys_are_checked() {
+        let m = Mission::builtin("hover").unwrap_or_else(|e| panic!("{e}"));
+        let e = Envelope::of(&m, &m.criteria);
+        assert_eq!(
+            (e.max_distance_m, e.max_tilt_deg, e.land_s),
+            (20.0, 60.0, Some(14.0))
+        );
+        // Flies off sideways at 4 m/s, tilted 65°, from 5 s.
+        let trace: Vec<TracePoint> = (0..9500)
+            .map(|k| {
+                let t = k as f64 * 0.002;
+                let mut p = point(t, if t >= 5.0 { 65.0 } else { 0.0 }, 0.0);
+                p.pos.x = 4.0 * (t - 5.0).max(0.0);
+                p
+            })
+            .collect();
+        let f = assess(&trace, &m).envelope_failures();
+        assert!(
+            f[0].starts_with("left the envelope at 10.00 s: more than 20 m from the launch point"),
+            "{f:?}"
+        );
+        assert!(
+            f[1].starts_with("left the envelope at 5.00 s: tilt above 60°"),
+            "{f:?}"
+        );
+        let bad = MISSION.replace("attitude_rms_deg = 0.5", "max_tilt_deg = 200");
+        let err = Mission::from_toml_str(&bad)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(err.contains("criteria.max_tilt_deg"), "{err}");
     }
 }

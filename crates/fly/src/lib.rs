@@ -18,6 +18,7 @@ use rtpipe_flight::quality::FlightQuality;
 use rtpipe_flight::radio::{Mission, BUILTIN_MISSIONS};
 use rtpipe_flight::tasks::{body, BodyKind, Cosim, CosimConfig, Value};
 use rtpipe_flight::trace::TracePoint;
+use rtpipe_flight::ConfigError;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::input::shown_name;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -223,6 +224,42 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
     })
 }
 
+/// Why the body of task `task` could not be built, blaming what is at
+/// fault: the task's period when it has none a flight task can run at,
+/// else the preset's key (a filter cut-off above the Nyquist frequency of
+/// the task's rate is the preset's setting, whatever the period: the
+/// preset file and the key are named, and both ways out).
+fn body_error(
+    task: &str,
+    role: BodyKind,
+    period: Nanos,
+    preset: &Preset,
+    e: &ConfigError,
+) -> Diagnostic {
+    if e.field == "period" {
+        return Diagnostic::error(
+            format!("task `{task}` (body {}): {e}", role.name()),
+            "give it a fixed period the body can run at",
+        );
+    }
+    // Three decimals at most: 10.079 ms, not 10.079367999999999.
+    let short = |x: f64| (x * 1e3).round() / 1e3;
+    let (ms, hz) = (short(period as f64 * 1e-6), short(1e9 / period as f64));
+    Diagnostic::error(
+        format!(
+            "{}: `{}` does not suit task `{task}` (body {}), which runs every {ms} ms ({hz} Hz): {}",
+            preset.source,
+            e.field,
+            role.name(),
+            e.reason
+        ),
+        format!(
+            "change `{}` in {} to suit the task's rate, or give task `{task}` a period it suits",
+            e.field, preset.source
+        ),
+    )
+}
+
 /// A task without a body: it runs (its timing matters) but computes nothing.
 fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
     Value::Nothing
@@ -245,12 +282,8 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
         // A data-triggered body runs at its triggers' rate.
         let period = spec.activation_period(i).unwrap_or(0);
         bodies.push(match role {
-            Some(r) => body(*r, period, &s.preset).map_err(|e| {
-                Diagnostic::error(
-                    format!("task `{}` (body {}): {e}", t.name, r.name()),
-                    "give it a fixed period the body can run at",
-                )
-            })?,
+            Some(r) => body(*r, period, &s.preset)
+                .map_err(|e| body_error(&t.name, *r, period, &s.preset, &e))?,
             None => Box::new(idle),
         });
     }

@@ -170,6 +170,9 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
     // A point keeps only the flight's quality: the bounds are the analysis's.
     setup.track_chains = false;
     setup.keep_trace = false;
+    // The flight judges its envelope as it flies, by the mission's
+    // criteria: the sweep's criterion replaces them.
+    setup.mission.criteria = *c;
     let (timing, delays, added) = plan(spec, s, v);
     setup.world.sense_delay_ns = delays;
     let timing = match timing {

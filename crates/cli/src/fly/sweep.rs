@@ -7,7 +7,7 @@ use super::args::FlyArgs;
 use crate::command::{self, Answer, Rendered};
 use crate::output;
 use crate::table::Table;
-use rtpipe_flight::quality::Criteria;
+use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
 use rtpipe_fly::sweep::{
     derived_limits, edge, scale_edge, sweep, tails, variations, ChainPair, Derived, Point,
     Variation, DELAY_LINES,
@@ -137,7 +137,13 @@ struct PointView<'a> {
     /// `freshness` the maximum data age.
     event_bounds_ms: Vec<PairMs>,
     schedulable: bool,
+    /// The timing is schedulable and its flight met the criterion: a
+    /// point the limits may rest on.
     flies: bool,
+    /// The simulated flight met the criterion, whatever the schedulability
+    /// test says (an unschedulable timing may still fly in simulation when
+    /// its worst case does not happen).
+    flight_met_criterion: bool,
     failures: &'a [String],
     attitude_error_rms_deg: Option<f64>,
     altitude_error_rms_m: Option<f64>,
@@ -177,7 +183,8 @@ fn point_json(p: &Point) -> PointView<'_> {
         bounds_ms: p.bounds.iter().map(PairMs::from).collect(),
         event_bounds_ms: p.event.iter().map(PairMs::from).collect(),
         schedulable: p.schedulable,
-        flies: p.pass(),
+        flies: p.schedulable && p.pass(),
+        flight_met_criterion: p.pass(),
         failures: &p.failures,
         attitude_error_rms_deg: hover.map(|q| q.attitude_error_deg.rms),
         altitude_error_rms_m: hover.map(|q| q.altitude_error_m.rms),
@@ -190,16 +197,23 @@ fn point_json(p: &Point) -> PointView<'_> {
 /// points.
 fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<String, String> {
     use crate::plot::DotOutcome;
+    let measure = sweep_measure(s, c);
+    let figure = |q: &FlightQuality| match measure.as_ref().map(|m| m.1) {
+        Some(Figure::Settling) => q
+            .steps
+            .iter()
+            .filter(|st| st.axis != Axis::Yaw)
+            .map(|st| st.tracked.settling_s)
+            .fold(0.0, f64::max),
+        // Never hovered: nothing held, drawn at the top.
+        _ if q.attitude_error_deg.count == 0 => f64::INFINITY,
+        Some(Figure::Position) => q.position_error_m.rms,
+        _ => q.attitude_error_deg.rms,
+    };
     let outcome = |p: &Point| match &p.quality {
         None => DotOutcome::NotFlown,
         Some(q) if q.crashed => DotOutcome::Crashed,
-        Some(q) => DotOutcome::Settling(
-            q.steps
-                .iter()
-                .filter(|st| st.axis != rtpipe_flight::quality::Axis::Yaw)
-                .map(|st| st.tracked.settling_s)
-                .fold(0.0, f64::max),
-        ),
+        Some(q) => DotOutcome::Measured(figure(q)),
     };
     let panels = (0..spec.chains.len())
         .map(|k| {
@@ -232,7 +246,59 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
             )
         })
         .collect::<Vec<_>>();
-    crate::plot::sweep_chart(&panels, c.settling_s)
+    crate::plot::sweep_chart(&panels, measure.as_ref().map(|m| &m.0))
+}
+
+/// Which figure of a flight the sweep plot shows.
+#[derive(Clone, Copy)]
+enum Figure {
+    Settling,
+    Position,
+    Attitude,
+}
+
+/// What the sweep plot measures for the mission `s` flies, judged by `c`:
+/// the worst roll/pitch step's settling when it has such steps, else the
+/// hover's position error (where the criterion judges it) or attitude
+/// error; `None` for a mission with neither (nothing to plot).
+fn sweep_measure(s: &Setup, c: &Criteria) -> Option<(crate::plot::SweepMeasure, Figure)> {
+    let has_steps =
+        s.mission.steps.iter().any(|st| {
+            st.roll_deg.is_some_and(|r| r != 0.0) || st.pitch_deg.is_some_and(|p| p != 0.0)
+        });
+    let hovers = s.mission.steps.iter().any(|st| st.altitude_m.is_some());
+    let (axis, criterion, limit, figure) = if has_steps {
+        let l = c.settling_s;
+        (
+            "worst step settling (s)",
+            format!("criterion: settling < {l} s"),
+            l,
+            Figure::Settling,
+        )
+    } else if let (true, Some(l)) = (hovers, c.position_rms_m) {
+        (
+            "hover position error RMS (m)",
+            format!("criterion: position RMS < {l} m"),
+            l,
+            Figure::Position,
+        )
+    } else if hovers {
+        let l = c.attitude_rms_deg;
+        (
+            "hover attitude error RMS (°)",
+            format!("criterion: attitude RMS < {l}°"),
+            l,
+            Figure::Attitude,
+        )
+    } else {
+        return None;
+    };
+    let m = crate::plot::SweepMeasure {
+        axis: axis.to_string(),
+        criterion,
+        limit,
+    };
+    Some((m, figure))
 }
 
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.

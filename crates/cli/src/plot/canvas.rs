@@ -85,3 +85,91 @@ pub fn svg(size: (u32, u32), draw: impl FnOnce(&Area<SVGBackend<'_>>) -> Res<()>
     }
     Ok(svg)
 }
+
+/// How a legend entry shows its series: a line (dashed as the series is),
+/// a dot (filled or hollow), a cross or a triangle.
+#[derive(Clone, Copy)]
+pub enum Mark {
+    Line {
+        color: RGBColor,
+        width: u32,
+        dashed: bool,
+    },
+    Dot {
+        color: RGBColor,
+        filled: bool,
+    },
+    Cross(RGBColor),
+    Triangle(RGBColor),
+    /// No swatch: a line of text, a note about the plot.
+    Note,
+}
+
+/// Dash and gap of every dashed line, px: the series and its legend swatch
+/// draw the same pattern.
+pub const DASH: (u32, u32) = (6, 4);
+
+/// The width of the legend column [`with_side_legend`] keeps, px.
+pub const LEGEND_W: u32 = 190;
+
+/// Splits `area` into a plot area and a legend column on its right, and
+/// draws `entries` in the column: a legend outside the plot covers no
+/// data. Returns the plot area.
+pub fn with_side_legend<DB: DrawingBackend>(
+    area: &Area<DB>,
+    entries: &[(String, Mark)],
+) -> Res<Area<DB>>
+where
+    DB::ErrorType: 'static,
+{
+    let (w, _) = area.dim_in_pixel();
+    let (plot, legend) = area.split_horizontally(w.saturating_sub(LEGEND_W));
+    for (k, (label, mark)) in entries.iter().enumerate() {
+        let y = 40 + 20 * k as i32;
+        draw_mark(&legend, (6, y), *mark)?;
+        legend
+            .draw(&Text::new(
+                label.clone(),
+                (38, y),
+                text_style(12, BLACK, HPos::Left, VPos::Center),
+            ))
+            .map_err(err)?;
+    }
+    Ok(plot)
+}
+
+/// A legend swatch 26 px wide starting at `(x, y)`.
+fn draw_mark<DB: DrawingBackend>(area: &Area<DB>, (x, y): (i32, i32), mark: Mark) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mid = (x + 13, y);
+    match mark {
+        Mark::Line {
+            color,
+            width,
+            dashed: true,
+        } => area.draw(&DashedPathElement::new(
+            [(x, y), (x + 26, y)],
+            DASH.0,
+            DASH.1,
+            color.stroke_width(width),
+        )),
+        Mark::Line { color, width, .. } => area.draw(&PathElement::new(
+            [(x, y), (x + 26, y)],
+            color.stroke_width(width),
+        )),
+        Mark::Dot { color, filled } => {
+            let style = if filled {
+                color.filled()
+            } else {
+                color.stroke_width(2)
+            };
+            area.draw(&Circle::new(mid, 5, style))
+        }
+        Mark::Cross(color) => area.draw(&Cross::new(mid, 5, color.stroke_width(2))),
+        Mark::Triangle(color) => area.draw(&TriangleMarker::new(mid, 5, color.filled())),
+        Mark::Note => Ok(()),
+    }
+    .map_err(err)
+}

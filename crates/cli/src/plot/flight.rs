@@ -34,62 +34,73 @@ fn series(
     }
 }
 
-/// Lines over time (s), stacked panels sharing the time axis.
+/// Lines over time (s), stacked panels sharing the time axis; each panel's
+/// legend in a column on its right, clear of the lines.
 fn time_plot(title: &str, panels: &[(&str, Vec<Series>)]) -> Res<String> {
     let h = 260 * panels.len() as u32 + 40;
-    svg((960, h), |root| {
+    svg((960 + LEGEND_W, h), |root| {
         let root = root.titled(title, (FONT, 20).into_font()).map_err(err)?;
         let areas = root.split_evenly((panels.len(), 1));
         for ((label, lines), area) in panels.iter().zip(areas) {
-            let pts = lines.iter().flat_map(|s| s.points.iter());
-            let (t0, t1, lo, hi) = pts.fold(
-                (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
-                |(a, b, c, d), &(t, y)| (a.min(t), b.max(t), c.min(y), d.max(y)),
-            );
-            if t0 > t1 {
-                continue;
-            }
-            let pad = ((hi - lo) * 0.08).max(1e-3);
-            let mut chart = ChartBuilder::on(&area)
-                .margin(8)
-                .x_label_area_size(32)
-                .y_label_area_size(60)
-                .build_cartesian_2d(t0..t1, (lo - pad)..(hi + pad))
-                .map_err(err)?;
-            chart
-                .configure_mesh()
-                .x_desc("time (s)")
-                .y_desc(*label)
-                .label_style((FONT, 12))
-                .draw()
-                .map_err(err)?;
-            for s in lines {
-                let style = s.color.stroke_width(if s.dashed { 1 } else { 2 });
-                let drawn = if s.dashed {
-                    chart.draw_series(std::iter::once(DashedPathElement::new(
-                        s.points.clone(),
-                        6,
-                        4,
-                        style,
-                    )))
-                } else {
-                    chart.draw_series(std::iter::once(PathElement::new(s.points.clone(), style)))
-                };
-                let c = s.color;
-                drawn.map_err(err)?.label(s.name).legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 16, y)], c.stroke_width(2))
-                });
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(GREY)
-                .label_font((FONT, 12))
-                .draw()
-                .map_err(err)?;
+            time_panel(&area, label, lines)?;
         }
         Ok(())
     })
+}
+
+/// One panel of [`time_plot`].
+fn time_panel<DB: DrawingBackend>(area: &Area<DB>, label: &str, lines: &[Series]) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let pts = lines.iter().flat_map(|s| s.points.iter());
+    let (t0, t1, lo, hi) = pts.fold(
+        (f64::MAX, f64::MIN, f64::MAX, f64::MIN),
+        |(a, b, c, d), &(t, y)| (a.min(t), b.max(t), c.min(y), d.max(y)),
+    );
+    if t0 > t1 {
+        return Ok(());
+    }
+    let width = |s: &Series| if s.dashed { 1 } else { 2 };
+    let entries: Vec<(String, Mark)> = lines
+        .iter()
+        .map(|s| {
+            let mark = Mark::Line {
+                color: s.color,
+                width: width(s),
+                dashed: s.dashed,
+            };
+            (s.name.to_string(), mark)
+        })
+        .collect();
+    let plot = with_side_legend(area, &entries)?;
+    let pad = ((hi - lo) * 0.08).max(1e-3);
+    let mut chart = ChartBuilder::on(&plot)
+        .margin(8)
+        .x_label_area_size(32)
+        .y_label_area_size(60)
+        .build_cartesian_2d(t0..t1, (lo - pad)..(hi + pad))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(label)
+        .label_style((FONT, 12))
+        .draw()
+        .map_err(err)?;
+    for s in lines {
+        let style = s.color.stroke_width(width(s));
+        let points = s.points.clone();
+        let drawn = if s.dashed {
+            chart.draw_series(std::iter::once(DashedPathElement::new(
+                points, DASH.0, DASH.1, style,
+            )))
+        } else {
+            chart.draw_series(std::iter::once(PathElement::new(points, style)))
+        };
+        drawn.map_err(err)?;
+    }
+    Ok(())
 }
 
 /// True roll and pitch against the set-point in use and the AHRS estimate.

@@ -21,6 +21,36 @@ impl From<&ErrorStats> for RmsMax {
     }
 }
 
+/// The envelope a flight was judged against over its whole length and how
+/// far it went, as `fly --json` and `run --json` both give it.
+#[derive(Serialize)]
+pub struct EnvelopeView {
+    pub max_altitude_m: f64,
+    pub max_distance_m: f64,
+    pub max_tilt_deg: f64,
+    /// When the mission's landing begins, s (absent: it does not end landed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub land_s: Option<f64>,
+    pub highest_m: f64,
+    pub farthest_m: f64,
+    pub most_tilt_deg: f64,
+}
+
+impl From<&FlightQuality> for EnvelopeView {
+    fn from(q: &FlightQuality) -> Self {
+        let (e, x) = (&q.envelope, &q.excursions);
+        EnvelopeView {
+            max_altitude_m: e.max_altitude_m,
+            max_distance_m: e.max_distance_m,
+            max_tilt_deg: e.max_tilt_deg,
+            land_s: e.land_s,
+            highest_m: x.altitude_m.peak,
+            farthest_m: x.distance_m.peak,
+            most_tilt_deg: x.tilt_deg.peak,
+        }
+    }
+}
+
 fn three_decimals(x: f64) -> String {
     format!("{x:.3}")
 }
@@ -61,12 +91,21 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
     } else {
         out.push_str("  hover: none to judge (the mission holds no altitude)\n");
     }
+    let x = &q.excursions;
+    out.push_str(&format!(
+        "  whole flight: highest {:.2} m, farthest {:.2} m from the launch point, most tilt {:.1}°\n",
+        x.altitude_m.peak, x.distance_m.peak, x.tilt_deg.peak
+    ));
     if !q.steps.is_empty() {
         out.push_str("  steps (tracked: the AHRS estimate the controller closes its loop on; true: the plant):\n");
         out.push_str(&steps_table(q));
     }
     out.push_str(&match failures {
-        [] => format!("  criteria ({}): met\n", c.describe()),
+        [] => format!(
+            "  criteria ({}; {}): met\n",
+            c.describe(),
+            q.envelope.describe()
+        ),
         f => format!("  criteria NOT met: {}\n", f.join("; ")),
     });
     out

@@ -398,6 +398,17 @@ pub struct Criteria {
     /// Hover horizontal position error RMS, metres (judged only when set:
     /// a disturbance-rejection criterion).
     pub position_rms_m: Option<f64>,
+    /// The envelope, judged over the whole flight: the highest altitude,
+    /// m (default: the mission's highest altitude target + 2 m, or 10 m
+    /// for a mission without one; `quality::Envelope`).
+    pub max_altitude_m: Option<f64>,
+    /// The envelope: the farthest horizontal distance from the launch
+    /// point, m (default 20 m).
+    pub max_distance_m: Option<f64>,
+    /// The envelope: the largest tilt from level while off the ground,
+    /// degrees (default: the mission's largest roll or pitch stick, at
+    /// least 20°, + 40°).
+    pub max_tilt_deg: Option<f64>,
 }
 
 impl Default for Criteria {
@@ -410,6 +421,9 @@ impl Default for Criteria {
             overshoot: 0.2,
             settling_s: 0.5,
             position_rms_m: None,
+            max_altitude_m: None,
+            max_distance_m: None,
+            max_tilt_deg: None,
         }
     }
 }
@@ -486,6 +500,15 @@ impl Criteria {
                 "criteria.position_rms_m",
                 self.position_rms_m.unwrap_or(1.0),
             ),
+            (
+                "criteria.max_altitude_m",
+                self.max_altitude_m.unwrap_or(1.0),
+            ),
+            (
+                "criteria.max_distance_m",
+                self.max_distance_m.unwrap_or(1.0),
+            ),
+            ("criteria.max_tilt_deg", self.max_tilt_deg.unwrap_or(1.0)),
         ] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(ConfigError::new(
@@ -493,6 +516,12 @@ impl Criteria {
                     format!("must be a positive number, found {v}"),
                 ));
             }
+        }
+        if self.max_tilt_deg.is_some_and(|t| t > 180.0) {
+            return Err(ConfigError::new(
+                "criteria.max_tilt_deg",
+                "must be at most 180 (degrees from level)",
+            ));
         }
         Ok(())
     }

@@ -70,11 +70,58 @@ pub fn step_response(
     to: f64,
     band: f64,
 ) -> StepResponse {
+    let samples = window(tr, t_step, t_end).map(|p| (p.t_ns as f64 * 1e-9, signal(p)));
+    response_of(samples, t_step, from, to, band)
+}
+
+/// Measure a heading step of `heading_deg` (degrees, any branch) towards
+/// `to_deg`, from where the heading is at `t_step`. Headings are angles on
+/// a circle: the signal is unwrapped along the window (each sample's
+/// difference from the one before taken by [`crate::math::angle_diff_deg`])
+/// so that crossing ±180° is no jump, and the target is the branch of
+/// `to_deg` nearest to where the response ends (a 180° step may be flown
+/// either way round; the controller chose the way it turned).
+pub fn heading_response(
+    tr: &[TracePoint],
+    heading_deg: impl Fn(&TracePoint) -> f64,
+    t_step: f64,
+    t_end: f64,
+    to_deg: f64,
+    band: f64,
+) -> StepResponse {
+    let mut unwrapped: Option<f64> = None;
+    let mut last_raw = 0.0;
+    let samples: Vec<(f64, f64)> = window(tr, t_step, t_end)
+        .map(|p| {
+            let raw = heading_deg(p);
+            let u = match unwrapped {
+                None => raw,
+                Some(u) => u + crate::math::angle_diff_deg(raw, last_raw),
+            };
+            (unwrapped, last_raw) = (Some(u), raw);
+            (p.t_ns as f64 * 1e-9, u)
+        })
+        .collect();
+    let (Some(&(_, start)), Some(&(_, end))) = (samples.first(), samples.last()) else {
+        return response_of(std::iter::empty(), t_step, 0.0, to_deg, band);
+    };
+    let target = end + crate::math::angle_diff_deg(to_deg, end);
+    response_of(samples.into_iter(), t_step, start, target, band)
+}
+
+/// The step response of `(time s, value)` samples from `t_step` on, the
+/// step going from `from` to `to`.
+fn response_of(
+    samples: impl Iterator<Item = (f64, f64)>,
+    t_step: f64,
+    from: f64,
+    to: f64,
+    band: f64,
+) -> StepResponse {
     let span = to - from;
     let (mut peak, mut last_out, mut t10, mut t90) = (0.0f64, t_step, None, None);
-    for p in window(tr, t_step, t_end) {
-        let t = p.t_ns as f64 * 1e-9;
-        let x = (signal(p) - from) / span;
+    for (t, value) in samples {
+        let x = (value - from) / span;
         peak = peak.max(x);
         if t10.is_none() && x >= 0.1 {
             t10 = Some(t);
