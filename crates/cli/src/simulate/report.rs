@@ -82,6 +82,8 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
             r.tightness().map_or("-".into(), |x| format!("{x:.4}")),
             match (r.value, r.paper) {
                 (Some(v), Some(p)) if v > p => "yes".into(),
+                // No paper bound (a spec the analysis does not bound yet).
+                (_, None) => "-".into(),
                 _ => "no".into(),
             },
             r.simulations.to_string(),
@@ -491,6 +493,8 @@ pub(super) fn run_lines(spec: &Spec, a: &SimulateArgs, p: &Plan, res: &SimResult
             .tasks
             .iter()
             .zip(&res.offsets)
+            // A data-triggered task has no offset: its triggers release it.
+            .filter(|(t, _)| !t.is_triggered())
             .map(|(t, &o)| format!("{}={}", t.name, spec.fmt_time(o)))
             .collect();
         out.push_str(&format!("offsets: {}\n", offs.join(" ")));
