@@ -461,20 +461,30 @@ fn an_event_triggered_spec_is_observed_without_bounds() {
 }
 
 #[test]
-fn an_event_triggered_gantt_has_a_row_per_thread() {
+fn an_event_triggered_gantt_has_a_row_per_thread_and_samples_are_written() {
     let dir = scratch("sim-wq-gantt");
-    let gantt = dir.join("gantt.svg");
+    let (gantt, samples) = (dir.join("gantt.svg"), dir.join("samples.csv"));
     let o = rtpipe(&[
         "simulate",
         &example("work-queues.toml"),
         "--duration",
-        "1ms",
+        "3ms",
         "--gantt",
         &gantt.to_string_lossy(),
         "--window",
         "0,150",
+        "--samples",
+        &samples.to_string_lossy(),
     ]);
     assert_exit(&o, 0);
+    // The samples' provenance through the triggered items: the rate loop's
+    // first sample, read by imu at 60 µs, reaches the allocator at 132.
+    let csv = read(&samples);
+    assert!(
+        csv.lines()
+            .any(|l| l.starts_with("rate loop,0,60000,,132000,")),
+        "{csv}"
+    );
     let g = read(&gantt);
     // The rate thread's row, and its jobs labelled with their tasks.
     for want in [

@@ -66,6 +66,22 @@ fn a_thread_runs_its_jobs_in_release_order_one_at_a_time() {
 }
 
 #[test]
+fn a_timer_and_a_publication_at_one_instant_queue_in_declaration_order() {
+    // a publishes at 1, releasing c; the timer item p (declared before c)
+    // is released at 1 too: the thread runs p first, then c, although the
+    // publication came first in the instant.
+    let s = spec(
+        "[threads.w]\npriority = 2\n\n\
+         [tasks.a]\nexec = 1\nperiod = 10\npriority = 1\noutput = { channel = \"m\", size = 0 }\n\
+         [tasks.p]\nexec = 2\nperiod = 10\noffset = 1\nthread = \"w\"\n\
+         [tasks.c]\nactivation = \"data\"\nreads = [\"a\"]\nexec = 1\nthread = \"w\"\n",
+    );
+    let r = run(&s, 10);
+    assert_eq!(spans(&s, &r, "p"), vec![(1, 3)]);
+    assert_eq!(spans(&s, &r, "c"), vec![(3, 4)]);
+}
+
+#[test]
 fn a_release_while_a_job_is_queued_merges_into_it() {
     // The timer item t (every 10 µs from 5) waits behind l's 50 µs job in
     // their thread: its releases at 15, 25, 35 and 45 join the job queued
