@@ -21,9 +21,14 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
 /// data-triggered one (its triggers' publications release it) has a fixed
 /// period.
 pub fn load_simulated(path: &Path) -> Result<Spec, ExitCode> {
-    load_checked(path, |spec| {
-        missing_periods(spec).filter(|_| !spec.event_triggered() || !timers_fixed(spec))
-    })
+    load_checked(path, unsimulable)
+}
+
+/// Why `spec` cannot be simulated: [`missing_periods`], but for the
+/// data-triggered tasks of an event-triggered spec (their triggers release
+/// them).
+pub fn unsimulable(spec: &Spec) -> Option<Diagnostic> {
+    missing_periods(spec).filter(|_| !spec.event_triggered() || !timers_fixed(spec))
 }
 
 /// Every task a timer releases has a fixed period.
