@@ -242,10 +242,13 @@ fn dispatch(
 ) -> Result<(Answer, Option<Spec>), Failure> {
     argv.push("--json".into());
     let input = Failure::Input;
-    if command != "design" {
-        if let Some(d) = command::missing_periods(spec) {
-            return Err(input(d));
-        }
+    let problem = match command {
+        "design" => None,
+        "simulate" => command::unsimulable(spec),
+        _ => command::missing_periods(spec),
+    };
+    if let Some(d) = problem {
+        return Err(input(d));
     }
     match command {
         "analyze" => {

@@ -88,6 +88,7 @@ fn every_command_answers_what_the_binary_prints() {
             "3",
         ],
     );
+    same_as_binary("simulate", "work-queues.toml", &["--outputs", "50"]);
     same_as_binary("fly", "cleanflight.toml", &["--mission", "hover"]);
     same_as_binary("design", "table2-design.toml", &[]);
     same_as_binary("design", "cleanflight-design.toml", &[]);
