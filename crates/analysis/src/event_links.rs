@@ -25,6 +25,8 @@ pub struct Activation {
     pub gap: Option<Nanos>,
     waits: [(usize, Option<Nanos>); MAX_WAITS],
     listed: usize,
+    /// How many triggers it has (0: periodic).
+    triggers: usize,
 }
 
 impl Activation {
@@ -39,7 +41,13 @@ impl Activation {
             gap: e.gap,
             waits,
             listed,
+            triggers: e.waits.len(),
         }
+    }
+
+    /// Task `p` is its only trigger.
+    fn only_trigger(&self, p: usize) -> bool {
+        self.triggers == 1 && self.waits[0].0 == p
     }
 
     /// When task `p` is a (listed) trigger: the longest from its
@@ -92,40 +100,42 @@ pub fn reaction(p: &Side, c: &Side, p_read: bool) -> Option<Nanos> {
     publish.checked_add(wait_or_gap(p, c)?)
 }
 
-/// Freshness in a spec with threads or data-triggered tasks, on every
-/// link: the terms run between `Y_k`, the (first) release of the p job
-/// after `L_k` (the last p job carrying the sample), and `Y_{k+1}`; that
-/// job publishes within `R_p`, at `X_k`, and `L_{k+1}` read before `X_k`.
-/// When p triggers c, the publish at `X_k` releases c (after the wait of
-/// `join = "all"`), and that job (or the queued one it joins) reads after
-/// it, so it follows `L_{k+1}`: `Y_{k+1} ≤ X_k + wait`. Otherwise c's next
-/// job after `L_{k+1}` is released at the first activation after `L_{k+1}`
-/// read (nominal release `T_c` after it for a thread-less periodic c),
-/// within `A_c`. So `Y_{k+1} − Y_k ≤ R_p + (wait or A_c)`; the head link
-/// adds [`head_offset`].
+/// Freshness, release of `L_k` (the last p job carrying the sample) to the
+/// release of `L_{k+1}` (the last c job carrying it), which reads before
+/// `X_k`, the publish of p's next job. When p is c's only trigger, c is
+/// released only at p's publications, and none falls between `L_k`'s and
+/// `X_k`: `L_{k+1}`'s (first) release is at or before `L_k`'s publish,
+/// `R_p`. Otherwise it is before `X_k`: p's next job is released within
+/// [`next_release`] of `L_k`'s release and publishes within `R_p`.
 pub fn freshness(p: &Side, c: &Side) -> Option<Nanos> {
     if p.let_comm || c.let_comm {
         return None;
     }
     c.r?;
-    p.r?.checked_add(wait_or_gap(p, c)?)
+    if c.act.only_trigger(p.act.id) {
+        return p.r;
+    }
+    next_release(p)?.checked_add(p.r?)
 }
 
-/// The last freshness link: `L_n` reads before `X_{n−1} ≤ Y_{n−1} + R_p`
-/// and publishes within `W_c` of its read.
+/// The last freshness link, to the publish of `L_n`: within `R_c` of its
+/// release when p is c's only trigger, else within `W_c` of its read,
+/// which is before `X_{n−1}`.
 pub fn freshness_last(p: &Side, c: &Side) -> Option<Nanos> {
     if p.let_comm || c.let_comm {
         return None;
     }
-    c.r?;
-    p.r?.checked_add(c.w?)
+    if c.act.only_trigger(p.act.id) {
+        return p.r?.checked_add(c.r?);
+    }
+    freshness(p, c)?.checked_add(c.w?)
 }
 
-/// `Y_1 − r(L_1)` of a chain's head p: its next job is released `T_p`
-/// after `L_1` (thread-less periodic), or, when its jobs merge, at the
-/// first activation after `L_1` starts (at most `R_p − x_p` after its
-/// release), within `A_p`.
-pub fn head_offset(p: &Side) -> Option<Nanos> {
+/// From the release of a p job to the (first) release of p's next job: T_p
+/// for a thread-less periodic p; when p's jobs merge, every activation
+/// while the job waits joins it, so the next job is the first activation
+/// after it starts (at most `R_p − x_p` after its release), within `A_p`.
+fn next_release(p: &Side) -> Option<Nanos> {
     if !p.act.merging {
         return Some(p.t);
     }

@@ -336,7 +336,7 @@ pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_freshness_link`] with the priority order given (see
 /// [`sound_reaction_link_in`]); every option grows with T_p and R_p.
 pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
-    if let Some((ps, cs)) = p.side().zip(c.side()) {
+    if let Some((ps, cs)) = event_sides(p, c) {
         return event_links::freshness(&ps, &cs);
     }
     let (rp, _) = (p.r?, c.r?);
@@ -368,7 +368,7 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_freshness_last`] with the priority order given; every option
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
-    if let Some((ps, cs)) = p.side().zip(c.side()) {
+    if let Some((ps, cs)) = event_sides(p, c) {
         return event_links::freshness_last(&ps, &cs);
     }
     let (rp, _, wc) = (p.r?, c.r?, c.w?);
@@ -395,18 +395,6 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
     })
 }
 
-/// What a chain's first freshness link adds before its term: in a spec
-/// with threads or data-triggered tasks, whose freshness terms run from
-/// the release of the job after the one carrying the sample
-/// (`event_links::freshness`), the head's distance to that release
-/// ([`event_links::head_offset`]); 0 in a periodic spec.
-pub fn freshness_head(p: &LinkTask) -> Option<Nanos> {
-    match p.side() {
-        Some(side) => event_links::head_offset(&side),
-        None => Some(0),
-    }
-}
-
 /// One link's sound terms, all anchored on releases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SoundLink {
@@ -428,12 +416,10 @@ impl SoundLink {
         p_distinct: bool,
         p_read: bool,
     ) -> SoundLink {
-        let head = if p_read { freshness_head(p) } else { Some(0) };
-        let plus = |term: Option<Nanos>| term?.checked_add(head?);
         SoundLink {
             reaction: sound_reaction_link_in(order, p, c, p_distinct, p_read),
-            freshness: plus(sound_freshness_link_in(order, p, c)),
-            freshness_last: plus(sound_freshness_last_in(order, p, c)),
+            freshness: sound_freshness_link_in(order, p, c),
+            freshness_last: sound_freshness_last_in(order, p, c),
         }
     }
 
