@@ -397,7 +397,7 @@ fn check(spec: &Spec, seed: u64, tally: &mut Tally) {
     }
 }
 
-/// 500 generated systems by default; `RTPIPE_EVENT_SEEDS=2000` for more
+/// 500 generated systems by default; `RTPIPE_EVENT_SEEDS=1000` for more
 /// (docs/analysis.md reports that run's tightness).
 #[test]
 fn no_simulated_job_or_chain_exceeds_its_bound() {
