@@ -328,21 +328,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
     cpus.dedup();
-    let (responses, events) = if spec.event_triggered() {
-        // The policy's analysis of threads and data-triggered tasks.
-        match spec.policy().events {
-            Some(EventAnalysis::HolisticFifo) => event_responses(spec, &prio, &top),
-            None => panic!(
-                "validation admits threads and data-triggered tasks only under a policy that analyses them, not under {}",
-                spec.policy().name
-            ),
-        }
-    } else {
-        let responses = (0..spec.tasks.len())
-            .map(|i| response_times(spec, &prio, &top, i))
-            .collect();
-        (responses, vec![None; spec.tasks.len()])
-    };
+    let (responses, events) = all_responses(spec, &prio, &top);
     let timings: Vec<TaskTiming> = responses
         .into_iter()
         .zip(events)
@@ -395,6 +381,28 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
             schedulable,
         },
     )
+}
+
+/// Every task's response times, and in a spec with threads or
+/// data-triggered tasks its event facts (the policy's analysis of them).
+fn all_responses(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
+    if !spec.event_triggered() {
+        let responses = (0..spec.tasks.len())
+            .map(|i| response_times(spec, prio, top, i))
+            .collect();
+        return (responses, vec![None; spec.tasks.len()]);
+    }
+    match spec.policy().events {
+        Some(EventAnalysis::HolisticFifo) => event_responses(spec, prio, top),
+        None => panic!(
+            "validation admits threads and data-triggered tasks only under a policy that analyses them, not under {}",
+            spec.policy().name
+        ),
+    }
 }
 
 /// A task's (budget, job, read-to-publish) response times.
