@@ -10,6 +10,10 @@ use rtpipe_model::{Communication, Nanos, Server, Spec};
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
+mod events;
+mod setup;
+use setup::{link_servers, offsets_of, periods_of, task_sims};
+
 /// What the simulator tells the code that runs task bodies: a job reads, a
 /// job publishes. Called in simulated-time order, at the instants of the
 /// task's semantics: its start and completion (implicit), or its release
@@ -345,7 +349,7 @@ pub(crate) struct Sim<H> {
     /// (`overheads.rs`).
     pub(crate) ovh: crate::overheads::Overheads,
     /// Threads, triggers and merging (`events.rs`).
-    pub(crate) event_model: crate::events::Events,
+    pub(crate) event_model: events::Events,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -413,7 +417,7 @@ impl<H: Hooks> Sim<H> {
             let_open: vec![None; spec.tasks.len()],
             locks,
             ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
-            event_model: crate::events::Events::new(spec),
+            event_model: events::Events::new(spec),
         })
     }
 
@@ -850,164 +854,6 @@ impl<H: Hooks> Sim<H> {
             segments: self.segments.unwrap_or_default(),
             events: self.events,
             horizon: self.horizon,
-        }
-    }
-}
-
-/// Every task's fixed period (positive; [`NO_TIMER`] for a data-triggered
-/// task, which no timer releases) and a demand range that makes sense.
-fn periods_of(spec: &Spec) -> Result<Vec<Nanos>, SimError> {
-    let mut periods = Vec::with_capacity(spec.tasks.len());
-    for t in &spec.tasks {
-        match t.fixed_period() {
-            Some(p) if p > 0 => periods.push(p),
-            None if t.is_triggered() => periods.push(NO_TIMER),
-            _ => return Err(SimError::NoPeriod(t.name.clone())),
-        }
-        if !(0 <= t.demand_min() && t.demand_min() <= t.demand()) {
-            return Err(SimError::BadDemand(t.name.clone()));
-        }
-    }
-    Ok(periods)
-}
-
-/// The period, first release and deadline of a data-triggered task: never
-/// (its publications release it, `events.rs`).
-const NO_TIMER: Nanos = Nanos::MAX;
-
-/// Release offsets φ_i as `phasing` says (drawn from `master` first, before
-/// any demand stream, so that a task's demands do not depend on them).
-///
-/// A task with a known offset (`offset` in the spec) is always released at
-/// it: the phasing places only the unknown ones. `Random` and `Grid` draw
-/// for the unknown tasks only, in task order, so a spec without known
-/// offsets draws exactly what it always drew.
-fn offsets_of(
-    spec: &Spec,
-    phasing: &Phasing,
-    periods: &[Nanos],
-    master: &mut Rng,
-) -> Result<Vec<Nanos>, SimError> {
-    let n = spec.tasks.len();
-    // A data-triggered task has no offset (0) and draws none.
-    let known = |i: usize| match spec.tasks[i].is_triggered() {
-        true => Some(0),
-        false => spec.tasks[i].offset,
-    };
-    Ok(match phasing {
-        Phasing::Sync => (0..n).map(|i| known(i).unwrap_or(0)).collect(),
-        Phasing::Random => periods
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| known(i).unwrap_or_else(|| master.range(0, p as u64 - 1) as Nanos))
-            .collect(),
-        Phasing::Grid(g) => {
-            if *g <= 0 {
-                return Err(SimError::GridNotPositive(*g));
-            }
-            periods
-                .iter()
-                .enumerate()
-                .map(|(i, &p)| {
-                    known(i).unwrap_or_else(|| master.range(0, ((p - 1) / g) as u64) as Nanos * g)
-                })
-                .collect()
-        }
-        Phasing::Given(v) => {
-            if v.len() != n {
-                return Err(SimError::BadOffsets {
-                    expected: n,
-                    found: v.len(),
-                });
-            }
-            if let Some(i) = v.iter().position(|&o| o < 0) {
-                return Err(SimError::NegativeOffset(spec.tasks[i].name.clone()));
-            }
-            let clash = (0..n).find_map(|i| known(i).filter(|&k| k != v[i]).map(|k| (i, k)));
-            if let Some((i, k)) = clash {
-                return Err(SimError::OffsetConflict {
-                    task: spec.tasks[i].name.clone(),
-                    known: k,
-                    given: v[i],
-                });
-            }
-            v.clone()
-        }
-    })
-}
-
-/// Each task's simulation state (its server, rank, demand stream) and the
-/// tasks of each CPU.
-fn task_sims(
-    spec: &Spec,
-    periods: &[Nanos],
-    offsets: &[Nanos],
-    jitter: Jitter,
-    master: &mut Rng,
-) -> (Vec<TaskSim>, Vec<Vec<usize>>) {
-    let n = spec.tasks.len();
-    let ranks = ranks(spec);
-    let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpu_ids.sort_unstable();
-    cpu_ids.dedup();
-    let mut cpu_tasks = vec![Vec::new(); cpu_ids.len()];
-    let mut tasks = Vec::with_capacity(n);
-    for (i, t) in spec.tasks.iter().enumerate() {
-        let cpu = cpu_ids.binary_search(&t.cpu).unwrap_or(0);
-        cpu_tasks[cpu].push(i);
-        let (c, p) = (t.budget(), periods[i]);
-        let budget = match spec.policy().budget(t.server) {
-            None => Budget::Unlimited,
-            Some(Kind::Cbs) => Budget::Cbs(Cbs::with_deadline(c, p, t.deadline().unwrap_or(p))),
-            Some(Kind::Sporadic) => Budget::Sporadic(Sporadic::new(c, p, 0)),
-            Some(Kind::Pibs) => Budget::Pibs(Pibs::new(c, p)),
-        };
-        tasks.push(TaskSim {
-            slack_when_empty: matches!(budget, Budget::Sporadic(_)),
-            budget,
-            period: periods[i],
-            deadline: t.deadline().unwrap_or(p),
-            jitter: t.jitter,
-            jitter_model: jitter,
-            next_nominal: if t.is_triggered() {
-                NO_TIMER
-            } else {
-                offsets[i]
-            },
-            class: u8::from(t.server == Server::Background),
-            rank: ranks[i].map_or(i as i64, |r| r as i64),
-            serves: spec.policy().inherits_from(t.serves),
-            demand_min: t.demand_min(),
-            demand: t.demand(),
-            rng: Rng::new(master.next_u64()),
-            next_release: NO_TIMER,
-            next_index: 0,
-            queue: VecDeque::new(),
-            merges: t.merges_releases(),
-            stats: TaskStats::default(),
-            cpu,
-            servers: Vec::new(),
-            entry: None,
-            timer: None,
-        });
-        if let (Some(ts), false) = (tasks.last_mut(), t.is_triggered()) {
-            // The first job is jittered too.
-            ts.next_release = offsets[i] + jitter_draw(ts);
-        }
-    }
-    (tasks, cpu_tasks)
-}
-
-/// The servers (PIBS) each Main VCPU has.
-fn link_servers(tasks: &mut [TaskSim]) {
-    let n = tasks.len();
-    for i in 0..n {
-        if let Some(m) = tasks[i].serves {
-            // An index out of range is left to `standing`, which
-            // panics on it as the scan did.
-            if let Some(ms) = tasks.get_mut(m) {
-                ms.servers.push(i);
-            }
         }
     }
 }

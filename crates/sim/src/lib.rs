@@ -57,7 +57,7 @@ mod config;
 mod cpu_events;
 mod cpus;
 mod engine;
-mod events;
+
 mod let_comm;
 mod locks;
 pub mod observe;

@@ -20,7 +20,7 @@
 //!   activation), for every task in a thread and every data-triggered
 //!   task; `TaskStats::merged` counts them.
 
-use crate::engine::{draw_demand, Hooks, Job, Sim};
+use super::{draw_demand, Hooks, Job, Sim};
 use rtpipe_joblog::Trigger;
 use rtpipe_model::{Join, Nanos, Spec};
 use std::collections::BTreeSet;
