@@ -55,7 +55,9 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     let top = top_priorities(spec, &prio);
     // The analysis' own interferers (release jitter included), so R(0) is
     // the R(job) the bound was built from.
-    let hp = hp_load(spec, &prio, &top, task);
+    let Some(hp) = hp_load(spec, &prio, &top, task) else {
+        return Nanos::MAX;
+    };
     let Some(period) = t.fixed_period() else {
         return Nanos::MAX;
     };
