@@ -358,7 +358,8 @@ fn rta_lower_bounds(
         // Ranked below i at every point, j runs above it only by
         // inheritance and brings its carry-in (`sched::hp_load`), with
         // R_j at its least over the box.
-        let (work, jitter) = if order.surely_above(i, j) {
+        let by_inheritance = o.serves.is_some() && !order.surely_above(j, i);
+        let (work, jitter) = if by_inheritance && order.surely_above(i, j) {
             match carry_in_lower_bound(spec, order, j) {
                 Some(carry) => carry,
                 None => return (None, None, None),
