@@ -14,6 +14,20 @@
 use crate::sched::{hp_load, level_response, top_priorities, OwnJobs};
 use rtpipe_model::{Nanos, Server, Spec};
 
+/// Whether `b` ns of disturbance can explain an observation `excess` ns
+/// above its bound that involves `tasks` (a job's task, a chain's
+/// stages): the largest inflation of one of them by the whole `b` covers
+/// it (a chain's stages add their delays, each at most that task's
+/// inflation by its share of `b`, and the inflation is superadditive).
+/// The one rule `rtpipe run`'s verdict and the runtime's tests apply.
+pub fn explains(spec: &Spec, tasks: &[usize], b: Nanos, excess: Nanos) -> bool {
+    tasks
+        .iter()
+        .map(|&t| inflation(spec, t, b))
+        .max()
+        .is_some_and(|allowance| allowance >= excess)
+}
+
 /// How much longer task `task`'s job response can be with `b` ns of
 /// disturbance in its busy window than without (`Nanos::MAX` when it is
 /// unbounded then). Under EDF with implicit deadlines Spuri's response
@@ -55,7 +69,9 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     let top = top_priorities(spec, &prio);
     // The analysis' own interferers (release jitter included), so R(0) is
     // the R(job) the bound was built from.
-    let hp = hp_load(spec, &prio, &top, task);
+    let Some(hp) = hp_load(spec, &prio, &top, task) else {
+        return Nanos::MAX;
+    };
     let Some(period) = t.fixed_period() else {
         return Nanos::MAX;
     };

@@ -352,13 +352,23 @@ fn rta_lower_bounds(
 ) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
     let (t, hi) = (&spec.tasks[i], order.hi);
     let switches = crate::overheads::per_job(spec, i);
-    let mut hp: Vec<(Nanos, Nanos, Nanos)> = (0..spec.tasks.len())
-        .filter(|&j| order.surely_interferes(j, i))
-        .map(|j| {
-            let c = interference(&spec.tasks[j]).saturating_add(switches);
-            (c, hi[j], spec.tasks[j].jitter)
-        })
-        .collect();
+    let mut hp: Vec<(Nanos, Nanos, Nanos)> = Vec::new();
+    for j in (0..spec.tasks.len()).filter(|&j| order.surely_interferes(j, i)) {
+        let o = &spec.tasks[j];
+        // Ranked below i at every point, j runs above it only by
+        // inheritance and brings its carry-in (`sched::hp_load`), with
+        // R_j at its least over the box.
+        let by_inheritance = o.serves.is_some() && !order.surely_above(j, i);
+        let (work, jitter) = if by_inheritance && order.surely_above(i, j) {
+            match carry_in_lower_bound(spec, order, j) {
+                Some(carry) => carry,
+                None => return (None, None, None),
+            }
+        } else {
+            (interference(o), o.jitter)
+        };
+        hp.push((work.saturating_add(switches), hi[j], jitter));
+    }
     hp.extend(crate::overheads::kernel_load_at(spec, t.cpu, hi));
     // Own period at its longest: later own jobs come later and fewer join
     // the busy period, so each w_q − q·T and the set of q only shrink.
@@ -373,6 +383,19 @@ fn rta_lower_bounds(
     let r = |work: Nanos| level_response_within(own(work), &hp, hi[i]);
     let rj = r(t.demand());
     (r(t.budget()), rj, rj)
+}
+
+/// The carry-in of a PIBS server `j` (`sched::inherited_carry_in`: work
+/// c = max(C, x) and jitter R_j − c) with R_j's lower bound over the box,
+/// so at most the analysis' at every point; `None` when j's response is
+/// above its longest period at every point (the analysis then bounds no
+/// task j runs above by inheritance).
+fn carry_in_lower_bound(spec: &Spec, order: &Order, j: usize) -> Option<(Nanos, Nanos)> {
+    let o = &spec.tasks[j];
+    let (budget_r, job_r, _) = rta_lower_bounds(spec, order, j);
+    let r = budget_r?.max(job_r?);
+    let c = interference(o).max(o.demand());
+    Some((c, r.checked_sub(c)?))
 }
 
 /// Per task, lower bounds on the job response time `R` and on the

@@ -136,26 +136,63 @@ pub fn interferers(
 /// What the tasks that can run above task `i` impose, as (I_j, T_j, J_j):
 /// the `hp` of [`response_time_jitter`], with the spec's overheads
 /// ([`crate::overheads`]: `I_j + 2·cs` per job, and the kernel work of
-/// every release on the CPU as interferers of their own).
+/// every release on the CPU as interferers of their own). A PIBS server
+/// ranked below i that runs above it only by inheritance brings its
+/// carry-in ([`inherited_carry_in`]); `None` when one has no response time,
+/// so nothing bounds what it brings.
 pub fn hp_load(
     spec: &Spec,
     prio: &[Option<usize>],
     top: &[Option<usize>],
     i: usize,
-) -> Vec<(Nanos, Nanos, Nanos)> {
+) -> Option<Vec<(Nanos, Nanos, Nanos)>> {
     // Each interfering job also pays the two switches it causes; every
     // release on the CPU its kernel work (`overheads`).
     let switches = crate::overheads::per_job(spec, i);
-    let mut hp: Vec<(Nanos, Nanos, Nanos)> = interferers(spec, prio, top, i)
-        .into_iter()
-        .map(|j| {
-            let o = &spec.tasks[j];
-            let c = interference(o).saturating_add(switches);
-            (c, period_or_max(o), o.jitter)
-        })
-        .collect();
+    let mut hp = Vec::new();
+    for j in interferers(spec, prio, top, i) {
+        let o = &spec.tasks[j];
+        let (work, jitter) = if prio[j] > prio[i] {
+            inherited_carry_in(spec, prio, top, j)?
+        } else {
+            (interference(o), o.jitter)
+        };
+        hp.push((work.saturating_add(switches), period_or_max(o), jitter));
+    }
     hp.extend(crate::overheads::kernel_load(spec, spec.tasks[i].cpu));
-    hp
+    Some(hp)
+}
+
+/// The per-job work and equivalent release jitter of a PIBS server `j` for
+/// a task ranked above j's own rank, which j runs above only while it
+/// inherits the rank of the Main VCPU it serves. Such a server can have
+/// jobs pending when that task's busy period starts (its own rank left it
+/// waiting), and at the inherited rank it runs them back to back while its
+/// eligibility time lags behind the clock: more than ⌈t / T_j⌉ budgets in a
+/// window of t. Every job of j runs within R_j of its nominal release, so
+/// (Bertogna and Cirinei 2007) it brings at most ⌈(t + R_j − c) / T_j⌉ · c
+/// in any window of t, with c the most one job runs (its budget or its
+/// demand) and R_j the larger of j's two figures at its own rank: the
+/// (c, R_j − c) returned. `None` when j has no response time within its
+/// period (its backlog, hence its catch-up, has no bound). docs/analysis.md.
+fn inherited_carry_in(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    j: usize,
+) -> Option<(Nanos, Nanos)> {
+    let o = &spec.tasks[j];
+    // Only inheritance puts a task ranked below i above it (`interferers`);
+    // the recursion goes to ever lower ranks, so it ends.
+    assert!(
+        top[j] < prio[j] && o.serves.is_some(),
+        "task `{}` runs above a higher-ranked task without inheriting a rank",
+        o.name
+    );
+    let (budget_r, job_r, _) = response_times(spec, prio, top, j);
+    let r = budget_r?.max(job_r?);
+    let c = interference(o).max(o.demand());
+    Some((c, r.checked_sub(c)?))
 }
 
 /// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
@@ -478,7 +515,12 @@ fn response_times(
         return (None, None, None);
     }
     let (rt, jrt) = match spec.policy().response {
-        ResponseAnalysis::Rta => rta_response(spec, prio, i, &hp_load(spec, prio, top, i)),
+        ResponseAnalysis::Rta => {
+            let Some(hp) = hp_load(spec, prio, top, i) else {
+                return (None, None, None);
+            };
+            rta_response(spec, prio, i, &hp)
+        }
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
         ResponseAnalysis::EdfRta => edf_response_times(spec, i),
     };
@@ -857,6 +899,42 @@ mod tests {
         assert_eq!(t[1].job_response_time, Some(4_000_000));
         assert_eq!(t[2].job_response_time, Some(4_000_000));
         assert_eq!((t[2].priority, t[2].top_priority), (Some(3), Some(2)));
+    }
+
+    #[test]
+    fn pibs_server_ranked_below_carries_in_a_pending_job() {
+        // m (T 10, x 3), mid (T 12, x 4), io (T 20, C 4) serving m: ranks
+        // m 1, mid 2, io 3. io at its own rank: w = 4 + 3⌈w/10⌉ + 4⌈w/12⌉
+        // = 11, 14, 18 (≤ 20): R_io = 18. For m, io runs above only by
+        // inheritance and may have a job pending when m's busy period
+        // starts (mid held it back): J = R_io − C_io = 14, so w = 3 +
+        // 4⌈(w + 14)/20⌉ = 7, 11; the second job ends by 14 − 10 = 4.
+        // R_m = 11 (io released at −13.5, run at m's rank over [0, 4), its
+        // next job at 6.5 before m is done at 7), not 3 + 4 = 7.
+        let src = "[system]\nname = \"c\"\n[tasks.m]\nexec = 3\nperiod = 10\n\
+                   [tasks.mid]\nexec = 4\nperiod = 12\nserver = \"none\"\n\
+                   [tasks.io]\nexec = 4\nperiod = 20\nserver = \"io\"\nserves = \"m\"\n";
+        let spec = match Spec::parse("c.toml", src) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        let (t, _) = analyze(&spec);
+        let ms = |x: Nanos| Some(x * 1_000_000);
+        assert_eq!(t[2].job_response_time, ms(18));
+        assert_eq!(t[0].job_response_time, ms(11));
+        assert_eq!(t[0].response_time, ms(11));
+        // io at its own rank without a figure within its period: nothing
+        // bounds its catch-up, so m has none either.
+        let behind = src.replace("period = 12", "period = 7");
+        let spec = match Spec::parse("c.toml", &behind) {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        let (t, _) = analyze(&spec);
+        assert_eq!(
+            (t[2].job_response_time, t[0].job_response_time),
+            (None, None)
+        );
     }
 
     #[test]

@@ -175,12 +175,23 @@ impl<'a> Master<'a> {
 
     /// Exact RTA where the levels fit: budget-level R_i ≥ W_i(R_i),
     /// R_i ≤ T_i; and the older cuts of failed candidates.
-    fn add_rta(&mut self, groups: &[Group], levels: &Levels, cuts: &[RtaCut]) {
+    /// `false` when `stop` said so before every task was added (see
+    /// [`build_within`]).
+    fn add_rta(
+        &mut self,
+        groups: &[Group],
+        levels: &Levels,
+        cuts: &[RtaCut],
+        stop: &dyn Fn() -> bool,
+    ) -> bool {
         let spec = self.spec;
         let tested: Vec<bool> = (0..spec.tasks.len())
             .map(|i| self.guaranteed(i) && groups.contains(&Group::Sched(spec.tasks[i].cpu)))
             .collect();
         for i in (0..spec.tasks.len()).filter(|&i| tested[i]) {
+            if stop() {
+                return false;
+            }
             let rmax = self.dom[i].max() as f64;
             let r = self.lp.var(0.0, rmax, false);
             self.at_most_period(i, r);
@@ -192,6 +203,7 @@ impl<'a> Master<'a> {
                 add_rta_cut(self, cut);
             }
         }
+        true
     }
 
     /// Sound mode: job response-time variables of the chain tasks with
@@ -200,7 +212,15 @@ impl<'a> Master<'a> {
     /// a binary per job of each higher-priority task (docs/design.md); not
     /// when the response times are pinned. Under EDF the lower bounds and
     /// the cuts learnt from candidates are all there is (a relaxation).
-    fn add_responses(&mut self, groups: &[Group], sm: &SoundModel, p: &Problem, levels: &Levels) {
+    /// `false` when `stop` said so before every recurrence was added.
+    fn add_responses(
+        &mut self,
+        groups: &[Group],
+        sm: &SoundModel,
+        p: &Problem,
+        levels: &Levels,
+        stop: &dyn Fn() -> bool,
+    ) -> bool {
         let n = self.spec.tasks.len();
         for i in (0..n).filter(|&i| p.on_chain[i]) {
             let r = match &sm.fixed {
@@ -217,10 +237,13 @@ impl<'a> Master<'a> {
             self.add_read_responses(groups, sm, p);
         }
         if sm.fixed.is_some() {
-            return;
+            return true;
         }
         let recurrence = self.spec.policy().response == ResponseAnalysis::Rta;
         for i in (0..n).filter(|&i| p.on_chain[i] && recurrence) {
+            if stop() {
+                return false;
+            }
             let Some(r) = self.rvar[i] else { continue };
             let rmax = rmax_of(self, groups, i);
             let own = grid_units(self.spec.tasks[i].demand(), self.g);
@@ -229,6 +252,7 @@ impl<'a> Master<'a> {
         for cut in &sm.cuts {
             add_r_cut(self, cut);
         }
+        true
     }
 
     /// Under EDF, read-to-publish variables W_i ≤ R_i of the chain tasks
@@ -318,28 +342,49 @@ fn tangent_points(lo: i64, hi: i64, oa: &[i64]) -> Vec<i64> {
 
 /// The master problem of `p` over `groups` (every constraint group for the
 /// search, a subset for the conflict search) with what the search has
-/// learnt, and its objective.
+/// learnt, and its objective (the encoding tests'; the search builds
+/// through [`build_within`]).
+#[cfg(test)]
 pub(crate) fn build<'a>(
     p: &Problem<'a>,
     learnt: &Learnt,
     groups: &[Group],
     sound: Option<&SoundModel>,
 ) -> (Master<'a>, Vec<(usize, f64)>) {
+    build_within(p, learnt, groups, sound, &|| false)
+        .expect("a build that is never stopped completes")
+}
+
+/// [`build`], abandoned (`None`) as soon as `stop` says so: it is asked
+/// before each task's response-time recurrence, the part that grows with
+/// the square of the tasks (a binary per pair whose order the periods
+/// decide; 300,000 of them, 2 s, for 1,200 free WATERS tasks).
+pub(crate) fn build_within<'a>(
+    p: &Problem<'a>,
+    learnt: &Learnt,
+    groups: &[Group],
+    sound: Option<&SoundModel>,
+    stop: &dyn Fn() -> bool,
+) -> Option<(Master<'a>, Vec<(usize, f64)>)> {
     let mut m = Master::new(p);
     let objective = m.add_periods(&learnt.oa_points);
     if p.spec.harmonic {
         m.forbid_non_harmonic();
     }
     m.add_sched(groups);
-    if p.spec.schedulability == SchedTest::Rta {
-        m.add_rta(groups, &learnt.levels, &learnt.rta_cuts);
+    if p.spec.schedulability == SchedTest::Rta
+        && !m.add_rta(groups, &learnt.levels, &learnt.rta_cuts, stop)
+    {
+        return None;
     }
     // Response-time variables wherever the analysis computes response
     // times (not where a response time is the server period).
     let rvars = p.spec.policy().response != ResponseAnalysis::ServerPeriod;
     if let Some(sm) = sound.filter(|_| rvars) {
-        m.add_responses(groups, sm, p, &learnt.levels);
+        if !m.add_responses(groups, sm, p, &learnt.levels, stop) {
+            return None;
+        }
     }
     m.add_limits(groups, sound);
-    (m, objective)
+    Some((m, objective))
 }

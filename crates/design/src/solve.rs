@@ -6,7 +6,7 @@ use crate::budget::Budget;
 use crate::domain::Dom;
 use crate::learnt::Learnt;
 use crate::lp::{self, Limits, LpError, LpSolution, Numerical, SolverKind};
-use crate::master::build;
+use crate::master::build_within;
 use crate::model::Master;
 use crate::problem::{Group, Problem};
 use crate::sound::SoundModel;
@@ -49,7 +49,10 @@ pub(crate) fn solve_master(
     groups: &[Group],
     sound: Option<&SoundModel>,
 ) -> Solved {
-    let (m, _) = build(p, learnt, groups, sound);
+    let out_of_time = || budget.out_of_time();
+    let Some((m, _)) = build_within(p, learnt, groups, sound, &out_of_time) else {
+        return Solved::Stopped;
+    };
     if debug() {
         let bins =
             m.lp.vars
@@ -61,6 +64,12 @@ pub(crate) fn solve_master(
             m.lp.vars.len(),
             m.lp.rows.len()
         );
+    }
+    // A large master takes long to build, and the solver's own set-up
+    // (before it looks at its time limit) longer still: with the time or
+    // work gone, solving it would only overrun the limit.
+    if budget.out_of_time() {
+        return Solved::Stopped;
     }
     let hint = hint(p, learnt, budget, &m);
     let left = budget.left();

@@ -4,7 +4,7 @@
 //! job of a task the analysis bounds no response for (never excused: no
 //! disturbance explains an overload the spec itself declares).
 
-use rtpipe_analysis::disturbance::inflation;
+use rtpipe_analysis::disturbance::explains;
 use rtpipe_analysis::{Anchor, Metric, Report};
 use rtpipe_joblog::{sample_rows, SampleRow};
 use rtpipe_model::{Nanos, Server, Spec};
@@ -137,12 +137,9 @@ impl Verdict {
     /// observation with no bound is never excused.
     fn push(&mut self, spec: &Spec, o: Obs, causes: Vec<Cause>, tasks: &[usize]) {
         let b = Blame::total(&causes);
-        let allowance = tasks
-            .iter()
-            .map(|&t| inflation(spec, t, b))
-            .max()
-            .unwrap_or(0);
-        let excused = o.bound.is_some_and(|bound| allowance >= o.value - bound);
+        let excused = o
+            .bound
+            .is_some_and(|bound| explains(spec, tasks, b, o.value - bound));
         if excused {
             self.excused += 1;
         } else {
