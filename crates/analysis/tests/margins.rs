@@ -1,0 +1,186 @@
+//! The margins (`rtpipe_analysis::margins`): hand-computed on small
+//! systems and the bundled examples, and on hundreds of generated systems
+//! the property that defines them: the verdict holds at the margin and
+//! fails one nanosecond beyond it.
+
+use rtpipe_analysis::margins::{margins, Breach, Control, Factor, Margin, Margins, MarginsError};
+use rtpipe_analysis::{analyze, Anchor, Metric, Mode};
+use rtpipe_model::{Nanos, Spec};
+use rtpipe_testkit::{example, spec};
+
+const MS: Nanos = 1_000_000;
+
+fn quiet(s: &Spec, mode: Mode) -> Margins {
+    match margins(s, mode, &Control::QUIET) {
+        Ok(m) => m,
+        Err(e) => panic!("{}: {e:?}", s.name),
+    }
+}
+
+/// One task alone on its CPU: its exec may grow until it fills the period,
+/// T − C exactly, under the utilisation tests and both modes; under RTA
+/// one nanosecond less, as the level-i busy period must end (U < 1,
+/// `sched::level_response`). Every exec scales by T / C, rounded down to a
+/// millionth, and the period may fall to C (RTA: C + 1 ns).
+#[test]
+fn one_task_margin_is_period_minus_exec() {
+    for (test, strict) in [("rta", 1), ("liu-layland", 0), ("hyperbolic", 0)] {
+        let s = spec(
+            "one.toml",
+            &format!(
+                "[system]\nname = \"one\"\nschedulability = \"{test}\"\n[tasks.a]\nexec = 3\nperiod = 10\n"
+            ),
+        );
+        for mode in Mode::ALL {
+            let m = quiet(&s, mode);
+            assert!(m.holds);
+            assert_eq!(m.exec[0].margin, Margin::By(7 * MS - strict), "{test}");
+            let beyond = if strict == 1 {
+                Breach::Schedulability { cpu: 0 }
+            } else {
+                // At 10 ms + 1 ns the budget exceeds the period.
+                Breach::Rule {
+                    task: 0,
+                    key: "period",
+                }
+            };
+            assert_eq!(m.exec[0].breach, Some(beyond), "{test}");
+            assert_eq!(m.system.factor, Factor::Millionths(3_333_333));
+            assert_eq!(m.periods[0].range, Some((3 * MS + strict, None)));
+        }
+    }
+}
+
+/// Two tasks on two CPUs, a → b, reaction limit 10 ms, no transfers. Sound
+/// (docs/analysis.md, "Reaction"): the head link is min(W_a + T_b, T_a +
+/// W_a) = min(1 + 5, 10 + 1) = 6 ms, plus R_b = 2: 8 ms, slack 2 ms, which
+/// a 2 ms growth of either exec eats (W_a and R_b grow one for one).
+/// Paper: E = L_a + (T_b − C_b) + L_b = 1 + 3 + 2 = 6 ms (Case 1), slack
+/// 4 ms; b's exec cancels (C_b and L_b grow together), a's eats it 1:1.
+#[test]
+fn two_task_chain_slack_by_hand() {
+    let s = spec(
+        "pair.toml",
+        "[system]\nname = \"pair\"\nschedulability = \"rta\"\n\
+         [channels.mem]\nbandwidth = 1\noverhead = 0\n\
+         [tasks.a]\nexec = 1\nperiod = 10\ncpu = 0\noutput = { channel = \"mem\", size = 0 }\n\
+         [tasks.b]\nexec = 2\nperiod = 5\ncpu = 1\nreads = [\"a\"]\n\
+         [[chain]]\npath = [\"a\", \"b\"]\nreaction = 10\n",
+    );
+    let m = quiet(&s, Mode::Sound);
+    let l = &m.limits[0];
+    assert_eq!((l.metric, l.anchor), (Metric::Reaction, Anchor::Read));
+    assert_eq!(l.bound, Some(8 * MS));
+    assert_eq!(l.slack(), Some(2 * MS));
+    assert_eq!(l.per_task, vec![Margin::By(2 * MS), Margin::By(2 * MS)]);
+    assert_eq!(l.critical(), Some((0, Margin::By(2 * MS))));
+    assert_eq!(m.exec[0].margin, Margin::By(2 * MS));
+    let reaction = Breach::Limit {
+        chain: 0,
+        metric: Metric::Reaction,
+        anchor: Anchor::Read,
+    };
+    assert_eq!(m.exec[0].breach, Some(reaction));
+    assert_eq!(m.exec[1].margin, Margin::By(2 * MS));
+    // Scaling both by f: W_a + T_b + R_b = 1f + 5 + 2f ≤ 10, f ≤ 5/3.
+    assert_eq!(m.system.factor, Factor::Millionths(1_666_666));
+
+    let p = quiet(&s, Mode::Paper);
+    let l = &p.limits[0];
+    assert_eq!(l.bound, Some(6 * MS));
+    assert_eq!(l.slack(), Some(4 * MS));
+    assert_eq!(l.per_task[0], Margin::By(4 * MS));
+    // b does not move the bound: only its CPU's RTA (U < 1) stops it.
+    assert_eq!(l.per_task[1], Margin::Unlimited);
+    assert_eq!(p.exec[1].margin, Margin::By(3 * MS - 1));
+    assert_eq!(p.exec[1].breach, Some(Breach::Schedulability { cpu: 1 }));
+}
+
+/// Table III (paper): every budget is half a millisecond above the demand
+/// Δin + p + Δout, and a given budget is kept: each exec may grow by 0.5
+/// ms, and every exec together by 10/9.5 (p1, p5, p6: exec 9.5 ms, Δ 2 ms,
+/// budget 12 ms), rounded down to a millionth.
+#[test]
+fn table3_margins_by_hand() {
+    let s = example("paper-table3.toml");
+    for mode in Mode::ALL {
+        let m = quiet(&s, mode);
+        for e in &m.exec {
+            assert_eq!(e.margin, Margin::By(MS / 2), "{}", s.tasks[e.task].name);
+            let key = "budget";
+            assert_eq!(e.breach, Some(Breach::Rule { task: e.task, key }));
+        }
+        assert_eq!(m.system.factor, Factor::Millionths(1_052_631));
+    }
+}
+
+/// Cleanflight fails its gyro path's reaction limit by 480 µs under the
+/// sound analysis (10 480 µs against 10 000): the slack is −480 µs, pwm's
+/// exec (970 µs, alone on the path's last link) must shrink by exactly
+/// that, and every exec together by about half.
+#[test]
+fn cleanflight_infeasible_reports_how_much_to_shrink() {
+    let s = example("cleanflight.toml");
+    let m = quiet(&s, Mode::Sound);
+    assert!(!m.holds);
+    let gyro = &m.limits[0];
+    assert_eq!(gyro.slack(), Some(-480_000));
+    let pwm = s.task_index("pwm").unwrap_or(usize::MAX);
+    assert_eq!(m.exec[pwm].margin, Margin::By(-480_000));
+    assert_eq!(gyro.critical(), Some((pwm, Margin::By(-480_000))));
+    match m.system.factor {
+        Factor::Millionths(f) => assert!(f < 1_000_000, "{f}"),
+        other => panic!("{other:?}"),
+    }
+    // Paper mode accepts it.
+    assert!(quiet(&s, Mode::Paper).holds);
+}
+
+/// Table II fails every reaction limit, whatever one exec is (the periods
+/// alone exceed them): no exec margin exists, and each exceeded limit has
+/// none either; the schedulability test still passes.
+#[test]
+fn table2_reaction_limits_are_beyond_any_exec() {
+    let s = example("paper-table2.toml");
+    let m = quiet(&s, Mode::Sound);
+    assert!(!m.holds);
+    assert!(m.exec.iter().all(|e| e.margin == Margin::Unreachable));
+    assert!(m
+        .exec
+        .iter()
+        .all(|e| matches!(e.breach, Some(Breach::Limit { .. }))));
+    assert_eq!(m.system.factor, Factor::Unreachable);
+    for l in &m.limits {
+        let r = analyze(&s).chains[2 * l.chain + usize::from(l.metric == Metric::Freshness)]
+            .bound_in(Mode::Sound, l.anchor);
+        assert_eq!(l.bound, r);
+    }
+}
+
+/// Work-queue threads and data-triggered tasks are refused until their
+/// analysis exists.
+#[test]
+fn event_triggered_specs_are_refused() {
+    let s = example("work-queues.toml");
+    assert_eq!(
+        margins(&s, Mode::Sound, &Control::QUIET),
+        Err(MarginsError::EventTriggered)
+    );
+}
+
+/// The stop flag ends the search at the next evaluation.
+#[test]
+fn stop_ends_the_search() {
+    let s = example("cleanflight.toml");
+    let calls = std::cell::Cell::new(0);
+    let stop = || {
+        calls.set(calls.get() + 1);
+        calls.get() > 10
+    };
+    let ctl = Control {
+        stop: &stop,
+        progress: &|_, _| {},
+    };
+    assert_eq!(margins(&s, Mode::Sound, &ctl), Err(MarginsError::Stopped));
+    assert_eq!(calls.get(), 11);
+}
