@@ -137,7 +137,8 @@ pub struct LimitSlack {
     /// The mode's bound (`None`: unbounded).
     pub bound: Option<Nanos>,
     /// Per task, the largest growth of its exec that keeps this limit
-    /// alone (the spec's rules and other limits aside): the bound's
+    /// alone (and the model's timing rules, which the analysis assumes;
+    /// other limits and the schedulability test aside): the bound's
     /// sensitivity to it.
     pub per_task: Vec<Margin>,
 }

@@ -90,8 +90,9 @@ fn two_task_chain_slack_by_hand() {
     assert_eq!(l.bound, Some(6 * MS));
     assert_eq!(l.slack(), Some(4 * MS));
     assert_eq!(l.per_task[0], Margin::By(4 * MS));
-    // b does not move the bound: only its CPU's RTA (U < 1) stops it.
-    assert_eq!(l.per_task[1], Margin::Unlimited);
+    // b does not move the bound: only the model's rule (budget ≤ period)
+    // stops it for the limit, and its CPU's RTA (U < 1) for the verdict.
+    assert_eq!(l.per_task[1], Margin::By(3 * MS));
     assert_eq!(p.exec[1].margin, Margin::By(3 * MS - 1));
     assert_eq!(p.exec[1].breach, Some(Breach::Schedulability { cpu: 1 }));
 }
@@ -183,4 +184,161 @@ fn stop_ends_the_search() {
     };
     assert_eq!(margins(&s, Mode::Sound, &ctl), Err(MarginsError::Stopped));
     assert_eq!(calls.get(), 11);
+}
+
+// --- Generated systems -------------------------------------------------
+
+use proptest::prelude::*;
+use rtpipe_model::gen::{random_system, GenConfig};
+use rtpipe_model::Scheduler;
+use rtpipe_testkit::{check, env_u64};
+
+prop_compose! {
+    /// Acyclic systems of 2..=8 tasks on 1..=3 CPUs with 1..=4 chains
+    /// (small: under EDF one analysis takes a millisecond or more).
+    fn gen_config()(
+        tasks in 2usize..=8,
+        cpus in 1u32..=3,
+        edf in any::<bool>(),
+        utilization in 0.2f64..=0.9,
+        chains in 1usize..=4,
+        transfers in any::<bool>(),
+        mixed_servers in any::<bool>(),
+    ) -> GenConfig {
+        GenConfig {
+            tasks,
+            cpus,
+            utilization,
+            scheduler: if edf { Scheduler::Edf } else { Scheduler::Rm },
+            source_fraction: 0.3,
+            max_fan_in: 2,
+            feedback: 0.0,
+            chains,
+            transfers,
+            mixed_servers,
+            inheritance: if mixed_servers { 0.3 } else { 0.0 },
+        }
+    }
+}
+
+/// A generated system whose chains get limits at `scale` times their
+/// bounds under `mode` (from the read and from the event), so that some
+/// limits hold and some fail.
+fn limited_system(seed: u64, cfg: &GenConfig, mode: Mode, scale: f64) -> Spec {
+    let mut s = random_system(seed, cfg);
+    let r = analyze(&s);
+    for c in &r.chains {
+        let limit = |a: Anchor| {
+            c.bound_in(mode, a)
+                .map(|b| (b as f64 * scale) as Nanos)
+                .filter(|&l| l > 0)
+        };
+        let ch = &mut s.chains[c.chain];
+        match c.metric {
+            Metric::Reaction => {
+                ch.reaction = limit(Anchor::Read);
+                ch.max_reaction_time = limit(Anchor::Event);
+            }
+            Metric::Freshness => {
+                ch.freshness = limit(Anchor::Read);
+                ch.max_data_age = limit(Anchor::Event);
+            }
+        }
+    }
+    s
+}
+
+/// The verdict `margins` searches with, from the public analysis: every
+/// timing rule of the model, then `Report::ok_in`.
+fn verdict(s: &Spec, mode: Mode) -> bool {
+    (0..s.tasks.len()).all(|i| s.timing_conflict(i).is_none())
+        && rtpipe_analysis::analyze_verdict(s).ok_in(mode)
+}
+
+fn with_exec(s: &Spec, i: usize, v: Nanos) -> Spec {
+    let mut s = s.clone();
+    s.tasks[i].exec = v;
+    s.tasks[i].exec_min = s.tasks[i].exec_min.min(v);
+    s
+}
+
+fn with_period(s: &Spec, i: usize, p: Nanos) -> Spec {
+    let mut s = s.clone();
+    s.tasks[i].period = rtpipe_model::PeriodSpec::Fixed(p);
+    s
+}
+
+fn scaled(s: &Spec, millionths: u64) -> Spec {
+    let mut s = s.clone();
+    for t in &mut s.tasks {
+        t.exec = (i128::from(t.exec) * i128::from(millionths) / 1_000_000) as Nanos;
+        t.exec_min = t.exec_min.min(t.exec);
+    }
+    s
+}
+
+/// Every exec margin is an edge of the public verdict: it holds at exec +
+/// margin and fails 1 ns beyond; the system's scaling factor likewise at
+/// one millionth; each period range at its ends. Whether the verdict also
+/// holds at points before the edge (monotonicity) is checked on a sample
+/// and must hold in sound mode; paper mode's exceptions are tallied.
+#[test]
+fn margins_are_edges_of_the_verdict() {
+    let cases = env_u64("RTPIPE_MARGIN_CASES", 300) as u32;
+    let strategy = (any::<u64>(), gen_config(), any::<bool>(), 0.7f64..1.6);
+    check(
+        "margins_are_edges",
+        cases,
+        strategy,
+        |(seed, cfg, paper, scale)| {
+            let mode = if paper { Mode::Paper } else { Mode::Sound };
+            let s = limited_system(seed, &cfg, mode, scale);
+            let m = quiet(&s, mode);
+            prop_assert_eq!(m.holds, verdict(&s, mode));
+            let mut monotone = true;
+            for e in &m.exec {
+                if let Margin::By(v) = e.margin {
+                    let edge = e.exec + v;
+                    prop_assert!(
+                        verdict(&with_exec(&s, e.task, edge), mode),
+                        "task {} at {edge}",
+                        e.task
+                    );
+                    prop_assert!(
+                        !verdict(&with_exec(&s, e.task, edge + 1), mode),
+                        "task {} at {edge}+1",
+                        e.task
+                    );
+                    for k in 1..4 {
+                        monotone &= verdict(&with_exec(&s, e.task, edge * k / 4), mode);
+                    }
+                }
+            }
+            if let Factor::Millionths(f) = m.system.factor {
+                prop_assert!(verdict(&scaled(&s, f), mode));
+                prop_assert!(!verdict(&scaled(&s, f + 1), mode));
+            }
+            for p in &m.periods {
+                if let Some((lo, hi)) = p.range {
+                    prop_assert!(verdict(&with_period(&s, p.task, lo), mode));
+                    prop_assert!(lo == 1 || !verdict(&with_period(&s, p.task, lo - 1), mode));
+                    if let Some(hi) = hi {
+                        prop_assert!(verdict(&with_period(&s, p.task, hi), mode));
+                        prop_assert!(!verdict(&with_period(&s, p.task, hi + 1), mode));
+                    }
+                }
+            }
+            prop_assert!(
+                monotone || mode == Mode::Paper,
+                "sound verdict not monotone in an exec"
+            );
+            Ok(match (monotone, mode, m.holds) {
+                (false, _, _) => "paper: not monotone below an edge",
+                (true, Mode::Sound, true) => "sound, holds",
+                (true, Mode::Sound, false) => "sound, fails",
+                (true, Mode::Paper, true) => "paper, holds",
+                (true, Mode::Paper, false) => "paper, fails",
+            })
+        },
+    );
 }

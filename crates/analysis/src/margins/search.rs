@@ -85,10 +85,15 @@ impl<'a> Oracle<'a> {
         Ok(no_conflict(&self.work) && crate::analyze_verdict(&self.work).ok_in(self.mode))
     }
 
-    /// The one limit `l` holds on the working copy (its chain alone is
-    /// bounded; the rules and other limits are not asked).
+    /// The one limit `l` holds on the working copy, which keeps the
+    /// model's timing rules (the analysis assumes them: a job's demand
+    /// within its budget); other limits and the schedulability test are not
+    /// asked.
     pub(super) fn limit_holds(&mut self, l: &LimitSlack) -> Result<bool, MarginsError> {
         self.tick()?;
+        if !no_conflict(&self.work) {
+            return Ok(false);
+        }
         let (timing, _) = sched::analyze(&self.work);
         let a = analyze_chain(&self.work, &timing, &self.work.chains[l.chain].path);
         let [reaction, freshness] = chain_results(&self.work, l.chain, &a);
@@ -190,8 +195,8 @@ pub(super) fn gallop(
     }
 }
 
-/// How many evenly spaced periods inside a range are checked.
-const PROBES: Nanos = 16;
+/// How many parts of a range, evenly spaced on a log scale, are checked.
+const PROBES: Nanos = 8;
 
 /// How often a range is narrowed around a hole before the search gives up
 /// narrowing (the range then still holds at every probe of the last round
@@ -277,10 +282,11 @@ fn others_periods(spec: &Spec, i: usize) -> impl Iterator<Item = Nanos> + '_ {
         .filter_map(|(_, t)| t.fixed_period())
 }
 
-/// The range around `start` probed for holes: at every other task's
-/// period and next to it (where rate-monotonic ranks change), and at
-/// evenly spaced periods; a failing probe narrows the range to the edge
-/// between it and `start`, and the new range is probed again.
+/// The range around `start` probed for holes: next to every other task's
+/// period (where rate-monotonic ranks change) and at periods spaced evenly
+/// on a log scale; a failing probe narrows the range to the edge between
+/// it and `start`, and the new range is probed again (points that held
+/// are not asked twice).
 fn narrow(
     o: &mut Oracle,
     i: usize,
@@ -289,15 +295,18 @@ fn narrow(
     probes: &mut usize,
     f: Holds,
 ) -> Result<(Nanos, Option<Nanos>), MarginsError> {
+    let mut held = std::collections::BTreeSet::from([start]);
     for _ in 0..ROUNDS {
         let points = probe_points(o.base, i, lo, hi.unwrap_or(MAX_TIME));
         let mut hole = None;
-        for p in points.into_iter().filter(|&p| p != start) {
+        let fresh: Vec<Nanos> = points.into_iter().filter(|p| !held.contains(p)).collect();
+        for p in fresh {
             *probes += 1;
             if !f(o, p)? {
                 hole = Some(p);
                 break;
             }
+            held.insert(p);
         }
         let Some(bad) = hole else {
             break;
@@ -312,11 +321,12 @@ fn narrow(
     Ok((lo, hi))
 }
 
-/// The periods inside [lo, hi] a range is checked at.
+/// The periods strictly inside (lo, hi) a range is checked at.
 fn probe_points(spec: &Spec, i: usize, lo: Nanos, hi: Nanos) -> Vec<Nanos> {
-    let even = (1..PROBES).map(|k| lo + (hi - lo) / PROBES * k);
-    let ranks = others_periods(spec, i).flat_map(|p| [p - 1, p, p + 1]);
-    let mut points: Vec<Nanos> = even.chain(ranks).filter(|&p| lo < p && p < hi).collect();
+    let ratio = (hi as f64 / lo.max(1) as f64).powf(1.0 / PROBES as f64);
+    let spaced = (1..PROBES).map(|k| (lo.max(1) as f64 * ratio.powi(k as i32)).round() as Nanos);
+    let ranks = others_periods(spec, i).flat_map(|p| [p - 1, p + 1]);
+    let mut points: Vec<Nanos> = spaced.chain(ranks).filter(|&p| lo < p && p < hi).collect();
     points.sort_unstable();
     points.dedup();
     points
