@@ -53,6 +53,18 @@ impl<'a> Oracle<'a> {
         t.exec_min = self.base.tasks[i].exec_min.min(v);
     }
 
+    /// [`Oracle::set_exec`], a given budget raised to the demand where
+    /// the demand outgrows it: a bound's own sensitivity to the exec, not
+    /// the budget's headroom (which the exec margins report).
+    pub(super) fn set_exec_with_budget(&mut self, i: usize, v: Nanos) {
+        self.set_exec(i, v);
+        let t = &mut self.work.tasks[i];
+        let demand = t.demand();
+        if let Some(c) = &mut t.budget_given {
+            *c = self.base.tasks[i].budget_given.unwrap_or(0).max(demand);
+        }
+    }
+
     /// Task `i`'s period set to `p`.
     pub(super) fn set_period(&mut self, i: usize, p: Nanos) {
         self.work.tasks[i].period = PeriodSpec::Fixed(p);
@@ -68,6 +80,13 @@ impl<'a> Oracle<'a> {
                 self.set_exec(i, Nanos::try_from(v).unwrap_or(MAX_TIME));
             }
         }
+    }
+
+    /// Task `i` at exec `v` (its budget following, as for a limit) breaks
+    /// a timing rule of the model.
+    pub(super) fn rule_broken_at(&mut self, i: usize, v: Nanos) -> bool {
+        self.set_exec_with_budget(i, v);
+        !no_conflict(&self.work)
     }
 
     fn tick(&mut self) -> Result<(), MarginsError> {
@@ -86,8 +105,8 @@ impl<'a> Oracle<'a> {
     }
 
     /// The one limit `l` holds on the working copy, which keeps the
-    /// model's timing rules (the analysis assumes them: a job's demand
-    /// within its budget); other limits and the schedulability test are not
+    /// model's timing rules (the analysis assumes them: a budget within
+    /// the period); other limits and the schedulability test are not
     /// asked.
     pub(super) fn limit_holds(&mut self, l: &LimitSlack) -> Result<bool, MarginsError> {
         self.tick()?;
