@@ -208,6 +208,12 @@ pub struct Margins {
     pub mode: Mode,
     /// The verdict on the spec as it is.
     pub holds: bool,
+    /// The verdict is monotone in every exec under this mode (sound), so
+    /// the exec margins, the limits' and the scaling factors are the exact
+    /// largest values; under the paper's equations a bound can fall when
+    /// an exec grows (docs/analysis.md, "Margins"), so each is the verified
+    /// edge nearest the spec's value, and a larger value may hold again.
+    pub exact: bool,
     /// One per task, in task order.
     pub exec: Vec<ExecMargin>,
     /// One per chain limit, in chain, metric (reaction first) and anchor
@@ -257,6 +263,7 @@ pub fn margins(spec: &Spec, mode: Mode, ctl: &Control) -> Result<Margins, Margin
     Ok(Margins {
         mode,
         holds,
+        exact: mode == Mode::Sound,
         exec,
         limits,
         cpus: per_cpu,

@@ -342,3 +342,25 @@ fn margins_are_edges_of_the_verdict() {
         },
     );
 }
+
+/// Paper mode is not monotone in an exec (docs/analysis.md, "Margins"):
+/// a (1 ms, T 20) → b (1, T 10) → c (1, T 20) has the paper reaction 21 ms
+/// (Eq. 2 adds T_b − C_b + L_b, Eq. 4 subtracts C_b), 20 ms with exec_b =
+/// 2. Against a 20.5 ms limit no shrinking of b helps, so its margin is
+/// `Unreachable`, though growing it does: the answer says it is not exact.
+#[test]
+fn paper_margins_are_edges_not_maxima() {
+    let text = "[system]\nname = \"nm\"\nschedulability = \"rta\"\n\
+                [channels.mem]\nbandwidth = 1\noverhead = 0\n\
+                [tasks.a]\nexec = 1\nperiod = 20\noutput = { channel = \"mem\", size = 0 }\n\
+                [tasks.b]\nexec = 1\nperiod = 10\nreads = [\"a\"]\noutput = { channel = \"mem\", size = 0 }\n\
+                [tasks.c]\nexec = 1\nperiod = 20\nreads = [\"b\"]\n\
+                [[chain]]\npath = [\"a\", \"b\", \"c\"]\nreaction = 20.5\n";
+    let s = spec("nm.toml", text);
+    let m = quiet(&s, Mode::Paper);
+    assert!(!m.holds && !m.exact);
+    assert_eq!(m.exec[1].margin, Margin::Unreachable);
+    assert_eq!(m.exec[0].margin, Margin::By(-MS / 2));
+    assert!(verdict(&with_exec(&s, 1, 2 * MS), Mode::Paper));
+    assert!(quiet(&s, Mode::Sound).exact);
+}

@@ -151,6 +151,9 @@ pub fn text(spec: &Spec, m: &Margins) -> String {
             "  (a period is not monotone: each range is verified at its ends and checked at the periods counted)\n",
         );
     }
+    if !m.exact {
+        out.push_str("\nthe paper's bounds can fall when an exec grows (Eqs. 2, 4, 12): each margin is the verified edge nearest the spec's value, and a larger value may hold again\n");
+    }
     if !m.holds {
         out.push_str("\nthe spec fails now: a negative margin is how much it must shrink, \"none\" that no value of it alone is enough\n");
     }
@@ -180,8 +183,8 @@ fn exec_table(spec: &Spec, rows: &[ExecMargin]) -> String {
 fn limit_table(spec: &Spec, rows: &[LimitSlack]) -> String {
     let heads = [
         "chain",
+        "key",
         "limit",
-        "value",
         "bound",
         "slack",
         "first eaten by",
@@ -251,6 +254,9 @@ fn period_table(spec: &Spec, rows: &[PeriodRange]) -> String {
 pub struct MarginsView {
     mode: &'static str,
     holds: bool,
+    /// The exec margins and factors are the exact largest values (sound
+    /// mode), not only verified edges (paper mode).
+    exact: bool,
     evaluations: u64,
     exec: Vec<ExecView>,
     limits: Vec<LimitView>,
@@ -319,6 +325,7 @@ pub fn view(spec: &Spec, m: &Margins) -> MarginsView {
     MarginsView {
         mode: m.mode.name(),
         holds: m.holds,
+        exact: m.exact,
         evaluations: m.evaluations,
         exec: m.exec.iter().map(|e| exec_view(spec, e)).collect(),
         limits: m.limits.iter().map(|l| limit_view(spec, l)).collect(),
