@@ -137,8 +137,8 @@ pub struct LimitSlack {
     /// The mode's bound (`None`: unbounded).
     pub bound: Option<Nanos>,
     /// Per task, the largest growth of its exec that keeps this limit
-    /// alone, a given budget growing with the demand (other limits and the
-    /// schedulability test aside): the bound's sensitivity to it;
+    /// alone (other limits and the schedulability test aside): the bound's
+    /// sensitivity to it;
     /// [`Margin::Unlimited`] when the limit holds at every exec the
     /// model's timing rules allow (a budget within the period).
     pub per_task: Vec<Margin>,
@@ -371,16 +371,15 @@ fn edge_from(
 }
 
 /// One limit's margins per task: the largest growth of each exec that
-/// keeps this limit, a given budget following the demand (from the spec's
-/// exec: the limit may fail there, then the margin is the shrinking that
-/// makes it hold).
+/// keeps this limit (from the spec's exec: the limit may fail there, then
+/// the margin is the shrinking that makes it hold).
 fn limit_slack(o: &mut Oracle, mut l: LimitSlack) -> Result<LimitSlack, MarginsError> {
     let holds = l.bound.is_some_and(|b| b <= l.limit);
     for i in 0..o.base.tasks.len() {
         let t = &o.base.tasks[i];
         let (exec, cap) = (t.exec, MAX_TIME - t.delta_in - t.delta_out);
         let mut f = |o: &mut Oracle, v: Nanos| {
-            o.set_exec_with_budget(i, v);
+            o.set_exec(i, v);
             o.limit_holds(&l)
         };
         let m = match edge_from(o, exec, cap, holds, &mut f)? {

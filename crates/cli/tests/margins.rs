@@ -7,8 +7,8 @@ mod common;
 use common::{assert_exit, example, json_of, rtpipe, rtpipe_in, rtpipe_interrupted, scratch};
 use std::time::Duration;
 
-/// Table III: every budget is 0.5 ms above its demand, so each exec may
-/// grow by 0.5 ms; every exec together by 10/9.5.
+/// Table III: the exact RTA ends every exec's growth (p1's at 34.5 ms),
+/// and every exec together at 1.885057.
 #[test]
 fn table3_margins_in_text_and_json() {
     let spec = example("paper-table3.toml");
@@ -17,18 +17,18 @@ fn table3_margins_in_text_and_json() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("margins (sound mode;"), "{text}");
     assert!(
-        text.contains("p1     9.5    +0.5      +5.3  budget of p1 (below its demand)"),
+        text.contains("p1     9.5   +34.5    +363.2  schedulability of cpu 0"),
         "{text}"
     );
-    assert!(text.contains("all    1.052631"), "{text}");
+    assert!(text.contains("all    1.885057"), "{text}");
 
     let o = rtpipe(&["analyze", &spec, "--margins", "--json", "--mode", "paper"]);
     assert_exit(&o, 0);
     let m = &json_of(&o)["margins"];
     assert_eq!(m["mode"], "paper");
-    assert_eq!(m["exec"][0]["margin"], 0.5);
+    assert_eq!(m["exec"][0]["margin"], 34.5);
     assert_eq!(m["exec"][0]["status"], "holds");
-    assert_eq!(m["scaling"][0]["factor"], 1.052631);
+    assert_eq!(m["scaling"][0]["factor"], 1.885057);
     // Without the flag the JSON is what it was.
     let o = rtpipe(&["analyze", &spec, "--json"]);
     assert!(json_of(&o).get("margins").is_none());
@@ -71,9 +71,9 @@ fn margins_csv_is_written_whole_and_never_over_the_spec() {
         lines.next(),
         Some("kind,subject,key,value,limit,margin,margin_percent,least,greatest,factor,status,limited_by,first_eaten_by")
     );
-    assert!(csv.contains("\nexec,p1,exec,9.5,,0.5,"), "{csv}");
+    assert!(csv.contains("\nexec,p1,exec,9.5,,34.5,"), "{csv}");
     assert!(
-        csv.contains("\nscaling,all,exec,,,,,,,1.052631,holds,"),
+        csv.contains("\nscaling,all,exec,,,,,,,1.885057,holds,"),
         "{csv}"
     );
     // --margins-csv implies --margins in the report.

@@ -59,7 +59,7 @@ def test_analyze_margins_is_the_command_lines_json(tmp_path):
     expected, status = binary("analyze", spec, "--margins")
     assert got.pop("exit_status") == status
     assert got == expected
-    assert got["margins"]["exec"][0]["margin"] == 0.5
+    assert got["margins"]["exec"][0]["margin"] == 34.5
     assert out.read_text().startswith("kind,subject,key,")
 
 

@@ -46,22 +46,18 @@ impl<'a> Oracle<'a> {
         self.work.tasks.clone_from(&self.base.tasks);
     }
 
-    /// Task `i`'s exec set to `v` (its best case no above it).
+    /// Task `i`'s exec set to `v` (its best case no above it), a given
+    /// budget raised to the demand where the demand outgrows it (the
+    /// reservation resized only when the job no longer fits; below, the
+    /// budget stays what the other tasks see).
     pub(super) fn set_exec(&mut self, i: usize, v: Nanos) {
+        let base = &self.base.tasks[i];
         let t = &mut self.work.tasks[i];
         t.exec = v;
-        t.exec_min = self.base.tasks[i].exec_min.min(v);
-    }
-
-    /// [`Oracle::set_exec`], a given budget raised to the demand where
-    /// the demand outgrows it: a bound's own sensitivity to the exec, not
-    /// the budget's headroom (which the exec margins report).
-    pub(super) fn set_exec_with_budget(&mut self, i: usize, v: Nanos) {
-        self.set_exec(i, v);
-        let t = &mut self.work.tasks[i];
+        t.exec_min = base.exec_min.min(v);
         let demand = t.demand();
-        if let Some(c) = &mut t.budget_given {
-            *c = self.base.tasks[i].budget_given.unwrap_or(0).max(demand);
+        if let (Some(c), Some(given)) = (&mut t.budget_given, base.budget_given) {
+            *c = given.max(demand);
         }
     }
 
@@ -82,10 +78,9 @@ impl<'a> Oracle<'a> {
         }
     }
 
-    /// Task `i` at exec `v` (its budget following, as for a limit) breaks
-    /// a timing rule of the model.
+    /// Task `i` at exec `v` breaks a timing rule of the model.
     pub(super) fn rule_broken_at(&mut self, i: usize, v: Nanos) -> bool {
-        self.set_exec_with_budget(i, v);
+        self.set_exec(i, v);
         !no_conflict(&self.work)
     }
 
