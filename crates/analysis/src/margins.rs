@@ -405,8 +405,11 @@ fn scaling(o: &mut Oracle, cpu: Option<u32>, holds: bool) -> Result<Scaling, Mar
     let on = |t: &rtpipe_model::Task| cpu.is_none_or(|c| t.cpu == c);
     let longest = o.base.tasks.iter().filter(|t| on(t)).map(|t| t.exec);
     let longest = longest.max().unwrap_or(0).max(1);
-    // Past this factor some exec exceeds MAX_TIME.
-    let cap = (i128::from(ONE) * i128::from(MAX_TIME) / i128::from(longest)) as Nanos;
+    // Past this factor some exec exceeds MAX_TIME (for execs of a few
+    // nanoseconds, a factor beyond what a Nanos holds: MAX_TIME millionths
+    // is then the search's end).
+    let cap = i128::from(ONE) * i128::from(MAX_TIME) / i128::from(longest);
+    let cap = Nanos::try_from(cap).unwrap_or(MAX_TIME);
     let mut f = |o: &mut Oracle, m: Nanos| {
         o.scale(cpu, m);
         o.holds()
