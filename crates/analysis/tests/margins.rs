@@ -374,15 +374,17 @@ fn paper_margins_are_edges_not_maxima() {
     assert!(quiet(&s, Mode::Sound).exact);
 }
 
-/// A task of 1 ns: the scaling factor's search ends at MAX_TIME millionths,
-/// not at a factor that overflows a Nanos. 1 ns in a 10 ms period scales by
-/// 10⁷ − 1 (RTA: U < 1), to the last millionth that rounds to it.
+/// A task of 3 ns: the scaling factor's search ends at MAX_TIME millionths,
+/// not at 10⁶ · MAX_TIME / 3, which overflows a Nanos (wrapped, it was
+/// negative). 3 ns in a 10 ms period scales by (10⁷ − 1) / 3 (RTA: U < 1),
+/// to the last millionth whose product rounds down to it.
 #[test]
 fn scaling_a_tiny_exec_does_not_overflow() {
     let s = spec(
         "tiny.toml",
-        "[system]\nname = \"tiny\"\nschedulability = \"rta\"\n[tasks.a]\nexec = \"1ns\"\nperiod = 10\n",
+        "[system]\nname = \"tiny\"\nschedulability = \"rta\"\n[tasks.a]\nexec = \"3ns\"\nperiod = 10\n",
     );
     let m = quiet(&s, Mode::Sound);
-    assert_eq!(m.system.factor, Factor::Millionths(9_999_999_999_999));
+    // ⌊3 · m / 10⁶⌋ ≤ 9 999 999 ns ⇔ m ≤ 3 333 333 333 333.
+    assert_eq!(m.system.factor, Factor::Millionths(3_333_333_333_333));
 }
