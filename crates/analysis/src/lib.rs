@@ -24,6 +24,7 @@ pub mod event_links;
 pub mod events;
 pub mod latency;
 pub mod let_bound;
+pub mod margins;
 pub mod offsets;
 pub mod overheads;
 pub mod paths;
@@ -285,35 +286,30 @@ pub fn bounds_per_chain(
 
 /// Runs the schedulability test and bounds every declared chain.
 pub fn analyze(spec: &Spec) -> Report {
+    analyze_with(spec, true)
+}
+
+/// [`analyze`] without the bounds under known offsets (`offsets` is empty):
+/// everything the verdict ([`Report::ok_in`]) reads, for callers that
+/// judge many variants of one spec ([`margins`]).
+pub fn analyze_verdict(spec: &Spec) -> Report {
+    analyze_with(spec, false)
+}
+
+fn analyze_with(spec: &Spec, with_offsets: bool) -> Report {
     let (timing, schedulability) = sched::analyze(spec);
     let mut chains = Vec::new();
     let mut cases = Vec::new();
     let mut offsets = Vec::new();
     for (k, ch) in spec.chains.iter().enumerate() {
         let a = analyze_chain(spec, &timing, &ch.path);
-        offsets.push(offsets::chain_offsets(
-            spec,
-            &timing,
-            k,
-            &ch.path,
-            &a,
-            offsets::MAX_JOBS,
-        ));
-        for (metric, bound) in [
-            (Metric::Reaction, a.reaction.clone()),
-            (Metric::Freshness, a.freshness.clone()),
-        ] {
-            let mut c = ChainResult {
-                chain: k,
-                metric,
-                limit: metric.limit(ch, Anchor::Read),
-                event_limit: metric.limit(ch, Anchor::Event),
-                bound,
-                ok: false,
-            };
-            c.ok = c.ok_in(Mode::Sound);
-            chains.push(c);
+        if with_offsets {
+            let max_jobs = offsets::MAX_JOBS;
+            offsets.push(offsets::chain_offsets(
+                spec, &timing, k, &ch.path, &a, max_jobs,
+            ));
         }
+        chains.extend(chain_results(spec, k, &a));
         cases.push(a.cases);
     }
     Report {
@@ -324,6 +320,27 @@ pub fn analyze(spec: &Spec) -> Report {
         offsets,
         period_excesses: period_excesses(spec),
     }
+}
+
+/// Chain `k`'s reaction and freshness, judged against its limits.
+pub fn chain_results(spec: &Spec, k: usize, a: &ChainAnalysis) -> [ChainResult; 2] {
+    let ch = &spec.chains[k];
+    [
+        (Metric::Reaction, a.reaction.clone()),
+        (Metric::Freshness, a.freshness.clone()),
+    ]
+    .map(|(metric, bound)| {
+        let mut c = ChainResult {
+            chain: k,
+            metric,
+            limit: metric.limit(ch, Anchor::Read),
+            event_limit: metric.limit(ch, Anchor::Event),
+            bound,
+            ok: false,
+        };
+        c.ok = c.ok_in(Mode::Sound);
+        c
+    })
 }
 
 #[cfg(test)]

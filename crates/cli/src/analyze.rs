@@ -1,5 +1,7 @@
 //! `rtpipe analyze`.
 
+mod margins;
+
 use crate::command::mode_parser;
 use crate::command::{self, Answer, Rendered};
 use crate::report::{time, Pairs};
@@ -28,6 +30,16 @@ pub struct AnalyzeArgs {
     /// always shown).
     #[arg(long, value_parser = mode_parser(), default_value = "sound")]
     pub mode: Mode,
+    /// Also compute the timing margins under --mode: how much each exec may
+    /// grow, each chain limit's slack and the task that eats it first, the
+    /// critical scaling factor per CPU and of the system, and the range of
+    /// each period (docs/analysis.md, "Margins"). Ctrl-C stops it.
+    #[arg(long)]
+    pub margins: bool,
+    /// Write the margins as CSV to this file (one row per margin, times in
+    /// the spec's unit); implies --margins.
+    #[arg(long, value_name = "FILE.csv")]
+    pub margins_csv: Option<PathBuf>,
 }
 
 pub fn run(a: &AnalyzeArgs) -> ExitCode {
@@ -35,35 +47,68 @@ pub fn run(a: &AnalyzeArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
-    match execute(&spec, a) {
+    if a.margins || a.margins_csv.is_some() {
+        rtpipe_runtime::sys::catch_stop_signals();
+    }
+    match execute(&spec, a, &rtpipe_runtime::sys::stop_requested) {
         Ok(answer) => answer.emit(),
         Err(b) => command::fail(b),
     }
 }
 
-/// `analyze` on a loaded spec (with every period fixed).
-pub fn execute(spec: &Spec, a: &AnalyzeArgs) -> Result<Answer, Diagnostic> {
+/// `analyze` on a loaded spec (with every period fixed); `stop` says when
+/// to give up the margins' search (Ctrl-C).
+pub fn execute(
+    spec: &Spec,
+    a: &AnalyzeArgs,
+    stop: &dyn Fn() -> bool,
+) -> Result<Answer, Diagnostic> {
+    let csv = a
+        .margins_csv
+        .as_deref()
+        .map(|p| crate::output::prepare("--margins-csv", p, &a.spec, None))
+        .transpose()?;
     let report = rtpipe_analysis::analyze(spec);
     let paths = a
         .all_paths
         .then(|| rtpipe_analysis::all_paths(spec, &report.timing));
+    let found = if a.margins || csv.is_some() {
+        match margins::compute(spec, a.mode, stop)? {
+            Some(m) => Some(m),
+            None => return Ok(margins::stopped()),
+        }
+    } else {
+        None
+    };
     let out = if a.json {
         Rendered::Json(command::to_value(&AnalyzeView {
             report: report_view(spec, &report),
             all_paths: paths.as_ref().map(|p| paths_view(spec, p)),
+            margins: found.as_ref().map(|m| margins::view(spec, m)),
         })?)
     } else {
         let mut t = report_text(spec, &report, a.mode);
         if let Some(p) = &paths {
             t.push_str(&paths_text(spec, p));
         }
+        if let Some(m) = &found {
+            t.push_str(&margins::text(spec, m));
+        }
         Rendered::Text(t)
     };
-    Ok(Answer {
+    let mut answer = Answer {
         report: out,
         notes: Vec::new(),
         status: if report.ok_in(a.mode) { 0 } else { 1 },
-    })
+    };
+    if let (Some(out), Some(m)) = (&csv, &found) {
+        let written = crate::output::write_all(&[(out, &margins::csv(spec, m))]);
+        if written.is_ok() {
+            answer.notes.push(format!("wrote {}", out.given.display()));
+        }
+        answer = answer.after_write(written);
+    }
+    Ok(answer)
 }
 
 fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
@@ -77,6 +122,8 @@ struct AnalyzeView<'a> {
     report: ReportView<'a>,
     #[serde(skip_serializing_if = "Option::is_none")]
     all_paths: Option<PathsView<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margins: Option<margins::MarginsView>,
 }
 
 /// The JSON report; `T` and `C` let `simulate` extend the task and chain

@@ -253,7 +253,11 @@ fn dispatch(
     match command {
         "analyze" => {
             let a: AnalyzeArgs = parse(command, &argv)?;
-            Ok((crate::analyze::execute(spec, &a).map_err(input)?, None))
+            let stop = || stop.load(Ordering::Relaxed);
+            Ok((
+                crate::analyze::execute(spec, &a, &stop).map_err(input)?,
+                None,
+            ))
         }
         "simulate" => {
             let a: SimulateArgs = parse(command, &argv)?;

@@ -75,6 +75,7 @@ fn same_as_binary(cmd: &str, file: &str, flags: &[&str]) {
 fn every_command_answers_what_the_binary_prints() {
     same_as_binary("analyze", "paper-table3.toml", &["--all-paths"]);
     same_as_binary("analyze", "paper-table2.toml", &["--mode", "paper"]);
+    same_as_binary("analyze", "cleanflight.toml", &["--margins"]);
     same_as_binary("simulate", "paper-table3.toml", &["--outputs", "50"]);
     same_as_binary(
         "simulate",

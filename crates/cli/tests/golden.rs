@@ -137,6 +137,22 @@ const CASES: &[Fixed] = &[
         &["analyze", "@paper-table2", "--mode", "paper"],
     ),
     case(
+        "analyze-jitter-deadlines-margins",
+        &["analyze", "@jitter-deadlines", "--margins"],
+    ),
+    case(
+        "analyze-cleanflight-margins-paper-json",
+        &[
+            "analyze",
+            "@cleanflight",
+            "--margins",
+            "--mode",
+            "paper",
+            "--json",
+        ],
+    ),
+    case("analyze-w1-margins", &["analyze", "%w1.toml", "--margins"]),
+    case(
         "simulate-table3-files",
         &[
             "simulate",

@@ -475,6 +475,35 @@ impl Spec {
     pub fn any_let(&self) -> bool {
         self.communications().contains(&Communication::Let)
     }
+    /// The first rule between task `i`'s exec, budget and fixed period
+    /// that its timing breaks, by the key a user would change: "budget"
+    /// (a given budget below the demand Δin + p + Δout), "period" (below
+    /// the budget), "offset" (not below the period), "deadline" (above
+    /// the period, or below it under a test that needs D = T), "jitter"
+    /// (not below the period). Validation refuses a spec that breaks one
+    /// with a diagnostic at its key; this is the same test for a validated
+    /// spec whose exec or period a caller changed (the analysis' margins).
+    pub fn timing_conflict(&self, i: usize) -> Option<&'static str> {
+        let t = &self.tasks[i];
+        if t.budget_given.is_some_and(|c| c < t.demand()) {
+            return Some("budget");
+        }
+        let p = t.fixed_period()?;
+        let d = t.deadline_given;
+        if t.server != Server::Background && t.budget() > p {
+            Some("period")
+        } else if t.offset.is_some_and(|x| x >= p) {
+            Some("offset")
+        } else if d
+            .is_some_and(|d| d > p || (d < p && self.schedulability.needs_implicit_deadlines()))
+        {
+            Some("deadline")
+        } else if t.jitter > 0 && t.jitter >= p {
+            Some("jitter")
+        } else {
+            None
+        }
+    }
 
     /// Has the spec threads or data-triggered tasks (the event-triggered
     /// model of docs/analysis.md), or only periodic tasks each on a thread

@@ -158,6 +158,7 @@ fn example_name(flag: &str) -> &'static str {
         "--gantt" => "gantt.svg",
         "--export-rt-app" => "rt-app.json",
         "--samples" => "samples.csv",
+        "--margins-csv" => "margins.csv",
         "--write-spec" => "measured.toml",
         "OUTFILE" => "spec.toml",
         _ => "out.txt",

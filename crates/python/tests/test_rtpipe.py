@@ -52,6 +52,17 @@ def test_analyze_is_the_command_lines_json():
     assert list(got) == list(expected)  # the same key order
 
 
+def test_analyze_margins_is_the_command_lines_json(tmp_path):
+    spec = EXAMPLES / "paper-table3.toml"
+    out = tmp_path / "margins.csv"
+    got = rtpipe.load(spec).analyze(margins=True, margins_csv=out)
+    expected, status = binary("analyze", spec, "--margins")
+    assert got.pop("exit_status") == status
+    assert got == expected
+    assert got["margins"]["exec"][0]["margin"] == 34.5
+    assert out.read_text().startswith("kind,subject,key,")
+
+
 @pytest.mark.parametrize(
     "command,file,kwargs,flags",
     [

@@ -287,7 +287,7 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
 /// `-`, `@`, tab or carriage return) gets a leading `'` and quotes, as
 /// OWASP's CSV-injection guidance says: names come from the spec, which
 /// may not be the reader's own.
-fn quoted(s: &str) -> String {
+pub(crate) fn quoted(s: &str) -> String {
     let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']);
     if formula {
         format!("\"'{}\"", s.replace('"', "\"\""))

@@ -254,11 +254,22 @@ class System:
         columns = _samples(samples, options)
         return self._run(command, options, columns)
 
-    def analyze(self, *, mode: Optional[str] = None, all_paths: bool = False) -> dict:
+    def analyze(
+        self,
+        *,
+        mode: Optional[str] = None,
+        all_paths: bool = False,
+        margins: bool = False,
+        margins_csv: Union[str, "os.PathLike[str]", None] = None,
+    ) -> dict:
         """Schedulability and the worst-case bounds of every chain
         (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
-        ``ok``."""
-        return self._run("analyze", {"mode": mode, "all_paths": all_paths})
+        ``ok``. ``margins=True`` adds ``"margins"`` (``--margins``): how much
+        each exec may grow, each chain limit's slack, the critical scaling
+        factors and each period's range, under ``mode``; ``margins_csv``
+        also writes them to that CSV file (``--margins-csv``)."""
+        options = dict(mode=mode, all_paths=all_paths, margins=margins, margins_csv=margins_csv)
+        return self._run("analyze", options)
 
     def simulate(
         self,

@@ -1,0 +1,518 @@
+//! `rtpipe analyze --margins`: the analysis' margins
+//! (`rtpipe_analysis::margins`) as a table, JSON and a CSV file.
+
+use crate::report::samples::quoted;
+use crate::table::Table;
+use rtpipe_analysis::margins::{
+    Breach, ExecMargin, Factor, LimitSlack, Margin, Margins, PeriodRange, Scaling,
+};
+use rtpipe_analysis::margins::{Control, MarginsError};
+use rtpipe_analysis::Mode;
+use rtpipe_model::Diagnostic;
+use rtpipe_model::{Nanos, Spec};
+use serde::Serialize;
+
+/// The margins of `spec` under `mode`, with a progress line on stderr
+/// (hidden when it is not a terminal); `None` when `stop` ended the search.
+pub fn compute(
+    spec: &Spec,
+    mode: Mode,
+    stop: &dyn Fn() -> bool,
+) -> Result<Option<Margins>, Diagnostic> {
+    let pb = crate::spinner(format!("margins of {} ({} mode)", spec.name, mode.name()));
+    let progress = |done: usize, total: usize| {
+        pb.set_message(format!(
+            "margins of {} ({} mode): {done} of {total} searches",
+            spec.name,
+            mode.name()
+        ));
+    };
+    let ctl = Control {
+        stop,
+        progress: &progress,
+    };
+    let found = rtpipe_analysis::margins::margins(spec, mode, &ctl);
+    pb.finish_and_clear();
+    match found {
+        Ok(m) => Ok(Some(m)),
+        Err(MarginsError::Stopped) => Ok(None),
+        Err(MarginsError::EventTriggered) => Err(Diagnostic::error(
+            "--margins: the spec has work-queue threads or data-triggered tasks, whose analysis does not exist yet",
+            "drop --margins (and --margins-csv), or give every task a period and a thread of its own",
+        )),
+    }
+}
+
+/// The answer when Ctrl-C (or SIGTERM, SIGHUP) stopped the margins:
+/// nothing printed or written, the signal's exit status.
+pub fn stopped() -> crate::command::Answer {
+    crate::command::Answer {
+        report: crate::command::Rendered::Nothing,
+        notes: vec![format!(
+            "stopped ({}) before the margins were complete: nothing printed, no file written",
+            rtpipe_runtime::sys::stop_name()
+        )],
+        status: crate::interrupted_status(),
+    }
+}
+
+/// What fails just beyond a margin, in words.
+fn breach_text(spec: &Spec, b: &Breach) -> String {
+    let name = |t: usize| spec.tasks[t].name.as_str();
+    match *b {
+        Breach::Rule { task, key } => rule_text(name(task), key),
+        Breach::Schedulability { cpu } => format!("schedulability of cpu {cpu}"),
+        Breach::MaxPeriod { task } => format!("max_period of {}", name(task)),
+        Breach::Limit {
+            chain,
+            metric,
+            anchor,
+        } => format!("{} {}", spec.chain_label(chain), metric.key(anchor)),
+        Breach::Unbounded { chain } => format!("{} unbounded", spec.chain_label(chain)),
+    }
+}
+
+/// A timing rule of the model a task breaks, by its key.
+fn rule_text(task: &str, key: &str) -> String {
+    match key {
+        "budget" => format!("budget of {task} (below its demand)"),
+        "period" => format!("period of {task} (below its budget)"),
+        other => format!("{other} of {task} (against its period)"),
+    }
+}
+
+/// A signed time in the spec's unit ("+1.5", "-0.25").
+fn signed(spec: &Spec, v: Nanos) -> String {
+    let sign = if v < 0 { "-" } else { "+" };
+    format!("{sign}{}", spec.fmt_time(v.abs()))
+}
+
+fn margin_text(spec: &Spec, m: Margin) -> String {
+    match m {
+        Margin::By(v) => signed(spec, v),
+        Margin::Unlimited => "unlimited".into(),
+        Margin::Unreachable => "none".into(),
+    }
+}
+
+/// The margin in % of the exec it moves.
+fn percent(m: Margin, exec: Nanos) -> Option<f64> {
+    match m {
+        Margin::By(v) if exec > 0 => Some(100.0 * v as f64 / exec as f64),
+        _ => None,
+    }
+}
+
+fn status(m: Margin) -> &'static str {
+    match m {
+        Margin::By(v) if v >= 0 => "holds",
+        Margin::By(_) => "shrink",
+        Margin::Unlimited => "unlimited",
+        Margin::Unreachable => "unreachable",
+    }
+}
+
+fn factor_text(f: Factor) -> String {
+    match f {
+        Factor::Millionths(m) => format!("{}.{:06}", m / 1_000_000, m % 1_000_000),
+        Factor::Unlimited => "unlimited".into(),
+        Factor::Unreachable => "none".into(),
+    }
+}
+
+fn factor_value(f: Factor) -> Option<f64> {
+    match f {
+        Factor::Millionths(m) => Some(m as f64 / 1e6),
+        _ => None,
+    }
+}
+
+/// The text section of `--margins`.
+pub fn text(spec: &Spec, m: &Margins) -> String {
+    let mut out = format!(
+        "\nmargins ({} mode; {} analyses; each verified one step beyond):\n",
+        m.mode.name(),
+        m.evaluations
+    );
+    out.push_str("\nexec: the largest growth of one task's exec, the others unchanged\n");
+    out.push_str(&exec_table(spec, &m.exec));
+    if !m.limits.is_empty() {
+        out.push_str(
+            "\nchain limits: slack = limit - bound; the task whose exec growth eats it first\n",
+        );
+        out.push_str(&limit_table(spec, &m.limits));
+    }
+    out.push_str("\ncritical scaling factor: the largest factor on every exec\n");
+    out.push_str(&scaling_table(spec, &m.cpus, &m.system));
+    if !m.periods.is_empty() {
+        out.push_str("\nperiods: the range that keeps everything, the others fixed\n");
+        out.push_str(&period_table(spec, &m.periods));
+        out.push_str(
+            "  (a period is not monotone: each range is verified at its ends and checked at the periods counted)\n",
+        );
+    }
+    if !m.exact {
+        out.push_str("\nthe paper's bounds can fall when an exec grows (Eqs. 2, 4, 12): each margin is the verified edge nearest the spec's value, and a larger value may hold again\n");
+    }
+    if !m.holds {
+        out.push_str("\nthe spec fails now: a negative margin is how much it must shrink, \"none\" that no value of it alone is enough\n");
+    }
+    out
+}
+
+fn breach_cell(spec: &Spec, b: Option<&Breach>) -> String {
+    b.map(|b| breach_text(spec, b))
+        .unwrap_or_else(|| "-".into())
+}
+
+fn exec_table(spec: &Spec, rows: &[ExecMargin]) -> String {
+    let mut t =
+        Table::new(&["task", "exec", "margin", "margin %", "limited by"]).numeric(&[1, 2, 3]);
+    for e in rows {
+        t.row(vec![
+            spec.tasks[e.task].name.clone(),
+            spec.fmt_time(e.exec),
+            margin_text(spec, e.margin),
+            percent(e.margin, e.exec).map_or("-".into(), |p| format!("{p:+.1}")),
+            breach_cell(spec, e.breach.as_ref()),
+        ]);
+    }
+    t.render()
+}
+
+fn limit_table(spec: &Spec, rows: &[LimitSlack]) -> String {
+    let heads = [
+        "chain",
+        "key",
+        "limit",
+        "bound",
+        "slack",
+        "first eaten by",
+        "its margin",
+    ];
+    let mut t = Table::new(&heads).numeric(&[2, 3, 4, 6]);
+    for l in rows {
+        let (who, margin) = match l.critical() {
+            Some((task, m)) => (spec.tasks[task].name.clone(), margin_text(spec, m)),
+            None => ("-".into(), "-".into()),
+        };
+        t.row(vec![
+            spec.chain_label(l.chain),
+            l.metric.key(l.anchor).to_string(),
+            spec.fmt_time(l.limit),
+            l.bound.map_or("unbounded".into(), |b| spec.fmt_time(b)),
+            l.slack().map_or("-".into(), |s| signed(spec, s)),
+            who,
+            margin,
+        ]);
+    }
+    t.render()
+}
+
+fn scaling_table(spec: &Spec, cpus: &[Scaling], system: &Scaling) -> String {
+    let mut t = Table::new(&["tasks", "factor", "limited by"]).numeric(&[1]);
+    let label = |s: &Scaling| s.cpu.map_or("all".into(), |c| format!("cpu {c}"));
+    let multi = cpus.len() > 1;
+    for s in cpus.iter().filter(|_| multi).chain([system]) {
+        t.row(vec![
+            label(s),
+            factor_text(s.factor),
+            breach_cell(spec, s.breach.as_ref()),
+        ]);
+    }
+    t.render()
+}
+
+fn period_table(spec: &Spec, rows: &[PeriodRange]) -> String {
+    let heads = [
+        "task", "period", "least", "greatest", "below", "above", "checked",
+    ];
+    let mut t = Table::new(&heads).numeric(&[1, 2, 3, 6]);
+    for p in rows {
+        let (lo, hi) = match p.range {
+            Some((lo, hi)) => (
+                spec.fmt_time(lo),
+                hi.map_or("unlimited".into(), |h| spec.fmt_time(h)),
+            ),
+            None => ("none".into(), "none".into()),
+        };
+        t.row(vec![
+            spec.tasks[p.task].name.clone(),
+            spec.fmt_time(p.period),
+            lo,
+            hi,
+            breach_cell(spec, p.below.as_ref()),
+            breach_cell(spec, p.above.as_ref()),
+            p.probes.to_string(),
+        ]);
+    }
+    t.render()
+}
+
+/// `--json`'s `margins`.
+#[derive(Serialize)]
+pub struct MarginsView {
+    mode: &'static str,
+    holds: bool,
+    /// The exec margins and factors are the exact largest values (sound
+    /// mode), not only verified edges (paper mode).
+    exact: bool,
+    evaluations: u64,
+    exec: Vec<ExecView>,
+    limits: Vec<LimitView>,
+    scaling: Vec<ScalingView>,
+    periods: Vec<PeriodView>,
+}
+
+#[derive(Serialize)]
+struct ExecView {
+    task: String,
+    exec: f64,
+    /// null when unlimited or unreachable (`status` says which).
+    margin: Option<f64>,
+    margin_percent: Option<f64>,
+    status: &'static str,
+    limited_by: Option<String>,
+}
+
+#[derive(Serialize)]
+struct LimitView {
+    chain: String,
+    metric: &'static str,
+    from: &'static str,
+    key: &'static str,
+    limit: f64,
+    bound: Option<f64>,
+    slack: Option<f64>,
+    first_eaten_by: Option<String>,
+    /// Per task: the growth of its exec this limit alone allows (null:
+    /// unlimited or unreachable).
+    exec_margins: crate::report::Pairs<String, Option<f64>>,
+}
+
+#[derive(Serialize)]
+struct ScalingView {
+    /// null: every CPU together.
+    cpu: Option<u32>,
+    factor: Option<f64>,
+    status: &'static str,
+    limited_by: Option<String>,
+}
+
+#[derive(Serialize)]
+struct PeriodView {
+    task: String,
+    period: f64,
+    least: Option<f64>,
+    /// null: unlimited (or no range).
+    greatest: Option<f64>,
+    found: bool,
+    below: Option<String>,
+    above: Option<String>,
+    checked: usize,
+}
+
+fn margin_value(spec: &Spec, m: Margin) -> Option<f64> {
+    match m {
+        Margin::By(v) => Some(spec.in_unit(v)),
+        _ => None,
+    }
+}
+
+/// The JSON view of `m`.
+pub fn view(spec: &Spec, m: &Margins) -> MarginsView {
+    let b = |b: &Option<Breach>| b.as_ref().map(|b| breach_text(spec, b));
+    MarginsView {
+        mode: m.mode.name(),
+        holds: m.holds,
+        exact: m.exact,
+        evaluations: m.evaluations,
+        exec: m.exec.iter().map(|e| exec_view(spec, e)).collect(),
+        limits: m.limits.iter().map(|l| limit_view(spec, l)).collect(),
+        scaling: m
+            .cpus
+            .iter()
+            .chain([&m.system])
+            .map(|s| ScalingView {
+                cpu: s.cpu,
+                factor: factor_value(s.factor),
+                status: factor_status(s.factor),
+                limited_by: b(&s.breach),
+            })
+            .collect(),
+        periods: m.periods.iter().map(|p| period_view(spec, p)).collect(),
+    }
+}
+
+fn factor_status(f: Factor) -> &'static str {
+    match f {
+        Factor::Millionths(m) if m >= 1_000_000 => "holds",
+        Factor::Millionths(_) => "shrink",
+        Factor::Unlimited => "unlimited",
+        Factor::Unreachable => "unreachable",
+    }
+}
+
+fn exec_view(spec: &Spec, e: &ExecMargin) -> ExecView {
+    ExecView {
+        task: spec.tasks[e.task].name.clone(),
+        exec: spec.in_unit(e.exec),
+        margin: margin_value(spec, e.margin),
+        margin_percent: percent(e.margin, e.exec),
+        status: status(e.margin),
+        limited_by: e.breach.as_ref().map(|b| breach_text(spec, b)),
+    }
+}
+
+fn limit_view(spec: &Spec, l: &LimitSlack) -> LimitView {
+    LimitView {
+        chain: spec.chain_label(l.chain),
+        metric: l.metric.name(),
+        from: l.anchor.name(),
+        key: l.metric.key(l.anchor),
+        limit: spec.in_unit(l.limit),
+        bound: l.bound.map(|b| spec.in_unit(b)),
+        slack: l.slack().map(|s| spec.in_unit(s)),
+        first_eaten_by: l.critical().map(|(t, _)| spec.tasks[t].name.clone()),
+        exec_margins: crate::report::Pairs(
+            l.per_task
+                .iter()
+                .enumerate()
+                .map(|(t, m)| (spec.tasks[t].name.clone(), margin_value(spec, *m)))
+                .collect(),
+        ),
+    }
+}
+
+fn period_view(spec: &Spec, p: &PeriodRange) -> PeriodView {
+    let b = |b: &Option<Breach>| b.as_ref().map(|b| breach_text(spec, b));
+    PeriodView {
+        task: spec.tasks[p.task].name.clone(),
+        period: spec.in_unit(p.period),
+        least: p.range.map(|(lo, _)| spec.in_unit(lo)),
+        greatest: p.range.and_then(|(_, hi)| hi).map(|h| spec.in_unit(h)),
+        found: p.range.is_some(),
+        below: b(&p.below),
+        above: b(&p.above),
+        checked: p.probes,
+    }
+}
+
+/// One row of the `--margins-csv` file (empty cells where a column does
+/// not apply to its kind).
+#[derive(Default)]
+struct CsvRow {
+    kind: &'static str,
+    subject: String,
+    key: &'static str,
+    value: Option<f64>,
+    limit: Option<f64>,
+    margin: Option<f64>,
+    margin_percent: Option<f64>,
+    least: Option<f64>,
+    greatest: Option<f64>,
+    factor: Option<f64>,
+    status: &'static str,
+    limited_by: String,
+    first_eaten_by: String,
+}
+
+const CSV_HEADER: &str = "kind,subject,key,value,limit,margin,margin_percent,least,greatest,factor,status,limited_by,first_eaten_by\n";
+
+impl CsvRow {
+    fn line(&self) -> String {
+        let n = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
+        let cells = [
+            self.kind.to_string(),
+            quoted(&self.subject),
+            self.key.to_string(),
+            n(self.value),
+            n(self.limit),
+            n(self.margin),
+            n(self.margin_percent),
+            n(self.least),
+            n(self.greatest),
+            n(self.factor),
+            self.status.to_string(),
+            quoted(&self.limited_by),
+            quoted(&self.first_eaten_by),
+        ];
+        cells.join(",") + "\n"
+    }
+}
+
+/// The `--margins-csv` file: one row per margin, times in the spec's unit.
+pub fn csv(spec: &Spec, m: &Margins) -> String {
+    let b = |b: &Option<Breach>| b.as_ref().map(|b| breach_text(spec, b)).unwrap_or_default();
+    let exec = m.exec.iter().map(|e| CsvRow {
+        kind: "exec",
+        subject: spec.tasks[e.task].name.clone(),
+        key: "exec",
+        value: Some(spec.in_unit(e.exec)),
+        margin: margin_value(spec, e.margin),
+        margin_percent: percent(e.margin, e.exec),
+        status: status(e.margin),
+        limited_by: b(&e.breach),
+        ..CsvRow::default()
+    });
+    let limits = m.limits.iter().map(|l| CsvRow {
+        kind: "limit",
+        subject: spec.chain_label(l.chain),
+        key: l.metric.key(l.anchor),
+        value: l.bound.map(|v| spec.in_unit(v)),
+        limit: Some(spec.in_unit(l.limit)),
+        margin: l.slack().map(|s| spec.in_unit(s)),
+        status: slack_status(l),
+        first_eaten_by: l
+            .critical()
+            .map(|(t, _)| spec.tasks[t].name.clone())
+            .unwrap_or_default(),
+        ..CsvRow::default()
+    });
+    let scaling = m.cpus.iter().chain([&m.system]).map(|s| CsvRow {
+        kind: "scaling",
+        subject: s.cpu.map_or("all".into(), |c| format!("cpu {c}")),
+        key: "exec",
+        factor: factor_value(s.factor),
+        status: factor_status(s.factor),
+        limited_by: b(&s.breach),
+        ..CsvRow::default()
+    });
+    let periods = m.periods.iter().map(|p| period_row(spec, p));
+    let rows = exec.chain(limits).chain(scaling).chain(periods);
+    std::iter::once(CSV_HEADER.to_string())
+        .chain(rows.map(|r| r.line()))
+        .collect()
+}
+
+fn slack_status(l: &LimitSlack) -> &'static str {
+    match l.slack() {
+        Some(s) if s >= 0 => "holds",
+        Some(_) => "exceeded",
+        None => "unbounded",
+    }
+}
+
+fn period_row(spec: &Spec, p: &PeriodRange) -> CsvRow {
+    let b = |b: &Option<Breach>| b.as_ref().map(|b| breach_text(spec, b));
+    let status = match p.range {
+        None => "unreachable",
+        Some((lo, hi)) if lo <= p.period && hi.is_none_or(|h| p.period <= h) => "holds",
+        Some(_) => "moved",
+    };
+    CsvRow {
+        kind: "period",
+        subject: spec.tasks[p.task].name.clone(),
+        key: "period",
+        value: Some(spec.in_unit(p.period)),
+        least: p.range.map(|(lo, _)| spec.in_unit(lo)),
+        greatest: p.range.and_then(|(_, hi)| hi).map(|h| spec.in_unit(h)),
+        status,
+        limited_by: [b(&p.below), b(&p.above)]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join("; "),
+        ..CsvRow::default()
+    }
+}
