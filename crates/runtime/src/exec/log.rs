@@ -197,6 +197,7 @@ fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
             .as_ref()
             .map_or_else(Vec::new, |s| s.held.clone()),
         let_misses: th.let_misses,
+        merges: th.merges,
     };
     (stats, run)
 }
