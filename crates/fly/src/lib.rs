@@ -241,8 +241,9 @@ pub type Bodies = Vec<Box<dyn Body<Value>>>;
 /// world, both for `s`: what every executor of a flight needs.
 fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnostic> {
     let mut bodies: Vec<Box<dyn Body<Value>>> = Vec::with_capacity(spec.tasks.len());
-    for (t, role) in spec.tasks.iter().zip(&s.kinds) {
-        let period = t.fixed_period().unwrap_or(0);
+    for (i, (t, role)) in spec.tasks.iter().zip(&s.kinds).enumerate() {
+        // A data-triggered body runs at its triggers' rate.
+        let period = spec.activation_period(i).unwrap_or(0);
         bodies.push(match role {
             Some(r) => body(*r, period, &s.preset).map_err(|e| {
                 Diagnostic::error(

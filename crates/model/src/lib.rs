@@ -489,6 +489,27 @@ impl Spec {
         out
     }
 
+    /// The nominal distance between task `i`'s releases: its fixed period,
+    /// or for a data-triggered task its triggers' (with `join = "any"` the
+    /// fastest trigger's, which releases it at least that often; with
+    /// `"all"` the slowest's, which it waits for). `None` where a period
+    /// on the way is not fixed. A rate for what needs one (a controller's
+    /// sample time, the paper's terms); the analysis bounds the actual
+    /// releases with event models, not with this.
+    pub fn activation_period(&self, i: usize) -> Option<Nanos> {
+        let t = self.tasks.get(i)?;
+        let Some((triggers, join)) = t.triggers() else {
+            return t.fixed_period();
+        };
+        // Validation makes the trigger graph acyclic, so this ends.
+        let periods = triggers.iter().map(|&p| self.activation_period(p));
+        let periods: Option<Vec<Nanos>> = periods.collect();
+        match join {
+            Join::Any => periods?.into_iter().min(),
+            Join::All => periods?.into_iter().max(),
+        }
+    }
+
     /// The index of the task called `name`.
     pub fn task_index(&self, name: &str) -> Option<usize> {
         self.tasks.iter().position(|t| t.name == name)

@@ -86,6 +86,7 @@ fn a_triggered_task_on_a_thread_parses_and_round_trips() {
         }
     );
     assert!(s.event_triggered());
+    assert_eq!(s.activation_period(1), Some(250_000));
     assert_eq!(s.triggered_by(), vec![vec![1], vec![]]);
     let again = Spec::parse("w.toml", &rtpipe_model::to_toml(&s)).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(again, s);
@@ -108,6 +109,8 @@ fn join_all_and_named_triggers() {
         text("", "", GOOD_GYRO, &ctrl).replace("reads = [\"gyro\"]", "reads = [\"gyro\", \"acc\"]");
     let s = Spec::parse("e.toml", &t).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.tasks[1].triggers(), Some((&[0, 2][..], Join::All)));
+    // Join all waits for the slowest trigger.
+    assert_eq!(s.activation_period(1), Some(1_000_000));
 }
 
 #[test]
