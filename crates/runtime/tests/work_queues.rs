@@ -111,9 +111,26 @@ fn make_runs() -> Vec<(Policy, Spec, RunResult)> {
                 load: 0,
             };
             let r = run_synthetic(&spec, &cfg, spin).unwrap_or_else(|e| panic!("{policy:?}: {e}"));
+            print_summary(&spec, policy, &r);
             (policy, spec.clone(), r)
         })
         .collect()
+}
+
+/// Per task, what the run did (`--nocapture` shows it; docs/runtime.md
+/// quotes it).
+fn print_summary(spec: &Spec, policy: Policy, r: &RunResult) {
+    println!("{} for {} ms:", policy.class(), DURATION / MS);
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let max = r.sim.tasks[i].max_response.unwrap_or(0);
+        println!(
+            "  {:<5} {:>3} jobs {:>3} merged  max R {:>7.3} ms",
+            t.name,
+            r.sim.tasks[i].completed,
+            r.tasks[i].merges,
+            max as f64 / MS as f64
+        );
+    }
 }
 
 fn task(spec: &Spec, name: &str) -> usize {
@@ -273,4 +290,59 @@ fn join_all_releases_once_every_trigger_has_published() {
             );
         }
     }
+}
+
+/// The policies that cannot run a work queue are refused before any thread
+/// starts, saying why and what to use; so is LET, whose publications are
+/// not at the completions that release data-triggered tasks.
+#[test]
+fn edf_policies_and_let_are_refused_with_the_fix() {
+    let spec = Spec::parse("queues.toml", SPEC).unwrap_or_else(|e| panic!("{e}"));
+    for policy in [Policy::Deadline, Policy::EdfFifo] {
+        let cfg = RunConfig {
+            duration: DURATION,
+            policy,
+            load: 0,
+        };
+        let e = rtpipe_runtime::check(&spec, &cfg).err();
+        let d = e
+            .map(|e| e.diagnostic)
+            .unwrap_or_else(|| panic!("{policy:?} admitted"));
+        assert!(
+            d.message.contains(&format!(
+                "--policy {} cannot run work-queue threads",
+                policy.name()
+            )),
+            "{}",
+            d.message
+        );
+        assert!(
+            d.help
+                .as_deref()
+                .is_some_and(|h| h.contains("--policy fifo")),
+            "{d:?}"
+        );
+    }
+    let text = SPEC.replace(
+        "priorities = \"explicit\"",
+        "priorities = \"explicit\"\ncommunication = \"let\"",
+    );
+    let text = text
+        .replace("activation = \"data\"", "period = 1")
+        .replace("join = \"all\"\n", "");
+    let spec = Spec::parse("let.toml", &text).unwrap_or_else(|e| panic!("{e}"));
+    let cfg = RunConfig {
+        duration: DURATION,
+        policy: Policy::Other,
+        load: 0,
+    };
+    let e = rtpipe_runtime::check(&spec, &cfg).err();
+    let d = e
+        .map(|e| e.diagnostic)
+        .unwrap_or_else(|| panic!("LET admitted"));
+    assert!(
+        d.message.contains("communication = \"let\""),
+        "{}",
+        d.message
+    );
 }
