@@ -5,6 +5,7 @@
 //! declared chains and the dynamic programme over all paths (`paths.rs`).
 //! docs/analysis.md derives every term.
 
+use crate::event_links::{self, Activation, Side};
 use crate::sched::TaskTiming;
 use rtpipe_model::{Communication, Nanos, Scheduler, Spec};
 
@@ -59,12 +60,23 @@ pub struct LinkTask {
     /// Reads at its release and publishes at its period's end (LET), not
     /// at its start and completion.
     pub let_comm: bool,
+    /// Its activations, in a spec with threads or data-triggered tasks
+    /// (`crate::event_links`); `None` in a periodic spec.
+    pub event: Option<Activation>,
 }
 
 impl LinkTask {
     /// Task `i` as its links see it.
     pub fn new(spec: &Spec, timing: &[TaskTiming], i: usize) -> LinkTask {
         let tm = &timing[i];
+        let event = tm.events.as_ref().map(|e| Activation::new(i, e));
+        // A task whose jobs merge needs no R ≤ T: its terms hold for every
+        // job from its first release (`event_links`); W ≤ R.
+        let merged = tm.events.as_ref().filter(|e| e.merging).map(|e| e.response);
+        let (r, w) = match merged {
+            Some(r) => (r, r),
+            None => (tm.bounded_response(), tm.bounded_read_to_publish()),
+        };
         LinkTask {
             c: tm.budget,
             t: tm.period,
@@ -73,8 +85,8 @@ impl LinkTask {
             x_min: tm.demand_min,
             delta_out: spec.tasks[i].delta_out,
             l: eq1_single_pipe(tm.demand, tm.budget, tm.period),
-            r: tm.bounded_response(),
-            w: tm.bounded_read_to_publish(),
+            r,
+            w,
             j: tm.jitter,
             budgeted: spec.policy().budget(spec.tasks[i].server).is_some(),
             cpu: tm.cpu,
@@ -82,7 +94,25 @@ impl LinkTask {
             prio: tm.priority,
             top: tm.top_priority,
             let_comm: spec.task_communication(i) == Communication::Let,
+            event,
         }
+    }
+
+    /// Its side of an event link (`None` in a periodic spec).
+    fn side(&self) -> Option<Side> {
+        Some(Side {
+            r: self.r,
+            w: self.w,
+            x: self.x,
+            t: self.t,
+            act: self.event?,
+            let_comm: self.let_comm,
+        })
+    }
+
+    /// Its jobs merge (in a thread, or data-triggered).
+    fn merging(&self) -> bool {
+        self.event.is_some_and(|e| e.merging)
     }
 
     /// A bound on the time from a job's release to its publish: R, or
@@ -104,6 +134,15 @@ impl LinkTask {
             self.w
         }
     }
+}
+
+/// Both sides of p → c when it is an event link (`event_links`): the
+/// producer's or the consumer's jobs merge.
+fn event_sides(p: &LinkTask, c: &LinkTask) -> Option<(Side, Side)> {
+    if !event_links::is_event_link(p.event.as_ref(), c.event.as_ref()) {
+        return None;
+    }
+    Some((p.side()?, c.side()?))
 }
 
 /// Which of the paper's cases a link falls in.
@@ -165,7 +204,9 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 /// keep the priority arguments, with J where an anchor moves.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     let waits = |t: &LinkTask| t.j > 0 && t.budgeted;
-    if !sched.policy().fixed_priority() || p.cpu != c.cpu || waits(p) || waits(c) {
+    // Jobs that merge, or share a rank in a thread, break both cases.
+    let merging = p.merging() || c.merging();
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu || waits(p) || waits(c) || merging {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
@@ -207,6 +248,9 @@ pub fn sound_reaction_link_in(
     p_distinct: bool,
     p_read: bool,
 ) -> Option<Nanos> {
+    if let Some((ps, cs)) = event_sides(p, c) {
+        return event_links::reaction(&ps, &cs, p_read);
+    }
     let (rp, _) = (p.r?, c.r?);
     if p.let_comm || c.let_comm {
         return let_reaction_link(p, c, p_distinct, p_read);
@@ -292,6 +336,9 @@ pub fn sound_freshness_link(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_freshness_link`] with the priority order given (see
 /// [`sound_reaction_link_in`]); every option grows with T_p and R_p.
 pub fn sound_freshness_link_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    if let Some((ps, cs)) = p.side().zip(c.side()) {
+        return event_links::freshness(&ps, &cs);
+    }
     let (rp, _) = (p.r?, c.r?);
     if p.let_comm || c.let_comm {
         // The same argument with p's publish at its period's end under
@@ -321,6 +368,9 @@ pub fn sound_freshness_last(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Opt
 /// [`sound_freshness_last`] with the priority order given; every option
 /// grows with the periods and response times.
 pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) -> Option<Nanos> {
+    if let Some((ps, cs)) = p.side().zip(c.side()) {
+        return event_links::freshness_last(&ps, &cs);
+    }
     let (rp, _, wc) = (p.r?, c.r?, c.w?);
     if p.let_comm || c.let_comm {
         // L_n reads before p's next publish and publishes within W_c of
@@ -345,6 +395,18 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
     })
 }
 
+/// What a chain's first freshness link adds before its term: in a spec
+/// with threads or data-triggered tasks, whose freshness terms run from
+/// the release of the job after the one carrying the sample
+/// (`event_links::freshness`), the head's distance to that release
+/// ([`event_links::head_offset`]); 0 in a periodic spec.
+pub fn freshness_head(p: &LinkTask) -> Option<Nanos> {
+    match p.side() {
+        Some(side) => event_links::head_offset(&side),
+        None => Some(0),
+    }
+}
+
 /// One link's sound terms, all anchored on releases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SoundLink {
@@ -366,10 +428,12 @@ impl SoundLink {
         p_distinct: bool,
         p_read: bool,
     ) -> SoundLink {
+        let head = if p_read { freshness_head(p) } else { Some(0) };
+        let plus = |term: Option<Nanos>| term?.checked_add(head?);
         SoundLink {
             reaction: sound_reaction_link_in(order, p, c, p_distinct, p_read),
-            freshness: sound_freshness_link_in(order, p, c),
-            freshness_last: sound_freshness_last_in(order, p, c),
+            freshness: plus(sound_freshness_link_in(order, p, c)),
+            freshness_last: plus(sound_freshness_last_in(order, p, c)),
         }
     }
 
@@ -439,6 +503,10 @@ pub fn compose_sound(
 /// It does when c's reads are further apart than p's publishes can be.
 /// Under LET a task reads exactly T apart and publishes exactly T apart.
 pub fn distinct_passes(p: &LinkTask, c: &LinkTask, p_distinct: bool) -> bool {
+    if event_sides(p, c).is_some() {
+        // Not argued for merging jobs: the reachability terms stay off.
+        return false;
+    }
     match (p_distinct, p.r, c.r) {
         (true, Some(rp), Some(rc)) => {
             let reads = if c.let_comm { c.t } else { c.t - rc + c.x };
@@ -592,7 +660,11 @@ fn paper_sampling_delay(h: &LinkTask) -> Nanos {
 /// first head release after an event (reaction), or after the head read
 /// before the sample's (freshness), is less than T_1 later.
 fn from_event(head: &LinkTask, from_release: Option<Nanos>) -> Option<Nanos> {
-    from_release.map(|b| b + head.t)
+    let sampling = match &head.event {
+        Some(a) if a.merging => event_links::sampling(a)?,
+        _ => head.t,
+    };
+    from_release?.checked_add(sampling)
 }
 
 /// Sound mode, reaction from the event (the maximum reaction time of the
@@ -638,6 +710,10 @@ fn sound_links(sched: Scheduler, lt: &[LinkTask]) -> Vec<SoundLink> {
 
 /// Davare's (reaction, freshness) from the read.
 fn davare(lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
+    // Its argument is for periodic tasks each a thread of its own.
+    if lt.iter().any(LinkTask::merging) {
+        return (None, None);
+    }
     let tail = lt[lt.len() - 1].r;
     let mid: Option<Nanos> = lt[..lt.len() - 1]
         .iter()
@@ -652,8 +728,9 @@ fn davare(lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
 /// 5.10 for one ECU, a link gaining R_p back when its producer preempts its
 /// consumer (`fp_order`, so inheritance and other CPUs count as "not above").
 fn duerr(sched: Scheduler, lt: &[LinkTask]) -> (Option<Nanos>, Option<Nanos>) {
-    // The theorems assume every response time is bounded.
-    if lt.iter().any(|t| t.r.is_none()) {
+    // The theorems assume every response time is bounded, and periodic
+    // tasks each a thread of its own.
+    if lt.iter().any(|t| t.r.is_none() || t.merging()) {
         return (None, None);
     }
     let mut react = lt[lt.len() - 1].r;
@@ -780,6 +857,7 @@ mod tests {
             prio: Some(prio),
             top: Some(prio),
             let_comm: false,
+            event: None,
         }
     }
 

@@ -16,9 +16,12 @@
 //!   offsets, job by job over the hyperperiod.
 #![deny(missing_docs)]
 
+pub mod arrivals;
 pub mod blocking;
 pub mod disturbance;
 pub mod edf;
+pub mod event_links;
+pub mod events;
 pub mod latency;
 pub mod let_bound;
 pub mod offsets;
@@ -27,6 +30,7 @@ pub mod paths;
 pub mod qpa;
 pub mod relax;
 pub mod sched;
+pub mod thread_rta;
 
 pub use latency::{analyze_chain, eq1_single_pipe, Anchor, Bound, Case, ChainAnalysis, ChainBound};
 pub use offsets::{Basis, ChainOffsets, Fallback, OffsetBound};
@@ -256,6 +260,8 @@ pub fn missing_periods(spec: &Spec) -> Vec<&str> {
     spec.tasks
         .iter()
         .filter(|t| t.server != rtpipe_model::Server::Background && t.fixed_period().is_none())
+        // A data-triggered task's releases come from its triggers.
+        .filter(|t| !t.is_triggered())
         .map(|t| t.name.as_str())
         .collect()
 }

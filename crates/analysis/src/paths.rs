@@ -11,8 +11,8 @@
 //! skipped cycle is named.
 
 use crate::latency::{
-    distinct_passes, paper_freshness_link, paper_reaction_link, sound_freshness_last,
-    sound_freshness_link, sound_reaction_link, LinkTask,
+    distinct_passes, freshness_head, paper_freshness_link, paper_reaction_link,
+    sound_freshness_last, sound_freshness_link, sound_reaction_link, LinkTask,
 };
 use crate::sched::TaskTiming;
 use rtpipe_model::{Nanos, Scheduler, Server, Spec};
@@ -285,14 +285,15 @@ impl Scratch {
         let (p, q) = (&lt[v], &lt[c]);
         let cand_pe = self.paper_reaction.val[v] + paper_reaction_link(p, q);
         let cand_pf = self.paper_freshness.val[v] + paper_freshness_link(p, q);
-        let cand_sf = add(
-            self.sound_freshness.val[v],
-            sound_freshness_link(sched, p, q),
-        );
-        let cand_sl = add(
-            self.sound_freshness.val[v],
-            sound_freshness_last(sched, p, q),
-        );
+        // The source's own offset, in a spec with threads or
+        // data-triggered tasks (`latency::freshness_head`).
+        let from = if v == s {
+            add(self.sound_freshness.val[v], freshness_head(p))
+        } else {
+            self.sound_freshness.val[v]
+        };
+        let cand_sf = add(from, sound_freshness_link(sched, p, q));
+        let cand_sl = add(from, sound_freshness_last(sched, p, q));
         if self.stamp[c] != s {
             self.stamp[c] = s;
             self.paper_reaction.set(c, cand_pe, v);

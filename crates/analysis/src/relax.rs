@@ -705,6 +705,8 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
         prio: None,
         top: None,
         let_comm: spec.task_communication(i) == rtpipe_model::Communication::Let,
+        // The design refuses threads and data-triggered tasks.
+        event: None,
     }
 }
 

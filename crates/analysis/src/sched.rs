@@ -47,6 +47,9 @@ pub struct TaskTiming {
     /// Spuri's `w_i(0)` under EDF ([`edf::start_to_finish`]), where a job's
     /// response is mostly waiting to start. docs/analysis.md.
     pub read_to_publish: Option<Nanos>,
+    /// In a spec with threads or data-triggered tasks, what the event
+    /// analysis found ([`crate::events`]); `None` in a periodic spec.
+    pub events: Option<crate::events::EventTiming>,
 }
 
 impl TaskTiming {
@@ -325,17 +328,27 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
     cpus.sort_unstable();
     cpus.dedup();
-    let timings: Vec<TaskTiming> = spec
-        .tasks
-        .iter()
+    let (responses, events) = if spec.event_triggered() {
+        event_responses(spec, &prio, &top)
+    } else {
+        let responses = (0..spec.tasks.len())
+            .map(|i| response_times(spec, &prio, &top, i))
+            .collect();
+        (responses, vec![None; spec.tasks.len()])
+    };
+    let timings: Vec<TaskTiming> = responses
+        .into_iter()
+        .zip(events)
         .enumerate()
-        .map(|(i, t)| {
-            let (rt, jrt, w) = response_times(spec, &prio, &top, i);
+        .map(|(i, ((rt, jrt, w), events))| {
+            let t = &spec.tasks[i];
             TaskTiming {
                 budget: t.budget(),
                 demand: t.demand(),
                 demand_min: t.demand_min(),
-                period: period_or_max(t),
+                // A data-triggered task's nominal rate, from its
+                // triggers' (for the paper's terms and the utilisation).
+                period: spec.activation_period(i).unwrap_or(MAX_TIME),
                 deadline: t.deadline().unwrap_or(MAX_TIME),
                 jitter: t.jitter,
                 priority: prio[i],
@@ -345,6 +358,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 response_time: rt,
                 job_response_time: jrt,
                 read_to_publish: w,
+                events,
             }
         })
         .collect();
@@ -376,6 +390,55 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     )
 }
 
+/// A task's (budget, job, read-to-publish) response times.
+type Responses = (Option<Nanos>, Option<Nanos>, Option<Nanos>);
+
+/// The figures of a spec with threads or data-triggered tasks
+/// ([`crate::events`]), with this module's fixed-priority analysis for
+/// its thread-less periodic tasks: per task its response times (W = R:
+/// under fixed priority nothing above is pending when a job starts, and a
+/// thread's job runs to completion), and its event facts.
+fn event_responses(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
+    let fp = Levels { spec, prio, top };
+    crate::events::analyze(spec, &fp)
+        .into_iter()
+        .map(|r| ((r.budget, r.job, r.job), Some(r.timing)))
+        .unzip()
+}
+
+/// The fixed-priority analysis as the event analysis asks for it.
+struct Levels<'a> {
+    spec: &'a Spec,
+    prio: &'a [Option<usize>],
+    top: &'a [Option<usize>],
+}
+
+impl crate::events::FixedPriority for Levels<'_> {
+    fn above(&self, i: usize) -> Vec<usize> {
+        interferers(self.spec, self.prio, self.top, i)
+    }
+
+    fn interference(&self, j: usize) -> Nanos {
+        interference(&self.spec.tasks[j])
+    }
+
+    fn blocking(&self, i: usize) -> Nanos {
+        crate::blocking::blocking(self.spec, self.prio, i)
+    }
+
+    fn periodic_response(
+        &self,
+        i: usize,
+        hp: &[(Nanos, Nanos, Nanos)],
+    ) -> (Option<Nanos>, Option<Nanos>) {
+        rta_response(self.spec, self.prio, i, hp)
+    }
+}
+
 /// A task's period, or [`MAX_TIME`] when none is fixed (callers are to rule
 /// that out first, see [`analyze`]), so that such a task counts as almost
 /// never released rather than as a panic.
@@ -400,25 +463,7 @@ fn response_times(
         return (None, None, None);
     }
     let (rt, jrt) = match spec.policy().response {
-        ResponseAnalysis::Rta => {
-            let hp = hp_load(spec, prio, top, i);
-            let own = |work: Nanos| OwnJobs {
-                work,
-                switch: crate::overheads::own(spec, i),
-                blocking: crate::blocking::blocking(spec, prio, i),
-                jitter: t.jitter,
-                period: period_or_max(t),
-            };
-            // A PIBS server with a backlog runs by its own replenishment
-            // rules at instants the busy period does not model (the
-            // simulator found its later jobs above the figure): none for
-            // one whose busy period holds more than one own job.
-            let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
-            let r = |work: Nanos| {
-                level_response(own(work), &hp).filter(|&r| !pibs || r <= period_or_max(t))
-            };
-            (r(t.budget()), r(t.demand()))
-        }
+        ResponseAnalysis::Rta => rta_response(spec, prio, i, &hp_load(spec, prio, top, i)),
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
         ResponseAnalysis::EdfRta => edf_response_times(spec, i),
     };
@@ -427,6 +472,32 @@ fn response_times(
         ResponseAnalysis::Rta | ResponseAnalysis::ServerPeriod => jrt,
     };
     (rt, jrt, w)
+}
+
+/// Task `i`'s (budget, job) response times under fixed priority against
+/// `hp` as (I_j, T_j, J_j): [`level_response`] over its level-i busy
+/// period.
+fn rta_response(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    i: usize,
+    hp: &[(Nanos, Nanos, Nanos)],
+) -> (Option<Nanos>, Option<Nanos>) {
+    let t = &spec.tasks[i];
+    let own = |work: Nanos| OwnJobs {
+        work,
+        switch: crate::overheads::own(spec, i),
+        blocking: crate::blocking::blocking(spec, prio, i),
+        jitter: t.jitter,
+        period: period_or_max(t),
+    };
+    // A PIBS server with a backlog runs by its own replenishment
+    // rules at instants the busy period does not model (the
+    // simulator found its later jobs above the figure): none for
+    // one whose busy period holds more than one own job.
+    let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
+    let r = |work: Nanos| level_response(own(work), hp).filter(|&r| !pibs || r <= period_or_max(t));
+    (r(t.budget()), r(t.demand()))
 }
 
 /// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),

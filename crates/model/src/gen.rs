@@ -13,9 +13,11 @@ use crate::{
 };
 
 mod contention;
+mod events;
 mod timing;
 mod waters;
 pub use contention::{add_contention, random_sections, Contention};
+pub use events::{event_triggered_system, EventGenConfig};
 pub use timing::{add_timing, Timing};
 pub use waters::{
     sample_acet_us, waters_exec, waters_share, waters_system, WatersConfig, WatersExec, WATERS_EXEC,

@@ -1,0 +1,173 @@
+//! Event models of activations and publications (compositional
+//! performance analysis, Henia et al. 2005; pyCPA's `model.py` and
+//! `junctions.py`): the most events any window of length Δ can hold,
+//! η⁺(Δ), as a sum of periodic streams with jitter. A periodic task is
+//! one stream; an OR junction (`join = "any"`) sums its inputs' streams;
+//! an output adds the response-time jitter `R − R_min` to every stream.
+//! docs/analysis.md, "Threads and data-triggered tasks".
+
+use rtpipe_model::{Nanos, MAX_TIME};
+
+/// One periodic stream with release jitter: at most ⌈(Δ + J) / T⌉ events
+/// in any window of length Δ > 0 (none in an empty one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stream {
+    /// T: the period.
+    pub period: Nanos,
+    /// J: the jitter, how far an event may be from its nominal instant.
+    pub jitter: Nanos,
+}
+
+/// The stream that holds one event in every window however long: the
+/// `1 +` of a join of all triggers.
+pub const ONCE: Stream = Stream {
+    period: MAX_TIME,
+    jitter: 0,
+};
+
+impl Stream {
+    /// η⁺(Δ) of this stream; saturates instead of overflowing.
+    pub fn eta(self, delta: Nanos) -> Nanos {
+        if delta <= 0 {
+            return 0;
+        }
+        let top = delta.saturating_add(self.jitter);
+        top / self.period + Nanos::from(top % self.period != 0)
+    }
+}
+
+/// η⁺ of a sum of streams: Σ_k ⌈(Δ + J_k) / T_k⌉.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Arrivals {
+    /// The streams whose events add up.
+    pub streams: Vec<Stream>,
+}
+
+impl Arrivals {
+    /// A periodic source: period `t`, release jitter `j`.
+    pub fn periodic(t: Nanos, j: Nanos) -> Arrivals {
+        assert!(
+            t > 0 && j >= 0,
+            "a stream needs T > 0 and J ≥ 0: ({t}, {j})"
+        );
+        Arrivals {
+            streams: vec![Stream {
+                period: t,
+                jitter: j,
+            }],
+        }
+    }
+
+    /// At most how many events a window of length `delta` holds.
+    pub fn eta(&self, delta: Nanos) -> Nanos {
+        self.streams
+            .iter()
+            .fold(0, |n: Nanos, s| n.saturating_add(s.eta(delta)))
+    }
+
+    /// The long-run rate, events per nanosecond.
+    pub fn rate(&self) -> f64 {
+        self.streams.iter().map(|s| 1.0 / s.period as f64).sum()
+    }
+
+    /// The same events, each up to `extra` later than it could be (the
+    /// output model of a task whose response varies by `extra`:
+    /// η⁺_out(Δ) = η⁺_in(Δ + extra)). `None` when a jitter passes
+    /// [`MAX_TIME`].
+    pub fn delayed(&self, extra: Nanos) -> Option<Arrivals> {
+        assert!(extra >= 0, "a delay is a duration: {extra}");
+        let streams = self.streams.iter().map(|s| {
+            let jitter = s.jitter.checked_add(extra).filter(|&j| j <= MAX_TIME)?;
+            Some(Stream { jitter, ..*s })
+        });
+        Some(Arrivals {
+            streams: streams.collect::<Option<_>>()?,
+        })
+    }
+
+    /// An OR junction: every input's event is an event (the sum).
+    pub fn any(inputs: &[&Arrivals]) -> Arrivals {
+        Arrivals {
+            streams: inputs.iter().flat_map(|a| a.streams.clone()).collect(),
+        }
+    }
+
+    /// An AND junction (`join = "all"`): an activation needs an event of
+    /// every input since the last, so `n` activations in a window need
+    /// `n − 1` events of each input inside it: η⁺ ≤ 1 + η⁺_k for every
+    /// input k; the slowest input (least rate) is taken. One input is
+    /// the input itself.
+    pub fn all(inputs: &[&Arrivals]) -> Arrivals {
+        assert!(!inputs.is_empty(), "a join has inputs");
+        if let [one] = inputs {
+            return (*one).clone();
+        }
+        let slowest = inputs
+            .iter()
+            .min_by(|a, b| a.rate().total_cmp(&b.rate()))
+            .map_or_else(Vec::new, |a| a.streams.clone());
+        let mut streams = vec![ONCE];
+        streams.extend(slowest);
+        Arrivals { streams }
+    }
+
+    /// Every window length `a` in `(0, limit)` at which η⁺(a + 1) steps up:
+    /// `k·T − J` for a stream (T, J) and k ≥ 1, ascending and distinct.
+    /// `None` when there are more than `max`.
+    pub fn steps_below(&self, limit: Nanos, max: usize) -> Option<Vec<Nanos>> {
+        let mut out = Vec::new();
+        for s in &self.streams {
+            let mut k: Nanos = (s.jitter / s.period) + 1;
+            loop {
+                let a = k.saturating_mul(s.period) - s.jitter;
+                if a >= limit {
+                    break;
+                }
+                if a > 0 {
+                    out.push(a);
+                    if out.len() > max {
+                        return None;
+                    }
+                }
+                k += 1;
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        Some(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eta_of_a_jittered_stream() {
+        // T = 10, J = 3: windows of 1..7 hold one event, 8..17 two.
+        let a = Arrivals::periodic(10, 3);
+        assert_eq!(a.eta(0), 0);
+        assert_eq!(a.eta(1), 1);
+        assert_eq!(a.eta(7), 1);
+        assert_eq!(a.eta(8), 2);
+        assert_eq!(a.eta(17), 2);
+        assert_eq!(a.eta(18), 3);
+        // η⁺(a + 1) steps at a = k·T − J: 7, 17, 27 below 30.
+        assert_eq!(a.steps_below(30, 10), Some(vec![7, 17, 27]));
+        assert_eq!(a.steps_below(30, 2), None);
+    }
+
+    #[test]
+    fn junctions() {
+        let (p, q) = (Arrivals::periodic(10, 0), Arrivals::periodic(25, 5));
+        let any = Arrivals::any(&[&p, &q]);
+        assert_eq!(any.eta(10), 1 + 1);
+        assert_eq!(any.eta(21), 3 + 2);
+        // All: one more than the slower input's events.
+        let all = Arrivals::all(&[&p, &q]);
+        assert_eq!(all.eta(21), 1 + 2);
+        assert_eq!(Arrivals::all(&[&p]), p);
+        // Output jitter.
+        assert_eq!(p.delayed(4), Some(Arrivals::periodic(10, 4)));
+    }
+}

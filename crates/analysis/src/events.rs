@@ -1,0 +1,330 @@
+//! Response times of a spec with work-queue threads and data-triggered
+//! tasks: event models per task ([`crate::arrivals`]), the FIFO analysis
+//! inside a thread ([`crate::thread_rta`]) and the fixed-priority one of
+//! the thread-less tasks (`sched`'s, handed in as [`FixedPriority`]),
+//! iterated holistically (Tindell and Clark 1994): a data-triggered task's
+//! activations are its triggers' publications, whose jitter grows with
+//! their response times, which grow with the jitter of what runs above
+//! them. From zero jitter the iteration only grows, and stops when no
+//! figure changes or one becomes unbounded. docs/analysis.md, "Threads and
+//! data-triggered tasks".
+
+use crate::arrivals::Arrivals;
+use crate::thread_rta::{fifo_response, Member};
+use rtpipe_model::{Join, Nanos, Server, Spec};
+
+/// Most rounds of the holistic iteration before every figure that
+/// depends on it is called unbounded.
+pub const MAX_ROUNDS: usize = 1_000;
+
+/// What the fixed-priority analysis provides (`sched` implements it, so
+/// that thread-less tasks keep their own analysis, servers included).
+pub trait FixedPriority {
+    /// The tasks that can run above task `i` on its CPU (its thread's
+    /// own tasks among them, which the caller leaves out).
+    fn above(&self, i: usize) -> Vec<usize>;
+    /// What one job of task `j` takes from the tasks below it.
+    fn interference(&self, j: usize) -> Nanos;
+    /// B of task `i`: once per busy period.
+    fn blocking(&self, i: usize) -> Nanos;
+    /// (budget, job) response times of a thread-less periodic task `i`,
+    /// from its nominal release, under `hp` as (I, T, J).
+    fn periodic_response(
+        &self,
+        i: usize,
+        hp: &[(Nanos, Nanos, Nanos)],
+    ) -> (Option<Nanos>, Option<Nanos>);
+}
+
+/// What the event analysis knows of a task, beside its response times.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventTiming {
+    /// Its jobs merge: it is in a thread or data-triggered, so a release
+    /// while one of its jobs is queued and not started joins that job.
+    pub merging: bool,
+    /// Its activations (`None`: unbounded, a trigger has no response).
+    pub arrivals: Option<Arrivals>,
+    /// R: from a job's first release (the nominal one of a periodic task)
+    /// to its completion, for every job, with no need for R ≤ T.
+    pub response: Option<Nanos>,
+    /// A: the longest from any instant to the task's next activation (or
+    /// nominal release): T, or from its triggers' publications.
+    pub gap: Option<Nanos>,
+    /// P = A + R: the longest from any instant to its next publication.
+    pub publish_gap: Option<Nanos>,
+    /// Per trigger (a data-triggered task's), the longest from its
+    /// publication to the release it brings: 0 under `join = "any"`, the
+    /// other triggers' largest `P` under `join = "all"`.
+    pub waits: Vec<(usize, Option<Nanos>)>,
+}
+
+/// One task's figures: (budget, job) response times and its event facts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventResult {
+    /// The budget response time (C delivered), from the nominal release.
+    pub budget: Option<Nanos>,
+    /// The job response time (demand x), from the nominal release.
+    pub job: Option<Nanos>,
+    /// The rest.
+    pub timing: EventTiming,
+}
+
+/// Every task's figures, by the holistic iteration.
+pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
+    let n = spec.tasks.len();
+    // Each task's output jitter R − R_min, from zero.
+    let mut delay: Vec<Option<Nanos>> = vec![Some(0); n];
+    for _ in 0..MAX_ROUNDS {
+        let arrivals = activations(spec, &delay);
+        let responses: Vec<Response> = (0..n).map(|i| respond(spec, fp, &arrivals, i)).collect();
+        let next: Vec<Option<Nanos>> = (0..n)
+            .map(|i| {
+                let grown = responses[i].actual? - spec.tasks[i].demand_min();
+                // Monotone: a figure never shrinks from one round to the next.
+                Some(grown.max(delay[i]?))
+            })
+            .collect();
+        if next == delay {
+            return finish(spec, arrivals, responses);
+        }
+        delay = next;
+    }
+    // No fixed point found: nothing that depends on the jitter is bounded.
+    let none = vec![None; n];
+    let arrivals = activations(spec, &none);
+    let responses = (0..n).map(|i| respond(spec, fp, &arrivals, i)).collect();
+    finish(spec, arrivals, responses)
+}
+
+/// One round's response of a task.
+#[derive(Debug, Clone, Copy)]
+struct Response {
+    budget: Option<Nanos>,
+    job: Option<Nanos>,
+    /// From the actual release (the first one of a merged job), for the
+    /// output jitter; at most `job`.
+    actual: Option<Nanos>,
+}
+
+/// Each task's activations given each task's output jitter (`None`:
+/// unbounded): periodic tasks their period and release jitter, a
+/// data-triggered one its triggers' publications joined.
+fn activations(spec: &Spec, delay: &[Option<Nanos>]) -> Vec<Option<Arrivals>> {
+    let mut out: Vec<Option<Option<Arrivals>>> = vec![None; spec.tasks.len()];
+    for i in 0..spec.tasks.len() {
+        activation(spec, delay, &mut out, i);
+    }
+    out.into_iter().map(Option::flatten).collect()
+}
+
+/// Task `i`'s activations into `memo`, its triggers' first (validation
+/// makes the trigger graph acyclic).
+fn activation(
+    spec: &Spec,
+    delay: &[Option<Nanos>],
+    memo: &mut [Option<Option<Arrivals>>],
+    i: usize,
+) -> Option<Arrivals> {
+    if let Some(known) = &memo[i] {
+        return known.clone();
+    }
+    let t = &spec.tasks[i];
+    let model = match t.triggers() {
+        None => t
+            .fixed_period()
+            .map(|period| Arrivals::periodic(period, t.jitter)),
+        Some((triggers, join)) => {
+            let outputs: Option<Vec<Arrivals>> = triggers
+                .iter()
+                .map(|&p| activation(spec, delay, memo, p)?.delayed(delay[p]?))
+                .collect();
+            outputs.map(|o| {
+                let refs: Vec<&Arrivals> = o.iter().collect();
+                match join {
+                    Join::Any => Arrivals::any(&refs),
+                    Join::All => Arrivals::all(&refs),
+                }
+            })
+        }
+    };
+    memo[i] = Some(model.clone());
+    model
+}
+
+/// Task `i`'s jobs merge: it runs in a thread or is data-triggered.
+pub fn merging(spec: &Spec, i: usize) -> bool {
+    let t = &spec.tasks[i];
+    t.thread.is_some() || t.is_triggered()
+}
+
+/// Task `i`'s response times this round.
+fn respond(
+    spec: &Spec,
+    fp: &impl FixedPriority,
+    arrivals: &[Option<Arrivals>],
+    i: usize,
+) -> Response {
+    let none = Response {
+        budget: None,
+        job: None,
+        actual: None,
+    };
+    let t = &spec.tasks[i];
+    if t.server == Server::Background {
+        return none;
+    }
+    let above: Vec<usize> = fp
+        .above(i)
+        .into_iter()
+        .filter(|&j| t.thread.is_none() || spec.tasks[j].thread != t.thread)
+        .collect();
+    let Some(models) = above
+        .iter()
+        .map(|&j| arrivals[j].as_ref().map(|a| (fp.interference(j), a)))
+        .collect::<Option<Vec<_>>>()
+    else {
+        return none;
+    };
+    if !merging(spec, i) {
+        let hp: Vec<(Nanos, Nanos, Nanos)> = models
+            .iter()
+            .flat_map(|&(c, a)| a.streams.iter().map(move |s| (c, s.period, s.jitter)))
+            .collect();
+        let (budget, job) = fp.periodic_response(i, &hp);
+        return Response {
+            budget,
+            job,
+            actual: job,
+        };
+    }
+    let Some(actual) = thread_response(spec, fp, arrivals, i, &models) else {
+        return none;
+    };
+    // A periodic task's figure counts from its nominal release.
+    let job = actual.checked_add(t.jitter);
+    Response {
+        budget: job,
+        job,
+        actual: Some(actual),
+    }
+}
+
+/// The FIFO response of task `i`'s jobs in its thread (a thread of its
+/// own for a thread-less data-triggered task), from their first release.
+fn thread_response(
+    spec: &Spec,
+    fp: &impl FixedPriority,
+    arrivals: &[Option<Arrivals>],
+    i: usize,
+    above: &[(Nanos, &Arrivals)],
+) -> Option<Nanos> {
+    let t = &spec.tasks[i];
+    let members: Vec<usize> = match t.thread {
+        Some(th) => (0..spec.tasks.len())
+            .filter(|&j| spec.tasks[j].thread == Some(th))
+            .collect(),
+        None => vec![i],
+    };
+    let members: Vec<Member> = members
+        .iter()
+        .map(|&j| {
+            let work = if j == i {
+                t.demand()
+            } else {
+                fp.interference(j)
+            };
+            Some(Member {
+                work,
+                arrivals: arrivals[j].as_ref()?,
+            })
+        })
+        .collect::<Option<_>>()?;
+    fifo_response(&members, above, fp.blocking(i))
+}
+
+/// The iteration's last round as each task's figures, with the gaps.
+fn finish(
+    spec: &Spec,
+    arrivals: Vec<Option<Arrivals>>,
+    responses: Vec<Response>,
+) -> Vec<EventResult> {
+    let n = spec.tasks.len();
+    let mut gap: Vec<Option<Option<Nanos>>> = vec![None; n];
+    for i in 0..n {
+        activation_gap(spec, &responses, &mut gap, i);
+    }
+    let gap: Vec<Option<Nanos>> = gap.into_iter().map(Option::flatten).collect();
+    let publish_gap = |i: usize| gap[i]?.checked_add(responses[i].job?);
+    (0..n)
+        .zip(arrivals)
+        .map(|(i, arrivals)| EventResult {
+            budget: responses[i].budget,
+            job: responses[i].job,
+            timing: EventTiming {
+                merging: merging(spec, i),
+                arrivals,
+                response: responses[i].job,
+                gap: gap[i],
+                publish_gap: publish_gap(i),
+                waits: waits(spec, i, &publish_gap),
+            },
+        })
+        .collect()
+}
+
+/// A of task `i` into `memo`: T for a periodic task; for a
+/// data-triggered one, after any instant each trigger publishes within
+/// its `P = A + R`, so `join = "any"` is released within the least of
+/// them, `join = "all"` within the largest.
+fn activation_gap(
+    spec: &Spec,
+    responses: &[Response],
+    memo: &mut [Option<Option<Nanos>>],
+    i: usize,
+) -> Option<Nanos> {
+    if let Some(known) = memo[i] {
+        return known;
+    }
+    let t = &spec.tasks[i];
+    let a = match t.triggers() {
+        None => t.fixed_period(),
+        Some((triggers, join)) => {
+            let p: Vec<Option<Nanos>> = triggers
+                .iter()
+                .map(|&q| activation_gap(spec, responses, memo, q)?.checked_add(responses[q].job?))
+                .collect();
+            match join {
+                Join::Any => p.into_iter().flatten().min(),
+                Join::All => p.into_iter().collect::<Option<Vec<_>>>()?.into_iter().max(),
+            }
+        }
+    };
+    memo[i] = Some(a);
+    a
+}
+
+/// Per trigger of task `i`, the longest from its publication to the
+/// release of `i` it brings (see [`EventTiming::waits`]).
+fn waits(
+    spec: &Spec,
+    i: usize,
+    publish_gap: &impl Fn(usize) -> Option<Nanos>,
+) -> Vec<(usize, Option<Nanos>)> {
+    let Some((triggers, join)) = spec.tasks[i].triggers() else {
+        return Vec::new();
+    };
+    triggers
+        .iter()
+        .map(|&p| {
+            let wait = match join {
+                Join::Any => Some(0),
+                Join::All => triggers
+                    .iter()
+                    .filter(|&&q| q != p)
+                    .map(|&q| publish_gap(q))
+                    .try_fold(0, |m: Nanos, g| Some(m.max(g?))),
+            };
+            (p, wait)
+        })
+        .collect()
+}

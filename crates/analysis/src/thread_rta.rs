@@ -1,0 +1,158 @@
+//! Response times inside a work-queue thread: its jobs run one at a time to
+//! completion in release order (FIFO), the thread is preempted by the
+//! threads and thread-less tasks of higher priority on its CPU (pyCPA's
+//! `FIFOScheduler` under a fixed-priority one; Davis et al. 2007 for the
+//! non-preemptive runs). docs/analysis.md, "Threads and data-triggered
+//! tasks".
+
+use crate::arrivals::Arrivals;
+use rtpipe_model::{Nanos, MAX_TIME};
+
+/// Most candidate release instants one level busy period is examined at
+/// before the response is called unbounded.
+pub const MAX_CANDIDATES: usize = 200_000;
+
+/// One task of the analysed thread: the work of each of its jobs and the
+/// most jobs any window can release.
+#[derive(Debug, Clone, Copy)]
+pub struct Member<'a> {
+    /// C: the work of one job.
+    pub work: Nanos,
+    /// Its activations.
+    pub arrivals: &'a Arrivals,
+}
+
+/// What runs above the thread: per higher-priority task, its work per
+/// job and its activations (each stream a term `⌈(w + J)/T⌉ · C`).
+pub type Above<'a> = [(Nanos, &'a Arrivals)];
+
+/// The worst time from a job's release to its completion for any job of
+/// a thread whose tasks are `members` (the analysed one among them), with
+/// the tasks `above` preempting it and `blocking` once per busy period.
+///
+/// A job released `a` after the start of a level busy period completes
+/// by the least `w` with
+/// `w = B + Σ_{m} η⁺_m(a + 1)·C_m + Σ_{h ∈ above} η⁺_h(w)·C_h`:
+/// everything the thread released up to and at `a` runs before it or is
+/// it (FIFO, ties counted ahead), and the thread runs whenever nothing
+/// above it is pending. The count of the first sum changes only at the
+/// instants where some member's η⁺(a + 1) steps, and between two of them
+/// `f(a) − a` falls, so the candidates are 0 and those steps in the busy
+/// period. `None` when the level's load reaches 1, on overflow, or past
+/// [`MAX_CANDIDATES`] candidates. A member whose jobs merge (a release
+/// while one is queued and not started joins it) releases fewer jobs
+/// than its activations: the figure bounds each job from its first
+/// release.
+pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
+    let load: f64 = members
+        .iter()
+        .map(|m| m.work as f64 * m.arrivals.rate())
+        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
+        .sum();
+    if load >= 1.0 {
+        return None;
+    }
+    let thread = |delta: Nanos| -> Option<Nanos> {
+        members.iter().try_fold(blocking, |sum, m| {
+            sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
+        })
+    };
+    let length = fixed_point(1, |w| thread(w)?.checked_add(interference(above, w)?))?;
+    let mut candidates = vec![0];
+    for m in members {
+        candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
+        if candidates.len() > MAX_CANDIDATES {
+            return None;
+        }
+    }
+    candidates.sort_unstable();
+    candidates.dedup();
+    let (mut worst, mut finish) = (0, 0);
+    for a in candidates {
+        let released = thread(a.checked_add(1)?)?;
+        // f grows with a: the last fixed point is a valid start.
+        finish = fixed_point(finish.max(released), |w| {
+            released.checked_add(interference(above, w)?)
+        })?;
+        worst = worst.max(finish - a);
+    }
+    Some(worst)
+}
+
+/// Σ_h η⁺_h(w)·C_h.
+fn interference(above: &Above, w: Nanos) -> Option<Nanos> {
+    above.iter().try_fold(0 as Nanos, |sum, &(c, a)| {
+        sum.checked_add(a.eta(w).checked_mul(c)?)
+    })
+}
+
+/// The least fixed point of a nondecreasing `f` at or above `start`
+/// (which must not exceed it), or `None` past [`MAX_TIME`].
+fn fixed_point(start: Nanos, f: impl Fn(Nanos) -> Option<Nanos>) -> Option<Nanos> {
+    let mut w = start;
+    loop {
+        let next = f(w)?;
+        if next > MAX_TIME {
+            return None;
+        }
+        if next <= w {
+            return Some(w);
+        }
+        w = next;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_task_alone_is_its_demand() {
+        let a = Arrivals::periodic(10, 0);
+        let m = [Member {
+            work: 3,
+            arrivals: &a,
+        }];
+        assert_eq!(fifo_response(&m, &[], 0), Some(3));
+    }
+
+    #[test]
+    fn fifo_behind_a_sibling_and_under_a_higher_thread() {
+        // Thread {x (T 10, C 2), y (T 10, C 3)}, above it h (T 5, C 1).
+        // a = 0: w = 2 + 3 + ⌈w/5⌉ = 7 (w = 7: 5 + 2). Later candidates
+        // (10, 20, … none below the busy period's 7) do not exist.
+        let (x, y, h) = (
+            Arrivals::periodic(10, 0),
+            Arrivals::periodic(10, 0),
+            Arrivals::periodic(5, 0),
+        );
+        let m = [
+            Member {
+                work: 2,
+                arrivals: &x,
+            },
+            Member {
+                work: 3,
+                arrivals: &y,
+            },
+        ];
+        assert_eq!(fifo_response(&m, &[(1, &h)], 0), Some(7));
+        // Overloaded: 0.5 + 0.2·… ≥ 1.
+        assert_eq!(fifo_response(&m, &[(3, &h)], 0), None);
+    }
+
+    #[test]
+    fn jitter_brings_a_second_job_into_the_window() {
+        // One task (T 10, J 6, C 4): η⁺(a + 1) steps at a = 4, so the job
+        // released at 4 finds the one released at 0: f(4) = 8, R = 4; but
+        // with h (T 100, C 5) above: f(0) = 9 (4 + 5, and the second job's
+        // release at 4 makes the busy period 13): f(4) = 13, R = 9.
+        let (x, h) = (Arrivals::periodic(10, 6), Arrivals::periodic(100, 0));
+        let m = [Member {
+            work: 4,
+            arrivals: &x,
+        }];
+        assert_eq!(fifo_response(&m, &[], 0), Some(4));
+        assert_eq!(fifo_response(&m, &[(5, &h)], 0), Some(9));
+    }
+}
