@@ -176,7 +176,8 @@ fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Resu
         return Err(Diagnostic::error(
             "--export-rt-app cannot express work-queue threads or data-triggered tasks: an rt-app thread is one task released by its own timer",
             "drop --export-rt-app (`rtpipe run` runs the threads and triggers itself)",
-        ));
+        )
+        .within(a.spec.display()));
     }
     let r = rtpipe_runtime::rt_app(spec, cfg);
     let text = serde_json::to_string_pretty(&r.json)
