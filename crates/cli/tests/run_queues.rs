@@ -91,3 +91,26 @@ fn edf_policies_and_the_rt_app_export_are_refused_at_their_flag() {
     );
     assert!(!out.exists(), "a refused export wrote {}", out.display());
 }
+
+/// `--measure-overheads --write-spec` would write a spec with `[system]
+/// overheads`, which an event-triggered spec may not have: refused before
+/// measuring, nothing written.
+#[test]
+fn measured_overheads_are_not_written_into_an_event_triggered_spec() {
+    let out = scratch("run-queues-overheads").join("out.toml");
+    let o = rtpipe(&[
+        "run",
+        &example("work-queues.toml"),
+        "--measure-overheads",
+        "--write-spec",
+        &out.to_string_lossy(),
+    ]);
+    assert_exit(&o, 2);
+    let e = stderr(&o);
+    assert!(
+        e.contains("--write-spec: a spec with work-queue threads"),
+        "{e}"
+    );
+    assert!(!e.contains("measuring"), "measured before refusing: {e}");
+    assert!(!out.exists(), "wrote {}", out.display());
+}
