@@ -30,6 +30,11 @@ pub(crate) const MAX_JOIN_ALL: usize = 64;
 /// still under way, once the run's releases are over.
 const SETTLE: Nanos = 1_000_000;
 
+/// The longest a thread waits without looking at Ctrl-C: a data-triggered
+/// task whose triggers have stopped would otherwise wait for a wake-up
+/// until the run's end (a signal interrupts one thread's wait, not all).
+const STOP_POLL: Nanos = 50_000_000;
+
 /// What the threads of an event-triggered run share: every task's queue
 /// slot and merge count, the join-all masks, and each thread's bell.
 pub(crate) struct Queues {
@@ -313,7 +318,8 @@ pub(super) fn serve<V: Copy>(
             None if now >= duration => now + SETTLE,
             None => duration,
         };
-        sys::wait_until(&q.bells[worker], bell, epoch + until.min(stop));
+        let until = until.min(stop).min(now + STOP_POLL);
+        sys::wait_until(&q.bells[worker], bell, epoch + until);
     }
 }
 
