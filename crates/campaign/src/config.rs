@@ -61,6 +61,15 @@ impl Config {
             g.cpus,
             g.synchronous,
         );
+        // Appended for the newer generator only, so that a WATERS
+        // campaign keeps the fingerprint its folders were written with.
+        let canonical = match &g.events {
+            None => canonical,
+            Some(e) => format!(
+                "{canonical}kind event-triggered\nthreads {}\nlinks {:?}\ndata_fraction {:?}\n",
+                e.threads, e.links, e.data_fraction
+            ),
+        };
         let hash = canonical.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
             (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
         });
@@ -68,18 +77,45 @@ impl Config {
     }
 }
 
-/// WATERS 2015 task sets, as E2EEvaluation generates them; a range is
-/// drawn uniformly per system.
+/// How each system is generated: WATERS 2015 task sets, as E2EEvaluation
+/// generates them (`kind = "waters"`), or event-triggered systems (`kind =
+/// "event-triggered"`: work-queue threads and data-triggered tasks,
+/// `rtpipe_model::gen::event_triggered_system`); a range is drawn
+/// uniformly per system.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Generate {
-    /// Tasks per system (UUniFast); `None`: the paper's runnables.
+    /// Tasks per system (UUniFast); `None`: the paper's runnables (WATERS
+    /// only: an event-triggered system's tasks follow from its chains).
     pub tasks: Option<(u32, u32)>,
     /// Utilisation per CPU.
     pub utilization: (f64, f64),
+    /// Chains per system: exactly (WATERS), at most (event-triggered,
+    /// drawn from 1).
     pub chains: u32,
+    /// CPUs per system: exactly (WATERS), at most (event-triggered).
     pub cpus: u32,
     /// Every task released at 0 (known-offset bounds are added).
     pub synchronous: bool,
+    /// The event-triggered generator's own keys; `None` for WATERS.
+    pub events: Option<EventKeys>,
+}
+
+/// `kind = "event-triggered"`'s keys.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventKeys {
+    /// Threads per system, at most (drawn from 1).
+    pub threads: u32,
+    /// Tasks per chain, drawn in this range (at least 2).
+    pub links: (u32, u32),
+    /// The probability that a link after a chain's head is data-triggered.
+    pub data_fraction: f64,
+}
+
+impl Generate {
+    /// Does every system get exactly `chains` chains (so fewer is short)?
+    pub fn exact_chains(&self) -> bool {
+        self.events.is_none()
+    }
 }
 
 /// One simulation per system, held against its bounds.
@@ -122,6 +158,9 @@ struct RawGenerate {
     cpus: u32,
     #[serde(default = "arbitrary")]
     release: String,
+    threads: Option<u32>,
+    links: Option<Span<u32>>,
+    data_fraction: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -222,13 +261,20 @@ fn validate(raw: Raw) -> Result<Config, Problem> {
 }
 
 fn generate(g: &RawGenerate) -> Result<Generate, Problem> {
-    if g.kind != "waters" {
-        return Err((
-            "generate.kind",
-            format!("no generator `{}`", g.kind),
-            "use kind = \"waters\" (WATERS 2015, as E2EEvaluation)",
-        ));
-    }
+    let events = match g.kind.as_str() {
+        "waters" => {
+            waters_has_no_event_keys(g)?;
+            None
+        }
+        "event-triggered" => Some(event_keys(g)?),
+        other => {
+            return Err((
+                "generate.kind",
+                format!("no generator `{other}`"),
+                "use kind = \"waters\" (WATERS 2015, as E2EEvaluation) or \"event-triggered\" (threads and data-triggered tasks)",
+            ))
+        }
+    };
     let tasks = g.tasks.map(Span::bounds);
     if let Some((lo, hi)) = tasks {
         if lo < 1 || lo > hi || hi > 100_000 {
@@ -276,6 +322,72 @@ fn generate(g: &RawGenerate) -> Result<Generate, Problem> {
         chains: g.chains,
         cpus: g.cpus,
         synchronous,
+        events,
+    })
+}
+
+/// The event-triggered generator's keys belong to it alone.
+fn waters_has_no_event_keys(g: &RawGenerate) -> Result<(), Problem> {
+    let given = [
+        ("generate.threads", g.threads.is_some()),
+        ("generate.links", g.links.is_some()),
+        ("generate.data_fraction", g.data_fraction.is_some()),
+    ];
+    match given.iter().find(|(_, set)| *set) {
+        Some((field, _)) => Err((
+            field,
+            format!("`{}` is a key of kind = \"event-triggered\"", &field[9..]),
+            "remove it, or use kind = \"event-triggered\"",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `threads`, `links` and `data_fraction` of an event-triggered campaign;
+/// `tasks` and a synchronous release are WATERS' alone.
+fn event_keys(g: &RawGenerate) -> Result<EventKeys, Problem> {
+    if g.tasks.is_some() {
+        return Err((
+            "generate.tasks",
+            "an event-triggered system's tasks follow from its chains".into(),
+            "remove `tasks`; give `chains` (at most per system) and `links` (tasks per chain)",
+        ));
+    }
+    if g.release != "arbitrary" {
+        return Err((
+            "generate.release",
+            format!("release `{}` with kind = \"event-triggered\"", g.release),
+            "remove `release`: data-triggered tasks are released by their triggers, periodic ones at unknown offsets",
+        ));
+    }
+    let threads = g.threads.unwrap_or(6);
+    if !(1..=64).contains(&threads) || !(1..=4).contains(&g.cpus) || !(1..=16).contains(&g.chains) {
+        return Err((
+            if !(1..=64).contains(&threads) { "generate.threads" } else if !(1..=4).contains(&g.cpus) { "generate.cpus" } else { "generate.chains" },
+            format!("{threads} threads, {} CPUs, {} chains", g.cpus, g.chains),
+            "give 1..=64 threads, 1..=4 CPUs and 1..=16 chains per system (each at most; drawn from 1)",
+        ));
+    }
+    let (lo, hi) = g.links.map_or((2, 8), Span::bounds);
+    if lo < 2 || lo > hi || hi > 32 {
+        return Err((
+            "generate.links",
+            format!("links [{lo}, {hi}] is not a range within 2..=32"),
+            "give the tasks per chain as a number or [lo, hi], e.g. links = [2, 8]",
+        ));
+    }
+    let data_fraction = g.data_fraction.unwrap_or(0.6);
+    if !(0.0..=1.0).contains(&data_fraction) {
+        return Err((
+            "generate.data_fraction",
+            format!("data_fraction {data_fraction} is not a probability"),
+            "give a number in [0, 1], e.g. data_fraction = 0.6",
+        ));
+    }
+    Ok(EventKeys {
+        threads,
+        links: (lo, hi),
+        data_fraction,
     })
 }
 

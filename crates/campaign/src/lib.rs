@@ -231,7 +231,8 @@ impl Tally {
     fn add(&mut self, cfg: &Config, rows: &[Row]) {
         let got = rows.first().map_or(0, |r| r.chains);
         self.systems += 1;
-        self.short += u64::from(got < cfg.generate.chains);
+        // An event-triggered system draws its chains: none is short.
+        self.short += u64::from(cfg.generate.exact_chains() && got < cfg.generate.chains);
         self.chainless += u64::from(got == 0 && cfg.generate.chains > 0);
         self.rows += rows.len() as u64;
     }

@@ -3,7 +3,7 @@
 
 use crate::config::{Config, Simulate};
 use rtpipe_analysis::{Anchor, Bound, Metric, Report};
-use rtpipe_model::gen::{waters_system, Rng, WatersConfig};
+use rtpipe_model::gen::{event_triggered_system, waters_system, EventGenConfig, Rng, WatersConfig};
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_sim::observe::{observe, ChainObs};
 use rtpipe_sim::{ExecModel, Jitter, Phasing, SimConfig};
@@ -87,7 +87,7 @@ pub fn run_system_until(cfg: &Config, i: u64, stop: &dyn Fn() -> bool) -> Option
             system: i,
             seed,
             tasks: spec.tasks.len() as u32,
-            cpus: cfg.generate.cpus,
+            cpus: cpus_of(cfg, &spec),
             chains: spec.chains.len() as u32,
             utilization_target: target,
             utilization,
@@ -113,6 +113,20 @@ pub fn run_system_until(cfg: &Config, i: u64, stop: &dyn Fn() -> bool) -> Option
 fn generate(cfg: &Config, seed: u64) -> (Spec, f64) {
     let g = &cfg.generate;
     let mut rng = Rng::new(seed);
+    if let Some(e) = &g.events {
+        let target = g.utilization.0 + (g.utilization.1 - g.utilization.0) * rng.unit();
+        let c = EventGenConfig {
+            max_chains: g.chains as usize,
+            min_links: e.links.0 as usize,
+            max_links: e.links.1 as usize,
+            max_threads: e.threads as usize,
+            max_cpus: g.cpus,
+            utilization: target,
+            data_fraction: e.data_fraction,
+            ..EventGenConfig::default()
+        };
+        return (event_triggered_system(rng.next_u64(), &c), target);
+    }
     let tasks = g
         .tasks
         .map(|(lo, hi)| rng.range(u64::from(lo), u64::from(hi)) as usize);
@@ -156,6 +170,15 @@ fn simulate(
         Ok(res) => res.map(|res| observe(report, &res)),
         // A generated system has fixed positive periods: a refusal is a bug.
         Err(e) => panic!("system {i} (seed {seed}) cannot be simulated: {e}"),
+    }
+}
+
+/// A system's CPUs: the campaign's (WATERS), or as many as the system
+/// uses (the event-triggered generator draws them).
+fn cpus_of(cfg: &Config, spec: &Spec) -> u32 {
+    match cfg.generate.events {
+        None => cfg.generate.cpus,
+        Some(_) => spec.tasks.iter().map(|t| t.cpu + 1).max().unwrap_or(0),
     }
 }
 

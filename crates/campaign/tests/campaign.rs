@@ -181,3 +181,58 @@ fn bad_configs_name_their_key() {
     assert!(Part::parse("2/2").is_err() && Part::parse("x").is_err());
     assert_eq!(Part::parse("1/4"), Ok(Part { index: 1, count: 4 }));
 }
+
+/// An event-triggered campaign's keys: parsed, fingerprinted apart from
+/// WATERS', and refused where they do not belong.
+#[test]
+fn event_triggered_configs_parse_and_refuse_foreign_keys() {
+    let events = CONFIG
+        .replace(
+            "kind = \"waters\"\ntasks = [5, 20]",
+            "kind = \"event-triggered\"\nthreads = 4\nlinks = [2, 6]",
+        )
+        .replace("release = \"synchronous\"", "cpus = 2");
+    let cfg = config::parse("e.toml", &events).unwrap_or_else(|e| panic!("{e}"));
+    let keys = cfg.generate.events.as_ref().expect("event keys");
+    assert_eq!(
+        (keys.threads, keys.links, keys.data_fraction),
+        (4, (2, 6), 0.6)
+    );
+    assert!(!cfg.generate.exact_chains());
+    let waters = config::parse("w.toml", CONFIG).expect("a valid config");
+    assert!(waters.generate.exact_chains());
+    assert_ne!(cfg.fingerprint(), waters.fingerprint());
+    let cases = [
+        (
+            CONFIG.replace("chains = 3", "chains = 3\nthreads = 2"),
+            "generate.threads",
+            "threads",
+        ),
+        (
+            events.replace("cpus = 2", "cpus = 2\ntasks = 9"),
+            "generate.tasks",
+            "follow from its chains",
+        ),
+        (
+            events.replace("cpus = 2", "cpus = 2\nrelease = \"synchronous\""),
+            "generate.release",
+            "synchronous",
+        ),
+        (
+            events.replace("links = [2, 6]", "links = [1, 6]"),
+            "generate.links",
+            "links [1, 6]",
+        ),
+        (
+            events.replace("threads = 4", "threads = 4\ndata_fraction = 2.0"),
+            "generate.data_fraction",
+            "not a probability",
+        ),
+    ];
+    for (text, key, says) in cases {
+        let e = config::parse("c.toml", &text).expect_err(key);
+        let d = &e.diagnostics[0];
+        assert!(d.message.contains(says), "{key}: {e}");
+        assert!(d.span.is_some() && d.help.is_some(), "{key}: {e}");
+    }
+}

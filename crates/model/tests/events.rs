@@ -301,3 +301,22 @@ fn generated_event_triggered_systems_round_trip() {
     // Every kind of activation and placement shows up.
     assert!(triggered > 500 && all > 50 && threaded > 500);
 }
+
+#[test]
+fn the_gyro_triggered_cleanflight_parses() {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/cleanflight-triggered.toml");
+    let s = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    let triggered: Vec<&str> = s
+        .tasks
+        .iter()
+        .filter(|t| t.is_triggered())
+        .map(|t| t.name.as_str())
+        .collect();
+    assert_eq!(triggered, ["ahrs", "pid", "pwm"]);
+    // Each runs at the gyro's rate.
+    for name in triggered {
+        let i = s.task_index(name).expect("a task");
+        assert_eq!(s.activation_period(i), Some(1_000_000), "{name}");
+    }
+}
