@@ -1,7 +1,7 @@
 //! Priorities, response times and schedulability tests per CPU.
 
 use crate::edf;
-use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::policy::{EventAnalysis, ResponseAnalysis};
 use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
 
 /// Timing facts of one task that the latency analysis builds on.
@@ -329,7 +329,14 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     cpus.sort_unstable();
     cpus.dedup();
     let (responses, events) = if spec.event_triggered() {
-        event_responses(spec, &prio, &top)
+        // The policy's analysis of threads and data-triggered tasks.
+        match spec.policy().events {
+            Some(EventAnalysis::HolisticFifo) => event_responses(spec, &prio, &top),
+            None => panic!(
+                "validation admits threads and data-triggered tasks only under a policy that analyses them, not under {}",
+                spec.policy().name
+            ),
+        }
     } else {
         let responses = (0..spec.tasks.len())
             .map(|i| response_times(spec, &prio, &top, i))

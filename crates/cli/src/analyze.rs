@@ -11,6 +11,8 @@ use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod events;
+
 /// `rtpipe analyze`'s flags.
 #[derive(clap::Args, Debug)]
 pub struct AnalyzeArgs {
@@ -147,6 +149,9 @@ pub struct TaskView<'a> {
     cpu: u32,
     response_time: Option<f64>,
     job_response_time: Option<f64>,
+    /// Its activations, in a spec with threads or data-triggered tasks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    activation: Option<events::ActivationView<'a>>,
 }
 
 #[derive(Serialize)]
@@ -242,7 +247,8 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
         .tasks
         .iter()
         .zip(&r.timing)
-        .map(|(t, tm)| TaskView {
+        .enumerate()
+        .map(|(i, (t, tm))| TaskView {
             name: &t.name,
             server: t.server.name(),
             exec: spec.in_unit(t.exec),
@@ -262,6 +268,7 @@ pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
             cpu: tm.cpu,
             response_time: time(spec, tm.response_time),
             job_response_time: time(spec, tm.job_response_time),
+            activation: events::activation_view(spec, r, i),
         })
         .collect();
     ReportView {
@@ -419,6 +426,7 @@ pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
     let mut out = system_line(spec);
     out.push('\n');
     out.push_str(&task_table(spec, r));
+    out.push_str(&events::activations_text(spec, r));
     out.push_str(&schedulability_text(spec, r));
     out.push_str(&chain_table(spec, r));
     out.push_str(&known_offsets_text(spec, r));
@@ -460,7 +468,12 @@ fn task_table(spec: &Spec, r: &Report) -> String {
             spec.fmt_time(tm.period),
         ];
         if extra {
-            row.push(spec.fmt_time(tm.deadline));
+            // A data-triggered task has no deadline of its own.
+            row.push(if tm.deadline == rtpipe_model::MAX_TIME {
+                "-".to_string()
+            } else {
+                spec.fmt_time(tm.deadline)
+            });
             row.push(spec.fmt_time(tm.jitter));
         }
         if blocking {

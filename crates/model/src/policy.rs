@@ -228,6 +228,17 @@ pub enum ResponseAnalysis {
     EdfRta,
 }
 
+/// How a spec with work-queue threads and data-triggered tasks is analysed
+/// under a policy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventAnalysis {
+    /// Event models per task, FIFO inside each thread, fixed priorities
+    /// between threads and thread-less tasks, iterated holistically over
+    /// the triggers' jitter (docs/analysis.md, "Threads and data-triggered
+    /// tasks").
+    HolisticFifo,
+}
+
 /// The Linux scheduling class that runs a policy on real threads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinuxClass {
@@ -251,6 +262,9 @@ pub struct SchedPolicy {
     pub io_budget: Budget,
     /// How job response times are bounded.
     pub response: ResponseAnalysis,
+    /// How threads and data-triggered tasks are analysed (`None`: the
+    /// policy has no analysis of them, and validation refuses them).
+    pub events: Option<EventAnalysis>,
     /// The schedulability tests that apply; the first is the default.
     pub tests: &'static [SchedTest],
     /// What to write instead of a test that does not apply.
@@ -270,6 +284,7 @@ const RM: SchedPolicy = SchedPolicy {
     main_budget: Budget::Sporadic,
     io_budget: Budget::Pibs,
     response: ResponseAnalysis::Rta,
+    events: Some(EventAnalysis::HolisticFifo),
     tests: &[SchedTest::Rta, SchedTest::LiuLayland, SchedTest::Hyperbolic],
     tests_help: "with scheduler = \"rm\" use \"liu-layland\", \"hyperbolic\" or \"rta\"",
     linux: LinuxClass::Fifo,
@@ -283,6 +298,7 @@ const EDF: SchedPolicy = SchedPolicy {
     main_budget: Budget::Cbs,
     io_budget: Budget::Cbs,
     response: ResponseAnalysis::EdfRta,
+    events: None,
     tests: &[SchedTest::Edf, SchedTest::Qpa],
     tests_help: "with scheduler = \"edf\" use schedulability = \"edf\" (the utilisation test) or \"qpa\" (the processor-demand test, for deadlines below periods)",
     linux: LinuxClass::Deadline,

@@ -305,7 +305,7 @@ impl Builder {
         } else {
             "threads"
         };
-        if let Some(s) = scheduler.filter(|s| !s.policy().fixed_priority()) {
+        if let Some(s) = scheduler.filter(|s| s.policy().events.is_none()) {
             self.err(
                 format!(
                     "{what} are scheduled by fixed priority, but the scheduler is \"{}\"",

@@ -1,0 +1,172 @@
+//! The analysis of threads and data-triggered tasks on hand-computed
+//! examples (docs/analysis.md, "Threads and data-triggered tasks", works
+//! each figure out).
+
+use rtpipe_analysis::{all_paths, analyze, Anchor, Bound, Metric, Report};
+use rtpipe_model::Nanos;
+use rtpipe_testkit::{example, spec};
+
+const US: Nanos = 1_000;
+
+/// (reaction, freshness) × (read, event) of chain `k` under `bound`.
+fn bounds(r: &Report, k: usize, bound: Bound) -> [Option<Nanos>; 4] {
+    let get = |m: Metric, a: Anchor| {
+        r.chains
+            .iter()
+            .find(|c| c.chain == k && c.metric == m)
+            .and_then(|c| c.bound.get(bound, a))
+    };
+    [
+        get(Metric::Reaction, Anchor::Read),
+        get(Metric::Freshness, Anchor::Read),
+        get(Metric::Reaction, Anchor::Event),
+        get(Metric::Freshness, Anchor::Event),
+    ]
+}
+
+fn us(v: [Nanos; 4]) -> [Option<Nanos>; 4] {
+    v.map(|x| Some(x * US))
+}
+
+#[test]
+fn work_queues_response_times_by_hand() {
+    let s = example("work-queues.toml");
+    let r = analyze(&s);
+    let job: Vec<Option<Nanos>> = r.timing.iter().map(|t| t.job_response_time).collect();
+    // imu alone on spi1: 25 + J 20; the rate thread's four items once
+    // each (107) under one imu job (25); the nav thread's two (550) under
+    // all of those (132).
+    let want = [45, 132, 132, 132, 132, 682, 682].map(|x| Some(x * US));
+    assert_eq!(job, want);
+    let gaps: Vec<(Option<Nanos>, Option<Nanos>)> = r
+        .timing
+        .iter()
+        .map(|t| {
+            t.events
+                .as_ref()
+                .map_or((None, None), |e| (e.gap, e.publish_gap))
+        })
+        .collect();
+    let want = [
+        (1000, 1045),
+        (1045, 1177),
+        (1177, 1309),
+        (1309, 1441),
+        (10_000, 10_132),
+        (4000, 4682),
+        (20_000, 20_682),
+    ]
+    .map(|(a, p)| (Some(a * US), Some(p * US)));
+    assert_eq!(gaps, want);
+    // A data-triggered task's period is its triggers' nominal one.
+    assert_eq!(r.timing[3].period, 1000 * US);
+    assert!(r.schedulability.schedulable);
+}
+
+#[test]
+fn work_queues_chain_bounds_by_hand() {
+    let s = example("work-queues.toml");
+    let r = analyze(&s);
+    // rate loop: reaction 45 + 0 + 132 + 132 (+ R_ca 132) = 441, from the
+    // event 1000 more; freshness (45 − 25 + 1000) + 45 + 132 + (132 +
+    // 132) = 1461, from the event 1000 more.
+    assert_eq!(bounds(&r, 0, Bound::Sound), us([441, 1461, 1441, 2461]));
+    // attitude to actuators: reaction 682 + A_rc 1177 + 132 + 132 =
+    // 2123; freshness (682 − 150 + 4000) + (682 + 1177) + (132 + 132) =
+    // 6655; from the event 4000 more each.
+    assert_eq!(bounds(&r, 1, Bound::Sound), us([2123, 6655, 6123, 10_655]));
+    // The paper's equations at the nominal periods; Davare's and Dürr's
+    // do not apply.
+    assert_eq!(bounds(&r, 0, Bound::Paper), us([3015, 3015, 4015, 4015]));
+    assert_eq!(bounds(&r, 0, Bound::Davare), [None; 4]);
+    assert_eq!(bounds(&r, 1, Bound::Duerr), [None; 4]);
+    // max_data_age 1.5 ms: the next sample reaches the tail about two
+    // imu periods after the event, so the limit cannot hold.
+    assert!(!r.ok_in(rtpipe_analysis::Mode::Sound));
+}
+
+#[test]
+fn work_queues_all_paths_agree_with_the_declared_chain() {
+    let s = example("work-queues.toml");
+    let r = analyze(&s);
+    let paths = all_paths(&s, &r.timing);
+    let imu = paths
+        .pairs
+        .iter()
+        .find(|p| p.source == 0 && p.sink == 3)
+        .map(|p| (p.reaction_sound.value, p.freshness_sound.value));
+    // The worst path leaves the declared chain through attitude_control:
+    // 45 + (132 + 4000) + (682 + 1177) + 132 + 132 = 6300; freshness
+    // 1020 + 45 + (132 + 4000) + (682 + 1177) + (132 + 132) = 7320.
+    assert_eq!(imu, Some((Some(6300 * US), Some(7320 * US))));
+}
+
+/// Two periodic triggers of one fusion task.
+fn fusion(join: &str) -> String {
+    format!(
+        "[system]\nname = \"fusion\"\ntime_unit = \"us\"\npriorities = \"explicit\"\n\
+         [channels.mem]\nbandwidth = 1000\noverhead = 0\n\
+         [tasks.a]\nperiod = 1000\nexec = 10\nexec_min = 10\npriority = 1\nserver = \"none\"\n\
+         output = {{ channel = \"mem\", size = 0 }}\n\
+         [tasks.b]\nperiod = 2000\nexec = 20\nexec_min = 20\npriority = 2\nserver = \"none\"\n\
+         output = {{ channel = \"mem\", size = 0 }}\n\
+         [tasks.f]\nactivation = \"data\"\nreads = [\"a\", \"b\"]\njoin = \"{join}\"\n\
+         exec = 30\nexec_min = 30\npriority = 3\n\
+         [[chain]]\npath = [\"a\", \"f\"]\n[[chain]]\npath = [\"b\", \"f\"]\n"
+    )
+}
+
+#[test]
+fn join_all_waits_for_the_other_trigger() {
+    let r = analyze(&spec("fusion.toml", &fusion("all")));
+    // f: at most 1 + η⁺_b(Δ) activations (b the slower input): 2·30 under
+    // a (10) and b (20) = 90.
+    assert_eq!(r.timing[2].job_response_time, Some(90 * US));
+    let e = r.timing[2]
+        .events
+        .as_ref()
+        .map(|e| (e.gap, e.waits.clone()));
+    // P_a = 1000 + 10, P_b = 2000 + 30: A_f = 2030; after a publishes, f
+    // waits up to P_b, after b up to P_a.
+    let want = (
+        Some(2030 * US),
+        vec![(0, Some(2030 * US)), (1, Some(1010 * US))],
+    );
+    assert_eq!(e, Some(want));
+    // a → f: reaction min(10 + 2030 + 90, freshness 1000 + 10 + 90) =
+    // 1100; from the event 1000 + 10 + 2030 + 90 = 3130, 2100.
+    assert_eq!(bounds(&r, 0, Bound::Sound), us([1100, 1100, 3130, 2100]));
+    // b → f: 30 + 1010 + 90 = 1130; freshness 2000 + 30 + 90 = 2120.
+    assert_eq!(bounds(&r, 1, Bound::Sound), us([1130, 2120, 3130, 4120]));
+}
+
+#[test]
+fn join_any_is_released_at_every_publication() {
+    let r = analyze(&spec("fusion.toml", &fusion("any")));
+    // f: η⁺_a + η⁺_b activations: in a window of 90, one of each (with
+    // b's output jitter 10): 2·30 + 10 + 20 = 90, the same.
+    assert_eq!(r.timing[2].job_response_time, Some(90 * US));
+    let e = r.timing[2]
+        .events
+        .as_ref()
+        .map(|e| (e.gap, e.waits.clone()));
+    // A_f = min(P_a, P_b) = 1010; no wait after either trigger.
+    let want = (Some(1010 * US), vec![(0, Some(0)), (1, Some(0))]);
+    assert_eq!(e, Some(want));
+    // a → f: 10 + 0 + 90 = 100.
+    assert_eq!(bounds(&r, 0, Bound::Sound)[0], Some(100 * US));
+}
+
+#[test]
+fn an_unbounded_trigger_leaves_its_consumers_unbounded() {
+    // b overloaded under a (10/1000 + 995/2000 ... with a at 600):
+    // a (600 of 1000) above b (900 of 2000): 0.6 + 0.45 > 1.
+    let text = fusion("any")
+        .replace("exec = 10\nexec_min = 10", "exec = 600\nexec_min = 600")
+        .replace("exec = 20\nexec_min = 20", "exec = 900\nexec_min = 900");
+    let r = analyze(&spec("fusion.toml", &text));
+    assert_eq!(r.timing[1].job_response_time, None);
+    assert_eq!(r.timing[2].job_response_time, None);
+    assert_eq!(bounds(&r, 1, Bound::Sound), [None; 4]);
+    assert!(!r.ok_in(rtpipe_analysis::Mode::Sound));
+}
