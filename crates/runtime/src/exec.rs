@@ -757,10 +757,14 @@ fn job<V: Copy>(
     for w in &mut th.let_out {
         w.write(Stamped { value, stamp });
     }
+    // The job's CPU time ends before it releases its consumers: the
+    // wake-ups are the executor's work (as the kernel's timer releases
+    // are), and a wake-up of a higher thread on this CPU switches to it
+    // inside the call.
+    let demand = sys::thread_cpu_time() - cpu0;
     if let Some(q) = q.filter(|_| publishing) {
         q.publish(th.task, done);
     }
-    let demand = sys::thread_cpu_time() - cpu0;
     th.recs.push(Rec {
         index: k,
         release: offset,
