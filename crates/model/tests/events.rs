@@ -320,3 +320,14 @@ fn the_gyro_triggered_cleanflight_parses() {
         assert_eq!(s.activation_period(i), Some(1_000_000), "{name}");
     }
 }
+
+#[test]
+fn pibs_inheritance_beside_threads() {
+    let extra = "\n[tasks.io]\nexec = 5\nperiod = 1000\nserver = \"io\"\npriority = 4\nserves = \"main\"\n[tasks.main]\nexec = 5\nperiod = 1000\npriority = 5\n";
+    let (_, msg, help) = error("", "", GOOD_GYRO, &format!("{GOOD_CTRL}{extra}"));
+    assert!(
+        msg.contains("task `io` serves another (PIBS inheritance)"),
+        "{msg}"
+    );
+    assert!(help.contains("remove `serves`"), "{help}");
+}

@@ -339,6 +339,13 @@ impl Builder {
                 );
             }
         }
+        if let Some(sv) = &rt.serves {
+            self.err(
+                format!("task `{}` serves another (PIBS inheritance) in a spec with threads or data-triggered tasks", t.name),
+                span(sv),
+                "the inheritance of an I/O VCPU is not analysed beside threads yet: remove `serves` (the server keeps its own priority)",
+            );
+        }
         if let (Some(cs), true) = (
             &rt.critical_sections,
             t.thread.is_some() || t.is_triggered(),
