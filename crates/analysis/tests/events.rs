@@ -33,10 +33,11 @@ fn work_queues_response_times_by_hand() {
     let s = example("work-queues.toml");
     let r = analyze(&s);
     let job: Vec<Option<Nanos>> = r.timing.iter().map(|t| t.job_response_time).collect();
-    // imu alone on spi1: 25 + J 20; the rate thread's four items once
-    // each (107) under one imu job (25); the nav thread's two (550) under
-    // all of those (132).
-    let want = [45, 132, 132, 132, 132, 682, 682].map(|x| Some(x * US));
+    // The rate thread on top: its four items once each, 107; imu on spi1
+    // under them: 25 + 107 + J 20 = 152; the nav thread's two (550) under
+    // imu and the rate items, control_allocator twice (its activation
+    // jitter 337 puts a second release in a window of 682): 697.
+    let want = [152, 107, 107, 107, 107, 697, 697].map(|x| Some(x * US));
     assert_eq!(job, want);
     let gaps: Vec<(Option<Nanos>, Option<Nanos>)> = r
         .timing
@@ -48,13 +49,13 @@ fn work_queues_response_times_by_hand() {
         })
         .collect();
     let want = [
-        (1000, 1045),
-        (1045, 1177),
-        (1177, 1309),
-        (1309, 1441),
-        (10_000, 10_132),
-        (4000, 4682),
-        (20_000, 20_682),
+        (1000, 1152),
+        (1152, 1259),
+        (1259, 1366),
+        (1366, 1473),
+        (10_000, 10_107),
+        (4000, 4697),
+        (20_000, 20_697),
     ]
     .map(|(a, p)| (Some(a * US), Some(p * US)));
     assert_eq!(gaps, want);
@@ -67,14 +68,14 @@ fn work_queues_response_times_by_hand() {
 fn work_queues_chain_bounds_by_hand() {
     let s = example("work-queues.toml");
     let r = analyze(&s);
-    // rate loop: reaction 45 + 0 + 132 + 132 (+ R_ca 132) = 441, from the
-    // event 1000 more; freshness (45 − 25 + 1000) + 45 + 132 + (132 +
-    // 132) = 1461, from the event 1000 more.
-    assert_eq!(bounds(&r, 0, Bound::Sound), us([441, 1461, 1441, 2461]));
-    // attitude to actuators: reaction 682 + A_rc 1177 + 132 + 132 =
-    // 2123; freshness (682 − 150 + 4000) + (682 + 1177) + (132 + 132) =
-    // 6655; from the event 4000 more each.
-    assert_eq!(bounds(&r, 1, Bound::Sound), us([2123, 6655, 6123, 10_655]));
+    // rate loop: reaction 152 + 0 + 107 + 107 (+ R_ca 107) = 473, from
+    // the event 1000 more; freshness (152 − 25 + 1000) + 152 + 107 + (107
+    // + 107) = 1600, from the event 1000 more.
+    assert_eq!(bounds(&r, 0, Bound::Sound), us([473, 1600, 1473, 2600]));
+    // attitude to actuators: reaction 697 + A_rc 1259 + 107 + 107 =
+    // 2170; freshness (697 − 150 + 4000) + (697 + 1259) + (107 + 107) =
+    // 6717; from the event 4000 more each.
+    assert_eq!(bounds(&r, 1, Bound::Sound), us([2170, 6717, 6170, 10_717]));
     // The paper's equations at the nominal periods; Davare's and Dürr's
     // do not apply.
     assert_eq!(bounds(&r, 0, Bound::Paper), us([3015, 3015, 4015, 4015]));
@@ -96,9 +97,9 @@ fn work_queues_all_paths_agree_with_the_declared_chain() {
         .find(|p| p.source == 0 && p.sink == 3)
         .map(|p| (p.reaction_sound.value, p.freshness_sound.value));
     // The worst path leaves the declared chain through attitude_control:
-    // 45 + (132 + 4000) + (682 + 1177) + 132 + 132 = 6300; freshness
-    // 1020 + 45 + (132 + 4000) + (682 + 1177) + (132 + 132) = 7320.
-    assert_eq!(imu, Some((Some(6300 * US), Some(7320 * US))));
+    // 152 + (107 + 4000) + (697 + 1259) + 107 + 107 = 6429; freshness
+    // 1127 + 152 + (107 + 4000) + (697 + 1259) + (107 + 107) = 7556.
+    assert_eq!(imu, Some((Some(6429 * US), Some(7556 * US))));
 }
 
 /// Two periodic triggers of one fusion task.

@@ -14,6 +14,32 @@ use std::process::ExitCode;
 
 /// Loads a spec and checks it can be analysed, printing errors to stderr.
 pub fn load(path: &Path) -> Result<Spec, ExitCode> {
+    load_checked(path, missing_periods)
+}
+
+/// Loads a spec and checks it can be simulated: every task but a
+/// data-triggered one (its triggers' publications release it) has a fixed
+/// period.
+pub fn load_simulated(path: &Path) -> Result<Spec, ExitCode> {
+    load_checked(path, |spec| {
+        missing_periods(spec).filter(|_| !spec.event_triggered() || !timers_fixed(spec))
+    })
+}
+
+/// Every task a timer releases has a fixed period.
+fn timers_fixed(spec: &Spec) -> bool {
+    spec.tasks
+        .iter()
+        .filter(|t| !t.is_triggered())
+        .all(|t| t.fixed_period().is_some())
+}
+
+/// Loads a spec and refuses it with `problem`'s diagnostic, printing
+/// errors to stderr.
+fn load_checked(
+    path: &Path,
+    problem: impl Fn(&Spec) -> Option<Diagnostic>,
+) -> Result<Spec, ExitCode> {
     let spec = match Spec::load(path) {
         Ok(s) => s,
         Err(e) => {
@@ -21,7 +47,7 @@ pub fn load(path: &Path) -> Result<Spec, ExitCode> {
             return Err(ExitCode::from(EXIT_BAD_INPUT));
         }
     };
-    if let Some(d) = missing_periods(&spec) {
+    if let Some(d) = problem(&spec) {
         // A spec's problem without a place in its text, shown as the spec's
         // own diagnostics are (task names hold no control characters).
         let e = SpecError {

@@ -16,7 +16,7 @@ fn work_queues_text_lists_activations_and_every_bound() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
         text.contains(
-            "  angular_velocity   rate_ctrl            data: imu (any)                1045   1177"
+            "  angular_velocity   rate_ctrl            data: imu (any)                1152   1259"
         ),
         "{text}"
     );
@@ -24,7 +24,7 @@ fn work_queues_text_lists_activations_and_every_bound() {
         text.contains("notes: a data-triggered task's period T is its triggers' nominal rate"),
         "{text}"
     );
-    assert!(text.contains("  rate loop              freshness      -         1500   3015   1461  unbounded  unbounded         4015         2461"), "{text}");
+    assert!(text.contains("  rate loop              freshness      -         1500   3015   1600  unbounded  unbounded         4015         2600"), "{text}");
 }
 
 #[test]
@@ -33,10 +33,10 @@ fn work_queues_json_paper_mode_and_all_paths() {
     let o = rtpipe(&["analyze", &spec, "--json"]);
     assert_exit(&o, 1);
     let v = json_of(&o);
-    assert_eq!(v["tasks"][1]["job_response_time"], json!(132.0));
-    let want = json!({"thread": "rate_ctrl", "triggers": ["imu"], "join": "any", "merging": true, "gap": 1045.0, "publish_gap": 1177.0});
+    assert_eq!(v["tasks"][1]["job_response_time"], json!(107.0));
+    let want = json!({"thread": "rate_ctrl", "triggers": ["imu"], "join": "any", "merging": true, "gap": 1152.0, "publish_gap": 1259.0});
     assert_eq!(v["tasks"][1]["activation"], want);
-    assert_eq!(v["chains"][1]["sound"], json!(1461.0));
+    assert_eq!(v["chains"][1]["sound"], json!(1600.0));
     assert_eq!(v["chains"][1]["davare"], json!(null));
     // Paper mode judges by the paper's equations at the nominal periods.
     let o = rtpipe(&["analyze", &spec, "--mode", "paper"]);
@@ -44,5 +44,5 @@ fn work_queues_json_paper_mode_and_all_paths() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("fail under the paper analysis"));
     let o = rtpipe(&["analyze", &spec, "--all-paths"]);
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("imu               control_allocator      6300  imu>angular_velocity>attitude_control>rate_control>control_allocator       7320"), "{text}");
+    assert!(text.contains("imu               control_allocator      6429  imu>angular_velocity>attitude_control>rate_control>control_allocator       7556"), "{text}");
 }

@@ -426,3 +426,81 @@ fn memory_does_not_grow_with_the_simulated_span() {
     assert!(rows > 10_000_000, "{rows} rows");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_event_triggered_spec_is_observed_without_bounds() {
+    let o = rtpipe(&[
+        "simulate",
+        &example("work-queues.toml"),
+        "--outputs",
+        "50",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("note: no bounds"), "{err}");
+    let v = json_of(&o);
+    assert_eq!(v["bounds"], Value::Null);
+    let tasks = v["tasks"].as_array().cloned().unwrap_or_default();
+    let task = |name: &str| {
+        tasks
+            .iter()
+            .find(|t| t["name"] == name)
+            .cloned()
+            .unwrap_or_else(|| panic!("no task {name}"))
+    };
+    // Every task of the example is in a thread: each reports its merges.
+    assert_eq!(task("angular_velocity")["thread"], "rate_ctrl");
+    assert_eq!(task("angular_velocity")["merged"], 0);
+    assert!(task("imu")["released"].as_u64().is_some_and(|n| n >= 50));
+    let chains = v["chains"].as_array().cloned().unwrap_or_default();
+    assert_eq!(chains.len(), 4, "two chains, reaction and freshness");
+    assert!(chains[0]["observed"]["max"]
+        .as_f64()
+        .is_some_and(|m| m > 0.0));
+}
+
+#[test]
+fn an_event_triggered_gantt_has_a_row_per_thread() {
+    let dir = scratch("sim-wq-gantt");
+    let gantt = dir.join("gantt.svg");
+    let o = rtpipe(&[
+        "simulate",
+        &example("work-queues.toml"),
+        "--duration",
+        "1ms",
+        "--gantt",
+        &gantt.to_string_lossy(),
+        "--window",
+        "0,150",
+    ]);
+    assert_exit(&o, 0);
+    let g = read(&gantt);
+    // The rate thread's row, and its jobs labelled with their tasks.
+    for want in [
+        "thread spi1",
+        "thread rate_ctrl",
+        "land_detector",
+        "rate_control",
+    ] {
+        assert!(g.contains(want), "gantt lacks {want}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_event_triggered_spec_refuses_the_bounds_plot() {
+    let dir = scratch("sim-wq-plot");
+    let plot = dir.join("fig9.svg");
+    let o = rtpipe(&[
+        "simulate",
+        &example("work-queues.toml"),
+        "--plot",
+        &plot.to_string_lossy(),
+    ]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--plot") && err.contains("--gantt"), "{err}");
+    assert!(files_in(&dir).is_empty(), "nothing written");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -44,6 +44,6 @@ mod tracker;
 
 pub use chain::{ChainStats, Observed, SampleRow, Witness};
 pub use hist::Histogram;
-pub use log::{Carried, JobRecord, Segment, SimResult, TaskStats};
+pub use log::{Carried, JobRecord, Segment, SimResult, TaskStats, Trigger};
 pub use provenance::{chains_from_jobs, sample_rows, BadChain, Provenance, Slot};
 pub use rows::RowSink;

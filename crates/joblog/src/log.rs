@@ -33,13 +33,31 @@ pub struct JobRecord {
     pub finish: Nanos,
     /// One entry per chain position the task occupies.
     pub carried: Vec<Carried>,
+    /// A data-triggered job: the publication that released it (the first,
+    /// when later ones merged into it; under join = "all" the one that
+    /// completed the set). `None` for a timer's job.
+    pub trigger: Option<Trigger>,
+}
+
+/// A publication that released a data-triggered job: which job of which
+/// task published.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Trigger {
+    /// The publishing task.
+    pub task: usize,
+    /// Its job (release index, from 0).
+    pub job: u64,
 }
 
 /// What one task's jobs did.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct TaskStats {
-    /// Jobs released.
+    /// Jobs released (a release merged into a queued job is not one).
     pub released: u64,
+    /// Releases merged into a job of the task that was queued and not yet
+    /// started (threads and data-triggered tasks: PX4's one pending
+    /// activation); always 0 for a thread-less periodic task.
+    pub merged: u64,
     /// Jobs completed.
     pub completed: u64,
     /// Largest finish − release over completed jobs.

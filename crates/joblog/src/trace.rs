@@ -9,7 +9,13 @@
 //!
 //! Layout:
 //! - one process per CPU (`pid` = dense CPU index, named `cpu <id>`), one
-//!   thread (track) per task (`tid` = task index + 1, named by the task);
+//!   thread (track) per task (`tid` = task index + 1, named by the task),
+//!   except that the tasks of a work-queue thread share one track, the
+//!   thread's ([`Tracks`]: `tid` = tasks + thread index + 1, named
+//!   `thread <name>`), on which each slice is named by its task;
+//! - a data-triggered job's slices and release carry its trigger in
+//!   `args.trigger` (`task#job`: the publication that released it), and an
+//!   arrow (category `trigger`) runs from that publication to the release;
 //! - every CPU slice is a complete event (`"ph": "X"`) named by the task, with
 //!   `args: {job, background}`; inside it, nested complete events `read`,
 //!   `process` and `write` mark which part of the job's demand ran there (the
@@ -25,7 +31,7 @@
 //! cut at [`TraceOptions::max_slices`] CPU slices and
 //! [`TraceOptions::max_flows`] flow arrows so files stay openable.
 
-use crate::{Carried, JobRecord, Segment, SimResult};
+use crate::{Carried, JobRecord, Segment, SimResult, Trigger};
 use rtpipe_model::{Nanos, Spec, Task};
 use serde_json::{json, Value};
 use std::collections::{HashMap, HashSet};
@@ -115,7 +121,7 @@ pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) ->
     let cut: Option<Nanos> = result.segments.get(opts.max_slices).map(|s| s.start);
     let end = cut.unwrap_or(result.horizon.saturating_add(1));
     let mut ev = Events::default();
-    lay.metadata(spec, &mut ev);
+    lay.metadata(&mut ev);
     let slices = lay.slices(spec, result, &opts, &mut ev);
     lay.releases(spec, result, end, &mut ev);
     let (flows, flows_dropped) = lay.flows(spec, result, end, opts.max_flows, &mut ev);
@@ -147,10 +153,71 @@ pub fn chrome_trace_with(spec: &Spec, result: &SimResult, opts: TraceOptions) ->
     }
 }
 
-/// Where each task's track is: a process per CPU, a thread per task.
+/// The rows a schedule is drawn in (this trace's tracks, the Gantt
+/// chart's rows): one per task, except that the tasks of a work-queue
+/// thread share the thread's, since they run on it one job at a time.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tracks {
+    /// The track of each task.
+    pub of: Vec<usize>,
+    /// Each track, in order of its first task's declaration.
+    pub tracks: Vec<Track>,
+}
+
+/// One row of a schedule.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Track {
+    /// Its label: the task's name, or `thread <name>`.
+    pub name: String,
+    /// The CPU it runs on.
+    pub cpu: u32,
+    /// Its first task (index into `Spec::tasks`).
+    pub first: usize,
+    /// The work-queue thread it is (index into `Spec::threads`), if any.
+    pub thread: Option<usize>,
+}
+
+impl Tracks {
+    /// The tracks of `spec`'s tasks.
+    pub fn of(spec: &Spec) -> Tracks {
+        let mut of = Vec::with_capacity(spec.tasks.len());
+        let mut tracks: Vec<Track> = Vec::new();
+        let mut thread_track = vec![None; spec.threads.len()];
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let known = t
+                .thread
+                .and_then(|th| thread_track.get(th).copied().flatten());
+            if let Some(k) = known {
+                of.push(k);
+                continue;
+            }
+            let name = match t.thread.and_then(|th| spec.threads.get(th)) {
+                Some(th) => format!("thread {}", th.name),
+                None => t.name.clone(),
+            };
+            if let Some(slot) = t.thread.and_then(|th| thread_track.get_mut(th)) {
+                *slot = Some(tracks.len());
+            }
+            of.push(tracks.len());
+            tracks.push(Track {
+                name,
+                cpu: t.cpu,
+                first: i,
+                thread: t.thread,
+            });
+        }
+        Tracks { of, tracks }
+    }
+}
+
+/// Where each task's track is: a process per CPU, a thread per task or
+/// work-queue thread.
 struct Layout {
     cpu_ids: Vec<u32>,
     pid_of: Vec<usize>,
+    tracks: Tracks,
+    /// The `tid` of each task's track.
+    tid_of: Vec<usize>,
 }
 
 impl Layout {
@@ -163,15 +230,33 @@ impl Layout {
             .iter()
             .map(|t| cpu_ids.binary_search(&t.cpu).unwrap_or(0))
             .collect();
-        Layout { cpu_ids, pid_of }
+        let tracks = Tracks::of(spec);
+        let tid_of = (0..spec.tasks.len())
+            .map(|i| Self::track_tid(spec, &tracks.tracks[tracks.of[i]]))
+            .collect();
+        Layout {
+            cpu_ids,
+            pid_of,
+            tracks,
+            tid_of,
+        }
     }
 
-    fn tid(task: usize) -> usize {
-        task + 1
+    /// A task's own track is its index + 1 (as before threads), a
+    /// thread's comes after every task's.
+    fn track_tid(spec: &Spec, track: &Track) -> usize {
+        match track.thread {
+            Some(th) => spec.tasks.len() + th + 1,
+            None => track.first + 1,
+        }
+    }
+
+    fn tid(&self, task: usize) -> usize {
+        self.tid_of[task]
     }
 
     /// Names and order of the CPU processes and task threads.
-    fn metadata(&self, spec: &Spec, ev: &mut Events) {
+    fn metadata(&self, ev: &mut Events) {
         for (pid, id) in self.cpu_ids.iter().enumerate() {
             ev.push(
                 json!({"ph": "M", "name": "process_name", "pid": pid, "tid": 0,
@@ -182,11 +267,12 @@ impl Layout {
                            "args": {"sort_index": pid}}),
             );
         }
-        for (i, t) in spec.tasks.iter().enumerate() {
-            let (pid, tid) = (self.pid_of[i], Self::tid(i));
+        for track in &self.tracks.tracks {
+            let i = track.first;
+            let (pid, tid) = (self.pid_of[i], self.tid(i));
             ev.push(
                 json!({"ph": "M", "name": "thread_name", "pid": pid, "tid": tid,
-                           "args": {"name": t.name}}),
+                           "args": {"name": track.name}}),
             );
             ev.push(
                 json!({"ph": "M", "name": "thread_sort_index", "pid": pid, "tid": tid,
@@ -213,12 +299,17 @@ impl Layout {
             if seg.task >= spec.tasks.len() {
                 continue;
             }
-            let (pid, tid) = (self.pid_of[seg.task], Self::tid(seg.task));
+            let (pid, tid) = (self.pid_of[seg.task], self.tid(seg.task));
             let task = &spec.tasks[seg.task];
+            let mut args = json!({"job": seg.job, "background": seg.background});
+            let job = jobs.get(&(seg.task, seg.job));
+            if let Some(tr) = job.and_then(|j| j.trigger) {
+                args["trigger"] = json!(trigger_label(spec, tr));
+            }
             ev.push(json!({
                 "ph": "X", "cat": if opts.spans { "span" } else { "job" }, "name": task.name, "pid": pid, "tid": tid,
                 "ts": ts(seg.start), "dur": ts(seg.end - seg.start),
-                "args": {"job": seg.job, "background": seg.background},
+                "args": args,
             }));
             slices += 1;
             if opts.spans {
@@ -235,13 +326,36 @@ impl Layout {
         slices
     }
 
-    /// An instant event at every release before `end`.
+    /// An instant event at every release before `end`, named by its task
+    /// on a thread's track; a data-triggered one with its trigger and an
+    /// arrow from the trigger's publication.
     fn releases(&self, spec: &Spec, result: &SimResult, end: Nanos, ev: &mut Events) {
+        let mut arrows = 0usize;
         for j in &result.jobs {
-            if j.release < end && j.task < spec.tasks.len() {
+            if j.release >= end || j.task >= spec.tasks.len() {
+                continue;
+            }
+            let (pid, tid) = (self.pid_of[j.task], self.tid(j.task));
+            let name = match spec.tasks[j.task].thread {
+                Some(_) => format!("release {}", spec.tasks[j.task].name),
+                None => "release".to_string(),
+            };
+            let mut args = json!({"job": j.index});
+            let trigger = j.trigger.filter(|tr| tr.task < spec.tasks.len());
+            if let Some(tr) = trigger {
+                args["trigger"] = json!(trigger_label(spec, tr));
+            }
+            ev.push(json!({"ph": "i", "s": "t", "cat": "release", "name": name,
+                           "pid": pid, "tid": tid, "ts": ts(j.release), "args": args}));
+            if let Some(tr) = trigger {
+                arrows += 1;
+                let id = format!("trigger-{arrows}");
+                ev.push(json!({"ph": "s", "cat": "trigger", "name": "trigger", "id": id,
+                               "pid": self.pid_of[tr.task], "tid": self.tid(tr.task), "ts": ts(j.release),
+                               "args": {"job": tr.job}}));
                 ev.push(
-                    json!({"ph": "i", "s": "t", "cat": "release", "name": "release",
-                               "pid": self.pid_of[j.task], "tid": Self::tid(j.task), "ts": ts(j.release),
+                    json!({"ph": "f", "bp": "e", "cat": "trigger", "name": "trigger", "id": id,
+                               "pid": pid, "tid": tid, "ts": ts(j.release),
                                "args": {"job": j.index}}),
                 );
             }
@@ -304,14 +418,20 @@ impl Layout {
             pj.finish
         };
         ev.push(json!({"ph": "s", "cat": "data", "name": "data", "id": id,
-                       "pid": self.pid_of[pj.task], "tid": Self::tid(pj.task), "ts": ts(start),
+                       "pid": self.pid_of[pj.task], "tid": self.tid(pj.task), "ts": ts(start),
                        "args": {"job": pj.index, "chain": chain, "sample": sample}}));
         ev.push(
             json!({"ph": "f", "bp": "e", "cat": "data", "name": "data", "id": id,
-                       "pid": self.pid_of[cj.task], "tid": Self::tid(cj.task), "ts": ts(cj.read),
+                       "pid": self.pid_of[cj.task], "tid": self.tid(cj.task), "ts": ts(cj.read),
                        "args": {"job": cj.index, "chain": chain, "sample": sample}}),
         );
     }
+}
+
+/// A publication as the trace names it: `task#job`.
+fn trigger_label(spec: &Spec, tr: Trigger) -> String {
+    let name = spec.tasks.get(tr.task).map_or("?", |t| t.name.as_str());
+    format!("{name}#{}", tr.job)
 }
 
 /// The read, process and write stages of `job` that fall in slice `seg`,

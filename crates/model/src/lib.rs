@@ -273,6 +273,14 @@ impl Task {
         self.triggers().is_some()
     }
 
+    /// Does a release of this task merge into its job that is queued and
+    /// not yet started (PX4's one pending activation)? For a task in a
+    /// thread and a data-triggered task; a thread-less periodic task queues
+    /// every job.
+    pub fn merges_releases(&self) -> bool {
+        self.thread.is_some() || self.is_triggered()
+    }
+
     /// Worst-case demand of one job: Δin + p + Δout.
     pub fn demand(&self) -> Nanos {
         self.delta_in

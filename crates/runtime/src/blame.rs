@@ -634,6 +634,7 @@ output = { channel = "shm", size = 0 }
             read: release,
             finish: release + demand,
             carried: Vec::new(),
+            trigger: None,
         }
     }
 

@@ -14,7 +14,12 @@
 //! - `scaling`: events per second against the task count (10, 100, 1,000,
 //!   10,000 tasks on one CPU, and on two CPUs as `…t-2cpu-…`, RM and EDF),
 //!   each run about 400,000 events long: the cost per event must not grow
-//!   with the number of tasks (only logarithmically).
+//!   with the number of tasks (only logarithmically). Beside them,
+//!   `1000t-events`: a generated event-triggered system
+//!   (`rtpipe_model::gen::event_triggered_system`) of 1,000 tasks in 125
+//!   chains of 8, most of them data-triggered, on 1–2 CPUs and up to 40
+//!   work-queue threads, as long a run: threads, triggers and merging must
+//!   cost per event what periodic releases do.
 //!
 //! Each system is described on stderr (events per run, late jobs) before it
 //! is measured.
@@ -23,7 +28,7 @@ mod common;
 use common::{bench_events, run, span_for, MS};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rtpipe_analysis::Metric;
-use rtpipe_model::gen::{random_system, GenConfig};
+use rtpipe_model::gen::{event_triggered_system, random_system, EventGenConfig, GenConfig};
 use rtpipe_model::{Scheduler, Spec};
 use rtpipe_sim::search::{search, SearchConfig};
 use rtpipe_sim::{ExecModel, Phasing, SimConfig};
@@ -184,7 +189,36 @@ fn scaling(c: &mut Criterion) {
             bench_events(&mut group, &label, &spec, &cfg, n);
         }
     }
+    let spec = event_system(125);
+    let cfg = SimConfig {
+        horizon: span_for(&spec, 400_000.0),
+        seed: SEED,
+        phasing: Phasing::Random,
+        exec: ExecModel::Uniform,
+        log_jobs: false,
+        jitter: rtpipe_sim::Jitter::Uniform,
+    };
+    let label = format!("{}t-events", spec.tasks.len());
+    let n = describe(&label, &spec, &cfg);
+    bench_events(&mut group, &label, &spec, &cfg, n);
     group.finish();
+}
+
+/// An event-triggered system of `chains` chains of 8 tasks and no timer
+/// items (125 chains: 1,000 tasks).
+fn event_system(chains: usize) -> Spec {
+    event_triggered_system(
+        SEED,
+        &EventGenConfig {
+            min_chains: chains,
+            max_chains: chains,
+            min_links: 8,
+            max_links: 8,
+            max_threads: 40,
+            max_timers: 0,
+            ..EventGenConfig::default()
+        },
+    )
 }
 
 criterion_group!(benches, events, table3, search_bench, scaling);

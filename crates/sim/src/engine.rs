@@ -88,10 +88,16 @@ pub(crate) fn run_until<H: Hooks>(
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Job {
     pub(crate) index: u64,
+    /// Its nominal release (response times count from it).
     pub(crate) release: Nanos,
+    /// When it entered the queue (its actual release, up to the jitter
+    /// after the nominal one): a thread runs its jobs in this order.
+    pub(crate) queued: Nanos,
     pub(crate) demand: Nanos,
     pub(crate) remaining: Nanos,
     pub(crate) read: Option<Nanos>,
+    /// A data-triggered job: the publication that released it.
+    pub(crate) trigger: Option<rtpipe_joblog::Trigger>,
 }
 
 /// The budget server a task runs on (Section II-B).
@@ -200,6 +206,8 @@ pub(crate) struct TaskSim {
     pub(crate) next_index: u64,
     /// Released, unfinished jobs; only the front one may have started.
     pub(crate) queue: VecDeque<Job>,
+    /// A release merges into a queued, unstarted job (`events.rs`).
+    pub(crate) merges: bool,
     pub(crate) stats: TaskStats,
     /// Dense CPU index.
     pub(crate) cpu: usize,
@@ -213,21 +221,33 @@ pub(crate) struct TaskSim {
     pub(crate) timer: Option<Nanos>,
 }
 
-/// Releases every job of `ts` due at or before t.
+/// The demand of the next job of `ts`, as `exec` says (from its stream).
+pub(crate) fn draw_demand(ts: &mut TaskSim, exec: ExecModel) -> Nanos {
+    match exec {
+        ExecModel::Worst => ts.demand,
+        ExecModel::Best => ts.demand_min,
+        ExecModel::Uniform => ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos,
+        ExecModel::Extremes => {
+            if ts.rng.chance(0.5) {
+                ts.demand_min
+            } else {
+                ts.demand
+            }
+        }
+    }
+}
+
+/// Releases every job of `ts` due at or before t (a release merges into a
+/// queued, unstarted job when the task merges: `events.rs`).
 pub(crate) fn release_jobs(ts: &mut TaskSim, exec: ExecModel, t: Nanos) {
     while ts.next_release <= t {
-        let demand = match exec {
-            ExecModel::Worst => ts.demand,
-            ExecModel::Best => ts.demand_min,
-            ExecModel::Uniform => ts.rng.range(ts.demand_min as u64, ts.demand as u64) as Nanos,
-            ExecModel::Extremes => {
-                if ts.rng.chance(0.5) {
-                    ts.demand_min
-                } else {
-                    ts.demand
-                }
-            }
-        };
+        if ts.merges && ts.queue.back().is_some_and(|j| j.read.is_none()) {
+            ts.stats.merged += 1;
+            ts.next_nominal += ts.period;
+            ts.next_release = ts.next_nominal + jitter_draw(ts);
+            continue;
+        }
+        let demand = draw_demand(ts, exec);
         if ts.queue.is_empty() {
             ts.budget.unblock(ts.next_release.max(t));
         }
@@ -237,9 +257,11 @@ pub(crate) fn release_jobs(ts: &mut TaskSim, exec: ExecModel, t: Nanos) {
         ts.queue.push_back(Job {
             index: ts.next_index,
             release: ts.next_nominal,
+            queued: ts.next_release,
             demand,
             remaining: demand,
             read: None,
+            trigger: None,
         });
         ts.stats.released += 1;
         ts.next_index += 1;
@@ -322,6 +344,8 @@ pub(crate) struct Sim<H> {
     /// Release handlers, replenishments and context switches
     /// (`overheads.rs`).
     pub(crate) ovh: crate::overheads::Overheads,
+    /// Threads, triggers and merging (`events.rs`).
+    pub(crate) event_model: crate::events::Events,
 }
 
 impl<H: Hooks> Sim<H> {
@@ -389,6 +413,7 @@ impl<H: Hooks> Sim<H> {
             let_open: vec![None; spec.tasks.len()],
             locks,
             ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
+            event_model: crate::events::Events::new(spec),
         })
     }
 
@@ -548,6 +573,13 @@ impl<H: Hooks> Sim<H> {
                 (i, ts.next_index - before, was_idle)
             };
             let (i, new, was_idle) = i;
+            if self.event_model.thread_of[i].is_some() {
+                let skip = self.tasks[i].queue.len() - new as usize;
+                for k in skip..self.tasks[i].queue.len() {
+                    let job = self.tasks[i].queue[k];
+                    self.thread_queued(i, &job, t);
+                }
+            }
             self.release_overheads(i, new, t);
             if !was_idle {
                 // Queued behind the front job: nothing the pick sees changed.
@@ -582,6 +614,10 @@ impl<H: Hooks> Sim<H> {
         let Some(job) = ts.queue.front() else {
             return (None, None);
         };
+        // Only a thread's head contends for the CPU (`events.rs`).
+        if !self.event_model.may_contend(i) {
+            return (None, None);
+        }
         if self.locks.waiting[i].is_some() {
             return (None, None);
         }
@@ -695,17 +731,18 @@ impl<H: Hooks> Sim<H> {
             unreachable!("task {i} reads without a pending job");
         };
         job.read = Some(t);
-        if self.let_comm[i] {
-            // Under LET the job read at its release (`let_comm.rs`).
-            return;
-        }
-        self.prov.read(i, t);
         let job = rtpipe_body::Job {
             task: i,
             index: job.index,
             release: job.release,
             read: t,
         };
+        self.thread_started(i);
+        if self.let_comm[i] {
+            // Under LET the job read at its release (`let_comm.rs`).
+            return;
+        }
+        self.prov.read(i, t);
         self.hooks.read(&job);
     }
 
@@ -728,11 +765,12 @@ impl<H: Hooks> Sim<H> {
         if response > ts.deadline {
             ts.stats.late += 1;
         }
+        if ts.queue.is_empty() {
+            ts.budget.block(t);
+        }
+        self.thread_done(i, &job, t);
         if self.let_comm[i] {
             // LET publishes at the end of the period (`let_comm.rs`).
-            if ts.queue.is_empty() {
-                ts.budget.block(t);
-            }
             return;
         }
         self.prov.publish(i, t);
@@ -745,11 +783,10 @@ impl<H: Hooks> Sim<H> {
                 read: job.read.unwrap_or(t),
                 finish: t,
                 carried: self.prov.record(i),
+                trigger: job.trigger,
             });
         }
-        if ts.queue.is_empty() {
-            ts.budget.block(t);
-        }
+        self.publish_triggers(i, job.index, t);
     }
 
     /// The next instant something happens after t: a release, a completion,
@@ -817,12 +854,14 @@ impl<H: Hooks> Sim<H> {
     }
 }
 
-/// Every task's fixed period (positive) and a demand range that makes sense.
+/// Every task's fixed period (positive; [`NO_TIMER`] for a data-triggered
+/// task, which no timer releases) and a demand range that makes sense.
 fn periods_of(spec: &Spec) -> Result<Vec<Nanos>, SimError> {
     let mut periods = Vec::with_capacity(spec.tasks.len());
     for t in &spec.tasks {
         match t.fixed_period() {
             Some(p) if p > 0 => periods.push(p),
+            None if t.is_triggered() => periods.push(NO_TIMER),
             _ => return Err(SimError::NoPeriod(t.name.clone())),
         }
         if !(0 <= t.demand_min() && t.demand_min() <= t.demand()) {
@@ -831,6 +870,10 @@ fn periods_of(spec: &Spec) -> Result<Vec<Nanos>, SimError> {
     }
     Ok(periods)
 }
+
+/// The period, first release and deadline of a data-triggered task: never
+/// (its publications release it, `events.rs`).
+const NO_TIMER: Nanos = Nanos::MAX;
 
 /// Release offsets φ_i as `phasing` says (drawn from `master` first, before
 /// any demand stream, so that a task's demands do not depend on them).
@@ -846,7 +889,11 @@ fn offsets_of(
     master: &mut Rng,
 ) -> Result<Vec<Nanos>, SimError> {
     let n = spec.tasks.len();
-    let known = |i: usize| spec.tasks[i].offset;
+    // A data-triggered task has no offset (0) and draws none.
+    let known = |i: usize| match spec.tasks[i].is_triggered() {
+        true => Some(0),
+        false => spec.tasks[i].offset,
+    };
     Ok(match phasing {
         Phasing::Sync => (0..n).map(|i| known(i).unwrap_or(0)).collect(),
         Phasing::Random => periods
@@ -922,23 +969,28 @@ fn task_sims(
             deadline: t.deadline().unwrap_or(p),
             jitter: t.jitter,
             jitter_model: jitter,
-            next_nominal: offsets[i],
+            next_nominal: if t.is_triggered() {
+                NO_TIMER
+            } else {
+                offsets[i]
+            },
             class: u8::from(t.server == Server::Background),
             rank: ranks[i].map_or(i as i64, |r| r as i64),
             serves: spec.policy().inherits_from(t.serves),
             demand_min: t.demand_min(),
             demand: t.demand(),
             rng: Rng::new(master.next_u64()),
-            next_release: offsets[i],
+            next_release: NO_TIMER,
             next_index: 0,
             queue: VecDeque::new(),
+            merges: t.merges_releases(),
             stats: TaskStats::default(),
             cpu,
             servers: Vec::new(),
             entry: None,
             timer: None,
         });
-        if let Some(ts) = tasks.last_mut() {
+        if let (Some(ts), false) = (tasks.last_mut(), t.is_triggered()) {
             // The first job is jittered too.
             ts.next_release = offsets[i] + jitter_draw(ts);
         }

@@ -71,7 +71,9 @@ impl<H: Hooks> Sim<H> {
                 read: job.release,
                 finish: t,
                 carried: self.prov.record(job.task),
+                trigger: None,
             });
         }
+        self.publish_triggers(job.task, job.index, t);
     }
 }

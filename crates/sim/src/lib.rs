@@ -19,6 +19,12 @@
 //!   [`rtpipe_model::policy::rate_monotonic`], EDF by absolute deadline
 //!   (release + T) then task index. Jobs of one task run in FIFO order.
 //!   Background tasks run only when nothing else is ready.
+//! - Threads and data-triggered tasks (`events.rs`): a work-queue thread's
+//!   jobs run one at a time to completion in release order, at the thread's
+//!   rank; a completion releases the data-triggered tasks its task
+//!   triggers at that instant (join any, or all); a release that finds an
+//!   earlier job of its task queued and not started joins it
+//!   (`TaskStats::merged`).
 //! - At one instant: (1) completions publish, (2) releases, (3) each CPU picks
 //!   a job, (4) jobs starting now read. So a job that starts when another job
 //!   publishes sees the new value. All CPUs share one timeline.
@@ -51,6 +57,7 @@ mod config;
 mod cpu_events;
 mod cpus;
 mod engine;
+mod events;
 mod let_comm;
 mod locks;
 pub mod observe;

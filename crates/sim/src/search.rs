@@ -32,7 +32,7 @@
 //! truth: a tightness of 1 proves the bound exact for this system, a tightness
 //! above 1 is a soundness bug of the analysis (or of the simulator).
 
-use crate::observe::ChainStatsExt;
+use crate::observe::{bounds_available, ChainStatsExt};
 use crate::rng::Rng;
 use crate::{simulate, ExecModel, Jitter, Phasing, SimConfig, SimError};
 use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
@@ -266,8 +266,14 @@ fn checked_periods(spec: &Spec, cfg: &SearchConfig) -> Result<Vec<Nanos>, SimErr
         return Err(SimError::HorizonNotPositive(cfg.horizon));
     }
     let mut periods = Vec::with_capacity(spec.tasks.len());
-    for t in &spec.tasks {
-        match t.fixed_period() {
+    for (i, t) in spec.tasks.iter().enumerate() {
+        // A data-triggered task has no offset to move: its nominal period
+        // only scales the search's steps.
+        let period = match t.is_triggered() {
+            true => spec.activation_period(i),
+            false => t.fixed_period(),
+        };
+        match period {
             Some(p) if p > 0 => periods.push(p),
             _ => return Err(SimError::NoPeriod(t.name.clone())),
         }
@@ -336,7 +342,13 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
             .filter(|&x| x > 0)
             .fold(gcd_periods, gcd);
         let chain_tasks = spec.chains[cfg.chain].path.clone();
-        let fixed: Vec<Option<Nanos>> = spec.tasks.iter().map(|t| t.offset).collect();
+        // Known offsets, and data-triggered tasks' (none: 0, which the
+        // simulator requires).
+        let fixed: Vec<Option<Nanos>> = spec
+            .tasks
+            .iter()
+            .map(|t| if t.is_triggered() { Some(0) } else { t.offset })
+            .collect();
         let movable: Vec<usize> = (0..fixed.len()).filter(|&i| fixed[i].is_none()).collect();
         let t_max = chain_tasks
             .iter()
@@ -367,17 +379,18 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
     /// The best run found, with the analysis' bounds for its quantity.
     fn result(self) -> SearchResult {
         let (spec, cfg) = (self.spec, self.cfg);
-        let report = analyze(spec);
+        let report = bounds_available(spec).then(|| analyze(spec));
         let (sound, paper) = report
-            .chains
             .iter()
+            .flat_map(|r| &r.chains)
             .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
             .map_or((None, None), |c| {
                 let a = cfg.anchor;
                 (c.bound.sound(a), Some(c.bound.paper(a)))
             });
         let known = report
-            .offset_bound(cfg.chain, cfg.metric, cfg.anchor)
+            .as_ref()
+            .and_then(|r| r.offset_bound(cfg.chain, cfg.metric, cfg.anchor))
             .cloned();
         let (best, value, witness) = match &self.best {
             Some(b) => (b.cand.clone(), b.value, b.witness),

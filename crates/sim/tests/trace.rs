@@ -119,3 +119,60 @@ fn limits_cut_the_trace() {
         .any(|ts| ts >= us(res.segments[3].start) && ts > 0.0);
     assert!(!late, "nothing after the cut");
 }
+
+#[test]
+fn a_work_queue_thread_is_one_track_and_triggered_jobs_name_their_trigger() {
+    let spec = rtpipe_testkit::example("work-queues.toml");
+    let mut cfg = SimConfig::new(3_000_000);
+    cfg.log_jobs = true;
+    let res = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+    let ev = events(&chrome_trace(&spec, &res));
+    // Three threads, three tracks, named by the thread.
+    let names: Vec<&str> = ev
+        .iter()
+        .filter(|e| e["name"] == "thread_name")
+        .filter_map(|e| e["args"]["name"].as_str())
+        .collect();
+    assert_eq!(
+        names,
+        vec![
+            "thread spi1",
+            "thread rate_ctrl",
+            "thread nav_and_controllers"
+        ]
+    );
+    // Every slice of the rate thread's tasks is on its track, named by
+    // its task.
+    let tid_of = |task: &str| -> Vec<u64> {
+        let mut tids: Vec<u64> = ev
+            .iter()
+            .filter(|e| e["ph"] == "X" && e["name"] == task)
+            .filter_map(|e| e["tid"].as_u64())
+            .collect();
+        tids.dedup();
+        tids
+    };
+    let rate = tid_of("angular_velocity");
+    assert_eq!(rate.len(), 1);
+    for task in ["rate_control", "control_allocator", "land_detector"] {
+        assert_eq!(tid_of(task), rate, "{task}");
+    }
+    // Each gyro-triggered job names the imu publication that released it,
+    // with an arrow from it.
+    let releases: Vec<&Value> = ev
+        .iter()
+        .filter(|e| e["ph"] == "i" && e["name"] == "release angular_velocity")
+        .collect();
+    assert_eq!(releases.len(), 3);
+    for (k, r) in releases.iter().enumerate() {
+        assert_eq!(r["args"]["trigger"], format!("imu#{k}"));
+    }
+    let arrows = |ph: &str| {
+        ev.iter()
+            .filter(|e| e["ph"] == ph && e["cat"] == "trigger")
+            .count()
+    };
+    let triggered = res.jobs.iter().filter(|j| j.trigger.is_some()).count();
+    assert!(triggered > 0);
+    assert_eq!((arrows("s"), arrows("f")), (triggered, triggered));
+}

@@ -1,7 +1,9 @@
-//! The schedule as a Gantt chart: a row per task grouped by CPU, slices,
-//! releases and publishes.
+//! The schedule as a Gantt chart: a row per task grouped by CPU (one per
+//! work-queue thread for its tasks, `rtpipe_joblog::trace::Tracks`),
+//! slices, releases and publishes.
 
 use super::canvas::*;
+use rtpipe_joblog::trace::Tracks;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Server, Spec};
 
@@ -16,9 +18,11 @@ fn darker(c: RGBColor) -> RGBColor {
     RGBColor(m(c.0), m(c.1), m(c.2))
 }
 
-/// The schedule in `window`: one row per task grouped by CPU, CPU slices
-/// coloured per task (background-priority slices light and hatched),
-/// release ticks and publish markers.
+/// The schedule in `window`: one row per task grouped by CPU (the tasks of
+/// a work-queue thread on the thread's, each slice labelled with its task
+/// where it fits), CPU slices coloured per task (background-priority
+/// slices light and hatched), release ticks (a data-triggered job's joined
+/// to its trigger's publish by a line) and publish markers.
 pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String> {
     let u = unit_of(spec);
     let (w0, w1) = window;
@@ -27,10 +31,10 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
     }
     let rows = Rows::of(spec);
     let row_px = 34u32;
-    let name_w = spec
-        .tasks
+    let name_w = rows
+        .names
         .iter()
-        .map(|t| t.name.chars().count())
+        .map(|n| n.chars().count())
         .max()
         .unwrap_or(4) as u32;
     let label_w = 70 + 8 * name_w;
@@ -71,9 +75,10 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
             .draw()
             .map_err(err)?;
         draw_cpu_bands(root, &mut chart, &rows, (x0, x1))?;
-        draw_task_names(spec, root, &chart, &rows, x0)?;
+        draw_task_names(root, &chart, &rows, x0)?;
         draw_slices(spec, res, root, &chart, &rows, window)?;
         draw_releases(spec, res, root, &chart, &rows, window)?;
+        draw_triggered_releases(spec, res, root, &chart, &rows, window)?;
         draw_publishes(spec, res, root, &chart, &rows, window)?;
         Ok(())
     })
@@ -82,11 +87,15 @@ pub fn gantt(spec: &Spec, res: &SimResult, window: (Nanos, Nanos)) -> Res<String
 /// Half the height of a slice, in rows: slices leave a gap between rows.
 const HALF_SLICE: f64 = 0.32;
 
-/// The rows of the Gantt chart: one per task, grouped by CPU id,
-/// declaration order inside a CPU.
+/// The rows of the Gantt chart: one per track (a task, or a work-queue
+/// thread's tasks), grouped by CPU id, declaration order inside a CPU.
 struct Rows {
     /// The row of each task (row 0 on top).
     of: Vec<usize>,
+    /// The label of each row.
+    names: Vec<String>,
+    /// Whether each row is a work-queue thread's (its slices are labelled).
+    shared: Vec<bool>,
     /// The CPUs, top to bottom.
     cpus: Vec<CpuRows>,
     /// How many rows (at least one).
@@ -102,13 +111,19 @@ struct CpuRows {
 
 impl Rows {
     fn of(spec: &Spec) -> Rows {
-        let mut order: Vec<usize> = (0..spec.tasks.len()).collect();
-        order.sort_by_key(|&i| (spec.tasks[i].cpu, i));
-        let mut of = vec![0usize; spec.tasks.len()];
+        let tracks = Tracks::of(spec);
+        let mut order: Vec<usize> = (0..tracks.tracks.len()).collect();
+        order.sort_by_key(|&k| (tracks.tracks[k].cpu, tracks.tracks[k].first));
+        let mut row_of_track = vec![0usize; order.len()];
+        let mut names = Vec::with_capacity(order.len());
+        let mut shared = Vec::with_capacity(order.len());
         let mut cpus: Vec<CpuRows> = Vec::new();
-        for (r, &i) in order.iter().enumerate() {
-            of[i] = r;
-            let cpu = spec.tasks[i].cpu;
+        for (r, &k) in order.iter().enumerate() {
+            let track = &tracks.tracks[k];
+            row_of_track[k] = r;
+            names.push(track.name.clone());
+            shared.push(track.thread.is_some());
+            let cpu = track.cpu;
             match cpus.last_mut() {
                 Some(g) if g.cpu == cpu => g.rows += 1,
                 _ => cpus.push(CpuRows {
@@ -119,7 +134,9 @@ impl Rows {
             }
         }
         Rows {
-            of,
+            of: tracks.of.iter().map(|&k| row_of_track[k]).collect(),
+            names,
+            shared,
             cpus,
             n: order.len().max(1),
         }
@@ -173,9 +190,9 @@ where
     Ok(())
 }
 
-/// Each task's name left of its row, right-aligned against the axis.
+/// Each row's name (its task's, or its thread's) left of it,
+/// right-aligned against the axis.
 fn draw_task_names<DB: DrawingBackend>(
-    spec: &Spec,
     root: &Area<DB>,
     chart: &Chart<'_, DB>,
     rows: &Rows,
@@ -184,10 +201,10 @@ fn draw_task_names<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    for (i, t) in spec.tasks.iter().enumerate() {
-        let (px, py) = chart.backend_coord(&(x0, rows.y(rows.of[i])));
+    for (r, name) in rows.names.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(x0, rows.y(r)));
         root.draw(&Text::new(
-            t.name.clone(),
+            name.clone(),
             (px - 8, py),
             text_style(13, BLACK, HPos::Right, VPos::Center),
         ))
@@ -232,6 +249,15 @@ where
         }
         root.draw(&Rectangle::new([(l, t), (r, b)], darker(c).stroke_width(1)))
             .map_err(err)?;
+        let name = &spec.tasks[s.task].name;
+        if rows.shared[rows.of[s.task]] && r - l > text_px(name, 11) + 6 {
+            root.draw(&Text::new(
+                name.clone(),
+                ((l + r) / 2, (t + b) / 2),
+                text_style(11, WHITE, HPos::Center, VPos::Center),
+            ))
+            .map_err(err)?;
+        }
     }
     Ok(())
 }
@@ -278,6 +304,54 @@ where
             .map_err(err)?;
             r += p;
         }
+    }
+    Ok(())
+}
+
+/// A data-triggered job's release: an arrow up its row at the instant (as
+/// a timer's), and a dashed line from its trigger's publish on the
+/// trigger's row.
+fn draw_triggered_releases<DB: DrawingBackend>(
+    spec: &Spec,
+    res: &SimResult,
+    root: &Area<DB>,
+    chart: &Chart<'_, DB>,
+    rows: &Rows,
+    (w0, w1): (Nanos, Nanos),
+) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let u = unit_of(spec);
+    for j in &res.jobs {
+        let Some(tr) = j.trigger.filter(|tr| tr.task < spec.tasks.len()) else {
+            continue;
+        };
+        if j.release < w0 || j.release > w1 || j.task >= spec.tasks.len() {
+            continue;
+        }
+        let x = j.release as f64 / u;
+        let y = rows.y(rows.of[j.task]);
+        let (px, pb) = chart.backend_coord(&(x, y - 0.5));
+        let (_, pt) = chart.backend_coord(&(x, y + 0.42));
+        let (_, from) = chart.backend_coord(&(x, rows.y(rows.of[tr.task]) + HALF_SLICE));
+        root.draw(&DashedPathElement::new(
+            vec![(px, from), (px, pt)],
+            3,
+            3,
+            RELEASE.stroke_width(1),
+        ))
+        .map_err(err)?;
+        root.draw(&PathElement::new(
+            vec![(px, pb), (px, pt)],
+            RELEASE.stroke_width(1),
+        ))
+        .map_err(err)?;
+        root.draw(&Polygon::new(
+            vec![(px, pt - 1), (px - 4, pt + 6), (px + 4, pt + 6)],
+            RELEASE.filled(),
+        ))
+        .map_err(err)?;
     }
     Ok(())
 }

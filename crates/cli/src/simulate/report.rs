@@ -3,6 +3,7 @@
 use super::*;
 use crate::analyze::{ChainView, ReportView, TaskView};
 use crate::report::{time, Pairs};
+use rtpipe_sim::observe::Summary;
 use serde::Serialize;
 
 #[derive(Serialize)]
@@ -81,6 +82,8 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
             r.tightness().map_or("-".into(), |x| format!("{x:.4}")),
             match (r.value, r.paper) {
                 (Some(v), Some(p)) if v > p => "yes".into(),
+                // No paper bound (a spec the analysis does not bound yet).
+                (_, None) => "-".into(),
                 _ => "no".into(),
             },
             r.simulations.to_string(),
@@ -122,6 +125,10 @@ pub(crate) struct Extended<B, X> {
 #[derive(Serialize)]
 pub(super) struct TaskObserved {
     released: u64,
+    /// Releases merged into a queued job (threads and data-triggered
+    /// tasks only: absent, not 0, for the others).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    merged: Option<u64>,
     completed: u64,
     max_response: Option<f64>,
     late: u64,
@@ -130,7 +137,7 @@ pub(super) struct TaskObserved {
 }
 
 #[derive(Serialize)]
-struct SimulationView<'a> {
+pub(super) struct SimulationView<'a> {
     horizon: f64,
     seed: u64,
     exec: String,
@@ -148,8 +155,9 @@ pub(super) fn to_json<'a>(
     obs: &[ChainObs],
     seconds: f64,
 ) -> SimulateView<'a> {
-    let observed = |ts: &rtpipe_joblog::TaskStats| TaskObserved {
+    let observed = |ts: &rtpipe_joblog::TaskStats, t: &rtpipe_model::Task| TaskObserved {
         released: ts.released,
+        merged: t.merges_releases().then_some(ts.merged),
         completed: ts.completed,
         max_response: time(spec, ts.max_response),
         late: ts.late,
@@ -160,17 +168,31 @@ pub(super) fn to_json<'a>(
         |tasks| {
             tasks
                 .into_iter()
-                .zip(&res.tasks)
-                .map(|(base, ts)| Extended {
+                .zip(res.tasks.iter().zip(&spec.tasks))
+                .map(|(base, (ts, t))| Extended {
                     base,
-                    observed: observed(ts),
+                    observed: observed(ts, t),
                 })
                 .collect()
         },
         |chains| chains,
     );
+    SimulateView {
+        report,
+        simulation: simulation_view(spec, a, res, seconds),
+        search: Vec::new(),
+    }
+}
+
+/// The run's settings and figures in `--json`.
+pub(super) fn simulation_view<'a>(
+    spec: &'a Spec,
+    a: &SimulateArgs,
+    res: &SimResult,
+    seconds: f64,
+) -> SimulationView<'a> {
     let offsets = spec.tasks.iter().zip(&res.offsets);
-    let simulation = SimulationView {
+    SimulationView {
         horizon: spec.in_unit(res.horizon),
         seed: a.seed,
         exec: flag_name(&a.exec),
@@ -182,11 +204,6 @@ pub(super) fn to_json<'a>(
         ),
         events: res.events,
         seconds,
-    };
-    SimulateView {
-        report,
-        simulation,
-        search: Vec::new(),
     }
 }
 
@@ -231,9 +248,9 @@ pub(crate) fn observations_view<'a>(
         }
         ObsChain {
             base,
-            observed: observed_json(spec, &o.read),
+            observed: observed_json(spec, o.read.observed),
             violations: Violations::of(&o.read),
-            observed_from_event: observed_json(spec, &o.event),
+            observed_from_event: observed_json(spec, o.event.observed),
             violations_from_event: Violations::of(&o.event),
         }
     };
@@ -256,9 +273,8 @@ pub(crate) struct ObservedView {
     variation: Option<f64>,
 }
 
-pub(crate) fn observed_json(spec: &Spec, j: &Judged) -> ObservedView {
+pub(crate) fn observed_json(spec: &Spec, s: Option<Summary>) -> ObservedView {
     let unit = spec.time_unit.nanos() as f64;
-    let s = j.observed;
     ObservedView {
         count: s.map_or(0, |s| s.count),
         min: s.map(|s| spec.in_unit(s.min)),
@@ -435,6 +451,29 @@ pub(super) fn to_text(
     obs: &[ChainObs],
     seconds: f64,
 ) -> String {
+    let mut out = run_lines(spec, a, p, res);
+    if !obs.is_empty() {
+        out.push_str(
+            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Read));
+        out.push_str(
+            "\nfrom the event just after each head read (reaction: to the first output that \
+             reflects it; freshness: to the last output of the next sample), against the +event bounds:\n",
+        );
+        out.push_str(&chain_table(spec, obs, Anchor::Event));
+        out.push_str(&known_table(spec, obs));
+    }
+    out.push_str("\ntasks (R(job): the analysed worst-case job response time):\n");
+    out.push_str(&task_table(spec, report, res));
+    out.push_str(&events_line(res, seconds));
+    out.push_str(&verdict_text(spec, report, res, obs));
+    out
+}
+
+/// The system, the simulated span and settings, and the offsets when any
+/// is not 0.
+pub(super) fn run_lines(spec: &Spec, a: &SimulateArgs, p: &Plan, res: &SimResult) -> String {
     let u = spec.time_unit;
     let mut out = crate::analyze::system_line(spec);
     let span = match p.outputs {
@@ -454,36 +493,27 @@ pub(super) fn to_text(
             .tasks
             .iter()
             .zip(&res.offsets)
+            // A data-triggered task has no offset: its triggers release it.
+            .filter(|(t, _)| !t.is_triggered())
             .map(|(t, &o)| format!("{}={}", t.name, spec.fmt_time(o)))
             .collect();
         out.push_str(&format!("offsets: {}\n", offs.join(" ")));
     }
-    if !obs.is_empty() {
-        out.push_str(
-            "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
-        );
-        out.push_str(&chain_table(spec, obs, Anchor::Read));
-        out.push_str(
-            "\nfrom the event just after each head read (reaction: to the first output that \
-             reflects it; freshness: to the last output of the next sample), against the +event bounds:\n",
-        );
-        out.push_str(&chain_table(spec, obs, Anchor::Event));
-        out.push_str(&known_table(spec, obs));
-    }
-    out.push_str("\ntasks (R(job): the analysed worst-case job response time):\n");
-    out.push_str(&task_table(spec, report, res));
+    out
+}
+
+/// How many events the run took and how fast.
+pub(super) fn events_line(res: &SimResult, seconds: f64) -> String {
     let eps = if seconds > 0.0 {
         res.events as f64 / seconds
     } else {
         0.0
     };
-    out.push_str(&format!(
+    format!(
         "\n{} events simulated in {seconds:.3} s ({} events/s)\n",
         res.events,
         si(eps)
-    ));
-    out.push_str(&verdict_text(spec, report, res, obs));
-    out
+    )
 }
 
 /// Per task: jobs released and completed, the largest response time seen

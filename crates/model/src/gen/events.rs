@@ -19,7 +19,9 @@ use crate::{
 /// What to generate.
 #[derive(Debug, Clone)]
 pub struct EventGenConfig {
-    /// Chains per system: 1..=max_chains, drawn.
+    /// Chains per system: min_chains..=max_chains, drawn.
+    pub min_chains: usize,
+    /// See `min_chains`.
     pub max_chains: usize,
     /// Tasks per chain: min_links..=max_links, drawn (at least 2).
     pub min_links: usize,
@@ -43,6 +45,7 @@ pub struct EventGenConfig {
 impl Default for EventGenConfig {
     fn default() -> Self {
         EventGenConfig {
+            min_chains: 1,
             max_chains: 3,
             min_links: 2,
             max_links: 8,
@@ -79,7 +82,8 @@ pub fn event_triggered_system(seed: u64, cfg: &EventGenConfig) -> Spec {
         .collect();
     let mut tasks = Vec::new();
     let mut chains = Vec::new();
-    let n_chains = rng.range(1, cfg.max_chains.max(1) as u64) as usize;
+    let lo = cfg.min_chains.max(1);
+    let n_chains = rng.range(lo as u64, cfg.max_chains.max(lo) as u64) as usize;
     for _ in 0..n_chains {
         chains.push(random_chain(&mut rng, cfg, &mut tasks));
     }

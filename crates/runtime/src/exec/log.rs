@@ -117,6 +117,7 @@ fn job_log<V>(
             read: r.read,
             finish: r.finish,
             carried: prov.record(i),
+            trigger: None,
         });
     }
     jobs
@@ -135,6 +136,7 @@ fn schedule<V>(threads: &[Thread<'_, V>]) -> Vec<JobRecord> {
                 read: r.start,
                 finish: r.done,
                 carried: Vec::new(),
+                trigger: None,
             })
         })
         .collect();
@@ -174,6 +176,7 @@ fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
         .count() as u64;
     let stats = TaskStats {
         released: th.recs.len() as u64,
+        merged: 0,
         completed: th.recs.len() as u64,
         max_response: responses.iter().copied().max(),
         late: missed,

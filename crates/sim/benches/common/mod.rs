@@ -40,12 +40,11 @@ pub fn describe(
 }
 
 /// A simulated span with about `events` events: two per job (release and
-/// completion) at the system's job rate.
+/// completion) at the system's job rate (a data-triggered task's at its
+/// nominal period, `Spec::activation_period`).
 pub fn span_for(spec: &Spec, events: f64) -> Nanos {
-    let jobs_per_ns: f64 = spec
-        .tasks
-        .iter()
-        .filter_map(|t| t.fixed_period())
+    let jobs_per_ns: f64 = (0..spec.tasks.len())
+        .filter_map(|i| spec.activation_period(i))
         .map(|p| 1.0 / p as f64)
         .sum();
     ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
