@@ -717,7 +717,7 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
             tr.missed.to_string(),
         ];
         if merging {
-            row.push(tr.merges.to_string());
+            row.push(ts.merged.to_string());
         }
         t.row(row);
     }
@@ -868,7 +868,7 @@ fn to_json<'a>(
             late: ts.late,
             missed_periods: tr.missed,
             overruns: tr.overruns,
-            merged: tr.merges,
+            merged: ts.merged,
             max_demand: spec.in_unit(tr.max_demand),
             max_start: spec.in_unit(tr.max_start),
             priority: tr.priority,

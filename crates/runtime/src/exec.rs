@@ -56,10 +56,6 @@ pub struct TaskRun {
     /// (`let_comm`): the producer overran its period, or the reader came
     /// later than the edge keeps jobs for.
     pub let_misses: u64,
-    /// Releases merged into a job of the task still queued and not started
-    /// (a task in a work-queue thread, or data-triggered: one pending job
-    /// at most); 0 for a thread-less periodic task.
-    pub merges: u64,
 }
 
 /// A finished run.
@@ -162,7 +158,8 @@ struct Thread<'a, V> {
     sections: Option<Sections>,
     /// Released by its triggers' publications, not by a timer.
     triggered: bool,
-    /// Releases merged into a job of it still queued (`queue`).
+    /// Releases merged into a job of it still queued (`queue`):
+    /// `TaskStats::merged`.
     merges: u64,
 }
 

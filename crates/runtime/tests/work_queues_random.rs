@@ -26,7 +26,7 @@ fn publications(r: &RunResult, p: usize) -> Vec<Nanos> {
 /// Task `i`'s releases are its jobs and merges, as its activation says.
 fn releases_add_up(spec: &Spec, r: &RunResult, i: usize, seed: u64) {
     let t = &spec.tasks[i];
-    let (jobs, merges) = (r.sim.tasks[i].completed, r.tasks[i].merges);
+    let (jobs, merges) = (r.sim.tasks[i].completed, r.sim.tasks[i].merged);
     let what = format!("seed {seed}, task {}: {jobs} jobs, {merges} merges", t.name);
     match t.triggers() {
         None => {
@@ -105,7 +105,7 @@ fn random_event_triggered_systems_keep_the_queue_rules() {
             let jobs = r.sim.tasks[i].completed;
             triggered += if t.is_triggered() { jobs } else { 0 };
             all += u64::from(t.triggers().is_some_and(|(_, j)| j == Join::All)) * jobs;
-            merges += r.tasks[i].merges;
+            merges += r.sim.tasks[i].merged;
         }
         for i in 0..spec.tasks.len() {
             releases_add_up(&spec, &r, i, seed);

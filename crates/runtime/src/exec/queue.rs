@@ -266,6 +266,11 @@ impl Queues {
         Some((m, release))
     }
 
+    /// No job of `tasks` is queued.
+    fn idle(&self, tasks: &[usize]) -> bool {
+        tasks.iter().all(|&t| self.pending[t].load(SeqCst) == EMPTY)
+    }
+
     /// Releases merged into a queued job of `task` during the run.
     pub(crate) fn merges(&self, task: usize) -> u64 {
         self.merges[task].load(SeqCst)
@@ -313,8 +318,14 @@ pub(super) fn serve<V: Copy>(
         let until = match next_timer {
             Some(t) => t,
             // Releases are over: end once no publication is under way that
-            // could still release a job here.
-            None if now >= duration && q.in_flight.load(SeqCst) == 0 => break,
+            // could still release a job here, and none landed since the
+            // look above (one may have ended in between).
+            None if now >= duration && q.in_flight.load(SeqCst) == 0 => {
+                if q.idle(&tasks) {
+                    break;
+                }
+                continue;
+            }
             None if now >= duration => now + SETTLE,
             None => duration,
         };
