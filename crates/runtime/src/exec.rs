@@ -565,9 +565,9 @@ fn start<'a, V: Copy + Send>(
             .map(|(w, members)| {
                 let first = &spec.tasks[members[0].task];
                 let name = first.name.as_str();
-                // A work-queue thread, or a data-triggered task: woken by
-                // releases, not by one timer.
-                let queued = first.thread.is_some() || first.is_triggered();
+                // A work-queue thread, or a data-triggered task: releases
+                // into slots, merged while a job waits (the model's rule).
+                let queued = first.merges_releases();
                 std::thread::Builder::new()
                     .stack_size(TASK_STACK)
                     .spawn_scoped(s, move || {
