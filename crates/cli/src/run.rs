@@ -172,6 +172,13 @@ fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Diagno
 /// Writes the rt-app workload (before the run: it needs no privilege, and a
 /// run refused for lack of one still leaves the file).
 fn export_rt_app(spec: &Spec, a: &RunArgs, cfg: &RunConfig, path: &Path) -> Result<(), Diagnostic> {
+    if spec.event_triggered() {
+        return Err(Diagnostic::error(
+            "--export-rt-app cannot express work-queue threads or data-triggered tasks: an rt-app thread is one task released by its own timer",
+            "drop --export-rt-app (`rtpipe run` runs the threads and triggers itself)",
+        )
+        .within(a.spec.display()));
+    }
     let r = rtpipe_runtime::rt_app(spec, cfg);
     let text = serde_json::to_string_pretty(&r.json)
         .map_err(|e| Diagnostic::error(format!("cannot render --export-rt-app: {e}"), ""))?;
@@ -657,9 +664,11 @@ fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
 
 /// One row per task: jobs, measured response times (`!!` marks a max above
 /// the analysed R(job)), start latency, CPU time against the budget,
-/// overruns and missed periods.
+/// overruns and missed periods; with work-queue threads or data-triggered
+/// tasks, the releases merged into a queued job too.
 fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
-    let mut t = Table::new(&[
+    let merging = spec.event_triggered();
+    let mut head = vec![
         "task",
         "cpu",
         "prio",
@@ -673,8 +682,12 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
         "budget",
         "overruns",
         "missed",
-    ])
-    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
+    ];
+    if merging {
+        head.push("merged");
+    }
+    let numeric: Vec<usize> = (1..head.len()).collect();
+    let mut t = Table::new(&head).numeric(&numeric);
     for (((task, ts), tr), tm) in spec
         .tasks
         .iter()
@@ -685,7 +698,7 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
         let s = Summary::of(&tr.responses);
         let f = |x: Option<Nanos>| x.map_or_else(|| "-".into(), |r| spec.fmt_time(r));
         let over = matches!((ts.max_response, tm.bounded_response()), (Some(s), Some(r)) if s > r);
-        t.row(vec![
+        let mut row = vec![
             task.name.clone(),
             if res.policy == Policy::Deadline && !res.partitioned {
                 "any".into()
@@ -704,7 +717,11 @@ fn task_table(spec: &Spec, report: &Report, res: &RunResult) -> String {
             spec.fmt_time(task.budget()),
             tr.overruns.to_string(),
             tr.missed.to_string(),
-        ]);
+        ];
+        if merging {
+            row.push(ts.merged.to_string());
+        }
+        t.row(row);
     }
     t.render()
 }
@@ -752,6 +769,9 @@ struct TaskMeasured {
     late: u64,
     missed_periods: u64,
     overruns: u64,
+    /// Releases merged into a job still queued (a task in a work-queue
+    /// thread or data-triggered); 0 for any other.
+    merged: u64,
     max_demand: f64,
     max_start: f64,
     priority: Option<i32>,
@@ -850,6 +870,7 @@ fn to_json<'a>(
             late: ts.late,
             missed_periods: tr.missed,
             overruns: tr.overruns,
+            merged: ts.merged,
             max_demand: spec.in_unit(tr.max_demand),
             max_start: spec.in_unit(tr.max_start),
             priority: tr.priority,

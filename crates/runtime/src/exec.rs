@@ -3,9 +3,13 @@
 //! every job, replayed after the run through the simulator's own sample
 //! provenance ([`rtpipe_joblog::Provenance`]) to measure the chains.
 
+mod check;
 mod log;
+mod queue;
 
-use crate::class::{configure, lock_memory, privileges, Placement, TASK_STACK};
+pub use check::{check, MAX_TASKS};
+
+use crate::class::{configure, lock_memory, Placement, TASK_STACK};
 pub use crate::config::{
     fifo_priorities, reservation_runtime, ErrorKind, Policy, RunConfig, RunError,
     OVERRUN_TOLERANCE, RESERVATION_MARGIN,
@@ -20,9 +24,9 @@ use crate::probe::{probe, Probe, PROBE_PERIOD};
 use crate::spin::{synthetic, Spin};
 use crate::sys;
 use log::assemble;
+use queue::{Env, Queues};
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamp, Stamped};
 use rtpipe_joblog::{JobRecord, Provenance, SimResult};
-use rtpipe_model::policy::LinuxClass;
 use rtpipe_model::{Communication, Spec};
 use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 use std::sync::{Barrier, Mutex};
@@ -152,6 +156,11 @@ struct Thread<'a, V> {
     let_misses: u64,
     /// Its critical sections, run before the body (synthetic bodies).
     sections: Option<Sections>,
+    /// Released by its triggers' publications, not by a timer.
+    triggered: bool,
+    /// Releases merged into a job of it still queued (`queue`):
+    /// `TaskStats::merged`.
+    merges: u64,
 }
 
 /// One input of a task thread.
@@ -203,120 +212,6 @@ fn watch(
         }
     }
     moved
-}
-
-/// Largest number of jobs logged in one run (memory: ~48 bytes a job).
-const MAX_JOBS: u64 = 20_000_000;
-
-/// Most tasks one run starts: a real-time thread each, whose stack
-/// (`TASK_STACK`) mlockall locks under SCHED_FIFO/SCHED_DEADLINE (3,000
-/// tasks with default stacks locked 6.2 GB).
-pub const MAX_TASKS: usize = 512;
-
-/// Checks that `spec` can run under `cfg` before any thread starts.
-pub fn check(spec: &Spec, cfg: &RunConfig) -> Result<(), RunError> {
-    if let Some((msg, help)) = crate::comm::refusal(spec, cfg.duration, cfg.policy) {
-        return Err(RunError::config(msg, help));
-    }
-    let cpus = sys::online_cpus();
-    let mut jobs = 0u64;
-    let mut bandwidth = 0.0;
-    for t in &spec.tasks {
-        let Some(period) = t.fixed_period().filter(|&p| p > 0) else {
-            return Err(RunError::config(
-                format!("task {} has no fixed positive period", t.name),
-                "give it `period = ...` (run `rtpipe design` to choose free periods)",
-            ));
-        };
-        jobs += (cfg.duration / period) as u64 + 1;
-        let deadline = t.deadline_given.unwrap_or(period);
-        bandwidth += reservation_runtime(t.budget(), deadline) as f64 / period as f64;
-        if t.cpu as usize >= cpus {
-            return Err(RunError::config(
-                format!(
-                    "task {} is bound to cpu {} but this machine has {cpus} CPU(s) (0..{})",
-                    t.name,
-                    t.cpu,
-                    cpus - 1
-                ),
-                format!("set `cpu` of task {} to a CPU below {cpus}", t.name),
-            ));
-        }
-        if cfg.policy == Policy::Deadline {
-            deadline_rules(&t.name, t.budget(), period)?;
-        }
-    }
-    if spec.tasks.len() > MAX_TASKS {
-        return Err(RunError::config(
-            format!(
-                "the spec has {} tasks, more than the {MAX_TASKS} one run starts (a real-time thread each, its memory locked)",
-                spec.tasks.len()
-            ),
-            "run a smaller spec, or study this one with `rtpipe simulate` (no thread per task)",
-        ));
-    }
-    privileges(spec, cfg.policy)?;
-    if jobs > MAX_JOBS {
-        return Err(RunError::config(
-            format!("the run would log {jobs} jobs, more than the {MAX_JOBS} this executor keeps"),
-            "shorten --duration",
-        ));
-    }
-    match (cfg.policy, spec.policy().linux) {
-        (Policy::Fifo, LinuxClass::Deadline) => Err(RunError::config(
-            "--policy fifo runs the rate-monotonic model, but the spec says scheduler = \"edf\"",
-            "use --policy deadline for an edf spec, or set scheduler = \"rm\"",
-        )),
-        (Policy::Deadline | Policy::EdfFifo, LinuxClass::Fifo) => Err(RunError::config(
-            format!(
-                "--policy {} runs the edf model, but the spec says scheduler = \"rm\"",
-                cfg.policy.name()
-            ),
-            "use --policy fifo for an rm spec, or set scheduler = \"edf\"",
-        )),
-        (Policy::Deadline, _) if bandwidth > 0.95 * cpus as f64 => Err(RunError::refused(
-            format!(
-                "SCHED_DEADLINE admission would fail: total bandwidth Σ C/T = {bandwidth:.3} exceeds 0.95 × {cpus} CPU(s) = {:.2}",
-                0.95 * cpus as f64
-            ),
-            "lower the budgets or lengthen the periods (the kernel admits at most sched_rt_runtime_us/sched_rt_period_us of each CPU)",
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// The kernel's rules for a SCHED_DEADLINE reservation (kernel/sched/
-/// deadline.c: `__checkparam_dl`, and the sched_deadline_period_{min,max}_us
-/// sysctls).
-fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunError> {
-    if budget < 1024 {
-        return Err(RunError::config(
-            format!("task {name}: budget {budget} ns is below SCHED_DEADLINE's minimum runtime of 1024 ns"),
-            format!("give task {name} a budget of at least 1.024 us"),
-        ));
-    }
-    if budget > period {
-        return Err(RunError::config(
-            format!("task {name}: budget {budget} ns exceeds its period {period} ns"),
-            format!("give task {name} a budget at most its period"),
-        ));
-    }
-    let sysctl = |f: &str| {
-        std::fs::read_to_string(format!("/proc/sys/kernel/{f}"))
-            .ok()
-            .and_then(|s| s.trim().parse::<i64>().ok())
-    };
-    let min = sysctl("sched_deadline_period_min_us").unwrap_or(100) * 1000;
-    let max = sysctl("sched_deadline_period_max_us").unwrap_or(1 << 22) * 1000;
-    if period < min || period > max {
-        return Err(RunError::config(
-            format!(
-                "task {name}: period {period} ns is outside SCHED_DEADLINE's allowed range [{min}, {max}] ns (kernel.sched_deadline_period_min_us/max_us)"
-            ),
-            format!("give task {name} a period in that range, or change the sysctls"),
-        ));
-    }
-    Ok(())
 }
 
 /// Runs `spec` for real: `bodies[i]` for every job of task i, `env` as the
@@ -373,7 +268,7 @@ fn execute<'a, V: Copy + Send>(
         )
     })?;
     sys::catch_stop_signals();
-    let shared = shared(spec, cfg.policy, &mut notes)?;
+    let shared = shared(spec, (cfg.policy, cfg.duration), &mut notes)?;
     shared.reserve_spans(&threads);
     let steal0 = sys::steal_time();
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
@@ -398,7 +293,7 @@ fn execute<'a, V: Copy + Send>(
     {
         return Err(e);
     }
-    let threads = unwrap_joined(finished);
+    let threads = unwrap_joined(finished, shared.queues.as_ref());
     let interrupted = sys::stop_requested();
     let mut res = assemble(
         spec,
@@ -424,12 +319,20 @@ fn execute<'a, V: Copy + Send>(
 /// locks, and under SCHED_DEADLINE a root domain per CPU where the machine
 /// allows it (else a note says EDF is global). What a run killed by
 /// SIGKILL left on the machine is repaired first, whatever the policy.
-fn shared(spec: &Spec, policy: Policy, notes: &mut Vec<String>) -> Result<Shared, RunError> {
+fn shared(
+    spec: &Spec,
+    (policy, duration): (Policy, Nanos),
+    notes: &mut Vec<String>,
+) -> Result<Shared, RunError> {
     match crate::partition::repair() {
         Ok(done) => notes.extend(done),
         Err(why) => notes.push(format!("warning: {why}")),
     }
-    let mut shared = Shared::new(spec.tasks.len());
+    let workers = queue::workers(spec);
+    let mut shared = Shared::new(spec.tasks.len(), workers);
+    if spec.event_triggered() {
+        shared.queues = Some(Queues::new(spec, &shared.workers, duration));
+    }
     shared.resources = Some(Resources::new(spec, policy).map_err(|e| {
         RunError::config(
             format!("cannot create the resources' locks: {e}"),
@@ -477,16 +380,21 @@ fn demoted_note(name: &str, policy: Policy, grace: Nanos) -> String {
     )
 }
 
-/// The joined threads, in task order; a body's panic goes on unwinding
-/// here, in the caller's thread (the panic hook has reported it).
-fn unwrap_joined<'a, V>(finished: Joined<'a, V>) -> Vec<Thread<'a, V>> {
+/// The joined task threads, in task order, with their merges from `q`; a
+/// body's panic goes on unwinding here, in the caller's thread (the panic
+/// hook has reported it).
+fn unwrap_joined<'a, V>(finished: Joined<'a, V>, q: Option<&Queues>) -> Vec<Thread<'a, V>> {
     let mut threads = Vec::with_capacity(finished.len());
     for r in finished {
         match r {
-            Ok(t) => threads.push(t),
+            Ok(t) => threads.extend(t),
             // A body panicked: the panic hook has reported it.
             Err(p) => std::panic::resume_unwind(p),
         }
+    }
+    threads.sort_by_key(|t| t.task);
+    for th in threads.iter_mut() {
+        th.merges = q.map_or(0, |q| q.merges(th.task));
     }
     threads
 }
@@ -505,18 +413,20 @@ fn threads<'a, V: Copy + Send>(
         .into_iter()
         .map(|c| c == Communication::Let)
         .collect();
+    let caps = queue::job_capacity(spec, cfg.duration);
     let mut threads: Vec<Thread<'a, V>> = bodies
         .into_iter()
         .enumerate()
         .map(|(i, body)| {
             let t = &spec.tasks[i];
-            let period = t.fixed_period().unwrap_or(1).max(1);
-            let cap = (cfg.duration / period) as usize + 2;
+            // 0 for a data-triggered task: it has no timer (`check`).
+            let period = t.fixed_period().unwrap_or(0);
+            let cap = caps[i] as usize;
             Thread {
                 task: i,
                 phase: t.offset.unwrap_or(0),
                 period,
-                deadline: t.deadline_given.unwrap_or(period).min(period),
+                deadline: deadline_of(t),
                 budget: t.budget(),
                 cpu: t.cpu as usize,
                 priority: match cfg.policy {
@@ -532,6 +442,8 @@ fn threads<'a, V: Copy + Send>(
                 let_comm: lets[i],
                 let_misses: 0,
                 sections: spin.and_then(|s| Sections::of(spec, i, s, cap)),
+                triggered: t.is_triggered(),
+                merges: 0,
             }
         })
         .collect();
@@ -555,6 +467,15 @@ fn threads<'a, V: Copy + Send>(
     threads
 }
 
+/// D ≤ T for a periodic task; a data-triggered one's given deadline, else
+/// none (it has no period to miss).
+fn deadline_of(t: &rtpipe_model::Task) -> Nanos {
+    match t.fixed_period() {
+        Some(p) => t.deadline_given.unwrap_or(p).min(p),
+        None => t.deadline_given.unwrap_or(Nanos::MAX),
+    }
+}
+
 /// What the task threads and the thread that starts them share.
 struct Shared {
     /// Every task thread has configured its scheduling class.
@@ -576,6 +497,12 @@ struct Shared {
     partition: Option<Partition>,
     /// The resources' locks and ceilings (`crate::locks`).
     resources: Option<Resources>,
+    /// The OS threads, each the tasks it runs (`queue::workers`: one per
+    /// task unless the spec has work-queue threads).
+    workers: Vec<Vec<usize>>,
+    /// The queues of an event-triggered spec (`queue`); `None`: every
+    /// task is a periodic thread of its own.
+    queues: Option<Queues>,
 }
 
 impl Shared {
@@ -592,11 +519,11 @@ impl Shared {
         }
     }
 
-    /// For `n` task threads (and the one that starts them).
-    fn new(n: usize) -> Shared {
+    /// For `n` tasks on `workers` (and the thread that starts them).
+    fn new(n: usize, workers: Vec<Vec<usize>>) -> Shared {
         Shared {
-            setup: Barrier::new(n + 1),
-            go: Barrier::new(n + 1),
+            setup: Barrier::new(workers.len() + 1),
+            go: Barrier::new(workers.len() + 1),
             abort: AtomicBool::new(false),
             epoch: AtomicI64::new(0),
             errors: Mutex::new(Vec::new()),
@@ -604,18 +531,21 @@ impl Shared {
             done: (0..n).map(|_| AtomicBool::new(false)).collect(),
             partition: None,
             resources: None,
+            workers,
+            queues: None,
         }
     }
 }
 
-/// What each task thread returned when joined: its [`Thread`] and log, or
-/// the panic of its body.
-type Joined<'a, V> = Vec<std::thread::Result<Thread<'a, V>>>;
+/// What each OS thread returned when joined: the [`Thread`]s of its tasks
+/// with their logs, or the panic of a body.
+type Joined<'a, V> = Vec<std::thread::Result<Vec<Thread<'a, V>>>>;
 
-/// Starts one thread per task, lets them run from a common epoch once all
-/// are configured (none runs a job if one could not be), watches them until
-/// the run's end plus `grace`, and joins them. Returns every thread's
-/// outcome, in task order, and the tasks [`watch`] had to demote.
+/// Starts one OS thread per worker (`queue::workers`: per task, or per
+/// work-queue thread), lets them run from a common epoch once all are
+/// configured (none runs a job if one could not be), watches them until
+/// the run's end plus `grace`, and joins them. Returns every OS thread's
+/// outcome, in worker order, and the tasks [`watch`] had to demote.
 fn start<'a, V: Copy + Send>(
     spec: &Spec,
     cfg: &RunConfig,
@@ -627,15 +557,22 @@ fn start<'a, V: Copy + Send>(
     let (policy, duration) = (cfg.policy, cfg.duration);
     let mut demoted = Vec::new();
     let mut probes = Vec::new();
+    let groups = group(threads, &shared.workers);
     let finished = std::thread::scope(|s| {
-        let handles: Vec<_> = threads
+        let handles: Vec<_> = groups
             .into_iter()
-            .map(|th| {
-                let name = spec.tasks[th.task].name.as_str();
+            .enumerate()
+            .map(|(w, members)| {
+                let first = &spec.tasks[members[0].task];
+                let name = first.name.as_str();
+                // A work-queue thread, or a data-triggered task: releases
+                // into slots, merged while a job waits (the model's rule).
+                let queued = first.merges_releases();
                 std::thread::Builder::new()
                     .stack_size(TASK_STACK)
                     .spawn_scoped(s, move || {
-                        task_thread(th, name, policy, (duration, grace), env, shared)
+                        let run = (policy, duration, grace);
+                        os_thread((members, w, queued), name, run, env, shared)
                     })
                     .unwrap_or_else(|e| panic!("cannot start the thread of task {name}: {e}"))
             })
@@ -658,19 +595,36 @@ fn start<'a, V: Copy + Send>(
     (finished, demoted, probes)
 }
 
-/// The life of one task's thread: enter its scheduling class, wait for
-/// the others, run its periodic loop from the epoch (unless the run was
-/// aborted), and hand the thread's log back.
-fn task_thread<'a, V: Copy>(
-    mut th: Thread<'a, V>,
+/// The task threads (in task order) grouped by the OS thread that runs
+/// them, in `workers`' order.
+fn group<'a, V>(threads: Vec<Thread<'a, V>>, workers: &[Vec<usize>]) -> Vec<Vec<Thread<'a, V>>> {
+    let mut slots: Vec<Option<Thread<'a, V>>> = threads.into_iter().map(Some).collect();
+    workers
+        .iter()
+        .map(|tasks| tasks.iter().filter_map(|&t| slots[t].take()).collect())
+        .collect()
+}
+
+/// The life of one OS thread: enter its scheduling class (its tasks share
+/// CPU and priority), wait for the others, run its loop from the epoch
+/// (unless the run was aborted): a work queue's (`queue::serve`) when
+/// `queued`, else its one task's periodic loop; and hand its tasks' logs
+/// back.
+fn os_thread<'a, V: Copy>(
+    (mut members, worker, queued): (Vec<Thread<'a, V>>, usize, bool),
     name: &str,
-    policy: Policy,
-    (duration, grace): (Nanos, Nanos),
+    (policy, duration, grace): (Policy, Nanos, Nanos),
     env: Option<&PiMutex<dyn Environment<V> + Send + 'a>>,
     shared: &Shared,
-) -> Thread<'a, V> {
-    let (tid, done) = (&shared.tids[th.task], &shared.done[th.task]);
-    tid.store(sys::gettid(), Ordering::SeqCst);
+) -> Vec<Thread<'a, V>> {
+    let tid = sys::gettid();
+    for th in &members {
+        shared.tids[th.task].store(tid, Ordering::SeqCst);
+        if let Some(d) = shared.dispatcher() {
+            d.register(th.task);
+        }
+    }
+    let th = &members[0];
     let place = Placement {
         name,
         cpu: th.cpu,
@@ -679,9 +633,6 @@ fn task_thread<'a, V: Copy>(
         deadline: th.deadline,
         period: th.period,
     };
-    if let Some(d) = shared.dispatcher() {
-        d.register(th.task);
-    }
     if let Err(e) = configure(&place, policy, shared.partition.as_ref()) {
         if let Ok(mut v) = shared.errors.lock() {
             v.push(e);
@@ -691,11 +642,17 @@ fn task_thread<'a, V: Copy>(
     shared.go.wait();
     if !shared.abort.load(Ordering::SeqCst) {
         let e = shared.epoch.load(Ordering::SeqCst);
-        let res = shared.resources.as_ref();
-        periodic(&mut th, e, (duration, duration + grace), env, res);
+        let (res, q) = (shared.resources.as_ref(), shared.queues.as_ref());
+        let span = (duration, duration + grace);
+        match q.filter(|_| queued) {
+            Some(q) => queue::serve((&mut members, worker), q, e, span, (env, res)),
+            None => periodic(&mut members[0], e, span, (env, res, q)),
+        }
     }
-    done.store(true, Ordering::SeqCst);
-    th
+    for th in &members {
+        shared.done[th.task].store(true, Ordering::SeqCst);
+    }
+    members
 }
 
 /// The periodic loop of one task: releases at epoch + φ + k·T for
@@ -705,8 +662,7 @@ fn periodic<V: Copy>(
     th: &mut Thread<'_, V>,
     epoch: Nanos,
     (duration, stop): (Nanos, Nanos),
-    env: Option<&PiMutex<dyn Environment<V> + Send + '_>>,
-    res: Option<&Resources>,
+    (env, res, q): (Env<'_, '_, V>, Option<&Resources>, Option<&Queues>),
 ) {
     let mut inputs: Vec<Cell<V>> = Vec::with_capacity(th.ins.len());
     let mut k: u64 = 0;
@@ -739,7 +695,7 @@ fn periodic<V: Copy>(
         if let Some(d) = dispatch {
             d.release(th.task, release + th.deadline);
         }
-        job(th, k, epoch, (env, res), &mut inputs);
+        job(th, (k, offset), epoch, (env, res, q), &mut inputs);
         if let Some(d) = dispatch {
             d.complete(th.task);
         }
@@ -747,23 +703,21 @@ fn periodic<V: Copy>(
     }
 }
 
-/// Job `k` of the task, released at epoch + φ + k·T: read the registers, run
-/// its critical sections and the body, publish to the registers, and log
-/// it. `inputs` is the job's buffer for the values read (kept across jobs:
+/// Job `k` of the task, released at epoch + `offset` (φ + k·T for a timer,
+/// a trigger's publish instant, or the first of the releases merged into
+/// it): read the registers, run its critical sections and the body,
+/// publish to the registers (and release the data-triggered tasks it
+/// triggers, `q`), and log it. `inputs` is the job's buffer for the values read (kept across jobs:
 /// no allocation here). Under LET (`let_comm`) it reads what was visible at
 /// its release and its output is visible from its period's end: those are
 /// the instants it logs and stamps.
 fn job<V: Copy>(
     th: &mut Thread<'_, V>,
-    k: u64,
+    (k, offset): (u64, Nanos),
     epoch: Nanos,
-    (env, res): (
-        Option<&PiMutex<dyn Environment<V> + Send + '_>>,
-        Option<&Resources>,
-    ),
+    (env, res, q): (Env<'_, '_, V>, Option<&Resources>, Option<&Queues>),
     inputs: &mut Vec<Cell<V>>,
 ) {
-    let offset = th.phase + k as i64 * th.period;
     let cpu0 = sys::thread_cpu_time();
     read_inputs(th, offset, epoch, inputs);
     let (start, device) = sense(th.task, epoch, env);
@@ -779,6 +733,9 @@ fn job<V: Copy>(
         s.run(res, k, th.priority, epoch);
     }
     let value = th.body.run(&job, inputs, device);
+    // Under way before the publish instant is taken: no thread ends before
+    // the releases this publication makes (`queue`).
+    let publishing = q.is_some_and(|q| q.begin(th.task));
     let done = actuate(th.task, epoch, env, &value) - epoch;
     let finish = if th.let_comm {
         offset + th.period
@@ -797,7 +754,14 @@ fn job<V: Copy>(
     for w in &mut th.let_out {
         w.write(Stamped { value, stamp });
     }
+    // The job's CPU time ends before it releases its consumers: the
+    // wake-ups are the executor's work (as the kernel's timer releases
+    // are), and a wake-up of a higher thread on this CPU switches to it
+    // inside the call.
     let demand = sys::thread_cpu_time() - cpu0;
+    if let Some(q) = q.filter(|_| publishing) {
+        q.publish(th.task, done);
+    }
     th.recs.push(Rec {
         index: k,
         release: offset,

@@ -65,6 +65,46 @@ pub fn sleep_until(t: i64) {
     }
 }
 
+/// Sleeps while `word` still holds `seen`, until CLOCK_MONOTONIC reads
+/// `until` (absolute) or [`wake`] is called on it; may return early
+/// (signals, spurious wake-ups): the caller re-checks what it waits for.
+/// A futex, so a waiting work-queue thread costs nothing and a wake-up
+/// allocates nothing.
+pub fn wait_until(word: &std::sync::atomic::AtomicU32, seen: u32, until: i64) {
+    let ts = libc::timespec {
+        tv_sec: until.div_euclid(1_000_000_000),
+        tv_nsec: until.rem_euclid(1_000_000_000),
+    };
+    // SAFETY: FUTEX_WAIT_BITSET on a live, aligned u32 (the atomic), with a
+    // valid absolute CLOCK_MONOTONIC timespec and the match-any mask; it
+    // only reads the word and sleeps.
+    unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAIT_BITSET | libc::FUTEX_PRIVATE_FLAG,
+            seen,
+            &ts as *const libc::timespec,
+            std::ptr::null::<u32>(),
+            libc::FUTEX_BITSET_MATCH_ANY,
+        );
+    }
+}
+
+/// Wakes every thread in [`wait_until`] on `word` (the caller has changed
+/// the word first, so a thread about to wait sees the change and does not).
+pub fn wake(word: &std::sync::atomic::AtomicU32) {
+    // SAFETY: FUTEX_WAKE on a live, aligned u32; it touches no memory.
+    unsafe {
+        libc::syscall(
+            libc::SYS_futex,
+            word.as_ptr(),
+            libc::FUTEX_WAKE | libc::FUTEX_PRIVATE_FLAG,
+            i32::MAX,
+        );
+    }
+}
+
 /// `SCHED_FIFO` at `priority` (1..=99) for the calling thread.
 pub fn set_fifo(priority: i32) -> io::Result<()> {
     let p = libc::sched_param {

@@ -3,7 +3,7 @@
 //! trace's spans), and what the threads could not do as the model says.
 
 use super::{Policy, RunResult, TaskRun, Thread, OVERRUN_TOLERANCE};
-use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats};
+use rtpipe_joblog::{JobRecord, Provenance, Segment, SimResult, TaskStats, Trigger};
 use rtpipe_model::{Nanos, Spec};
 
 /// The job log in the simulator's terms, the chains `prov` measures on it,
@@ -117,10 +117,35 @@ fn job_log<V>(
             read: r.read,
             finish: r.finish,
             carried: prov.record(i),
-            trigger: None,
+            trigger: trigger_of(spec, threads, i, r.release),
         });
     }
     jobs
+}
+
+/// The publication that released a job of data-triggered task `i` at
+/// `release`: the job of one of its triggers that published at that very
+/// instant (a release is made at its trigger's publish instant; the
+/// first trigger in declaration order on a tie of nanoseconds). `None`
+/// for a timer's job.
+fn trigger_of<V>(
+    spec: &Spec,
+    threads: &[Thread<'_, V>],
+    i: usize,
+    release: Nanos,
+) -> Option<Trigger> {
+    let (triggers, _) = spec.tasks[i].triggers()?;
+    triggers.iter().find_map(|&p| {
+        // A task's jobs publish in index order.
+        let k = threads[p]
+            .recs
+            .binary_search_by_key(&release, |r| r.finish)
+            .ok()?;
+        Some(Trigger {
+            task: p,
+            job: threads[p].recs[k].index,
+        })
+    })
 }
 
 /// Every job at the schedule's instants, in completion order.
@@ -176,7 +201,7 @@ fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
         .count() as u64;
     let stats = TaskStats {
         released: th.recs.len() as u64,
-        merged: 0,
+        merged: th.merges,
         completed: th.recs.len() as u64,
         max_response: responses.iter().copied().max(),
         late: missed,
