@@ -19,7 +19,7 @@
 //!   [`rtpipe_model::policy::rate_monotonic`], EDF by absolute deadline
 //!   (release + T) then task index. Jobs of one task run in FIFO order.
 //!   Background tasks run only when nothing else is ready.
-//! - Threads and data-triggered tasks (`events.rs`): a work-queue thread's
+//! - Threads and data-triggered tasks (`engine/events.rs`): a work-queue thread's
 //!   jobs run one at a time to completion in release order, at the thread's
 //!   rank; a completion releases the data-triggered tasks its task
 //!   triggers at that instant (join any, or all); a release that finds an

@@ -210,14 +210,6 @@ pub fn response_violations(report: &Report, res: &SimResult) -> Vec<usize> {
         .collect()
 }
 
-/// Does the analysis bound this spec? Not yet a spec with threads or
-/// data-triggered tasks: its runs are observed without bounds (the
-/// simulator runs them; the analysis of the event-triggered model is to
-/// come, and then this answers yes).
-pub fn bounds_available(spec: &Spec) -> bool {
-    !spec.event_triggered()
-}
-
 /// The longest of the tasks' periods (a data-triggered task's nominal one,
 /// `Spec::activation_period`, from its triggers).
 fn max_period(spec: &Spec, tasks: impl Iterator<Item = usize>) -> Option<Nanos> {

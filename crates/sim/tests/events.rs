@@ -314,8 +314,13 @@ fn the_search_moves_periodic_sources_to_a_triggered_chain_s_worst_case() {
         found.best.offsets[2], 0,
         "a data-triggered task has no offset"
     );
-    // No bounds for an event-triggered spec yet, and a replayable result.
-    assert_eq!((found.sound, found.paper), (None, None));
+    // The analysis bounds what the search found, and the result replays.
+    assert!(
+        found.sound.is_some_and(|b| b >= 7 * US),
+        "sound bound {:?} below the 7 µs found",
+        found.sound
+    );
+    assert!(found.paper.is_some());
     let replay = simulate(&s, &found.config).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(replay.chains[0].reaction.max, Some(7 * US));
 }

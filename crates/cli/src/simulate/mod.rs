@@ -2,7 +2,6 @@
 //! observed reaction and freshness times against the analysis' bounds.
 
 mod files;
-mod observed;
 mod plan;
 mod report;
 
@@ -22,9 +21,7 @@ use rtpipe_joblog::trace::{chrome_trace_with, TraceOptions};
 use rtpipe_joblog::RowSink;
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
-use rtpipe_sim::observe::{
-    bounds_available, horizon_for_outputs, observe, response_violations, ChainObs, Judged,
-};
+use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
 use rtpipe_sim::{
     simulate_with_progress, simulate_with_rows, Jitter, Phasing, SimConfig, SimError,
@@ -188,9 +185,6 @@ pub fn run(a: &SimulateArgs) -> ExitCode {
 /// row sink and stop flag.
 pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     let p = plan(spec, a)?;
-    if !bounds_available(spec) {
-        return execute_unbounded(spec, a, hooks, &p);
-    }
     let report = rtpipe_analysis::analyze(spec);
     let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
@@ -219,50 +213,6 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
         report: out,
         notes,
         status,
-    };
-    Ok(answer.after_write(written))
-}
-
-/// `execute` for a spec the analysis does not bound yet: the observations
-/// alone, with a note, and exit status 0.
-fn execute_unbounded(
-    spec: &Spec,
-    a: &SimulateArgs,
-    hooks: Hooks,
-    p: &Plan,
-) -> Result<Answer, Diagnostic> {
-    if a.plot.is_some() {
-        return Err(Diagnostic::error(
-            "--plot draws the observations against the analysis' bounds, which threads and data-triggered tasks do not have yet",
-            "drop --plot (--gantt and --trace show the schedule)",
-        ));
-    }
-    let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
-    let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
-    let stop = hooks.stop.as_deref();
-    let (res, searches, seconds) = simulate_and_search(spec, a, p, sink, stop)?;
-    let mut outputs = render_outputs(spec, a, p, &res, &[])?;
-    let written = write_all_outputs(a, &mut outputs, samples);
-    let out = if a.json {
-        let mut v = observed::to_json(spec, a, &res, seconds);
-        v.search = search_json(spec, &searches);
-        Rendered::Json(command::to_value(&v)?)
-    } else {
-        let mut t = observed::to_text(spec, a, p, &res, seconds);
-        if !searches.is_empty() {
-            t.push_str(&search_text(spec, &searches));
-        }
-        Rendered::Text(t)
-    };
-    let mut notes = outputs.notes;
-    if let Some(n) = p.outputs {
-        notes.extend(short_tails(spec, &res, n));
-    }
-    notes.push(observed::NO_BOUNDS.to_string());
-    let answer = Answer {
-        report: out,
-        notes,
-        status: 0,
     };
     Ok(answer.after_write(written))
 }

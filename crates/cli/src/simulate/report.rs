@@ -464,7 +464,11 @@ pub(super) fn to_text(
         out.push_str(&chain_table(spec, obs, Anchor::Event));
         out.push_str(&known_table(spec, obs));
     }
-    out.push_str("\ntasks (R(job): the analysed worst-case job response time):\n");
+    out.push_str(if spec.event_triggered() {
+        "\ntasks (R(job): the analysed worst-case job response time, from a job's first release; merged: releases that joined a queued job of the task):\n"
+    } else {
+        "\ntasks (R(job): the analysed worst-case job response time):\n"
+    });
     out.push_str(&task_table(spec, report, res));
     out.push_str(&events_line(res, seconds));
     out.push_str(&verdict_text(spec, report, res, obs));
@@ -519,34 +523,48 @@ pub(super) fn events_line(res: &SimResult, seconds: f64) -> String {
 /// Per task: jobs released and completed, the largest response time seen
 /// against the analysed one (`!!` when above), late jobs, exhaustions, load.
 fn task_table(spec: &Spec, report: &Report, res: &SimResult) -> String {
-    let mut t = Table::new(&[
-        "task",
-        "cpu",
-        "released",
+    // Threads and data-triggered tasks add how many releases joined a
+    // queued job (`merged`; "-" for a task whose jobs queue instead).
+    let merging = spec.event_triggered();
+    let mut head = vec!["task", "cpu", "released"];
+    head.extend(merging.then_some("merged"));
+    head.extend([
         "completed",
         "max R",
         "R(job)",
         "late",
         "exhaustions",
         "busy/horizon",
-    ])
-    .numeric(&[1, 2, 3, 4, 5, 6, 7, 8]);
+    ]);
+    let numeric: Vec<usize> = (1..head.len()).collect();
+    let mut t = Table::new(&head).numeric(&numeric);
     for ((task, ts), tm) in spec.tasks.iter().zip(&res.tasks).zip(&report.timing) {
         let over = matches!((ts.max_response, tm.bounded_response()), (Some(s), Some(r)) if s > r);
-        t.row(vec![
-            task.name.clone(),
-            task.cpu.to_string(),
-            ts.released.to_string(),
-            ts.completed.to_string(),
-            ts.max_response
-                .map_or_else(|| "-".into(), |r| spec.fmt_time(r))
-                + if over { " !!" } else { "" },
-            tm.job_response_time
-                .map_or_else(|| "unbounded".into(), |r| spec.fmt_time(r)),
-            ts.late.to_string(),
-            ts.exhaustions.to_string(),
-            format!("{:.4}", ts.busy as f64 / res.horizon as f64),
-        ]);
+        let merged = match task.merges_releases() {
+            true => ts.merged.to_string(),
+            false => "-".into(),
+        };
+        t.row(
+            vec![
+                task.name.clone(),
+                task.cpu.to_string(),
+                ts.released.to_string(),
+            ]
+            .into_iter()
+            .chain(merging.then_some(merged))
+            .chain([
+                ts.completed.to_string(),
+                ts.max_response
+                    .map_or_else(|| "-".into(), |r| spec.fmt_time(r))
+                    + if over { " !!" } else { "" },
+                tm.job_response_time
+                    .map_or_else(|| "unbounded".into(), |r| spec.fmt_time(r)),
+                ts.late.to_string(),
+                ts.exhaustions.to_string(),
+                format!("{:.4}", ts.busy as f64 / res.horizon as f64),
+            ])
+            .collect(),
+        );
     }
     t.render()
 }
