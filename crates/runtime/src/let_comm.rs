@@ -17,7 +17,12 @@
 //! and the consumer reads within N − 2 producer periods of its release,
 //! N = ⌈Tc / Tp⌉ + 3 (a consumer reads at the start of its job, before its
 //! deadline Dc ≤ Tc); a read that finds another job in its slot is counted
-//! ([`LetIn::read`]), its data flow logged as it happened.
+//! ([`LetIn::read`]), its data flow logged as it happened. A consumer more
+//! than N periods late finds its job written over: it takes the latest job
+//! held up to it, else the oldest after it, so its reads never go back
+//! (the job log's replay, like every register's reader, relies on that: a
+//! newer job taken first, then an older one, made a later output carry an
+//! older sample, which the chain tracker cannot place).
 //!
 //! Communication per chain (issue 22) makes edges mixed. A LET producer's
 //! edge to an implicit consumer is the same ring: the consumer, reading at
@@ -98,7 +103,31 @@ impl<V: Copy> LetIn<V> {
         };
         let n = self.slots.len() as u64;
         let v = self.slots[(j % n) as usize].read();
-        (v, v.is_some_and(|s| s.stamp.job == j))
+        if v.is_none_or(|s| s.stamp.job <= j) {
+            return (v, v.is_some_and(|s| s.stamp.job == j));
+        }
+        // Job j was written over: the consumer reads more than N periods
+        // late. Of what the slots hold, take the latest job up to j, else
+        // the oldest after it, so that what one consumer reads never goes
+        // back (the slots only move forward), as every register's reads.
+        (self.nearest(j), false)
+    }
+
+    /// The latest job up to `j` the slots hold, else the oldest after it.
+    fn nearest(&mut self, j: u64) -> Cell<V> {
+        self.seen.clear();
+        self.seen.extend(self.slots.iter_mut().map(|r| r.read()));
+        let held = self.seen.iter().flatten();
+        let before = held
+            .clone()
+            .filter(|s| s.stamp.job <= j)
+            .max_by_key(|s| s.stamp.job);
+        let after = || {
+            held.clone()
+                .filter(|s| s.stamp.job > j)
+                .min_by_key(|s| s.stamp.job)
+        };
+        before.or_else(after).copied()
     }
 }
 
@@ -138,6 +167,39 @@ impl<V: Copy> LetOut<V> {
 mod tests {
     use super::*;
     use rtpipe_body::Stamp;
+
+    #[test]
+    fn a_read_whose_job_was_written_over_never_goes_back() {
+        // Producer at 0 + 10k, consumer period 10: N = 4 slots. The
+        // producer has written jobs 0..=4 (slot 0 now holds job 4) while
+        // the consumer still reads at 15 (job 0 prescribed), then at 25
+        // (job 1, still in its slot).
+        let (mut out, mut inp) = edge::<u64>((0, 10), 10, true);
+        let stamped = |job: u64| Stamped {
+            value: job,
+            stamp: Stamp {
+                task: 0,
+                job,
+                read: job as Nanos * 10,
+                publish: job as Nanos * 10 + 10,
+            },
+        };
+        for job in 0..=4 {
+            out.write(stamped(job));
+        }
+        let (a, exact_a) = inp.read(15);
+        let (b, exact_b) = inp.read(25);
+        assert!(!exact_a && exact_b, "job 0 was written over, job 1 not");
+        // Not slot 0's job 4 and then job 1: the oldest held after the
+        // prescribed job, so the reads do not go back.
+        let (a, b) = (a.map(|s| s.stamp.job), b.map(|s| s.stamp.job));
+        assert_eq!((a, b), (Some(1), Some(1)));
+        for job in 5..=9 {
+            out.write(stamped(job));
+        }
+        // Job 2 (visible at 35) is gone too; 6 is the oldest held.
+        assert_eq!(inp.read(35).0.map(|s| s.stamp.job), Some(6));
+    }
 
     #[test]
     fn a_release_sees_the_periods_ended_by_then() {
