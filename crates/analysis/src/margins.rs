@@ -43,9 +43,6 @@ impl Control<'_> {
 pub enum MarginsError {
     /// [`Control::stop`] asked to stop before every margin was known.
     Stopped,
-    /// The spec has threads or data-triggered tasks, which the analysis
-    /// does not bound yet.
-    EventTriggered,
 }
 
 /// How far a time may move (a processing time, or a period's end).
@@ -231,9 +228,6 @@ pub struct Margins {
 
 /// Every margin of `spec` under `mode`.
 pub fn margins(spec: &Spec, mode: Mode, ctl: &Control) -> Result<Margins, MarginsError> {
-    if spec.event_triggered() {
-        return Err(MarginsError::EventTriggered);
-    }
     let mut o = Oracle::new(spec, mode, ctl);
     let base = crate::analyze_verdict(spec);
     let holds = o.holds_base(&base);

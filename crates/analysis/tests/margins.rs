@@ -160,15 +160,23 @@ fn table2_reaction_limits_are_beyond_any_exec() {
     }
 }
 
-/// Work-queue threads and data-triggered tasks are refused until their
-/// analysis exists.
+/// Work-queue threads and data-triggered tasks: the rate loop of the
+/// example has slack against its limit, and each margin is an edge.
 #[test]
-fn event_triggered_specs_are_refused() {
+fn event_triggered_margins_are_edges() {
     let s = example("work-queues.toml");
-    assert_eq!(
-        margins(&s, Mode::Sound, &Control::QUIET),
-        Err(MarginsError::EventTriggered)
-    );
+    let m = quiet(&s, Mode::Sound);
+    assert!(m.holds);
+    for e in &m.exec {
+        let Margin::By(v) = e.margin else {
+            panic!("task {}: {:?}", e.task, e.margin)
+        };
+        assert!(verdict(&with_exec(&s, e.task, e.exec + v), Mode::Sound));
+        assert!(!verdict(
+            &with_exec(&s, e.task, e.exec + v + 1),
+            Mode::Sound
+        ));
+    }
 }
 
 /// The stop flag ends the search at the next evaluation.
@@ -227,7 +235,11 @@ prop_compose! {
 /// bounds under `mode` (from the read and from the event), so that some
 /// limits hold and some fail.
 fn limited_system(seed: u64, cfg: &GenConfig, mode: Mode, scale: f64) -> Spec {
-    let mut s = random_system(seed, cfg);
+    limited(random_system(seed, cfg), mode, scale)
+}
+
+/// `s` with chain limits at `scale` times its bounds under `mode`.
+fn limited(mut s: Spec, mode: Mode, scale: f64) -> Spec {
     let r = analyze(&s);
     for c in &r.chains {
         let limit = |a: Anchor| {
@@ -387,4 +399,49 @@ fn scaling_a_tiny_exec_does_not_overflow() {
     let m = quiet(&s, Mode::Sound);
     // ⌊3 · m / 10⁶⌋ ≤ 9 999 999 ns ⇔ m ≤ 3 333 333 333 333.
     assert_eq!(m.system.factor, Factor::Millionths(3_333_333_333_333));
+}
+
+/// The same on generated event-triggered systems (threads, data-triggered
+/// tasks, join any and all): the sound verdict is monotone in every exec
+/// there too, and every margin is an edge of it.
+#[test]
+fn event_triggered_margins_are_edges_of_the_verdict() {
+    use rtpipe_model::gen::{event_triggered_system, EventGenConfig};
+    // Each case searches every margin with the full analysis as oracle:
+    // seconds on a large generated system, so few and small by default.
+    let cases = env_u64("RTPIPE_EVENT_MARGIN_CASES", 12) as u32;
+    let strategy = (any::<u64>(), 0.2f64..0.9, 0.7f64..1.6);
+    check(
+        "event_triggered_margins",
+        cases,
+        strategy,
+        |(seed, utilization, scale)| {
+            let cfg = EventGenConfig {
+                utilization,
+                max_chains: 1,
+                max_links: 4,
+                max_threads: 3,
+                max_timers: 1,
+                ..EventGenConfig::default()
+            };
+            let s = limited(event_triggered_system(seed, &cfg), Mode::Sound, scale);
+            let m = quiet(&s, Mode::Sound);
+            prop_assert_eq!(m.holds, verdict(&s, Mode::Sound));
+            for e in &m.exec {
+                if let Margin::By(v) = e.margin {
+                    let edge = e.exec + v;
+                    prop_assert!(verdict(&with_exec(&s, e.task, edge), Mode::Sound));
+                    prop_assert!(!verdict(&with_exec(&s, e.task, edge + 1), Mode::Sound));
+                    for k in 1..4 {
+                        prop_assert!(
+                            verdict(&with_exec(&s, e.task, edge * k / 4), Mode::Sound),
+                            "sound verdict not monotone in task {}'s exec",
+                            e.task
+                        );
+                    }
+                }
+            }
+            Ok(if m.holds { "holds" } else { "fails" })
+        },
+    );
 }

@@ -83,20 +83,19 @@ fn margins_csv_is_written_whole_and_never_over_the_spec() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("--margins-csv"));
 }
 
-/// Work-queue threads are not analysed yet: refused with a way out.
+/// Work-queue threads and data-triggered tasks have margins too.
 #[test]
-fn threads_are_refused() {
-    let dir = scratch("margins-threads");
-    let spec = dir.join("threads.toml");
-    let text = "[system]\nname = \"q\"\npriorities = \"explicit\"\n\
-                [threads.w]\npriority = 1\ncpu = 0\n\
-                [tasks.a]\nexec = 1\nperiod = 10\nthread = \"w\"\n";
-    std::fs::write(&spec, text).unwrap_or_default();
-    let o = rtpipe(&["analyze", &spec.to_string_lossy(), "--margins"]);
-    assert_exit(&o, 2);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("work-queue threads"), "{err}");
-    assert!(err.contains("drop --margins"), "{err}");
+fn threads_have_margins() {
+    let o = rtpipe(&[
+        "analyze",
+        &example("work-queues.toml"),
+        "--margins",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let exec = v["margins"]["exec"].as_array().cloned().unwrap_or_default();
+    assert_eq!(exec.len(), 7, "{v}");
 }
 
 /// Ctrl-C during a long search: status 130, a note, no CSV file.

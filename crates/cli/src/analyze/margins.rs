@@ -36,10 +36,6 @@ pub fn compute(
     match found {
         Ok(m) => Ok(Some(m)),
         Err(MarginsError::Stopped) => Ok(None),
-        Err(MarginsError::EventTriggered) => Err(Diagnostic::error(
-            "--margins: the spec has work-queue threads or data-triggered tasks, whose analysis does not exist yet",
-            "drop --margins (and --margins-csv), or give every task a period and a thread of its own",
-        )),
     }
 }
 
