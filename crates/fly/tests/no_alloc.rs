@@ -11,48 +11,8 @@
 use rtpipe_body::{Job, Stamp, Stamped};
 use rtpipe_fly::{real_time_parts, setup, Request};
 use rtpipe_model::{Nanos, Spec};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use rtpipe_testkit::alloc::{allocations, Counting};
 use std::path::Path;
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is passed on to the system allocator unchanged; the
-// count is a thread-local cell that itself never allocates.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-fn count() {
-    // `try_with`: a thread being torn down has no cell left.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -96,6 +56,10 @@ fn a_flights_jobs_allocate_nothing_past_20000_gyro_jobs() {
         .map(|t| Vec::with_capacity(t.reads.len()))
         .collect();
     let gyro = spec.tasks.iter().position(|t| t.name == "gyro");
+    // The counter counts (a test that cannot fail proves nothing).
+    let probe = allocations();
+    drop(std::hint::black_box(vec![0u8; 16]));
+    assert!(allocations() > probe, "the counting allocator is installed");
     let before = allocations();
     let mut gyro_jobs = 0;
     let mut first = None;

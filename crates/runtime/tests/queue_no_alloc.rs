@@ -10,45 +10,9 @@
 use rtpipe_body::{Body, Job, Stamped};
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_runtime::{run, Policy, RunConfig, Spin};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+use rtpipe_testkit::alloc::{allocations, Counting};
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
-
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is passed on to the system allocator unchanged; the
-// count is a thread-local cell that itself never allocates.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: the caller's contract, passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-fn count() {
-    // `try_with`: a thread being torn down has no cell left.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
@@ -91,7 +55,7 @@ fn work_queue_threads_allocate_nothing_between_jobs() {
             .map(|(t, s)| {
                 let demand = t.exec_min;
                 let body = move |job: &Job, _: &[Option<Stamped<u64>>], _: Option<u64>| {
-                    let n = ALLOCATIONS.with(Cell::get);
+                    let n = allocations();
                     let _ =
                         s.first
                             .compare_exchange(u64::MAX, n, Ordering::SeqCst, Ordering::SeqCst);

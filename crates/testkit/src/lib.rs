@@ -16,6 +16,8 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
+pub mod alloc;
+
 /// Random systems, deterministic per seed (the model's generator).
 pub use rtpipe_model::gen;
 
