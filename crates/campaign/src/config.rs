@@ -361,9 +361,14 @@ fn event_keys(g: &RawGenerate) -> Result<EventKeys, Problem> {
         ));
     }
     let threads = g.threads.unwrap_or(6);
-    if !(1..=64).contains(&threads) || !(1..=4).contains(&g.cpus) || !(1..=16).contains(&g.chains) {
+    let sizes = [
+        ("generate.threads", threads, 64),
+        ("generate.cpus", g.cpus, 4),
+        ("generate.chains", g.chains, 16),
+    ];
+    if let Some(&(field, _, _)) = sizes.iter().find(|(_, n, most)| !(1..=*most).contains(n)) {
         return Err((
-            if !(1..=64).contains(&threads) { "generate.threads" } else if !(1..=4).contains(&g.cpus) { "generate.cpus" } else { "generate.chains" },
+            field,
             format!("{threads} threads, {} CPUs, {} chains", g.cpus, g.chains),
             "give 1..=64 threads, 1..=4 CPUs and 1..=16 chains per system (each at most; drawn from 1)",
         ));

@@ -379,18 +379,17 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
     /// The best run found, with the analysis' bounds for its quantity.
     fn result(self) -> SearchResult {
         let (spec, cfg) = (self.spec, self.cfg);
-        let report = Some(analyze(spec));
+        let report = analyze(spec);
         let (sound, paper) = report
+            .chains
             .iter()
-            .flat_map(|r| &r.chains)
             .find(|c| c.chain == cfg.chain && c.metric == cfg.metric)
             .map_or((None, None), |c| {
                 let a = cfg.anchor;
                 (c.bound.sound(a), Some(c.bound.paper(a)))
             });
         let known = report
-            .as_ref()
-            .and_then(|r| r.offset_bound(cfg.chain, cfg.metric, cfg.anchor))
+            .offset_bound(cfg.chain, cfg.metric, cfg.anchor)
             .cloned();
         let (best, value, witness) = match &self.best {
             Some(b) => (b.cand.clone(), b.value, b.witness),
