@@ -19,10 +19,14 @@
 //! deadline Dc ≤ Tc); a read that finds another job in its slot is counted
 //! ([`LetIn::read`]), its data flow logged as it happened. A consumer more
 //! than N periods late finds its job written over: it takes the latest job
-//! held up to it, else the oldest after it, so its reads never go back
-//! (the job log's replay, like every register's reader, relies on that: a
-//! newer job taken first, then an older one, made a later output carry an
-//! older sample, which the chain tracker cannot place).
+//! held up to it, else the oldest after it. Whatever a slot holds, one
+//! consumer's reads never go back: a read that would return an older job
+//! than the last one it returned (a producer late on job j leaves job
+//! j − N in j's slot, or nothing) returns the last one again, counted as
+//! not the job LET prescribes. The job log's replay, like every register's
+//! reader, relies on that: a newer job taken first, then an older one,
+//! made a later output carry an older sample, which the chain tracker
+//! cannot place.
 //!
 //! Communication per chain (issue 22) makes edges mixed. A LET producer's
 //! edge to an implicit consumer is the same ring: the consumer, reading at
@@ -53,6 +57,8 @@ pub(crate) struct LetIn<V> {
     /// The slots' values of one read by publish instant (no allocation
     /// while a job runs).
     seen: Vec<Cell<V>>,
+    /// What the last read returned: no read returns an older job.
+    last: Cell<V>,
 }
 
 /// A producer's end of one LET edge.
@@ -78,6 +84,7 @@ pub(crate) fn edge<V: Copy + Send>(
             period,
             by_period,
             seen: Vec::with_capacity(n as usize),
+            last: None,
         },
     )
 }
@@ -93,8 +100,21 @@ pub(crate) fn visible(release: Nanos, (phase, period): (Nanos, Nanos)) -> Option
 impl<V: Copy> LetIn<V> {
     /// The value visible at `release`, and whether it is the job LET
     /// prescribes (false: the producer had not written it yet, or had
-    /// already written over it).
+    /// already written over it). Never an older job than the last read
+    /// returned.
     pub(crate) fn read(&mut self, release: Nanos) -> (Cell<V>, bool) {
+        let (v, exact) = self.prescribed(release);
+        let job = |c: &Cell<V>| c.map(|s| s.stamp.job);
+        // `None` (nothing written) orders before every job.
+        if job(&v) < job(&self.last) {
+            return (self.last, false);
+        }
+        self.last = v;
+        (v, exact)
+    }
+
+    /// What LET prescribes at `release`, as near as the slots hold it.
+    fn prescribed(&mut self, release: Nanos) -> (Cell<V>, bool) {
         if !self.by_period {
             return self.read_published(release);
         }
@@ -202,6 +222,32 @@ mod tests {
     }
 
     #[test]
+    fn a_producer_late_on_the_prescribed_job_never_sends_the_reader_back() {
+        // Producer and consumer at 0 + 10k: N = 4 slots. Jobs 0..=4 are
+        // written (slot 0 holds job 4); at 50 job 4 is prescribed, at 60
+        // job 5, whose slot still holds job 1 (the producer is late).
+        let (mut out, mut inp) = edge::<u64>((0, 10), 10, true);
+        for job in 0..=4 {
+            let stamp = Stamp {
+                task: 0,
+                job,
+                read: job as Nanos * 10,
+                publish: job as Nanos * 10 + 10,
+            };
+            out.write(Stamped { value: job, stamp });
+        }
+        let (a, exact_a) = inp.read(50);
+        let (b, exact_b) = inp.read(60);
+        assert!(exact_a && !exact_b, "job 4 is held, job 5 is not written");
+        let (a, b) = (a.map(|s| s.value), b.map(|s| s.value));
+        assert_eq!((a, b), (Some(4), Some(4)), "job 4 again, not job 1");
+        // Nothing written is older than anything: job 4 again at 90.
+        let (mut _out, mut fresh) = edge::<u64>((0, 10), 10, true);
+        assert_eq!(fresh.read(90).0.map(|s| s.value), None);
+        assert_eq!(inp.read(90).0.map(|s| s.value), Some(4));
+    }
+
+    #[test]
     fn a_release_sees_the_periods_ended_by_then() {
         // Producer at 1 + 5k: job 0's period ends at 6.
         assert_eq!(visible(5, (1, 5)), None);
@@ -245,12 +291,16 @@ mod tests {
         assert!(ok);
         assert_eq!(v.map(|s| s.value), Some(101));
         assert_eq!(r.read(3).0.map(|s| s.value), Some(101), "at the instant");
-        // Jobs 3 … 7 overwrite every slot: job 1's successor is gone.
+        // Jobs 3 … 7 overwrite every slot: job 1's successor is gone, and
+        // a reader that never read before finds nothing published by 4.
         for j in 3..=7 {
             put(&mut w, j, 2 * j as Nanos + 1);
         }
-        let (v, ok) = r.read(4);
+        let (v, ok) = r.read_published(4);
         assert!(v.is_none() && !ok);
+        // This reader took job 1 already: job 1 again, not nothing.
+        let (v, ok) = r.read(4);
+        assert!(v.is_some_and(|s| s.value == 101) && !ok);
         assert_eq!(r.read(13).0.map(|s| s.value), Some(106));
     }
 
