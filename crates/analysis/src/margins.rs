@@ -267,6 +267,29 @@ pub fn margins(spec: &Spec, mode: Mode, ctl: &Control) -> Result<Margins, Margin
     })
 }
 
+/// `spec` with every exec (of `cpu`; of every CPU for `None`) scaled by
+/// `millionths` / 10⁶, rounded down, each given budget kept unless the
+/// demand outgrows it: the variant a critical scaling factor judges.
+pub fn scaled(spec: &Spec, cpu: Option<u32>, millionths: Nanos) -> Spec {
+    let mut work = spec.clone();
+    search::scale_execs(&mut work, spec, cpu, millionths);
+    work
+}
+
+/// The critical scaling factor of `cpu`'s tasks (every task for `None`)
+/// alone, under `mode`: [`Margins::system`] without the other searches.
+pub fn critical_scaling(
+    spec: &Spec,
+    mode: Mode,
+    cpu: Option<u32>,
+    ctl: &Control,
+) -> Result<Scaling, MarginsError> {
+    let mut o = Oracle::new(spec, mode, ctl);
+    let holds = o.holds_base(&crate::analyze_verdict(spec));
+    o.total = 1;
+    scaling(&mut o, cpu, holds)
+}
+
 /// A task with a fixed period the verdict depends on (not background).
 fn has_guaranteed_period(spec: &Spec, i: usize) -> bool {
     let t = &spec.tasks[i];
@@ -391,8 +414,8 @@ fn limit_slack(o: &mut Oracle, mut l: LimitSlack) -> Result<LimitSlack, MarginsE
     Ok(l)
 }
 
-/// One million: a factor of 1 in millionths.
-const ONE: Nanos = 1_000_000;
+/// A factor of 1 in millionths, the unit of every scaling factor.
+pub const ONE: Nanos = 1_000_000;
 
 /// The critical scaling factor of `cpu`'s tasks (every task for `None`).
 fn scaling(o: &mut Oracle, cpu: Option<u32>, holds: bool) -> Result<Scaling, MarginsError> {

@@ -1,6 +1,6 @@
 //! `rtpipe analyze`.
 
-mod margins;
+pub(crate) mod margins;
 
 use crate::command::mode_parser;
 use crate::command::{self, Answer, Rendered};

@@ -1,6 +1,7 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
 mod flights;
+mod margin;
 
 use crate::analyze::{report_text, report_view, ReportView};
 use crate::command::mode_parser;
@@ -25,6 +26,15 @@ pub enum MethodArg {
     Auto,
     Boxes,
     Milp,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ObjectiveArg {
+    /// The least utilisation Σ C/T that meets every limit.
+    Utilization,
+    /// The largest critical scaling factor (every exec grown together)
+    /// within --max-utilization.
+    Margin,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -84,6 +94,20 @@ pub struct DesignArgs {
     /// (repeat or separate with commas) [default: 0].
     #[arg(long = "seed", value_name = "S", value_delimiter = ',')]
     pub seeds: Vec<u64>,
+    /// What the answer optimises: `utilization` (least Σ C/T) or `margin`
+    /// (the largest factor every exec may grow by together, among the
+    /// designs within --max-utilization).
+    #[arg(long, value_enum, default_value = "utilization")]
+    pub objective: ObjectiveArg,
+    /// With --objective margin: the most utilisation Σ C/T the design may
+    /// use (e.g. 0.8).
+    #[arg(long, value_name = "U", value_parser = margin::parse_cap, allow_hyphen_values = true)]
+    pub max_utilization: Option<f64>,
+    /// Also compute the timing margins of the answer (as `analyze
+    /// --margins` does): how much each exec may grow, each chain's slack,
+    /// the critical scaling factors and each period's range.
+    #[arg(long)]
+    pub margins: bool,
 }
 
 /// The most `--time-limit` accepts, in seconds (about 11.6 days).
@@ -150,6 +174,7 @@ pub fn execute(
         })
         .transpose()?;
     let mut opts = options(a);
+    opts.objective = margin::objective(a)?;
     let flying = flight_check(a, spec)?;
     if let Some((check, _)) = &flying {
         opts.accept = Some(check.clone());
@@ -162,7 +187,12 @@ pub fn execute(
     let mut notes = Vec::new();
     let written = write_design(write.as_ref(), &out, &mut notes);
     let what = flying.map(|(_, w)| w);
-    let report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
+    let margins = match (a.margins, &out.spec) {
+        (true, Some(s)) if !stopped => margin::answer_margins(s, opts.mode, stop)?,
+        _ => None,
+    };
+    let mut report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
+    margin::append(&mut report, &out, margins.as_ref())?;
     let status = match (stopped, out.status) {
         (true, _) => crate::interrupted_status(),
         (false, Status::Optimal | Status::Feasible) => 0,
@@ -453,7 +483,19 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
         conflicts: Vec::new(),
         notes: Vec::new(),
         checked: Vec::new(),
+        margin: None,
     };
+    // Under the margin objective the designs published are of scaled
+    // systems: one is an answer only within the cap, and its lower bound
+    // is another problem's.
+    let cap = match opts.objective {
+        rtpipe_design::Objective::Margin { max_utilization } => Some(max_utilization),
+        rtpipe_design::Objective::Utilization => None,
+    };
+    let best = best.map(|b| Incumbent {
+        lower_bound: b.lower_bound.filter(|_| cap.is_none()),
+        ..b
+    });
     let verified = best
         .filter(|b| b.periods.len() == spec.tasks.len())
         .and_then(|b| {
@@ -462,7 +504,8 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
                 t.period = PeriodSpec::Fixed(p);
             }
             let r = rtpipe_analysis::analyze(&s);
-            r.ok_in(opts.mode).then_some((s, r, b))
+            let within = cap.is_none_or(|c| rtpipe_design::utilization(&s) <= c + 1e-12);
+            (within && r.ok_in(opts.mode)).then_some((s, r, b))
         });
     let Some((s, r, b)) = verified else {
         o.notes

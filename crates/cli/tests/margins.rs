@@ -141,3 +141,72 @@ fn ctrl_c_stops_the_search_and_writes_nothing() {
     assert!(!out.exists());
     assert!(after < Duration::from_secs(30), "{after:?}");
 }
+
+/// `design --objective margin --max-utilization U`: the factor found, the
+/// answer within the cap, `--margins` of the answer; the flags' refusals.
+#[test]
+fn design_for_margin_within_a_cap() {
+    let spec = example("timing-design.toml");
+    let o = rtpipe(&[
+        "design",
+        &spec,
+        "--objective",
+        "margin",
+        "--max-utilization",
+        "0.6",
+        "--margins",
+    ]);
+    assert_exit(&o, 0);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("margin objective: every exec ×1.333"),
+        "{text}"
+    );
+    assert!(text.contains("all    1.333333"), "{text}");
+    let o = rtpipe(&[
+        "design",
+        &spec,
+        "--objective",
+        "margin",
+        "--max-utilization",
+        "0.33",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let search = &v["design"]["margin_search"];
+    assert_eq!(search["largest"], true);
+    assert!(v["design"]["objective"].as_f64().is_some_and(|u| u <= 0.33));
+    let steps = search["steps"].as_array().map_or(0, Vec::len);
+    assert!(steps > 3, "{search}");
+    // A cap below the least utilisation (0.2909): no design, exit 1.
+    let o = rtpipe(&[
+        "design",
+        &spec,
+        "--objective",
+        "margin",
+        "--max-utilization",
+        "0.25",
+    ]);
+    assert_exit(&o, 1);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("0.2909"));
+    for (args, says) in [
+        (vec!["--objective", "margin"], "needs a utilisation cap"),
+        (vec!["--max-utilization", "0.5"], "add --objective margin"),
+        (
+            vec!["--objective", "margin", "--max-utilization", "-1"],
+            "positive number",
+        ),
+        (
+            vec!["--objective", "margin", "--max-utilization", "nan"],
+            "positive number",
+        ),
+    ] {
+        let mut all = vec!["design", spec.as_str()];
+        all.extend(args.iter().copied());
+        let o = rtpipe(&all);
+        assert_exit(&o, 2);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(says), "{args:?}: {e}");
+    }
+}

@@ -65,6 +65,54 @@ pub struct Options {
     /// --fly`: its flights); box search only. See `gate.rs` for the cut a
     /// rejected design leaves.
     pub accept: Option<Arc<dyn Acceptance>>,
+    /// What the answer optimises.
+    pub objective: Objective,
+}
+
+/// What `design` optimises.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Objective {
+    /// The least utilisation Σ C/T that meets every limit.
+    #[default]
+    Utilization,
+    /// The largest critical scaling factor (every exec grown together)
+    /// among the designs of utilisation at most `max_utilization`.
+    Margin {
+        /// The cap on Σ C/T.
+        max_utilization: f64,
+    },
+}
+
+/// What the margin objective's search did (`Objective::Margin`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarginSearch {
+    /// The utilisation cap.
+    pub cap: f64,
+    /// The largest factor on every exec at which the design was found
+    /// (`None`: no design fits the cap).
+    pub factor: Option<f64>,
+    /// The answer's own critical scaling factor (at least `factor`).
+    pub critical: Option<rtpipe_analysis::margins::Factor>,
+    /// `factor` is the largest any design within the cap keeps, to a
+    /// thousandth of itself: sound mode, the search not cut short, and
+    /// every task's utilisation scaling with its exec (no transfers, no
+    /// given budgets); otherwise a verified factor only.
+    pub exact: bool,
+    /// Every factor tried, in order.
+    pub steps: Vec<MarginStep>,
+}
+
+/// One factor the margin search tried.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarginStep {
+    /// The factor on every exec.
+    pub factor: f64,
+    /// What the least-utilisation search of the scaled system proved.
+    pub status: Status,
+    /// The utilisation of its design with the execs as given, if any.
+    pub utilization: Option<f64>,
+    /// It fits the cap.
+    pub accepted: bool,
 }
 
 /// A check beyond the analysis that a design must pass to be the answer.
@@ -109,6 +157,7 @@ impl Default for Options {
             cancel: None,
             incumbent: None,
             accept: None,
+            objective: Objective::Utilization,
         }
     }
 }
@@ -182,6 +231,8 @@ pub struct Outcome {
     /// Every design the [`Options::accept`] check judged, in order (empty
     /// without one).
     pub checked: Vec<Checked>,
+    /// The margin objective's search (`None` for least utilisation).
+    pub margin: Option<MarginSearch>,
 }
 
 /// Whose fault a [`DesignError`] is.

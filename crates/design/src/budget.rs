@@ -171,6 +171,7 @@ impl Budget {
             conflicts,
             notes,
             checked: Vec::new(),
+            margin: None,
         }
     }
 }

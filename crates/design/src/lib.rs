@@ -29,7 +29,7 @@
 // Layers, bottom up; a module uses only modules of lower layers:
 // lp < api, linear < domain < problem < budget, model < paper, rta, sound
 // < learnt < master < solve < heuristic, axis, joint < bnb < frontier < explain
-// < boxes, runner < lib.rs (`design`).
+// < boxes, runner < robust < lib.rs (`design`).
 mod api;
 mod axis;
 mod bnb;
@@ -50,14 +50,15 @@ mod master;
 mod model;
 mod paper;
 mod problem;
+mod robust;
 mod rta;
 mod runner;
 mod solve;
 mod sound;
 
 pub use api::{
-    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Method, Options,
-    Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
+    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, MarginSearch,
+    MarginStep, Method, Objective, Options, Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
 };
 use budget::Budget;
 use domain::domains;
@@ -73,8 +74,24 @@ use std::time::Instant;
 /// workspace).
 pub use rtpipe_analysis::Mode;
 
-/// Designs the periods of `spec`.
+/// Designs the periods of `spec` for `opts.objective`.
 pub fn design(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
+    match opts.objective {
+        Objective::Utilization => least_utilization(spec, opts),
+        Objective::Margin { max_utilization } => {
+            if !(max_utilization.is_finite() && max_utilization > 0.0) {
+                return Err(DesignError::input(format!(
+                    "a utilisation cap of {max_utilization} admits no design"
+                ))
+                .help("give a positive cap, e.g. --max-utilization 0.8"));
+            }
+            robust::most_robust(spec, opts, max_utilization, least_utilization)
+        }
+    }
+}
+
+/// The periods of `spec` of least utilisation.
+fn least_utilization(spec: &Spec, opts: &Options) -> Result<Outcome, DesignError> {
     let start = Instant::now();
     if !opts.solver.available() {
         return Err(DesignError::input(

@@ -142,6 +142,18 @@ def test_design_returns_the_designed_system():
     assert again["schedulability"]["utilization"] == pytest.approx(r["design"]["objective"])
 
 
+def test_design_for_margin_within_a_utilisation_cap():
+    system = rtpipe.load(EXAMPLES / "timing-design.toml")
+    r = system.design(objective="margin", max_utilization=0.6, margins=True)
+    search = r["design"]["margin_search"]
+    assert search["max_utilization"] == 0.6
+    assert search["factor"] == pytest.approx(4 / 3, rel=2e-3)
+    assert r["design"]["objective"] <= 0.6
+    assert r["margins"]["scaling"][-1]["factor"] >= search["factor"]
+    with pytest.raises(rtpipe.InputError, match="max-utilization"):
+        system.design(objective="margin")
+
+
 def test_a_bad_spec_raises_spec_error_with_its_place(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('[system]\nname = "x"\n\n[tasks.a]\nperiod = "ten ms"\nexec = 1\n')

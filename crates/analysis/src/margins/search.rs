@@ -5,6 +5,31 @@ use super::{Breach, Control, LimitSlack, MarginsError, PeriodRange, ONE};
 use crate::{analyze_chain, chain_results, sched, Anchor, Mode, Report};
 use rtpipe_model::{Nanos, PeriodSpec, Spec, MAX_TIME};
 
+/// `base`'s task with its exec set to `v` in `t` (its best case no above
+/// it), a given budget raised to the demand where the demand outgrows it
+/// (the reservation resized only when the job no longer fits; below, the
+/// budget stays what the other tasks see).
+fn set_exec(t: &mut rtpipe_model::Task, base: &rtpipe_model::Task, v: Nanos) {
+    t.exec = v;
+    t.exec_min = base.exec_min.min(v);
+    let demand = t.demand();
+    if let (Some(c), Some(given)) = (&mut t.budget_given, base.budget_given) {
+        *c = given.max(demand);
+    }
+}
+
+/// Every exec of `base` on `cpu` (every CPU for `None`) scaled by
+/// `millionths` / 10⁶, rounded down, into `work` (a copy of `base`), each
+/// by [`set_exec`]'s rule.
+pub(super) fn scale_execs(work: &mut Spec, base: &Spec, cpu: Option<u32>, millionths: Nanos) {
+    for (t, b) in work.tasks.iter_mut().zip(&base.tasks) {
+        if cpu.is_none_or(|c| b.cpu == c) {
+            let v = i128::from(b.exec) * i128::from(millionths) / i128::from(ONE);
+            set_exec(t, b, Nanos::try_from(v).unwrap_or(MAX_TIME));
+        }
+    }
+}
+
 /// The spec, a working copy whose execs and periods the searches set, and
 /// the verdict on that copy.
 pub(super) struct Oracle<'a> {
@@ -46,19 +71,9 @@ impl<'a> Oracle<'a> {
         self.work.tasks.clone_from(&self.base.tasks);
     }
 
-    /// Task `i`'s exec set to `v` (its best case no above it), a given
-    /// budget raised to the demand where the demand outgrows it (the
-    /// reservation resized only when the job no longer fits; below, the
-    /// budget stays what the other tasks see).
+    /// Task `i`'s exec set to `v`: [`set_exec`]'s rule.
     pub(super) fn set_exec(&mut self, i: usize, v: Nanos) {
-        let base = &self.base.tasks[i];
-        let t = &mut self.work.tasks[i];
-        t.exec = v;
-        t.exec_min = base.exec_min.min(v);
-        let demand = t.demand();
-        if let (Some(c), Some(given)) = (&mut t.budget_given, base.budget_given) {
-            *c = given.max(demand);
-        }
+        set_exec(&mut self.work.tasks[i], &self.base.tasks[i], v);
     }
 
     /// Task `i`'s period set to `p`.
@@ -67,15 +82,9 @@ impl<'a> Oracle<'a> {
     }
 
     /// Every exec of `cpu` (of the system for `None`) scaled by
-    /// `millionths` / 10⁶, rounded down.
+    /// `millionths` / 10⁶: [`scale_execs`].
     pub(super) fn scale(&mut self, cpu: Option<u32>, millionths: Nanos) {
-        for i in 0..self.base.tasks.len() {
-            let t = &self.base.tasks[i];
-            if cpu.is_none_or(|c| t.cpu == c) {
-                let v = i128::from(t.exec) * i128::from(millionths) / i128::from(ONE);
-                self.set_exec(i, Nanos::try_from(v).unwrap_or(MAX_TIME));
-            }
-        }
+        scale_execs(&mut self.work, self.base, cpu, millionths);
     }
 
     /// Task `i` at exec `v` breaks a timing rule of the model.

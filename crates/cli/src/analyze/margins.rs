@@ -108,7 +108,8 @@ fn status(m: Margin) -> &'static str {
     }
 }
 
-fn factor_text(f: Factor) -> String {
+/// A critical scaling factor in words (six decimals).
+pub(crate) fn factor_text(f: Factor) -> String {
     match f {
         Factor::Millionths(m) => format!("{}.{:06}", m / 1_000_000, m % 1_000_000),
         Factor::Unlimited => "unlimited".into(),
@@ -116,7 +117,8 @@ fn factor_text(f: Factor) -> String {
     }
 }
 
-fn factor_value(f: Factor) -> Option<f64> {
+/// A critical scaling factor as a number (`None`: unlimited or none).
+pub(crate) fn factor_value(f: Factor) -> Option<f64> {
     match f {
         Factor::Millionths(m) => Some(m as f64 / 1e6),
         _ => None,

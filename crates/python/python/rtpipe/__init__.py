@@ -348,13 +348,21 @@ class System:
         seed: Union[int, Iterable[int], None] = None,
         write: Optional[str] = None,
         overwrite_spec: bool = False,
+        objective: Optional[str] = None,
+        max_utilization: Optional[float] = None,
+        margins: bool = False,
     ) -> dict:
         """Periods that meet every limit at least utilisation
         (``rtpipe design --json``), plus ``"spec"``: the designed
-        :class:`System`, or None when there is no verified design."""
+        :class:`System`, or None when there is no verified design.
+        ``objective="margin"`` with ``max_utilization=U`` asks instead for
+        the largest factor every exec may grow by together within that
+        utilisation (``design["margin_search"]``); ``margins=True`` adds
+        the answer's timing margins (``"margins"``, as ``analyze``)."""
         seeds = list(seed) if seed is not None and not isinstance(seed, int) else seed
         options = dict(
             mode=mode, method=method, solver=solver, time_limit=time_limit, fly=fly,
             vehicle=vehicle, seed=seeds, write=write, overwrite_spec=overwrite_spec,
+            objective=objective, max_utilization=max_utilization, margins=margins,
         )
         return self._run("design", options)
