@@ -345,3 +345,74 @@ fn a_sweep_of_a_mission_without_steps_plots_what_it_measures() {
     );
     assert!(!svg.contains("settling"), "{svg}");
 }
+
+/// `--seeds` and `--phases`: every timing flown seeds × phases times, a
+/// timing flies only when all did, and `--safety` scales every limit down.
+#[test]
+fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
+    let spec = example("cleanflight.toml");
+    let sweep = |extra: &[&str]| {
+        let mut args = vec![
+            "fly",
+            spec.as_str(),
+            "--sweep",
+            "--scale",
+            "1..2",
+            "--per-octave",
+            "1",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let o = rtpipe(&args);
+        assert_exit(&o, 0);
+        json_of(&o)
+    };
+    let plain = sweep(&[]);
+    let v = sweep(&["--seeds", "2", "--phases", "2", "--safety", "0.9"]);
+    assert_eq!(
+        (v["seeds"].as_u64(), v["phases"].as_u64()),
+        (Some(2), Some(2))
+    );
+    assert_eq!(v["safety"], 0.9);
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    assert!(!points.is_empty());
+    for p in &points {
+        let (flights, passed) = (p["flights"].as_u64(), p["passed"].as_u64());
+        if p["failures"][0]
+            .as_str()
+            .is_some_and(|f| f.contains("below its budget"))
+        {
+            continue;
+        }
+        assert_eq!(flights, Some(4), "{p}");
+        let all = passed == Some(4);
+        assert_eq!(p["flight_met_criterion"], all, "{p}");
+        if !all {
+            let f = p["failures"][0].as_str().unwrap_or("");
+            assert!(f.starts_with("seed "), "the failing flight is named: {f}");
+        }
+    }
+    // Every limit is at most 0.9 × the one-flight sweep's (more flights can
+    // only move the edge down).
+    let plain_limits = plain["limits_ms"].as_array().cloned().unwrap_or_default();
+    let limits = v["limits_ms"].as_array().cloned().unwrap_or_default();
+    for (a, b) in plain_limits.iter().zip(&limits) {
+        for key in ["reaction", "freshness", "max_reaction_time", "max_data_age"] {
+            if let (Some(x), Some(y)) = (a[key].as_f64(), b[key].as_f64()) {
+                assert!(y <= 0.9 * x + 1e-6, "{key}: {y} > 0.9 × {x}");
+            }
+        }
+    }
+    for bad in [
+        ["--safety", "0"],
+        ["--safety", "1.5"],
+        ["--seeds", "0"],
+        ["--phases", "x"],
+    ] {
+        let mut args = vec!["fly", spec.as_str(), "--sweep"];
+        args.extend_from_slice(&bad);
+        assert_exit(&rtpipe(&args), 2);
+    }
+    // Without --sweep they are refused, not ignored.
+    assert_exit(&rtpipe(&["fly", spec.as_str(), "--seeds", "2"]), 2);
+}

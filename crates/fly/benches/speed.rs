@@ -29,7 +29,7 @@
 
 use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use rtpipe_fly::sweep::{default_variations, sweep, Variation};
+use rtpipe_fly::sweep::{default_variations, sweep, How, Trials, Variation};
 use rtpipe_fly::{fly, setup, Request, Setup};
 use rtpipe_model::Spec;
 use rtpipe_sim::ExecModel;
@@ -164,7 +164,20 @@ fn sweeps(c: &mut Criterion<CpuTime>) {
         for vars in [&issue, &all] {
             let run = || {
                 let done = AtomicU64::new(0);
-                pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &crit, vars, &done, &|| {}))
+                pool.install(|| {
+                    sweep(
+                        &spec,
+                        &s,
+                        &How {
+                            exec: ExecModel::Uniform,
+                            criteria: &crit,
+                            trials: Trials::ONE,
+                        },
+                        vars,
+                        &done,
+                        &|| {},
+                    )
+                })
             };
             group.throughput(Throughput::Elements(vars.len() as u64));
             let id = format!("{}-flights-{threads}-threads", vars.len());

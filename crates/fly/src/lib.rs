@@ -9,6 +9,7 @@
 #![deny(missing_docs)]
 
 /// The timing sweep: flights over scaled periods and added delays.
+pub mod phases;
 pub mod sweep;
 
 use rtpipe_body::{Body, Job, Stamped};
@@ -55,6 +56,9 @@ pub struct Setup {
     /// flies the same (chains only observe) at about a fifth less cost,
     /// for callers that want only its quality (`--sweep`).
     pub track_chains: bool,
+    /// Each task's first release (`None`: every task at 0, the spec's
+    /// known offsets kept); a phase of the flight ([`phases::phased`]).
+    pub offsets: Option<Vec<Nanos>>,
 }
 
 impl Setup {
@@ -221,6 +225,7 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
         log_jobs: false,
         keep_trace: true,
         track_chains: true,
+        offsets: None,
     })
 }
 
@@ -323,7 +328,10 @@ pub fn fly_with_progress(
     let cfg = SimConfig {
         horizon: s.horizon,
         seed,
-        phasing: Phasing::Sync,
+        phasing: match &s.offsets {
+            Some(v) => Phasing::Given(v.clone()),
+            None => Phasing::Sync,
+        },
         exec,
         log_jobs: s.log_jobs,
         jitter: rtpipe_sim::Jitter::Uniform,

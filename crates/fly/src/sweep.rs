@@ -66,14 +66,44 @@ pub struct Point {
     /// `None` when the timing could not be flown (a period below its
     /// budget); the reason is in `failures`.
     pub quality: Option<FlightQuality>,
-    /// What misses the criteria; empty when the flight meets them.
+    /// What misses the criteria in the first flight that missed them
+    /// (named by its seed and phase when several were flown); empty when
+    /// every flight meets them.
     pub failures: Vec<String>,
+    /// Flights flown at this timing (seeds × phases).
+    pub flights: u32,
+    /// Of them, those that met the criteria.
+    pub passed: u32,
+}
+
+/// How many flights judge one timing: `seeds` seeds of the noise and
+/// execution times (from the setup's, consecutive) × `phases` phase draws
+/// ([`crate::phases::phased`]; draw 0 the nominal phase).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Trials {
+    /// Seeds per timing.
+    pub seeds: u32,
+    /// Phase draws per seed.
+    pub phases: u32,
+}
+
+impl Trials {
+    /// One flight: the setup's seed, the nominal phase.
+    pub const ONE: Trials = Trials {
+        seeds: 1,
+        phases: 1,
+    };
+
+    fn count(self) -> u32 {
+        assert!(self.seeds >= 1 && self.phases >= 1, "at least one flight");
+        self.seeds * self.phases
+    }
 }
 
 impl Point {
-    /// The flight met the criteria.
+    /// Every flight at this timing met the criteria.
     pub fn pass(&self) -> bool {
-        self.quality.is_some() && self.failures.is_empty()
+        self.quality.is_some() && self.failures.is_empty() && self.passed == self.flights
     }
 }
 
@@ -165,14 +195,14 @@ fn plan(spec: &Spec, s: &Setup, v: Variation) -> Plan {
     (timing, delays, added)
 }
 
-fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) -> Point {
+fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
     let mut setup = s.clone();
     // A point keeps only the flight's quality: the bounds are the analysis's.
     setup.track_chains = false;
     setup.keep_trace = false;
     // The flight judges its envelope as it flies, by the mission's
     // criteria: the sweep's criterion replaces them.
-    setup.mission.criteria = *c;
+    setup.mission.criteria = *how.criteria;
     let (timing, delays, added) = plan(spec, s, v);
     setup.world.sense_delay_ns = delays;
     let timing = match timing {
@@ -185,6 +215,8 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
                 schedulable: false,
                 quality: None,
                 failures: vec![why],
+                flights: 0,
+                passed: 0,
             }
         }
     };
@@ -199,13 +231,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
             }
         }
     }
-    let (quality, failures) = match fly(&timing, &setup, exec) {
-        Ok(f) => {
-            let failures = f.quality.failures(c);
-            (Some(f.quality), failures)
-        }
-        Err(Diagnostic { message, .. }) => (None, vec![message]),
-    };
+    let (quality, failures, passed) = trials(&timing, &setup, how);
     Point {
         variation: v,
         bounds,
@@ -213,7 +239,53 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
         schedulable,
         quality,
         failures,
+        flights: how.trials.count(),
+        passed,
     }
+}
+
+/// What every flight of a sweep shares: the execution-time model, the
+/// criterion and how many flights judge a timing.
+pub struct How<'a> {
+    /// How each job's demand is drawn.
+    pub exec: ExecModel,
+    /// What a flight must meet.
+    pub criteria: &'a Criteria,
+    /// Flights per timing.
+    pub trials: Trials,
+}
+
+/// Every flight of one timing: the first flight's quality, the first
+/// failure's reasons (named by seed and phase when several flew), and how
+/// many met the criteria.
+fn trials(timing: &Spec, setup: &Setup, how: &How) -> (Option<FlightQuality>, Vec<String>, u32) {
+    let several = how.trials.count() > 1;
+    let (mut first, mut failures, mut passed) = (None, Vec::new(), 0);
+    for j in 0..u64::from(how.trials.seeds) {
+        for k in 0..u64::from(how.trials.phases) {
+            let mut one = crate::phases::phased(timing, setup, k);
+            one.world.seed = setup.world.seed.wrapping_add(j);
+            let (quality, missed) = match fly(timing, &one, how.exec) {
+                Ok(f) => {
+                    let missed = f.quality.failures(how.criteria);
+                    (Some(f.quality), missed)
+                }
+                Err(Diagnostic { message, .. }) => (None, vec![message]),
+            };
+            passed += u32::from(quality.is_some() && missed.is_empty());
+            if failures.is_empty() && !missed.is_empty() {
+                let at = format!("seed {}, phase {k}: ", one.world.seed);
+                failures = missed
+                    .into_iter()
+                    .map(|m| if several { format!("{at}{m}") } else { m })
+                    .collect();
+            }
+            if j == 0 && k == 0 {
+                first = quality;
+            }
+        }
+    }
+    (first, failures, passed)
 }
 
 /// Flies every variation (in parallel; each point is deterministic; the
@@ -226,8 +298,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, exec: ExecModel, c: &Criteria) ->
 pub fn sweep(
     spec: &Spec,
     s: &Setup,
-    exec: ExecModel,
-    c: &Criteria,
+    how: &How,
     variations: &[Variation],
     done: &AtomicU64,
     check: &(dyn Fn() + Sync),
@@ -249,7 +320,7 @@ pub fn sweep(
         .enumerate()
         .map(|(k, (v, _))| {
             check();
-            let p = flown(spec, s, *v, exec, c);
+            let p = flown(spec, s, *v, how);
             let copies = slot.iter().filter(|&&i| i == k).count();
             done.fetch_add(copies as u64, Ordering::Relaxed);
             p
@@ -360,9 +431,24 @@ pub struct Derived {
 /// chain's head allowed (the bounds at each one's last passing point). The
 /// scale sweep slows every chain at once, so its limits hold as a set; the
 /// delay sweep isolates one chain with the others nominal.
-pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point]) -> Derived {
+///
+/// Every limit is then multiplied by `safety` (in (0, 1]; 1: the bound at
+/// the last passing point itself), rounded down (a `max_period` down to the
+/// design grid): the margin a written limit keeps from the last timing
+/// that flew.
+pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point], safety: f64) -> Derived {
+    assert!(
+        safety > 0.0 && safety <= 1.0,
+        "a safety factor in (0, 1], found {safety}"
+    );
+    let times = |x: Nanos| (x as f64 * safety).floor() as Nanos;
+    let pair = |(r, f): ChainPair| (r.map(times), f.map(times));
     let read = chain_limits(spec, s, points, |p| &p.bounds);
     let event = chain_limits(spec, s, points, |p| &p.event);
+    let (read, event) = (
+        read.into_iter().map(pair).collect(),
+        event.into_iter().map(pair).collect(),
+    );
     let rate = match edge(points, |v| matches!(v, Variation::Rate(_))).last_pass {
         Some(Point {
             variation: Variation::Rate(k),
@@ -379,7 +465,7 @@ pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point]) -> Derived {
             let p = t.fixed_period().filter(|_| tails.contains(&i))?;
             let k = rate?;
             // Down to the design grid, so a written range stays on it.
-            let q = (p as f64 * k).round() as Nanos;
+            let q = times((p as f64 * k).round() as Nanos);
             Some(q - q % spec.resolution.max(1))
         })
         .collect();
@@ -452,8 +538,11 @@ mod tests {
         let points = sweep(
             &spec,
             &s,
-            ExecModel::Uniform,
-            &s.criteria(),
+            &How {
+                exec: ExecModel::Uniform,
+                criteria: &s.criteria(),
+                trials: Trials::ONE,
+            },
             &vars,
             &done,
             &|| {},
@@ -467,7 +556,7 @@ mod tests {
             panic!("not scales");
         };
         assert!(1.0 <= a && a < b, "Table V's timing flies: {a} < {b}");
-        let limits = derived_limits(&spec, &s, &points).read;
+        let limits = derived_limits(&spec, &s, &points, 1.0).read;
         let nominal = points
             .iter()
             .find(|p| p.variation == Variation::Scale(1.0))
@@ -501,6 +590,54 @@ mod tests {
             panic!("the gyro delay sweep never failed: {g:?}");
         };
         assert!(gp.bounds[0].0 < gf.bounds[0].0);
+    }
+
+    /// Several seeds and phases per timing: every flight counted, the first
+    /// (the setup's seed, nominal phase) is the single flight's, and a
+    /// safety factor scales every derived limit down.
+    #[test]
+    fn trials_count_every_flight_and_safety_scales_the_limits() {
+        let (spec, s) = cleanflight("racer5");
+        let c = s.criteria();
+        let vars = [
+            Variation::Scale(1.0),
+            Variation::Scale(2.0),
+            Variation::Scale(6.0),
+        ];
+        let done = AtomicU64::new(0);
+        let one = How {
+            exec: ExecModel::Uniform,
+            criteria: &c,
+            trials: Trials::ONE,
+        };
+        let six = How {
+            trials: Trials {
+                seeds: 2,
+                phases: 3,
+            },
+            ..one
+        };
+        let single = sweep(&spec, &s, &one, &vars, &done, &|| {});
+        let many = sweep(&spec, &s, &six, &vars, &done, &|| {});
+        for (a, b) in single.iter().zip(&many) {
+            assert_eq!((a.flights, b.flights), (1, 6));
+            assert!(b.passed <= 6);
+            assert_eq!(a.quality, b.quality, "the first flight is the nominal one");
+            assert_eq!(b.pass(), b.passed == 6 && b.quality.is_some());
+            if !a.pass() {
+                assert!(!b.pass());
+            }
+        }
+        assert!(
+            many[0].pass(),
+            "Table V's timing flies every seed and phase"
+        );
+        let full = derived_limits(&spec, &s, &many, 1.0);
+        let safe = derived_limits(&spec, &s, &many, 0.9);
+        for (f, g) in full.read.iter().zip(&safe.read) {
+            let times = |x: Option<Nanos>| x.map(|x| (x as f64 * 0.9).floor() as Nanos);
+            assert_eq!((times(f.0), times(f.1)), *g);
+        }
     }
 }
 
@@ -548,10 +685,30 @@ mod threads {
         assert!(plans[4] != plans[0] && plans[5] != plans[0]);
         let c = s.criteria();
         let done = AtomicU64::new(0);
-        let got = sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &|| {});
+        let got = sweep(
+            &spec,
+            &s,
+            &How {
+                exec: ExecModel::Uniform,
+                criteria: &c,
+                trials: Trials::ONE,
+            },
+            &vars,
+            &done,
+            &|| {},
+        );
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         for (v, g) in vars.iter().zip(&got) {
-            let alone = flown(&spec, &s, *v, ExecModel::Uniform, &c);
+            let alone = flown(
+                &spec,
+                &s,
+                *v,
+                &How {
+                    exec: ExecModel::Uniform,
+                    criteria: &c,
+                    trials: Trials::ONE,
+                },
+            );
             assert_eq!(format!("{g:?}"), format!("{alone:?}"));
         }
         assert!(!got[5].schedulable, "{:?}", got[5]);
@@ -578,7 +735,20 @@ mod threads {
             .unwrap_or_else(|e| panic!("{e}"));
         let swept = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             let c = s.criteria();
-            one.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &check))
+            one.install(|| {
+                sweep(
+                    &spec,
+                    &s,
+                    &How {
+                        exec: ExecModel::Uniform,
+                        criteria: &c,
+                        trials: Trials::ONE,
+                    },
+                    &vars,
+                    &done,
+                    &check,
+                )
+            })
         }));
         let Err(payload) = swept else {
             panic!("the sweep ran to its end")
@@ -616,7 +786,20 @@ mod threads {
                 .unwrap_or_else(|e| panic!("{e}"));
             let done = AtomicU64::new(0);
             let c = s.criteria();
-            pool.install(|| sweep(&spec, &s, ExecModel::Uniform, &c, &vars, &done, &|| {}))
+            pool.install(|| {
+                sweep(
+                    &spec,
+                    &s,
+                    &How {
+                        exec: ExecModel::Uniform,
+                        criteria: &c,
+                        trials: Trials::ONE,
+                    },
+                    &vars,
+                    &done,
+                    &|| {},
+                )
+            })
         };
         let one = on(1);
         assert_eq!(

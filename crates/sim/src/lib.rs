@@ -69,6 +69,7 @@ pub mod server;
 pub use config::*;
 pub(crate) use engine::*;
 pub(crate) use locks::Locks;
+pub use rng::Rng;
 
 pub use bodies::{simulate_bodies, simulate_bodies_with_progress, simulate_bodies_with_rows};
 use rtpipe_joblog::SimResult;

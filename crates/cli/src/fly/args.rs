@@ -59,6 +59,22 @@ pub struct FlyArgs {
     /// closely at proportionally more flights.
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=48), requires = "sweep")]
     pub per_octave: u32,
+    /// With --sweep: seeds of the noise and execution times flown at every
+    /// timing (--seed, --seed + 1, …); a timing flies only if every flight
+    /// meets the criterion.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100), requires = "sweep")]
+    pub seeds: u32,
+    /// With --sweep: phase draws flown per seed: the first is the nominal
+    /// phase (every task released at 0, the mission's steps where it puts
+    /// them); each other places every periodic task's first release at
+    /// random within its period and shifts the stick steps within the
+    /// motor-output period.
+    #[arg(long, value_name = "M", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100), requires = "sweep")]
+    pub phases: u32,
+    /// With --sweep: every derived limit × this factor in (0, 1] (the
+    /// margin a written limit keeps from the last timing that flew).
+    #[arg(long, value_name = "F", default_value_t = 1.0, value_parser = parse_safety, requires = "sweep")]
+    pub safety: f64,
     /// With --sweep: the criterion, a TOML file with attitude_rms_deg,
     /// altitude_rms_m, overshoot, settling_s, position_rms_m [default: the
     /// mission's].
@@ -103,6 +119,16 @@ pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
         (Some(lo), Some(hi)) if lo <= hi && hi <= 64.0 => Ok((lo, hi)),
         _ => Err(format!(
             "expected two positive factors LO <= HI <= 64, like 0.5..8, found `{s}`"
+        )),
+    }
+}
+
+/// `--safety F`: a factor in (0, 1].
+pub fn parse_safety(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(f) if f > 0.0 && f <= 1.0 => Ok(f),
+        _ => Err(format!(
+            "expected a factor in (0, 1] (e.g. 0.9: limits 10 % inside the last timing that flew), found `{s}`"
         )),
     }
 }

@@ -9,8 +9,8 @@ use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
 use rtpipe_fly::sweep::{
-    derived_limits, edge, scale_edge, sweep, tails, variations, ChainPair, Derived, Point,
-    Variation, DELAY_LINES,
+    derived_limits, edge, scale_edge, sweep, tails, variations, ChainPair, Derived, How, Point,
+    Trials, Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -40,10 +40,15 @@ fn what(v: &Variation) -> String {
 }
 
 fn verdict(p: &Point) -> String {
+    let count = if p.flights > 1 {
+        format!(" ({}/{} flights)", p.passed, p.flights)
+    } else {
+        String::new()
+    };
     match (p.schedulable, p.pass()) {
         (false, _) => "unschedulable".into(),
-        (true, true) => "flies".into(),
-        (true, false) => format!("FAILS: {}", p.failures.join("; ")),
+        (true, true) => format!("flies{count}"),
+        (true, false) => format!("FAILS{count}: {}", p.failures.join("; ")),
     }
 }
 
@@ -144,6 +149,10 @@ struct PointView<'a> {
     /// test says (an unschedulable timing may still fly in simulation when
     /// its worst case does not happen).
     flight_met_criterion: bool,
+    /// Flights flown at this timing (seeds × phases), and how many met the
+    /// criterion: it flies only when all did.
+    flights: u32,
+    passed: u32,
     failures: &'a [String],
     attitude_error_rms_deg: Option<f64>,
     altitude_error_rms_m: Option<f64>,
@@ -185,6 +194,8 @@ fn point_json(p: &Point) -> PointView<'_> {
         schedulable: p.schedulable,
         flies: p.schedulable && p.pass(),
         flight_met_criterion: p.pass(),
+        flights: p.flights,
+        passed: p.passed,
         failures: &p.failures,
         attitude_error_rms_deg: hover.map(|q| q.attitude_error_deg.rms),
         altitude_error_rms_m: hover.map(|q| q.altitude_error_m.rms),
@@ -315,7 +326,7 @@ pub fn execute(
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let points = fly_all(spec, s, a, &c, &vars, stop);
-    let limits = derived_limits(spec, s, &points);
+    let limits = derived_limits(spec, s, &points, a.safety);
     // Nothing flew: a spec "with these limits" would carry none of them.
     let nothing = limits
         .read
@@ -327,11 +338,11 @@ pub fn execute(
     let written = write_files(spec, s, a, &c, &points, &limits, write_limits);
     let report = if a.json {
         Rendered::Json(command::to_value(&sweep_json(
-            spec, s, &c, &points, &limits,
+            spec, s, &c, a, &points, &limits,
         ))?)
     } else {
         let shown = write_limits.filter(|_| written.is_ok());
-        Rendered::Text(text(spec, s, &c, &points, &limits, shown))
+        Rendered::Text(text(spec, s, (&c, a), &points, &limits, shown))
     };
     let mut notes = Vec::new();
     if let (Some(out), true) = (&a.write_limits, nothing) {
@@ -373,14 +384,22 @@ fn fly_all(
         indicatif::ProgressDrawTarget::stderr(),
     );
     if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "sweeping {msg} [{bar:30}] {pos}/{len} flights, {elapsed_precise} elapsed, ETA {eta}",
+        "sweeping {msg} [{bar:30}] {pos}/{len} timings, {elapsed_precise} elapsed, ETA {eta}",
     ) {
         pb.set_style(style);
     }
     pb.set_message(spec.name.clone());
     let check = || crate::command::Hooks::check_stop(stop);
+    let how = How {
+        exec: a.exec.model(),
+        criteria: c,
+        trials: Trials {
+            seeds: a.seeds,
+            phases: a.phases,
+        },
+    };
     let points = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| sweep(spec, s, a.exec.model(), c, vars, &done, &check));
+        let worker = scope.spawn(|| sweep(spec, s, &how, vars, &done, &check));
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));
             std::thread::sleep(std::time::Duration::from_millis(50));
@@ -429,6 +448,11 @@ struct SweepView<'a> {
     vehicle: &'a str,
     mission: &'a str,
     criterion: String,
+    /// Flights per timing: seeds × phase draws.
+    seeds: u32,
+    phases: u32,
+    /// Every derived limit is the bound at the last timing that flew × this.
+    safety: f64,
     points: Vec<PointView<'a>>,
     limits_ms: Vec<LimitMs>,
     /// The tail's `max_period` (ms): the longest period that flew in the
@@ -449,6 +473,7 @@ fn sweep_json<'a>(
     spec: &'a Spec,
     s: &'a Setup,
     c: &Criteria,
+    a: &FlyArgs,
     points: &'a [Point],
     limits: &Derived,
 ) -> SweepView<'a> {
@@ -471,6 +496,9 @@ fn sweep_json<'a>(
         vehicle: &s.preset.name,
         mission: &s.mission.name,
         criterion: c.describe(),
+        seeds: a.seeds,
+        phases: a.phases,
+        safety: a.safety,
         points: points.iter().map(point_json).collect(),
         limits_ms: chain_limits.collect(),
         max_period_ms: crate::report::Pairs(
@@ -482,7 +510,7 @@ fn sweep_json<'a>(
 }
 
 /// The rate sweep's table and the tail's derived `max_period`.
-fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived) -> String {
+fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety: f64) -> String {
     let pts: Vec<&Point> = points
         .iter()
         .filter(|p| matches!(p.variation, Variation::Rate(_)))
@@ -500,9 +528,14 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived) -> Stri
     for &i in &tails {
         out.push_str(&match limits.max_period[i] {
             Some(p) => format!(
-                "{}: max_period {} ms (the longest period that flew)\n",
+                "{}: max_period {} ms (the longest period that flew{})\n",
                 spec.tasks[i].name,
-                ms(Some(p))
+                ms(Some(p)),
+                if safety < 1.0 {
+                    format!(" × {safety}, on the design grid")
+                } else {
+                    String::new()
+                }
             ),
             None => format!("{}: no period flew\n", spec.tasks[i].name),
         });
@@ -510,22 +543,37 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived) -> Stri
     out
 }
 
-fn text(
-    spec: &Spec,
-    s: &Setup,
-    c: &Criteria,
-    points: &[Point],
-    limits: &Derived,
-    written: Option<&Path>,
-) -> String {
+/// What was swept, on what, judged how, and how many flights per timing.
+fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
     let mut out = format!(
-        "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n\nperiod scale (budgets fixed; sound bounds from the read):\n",
+        "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n",
         spec.name,
         spec.tasks.len(),
         s.preset.name,
         s.mission.name,
         c.describe()
     );
+    if a.seeds * a.phases > 1 {
+        out.push_str(&format!(
+            "each timing flown {} times ({} seeds × {} phases): it flies only if every flight meets the criterion\n",
+            a.seeds * a.phases,
+            a.seeds,
+            a.phases
+        ));
+    }
+    out
+}
+
+fn text(
+    spec: &Spec,
+    s: &Setup,
+    (c, a): (&Criteria, &FlyArgs),
+    points: &[Point],
+    limits: &Derived,
+    written: Option<&Path>,
+) -> String {
+    let mut out = header_text(spec, s, c, a);
+    out.push_str("\nperiod scale (budgets fixed; sound bounds from the read):\n");
     let scales: Vec<&Point> = points
         .iter()
         .filter(|p| matches!(p.variation, Variation::Scale(_)))
@@ -562,8 +610,15 @@ fn text(
             out.push_str(&format!("no failure up to {}\n", what(&p.variation)));
         }
     }
-    out.push_str(&rate_text(spec, s, points, limits));
-    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and max data age from the event):\n");
+    out.push_str(&rate_text(spec, s, points, limits, a.safety));
+    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and max data age from the event)");
+    if a.safety < 1.0 {
+        out.push_str(&format!(
+            ", each × {} (the safety factor; the tail's max_period too)",
+            a.safety
+        ));
+    }
+    out.push_str(":\n");
     out.push_str(&limits_text(spec, limits));
     if let Some(w) = written {
         out.push_str(&format!("wrote {} with these limits\n", w.display()));

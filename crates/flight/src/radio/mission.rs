@@ -376,6 +376,17 @@ impl Mission {
         }
     }
 
+    /// The same mission with every step after the start `by_ns` later
+    /// (the arming at 0 stays): where a stick step falls in the output
+    /// period is a phase of the flight, not of the controller.
+    pub fn shifted(&self, by_ns: u64) -> Mission {
+        let mut m = self.clone();
+        for s in m.steps.iter_mut().filter(|s| s.t_ns > 0) {
+            s.t_ns += by_ns;
+        }
+        m
+    }
+
     /// Time of the last step, ns.
     pub fn end_ns(&self) -> u64 {
         self.steps.last().map_or(0, |s| s.t_ns)
