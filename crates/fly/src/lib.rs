@@ -131,20 +131,37 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
         };
         kinds.push(r);
     }
-    for need in BodyKind::CRITICAL {
-        if !kinds.contains(&Some(need)) {
-            return Err(Diagnostic::error(
-                format!(
-                    "{}: no task has body = \"{}\", so the flight controller is incomplete",
-                    path.display(),
-                    need.name()
-                ),
-                "give the tasks of the critical path their bodies, as examples/cleanflight.toml does",
-            ));
-        }
-    }
+    check_complete(path, &kinds)?;
     check_wiring(spec, path, &kinds)?;
     Ok(kinds)
+}
+
+/// The tasks of one of the flight controllers of
+/// [`BodyKind::STRUCTURES`] are all there; when none is complete, the
+/// nearest (fewest missing; Cleanflight's on a tie) names its first gap.
+fn check_complete(path: &Path, kinds: &[Option<BodyKind>]) -> Result<(), Diagnostic> {
+    let missing = |s: &[BodyKind]| -> Vec<BodyKind> {
+        s.iter()
+            .copied()
+            .filter(|k| !kinds.contains(&Some(*k)))
+            .collect()
+    };
+    let nearest = BodyKind::STRUCTURES
+        .iter()
+        .map(|s| missing(s))
+        .min_by_key(Vec::len)
+        .unwrap_or_default();
+    match nearest.first() {
+        None => Ok(()),
+        Some(need) => Err(Diagnostic::error(
+            format!(
+                "{}: no task has body = \"{}\", so the flight controller is incomplete",
+                path.display(),
+                need.name()
+            ),
+            "give the tasks of the critical path their bodies, as examples/cleanflight.toml (or examples/betaflight-8k.toml) does",
+        )),
+    }
 }
 
 /// Every body's inputs are wired: a task whose body needs another role's
@@ -153,16 +170,15 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
 fn check_wiring(spec: &Spec, path: &Path, kinds: &[Option<BodyKind>]) -> Result<(), Diagnostic> {
     for (t, kind) in spec.tasks.iter().zip(kinds) {
         let Some(kind) = kind else { continue };
-        for &need in kind.needs() {
-            if t.reads.iter().any(|&j| kinds.get(j) == Some(&Some(need))) {
+        for &roles in kind.needs() {
+            let gives = |k: &Option<BodyKind>| k.is_some_and(|k| roles.contains(&k));
+            if t.reads.iter().any(|&j| kinds.get(j).is_some_and(gives)) {
                 continue;
             }
-            let source = spec
-                .tasks
-                .iter()
-                .zip(kinds)
-                .find(|(_, k)| **k == Some(need))
-                .map_or(String::new(), |(s, _)| s.name.clone());
+            let found = spec.tasks.iter().zip(kinds).find(|(_, k)| gives(k));
+            let source = found.map_or(String::new(), |(s, _)| s.name.clone());
+            // The role the spec has, else the first that could give it.
+            let need = found.and_then(|(_, k)| *k).unwrap_or(roles[0]);
             return Err(Diagnostic::error(
                 format!(
                     "{}: task `{}` (body {}) reads no task with body = \"{}\", so its input from it would always be missing",
