@@ -716,6 +716,38 @@ mod tests {
     }
 
     #[test]
+    fn the_cascade_is_complete_and_its_gaps_are_named() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/betaflight-8k.toml");
+        let mut spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        assert!(body_kinds(&spec, &p).is_ok());
+        let task = |spec: &Spec, name: &str| {
+            spec.tasks
+                .iter()
+                .position(|t| t.name == name)
+                .unwrap_or_else(|| panic!("no task {name}"))
+        };
+        // The motor output of the cascade reads the rate PID.
+        let (pwm, rate_pid) = (task(&spec, "pwm"), task(&spec, "rate_pid"));
+        spec.tasks[pwm].reads.retain(|&j| j != rate_pid);
+        let e = body_kinds(&spec, &p)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("task `pwm` (body pwm) reads no task with body = \"rate_pid\"")
+                && e.contains("add \"rate_pid\" to the reads of task `pwm`"),
+            "{e}"
+        );
+        // Nearer the cascade than Cleanflight's structure: its gap is named.
+        spec.tasks[rate_pid].body = None;
+        let e = body_kinds(&spec, &p)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("no task has body = \"rate_pid\""), "{e}");
+    }
+
+    #[test]
     fn incomplete_or_unknown_bodies_are_refused() {
         let (mut spec, path) = cleanflight();
         spec.tasks[0].body = Some("gyroscope".into());

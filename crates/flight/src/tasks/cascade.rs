@@ -111,3 +111,121 @@ impl Body<Value> for RatePidTask {
         Value::Demand(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ahrs::GyroSnapshot;
+    use crate::pid::{PidConfig, RateGains};
+    use rtpipe_body::Stamp;
+
+    fn stamped(value: Value, task: usize, at: u64) -> Option<Stamped<Value>> {
+        let t = at as i64;
+        Some(Stamped {
+            value,
+            stamp: Stamp {
+                task,
+                job: 0,
+                read: t,
+                publish: t,
+            },
+        })
+    }
+
+    /// A rate loop with D alone (and the D-term low-pass), at 8 kHz.
+    fn d_only() -> RatePidTask {
+        RatePidTask {
+            rate: RateController::new(&d_only_config(), 8000.0).unwrap(),
+            last: None,
+        }
+    }
+
+    /// One job of the rate loop on gyro sample `k` (125 µs apart) at the
+    /// rate `gyro` and the set-point `sp`: its motor commands.
+    fn step(task: &mut RatePidTask, k: u64, gyro: Vec3, sp: Vec3) -> [f64; 4] {
+        let t = 125_000 * (k + 1);
+        let snap = GyroSnapshot {
+            sum: gyro,
+            count: k + 1,
+            last_t_ns: t,
+            latest: gyro,
+        };
+        let demand = RateDemand {
+            rate: sp,
+            throttle: 0.5,
+            armed: true,
+        };
+        let inputs = [
+            stamped(Value::Gyro(snap), 0, t),
+            stamped(Value::RateSetpoint(demand), 1, t),
+        ];
+        let job = Job {
+            task: 2,
+            index: k,
+            release: t as i64,
+            read: t as i64,
+        };
+        match task.run(&job, &inputs, None) {
+            Value::Demand(d) => d.motors,
+            v => panic!("the rate loop gave {v:?}"),
+        }
+    }
+
+    #[test]
+    fn a_rate_setpoint_step_gives_no_d_kick_but_a_gyro_step_does() {
+        let mut task = d_only();
+        let level = [0.5; 4];
+        assert_eq!(step(&mut task, 0, Vec3::ZERO, Vec3::ZERO), level);
+        let sp = Vec3::new(3.0, -2.0, 1.0);
+        for k in 1..50 {
+            assert_eq!(step(&mut task, k, Vec3::ZERO, sp), level, "job {k}");
+        }
+        // The measured roll rate rises: D opposes it (roll down on the
+        // left motors 3 and 4, up on the right).
+        let m = step(&mut task, 50, Vec3::new(0.5, 0.0, 0.0), sp);
+        assert!(m[0] > 0.5 && m[2] < 0.5, "{m:?}");
+    }
+
+    #[test]
+    fn the_attitude_loop_stops_the_motors_until_armed() {
+        let mut task = AttitudeTask {
+            arming: Arming::new(crate::radio::FailsafeConfig {
+                timeout_ms: 200,
+                descent_throttle: 0.3,
+                max_descent_s: 8.0,
+            }),
+            angle: AngleLoop::new(&d_only_config()),
+        };
+        let job = Job {
+            task: 0,
+            index: 0,
+            release: 0,
+            read: 0,
+        };
+        // No attitude or radio yet: a disarmed, zero set-point.
+        assert_eq!(
+            task.run(&job, &[None, None], None),
+            Value::RateSetpoint(RateDemand::default())
+        );
+    }
+
+    fn d_only_config() -> PidConfig {
+        let g = RateGains {
+            kp: 0.0,
+            ki: 0.0,
+            kd: 0.01,
+            kff: 0.0,
+            i_limit: 0.0,
+        };
+        PidConfig {
+            roll: g,
+            pitch: g,
+            yaw: g,
+            level_kp: 6.0,
+            max_rate_dps: 300.0,
+            yaw_max_rate_dps: 200.0,
+            dterm_lpf_hz: 75.0,
+            output_limit: 0.5,
+        }
+    }
+}
