@@ -228,16 +228,38 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
             "give a positive duration",
         ));
     }
+    let world = gyro_at_data_ready_rate(spec, &kinds, CosimConfig::new(r.seed));
     Ok(Setup {
         preset,
         mission,
         kinds,
         horizon,
-        world: CosimConfig::new(r.seed),
+        world,
         log_jobs: false,
         keep_trace: true,
         track_chains: true,
     })
+}
+
+/// The cascade's gyro (`gyro_filter`) is read at the sensor's data-ready
+/// rate, so the sensor's output data rate is that task's rate (rounded up:
+/// every read on time gets a sample of its own), not the default IMU's
+/// 3200 Hz, which would hand an 8 kHz loop the same sample two or three
+/// times. Cleanflight's `gyro` polls the default IMU as before.
+fn gyro_at_data_ready_rate(
+    spec: &Spec,
+    kinds: &[Option<BodyKind>],
+    mut world: CosimConfig,
+) -> CosimConfig {
+    let gyro = kinds.iter().position(|k| *k == Some(BodyKind::GyroFilter));
+    let period = gyro.and_then(|i| spec.activation_period(i));
+    if let Some(p) = period
+        .and_then(|p| u64::try_from(p).ok())
+        .filter(|&p| p > 0)
+    {
+        world.imu.gyro_odr_hz = 1_000_000_000u64.div_ceil(p);
+    }
+    world
 }
 
 /// Why the body of task `task` could not be built, blaming what is at

@@ -31,6 +31,8 @@ fn betaflight_8k_flies_steps_and_gusty_on_both_vehicles() {
                 seed: 0,
             };
             let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+            // The sensor delivers a sample for every 8 kHz read.
+            assert_eq!(s.world.imu.gyro_odr_hz, 8000);
             let f = fly(&spec, &s, ExecModel::Uniform).unwrap_or_else(|e| panic!("{e}"));
             let failures = f.quality.failures(&s.criteria());
             assert!(failures.is_empty(), "{vehicle} {mission}: {failures:?}");
