@@ -224,6 +224,18 @@ impl BodyKind {
         rtpipe_model::BODY_NAMES[self as usize]
     }
 
+    /// Which of the world's delay lines ([`CosimConfig::sense_delay_ns`])
+    /// this role's samples pass: the gyro (either structure's), the
+    /// accelerometer, the radio; `None` for the others.
+    pub fn delay_line(self) -> Option<usize> {
+        match self {
+            BodyKind::Gyro | BodyKind::GyroFilter => Some(0),
+            BodyKind::Accel => Some(1),
+            BodyKind::Radio => Some(2),
+            _ => None,
+        }
+    }
+
     /// The role a spec names, if any.
     pub fn parse(name: &str) -> Option<BodyKind> {
         BodyKind::ALL.into_iter().find(|r| r.name() == name)
@@ -900,23 +912,27 @@ impl Environment<Value> for Cosim {
         } else {
             self.trace_to(t);
         }
-        let (line, fresh) = match kind {
+        let fresh = match kind {
             BodyKind::Gyro | BodyKind::GyroFilter => {
                 self.tell_rotors(t);
                 let rate = self.plant.state().rate;
-                (0, Some(Value::Imu(self.imu.read_gyro(t, rate))))
+                Some(Value::Imu(self.imu.read_gyro(t, rate)))
             }
             BodyKind::Accel => {
                 self.tell_rotors(t);
                 let sf = self.plant.specific_force();
-                (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
+                Some(Value::Imu(self.imu.read_accel(t, sf)))
             }
-            BodyKind::Radio => (2, self.radio_frame(t)),
+            BodyKind::Radio => self.radio_frame(t),
             BodyKind::Vbat => return Some(Value::Scalar(self.battery.voltage())),
             BodyKind::Current => return Some(Value::Scalar(self.battery.current())),
             _ => return None,
         };
-        self.delayed[line].pass(t, fresh)
+        let line = kind.delay_line();
+        match line.and_then(|l| self.delayed.get_mut(l)) {
+            Some(d) => d.pass(t, fresh),
+            None => fresh,
+        }
     }
 
     fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {

@@ -59,3 +59,36 @@ fn betaflight_8k_flies_steps_and_gusty_on_both_vehicles() {
         }
     }
 }
+
+/// The timing sweep reaches the cascade: the gyro path's head is the gyro
+/// delay line (a pure delay on the rate loop's samples), the period scale
+/// varies the gyro rate, and the data-triggered motor output has no period
+/// of its own for the rate sweep to vary.
+#[test]
+fn the_sweep_varies_the_cascades_gyro_rate_and_rate_loop_latency() {
+    use rtpipe_fly::sweep::{head_line, tails, variations, Variation};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/betaflight-8k.toml");
+    let spec = Spec::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let r = Request {
+        spec_path: &path,
+        vehicle: "racer5",
+        mission: "steps",
+        horizon: None,
+        seed: 0,
+    };
+    let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+    let gyro_path = spec
+        .chains
+        .iter()
+        .position(|c| c.name.as_deref() == Some("gyro path"))
+        .unwrap_or_else(|| panic!("no gyro path"));
+    assert_eq!(head_line(&spec, &s, gyro_path), Some(0));
+    assert!(tails(&spec, &s).is_empty());
+    let v = variations(&spec, &s, 1.0, 4.0, 1);
+    assert!(v.contains(&Variation::Scale(4.0)), "{v:?}");
+    assert!(v.contains(&Variation::Delay {
+        line: 0,
+        ns: 2_000_000
+    }));
+    assert!(!v.iter().any(|x| matches!(x, Variation::Rate(_))), "{v:?}");
+}
