@@ -4,7 +4,7 @@
 //! [`GyroFilter`] chains them for a gyro read at its data-ready rate.
 //!
 //! Every constructor checks the invariant 0 < f < fs/2 (the cut-off must be
-//! below Nyquist — with our slow loop rates, gyro 1 kHz and PID 500 Hz,
+//! below Nyquist — at Cleanflight's rates, gyro 1 kHz and PID 500 Hz,
 //! Betaflight's 8 kHz defaults such as the 500 Hz gyro LPF2 would violate
 //! it) and returns a [`ConfigError`] otherwise.
 

@@ -966,20 +966,6 @@ mod tests {
     use super::BodyKind;
 
     #[test]
-    fn the_cascades_gyro_needs_the_presets_gyro_filter_table() {
-        let mut p = crate::preset::Preset::builtin("racer5").unwrap();
-        assert!(super::body(BodyKind::GyroFilter, 125_000, &p).is_ok());
-        p.gyro_filter = None;
-        let e = super::body(BodyKind::GyroFilter, 125_000, &p)
-            .err()
-            .unwrap();
-        assert_eq!(e.field, "gyro_filter", "{e}");
-        assert!(e.reason.contains("[gyro_filter]"), "{e}");
-        // Cleanflight's gyro does not ask for it.
-        assert!(super::body(BodyKind::Gyro, 1_000_000, &p).is_ok());
-    }
-
-    #[test]
     fn every_body_is_named_by_its_place_in_the_models_list() {
         for (i, k) in BodyKind::ALL.into_iter().enumerate() {
             assert_eq!(k as usize, i, "{k:?}");

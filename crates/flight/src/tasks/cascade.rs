@@ -187,6 +187,20 @@ mod tests {
     }
 
     #[test]
+    fn the_cascades_gyro_needs_the_presets_gyro_filter_table() {
+        let mut p = crate::preset::Preset::builtin("racer5").unwrap();
+        assert!(crate::tasks::body(crate::tasks::BodyKind::GyroFilter, 125_000, &p).is_ok());
+        p.gyro_filter = None;
+        let e = crate::tasks::body(crate::tasks::BodyKind::GyroFilter, 125_000, &p)
+            .err()
+            .unwrap();
+        assert_eq!(e.field, "gyro_filter", "{e}");
+        assert!(e.reason.contains("[gyro_filter]"), "{e}");
+        // Cleanflight's gyro does not ask for it.
+        assert!(crate::tasks::body(crate::tasks::BodyKind::Gyro, 1_000_000, &p).is_ok());
+    }
+
+    #[test]
     fn the_attitude_loop_stops_the_motors_until_armed() {
         let mut task = AttitudeTask {
             arming: Arming::new(crate::radio::FailsafeConfig {
