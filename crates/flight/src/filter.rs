@@ -1,8 +1,10 @@
 //! Discrete low-pass and notch filters in Betaflight's forms
 //! (src/main/common/filter.c): PT1 and RBJ-cookbook biquads.
 //!
+//! [`GyroFilter`] chains them for a gyro read at its data-ready rate.
+//!
 //! Every constructor checks the invariant 0 < f < fs/2 (the cut-off must be
-//! below Nyquist — with our slow loop rates, gyro 1 kHz and PID 500 Hz,
+//! below Nyquist — at Cleanflight's rates, gyro 1 kHz and PID 500 Hz,
 //! Betaflight's 8 kHz defaults such as the 500 Hz gyro LPF2 would violate
 //! it) and returns a [`ConfigError`] otherwise.
 
@@ -164,6 +166,85 @@ impl Biquad {
     }
 }
 
+/// Betaflight's gyro LPF2 default, Hz (sensors/gyro.h
+/// `GYRO_LPF2_HZ_DEFAULT` = 500, PT1): the anti-alias stage of a gyro read
+/// at its data-ready rate (4–8 kHz).
+pub const GYRO_LPF2_HZ_DEFAULT: f64 = 500.0;
+
+/// The gyro filters of a loop run at the gyro's data-ready rate, as
+/// Betaflight chains them (sensors/gyro_filter_impl.c): the LPF2 PT1
+/// (anti-alias), a static biquad notch, then the LPF1 PT1. A preset's
+/// `[gyro_filter]` table; every frequency must be below the gyro rate's
+/// Nyquist frequency.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GyroFilterConfig {
+    /// LPF1 PT1 cut-off, Hz (Betaflight `gyro_lpf1_static_hz`).
+    #[serde(default = "default_lpf1")]
+    pub lpf1_hz: f64,
+    /// LPF2 PT1 cut-off, Hz (Betaflight `gyro_lpf2_static_hz`).
+    #[serde(default = "default_lpf2")]
+    pub lpf2_hz: f64,
+    /// Static notch centre, Hz (Betaflight `gyro_notch1_hz`): where the
+    /// rotors shake the gyro most, their rotation frequency at hover.
+    pub notch_hz: f64,
+    /// The notch's lower −3 dB edge, Hz (Betaflight `gyro_notch1_cutoff`),
+    /// below `notch_hz`: Q = f0·fc / (f0² − fc²).
+    pub notch_cutoff_hz: f64,
+}
+
+fn default_lpf1() -> f64 {
+    GYRO_LPF_HZ_DEFAULT
+}
+
+fn default_lpf2() -> f64 {
+    GYRO_LPF2_HZ_DEFAULT
+}
+
+/// [`GyroFilterConfig`]'s chain on the three axes of a gyro sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GyroFilter {
+    lpf2: Pt1Vec3,
+    notch: [Biquad; 3],
+    lpf1: Pt1Vec3,
+}
+
+impl GyroFilter {
+    /// The chain of `cfg` sampled at `fs_hz`; an error names the preset key
+    /// whose frequency the rate cannot carry.
+    pub fn new(cfg: &GyroFilterConfig, fs_hz: f64) -> Result<Self, ConfigError> {
+        let keyed = |key: &str, e: ConfigError| ConfigError::new(key, e.reason);
+        if !(cfg.notch_cutoff_hz > 0.0 && cfg.notch_cutoff_hz < cfg.notch_hz) {
+            return Err(ConfigError::new(
+                "gyro_filter.notch_cutoff_hz",
+                format!(
+                    "must be in (0, notch_hz = {} Hz), got {}",
+                    cfg.notch_hz, cfg.notch_cutoff_hz
+                ),
+            ));
+        }
+        let q = Biquad::notch_q(cfg.notch_hz, cfg.notch_cutoff_hz);
+        let notch =
+            Biquad::notch(cfg.notch_hz, fs_hz, q).map_err(|e| keyed("gyro_filter.notch_hz", e))?;
+        Ok(Self {
+            lpf2: Pt1Vec3::new(cfg.lpf2_hz, fs_hz).map_err(|e| keyed("gyro_filter.lpf2_hz", e))?,
+            notch: [notch; 3],
+            lpf1: Pt1Vec3::new(cfg.lpf1_hz, fs_hz).map_err(|e| keyed("gyro_filter.lpf1_hz", e))?,
+        })
+    }
+
+    /// Filter one gyro sample.
+    pub fn apply(&mut self, v: Vec3) -> Vec3 {
+        let a = self.lpf2.apply(v);
+        let n = Vec3::new(
+            self.notch[0].apply(a.x),
+            self.notch[1].apply(a.y),
+            self.notch[2].apply(a.z),
+        );
+        self.lpf1.apply(n)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,6 +315,56 @@ mod tests {
             y = n.apply(1.0);
         }
         assert!((y - 1.0).abs() < 1e-12);
+    }
+
+    /// racer5's chain at 8 kHz: the notch takes ≥ 20 dB off its centre;
+    /// the notch alone passes 10 % of its centre within 1 dB, and so does
+    /// the whole chain (its low-passes sit well above that).
+    #[test]
+    fn gyro_filter_notches_its_centre_and_passes_a_tenth_of_it() {
+        let cfg = GyroFilterConfig {
+            lpf1_hz: GYRO_LPF_HZ_DEFAULT,
+            lpf2_hz: GYRO_LPF2_HZ_DEFAULT,
+            notch_hz: 260.0,
+            notch_cutoff_hz: 200.0,
+        };
+        let fs = 8000.0;
+        let q = Biquad::notch_q(cfg.notch_hz, cfg.notch_cutoff_hz);
+        let mut n = Biquad::notch(cfg.notch_hz, fs, q).unwrap();
+        let centre = db(gain(|x| n.apply(x), cfg.notch_hz, fs));
+        assert!(centre <= -20.0, "notch at its centre: {centre} dB");
+        let mut n = Biquad::notch(cfg.notch_hz, fs, q).unwrap();
+        let pass = db(gain(|x| n.apply(x), 0.1 * cfg.notch_hz, fs));
+        assert!(pass.abs() <= 1.0, "notch at 10 % of its centre: {pass} dB");
+        let axis_x = |f: &mut GyroFilter, x: f64| f.apply(Vec3::new(x, 0.0, 0.0)).x;
+        let mut chain = GyroFilter::new(&cfg, fs).unwrap();
+        let pass = db(gain(|x| axis_x(&mut chain, x), 0.1 * cfg.notch_hz, fs));
+        assert!(pass.abs() <= 1.0, "chain at 10 % of the notch: {pass} dB");
+        let mut chain = GyroFilter::new(&cfg, fs).unwrap();
+        let centre = db(gain(|x| axis_x(&mut chain, x), cfg.notch_hz, fs));
+        assert!(centre <= -20.0, "chain at the notch: {centre} dB");
+    }
+
+    #[test]
+    fn gyro_filter_refuses_what_its_rate_cannot_carry_naming_the_key() {
+        let cfg = GyroFilterConfig {
+            lpf1_hz: GYRO_LPF_HZ_DEFAULT,
+            lpf2_hz: GYRO_LPF2_HZ_DEFAULT,
+            notch_hz: 260.0,
+            notch_cutoff_hz: 200.0,
+        };
+        // 500 Hz is Nyquist at 1 kHz: LPF2 cannot run there.
+        let e = GyroFilter::new(&cfg, 1000.0).unwrap_err();
+        assert_eq!(e.field, "gyro_filter.lpf2_hz", "{e}");
+        let e = GyroFilter::new(
+            &GyroFilterConfig {
+                notch_cutoff_hz: 300.0,
+                ..cfg
+            },
+            8000.0,
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "gyro_filter.notch_cutoff_hz", "{e}");
     }
 
     #[test]

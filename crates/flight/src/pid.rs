@@ -175,41 +175,67 @@ pub struct AxisCommand {
     pub throttle: f64,
 }
 
-/// Angle loop + three rate PIDs (the PID task's state).
+/// The angle loop (Betaflight's angle mode): the roll/pitch angle error
+/// times `level_kp`, and the pilot's yaw rate, each bounded, become the
+/// rate set-point of the rate loop. Stateless: the same in Cleanflight's
+/// PID task and in the cascade's attitude task.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Controller {
-    cfg: PidConfig,
-    axes: [AxisPid; 3],
-    saturated: bool,
-    rate_sp: Vec3,
+pub struct AngleLoop {
+    level_kp: f64,
+    max_rate: f64,
+    yaw_max_rate: f64,
 }
 
-impl Controller {
-    /// A controller running at `pid_rate_hz`; validates `cfg`.
-    pub fn new(cfg: PidConfig, pid_rate_hz: f64) -> Result<Self, ConfigError> {
+impl AngleLoop {
+    /// The angle loop of `cfg` (validated by the caller).
+    pub fn new(cfg: &PidConfig) -> Self {
+        Self {
+            level_kp: cfg.level_kp,
+            max_rate: cfg.max_rate_dps.to_radians(),
+            yaw_max_rate: cfg.yaw_max_rate_dps.to_radians(),
+        }
+    }
+
+    /// The body rate set-point, rad/s, for `sp` at the attitude `att`.
+    pub fn rate_setpoint(&self, sp: &Setpoint, att: &Euler) -> Vec3 {
+        let (k, max, ymax) = (self.level_kp, self.max_rate, self.yaw_max_rate);
+        Vec3::new(
+            (k * (sp.roll - att.roll)).clamp(-max, max),
+            (k * (sp.pitch - att.pitch)).clamp(-max, max),
+            sp.yaw_rate.clamp(-ymax, ymax),
+        )
+    }
+}
+
+/// The rate loop: a PID per axis on the measured body rate (D on the
+/// measurement, through the D-term low-pass), anti-windup from the mixer.
+/// A pure controller, as PX4's `RateControl`: rates and dt in, torque
+/// commands out; arming, set-points and timing belong to its caller.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RateController {
+    axes: [AxisPid; 3],
+    saturated: bool,
+}
+
+impl RateController {
+    /// The rate loop of `cfg` stepped at `rate_hz` (validates `cfg`).
+    pub fn new(cfg: &PidConfig, rate_hz: f64) -> Result<Self, ConfigError> {
         cfg.validate()?;
-        let mk = |g| AxisPid::new(g, cfg.output_limit, cfg.dterm_lpf_hz, pid_rate_hz);
+        let mk = |g| AxisPid::new(g, cfg.output_limit, cfg.dterm_lpf_hz, rate_hz);
         Ok(Self {
-            cfg,
             axes: [mk(cfg.roll)?, mk(cfg.pitch)?, mk(cfg.yaw)?],
             saturated: false,
-            rate_sp: Vec3::ZERO,
         })
     }
 
-    /// Tell the controller whether the mixer saturated (anti-windup).
+    /// Tell the loop whether the mixer saturated (anti-windup).
     pub fn set_saturated(&mut self, saturated: bool) {
         self.saturated = saturated;
     }
 
-    /// Zero all integrators (on disarm or while on the ground).
+    /// Zero all integrators and derivative histories.
     pub fn reset(&mut self) {
         self.axes.iter_mut().for_each(AxisPid::reset);
-    }
-
-    /// The rate set-point of the last update, rad/s (body).
-    pub fn rate_setpoint(&self) -> Vec3 {
-        self.rate_sp
     }
 
     /// The per-axis integral terms.
@@ -221,22 +247,65 @@ impl Controller {
         ]
     }
 
+    /// One step: torque commands (mixer units) for the set-point `rate_sp`
+    /// and the measured `gyro` rate, rad/s, `dt` s after the previous step.
+    pub fn update(&mut self, rate_sp: Vec3, gyro: Vec3, dt: f64) -> [f64; 3] {
+        let s = self.saturated;
+        [
+            self.axes[0].update(rate_sp.x, gyro.x, dt, s),
+            self.axes[1].update(rate_sp.y, gyro.y, dt, s),
+            self.axes[2].update(rate_sp.z, gyro.z, dt, s),
+        ]
+    }
+}
+
+/// Angle loop + rate loop in one step (Cleanflight's PID task's state).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Controller {
+    angle: AngleLoop,
+    rate: RateController,
+    rate_sp: Vec3,
+}
+
+impl Controller {
+    /// A controller running at `pid_rate_hz`; validates `cfg`.
+    pub fn new(cfg: PidConfig, pid_rate_hz: f64) -> Result<Self, ConfigError> {
+        Ok(Self {
+            rate: RateController::new(&cfg, pid_rate_hz)?,
+            angle: AngleLoop::new(&cfg),
+            rate_sp: Vec3::ZERO,
+        })
+    }
+
+    /// Tell the controller whether the mixer saturated (anti-windup).
+    pub fn set_saturated(&mut self, saturated: bool) {
+        self.rate.set_saturated(saturated);
+    }
+
+    /// Zero all integrators (on disarm or while on the ground).
+    pub fn reset(&mut self) {
+        self.rate.reset();
+    }
+
+    /// The rate set-point of the last update, rad/s (body).
+    pub fn rate_setpoint(&self) -> Vec3 {
+        self.rate_sp
+    }
+
+    /// The per-axis integral terms.
+    pub fn integrals(&self) -> [f64; 3] {
+        self.rate.integrals()
+    }
+
     /// One PID step: `att` from the AHRS, `gyro` the latest filtered body
     /// rate, `dt` the time since the previous step, s.
     pub fn update(&mut self, sp: &Setpoint, att: &Euler, gyro: Vec3, dt: f64) -> AxisCommand {
-        let max = self.cfg.max_rate_dps.to_radians();
-        let ymax = self.cfg.yaw_max_rate_dps.to_radians();
-        let k = self.cfg.level_kp;
-        self.rate_sp = Vec3::new(
-            (k * (sp.roll - att.roll)).clamp(-max, max),
-            (k * (sp.pitch - att.pitch)).clamp(-max, max),
-            sp.yaw_rate.clamp(-ymax, ymax),
-        );
-        let s = self.saturated;
+        self.rate_sp = self.angle.rate_setpoint(sp, att);
+        let [roll, pitch, yaw] = self.rate.update(self.rate_sp, gyro, dt);
         AxisCommand {
-            roll: self.axes[0].update(self.rate_sp.x, gyro.x, dt, s),
-            pitch: self.axes[1].update(self.rate_sp.y, gyro.y, dt, s),
-            yaw: self.axes[2].update(self.rate_sp.z, gyro.z, dt, s),
+            roll,
+            pitch,
+            yaw,
             throttle: sp.throttle.clamp(0.0, 1.0),
         }
     }
@@ -306,5 +375,38 @@ mod tests {
         a.update(0.0, 0.0, 0.002, false);
         // FF = 0.01 · (1 − 0)/0.002 = 5, clamped at the output limit 10.
         assert!((a.update(1.0, 0.0, 0.002, false) - 5.0).abs() < 1e-12);
+    }
+
+    /// The rate loop of the cascade: a step of the rate set-point moves
+    /// only P (and FF) — no D kick — while a step of the measured rate
+    /// does give a D term, through the D-term low-pass.
+    #[test]
+    fn rate_controller_has_no_d_kick_on_a_setpoint_step() {
+        let d_only = RateGains {
+            kp: 0.0,
+            ki: 0.0,
+            kd: 0.01,
+            kff: 0.0,
+            i_limit: 0.0,
+        };
+        let cfg = PidConfig {
+            roll: d_only,
+            pitch: d_only,
+            yaw: d_only,
+            level_kp: 6.0,
+            max_rate_dps: 200.0,
+            yaw_max_rate_dps: 200.0,
+            dterm_lpf_hz: 75.0,
+            output_limit: 1.0,
+        };
+        let dt = 1.0 / 8000.0;
+        let mut rc = RateController::new(&cfg, 8000.0).unwrap();
+        rc.update(Vec3::ZERO, Vec3::ZERO, dt);
+        for _ in 0..100 {
+            let out = rc.update(Vec3::new(5.0, -5.0, 2.0), Vec3::ZERO, dt);
+            assert_eq!(out, [0.0; 3], "a set-point step kicked D");
+        }
+        let out = rc.update(Vec3::new(5.0, -5.0, 2.0), Vec3::new(0.1, 0.0, 0.0), dt);
+        assert!(out[0] < 0.0, "a measurement step gives D: {out:?}");
     }
 }

@@ -32,6 +32,11 @@ pub struct Preset {
     pub battery: BatteryParams,
     /// Attitude controller gains.
     pub pid: PidConfig,
+    /// The gyro filters of a loop at the gyro's data-ready rate (the
+    /// `gyro_filter` body's; `[gyro_filter]`, optional for a vehicle that
+    /// flies only Cleanflight's structure).
+    #[serde(default)]
+    pub gyro_filter: Option<crate::filter::GyroFilterConfig>,
     /// Autopilot gains.
     pub autopilot: AutopilotConfig,
     /// The IMU's errors in a disturbed world (`[imu]`; none when omitted).

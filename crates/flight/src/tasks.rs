@@ -19,21 +19,24 @@
 use crate::ahrs::{AccelSample, Attitude, GyroAccumulator, Mahony, DCM_KP_DEFAULT};
 use crate::battery::{Battery, BatteryAlert, Housekeeping, HousekeepingConfig};
 use crate::error::ConfigError;
-use crate::filter::{Pt1Vec3, GYRO_LPF_HZ_DEFAULT};
+use crate::filter::{GyroFilter, Pt1Vec3, GYRO_LPF_HZ_DEFAULT};
 use crate::imu::{Imu, ImuConfig, Reading};
 use crate::math::{Euler, Vec3};
 use crate::mixer::{mix, MotorDemand};
 use crate::motor::through_dshot;
-use crate::pid::{Controller, Setpoint};
+use crate::pid::{AngleLoop, AxisCommand, Controller, RateController, Setpoint};
 use crate::plant::Plant;
 use crate::preset::Preset;
-use crate::radio::{
-    ArmState, ArmingChecks, Autopilot, Failsafe, FailsafeAction, FailsafeConfig, Mission,
-    RadioSample, VehicleState,
-};
+use crate::radio::{Autopilot, FailsafeConfig, Mission, RadioSample, VehicleState};
 use crate::trace::TracePoint;
 use crate::wind::Wind;
 use rtpipe_body::{Body, Environment, Job, Nanos, Stamped};
+
+mod arming;
+mod cascade;
+
+use arming::Arming;
+pub use cascade::{AttitudeTask, RateDemand, RatePidTask};
 
 /// What flows between the flight tasks: one register value type for the
 /// whole pipeline (`Copy`, so registers are fixed-size slots).
@@ -60,6 +63,8 @@ pub enum Value {
     Scalar(f64),
     /// The low-battery alert level.
     Alert(BatteryAlert),
+    /// The attitude loop's rate set-point for the rate loop.
+    RateSetpoint(RateDemand),
 }
 
 /// Typed views of a [`Value`], for picking a task's inputs by kind.
@@ -104,6 +109,14 @@ impl Value {
         }
     }
 
+    /// The attitude loop's rate set-point.
+    pub fn rate_setpoint(self) -> Option<RateDemand> {
+        match self {
+            Value::RateSetpoint(r) => Some(r),
+            _ => None,
+        }
+    }
+
     /// A housekeeping figure.
     pub fn scalar(self) -> Option<f64> {
         match self {
@@ -136,6 +149,13 @@ pub enum BodyKind {
     Current,
     /// Housekeeping: low-battery alert.
     Alert,
+    /// Samples the gyro at its data-ready rate through the preset's
+    /// `[gyro_filter]` chain (low-pass, notch, low-pass), accumulates sums.
+    GyroFilter,
+    /// Arming, failsafe and the angle loop: publishes rate set-points.
+    Attitude,
+    /// The rate PID on the filtered gyro, and the mixer.
+    RatePid,
 }
 
 impl BodyKind {
@@ -145,7 +165,12 @@ impl BodyKind {
     fn observes_world(self) -> bool {
         matches!(
             self,
-            BodyKind::Gyro | BodyKind::Accel | BodyKind::Radio | BodyKind::Vbat | BodyKind::Current
+            BodyKind::Gyro
+                | BodyKind::GyroFilter
+                | BodyKind::Accel
+                | BodyKind::Radio
+                | BodyKind::Vbat
+                | BodyKind::Current
         )
     }
 
@@ -159,8 +184,25 @@ impl BodyKind {
         BodyKind::Pwm,
     ];
 
+    /// The tasks of the modern cascade (Betaflight's, PX4's): the gyro at
+    /// its data-ready rate with its filters, the attitude loop handing rate
+    /// set-points to the rate PID and mixer, and the motor output.
+    pub const CASCADE: [BodyKind; 7] = [
+        BodyKind::GyroFilter,
+        BodyKind::Accel,
+        BodyKind::Ahrs,
+        BodyKind::Radio,
+        BodyKind::Attitude,
+        BodyKind::RatePid,
+        BodyKind::Pwm,
+    ];
+
+    /// The complete flight controllers: a spec that has every task of one
+    /// of them flies ([`BodyKind::CRITICAL`] first).
+    pub const STRUCTURES: [&'static [BodyKind]; 2] = [&BodyKind::CRITICAL, &BodyKind::CASCADE];
+
     /// Every role, in the order of [`BodyKind::name`]'s list.
-    pub const ALL: [BodyKind; 10] = [
+    pub const ALL: [BodyKind; 13] = [
         BodyKind::Gyro,
         BodyKind::Accel,
         BodyKind::Ahrs,
@@ -171,6 +213,9 @@ impl BodyKind {
         BodyKind::Vbat,
         BodyKind::Current,
         BodyKind::Alert,
+        BodyKind::GyroFilter,
+        BodyKind::Attitude,
+        BodyKind::RatePid,
     ];
 
     /// The name a spec uses: `rtpipe_model::BODY_NAMES`, the list the
@@ -179,20 +224,36 @@ impl BodyKind {
         rtpipe_model::BODY_NAMES[self as usize]
     }
 
+    /// Which of the world's delay lines ([`CosimConfig::sense_delay_ns`])
+    /// this role's samples pass: the gyro (either structure's), the
+    /// accelerometer, the radio; `None` for the others.
+    pub fn delay_line(self) -> Option<usize> {
+        match self {
+            BodyKind::Gyro | BodyKind::GyroFilter => Some(0),
+            BodyKind::Accel => Some(1),
+            BodyKind::Radio => Some(2),
+            _ => None,
+        }
+    }
+
     /// The role a spec names, if any.
     pub fn parse(name: &str) -> Option<BodyKind> {
         BodyKind::ALL.into_iter().find(|r| r.name() == name)
     }
 
-    /// The roles whose outputs this body takes as inputs: without one of
-    /// them among its task's `reads`, the input is always missing (a PID
-    /// without the radio never arms: zero motor demand).
-    pub fn needs(self) -> &'static [BodyKind] {
+    /// The inputs this body takes, each as the roles that can give it
+    /// (any one will do): without one of them among its task's `reads`, the
+    /// input is always missing (a PID without the radio never arms: zero
+    /// motor demand).
+    pub fn needs(self) -> &'static [&'static [BodyKind]] {
+        const GYRO: &[BodyKind] = &[BodyKind::Gyro, BodyKind::GyroFilter];
         match self {
-            BodyKind::Ahrs => &[BodyKind::Gyro, BodyKind::Accel],
-            BodyKind::Pid => &[BodyKind::Ahrs, BodyKind::Radio],
-            BodyKind::Pwm => &[BodyKind::Pid],
-            BodyKind::Alert => &[BodyKind::Vbat],
+            BodyKind::Ahrs => &[GYRO, &[BodyKind::Accel]],
+            BodyKind::Pid => &[&[BodyKind::Ahrs], &[BodyKind::Radio]],
+            BodyKind::Attitude => &[&[BodyKind::Ahrs], &[BodyKind::Radio]],
+            BodyKind::RatePid => &[GYRO, &[BodyKind::Attitude]],
+            BodyKind::Pwm => &[&[BodyKind::Pid, BodyKind::RatePid]],
+            BodyKind::Alert => &[&[BodyKind::Vbat]],
             _ => &[],
         }
     }
@@ -214,8 +275,14 @@ fn input<T>(inputs: &[Option<Stamped<Value>>], pick: impl Fn(Value) -> Option<T>
 /// value, so the AHRS differences two snapshots to average every sample of
 /// its interval.
 pub struct GyroTask {
-    lpf: Pt1Vec3,
+    filter: GyroFilters,
     acc: GyroAccumulator,
+}
+
+/// The gyro body's filters: Cleanflight's one PT1, or the cascade's chain.
+enum GyroFilters {
+    Pt1(Pt1Vec3),
+    Chain(Box<GyroFilter>),
 }
 
 impl Body<Value> for GyroTask {
@@ -226,7 +293,10 @@ impl Body<Value> for GyroTask {
         device: Option<Value>,
     ) -> Value {
         if let Some(Value::Imu(r)) = device {
-            let rate = self.lpf.apply(r.value);
+            let rate = match &mut self.filter {
+                GyroFilters::Pt1(f) => f.apply(r.value),
+                GyroFilters::Chain(f) => f.apply(r.value),
+            };
             self.acc.push(rate, r.t_ns);
         }
         Value::Gyro(self.acc.snapshot())
@@ -300,34 +370,21 @@ impl Body<Value> for RadioTask {
 /// gyro rate) and the radio frame.
 pub struct PidTask {
     ctrl: Controller,
-    arm: ArmState,
-    checks: ArmingChecks,
-    failsafe: Failsafe,
+    arming: Arming,
     /// The attitude sample the controller last ran on: (its time, ns; the
     /// output it gave).
     last: Option<(u64, MotorDemand)>,
 }
 
-impl PidTask {
-    /// Arming and failsafe decide; `None` means the motors stop.
-    fn setpoint(&mut self, now: u64, att: &Attitude, rx: &RadioSample) -> Option<Setpoint> {
-        // No landing detector on the controller side: a failsafe descent
-        // disarms after its time-out.
-        let action = self.failsafe.update(now, rx.t_ns, false);
-        let check = self
-            .checks
-            .check(&rx.cmd, att.q.tilt(), false, self.failsafe.active());
-        self.arm.update(&rx.cmd, check);
-        let sp = match action {
-            FailsafeAction::PassThrough => rx.cmd.setpoint(),
-            FailsafeAction::Override(sp) => sp,
-            FailsafeAction::Disarm => {
-                self.arm.disarm();
-                return None;
-            }
-        };
-        self.arm.armed.then_some(sp)
-    }
+/// The mixer's motor demand for `cmd`, armed, and whether it saturated
+/// (for the rate loop's anti-windup).
+fn mixed(cmd: &AxisCommand) -> (MotorDemand, bool) {
+    let m = mix(cmd);
+    let out = MotorDemand {
+        motors: m.motors,
+        armed: true,
+    };
+    (out, m.saturated)
 }
 
 impl Body<Value> for PidTask {
@@ -347,7 +404,7 @@ impl Body<Value> for PidTask {
             return Value::Demand(MotorDemand::default());
         };
         let now = u64::try_from(job.read).unwrap_or(0);
-        let Some(sp) = self.setpoint(now, &att, &rx) else {
+        let Some(sp) = self.arming.setpoint(now, &att, &rx) else {
             self.ctrl.reset();
             self.last = None;
             return Value::Demand(MotorDemand::default());
@@ -360,17 +417,13 @@ impl Body<Value> for PidTask {
         let dt = self
             .last
             .map_or(0.0, |(t, _)| att.t_ns.saturating_sub(t) as f64 * 1e-9);
-        if sp.throttle < 0.15 {
+        if sp.throttle < cascade::I_RESET_THROTTLE {
             // Betaflight resets the I term at low throttle (no airmode on the ground).
             self.ctrl.reset();
         }
         let cmd = self.ctrl.update(&sp, &att.euler, att.rate, dt);
-        let m = mix(&cmd);
-        self.ctrl.set_saturated(m.saturated);
-        let out = MotorDemand {
-            motors: m.motors,
-            armed: true,
-        };
+        let (out, saturated) = mixed(&cmd);
+        self.ctrl.set_saturated(saturated);
         self.last = Some((att.t_ns, out));
         Value::Demand(out)
     }
@@ -494,8 +547,20 @@ pub fn body(
     let hk = || Housekeeping::new(HousekeepingConfig::cleanflight(preset.battery.cells));
     Ok(match role {
         BodyKind::Gyro => Box::new(GyroTask {
-            lpf: Pt1Vec3::new(GYRO_LPF_HZ_DEFAULT.min(0.45 * hz), hz)?,
+            filter: GyroFilters::Pt1(Pt1Vec3::new(GYRO_LPF_HZ_DEFAULT.min(0.45 * hz), hz)?),
             acc: GyroAccumulator::new(),
+        }),
+        BodyKind::GyroFilter => Box::new(GyroTask {
+            filter: GyroFilters::Chain(Box::new(GyroFilter::new(gyro_filter(preset)?, hz)?)),
+            acc: GyroAccumulator::new(),
+        }),
+        BodyKind::Attitude => Box::new(AttitudeTask {
+            arming: Arming::new(failsafe_config(preset)),
+            angle: AngleLoop::new(&preset.pid),
+        }),
+        BodyKind::RatePid => Box::new(RatePidTask {
+            rate: RateController::new(&preset.pid, hz)?,
+            last: None,
         }),
         BodyKind::Accel => Box::new(AccelTask),
         BodyKind::Ahrs => Box::new(AhrsTask {
@@ -504,9 +569,7 @@ pub fn body(
         BodyKind::Radio => Box::new(RadioTask::default()),
         BodyKind::Pid => Box::new(PidTask {
             ctrl: Controller::new(preset.pid, hz)?,
-            arm: ArmState::default(),
-            checks: ArmingChecks::default(),
-            failsafe: Failsafe::new(failsafe_config(preset)),
+            arming: Arming::new(failsafe_config(preset)),
             last: None,
         }),
         BodyKind::Pwm => Box::new(PwmTask),
@@ -517,6 +580,16 @@ pub fn body(
             last_read: None,
         }),
         BodyKind::Alert => Box::new(AlertTask { hk: hk()? }),
+    })
+}
+
+/// The preset's `[gyro_filter]` table, which the cascade's gyro needs.
+fn gyro_filter(preset: &Preset) -> Result<&crate::filter::GyroFilterConfig, ConfigError> {
+    preset.gyro_filter.as_ref().ok_or_else(|| {
+        ConfigError::new(
+            "gyro_filter",
+            "the preset has no [gyro_filter] table (lpf1_hz, lpf2_hz, notch_hz, notch_cutoff_hz), which the gyro_filter body needs",
+        )
     })
 }
 
@@ -839,23 +912,27 @@ impl Environment<Value> for Cosim {
         } else {
             self.trace_to(t);
         }
-        let (line, fresh) = match kind {
-            BodyKind::Gyro => {
+        let fresh = match kind {
+            BodyKind::Gyro | BodyKind::GyroFilter => {
                 self.tell_rotors(t);
                 let rate = self.plant.state().rate;
-                (0, Some(Value::Imu(self.imu.read_gyro(t, rate))))
+                Some(Value::Imu(self.imu.read_gyro(t, rate)))
             }
             BodyKind::Accel => {
                 self.tell_rotors(t);
                 let sf = self.plant.specific_force();
-                (1, Some(Value::Imu(self.imu.read_accel(t, sf))))
+                Some(Value::Imu(self.imu.read_accel(t, sf)))
             }
-            BodyKind::Radio => (2, self.radio_frame(t)),
+            BodyKind::Radio => self.radio_frame(t),
             BodyKind::Vbat => return Some(Value::Scalar(self.battery.voltage())),
             BodyKind::Current => return Some(Value::Scalar(self.battery.current())),
             _ => return None,
         };
-        self.delayed[line].pass(t, fresh)
+        let line = kind.delay_line();
+        match line.and_then(|l| self.delayed.get_mut(l)) {
+            Some(d) => d.pass(t, fresh),
+            None => fresh,
+        }
     }
 
     fn actuate(&mut self, task: usize, t: Nanos, value: &Value) {

@@ -135,20 +135,37 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
         };
         kinds.push(r);
     }
-    for need in BodyKind::CRITICAL {
-        if !kinds.contains(&Some(need)) {
-            return Err(Diagnostic::error(
-                format!(
-                    "{}: no task has body = \"{}\", so the flight controller is incomplete",
-                    path.display(),
-                    need.name()
-                ),
-                "give the tasks of the critical path their bodies, as examples/cleanflight.toml does",
-            ));
-        }
-    }
+    check_complete(path, &kinds)?;
     check_wiring(spec, path, &kinds)?;
     Ok(kinds)
+}
+
+/// The tasks of one of the flight controllers of
+/// [`BodyKind::STRUCTURES`] are all there; when none is complete, the
+/// nearest (fewest missing; Cleanflight's on a tie) names its first gap.
+fn check_complete(path: &Path, kinds: &[Option<BodyKind>]) -> Result<(), Diagnostic> {
+    let missing = |s: &[BodyKind]| -> Vec<BodyKind> {
+        s.iter()
+            .copied()
+            .filter(|k| !kinds.contains(&Some(*k)))
+            .collect()
+    };
+    let nearest = BodyKind::STRUCTURES
+        .iter()
+        .map(|s| missing(s))
+        .min_by_key(Vec::len)
+        .unwrap_or_default();
+    match nearest.first() {
+        None => Ok(()),
+        Some(need) => Err(Diagnostic::error(
+            format!(
+                "{}: no task has body = \"{}\", so the flight controller is incomplete",
+                path.display(),
+                need.name()
+            ),
+            "give the tasks of the critical path their bodies, as examples/cleanflight.toml (or examples/betaflight-8k.toml) does",
+        )),
+    }
 }
 
 /// Every body's inputs are wired: a task whose body needs another role's
@@ -157,16 +174,15 @@ pub fn body_kinds(spec: &Spec, path: &Path) -> Result<Vec<Option<BodyKind>>, Dia
 fn check_wiring(spec: &Spec, path: &Path, kinds: &[Option<BodyKind>]) -> Result<(), Diagnostic> {
     for (t, kind) in spec.tasks.iter().zip(kinds) {
         let Some(kind) = kind else { continue };
-        for &need in kind.needs() {
-            if t.reads.iter().any(|&j| kinds.get(j) == Some(&Some(need))) {
+        for &roles in kind.needs() {
+            let gives = |k: &Option<BodyKind>| k.is_some_and(|k| roles.contains(&k));
+            if t.reads.iter().any(|&j| kinds.get(j).is_some_and(gives)) {
                 continue;
             }
-            let source = spec
-                .tasks
-                .iter()
-                .zip(kinds)
-                .find(|(_, k)| **k == Some(need))
-                .map_or(String::new(), |(s, _)| s.name.clone());
+            let found = spec.tasks.iter().zip(kinds).find(|(_, k)| gives(k));
+            let source = found.map_or(String::new(), |(s, _)| s.name.clone());
+            // The role the spec has, else the first that could give it.
+            let need = found.and_then(|(_, k)| *k).unwrap_or(roles[0]);
             return Err(Diagnostic::error(
                 format!(
                     "{}: task `{}` (body {}) reads no task with body = \"{}\", so its input from it would always be missing",
@@ -216,17 +232,39 @@ pub fn setup(spec: &Spec, r: &Request) -> Result<Setup, Diagnostic> {
             "give a positive duration",
         ));
     }
+    let world = gyro_at_data_ready_rate(spec, &kinds, CosimConfig::new(r.seed));
     Ok(Setup {
         preset,
         mission,
         kinds,
         horizon,
-        world: CosimConfig::new(r.seed),
+        world,
         log_jobs: false,
         keep_trace: true,
         track_chains: true,
         offsets: None,
     })
+}
+
+/// The cascade's gyro (`gyro_filter`) is read at the sensor's data-ready
+/// rate, so the sensor's output data rate is that task's rate (rounded up:
+/// every read on time gets a sample of its own), not the default IMU's
+/// 3200 Hz, which would hand an 8 kHz loop the same sample two or three
+/// times. Cleanflight's `gyro` polls the default IMU as before.
+fn gyro_at_data_ready_rate(
+    spec: &Spec,
+    kinds: &[Option<BodyKind>],
+    mut world: CosimConfig,
+) -> CosimConfig {
+    let gyro = kinds.iter().position(|k| *k == Some(BodyKind::GyroFilter));
+    let period = gyro.and_then(|i| spec.activation_period(i));
+    if let Some(p) = period
+        .and_then(|p| u64::try_from(p).ok())
+        .filter(|&p| p > 0)
+    {
+        world.imu.gyro_odr_hz = 1_000_000_000u64.div_ceil(p);
+    }
+    world
 }
 
 /// Why the body of task `task` could not be built, blaming what is at
@@ -705,6 +743,38 @@ mod tests {
                 && e.contains("add \"radio\" to the reads of task `pid`"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn the_cascade_is_complete_and_its_gaps_are_named() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/betaflight-8k.toml");
+        let mut spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
+        assert!(body_kinds(&spec, &p).is_ok());
+        let task = |spec: &Spec, name: &str| {
+            spec.tasks
+                .iter()
+                .position(|t| t.name == name)
+                .unwrap_or_else(|| panic!("no task {name}"))
+        };
+        // The motor output of the cascade reads the rate PID.
+        let (pwm, rate_pid) = (task(&spec, "pwm"), task(&spec, "rate_pid"));
+        spec.tasks[pwm].reads.retain(|&j| j != rate_pid);
+        let e = body_kinds(&spec, &p)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("task `pwm` (body pwm) reads no task with body = \"rate_pid\"")
+                && e.contains("add \"rate_pid\" to the reads of task `pwm`"),
+            "{e}"
+        );
+        // Nearer the cascade than Cleanflight's structure: its gap is named.
+        spec.tasks[rate_pid].body = None;
+        let e = body_kinds(&spec, &p)
+            .err()
+            .map(|b| b.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("no task has body = \"rate_pid\""), "{e}");
     }
 
     #[test]

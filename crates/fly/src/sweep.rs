@@ -29,7 +29,8 @@ use rtpipe_sim::ExecModel;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The sensing kinds a pure delay can be put on, in the order of
-/// `CosimConfig::sense_delay_ns`.
+/// `CosimConfig::sense_delay_ns` (`BodyKind::delay_line`: the cascade's
+/// `gyro_filter` samples pass the gyro's line).
 pub const DELAY_LINES: [BodyKind; 3] = [BodyKind::Gyro, BodyKind::Accel, BodyKind::Radio];
 
 /// A chain's (reaction, freshness) bounds or limits, ns.
@@ -141,10 +142,13 @@ fn scaled_where(spec: &Spec, k: f64, pick: impl Fn(usize) -> bool) -> Result<Spe
     Ok(s)
 }
 
-/// The motor-output tasks: the tails whose rate the rate sweep varies.
-pub fn tails(s: &Setup) -> Vec<usize> {
+/// The motor-output tasks with a period of their own: the tails whose
+/// rate the rate sweep varies (a data-triggered output runs at its
+/// trigger's rate, which the period scale varies).
+pub fn tails(spec: &Spec, s: &Setup) -> Vec<usize> {
     (0..s.kinds.len())
         .filter(|&i| s.kinds[i] == Some(BodyKind::Pwm))
+        .filter(|&i| spec.tasks.get(i).is_some_and(|t| !t.is_triggered()))
         .collect()
 }
 
@@ -168,8 +172,7 @@ fn sound_bounds(spec: &Spec) -> (Vec<ChainPair>, Vec<ChainPair>, bool) {
 /// The delay line a chain starts at, if any.
 pub fn head_line(spec: &Spec, s: &Setup, chain: usize) -> Option<usize> {
     let head = *spec.chains.get(chain)?.path.first()?;
-    let role = s.kinds.get(head).copied().flatten()?;
-    DELAY_LINES.iter().position(|&r| r == role)
+    s.kinds.get(head).copied().flatten()?.delay_line()
 }
 
 /// What a variation flies: the timing (or why it cannot be flown), the
@@ -183,7 +186,7 @@ fn plan(spec: &Spec, s: &Setup, v: Variation) -> Plan {
     let timing = match v {
         Variation::Scale(k) => scaled(spec, k),
         Variation::Rate(k) => {
-            let tails = tails(s);
+            let tails = tails(spec, s);
             scaled_where(spec, k, |i| tails.contains(&i))
         }
         Variation::Delay { line, ns } => {
@@ -370,7 +373,7 @@ pub fn variations(spec: &Spec, s: &Setup, lo: f64, hi: f64, per_octave: u32) -> 
             }
         }
     }
-    if !tails(s).is_empty() {
+    if !tails(spec, s).is_empty() {
         v.extend((0..=5 * per_octave as i32).map(|i| Variation::Rate(at(i))));
     }
     v
@@ -456,7 +459,7 @@ pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point], safety: f64) -> 
         }) => Some(*k),
         _ => None,
     };
-    let tails = tails(s);
+    let tails = tails(spec, s);
     let max_period = spec
         .tasks
         .iter()

@@ -34,7 +34,7 @@ pub const MAX_SPEC_BYTES: u64 = input::MAX_INPUT_BYTES;
 /// The task bodies a spec's `body` may name: the flight controller's tasks
 /// (crate `flight`'s `BodyKind`, whose names these are, in its order). They
 /// live here so that the spec's validation refuses a misspelling at its key.
-pub const BODY_NAMES: [&str; 10] = [
+pub const BODY_NAMES: [&str; 13] = [
     "gyro",
     "accel",
     "ahrs",
@@ -45,6 +45,9 @@ pub const BODY_NAMES: [&str; 10] = [
     "battery_voltage",
     "battery_current",
     "battery_alert",
+    "gyro_filter",
+    "attitude",
+    "rate_pid",
 ];
 
 use raw::RawSpec;

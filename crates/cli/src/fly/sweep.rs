@@ -109,7 +109,7 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
         ch.max_reaction_time = e.0.or(ch.max_reaction_time);
         ch.max_data_age = e.1.or(ch.max_data_age);
     }
-    let tails = tails(s);
+    let tails = tails(spec, s);
     for (i, t) in out.tasks.iter_mut().enumerate() {
         if tails.contains(&i) {
             t.max_period = d.max_period[i].or(t.max_period);
@@ -515,7 +515,7 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety:
         .iter()
         .filter(|p| matches!(p.variation, Variation::Rate(_)))
         .collect();
-    let tails = tails(s);
+    let tails = tails(spec, s);
     if pts.is_empty() || tails.is_empty() {
         return String::new();
     }
