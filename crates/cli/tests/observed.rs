@@ -246,3 +246,34 @@ fn wrong_files_are_refused_at_their_line() {
         "{err}"
     );
 }
+
+/// A log longer than the open samples kept (65,536 per chain): every
+/// sample's reaction is still its earliest publication, and a publication
+/// of a sample already closed counts toward freshness only, reported.
+#[test]
+fn a_long_log_closes_old_samples_and_reports_late_publications() {
+    let spec = example("work-queues.toml");
+    let n: i64 = 70_000;
+    let mut s = String::from(LOG_HEADER);
+    for k in 0..n {
+        let t = 1_000_000 * k;
+        // The later publication first: the earliest is the reaction.
+        s.push_str(&format!("rate loop,a,{},{t},200000\n", t + 200_000));
+        s.push_str(&format!("rate loop,a,{},{t},100000\n", t + 100_000));
+    }
+    s.push_str("rate loop,a,300000,0,300000\n");
+    let file = scratch("observed-long").join("long.csv");
+    let _ = std::fs::write(&file, s);
+    let (o, observed) = analyze_observed(&spec, &file);
+    assert_exit(&o, 0);
+    let m = &observed["measured"];
+    assert_eq!(m[0]["count"], n);
+    assert_eq!(
+        (m[0]["min"].as_f64(), m[0]["max"].as_f64()),
+        (Some(100.0), Some(100.0))
+    );
+    assert_eq!(m[1]["count"], 2 * n + 1);
+    assert_eq!(m[1]["max"].as_f64(), Some(300.0));
+    assert_eq!(m[1]["worst_line"], 2 * n + 2);
+    assert_eq!(observed["late"], serde_json::json!([["rate loop", 1]]));
+}
