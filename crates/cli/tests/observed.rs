@@ -277,3 +277,18 @@ fn a_long_log_closes_old_samples_and_reports_late_publications() {
     assert_eq!(m[1]["worst_line"], 2 * n + 2);
     assert_eq!(observed["late"], serde_json::json!([["rate loop", 1]]));
 }
+
+/// No output replaces the measurements file.
+#[test]
+fn no_output_replaces_the_measurements_file() {
+    let spec = example("work-queues.toml");
+    let file = scratch("observed-overwrite").join("ages.csv");
+    let text = log(&[("rate loop", 1_100_000, 1_000_000)]);
+    let _ = std::fs::write(&file, &text);
+    let f = file.to_string_lossy();
+    let o = rtpipe(&["analyze", &spec, "--observed", &f, "--margins-csv", &f]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--observed"), "{err}");
+    assert_eq!(std::fs::read_to_string(&file).ok(), Some(text));
+}
