@@ -1,6 +1,7 @@
 //! `rtpipe analyze`.
 
 pub(crate) mod margins;
+mod observed;
 
 use crate::command::mode_parser;
 use crate::command::{self, Answer, Rendered};
@@ -40,6 +41,12 @@ pub struct AnalyzeArgs {
     /// the spec's unit); implies --margins.
     #[arg(long, value_name = "FILE.csv")]
     pub margins_csv: Option<PathBuf>,
+    /// Measured chain latencies to hold against the bounds: the --samples
+    /// CSV of simulate, fly or run, or a flight log's data ages (import
+    /// px4-ulog). Exit 1 when a measurement exceeds its sound bound
+    /// (docs/analysis.md, "Measurements beside the bounds").
+    #[arg(long, value_name = "FILE.csv")]
+    pub observed: Option<PathBuf>,
 }
 
 pub fn run(a: &AnalyzeArgs) -> ExitCode {
@@ -69,6 +76,11 @@ pub fn execute(
         .map(|p| crate::output::prepare("--margins-csv", p, &a.spec, None))
         .transpose()?;
     let report = rtpipe_analysis::analyze(spec);
+    let measured = a
+        .observed
+        .as_deref()
+        .map(|p| observed::read(p, spec, &report))
+        .transpose()?;
     let paths = a
         .all_paths
         .then(|| rtpipe_analysis::all_paths(spec, &report.timing));
@@ -85,6 +97,7 @@ pub fn execute(
             report: report_view(spec, &report),
             all_paths: paths.as_ref().map(|p| paths_view(spec, p)),
             margins: found.as_ref().map(|m| margins::view(spec, m)),
+            observed: measured.as_ref().map(|o| observed::view(spec, &report, o)),
         })?)
     } else {
         let mut t = report_text(spec, &report, a.mode);
@@ -94,12 +107,19 @@ pub fn execute(
         if let Some(m) = &found {
             t.push_str(&margins::text(spec, m));
         }
+        if let Some(o) = &measured {
+            t.push_str(&observed::text(spec, &report, o));
+        }
         Rendered::Text(t)
     };
     let mut answer = Answer {
         report: out,
         notes: Vec::new(),
-        status: if report.ok_in(a.mode) { 0 } else { 1 },
+        status: if report.ok_in(a.mode) && measured.as_ref().is_none_or(|o| o.ok()) {
+            0
+        } else {
+            1
+        },
     };
     if let (Some(out), Some(m)) = (&csv, &found) {
         let written = crate::output::write_all(&[(out, &margins::csv(spec, m))]);
@@ -124,6 +144,8 @@ struct AnalyzeView<'a> {
     all_paths: Option<PathsView<'a>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     margins: Option<margins::MarginsView>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    observed: Option<observed::ObservedView<'a>>,
 }
 
 /// The JSON report; `T` and `C` let `simulate` extend the task and chain

@@ -150,6 +150,11 @@ fn register_inputs(command: &Command) {
             a.missions.iter().for_each(|m| world("racer5", m));
         }
         Command::Import { format } => import::register_inputs(format),
+        Command::Analyze(a) => {
+            if let Some(o) = &a.observed {
+                output::register_input("--observed", o);
+            }
+        }
         _ => {}
     }
 }

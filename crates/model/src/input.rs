@@ -18,6 +18,10 @@
 //!   so no input makes parsing slow;
 //! - a TOML syntax error names file, line and column ([`parse_toml`]).
 //!
+//! A file of any length read a line at a time (a CSV of measurements) is
+//! [`Lines`]: the same rules line by line, with a cap on a line's length in
+//! place of the file's size.
+//!
 //! Errors are [`SpecError`]s: the file, and a diagnostic with its place
 //! when it has one and how to fix it. Names that are shown on a terminal
 //! are checked by [`name_problem`].
@@ -25,6 +29,9 @@
 use crate::{Diagnostic, SpecError};
 use std::io::Read;
 use std::path::Path;
+
+mod lines;
+pub use lines::{Lines, MAX_LINE_BYTES};
 
 /// The largest TOML file rtpipe reads (spec, mission, preset, criterion):
 /// 16 MiB.
@@ -215,10 +222,7 @@ pub fn check_text(file: &str, text: String, kind: &Kind) -> Result<String, SpecE
         diagnostics: vec![Diagnostic::new(msg, Some(at..at + 1)).help(help)],
         source: text,
     };
-    let control = text
-        .char_indices()
-        .find(|&(_, c)| c.is_control() && !matches!(c, '\t' | '\n' | '\r'));
-    if let Some((at, c)) = control {
+    if let Some((at, c)) = first_control(&text) {
         let msg = format!(
             "the {} holds the control character U+{:04X}; {} files hold printable text",
             kind.name,
@@ -244,6 +248,13 @@ pub fn check_text(file: &str, text: String, kind: &Kind) -> Result<String, SpecE
         return Err(located(text, at, msg, kind.help));
     }
     Ok(text)
+}
+
+/// The first control character other than tab, line feed and carriage
+/// return, with its byte offset: what no file rtpipe reads may hold.
+pub fn first_control(text: &str) -> Option<(usize, char)> {
+    text.char_indices()
+        .find(|&(_, c)| c.is_control() && !matches!(c, '\t' | '\n' | '\r'))
 }
 
 /// The byte offset where nesting first exceeds [`MAX_NESTING`], if it

@@ -63,6 +63,29 @@ def test_analyze_margins_is_the_command_lines_json(tmp_path):
     assert out.read_text().startswith("kind,subject,key,")
 
 
+def test_analyze_observed_is_the_command_lines_json(tmp_path):
+    spec = EXAMPLES / "work-queues.toml"
+    ages = tmp_path / "ages.csv"
+    ages.write_text(
+        "chain,topic,timestamp_ns,timestamp_sample_ns,data_age_ns\n"
+        "rate loop,actuator_motors,1100000,1000000,100000\n"
+        "rate loop,actuator_motors,1900000,1000000,900000\n"
+    )
+    got = rtpipe.load(spec).analyze(observed=ages)
+    expected, status = binary("analyze", spec, "--observed", str(ages))
+    assert got.pop("exit_status") == status == 1
+    assert got == expected
+    measured = got["observed"]["measured"]
+    assert [(m["metric"], m["count"], m["ok"]) for m in measured] == [
+        ("reaction", 1, True),
+        ("freshness", 2, False),
+    ]
+    assert measured[1]["worst_line"] == 3
+    with pytest.raises(rtpipe.InputError, match=r"ages.csv:2:1: chain `yaw` is not in the spec"):
+        ages.write_text("chain,topic,timestamp_ns,timestamp_sample_ns,data_age_ns\nyaw,t,2,1,1\n")
+        rtpipe.load(spec).analyze(observed=ages)
+
+
 @pytest.mark.parametrize(
     "command,file,kwargs,flags",
     [

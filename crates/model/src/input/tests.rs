@@ -98,3 +98,57 @@ fn fields_are_located_in_the_usual_toml() {
     assert_eq!(at("criteria.overshoot"), Some((9, 1)));
     assert_eq!(at("world.speed_mps"), None);
 }
+
+#[test]
+fn lines_are_read_one_at_a_time_by_the_same_rules() {
+    let kind = Kind {
+        name: "measurements file",
+        max_bytes: u64::MAX,
+        syntax: Syntax::Toml,
+        help: "h",
+    };
+    let p = scratch("lines", b"\xEF\xBB\xBFa,b\r\nc\n\nd");
+    let mut lines = Lines::open(&p, &kind).ok();
+    let mut seen = Vec::new();
+    while let Some(Ok(Some((n, l)))) = lines.as_mut().map(|l| l.next_line()) {
+        seen.push((n, l.to_string()));
+    }
+    let want = [(1, "a,b"), (2, "c"), (3, ""), (4, "d")].map(|(n, l)| (n, l.to_string()));
+    assert_eq!(seen, want);
+
+    let error = |bytes: &[u8]| {
+        let p = scratch("lines-bad", bytes);
+        let mut lines = Lines::open(&p, &kind).map_err(|e| e.message)?;
+        loop {
+            match lines.next_line() {
+                Ok(Some(_)) => {}
+                Ok(None) => return Ok(()),
+                Err(e) => return Err(e.message),
+            }
+        }
+    };
+    let e = error(b"ok\nab\xFFc\n").err().unwrap_or_default();
+    assert!(
+        e.ends_with("f.toml:2:3: cannot read the measurements file: not UTF-8 text (byte 0xFF)"),
+        "{e}"
+    );
+    let e = error(b"ok\nok\n\xC3\xA9\x07\n").err().unwrap_or_default();
+    assert!(e.ends_with("f.toml:3:2: the measurements file holds the control character U+0007; it holds printable text"), "{e}");
+    let long = vec![b'x'; MAX_LINE_BYTES + 1];
+    let e = error(&long).err().unwrap_or_default();
+    assert!(e.contains(":1:1: the line is longer than 64 KiB"), "{e}");
+    assert!(
+        error(&long[1..]).is_ok(),
+        "a line of the cap's length is read"
+    );
+    let dir = scratch("lines-dir", b"").with_file_name("");
+    let e = error_at(&dir, &kind);
+    assert!(e.contains("it is a directory, not a regular file"), "{e}");
+}
+
+fn error_at(p: &std::path::Path, kind: &Kind) -> String {
+    Lines::open(p, kind)
+        .err()
+        .map(|e| e.message)
+        .unwrap_or_default()
+}

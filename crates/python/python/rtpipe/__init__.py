@@ -261,14 +261,24 @@ class System:
         all_paths: bool = False,
         margins: bool = False,
         margins_csv: Union[str, "os.PathLike[str]", None] = None,
+        observed: Union[str, "os.PathLike[str]", None] = None,
     ) -> dict:
         """Schedulability and the worst-case bounds of every chain
         (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
         ``ok``. ``margins=True`` adds ``"margins"`` (``--margins``): how much
         each exec may grow, each chain limit's slack, the critical scaling
         factors and each period's range, under ``mode``; ``margins_csv``
-        also writes them to that CSV file (``--margins-csv``)."""
-        options = dict(mode=mode, all_paths=all_paths, margins=margins, margins_csv=margins_csv)
+        also writes them to that CSV file (``--margins-csv``). ``observed``
+        adds ``"observed"`` (``--observed``): the measured latencies of that
+        CSV file (a ``--samples`` file, or a flight log's data ages) against
+        the bounds; ``exit_status`` is 1 when one exceeds its sound bound."""
+        options = dict(
+            mode=mode,
+            all_paths=all_paths,
+            margins=margins,
+            margins_csv=margins_csv,
+            observed=observed,
+        )
         return self._run("analyze", options)
 
     def simulate(
