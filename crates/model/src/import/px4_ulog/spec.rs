@@ -8,8 +8,9 @@
 //! - Modules: [`super::px4`]'s table, each on its queue; `exec` is its
 //!   `perf` counter's maximum, `exec_min` its minimum. A maximum at or
 //!   above the module's own interval times blocking I/O, not CPU (PX4's
-//!   `io update` waits for the IO coprocessor's serial link): the average
-//!   is taken then, with a note. A module without a counter (the gyro
+//!   `io update` waits for the IO coprocessor's serial link): its thread's
+//!   CPU time from `top` is taken then (the average when it shares a
+//!   thread), with a note. `--exec mean` takes every average instead. A module without a counter (the gyro
 //!   driver, `VehicleAngularVelocity`) and a thread without a module of the
 //!   table are charged their thread's CPU time from `top` per gyro period.
 //! - The gyro driver runs at `1e6 / IMU_GYRO_RATEMAX` µs; the rate loop's
@@ -300,50 +301,66 @@ fn timing(
     period_us: u64,
     notes: &mut Vec<String>,
 ) -> Result<(u64, u64, String), Diagnostic> {
-    if let Some(c) = m.counter.and_then(|c| counter(f, c)) {
-        if f.exec_from == ExecFrom::Mean {
-            let avg = (c.avg_us.ceil() as u64).max(1);
-            return Ok((
-                avg,
-                c.min_us.clamp(1, avg),
-                format!(
-                    "perf `{}`: avg {:.2} µs (exec), max {} µs, min {} µs, {} runs",
-                    c.name, c.avg_us, c.max_us, c.min_us, c.events
-                ),
-            ));
-        }
-        if c.max_us < period_us {
-            return Ok((
-                c.max_us.max(1),
-                c.min_us.clamp(1, c.max_us.max(1)),
-                format!(
-                    "perf `{}`: max {} µs, avg {:.2} µs, min {} µs, {} runs",
-                    c.name, c.max_us, c.avg_us, c.min_us, c.events
-                ),
-            ));
-        }
-        let avg = (c.avg_us.ceil() as u64).max(1);
-        notes.push(format!("{}: perf `{}` max {} µs is not below its interval {} µs, so it times blocking I/O, not CPU: exec is the average {avg} µs", m.name, c.name, c.max_us, period_us));
+    let Some(c) = m.counter.and_then(|c| counter(f, c)) else {
+        let name = queue_name(m.queue, f);
+        let exec = share(f, &name).ok_or_else(|| {
+            missing(
+                &format!("CPU time of {name} in perf_top_*"),
+                "import a log whose top lists it",
+            )
+        })?;
         return Ok((
-            avg,
-            c.min_us.clamp(1, avg),
-            format!(
-                "perf `{}`: avg {:.2} µs (max {} µs includes blocking I/O), min {} µs, {} runs",
-                c.name, c.avg_us, c.max_us, c.min_us, c.events
-            ),
+            exec,
+            1,
+            format!("no perf counter: {name}'s CPU time per gyro period from top"),
         ));
+    };
+    let stats = format!(
+        "perf `{}`: max {} µs, avg {:.2} µs, min {} µs, {} runs",
+        c.name, c.max_us, c.avg_us, c.min_us, c.events
+    );
+    if c.max_us >= period_us {
+        return blocking(m, c, f, period_us, notes, stats);
     }
-    let name = queue_name(m.queue, f);
-    let exec = share(f, &name).ok_or_else(|| {
-        missing(
-            &format!("CPU time of {name} in perf_top_*"),
-            "import a log whose top lists it",
-        )
-    })?;
+    let exec = match f.exec_from {
+        ExecFrom::Max => c.max_us,
+        ExecFrom::Mean => c.avg_us.ceil() as u64,
+    }
+    .max(1);
+    Ok((exec, c.min_us.clamp(1, exec), stats))
+}
+
+/// A counter whose longest run is not shorter than the module's interval
+/// times waiting, not computing (PX4's `io update` waits for the IO
+/// coprocessor's serial link). rtpipe has no self-suspension: a module
+/// with a thread of its own is charged that thread's CPU time from `top`,
+/// and the wait is left out of the bounds; any other its average.
+fn blocking(
+    m: &Module,
+    c: &Counter,
+    f: &Facts,
+    period_us: u64,
+    notes: &mut Vec<String>,
+    stats: String,
+) -> Result<(u64, u64, String), Diagnostic> {
+    if let Queue::Own(name) = m.queue {
+        if let Some(cpu) = share(f, name) {
+            notes.push(format!(
+                "{}: perf `{}` (max {} µs, avg {:.2} µs) is not below its interval {period_us} µs: it times waits for I/O, which rtpipe cannot model (no self-suspension); exec is its thread's CPU time from top, {cpu} µs per gyro period, and the bounds leave the wait out",
+                m.name, c.name, c.max_us, c.avg_us
+            ));
+            return Ok((cpu, 1, format!("{stats}; exec: {name}'s CPU time from top")));
+        }
+    }
+    let avg = (c.avg_us.ceil() as u64).max(1);
+    notes.push(format!(
+        "{}: perf `{}` max {} µs is not below its interval {period_us} µs, so it times blocking I/O, not CPU: exec is the average {avg} µs",
+        m.name, c.name, c.max_us
+    ));
     Ok((
-        exec,
-        1,
-        format!("no perf counter: {name}'s CPU time per gyro period from top"),
+        avg,
+        c.min_us.clamp(1, avg),
+        format!("{stats}; exec: the average"),
     ))
 }
 
