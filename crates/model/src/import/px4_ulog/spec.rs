@@ -91,10 +91,16 @@ pub fn import(log: &Ulog, name: &str, exec_from: ExecFrom) -> Result<Import, Dia
     })?;
     let modules = present(table, &facts)?;
     let lowest = chain_floor(&modules, &facts)?;
+    // A thread that used no CPU has nothing to model unless the loop runs on it.
+    let on_loop: Vec<String> = modules
+        .iter()
+        .filter(|m| m.release != Release::Periodic)
+        .map(|m| queue_name(m.queue, &facts))
+        .collect();
     let threads: Vec<&TopThread> = facts
         .threads
         .iter()
-        .filter(|t| t.priority >= lowest && t.cpu_ms > 0)
+        .filter(|t| t.priority >= lowest && (t.cpu_ms > 0 || on_loop.contains(&t.name)))
         .collect();
     let mut assumptions = base_assumptions(&facts);
     let (ages, rows) = observe(log, &modules)?;
@@ -394,27 +400,16 @@ fn spec_text(
         let period = interval(m, f);
         timings.push((period, timing(m, f, period, notes)?));
     }
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# exec: each module's {} run in the log's perf counters",
-        if f.exec_from == ExecFrom::Max {
-            "longest"
-        } else {
-            "average"
-        }
-    );
-    for n in notes.iter() {
-        let _ = writeln!(s, "# assumption: {n}");
-    }
-    let _ = writeln!(s, "[system]\nname = {name:?}\ntime_unit = \"us\"\nscheduler = \"rm\"\npriorities = \"explicit\"\n\n[channels.uorb]\nbandwidth = 1000000\noverhead = 0\n");
+    let mut s = header(name, f, notes);
     let ranks = ranks(threads);
     let used: Vec<String> = modules.iter().map(|m| queue_name(m.queue, f)).collect();
     for t in threads {
-        if matches!(t.name.as_str(), "px4io")
-            && modules.iter().any(|m| m.queue == Queue::Own("px4io"))
+        // A module on a thread of its own is a task with that priority.
+        if modules
+            .iter()
+            .any(|m| m.queue == Queue::Own(static_name(&t.name)))
         {
-            continue; // a thread of its own: its module gives the priority
+            continue;
         }
         let _ = writeln!(
             s,
@@ -426,49 +421,93 @@ fn spec_text(
         );
     }
     let mut before: Option<&str> = None;
-    for (m, (period, (exec, exec_min, why))) in modules.iter().zip(timings) {
+    for (m, (period, timing)) in modules.iter().zip(timings) {
         let q = queue_name(m.queue, f);
+        // A periodic module on a thread below the loop cannot delay it.
         let Some(t) = threads.iter().find(|t| t.name == q) else {
             continue;
         };
-        let _ = writeln!(s, "[tasks.{}]  # {why}", m.name);
-        let _ = writeln!(s, "exec = \"{exec}us\"\nexec_min = \"{exec_min}us\"");
-        match m.queue {
-            Queue::Own(_) => {
-                let _ = writeln!(s, "priority = {}\ncpu = 0", ranks[&t.priority]);
-            }
-            _ => {
-                let _ = writeln!(s, "thread = {:?}", thread_key(&q));
-            }
-        }
-        match m.release {
-            Release::Gyro => {
-                let _ = writeln!(s, "period = \"{}us\"", f.gyro_period_us);
-            }
-            Release::Periodic => {
-                let _ = writeln!(
-                    s,
-                    "period = \"{period}us\"  # {} runs in {} µs of uptime",
-                    counter(f, m.counter.unwrap_or_default()).map_or(0, |c| c.events),
-                    f.uptime_us
-                );
-            }
-            Release::Loop => {
-                let b = before.unwrap_or("gyro");
-                let _ = writeln!(
-                    s,
-                    "activation = \"data\"\nreads = [{b:?}]\ntriggers = [{b:?}]"
-                );
-            }
-        }
+        let rank = ranks[&t.priority];
+        task_table(
+            &mut s,
+            f,
+            m,
+            (period, timing),
+            rank,
+            before.unwrap_or("gyro"),
+        );
         if m.release != Release::Periodic {
             before = Some(m.name);
         }
-        let _ = writeln!(s, "output = {{ channel = \"uorb\", size = 0 }}\n");
     }
-    load_tasks(&mut s, f, threads, &used, &ranks);
+    load_tasks(&mut s, f, threads, &used);
     chains(&mut s, modules);
     Ok(s)
+}
+
+/// `name` when it is a thread of its own in the table (the table's names
+/// are static), else the empty string, which no table entry has.
+fn static_name(name: &str) -> &'static str {
+    px4::V1_11
+        .iter()
+        .find_map(|m| match m.queue {
+            Queue::Own(n) if n == name => Some(n),
+            _ => None,
+        })
+        .unwrap_or("")
+}
+
+/// The comment lines and the `[system]` and channel tables.
+fn header(name: &str, f: &Facts, notes: &[String]) -> String {
+    let mut s = String::new();
+    let stat = match f.exec_from {
+        ExecFrom::Max => "longest",
+        ExecFrom::Mean => "average",
+    };
+    let _ = writeln!(
+        s,
+        "# exec: each module's {stat} run in the log's perf counters"
+    );
+    for n in notes {
+        let _ = writeln!(s, "# assumption: {n}");
+    }
+    let _ = writeln!(s, "[system]\nname = {name:?}\ntime_unit = \"us\"\nscheduler = \"rm\"\npriorities = \"explicit\"\n\n[channels.uorb]\nbandwidth = 1000000\noverhead = 0\n");
+    s
+}
+
+/// One module's task table: its times, its thread (or priority), its
+/// activation (`trigger`: the loop module before it).
+fn task_table(
+    s: &mut String,
+    f: &Facts,
+    m: &Module,
+    (period, (exec, exec_min, why)): (u64, (u64, u64, String)),
+    rank: usize,
+    trigger: &str,
+) {
+    let _ = writeln!(s, "[tasks.{}]  # {why}", m.name);
+    let _ = writeln!(s, "exec = \"{exec}us\"\nexec_min = \"{exec_min}us\"");
+    let _ = match m.queue {
+        Queue::Own(_) => writeln!(s, "priority = {rank}\ncpu = 0"),
+        _ => writeln!(s, "thread = {:?}", thread_key(&queue_name(m.queue, f))),
+    };
+    let runs = m
+        .counter
+        .and_then(|c| counter(f, c))
+        .map_or(0, |c| c.events);
+    let _ = match m.release {
+        Release::Gyro => writeln!(s, "period = \"{}us\"", f.gyro_period_us),
+        Release::Periodic => writeln!(
+            s,
+            "period = \"{period}us\"  # {runs} runs in {} µs of uptime",
+            f.uptime_us
+        ),
+        Release::Loop => writeln!(
+            s,
+            "activation = \"data\"\nreads = [{trigger:?}]\ntriggers = [{trigger:?}]"
+        ),
+    };
+    let _ = writeln!(s, "output = {{ channel = \"uorb\", size = 0 }}\n");
 }
 
 /// Ranks 1.. for NuttX priorities, highest first.
@@ -483,13 +522,7 @@ fn ranks(threads: &[&TopThread]) -> BTreeMap<u8, usize> {
 }
 
 /// One periodic task for each thread no module of the table runs on.
-fn load_tasks(
-    s: &mut String,
-    f: &Facts,
-    threads: &[&TopThread],
-    used: &[String],
-    ranks: &BTreeMap<u8, usize>,
-) {
+fn load_tasks(s: &mut String, f: &Facts, threads: &[&TopThread], used: &[String]) {
     for t in threads.iter().filter(|t| !used.contains(&t.name)) {
         let exec = share(f, &t.name).unwrap_or(1);
         let _ = writeln!(s, "[tasks.{}_load]  # no module of the table: {}'s CPU time from top ({} ms in {} µs of uptime) per gyro period", thread_key(&t.name), t.name, t.cpu_ms, f.uptime_us);
@@ -499,7 +532,6 @@ fn load_tasks(
             f.gyro_period_us,
             thread_key(&t.name)
         );
-        let _ = ranks;
     }
 }
 
