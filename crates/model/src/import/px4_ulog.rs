@@ -157,9 +157,13 @@ pub struct Value {
 }
 
 impl Value {
-    /// A number (the first element of an array).
+    /// A number (the first element of an array); NaN for an empty array
+    /// (a key may be `int32_t[0] name`).
     pub fn number(&self) -> f64 {
-        self.ty.number(&self.bytes[..self.ty.size()])
+        match self.bytes.get(..self.ty.size()) {
+            Some(b) => self.ty.number(b),
+            None => f64::NAN,
+        }
     }
 
     /// A `char` array as text.

@@ -216,3 +216,17 @@ fn a_log_without_perf_is_refused_naming_what_it_lacks() {
     let e = import(&log, "x", ExecFrom::Max).unwrap_err();
     assert!(e.message.contains("perf_counter_"), "{}", e.message);
 }
+
+#[test]
+fn an_empty_array_value_is_no_number_and_no_panic() {
+    let mut b = fixture("sample_log_small.ulg")[..16].to_vec();
+    let key = b"uint32_t[0] ver_sw_release";
+    b.extend_from_slice(&(1 + key.len() as u16).to_le_bytes());
+    b.push(b'I');
+    b.push(key.len() as u8);
+    b.extend_from_slice(key);
+    let log = Ulog::parse(b).unwrap();
+    assert!(log.info["ver_sw_release"].number().is_nan());
+    let e = import(&log, "x", ExecFrom::Max).unwrap_err();
+    assert!(e.message.contains("perf_counter_"), "{}", e.message);
+}
