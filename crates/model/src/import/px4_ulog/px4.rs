@@ -5,9 +5,13 @@
 //! `major << 24 | minor << 16 | patch << 8 | type`), when the rate loop was
 //! gyro driver → `sensors`' `VehicleAngularVelocity` → `mc_rate_control`
 //! (→ `vtol_att_control` on a VTOL) → `actuator_controls_0` → the output
-//! driver, all data-triggered through uORB callbacks. It was written from
-//! those versions' `ScheduledWorkItem(MODULE_NAME, px4::wq_configurations::…)`
-//! and `WorkItem(…)` constructors (`src/modules/*`, `src/drivers/*`); the
+//! driver, all data-triggered through uORB callbacks. It follows those
+//! versions' `ScheduledWorkItem(MODULE_NAME, px4::wq_configurations::…)`
+//! and `WorkItem(…)` constructors (`src/modules/*`, `src/drivers/*`;
+//! checked against the source: `vtol_att_control` and its counter on
+//! `rate_ctrl`, `fw_att_control` on `attitude_ctrl`, px4io's `io update`
+//! and `io control latency` counters; the other entries are placed as
+//! those versions placed them, to be rechecked when a log disagrees); the
 //! queues' priorities are not taken from `WorkQueueManager.hpp` but from
 //! the log's own `top` (`perf_top_*`), which shows what the board ran.
 //! From v1.13 the allocator (`control_allocator`, `actuator_motors`)
