@@ -10,8 +10,9 @@
 //! and `WorkItem(…)` constructors (`src/modules/*`, `src/drivers/*`;
 //! checked against the source: `vtol_att_control` and its counter on
 //! `rate_ctrl`, `fw_att_control` on `attitude_ctrl`, px4io's `io update`
-//! and `io control latency` counters; the other entries are placed as
-//! those versions placed them, to be rechecked when a log disagrees); the
+//! and `io control latency` counters; the other entries have not been
+//! checked one by one, and a log whose `top` or `perf` disagrees is the
+//! cue to fix them); the
 //! queues' priorities are not taken from `WorkQueueManager.hpp` but from
 //! the log's own `top` (`perf_top_*`), which shows what the board ran.
 //! From v1.13 the allocator (`control_allocator`, `actuator_motors`)
