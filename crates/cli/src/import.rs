@@ -7,6 +7,8 @@
 //! read and every spec built and parsed back before the first file is
 //! written, and then all of them are written atomically.
 
+mod px4_ulog;
+
 use crate::output;
 use crate::table::Table;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
@@ -33,12 +35,42 @@ pub enum ImportCommand {
         /// existing specs of the same names are replaced.
         outdir: PathBuf,
     },
+    /// A PX4 flight log (ULog, PX4 v1.11–v1.12): OUTDIR/spec.toml (the
+    /// threads, priorities, modules and execution times the log shows, the
+    /// rate loop's chains) and OUTDIR/observed.csv (every logged data age
+    /// of the rate loop: `timestamp - timestamp_sample`). See docs/px4.md.
+    ///
+    /// Exit status: 0 when both files were written, 2 on bad input (a log
+    /// that is not ULog, or lacks what the spec needs; nothing is written
+    /// then), 3 on an internal error.
+    #[command(name = "px4-ulog")]
+    Px4Ulog {
+        /// The log (.ulg).
+        log: PathBuf,
+        /// The directory spec.toml and observed.csv are written to (created
+        /// if missing); existing files of those names are replaced.
+        outdir: PathBuf,
+        /// Each module's `exec`: `max`, the longest run its perf counter
+        /// saw (first runs after boot included), or `mean`, its average.
+        #[arg(long, value_enum, default_value_t = ExecStat::Max)]
+        exec: ExecStat,
+    },
+}
+
+/// `import px4-ulog --exec`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExecStat {
+    /// The longest run.
+    Max,
+    /// The average run.
+    Mean,
 }
 
 /// The file an import reads, which no output may replace.
 pub fn register_inputs(cmd: &ImportCommand) {
     match cmd {
         ImportCommand::E2eeval { file, .. } => output::register_input("FILE", file),
+        ImportCommand::Px4Ulog { log, .. } => output::register_input("LOG", log),
     }
 }
 
@@ -49,10 +81,15 @@ pub fn run(cmd: &ImportCommand) -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(code) => code,
         },
+        ImportCommand::Px4Ulog { log, outdir, exec } => {
+            match px4_ulog::import(log, outdir, *exec) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(code) => code,
+            }
+        }
     }
 }
 
-/// The largest file read: E2EEvaluation's files of a thousand task sets
 /// One spec to write: where, and the spec.
 struct Planned<'a> {
     path: PathBuf,
@@ -82,7 +119,11 @@ fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
     for n in &imported.notes {
         eprintln!("{shown}: {}: {}", n.level, n.message);
     }
-    write_specs(&plans, outdir)?;
+    let files: Vec<(PathBuf, &str)> = plans
+        .iter()
+        .map(|p| (p.path.clone(), p.spec.text.as_str()))
+        .collect();
+    write_files(&files, outdir)?;
     print_summary(&shown, &imported, &plans);
     Ok(())
 }
@@ -135,8 +176,8 @@ fn plural(n: usize) -> &'static str {
     }
 }
 
-/// Creates OUTDIR and writes every spec atomically (all or none).
-fn write_specs(plans: &[Planned], outdir: &Path) -> Result<(), ExitCode> {
+/// Creates OUTDIR and writes every file atomically (all or none).
+fn write_files(files: &[(PathBuf, &str)], outdir: &Path) -> Result<(), ExitCode> {
     let fail = |msg: String, help: &str| {
         eprint!("{}", Diagnostic::error(msg, help));
         ExitCode::from(EXIT_BAD_INPUT)
@@ -154,8 +195,8 @@ fn write_specs(plans: &[Planned], outdir: &Path) -> Result<(), ExitCode> {
         )
     })?;
     let mut outs = Vec::new();
-    for p in plans {
-        let o = output::prepare("OUTDIR", &p.path, Path::new(""), None).map_err(|e| {
+    for (path, _) in files {
+        let o = output::prepare("OUTDIR", path, Path::new(""), None).map_err(|e| {
             eprint!("{e}");
             ExitCode::from(EXIT_BAD_INPUT)
         })?;
@@ -163,8 +204,8 @@ fn write_specs(plans: &[Planned], outdir: &Path) -> Result<(), ExitCode> {
     }
     let files: Vec<(&output::Output, &str)> = outs
         .iter()
-        .zip(plans)
-        .map(|(o, p)| (o, p.spec.text.as_str()))
+        .zip(files)
+        .map(|(o, (_, text))| (o, *text))
         .collect();
     output::write_all(&files).map_err(|e| {
         eprint!("{e}");

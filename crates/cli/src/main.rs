@@ -63,7 +63,8 @@ enum Command {
     /// with --write).
     Design(design::DesignArgs),
     /// Turn the task sets of other tools into rtpipe specs: `import e2eeval
-    /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework.
+    /// FILE.yaml OUTDIR` reads TU Dortmund's E2EEvaluation framework,
+    /// `import px4-ulog LOG.ulg OUTDIR` a PX4 flight log.
     ///
     /// Exit status: 0 when every spec was written, 2 on bad input (nothing is
     /// written then), 3 on an internal error.

@@ -193,6 +193,7 @@ fn a_named_pipe_as_any_input_is_refused_not_waited_on() {
         vec!["fly", &spec, "--sweep", "--criterion", &f],
         vec!["run", &spec, "--mission", &f],
         vec!["import", "e2eeval", &f, "out"],
+        vec!["import", "px4-ulog", &f, "out"],
     ] {
         // A blocked open would hang until the supervisor's limit fails it.
         let o = rtpipe_in(&dir, &args, &[], LIMIT);

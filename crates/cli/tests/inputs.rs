@@ -72,6 +72,13 @@ fn endless_and_huge_inputs_are_refused_after_the_cap() {
     assert_exit(&o, 2);
     assert!(stderr(&o).contains("larger than 64 MiB"), "{}", stderr(&o));
     assert!(t0.elapsed() < Duration::from_secs(5));
+    // A flight log may be larger (512 MiB), not the 2 GiB sparse file.
+    let t0 = Instant::now();
+    let o = rtpipe_in(&d, &["import", "px4-ulog", &sparse, "out"], &[], LIMIT);
+    assert_exit(&o, 2);
+    assert!(stderr(&o).contains("larger than 512 MiB"), "{}", stderr(&o));
+    assert!(t0.elapsed() < Duration::from_secs(5));
+    assert!(!d.join("out").exists());
 }
 
 #[test]

@@ -107,8 +107,11 @@ fn fail(file: &str, msg: String, help: &str) -> SpecError {
     }
 }
 
-/// The bytes of `path`, at most `kind.max_bytes`.
-fn read_bytes(path: &Path, kind: &Kind) -> Result<Vec<u8>, SpecError> {
+/// The bytes of `path`, at most `kind.max_bytes`, by the rules of the
+/// module documentation that apply to any file (regular files only, the
+/// size cap): the one way to read a binary input such as a flight log
+/// (`kind.syntax` is not used).
+pub fn read_bytes(path: &Path, kind: &Kind) -> Result<Vec<u8>, SpecError> {
     let file = path.display().to_string();
     let what = kind.name;
     let too_big = || {

@@ -1,0 +1,94 @@
+//! `rtpipe import px4-ulog LOG.ulg OUTDIR`: the files and what is printed.
+//! Reading the log and building the spec are
+//! [`rtpipe_model::import::px4_ulog`]'s; every problem is exit status 2 with
+//! nothing written, and both files are written atomically, all or none.
+
+use super::{write_files, ExecStat};
+use crate::table::Table;
+use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
+use rtpipe_model::import::px4_ulog::{self, ExecFrom, Import};
+use rtpipe_model::Spec;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Imports `log` into `outdir/spec.toml` and `outdir/observed.csv`.
+pub(super) fn import(log: &Path, outdir: &Path, exec: ExecStat) -> Result<(), ExitCode> {
+    let shown = log.display().to_string().escape_debug().to_string();
+    let bad = |d: rtpipe_model::Diagnostic| {
+        eprint!("{}", d.within(&shown));
+        ExitCode::from(EXIT_BAD_INPUT)
+    };
+    let read = px4_ulog::load(log).map_err(bad)?;
+    let from = match exec {
+        ExecStat::Max => ExecFrom::Max,
+        ExecStat::Mean => ExecFrom::Mean,
+    };
+    let imported = px4_ulog::import(&read, &spec_name(log), from).map_err(bad)?;
+    let spec_path = outdir.join("spec.toml");
+    if let Err(e) = Spec::parse(&spec_path.display().to_string(), &imported.spec) {
+        eprint!("{e}");
+        eprintln!("error: internal error: the spec imported from {shown} does not parse; please report it with the log");
+        return Err(ExitCode::from(EXIT_INTERNAL));
+    }
+    let files: Vec<(PathBuf, &str)> = vec![
+        (spec_path, imported.spec.as_str()),
+        (outdir.join("observed.csv"), imported.observed.as_str()),
+    ];
+    write_files(&files, outdir)?;
+    print_summary(&shown, outdir, &imported);
+    Ok(())
+}
+
+/// The spec's name: `px4-` and the log's file stem, in characters a name
+/// may hold (any other becomes `_`).
+fn spec_name(log: &Path) -> String {
+    let stem = log
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let clean: String = stem
+        .chars()
+        .take(64)
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("px4-{clean}")
+}
+
+/// What was written, the measured data ages and the assumptions.
+fn print_summary(shown: &str, outdir: &Path, f: &Import) {
+    println!("imported {shown}: {}", f.board);
+    println!(
+        "wrote {} and {}",
+        outdir.join("spec.toml").display(),
+        outdir.join("observed.csv").display()
+    );
+    println!();
+    println!("measured data ages (timestamp - timestamp_sample), us:");
+    let mut t = Table::new(&["chain", "topic", "messages", "min", "max"]).numeric(&[2, 3, 4]);
+    for a in &f.ages {
+        t.row(vec![
+            a.chain.clone(),
+            a.topic.clone(),
+            a.count.to_string(),
+            format!("{}", a.min_ns as f64 / 1000.0),
+            format!("{}", a.max_ns as f64 / 1000.0),
+        ]);
+    }
+    print!("{}", t.render());
+    println!();
+    println!("what the log cannot tell, and what the spec assumes:");
+    for a in &f.assumptions {
+        println!("  - {a}");
+    }
+    println!();
+    println!(
+        "next: rtpipe analyze {} (bounds on the same chains)",
+        outdir.join("spec.toml").display()
+    );
+}

@@ -1,0 +1,126 @@
+//! `rtpipe import px4-ulog`: pyulog's Cube Orange log (model's
+//! tests/data/px4) in, a spec that loads and analyses and its measured data
+//! ages out; logs that lack what the spec needs refused with nothing written.
+
+mod common;
+
+use common::{assert_exit, json_of, listing, rtpipe, scratch};
+use rtpipe_model::Spec;
+use std::path::{Path, PathBuf};
+
+fn log(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../model/tests/data/px4")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn import(tag: &str, log: &str, extra: &[&str]) -> (std::process::Output, PathBuf) {
+    let out = scratch(tag).join("out");
+    let mut args = vec!["import", "px4-ulog", log];
+    let shown = out.to_string_lossy().into_owned();
+    args.push(&shown);
+    args.extend_from_slice(extra);
+    (rtpipe(&args), out)
+}
+
+/// The observed rows of one topic: (count, least and largest data age ns).
+fn ages(csv: &str, topic: &str) -> (usize, u64, u64) {
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("chain,topic,timestamp_ns,timestamp_sample_ns,data_age_ns")
+    );
+    let (mut n, mut lo, mut hi) = (0, u64::MAX, 0);
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(f.len(), 5, "{line}");
+        if f[1] != topic {
+            continue;
+        }
+        assert_eq!(f[0], format!("gyro to {topic}"));
+        let (t, s, age): (u64, u64, u64) = (
+            f[2].parse().unwrap(),
+            f[3].parse().unwrap(),
+            f[4].parse().unwrap(),
+        );
+        assert_eq!(t - s, age);
+        assert_eq!(t % 1000, 0, "µs × 1000");
+        n += 1;
+        lo = lo.min(age);
+        hi = hi.max(age);
+    }
+    (n, lo, hi)
+}
+
+#[test]
+fn the_cube_orange_log_imports_loads_and_analyses() {
+    let (o, out) = import(
+        "px4-cube",
+        &log("sample_log_small.ulg"),
+        &["--exec", "mean"],
+    );
+    assert_exit(&o, 0);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("CUBEPILOT_CUBEORANGE (PX4 v1.11.2)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("interrupt load"),
+        "the summary states the assumptions: {stdout}"
+    );
+    assert_eq!(listing(&out), ["observed.csv", "spec.toml"]);
+    let csv = std::fs::read_to_string(out.join("observed.csv")).unwrap();
+    assert_eq!(
+        ages(&csv, "vehicle_angular_velocity"),
+        (1812, 395_000, 445_000)
+    );
+    assert_eq!(ages(&csv, "actuator_controls_0"), (1812, 414_000, 465_000));
+    let spec_path = out.join("spec.toml");
+    let spec = Spec::load(&spec_path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(spec.event_triggered());
+    let a = rtpipe(&["analyze", &spec_path.to_string_lossy(), "--json"]);
+    assert_exit(&a, 0);
+    let report = json_of(&a);
+    assert_eq!(report["ok"], true, "{report}");
+    // Every measured data age lies within the sound bound from the event
+    // (the gyro samples before its driver reads the FIFO).
+    for chain in report["chains"].as_array().unwrap() {
+        let name = chain["name"].as_str().unwrap();
+        let Some(topic) = name.strip_prefix("gyro to ").filter(|t| *t != "outputs") else {
+            continue;
+        };
+        let bound = chain["from_event"]["sound"].as_f64();
+        let (_, _, hi) = ages(&csv, topic);
+        assert!(
+            bound.is_some_and(|b| hi as f64 / 1000.0 <= b),
+            "{name}: {hi} ns against {bound:?}"
+        );
+    }
+}
+
+#[test]
+fn a_log_without_perf_is_refused_and_nothing_is_written() {
+    let (o, out) = import("px4-noperf", &log("sample_appended_multiple.ulg"), &[]);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("lacks perf_counter_*"), "{stderr}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_file_that_is_not_ulog_is_refused_with_its_place() {
+    let dir = scratch("px4-notulog");
+    let f = dir.join("x.ulg");
+    std::fs::write(&f, "[system]\nname = \"x\"\n").unwrap();
+    let (o, out) = import("px4-notulog2", &f.to_string_lossy(), &[]);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("byte 0") && stderr.contains("ULog header"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
