@@ -99,6 +99,23 @@ fn the_cube_orange_log_imports_loads_and_analyses() {
             "{name}: {hi} ns against {bound:?}"
         );
     }
+    // `analyze --observed` agrees: every row within its bound, exit 0.
+    let observed = out.join("observed.csv");
+    let spec_arg = spec_path.to_string_lossy();
+    let obs_arg = observed.to_string_lossy();
+    let a = rtpipe(&["analyze", &spec_arg, "--observed", &obs_arg, "--json"]);
+    assert_exit(&a, 0);
+    let v = json_of(&a);
+    assert_eq!(v["observed"]["ok"], true, "{}", v["observed"]);
+    let measured = v["observed"]["measured"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    assert_eq!(measured.len(), 4, "two chains × reaction and freshness");
+    for m in &measured {
+        assert_eq!(m["count"], 1812, "{m}");
+        assert!(m["ratio"].as_f64().is_some_and(|r| r < 0.2), "{m}");
+    }
 }
 
 #[test]

@@ -287,8 +287,10 @@ impl<'s> Reader<'s> {
         Ok(())
     }
 
-    /// A data-age row: its age is a freshness from the read; the earliest
-    /// publication of its sample is the sample's reaction.
+    /// A data-age row: its age is a freshness from the event (a sensor
+    /// samples the world at or before the head's read of it, after the
+    /// head's previous read: the event anchor's instant); the earliest
+    /// publication of its sample is the sample's reaction from the event.
     fn log_row(&mut self, cells: &Cells, chain: usize, line: u64) -> Result<(), Bad> {
         let published = cells.instant(2)?;
         let sampled = cells.instant(3)?;
@@ -309,7 +311,7 @@ impl<'s> Reader<'s> {
             ));
         }
         self.tallies
-            .get(chain, Metric::Freshness, Anchor::Read)
+            .get(chain, Metric::Freshness, Anchor::Event)
             .push(line, age);
         self.first_publication(chain, sampled, published, line);
         Ok(())
@@ -337,7 +339,7 @@ impl<'s> Reader<'s> {
         if let Some((sampled, (published, line))) = self.open[chain].pop_first() {
             self.closed[chain] = Some(sampled);
             self.tallies
-                .get(chain, Metric::Reaction, Anchor::Read)
+                .get(chain, Metric::Reaction, Anchor::Event)
                 .push(line, published - sampled);
         }
     }
