@@ -41,6 +41,10 @@ use rtpipe_model::{Nanos, ResourceProtocol, Server, Spec};
 /// that uses it; `None` for a resource no ranked task uses.
 pub fn ceilings(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {
     let mut out: Vec<Option<usize>> = vec![None; spec.resources.len()];
+    // Without resources no task has a section (validation): no scan.
+    if spec.resources.is_empty() {
+        return out;
+    }
     for (i, t) in spec.tasks.iter().enumerate() {
         for s in &t.sections {
             if let (Some(c), Some(p)) = (out.get_mut(s.resource), prio[i]) {
@@ -55,7 +59,16 @@ pub fn ceilings(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {
 /// ceiling of the resources it uses, under every protocol: PIP raises it
 /// at most to the rank of a user), or its own rank when it uses none.
 pub fn locking_rank(spec: &Spec, prio: &[Option<usize>], i: usize) -> Option<usize> {
-    let ceil = ceilings(spec, prio);
+    locking_rank_with(spec, prio, &ceilings(spec, prio), i)
+}
+
+/// [`locking_rank`] given the [`ceilings`], computed once for every task.
+pub fn locking_rank_with(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    ceil: &[Option<usize>],
+    i: usize,
+) -> Option<usize> {
     spec.tasks[i]
         .sections
         .iter()
@@ -72,6 +85,29 @@ pub fn locking_rank(spec: &Spec, prio: &[Option<usize>], i: usize) -> Option<usi
 /// at its release (Baker's B_i of the density test); the busy-window
 /// analysis (`edf.rs`) takes b at every interval length instead.
 pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
+    if spec.resources.is_empty() {
+        return 0;
+    }
+    let on: Vec<usize> = (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
+        .collect();
+    blocking_with(spec, prio, &ceilings(spec, prio), &on, i)
+}
+
+/// [`blocking`] given the [`ceilings`] and the tasks of i's CPU (`on`),
+/// both computed once for every task: the analysis' path, linear in the
+/// tasks of one CPU rather than of the system.
+pub fn blocking_with(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    ceil: &[Option<usize>],
+    on: &[usize],
+    i: usize,
+) -> Nanos {
+    // Without resources no task has a section (validation): no blocking.
+    if spec.resources.is_empty() {
+        return 0;
+    }
     let t = &spec.tasks[i];
     if !spec.policy().fixed_priority() {
         if t.server == Server::Background {
@@ -83,10 +119,10 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
     let Some(own) = prio[i] else {
         return 0;
     };
-    let ceil = ceilings(spec, prio);
-    let cpu = spec.tasks[i].cpu;
-    blocking_by(
+    let cpu = t.cpu;
+    blocking_among(
         spec,
+        on.iter().copied(),
         |j| spec.tasks[j].cpu == cpu && prio[j].is_some_and(|p| p > own),
         |r| ceil.get(r).copied().flatten().is_some_and(|c| c <= own),
     )
@@ -103,13 +139,24 @@ pub fn blocking_by(
     below: impl Fn(usize) -> bool,
     able: impl Fn(usize) -> bool,
 ) -> Nanos {
+    blocking_among(spec, 0..spec.tasks.len(), below, able)
+}
+
+/// [`blocking_by`] over the tasks `candidates` only (a superset of those
+/// `below` admits).
+fn blocking_among(
+    spec: &Spec,
+    candidates: impl Iterator<Item = usize>,
+    below: impl Fn(usize) -> bool,
+    able: impl Fn(usize) -> bool,
+) -> Nanos {
     // (task, resource, length) of every section able to block i.
     let mut sections: Vec<(usize, usize, Nanos)> = Vec::new();
-    for (j, t) in spec.tasks.iter().enumerate() {
+    for j in candidates {
         if !below(j) {
             continue;
         }
-        for s in t.sections.iter().filter(|s| able(s.resource)) {
+        for s in spec.tasks[j].sections.iter().filter(|s| able(s.resource)) {
             sections.push((j, s.resource, s.length));
         }
     }
@@ -133,11 +180,12 @@ pub fn blocking_by(
 pub fn srp_steps(spec: &Spec, deadline: &[Nanos], cpu: u32) -> Vec<(Nanos, Nanos)> {
     assert_eq!(deadline.len(), spec.tasks.len());
     // Asked for every task and every box of the design: nothing to build
-    // (or allocate) on a CPU without sections.
-    if !spec
-        .tasks
-        .iter()
-        .any(|t| t.cpu == cpu && !t.sections.is_empty())
+    // (or allocate) on a CPU without sections, nor scan without resources.
+    if spec.resources.is_empty()
+        || !spec
+            .tasks
+            .iter()
+            .any(|t| t.cpu == cpu && !t.sections.is_empty())
     {
         return Vec::new();
     }

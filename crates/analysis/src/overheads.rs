@@ -81,11 +81,25 @@ pub fn kernel_load(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos, Nanos)> {
 /// [`kernel_load`] at the given periods (one per task): `relax` takes
 /// each task's longest, the fewest releases in any window.
 pub fn kernel_load_at(spec: &Spec, cpu: u32, periods: &[Nanos]) -> Vec<(Nanos, Nanos, Nanos)> {
-    spec.tasks
-        .iter()
-        .enumerate()
-        .filter(|(_, t)| t.cpu == cpu)
-        .map(|(k, t)| (per_release(spec, k), periods[k], t.jitter))
+    // Without overheads every K_k is 0: no scan.
+    if spec.overheads.is_zero() {
+        return Vec::new();
+    }
+    let on = (0..spec.tasks.len()).filter(|&k| spec.tasks[k].cpu == cpu);
+    kernel_load_among(spec, on, periods)
+}
+
+/// [`kernel_load_at`] given the tasks of the CPU (`on`, from the index of
+/// tasks by CPU the analysis builds once).
+pub fn kernel_load_among(
+    spec: &Spec,
+    on: impl Iterator<Item = usize>,
+    periods: &[Nanos],
+) -> Vec<(Nanos, Nanos, Nanos)> {
+    if spec.overheads.is_zero() {
+        return Vec::new();
+    }
+    on.map(|k| (per_release(spec, k), periods[k], spec.tasks[k].jitter))
         .filter(|&(c, _, _)| c > 0)
         .collect()
 }

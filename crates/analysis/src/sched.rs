@@ -124,13 +124,41 @@ pub fn interferers(
     top: &[Option<usize>],
     i: usize,
 ) -> Vec<usize> {
-    let t = &spec.tasks[i];
     (0..spec.tasks.len())
-        .filter(|&j| {
-            let o = &spec.tasks[j];
-            j != i && o.cpu == t.cpu && o.server != Server::Background && top[j] <= prio[i]
-        })
+        .filter(|&j| runs_above(spec, prio, top, j, i))
         .collect()
+}
+
+/// Task `j` can run above task `i`: a guaranteed task of i's CPU other
+/// than i whose highest rank is at or above i's own (the rule of
+/// [`interferers`]).
+fn runs_above(
+    spec: &Spec,
+    prio: &[Option<usize>],
+    top: &[Option<usize>],
+    j: usize,
+    i: usize,
+) -> bool {
+    let o = &spec.tasks[j];
+    o.cpu == spec.tasks[i].cpu && o.server != Server::Background && outranks(j, top[j], i, prio[i])
+}
+
+/// Of two guaranteed tasks of one CPU, `j` (highest rank `top_j`) can run
+/// above `i` (rank `prio_i`): the rank part of [`runs_above`].
+fn outranks(j: usize, top_j: Option<usize>, i: usize, prio_i: Option<usize>) -> bool {
+    j != i && top_j <= prio_i
+}
+
+/// A guaranteed task as the tasks below it see it, stored per CPU so that
+/// a task's analysis reads its CPU's in one contiguous run (at 100,000
+/// tasks, reading each `Task` instead missed the cache on most reads).
+#[derive(Debug, Clone, Copy)]
+struct Interferer {
+    task: usize,
+    /// Its highest rank.
+    top: Option<usize>,
+    /// I_j, T_j, J_j.
+    load: (Nanos, Nanos, Nanos),
 }
 
 /// What the tasks that can run above task `i` impose, as (I_j, T_j, J_j):
@@ -146,21 +174,111 @@ pub fn hp_load(
     top: &[Option<usize>],
     i: usize,
 ) -> Option<Vec<(Nanos, Nanos, Nanos)>> {
-    // Each interfering job also pays the two switches it causes; every
-    // release on the CPU its kernel work (`overheads`).
-    let switches = crate::overheads::per_job(spec, i);
-    let mut hp = Vec::new();
-    for j in interferers(spec, prio, top, i) {
-        let o = &spec.tasks[j];
-        let (work, jitter) = if prio[j] > prio[i] {
-            inherited_carry_in(spec, prio, top, j)?
+    Levels::new(spec, prio, top).hp_load(i)
+}
+
+/// The fixed-priority facts every task's analysis shares, built once per
+/// analysis (docs/analysis.md, "Scale"): the ranks, the tasks by CPU, the
+/// resources' ceilings and each CPU's kernel load. With them a task's
+/// analysis looks at its own CPU's tasks only, never at the whole system.
+pub(crate) struct Levels<'a> {
+    spec: &'a Spec,
+    prio: &'a [Option<usize>],
+    top: &'a [Option<usize>],
+    by_cpu: rtpipe_model::TasksByCpu,
+    /// Per CPU of `by_cpu`, its guaranteed tasks.
+    guaranteed: Vec<Vec<Interferer>>,
+    ceilings: Vec<Option<usize>>,
+    /// Per CPU of `by_cpu`, [`crate::overheads::kernel_load`] (empty
+    /// without overheads).
+    kernel: Vec<Vec<(Nanos, Nanos, Nanos)>>,
+}
+
+impl<'a> Levels<'a> {
+    pub(crate) fn new(spec: &'a Spec, prio: &'a [Option<usize>], top: &'a [Option<usize>]) -> Self {
+        let by_cpu = spec.tasks_by_cpu();
+        let periods: Vec<Nanos> = if spec.overheads.is_zero() {
+            Vec::new()
         } else {
-            (interference(o), o.jitter)
+            spec.tasks.iter().map(period_or_max).collect()
         };
-        hp.push((work.saturating_add(switches), period_or_max(o), jitter));
+        let kernel = by_cpu
+            .iter()
+            .map(|(_, on)| crate::overheads::kernel_load_among(spec, on.iter().copied(), &periods))
+            .collect();
+        let guaranteed = by_cpu
+            .iter()
+            .map(|(_, on)| {
+                let on = on.iter().copied();
+                on.filter(|&j| spec.tasks[j].server != Server::Background)
+                    .map(|j| {
+                        let o = &spec.tasks[j];
+                        let load = (interference(o), period_or_max(o), o.jitter);
+                        Interferer {
+                            task: j,
+                            top: top[j],
+                            load,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        Levels {
+            spec,
+            prio,
+            top,
+            ceilings: crate::blocking::ceilings(spec, prio),
+            by_cpu,
+            guaranteed,
+            kernel,
+        }
     }
-    hp.extend(crate::overheads::kernel_load(spec, spec.tasks[i].cpu));
-    Some(hp)
+
+    /// The guaranteed tasks that can run above task `i` ([`interferers`]).
+    fn above(&self, i: usize) -> impl Iterator<Item = &Interferer> + '_ {
+        let k = self.by_cpu.position(self.spec.tasks[i].cpu);
+        let on = k.map_or(&[][..], |k| &self.guaranteed[k][..]);
+        let prio_i = self.prio[i];
+        on.iter()
+            .filter(move |x| outranks(x.task, x.top, i, prio_i))
+    }
+
+    /// The tasks of task `i`'s CPU.
+    fn cpu_of(&self, i: usize) -> &[usize] {
+        self.by_cpu.on(self.spec.tasks[i].cpu)
+    }
+
+    /// [`interferers`] of task `i`.
+    fn interferers(&self, i: usize) -> Vec<usize> {
+        self.above(i).map(|x| x.task).collect()
+    }
+
+    /// [`crate::blocking::blocking`] of task `i`.
+    fn blocking(&self, i: usize) -> Nanos {
+        crate::blocking::blocking_with(self.spec, self.prio, &self.ceilings, self.cpu_of(i), i)
+    }
+
+    /// [`hp_load`] of task `i`.
+    fn hp_load(&self, i: usize) -> Option<Vec<(Nanos, Nanos, Nanos)>> {
+        let spec = self.spec;
+        // Each interfering job also pays the two switches it causes; every
+        // release on the CPU its kernel work (`overheads`).
+        let switches = crate::overheads::per_job(spec, i);
+        let mut hp = Vec::new();
+        for x in self.above(i) {
+            let (work, period, jitter) = x.load;
+            let (work, jitter) = if self.prio[x.task] > self.prio[i] {
+                inherited_carry_in(self, x.task)?
+            } else {
+                (work, jitter)
+            };
+            hp.push((work.saturating_add(switches), period, jitter));
+        }
+        if let Some(k) = self.by_cpu.position(spec.tasks[i].cpu) {
+            hp.extend_from_slice(&self.kernel[k]);
+        }
+        Some(hp)
+    }
 }
 
 /// The per-job work and equivalent release jitter of a PIBS server `j` for
@@ -175,12 +293,8 @@ pub fn hp_load(
 /// demand) and R_j the larger of j's two figures at its own rank: the
 /// (c, R_j − c) returned. `None` when j has no response time within its
 /// period (its backlog, hence its catch-up, has no bound). docs/analysis.md.
-fn inherited_carry_in(
-    spec: &Spec,
-    prio: &[Option<usize>],
-    top: &[Option<usize>],
-    j: usize,
-) -> Option<(Nanos, Nanos)> {
+fn inherited_carry_in(levels: &Levels, j: usize) -> Option<(Nanos, Nanos)> {
+    let (spec, prio, top) = (levels.spec, levels.prio, levels.top);
     let o = &spec.tasks[j];
     // Only inheritance puts a task ranked below i above it (`interferers`);
     // the recursion goes to ever lower ranks, so it ends.
@@ -189,7 +303,7 @@ fn inherited_carry_in(
         "task `{}` runs above a higher-ranked task without inheriting a rank",
         o.name
     );
-    let (budget_r, job_r, _) = response_times(spec, prio, top, j);
+    let (budget_r, job_r, _) = response_times(levels, j);
     let r = budget_r?.max(job_r?);
     let c = interference(o).max(o.demand());
     Some((c, r.checked_sub(c)?))
@@ -362,10 +476,8 @@ pub fn utilization_test(test: SchedTest, us: &[f64]) -> (f64, f64, bool) {
 pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     let prio = spec.policy().priorities(spec);
     let top = top_priorities(spec, &prio);
-    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpus.sort_unstable();
-    cpus.dedup();
-    let (responses, events) = all_responses(spec, &prio, &top);
+    let levels = Levels::new(spec, &prio, &top);
+    let (responses, events) = all_responses(&levels);
     let timings: Vec<TaskTiming> = responses
         .into_iter()
         .zip(events)
@@ -382,8 +494,13 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
                 deadline: t.deadline().unwrap_or(MAX_TIME),
                 jitter: t.jitter,
                 priority: prio[i],
-                top_priority: top[i].min(crate::blocking::locking_rank(spec, &prio, i)),
-                blocking: crate::blocking::blocking(spec, &prio, i),
+                top_priority: top[i].min(crate::blocking::locking_rank_with(
+                    spec,
+                    &prio,
+                    &levels.ceilings,
+                    i,
+                )),
+                blocking: levels.blocking(i),
                 cpu: t.cpu,
                 response_time: rt,
                 job_response_time: jrt,
@@ -399,15 +516,15 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
         .collect();
     let fixed = spec.policy().fixed_priority();
     let above = |j: usize, i: usize| {
-        spec.tasks[j].cpu == spec.tasks[i].cpu
-            && (!fixed || interferers(spec, &prio, &top, i).contains(&j))
+        spec.tasks[j].cpu == spec.tasks[i].cpu && (!fixed || runs_above(spec, &prio, &top, j, i))
     };
     for i in crate::overheads::unaccounted(spec, &bounded, above) {
         (timings[i].response_time, timings[i].job_response_time) = (None, None);
     }
-    let verdicts: Vec<CpuVerdict> = cpus
-        .into_iter()
-        .map(|cpu| cpu_verdict(spec, &timings, cpu))
+    let verdicts: Vec<CpuVerdict> = levels
+        .by_cpu
+        .iter()
+        .map(|(cpu, on)| cpu_verdict(spec, &timings, cpu, on))
         .collect();
     let schedulable = verdicts.iter().all(|v| v.schedulable);
     (
@@ -422,19 +539,16 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
 
 /// Every task's response times, and in a spec with threads or
 /// data-triggered tasks its event facts (the policy's analysis of them).
-fn all_responses(
-    spec: &Spec,
-    prio: &[Option<usize>],
-    top: &[Option<usize>],
-) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
+fn all_responses(levels: &Levels) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
+    let spec = levels.spec;
     if !spec.event_triggered() {
         let responses = (0..spec.tasks.len())
-            .map(|i| response_times(spec, prio, top, i))
+            .map(|i| response_times(levels, i))
             .collect();
         return (responses, vec![None; spec.tasks.len()]);
     }
     match spec.policy().events {
-        Some(EventAnalysis::HolisticFifo) => event_responses(spec, prio, top),
+        Some(EventAnalysis::HolisticFifo) => event_responses(levels),
         None => panic!(
             "validation admits threads and data-triggered tasks only under a policy that analyses them, not under {}",
             spec.policy().name
@@ -450,28 +564,17 @@ type Responses = (Option<Nanos>, Option<Nanos>, Option<Nanos>);
 /// its thread-less periodic tasks: per task its response times (W = R:
 /// under fixed priority nothing above is pending when a job starts, and a
 /// thread's job runs to completion), and its event facts.
-fn event_responses(
-    spec: &Spec,
-    prio: &[Option<usize>],
-    top: &[Option<usize>],
-) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
-    let fp = Levels { spec, prio, top };
-    crate::events::analyze(spec, &fp)
+fn event_responses(levels: &Levels) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
+    crate::events::analyze(levels.spec, levels)
         .into_iter()
         .map(|r| ((r.budget, r.job, r.job), Some(r.timing)))
         .unzip()
 }
 
 /// The fixed-priority analysis as the event analysis asks for it.
-struct Levels<'a> {
-    spec: &'a Spec,
-    prio: &'a [Option<usize>],
-    top: &'a [Option<usize>],
-}
-
 impl crate::events::FixedPriority for Levels<'_> {
     fn above(&self, i: usize) -> Vec<usize> {
-        interferers(self.spec, self.prio, self.top, i)
+        self.interferers(i)
     }
 
     fn interference(&self, j: usize) -> Nanos {
@@ -479,7 +582,7 @@ impl crate::events::FixedPriority for Levels<'_> {
     }
 
     fn blocking(&self, i: usize) -> Nanos {
-        crate::blocking::blocking(self.spec, self.prio, i)
+        Levels::blocking(self, i)
     }
 
     fn periodic_response(
@@ -487,7 +590,7 @@ impl crate::events::FixedPriority for Levels<'_> {
         i: usize,
         hp: &[(Nanos, Nanos, Nanos)],
     ) -> (Option<Nanos>, Option<Nanos>) {
-        rta_response(self.spec, self.prio, i, hp)
+        rta_response(self, i, hp)
     }
 }
 
@@ -504,22 +607,18 @@ fn period_or_max(t: &Task) -> Nanos {
 /// the latter); under EDF with constant-bandwidth
 /// servers Spuri's analysis, when its CPU is not overloaded. A background
 /// task has none: nothing guarantees it the CPU.
-fn response_times(
-    spec: &Spec,
-    prio: &[Option<usize>],
-    top: &[Option<usize>],
-    i: usize,
-) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+    let spec = levels.spec;
     let t = &spec.tasks[i];
     if t.server == Server::Background {
         return (None, None, None);
     }
     let (rt, jrt) = match spec.policy().response {
         ResponseAnalysis::Rta => {
-            let Some(hp) = hp_load(spec, prio, top, i) else {
+            let Some(hp) = levels.hp_load(i) else {
                 return (None, None, None);
             };
-            rta_response(spec, prio, i, &hp)
+            rta_response(levels, i, &hp)
         }
         ResponseAnalysis::ServerPeriod => server_period(spec, t),
         ResponseAnalysis::EdfRta => edf_response_times(spec, i),
@@ -535,16 +634,17 @@ fn response_times(
 /// `hp` as (I_j, T_j, J_j): [`level_response`] over its level-i busy
 /// period.
 fn rta_response(
-    spec: &Spec,
-    prio: &[Option<usize>],
+    levels: &Levels,
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    let spec = levels.spec;
     let t = &spec.tasks[i];
+    let blocking = levels.blocking(i);
     let own = |work: Nanos| OwnJobs {
         work,
         switch: crate::overheads::own(spec, i),
-        blocking: crate::blocking::blocking(spec, prio, i),
+        blocking,
         jitter: t.jitter,
         period: period_or_max(t),
     };
@@ -769,9 +869,12 @@ pub(crate) fn edf_overhead_load(spec: &Spec, periods: &[Nanos], i: usize) -> f64
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.
-fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32) -> CpuVerdict {
-    let ids: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+/// `on`: the tasks of `cpu`.
+fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32, on: &[usize]) -> CpuVerdict {
+    let ids: Vec<usize> = on
+        .iter()
+        .copied()
+        .filter(|&i| spec.tasks[i].server != Server::Background)
         .collect();
     let us: Vec<f64> = ids
         .iter()

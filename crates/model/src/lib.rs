@@ -9,6 +9,7 @@
 //! panics, whatever the input.
 #![deny(missing_docs)]
 
+mod cpus;
 mod error;
 pub mod gen;
 pub mod import;
@@ -22,6 +23,7 @@ mod validate;
 mod write;
 pub use write::to_toml;
 
+pub use cpus::TasksByCpu;
 pub use error::{line_col, printable, suggest, Diagnostic, SpecError};
 pub use overheads::Overheads;
 pub use policy::{Communication, Priorities, ResourceProtocol, SchedPolicy, SchedTest, Scheduler};

@@ -470,12 +470,11 @@ pub fn rate_monotonic(spec: &Spec) -> Vec<Option<usize>> {
 /// background tasks get none.
 fn ranked_by(spec: &Spec, key: impl Fn(&crate::Task) -> Nanos) -> Vec<Option<usize>> {
     let mut out = vec![None; spec.tasks.len()];
-    let mut cpus: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
-    cpus.sort_unstable();
-    cpus.dedup();
-    for cpu in cpus {
-        let mut ids: Vec<usize> = (0..spec.tasks.len())
-            .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
+    for (_, on) in spec.tasks_by_cpu().iter() {
+        let mut ids: Vec<usize> = on
+            .iter()
+            .copied()
+            .filter(|&i| spec.tasks[i].server != Server::Background)
             .collect();
         ids.sort_by_key(|&i| (key(&spec.tasks[i]), i));
         // The tasks of one thread share its rank: they have its priority,
