@@ -234,6 +234,18 @@ impl Cause {
                 "{} us of steal time on CPU {cpu} (within the foreign time)",
                 us(ns)
             ),
+            Cause::ReservationOverrun { .. }
+            | Cause::StaleDeadline { .. }
+            | Cause::ForeignThread { .. } => self.describe_kernel(spec),
+            Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
+        }
+    }
+
+    /// In words, what SCHED_DEADLINE and other processes did (the causes
+    /// the kernel's side of a run adds).
+    fn describe_kernel(&self, spec: &Spec) -> String {
+        let name = |t: usize| spec.tasks.get(t).map_or("?", |t| t.name.as_str());
+        match *self {
             Cause::ReservationOverrun {
                 task,
                 job,
@@ -268,7 +280,7 @@ impl Cause {
                 cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
                 thread.describe()
             ),
-            Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
+            _ => unreachable!("not a kernel cause: {self:?}"),
         }
     }
 }

@@ -284,8 +284,7 @@ fn execute<'a, V: Copy + Send>(
     sys::catch_stop_signals();
     let shared = shared(spec, (cfg.policy, cfg.duration), &mut notes)?;
     shared.reserve_spans(&threads);
-    let steal0 = sys::steal_time();
-    let rt0 = crate::foreign::Scan::now();
+    let (steal0, rt0) = (sys::steal_time(), crate::foreign::Scan::now());
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
     let (finished, demoted, probes) = start(spec, cfg, threads, env, &shared, grace);
@@ -298,8 +297,6 @@ fn execute<'a, V: Copy + Send>(
         (Some(a), Some(b)) => Some(b - a),
         _ => None,
     };
-    let cpus: Vec<usize> = spec.tasks.iter().map(|t| t.cpu as usize).collect();
-    let foreign_rt = rt0.ran_until(&crate::foreign::Scan::now(), &cpus);
     let dispatch = shared.dispatcher().map(|d| d.stats());
     let dispatch_spans = shared.dispatcher().map(|d| d.spans(e0)).unwrap_or_default();
     if let Some(e) = shared
@@ -329,7 +326,7 @@ fn execute<'a, V: Copy + Send>(
     res.partitioned = shared.partition.is_some();
     res.dispatch = dispatch;
     res.dispatch_spans = dispatch_spans;
-    res.foreign_rt = foreign_rt;
+    res.foreign_rt = rt0.ran_until(&crate::foreign::Scan::now(), &crate::foreign::cpus_of(spec));
     Ok(res)
 }
 

@@ -117,6 +117,14 @@ impl Scan {
     }
 }
 
+/// The CPUs of a spec's tasks, in order.
+pub fn cpus_of(spec: &rtpipe_model::Spec) -> Vec<usize> {
+    let mut cpus: Vec<usize> = spec.tasks.iter().map(|t| t.cpu as usize).collect();
+    cpus.sort_unstable();
+    cpus.dedup();
+    cpus
+}
+
 /// The numeric entries of a /proc directory (none when unreadable).
 fn numbered(dir: &str) -> impl Iterator<Item = i32> {
     std::fs::read_dir(dir)
