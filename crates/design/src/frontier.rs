@@ -232,12 +232,13 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
         }
         let floor = root.bound;
-        if self.effort.out_of_time() {
-            // Spent before the root was examined (the first design's local
-            // search, an earlier probe of the conflict search): one
+        if self.effort.out_of_clock() {
+            // Out of time before the root was examined (the first design's
+            // local search, an earlier probe of the conflict search): one
             // narrowing of the root of 1,200 tasks costs ~0.1 s, a conflict
             // search probes once per group. The root stays open; its bound
-            // is the lower bound.
+            // is the lower bound. Spent work alone still examines the root,
+            // as it always did: answers under a work budget stay the same.
             f.push(root, Next::Stopped);
             f.stopped = true;
             let checked = self.gate.take().map_or(Vec::new(), |g| g.log);
