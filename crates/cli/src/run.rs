@@ -628,6 +628,12 @@ fn to_text(
         res.steal
             .map_or_else(|| "unknown".into(), |s| format!("{:.1} ms", s as f64 / 1e6))
     ));
+    for t in &res.foreign_rt {
+        out.push_str(&format!(
+            "foreign real-time thread on the run's CPUs: {}\n",
+            t.describe()
+        ));
+    }
     out
 }
 
@@ -704,6 +710,9 @@ struct RunInfo<'a> {
     real_time: bool,
     interrupted: bool,
     steal: Option<f64>,
+    /// Other processes' real-time threads that may run on the run's CPUs
+    /// and used CPU time during it, in words (most CPU time first).
+    foreign_rt_threads: Vec<String>,
     spin_iterations_per_us: f64,
     /// EDF only: `partitioned` (SCHED_DEADLINE with a root domain per CPU,
     /// or the EDF dispatcher's pinned threads) or `global` EDF.
@@ -822,6 +831,7 @@ fn to_json<'a>(
             }),
         interrupted: res.interrupted,
         steal: res.steal.map(|s| spec.in_unit(s)),
+        foreign_rt_threads: res.foreign_rt.iter().map(|t| t.describe()).collect(),
         spin_iterations_per_us: spin.iters_per_us,
         sound_bound_violations: verdict,
         notes: &res.notes,

@@ -93,9 +93,12 @@ impl Budget {
 
     /// Cancelled, or out of time or of work.
     pub(crate) fn out_of_time(&self) -> bool {
-        self.cancelled()
-            || self.time_limit.is_some_and(|t| self.elapsed() >= t)
-            || self.cap().is_some_and(|c| self.work >= c)
+        self.out_of_clock() || self.cap().is_some_and(|c| self.work >= c)
+    }
+
+    /// Cancelled, or past the time limit (work aside).
+    pub(crate) fn out_of_clock(&self) -> bool {
+        self.cancelled() || self.time_limit.is_some_and(|t| self.elapsed() >= t)
     }
 
     /// Why a search stopped early, for the user.

@@ -232,6 +232,18 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
         }
         let floor = root.bound;
+        if self.effort.out_of_clock() {
+            // Out of time before the root was examined (the first design's
+            // local search, an earlier probe of the conflict search): one
+            // narrowing of the root of 1,200 tasks costs ~0.1 s, a conflict
+            // search probes once per group. The root stays open; its bound
+            // is the lower bound. Spent work alone still examines the root,
+            // as it always did: answers under a work budget stay the same.
+            f.push(root, Next::Stopped);
+            f.stopped = true;
+            let checked = self.gate.take().map_or(Vec::new(), |g| g.log);
+            return f.result(checked);
+        }
         let mut flow = self.examine_all(&mut f, floor, vec![root]);
         while flow.is_continue() && !f.open.is_empty() {
             flow = self.round(&mut f);
@@ -305,7 +317,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         // With a gate every dive's design would be checked (flown): the
         // best-first order alone reaches the answer with fewer checks.
         if f.splits % DIVE_EVERY == 1 && self.gate.is_none() {
-            if let Some(found) = self.ex.dive(&node, incumbent) {
+            if let Some(found) = self.ex.dive(&node, incumbent, self.effort) {
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }

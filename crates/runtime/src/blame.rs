@@ -6,6 +6,7 @@
 //! grows the bound by at least the excess. Everything else is a violation.
 
 use crate::exec::{Policy, RunResult, RESERVATION_MARGIN};
+use crate::foreign::ForeignThread;
 use crate::probe::{Probe, PROBE_PERIOD};
 use rtpipe_joblog::JobRecord;
 use rtpipe_model::{Nanos, Spec};
@@ -82,6 +83,59 @@ pub enum Cause {
         /// Steal time in the probe intervals covering the window, ns.
         ns: Nanos,
     },
+    /// Under SCHED_DEADLINE the kernel signalled (SIGXCPU) that the task's
+    /// reservation overran its runtime: it throttled the thread until the
+    /// reservation's deadline and replenished it a period on, so the
+    /// task's next jobs ran with a kernel deadline later than their own
+    /// (release + D), out of EDF order, until one met its deadline again.
+    /// No `sched_setattr` re-arms it: the kernel keeps a reservation's
+    /// deadline while it lies ahead (docs/runtime.md). Each of those jobs
+    /// may be late by up to the lag.
+    ReservationOverrun {
+        /// The task.
+        task: usize,
+        /// The job during which the kernel signalled it.
+        job: u64,
+        /// Its jobs from that one until one met its deadline again.
+        affected: u64,
+        /// How far its reservation can lag its releases: its period, ns.
+        lag: Nanos,
+    },
+    /// Under SCHED_DEADLINE the job woke earlier after its release than the
+    /// task's previous job did, before the reservation's deadline that the
+    /// previous wake-up set (its release + D + its latency): the kernel
+    /// keeps that deadline with what is left of the runtime (the CBS
+    /// wake-up rule), and once that is spent throttles the job until it,
+    /// up to the difference of the two latencies. With that earlier
+    /// deadline the job also runs what is left of the runtime ahead of
+    /// other tasks' jobs of earlier deadlines (out of EDF order).
+    StaleDeadline {
+        /// The task.
+        task: usize,
+        /// The job.
+        job: u64,
+        /// The previous job's start latency minus this one's, ns: how long
+        /// the job itself may be throttled.
+        lag: Nanos,
+        /// What the reservation had left after the previous job (its
+        /// runtime less that job's CPU time), ns: how long it may run ahead.
+        ahead: Nanos,
+        /// A job of the observation's own task (delayed by `lag`), or
+        /// another task's on its CPU (delaying it by `ahead`).
+        own: bool,
+    },
+    /// Another process's real-time thread that may run on a CPU with
+    /// foreign time in the window and used CPU time during the run
+    /// (`crate::foreign`): named, but already part of that CPU's
+    /// [`Cause::Foreign`] time, so it adds no delay of its own. The scans
+    /// are before and after the run, so it ran during the run, not
+    /// necessarily in the window.
+    ForeignThread {
+        /// The CPU of the foreign time (`None`: all of them, under global EDF).
+        cpu: Option<u32>,
+        /// The thread.
+        thread: ForeignThread,
+    },
     /// The task was still running long after the run's end and was moved
     /// to SCHED_OTHER.
     Demoted {
@@ -95,7 +149,7 @@ impl Cause {
     pub fn delay(&self) -> Nanos {
         match *self {
             Cause::BestEffort | Cause::GlobalEdf | Cause::Demoted { .. } => Nanos::MAX,
-            Cause::Steal { .. } => 0,
+            Cause::Steal { .. } | Cause::ForeignThread { .. } => 0,
             Cause::Overrun {
                 demand,
                 assumed,
@@ -105,6 +159,16 @@ impl Cause {
             Cause::Demand {
                 demand, declared, ..
             } => demand - declared,
+            Cause::ReservationOverrun { lag, .. } => lag,
+            Cause::StaleDeadline {
+                lag, ahead, own, ..
+            } => {
+                if own {
+                    lag
+                } else {
+                    ahead
+                }
+            }
             Cause::Foreign {
                 throttled: true, ..
             } => 0,
@@ -170,7 +234,53 @@ impl Cause {
                 "{} us of steal time on CPU {cpu} (within the foreign time)",
                 us(ns)
             ),
+            Cause::ReservationOverrun { .. }
+            | Cause::StaleDeadline { .. }
+            | Cause::ForeignThread { .. } => self.describe_kernel(spec),
             Cause::Demoted { task } => format!("{} was demoted to SCHED_OTHER", name(task)),
+        }
+    }
+
+    /// In words, what SCHED_DEADLINE and other processes did (the causes
+    /// the kernel's side of a run adds).
+    fn describe_kernel(&self, spec: &Spec) -> String {
+        let name = |t: usize| spec.tasks.get(t).map_or("?", |t| t.name.as_str());
+        match *self {
+            Cause::ReservationOverrun {
+                task,
+                job,
+                affected,
+                lag,
+            } => format!(
+                "{} job {job}: the kernel signalled an overrun of its SCHED_DEADLINE reservation, \
+                 which then lagged its releases by up to {} us (out of EDF order) for {affected} job(s)",
+                name(task),
+                us(lag)
+            ),
+            Cause::StaleDeadline {
+                task,
+                job,
+                lag,
+                ahead,
+                own,
+            } => format!(
+                "{} job {job} woke {} us sooner after its release than job {} did: SCHED_DEADLINE kept that \
+                 job's deadline, {}",
+                name(task),
+                us(lag),
+                job.saturating_sub(1),
+                if own {
+                    format!("and may throttle it {} us", us(lag))
+                } else {
+                    format!("with which it may run {} us ahead of earlier deadlines", us(ahead))
+                }
+            ),
+            Cause::ForeignThread { cpu, ref thread } => format!(
+                "a foreign real-time thread may run on {} (within the foreign time): {}",
+                cpu.map_or("the CPUs".to_string(), |c| format!("CPU {c}")),
+                thread.describe()
+            ),
+            _ => unreachable!("not a kernel cause: {self:?}"),
         }
     }
 }
@@ -202,6 +312,10 @@ pub struct Blame<'r> {
     /// Per CPU, the probe instants where the run's own threads there had
     /// used the CPU's real-time share over the throttling period before.
     saturated: Vec<Vec<Nanos>>,
+    /// Per task, its reservation's overruns: (from, to, cause), from the
+    /// release of the job that overran to the finish of the last job
+    /// before one met its deadline again.
+    lags: Vec<Vec<(Nanos, Nanos, Cause)>>,
 }
 
 impl<'r> Blame<'r> {
@@ -217,11 +331,15 @@ impl<'r> Blame<'r> {
             v.sort_by_key(|j| j.index);
         }
         let saturated = saturated(spec, res);
+        let lags = (0..spec.tasks.len())
+            .map(|t| lags(spec, res, t, &jobs[t]))
+            .collect();
         Blame {
             spec,
             res,
             jobs,
             saturated,
+            lags,
         }
     }
 
@@ -254,10 +372,21 @@ impl<'r> Blame<'r> {
         for t in 0..self.spec.tasks.len() {
             if self.on(t, &cpus) && self.level(t, tasks) {
                 out.extend(self.overruns(t, window, tasks.contains(&t)));
+                if !tasks.contains(&t) {
+                    out.extend(self.ahead(t, window));
+                }
             }
         }
         for &t in tasks {
             out.extend(self.demands(t, window));
+            // Only the task's own jobs: the kernel throttles the
+            // overrunning reservation, not the others.
+            let lags = self.lags.get(t).map_or(&[][..], Vec::as_slice);
+            out.extend(
+                lags.iter()
+                    .filter(|(a, b, _)| *a <= window.1 && *b >= window.0)
+                    .map(|(_, _, c)| c.clone()),
+            );
         }
         match &cpus {
             Some(list) => {
@@ -273,6 +402,61 @@ impl<'r> Blame<'r> {
         let (p0, p1) = covering(&self.res.probes, window);
         if let (Some(p0), Some(p1)) = (p0, p1) {
             out.extend(steal(p0, p1, &cpus));
+        }
+        let named = self.foreign_threads(&out);
+        out.extend(named);
+        out
+    }
+
+    /// Task `t`'s jobs in `window` that ran ahead of EDF order with a
+    /// deadline kept from the job before ([`Cause::StaleDeadline`]).
+    fn ahead(&self, t: usize, window: (Nanos, Nanos)) -> Vec<Cause> {
+        let lags = self.lags.get(t).map_or(&[][..], Vec::as_slice);
+        lags.iter()
+            .filter(|(a, b, _)| *a <= window.1 && *b >= window.0)
+            .filter_map(|(_, _, c)| match *c {
+                Cause::StaleDeadline {
+                    task,
+                    job,
+                    lag,
+                    ahead,
+                    ..
+                } if ahead > 0 => Some(Cause::StaleDeadline {
+                    task,
+                    job,
+                    lag,
+                    ahead,
+                    own: false,
+                }),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The foreign real-time threads that may have taken the foreign time
+    /// among `causes` (one it excuses: not the run's own throttling).
+    fn foreign_threads(&self, causes: &[Cause]) -> Vec<Cause> {
+        let mut out = Vec::new();
+        for c in causes {
+            let Cause::Foreign {
+                cpu,
+                throttled: false,
+                ..
+            } = *c
+            else {
+                continue;
+            };
+            let on = |t: &&ForeignThread| cpu.is_none_or(|c| t.cpus.contains(&(c as usize)));
+            out.extend(
+                self.res
+                    .foreign_rt
+                    .iter()
+                    .filter(on)
+                    .map(|t| Cause::ForeignThread {
+                        cpu,
+                        thread: t.clone(),
+                    }),
+            );
         }
         out
     }
@@ -512,6 +696,69 @@ impl<'r> Blame<'r> {
     }
 }
 
+/// Task `t`'s reservation overruns as spans of its jobs (`jobs`, in
+/// release order): from the job before the one the kernel signalled it in through the
+/// jobs after it that missed their deadlines (the lag made up by the first
+/// one that did not).
+fn lags(spec: &Spec, res: &RunResult, t: usize, jobs: &[&JobRecord]) -> Vec<(Nanos, Nanos, Cause)> {
+    let (Some(run), Some(task)) = (res.tasks.get(t), spec.tasks.get(t)) else {
+        return Vec::new();
+    };
+    let Some(period) = task
+        .fixed_period()
+        .filter(|_| res.policy == Policy::Deadline)
+    else {
+        return Vec::new();
+    };
+    let due = task.deadline().unwrap_or(period);
+    let mut out = Vec::new();
+    for &job in &run.reservation_overruns {
+        let Ok(first) = jobs.binary_search_by_key(&job, |j| j.index) else {
+            continue;
+        };
+        let late = jobs[first + 1..]
+            .iter()
+            .take_while(|j| j.finish - j.release > due)
+            .count();
+        let last = first + late;
+        let cause = Cause::ReservationOverrun {
+            task: t,
+            job,
+            affected: late as u64 + 1,
+            lag: period,
+        };
+        // The signal comes at the thread's next tick on the CPU: the job
+        // before may be the one that overran.
+        let from = jobs[first.saturating_sub(1)].release;
+        out.push((from, jobs[last].finish, cause));
+    }
+    if res.partitioned {
+        let runtime =
+            crate::config::reservation_runtime(task.budget(), task.deadline().unwrap_or(period));
+        out.extend(stale_deadlines(t, jobs, runtime));
+    }
+    out
+}
+
+/// Task `t`'s jobs that woke sooner after their release than the job
+/// before them ([`Cause::StaleDeadline`]), each over its own span.
+fn stale_deadlines(t: usize, jobs: &[&JobRecord], runtime: Nanos) -> Vec<(Nanos, Nanos, Cause)> {
+    jobs.windows(2)
+        .filter(|w| w[1].index == w[0].index + 1)
+        .filter_map(|w| {
+            let lag = (w[0].read - w[0].release) - (w[1].read - w[1].release);
+            let cause = Cause::StaleDeadline {
+                task: t,
+                job: w[1].index,
+                lag,
+                ahead: (runtime - w[0].demand).max(0),
+                own: true,
+            };
+            (lag > 0).then_some((w[1].release, w[1].finish, cause))
+        })
+        .collect()
+}
+
 /// How far below the real-time share a CPU's use by the run still counts
 /// as having reached it: two probe periods, the probes' grain at both
 /// ends of the span.
@@ -600,316 +847,4 @@ fn steal(p0: &Probe, p1: &Probe, cpus: &Option<Vec<u32>>) -> Vec<Cause> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use rtpipe_joblog::SimResult;
-
-    const SPEC: &str = r#"
-[system]
-name = "two"
-time_unit = "ms"
-[channels.shm]
-bandwidth = 1000
-overhead = 0
-[tasks.a]
-exec = 1
-period = 10
-output = { channel = "shm", size = 0 }
-[tasks.b]
-exec = 1
-period = 10
-cpu = 1
-output = { channel = "shm", size = 0 }
-"#;
-
-    const MS: Nanos = 1_000_000;
-
-    fn job(task: usize, index: u64, demand: Nanos) -> JobRecord {
-        let release = index as Nanos * 10 * MS;
-        JobRecord {
-            task,
-            index,
-            release,
-            demand,
-            read: release,
-            finish: release + demand,
-            carried: Vec::new(),
-            trigger: None,
-        }
-    }
-
-    fn probe(at: Nanos, steal: [Nanos; 2]) -> Probe {
-        Probe {
-            at,
-            steal: steal.to_vec(),
-            run: Vec::new(),
-        }
-    }
-
-    /// Task a overruns its job 2 (20–23 ms, 3 ms against 1); CPU 1 (task b)
-    /// has 4 ms of steal in 10–20 ms; CPU 0 none; a's job 3 starts 0.5 ms
-    /// late and takes 3 ms for 1 ms of CPU with nothing of the run beside
-    /// it.
-    fn run() -> (Spec, RunResult) {
-        let Ok(spec) = Spec::parse("two.toml", SPEC) else {
-            panic!("the spec parses");
-        };
-        let jobs = vec![
-            job(0, 0, MS),
-            job(1, 0, MS),
-            job(0, 1, MS),
-            job(0, 2, 3 * MS),
-            JobRecord {
-                read: 30 * MS + MS / 2,
-                finish: 33 * MS + MS / 2,
-                ..job(0, 3, MS)
-            },
-        ];
-        let probes = vec![
-            probe(0, [0, 0]),
-            probe(10 * MS, [0, 0]),
-            probe(20 * MS, [0, 4 * MS]),
-            probe(30 * MS, [0, 4 * MS]),
-            probe(40 * MS, [0, 4 * MS]),
-        ];
-        let sim = SimResult {
-            offsets: vec![0, 0],
-            tasks: Vec::new(),
-            chains: Vec::new(),
-            jobs,
-            segments: Vec::new(),
-            events: 0,
-            horizon: 40 * MS,
-        };
-        let res = RunResult {
-            sim,
-            tasks: Vec::new(),
-            policy: Policy::Fifo,
-            load: 0,
-            interrupted: false,
-            steal: None,
-            elapsed: 40 * MS,
-            epoch: 0,
-            notes: Vec::new(),
-            probes,
-            rt_share: None,
-            demoted: Vec::new(),
-            partitioned: false,
-            dispatch: None,
-            dispatch_spans: Vec::new(),
-            schedule: None,
-        };
-        (spec, res)
-    }
-
-    #[test]
-    fn causes_count_only_inside_the_window_and_on_the_tasks_cpus() {
-        let (spec, res) = run();
-        let b = Blame::new(&spec, &res);
-        let at = |w: (Nanos, Nanos), t: &[usize]| b.causes(b.extend(w, t), t);
-        // 0–9 ms on CPU 0: nothing happened there then.
-        assert_eq!(at((0, 9 * MS), &[0]), vec![]);
-        // 21–22 ms on CPU 0: a's overrun; CPU 1's steal is not a's.
-        let overrun = Cause::Overrun {
-            task: 0,
-            job: 2,
-            demand: 3 * MS,
-            budget: MS,
-            assumed: MS,
-            throttle: 0,
-        };
-        assert_eq!(at((21 * MS, 22 * MS), &[0]), vec![overrun]);
-        // 12–18 ms on CPU 1: the steal there.
-        let steal = Cause::Steal { cpu: 1, ns: 4 * MS };
-        assert_eq!(at((12 * MS, 18 * MS), &[1]), vec![steal]);
-        // 31–39 ms, from the start of its busy period (job 3's release at
-        // 30): job 3 was pending 3.5 ms of it and ran 1 ms.
-        let foreign = Cause::Foreign {
-            cpu: Some(0),
-            ns: 5 * MS / 2,
-            dispatcher: false,
-            throttled: false,
-        };
-        assert_eq!(at((31 * MS, 39 * MS), &[0]), vec![foreign]);
-        // Outside them, no evidence.
-        assert_eq!(Blame::total(&at((0, 9 * MS), &[0])), 0);
-    }
-
-    #[test]
-    fn a_thread_counter_that_falls_says_nothing() {
-        // a's thread ran 1 ms by 30 ms; at 40 ms its counter reads 0 (the
-        // thread is gone): the job log alone bounds its CPU time.
-        let (spec, mut res) = run();
-        for (k, p) in res.probes.iter_mut().enumerate() {
-            p.run = vec![if k == 3 { MS } else { 0 }, 0];
-        }
-        let b = Blame::new(&spec, &res);
-        let w = b.extend((31 * MS, 39 * MS), &[0]);
-        let foreign = Cause::Foreign {
-            cpu: Some(0),
-            ns: 5 * MS / 2,
-            dispatcher: false,
-            throttled: false,
-        };
-        assert_eq!(b.causes(w, &[0]), vec![foreign]);
-    }
-
-    #[test]
-    fn the_total_delay_adds_the_causes_up() {
-        let c = [
-            Cause::Foreign {
-                cpu: Some(0),
-                ns: 3 * MS,
-                dispatcher: false,
-                throttled: false,
-            },
-            Cause::Overrun {
-                task: 0,
-                job: 0,
-                demand: 2 * MS,
-                budget: MS,
-                assumed: MS,
-                throttle: 0,
-            },
-        ];
-        assert_eq!(Blame::total(&c), 4 * MS);
-        // Steal is named but already inside the foreign time.
-        assert_eq!(Blame::total(&[Cause::Steal { cpu: 0, ns: 1 }]), 0);
-        assert_eq!(Blame::total(&[]), 0);
-        assert_eq!(
-            Blame::total(&[Cause::BestEffort, Cause::Steal { cpu: 0, ns: 1 }]),
-            Nanos::MAX
-        );
-    }
-
-    /// A job above its budget delays its own response by all of its CPU
-    /// time above its declared demand x (R(job) assumes x), and another
-    /// task's by its time above the budget C (the analysis charges C): g
-    /// (x 174 µs, C 200 µs) ran 284 µs in a 307 µs response, l (below it)
-    /// waited. Counted from C alone, g's own lateness (133 µs above x) was
-    /// left 26 µs short of what delayed it: a false alarm.
-    #[test]
-    fn an_overrun_counts_from_the_demand_for_its_own_job_and_from_the_budget_for_others() {
-        let src = "[system]\nname = \"o\"\ntime_unit = \"us\"\n[tasks.g]\nexec = 174\nbudget = 200\nperiod = 1000\n[tasks.l]\nexec = 100\nperiod = 5000\n";
-        let spec = Spec::parse("o.toml", src).unwrap_or_else(|e| panic!("{e}"));
-        let us = 1_000;
-        let g = JobRecord {
-            finish: 307 * us,
-            ..job(0, 0, 284 * us)
-        };
-        let l = JobRecord {
-            read: 307 * us,
-            finish: 407 * us,
-            ..job(1, 0, 100 * us)
-        };
-        let (_, mut res) = run();
-        res.sim.jobs = vec![g, l];
-        res.probes = Vec::new();
-        let b = Blame::new(&spec, &res);
-        let overrun = |assumed| Cause::Overrun {
-            task: 0,
-            job: 0,
-            demand: 284 * us,
-            budget: 200 * us,
-            assumed,
-            throttle: 0,
-        };
-        let own = b.causes((0, 307 * us), &[0]);
-        assert_eq!(own[0], overrun(174 * us), "{own:?}");
-        // 110 µs above x, and 23 µs with g pending but not running.
-        assert_eq!(Blame::total(&own), 133 * us, "{own:?}");
-        let other = b.causes((0, 407 * us), &[1]);
-        assert_eq!(other[0], overrun(200 * us), "{other:?}");
-        assert_eq!(other[0].delay(), 84 * us);
-        // A job within its budget is no overrun: its time above x is.
-        res.sim.jobs[0].demand = 190 * us;
-        let b = Blame::new(&spec, &res);
-        let own = b.causes((0, 307 * us), &[0]);
-        assert!(
-            own.iter().all(|c| !matches!(c, Cause::Overrun { .. })),
-            "{own:?}"
-        );
-        assert_eq!(own[0].delay(), 16 * us, "{own:?}");
-    }
-
-    /// Foreign time where the run's own threads had used the CPU's
-    /// real-time share is the kernel's throttling of the run's own
-    /// overload: named, and no excuse. Here a's thread ran all of 0–40 ms
-    /// on CPU 0 under a share of 9 ms per 10 ms; CPU 1's b ran 1 ms in 10.
-    #[test]
-    fn throttling_by_the_run_s_own_demand_excuses_nothing() {
-        let (spec, mut res) = run();
-        for p in &mut res.probes {
-            p.run = vec![p.at, p.at / 10];
-        }
-        res.rt_share = Some((9 * MS, 10 * MS));
-        let b = Blame::new(&spec, &res);
-        let w = b.extend((31 * MS, 39 * MS), &[0]);
-        let throttled = Cause::Foreign {
-            cpu: Some(0),
-            ns: 5 * MS / 2,
-            dispatcher: false,
-            throttled: true,
-        };
-        let causes = b.causes(w, &[0]);
-        assert_eq!(causes, vec![throttled.clone()]);
-        assert_eq!(Blame::total(&causes), 0);
-        assert!(throttled.describe(&spec).contains("excuses nothing"));
-        // Below the share, the same time is foreign and excuses.
-        for p in &mut res.probes {
-            p.run = vec![p.at / 4, 0];
-        }
-        let b = Blame::new(&spec, &res);
-        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
-        // Without throttling (sched_rt_runtime_us = -1), none is the run's.
-        res.rt_share = None;
-        for p in &mut res.probes {
-            p.run = vec![p.at, 0];
-        }
-        let b = Blame::new(&spec, &res);
-        assert_eq!(Blame::total(&b.causes(w, &[0])), 5 * MS / 2);
-    }
-
-    /// Under the EDF dispatcher a job pending past the window's end is not
-    /// credited with the time a job of an earlier deadline ran, nor with
-    /// the dispatcher's release: lo (D 20 ms) runs 0–1 ms, hi (D 5 ms) is
-    /// released at 1, dispatched 1.00–1.02, reads at 1.05 and publishes at
-    /// 2.05; lo ends at 3.05. In hi's window [0, 2.05] lo can have run 1.03
-    /// ms (not its whole 2 ms): the 20 µs dispatch is foreign time; the
-    /// 30 µs after it, where lo may still have run, is not.
-    #[test]
-    fn edf_windows_do_not_credit_a_later_deadline_with_what_preempted_it() {
-        let src = "[system]\nname = \"e\"\nscheduler = \"edf\"\n[tasks.hi]\nexec = 1\nperiod = 4\nserver = \"none\"\n[tasks.lo]\nexec = 2\nperiod = 20\nserver = \"none\"\n";
-        let spec = Spec::parse("e.toml", src).unwrap_or_else(|e| panic!("{e}"));
-        let us = 1_000;
-        let hi = JobRecord {
-            release: MS,
-            read: MS + 50 * us,
-            finish: 2 * MS + 50 * us,
-            ..job(0, 0, MS)
-        };
-        let lo = JobRecord {
-            finish: 3 * MS + 50 * us,
-            ..job(1, 0, 2 * MS)
-        };
-        let (_, mut res) = run();
-        res.sim.jobs = vec![hi, lo];
-        res.probes = Vec::new();
-        res.policy = Policy::EdfFifo;
-        res.dispatch_spans = vec![vec![(MS, MS + 20 * us)], Vec::new()];
-        let b = Blame::new(&spec, &res);
-        let w = b.extend((MS, 2 * MS + 50 * us), &[0]);
-        assert_eq!(w, (0, 2 * MS + 50 * us));
-        let foreign = Cause::Foreign {
-            cpu: Some(0),
-            ns: 20 * us,
-            dispatcher: true,
-            throttled: false,
-        };
-        assert_eq!(b.causes(w, &[0]), vec![foreign]);
-        // Without the dispatcher's spans, nothing is seen.
-        res.dispatch_spans = Vec::new();
-        let b = Blame::new(&spec, &res);
-        assert_eq!(b.causes(w, &[0]), vec![]);
-    }
-}
+mod tests;

@@ -93,7 +93,16 @@ fn deadline(
     // The runtime carries the job frame on top of the budget.
     let c = reservation_runtime(th.budget, th.deadline) as u64;
     let t = th.period as u64;
-    if let Err(e) = sys::set_deadline(c, th.deadline as u64, t) {
+    // The kernel signals an overrun of the reservation (SIGXCPU), which the
+    // verdict names; the handler goes first. A kernel without the flag
+    // (before 4.16) refuses it: reserve without it then.
+    sys::count_dl_overruns();
+    let reserve = |flags: u64| sys::set_deadline(c, th.deadline as u64, t, flags);
+    let reserved = reserve(sys::SCHED_FLAG_DL_OVERRUN).or_else(|e| match e.raw_os_error() {
+        Some(libc::EINVAL) => reserve(0),
+        _ => Err(e),
+    });
+    if let Err(e) = reserved {
         let help = match e.raw_os_error() {
             Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
             Some(libc::EBUSY) => format!(

@@ -56,6 +56,13 @@ pub struct TaskRun {
     /// (`let_comm`): the producer overran its period, or the reader came
     /// later than the edge keeps jobs for.
     pub let_misses: u64,
+    /// Under `deadline`: the jobs (release indices) that overran the task's
+    /// reservation: the thread used more CPU time from the job's start to
+    /// the next job's than the reservation's runtime (it holds at most
+    /// that much at any instant), or the kernel signalled an overrun during
+    /// the job (SIGXCPU, `SCHED_FLAG_DL_OVERRUN`; it comes at the thread's
+    /// next tick on the CPU, so in the job that overran or a later one).
+    pub reservation_overruns: Vec<u64>,
 }
 
 /// A finished run.
@@ -101,6 +108,9 @@ pub struct RunResult {
     /// completion dispatches (relative to the epoch), when no job of its
     /// CPU ran; empty otherwise.
     pub dispatch_spans: Vec<Vec<(Nanos, Nanos)>>,
+    /// Other processes' real-time threads that may run on the run's CPUs
+    /// and used CPU time during it (`crate::foreign`), most first.
+    pub foreign_rt: Vec<crate::foreign::ForeignThread>,
     /// Under LET, every job at the schedule's instants (read: when its
     /// thread read, finish: when it completed), where `sim.jobs` holds
     /// LET's (release, period end); `None` otherwise ([`RunResult::scheduled`]).
@@ -128,6 +138,10 @@ struct Rec {
     read: Nanos,
     finish: Nanos,
     demand: Nanos,
+    /// The kernel signalled an overrun of the reservation during the job.
+    dl_overrun: bool,
+    /// The thread's CPU time when the job started, ns.
+    cpu_start: Nanos,
 }
 
 /// What one task's thread owns.
@@ -270,7 +284,7 @@ fn execute<'a, V: Copy + Send>(
     sys::catch_stop_signals();
     let shared = shared(spec, (cfg.policy, cfg.duration), &mut notes)?;
     shared.reserve_spans(&threads);
-    let steal0 = sys::steal_time();
+    let (steal0, rt0) = (sys::steal_time(), crate::foreign::Scan::now());
     let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
     let grace = GRACE.max(2 * longest.unwrap_or(0));
     let (finished, demoted, probes) = start(spec, cfg, threads, env, &shared, grace);
@@ -312,6 +326,7 @@ fn execute<'a, V: Copy + Send>(
     res.partitioned = shared.partition.is_some();
     res.dispatch = dispatch;
     res.dispatch_spans = dispatch_spans;
+    res.foreign_rt = rt0.ran_until(&crate::foreign::Scan::now(), &crate::foreign::cpus_of(spec));
     Ok(res)
 }
 
@@ -759,6 +774,7 @@ fn job<V: Copy>(
     // are), and a wake-up of a higher thread on this CPU switches to it
     // inside the call.
     let demand = sys::thread_cpu_time() - cpu0;
+    let dl_overrun = sys::take_dl_overruns() > 0;
     if let Some(q) = q.filter(|_| publishing) {
         q.publish(th.task, done);
     }
@@ -770,6 +786,8 @@ fn job<V: Copy>(
         read,
         finish,
         demand,
+        dl_overrun,
+        cpu_start: cpu0,
     });
 }
 

@@ -13,6 +13,7 @@ mod comm;
 mod config;
 pub mod edf;
 pub mod exec;
+pub mod foreign;
 pub mod four_slot;
 mod let_comm;
 pub mod load;

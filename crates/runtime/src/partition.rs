@@ -320,7 +320,7 @@ mod tests {
             let cpu = sets.len() - 1;
             p.enter(cpu)?;
             sys::pin_to(cpu)?;
-            sys::set_deadline(1_000_000, 10_000_000, 10_000_000)?;
+            sys::set_deadline(1_000_000, 10_000_000, 10_000_000, 0)?;
             let _ = sys::set_other(sys::gettid());
             drop(p);
             Ok::<(), io::Error>(())

@@ -145,12 +145,17 @@ pub fn set_priority_of(tid: i32, priority: i32) -> io::Result<()> {
     Ok(())
 }
 
-/// `SCHED_DEADLINE` with runtime, deadline and period (ns) for the calling
-/// thread.
-pub fn set_deadline(runtime: u64, deadline: u64, period: u64) -> io::Result<()> {
+/// `sched_attr.sched_flags`: the kernel sends the thread SIGXCPU when its
+/// reservation overruns its runtime (include/uapi/linux/sched.h).
+pub const SCHED_FLAG_DL_OVERRUN: u64 = 0x04;
+
+/// `SCHED_DEADLINE` with runtime, deadline and period (ns) and `flags`
+/// (0 or [`SCHED_FLAG_DL_OVERRUN`]) for the calling thread.
+pub fn set_deadline(runtime: u64, deadline: u64, period: u64, flags: u64) -> io::Result<()> {
     let attr = SchedAttr {
         size: std::mem::size_of::<SchedAttr>() as u32,
         sched_policy: SCHED_DEADLINE,
+        sched_flags: flags,
         sched_runtime: runtime,
         sched_deadline: deadline,
         sched_period: period,
@@ -274,6 +279,34 @@ extern "C" fn on_stop_signal(signal: libc::c_int) {
         STOP_SIGNAL.store(signal, SeqCst);
     }
     STOP.store(true, SeqCst);
+}
+
+thread_local! {
+    /// SIGXCPUs this thread received: its SCHED_DEADLINE reservation
+    /// overran ([`SCHED_FLAG_DL_OVERRUN`]). Const-initialised, no
+    /// destructor: a plain thread-local word, safe to touch in a handler.
+    static DL_OVERRUNS: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
+}
+
+extern "C" fn on_dl_overrun(_: libc::c_int) {
+    DL_OVERRUNS.with(|c| c.set(c.get().saturating_add(1)));
+}
+
+/// Installs the SIGXCPU handler that counts the calling thread's
+/// reservation overruns ([`take_dl_overruns`]). It stays installed after
+/// the run: the kernel signals an overrun at the thread's next tick, so
+/// one may still be on its way when the run ends, and SIGXCPU's default
+/// action would kill the process.
+pub fn count_dl_overruns() {
+    let handler: extern "C" fn(libc::c_int) = on_dl_overrun;
+    // SAFETY: the handler only adds to a thread-local word.
+    unsafe { libc::signal(libc::SIGXCPU, handler as libc::sighandler_t) };
+}
+
+/// The reservation overruns signalled to the calling thread since the last
+/// call (see [`count_dl_overruns`]).
+pub fn take_dl_overruns() -> u32 {
+    DL_OVERRUNS.with(|c| c.replace(0))
 }
 
 /// Installs the handler of every [`STOP_SIGNALS`] signal: it sets the stop

@@ -32,7 +32,7 @@ pub(super) fn assemble<V>(
     let mut runs = Vec::with_capacity(n);
     let mut notes = notes;
     for th in &threads {
-        let (stats, run) = task_figures(th);
+        let (stats, run) = task_figures(th, policy);
         notes.extend(thread_notes(&spec.tasks[th.task].name, th));
         tasks.push(stats);
         runs.push(run);
@@ -62,6 +62,7 @@ pub(super) fn assemble<V>(
         partitioned: false,
         dispatch: None,
         dispatch_spans: Vec::new(),
+        foreign_rt: Vec::new(),
         schedule,
     }
 }
@@ -189,7 +190,7 @@ fn thread_notes<V>(name: &str, th: &Thread<'_, V>) -> Vec<String> {
 /// One task's figures from its thread's log: in the simulator's terms
 /// (late = missed periods, exhaustions = budget overruns beyond
 /// [`OVERRUN_TOLERANCE`]) and what only a real run measures.
-fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
+fn task_figures<V>(th: &Thread<'_, V>, policy: Policy) -> (TaskStats, TaskRun) {
     // The schedule's response (completion, not LET's period end).
     let responses: Vec<Nanos> = th.recs.iter().map(|r| r.done - r.release).collect();
     // Against D (the period unless the spec gives a deadline).
@@ -225,8 +226,26 @@ fn task_figures<V>(th: &Thread<'_, V>) -> (TaskStats, TaskRun) {
             .as_ref()
             .map_or_else(Vec::new, |s| s.held.clone()),
         let_misses: th.let_misses,
+        reservation_overruns: reservation_overruns(th, policy),
     };
     (stats, run)
+}
+
+/// Under SCHED_DEADLINE, the jobs that overran the thread's reservation
+/// (`TaskRun::reservation_overruns`).
+fn reservation_overruns<V>(th: &Thread<'_, V>, policy: Policy) -> Vec<u64> {
+    if policy != Policy::Deadline {
+        return Vec::new();
+    }
+    let runtime = crate::config::reservation_runtime(th.budget, th.deadline);
+    let recs = &th.recs;
+    (0..recs.len())
+        .filter(|&k| {
+            let cycle = recs.get(k + 1).map(|n| n.cpu_start - recs[k].cpu_start);
+            recs[k].dl_overrun || cycle.is_some_and(|c| c > runtime)
+        })
+        .map(|k| recs[k].index)
+        .collect()
 }
 
 /// One "slice" per job from its read to its publish, for the trace writer:
