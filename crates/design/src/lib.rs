@@ -27,8 +27,9 @@
 #![deny(missing_docs)]
 
 // Layers, bottom up; a module uses only modules of lower layers:
-// lp < api, linear < domain < problem < budget, model < paper, rta, sound
-// < learnt < master < solve < heuristic, axis, joint < bnb < frontier < explain
+// lp < api, linear < domain < problem < budget, events, model < paper, rta,
+// sound < learnt < master < solve < heuristic, axis, joint < bnb < frontier
+// < explain
 // < boxes, runner < lib.rs (`design`).
 mod api;
 mod axis;
@@ -36,6 +37,7 @@ mod bnb;
 mod boxes;
 mod budget;
 mod domain;
+mod events;
 mod explain;
 mod frontier;
 mod gate;
@@ -191,9 +193,11 @@ pub fn method_for(spec: &Spec, opts: &Options) -> Method {
 
 /// Whether the box search runs (true) or the MILP.
 fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
+    // With threads or data-triggered tasks the box search does not use
+    // the relaxation (`events`), so paper mode needs no monotone Eq. 12.
     let fits = match opts.mode {
         Mode::Sound => true,
-        Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
+        Mode::Paper => spec.event_triggered() || rtpipe_analysis::relax::paper_monotone(spec),
     };
     let paper_refusal = || {
         DesignError::input(
@@ -205,7 +209,7 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
             .at(key)
             .help(format!("the MILP does not model {what}: design in sound mode (leave --mode out)"))),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead, jitter or event term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
@@ -232,10 +236,26 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
 /// R ≤ D, or the demand test, re-checked by `analyze`). docs/design.md,
 /// "Critical sections and overheads" and "Priorities and deadlines".
 fn contention(spec: &Spec) -> Option<(String, String)> {
+    if let Some(x) = event_triggered(spec) {
+        return Some(x);
+    }
     if let Some(x) = ranks_or_demand(spec) {
         return Some(x);
     }
     contention_costs(spec).map(|(what, key)| (what.to_string(), key))
+}
+
+/// Work-queue threads or data-triggered tasks (the MILP's rows are the
+/// periodic analysis'; the box search verifies every candidate with the
+/// event analysis, docs/design.md "Event-triggered specs"), and the key of
+/// the first: a thread, else a data-triggered task's activation.
+fn event_triggered(spec: &Spec) -> Option<(String, String)> {
+    let what = "threads and data-triggered tasks (their event analysis)".to_string();
+    if let Some(t) = spec.threads.first() {
+        return Some((what, format!("threads.{}", t.name)));
+    }
+    let t = spec.tasks.iter().find(|t| t.is_triggered())?;
+    Some((what, format!("tasks.{}.activation", t.name)))
 }
 
 /// A priority order other than rate monotonic, the processor-demand test
