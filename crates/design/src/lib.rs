@@ -248,14 +248,19 @@ fn contention(spec: &Spec) -> Option<(String, String)> {
 /// Work-queue threads or data-triggered tasks (the MILP's rows are the
 /// periodic analysis'; the box search verifies every candidate with the
 /// event analysis, docs/design.md "Event-triggered specs"), and the key of
-/// the first: a thread, else a data-triggered task's activation.
+/// the first task that gives one: its `thread`, else its `activation`.
 fn event_triggered(spec: &Spec) -> Option<(String, String)> {
     let what = "threads and data-triggered tasks (their event analysis)".to_string();
-    if let Some(t) = spec.threads.first() {
-        return Some((what, format!("threads.{}", t.name)));
-    }
-    let t = spec.tasks.iter().find(|t| t.is_triggered())?;
-    Some((what, format!("tasks.{}.activation", t.name)))
+    let t = spec
+        .tasks
+        .iter()
+        .find(|t| t.thread.is_some() || t.is_triggered())?;
+    let key = if t.thread.is_some() {
+        "thread"
+    } else {
+        "activation"
+    };
+    Some((what, format!("tasks.{}.{key}", t.name)))
 }
 
 /// A priority order other than rate monotonic, the processor-demand test
