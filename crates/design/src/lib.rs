@@ -209,7 +209,7 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
             .at(key)
             .help(format!("the MILP does not model {what}: design in sound mode (leave --mode out)"))),
         (Method::Milp, Some((what, key))) => Err(DesignError::input(format!(
-            "{what}: the MILP (--method milp) has no blocking, overhead, jitter or event term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
+            "{what}: the MILP (--method milp) has no blocking, overhead or jitter term, and only rate-monotonic ranks, implicit deadlines under EDF and implicit communication; the box search models them"
         ))
         .at(key)
         .help("leave --method out (or use --method boxes)")),
