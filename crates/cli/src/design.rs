@@ -645,15 +645,19 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
             ));
         }
         out.push_str("\nperiods:");
-        for (orig, t) in spec.tasks.iter().zip(&s.tasks) {
-            let fixed = orig.fixed_period().is_some();
+        for (i, (orig, t)) in spec.tasks.iter().zip(&s.tasks).enumerate() {
+            // A data-triggered task runs at the rate of its triggers.
+            let how = match (orig.fixed_period(), orig.is_triggered()) {
+                (Some(_), _) => "(fixed)",
+                (None, true) => "(data)",
+                (None, false) => "",
+            };
             out.push_str(&format!(
-                " {}={}{}",
+                " {}={}{how}",
                 t.name,
-                t.fixed_period()
+                s.activation_period(i)
                     .map(|p| spec.fmt_time(p))
                     .unwrap_or_default(),
-                if fixed { "(fixed)" } else { "" }
             ));
         }
         out.push_str("\n\nre-check by the analysis:\n\n");

@@ -313,12 +313,16 @@ pub const EXPLAIN_EFFORT: u64 = 3;
 /// given; about 20 s of microlp on Table II (6,000 nodes/s).
 pub const EXACT_PATIENCE: u64 = 120_000;
 
-/// Σ C/T over guaranteed tasks.
+/// Σ C/T over guaranteed tasks, a data-triggered task's T the rate it
+/// inherits from its triggers (`Spec::activation_period`, as the
+/// analysis' C/T column).
 pub fn utilization(spec: &Spec) -> f64 {
-    spec.tasks
-        .iter()
-        .filter(|t| t.server != Server::Background)
-        .filter_map(|t| t.fixed_period().map(|p| t.budget() as f64 / p as f64))
+    (0..spec.tasks.len())
+        .filter(|&i| spec.tasks[i].server != Server::Background)
+        .filter_map(|i| {
+            let p = spec.activation_period(i)?;
+            Some(spec.tasks[i].budget() as f64 / p as f64)
+        })
         .sum::<f64>()
         + 0.0 // an empty sum is -0.0
 }

@@ -73,6 +73,12 @@ pub(crate) struct Examiner<'r, 'a> {
     pub(crate) axes: Vec<Axis>,
     /// Budgets C_i of guaranteed tasks (0 for background ones).
     budget: Vec<f64>,
+    /// The spec has threads or data-triggered tasks: `relax` does not
+    /// bound its analysis (`events`).
+    events: bool,
+    /// Per task, the longest period the from-event limits allow
+    /// (`events::source_caps`; empty unless `events` in sound mode).
+    caps: Vec<Option<Nanos>>,
 }
 
 impl<'r, 'a> Examiner<'r, 'a> {
@@ -92,6 +98,8 @@ impl<'r, 'a> Examiner<'r, 'a> {
             groups,
             axes,
             budget,
+            events: p.spec.event_triggered(),
+            caps: crate::events::source_caps(p.spec, p.opts.mode, groups),
         }
     }
 
@@ -104,9 +112,20 @@ impl<'r, 'a> Examiner<'r, 'a> {
     }
 
     /// Σ C/T at periods `t` (ns): the least utilisation of a box whose
-    /// longest periods they are.
+    /// longest periods they are (a data-triggered task at the rate it
+    /// inherits, which never falls as a period grows).
     fn utilization_at(&self, t: &[Nanos]) -> f64 {
-        t.iter().zip(&self.budget).map(|(&t, c)| c / t as f64).sum()
+        if !self.events {
+            return t.iter().zip(&self.budget).map(|(&t, c)| c / t as f64).sum();
+        }
+        let spec = self.p.spec;
+        let own = |j: usize| Some(t[j]);
+        (0..t.len())
+            .map(|i| match spec.activation_period_with(i, &own) {
+                Some(p) => self.budget[i] / p as f64,
+                None => unreachable!("every period is given"),
+            })
+            .sum()
     }
 
     /// Task i's rank key at its period index k (`policy::rank_key`: the
@@ -282,6 +301,9 @@ impl<'r, 'a> Examiner<'r, 'a> {
     /// Narrows the box in place and sets its bound; false when it holds
     /// nothing feasible that can beat `best`.
     fn narrow(&self, node: &mut Node, best: Option<f64>) -> bool {
+        if self.events {
+            return self.narrow_events(node, best);
+        }
         for _ in 0..NARROW_ROUNDS {
             if !self.enforce_orders(node) {
                 return false;
@@ -319,6 +341,32 @@ impl<'r, 'a> Examiner<'r, 'a> {
         // The last cut's box: its bound is at least the one set above.
         node.bound = node.bound.max(self.bound(&node.hi));
         true
+    }
+
+    /// `narrow` for a spec with threads or data-triggered tasks, with only
+    /// what stays a lower bound of its analysis (`events`): the from-event
+    /// caps on source periods, and the utilisation against `best`.
+    fn narrow_events(&self, node: &mut Node, best: Option<f64>) -> bool {
+        if self.p.spec.harmonic && !harmonic::propagate(&self.axes, node) {
+            return false;
+        }
+        for (i, cap) in self.caps.iter().enumerate() {
+            let Some(cap) = *cap else { continue };
+            if self.axes[i].value(node.hi[i]) <= cap {
+                continue;
+            }
+            match self.axes[i].last_at_most(cap) {
+                Some(k) if k >= node.lo[i] => node.hi[i] = k,
+                _ => return false,
+            }
+        }
+        if let Some(u) = best {
+            if self.raise_lows(node, u).is_none() {
+                return false;
+            }
+        }
+        node.bound = node.bound.max(self.bound(&node.hi));
+        !beaten(node.bound, best)
     }
 
     /// Periods shorter than a response time's lower bound fail where that
@@ -586,6 +634,9 @@ impl<'r, 'a> Examiner<'r, 'a> {
             for (i, t) in spec.tasks.iter().enumerate() {
                 blamed[i] |= t.cpu == v.cpu;
             }
+        }
+        if self.events {
+            crate::events::blame_triggers(spec, &mut blamed);
         }
         // A corner the analysis accepts but that breaks a harmonic pair:
         // the split goes to the tasks of the broken pairs.

@@ -252,12 +252,11 @@ fn task_dom(spec: &Spec, t: &Task, horizon: Nanos, g: i64) -> Result<Dom, Design
             range_dom(spec, t, *min, max, c, horizon, res, g)?
         }
         PeriodSpec::Free => range_dom(spec, t, None, t.max_period, c, horizon, res, g)?,
-        PeriodSpec::Triggered { .. } => {
-            return Err(DesignError::input(format!(
-                "task `{}` is data-triggered: the design chooses periods of periodic tasks only, and does not take threads or data-triggered tasks yet",
-                t.name
-            )))
-        }
+        // A data-triggered task has no period of its own: its rate is its
+        // triggers' (`Spec::activation_period_with`). It keeps one value,
+        // a single grid step (harmonic with every period on the grid),
+        // which `Problem::with_periods` never writes into the spec.
+        PeriodSpec::Triggered { .. } => Dom::Fixed(1),
     })
 }
 

@@ -27,15 +27,16 @@
 #![deny(missing_docs)]
 
 // Layers, bottom up; a module uses only modules of lower layers:
-// lp < api, linear < domain < problem < budget, model < paper, rta, sound
-// < learnt < master < solve < heuristic, axis, joint < bnb < frontier < explain
-// < boxes, runner < robust < lib.rs (`design`).
+// lp < api, linear < domain < problem < budget, events, model < paper, rta,
+// sound < learnt < master < solve < heuristic, axis, joint < bnb < frontier
+// < explain < boxes, runner < robust < lib.rs (`design`).
 mod api;
 mod axis;
 mod bnb;
 mod boxes;
 mod budget;
 mod domain;
+mod events;
 mod explain;
 mod frontier;
 mod gate;
@@ -208,9 +209,11 @@ pub fn method_for(spec: &Spec, opts: &Options) -> Method {
 
 /// Whether the box search runs (true) or the MILP.
 fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
+    // With threads or data-triggered tasks the box search does not use
+    // the relaxation (`events`), so paper mode needs no monotone Eq. 12.
     let fits = match opts.mode {
         Mode::Sound => true,
-        Mode::Paper => rtpipe_analysis::relax::paper_monotone(spec),
+        Mode::Paper => spec.event_triggered() || rtpipe_analysis::relax::paper_monotone(spec),
     };
     let paper_refusal = || {
         DesignError::input(
@@ -249,10 +252,31 @@ fn choose_method(spec: &Spec, opts: &Options) -> Result<bool, DesignError> {
 /// R ≤ D, or the demand test, re-checked by `analyze`). docs/design.md,
 /// "Critical sections and overheads" and "Priorities and deadlines".
 fn contention(spec: &Spec) -> Option<(String, String)> {
+    if let Some(x) = event_triggered(spec) {
+        return Some(x);
+    }
     if let Some(x) = ranks_or_demand(spec) {
         return Some(x);
     }
     contention_costs(spec).map(|(what, key)| (what.to_string(), key))
+}
+
+/// Work-queue threads or data-triggered tasks (the MILP's rows are the
+/// periodic analysis'; the box search verifies every candidate with the
+/// event analysis, docs/design.md "Event-triggered specs"), and the key of
+/// the first task that gives one: its `thread`, else its `activation`.
+fn event_triggered(spec: &Spec) -> Option<(String, String)> {
+    let what = "threads and data-triggered tasks (their event analysis)".to_string();
+    let t = spec
+        .tasks
+        .iter()
+        .find(|t| t.thread.is_some() || t.is_triggered())?;
+    let key = if t.thread.is_some() {
+        "thread"
+    } else {
+        "activation"
+    };
+    Some((what, format!("tasks.{}.{key}", t.name)))
 }
 
 /// A priority order other than rate monotonic, the processor-demand test

@@ -111,11 +111,14 @@ impl<'a> Problem<'a> {
         v
     }
 
-    /// The spec with these periods fixed.
+    /// The spec with these periods fixed; a data-triggered task keeps
+    /// its triggers (its entry in `periods` is a placeholder, `domain`).
     pub(crate) fn with_periods(&self, periods: &[Nanos]) -> Spec {
         let mut s = self.spec.clone();
         for (t, &p) in s.tasks.iter_mut().zip(periods) {
-            t.period = PeriodSpec::Fixed(p);
+            if !t.is_triggered() {
+                t.period = PeriodSpec::Fixed(p);
+            }
         }
         s
     }

@@ -539,12 +539,27 @@ impl Spec {
     /// sample time, the paper's terms); the analysis bounds the actual
     /// releases with event models, not with this.
     pub fn activation_period(&self, i: usize) -> Option<Nanos> {
+        self.activation_period_with(i, &|j| self.tasks[j].fixed_period())
+    }
+
+    /// [`Spec::activation_period`] with the periodic tasks' periods given
+    /// by `period` (task index → period) instead of the spec's: the rate
+    /// a data-triggered task inherits at periods under consideration (the
+    /// design's boxes). Never smaller when a period grows (min and max
+    /// of the triggers').
+    pub fn activation_period_with(
+        &self,
+        i: usize,
+        period: &impl Fn(usize) -> Option<Nanos>,
+    ) -> Option<Nanos> {
         let t = self.tasks.get(i)?;
         let Some((triggers, join)) = t.triggers() else {
-            return t.fixed_period();
+            return period(i);
         };
         // Validation makes the trigger graph acyclic, so this ends.
-        let periods = triggers.iter().map(|&p| self.activation_period(p));
+        let periods = triggers
+            .iter()
+            .map(|&p| self.activation_period_with(p, period));
         let periods: Option<Vec<Nanos>> = periods.collect();
         match join {
             Join::Any => periods?.into_iter().min(),
