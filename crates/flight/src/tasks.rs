@@ -34,6 +34,9 @@ use rtpipe_body::{Body, Environment, Job, Nanos, Stamped};
 
 mod arming;
 mod cascade;
+mod per_sample;
+
+pub(crate) use per_sample::PerSample;
 
 use arming::Arming;
 pub use cascade::{AttitudeTask, RateDemand, RatePidTask};
@@ -371,9 +374,7 @@ impl Body<Value> for RadioTask {
 pub struct PidTask {
     ctrl: Controller,
     arming: Arming,
-    /// The attitude sample the controller last ran on: (its time, ns; the
-    /// output it gave).
-    last: Option<(u64, MotorDemand)>,
+    last: PerSample,
 }
 
 /// The mixer's motor demand for `cmd`, armed, and whether it saturated
@@ -388,10 +389,9 @@ fn mixed(cmd: &AxisCommand) -> (MotorDemand, bool) {
 }
 
 impl Body<Value> for PidTask {
-    /// The controller steps once per new attitude sample, with dt from the
-    /// samples' timestamps: the PID task runs faster than the AHRS, and
-    /// stepping again on the same measurement would turn the D term into
-    /// spikes (zero, then the whole change over one PID period).
+    /// The controller steps once per new attitude sample ([`PerSample`]),
+    /// with dt from the samples' timestamps: the PID task runs faster than
+    /// the AHRS.
     fn run(
         &mut self,
         job: &Job,
@@ -406,17 +406,13 @@ impl Body<Value> for PidTask {
         let now = u64::try_from(job.read).unwrap_or(0);
         let Some(sp) = self.arming.setpoint(now, &att, &rx) else {
             self.ctrl.reset();
-            self.last = None;
+            self.last.reset();
             return Value::Demand(MotorDemand::default());
         };
-        if let Some((t, out)) = self.last {
-            if t == att.t_ns {
-                return Value::Demand(out);
-            }
-        }
-        let dt = self
-            .last
-            .map_or(0.0, |(t, _)| att.t_ns.saturating_sub(t) as f64 * 1e-9);
+        let dt = match self.last.step(att.t_ns) {
+            Ok(dt) => dt,
+            Err(repeat) => return Value::Demand(repeat),
+        };
         if sp.throttle < cascade::I_RESET_THROTTLE {
             // Betaflight resets the I term at low throttle (no airmode on the ground).
             self.ctrl.reset();
@@ -424,7 +420,7 @@ impl Body<Value> for PidTask {
         let cmd = self.ctrl.update(&sp, &att.euler, att.rate, dt);
         let (out, saturated) = mixed(&cmd);
         self.ctrl.set_saturated(saturated);
-        self.last = Some((att.t_ns, out));
+        self.last.record(att.t_ns, out);
         Value::Demand(out)
     }
 }
@@ -560,7 +556,7 @@ pub fn body(
         }),
         BodyKind::RatePid => Box::new(RatePidTask {
             rate: RateController::new(&preset.pid, hz)?,
-            last: None,
+            last: PerSample::default(),
         }),
         BodyKind::Accel => Box::new(AccelTask),
         BodyKind::Ahrs => Box::new(AhrsTask {
@@ -570,7 +566,7 @@ pub fn body(
         BodyKind::Pid => Box::new(PidTask {
             ctrl: Controller::new(preset.pid, hz)?,
             arming: Arming::new(failsafe_config(preset)),
-            last: None,
+            last: PerSample::default(),
         }),
         BodyKind::Pwm => Box::new(PwmTask),
         BodyKind::Load => Box::new(LoadTask { period, hk: hk()? }),

@@ -29,7 +29,7 @@
 
 use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use rtpipe_fly::sweep::{default_variations, sweep, How, Trials, Variation};
+use rtpipe_fly::sweep::{default_variations, sweep, How, Variation};
 use rtpipe_fly::{fly, setup, Request, Setup};
 use rtpipe_model::Spec;
 use rtpipe_sim::ExecModel;
@@ -168,11 +168,7 @@ fn sweeps(c: &mut Criterion<CpuTime>) {
                     sweep(
                         &spec,
                         &s,
-                        &How {
-                            exec: ExecModel::Uniform,
-                            criteria: &crit,
-                            trials: Trials::ONE,
-                        },
+                        &How::once(ExecModel::Uniform, &crit),
                         vars,
                         &done,
                         &|| {},

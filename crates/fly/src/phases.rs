@@ -56,21 +56,9 @@ fn output_period(spec: &Spec, s: &Setup) -> Option<Nanos> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{setup, Request};
-    use std::path::Path;
 
     fn cleanflight() -> (Spec, Setup) {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
-        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
-        let r = Request {
-            spec_path: &p,
-            vehicle: "racer5",
-            mission: "steps",
-            horizon: None,
-            seed: 0,
-        };
-        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
-        (spec, s)
+        crate::sweep::tests::cleanflight("racer5")
     }
 
     #[test]

@@ -258,6 +258,17 @@ pub struct How<'a> {
     pub trials: Trials,
 }
 
+impl<'a> How<'a> {
+    /// One flight per timing (the setup's seed, the nominal phase).
+    pub fn once(exec: ExecModel, criteria: &'a Criteria) -> How<'a> {
+        How {
+            exec,
+            criteria,
+            trials: Trials::ONE,
+        }
+    }
+}
+
 /// Every flight of one timing: the first flight's quality, the first
 /// failure's reasons (named by seed and phase when several flew), and how
 /// many met the criteria.
@@ -514,12 +525,13 @@ fn min_opt(a: Option<Nanos>, b: Option<Nanos>) -> Option<Nanos> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{setup, Request};
     use std::path::Path;
 
-    fn cleanflight(vehicle: &str) -> (Spec, Setup) {
+    /// examples/cleanflight.toml flying `steps` on `vehicle`, seed 1.
+    pub(crate) fn cleanflight(vehicle: &str) -> (Spec, Setup) {
         let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
         let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
         let r = Request {
@@ -541,11 +553,7 @@ mod tests {
         let points = sweep(
             &spec,
             &s,
-            &How {
-                exec: ExecModel::Uniform,
-                criteria: &s.criteria(),
-                trials: Trials::ONE,
-            },
+            &How::once(ExecModel::Uniform, &s.criteria()),
             &vars,
             &done,
             &|| {},
@@ -608,11 +616,7 @@ mod tests {
             Variation::Scale(6.0),
         ];
         let done = AtomicU64::new(0);
-        let one = How {
-            exec: ExecModel::Uniform,
-            criteria: &c,
-            trials: Trials::ONE,
-        };
+        let one = How::once(ExecModel::Uniform, &c);
         let six = How {
             trials: Trials {
                 seeds: 2,
@@ -691,27 +695,14 @@ mod threads {
         let got = sweep(
             &spec,
             &s,
-            &How {
-                exec: ExecModel::Uniform,
-                criteria: &c,
-                trials: Trials::ONE,
-            },
+            &How::once(ExecModel::Uniform, &c),
             &vars,
             &done,
             &|| {},
         );
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         for (v, g) in vars.iter().zip(&got) {
-            let alone = flown(
-                &spec,
-                &s,
-                *v,
-                &How {
-                    exec: ExecModel::Uniform,
-                    criteria: &c,
-                    trials: Trials::ONE,
-                },
-            );
+            let alone = flown(&spec, &s, *v, &How::once(ExecModel::Uniform, &c));
             assert_eq!(format!("{g:?}"), format!("{alone:?}"));
         }
         assert!(!got[5].schedulable, "{:?}", got[5]);
@@ -742,11 +733,7 @@ mod threads {
                 sweep(
                     &spec,
                     &s,
-                    &How {
-                        exec: ExecModel::Uniform,
-                        criteria: &c,
-                        trials: Trials::ONE,
-                    },
+                    &How::once(ExecModel::Uniform, &c),
                     &vars,
                     &done,
                     &check,
@@ -793,11 +780,7 @@ mod threads {
                 sweep(
                     &spec,
                     &s,
-                    &How {
-                        exec: ExecModel::Uniform,
-                        criteria: &c,
-                        trials: Trials::ONE,
-                    },
+                    &How::once(ExecModel::Uniform, &c),
                     &vars,
                     &done,
                     &|| {},

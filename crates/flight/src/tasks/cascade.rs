@@ -6,7 +6,7 @@
 //! the gyro body.
 
 use super::arming::Arming;
-use super::{input, mixed, Value};
+use super::{input, mixed, PerSample, Value};
 use crate::math::Vec3;
 use crate::mixer::MotorDemand;
 use crate::pid::{AngleLoop, AxisCommand, RateController};
@@ -63,9 +63,8 @@ impl Body<Value> for AttitudeTask {
 /// dt from the samples' stamps, on the attitude loop's latest set-point.
 pub struct RatePidTask {
     pub(super) rate: RateController,
-    /// The gyro sample the loop last stepped on: (its stamp, ns; the output
-    /// it gave).
-    pub(super) last: Option<(u64, MotorDemand)>,
+    /// The gyro sample the loop last stepped on.
+    pub(super) last: PerSample,
 }
 
 impl Body<Value> for RatePidTask {
@@ -82,19 +81,15 @@ impl Body<Value> for RatePidTask {
         };
         if !sp.armed {
             self.rate.reset();
-            self.last = None;
+            self.last.reset();
             return Value::Demand(MotorDemand::default());
         }
         // A job released with no new sample (a merged or a periodic one)
-        // repeats its output: stepping D on the same measurement spikes it.
-        if let Some((t, out)) = self.last {
-            if t == gyro.last_t_ns {
-                return Value::Demand(out);
-            }
-        }
-        let dt = self
-            .last
-            .map_or(0.0, |(t, _)| gyro.last_t_ns.saturating_sub(t) as f64 * 1e-9);
+        // repeats its output.
+        let dt = match self.last.step(gyro.last_t_ns) {
+            Ok(dt) => dt,
+            Err(repeat) => return Value::Demand(repeat),
+        };
         if sp.throttle < I_RESET_THROTTLE {
             self.rate.reset();
         }
@@ -107,7 +102,7 @@ impl Body<Value> for RatePidTask {
         };
         let (out, saturated) = mixed(&cmd);
         self.rate.set_saturated(saturated);
-        self.last = Some((gyro.last_t_ns, out));
+        self.last.record(gyro.last_t_ns, out);
         Value::Demand(out)
     }
 }
@@ -136,7 +131,7 @@ mod tests {
     fn d_only() -> RatePidTask {
         RatePidTask {
             rate: RateController::new(&d_only_config(), 8000.0).unwrap(),
-            last: None,
+            last: PerSample::default(),
         }
     }
 
@@ -241,5 +236,20 @@ mod tests {
             dterm_lpf_hz: 75.0,
             output_limit: 0.5,
         }
+    }
+
+    #[test]
+    fn a_controller_steps_once_per_sample_and_repeats_its_output_between() {
+        let mut gate = PerSample::default();
+        assert_eq!(gate.step(1_000), Ok(0.0), "the first sample: dt 0");
+        let out = MotorDemand {
+            motors: [0.5; 4],
+            armed: true,
+        };
+        gate.record(1_000, out);
+        assert_eq!(gate.step(1_000), Err(out), "the same sample: repeat");
+        assert_eq!(gate.step(126_000), Ok(125e-6));
+        gate.reset();
+        assert_eq!(gate.step(126_000), Ok(0.0));
     }
 }
