@@ -12,6 +12,16 @@ use rtpipe_model::{Nanos, MAX_TIME};
 /// before the response is called unbounded.
 pub const MAX_CANDIDATES: usize = 200_000;
 
+/// Most steps of the fixed-point iterations of one response (the busy
+/// period's and every candidate's together) before it is called
+/// unbounded. Near a level load of 1 the iteration converges about as
+/// slowly as 1 / (1 − load) (w ← ρ·w + c): at 1 − 10⁻⁹ it would take
+/// billions of steps (a margin search, which probes execs at the edge of
+/// the load, hung there). Calling such a response unbounded is sound (the
+/// verdict only fails); a response that needs this many steps is
+/// thousands of times its busy period's first estimate.
+pub const MAX_STEPS: u64 = 100_000;
+
 /// One task of the analysed thread: the work of each of its jobs and the
 /// most jobs any window can release.
 #[derive(Debug, Clone, Copy)]
@@ -38,8 +48,8 @@ pub type Above<'a> = [(Nanos, &'a Arrivals)];
 /// above it is pending. The count of the first sum changes only at the
 /// instants where some member's η⁺(a + 1) steps, and between two of them
 /// `f(a) − a` falls, so the candidates are 0 and those steps in the busy
-/// period. `None` when the level's load reaches 1, on overflow, or past
-/// [`MAX_CANDIDATES`] candidates. A member whose jobs merge (a release
+/// period. `None` when the level's load reaches 1, on overflow, past
+/// [`MAX_CANDIDATES`] candidates, or past [`MAX_STEPS`] iteration steps. A member whose jobs merge (a release
 /// while one is queued and not started joins it) releases fewer jobs
 /// than its activations: the figure bounds each job from its first
 /// release.
@@ -57,7 +67,10 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
         })
     };
-    let length = fixed_point(1, |w| thread(w)?.checked_add(interference(above, w)?))?;
+    let steps = std::cell::Cell::new(MAX_STEPS);
+    let length = fixed_point(1, &steps, |w| {
+        thread(w)?.checked_add(interference(above, w)?)
+    })?;
     let mut candidates = vec![0];
     for m in members {
         candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
@@ -71,7 +84,7 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
         // f grows with a: the last fixed point is a valid start.
-        finish = fixed_point(finish.max(released), |w| {
+        finish = fixed_point(finish.max(released), &steps, |w| {
             released.checked_add(interference(above, w)?)
         })?;
         worst = worst.max(finish - a);
@@ -87,10 +100,16 @@ fn interference(above: &Above, w: Nanos) -> Option<Nanos> {
 }
 
 /// The least fixed point of a nondecreasing `f` at or above `start`
-/// (which must not exceed it), or `None` past [`MAX_TIME`].
-fn fixed_point(start: Nanos, f: impl Fn(Nanos) -> Option<Nanos>) -> Option<Nanos> {
+/// (which must not exceed it), or `None` past [`MAX_TIME`] or when the
+/// `steps` left run out.
+fn fixed_point(
+    start: Nanos,
+    steps: &std::cell::Cell<u64>,
+    f: impl Fn(Nanos) -> Option<Nanos>,
+) -> Option<Nanos> {
     let mut w = start;
     loop {
+        steps.set(steps.get().checked_sub(1)?);
         let next = f(w)?;
         if next > MAX_TIME {
             return None;
@@ -154,5 +173,27 @@ mod tests {
         }];
         assert_eq!(fifo_response(&m, &[], 0), Some(4));
         assert_eq!(fifo_response(&m, &[(5, &h)], 0), Some(9));
+    }
+
+    #[test]
+    fn a_load_a_millionth_below_one_is_unbounded_not_iterated_forever() {
+        // Above: C 999,999 every 1 ms (load 1 − 10⁻⁶); the thread's job of
+        // 1 s then needs w = 10⁹ + ⌈w/10⁶⌉·999,999: about 10¹⁵ ns, reached
+        // in some 10⁷ steps of ratio 1 − 10⁻⁶, past MAX_STEPS.
+        let (x, h) = (
+            Arrivals::periodic(4_000_000_000_000_000, 0),
+            Arrivals::periodic(1_000_000, 0),
+        );
+        let m = [Member {
+            work: 1_000_000_000,
+            arrivals: &x,
+        }];
+        assert_eq!(fifo_response(&m, &[(999_999, &h)], 0), None);
+        // Far from the edge it converges as before.
+        let m = [Member {
+            work: 1_000,
+            arrivals: &x,
+        }];
+        assert_eq!(fifo_response(&m, &[(500_000, &h)], 0), Some(501_000));
     }
 }
