@@ -69,7 +69,7 @@ def test_analyze_observed_is_the_command_lines_json(tmp_path):
     ages.write_text(
         "chain,topic,timestamp_ns,timestamp_sample_ns,data_age_ns\n"
         "rate loop,actuator_motors,1100000,1000000,100000\n"
-        "rate loop,actuator_motors,1900000,1000000,900000\n"
+        "rate loop,actuator_motors,2900000,1000000,1900000\n"
     )
     got = rtpipe.load(spec).analyze(observed=ages)
     expected, status = binary("analyze", spec, "--observed", str(ages))
