@@ -188,7 +188,7 @@ pub fn execute(
     let written = write_design(write.as_ref(), &out, &mut notes);
     let what = flying.map(|(_, w)| w);
     let margins = match (a.margins, &out.spec) {
-        (true, Some(s)) if !stopped => margin::answer_margins(s, opts.mode, stop)?,
+        (true, Some(s)) if !stopped => crate::analyze::margins::compute(s, opts.mode, stop)?,
         _ => None,
     };
     let mut report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;

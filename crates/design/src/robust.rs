@@ -20,6 +20,7 @@
 //! monotone in exec: the answer is verified, not the largest.
 
 use crate::api::{utilization, DesignError, MarginSearch, MarginStep, Options, Outcome, Status};
+use crate::budget::Budget;
 use rtpipe_analysis::margins::{self, Control, ONE};
 use rtpipe_analysis::Mode;
 use rtpipe_model::{Nanos, PeriodSpec, Spec};
@@ -44,13 +45,12 @@ pub(crate) fn most_robust(
     least: LeastUtilization,
 ) -> Result<Outcome, DesignError> {
     assert!(cap.is_finite() && cap > 0.0, "a positive utilisation cap");
-    let start = Instant::now();
     let mut s = Search {
         spec,
         opts,
         cap,
         least,
-        start,
+        clock: Budget::new(opts, Instant::now()),
         steps: Vec::new(),
         best: None,
         stopped: false,
@@ -78,7 +78,9 @@ struct Search<'a> {
     opts: &'a Options,
     cap: f64,
     least: LeastUtilization,
-    start: Instant,
+    /// The time limit and Ctrl-C of the whole search (its work is the
+    /// scaled searches' own).
+    clock: Budget,
     steps: Vec<MarginStep>,
     /// The largest accepted factor (millionths) and its design (on the
     /// unscaled spec).
@@ -126,16 +128,7 @@ impl Search<'_> {
 
     /// Whether the time limit or a cancel ends the search now.
     fn out_of_time(&mut self) -> bool {
-        let late = self
-            .opts
-            .time_limit
-            .is_some_and(|t| self.start.elapsed().as_secs_f64() >= t);
-        let cancelled = self
-            .opts
-            .cancel
-            .as_ref()
-            .is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed));
-        self.stopped |= late || cancelled;
+        self.stopped |= self.clock.out_of_clock();
         self.stopped
     }
 
@@ -186,7 +179,7 @@ impl Search<'_> {
         let left = self
             .opts
             .time_limit
-            .map(|t| (t - self.start.elapsed().as_secs_f64()).max(0.001));
+            .map(|t| (t - self.clock.elapsed()).max(0.001));
         Options {
             time_limit: left,
             ..self.opts.clone()
@@ -231,7 +224,7 @@ impl Search<'_> {
                 factor as f64 / ONE as f64
             ));
         }
-        o.seconds = self.start.elapsed().as_secs_f64();
+        o.seconds = self.clock.elapsed();
         o.margin = Some(MarginSearch {
             cap: self.cap,
             factor: Some(factor as f64 / ONE as f64),

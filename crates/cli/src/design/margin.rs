@@ -7,8 +7,8 @@ use super::{DesignArgs, ObjectiveArg};
 use crate::analyze::margins;
 use crate::command::Rendered;
 use rtpipe_analysis::margins::Margins;
-use rtpipe_design::{MarginSearch, Mode, Objective, Outcome};
-use rtpipe_model::{Diagnostic, Spec};
+use rtpipe_design::{MarginSearch, Objective, Outcome};
+use rtpipe_model::Diagnostic;
 use serde::Serialize;
 
 /// `--max-utilization`: a positive finite number.
@@ -44,15 +44,6 @@ pub fn objective(a: &DesignArgs) -> Result<Objective, Diagnostic> {
             Ok(Objective::Margin { max_utilization })
         }
     }
-}
-
-/// `--margins`: the answer's margins (`None` when `stop` ended them).
-pub fn answer_margins(
-    designed: &Spec,
-    mode: Mode,
-    stop: &dyn Fn() -> bool,
-) -> Result<Option<Margins>, Diagnostic> {
-    margins::compute(designed, mode, stop)
 }
 
 /// The margin search and the answer's margins, added to the report.
