@@ -589,6 +589,22 @@ pub fn ensure_dir(dir: &Path) -> Result<(), Diagnostic> {
     })
 }
 
+/// A CSV field (RFC 4180): quoted when it holds a comma, quote or newline.
+/// A field a spreadsheet would run as a formula (it begins with `=`, `+`,
+/// `-`, `@`, tab or carriage return) gets a leading `'` and quotes, as
+/// OWASP's CSV-injection guidance says: names come from the spec, which
+/// may not be the reader's own.
+pub fn csv_field(s: &str) -> String {
+    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']);
+    if formula {
+        format!("\"'{}\"", s.replace('"', "\"\""))
+    } else if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -282,21 +282,8 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
     )
 }
 
-/// A CSV field (RFC 4180): quoted when it holds a comma, quote or newline.
-/// A field a spreadsheet would run as a formula (it begins with `=`, `+`,
-/// `-`, `@`, tab or carriage return) gets a leading `'` and quotes, as
-/// OWASP's CSV-injection guidance says: names come from the spec, which
-/// may not be the reader's own.
-pub(crate) fn quoted(s: &str) -> String {
-    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']);
-    if formula {
-        format!("\"'{}\"", s.replace('"', "\"\""))
-    } else if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
+/// A CSV field: the one rule every CSV rtpipe writes follows.
+pub(crate) use rtpipe_model::output::csv_field as quoted;
 
 #[cfg(test)]
 mod tests {

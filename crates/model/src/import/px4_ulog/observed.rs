@@ -65,15 +65,6 @@ pub(super) fn rows(
     Ok((!out.is_empty()).then_some(out))
 }
 
-/// A CSV field, quoted by RFC 4180 when it needs to be.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 /// The rows as CSV text with [`OBSERVED_HEADER`].
 pub(super) fn to_csv(rows: &[ObservedRow]) -> String {
     let mut s = String::with_capacity(64 * (rows.len() + 1));
@@ -83,8 +74,8 @@ pub(super) fn to_csv(rows: &[ObservedRow]) -> String {
         let _ = writeln!(
             s,
             "{},{},{},{},{}",
-            csv_field(&r.chain),
-            csv_field(&r.topic),
+            crate::output::csv_field(&r.chain),
+            crate::output::csv_field(&r.topic),
             r.timestamp_ns,
             r.timestamp_sample_ns,
             r.data_age_ns()
@@ -96,6 +87,7 @@ pub(super) fn to_csv(rows: &[ObservedRow]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::csv_field;
 
     #[test]
     fn chain_names_are_quoted_when_they_need_it() {
