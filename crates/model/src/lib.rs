@@ -287,22 +287,26 @@ impl Task {
     }
 
     /// Worst-case demand of one job: Δin + p + Δout.
+    #[inline]
     pub fn demand(&self) -> Nanos {
         self.delta_in
             .saturating_add(self.exec)
             .saturating_add(self.delta_out)
     }
     /// Best-case demand of one job: Δin + p_min + Δout.
+    #[inline]
     pub fn demand_min(&self) -> Nanos {
         self.delta_in
             .saturating_add(self.exec_min)
             .saturating_add(self.delta_out)
     }
     /// C: the given budget or the demand (Section IV-B, Step 1).
+    #[inline]
     pub fn budget(&self) -> Nanos {
         self.budget_given.unwrap_or_else(|| self.demand())
     }
     /// D: the given deadline, else the fixed period (implicit deadline).
+    #[inline]
     pub fn deadline(&self) -> Option<Nanos> {
         self.deadline_given.or_else(|| self.fixed_period())
     }

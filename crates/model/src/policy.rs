@@ -29,6 +29,7 @@ impl Scheduler {
     }
 
     /// The policy's descriptor.
+    #[inline]
     pub fn policy(self) -> &'static SchedPolicy {
         match self {
             Scheduler::Rm => &RM,
@@ -495,6 +496,7 @@ fn ranked_by(spec: &Spec, key: impl Fn(&crate::Task) -> Nanos) -> Vec<Option<usi
 
 impl Spec {
     /// The descriptor of the spec's scheduler.
+    #[inline]
     pub fn policy(&self) -> &'static SchedPolicy {
         self.scheduler.policy()
     }
