@@ -4,7 +4,7 @@
 
 use super::queue;
 use crate::class::privileges;
-use crate::config::{reservation_runtime, Policy, RunConfig, RunError};
+use crate::config::{reservation, Policy, RunConfig, RunError};
 use crate::sys;
 use rtpipe_model::policy::LinuxClass;
 use rtpipe_model::{Nanos, Spec, Task};
@@ -91,8 +91,9 @@ fn check_task(t: &Task, policy: Policy, cpus: usize) -> Result<f64, RunError> {
     if policy == Policy::Deadline {
         deadline_rules(&t.name, t.budget(), period)?;
     }
-    let deadline = t.deadline_given.unwrap_or(period);
-    Ok(reservation_runtime(t.budget(), deadline) as f64 / period as f64)
+    let deadline = t.deadline_given.unwrap_or(period).min(period);
+    let r = reservation(t.budget(), deadline, period);
+    Ok(r.runtime as f64 / r.period as f64)
 }
 
 /// Checks that task `t`'s CPU is one of this machine's `cpus`.
