@@ -114,9 +114,13 @@ pub enum Cause {
         task: usize,
         /// The job.
         job: u64,
-        /// The previous job's start latency minus this one's, ns: how long
-        /// the job itself may be throttled.
+        /// The previous job's start latency minus this one's, less the
+        /// lead, ns: how long the job itself may be throttled.
         lag: Nanos,
+        /// How much shorter the reservation's deadline and period are than
+        /// the task's (`config::reservation`): a wake-up up to that much
+        /// sooner than the one before still gets a fresh deadline.
+        lead: Nanos,
         /// What the reservation had left after the previous job (its
         /// runtime less that job's CPU time), ns: how long it may run ahead.
         ahead: Nanos,
@@ -261,14 +265,16 @@ impl Cause {
                 task,
                 job,
                 lag,
+                lead,
                 ahead,
                 own,
             } => format!(
-                "{} job {job} woke {} us sooner after its release than job {} did: SCHED_DEADLINE kept that \
-                 job's deadline, {}",
+                "{} job {job} woke {} us sooner after its release than job {} did (more than the \
+                 reservation's {} us lead): SCHED_DEADLINE kept that job's deadline, {}",
                 name(task),
-                us(lag),
+                us(lag + lead),
                 job.saturating_sub(1),
+                us(lead),
                 if own {
                     format!("and may throttle it {} us", us(lag))
                 } else {
@@ -419,12 +425,14 @@ impl<'r> Blame<'r> {
                     task,
                     job,
                     lag,
+                    lead,
                     ahead,
                     ..
                 } if ahead > 0 => Some(Cause::StaleDeadline {
                     task,
                     job,
                     lag,
+                    lead,
                     ahead,
                     own: false,
                 }),
@@ -733,28 +741,35 @@ fn lags(spec: &Spec, res: &RunResult, t: usize, jobs: &[&JobRecord]) -> Vec<(Nan
         out.push((from, jobs[last].finish, cause));
     }
     if res.partitioned {
-        let runtime =
-            crate::config::reservation_runtime(task.budget(), task.deadline().unwrap_or(period));
-        out.extend(stale_deadlines(t, jobs, runtime));
+        let deadline = task.deadline().unwrap_or(period).min(period);
+        let r = crate::config::reservation(task.budget(), deadline, period);
+        out.extend(stale_deadlines(t, jobs, (r.runtime, deadline - r.deadline)));
     }
     out
 }
 
 /// Task `t`'s jobs that woke sooner after their release than the job
-/// before them ([`Cause::StaleDeadline`]), each over its own span.
-fn stale_deadlines(t: usize, jobs: &[&JobRecord], runtime: Nanos) -> Vec<(Nanos, Nanos, Cause)> {
+/// before them by more than the reservation's `lead` (less, and the
+/// kernel renews the deadline: it lies before the wake-up;
+/// [`Cause::StaleDeadline`]), each over its own span.
+fn stale_deadlines(
+    t: usize,
+    jobs: &[&JobRecord],
+    (runtime, lead): (Nanos, Nanos),
+) -> Vec<(Nanos, Nanos, Cause)> {
     jobs.windows(2)
         .filter(|w| w[1].index == w[0].index + 1)
         .filter_map(|w| {
-            let lag = (w[0].read - w[0].release) - (w[1].read - w[1].release);
+            let sooner = (w[0].read - w[0].release) - (w[1].read - w[1].release);
             let cause = Cause::StaleDeadline {
                 task: t,
                 job: w[1].index,
-                lag,
+                lag: sooner - lead,
+                lead,
                 ahead: (runtime - w[0].demand).max(0),
                 own: true,
             };
-            (lag > 0).then_some((w[1].release, w[1].finish, cause))
+            (sooner > lead).then_some((w[1].release, w[1].finish, cause))
         })
         .collect()
 }

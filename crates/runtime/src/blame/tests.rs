@@ -413,11 +413,13 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
         j.read = 20 * MS + 4 * MS / 5;
     }
     let b = Blame::new(&spec, &res);
-    // Job 2 used 3 ms of a's 1.05 ms runtime: nothing was left to run ahead.
+    // Job 2 used 3 ms of a's 1.05 ms runtime: nothing was left to run
+    // ahead. It woke 0.3 ms sooner, 0.2 ms more than the reservation's lead.
     let stale = Cause::StaleDeadline {
         task: 0,
         job: 3,
-        lag: 3 * MS / 10,
+        lag: 2 * MS / 10,
+        lead: crate::config::RENEWAL_LEAD,
         ahead: 0,
         own: true,
     };
@@ -430,7 +432,7 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
             .any(|c| matches!(c, Cause::StaleDeadline { .. })),
         "{at_2:?}"
     );
-    assert_eq!(stale.delay(), 3 * MS / 10);
+    assert_eq!(stale.delay(), 2 * MS / 10);
     // Had job 2 used 0.5 ms, 0.55 ms of the runtime (1 ms + the 50 µs
     // margin) would be left to run ahead of another task's job.
     if let Some(j) = res
@@ -448,4 +450,23 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
     assert!(ahead[0]
         .describe(&spec)
         .ends_with("it may run 550.0 us ahead of earlier deadlines"));
+    // Job 2 started 0.55 ms after its release: job 3 woke 50 µs sooner,
+    // within the lead, and the kernel renewed its deadline.
+    if let Some(j) = res
+        .sim
+        .jobs
+        .iter_mut()
+        .find(|j| j.task == 0 && j.index == 2)
+    {
+        j.read = 20 * MS + 11 * MS / 20;
+    }
+    let b = Blame::new(&spec, &res);
+    let at_3 = b.causes((31 * MS, 32 * MS), &[0]);
+    assert!(
+        !at_3
+            .iter()
+            .any(|c| matches!(c, Cause::StaleDeadline { .. })),
+        "{at_3:?}"
+    );
+    assert!(b.ahead(0, (31 * MS, 32 * MS)).is_empty());
 }
