@@ -1076,3 +1076,45 @@ fn a_forced_overload_exits_1_naming_the_unbounded_task_s_jobs() {
         );
     }
 }
+
+/// Two reservations of 0.4 and 0.45 of a CPU with a period of 1 s: the
+/// bandwidth of one run leaves no room for the next until it is freed.
+const BACK_TO_BACK: &str = r#"
+[system]
+name = "back-to-back"
+time_unit = "ms"
+scheduler = "edf"
+schedulability = "edf"
+
+[tasks.a]
+exec = 400
+period = 1000
+
+[tasks.b]
+exec = 450
+period = 1000
+"#;
+
+/// A deadline run started right after another ended is admitted: the
+/// kernel frees an ended run's bandwidth only at its reservations' 0-lag
+/// time (up to a period later), and `run` retries a reservation refused as
+/// busy (EBUSY) for its longest period plus a margin instead of exiting 2
+/// (`class::retry_busy`, unit-tested there).
+#[test]
+fn a_deadline_run_right_after_another_is_admitted() {
+    let _one = serial();
+    let spec = write_spec("run-b2b", BACK_TO_BACK);
+    for i in 0..2 {
+        let o = rtpipe(&["run", &spec, "--duration", "1s"]);
+        let e = stderr(&o);
+        if unprivileged(&o, "a_deadline_run_right_after_another_is_admitted") {
+            return;
+        }
+        if o.status.code() == Some(2) && e.contains("Invalid argument") {
+            eprintln!("SKIPPED: no SCHED_DEADLINE here: {e}");
+            return;
+        }
+        assert!(!e.contains("Device or resource busy"), "run {i}: {e}");
+        assert!(matches!(o.status.code(), Some(0 | 1)), "run {i}: {e}");
+    }
+}

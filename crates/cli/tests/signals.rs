@@ -128,12 +128,19 @@ fn cpusets_unavailable() -> Option<String> {
 /// made (its sets exist and load balancing is off); `None` (the child
 /// stopped) when it never is.
 fn partitioned_run(dir: &Path, seconds: &str) -> Option<Child> {
+    partitioned(dir, &["--duration", seconds])
+}
+
+/// `run --policy deadline` of the small pipeline in `dir` with `extra`
+/// flags, once its partition is made (as [`partitioned_run`]).
+fn partitioned(dir: &Path, extra: &[&str]) -> Option<Child> {
     let spec = dir.join("spec.toml");
     if let Err(e) = std::fs::write(&spec, small_pipeline("edf", 0, "")) {
         panic!("cannot write {}: {e}", spec.display());
     }
     let spec = spec.to_string_lossy().into_owned();
-    let args = ["run", &spec, "--policy", "deadline", "--duration", seconds];
+    let mut args = vec!["run", &spec, "--policy", "deadline"];
+    args.extend_from_slice(extra);
     let mut child = spawn(dir, &args);
     let own = PathBuf::from(CPUSETS).join(format!("rtpipe-{}-cpu0", child.id()));
     // The flag goes off once every set is made: the partition is whole.
@@ -210,6 +217,43 @@ fn what_sigkill_leaves_the_next_start_repairs() {
     assert!(!err.contains("global EDF"), "{err}");
     assert_eq!(cpuset_state(), before, "{err}");
     assert!(!Path::new("/run/rtpipe/cpuset.sched_load_balance").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `run --measure-overheads` under deadline partitions the CPUs as a run
+/// does: SIGTERM ends it with its sets removed and balancing restored, and
+/// what a SIGKILL leaves the next start repairs.
+#[test]
+fn measure_overheads_ended_by_a_signal_leaves_the_machine_as_it_was() {
+    let _one = serial();
+    if let Some(why) = cpusets_unavailable() {
+        eprintln!("SKIPPED: {why}");
+        return;
+    }
+    let before = cpuset_state();
+    let dir = scratch("signal-overheads");
+    let Some(child) = partitioned(&dir, &["--measure-overheads"]) else {
+        return;
+    };
+    kill("TERM", child.id());
+    let (status, err) = finish(child);
+    assert_eq!(status, Some(143), "SIGTERM: {err}");
+    assert_eq!(cpuset_state(), before, "after SIGTERM: {err}");
+    let Some(child) = partitioned(&dir, &["--measure-overheads"]) else {
+        return;
+    };
+    let pid = child.id();
+    kill("KILL", pid);
+    let (status, _) = finish(child);
+    assert_eq!(status, None, "killed by a signal");
+    assert_ne!(cpuset_state(), before, "a SIGKILL runs no clean-up");
+    let spec = dir.join("spec.toml").to_string_lossy().into_owned();
+    let args = ["run", &spec, "--policy", "deadline", "--duration", "0.3s"];
+    let next = rtpipe_in(&dir, &args, &[], LIMIT);
+    let err = String::from_utf8_lossy(&next.stderr).into_owned();
+    assert!(matches!(next.status.code(), Some(0 | 1)), "{err}");
+    assert!(err.contains(&format!("(pid {pid})")), "{err}");
+    assert_eq!(cpuset_state(), before, "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

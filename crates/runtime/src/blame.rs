@@ -101,22 +101,28 @@ pub enum Cause {
         /// How far its reservation can lag its releases: its period, ns.
         lag: Nanos,
     },
-    /// Under SCHED_DEADLINE the job woke earlier after its release than the
-    /// task's previous job did, before the reservation's deadline that the
-    /// previous wake-up set (its release + D + its latency): the kernel
-    /// keeps that deadline with what is left of the runtime (the CBS
-    /// wake-up rule), and once that is spent throttles the job until it,
-    /// up to the difference of the two latencies. With that earlier
-    /// deadline the job also runs what is left of the runtime ahead of
-    /// other tasks' jobs of earlier deadlines (out of EDF order).
+    /// Under SCHED_DEADLINE the task's previous job woke so late after its
+    /// release that the reservation's deadline its wake-up set (wake-up +
+    /// D − lead) lies after this job's release: when this job wakes before
+    /// it, the kernel keeps that deadline with what is left of the runtime
+    /// (the CBS wake-up rule), and once that is spent throttles the job
+    /// until it, up to the previous job's start latency less the lead.
+    /// With that earlier deadline the job also runs what is left of the
+    /// runtime ahead of other tasks' jobs of earlier deadlines (out of EDF
+    /// order).
     StaleDeadline {
         /// The task.
         task: usize,
         /// The job.
         job: u64,
-        /// The previous job's start latency minus this one's, ns: how long
-        /// the job itself may be throttled.
+        /// The previous job's start latency less `lead`, ns: how long the
+        /// job itself may be throttled.
         lag: Nanos,
+        /// How long before the job's release the kept deadline lies when
+        /// the previous job woke on time: T − D plus the reservation's lead
+        /// (`config::reservation`); a previous wake-up later than that by
+        /// less leaves a deadline that has passed, which the kernel renews.
+        lead: Nanos,
         /// What the reservation had left after the previous job (its
         /// runtime less that job's CPU time), ns: how long it may run ahead.
         ahead: Nanos,
@@ -261,16 +267,19 @@ impl Cause {
                 task,
                 job,
                 lag,
+                lead,
                 ahead,
                 own,
             } => format!(
-                "{} job {job} woke {} us sooner after its release than job {} did: SCHED_DEADLINE kept that \
-                 job's deadline, {}",
+                "{} job {} started {} us after its release (more than the {} us its reservation's \
+                 deadline leads the next release by): SCHED_DEADLINE may keep the deadline its wake-up set \
+                 for job {job}, {}",
                 name(task),
-                us(lag),
                 job.saturating_sub(1),
+                us(lag + lead),
+                us(lead),
                 if own {
-                    format!("and may throttle it {} us", us(lag))
+                    format!("and throttle it up to {} us", us(lag))
                 } else {
                     format!("with which it may run {} us ahead of earlier deadlines", us(ahead))
                 }
@@ -419,12 +428,14 @@ impl<'r> Blame<'r> {
                     task,
                     job,
                     lag,
+                    lead,
                     ahead,
                     ..
                 } if ahead > 0 => Some(Cause::StaleDeadline {
                     task,
                     job,
                     lag,
+                    lead,
                     ahead,
                     own: false,
                 }),
@@ -733,28 +744,41 @@ fn lags(spec: &Spec, res: &RunResult, t: usize, jobs: &[&JobRecord]) -> Vec<(Nan
         out.push((from, jobs[last].finish, cause));
     }
     if res.partitioned {
-        let runtime =
-            crate::config::reservation_runtime(task.budget(), task.deadline().unwrap_or(period));
-        out.extend(stale_deadlines(t, jobs, runtime));
+        let deadline = task.deadline().unwrap_or(period).min(period);
+        let r = crate::config::reservation(task.budget(), deadline, period);
+        // The kept deadline lies this long before the next release when
+        // the job before woke on time.
+        let early = period - r.deadline;
+        out.extend(stale_deadlines(t, jobs, (r.runtime, early)));
     }
     out
 }
 
-/// Task `t`'s jobs that woke sooner after their release than the job
-/// before them ([`Cause::StaleDeadline`]), each over its own span.
-fn stale_deadlines(t: usize, jobs: &[&JobRecord], runtime: Nanos) -> Vec<(Nanos, Nanos, Cause)> {
+/// Task `t`'s jobs whose job before started more than `early` after its
+/// release ([`Cause::StaleDeadline`]), each over its own span. That job's
+/// wake-up, at most its start, set the reservation's deadline (wake-up +
+/// D − lead), which then lies `early` (T − D + the lead) less than that
+/// wake-up's latency before this job's release: when this job wakes before
+/// it, the kernel may keep it, up to that long (its own start latency is no
+/// measure of it: a throttle until the kept deadline is part of it).
+fn stale_deadlines(
+    t: usize,
+    jobs: &[&JobRecord],
+    (runtime, early): (Nanos, Nanos),
+) -> Vec<(Nanos, Nanos, Cause)> {
     jobs.windows(2)
         .filter(|w| w[1].index == w[0].index + 1)
         .filter_map(|w| {
-            let lag = (w[0].read - w[0].release) - (w[1].read - w[1].release);
+            let late = w[0].read - w[0].release;
             let cause = Cause::StaleDeadline {
                 task: t,
                 job: w[1].index,
-                lag,
+                lag: late - early,
+                lead: early,
                 ahead: (runtime - w[0].demand).max(0),
                 own: true,
             };
-            (lag > 0).then_some((w[1].release, w[1].finish, cause))
+            (late > early).then_some((w[1].release, w[1].finish, cause))
         })
         .collect()
 }

@@ -3,7 +3,7 @@
 //! its class (SCHED_FIFO pinned to its CPU, or a SCHED_DEADLINE
 //! reservation, partitioned into the CPU's root domain where possible).
 
-use crate::config::{fifo_priorities, reservation_runtime, Policy, RunError};
+use crate::config::{fifo_priorities, reservation, Policy, RunError};
 use crate::partition::Partition;
 use crate::sys;
 use rtpipe_model::{Nanos, Spec};
@@ -20,6 +20,9 @@ pub(crate) struct Placement<'a> {
     pub(crate) budget: Nanos,
     pub(crate) deadline: Nanos,
     pub(crate) period: Nanos,
+    /// How long to retry a reservation the kernel refuses as busy (EBUSY):
+    /// the run's longest period plus [`crate::config::ADMISSION_MARGIN`].
+    pub(crate) admission_wait: Nanos,
 }
 
 /// Puts the calling thread into its scheduling class.
@@ -90,30 +93,36 @@ fn deadline(
             return Err(refused(&format!("cpu {}'s cpuset", th.cpu), e, help));
         }
     }
-    // The runtime carries the job frame on top of the budget.
-    let c = reservation_runtime(th.budget, th.deadline) as u64;
-    let t = th.period as u64;
+    // The runtime carries the job frame on top of the budget; deadline and
+    // period lead the task's (`config::reservation`).
+    let r = reservation(th.budget, th.deadline, th.period);
+    let (c, t) = (r.runtime as u64, r.period as u64);
     // The kernel signals an overrun of the reservation (SIGXCPU), which the
     // verdict names; the handler goes first. A kernel without the flag
     // (before 4.16) refuses it: reserve without it then.
     sys::count_dl_overruns();
-    let reserve = |flags: u64| sys::set_deadline(c, th.deadline as u64, t, flags);
-    let reserved = reserve(sys::SCHED_FLAG_DL_OVERRUN).or_else(|e| match e.raw_os_error() {
-        Some(libc::EINVAL) => reserve(0),
-        _ => Err(e),
+    let reserve = |flags: u64| sys::set_deadline(c, r.deadline as u64, t, flags);
+    let reserved = retry_busy(th.admission_wait, || {
+        reserve(sys::SCHED_FLAG_DL_OVERRUN).or_else(|e| match e.raw_os_error() {
+            Some(libc::EINVAL) => reserve(0),
+            _ => Err(e),
+        })
     });
     if let Err(e) = reserved {
         let help = match e.raw_os_error() {
             Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
             Some(libc::EBUSY) => format!(
                 "admission control: the reservations already admitted plus this one \
-                 (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU); \
-                 lower the budgets or lengthen the periods",
-                c as f64 / t as f64
+                 (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU), \
+                 still after {} ms of retrying (a run that just ended frees its bandwidth within its longest period); \
+                 lower the budgets or lengthen the periods, or stop the other SCHED_DEADLINE threads",
+                c as f64 / t as f64,
+                th.admission_wait / 1_000_000
             ),
             Some(libc::EINVAL) => format!(
-                "task {name}: runtime {c} ns, deadline = period = {t} ns break the kernel's rules \
-                 (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)"
+                "task {name}: runtime {c} ns, deadline {} ns, period {t} ns break the kernel's rules \
+                 (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)",
+                r.deadline
             ),
             _ => String::new(),
         };
@@ -124,6 +133,31 @@ fn deadline(
         ));
     }
     Ok(())
+}
+
+/// `reserve()` until it is not refused as busy (EBUSY) or `wait` ns have
+/// passed (or a stop signal came), sleeping 10 ms, then doubling up to
+/// 200 ms, between tries: the bandwidth of a run that ended just before is
+/// freed by the kernel only at its reservations' 0-lag time.
+pub(crate) fn retry_busy(
+    wait: Nanos,
+    mut reserve: impl FnMut() -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let give_up = sys::now() + wait;
+    let mut pause: Nanos = 10_000_000;
+    loop {
+        match reserve() {
+            Err(e) if e.raw_os_error() == Some(libc::EBUSY) => {
+                let now = sys::now();
+                if now >= give_up || sys::stop_requested() {
+                    return Err(e);
+                }
+                sys::sleep_until(now + pause.min(give_up - now));
+                pause = (pause * 2).min(200_000_000);
+            }
+            done => return done,
+        }
+    }
 }
 
 /// Refuses up front a real-time policy this process may not use (rather
@@ -222,5 +256,47 @@ mod tests {
         let w = lock_memory(Policy::Fifo, 10_000_000).unwrap_or_default();
         assert!(w.contains("memory not locked"), "{w}");
         assert_eq!(lock_memory(Policy::Other, 10_000_000), None);
+    }
+
+    fn busy() -> std::io::Error {
+        std::io::Error::from_raw_os_error(libc::EBUSY)
+    }
+
+    #[test]
+    fn a_busy_reservation_is_retried_until_the_kernel_admits_it() {
+        let mut tries = 0;
+        let r = retry_busy(1_000_000_000, || {
+            tries += 1;
+            if tries < 3 {
+                Err(busy())
+            } else {
+                Ok(())
+            }
+        });
+        assert!(r.is_ok());
+        assert_eq!(tries, 3);
+    }
+
+    #[test]
+    fn a_busy_reservation_is_refused_once_the_wait_is_over() {
+        let mut tries = 0;
+        let r = retry_busy(25_000_000, || {
+            tries += 1;
+            Err(busy())
+        });
+        assert_eq!(r.map_err(|e| e.raw_os_error()), Err(Some(libc::EBUSY)));
+        // 10 ms, 15 ms (the rest of the wait), then given up: bounded.
+        assert!((2..=4).contains(&tries), "{tries} tries");
+    }
+
+    #[test]
+    fn other_refusals_are_not_retried() {
+        let mut tries = 0;
+        let r = retry_busy(1_000_000_000, || {
+            tries += 1;
+            Err(std::io::Error::from_raw_os_error(libc::EPERM))
+        });
+        assert!(r.is_err());
+        assert_eq!(tries, 1);
     }
 }

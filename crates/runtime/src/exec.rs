@@ -355,6 +355,8 @@ fn shared(
         )
     })?);
     if policy == Policy::Deadline {
+        let longest = spec.tasks.iter().filter_map(|t| t.fixed_period()).max();
+        shared.admission_wait += longest.unwrap_or(0);
         match Partition::create(sys::online_cpus()) {
             Ok(p) => shared.partition = Some(p),
             Err(why) => notes.push(format!(
@@ -518,6 +520,10 @@ struct Shared {
     /// The queues of an event-triggered spec (`queue`); `None`: every
     /// task is a periodic thread of its own.
     queues: Option<Queues>,
+    /// How long a thread retries a reservation refused as busy
+    /// (`class::retry_busy`): the longest period plus
+    /// [`crate::config::ADMISSION_MARGIN`].
+    admission_wait: Nanos,
 }
 
 impl Shared {
@@ -548,6 +554,7 @@ impl Shared {
             resources: None,
             workers,
             queues: None,
+            admission_wait: crate::config::ADMISSION_MARGIN,
         }
     }
 }
@@ -647,6 +654,7 @@ fn os_thread<'a, V: Copy>(
         budget: th.budget,
         deadline: th.deadline,
         period: th.period,
+        admission_wait: shared.admission_wait,
     };
     if let Err(e) = configure(&place, policy, shared.partition.as_ref()) {
         if let Ok(mut v) = shared.errors.lock() {

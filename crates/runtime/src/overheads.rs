@@ -89,6 +89,7 @@ fn placement(cpu: usize, priority: i32) -> Placement<'static> {
         budget: 3_000_000,
         deadline: 10_000_000,
         period: 10_000_000,
+        admission_wait: 10_000_000 + crate::config::ADMISSION_MARGIN,
     }
 }
 

@@ -8,7 +8,8 @@
 //! rt-app has no registers: the data flow between tasks is not part of the
 //! file.
 
-use crate::exec::{fifo_priorities, reservation_runtime, Policy, RunConfig};
+use crate::config::reservation;
+use crate::exec::{fifo_priorities, Policy, RunConfig};
 use rtpipe_model::{Nanos, ResourceProtocol, Spec};
 use serde_json::{json, Map, Value};
 
@@ -59,16 +60,25 @@ fn task(spec: &Spec, i: usize, cfg: &RunConfig, prio: i32, notes: &mut Vec<Strin
             if i == 0 {
                 notes.push(NO_CPUSETS.into());
             }
-            // The reservation `run` makes (`reservation_runtime`), not
-            // the bare budget: rt-app's job frame needs the margin too.
-            let runtime = reservation_runtime(t.budget(), t.deadline_given.unwrap_or(period));
-            let runtime = us_up(runtime, &format!("task {} reservation", t.name), notes);
+            // The reservation `run` makes (`config::reservation`), not
+            // the bare budget: rt-app's job frame needs the margin too,
+            // and its deadline and period the same lead.
+            let deadline = t.deadline_given.unwrap_or(period).min(period);
+            let r = reservation(t.budget(), deadline, period);
+            let runtime = us_up(r.runtime, &format!("task {} reservation", t.name), notes);
             o.insert("policy".into(), json!("SCHED_DEADLINE"));
             o.insert("dl-runtime".into(), json!(runtime));
-            o.insert("dl-period".into(), json!(period_us));
-            let deadline = t.deadline_given.map_or(period_us, |d| {
-                us_up(d, &format!("task {} deadline", t.name), notes)
-            });
+            let dl_period = us_up(
+                r.period,
+                &format!("task {} reservation period", t.name),
+                notes,
+            );
+            o.insert("dl-period".into(), json!(dl_period));
+            let deadline = us_up(
+                r.deadline,
+                &format!("task {} reservation deadline", t.name),
+                notes,
+            );
             o.insert("dl-deadline".into(), json!(deadline));
         }
         Policy::Other => {
@@ -254,10 +264,11 @@ output = { channel = "m", size = 0 }
         let r = rt_app(&spec("edf"), &cfg(Policy::Deadline, 0));
         let dst = &r.json["tasks"]["dst"];
         assert_eq!(dst["policy"], "SCHED_DEADLINE");
-        // The budget (400 us) and the margin `run` reserves with it.
+        // The budget (400 us) and the margin `run` reserves with it; the
+        // period (5 ms) and deadline less the renewal lead.
         assert_eq!(dst["dl-runtime"], 450);
-        assert_eq!(dst["dl-period"], 5000);
-        assert_eq!(dst["dl-deadline"], 5000);
+        assert_eq!(dst["dl-period"], 4900);
+        assert_eq!(dst["dl-deadline"], 4900);
         assert!(
             dst.get("cpus").is_none(),
             "deadline affinity spans the root domain"

@@ -398,7 +398,7 @@ fn a_reservation_overrun_delays_its_own_task_s_late_jobs_only() {
 }
 
 #[test]
-fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
+fn a_job_after_one_that_woke_late_may_inherit_its_deadline() {
     let (spec, mut res) = run();
     res.policy = Policy::Deadline;
     res.partitioned = true;
@@ -413,16 +413,20 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
         j.read = 20 * MS + 4 * MS / 5;
     }
     let b = Blame::new(&spec, &res);
-    // Job 2 used 3 ms of a's 1.05 ms runtime: nothing was left to run ahead.
+    // Job 2 used 3 ms of a's 1.05 ms runtime: nothing was left to run
+    // ahead. It started 0.8 ms late, 0.7 ms more than the reservation's
+    // deadline leads the next release by (T = D: the lead): job 3 may be
+    // throttled that long, whatever its own start (0.5 ms late here).
     let stale = Cause::StaleDeadline {
         task: 0,
         job: 3,
-        lag: 3 * MS / 10,
+        lag: 7 * MS / 10,
+        lead: crate::config::RENEWAL_LEAD,
         ahead: 0,
         own: true,
     };
     assert!(b.causes((31 * MS, 32 * MS), &[0]).contains(&stale));
-    // Job 2 woke later than job 1: it keeps no earlier deadline.
+    // Job 1 started on time: job 2 keeps no earlier deadline.
     let at_2 = b.causes((20 * MS, 21 * MS), &[0]);
     assert!(
         !at_2
@@ -430,7 +434,7 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
             .any(|c| matches!(c, Cause::StaleDeadline { .. })),
         "{at_2:?}"
     );
-    assert_eq!(stale.delay(), 3 * MS / 10);
+    assert_eq!(stale.delay(), 7 * MS / 10);
     // Had job 2 used 0.5 ms, 0.55 ms of the runtime (1 ms + the 50 µs
     // margin) would be left to run ahead of another task's job.
     if let Some(j) = res
@@ -448,4 +452,23 @@ fn a_job_that_wakes_sooner_than_the_one_before_may_inherit_its_deadline() {
     assert!(ahead[0]
         .describe(&spec)
         .ends_with("it may run 550.0 us ahead of earlier deadlines"));
+    // Job 2 started 50 µs after its release, within the lead: the deadline
+    // its wake-up set lies before job 3's release, which renews it.
+    if let Some(j) = res
+        .sim
+        .jobs
+        .iter_mut()
+        .find(|j| j.task == 0 && j.index == 2)
+    {
+        j.read = 20 * MS + MS / 20;
+    }
+    let b = Blame::new(&spec, &res);
+    let at_3 = b.causes((31 * MS, 32 * MS), &[0]);
+    assert!(
+        !at_3
+            .iter()
+            .any(|c| matches!(c, Cause::StaleDeadline { .. })),
+        "{at_3:?}"
+    );
+    assert!(b.ahead(0, (31 * MS, 32 * MS)).is_empty());
 }

@@ -4,7 +4,7 @@
 
 use super::queue;
 use crate::class::privileges;
-use crate::config::{reservation_runtime, Policy, RunConfig, RunError};
+use crate::config::{reservation, Policy, RunConfig, RunError};
 use crate::sys;
 use rtpipe_model::policy::LinuxClass;
 use rtpipe_model::{Nanos, Spec, Task};
@@ -88,11 +88,12 @@ fn check_task(t: &Task, policy: Policy, cpus: usize) -> Result<f64, RunError> {
         }
     };
     on_a_cpu(t, cpus)?;
+    let deadline = t.deadline_given.unwrap_or(period).min(period);
+    let r = reservation(t.budget(), deadline, period);
     if policy == Policy::Deadline {
-        deadline_rules(&t.name, t.budget(), period)?;
+        deadline_rules(&t.name, t.budget(), (period, r.period))?;
     }
-    let deadline = t.deadline_given.unwrap_or(period);
-    Ok(reservation_runtime(t.budget(), deadline) as f64 / period as f64)
+    Ok(r.runtime as f64 / r.period as f64)
 }
 
 /// Checks that task `t`'s CPU is one of this machine's `cpus`.
@@ -114,7 +115,13 @@ fn on_a_cpu(t: &Task, cpus: usize) -> Result<(), RunError> {
 /// The kernel's rules for a SCHED_DEADLINE reservation (kernel/sched/
 /// deadline.c: `__checkparam_dl`, and the sched_deadline_period_{min,max}_us
 /// sysctls).
-fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunError> {
+/// `reserved` is the reservation's period (`config::reservation`: T less
+/// the renewal lead), which the kernel checks against the range.
+fn deadline_rules(
+    name: &str,
+    budget: Nanos,
+    (period, reserved): (Nanos, Nanos),
+) -> Result<(), RunError> {
     if budget < 1024 {
         return Err(RunError::config(
             format!("task {name}: budget {budget} ns is below SCHED_DEADLINE's minimum runtime of 1024 ns"),
@@ -134,13 +141,44 @@ fn deadline_rules(name: &str, budget: Nanos, period: Nanos) -> Result<(), RunErr
     };
     let min = sysctl("sched_deadline_period_min_us").unwrap_or(100) * 1000;
     let max = sysctl("sched_deadline_period_max_us").unwrap_or(1 << 22) * 1000;
-    if period < min || period > max {
+    if reserved < min || period > max {
         return Err(RunError::config(
             format!(
-                "task {name}: period {period} ns is outside SCHED_DEADLINE's allowed range [{min}, {max}] ns (kernel.sched_deadline_period_min_us/max_us)"
+                "task {name}: period {period} ns (reserved as {reserved} ns, less the renewal lead) is outside SCHED_DEADLINE's allowed range [{min}, {max}] ns (kernel.sched_deadline_period_min_us/max_us)"
             ),
             format!("give task {name} a period in that range, or change the sysctls"),
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_period_whose_reservation_falls_below_the_kernels_minimum_is_refused() {
+        // T = 100 µs is the kernel's default minimum; the reservation's
+        // period is T less the lead (12.5 µs here, T/8): below it.
+        let text = "[system]\nname = \"fast\"\ntime_unit = \"us\"\nscheduler = \"edf\"\n\
+                    schedulability = \"edf\"\n[tasks.a]\nexec = 10\nperiod = 100\n";
+        let spec = Spec::parse("fast.toml", text).unwrap_or_else(|e| panic!("{e}"));
+        let cfg = RunConfig {
+            duration: 10_000_000,
+            policy: Policy::Deadline,
+            load: 0,
+        };
+        let min = std::fs::read_to_string("/proc/sys/kernel/sched_deadline_period_min_us")
+            .ok()
+            .and_then(|s| s.trim().parse::<i64>().ok())
+            .unwrap_or(100);
+        if min != 100 {
+            eprintln!("SKIPPED: sched_deadline_period_min_us is {min} here, not 100");
+            return;
+        }
+        let Err(e) = check(&spec, &cfg) else {
+            panic!("a reservation period of 87.5 us was accepted");
+        };
+        assert!(e.diagnostic.message.contains("reserved as 87500 ns"), "{e}");
+    }
 }
