@@ -164,3 +164,67 @@ fn fly_flags_need_fly() {
     ]);
     assert_exit(&o, 2);
 }
+
+/// The loop on the gyro-triggered structure (examples/px4-multicopter.toml):
+/// the sweep varies the gyro rate (the period scale; the rate loop follows,
+/// data-triggered) and the rate loop's latency (a delay on the gyro
+/// samples); `--free-periods=gyro,mc_att_control` frees the gyro and the
+/// attitude controller's periods alone, the data-triggered tasks keep their
+/// triggers; the design picks both, optimal, and the answer flies.
+#[test]
+fn sweep_design_fly_closes_on_the_px4_rate_loop() {
+    let dir = scratch("loop-px4");
+    let (limits, design) = (dir.join("limits.toml"), dir.join("design.toml"));
+    let spec = example("px4-multicopter.toml");
+    let o = rtpipe(&[
+        "fly",
+        &spec,
+        "--sweep",
+        "--write-limits",
+        &s(&limits),
+        "--free-periods=gyro,mc_att_control",
+    ]);
+    assert_exit(&o, 0);
+    let written = std::fs::read_to_string(&limits).unwrap_or_default();
+    assert_eq!(written.matches("period = { max").count(), 2, "{written}");
+    assert_eq!(
+        written.matches("activation = \"data\"").count(),
+        4,
+        "{written}"
+    );
+    assert!(written.contains("max_reaction_time"), "{written}");
+    let o = rtpipe(&["design", &s(&limits), "--write", &s(&design)]);
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("optimal after"), "{out}");
+    for mission in ["steps", "gusty"] {
+        let o = rtpipe(&["fly", &s(&design), "--mission", mission]);
+        assert_exit(&o, 0);
+    }
+}
+
+/// `--free-periods=` names tasks whose period the design may choose; any
+/// other name is refused before a flight, naming the task and the fix.
+#[test]
+fn free_periods_refuses_a_task_without_a_period_to_free() {
+    let dir = scratch("free-periods-names");
+    let limits = dir.join("limits.toml");
+    let spec = example("px4-multicopter.toml");
+    for (name, says) in [
+        ("px4io", "task `px4io` has no period the design may choose"),
+        ("nosuch", "the spec has no task `nosuch`"),
+    ] {
+        let o = rtpipe(&[
+            "fly",
+            &spec,
+            "--sweep",
+            "--write-limits",
+            &s(&limits),
+            &format!("--free-periods=gyro,{name}"),
+        ]);
+        assert_exit(&o, 2);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(says), "{err}");
+        assert!(!limits.exists(), "{} was written", limits.display());
+    }
+}

@@ -6,7 +6,8 @@
 //! Every constructor checks the invariant 0 < f < fs/2 (the cut-off must be
 //! below Nyquist — at Cleanflight's rates, gyro 1 kHz and PID 500 Hz,
 //! Betaflight's 8 kHz defaults such as the 500 Hz gyro LPF2 would violate
-//! it) and returns a [`ConfigError`] otherwise.
+//! it) and returns a [`ConfigError`] otherwise. [`GyroFilter`] alone turns
+//! a stage above Nyquist off instead, as Betaflight's gyro does.
 
 use crate::error::ConfigError;
 use crate::math::Vec3;
@@ -174,8 +175,11 @@ pub const GYRO_LPF2_HZ_DEFAULT: f64 = 500.0;
 /// The gyro filters of a loop run at the gyro's data-ready rate, as
 /// Betaflight chains them (sensors/gyro_filter_impl.c): the LPF2 PT1
 /// (anti-alias), a static biquad notch, then the LPF1 PT1. A preset's
-/// `[gyro_filter]` table; every frequency must be below the gyro rate's
-/// Nyquist frequency.
+/// `[gyro_filter]` table. Every frequency must be positive; a stage whose
+/// frequency is not below the gyro rate's Nyquist frequency is off, as
+/// Betaflight turns it off (sensors/gyro_init.c: a low-pass above Nyquist
+/// is its null filter, and so is a notch whose cut-off is not below it),
+/// so one preset serves a loop at 8 kHz and one at PX4's 400 Hz.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GyroFilterConfig {
@@ -201,17 +205,31 @@ fn default_lpf2() -> f64 {
     GYRO_LPF2_HZ_DEFAULT
 }
 
-/// [`GyroFilterConfig`]'s chain on the three axes of a gyro sample.
+/// [`GyroFilterConfig`]'s chain on the three axes of a gyro sample; a
+/// stage the rate cannot carry is `None` (off).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GyroFilter {
-    lpf2: Pt1Vec3,
-    notch: [Biquad; 3],
-    lpf1: Pt1Vec3,
+    lpf2: Option<Pt1Vec3>,
+    notch: Option<[Biquad; 3]>,
+    lpf1: Option<Pt1Vec3>,
+}
+
+/// Whether a stage at `f_hz` runs at `fs_hz`: a frequency that is not
+/// positive is the preset's error (named by `key`); one at or above
+/// Nyquist turns the stage off, as Betaflight does.
+fn stage_runs(key: &str, f_hz: f64, fs_hz: f64) -> Result<bool, ConfigError> {
+    if !(f_hz.is_finite() && f_hz > 0.0) {
+        return Err(ConfigError::new(
+            key,
+            format!("must be a positive frequency in Hz, got {f_hz}"),
+        ));
+    }
+    Ok(f_hz < 0.5 * fs_hz)
 }
 
 impl GyroFilter {
     /// The chain of `cfg` sampled at `fs_hz`; an error names the preset key
-    /// whose frequency the rate cannot carry.
+    /// at fault. Stages at or above Nyquist are off ([`GyroFilterConfig`]).
     pub fn new(cfg: &GyroFilterConfig, fs_hz: f64) -> Result<Self, ConfigError> {
         let keyed = |key: &str, e: ConfigError| ConfigError::new(key, e.reason);
         if !(cfg.notch_cutoff_hz > 0.0 && cfg.notch_cutoff_hz < cfg.notch_hz) {
@@ -223,25 +241,46 @@ impl GyroFilter {
                 ),
             ));
         }
-        let q = Biquad::notch_q(cfg.notch_hz, cfg.notch_cutoff_hz);
-        let notch =
-            Biquad::notch(cfg.notch_hz, fs_hz, q).map_err(|e| keyed("gyro_filter.notch_hz", e))?;
+        let pt1 = |key: &str, f_hz: f64| -> Result<Option<Pt1Vec3>, ConfigError> {
+            if !stage_runs(key, f_hz, fs_hz)? {
+                return Ok(None);
+            }
+            Pt1Vec3::new(f_hz, fs_hz)
+                .map(Some)
+                .map_err(|e| keyed(key, e))
+        };
+        let notch = if stage_runs("gyro_filter.notch_cutoff_hz", cfg.notch_cutoff_hz, fs_hz)?
+            && stage_runs("gyro_filter.notch_hz", cfg.notch_hz, fs_hz)?
+        {
+            let q = Biquad::notch_q(cfg.notch_hz, cfg.notch_cutoff_hz);
+            let n = Biquad::notch(cfg.notch_hz, fs_hz, q)
+                .map_err(|e| keyed("gyro_filter.notch_hz", e))?;
+            Some([n; 3])
+        } else {
+            None
+        };
         Ok(Self {
-            lpf2: Pt1Vec3::new(cfg.lpf2_hz, fs_hz).map_err(|e| keyed("gyro_filter.lpf2_hz", e))?,
-            notch: [notch; 3],
-            lpf1: Pt1Vec3::new(cfg.lpf1_hz, fs_hz).map_err(|e| keyed("gyro_filter.lpf1_hz", e))?,
+            lpf2: pt1("gyro_filter.lpf2_hz", cfg.lpf2_hz)?,
+            notch,
+            lpf1: pt1("gyro_filter.lpf1_hz", cfg.lpf1_hz)?,
         })
+    }
+
+    /// How many of the three stages run at this rate.
+    pub fn stages(&self) -> usize {
+        usize::from(self.lpf2.is_some())
+            + usize::from(self.notch.is_some())
+            + usize::from(self.lpf1.is_some())
     }
 
     /// Filter one gyro sample.
     pub fn apply(&mut self, v: Vec3) -> Vec3 {
-        let a = self.lpf2.apply(v);
-        let n = Vec3::new(
-            self.notch[0].apply(a.x),
-            self.notch[1].apply(a.y),
-            self.notch[2].apply(a.z),
-        );
-        self.lpf1.apply(n)
+        let a = self.lpf2.as_mut().map_or(v, |f| f.apply(v));
+        let n = match self.notch.as_mut() {
+            Some(n) => Vec3::new(n[0].apply(a.x), n[1].apply(a.y), n[2].apply(a.z)),
+            None => a,
+        };
+        self.lpf1.as_mut().map_or(n, |f| f.apply(n))
     }
 }
 
@@ -346,16 +385,41 @@ mod tests {
     }
 
     #[test]
-    fn gyro_filter_refuses_what_its_rate_cannot_carry_naming_the_key() {
+    fn gyro_filter_turns_off_the_stages_its_rate_cannot_carry() {
         let cfg = GyroFilterConfig {
             lpf1_hz: GYRO_LPF_HZ_DEFAULT,
             lpf2_hz: GYRO_LPF2_HZ_DEFAULT,
             notch_hz: 260.0,
             notch_cutoff_hz: 200.0,
         };
-        // 500 Hz is Nyquist at 1 kHz: LPF2 cannot run there.
-        let e = GyroFilter::new(&cfg, 1000.0).unwrap_err();
-        assert_eq!(e.field, "gyro_filter.lpf2_hz", "{e}");
+        assert_eq!(GyroFilter::new(&cfg, 8000.0).unwrap().stages(), 3);
+        // 500 Hz is Nyquist at 1 kHz: LPF2 is off there, the rest runs.
+        assert_eq!(GyroFilter::new(&cfg, 1000.0).unwrap().stages(), 2);
+        // At PX4's 400 Hz (Nyquist 200 Hz) every stage is off: the chain
+        // passes the samples through unchanged.
+        let mut off = GyroFilter::new(&cfg, 400.0).unwrap();
+        assert_eq!(off.stages(), 0);
+        let v = Vec3::new(0.3, -0.2, 0.1);
+        assert_eq!(off.apply(v), v);
+        // A notch whose cut-off is below Nyquist but centre is not is off
+        // too; one wholly below runs.
+        let low = GyroFilterConfig {
+            notch_hz: 111.0,
+            notch_cutoff_hz: 80.0,
+            ..cfg
+        };
+        assert_eq!(GyroFilter::new(&low, 400.0).unwrap().stages(), 1);
+        assert_eq!(GyroFilter::new(&low, 200.0).unwrap().stages(), 0);
+    }
+
+    #[test]
+    fn gyro_filter_refuses_a_bad_preset_naming_the_key() {
+        let cfg = GyroFilterConfig {
+            lpf1_hz: GYRO_LPF_HZ_DEFAULT,
+            lpf2_hz: GYRO_LPF2_HZ_DEFAULT,
+            notch_hz: 260.0,
+            notch_cutoff_hz: 200.0,
+        };
         let e = GyroFilter::new(
             &GyroFilterConfig {
                 notch_cutoff_hz: 300.0,
@@ -365,6 +429,24 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(e.field, "gyro_filter.notch_cutoff_hz", "{e}");
+        let e = GyroFilter::new(
+            &GyroFilterConfig {
+                lpf2_hz: 0.0,
+                ..cfg
+            },
+            8000.0,
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "gyro_filter.lpf2_hz", "{e}");
+        let e = GyroFilter::new(
+            &GyroFilterConfig {
+                lpf1_hz: f64::NAN,
+                ..cfg
+            },
+            8000.0,
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "gyro_filter.lpf1_hz", "{e}");
     }
 
     #[test]

@@ -86,12 +86,20 @@ pub struct FlyArgs {
     /// (from the rate sweep).
     #[arg(long, value_name = "OUT.toml", requires = "sweep")]
     pub write_limits: Option<PathBuf>,
-    /// With --write-limits: free the period of every guaranteed task on a
-    /// chain (a range up to the largest from-event limit of its chains), so
-    /// that `rtpipe design` can choose them; other tasks keep their fixed
-    /// periods.
-    #[arg(long, requires = "write_limits")]
-    pub free_periods: bool,
+    /// With --write-limits: free the period of every guaranteed periodic
+    /// task on a chain (a range up to the largest from-event limit of its
+    /// chains), so that `rtpipe design` can choose them; other tasks keep
+    /// their fixed periods, data-triggered ones their triggers. With
+    /// `--free-periods=A,B` only tasks A and B (each such a task).
+    #[arg(
+        long,
+        requires = "write_limits",
+        num_args = 0..=1,
+        require_equals = true,
+        value_delimiter = ',',
+        value_name = "TASKS"
+    )]
+    pub free_periods: Option<Vec<String>>,
     /// Write the flight as CSV (one row every 2 ms; the header names every
     /// column and its unit, ending with each chain's latest observed
     /// reaction and freshness in ms; readable by PlotJuggler).

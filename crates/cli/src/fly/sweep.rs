@@ -97,11 +97,11 @@ fn limits_text(spec: &Spec, d: &Derived) -> String {
     t.render()
 }
 
-/// The spec with every derived limit (see `--write-limits`); with `free`,
-/// the periods of the guaranteed chain tasks become ranges up to the
-/// largest from-event limit of their chains (so that no fixed period
-/// elsewhere, a housekeeping task's say, sets their ceiling).
-fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
+/// The spec with every derived limit (see `--write-limits`); the periods
+/// of the tasks in `free` ([`freed`]) become ranges up to the largest
+/// from-event limit of their chains (so that no fixed period elsewhere, a
+/// housekeeping task's say, sets their ceiling).
+fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: &[bool]) -> Spec {
     let mut out = spec.clone();
     for ((ch, l), e) in out.chains.iter_mut().zip(&d.read).zip(&d.event) {
         ch.reaction = l.0.or(ch.reaction);
@@ -121,8 +121,7 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
             .filter(|(c, _)| c.path.contains(&i))
             .filter_map(|(_, e)| e.0.max(e.1))
             .max();
-        let guaranteed = t.server != rtpipe_model::Server::Background;
-        if let (true, true, Some(max)) = (free, guaranteed, cap) {
+        if let (true, Some(max)) = (free[i], cap) {
             let max = max - max % spec.resolution.max(1);
             t.period = rtpipe_model::PeriodSpec::Range {
                 min: None,
@@ -131,6 +130,49 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: bool) -> Spec {
         }
     }
     out
+}
+
+/// Whether task `i` may have its period freed: it is guaranteed (not a
+/// background server's), periodic (a data-triggered task's rate is its
+/// triggers': the design frees its sources instead) and on a chain.
+fn freeable(spec: &Spec, i: usize) -> bool {
+    let t = &spec.tasks[i];
+    t.server != rtpipe_model::Server::Background
+        && !matches!(t.period, rtpipe_model::PeriodSpec::Triggered { .. })
+        && spec.chains.iter().any(|c| c.path.contains(&i))
+}
+
+/// Which tasks' periods `--free-periods` frees: none without it, every
+/// freeable task with it alone, the named ones with a list (each must be
+/// freeable; checked before any flight).
+fn freed(spec: &Spec, names: Option<&[String]>) -> Result<Vec<bool>, Diagnostic> {
+    let n = spec.tasks.len();
+    let Some(names) = names else {
+        return Ok(vec![false; n]);
+    };
+    if names.is_empty() {
+        return Ok((0..n).map(|i| freeable(spec, i)).collect());
+    }
+    let mut free = vec![false; n];
+    for name in names {
+        let found = spec.tasks.iter().position(|t| &t.name == name);
+        match found {
+            Some(i) if freeable(spec, i) => free[i] = true,
+            Some(_) => {
+                return Err(Diagnostic::error(
+                    format!("--free-periods: task `{name}` has no period the design may choose: it is data-triggered, a background server's, or on no chain"),
+                    "name periodic tasks on a chain (the sources of the triggered ones), or give --free-periods alone to free them all",
+                ))
+            }
+            None => {
+                return Err(Diagnostic::error(
+                    format!("--free-periods: the spec has no task `{name}`"),
+                    "name tasks of the spec, separated by commas: --free-periods=gyro,attitude",
+                ))
+            }
+        }
+    }
+    Ok(free)
 }
 
 #[derive(Serialize)]
@@ -325,6 +367,7 @@ pub fn execute(
     if let Some(out) = &a.write_limits {
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
+    let free = freed(spec, a.free_periods.as_deref())?;
     let points = fly_all(spec, s, a, &c, &vars, stop);
     let limits = derived_limits(spec, s, &points, a.safety);
     // Nothing flew: a spec "with these limits" would carry none of them.
@@ -335,7 +378,7 @@ pub fn execute(
         .all(|l| l.0.is_none() && l.1.is_none())
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
-    let written = write_files(spec, s, a, &c, &points, &limits, write_limits);
+    let written = write_files(spec, s, a, (&c, &free), &points, &limits, write_limits);
     let report = if a.json {
         Rendered::Json(command::to_value(&sweep_json(
             spec, s, &c, a, &points, &limits,
@@ -420,14 +463,14 @@ fn write_files(
     spec: &Spec,
     s: &Setup,
     a: &FlyArgs,
-    c: &Criteria,
+    (c, free): (&Criteria, &[bool]),
     points: &[Point],
     limits: &Derived,
     write_limits: Option<&Path>,
 ) -> Result<(), Diagnostic> {
     let mut files = Vec::new();
     if let Some(out) = write_limits {
-        let text = rtpipe_model::to_toml(&with_limits(spec, s, limits, a.free_periods));
+        let text = rtpipe_model::to_toml(&with_limits(spec, s, limits, free));
         files.push(("--write-limits", out.to_path_buf(), text));
     }
     if let Some(dir) = &a.plot {
