@@ -10,6 +10,7 @@
 
 use crate::error::{in_range, non_negative, positive, ConfigError};
 use crate::math::{Euler, Quat, Vec3, GRAVITY};
+pub use aero::AeroParams;
 use serde::Deserialize;
 
 /// Rotor spin direction seen from above.
@@ -112,6 +113,8 @@ pub struct PlantParams {
     pub body: BodyParams,
     /// Rotors.
     pub rotors: RotorParams,
+    /// Rotor aerodynamics (all off: the linear-drag plant).
+    pub aero: AeroParams,
     /// RK4 sub-step, ns.
     pub substep_ns: u64,
 }
@@ -143,28 +146,59 @@ impl PlantParams {
     /// τ/10 the RK4 local error is below (h/τ)⁵/120 ≈ 8e-8 relative; the
     /// rest of the plant (rates, attitude, position) integrates the rotors
     /// without a faster mode of its own (docs/flight.md).
-    pub fn with_substep(body: BodyParams, rotors: RotorParams) -> PlantParams {
-        let mut fastest = rotors.time_constant_s;
-        if body.drag_angular > 0.0 {
-            let i_min = body
-                .inertia_kg_m2
-                .iter()
-                .copied()
-                .fold(f64::INFINITY, f64::min);
-            fastest = fastest.min(i_min / body.drag_angular);
-        }
-        if body.drag_linear > 0.0 {
-            fastest = fastest.min(body.mass_kg / body.drag_linear);
-        }
-        let mut substep_ns = SUBSTEP_NS_MAX;
-        while substep_ns > 1 && substep_ns as f64 * 1e-9 * STEPS_PER_TIME_CONSTANT > fastest {
-            substep_ns /= 2;
-        }
-        PlantParams {
+    pub fn with_substep(body: BodyParams, rotors: RotorParams, aero: AeroParams) -> PlantParams {
+        let mut params = PlantParams {
             body,
             rotors,
-            substep_ns,
+            aero,
+            substep_ns: SUBSTEP_NS_MAX,
+        };
+        let fastest = params
+            .damping_times()
+            .iter()
+            .map(|d| d.2)
+            .fold(rotors.time_constant_s, f64::min);
+        while params.substep_ns > 1
+            && params.substep_ns as f64 * 1e-9 * STEPS_PER_TIME_CONSTANT > fastest
+        {
+            params.substep_ns /= 2;
         }
+        params
+    }
+
+    /// The body's damping times, s, each with the key that sets it and how:
+    /// its velocity damping m/c_v and rate damping I_min/c_ω, c_v and c_ω
+    /// the linear drags plus what the rotor aerodynamics add at full rotor
+    /// speed ([`AeroParams::damping`]); infinite without damping.
+    fn damping_times(&self) -> [(&'static str, &'static str, f64); 2] {
+        let b = &self.body;
+        let i_min = b
+            .inertia_kg_m2
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let (aero_v, aero_w) = self
+            .aero
+            .damping(&self.rotors.positions_m, self.rotors.omega_max_rad_s);
+        let time = |inertia: f64, drag: f64| {
+            if drag > 0.0 {
+                inertia / drag
+            } else {
+                f64::INFINITY
+            }
+        };
+        [
+            (
+                "body.drag_linear",
+                "body.mass_kg / (body.drag_linear + the [aero] rotor drag at full speed)",
+                time(b.mass_kg, b.drag_linear + aero_v),
+            ),
+            (
+                "body.drag_angular",
+                "the least body.inertia_kg_m2 / (body.drag_angular + the [aero] rate damping at full speed)",
+                time(i_min, b.drag_angular + aero_w),
+            ),
+        ]
     }
 
     /// Check every field; the error names the first bad one.
@@ -178,6 +212,7 @@ impl PlantParams {
         }
         non_negative("body.drag_linear", b.drag_linear)?;
         non_negative("body.drag_angular", b.drag_angular)?;
+        self.aero.validate()?;
         self.damping_is_plausible()?;
         positive("body.crash_speed_mps", b.crash_speed_mps)?;
         in_range("body.crash_tilt_deg", b.crash_tilt_deg, 0.0, 180.0)?;
@@ -218,34 +253,12 @@ impl PlantParams {
     /// so an implausible drag (1e9) would take it to 1 ns and a flight to
     /// half an hour of CPU. A real quadrotor's are seconds.
     fn damping_is_plausible(&self) -> Result<(), ConfigError> {
-        let b = &self.body;
-        let i_min = b
-            .inertia_kg_m2
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        let times = [
-            (
-                "body.drag_linear",
-                "body.mass_kg / body.drag_linear",
-                b.mass_kg,
-                b.drag_linear,
-            ),
-            (
-                "body.drag_angular",
-                "the least body.inertia_kg_m2 / body.drag_angular",
-                i_min,
-                b.drag_angular,
-            ),
-        ];
-        for (field, what, inertia, drag) in times {
-            if drag > 0.0 && inertia / drag < MIN_TIME_CONSTANT_S {
+        for (field, what, time) in self.damping_times() {
+            if time < MIN_TIME_CONSTANT_S {
                 return Err(ConfigError::new(
                     field,
                     format!(
-                        "is {drag}: the damping time {what} is {:.3e} s, under the {MIN_TIME_CONSTANT_S} s the plant integrates (a real quadrotor's is seconds); give a drag of at most {:.3e}",
-                        inertia / drag,
-                        inertia / MIN_TIME_CONSTANT_S
+                        "the damping time {what} is {time:.3e} s, under the {MIN_TIME_CONSTANT_S} s the plant integrates (a real quadrotor's is seconds): give less drag"
                     ),
                 ));
             }
@@ -272,6 +285,7 @@ impl PlantParams {
     }
 }
 
+pub mod aero;
 mod dense;
 
 /// The integrated state.
@@ -570,12 +584,20 @@ impl Plant {
             tau += *c * w2;
             w2_sum += w2;
         }
-        let thrust = self.p.rotors.k_f * w2_sum;
+        let mut f_body = Vec3::new(0.0, 0.0, self.p.rotors.k_f * w2_sum);
         tau += self.ext_torque - s.rate * b.drag_angular;
+        let airspeed = s.vel - self.wind;
+        // Off, the plant's arithmetic is the linear-drag one, bit for bit.
+        if !self.p.aero.is_off() {
+            let positions = &self.p.rotors.positions_m;
+            let a = (self.p.aero).wrench(positions, &s.omega, s.rate, s.q.rotate_inv(airspeed));
+            f_body += a.force;
+            tau += a.moment;
+        }
         let inertia = Vec3::from_array(b.inertia_kg_m2);
         let gyro = s.rate.cross(s.rate.hadamard(inertia));
         let ang_accel = (tau - gyro).hadamard(k.inv_inertia);
-        let f_world = s.q.rotate(Vec3::new(0.0, 0.0, thrust)) - (s.vel - self.wind) * b.drag_linear;
+        let f_world = s.q.rotate(f_body) - airspeed * b.drag_linear;
         let accel_world = f_world * k.inv_mass - Vec3::new(0.0, 0.0, GRAVITY);
         Wrench {
             accel_world,
@@ -860,133 +882,4 @@ impl Plant {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::preset::Preset;
-
-    #[test]
-    fn wrap_tau_is_rem_euclid_bit_for_bit() {
-        use std::f64::consts::TAU;
-        let mut rng = crate::rng::Rng::new(5);
-        let mut cases = vec![0.0, -0.0, TAU, 2.0 * TAU, TAU.next_down(), -1e-300, 1e300];
-        cases.extend((0..100_000).map(|_| 5.0 * TAU * rng.uniform() - TAU));
-        for a in cases {
-            assert_eq!(wrap_tau(a).to_bits(), a.rem_euclid(TAU).to_bits(), "{a}");
-        }
-    }
-
-    /// The step on the ground is the full RK4 with the body's derivatives
-    /// zero, bit for bit (the plant's code before the two were split).
-    #[test]
-    fn the_held_step_is_the_full_step_with_a_still_body() {
-        let p = Preset::builtin("racer5").map(|p| p.plant_params());
-        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
-        let mut rng = crate::rng::Rng::new(9);
-        for k in 0..2_000 {
-            let mut u = || rng.gaussian();
-            let mut s = *plant.state();
-            s.pos = Vec3::new(u(), -0.0, 0.0);
-            s.vel = Vec3::new(-0.0, u(), u());
-            s.q = Quat::new(u(), u(), -0.0, u()).normalized();
-            s.rate = Vec3::new(u(), u(), -0.0);
-            s.omega = [u().abs() * 900.0, 0.0, u() * 3.0, 1e-5];
-            plant.s = s;
-            plant.on_ground = true;
-            plant.set_motor_commands([0.2, 0.0, 1.0, 0.5], k % 2 == 0);
-            let h = (1 + k * 131 % 250_000) as f64 * 1e-9;
-            let still = |x: &State| State {
-                pos: Vec3::ZERO,
-                vel: Vec3::ZERO,
-                q: Quat::new(0.0, 0.0, 0.0, 0.0),
-                rate: Vec3::ZERO,
-                omega: plant.omega_rate(&x.omega),
-            };
-            let k1 = still(&s);
-            let k2 = still(&s.add_scaled(&k1, 0.5 * h));
-            let k3 = still(&s.add_scaled(&k2, 0.5 * h));
-            let k4 = still(&s.add_scaled(&k3, h));
-            let want = s
-                .add_scaled(&k1, h / 6.0)
-                .add_scaled(&k2, h / 3.0)
-                .add_scaled(&k3, h / 3.0)
-                .add_scaled(&k4, h / 6.0);
-            assert_eq!(format!("{:?}", plant.rk4_held(h)), format!("{want:?}"));
-        }
-    }
-
-    #[test]
-    fn stopped_rotors_come_to_rest_at_zero_not_in_subnormals() {
-        let p = Preset::builtin("racer5").map(|p| p.plant_params());
-        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
-        plant.set_motor_commands([0.3; 4], true);
-        plant.advance_to(1_000_000_000);
-        assert!(plant.state().omega.iter().all(|&w| w > 100.0));
-        plant.set_motor_commands([0.0; 4], false);
-        // ln(1000 rad/s / 1e-3 rad/s) · 20 ms = 0.28 s to rest; the
-        // subnormal range begins only after ln(1000/2.2e-308) · 20 ms = 14 s.
-        plant.advance_to(1_400_000_000);
-        assert_eq!(plant.state().omega, [0.0; 4]);
-        plant.advance_to(60_000_000_000);
-        assert!(plant
-            .state()
-            .omega
-            .iter()
-            .all(|w| *w == 0.0 && !w.is_subnormal()));
-    }
-
-    #[test]
-    fn implausible_presets_are_refused_naming_the_field() {
-        // Issue 24: mass_kg = 1e-30 flew NaNs and "landed"; five rotor
-        // positions were cut to four while three were refused.
-        use crate::preset::RACER5_TOML;
-        let err = |text: String| match Preset::from_toml_str(&text) {
-            Ok(_) => panic!("accepted: {text}"),
-            Err(e) => e.to_string(),
-        };
-        let e = err(RACER5_TOML.replace("mass_kg = 0.830", "mass_kg = 1e-30"));
-        assert!(
-            e.contains("body.mass_kg") && e.contains("[0.01, 100]"),
-            "{e}"
-        );
-        let e = err(RACER5_TOML.replace("k_f = 7.7237e-7", "k_f = 1e-12"));
-        assert!(e.contains("thrust over weight"), "{e}");
-        let five = "positions_m = [[0.1, 0.1], [-0.085, -0.0675],";
-        let e = err(RACER5_TOML.replace("positions_m = [[-0.085, -0.0675],", five));
-        assert!(e.contains("rotors.positions_m needs exactly 4"), "{e}");
-        let e = err(RACER5_TOML.replace("[-0.085, -0.0675], [0.085, -0.0675],", ""));
-        assert!(e.contains("found 2") || e.contains("exactly 4"), "{e}");
-        let e =
-            err(RACER5_TOML.replace(r#"spin = ["cw", "ccw", "ccw", "cw"]"#, r#"spin = ["cw"]"#));
-        assert!(e.contains("rotors.spin needs exactly 4"), "{e}");
-    }
-
-    #[test]
-    fn a_diverging_integration_is_a_crash_not_nans() {
-        let p = Preset::builtin("racer5").map(|p| p.plant_params());
-        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
-        let mut s = *plant.state();
-        s.pos.z = 10.0;
-        s.rate = Vec3::new(1e200, 1e200, 1e200);
-        plant.set_state(s);
-        plant.advance_to(10_000_000);
-        let t = plant.truth();
-        assert!(t.crashed);
-        assert!(t.pos.x.is_finite() && t.pos.z.is_finite(), "{:?}", t.pos);
-    }
-
-    #[test]
-    fn drag_acts_on_the_airspeed() {
-        let p = Preset::builtin("racer5").map(|p| p.plant_params());
-        let mut plant = p.and_then(Plant::new).unwrap_or_else(|e| panic!("{e}"));
-        let mut s = *plant.state();
-        s.pos.z = 10.0;
-        plant.set_state(s);
-        plant.set_wind(Vec3::new(3.0, 0.0, 0.0));
-        // At rest in a 3 m/s wind: pushed downwind at drag·3/m.
-        let a = plant.truth();
-        let d = plant.params().body.drag_linear;
-        let ax = plant.params().body.mass_kg.recip() * d * 3.0;
-        let sf = a.specific_force;
-        assert!((sf.x - ax).abs() < 1e-12, "{sf:?} vs {ax}");
-    }
-}
+mod tests;

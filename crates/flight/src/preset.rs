@@ -7,7 +7,7 @@ use crate::error::ConfigError;
 use crate::imu::{ImuConfig, Vibration};
 use crate::math::Vec3;
 use crate::pid::PidConfig;
-use crate::plant::{BodyParams, PlantParams, RotorParams};
+use crate::plant::{AeroParams, BodyParams, PlantParams, RotorParams};
 use crate::radio::AutopilotConfig;
 use serde::Deserialize;
 
@@ -28,6 +28,10 @@ pub struct Preset {
     pub body: BodyParams,
     /// Rotors.
     pub rotors: RotorParams,
+    /// Rotor aerodynamics (`[aero]`; all off when omitted: the linear-drag
+    /// plant of `body.drag_linear`).
+    #[serde(default)]
+    pub aero: AeroParams,
     /// Battery.
     pub battery: BatteryParams,
     /// Attitude controller gains.
@@ -200,7 +204,7 @@ impl Preset {
     /// The plant parameters, with the RK4 sub-step its dynamics call for
     /// ([`PlantParams::with_substep`]).
     pub fn plant_params(&self) -> PlantParams {
-        PlantParams::with_substep(self.body, self.rotors)
+        PlantParams::with_substep(self.body, self.rotors, self.aero)
     }
 }
 

@@ -12,6 +12,7 @@ fn plant(name: &str, drag: bool) -> Plant {
     if !drag {
         p.body.drag_linear = 0.0;
         p.body.drag_angular = 0.0;
+        p.aero = rtpipe_flight::plant::AeroParams::default();
     }
     Plant::new(p).unwrap()
 }
