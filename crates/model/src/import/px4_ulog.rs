@@ -8,6 +8,7 @@
 //! covered in `px4.rs`) and the observed data ages (`observed.rs`). Nothing
 //! here writes a file: the caller writes both, all or none.
 
+mod facts;
 mod observed;
 mod perf;
 mod px4;
@@ -24,7 +25,7 @@ use std::ops::Range;
 use std::path::Path;
 
 pub use observed::{ObservedRow, OBSERVED_HEADER};
-pub use spec::{import, ExecFrom, Import, TopicAges};
+pub use spec::{import, ExecFrom, Import, Options, TopicAges};
 
 /// The largest log read: 512 MiB (a long flight at a high logging rate).
 pub const MAX_BYTES: u64 = 512 << 20;
