@@ -3,8 +3,9 @@
 //!
 //! [`load`] reads a log ([`read`]: the format, every message checked);
 //! [`import`] builds from it the spec (`spec.rs`: threads and priorities
-//! from `perf_top_*`, modules and their execution times from
-//! `perf_counter_*`, the module → work-queue table of the PX4 versions
+//! from `perf_top_*` or PX4's source, what the log says of its system in
+//! `facts.rs`, modules and their execution times from `perf_counter_*` or
+//! another log's, the module → work-queue table of the PX4 versions
 //! covered in `px4.rs`) and the observed data ages (`observed.rs`). Nothing
 //! here writes a file: the caller writes both, all or none.
 

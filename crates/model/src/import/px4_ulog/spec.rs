@@ -4,16 +4,23 @@
 //!   is at least the output driver's, on one CPU (the boards these versions
 //!   ran on are single-core). rtpipe's priorities count from 1 (highest);
 //!   PX4's (NuttX's) higher number runs first, so they are ranked
-//!   descending, equal priorities sharing a rank.
+//!   descending, equal priorities sharing a rank. Without `top`, the
+//!   table's modules' queues at the priorities of PX4's source
+//!   ([`super::facts`]).
 //! - Modules: [`super::px4`]'s table, each on its queue; `exec` is its
 //!   `perf` counter's maximum, `exec_min` its minimum. A maximum at or
 //!   above the module's own interval times blocking I/O, not CPU (PX4's
 //!   `io update` waits for the IO coprocessor's serial link): its thread's
 //!   CPU time from `top` is taken then (the average when it shares a
-//!   thread), with a note. `--exec mean` takes every average instead. A module without a counter (the gyro
-//!   driver, `VehicleAngularVelocity`) and a thread without a module of the
-//!   table are charged their thread's CPU time from `top` per gyro period.
-//! - The gyro driver runs at `1e6 / IMU_GYRO_RATEMAX` µs; the rate loop's
+//!   thread), with a note. `--exec mean` takes every average instead. A
+//!   module without a counter (the gyro driver, `VehicleAngularVelocity`)
+//!   and a thread without a module of the table are charged their thread's
+//!   CPU time from `top` per gyro period. The counters and `top` are
+//!   another log's with [`Options::exec_log`] (for a log without counters,
+//!   or a SITL log whose counters time 0 µs); [`Options::exec_us`] gives a
+//!   module's time outright. A log with neither is refused naming both.
+//! - The gyro driver runs at `1e6 / IMU_GYRO_RATEMAX` µs (SITL's simulator
+//!   at its measured lockstep step); the rate loop's
 //!   modules are data-triggered by the one before; the others are periodic
 //!   at their observed interval (`perf` events over the uptime).
 
