@@ -35,7 +35,7 @@ pub enum ImportCommand {
         /// existing specs of the same names are replaced.
         outdir: PathBuf,
     },
-    /// A PX4 flight log (ULog, PX4 v1.11–v1.12): OUTDIR/spec.toml (the
+    /// A PX4 flight log (ULog, PX4 v1.11–v1.15): OUTDIR/spec.toml (the
     /// threads, priorities, modules and execution times the log shows, the
     /// rate loop's chains) and OUTDIR/observed.csv (every logged data age
     /// of the rate loop: `timestamp - timestamp_sample`). See docs/px4.md.
@@ -54,7 +54,39 @@ pub enum ImportCommand {
         /// saw (first runs after boot included), or `mean`, its average.
         #[arg(long, value_enum, default_value_t = ExecStat::Max)]
         exec: ExecStat,
+        /// Take the execution times from this log's perf counters (and its
+        /// top, for modules without one) instead of LOG's: for a log
+        /// without perf counters or a SITL log (whose counters time 0 µs).
+        /// A log of a board running the same modules.
+        #[arg(long, value_name = "OTHER.ulg")]
+        exec_from: Option<PathBuf>,
+        /// A module's execution time in µs, over any counter (repeatable):
+        /// e.g. `--exec-us control_allocator=20`.
+        #[arg(long, value_name = "MODULE=US", value_parser = parse_exec_us)]
+        exec_us: Vec<(String, u64)>,
     },
+}
+
+/// `--exec-us MODULE=US`: a module name and a whole number of µs (≥ 1).
+fn parse_exec_us(s: &str) -> Result<(String, u64), String> {
+    let (module, us) = s
+        .split_once('=')
+        .ok_or_else(|| format!("`{s}`: expected MODULE=US, e.g. control_allocator=20"))?;
+    let us: u64 =
+        us.trim().parse().ok().filter(|n| *n >= 1).ok_or_else(|| {
+            format!("`{s}`: US must be a whole number of microseconds, at least 1")
+        })?;
+    let module = module.trim();
+    if module.is_empty()
+        || !module
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_')
+    {
+        return Err(format!(
+            "`{s}`: MODULE must be a PX4 module name (letters, digits, _)"
+        ));
+    }
+    Ok((module.to_string(), us))
 }
 
 /// `import px4-ulog --exec`.
@@ -70,7 +102,12 @@ pub enum ExecStat {
 pub fn register_inputs(cmd: &ImportCommand) {
     match cmd {
         ImportCommand::E2eeval { file, .. } => output::register_input("FILE", file),
-        ImportCommand::Px4Ulog { log, .. } => output::register_input("LOG", log),
+        ImportCommand::Px4Ulog { log, exec_from, .. } => {
+            output::register_input("LOG", log);
+            if let Some(other) = exec_from {
+                output::register_input("--exec-from", other);
+            }
+        }
     }
 }
 
@@ -81,8 +118,19 @@ pub fn run(cmd: &ImportCommand) -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(code) => code,
         },
-        ImportCommand::Px4Ulog { log, outdir, exec } => {
-            match px4_ulog::import(log, outdir, *exec) {
+        ImportCommand::Px4Ulog {
+            log,
+            outdir,
+            exec,
+            exec_from,
+            exec_us,
+        } => {
+            let exec = px4_ulog::ExecArgs {
+                stat: *exec,
+                from: exec_from.as_deref(),
+                us: exec_us,
+            };
+            match px4_ulog::import(log, outdir, &exec) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(code) => code,
             }

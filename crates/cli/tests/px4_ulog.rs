@@ -119,12 +119,124 @@ fn the_cube_orange_log_imports_loads_and_analyses() {
 }
 
 #[test]
-fn a_log_without_perf_is_refused_and_nothing_is_written() {
+fn a_log_before_work_queues_is_refused_and_nothing_is_written() {
     let (o, out) = import("px4-noperf", &log("sample_appended_multiple.ulg"), &[]);
     assert_exit(&o, 2);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("lacks perf_counter_*"), "{stderr}");
+    assert!(
+        stderr.contains("PX4 v1.6.0") && stderr.contains("work queues"),
+        "{stderr}"
+    );
     assert!(!out.exists());
+}
+
+/// `analyze SPEC --observed observed.csv --json` of an import: exit 0, and
+/// each measured chain's (name, count, largest/sound ratio).
+fn analyze_observed(out: &Path) -> Vec<(String, u64, f64)> {
+    let spec = out.join("spec.toml");
+    let observed = out.join("observed.csv");
+    let a = rtpipe(&[
+        "analyze",
+        &spec.to_string_lossy(),
+        "--observed",
+        &observed.to_string_lossy(),
+        "--json",
+    ]);
+    assert_exit(&a, 0);
+    let v = json_of(&a);
+    assert_eq!(v["observed"]["ok"], true, "{}", v["observed"]);
+    let measured = v["observed"]["measured"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    measured
+        .iter()
+        .filter(|m| m["metric"] == "freshness")
+        .map(|m| {
+            (
+                m["chain"].as_str().unwrap_or("?").to_string(),
+                m["count"].as_u64().unwrap_or(0),
+                m["ratio"].as_f64().unwrap_or(f64::NAN),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn sitl_logs_import_with_the_cube_orange_counters_and_analyze_exits_0() {
+    let cube = log("sample_log_small.ulg");
+    for (name, tag, counts) in [
+        (
+            "sample_logging_tagged_and_default_params.ulg",
+            "px4-sitl13",
+            &[1078u64, 217][..],
+        ),
+        (
+            "sample_px4_events.ulg",
+            "px4-sitl15",
+            &[1558, 1558, 313][..],
+        ),
+    ] {
+        let extra = ["--exec-from", cube.as_str(), "--exec", "mean"];
+        let (o, out) = import(tag, &log(name), &extra);
+        assert_exit(&o, 0);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("lockstep ages"), "{stdout}");
+        assert!(stdout.contains("PX4_SITL"), "{stdout}");
+        let measured = analyze_observed(&out);
+        let got: Vec<u64> = measured.iter().map(|m| m.1).collect();
+        assert_eq!(got, counts, "{name}: {measured:?}");
+        // Lockstep: every age 0 µs, so every ratio is 0.
+        assert!(measured.iter().all(|m| m.2 == 0.0), "{measured:?}");
+    }
+}
+
+#[test]
+fn a_sitl_log_without_exec_from_is_refused_naming_the_flag() {
+    let (o, out) = import("px4-sitl-alone", &log("sample_px4_events.ulg"), &[]);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("0 µs") && stderr.contains("--exec-from"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
+
+/// Every log of pyulog's `test/` folder (`RTPIPE_PYULOG_DIR`; skipped when
+/// unset): each imports with the Cube Orange's counters and `analyze
+/// --observed` exits 0 on it, or it is refused (exit 2, one `error:` line
+/// naming what it lacks, nothing written).
+#[test]
+fn pyulog_logs_from_a_folder() {
+    let Some(dir) = std::env::var_os("RTPIPE_PYULOG_DIR") else {
+        eprintln!("note: RTPIPE_PYULOG_DIR is unset: pyulog's test logs not imported");
+        return;
+    };
+    let cube = log("sample_log_small.ulg");
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ulg"))
+        .collect();
+    logs.sort();
+    for (k, path) in logs.iter().enumerate() {
+        let extra = ["--exec-from", cube.as_str(), "--exec", "mean"];
+        let (o, out) = import(&format!("px4-pyulog-{k}"), &path.to_string_lossy(), &extra);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        match o.status.code() {
+            Some(0) => {
+                let measured = analyze_observed(&out);
+                eprintln!("{}: imported, {measured:?}", path.display());
+            }
+            Some(2) => {
+                assert!(stderr.starts_with("error: "), "{stderr}");
+                assert!(!out.exists());
+                eprintln!("{}: refused: {stderr}", path.display());
+            }
+            code => panic!("{}: exit {code:?}: {stderr}", path.display()),
+        }
+    }
 }
 
 #[test]

@@ -6,24 +6,45 @@
 use super::{write_files, ExecStat};
 use crate::table::Table;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
-use rtpipe_model::import::px4_ulog::{self, ExecFrom, Import};
+use rtpipe_model::import::px4_ulog::{self, ExecFrom, Import, Options};
 use rtpipe_model::Spec;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// Where the execution times come from (`--exec`, `--exec-from`, `--exec-us`).
+pub(super) struct ExecArgs<'a> {
+    pub(super) stat: ExecStat,
+    pub(super) from: Option<&'a Path>,
+    pub(super) us: &'a [(String, u64)],
+}
+
 /// Imports `log` into `outdir/spec.toml` and `outdir/observed.csv`.
-pub(super) fn import(log: &Path, outdir: &Path, exec: ExecStat) -> Result<(), ExitCode> {
+pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), ExitCode> {
     let shown = log.display().to_string().escape_debug().to_string();
     let bad = |d: rtpipe_model::Diagnostic| {
         eprint!("{}", d.within(&shown));
         ExitCode::from(EXIT_BAD_INPUT)
     };
     let read = px4_ulog::load(log).map_err(bad)?;
-    let from = match exec {
-        ExecStat::Max => ExecFrom::Max,
-        ExecStat::Mean => ExecFrom::Mean,
+    let other_shown = exec
+        .from
+        .map(|p| p.display().to_string().escape_debug().to_string());
+    let other = match (exec.from, &other_shown) {
+        (Some(p), Some(name)) => Some(px4_ulog::load(p).map_err(|d| {
+            eprint!("{}", d.within(format!("--exec-from {name}")));
+            ExitCode::from(EXIT_BAD_INPUT)
+        })?),
+        _ => None,
     };
-    let imported = px4_ulog::import(&read, &spec_name(log), from).map_err(bad)?;
+    let opts = Options {
+        stat: match exec.stat {
+            ExecStat::Max => ExecFrom::Max,
+            ExecStat::Mean => ExecFrom::Mean,
+        },
+        exec_log: other.as_ref().zip(other_shown.as_deref()),
+        exec_us: exec.us,
+    };
+    let imported = px4_ulog::import(&read, &spec_name(log), &opts).map_err(bad)?;
     let spec_path = outdir.join("spec.toml");
     if let Err(e) = Spec::parse(&spec_path.display().to_string(), &imported.spec) {
         eprint!("{e}");
@@ -69,7 +90,11 @@ fn print_summary(shown: &str, outdir: &Path, f: &Import) {
         outdir.join("observed.csv").display()
     );
     println!();
-    println!("measured data ages (timestamp - timestamp_sample), us:");
+    if f.lockstep {
+        println!("measured data ages (timestamp - timestamp_sample), us: lockstep ages (SITL: the simulated clock stands still while the modules run)");
+    } else {
+        println!("measured data ages (timestamp - timestamp_sample), us:");
+    }
     let mut t = Table::new(&["chain", "topic", "messages", "min", "max"]).numeric(&[2, 3, 4]);
     for a in &f.ages {
         t.row(vec![

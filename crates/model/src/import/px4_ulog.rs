@@ -3,11 +3,13 @@
 //!
 //! [`load`] reads a log ([`read`]: the format, every message checked);
 //! [`import`] builds from it the spec (`spec.rs`: threads and priorities
-//! from `perf_top_*`, modules and their execution times from
-//! `perf_counter_*`, the module → work-queue table of the PX4 versions
+//! from `perf_top_*` or PX4's source, what the log says of its system in
+//! `facts.rs`, modules and their execution times from `perf_counter_*` or
+//! another log's, the module → work-queue table of the PX4 versions
 //! covered in `px4.rs`) and the observed data ages (`observed.rs`). Nothing
 //! here writes a file: the caller writes both, all or none.
 
+mod facts;
 mod observed;
 mod perf;
 mod px4;
@@ -24,7 +26,7 @@ use std::ops::Range;
 use std::path::Path;
 
 pub use observed::{ObservedRow, OBSERVED_HEADER};
-pub use spec::{import, ExecFrom, Import, TopicAges};
+pub use spec::{import, ExecFrom, Import, Options, TopicAges};
 
 /// The largest log read: 512 MiB (a long flight at a high logging rate).
 pub const MAX_BYTES: u64 = 512 << 20;

@@ -1,22 +1,30 @@
 //! What PX4's source says and a log does not: which work queue each module
-//! runs on, what releases it, and which `perf` counter times it.
+//! runs on, what releases it, which `perf` counter times it, and (for a log
+//! without `top`) each work queue's priority.
 //!
-//! The table covers PX4 v1.11 and v1.12 (the log's `ver_sw_release`:
-//! `major << 24 | minor << 16 | patch << 8 | type`), when the rate loop was
-//! gyro driver → `sensors`' `VehicleAngularVelocity` → `mc_rate_control`
-//! (→ `vtol_att_control` on a VTOL) → `actuator_controls_0` → the output
-//! driver, all data-triggered through uORB callbacks. It follows those
-//! versions' `ScheduledWorkItem(MODULE_NAME, px4::wq_configurations::…)`
-//! and `WorkItem(…)` constructors (`src/modules/*`, `src/drivers/*`;
-//! checked against the source: `vtol_att_control` and its counter on
-//! `rate_ctrl`, `fw_att_control` on `attitude_ctrl`, px4io's `io update`
-//! and `io control latency` counters; the other entries have not been
-//! checked one by one, and a log whose `top` or `perf` disagrees is the
-//! cue to fix them); the
-//! queues' priorities are not taken from `WorkQueueManager.hpp` but from
-//! the log's own `top` (`perf_top_*`), which shows what the board ran.
-//! From v1.13 the allocator (`control_allocator`, `actuator_motors`)
-//! replaces the mixers: another table, not written yet.
+//! Two tables, by the log's `ver_sw_release` (`major << 24 | minor << 16 |
+//! patch << 8 | type`):
+//!
+//! - [`V1_11`] (v1.11, v1.12): gyro driver → `sensors`'
+//!   `VehicleAngularVelocity` → `mc_rate_control` (→ `vtol_att_control` on a
+//!   VTOL) → `actuator_controls_0` → the output driver, all data-triggered
+//!   through uORB callbacks. Checked against the source: `vtol_att_control`
+//!   and its counter on `rate_ctrl`, `fw_att_control` on `attitude_ctrl`,
+//!   px4io's `io update` and `io control latency` counters; the other
+//!   entries have not been checked one by one (a log whose `top` or `perf`
+//!   disagrees is the cue to fix them).
+//! - [`V1_13`] (v1.13 to v1.15): the same loop, and `control_allocator`
+//!   (`rate_ctrl`) after `mc_rate_control` when the log ran it (its counter
+//!   counted runs): it takes `vehicle_torque_setpoint` and publishes
+//!   `actuator_motors`. Each entry says in a comment whether its
+//!   `ScheduledWorkItem`/`WorkItem` line was read in PX4-Autopilot's source
+//!   (docs/px4.md's table gives the line and the stored version read, which
+//!   is not the release tag: the tags themselves could not be read here).
+//!
+//! The queues' priorities come from the log's own `top` (`perf_top_*`) when
+//! it has one (what the board ran); without it from [`wq_priority`],
+//! PX4's `WorkQueueManager.hpp` (each queue's priority relative to
+//! `SCHED_PRIORITY_MAX`).
 
 /// Where a module runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,12 +53,14 @@ pub(super) enum Release {
 pub(super) struct Module {
     /// Its task name in the spec (PX4's module name).
     pub(super) name: &'static str,
-    /// Its `perf` elapsed-time counter, when it has one.
-    pub(super) counter: Option<&'static str>,
+    /// Its `perf` elapsed-time counter's names across the versions the
+    /// table covers (the first the log has is taken); none when it has none.
+    pub(super) counter: &'static [&'static str],
     pub(super) queue: Queue,
     pub(super) release: Release,
-    /// The uORB topic it publishes, when the rate loop's observed data end there.
-    pub(super) publishes: Option<&'static str>,
+    /// The uORB topics it publishes where the rate loop's observed data may
+    /// end (a chain is written for each the log has with `timestamp_sample`).
+    pub(super) publishes: &'static [&'static str],
     /// Only in the spec when its counter counted events (`vtol_att_control`
     /// runs on VTOLs only).
     pub(super) optional: bool,
@@ -58,7 +68,7 @@ pub(super) struct Module {
 
 const fn m(
     name: &'static str,
-    counter: Option<&'static str>,
+    counter: &'static [&'static str],
     queue: Queue,
     release: Release,
 ) -> Module {
@@ -67,7 +77,7 @@ const fn m(
         counter,
         queue,
         release,
-        publishes: None,
+        publishes: &[],
         optional: false,
     }
 }
@@ -75,117 +85,184 @@ const fn m(
 /// The rate loop of v1.11–v1.12, in data-flow order, then the modules that
 /// compete with it on its threads or on threads above the output driver.
 pub(super) const V1_11: &[Module] = &[
-    m("gyro", None, Queue::GyroBus, Release::Gyro),
+    m("gyro", &[], Queue::GyroBus, Release::Gyro),
     Module {
-        publishes: Some("vehicle_angular_velocity"),
+        publishes: &["vehicle_angular_velocity"],
         ..m(
             "vehicle_angular_velocity",
-            None,
+            &[],
             Queue::Wq("wq:rate_ctrl"),
             Release::Loop,
         )
     },
     Module {
-        publishes: Some("actuator_controls_0"),
+        publishes: &["actuator_controls_0"],
         ..m(
             "mc_rate_control",
-            Some("mc_rate_control: cycle"),
+            &["mc_rate_control: cycle"],
             Queue::Wq("wq:rate_ctrl"),
             Release::Loop,
         )
     },
     Module {
-        publishes: Some("actuator_controls_0"),
+        publishes: &["actuator_controls_0"],
         optional: true,
         ..m(
             "vtol_att_control",
-            Some("vtol_att_control: cycle"),
+            &["vtol_att_control: cycle"],
             Queue::Wq("wq:rate_ctrl"),
             Release::Loop,
         )
     },
-    m(
-        "px4io",
-        Some("io update"),
-        Queue::Own("px4io"),
-        Release::Loop,
-    ),
+    m("px4io", &["io update"], Queue::Own("px4io"), Release::Loop),
     m(
         "mc_att_control",
-        Some("mc_att_control: cycle"),
+        &["mc_att_control: cycle"],
         Queue::Wq("wq:attitude_ctrl"),
         Release::Periodic,
     ),
     m(
         "fw_att_control",
-        Some("fw_att_control: cycle"),
+        &["fw_att_control: cycle"],
         Queue::Wq("wq:attitude_ctrl"),
         Release::Periodic,
     ),
     m(
         "ekf2",
-        Some("ekf2: update"),
+        &["ekf2: update"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "sensors",
-        Some("sensors"),
+        &["sensors"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "vehicle_air_data",
-        Some("vehicle_air_data: cycle"),
+        &["vehicle_air_data: cycle"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "land_detector",
-        Some("land_detector: cycle"),
+        &["land_detector: cycle"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "mc_pos_control",
-        Some("mc_pos_control: cycle time"),
+        &["mc_pos_control: cycle time"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "fw_pos_control_l1",
-        Some("fw_pos_control_l1: cycle"),
+        &["fw_pos_control_l1: cycle"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "airspeed_selector",
-        Some("airspeed_selector: elapsed"),
+        &["airspeed_selector: elapsed"],
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
     m(
         "pwm_out",
-        Some("pwm_out: cycle"),
+        &["pwm_out: cycle"],
         Queue::Wq("wq:hp_default"),
         Release::Periodic,
     ),
     m(
         "rc_update",
-        Some("rc_update"),
+        &["rc_update"],
         Queue::Wq("wq:hp_default"),
         Release::Periodic,
     ),
     m(
         "battery_status",
-        Some("battery_status"),
+        &["battery_status"],
         Queue::Wq("wq:hp_default"),
         Release::Periodic,
     ),
     m(
         "adc",
-        Some("adc: sample"),
+        &["adc: sample"],
         Queue::Wq("wq:hp_default"),
+        Release::Periodic,
+    ),
+];
+
+/// The rate loop of v1.13–v1.15, then the modules that compete with it.
+/// Source lines (docs/px4.md, "The module table"): `VehicleAngularVelocity`
+/// `ScheduledWorkItem(MODULE_NAME, px4::wq_configurations::rate_ctrl)`,
+/// `MulticopterRateControl` `WorkItem(MODULE_NAME,
+/// px4::wq_configurations::rate_ctrl)`, `ControlAllocator`
+/// `ScheduledWorkItem(MODULE_NAME, px4::wq_configurations::rate_ctrl)`:
+/// read (verified); the periodic modules' queues are carried over from
+/// v1.11 (`attitude_ctrl` no longer exists: `mc_att_control` is on
+/// `nav_and_controllers`) and not verified.
+pub(super) const V1_13: &[Module] = &[
+    m("gyro", &[], Queue::GyroBus, Release::Gyro),
+    Module {
+        publishes: &["vehicle_angular_velocity"],
+        // Its `gyro filter` counter times the filters only, not the run.
+        ..m(
+            "vehicle_angular_velocity",
+            &[],
+            Queue::Wq("wq:rate_ctrl"),
+            Release::Loop,
+        )
+    },
+    Module {
+        publishes: &["actuator_controls_0", "vehicle_torque_setpoint"],
+        ..m(
+            "mc_rate_control",
+            &["mc_rate_control: cycle"],
+            Queue::Wq("wq:rate_ctrl"),
+            Release::Loop,
+        )
+    },
+    Module {
+        publishes: &["actuator_motors"],
+        optional: true,
+        ..m(
+            "control_allocator",
+            &["control_allocator: cycle"],
+            Queue::Wq("wq:rate_ctrl"),
+            Release::Loop,
+        )
+    },
+    m(
+        "mc_att_control",
+        &["mc_att_control: cycle"],
+        Queue::Wq("wq:nav_and_controllers"),
+        Release::Periodic,
+    ),
+    m(
+        "sensors",
+        &["sensors"],
+        Queue::Wq("wq:nav_and_controllers"),
+        Release::Periodic,
+    ),
+    m(
+        "vehicle_air_data",
+        &["vehicle_air_data: cycle"],
+        Queue::Wq("wq:nav_and_controllers"),
+        Release::Periodic,
+    ),
+    m(
+        "land_detector",
+        &["land_detector: cycle"],
+        Queue::Wq("wq:nav_and_controllers"),
+        Release::Periodic,
+    ),
+    m(
+        "mc_pos_control",
+        &["mc_pos_control: cycle time"],
+        Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
 ];
@@ -195,16 +272,77 @@ pub(super) fn table(release: u32) -> Result<&'static [Module], String> {
     let (major, minor) = (release >> 24, (release >> 16) & 0xff);
     match (major, minor) {
         (1, 11) | (1, 12) => Ok(V1_11),
+        (1, 13..=15) => Ok(V1_13),
+        (1, 0..=9) => Err(format!(
+            "PX4 v{major}.{minor}.{}: before v1.10 PX4 ran its controllers as tasks, not on work queues, and rtpipe's module → work-queue table begins at v1.11 (it covers v1.11 to v1.15)",
+            (release >> 8) & 0xff
+        )),
         _ => Err(format!(
-            "PX4 v{major}.{minor}.{}: rtpipe's module → work-queue table covers v1.11 and v1.12",
+            "PX4 v{major}.{minor}.{}: rtpipe's module → work-queue table covers v1.11 to v1.15",
             (release >> 8) & 0xff
         )),
     }
 }
 
-/// The work queue of an SPI device: PX4's device id packs bus type (3
-/// bits, 2 = SPI), bus (5 bits), address and device type.
-pub(super) fn spi_queue(device_id: u32) -> Option<String> {
+/// The thread the simulator publishes the gyro on in SITL (PX4's device
+/// id's bus type 4, SIMULATION). Its task is spawned at
+/// `SCHED_PRIORITY_MAX` (not verified against the source).
+pub(super) const SIMULATOR: &str = "simulator";
+
+/// A work queue's priority relative to `SCHED_PRIORITY_MAX`, from PX4's
+/// `platforms/common/include/px4_platform_common/px4_work_queue/WorkQueueManager.hpp`
+/// (`wq_config_t{name, stacksize, relative_priority}`; read at a stored
+/// version with the `INS0`..`INS3` queues, v1.13 and later), and the
+/// simulator's task.
+pub(super) fn wq_priority(name: &str) -> Option<i16> {
+    let bus = |prefix: &str, first: i16, count: i16| -> Option<i16> {
+        let n: i16 = name.strip_prefix(prefix)?.parse().ok()?;
+        (0..count).contains(&n).then_some(first - n)
+    };
+    match name {
+        "wq:rate_ctrl" | SIMULATOR => Some(0),
+        "wq:nav_and_controllers" => Some(-13),
+        "wq:hp_default" => Some(-18),
+        "wq:uavcan" => Some(-19),
+        "wq:lp_default" => Some(-50),
+        _ => bus("wq:SPI", -1, 7)
+            .or_else(|| bus("wq:I2C", -8, 5))
+            .or_else(|| bus("wq:INS", -14, 4)),
+    }
+}
+
+/// The thread of the gyro with this device id: PX4's device id packs bus
+/// type (3 bits: 2 = SPI, 4 = SIMULATION), bus (5 bits), address and
+/// device type; an SPI gyro's driver runs on its bus' work queue.
+pub(super) fn gyro_queue(device_id: u32) -> Option<String> {
     let (bus_type, bus) = (device_id & 0x7, (device_id >> 3) & 0x1f);
-    (bus_type == 2).then(|| format!("wq:SPI{bus}"))
+    match bus_type {
+        2 => Some(format!("wq:SPI{bus}")),
+        4 => Some(SIMULATOR.to_string()),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn queues_and_priorities_follow_the_work_queue_manager() {
+        assert_eq!(wq_priority("wq:rate_ctrl"), Some(0));
+        assert_eq!(wq_priority("wq:SPI1"), Some(-2));
+        assert_eq!(wq_priority("wq:SPI6"), Some(-7));
+        assert_eq!(wq_priority("wq:SPI7"), None);
+        assert_eq!(wq_priority("wq:I2C4"), Some(-12));
+        assert_eq!(wq_priority("wq:INS0"), Some(-14));
+        assert_eq!(wq_priority("wq:nav_and_controllers"), Some(-13));
+        assert_eq!(wq_priority("wq:attitude_ctrl"), None);
+        // The Cube Orange's gyro (SPI bus 1) and SITL's simulated one.
+        assert_eq!(gyro_queue(2_490_378).as_deref(), Some("wq:SPI1"));
+        assert_eq!(gyro_queue(1_310_988).as_deref(), Some(SIMULATOR));
+        assert_eq!(gyro_queue(1), None);
+        assert!(table(0x010d_0000).is_ok() && table(0x010f_0000).is_ok());
+        let old = table(0x0106_0000).unwrap_err();
+        assert!(old.contains("v1.6.0") && old.contains("tasks"), "{old}");
+    }
 }

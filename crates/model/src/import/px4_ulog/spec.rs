@@ -4,21 +4,29 @@
 //!   is at least the output driver's, on one CPU (the boards these versions
 //!   ran on are single-core). rtpipe's priorities count from 1 (highest);
 //!   PX4's (NuttX's) higher number runs first, so they are ranked
-//!   descending, equal priorities sharing a rank.
+//!   descending, equal priorities sharing a rank. Without `top`, the
+//!   table's modules' queues at the priorities of PX4's source
+//!   ([`super::facts`]).
 //! - Modules: [`super::px4`]'s table, each on its queue; `exec` is its
 //!   `perf` counter's maximum, `exec_min` its minimum. A maximum at or
 //!   above the module's own interval times blocking I/O, not CPU (PX4's
 //!   `io update` waits for the IO coprocessor's serial link): its thread's
 //!   CPU time from `top` is taken then (the average when it shares a
-//!   thread), with a note. `--exec mean` takes every average instead. A module without a counter (the gyro
-//!   driver, `VehicleAngularVelocity`) and a thread without a module of the
-//!   table are charged their thread's CPU time from `top` per gyro period.
-//! - The gyro driver runs at `1e6 / IMU_GYRO_RATEMAX` µs; the rate loop's
+//!   thread), with a note. `--exec mean` takes every average instead. A
+//!   module without a counter (the gyro driver, `VehicleAngularVelocity`)
+//!   and a thread without a module of the table are charged their thread's
+//!   CPU time from `top` per gyro period. The counters and `top` are
+//!   another log's with [`Options::exec_log`] (for a log without counters,
+//!   or a SITL log whose counters time 0 µs); [`Options::exec_us`] gives a
+//!   module's time outright. A log with neither is refused naming both.
+//! - The gyro driver runs at `1e6 / IMU_GYRO_RATEMAX` µs (SITL's simulator
+//!   at its measured lockstep step); the rate loop's
 //!   modules are data-triggered by the one before; the others are periodic
 //!   at their observed interval (`perf` events over the uptime).
 
+use super::facts::{self, missing, Facts};
 use super::observed::{self, ObservedRow};
-use super::perf::{self, Counter, TopThread};
+use super::perf::{Counter, TopThread};
 use super::px4::{self, Module, Queue, Release};
 use super::Ulog;
 use crate::Diagnostic;
@@ -38,6 +46,8 @@ pub struct Import {
     pub assumptions: Vec<String>,
     /// `ver_hw`, `ver_sw_release` as `vX.Y.Z`.
     pub board: String,
+    /// A SITL log: its measured ages are lockstep ages (0 µs).
+    pub lockstep: bool,
 }
 
 /// One topic's measured data ages.
@@ -66,183 +76,135 @@ pub enum ExecFrom {
     Mean,
 }
 
-/// What the spec is built from.
-struct Facts {
-    counters: Vec<Counter>,
-    threads: Vec<TopThread>,
-    uptime_us: u64,
-    gyro_period_us: u64,
-    gyro_queue: String,
-    version: String,
-    exec_from: ExecFrom,
+/// Where each module's `exec` comes from.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Options<'a> {
+    /// Which `perf` statistic.
+    pub stat: ExecFrom,
+    /// Another log of the same modules whose counters (and `top`) give the
+    /// execution times, and how to name it; `None`: the log's own.
+    pub exec_log: Option<(&'a Ulog, &'a str)>,
+    /// Per module, an execution time (µs) the user gives; it overrides
+    /// every counter.
+    pub exec_us: &'a [(String, u64)],
 }
 
-fn missing(what: &str, help: &str) -> Diagnostic {
-    Diagnostic::error(format!("the log lacks {what}"), help)
+/// The execution times' source while the spec is built.
+struct Exec<'a> {
+    facts: &'a Facts,
+    /// How the source is named in comments (`the log`, `--exec-from X`).
+    label: String,
+    stat: ExecFrom,
+    given: &'a [(String, u64)],
 }
 
 /// Builds the spec and the observed rows of `log`, named `name`, each
-/// module's `exec` from `exec_from`.
-pub fn import(log: &Ulog, name: &str, exec_from: ExecFrom) -> Result<Import, Diagnostic> {
-    let mut facts = facts(log)?;
-    facts.exec_from = exec_from;
-    let table = px4::table(parse_release(log)?).map_err(|e| {
-        Diagnostic::error(e, "import a log of PX4 v1.11 or v1.12, or add the version's table to crates/model/src/import/px4_ulog/px4.rs")
-    })?;
-    let modules = present(table, &facts)?;
+/// module's `exec` as `opts` says.
+pub fn import(log: &Ulog, name: &str, opts: &Options) -> Result<Import, Diagnostic> {
+    let facts = facts::of(log)?;
+    let other = match opts.exec_log {
+        Some((l, label)) => Some((
+            facts::of(l).map_err(|d| d.within(format!("--exec-from {label}")))?,
+            label,
+        )),
+        None => None,
+    };
+    let exec = match &other {
+        Some((f, label)) => Exec {
+            facts: f,
+            label: format!("--exec-from {label} ({}, PX4 {})", f.board, f.version),
+            stat: opts.stat,
+            given: opts.exec_us,
+        },
+        None => Exec {
+            facts: &facts,
+            label: "the log".to_string(),
+            stat: opts.stat,
+            given: opts.exec_us,
+        },
+    };
+    check_exec_source(&exec)?;
+    let modules = facts.present();
+    for (given, _) in opts.exec_us {
+        if !modules.iter().any(|m| m.name == given) {
+            let names: Vec<&str> = modules.iter().map(|m| m.name).collect();
+            return Err(Diagnostic::error(
+                format!("--exec-us {given}: the spec has no module `{given}`"),
+                format!("name one of: {}", names.join(", ")),
+            ));
+        }
+    }
     let lowest = chain_floor(&modules, &facts)?;
-    // A thread that used no CPU has nothing to model unless the loop runs on it.
+    // A thread that used no CPU has nothing to model unless the loop runs
+    // on it (without `top` every thread is a queue of the table's modules).
     let on_loop: Vec<String> = modules
         .iter()
         .filter(|m| m.release != Release::Periodic)
-        .map(|m| queue_name(m.queue, &facts))
+        .map(|m| facts.queue_name(m.queue))
         .collect();
     let threads: Vec<&TopThread> = facts
         .threads
         .iter()
-        .filter(|t| t.priority >= lowest && (t.cpu_ms > 0 || on_loop.contains(&t.name)))
+        .filter(|t| {
+            t.priority >= lowest && (!facts.top || t.cpu_ms > 0 || on_loop.contains(&t.name))
+        })
         .collect();
-    let mut assumptions = base_assumptions(&facts);
+    let mut assumptions = base_assumptions(&facts, &exec);
     let (ages, rows) = observe(log, &modules)?;
-    let spec = spec_text(name, &facts, &modules, &threads, &mut assumptions)?;
+    let observed: Vec<&str> = ages.iter().map(|a| a.topic.as_str()).collect();
+    let spec = spec_text(
+        name,
+        &facts,
+        &exec,
+        &modules,
+        &threads,
+        &observed,
+        &mut assumptions,
+    )?;
     Ok(Import {
         spec,
         observed: observed::to_csv(&rows),
         ages,
         assumptions,
-        board: format!(
-            "{} (PX4 {})",
-            log.info_text("ver_hw").unwrap_or_default(),
-            facts.version
-        ),
+        board: format!("{} (PX4 {})", facts.board, facts.version),
+        lockstep: facts.lockstep,
     })
 }
 
-fn parse_release(log: &Ulog) -> Result<u32, Diagnostic> {
-    log.info
-        .get("ver_sw_release")
-        .filter(|v| v.ty == super::FieldType::U32)
-        .map(|v| v.number() as u32)
-        .ok_or_else(|| {
-            missing(
-                "the info message ver_sw_release (PX4's version)",
-                "import a log of PX4 v1.11 or later",
-            )
-        })
-}
-
-/// The counters, threads, uptime and gyro of the log.
-fn facts(log: &Ulog) -> Result<Facts, Diagnostic> {
-    let text = |prefix: &str| -> Option<Vec<String>> {
-        let (_, v) = log
-            .info_multiple
-            .iter()
-            .find(|(k, _)| k.starts_with(prefix))?;
-        Some(v.first()?.clone())
-    };
-    let perf_help = "the logger stores `perf` and `top` at the start of a log on PX4 v1.11 and later; import a log with both";
-    let counters: Vec<Counter> = text("perf_counter_")
-        .ok_or_else(|| missing("perf_counter_* (the modules' execution times)", perf_help))?
-        .iter()
-        .filter_map(|l| perf::counter(l))
-        .collect();
-    let top = text("perf_top_")
-        .ok_or_else(|| missing("perf_top_* (the threads' priorities)", perf_help))?;
-    let threads: Vec<TopThread> = top.iter().filter_map(|l| perf::top_thread(l)).collect();
-    let uptime_us = top
-        .iter()
-        .find_map(|l| perf::uptime_us(l))
-        .ok_or_else(|| missing("the uptime line of perf_top_*", perf_help))?;
-    let rate = log
-        .parameters
-        .get("IMU_GYRO_RATEMAX")
-        .map(|v| v.number())
-        .filter(|r| (1.0..=1e6).contains(r));
-    let rate = rate.ok_or_else(|| {
-        missing(
-            "the parameter IMU_GYRO_RATEMAX (the gyro's rate)",
-            "import a log of PX4 v1.11 or later",
-        )
-    })?;
-    let selection = log
-        .topic("sensor_selection", 0)
-        .and_then(|s| log.values(s, "gyro_device_id"))
-        .and_then(|v| v.first().copied());
-    let device = selection.ok_or_else(|| {
-        missing(
-            "sensor_selection.gyro_device_id (which gyro the loop uses)",
-            "log sensor_selection (in PX4's default logging profile)",
-        )
-    })?;
-    let gyro_queue = px4::spi_queue(device as u32).ok_or_else(|| {
-        Diagnostic::error(
-            format!("the selected gyro (device id {device}) is not on an SPI bus"),
-            "rtpipe's PX4 table knows SPI gyros only",
-        )
-    })?;
-    let release = parse_release(log)?;
-    Ok(Facts {
-        counters,
-        threads,
-        uptime_us,
-        gyro_period_us: (1e6 / rate).round() as u64,
-        gyro_queue,
-        version: format!(
-            "v{}.{}.{}",
-            release >> 24,
-            (release >> 16) & 0xff,
-            (release >> 8) & 0xff
-        ),
-        exec_from: ExecFrom::Max,
-    })
-}
-
-/// The table's modules the log ran (optional ones only when counted).
-fn present(table: &[Module], f: &Facts) -> Result<Vec<Module>, Diagnostic> {
-    let mut out = Vec::new();
-    for m in table {
-        let counted = m
-            .counter
-            .and_then(|c| counter(f, c))
-            .is_some_and(|c| c.events > 0);
-        if m.optional && !counted {
-            continue;
-        }
-        if let Some(c) = m.counter.and_then(|c| counter(f, c)) {
-            if c.events > 0 && c.max_us == 0 {
-                return Err(Diagnostic::error(
-                    format!("the perf counter `{}` measured {} runs of 0 µs: the log's execution times are not real (a SITL lockstep log, whose simulated clock stands still while code runs)", c.name, c.events),
-                    "import a log from a flight controller board",
-                ));
-            }
-        }
-        out.push(*m);
+/// Refuses an execution-time source that has no times: a log without
+/// `perf_counter_*`, or one whose counters timed every run as 0 µs.
+fn check_exec_source(exec: &Exec) -> Result<(), Diagnostic> {
+    if exec.facts.counters.is_empty() && exec.given.is_empty() {
+        let d = missing("perf_counter_* (the modules' execution times)", EXEC_HELP);
+        return Err(match exec.label.as_str() {
+            "the log" => d,
+            other => d.within(other),
+        });
     }
-    Ok(out)
-}
-
-fn counter<'a>(f: &'a Facts, name: &str) -> Option<&'a Counter> {
-    f.counters.iter().find(|c| c.name == name && c.elapsed)
-}
-
-fn thread<'a>(f: &'a Facts, name: &str) -> Option<&'a TopThread> {
-    f.threads.iter().find(|t| t.name == name)
-}
-
-/// The queue's thread name in `top`.
-fn queue_name(q: Queue, f: &Facts) -> String {
-    match q {
-        Queue::Wq(n) | Queue::Own(n) => n.to_string(),
-        Queue::GyroBus => f.gyro_queue.clone(),
+    match exec.facts.zero_times() {
+        // Times given for some modules: each other one is refused by name.
+        Some(c) if exec.given.is_empty() => Err(zero_times(c, exec)),
+        _ => Ok(()),
     }
 }
+
+/// A counter that timed its runs as 0 µs, refused.
+fn zero_times(c: &Counter, exec: &Exec) -> Diagnostic {
+    Diagnostic::error(
+        format!("the perf counter `{}` of {} measured {} runs of 0 µs: the log's execution times are not real (a SITL lockstep log, whose simulated clock stands still while code runs)", c.name, exec.label, c.events),
+        EXEC_HELP,
+    )
+}
+
+/// How to give execution times a log lacks.
+const EXEC_HELP: &str = "give --exec-from OTHER.ulg (a log of a flight controller board running the same modules: its perf counters, and its top for modules without one) or --exec-us MODULE=US for each module";
 
 /// The lowest priority on the rate loop: threads below it cannot delay it.
 fn chain_floor(modules: &[Module], f: &Facts) -> Result<u8, Diagnostic> {
     let mut lowest = u8::MAX;
     for m in modules.iter().filter(|m| m.release != Release::Periodic) {
-        let name = queue_name(m.queue, f);
-        let t = thread(f, &name).ok_or_else(|| {
+        let name = f.queue_name(m.queue);
+        let t = f.thread(&name).ok_or_else(|| {
             missing(
                 &format!("the thread {name} (of {}) in perf_top_*", m.name),
                 "import a log whose top lists the rate loop's threads",
@@ -259,13 +221,32 @@ fn thread_key(name: &str) -> String {
         .replace(|c: char| !c.is_ascii_alphanumeric() && c != '_', "_")
 }
 
-fn base_assumptions(f: &Facts) -> Vec<String> {
-    vec![
-        format!("the gyro driver runs every {} µs (1e6 / IMU_GYRO_RATEMAX) on {}; the sensor samples before the driver reads its FIFO, a wait the log's timestamp_sample includes and the spec does not", f.gyro_period_us, f.gyro_queue),
-        "interrupt load (the NuttX kernel, DMA completion, the high-resolution timer) is not in the log: the spec has none".to_string(),
-        "a module or thread without a perf counter is charged its thread's CPU time from top per gyro period (an average, not a worst case)".to_string(),
-        "one CPU: these boards are single-core".to_string(),
-    ]
+fn base_assumptions(f: &Facts, exec: &Exec) -> Vec<String> {
+    let mut out = Vec::new();
+    if f.lockstep {
+        out.push(format!("SITL: the simulator publishes the gyro every {} µs (the step of vehicle_angular_velocity's timestamp_sample; IMU_GYRO_RATEMAX does not apply) on its own thread `{}`, spawned at SCHED_PRIORITY_MAX like wq:rate_ctrl", f.gyro_period_us, f.gyro_queue));
+        out.push("the measured ages are lockstep ages: SITL's simulated clock stands still while the modules run, so a gyro sample and what the loop makes of it carry the same time (0 µs); they show the data flow, not the CPU's delays".to_string());
+        out.push("one CPU: SITL ran on a host whose cores the log does not give; the spec puts every thread on cpu 0".to_string());
+    } else {
+        out.push(format!("the gyro driver runs every {} µs (1e6 / IMU_GYRO_RATEMAX) on {}; the sensor samples before the driver reads its FIFO, a wait the log's timestamp_sample includes and the spec does not", f.gyro_period_us, f.gyro_queue));
+        out.push("interrupt load (the NuttX kernel, DMA completion, the high-resolution timer) is not in the log: the spec has none".to_string());
+    }
+    if !f.top {
+        out.push("the log has no perf_top_*: the threads are the queues of rtpipe's module table, their priorities PX4's source's (WorkQueueManager.hpp, relative to SCHED_PRIORITY_MAX); what else ran is not known".to_string());
+    }
+    if exec.label != "the log" {
+        out.push(format!("execution times from {}: that board's perf counters for the modules of the same name, and its top for those without one", exec.label));
+    }
+    if exec.facts.top {
+        out.push("a module or thread without a perf counter is charged its thread's CPU time from top per gyro period (an average, not a worst case)".to_string());
+    }
+    if !f.lockstep {
+        out.push("one CPU: these boards are single-core".to_string());
+    }
+    for (m, us) in exec.given {
+        out.push(format!("{m}: exec {us} µs as given (--exec-us)"));
+    }
+    out
 }
 
 /// The rows of every topic a loop module publishes, and their ages.
@@ -274,8 +255,8 @@ fn observe(
     modules: &[Module],
 ) -> Result<(Vec<TopicAges>, Vec<ObservedRow>), Diagnostic> {
     let mut topics: Vec<&str> = Vec::new();
-    for t in modules.iter().filter_map(|m| m.publishes) {
-        if !topics.contains(&t) {
+    for t in modules.iter().flat_map(|m| m.publishes) {
+        if !topics.contains(t) {
             topics.push(t);
         }
     }
@@ -295,7 +276,7 @@ fn observe(
         all.extend(rows);
     }
     if ages.is_empty() {
-        return Err(missing("timestamp_sample on vehicle_angular_velocity and actuator_controls_0 (the rate loop's measured data ages)", "log those topics (PX4's default logging profile does)"));
+        return Err(missing("timestamp_sample on vehicle_angular_velocity and the rate controller's output (actuator_controls_0, vehicle_torque_setpoint: the rate loop's measured data ages)", "log those topics (PX4's default logging profile does)"));
     }
     Ok((ages, all))
 }
@@ -303,37 +284,50 @@ fn observe(
 /// A module's exec and exec_min (µs) and how they were found.
 fn timing(
     m: &Module,
-    f: &Facts,
+    exec: &Exec,
     period_us: u64,
     notes: &mut Vec<String>,
 ) -> Result<(u64, u64, String), Diagnostic> {
-    let Some(c) = m.counter.and_then(|c| counter(f, c)) else {
-        let name = queue_name(m.queue, f);
-        let exec = share(f, &name).ok_or_else(|| {
-            missing(
-                &format!("CPU time of {name} in perf_top_*"),
-                "import a log whose top lists it",
+    if let Some((_, us)) = exec.given.iter().find(|(n, _)| n == m.name) {
+        return Ok((*us, 1, format!("exec as given: --exec-us {}={us}", m.name)));
+    }
+    let ex = exec.facts;
+    // The same module in the source's version (its counter's name and
+    // queue may differ between versions).
+    let entry = ex.table.iter().find(|e| e.name == m.name).unwrap_or(m);
+    let Some(c) = ex.counter(entry.counter) else {
+        let name = ex.queue_name(entry.queue);
+        let exec_us = ex.share(&name).ok_or_else(|| {
+            Diagnostic::error(
+                format!("no execution time for {}: {} has no perf counter for it and no top CPU time of its thread {name}", m.name, exec.label),
+                format!("give --exec-us {}=US (its execution time in µs), or --exec-from a log that times it", m.name),
             )
         })?;
         return Ok((
-            exec,
+            exec_us,
             1,
-            format!("no perf counter: {name}'s CPU time per gyro period from top"),
+            format!(
+                "no perf counter: {name}'s CPU time per gyro period from top of {}",
+                exec.label
+            ),
         ));
     };
+    if c.events > 0 && c.max_us == 0 {
+        return Err(zero_times(c, exec));
+    }
     let stats = format!(
-        "perf `{}`: max {} µs, avg {:.2} µs, min {} µs, {} runs",
-        c.name, c.max_us, c.avg_us, c.min_us, c.events
+        "perf `{}` of {}: max {} µs, avg {:.2} µs, min {} µs, {} runs",
+        c.name, exec.label, c.max_us, c.avg_us, c.min_us, c.events
     );
     if c.max_us >= period_us {
-        return blocking(m, c, f, period_us, notes, stats);
+        return blocking(entry, c, ex, period_us, notes, stats);
     }
-    let exec = match f.exec_from {
+    let exec_us = match exec.stat {
         ExecFrom::Max => c.max_us,
         ExecFrom::Mean => c.avg_us.ceil() as u64,
     }
     .max(1);
-    Ok((exec, c.min_us.clamp(1, exec), stats))
+    Ok((exec_us, c.min_us.clamp(1, exec_us), stats))
 }
 
 /// A counter whose longest run is not shorter than the module's interval
@@ -350,7 +344,7 @@ fn blocking(
     stats: String,
 ) -> Result<(u64, u64, String), Diagnostic> {
     if let Queue::Own(name) = m.queue {
-        if let Some(cpu) = share(f, name) {
+        if let Some(cpu) = f.share(name) {
             notes.push(format!(
                 "{}: perf `{}` (max {} µs, avg {:.2} µs) is not below its interval {period_us} µs: it times waits for I/O, which rtpipe cannot model (no self-suspension); exec is its thread's CPU time from top, {cpu} µs per gyro period, and the bounds leave the wait out",
                 m.name, c.name, c.max_us, c.avg_us
@@ -370,18 +364,11 @@ fn blocking(
     ))
 }
 
-/// A thread's CPU time from `top` per gyro period, µs, at least 1.
-fn share(f: &Facts, name: &str) -> Option<u64> {
-    let t = thread(f, name)?;
-    let per = (t.cpu_ms as f64 * 1000.0) * f.gyro_period_us as f64 / f.uptime_us as f64;
-    Some((per.ceil() as u64).max(1))
-}
-
 /// A periodic module's interval: the uptime over its runs, µs.
 fn interval(m: &Module, f: &Facts) -> u64 {
-    match m.counter.and_then(|c| counter(f, c)) {
-        Some(c) if m.release == Release::Periodic && c.events > 0 => {
-            (f.uptime_us / c.events).max(1)
+    match (f.counter(m.counter), f.uptime_us) {
+        (Some(c), Some(up)) if m.release == Release::Periodic && c.events > 0 => {
+            (up / c.events).max(1)
         }
         _ => f.gyro_period_us,
     }
@@ -391,18 +378,27 @@ fn interval(m: &Module, f: &Facts) -> u64 {
 fn spec_text(
     name: &str,
     f: &Facts,
+    exec: &Exec,
     modules: &[Module],
     threads: &[&TopThread],
+    observed: &[&str],
     notes: &mut Vec<String>,
 ) -> Result<String, Diagnostic> {
     let mut timings = Vec::new();
     for m in modules {
+        let q = f.queue_name(m.queue);
+        // A periodic module on a thread below the loop cannot delay it:
+        // it is left out, and so needs no execution time.
+        if !threads.iter().any(|t| t.name == q) {
+            timings.push(None);
+            continue;
+        }
         let period = interval(m, f);
-        timings.push((period, timing(m, f, period, notes)?));
+        timings.push(Some((period, timing(m, exec, period, notes)?)));
     }
-    let mut s = header(name, f, notes);
+    let mut s = header(name, exec, notes);
     let ranks = ranks(threads);
-    let used: Vec<String> = modules.iter().map(|m| queue_name(m.queue, f)).collect();
+    let used: Vec<String> = modules.iter().map(|m| f.queue_name(m.queue)).collect();
     for t in threads {
         // A module on a thread of its own is a task with that priority.
         if modules
@@ -411,45 +407,48 @@ fn spec_text(
         {
             continue;
         }
+        let rel = facts::SCHED_PRIORITY_MAX - i16::from(t.priority);
+        let why = if f.top {
+            format!("PX4 {} priority {}", t.name, t.priority)
+        } else if rel < 0 {
+            format!("PX4 {}: SCHED_PRIORITY_MAX, as wq:rate_ctrl, ranked just above it (PX4 runs the two FIFO; rtpipe needs distinct priorities)", t.name)
+        } else {
+            format!(
+                "PX4 {}: SCHED_PRIORITY_MAX - {rel} (WorkQueueManager.hpp; the log has no top)",
+                t.name
+            )
+        };
         let _ = writeln!(
             s,
-            "[threads.{}]  # PX4 {} priority {}\npriority = {}\ncpu = 0\n",
+            "[threads.{}]  # {why}\npriority = {}\ncpu = 0\n",
             thread_key(&t.name),
-            t.name,
-            t.priority,
             ranks[&t.priority]
         );
     }
     let mut before: Option<&str> = None;
-    for (m, (period, timing)) in modules.iter().zip(timings) {
-        let q = queue_name(m.queue, f);
-        // A periodic module on a thread below the loop cannot delay it.
-        let Some(t) = threads.iter().find(|t| t.name == q) else {
-            continue;
-        };
-        let rank = ranks[&t.priority];
-        task_table(
-            &mut s,
-            f,
-            m,
-            (period, timing),
-            rank,
-            before.unwrap_or("gyro"),
-        );
+    for (m, timing) in modules.iter().zip(timings) {
+        let Some(timing) = timing else { continue };
+        let q = f.queue_name(m.queue);
+        let rank = threads
+            .iter()
+            .find(|t| t.name == q)
+            .map_or(1, |t| ranks[&t.priority]);
+        task_table(&mut s, f, m, timing, rank, before.unwrap_or("gyro"));
         if m.release != Release::Periodic {
             before = Some(m.name);
         }
     }
     load_tasks(&mut s, f, threads, &used);
-    chains(&mut s, modules);
+    chains(&mut s, modules, observed);
     Ok(s)
 }
 
-/// `name` when it is a thread of its own in the table (the table's names
+/// `name` when it is a thread of its own in a table (the tables' names
 /// are static), else the empty string, which no table entry has.
 fn static_name(name: &str) -> &'static str {
     px4::V1_11
         .iter()
+        .chain(px4::V1_13)
         .find_map(|m| match m.queue {
             Queue::Own(n) if n == name => Some(n),
             _ => None,
@@ -458,15 +457,16 @@ fn static_name(name: &str) -> &'static str {
 }
 
 /// The comment lines and the `[system]` and channel tables.
-fn header(name: &str, f: &Facts, notes: &[String]) -> String {
+fn header(name: &str, exec: &Exec, notes: &[String]) -> String {
     let mut s = String::new();
-    let stat = match f.exec_from {
+    let stat = match exec.stat {
         ExecFrom::Max => "longest",
         ExecFrom::Mean => "average",
     };
     let _ = writeln!(
         s,
-        "# exec: each module's {stat} run in the log's perf counters"
+        "# exec: each module's {stat} run in {}'s perf counters",
+        exec.label
     );
     for n in notes {
         let _ = writeln!(s, "# assumption: {n}");
@@ -489,19 +489,19 @@ fn task_table(
     let _ = writeln!(s, "exec = \"{exec}us\"\nexec_min = \"{exec_min}us\"");
     let _ = match m.queue {
         Queue::Own(_) => writeln!(s, "priority = {rank}\ncpu = 0"),
-        _ => writeln!(s, "thread = {:?}", thread_key(&queue_name(m.queue, f))),
+        _ => writeln!(s, "thread = {:?}", thread_key(&f.queue_name(m.queue))),
     };
-    let runs = m
-        .counter
-        .and_then(|c| counter(f, c))
-        .map_or(0, |c| c.events);
+    let runs = f.counter(m.counter).map_or(0, |c| c.events);
+    let uptime = match (f.uptime_us, f.top) {
+        (Some(up), true) => format!("{runs} runs in {up} µs of uptime"),
+        (Some(up), false) => {
+            format!("{runs} runs in {up} µs (the rate loop's runs times the gyro period)")
+        }
+        (None, _) => "no uptime in the log: every gyro period".to_string(),
+    };
     let _ = match m.release {
         Release::Gyro => writeln!(s, "period = \"{}us\"", f.gyro_period_us),
-        Release::Periodic => writeln!(
-            s,
-            "period = \"{period}us\"  # {runs} runs in {} µs of uptime",
-            f.uptime_us
-        ),
+        Release::Periodic => writeln!(s, "period = \"{period}us\"  # {uptime}"),
         Release::Loop => writeln!(
             s,
             "activation = \"data\"\nreads = [{trigger:?}]\ntriggers = [{trigger:?}]"
@@ -524,8 +524,8 @@ fn ranks(threads: &[&TopThread]) -> BTreeMap<u8, usize> {
 /// One periodic task for each thread no module of the table runs on.
 fn load_tasks(s: &mut String, f: &Facts, threads: &[&TopThread], used: &[String]) {
     for t in threads.iter().filter(|t| !used.contains(&t.name)) {
-        let exec = share(f, &t.name).unwrap_or(1);
-        let _ = writeln!(s, "[tasks.{}_load]  # no module of the table: {}'s CPU time from top ({} ms in {} µs of uptime) per gyro period", thread_key(&t.name), t.name, t.cpu_ms, f.uptime_us);
+        let exec = f.share(&t.name).unwrap_or(1);
+        let _ = writeln!(s, "[tasks.{}_load]  # no module of the table: {}'s CPU time from top ({} ms in {} µs of uptime) per gyro period", thread_key(&t.name), t.name, t.cpu_ms, f.uptime_us.unwrap_or(0));
         let _ = writeln!(
             s,
             "exec = \"{exec}us\"\nexec_min = \"1us\"\nperiod = \"{}us\"\nthread = {:?}\n",
@@ -536,30 +536,47 @@ fn load_tasks(s: &mut String, f: &Facts, threads: &[&TopThread], used: &[String]
 }
 
 /// The rate loop's chains: to each observed topic and to the outputs.
-fn chains(s: &mut String, modules: &[Module]) {
+fn chains(s: &mut String, modules: &[Module], observed: &[&str]) {
     let lp: Vec<&Module> = modules
         .iter()
         .filter(|m| m.release != Release::Periodic)
         .collect();
     let mut written: Vec<&str> = Vec::new();
     for (k, m) in lp.iter().enumerate() {
-        let Some(topic) = m.publishes else { continue };
-        // The last publisher of a topic ends its chain.
-        if lp[k + 1..].iter().any(|n| n.publishes == Some(topic)) || written.contains(&topic) {
-            continue;
+        for &topic in m.publishes {
+            // The last publisher of a topic ends its chain; a topic the
+            // log did not measure gets none.
+            let later = lp[k + 1..].iter().any(|n| n.publishes.contains(&topic));
+            if later || written.contains(&topic) || !observed.contains(&topic) {
+                continue;
+            }
+            written.push(topic);
+            chain(s, topic, &lp[..=k]);
         }
-        written.push(topic);
-        let path: Vec<String> = lp[..=k].iter().map(|m| format!("{:?}", m.name)).collect();
+    }
+    // The whole loop to the output driver, unless a measured chain is the
+    // whole loop already (no output driver on it: SITL).
+    let whole = lp
+        .last()
+        .is_some_and(|m| m.publishes.iter().any(|t| written.contains(t)));
+    if !whole {
+        let path: Vec<String> = lp.iter().map(|m| format!("{:?}", m.name)).collect();
+        let _ = writeln!(
+            s,
+            "[[chain]]\nname = \"gyro to outputs\"\npath = [{}]",
+            path.join(", ")
+        );
+    }
+}
+
+/// One `[[chain]]` from the gyro to `topic` along `path`.
+fn chain(s: &mut String, topic: &str, path: &[&Module]) {
+    {
+        let path: Vec<String> = path.iter().map(|m| format!("{:?}", m.name)).collect();
         let _ = writeln!(
             s,
             "[[chain]]\nname = \"gyro to {topic}\"\npath = [{}]\n",
             path.join(", ")
         );
     }
-    let path: Vec<String> = lp.iter().map(|m| format!("{:?}", m.name)).collect();
-    let _ = writeln!(
-        s,
-        "[[chain]]\nname = \"gyro to outputs\"\npath = [{}]",
-        path.join(", ")
-    );
 }

@@ -141,7 +141,7 @@ fn mutated_cube_orange_logs_import_or_fail_cleanly() {
             } else {
                 ExecFrom::Mean
             };
-            imported += usize::from(import(&log, "fuzz", from).is_ok());
+            imported += usize::from(import(&log, "fuzz", &stat(from)).is_ok());
         }
     }
     assert!(imported > 0, "most single flips leave an importable log");
@@ -150,7 +150,7 @@ fn mutated_cube_orange_logs_import_or_fail_cleanly() {
 #[test]
 fn the_cube_orange_spec_holds_its_threads_modules_and_chains() {
     let log = Ulog::parse(fixture("sample_log_small.ulg")).unwrap();
-    let i = import(&log, "cube", ExecFrom::Max).unwrap();
+    let i = import(&log, "cube", &stat(ExecFrom::Max)).unwrap();
     let spec = crate::Spec::parse("spec.toml", &i.spec).unwrap_or_else(|e| panic!("{e}"));
     let thread = |n: &str| {
         spec.threads
@@ -199,7 +199,7 @@ fn the_cube_orange_spec_holds_its_threads_modules_and_chains() {
         ]
     );
     assert_eq!(i.observed.lines().count(), 1 + 2 * 1812);
-    let mean = import(&log, "cube", ExecFrom::Mean).unwrap();
+    let mean = import(&log, "cube", &stat(ExecFrom::Mean)).unwrap();
     let spec = crate::Spec::parse("spec.toml", &mean.spec).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         spec.tasks
@@ -210,11 +210,123 @@ fn the_cube_orange_spec_holds_its_threads_modules_and_chains() {
     );
 }
 
+fn stat(stat: ExecFrom) -> Options<'static> {
+    Options {
+        stat,
+        ..Options::default()
+    }
+}
+
 #[test]
-fn a_log_without_perf_is_refused_naming_what_it_lacks() {
+fn a_log_before_work_queues_is_refused_by_its_version() {
     let log = Ulog::parse(fixture("sample_appended_multiple.ulg")).unwrap();
-    let e = import(&log, "x", ExecFrom::Max).unwrap_err();
-    assert!(e.message.contains("perf_counter_"), "{}", e.message);
+    let e = import(&log, "x", &stat(ExecFrom::Max)).unwrap_err();
+    assert!(
+        e.message.contains("v1.6.0") && e.message.contains("work queues"),
+        "{}",
+        e.message
+    );
+}
+
+#[test]
+fn a_log_without_perf_counters_is_refused_naming_the_flags() {
+    let mut log = Ulog::parse(fixture("sample_px4_events.ulg")).unwrap();
+    log.info_multiple
+        .retain(|k, _| !k.starts_with("perf_counter_"));
+    let e = import(&log, "x", &stat(ExecFrom::Max)).unwrap_err();
+    assert!(e.message.contains("lacks perf_counter_*"), "{}", e.message);
+    let help = e.help.unwrap_or_default();
+    assert!(
+        help.contains("--exec-from") && help.contains("--exec-us"),
+        "{help}"
+    );
+}
+
+/// The SITL logs with the Cube Orange's counters, `--exec mean`.
+fn sitl(name: &str, given: &[(String, u64)]) -> Result<Import, crate::Diagnostic> {
+    let log = Ulog::parse(fixture(name)).unwrap();
+    let cube = Ulog::parse(fixture("sample_log_small.ulg")).unwrap();
+    let opts = Options {
+        stat: ExecFrom::Mean,
+        exec_log: Some((&cube, "cube.ulg")),
+        exec_us: given,
+    };
+    import(&log, "sitl", &opts)
+}
+
+#[test]
+fn sitl_logs_import_with_another_logs_counters_and_lockstep_ages() {
+    for (name, version, topics) in [
+        (
+            "sample_logging_tagged_and_default_params.ulg",
+            "PX4 v1.13.0",
+            &["vehicle_angular_velocity", "actuator_controls_0"][..],
+        ),
+        (
+            "sample_px4_events.ulg",
+            "PX4 v1.15.0",
+            &[
+                "vehicle_angular_velocity",
+                "vehicle_torque_setpoint",
+                "actuator_motors",
+            ][..],
+        ),
+    ] {
+        let i = sitl(name, &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            i.lockstep && i.board == format!("PX4_SITL ({version})"),
+            "{}",
+            i.board
+        );
+        let measured: Vec<&str> = i.ages.iter().map(|a| a.topic.as_str()).collect();
+        assert_eq!(measured, topics, "{name}");
+        assert!(i.ages.iter().all(|a| a.max_ns == 0), "lockstep ages are 0");
+        assert!(i.assumptions.iter().any(|a| a.contains("lockstep ages")));
+        assert!(i.assumptions.iter().any(|a| a.contains("no perf_top_*")));
+        let spec = crate::Spec::parse("spec.toml", &i.spec).unwrap_or_else(|e| panic!("{e}"));
+        let prio = |n: &str| {
+            spec.threads
+                .iter()
+                .find(|t| t.name == n)
+                .map(|t| t.priority)
+        };
+        // The simulator (SCHED_PRIORITY_MAX, as rate_ctrl) ranked just above it.
+        assert_eq!((prio("simulator"), prio("rate_ctrl")), (Some(1), Some(2)));
+        let task = |n: &str| spec.tasks.iter().find(|t| t.name == n).expect(n);
+        // The Cube's `mc_rate_control: cycle` average, 7.43 µs, rounded up;
+        // SITL's gyro step, 4 ms, measured from timestamp_sample.
+        assert_eq!(task("mc_rate_control").exec, 8_000);
+        assert!(i.spec.contains("period = \"4000us\""), "{}", i.spec);
+        assert!(i.spec.contains("from top of --exec-from cube.ulg"));
+    }
+}
+
+#[test]
+fn given_times_override_and_unknown_modules_are_refused() {
+    let given = [("control_allocator".to_string(), 20)];
+    let i = sitl("sample_px4_events.ulg", &given).unwrap();
+    let spec = crate::Spec::parse("spec.toml", &i.spec).unwrap_or_else(|e| panic!("{e}"));
+    let ca = spec.tasks.iter().find(|t| t.name == "control_allocator");
+    assert_eq!(ca.map(|t| t.exec), Some(20_000));
+    let typo = [("control_alocator".to_string(), 20)];
+    let e = sitl("sample_px4_events.ulg", &typo).unwrap_err();
+    assert!(
+        e.message.contains("no module `control_alocator`"),
+        "{}",
+        e.message
+    );
+}
+
+#[test]
+fn a_sitl_log_alone_is_refused_for_its_zero_times() {
+    let log = Ulog::parse(fixture("sample_px4_events.ulg")).unwrap();
+    let e = import(&log, "x", &stat(ExecFrom::Max)).unwrap_err();
+    assert!(
+        e.message.contains("0 µs") && e.message.contains("lockstep"),
+        "{}",
+        e.message
+    );
+    assert!(e.help.unwrap_or_default().contains("--exec-from"));
 }
 
 #[test]
@@ -227,6 +339,6 @@ fn an_empty_array_value_is_no_number_and_no_panic() {
     b.extend_from_slice(key);
     let log = Ulog::parse(b).unwrap();
     assert!(log.info["ver_sw_release"].number().is_nan());
-    let e = import(&log, "x", ExecFrom::Max).unwrap_err();
-    assert!(e.message.contains("perf_counter_"), "{}", e.message);
+    let e = import(&log, "x", &stat(ExecFrom::Max)).unwrap_err();
+    assert!(e.message.contains("ver_sw_release"), "{}", e.message);
 }
