@@ -67,12 +67,14 @@ impl Gate {
             return Verdict::Exhausted;
         }
         let verdict = self.check.accept(spec);
+        let accepted = verdict.failure.is_none();
         self.log.push(Checked {
             periods: periods_ns(spec),
             utilization: utilization(spec),
-            failure: verdict.as_ref().err().cloned(),
+            failure: verdict.failure,
+            trials: verdict.trials,
         });
-        if verdict.is_ok() {
+        if accepted {
             return Verdict::Accepted;
         }
         let cut: Vec<u32> = axes
