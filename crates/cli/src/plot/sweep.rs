@@ -9,13 +9,17 @@ pub type SweepRow = (String, (Option<f64>, Option<f64>), Vec<SweepDot>);
 
 /// One sweep point for [`sweep_chart`]: the chain's predicted sound reaction
 /// (ms), what the flight gave, whether it met the criterion, and whether
-/// the point came from the delay sweep (else the period-scale sweep).
+/// the point came from the delay sweep (else the period-scale sweep), and
+/// its flights passed / flown (annotated beside a point some of whose
+/// flights failed).
 pub struct SweepDot {
     pub reaction_ms: f64,
     pub freshness_ms: f64,
     pub outcome: DotOutcome,
     pub flies: bool,
     pub delay: bool,
+    pub passed: u32,
+    pub flown: u32,
 }
 
 /// What a sweep point's flight gave: the measure to plot, or why there is
@@ -186,7 +190,9 @@ where
 
 /// The sweep's flown points at (`x_of`, measure capped at `top`), one
 /// series per sweep (period scale, pure delay) in its own colour, filled
-/// where the vehicle flies and hollow where it fails.
+/// where the vehicle flies and hollow where it fails; a point flown
+/// several times that passed some but not all of them is annotated
+/// "passed/flown" (its pass fraction).
 fn draw_sweep_dots<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     dots: &[SweepDot],
@@ -215,6 +221,17 @@ where
             }))
             .map_err(err)?;
     }
+    let partial = dots.iter().filter(|d| 0 < d.passed && d.passed < d.flown);
+    chart
+        .draw_series(partial.filter_map(|d| match d.outcome {
+            DotOutcome::Measured(v) => Some(Text::new(
+                format!("{}/{}", d.passed, d.flown),
+                (x_of(d), v.min(top)),
+                (FONT, 11).into_font(),
+            )),
+            _ => None,
+        }))
+        .map_err(err)?;
     Ok(())
 }
 
@@ -266,6 +283,8 @@ mod tests {
             outcome,
             flies: false,
             delay: false,
+            passed: 0,
+            flown: 1,
         }
     }
 
