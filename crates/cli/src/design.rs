@@ -82,7 +82,8 @@ pub struct DesignArgs {
     /// steps, hover, paper, gusty, or a mission file; repeat or separate
     /// with commas for several) over randomised seeds and phases: one
     /// whose pass rate's lower confidence bound misses --pass-rate is cut,
-    /// with every design no faster than it, and the search goes on. The
+    /// with every design no faster than 95 % of it, and the search goes
+    /// on. The
     /// answer is the least-utilisation design that both verifies and
     /// flies. Box search only (sound mode, no harmonic periods).
     #[arg(long = "fly", value_name = "MISSION", value_delimiter = ',')]
