@@ -313,6 +313,25 @@ mod tests {
         assert!(svg.contains("<circle") && !svg.contains("crashed"));
     }
 
+    /// A point some of whose flights failed says how many passed; one
+    /// whose flights all passed or all failed is not annotated.
+    #[test]
+    fn a_partly_passing_point_is_annotated_with_its_pass_fraction() {
+        let m = settling();
+        let mut partial = dot(DotOutcome::Measured(0.3));
+        (partial.passed, partial.flown) = (5, 8);
+        let mut all = dot(DotOutcome::Measured(0.2));
+        (all.passed, all.flown, all.flies) = (8, 8, true);
+        let rows = [(
+            "gyro path".to_string(),
+            (Some(10.0), None),
+            vec![partial, all],
+        )];
+        let svg = sweep_chart(&rows, Some(&m)).unwrap_or_default();
+        assert!(svg.contains("5/8"), "{svg}");
+        assert!(!svg.contains("8/8"), "{svg}");
+    }
+
     #[test]
     fn a_mission_without_a_measure_leaves_its_points_out_and_says_so() {
         let svg = sweep_chart(&[row(DotOutcome::Measured(0.0))], None).unwrap_or_default();
