@@ -432,3 +432,22 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
     // Without --sweep they are refused, not ignored.
     assert_exit(&rtpipe(&["fly", spec.as_str(), "--seeds", "2"]), 2);
 }
+
+/// The held-out missions of docs/flight.md load, and Table V flies each
+/// on racer5 at seed 10 (scripts/held-out-flights.sh flies them all).
+#[test]
+fn the_held_out_missions_load_and_table_v_flies_them_on_racer5() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/missions");
+    for m in ["steps-turbulent", "aggressive-steps", "gusty-120s"] {
+        let mission = format!("{dir}/{m}.toml");
+        let o = rtpipe(&[
+            "fly",
+            &example("cleanflight.toml"),
+            "--mission",
+            &mission,
+            "--seed",
+            "10",
+        ]);
+        assert_exit(&o, 0);
+    }
+}
