@@ -80,20 +80,36 @@ pub struct DesignArgs {
     pub time_limit: Option<f64>,
     /// Fly every design the search would return on this mission (built-in
     /// steps, hover, paper, gusty, or a mission file; repeat or separate
-    /// with commas for several): one that misses the mission's criteria is
-    /// cut, with every design no faster than 95 % of it, and the search
-    /// goes on. The answer is the least-utilisation design that both
-    /// verifies and flies. Box search only (sound mode, no harmonic periods).
+    /// with commas for several) over randomised seeds and phases: one
+    /// whose pass rate's lower confidence bound misses --pass-rate is cut,
+    /// with every design no faster than 95 % of it, and the search goes
+    /// on. The
+    /// answer is the least-utilisation design that both verifies and
+    /// flies. Box search only (sound mode, no harmonic periods).
     #[arg(long = "fly", value_name = "MISSION", value_delimiter = ',')]
     pub missions: Vec<String>,
     /// With --fly: the vehicles (built-in racer5, aero1kg, or preset files;
     /// repeat or separate with commas) [default: racer5].
     #[arg(long = "vehicle", value_name = "PRESET|FILE", value_delimiter = ',')]
     pub vehicles: Vec<String>,
-    /// With --fly: the seeds of the sensor noise and execution times
-    /// (repeat or separate with commas) [default: 0].
-    #[arg(long = "seed", value_name = "S", value_delimiter = ',')]
-    pub seeds: Vec<u64>,
+    /// With --fly: the first seed of the sensor noise and execution times;
+    /// flight j of each vehicle and mission flies seed S + j at phase draw
+    /// j [default: 0].
+    #[arg(long = "seed", value_name = "S")]
+    pub seed: Option<u64>,
+    /// With --fly: the pass rate whose lower confidence bound (Wilson) a
+    /// design's flights must reach, in (0, 1) [default: 0.95].
+    #[arg(long, value_name = "R", value_parser = flights::parse_fraction, allow_hyphen_values = true)]
+    pub pass_rate: Option<f64>,
+    /// With --fly: the confidence of that bound, in (0, 1) [default: 0.95;
+    /// with the default rate, 73 flights all passing].
+    #[arg(long, value_name = "C", value_parser = flights::parse_fraction, allow_hyphen_values = true)]
+    pub confidence: Option<f64>,
+    /// With --fly: flights per design [default: the fewest that can reach
+    /// the bound, spread over the vehicles and missions]; more flights let
+    /// a design fail a few and still pass.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub flights: Option<u32>,
     /// What the answer optimises: `utilization` (least Σ C/T) or `margin`
     /// (the largest factor every exec may grow by together, among the
     /// designs within --max-utilization).
@@ -213,9 +229,14 @@ type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
 /// `--seed` without `--fly` is an error, not a silently ignored flag.
 fn flight_check(a: &DesignArgs, spec: &Spec) -> Result<Option<FlightCheck>, Diagnostic> {
     if a.missions.is_empty() {
-        if !a.vehicles.is_empty() || !a.seeds.is_empty() {
+        let given = !a.vehicles.is_empty()
+            || a.seed.is_some()
+            || a.flights.is_some()
+            || a.pass_rate.is_some()
+            || a.confidence.is_some();
+        if given {
             return Err(Diagnostic::error(
-                "--vehicle and --seed choose the flights of --fly, which is not given",
+                "--vehicle, --seed, --flights, --pass-rate and --confidence choose and judge the flights of --fly, which is not given",
                 "add --fly MISSION (e.g. --fly steps), or drop them",
             ));
         }
@@ -226,18 +247,20 @@ fn flight_check(a: &DesignArgs, spec: &Spec) -> Result<Option<FlightCheck>, Diag
     } else {
         a.vehicles.clone()
     };
-    let seeds = if a.seeds.is_empty() {
-        vec![0]
-    } else {
-        a.seeds.clone()
-    };
+    let d = rtpipe_fly::confidence::Requirement::DEFAULT;
     let r = flights::FlyRequest {
         missions: &a.missions,
         vehicles: &vehicles,
-        seeds: &seeds,
+        seed: a.seed.unwrap_or(0),
+        flights: a.flights,
+        need: rtpipe_fly::confidence::Requirement {
+            rate: a.pass_rate.unwrap_or(d.rate),
+            confidence: a.confidence.unwrap_or(d.confidence),
+        },
     };
     let f = flights::flights(&a.spec, spec, &r)?;
-    Ok(Some((Arc::new(f), r.describe())))
+    let what = r.describe(&f);
+    Ok(Some((Arc::new(f), what)))
 }
 
 /// The search's options from the flags: the solver named, else HiGHS when

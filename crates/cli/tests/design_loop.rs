@@ -70,15 +70,21 @@ fn sweep_design_fly_closes_on_aero1kg() {
 }
 
 #[test]
-fn design_fly_returns_a_design_that_flies_both_missions_on_both_vehicles() {
+fn design_fly_returns_a_design_whose_pass_rate_bound_is_met() {
     let spec = example("cleanflight-design.toml");
+    // Pass rate ≥ 0.8 at 80 % confidence: 7 flights a design, 4 per
+    // vehicle (8), all passing.
     let o = rtpipe(&[
         "design",
         &spec,
         "--fly",
-        "steps,gusty",
+        "hover",
         "--vehicle",
         "racer5,aero1kg",
+        "--pass-rate",
+        "0.8",
+        "--confidence",
+        "0.8",
         "--json",
     ]);
     assert_exit(&o, 0);
@@ -103,6 +109,18 @@ fn design_fly_returns_a_design_that_flies_both_missions_on_both_vehicles() {
     assert!(flights
         .iter()
         .all(|f| f["flies"] == true || f["failure"].as_str().is_some_and(|w| !w.is_empty())));
+    // Each design's flights counted: an accepted one flew all 8 and its
+    // Wilson lower bound reached 0.8 (8 of 8: 0.830).
+    for f in flights.iter().filter(|f| f["flies"] == true) {
+        assert_eq!(
+            (f["passed"].as_u64(), f["flown"].as_u64()),
+            (Some(8), Some(8))
+        );
+        let lower = f["lower_bound"].as_f64().unwrap_or(f64::NAN);
+        assert!((lower - 0.830).abs() < 1e-3, "{f}");
+        assert!((f["margin"].as_f64().unwrap_or(f64::NAN) - (lower - 0.8)).abs() < 1e-12);
+        assert_eq!(f["pass_rate"].as_f64(), Some(1.0));
+    }
     // Below Table V's 0.68, at or above the unflown optimum.
     let free = json_of(&rtpipe(&["design", &spec, "--json"]));
     let u0 = free["design"]["objective"].as_f64().unwrap_or(f64::NAN);
@@ -153,6 +171,29 @@ fn fly_flags_need_fly() {
         std::fs::read_to_string(&v).ok(),
         std::fs::read_to_string(preset).ok()
     );
+    // Too few flights to show the rate: named, with the fewest that can.
+    let o = rtpipe(&[
+        "design",
+        &example("cleanflight-design.toml"),
+        "--fly",
+        "steps",
+        "--flights",
+        "59",
+    ]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--flights 59") && err.contains("73"), "{err}");
+    for bad in [["--pass-rate", "1"], ["--confidence", "0"]] {
+        let o = rtpipe(&[
+            "design",
+            &example("cleanflight-design.toml"),
+            "--fly",
+            "steps",
+            bad[0],
+            bad[1],
+        ]);
+        assert_exit(&o, 2);
+    }
     // The MILP has no acceptance check.
     let o = rtpipe(&[
         "design",

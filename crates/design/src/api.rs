@@ -117,9 +117,33 @@ pub struct MarginStep {
 
 /// A check beyond the analysis that a design must pass to be the answer.
 pub trait Acceptance: Send + Sync + std::fmt::Debug {
-    /// `Ok` when `spec` (every period fixed, verified by the analysis)
-    /// passes; otherwise why not, said for the user.
-    fn accept(&self, spec: &Spec) -> Result<(), String>;
+    /// Whether `spec` (every period fixed, verified by the analysis)
+    /// passes, why not (said for the user), and the trials it was judged
+    /// by.
+    fn accept(&self, spec: &Spec) -> Judgement;
+}
+
+/// What an [`Acceptance`] check found of one design.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Judgement {
+    /// Why it was rejected; `None` when it passed.
+    pub failure: Option<String>,
+    /// The trials (flights) it was judged by, when the check counts them.
+    pub trials: Option<Trials>,
+}
+
+/// A design's trials: how many passed of how many run, and the lower
+/// confidence bound of its pass rate against the rate required.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Trials {
+    /// Trials that passed.
+    pub passed: u32,
+    /// Trials run (a rejection may stop early: fewer than planned).
+    pub run: u32,
+    /// The lower confidence bound of the pass rate.
+    pub lower_bound: f64,
+    /// The pass rate the lower bound had to reach.
+    pub required: f64,
 }
 
 /// A verified design the [`Acceptance`] check judged.
@@ -131,6 +155,8 @@ pub struct Checked {
     pub utilization: f64,
     /// Why it was rejected; `None` when it passed.
     pub failure: Option<String>,
+    /// The trials it was judged by, when counted.
+    pub trials: Option<Trials>,
 }
 
 /// A verified design found during the search.

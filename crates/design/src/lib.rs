@@ -58,8 +58,9 @@ mod solve;
 mod sound;
 
 pub use api::{
-    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, MarginSearch,
-    MarginStep, Method, Objective, Options, Outcome, Status, EXACT_PATIENCE, EXPLAIN_EFFORT,
+    utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Judgement,
+    MarginSearch, MarginStep, Method, Objective, Options, Outcome, Status, Trials, EXACT_PATIENCE,
+    EXPLAIN_EFFORT,
 };
 use budget::Budget;
 use domain::domains;

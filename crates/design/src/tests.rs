@@ -502,12 +502,11 @@ struct SlowerThan {
 }
 
 impl crate::Acceptance for SlowerThan {
-    fn accept(&self, spec: &Spec) -> Result<(), String> {
+    fn accept(&self, spec: &Spec) -> crate::Judgement {
         let p = spec.tasks[self.task].fixed_period().unwrap_or(0);
-        if self.everything || p > self.max {
-            Err(format!("period {p} ns"))
-        } else {
-            Ok(())
+        crate::Judgement {
+            failure: (self.everything || p > self.max).then(|| format!("period {p} ns")),
+            trials: None,
         }
     }
 }

@@ -8,8 +8,9 @@
 //! benchmark use it; the analysis and the simulator know nothing of it.
 #![deny(missing_docs)]
 
-/// The timing sweep: flights over scaled periods and added delays.
+pub mod confidence;
 pub mod phases;
+/// The timing sweep: flights over scaled periods and added delays.
 pub mod sweep;
 
 use rtpipe_body::{Body, Job, Stamped};

@@ -17,6 +17,9 @@
 //! the first failing one. The rate sweep gives the tail's `max_period`: a
 //! sample that never reaches a slow tail is counted by no from-read bound.
 
+mod refine;
+pub use refine::refine;
+
 use crate::{fly, Setup};
 use rayon::prelude::*;
 use rtpipe_analysis::Anchor;

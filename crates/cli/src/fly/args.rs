@@ -71,6 +71,13 @@ pub struct FlyArgs {
     /// motor-output period.
     #[arg(long, value_name = "M", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100), requires = "sweep")]
     pub phases: u32,
+    /// With --sweep: after the grid, bisect each sweep's edge (between its
+    /// last passing and first failing point, flown with the same seeds ×
+    /// phases) until the two are within this fraction of each other, so a
+    /// limit is written only where every finer point below it passed; 0
+    /// flies the grid alone.
+    #[arg(long, value_name = "R", default_value_t = 0.02, value_parser = parse_resolution, requires = "sweep")]
+    pub resolution: f64,
     /// With --sweep: every derived limit × this factor in (0, 1] (the
     /// margin a written limit keeps from the last timing that flew).
     #[arg(long, value_name = "F", default_value_t = 1.0, value_parser = parse_safety, requires = "sweep")]
@@ -132,6 +139,14 @@ pub fn parse_scale(s: &str) -> Result<(f64, f64), String> {
 }
 
 /// `--safety F`: a factor in (0, 1].
+/// `--resolution`: 0 (no refinement) or a fraction in (0, 0.5].
+pub fn parse_resolution(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(r) if r == 0.0 || (r > 0.0 && r <= 0.5) => Ok(r),
+        _ => Err("must be 0 (no refinement) or a fraction in (0, 0.5], e.g. 0.02".into()),
+    }
+}
+
 pub fn parse_safety(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(f) if f > 0.0 && f <= 1.0 => Ok(f),

@@ -9,8 +9,8 @@ use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
 use rtpipe_fly::sweep::{
-    derived_limits, edge, scale_edge, sweep, tails, variations, ChainPair, Derived, How, Point,
-    Trials, Variation, DELAY_LINES,
+    derived_limits, edge, refine, scale_edge, sweep, tails, variations, ChainPair, Derived, How,
+    Point, Trials, Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -287,6 +287,8 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
                         outcome: outcome(p),
                         flies: p.pass(),
                         delay: matches!(p.variation, Variation::Delay { .. }),
+                        passed: p.passed,
+                        flown: p.flights,
                     })
                 })
                 .collect();
@@ -442,7 +444,14 @@ fn fly_all(
         },
     };
     let points = std::thread::scope(|scope| {
-        let worker = scope.spawn(|| sweep(spec, s, &how, vars, &done, &check));
+        let worker = scope.spawn(|| {
+            let coarse = sweep(spec, s, &how, vars, &done, &check);
+            if a.resolution == 0.0 {
+                return coarse;
+            }
+            pb.set_message(format!("{} (refining the edges)", spec.name));
+            refine(spec, s, &how, coarse, a.resolution, &done, &check)
+        });
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));
             std::thread::sleep(std::time::Duration::from_millis(50));

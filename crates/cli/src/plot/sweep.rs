@@ -9,13 +9,17 @@ pub type SweepRow = (String, (Option<f64>, Option<f64>), Vec<SweepDot>);
 
 /// One sweep point for [`sweep_chart`]: the chain's predicted sound reaction
 /// (ms), what the flight gave, whether it met the criterion, and whether
-/// the point came from the delay sweep (else the period-scale sweep).
+/// the point came from the delay sweep (else the period-scale sweep), and
+/// its flights passed / flown (annotated beside a point some of whose
+/// flights failed).
 pub struct SweepDot {
     pub reaction_ms: f64,
     pub freshness_ms: f64,
     pub outcome: DotOutcome,
     pub flies: bool,
     pub delay: bool,
+    pub passed: u32,
+    pub flown: u32,
 }
 
 /// What a sweep point's flight gave: the measure to plot, or why there is
@@ -186,7 +190,9 @@ where
 
 /// The sweep's flown points at (`x_of`, measure capped at `top`), one
 /// series per sweep (period scale, pure delay) in its own colour, filled
-/// where the vehicle flies and hollow where it fails.
+/// where the vehicle flies and hollow where it fails; a point flown
+/// several times that passed some but not all of them is annotated
+/// "passed/flown" (its pass fraction).
 fn draw_sweep_dots<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     dots: &[SweepDot],
@@ -215,6 +221,17 @@ where
             }))
             .map_err(err)?;
     }
+    let partial = dots.iter().filter(|d| 0 < d.passed && d.passed < d.flown);
+    chart
+        .draw_series(partial.filter_map(|d| match d.outcome {
+            DotOutcome::Measured(v) => Some(Text::new(
+                format!("{}/{}", d.passed, d.flown),
+                (x_of(d), v.min(top)),
+                (FONT, 11).into_font(),
+            )),
+            _ => None,
+        }))
+        .map_err(err)?;
     Ok(())
 }
 
@@ -266,6 +283,8 @@ mod tests {
             outcome,
             flies: false,
             delay: false,
+            passed: 0,
+            flown: 1,
         }
     }
 
@@ -292,6 +311,25 @@ mod tests {
         assert!(!svg.contains("<circle"));
         let svg = sweep_chart(&[row(DotOutcome::Measured(0.3))], Some(&m)).unwrap_or_default();
         assert!(svg.contains("<circle") && !svg.contains("crashed"));
+    }
+
+    /// A point some of whose flights failed says how many passed; one
+    /// whose flights all passed or all failed is not annotated.
+    #[test]
+    fn a_partly_passing_point_is_annotated_with_its_pass_fraction() {
+        let m = settling();
+        let mut partial = dot(DotOutcome::Measured(0.3));
+        (partial.passed, partial.flown) = (5, 8);
+        let mut all = dot(DotOutcome::Measured(0.2));
+        (all.passed, all.flown, all.flies) = (8, 8, true);
+        let rows = [(
+            "gyro path".to_string(),
+            (Some(10.0), None),
+            vec![partial, all],
+        )];
+        let svg = sweep_chart(&rows, Some(&m)).unwrap_or_default();
+        assert!(svg.contains("5/8"), "{svg}");
+        assert!(!svg.contains("8/8"), "{svg}");
     }
 
     #[test]

@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import operator
 import os
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -355,7 +355,10 @@ class System:
         time_limit: Optional[float] = None,
         fly: Union[str, Sequence[str], None] = None,
         vehicle: Union[str, Sequence[str], None] = None,
-        seed: Union[int, Iterable[int], None] = None,
+        seed: Optional[int] = None,
+        flights: Optional[int] = None,
+        pass_rate: Optional[float] = None,
+        confidence: Optional[float] = None,
         write: Optional[str] = None,
         overwrite_spec: bool = False,
         objective: Optional[str] = None,
@@ -368,11 +371,15 @@ class System:
         ``objective="margin"`` with ``max_utilization=U`` asks instead for
         the largest factor every exec may grow by together within that
         utilisation (``design["margin_search"]``); ``margins=True`` adds
-        the answer's timing margins (``"margins"``, as ``analyze``)."""
-        seeds = list(seed) if seed is not None and not isinstance(seed, int) else seed
+        the answer's timing margins (``"margins"``, as ``analyze``).
+        With ``fly``, ``seed`` is the first seed of each vehicle and
+        mission's flights, and a design is accepted when the Wilson lower
+        bound of its pass rate reaches ``pass_rate`` at ``confidence``
+        (defaults 0.95 and 0.95: 73 flights), over ``flights`` flights."""
         options = dict(
             mode=mode, method=method, solver=solver, time_limit=time_limit, fly=fly,
-            vehicle=vehicle, seed=seeds, write=write, overwrite_spec=overwrite_spec,
+            vehicle=vehicle, seed=seed, flights=flights, pass_rate=pass_rate,
+            confidence=confidence, write=write, overwrite_spec=overwrite_spec,
             objective=objective, max_utilization=max_utilization, margins=margins,
         )
         return self._run("design", options)
