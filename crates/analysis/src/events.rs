@@ -17,6 +17,10 @@ use rtpipe_model::{Join, Nanos, Server, Spec};
 /// depends on it is called unbounded.
 pub const MAX_ROUNDS: usize = 1_000;
 
+/// One stream of what runs above a task: (I, T, J), the work of each of
+/// its jobs, its period and its release jitter.
+pub type Load = (Nanos, Nanos, Nanos);
+
 /// What the fixed-priority analysis provides (`sched` implements it, so
 /// that thread-less tasks keep their own analysis, servers included).
 pub trait FixedPriority {
@@ -29,11 +33,7 @@ pub trait FixedPriority {
     fn blocking(&self, i: usize) -> Nanos;
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
-    fn periodic_response(
-        &self,
-        i: usize,
-        hp: &[(Nanos, Nanos, Nanos)],
-    ) -> (Option<Nanos>, Option<Nanos>);
+    fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
 }
 
 /// What the event analysis knows of a task, beside its response times.
