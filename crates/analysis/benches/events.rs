@@ -1,12 +1,15 @@
 //! The whole analysis (`analyze`: the holistic iteration over threads and
 //! data-triggered tasks, then every chain's bounds) of a generated
-//! event-triggered system of about 1,000 tasks.
+//! event-triggered system of 1,000 tasks, against the same generator's
+//! system with no thread and no data-triggered task (every task periodic,
+//! analysed by the fixed-priority path alone): like with like, per task
+//! (criterion's throughput in tasks).
 //!
-//! `cargo bench -p rtpipe-analysis --bench events`. The system comes from
-//! `rtpipe_model::gen::event_triggered_system`, deterministic per seed; it
-//! is described on stderr before it is measured.
+//! `cargo bench -p rtpipe-analysis --bench events`. The systems come from
+//! `rtpipe_model::gen::event_triggered_system`, deterministic per seed;
+//! each is described on stderr before it is measured.
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_analysis::analyze;
 use rtpipe_model::gen::{event_triggered_system, EventGenConfig};
 use rtpipe_model::Spec;
@@ -18,8 +21,8 @@ const SEED: u64 = 2018;
 /// 250 chains of 4 tasks (1,000 tasks) on up to 8 CPUs, a few of them in
 /// up to 64 work-queue threads (a thread's tasks queue behind each other:
 /// with most of 1,000 tasks in a handful of threads no system is
-/// schedulable).
-fn system() -> Spec {
+/// schedulable). `periodic`: no threads and no data-triggered links.
+fn system(periodic: bool) -> Spec {
     event_triggered_system(
         SEED,
         &EventGenConfig {
@@ -30,8 +33,8 @@ fn system() -> Spec {
             max_threads: 64,
             max_cpus: 8,
             utilization: 0.5,
-            data_fraction: 0.6,
-            thread_fraction: 0.05,
+            data_fraction: if periodic { 0.0 } else { 0.6 },
+            thread_fraction: if periodic { 0.0 } else { 0.05 },
             max_timers: 0,
         },
     )
@@ -61,16 +64,18 @@ fn describe(spec: &Spec) {
 }
 
 fn bench(c: &mut Criterion) {
-    let mut group = c.benchmark_group("analyze event-triggered");
+    let mut group = c.benchmark_group("analyze 1000 tasks");
     group
         .sample_size(10)
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(5));
-    let spec = system();
-    describe(&spec);
-    group.bench_function(BenchmarkId::from_parameter(spec.tasks.len()), |b| {
-        b.iter(|| black_box(analyze(black_box(&spec))))
-    });
+    for (name, periodic) in [("periodic", true), ("event-triggered", false)] {
+        let spec = system(periodic);
+        describe(&spec);
+        group.throughput(Throughput::Elements(spec.tasks.len() as u64));
+        let id = BenchmarkId::new(name, spec.tasks.len());
+        group.bench_function(id, |b| b.iter(|| black_box(analyze(black_box(&spec)))));
+    }
     group.finish();
 }
 

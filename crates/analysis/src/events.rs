@@ -17,6 +17,10 @@ use rtpipe_model::{Join, Nanos, Server, Spec};
 /// depends on it is called unbounded.
 pub const MAX_ROUNDS: usize = 1_000;
 
+/// One stream of what runs above a task: (I, T, J), the work of each of
+/// its jobs, its period and its release jitter.
+pub type Load = (Nanos, Nanos, Nanos);
+
 /// What the fixed-priority analysis provides (`sched` implements it, so
 /// that thread-less tasks keep their own analysis, servers included).
 pub trait FixedPriority {
@@ -29,11 +33,7 @@ pub trait FixedPriority {
     fn blocking(&self, i: usize) -> Nanos;
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
-    fn periodic_response(
-        &self,
-        i: usize,
-        hp: &[(Nanos, Nanos, Nanos)],
-    ) -> (Option<Nanos>, Option<Nanos>);
+    fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
 }
 
 /// What the event analysis knows of a task, beside its response times.
@@ -69,14 +69,27 @@ pub struct EventResult {
     pub timing: EventTiming,
 }
 
-/// Every task's figures, by the holistic iteration.
+/// Every task's figures, by the holistic iteration. Each round recomputes
+/// the activations (linear in the tasks and their streams) and then only
+/// the responses whose inputs changed: a task's response reads the
+/// activations of the tasks above it and of its thread's tasks alone
+/// ([`Deps`]), so the figures are those of recomputing every task every
+/// round (`analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
+    let deps = Deps::of(spec, fp);
     // Each task's output jitter R − R_min, from zero.
     let mut delay: Vec<Option<Nanos>> = vec![Some(0); n];
-    for _ in 0..MAX_ROUNDS {
-        let arrivals = activations(spec, &delay);
-        let responses: Vec<Response> = (0..n).map(|i| respond(spec, fp, &arrivals, i)).collect();
+    let mut arrivals = activations(spec, &delay);
+    let mut responses: Vec<Response> = vec![Response::NONE; n];
+    deps.respond_units(spec, fp, &arrivals, &mut responses, |_| true);
+    for round in 0..MAX_ROUNDS {
+        if round > 0 {
+            let fresh = activations(spec, &delay);
+            let dirty = deps.readers_of_changed(&arrivals, &fresh);
+            arrivals = fresh;
+            deps.respond_units(spec, fp, &arrivals, &mut responses, |u| dirty[u]);
+        }
         let next: Vec<Option<Nanos>> = (0..n)
             .map(|i| {
                 let grown = responses[i].actual? - spec.tasks[i].demand_min();
@@ -92,9 +105,116 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     // No fixed point found: nothing that depends on the jitter is bounded.
     let none = vec![None; n];
     let arrivals = activations(spec, &none);
-    let responses = (0..n).map(|i| respond(spec, fp, &arrivals, i)).collect();
+    deps.respond_units(spec, fp, &arrivals, &mut responses, |_| true);
     finish(spec, arrivals, responses)
 }
+
+/// What each task's response reads, built once per analysis. A *unit* is
+/// a thread (its tasks' responses are analysed together: they share the
+/// tasks above them and read each other's activations), numbered after
+/// the tasks, or a thread-less task, numbered as the task.
+struct Deps {
+    /// Per task the tasks that can run above it, its thread's own left
+    /// out (none for a background task, which has no response).
+    above: Vec<Vec<usize>>,
+    /// Per thread its tasks, in declaration order.
+    members: Vec<Vec<usize>>,
+    /// Per task j the units whose responses read j's activations,
+    /// ascending and distinct.
+    readers: Vec<Vec<usize>>,
+}
+
+impl Deps {
+    fn of(spec: &Spec, fp: &impl FixedPriority) -> Deps {
+        let n = spec.tasks.len();
+        let mut members = vec![Vec::new(); spec.threads.len()];
+        for (i, t) in spec.tasks.iter().enumerate() {
+            if let Some(th) = t.thread {
+                members[th].push(i);
+            }
+        }
+        let above: Vec<Vec<usize>> = (0..n)
+            .map(|i| {
+                let t = &spec.tasks[i];
+                if t.server == Server::Background {
+                    return Vec::new();
+                }
+                let mut above = fp.above(i);
+                above.retain(|&j| t.thread.is_none() || spec.tasks[j].thread != t.thread);
+                above
+            })
+            .collect();
+        let mut readers = vec![Vec::new(); n];
+        for (i, t) in spec.tasks.iter().enumerate() {
+            let unit = t.thread.map_or(i, |th| n + th);
+            for &j in &above[i] {
+                readers[j].push(unit);
+            }
+            if t.thread.is_none() && merging(spec, i) {
+                readers[i].push(unit);
+            }
+        }
+        for (th, on) in members.iter().enumerate() {
+            for &j in on {
+                readers[j].push(n + th);
+            }
+        }
+        for r in &mut readers {
+            r.sort_unstable();
+            r.dedup();
+        }
+        Deps {
+            above,
+            members,
+            readers,
+        }
+    }
+
+    /// Per unit, whether it reads the activations of a task whose
+    /// activations differ between `old` and `new`.
+    fn readers_of_changed(&self, old: &[Option<Arrivals>], new: &[Option<Arrivals>]) -> Vec<bool> {
+        let mut dirty = vec![false; old.len() + self.members.len()];
+        for (j, readers) in self.readers.iter().enumerate() {
+            if old[j] != new[j] {
+                for &u in readers {
+                    dirty[u] = true;
+                }
+            }
+        }
+        dirty
+    }
+
+    /// The responses of the units `chosen` picks, into `responses`.
+    fn respond_units(
+        &self,
+        spec: &Spec,
+        fp: &impl FixedPriority,
+        arrivals: &[Option<Arrivals>],
+        responses: &mut [Response],
+        chosen: impl Fn(usize) -> bool,
+    ) {
+        let n = spec.tasks.len();
+        for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none() && chosen(i)) {
+            responses[i] = respond(spec, fp, self, arrivals, i, &mut Vec::new());
+        }
+        for (th, on) in self.members.iter().enumerate() {
+            if chosen(n + th) {
+                // The members' FIFO figures, shared between members that
+                // see the same thread (ThreadCache).
+                let mut cache = Vec::new();
+                for &i in on {
+                    responses[i] = respond(spec, fp, self, arrivals, i, &mut cache);
+                }
+            }
+        }
+    }
+}
+
+/// FIFO responses of one thread this round, by (tasks above, blocking),
+/// for members whose own work is the work the others see of them (then
+/// every input of [`fifo_response`] is the same for them, and so is its
+/// figure).
+type ThreadCache = Vec<(Vec<usize>, Nanos, Option<Nanos>)>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone, Copy)]
@@ -104,6 +224,15 @@ struct Response {
     /// From the actual release (the first one of a merged job), for the
     /// output jitter; at most `job`.
     actual: Option<Nanos>,
+}
+
+impl Response {
+    /// No figure: unbounded.
+    const NONE: Response = Response {
+        budget: None,
+        job: None,
+        actual: None,
+    };
 }
 
 /// Each task's activations given each task's output jitter (`None`:
@@ -161,29 +290,22 @@ pub fn merging(spec: &Spec, i: usize) -> bool {
 fn respond(
     spec: &Spec,
     fp: &impl FixedPriority,
+    deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
+    cache: &mut ThreadCache,
 ) -> Response {
-    let none = Response {
-        budget: None,
-        job: None,
-        actual: None,
-    };
     let t = &spec.tasks[i];
     if t.server == Server::Background {
-        return none;
+        return Response::NONE;
     }
-    let above: Vec<usize> = fp
-        .above(i)
-        .into_iter()
-        .filter(|&j| t.thread.is_none() || spec.tasks[j].thread != t.thread)
-        .collect();
+    let above = &deps.above[i];
     let Some(models) = above
         .iter()
         .map(|&j| arrivals[j].as_ref().map(|a| (fp.interference(j), a)))
         .collect::<Option<Vec<_>>>()
     else {
-        return none;
+        return Response::NONE;
     };
     if !merging(spec, i) {
         let hp: Vec<(Nanos, Nanos, Nanos)> = models
@@ -197,8 +319,21 @@ fn respond(
             actual: job,
         };
     }
-    let Some(actual) = thread_response(spec, fp, arrivals, i, &models) else {
-        return none;
+    let blocking = fp.blocking(i);
+    let shared = t.demand() == fp.interference(i);
+    let known = cache
+        .iter()
+        .find(|(a, b, _)| shared && a == above && *b == blocking)
+        .map(|&(_, _, r)| r);
+    let actual = known.unwrap_or_else(|| {
+        let r = thread_response(spec, fp, deps, arrivals, i, &models, blocking);
+        if shared {
+            cache.push((above.clone(), blocking, r));
+        }
+        r
+    });
+    let Some(actual) = actual else {
+        return Response::NONE;
     };
     // A periodic task's figure counts from its nominal release.
     let job = actual.checked_add(t.jitter);
@@ -214,17 +349,15 @@ fn respond(
 fn thread_response(
     spec: &Spec,
     fp: &impl FixedPriority,
+    deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
     above: &[(Nanos, &Arrivals)],
+    blocking: Nanos,
 ) -> Option<Nanos> {
     let t = &spec.tasks[i];
-    let members: Vec<usize> = match t.thread {
-        Some(th) => (0..spec.tasks.len())
-            .filter(|&j| spec.tasks[j].thread == Some(th))
-            .collect(),
-        None => vec![i],
-    };
+    let alone = [i];
+    let members = t.thread.map_or(&alone[..], |th| &deps.members[th][..]);
     let members: Vec<Member> = members
         .iter()
         .map(|&j| {
@@ -239,7 +372,7 @@ fn thread_response(
             })
         })
         .collect::<Option<_>>()?;
-    fifo_response(&members, above, fp.blocking(i))
+    fifo_response(&members, above, blocking)
 }
 
 /// The iteration's last round as each task's figures, with the gaps.

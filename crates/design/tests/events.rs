@@ -172,11 +172,22 @@ fn small() -> EventGenConfig {
     }
 }
 
+/// The period values a periodic task of period T may take in a problem.
+#[derive(Debug, Clone, Copy)]
+enum Grid {
+    /// {T/2, T, 2T}: halving can bring a CPU's load near 1, where one
+    /// analysis iterates long (some systems then take minutes to
+    /// enumerate).
+    HalfToDouble,
+    /// {T, 2T}: the load stays at most the generated one.
+    OneOrDouble,
+}
+
 /// A generated event-triggered system with its periodic tasks' periods
-/// free among {T/2, T, 2T} (those at least their budget) and, per chain,
-/// a from-event freshness limit at `scale` times its sound bound at the
+/// free on `grid` (values at least their budget) and, per chain, a
+/// from-event freshness limit at `scale` times its sound bound at the
 /// generated periods (`None`: the system is not a design problem).
-fn problem(seed: u64, scale: f64) -> Option<Spec> {
+fn problem(seed: u64, grid: Grid, scale: f64) -> Option<Spec> {
     let mut spec = event_triggered_system(seed, &small());
     let report = analyze(&spec);
     for c in &report.chains {
@@ -186,10 +197,11 @@ fn problem(seed: u64, scale: f64) -> Option<Spec> {
     }
     for t in spec.tasks.iter_mut() {
         if let Some(p) = t.fixed_period() {
-            let choices: Vec<Nanos> = [p / 2, p, 2 * p]
-                .into_iter()
-                .filter(|&q| q >= t.budget())
-                .collect();
+            let values = match grid {
+                Grid::HalfToDouble => vec![p / 2, p, 2 * p],
+                Grid::OneOrDouble => vec![p, 2 * p],
+            };
+            let choices: Vec<Nanos> = values.into_iter().filter(|&q| q >= t.budget()).collect();
             t.period = PeriodSpec::Choices(choices);
         }
     }
@@ -198,13 +210,29 @@ fn problem(seed: u64, scale: f64) -> Option<Spec> {
 
 #[test]
 fn generated_event_systems_agree_with_enumeration() {
-    // Each system is three problems, each enumerated: the default keeps
-    // the suite short on a loaded machine; raise it to test more.
-    let cases = rtpipe_testkit::env_u64("RTPIPE_EVENT_DESIGN_CASES", 3);
+    // Periods halved too: three systems keep the suite short on a loaded
+    // machine (one of the first ten takes minutes); raise it to test more.
+    let systems = rtpipe_testkit::env_u64("RTPIPE_EVENT_DESIGN_CASES", 3);
+    let (optimal, infeasible) = agree_with_enumeration(systems, Grid::HalfToDouble);
+    assert!(optimal > 0 && infeasible > 0);
+}
+
+#[test]
+fn many_generated_event_systems_agree_with_enumeration() {
+    // Periods kept or doubled: 200 systems take seconds.
+    let systems = rtpipe_testkit::env_u64("RTPIPE_EVENT_DESIGN_SYSTEMS", 200);
+    let (optimal, infeasible) = agree_with_enumeration(systems, Grid::OneOrDouble);
+    assert!(optimal > 0 && infeasible > 0);
+}
+
+/// Designs three problems of each of `systems` generated systems on
+/// `grid` and checks each against enumeration: (optimal, infeasible)
+/// counts.
+fn agree_with_enumeration(systems: u64, grid: Grid) -> (usize, usize) {
     let (mut optimal, mut infeasible) = (0, 0);
-    for seed in 0..cases {
+    for seed in 0..systems {
         for (scale, mode) in [(1.0, Mode::Sound), (0.8, Mode::Sound), (1.0, Mode::Paper)] {
-            let Some(spec) = problem(seed, scale) else {
+            let Some(spec) = problem(seed, grid, scale) else {
                 continue;
             };
             let o = run(&spec, mode);
@@ -223,8 +251,8 @@ fn generated_event_systems_agree_with_enumeration() {
             }
         }
     }
-    eprintln!("{optimal} optimal, {infeasible} infeasible");
-    assert!(optimal > 0 && infeasible > 0);
+    eprintln!("{systems} systems on {grid:?}: {optimal} optimal, {infeasible} infeasible");
+    (optimal, infeasible)
 }
 
 /// The search cuts a source's period by a from-event limit because the
