@@ -1,0 +1,4 @@
+//! Empty: it exists so that cargo resolves this crate's build-dependencies
+//! (the host-side features it unifies; see Cargo.toml).
+
+fn main() {}
