@@ -1,4 +1,4 @@
-//! Blocking by lower-priority critical sections (issue 22): the B_i of
+//! Blocking by lower-priority critical sections: the B_i of
 //! fixed-priority response-time analysis, R_i = J_i + w_i with
 //! w_i = C_i + B_i + Σ_{j ∈ hp(i)} ⌈(w_i + J_j) / T_j⌉ · I_j
 //! (Audsley, Burns, Richardson, Tindell, Wellings 1993; Burns and Wellings,

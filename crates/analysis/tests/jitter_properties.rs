@@ -1,5 +1,5 @@
 //! Property tests of the analysis with release jitter, constrained
-//! deadlines and deadline-monotonic or explicit priorities (issue 22), on
+//! deadlines and deadline-monotonic or explicit priorities, on
 //! generated systems: sound ≤ min(Davare, Dürr) still holds, reaction ≤
 //! freshness, from the event ≥ from the read, and jitter never lowers a
 //! response time or a bound (removing it from a system can only tighten

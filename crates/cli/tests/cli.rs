@@ -266,7 +266,7 @@ fn bad_deadlines_jitter_and_priorities_exit_2_with_location() {
     );
 }
 
-/// Communication per chain (issue 22): a task on chains of two semantics,
+/// Communication per chain: a task on chains of two semantics,
 /// and what LET cannot run on a LET chain (jitter, an I/O VCPU), exit 2
 /// with the place and a fix; `design` refuses a LET chain (exit 2).
 #[test]
@@ -301,7 +301,7 @@ fn per_chain_let_misuse_exits_2_with_location() {
     );
 }
 
-/// Shared resources (issue 22): a critical section longer than its task's
+/// Shared resources: a critical section longer than its task's
 /// exec, an undeclared resource and sections under EDF exit 2 with the
 /// place and a fix; `design`'s MILP refuses specs with sections (exit 2)
 /// at the first section rather than ignore them, the box search models
@@ -324,7 +324,7 @@ fn bad_critical_sections_exit_2_with_location() {
     assert_exit(&rtpipe(&["design", &example("resources.toml")]), 0);
 }
 
-/// Shared resources under EDF (issue 22): only the stack resource policy,
+/// Shared resources under EDF: only the stack resource policy,
 /// named; sections only in plain tasks
 /// and within exec, as under RM. `run --policy deadline` refuses the spec
 /// at its protocol (SCHED_DEADLINE cannot run SRP), `analyze` and

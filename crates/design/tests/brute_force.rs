@@ -17,7 +17,7 @@
 //! every instance. Run with `--nocapture` to see the tallies.
 //!
 //! `contention_agrees_with_brute_force` adds critical sections and
-//! scheduling overheads (issue 22) and simulates some of the designs
+//! scheduling overheads and simulates some of the designs
 //! (`sim/tests/common`'s probe and check).
 
 #[path = "../../sim/tests/common/mod.rs"]

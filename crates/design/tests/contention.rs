@@ -1,4 +1,4 @@
-//! `design` with critical sections and scheduling overheads (issue 22),
+//! `design` with critical sections and scheduling overheads,
 //! on a problem small enough to solve by hand. The brute-force agreement
 //! on random problems is `contention_agrees_with_brute_force` in
 //! tests/brute_force.rs.

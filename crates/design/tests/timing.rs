@@ -1,5 +1,5 @@
 //! `design` with deadline-monotonic and explicit priorities, with EDF
-//! under the processor-demand test and with LET communication (issue 22),
+//! under the processor-demand test and with LET communication,
 //! on problems small enough to solve by hand. The brute-force agreement on random problems is
 //! `timing_agrees_with_brute_force` in tests/brute_force.rs.
 //!

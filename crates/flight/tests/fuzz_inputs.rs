@@ -1,4 +1,4 @@
-//! Missions, vehicle presets and criteria from files (issue 24): random
+//! Missions, vehicle presets and criteria from files: random
 //! bytes and mutated valid files are read without a panic, and every
 //! refusal names the file (and its line and column when it has a place)
 //! and says what is wrong.

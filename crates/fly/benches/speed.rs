@@ -1,4 +1,4 @@
-//! Flight speed along its axes (issue 25): flight length (26 s, 600 s and
+//! Flight speed along its axes: flight length (26 s, 600 s and
 //! 3,600 s of an airborne hold (`benches/hold.toml`) and of the built-in
 //! hover, which lands at 16 s, and the 26 s steps mission) and the timing
 //! sweep (`rtpipe fly --sweep`: the issue's 37 flights, period scales and

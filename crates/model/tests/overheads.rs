@@ -1,4 +1,4 @@
-//! `[system] overheads` (issue 22): the keys, their defaults, per-CPU
+//! `[system] overheads`: the keys, their defaults, per-CPU
 //! tables overriding key by key, the writer, and every refusal as a
 //! located diagnostic (file:line:column) with a fix. A spec whose
 //! overheads make it unschedulable still analyses (the analysis crate's

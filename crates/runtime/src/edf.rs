@@ -1,4 +1,4 @@
-//! EDF with the stack resource policy on SCHED_FIFO threads (issue 22): a
+//! EDF with the stack resource policy on SCHED_FIFO threads: a
 //! dispatcher in user space, one per CPU, for the specs SCHED_DEADLINE
 //! cannot run (critical sections under `scheduler = "edf"`: it picks by
 //! deadline alone and has no preemption level or ceiling to hold a job

@@ -28,7 +28,7 @@
 //! made a later output carry an older sample, which the chain tracker
 //! cannot place.
 //!
-//! Communication per chain (issue 22) makes edges mixed. A LET producer's
+//! Communication per chain makes edges mixed. A LET producer's
 //! edge to an implicit consumer is the same ring: the consumer, reading at
 //! the start of its job, takes the job whose period ended by then. An
 //! implicit producer's edge to a LET consumer cannot go by index (which

@@ -1,4 +1,4 @@
-//! Critical sections on real threads (issue 22), placed as the simulator
+//! Critical sections on real threads, placed as the simulator
 //! places them (`rtpipe_sim`'s locks.rs): a job runs its sections back to
 //! back, in the spec's order, from the start of its processing (after Δin),
 //! each cut at the job's demand. Synthetic bodies only: the runtime burns

@@ -1,4 +1,4 @@
-//! EDF with the stack resource policy on real threads (issue 22): the EDF
+//! EDF with the stack resource policy on real threads: the EDF
 //! dispatcher (`rtpipe_runtime::edf`, `Policy::EdfFifo`) runs
 //! examples/edf-srp.toml. SCHED_FIFO needs root: without it the test says
 //! why and passes.

@@ -1,4 +1,4 @@
-//! The EDF dispatcher on random EDF + SRP systems (issue 22): two CPUs,
+//! The EDF dispatcher on random EDF + SRP systems: two CPUs,
 //! three or four tasks each, a resource per CPU shared by most of its
 //! tasks. Each run's own log is the oracle: SRP's start rule
 //! (`model::policy::srp_may_start`) at every job's start against every hold

@@ -1,4 +1,4 @@
-//! Critical sections and LET on real threads (issue 22): the protocol
+//! Critical sections and LET on real threads: the protocol
 //! holds (mutual exclusion, blocking where the analysis puts it, no
 //! response above its bound beyond the run's own noise) and LET's data
 //! flow is the simulator's. SCHED_FIFO needs root: without it the

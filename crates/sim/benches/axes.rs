@@ -1,4 +1,4 @@
-//! Simulator throughput along every axis of a system's size (issue 25):
+//! Simulator throughput along every axis of a system's size:
 //! tasks, CPUs, chains and fan-in (reads per task), each varied alone
 //! around a base of 1,000 tasks on 40 CPUs with 50 chains, plus WATERS
 //! systems (`rtpipe generate waters`) of 1,000 tasks on 40 CPUs and of

@@ -1,4 +1,4 @@
-//! The CPUs without a scan per event (issue 25): each CPU's running job is
+//! The CPUs without a scan per event: each CPU's running job is
 //! charged lazily, only when something happens on that CPU, and the CPUs'
 //! next events (a completion or a budget running out) wait in a tournament
 //! tree. An instant visits only the CPUs whose event it is and those whose

@@ -1,4 +1,4 @@
-//! Shared resources on the simulated schedule (issue 22): each task's
+//! Shared resources on the simulated schedule: each task's
 //! critical sections, who holds each resource, who waits for it, and the
 //! priority a holder runs at.
 //!

@@ -1,4 +1,4 @@
-//! Shared resources under EDF, the stack resource policy (issue 22),
+//! Shared resources under EDF, the stack resource policy,
 //! against the simulator: the hand-computed example of
 //! `examples/edf-srp.toml` (Baruah's blocking, the density and demand
 //! tests, Spuri's response times with blocking, `W`), reached by the

@@ -1,4 +1,4 @@
-//! Communication per chain (issue 22): random systems whose tasks each
+//! Communication per chain: random systems whose tasks each
 //! communicate under LET or implicitly, simulated task by task as specified
 //! (a LET task reads at its release and publishes at its period's end, an
 //! implicit one at its start and completion), against the sound bounds of

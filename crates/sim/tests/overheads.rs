@@ -1,4 +1,4 @@
-//! Scheduling overheads (issue 22) against the simulator: a small task set
+//! Scheduling overheads against the simulator: a small task set
 //! computed by hand reaches its bounds exactly, and on random systems with
 //! context switch, release and replenishment costs (fixed priority with
 //! sporadic servers, PIBS with inheritance and plain tasks, or EDF with

@@ -1,4 +1,4 @@
-//! Shared resources (issue 22) against the simulator: the hand-computed
+//! Shared resources against the simulator: the hand-computed
 //! example of `examples/resources.toml` reaches its bounds under the
 //! immediate priority ceiling and under priority inheritance, and on random
 //! systems with critical sections (PCP, SRP or PIP) no simulated job

@@ -1,5 +1,5 @@
 //! Critical sections and scheduling overheads added to a generated system
-//! (issue 22), for the property tests of the analysis' relaxation and the
+//!, for the property tests of the analysis' relaxation and the
 //! design's brute-force agreement. What validation refuses is avoided:
 //! sections only under fixed priorities, in plain tasks (`server =
 //! "none"`), on resources of one CPU each; no PIP with overheads; with

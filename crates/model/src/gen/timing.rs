@@ -1,5 +1,5 @@
 //! Constrained deadlines, deadline-monotonic or explicit priorities and
-//! the processor-demand test (issue 22) added to a generated system, for
+//! the processor-demand test added to a generated system, for
 //! the property tests of the analysis' relaxation and the design's
 //! brute-force agreement. What validation refuses is avoided: a deadline
 //! lies in [C, the task's least possible period]; deadline-monotonic and

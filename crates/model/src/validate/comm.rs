@@ -1,4 +1,4 @@
-//! Validation of the communication semantics (issue 22): `[system]
+//! Validation of the communication semantics: `[system]
 //! communication`, implicit by default, or LET; and `communication` in a
 //! `[[chain]]`, which sets it for every task on that chain. Under LET every
 //! job reads at its release and publishes at the end of its period, so

@@ -1,4 +1,4 @@
-//! Validation of the event-triggered model (issue 36): `[threads.NAME]`
+//! Validation of the event-triggered model: `[threads.NAME]`
 //! and per task `thread`, `activation`, `triggers` and `join`. A task's
 //! activation is parsed with its other keys ([`Builder::activation`]); the
 //! rules between tasks, threads, the priority order and the scheduler run

@@ -1,4 +1,4 @@
-//! Validation of `[system] overheads` (issue 22): `context_switch`,
+//! Validation of `[system] overheads`: `context_switch`,
 //! `release` and `replenish`, each a time of zero or more and at most
 //! [`MAX_OVERHEAD`], for the system and per CPU
 //! (`[system.overheads.cpu.N]`, overriding key by key).

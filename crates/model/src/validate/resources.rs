@@ -1,4 +1,4 @@
-//! Validation of shared resources (issue 22): `[resources.NAME]`, `[system]
+//! Validation of shared resources: `[resources.NAME]`, `[system]
 //! resource_protocol` and each task's `critical_sections = [{ resource =
 //! "bus", length = "200us" }, ...]`.
 //!
