@@ -35,7 +35,7 @@ pub enum ImportCommand {
         /// existing specs of the same names are replaced.
         outdir: PathBuf,
     },
-    /// A PX4 flight log (ULog, PX4 v1.11–v1.15): OUTDIR/spec.toml (the
+    /// A PX4 flight log (ULog, PX4 v1.5–v1.6 and v1.11–v1.15): OUTDIR/spec.toml (the
     /// threads, priorities, modules and execution times the log shows, the
     /// rate loop's chains) and OUTDIR/observed.csv (every logged data age
     /// of the rate loop: `timestamp - timestamp_sample`). See docs/px4.md.

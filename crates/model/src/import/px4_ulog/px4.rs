@@ -2,7 +2,7 @@
 //! runs on, what releases it, which `perf` counter times it, and (for a log
 //! without `top`) each work queue's priority.
 //!
-//! Two tables, by the log's `ver_sw_release` (`major << 24 | minor << 16 |
+//! The tables, by the log's `ver_sw_release` (`major << 24 | minor << 16 |
 //! patch << 8 | type`):
 //!
 //! - [`V1_11`] (v1.11, v1.12): gyro driver → `sensors`'
@@ -20,6 +20,10 @@
 //!   `ScheduledWorkItem`/`WorkItem` line was read in PX4-Autopilot's source
 //!   (docs/px4.md's table gives the line and the stored version read, which
 //!   is not the release tag: the tags themselves could not be read here).
+//!
+//! - [`V1_6_Q`] / [`V1_6_EKF2`] (v1.5–v1.6, before work queues): each
+//!   module a task of its own polling the topic before it, at the
+//!   `px4_task_spawn_cmd` priorities of [`task_priority`].
 //!
 //! The queues' priorities come from the log's own `top` (`perf_top_*`) when
 //! it has one (what the board ran); without it from [`wq_priority`],

@@ -234,6 +234,11 @@ fn base_assumptions(f: &Facts, exec: &Exec) -> Vec<String> {
         out.push(format!("the gyro driver runs every {} µs (the median step of sensor_combined's timestamps) from a high-resolution-timer callout, i.e. interrupt context: the task `{}`, above every other", f.gyro_period_us, f.gyro_queue));
         out.push("before work queues each module is its own task (px4_task_spawn_cmd) blocking in px4_poll() on the topic before it: gyro → sensors → the estimator (SYS_MC_EST_GROUP) → control_state → mc_att_control (attitude and rate control in one task); sensors, the estimator and mc_att_control are all spawned at SCHED_PRIORITY_MAX - 5, which PX4 runs FIFO: rtpipe needs distinct priorities and ranks them in data-flow order".to_string());
         out.push("the log has no perf_top_*: what else ran (drivers, the logger, mavlink, navigator) is not known and not in the spec; interrupt load neither".to_string());
+        out.push(if f.table.iter().any(|m| m.name == "ekf2") {
+            "ekf2 stamps control_state with the time of its own run (hrt_absolute_time()), and mc_att_control passes that stamp on as actuator_controls_0's timestamp_sample: the measured age runs from ekf2's run, not from the gyro sample, a part of the chain's age".to_string()
+        } else {
+            "attitude_estimator_q stamps control_state with sensor_combined's timestamp (the gyro's), and mc_att_control passes it on as actuator_controls_0's timestamp_sample: the measured age runs from the gyro driver's read".to_string()
+        });
     } else {
         out.push(format!("the gyro driver runs every {} µs (1e6 / IMU_GYRO_RATEMAX) on {}; the sensor samples before the driver reads its FIFO, a wait the log's timestamp_sample includes and the spec does not", f.gyro_period_us, f.gyro_queue));
         out.push("interrupt load (the NuttX kernel, DMA completion, the high-resolution timer) is not in the log: the spec has none".to_string());
