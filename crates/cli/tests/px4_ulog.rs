@@ -139,6 +139,13 @@ fn a_log_before_work_queues_without_times_is_refused_and_nothing_is_written() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("PX4 v1.6.0"), "{stderr}");
     assert!(!out.exists());
+    // A version that is not X.Y is refused with the form expected.
+    let extra = ["--exec-from", cube.as_str(), "--px4-version", "six"];
+    let (o, out) = import("px4-v16-bad", &v16, &extra);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("expected X.Y"), "{stderr}");
+    assert!(!out.exists());
 }
 
 /// PX4 v1.6.0 (Pixhawk 4 Pro, ekf2), before work queues: each module a
