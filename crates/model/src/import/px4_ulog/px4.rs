@@ -339,7 +339,7 @@ pub(super) fn table(
             _ => Err(format!("PX4 v{major}.{minor}: the parameter SYS_MC_EST_GROUP (which estimator fed mc_att_control) is {}, not 1 (attitude_estimator_q) or 2 (ekf2)", est_group.map_or("missing".to_string(), |g| g.to_string()))),
         },
         (1, 7..=10) => Err(format!(
-            "PX4 v{major}.{minor}: rtpipe's module tables cover v1.5–v1.6 (tasks polling control_state) and v1.11–v1.15 (work queues); from v1.7 to v1.10 mc_att_control polled the gyro itself and sensors moved towards work queues, which no table describes"
+            "PX4 v{major}.{minor}: rtpipe's module tables cover v1.5–v1.6 (tasks polling control_state) and v1.11–v1.15 (work queues); from v1.7 mc_att_control polled the gyro itself, and v1.10 began moving modules onto work queues: no table describes v1.7 to v1.10"
         )),
         _ => Err(format!(
             "PX4 v{major}.{minor}: rtpipe's module tables cover v1.5–v1.6 and v1.11 to v1.15"
