@@ -35,7 +35,7 @@ pub enum ImportCommand {
         /// existing specs of the same names are replaced.
         outdir: PathBuf,
     },
-    /// A PX4 flight log (ULog, PX4 v1.11–v1.15): OUTDIR/spec.toml (the
+    /// A PX4 flight log (ULog, PX4 v1.5–v1.6 and v1.11–v1.15): OUTDIR/spec.toml (the
     /// threads, priorities, modules and execution times the log shows, the
     /// rate loop's chains) and OUTDIR/observed.csv (every logged data age
     /// of the rate loop: `timestamp - timestamp_sample`). See docs/px4.md.
@@ -64,7 +64,22 @@ pub enum ImportCommand {
         /// e.g. `--exec-us control_allocator=20`.
         #[arg(long, value_name = "MODULE=US", value_parser = parse_exec_us)]
         exec_us: Vec<(String, u64)>,
+        /// PX4's release X.Y, for a log without `ver_sw_release` (older
+        /// logs have none): 1.5, 1.6 or 1.11 to 1.15. Without it the
+        /// version is inferred from the log's topics where they show it.
+        #[arg(long, value_name = "X.Y", value_parser = parse_px4_version)]
+        px4_version: Option<(u32, u32)>,
     },
+}
+
+/// `--px4-version X.Y`: PX4's major and minor release numbers.
+fn parse_px4_version(s: &str) -> Result<(u32, u32), String> {
+    let parsed = s
+        .trim()
+        .trim_start_matches('v')
+        .split_once('.')
+        .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)));
+    parsed.ok_or_else(|| format!("`{s}`: expected X.Y, PX4's release, e.g. 1.6"))
 }
 
 /// `--exec-us MODULE=US`: a module name and a whole number of µs (≥ 1).
@@ -124,11 +139,13 @@ pub fn run(cmd: &ImportCommand) -> ExitCode {
             exec,
             exec_from,
             exec_us,
+            px4_version,
         } => {
             let exec = px4_ulog::ExecArgs {
                 stat: *exec,
                 from: exec_from.as_deref(),
                 us: exec_us,
+                px4_version: *px4_version,
             };
             match px4_ulog::import(log, outdir, &exec) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -119,16 +119,103 @@ fn the_cube_orange_log_imports_loads_and_analyses() {
 }
 
 #[test]
-fn a_log_before_work_queues_is_refused_and_nothing_is_written() {
-    let (o, out) = import("px4-noperf", &log("sample_appended_multiple.ulg"), &[]);
+fn a_log_before_work_queues_without_times_is_refused_and_nothing_is_written() {
+    let v16 = log("sample_appended_multiple.ulg");
+    let (o, out) = import("px4-noperf", &v16, &[]);
     assert_exit(&o, 2);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
-        stderr.contains("PX4 v1.6.0") && stderr.contains("work queues"),
+        stderr.contains("lacks perf_counter_*")
+            && stderr.contains("--exec-from")
+            && stderr.contains("--exec-us"),
         "{stderr}"
     );
     assert!(!out.exists());
+    // A version the log contradicts is refused by name.
+    let cube = log("sample_log_small.ulg");
+    let extra = ["--exec-from", cube.as_str(), "--px4-version", "1.11"];
+    let (o, out) = import("px4-v16-wrong", &v16, &extra);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("PX4 v1.6.0"), "{stderr}");
+    assert!(!out.exists());
+    // A version that is not X.Y is refused with the form expected.
+    let extra = ["--exec-from", cube.as_str(), "--px4-version", "six"];
+    let (o, out) = import("px4-v16-bad", &v16, &extra);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("expected X.Y"), "{stderr}");
+    assert!(!out.exists());
 }
+
+/// PX4 v1.6.0 (Pixhawk 4 Pro, ekf2), before work queues: each module a
+/// task polling the topic before it, timed by the Cube Orange's counters.
+#[test]
+fn a_v1_6_log_imports_as_tasks_and_analyze_exits_0() {
+    let cube = log("sample_log_small.ulg");
+    let extra = ["--exec-from", cube.as_str()];
+    let (o, out) = import("px4-v16", &log("sample_appended_multiple.ulg"), &extra);
+    assert_exit(&o, 0);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("PX4FMU_V4PRO (PX4 v1.6.0)"), "{stdout}");
+    assert!(stdout.contains("SCHED_PRIORITY_MAX - 5"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("observed.csv")).unwrap();
+    assert_eq!(
+        ages(&csv, "actuator_controls_0"),
+        (95, 3_520_000, 4_660_000)
+    );
+    let measured = analyze_observed(&out);
+    assert_eq!(measured.len(), 1, "{measured:?}");
+    let (chain, count, ratio) = &measured[0];
+    assert_eq!(
+        (chain.as_str(), *count),
+        ("gyro to actuator_controls_0", 95)
+    );
+    assert!(*ratio > 0.5 && *ratio < 0.6, "{ratio}");
+}
+
+/// pyulog's `sample.ulg` (AUAV-X2.1, 2016, no `ver_sw_release`, 4 MB, not
+/// copied here): from `RTPIPE_PYULOG_DIR`, skipped when unset. Its version
+/// is inferred (v1.5–v1.6), its estimator `attitude_estimator_q`, which no
+/// counter of the Cube Orange times: given with `--exec-us`.
+#[test]
+fn pyulog_sample_before_work_queues_imports_and_analyze_exits_0() {
+    let Some(dir) = std::env::var_os("RTPIPE_PYULOG_DIR") else {
+        eprintln!("note: RTPIPE_PYULOG_DIR is unset: pyulog's sample.ulg not imported");
+        return;
+    };
+    let sample = Path::new(&dir).join("sample.ulg");
+    let cube = log("sample_log_small.ulg");
+    let sample = sample.to_string_lossy();
+    let (o, out) = import("px4-sample", &sample, &["--exec-from", cube.as_str()]);
+    assert_exit(&o, 2);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("--exec-us attitude_estimator_q=US"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    let extra = ["--exec-from", cube.as_str(), "--exec-us", ESTIMATOR_Q];
+    let (o, out) = import("px4-sample", &sample, &extra);
+    assert_exit(&o, 0);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("AUAV_X21 (PX4 v1.5–v1.6, inferred)"),
+        "{stdout}"
+    );
+    let csv = std::fs::read_to_string(out.join("observed.csv")).unwrap();
+    assert_eq!(
+        ages(&csv, "actuator_controls_0"),
+        (3269, 355_000, 2_115_000)
+    );
+    let measured = analyze_observed(&out);
+    assert_eq!(measured.len(), 1, "{measured:?}");
+    assert!(measured[0].2 > 0.2 && measured[0].2 < 0.3, "{measured:?}");
+}
+
+/// `attitude_estimator_q`'s time for pyulog's `sample.ulg`: the Cube
+/// Orange's longest `ekf2: update` run, 342 µs (docs/px4.md says why).
+const ESTIMATOR_Q: &str = "attitude_estimator_q=342";
 
 /// `analyze SPEC --observed observed.csv --json` of an import: exit 0, and
 /// each measured chain's (name, count, largest/sound ratio).
@@ -221,8 +308,7 @@ fn pyulog_logs_from_a_folder() {
         .collect();
     logs.sort();
     for (k, path) in logs.iter().enumerate() {
-        let extra = ["--exec-from", cube.as_str(), "--exec", "mean"];
-        let (o, out) = import(&format!("px4-pyulog-{k}"), &path.to_string_lossy(), &extra);
+        let (o, out) = import_pyulog(&format!("px4-pyulog-{k}"), path, &cube);
         let stderr = String::from_utf8_lossy(&o.stderr);
         match o.status.code() {
             Some(0) => {
@@ -237,6 +323,31 @@ fn pyulog_logs_from_a_folder() {
             code => panic!("{}: exit {code:?}: {stderr}", path.display()),
         }
     }
+}
+
+/// Imports one of pyulog's logs with the Cube Orange's counters, `--exec
+/// mean`; a log before work queues with `--exec max` (the Cube's average
+/// runs are too short for those boards: docs/px4.md), and with
+/// attitude_estimator_q's time when it is refused for want of it.
+fn import_pyulog(tag: &str, path: &Path, cube: &str) -> (std::process::Output, PathBuf) {
+    let shown = path.to_string_lossy();
+    let mut extra = vec!["--exec-from", cube, "--exec", "mean"];
+    let (o, out) = import(tag, &shown, &extra);
+    let estimator = String::from_utf8_lossy(&o.stderr).contains("attitude_estimator_q=US");
+    if estimator {
+        extra.extend(["--exec-us", ESTIMATOR_Q]);
+    }
+    let tasks = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout).contains("before work queues")
+    };
+    if estimator || tasks(&o) {
+        extra[3] = "max";
+        let (o, out) = import(&format!("{tag}-tasks"), &shown, &extra);
+        assert_exit(&o, 0);
+        assert!(tasks(&o));
+        return (o, out);
+    }
+    (o, out)
 }
 
 #[test]

@@ -16,6 +16,7 @@ pub(super) struct ExecArgs<'a> {
     pub(super) stat: ExecStat,
     pub(super) from: Option<&'a Path>,
     pub(super) us: &'a [(String, u64)],
+    pub(super) px4_version: Option<(u32, u32)>,
 }
 
 /// Imports `log` into `outdir/spec.toml` and `outdir/observed.csv`.
@@ -43,6 +44,7 @@ pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), E
         },
         exec_log: other.as_ref().zip(other_shown.as_deref()),
         exec_us: exec.us,
+        px4_version: exec.px4_version,
     };
     let imported = px4_ulog::import(&read, &spec_name(log), &opts).map_err(bad)?;
     let spec_path = outdir.join("spec.toml");

@@ -36,6 +36,10 @@ pub(super) struct Facts {
     pub(super) lockstep: bool,
     /// `ver_hw`.
     pub(super) board: String,
+    /// Before work queues (v1.5–v1.6): each module its own task.
+    pub(super) tasks: bool,
+    /// How the version was found when the log does not say it.
+    pub(super) version_note: Option<String>,
 }
 
 pub(super) fn missing(what: &str, help: &str) -> Diagnostic {
@@ -52,34 +56,101 @@ fn text(log: &Ulog, prefix: &str) -> Option<Vec<String>> {
     Some(v.first()?.clone())
 }
 
-pub(super) fn parse_release(log: &Ulog) -> Result<u32, Diagnostic> {
+/// The log's `ver_sw_release` (`major << 24 | minor << 16 | patch << 8 | type`).
+fn release(log: &Ulog) -> Option<u32> {
     log.info
         .get("ver_sw_release")
         .filter(|v| v.ty == super::FieldType::U32 && v.number().is_finite())
         .map(|v| v.number() as u32)
-        .ok_or_else(|| {
-            missing(
-                "the info message ver_sw_release (PX4's version; older logs have none)",
-                "import a log of PX4 v1.11 to v1.15",
-            )
-        })
 }
 
-/// Reads the facts of `log`.
-pub(super) fn of(log: &Ulog) -> Result<Facts, Diagnostic> {
-    let release = parse_release(log)?;
-    let table = px4::table(release).map_err(|e| {
-        Diagnostic::error(e, "import a log of PX4 v1.11 to v1.15, or add the version's table to crates/model/src/import/px4_ulog/px4.rs")
+/// PX4's version: the log's `ver_sw_release`, else the user's
+/// `--px4-version`, else what the log's topics show; and how it was found
+/// when the log does not say it. `vX.Y.Z` (or a range when inferred).
+struct Version {
+    major: u32,
+    minor: u32,
+    text: String,
+    note: Option<String>,
+}
+
+const VERSION_HELP: &str =
+    "give --px4-version X.Y (PX4's release the log was written by: 1.5, 1.6 or 1.11 to 1.15)";
+
+fn version(log: &Ulog, given: Option<(u32, u32)>) -> Result<Version, Diagnostic> {
+    if let Some(r) = release(log) {
+        let (major, minor, patch) = (r >> 24, (r >> 16) & 0xff, (r >> 8) & 0xff);
+        if let Some((a, b)) = given.filter(|g| *g != (major, minor)) {
+            return Err(Diagnostic::error(
+                format!("--px4-version {a}.{b}: the log's ver_sw_release says PX4 v{major}.{minor}.{patch}"),
+                "leave --px4-version out: it is for logs without ver_sw_release",
+            ));
+        }
+        let text = format!("v{major}.{minor}.{patch}");
+        return Ok(Version {
+            major,
+            minor,
+            text,
+            note: None,
+        });
+    }
+    if let Some((major, minor)) = given {
+        let note =
+            format!("the log has no ver_sw_release: PX4 v{major}.{minor} as given (--px4-version)");
+        let text = format!("v{major}.{minor}, as given");
+        return Ok(Version {
+            major,
+            minor,
+            text,
+            note: Some(note),
+        });
+    }
+    // `control_state` was removed in v1.7; `sensor_combined` carries
+    // `gyro_integral_dt` from v1.5 on.
+    let has = |topic: &str, field: &str| {
+        log.subscriptions
+            .iter()
+            .any(|s| s.name == topic && s.field(field).is_some())
+    };
+    if has("control_state", "timestamp") && has("sensor_combined", "gyro_integral_dt") {
+        let note = "the log has no ver_sw_release: PX4 v1.5–v1.6 inferred from its topics (control_state, removed in v1.7; sensor_combined with gyro_integral_dt, from v1.5); --px4-version X.Y overrides".to_string();
+        let text = "v1.5–v1.6, inferred".to_string();
+        return Ok(Version {
+            major: 1,
+            minor: 6,
+            text,
+            note: Some(note),
+        });
+    }
+    Err(missing(
+        "the info message ver_sw_release (PX4's version; older logs have none), and its topics do not show the version (control_state and sensor_combined.gyro_integral_dt would show v1.5–v1.6)",
+        VERSION_HELP,
+    ))
+}
+
+/// Reads the facts of `log`; `given` is `--px4-version`.
+pub(super) fn of(log: &Ulog, given: Option<(u32, u32)>) -> Result<Facts, Diagnostic> {
+    let v = version(log, given)?;
+    let est_group = log.parameters.get("SYS_MC_EST_GROUP").map(|p| p.number());
+    let table = px4::table(v.major, v.minor, est_group).map_err(|e| {
+        Diagnostic::error(e, "import a log of PX4 v1.5–v1.6 or v1.11 to v1.15, or add the version's table to crates/model/src/import/px4_ulog/px4.rs")
     })?;
+    let tasks = table.iter().any(|m| m.queue == Queue::Own(px4::HRT));
     let counters: Vec<Counter> = text(log, "perf_counter_")
         .unwrap_or_default()
         .iter()
         .filter_map(|l| perf::counter(l))
         .collect();
-    let gyro_queue = gyro_queue(log)?;
+    let gyro_queue = if tasks {
+        px4::HRT.to_string()
+    } else {
+        gyro_queue(log)?
+    };
     let board = log.info_text("ver_hw").unwrap_or_default();
     let lockstep = gyro_queue == px4::SIMULATOR || board == "PX4_SITL";
-    let gyro_period_us = if lockstep {
+    let gyro_period_us = if tasks {
+        sensor_combined_period(log)?
+    } else if lockstep {
         lockstep_period(log)?
     } else {
         gyro_rate_period(log)?
@@ -91,15 +162,12 @@ pub(super) fn of(log: &Ulog) -> Result<Facts, Diagnostic> {
         uptime_us: None,
         gyro_period_us,
         gyro_queue,
-        version: format!(
-            "v{}.{}.{}",
-            release >> 24,
-            (release >> 16) & 0xff,
-            (release >> 8) & 0xff
-        ),
+        version: v.text,
         table,
         lockstep,
         board,
+        tasks,
+        version_note: v.note,
     };
     match text(log, "perf_top_") {
         Some(top) => {
@@ -135,6 +203,27 @@ fn gyro_rate_period(log: &Ulog) -> Result<u64, Diagnostic> {
         )
     })?;
     Ok((1e6 / rate).round() as u64)
+}
+
+/// Before work queues: the gyro period as the median step between
+/// consecutive `sensor_combined` timestamps (`sensors` publishes one per
+/// gyro sample; the logger drops a few, so the median, not the least).
+fn sensor_combined_period(log: &Ulog) -> Result<u64, Diagnostic> {
+    let stamps = log
+        .topic("sensor_combined", 0)
+        .and_then(|s| log.u64_values(s, "timestamp"))
+        .unwrap_or_default();
+    let mut steps: Vec<u64> = stamps
+        .windows(2)
+        .filter_map(|w| w[1].checked_sub(w[0]).filter(|d| *d > 0))
+        .collect();
+    steps.sort_unstable();
+    steps.get(steps.len() / 2).copied().ok_or_else(|| {
+        missing(
+            "two sensor_combined messages apart in time (the gyro period is measured from them)",
+            "log sensor_combined (PX4's default logging profile does)",
+        )
+    })
 }
 
 /// SITL's gyro period: the greatest common divisor of the steps between
@@ -195,17 +284,28 @@ fn source_threads(modules: &[Module], f: &Facts) -> Result<Vec<TopThread>, Diagn
         if out.iter().any(|t| t.name == name) {
             continue;
         }
-        let rel = px4::wq_priority(&name).ok_or_else(|| {
+        let rel = px4::wq_priority(&name).or_else(|| px4::task_priority(&name)).ok_or_else(|| {
             Diagnostic::error(
                 format!("the log has no perf_top_* (the threads' priorities), and PX4's source gives none rtpipe knows for {name} (of {})", m.name),
                 "import a log with perf_top_* (PX4 stores it at the start of a log on a board), or add the queue to wq_priority in crates/model/src/import/px4_ulog/px4.rs",
             )
         })?;
         let tie_break = i16::from(name == px4::SIMULATOR);
+        let mut priority = u8::try_from(SCHED_PRIORITY_MAX + rel + tie_break).unwrap_or(0);
+        // Tasks spawned at one priority (PX4 runs them FIFO) are ranked in
+        // data-flow order: rtpipe needs distinct priorities.
+        while out.iter().any(|t| t.priority == priority) {
+            priority = priority.checked_sub(1).ok_or_else(|| {
+                Diagnostic::error(
+                    format!("no priority left for {name}"),
+                    "report it with the log",
+                )
+            })?;
+        }
         out.push(TopThread {
             name,
             cpu_ms: 0,
-            priority: u8::try_from(SCHED_PRIORITY_MAX + rel + tie_break).unwrap_or(0),
+            priority,
         });
     }
     Ok(out)

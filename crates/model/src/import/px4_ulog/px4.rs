@@ -2,7 +2,7 @@
 //! runs on, what releases it, which `perf` counter times it, and (for a log
 //! without `top`) each work queue's priority.
 //!
-//! Two tables, by the log's `ver_sw_release` (`major << 24 | minor << 16 |
+//! The tables, by the log's `ver_sw_release` (`major << 24 | minor << 16 |
 //! patch << 8 | type`):
 //!
 //! - [`V1_11`] (v1.11, v1.12): gyro driver → `sensors`'
@@ -20,6 +20,10 @@
 //!   `ScheduledWorkItem`/`WorkItem` line was read in PX4-Autopilot's source
 //!   (docs/px4.md's table gives the line and the stored version read, which
 //!   is not the release tag: the tags themselves could not be read here).
+//!
+//! - [`V1_6_Q`] / [`V1_6_EKF2`] (v1.5–v1.6, before work queues): each
+//!   module a task of its own polling the topic before it, at the
+//!   `px4_task_spawn_cmd` priorities of [`task_priority`].
 //!
 //! The queues' priorities come from the log's own `top` (`perf_top_*`) when
 //! it has one (what the board ran); without it from [`wq_priority`],
@@ -267,19 +271,78 @@ pub(super) const V1_13: &[Module] = &[
     ),
 ];
 
-/// The table for the log's `ver_sw_release`, or the versions covered.
-pub(super) fn table(release: u32) -> Result<&'static [Module], String> {
-    let (major, minor) = (release >> 24, (release >> 16) & 0xff);
+/// The thread-less task the gyro driver runs in before work queues: a
+/// high-resolution-timer callout, i.e. interrupt context, above every task.
+pub(super) const HRT: &str = "hrt";
+
+/// The rate loop of v1.5–v1.6, before work queues: each module its own
+/// task (`px4_task_spawn_cmd`) blocking in `px4_poll()` on the topic before
+/// it. The IMU driver's timer callout publishes the gyro; `sensors` polls
+/// it and publishes `sensor_combined`; the estimator (`ESTIMATOR`) polls
+/// that and publishes `control_state`; `mc_att_control` (attitude and rate
+/// control in one task) polls `control_state` and publishes
+/// `actuator_controls_0`, stamping it with `control_state`'s timestamp.
+/// Which estimator ran is the log's `SYS_MC_EST_GROUP` (1: `attitude_estimator_q`,
+/// 2: `ekf2`). Source lines: docs/px4.md, "Before work queues".
+const fn pre_wq(estimator: &'static str, counter: &'static [&'static str]) -> [Module; 4] {
+    [
+        m("gyro", &[], Queue::Own(HRT), Release::Gyro),
+        m(
+            "sensors",
+            &["sensors"],
+            Queue::Own("sensors"),
+            Release::Loop,
+        ),
+        m(estimator, counter, Queue::Own(estimator), Release::Loop),
+        Module {
+            publishes: &["actuator_controls_0"],
+            ..m(
+                "mc_att_control",
+                &["mc_att_control: cycle", "mc_att_control"],
+                Queue::Own("mc_att_control"),
+                Release::Loop,
+            )
+        },
+    ]
+}
+
+/// v1.5–v1.6 with `attitude_estimator_q` (`SYS_MC_EST_GROUP` 1).
+pub(super) const V1_6_Q: &[Module] = &pre_wq("attitude_estimator_q", &[]);
+/// v1.5–v1.6 with `ekf2` (`SYS_MC_EST_GROUP` 2).
+pub(super) const V1_6_EKF2: &[Module] = &pre_wq("ekf2", &["ekf2: update"]);
+
+/// A task's priority relative to `SCHED_PRIORITY_MAX` before work queues
+/// (`px4_task_spawn_cmd(name, SCHED_DEFAULT, SCHED_PRIORITY_MAX - 5, …)` in
+/// `sensors.cpp`, `ekf2_main.cpp`, `attitude_estimator_q_main.cpp`,
+/// `mc_att_control_main.cpp`), and the timer callout's (above every task).
+pub(super) fn task_priority(name: &str) -> Option<i16> {
+    match name {
+        HRT => Some(1),
+        "sensors" | "ekf2" | "attitude_estimator_q" | "mc_att_control" => Some(-5),
+        _ => None,
+    }
+}
+
+/// The table for PX4 `vMAJOR.MINOR`; `est_group` is the log's
+/// `SYS_MC_EST_GROUP` (which estimator ran before work queues).
+pub(super) fn table(
+    major: u32,
+    minor: u32,
+    est_group: Option<f64>,
+) -> Result<&'static [Module], String> {
     match (major, minor) {
         (1, 11) | (1, 12) => Ok(V1_11),
         (1, 13..=15) => Ok(V1_13),
-        (1, 0..=9) => Err(format!(
-            "PX4 v{major}.{minor}.{}: before v1.10 PX4 ran its controllers as tasks, not on work queues, and rtpipe's module → work-queue table begins at v1.11 (it covers v1.11 to v1.15)",
-            (release >> 8) & 0xff
+        (1, 5 | 6) => match est_group {
+            Some(1.0) => Ok(V1_6_Q),
+            Some(2.0) => Ok(V1_6_EKF2),
+            _ => Err(format!("PX4 v{major}.{minor}: the parameter SYS_MC_EST_GROUP (which estimator fed mc_att_control) is {}, not 1 (attitude_estimator_q) or 2 (ekf2)", est_group.map_or("missing".to_string(), |g| g.to_string()))),
+        },
+        (1, 7..=10) => Err(format!(
+            "PX4 v{major}.{minor}: rtpipe's module tables cover v1.5–v1.6 (tasks polling control_state) and v1.11–v1.15 (work queues); from v1.7 mc_att_control polled the gyro itself, and v1.10 began moving modules onto work queues: no table describes v1.7 to v1.10"
         )),
         _ => Err(format!(
-            "PX4 v{major}.{minor}.{}: rtpipe's module → work-queue table covers v1.11 to v1.15",
-            (release >> 8) & 0xff
+            "PX4 v{major}.{minor}: rtpipe's module tables cover v1.5–v1.6 and v1.11 to v1.15"
         )),
     }
 }
@@ -341,8 +404,17 @@ mod tests {
         assert_eq!(gyro_queue(2_490_378).as_deref(), Some("wq:SPI1"));
         assert_eq!(gyro_queue(1_310_988).as_deref(), Some(SIMULATOR));
         assert_eq!(gyro_queue(1), None);
-        assert!(table(0x010d_0000).is_ok() && table(0x010f_0000).is_ok());
-        let old = table(0x0106_0000).unwrap_err();
-        assert!(old.contains("v1.6.0") && old.contains("tasks"), "{old}");
+        assert!(table(1, 13, None).is_ok() && table(1, 15, None).is_ok());
+        assert_eq!(table(1, 6, Some(2.0)).unwrap()[2].name, "ekf2");
+        assert_eq!(
+            table(1, 5, Some(1.0)).unwrap()[2].name,
+            "attitude_estimator_q"
+        );
+        let est = table(1, 6, None).unwrap_err();
+        assert!(est.contains("SYS_MC_EST_GROUP"), "{est}");
+        let wq = table(1, 8, Some(2.0)).unwrap_err();
+        assert!(wq.contains("v1.8") && wq.contains("v1.5–v1.6"), "{wq}");
+        assert_eq!(task_priority("ekf2"), Some(-5));
+        assert_eq!(task_priority(HRT), Some(1));
     }
 }

@@ -87,6 +87,8 @@ pub struct Options<'a> {
     /// Per module, an execution time (µs) the user gives; it overrides
     /// every counter.
     pub exec_us: &'a [(String, u64)],
+    /// PX4's `(major, minor)` for a log without `ver_sw_release`.
+    pub px4_version: Option<(u32, u32)>,
 }
 
 /// The execution times' source while the spec is built.
@@ -101,10 +103,10 @@ struct Exec<'a> {
 /// Builds the spec and the observed rows of `log`, named `name`, each
 /// module's `exec` as `opts` says.
 pub fn import(log: &Ulog, name: &str, opts: &Options) -> Result<Import, Diagnostic> {
-    let facts = facts::of(log)?;
+    let facts = facts::of(log, opts.px4_version)?;
     let other = match opts.exec_log {
         Some((l, label)) => Some((
-            facts::of(l).map_err(|d| d.within(format!("--exec-from {label}")))?,
+            facts::of(l, None).map_err(|d| d.within(format!("--exec-from {label}")))?,
             label,
         )),
         None => None,
@@ -227,11 +229,21 @@ fn base_assumptions(f: &Facts, exec: &Exec) -> Vec<String> {
         out.push(format!("SITL: the simulator publishes the gyro every {} µs (the step of vehicle_angular_velocity's timestamp_sample; IMU_GYRO_RATEMAX does not apply) on its own thread `{}`, spawned at SCHED_PRIORITY_MAX like wq:rate_ctrl", f.gyro_period_us, f.gyro_queue));
         out.push("the measured ages are lockstep ages: SITL's simulated clock stands still while the modules run, so a gyro sample and what the loop makes of it carry the same time (0 µs); they show the data flow, not the CPU's delays".to_string());
         out.push("one CPU: SITL ran on a host whose cores the log does not give; the spec puts every thread on cpu 0".to_string());
+    } else if f.tasks {
+        out.extend(f.version_note.clone());
+        out.push(format!("the gyro driver runs every {} µs (the median step of sensor_combined's timestamps) from a high-resolution-timer callout, i.e. interrupt context: the task `{}`, above every other", f.gyro_period_us, f.gyro_queue));
+        out.push("before work queues each module is its own task (px4_task_spawn_cmd) blocking in px4_poll() on the topic before it: gyro → sensors → the estimator (SYS_MC_EST_GROUP) → control_state → mc_att_control (attitude and rate control in one task); sensors, the estimator and mc_att_control are all spawned at SCHED_PRIORITY_MAX - 5, which PX4 runs FIFO: rtpipe needs distinct priorities and ranks them in data-flow order".to_string());
+        out.push("the log has no perf_top_*: what else ran (drivers, the logger, mavlink, navigator) is not known and not in the spec; interrupt load neither".to_string());
+        out.push(if f.table.iter().any(|m| m.name == "ekf2") {
+            "ekf2 stamps control_state with the time of its own run (hrt_absolute_time()), and mc_att_control passes that stamp on as actuator_controls_0's timestamp_sample: the measured age runs from ekf2's run, not from the gyro sample, a part of the chain's age".to_string()
+        } else {
+            "attitude_estimator_q stamps control_state with sensor_combined's timestamp (the gyro's), and mc_att_control passes it on as actuator_controls_0's timestamp_sample: the measured age runs from the gyro driver's read".to_string()
+        });
     } else {
         out.push(format!("the gyro driver runs every {} µs (1e6 / IMU_GYRO_RATEMAX) on {}; the sensor samples before the driver reads its FIFO, a wait the log's timestamp_sample includes and the spec does not", f.gyro_period_us, f.gyro_queue));
         out.push("interrupt load (the NuttX kernel, DMA completion, the high-resolution timer) is not in the log: the spec has none".to_string());
     }
-    if !f.top {
+    if !f.top && !f.tasks {
         out.push("the log has no perf_top_*: the threads are the queues of rtpipe's module table, their priorities PX4's source's (WorkQueueManager.hpp, relative to SCHED_PRIORITY_MAX); what else ran is not known".to_string());
     }
     if exec.label != "the log" {
@@ -449,6 +461,8 @@ fn static_name(name: &str) -> &'static str {
     px4::V1_11
         .iter()
         .chain(px4::V1_13)
+        .chain(px4::V1_6_Q)
+        .chain(px4::V1_6_EKF2)
         .find_map(|m| match m.queue {
             Queue::Own(n) if n == name => Some(n),
             _ => None,

@@ -217,15 +217,59 @@ fn stat(stat: ExecFrom) -> Options<'static> {
     }
 }
 
+/// The v1.6.0 log (ekf2) with the Cube Orange's counters.
+fn before_work_queues(
+    log: &Ulog,
+    version: Option<(u32, u32)>,
+) -> Result<Import, crate::Diagnostic> {
+    let cube = Ulog::parse(fixture("sample_log_small.ulg")).unwrap();
+    let opts = Options {
+        stat: ExecFrom::Max,
+        exec_log: Some((&cube, "cube.ulg")),
+        exec_us: &[],
+        px4_version: version,
+    };
+    import(log, "v16", &opts)
+}
+
 #[test]
-fn a_log_before_work_queues_is_refused_by_its_version() {
+fn a_log_before_work_queues_imports_as_tasks_polling_the_topic_before() {
     let log = Ulog::parse(fixture("sample_appended_multiple.ulg")).unwrap();
     let e = import(&log, "x", &stat(ExecFrom::Max)).unwrap_err();
+    assert!(e.message.contains("lacks perf_counter_*"), "{}", e.message);
+    let got = before_work_queues(&log, None).unwrap();
+    let spec = crate::Spec::parse("v16.toml", &got.spec).unwrap();
+    let names: Vec<&str> = spec.tasks.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["gyro", "sensors", "ekf2", "mc_att_control"]);
+    // The timer callout first, then data-flow order; no threads.
+    let prios: Vec<Option<u32>> = spec.tasks.iter().map(|t| t.priority).collect();
+    assert_eq!(prios, [Some(1), Some(2), Some(3), Some(4)]);
+    assert!(spec.threads.is_empty());
+    assert_eq!(spec.tasks[0].period, crate::PeriodSpec::Fixed(4_000_000));
+    assert_eq!(spec.triggered_by(), [vec![1], vec![2], vec![3], vec![]]);
+    assert_eq!(got.ages.len(), 1);
+    assert_eq!(
+        (got.ages[0].count, got.ages[0].min_ns, got.ages[0].max_ns),
+        (95, 3_520_000, 4_660_000)
+    );
+    assert_eq!(spec.chains.len(), 1);
+    // The log's version disagrees with a given one; a version no table
+    // covers is refused by name.
+    let e = before_work_queues(&log, Some((1, 11))).unwrap_err();
+    assert!(e.message.contains("v1.6.0"), "{}", e.message);
+    let mut v18 = log.clone();
+    v18.info.remove("ver_sw_release");
+    let e = before_work_queues(&v18, Some((1, 8))).unwrap_err();
     assert!(
-        e.message.contains("v1.6.0") && e.message.contains("work queues"),
+        e.message.contains("v1.8") && e.message.contains("v1.5–v1.6"),
         "{}",
         e.message
     );
+    // Without the version and without the topics that show it.
+    v18.subscriptions.retain(|s| s.name != "control_state");
+    let e = before_work_queues(&v18, None).unwrap_err();
+    assert!(e.message.contains("ver_sw_release"), "{}", e.message);
+    assert!(e.help.unwrap_or_default().contains("--px4-version"));
 }
 
 #[test]
@@ -250,6 +294,7 @@ fn sitl(name: &str, given: &[(String, u64)]) -> Result<Import, crate::Diagnostic
         stat: ExecFrom::Mean,
         exec_log: Some((&cube, "cube.ulg")),
         exec_us: given,
+        px4_version: None,
     };
     import(&log, "sitl", &opts)
 }
