@@ -86,19 +86,54 @@ const fn m(
     }
 }
 
+/// The gyro driver, on the SPI (or I2C) work queue of its bus.
+const GYRO: Module = m("gyro", &[], Queue::GyroBus, Release::Gyro);
+/// `sensors`' `vehicle_angular_velocity` on `wq:rate_ctrl`, released by
+/// each gyro sample (v1.11–v1.15 alike). Its `gyro filter` counter (v1.13+)
+/// times the filters only, not the run, so it has none here.
+const ANGULAR_VELOCITY: Module = Module {
+    publishes: &["vehicle_angular_velocity"],
+    ..m(
+        "vehicle_angular_velocity",
+        &[],
+        Queue::Wq("wq:rate_ctrl"),
+        Release::Loop,
+    )
+};
+/// `sensors` on `wq:nav_and_controllers` (v1.11–v1.15 alike).
+const SENSORS: Module = m(
+    "sensors",
+    &["sensors"],
+    Queue::Wq("wq:nav_and_controllers"),
+    Release::Periodic,
+);
+/// `vehicle_air_data` on `wq:nav_and_controllers` (v1.11–v1.15 alike).
+const VEHICLE_AIR_DATA: Module = m(
+    "vehicle_air_data",
+    &["vehicle_air_data: cycle"],
+    Queue::Wq("wq:nav_and_controllers"),
+    Release::Periodic,
+);
+/// `land_detector` on `wq:nav_and_controllers` (v1.11–v1.15 alike).
+const LAND_DETECTOR: Module = m(
+    "land_detector",
+    &["land_detector: cycle"],
+    Queue::Wq("wq:nav_and_controllers"),
+    Release::Periodic,
+);
+/// `mc_pos_control` on `wq:nav_and_controllers` (v1.11–v1.15 alike).
+const MC_POS_CONTROL: Module = m(
+    "mc_pos_control",
+    &["mc_pos_control: cycle time"],
+    Queue::Wq("wq:nav_and_controllers"),
+    Release::Periodic,
+);
+
 /// The rate loop of v1.11–v1.12, in data-flow order, then the modules that
 /// compete with it on its threads or on threads above the output driver.
 pub(super) const V1_11: &[Module] = &[
-    m("gyro", &[], Queue::GyroBus, Release::Gyro),
-    Module {
-        publishes: &["vehicle_angular_velocity"],
-        ..m(
-            "vehicle_angular_velocity",
-            &[],
-            Queue::Wq("wq:rate_ctrl"),
-            Release::Loop,
-        )
-    },
+    GYRO,
+    ANGULAR_VELOCITY,
     Module {
         publishes: &["actuator_controls_0"],
         ..m(
@@ -137,30 +172,10 @@ pub(super) const V1_11: &[Module] = &[
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
-    m(
-        "sensors",
-        &["sensors"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "vehicle_air_data",
-        &["vehicle_air_data: cycle"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "land_detector",
-        &["land_detector: cycle"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "mc_pos_control",
-        &["mc_pos_control: cycle time"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
+    SENSORS,
+    VEHICLE_AIR_DATA,
+    LAND_DETECTOR,
+    MC_POS_CONTROL,
     m(
         "fw_pos_control_l1",
         &["fw_pos_control_l1: cycle"],
@@ -209,17 +224,8 @@ pub(super) const V1_11: &[Module] = &[
 /// v1.11 (`attitude_ctrl` no longer exists: `mc_att_control` is on
 /// `nav_and_controllers`) and not verified.
 pub(super) const V1_13: &[Module] = &[
-    m("gyro", &[], Queue::GyroBus, Release::Gyro),
-    Module {
-        publishes: &["vehicle_angular_velocity"],
-        // Its `gyro filter` counter times the filters only, not the run.
-        ..m(
-            "vehicle_angular_velocity",
-            &[],
-            Queue::Wq("wq:rate_ctrl"),
-            Release::Loop,
-        )
-    },
+    GYRO,
+    ANGULAR_VELOCITY,
     Module {
         publishes: &["actuator_controls_0", "vehicle_torque_setpoint"],
         ..m(
@@ -245,30 +251,10 @@ pub(super) const V1_13: &[Module] = &[
         Queue::Wq("wq:nav_and_controllers"),
         Release::Periodic,
     ),
-    m(
-        "sensors",
-        &["sensors"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "vehicle_air_data",
-        &["vehicle_air_data: cycle"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "land_detector",
-        &["land_detector: cycle"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
-    m(
-        "mc_pos_control",
-        &["mc_pos_control: cycle time"],
-        Queue::Wq("wq:nav_and_controllers"),
-        Release::Periodic,
-    ),
+    SENSORS,
+    VEHICLE_AIR_DATA,
+    LAND_DETECTOR,
+    MC_POS_CONTROL,
 ];
 
 /// The thread-less task the gyro driver runs in before work queues: a
