@@ -104,16 +104,25 @@ fn check_exclusion(res: &RunResult) {
 /// the spans of started jobs of earlier deadlines) must leave each job its
 /// own CPU time inside its read → publish span: a span recorded after the
 /// thread lowered itself would cover other jobs' work and hide it.
+/// CPU time a job may show beyond its read → publish span: the register
+/// reads before the read stamp and the writes after the publish stamp run
+/// on the job's CPU clock. Up to ~30 µs on this 2-core VM after a wait,
+/// and 22.5 µs was seen with four busy loops competing for the CPUs
+/// (the 20 µs this test allowed before failed there); a span that hid
+/// another job's work would hide that job's whole execution.
+const OUTSIDE_SPAN_NS: Nanos = 50_000;
+
 fn check_room(spec: &Spec, res: &RunResult) {
     let blame = Blame::new(spec, res);
     for j in &res.sim.jobs {
         let room = blame.could_run(j, (j.read, j.finish));
         // The CPU time is read a few µs outside [read, finish] (the
-        // register reads before, the writes after; up to ~30 µs more on
-        // this VM after a wait): held to the span where it exceeds it.
+        // register reads before, the writes after): held to the span where
+        // it exceeds it, with OUTSIDE_SPAN_NS for the code between the
+        // clock reads and the stamps.
         let ran = j.demand.min(j.finish - j.read);
         assert!(
-            room + 20_000 >= ran,
+            room + OUTSIDE_SPAN_NS >= ran,
             "{} job {}: {room} ns of room for {ran} ns of CPU time",
             spec.tasks[j.task].name,
             j.index
