@@ -234,23 +234,19 @@ fn lockstep_period(log: &Ulog) -> Result<u64, Diagnostic> {
         .topic("vehicle_angular_velocity", 0)
         .and_then(|s| log.u64_values(s, "timestamp_sample"))
         .unwrap_or_default();
-    let gcd = |mut a: u64, mut b: u64| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
+    // Steps beyond i64 (over 290,000 years of µs) are no lockstep step.
     let step = samples
         .windows(2)
         .filter_map(|w| w[1].checked_sub(w[0]).filter(|d| *d > 0))
-        .fold(0, gcd);
+        .filter_map(|d| i64::try_from(d).ok())
+        .fold(0, crate::time::gcd);
     if step == 0 {
         return Err(missing(
             "two vehicle_angular_velocity samples apart in time (SITL's gyro period is measured from them)",
             "log vehicle_angular_velocity (PX4's default logging profile does)",
         ));
     }
-    Ok(step)
+    Ok(step.unsigned_abs())
 }
 
 /// The thread of the gyro `sensor_selection.gyro_device_id` names.
