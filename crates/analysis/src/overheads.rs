@@ -1,5 +1,5 @@
 //! Scheduling overheads in the response times (`[system] overheads`,
-//! issue 22; docs/analysis.md, "Scheduling overheads"): the one home of
+//! docs/analysis.md, "Scheduling overheads"): the one home of
 //! the accounting, which `sched` (RTA), `edf` (Spuri) and `disturbance`
 //! use.
 //!

@@ -1,4 +1,4 @@
-//! Issue 22, hand-computed: response-time analysis with release jitter and
+//! Hand-computed: response-time analysis with release jitter and
 //! constrained deadlines (Audsley, Burns, Richardson, Tindell, Wellings
 //! 1993, "Applying new scheduling theory to static priority pre-emptive
 //! scheduling": w = C + Σ ⌈(w + J_j)/T_j⌉ C_j, R = J + w), deadline-

@@ -1,4 +1,4 @@
-//! Issue 22: rtpipe's analyses on examples with numbers from outside
+//! rtpipe's analyses on examples with numbers from outside
 //! rtpipe — published task sets and the expected results other tools' test
 //! suites hold for them. Every number below is quoted from the source
 //! named at its test (repository, path, commit); where a source gives only

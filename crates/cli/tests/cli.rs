@@ -190,7 +190,7 @@ fn design_rejects_bad_flags_with_exit_2() {
     assert_eq!(o.status.code(), Some(2));
 }
 
-/// Issue 14: a numerical failure of the solver (microlp's "Singular
+/// A numerical failure of the solver (microlp's "Singular
 /// matrix" on Cleanflight's derived limits) is not an internal error: the
 /// best verified design (exit 0) or none (exit 1), never exit 3.
 #[test]
@@ -238,7 +238,7 @@ fn mutated_exit_2(tag: &str, name: &str, cases: &[(&str, &str, &str)]) {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Issue 22's bad combinations exit 2 with the place and a fix; `design`
+/// Bad combinations of timing keys exit 2 with the place and a fix; `design`
 /// checks the deadline-monotonic spec with the box search (every period
 /// fixed: it verifies, exit 0), the MILP refuses it at `priorities`.
 #[test]
@@ -587,8 +587,8 @@ fn a_closed_pipe_ends_quietly() {
     );
 }
 
-/// A flag that would have no effect is an error naming the fix (issue 24
-/// item 8), before anything runs.
+/// A flag that would have no effect is an error naming the fix, before
+/// anything runs.
 #[test]
 fn flags_that_would_be_ignored_exit_2() {
     let t2 = example("table2-design.toml");

@@ -32,7 +32,7 @@ fn a_flight_reports_quality_and_chains_as_json() {
     }
 }
 
-/// Issue 22: a flight honours LET. examples/cleanflight.toml with its three
+/// A flight honours LET. examples/cleanflight.toml with its three
 /// chains under LET (its I/O VCPUs made Main VCPUs, which LET needs; the
 /// background tasks stay implicit): the bodies read at their releases and
 /// publish at their periods' ends, so the flight's latencies are LET's,
@@ -201,7 +201,7 @@ fn bad_flight_input_exits_2() {
 
 #[test]
 fn a_sweep_where_nothing_flies_writes_no_limits_and_exits_1() {
-    // Issue 24: it wrote "wrote l.toml with these limits" (every limit "-")
+    // It wrote "wrote l.toml with these limits" (every limit "-")
     // and exited 0.
     let dir = scratch("fly-sweep-none");
     let crit = dir.join("c.toml");

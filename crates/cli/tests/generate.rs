@@ -157,7 +157,7 @@ fn bad_flags_and_paths_exit_2_and_write_nothing() {
     for flags in [
         vec!["--utilization", "0"],
         vec!["--utilization", "1.5"],
-        // Issue 24: so small that no task fits (exited 3, "internal error").
+        // So small that no task fits (exited 3, "internal error").
         vec!["--utilization", "1e-9"],
         vec!["--utilization", "NaN"],
         vec!["--tasks", "0"],

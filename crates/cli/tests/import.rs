@@ -452,7 +452,7 @@ fn a_failed_import_leaves_an_existing_outdir_as_it_was() {
 
 #[test]
 fn a_file_name_with_a_newline_is_refused_with_exit_2() {
-    // Issue 24: the name reached the specs' header comments and names, and
+    // The name reached the specs' header comments and names, and
     // the import exited 3 ("internal error").
     let text = read(Path::new(&data("e2eeval-golden.yaml")));
     let (o, out) = import_text("import-newline", "a\nb.yaml", &text);

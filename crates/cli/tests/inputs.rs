@@ -1,4 +1,4 @@
-//! Issue 24, items 1, 2, 6 and 9: every file a user hands rtpipe (spec,
+//! Every file a user hands rtpipe (spec,
 //! mission, vehicle preset, criterion, YAML import) is read by the same
 //! rules, no output replaces it, no input makes reading slow, and names
 //! print as themselves.
@@ -397,7 +397,7 @@ fn mutated_missions_presets_and_criteria_are_refused_plainly() {
     }
 }
 
-/// Issue 24 item 9: a refused value names the limit it broke; examples in
+/// A refused value names the limit it broke; examples in
 /// errors fit their flag; no "-0.0000".
 #[test]
 fn messages_name_the_limit_and_fitting_examples() {

@@ -1,4 +1,4 @@
-//! Issue 15: the binary as a demanding user and a tester would use it —
+//! The binary as a demanding user and a tester would use it —
 //! panics and hangs, output paths, huge inputs, bad names and values, exit
 //! codes, flags that were silently ignored.
 

@@ -261,7 +261,7 @@ fn ctrl_c_stops_the_run_cleanly() {
         "took {:?} to stop",
         started.elapsed()
     );
-    // Issue 24: the truncated report, then exit 130 as every other command.
+    // The truncated report, then exit 130 as every other command.
     assert_exit(&o, 130);
     assert!(
         stderr(&o).contains("interrupted by Ctrl-C"),
@@ -276,7 +276,7 @@ fn ctrl_c_stops_the_run_cleanly() {
 
 #[test]
 fn a_trace_that_cannot_be_written_keeps_the_report_and_exits_2() {
-    // Issue 24: a full disk under --trace dropped the whole report of a
+    // A full disk under --trace dropped the whole report of a
     // completed run. A file-size limit stands in for the full disk (SIGXFSZ
     // ignored, so the write fails with EFBIG instead of killing).
     let _one = serial();
@@ -300,7 +300,7 @@ fn a_trace_that_cannot_be_written_keeps_the_report_and_exits_2() {
 
 #[test]
 fn a_spec_with_more_tasks_than_run_starts_is_refused() {
-    // Issue 24: 3,000 tasks under SCHED_FIFO locked 6.2 GB of thread stacks.
+    // 3,000 tasks under SCHED_FIFO locked 6.2 GB of thread stacks.
     let spec = write_spec("run-many", "");
     let o = rtpipe(&["generate", "waters", &spec, "--tasks", "600", "--cpus", "1"]);
     assert_exit(&o, 0);
@@ -823,7 +823,7 @@ fn observed(v: &Value, metric: &str) -> Value {
     c["observed"].clone()
 }
 
-/// Issue 22: a spec with critical sections runs under its protocol
+/// A spec with critical sections runs under its protocol
 /// (PCP, and PIP) and nothing it observes breaks a sound bound unexcused.
 #[test]
 fn resources_run_under_their_protocol_within_the_sound_bounds() {
@@ -872,7 +872,7 @@ fn resources_run_under_their_protocol_within_the_sound_bounds() {
     }
 }
 
-/// Issue 22, communication per chain: examples/let-mixed.toml on real
+/// Communication per chain: examples/let-mixed.toml on real
 /// threads. Its LET chains measure exactly the simulator's figures
 /// (estimation 6 and 6 ms, logging 24 and 24 ms from the head's read,
 /// synchronous release), while the implicit control chain reads the LET
@@ -922,7 +922,7 @@ fn per_chain_let_runs_measure_the_simulator_s_let_figures() {
     }
 }
 
-/// Issue 22: LET on real threads measures exactly what the simulator does
+/// LET on real threads measures exactly what the simulator does
 /// on examples/let.toml (reaction 20 ms, freshness 25 ms from the head's
 /// read on every sample, the known-offset bounds 20 and 25 reached).
 #[test]

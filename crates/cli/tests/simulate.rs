@@ -391,7 +391,7 @@ fn peak_kb(args: &[&str]) -> (String, u64) {
 
 #[test]
 fn memory_does_not_grow_with_the_simulated_span() {
-    // Issue 24: 20000 s of cleanflight peaked at 1.46 GB (73 KB per
+    // 20000 s of cleanflight peaked at 1.46 GB (73 KB per
     // simulated second); 5020 s (100x the default horizon) at 371 MB.
     let spec = example("cleanflight.toml");
     let (out, kb) = peak_kb(&["simulate", &spec, "--duration", "5020s"]);

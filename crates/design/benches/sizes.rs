@@ -55,7 +55,7 @@ fn problem(tasks: usize, seed: u64) -> rtpipe_model::Spec {
 }
 
 /// Cleanflight with Table V's budgets, `harmonic = true` and a 100 µs grid
-/// (issue 25: the MILP did not finish it in 120 s).
+/// (the MILP did not finish it in 120 s).
 fn cleanflight_harmonic() -> rtpipe_model::Spec {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),

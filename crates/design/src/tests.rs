@@ -615,7 +615,7 @@ reaction = {reaction_us}
 
 #[test]
 fn a_wide_harmonic_design_ends_without_a_time_limit() {
-    // Issue 24: unfinished after 590 s and 423 MB (a master of 210,892 rows
+    // Unfinished after 590 s and 423 MB (a master of 210,892 rows
     // over 507 choices per task, no work bound before a verified design).
     let started = std::time::Instant::now();
     for limit in [7_777, 50_000, 1_000_000] {

@@ -1,4 +1,4 @@
-//! Issue 14: a numerical failure of the solver is not the user's error.
+//! A numerical failure of the solver is not the user's error.
 //! These problems run the MILP (`Method::Milp`); the box search, which
 //! solves no LP, has its own tests (tests/boxes.rs).
 //!
@@ -59,8 +59,8 @@ fn check(name: &str, spec: &Spec, opts: Options) -> Outcome {
 }
 
 /// The derived-limits problem. Under the publish-anchored link terms its
-/// second master made microlp's basis singular at once (the reproducer of
-/// issue 14); the release-anchored terms of issue 13 changed the model and
+/// second master made microlp's basis singular at once (the original
+/// reproducer); the release-anchored terms changed the model and
 /// the failure no longer occurs there. The problem stays as a MILP run that
 /// must answer within a small work budget; how failures are counted and
 /// noted is unit-tested in `budget.rs`.

@@ -1,6 +1,6 @@
 //! The box search examines the two halves of each split in parallel; its
 //! result must not depend on the cores: on one thread and on four, the
-//! same boxes, the same answer, the same bound (issue 25: "the same answer
+//! same boxes, the same answer, the same bound ("the same answer
 //! on any machine for a given work budget").
 
 use rtpipe_analysis::{bounds_per_chain, Anchor};

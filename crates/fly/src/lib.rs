@@ -669,7 +669,7 @@ mod tests {
 
     #[test]
     fn a_flight_without_its_trace_streams_the_same_quality() {
-        // Issue 24: fly kept every 2 ms trace point (~0.1 MB per flown
+        // Before, `fly` kept every 2 ms trace point (~0.1 MB per flown
         // second) to assess the flight at the end.
         let (spec, path) = cleanflight();
         let mut s = setup_of(&spec, &path, &["--duration", "30s"]);

@@ -333,7 +333,7 @@ path = ["a", "b"]
 
     #[test]
     fn a_long_run_holds_bounded_memory() {
-        // Issue 24: every stamp and every latency was kept, so memory grew
+        // Before, every stamp and every latency was kept, so memory grew
         // with the simulated span.
         let s = spec();
         let mut p = Provenance::new(&s).unwrap_or_else(|e| panic!("{e}"));

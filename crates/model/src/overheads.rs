@@ -1,4 +1,4 @@
-//! Scheduling overheads (`[system] overheads`, issue 22): what the kernel
+//! Scheduling overheads (`[system] overheads`): what the kernel
 //! costs the CPU per context switch, per release and per budget
 //! replenishment. The analysis charges them in every response time
 //! (`analysis/src/overheads.rs`), the simulator runs them

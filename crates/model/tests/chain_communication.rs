@@ -1,4 +1,4 @@
-//! Issue 22: `communication` per chain. A chain's key sets how every task
+//! `communication` per chain. A chain's key sets how every task
 //! on it reads and publishes; the system's value is the default, and covers
 //! the tasks on no chain with its own key. A task on two chains of
 //! different semantics, and a LET task LET cannot run (an I/O VCPU, release

@@ -1,4 +1,4 @@
-//! Issue 36's keys: `[threads.NAME]` and per task `thread`, `activation`,
+//! The keys: `[threads.NAME]` and per task `thread`, `activation`,
 //! `triggers` and `join`. A good spec parses into threads and triggered
 //! tasks and survives the writer; every bad combination is one located
 //! diagnostic (file:line:column) with a fix.

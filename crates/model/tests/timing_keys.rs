@@ -1,4 +1,4 @@
-//! Issue 22's keys: `[system] priorities` and `communication`, and per task
+//! The keys: `[system] priorities` and `communication`, and per task
 //! `priority`, `deadline` and `jitter`. Every bad combination is a located
 //! diagnostic (file:line:column) with a fix; LET (`communication = "let"`)
 //! is implicit communication's alternative, refused for the tasks it cannot

@@ -248,7 +248,7 @@ mod tests {
 
     #[test]
     fn a_lock_beyond_the_available_memory_is_not_tried() {
-        // Issue 24: 3,000 tasks locked 6.2 GB. Stacks of 10^7 threads
+        // Before, 3,000 tasks locked 6.2 GB. Stacks of 10^7 threads
         // exceed any machine's memory: refused with a warning, nothing
         // locked (the check comes before mlockall).
         let avail = mem_available();

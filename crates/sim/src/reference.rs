@@ -1,4 +1,4 @@
-//! The simulator's scheduling before the event heaps (issue 15, item 8):
+//! The simulator's scheduling before the event heaps:
 //! every event scanned every task (CBS replenishment, releases, the pick of
 //! each CPU, the next release and refill). Kept verbatim, test-only, as the
 //! reference the event-heap implementation must match bit for bit

@@ -470,7 +470,7 @@ fn compare_with_reference(spec: &Spec, cfg: &SimConfig) -> u64 {
     new.map_or(0, |r| r.events)
 }
 
-/// The event heaps (issue 15, item 8) give the results of the per-event scans
+/// The event heaps give the results of the per-event scans
 /// they replaced, bit for bit: 300 systems of 1 to 14 tasks (60 in debug
 /// builds, which also check the incremental state at every pick), five
 /// configurations each.
@@ -507,7 +507,7 @@ fn heaps_match_the_reference_with_many_tasks() {
     }
 }
 
-/// The lazy CPUs (issue 25: each CPU charged only when something happens
+/// The lazy CPUs (each CPU charged only when something happens
 /// on it, the CPUs' events in a tree) give the every-CPU scans' results:
 /// 200 systems (15 in debug builds) of 10 to 60 tasks spread over 3 to 16
 /// CPUs, five configurations each.

@@ -1,4 +1,5 @@
-//! The simulator as an oracle for issue 22's task model: on random systems
+//! The simulator as an oracle for the task model with jitter, deadlines
+//! and blocking: on random systems
 //! with release jitter, constrained deadlines and rate-monotonic,
 //! deadline-monotonic or explicit (random) priorities, no simulated job
 //! response time, reaction or freshness (from the read and from the event,

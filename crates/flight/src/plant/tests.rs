@@ -75,7 +75,7 @@ fn stopped_rotors_come_to_rest_at_zero_not_in_subnormals() {
 
 #[test]
 fn implausible_presets_are_refused_naming_the_field() {
-    // Issue 24: mass_kg = 1e-30 flew NaNs and "landed"; five rotor
+    // Before: mass_kg = 1e-30 flew NaNs and "landed"; five rotor
     // positions were cut to four while three were refused.
     use crate::preset::RACER5_TOML;
     let err = |text: String| match Preset::from_toml_str(&text) {

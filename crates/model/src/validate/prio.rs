@@ -1,4 +1,4 @@
-//! Validation of the fixed-priority and timing keys of issue 22:
+//! Validation of the fixed-priority and timing keys of the timing model:
 //! `[system] priorities`, and per task `priority`, `deadline` and `jitter`.
 //! Each rule is one function; [`Builder::priorities_and_deadlines`] runs
 //! them once the periods are known.
