@@ -1,7 +1,6 @@
-//! Scheduling overheads in the response times (issue 22;
-//! docs/analysis.md, "Scheduling overheads"): fixed priority and EDF
-//! worked by hand, and a system the overheads overload still analyses,
-//! as unschedulable.
+//! Scheduling overheads in the response times (docs/analysis.md,
+//! "Scheduling overheads"): fixed priority and EDF worked by hand, and a
+//! system the overheads overload still analyses, as unschedulable.
 
 use rtpipe_analysis::analyze;
 use rtpipe_model::{Nanos, Spec};
