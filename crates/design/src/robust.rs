@@ -23,6 +23,7 @@ use crate::api::{utilization, DesignError, MarginSearch, MarginStep, Options, Ou
 use crate::budget::Budget;
 use rtpipe_analysis::margins::{self, Control, ONE};
 use rtpipe_analysis::Mode;
+use rtpipe_model::bracket::{self, Gallop, Probe};
 use rtpipe_model::{Nanos, PeriodSpec, Spec};
 use std::time::Instant;
 
@@ -60,8 +61,7 @@ pub(crate) fn most_robust(
         Tried::Rejected(o) => return Ok(s.without_design(o)),
     };
     s.best = Some(best);
-    let (lo, hi) = s.gallop()?;
-    s.bisect(lo, hi)?;
+    s.search()?;
     Ok(s.answer())
 }
 
@@ -90,40 +90,35 @@ struct Search<'a> {
 }
 
 impl Search<'_> {
-    /// Doubles the factor while designs are accepted: (accepted, not).
-    fn gallop(&mut self) -> Result<(Nanos, Option<Nanos>), DesignError> {
-        let mut lo = ONE;
-        loop {
-            let next = (lo * 2).min(MAX_FACTOR);
-            if next == lo || self.out_of_time() {
-                return Ok((lo, None));
-            }
-            match self.try_factor(next)? {
-                Tried::Accepted(o) => {
-                    self.best = Some((next, o));
-                    lo = next;
-                }
-                Tried::Rejected(_) => return Ok((lo, Some(next))),
-            }
-        }
-    }
-
-    /// Halves (lo, hi) until it is below the resolution.
-    fn bisect(&mut self, mut lo: Nanos, hi: Option<Nanos>) -> Result<(), DesignError> {
-        let Some(mut hi) = hi else {
+    /// Doubles the factor while designs are accepted, then halves the
+    /// bracket until it is below the resolution ([`bracket`]); the best
+    /// accepted design is kept as the probes go.
+    fn search(&mut self) -> Result<(), DesignError> {
+        let Gallop::Bracketed { good, bad } =
+            bracket::gallop(ONE, MAX_FACTOR, ONE, |f| self.probe(f))?
+        else {
             return Ok(());
         };
-        while hi - lo > lo / (ONE / RESOLUTION_PER_MILLION) && !self.out_of_time() {
-            let mid = lo + (hi - lo) / 2;
-            match self.try_factor(mid)? {
-                Tried::Accepted(o) => {
-                    self.best = Some((mid, o));
-                    lo = mid;
-                }
-                Tried::Rejected(_) => hi = mid,
-            }
-        }
+        let resolution = |lo: Nanos, hi: Nanos| {
+            (hi - lo > lo / (ONE / RESOLUTION_PER_MILLION)).then(|| lo + (hi - lo) / 2)
+        };
+        bracket::bisect(good, bad, resolution, |f| self.probe(f))?;
         Ok(())
+    }
+
+    /// Whether `factor` gives an accepted design (kept as the best so
+    /// far), or no answer once the time limit or a cancel ends the search.
+    fn probe(&mut self, factor: Nanos) -> Probe<DesignError> {
+        if self.out_of_time() {
+            return Ok(None);
+        }
+        Ok(Some(match self.try_factor(factor)? {
+            Tried::Accepted(o) => {
+                self.best = Some((factor, o));
+                true
+            }
+            Tried::Rejected(_) => false,
+        }))
     }
 
     /// Whether the time limit or a cancel ends the search now.

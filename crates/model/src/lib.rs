@@ -9,6 +9,7 @@
 //! panics, whatever the input.
 #![deny(missing_docs)]
 
+pub mod bracket;
 mod cpus;
 mod error;
 pub mod gen;

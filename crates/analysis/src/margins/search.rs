@@ -3,6 +3,7 @@
 
 use super::{Breach, Control, LimitSlack, MarginsError, PeriodRange, ONE};
 use crate::{analyze_chain, chain_results, sched, Anchor, Mode, Report};
+use rtpipe_model::bracket::{self, Gallop};
 use rtpipe_model::{Nanos, PeriodSpec, Spec, MAX_TIME};
 
 /// `base`'s task with its exec set to `v` in `t` (its best case no above
@@ -171,50 +172,32 @@ fn no_conflict(spec: &Spec) -> bool {
 pub(super) type Holds<'f> = &'f mut dyn FnMut(&mut Oracle, Nanos) -> Result<bool, MarginsError>;
 
 /// Between `good` (where `f` holds) and `bad` (where it fails), either
-/// side of the other: the value next to a failing one, by bisection. When
-/// `f` is monotone there, the exact edge.
+/// side of the other: the value next to a failing one, by bisection
+/// ([`bracket::bisect`] to the nanosecond). When `f` is monotone there,
+/// the exact edge.
 pub(super) fn boundary(
     o: &mut Oracle,
-    mut good: Nanos,
-    mut bad: Nanos,
+    good: Nanos,
+    bad: Nanos,
     f: Holds,
 ) -> Result<Nanos, MarginsError> {
-    while (bad - good).abs() > 1 {
-        let mid = good + (bad - good) / 2;
-        if f(o, mid)? {
-            good = mid;
-        } else {
-            bad = mid;
-        }
-    }
-    Ok(good)
+    let to_the_ns = |g, b| bracket::midpoint(g, b, 1);
+    Ok(bracket::bisect(good, bad, to_the_ns, |x| f(o, x).map(Some))?.good)
 }
 
 /// From `from` (where `f` holds) toward `limit`, in steps of 1, 2, 4, …
-/// until `f` fails, then bisected: the last value before a failure, or
-/// `None` when `f` holds at `limit` too.
+/// until `f` fails ([`bracket::gallop`]), then bisected: the last value
+/// before a failure, or `None` when `f` holds at `limit` too.
 pub(super) fn gallop(
     o: &mut Oracle,
     from: Nanos,
     limit: Nanos,
     f: Holds,
 ) -> Result<Option<Nanos>, MarginsError> {
-    let dir = if limit >= from { 1 } else { -1 };
-    let (mut good, mut step) = (from, 1);
-    loop {
-        if good == limit {
-            return Ok(None);
-        }
-        let next = if (limit - good).abs() <= step {
-            limit
-        } else {
-            good + dir * step
-        };
-        if !f(o, next)? {
-            return Ok(Some(boundary(o, good, next, f)?));
-        }
-        good = next;
-        step = step.saturating_mul(2);
+    match bracket::gallop(from, limit, 1, |x| f(o, x).map(Some))? {
+        Gallop::HoldsToLimit => Ok(None),
+        Gallop::Bracketed { good, bad } => Ok(Some(boundary(o, good, bad, f)?)),
+        Gallop::Stopped { .. } => unreachable!("every probe of the analysis answers"),
     }
 }
 

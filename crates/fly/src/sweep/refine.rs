@@ -7,7 +7,9 @@
 
 use super::{edge, flown, How, Point, Variation, DELAY_LINES};
 use rayon::prelude::*;
+use rtpipe_model::bracket::{self, Probe};
 use rtpipe_model::Spec;
+use std::convert::Infallible;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The one-dimensional sweeps a variation belongs to: the period scale,
@@ -92,28 +94,28 @@ fn bisect(
     s: &crate::Setup,
     how: &How,
     like: Variation,
-    (mut lo, mut hi): (f64, f64),
+    (lo, hi): (f64, f64),
     resolution: f64,
     done: &AtomicU64,
     check: &(dyn Fn() + Sync),
 ) -> Vec<Point> {
     let mut out = Vec::new();
-    while hi - lo > resolution * hi {
-        let v = at(&like, (lo + hi) / 2.0);
-        // A delay rounds to the nanosecond: nothing left between them.
-        if value(&v) <= lo || value(&v) >= hi {
-            break;
-        }
+    // The next probe: the midpoint as its sweep rounds it (a delay to the
+    // nanosecond), while the bracket is wider than the resolution and the
+    // rounded midpoint still lies strictly inside it.
+    let between = |lo: f64, hi: f64| {
+        let x = value(&at(&like, (lo + hi) / 2.0));
+        (hi - lo > resolution * hi && x > lo && x < hi).then_some(x)
+    };
+    let flies = |x: f64| -> Probe<Infallible> {
         check();
-        let p = flown(spec, s, v, how);
+        let p = flown(spec, s, at(&like, x), how);
         done.fetch_add(1, Ordering::Relaxed);
-        if p.schedulable && p.pass() {
-            lo = value(&v);
-        } else {
-            hi = value(&v);
-        }
+        let passed = p.schedulable && p.pass();
         out.push(p);
-    }
+        Ok(Some(passed))
+    };
+    let Ok(_) = bracket::bisect(lo, hi, between, flies);
     out
 }
 
