@@ -300,18 +300,19 @@ fn respond(
         return Response::NONE;
     }
     let above = &deps.above[i];
-    let Some(models) = above
-        .iter()
-        .map(|&j| arrivals[j].as_ref().map(|a| (fp.interference(j), a)))
-        .collect::<Option<Vec<_>>>()
-    else {
-        return Response::NONE;
-    };
+    let mut models = Vec::with_capacity(above.len());
+    for &j in above {
+        let Some(a) = arrivals[j].as_ref() else {
+            return Response::NONE;
+        };
+        models.push((fp.interference(j), a));
+    }
     if !merging(spec, i) {
-        let hp: Vec<(Nanos, Nanos, Nanos)> = models
-            .iter()
-            .flat_map(|&(c, a)| a.streams.iter().map(move |s| (c, s.period, s.jitter)))
-            .collect();
+        let streams = models.iter().map(|(_, a)| a.streams.len()).sum();
+        let mut hp: Vec<Load> = Vec::with_capacity(streams);
+        for &(c, a) in &models {
+            hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
+        }
         let (budget, job) = fp.periodic_response(i, &hp);
         return Response {
             budget,

@@ -1,5 +1,6 @@
 //! Priorities, response times and schedulability tests per CPU.
 
+use crate::demand::Demand;
 use crate::edf;
 use rtpipe_model::policy::{EventAnalysis, ResponseAnalysis};
 use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
@@ -383,15 +384,17 @@ pub fn level_response_within(
     if u + share >= 1.0 {
         return None;
     }
+    // One demand for the whole busy period: its windows only grow.
+    let mut demand = Demand::of_loads(hp);
     let (mut worst, mut w): (Nanos, Nanos) = (0, 0);
     for q in 0..MAX_BUSY_JOBS {
-        let demand = (q + 1)
+        let own_demand = (q + 1)
             .checked_mul(own.work)?
             .checked_add((2 * q + 1).checked_mul(own.switch)?)?
             .checked_add(own.blocking)?;
         // w_{q-1} plus the q-th job's own work is below w_q (the fixed
         // point grows at least by the work added): a valid start.
-        w = busy_window_from(demand, hp, w.checked_add(own.work)?)?;
+        w = busy_window_from(own_demand, hp, &mut demand, w.checked_add(own.work)?)?;
         worst = worst.max(w - q.saturating_mul(own.period));
         if worst.checked_add(own.jitter)? > limit {
             return None;
@@ -405,25 +408,30 @@ pub fn level_response_within(
 
 /// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
 pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
-    busy_window_from(own, hp, 0)
-}
-
-/// [`busy_window`] iterated from `start`, which must not exceed the least
-/// fixed point (the iteration then reaches it from below).
-fn busy_window_from(own: Nanos, hp: &[(Nanos, Nanos, Nanos)], start: Nanos) -> Option<Nanos> {
-    // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
+    // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
     if u >= 1.0 {
         return None;
     }
+    busy_window_from(own, hp, &mut Demand::of_loads(hp), 0)
+}
+
+/// [`busy_window`] iterated from `start`, which must not exceed the least
+/// fixed point (the iteration then reaches it from below), with `demand`
+/// the demand of `hp` last asked at or below `start`. The caller has
+/// checked that `hp` leaves room (Σ I_j/T_j < 1).
+fn busy_window_from(
+    own: Nanos,
+    hp: &[(Nanos, Nanos, Nanos)],
+    demand: &mut Demand,
+    start: Nanos,
+) -> Option<Nanos> {
     let first = own.checked_add(hp.iter().map(|&(c, _, _)| c).sum::<Nanos>())?;
     let mut r = first.max(start);
     for _ in 0..1_000_000 {
-        // Overflow means a value far beyond MAX_TIME: no bounded response.
-        let mut next = own;
-        for &(c, t, j) in hp {
-            next = ((r + j + t - 1) / t).checked_mul(c)?.checked_add(next)?;
-        }
+        // Past MAX_TIME (the demand saturates where the sum would
+        // overflow): no bounded response.
+        let next = own.saturating_add(demand.at(r));
         if next > MAX_TIME {
             return None;
         }
@@ -654,7 +662,14 @@ fn rta_response(
     // one whose busy period holds more than one own job.
     let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
     let r = |work: Nanos| level_response(own(work), hp).filter(|&r| !pibs || r <= period_or_max(t));
-    (r(t.budget()), r(t.demand()))
+    let job = r(t.demand());
+    // Without a budget of its own the budget figure is the job figure.
+    let budget = if t.budget() == t.demand() {
+        job
+    } else {
+        r(t.budget())
+    };
+    (budget, job)
 }
 
 /// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),
