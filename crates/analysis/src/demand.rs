@@ -77,6 +77,12 @@ impl Demand {
         demand
     }
 
+    /// The largest window asked so far: the figure of an iteration that
+    /// asked no more depends on each stream's η⁺ up to it alone.
+    pub fn reach(&self) -> Nanos {
+        self.last
+    }
+
     /// `Σ_h η⁺_h(w)·C_h`, saturating at `Nanos::MAX`. `w` must be at least
     /// the window asked before.
     pub fn at(&mut self, w: Nanos) -> Nanos {

@@ -379,13 +379,37 @@ pub fn level_response_within(
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
 ) -> Option<Nanos> {
+    level_response_reach(own, hp, limit).0
+}
+
+/// [`level_response_within`] with the largest window its iteration asked
+/// `hp`'s demand at: the figure depends on `hp`'s η⁺ up to it alone (the
+/// event analysis re-analyses a task only when an input's η⁺ changes
+/// there, `crate::events`).
+pub fn level_response_reach(
+    own: OwnJobs,
+    hp: &[(Nanos, Nanos, Nanos)],
+    limit: Nanos,
+) -> (Option<Nanos>, Nanos) {
+    let mut demand = Demand::of_loads(hp);
+    let r = busy_period_jobs(own, hp, limit, &mut demand);
+    (r, demand.reach())
+}
+
+/// The jobs of [`level_response_within`]'s busy period, `demand` that of
+/// `hp` before any window.
+fn busy_period_jobs(
+    own: OwnJobs,
+    hp: &[(Nanos, Nanos, Nanos)],
+    limit: Nanos,
+    demand: &mut Demand,
+) -> Option<Nanos> {
     let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     if u + share >= 1.0 {
         return None;
     }
     // One demand for the whole busy period: its windows only grow.
-    let mut demand = Demand::of_loads(hp);
     let (mut worst, mut w): (Nanos, Nanos) = (0, 0);
     for q in 0..MAX_BUSY_JOBS {
         let own_demand = (q + 1)
@@ -394,7 +418,7 @@ pub fn level_response_within(
             .checked_add(own.blocking)?;
         // w_{q-1} plus the q-th job's own work is below w_q (the fixed
         // point grows at least by the work added): a valid start.
-        w = busy_window_from(own_demand, hp, &mut demand, w.checked_add(own.work)?)?;
+        w = busy_window_from(own_demand, hp, demand, w.checked_add(own.work)?)?;
         worst = worst.max(w - q.saturating_mul(own.period));
         if worst.checked_add(own.jitter)? > limit {
             return None;
@@ -600,6 +624,15 @@ impl crate::events::FixedPriority for Levels<'_> {
     ) -> (Option<Nanos>, Option<Nanos>) {
         rta_response(self, i, hp)
     }
+
+    fn periodic_response_reach(
+        &self,
+        i: usize,
+        hp: &[(Nanos, Nanos, Nanos)],
+    ) -> ((Option<Nanos>, Option<Nanos>), Option<Nanos>) {
+        let (figures, reach) = rta_response_reach(self, i, hp);
+        (figures, Some(reach))
+    }
 }
 
 /// A task's period, or [`MAX_TIME`] when none is fixed (callers are to rule
@@ -646,6 +679,16 @@ fn rta_response(
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    rta_response_reach(levels, i, hp).0
+}
+
+/// [`rta_response`] with the largest window either figure's iteration
+/// asked `hp`'s demand at ([`level_response_reach`]).
+fn rta_response_reach(
+    levels: &Levels,
+    i: usize,
+    hp: &[(Nanos, Nanos, Nanos)],
+) -> ((Option<Nanos>, Option<Nanos>), Nanos) {
     let spec = levels.spec;
     let t = &spec.tasks[i];
     let blocking = levels.blocking(i);
@@ -661,15 +704,17 @@ fn rta_response(
     // simulator found its later jobs above the figure): none for
     // one whose busy period holds more than one own job.
     let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
-    let r = |work: Nanos| level_response(own(work), hp).filter(|&r| !pibs || r <= period_or_max(t));
-    let job = r(t.demand());
-    // Without a budget of its own the budget figure is the job figure.
-    let budget = if t.budget() == t.demand() {
-        job
-    } else {
-        r(t.budget())
+    let r = |work: Nanos| {
+        let (r, reach) = level_response_reach(own(work), hp, Nanos::MAX);
+        (r.filter(|&r| !pibs || r <= period_or_max(t)), reach)
     };
-    (budget, job)
+    let (job, job_reach) = r(t.demand());
+    // Without a budget of its own the budget figure is the job figure.
+    if t.budget() == t.demand() {
+        return ((job, job), job_reach);
+    }
+    let (budget, budget_reach) = r(t.budget());
+    ((budget, job), budget_reach.max(job_reach))
 }
 
 /// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),

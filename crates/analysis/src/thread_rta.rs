@@ -55,6 +55,41 @@ pub type Above<'a> = [(Nanos, &'a Arrivals)];
 /// than its activations: the figure bounds each job from its first
 /// release.
 pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
+    fifo_response_reach(members, above, blocking).0
+}
+
+/// [`fifo_response`] with the largest window it looked at: the busy
+/// period, beyond which neither the members' η⁺ nor that of the tasks
+/// above is read (every candidate's fixed point is within it), so the
+/// figure depends on each η⁺ up to it alone (the event analysis
+/// re-analyses a thread only when an input's η⁺ changes there,
+/// `crate::events`). The reach is 0 when the response is unbounded.
+pub fn fifo_response_reach(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+) -> (Option<Nanos>, Nanos) {
+    let mut demand = demand_of(above);
+    // The candidates' windows start below the busy period's: a copy of
+    // the demand before its first window, whose windows grow from one
+    // candidate to the next.
+    let mut candidate_demand = demand.clone();
+    let r = fifo_within(members, above, blocking, &mut demand, &mut candidate_demand);
+    (
+        r,
+        r.map_or(0, |_| demand.reach().max(candidate_demand.reach())),
+    )
+}
+
+/// [`fifo_response`] with two demands of the tasks above before any
+/// window, one for the busy period and one for the candidates.
+fn fifo_within(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    demand: &mut Demand,
+    candidate_demand: &mut Demand,
+) -> Option<Nanos> {
     let load: f64 = members
         .iter()
         .map(|m| m.work as f64 * m.arrivals.rate())
@@ -69,11 +104,6 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
         })
     };
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let mut demand = demand_of(above);
-    // The candidates' windows start below the busy period's: a copy of
-    // the demand before its first window, whose windows grow from one
-    // candidate to the next.
-    let mut candidate_demand = demand.clone();
     let length = fixed_point(1, &steps, |w| Some(thread(w)?.saturating_add(demand.at(w))))?;
     let mut candidates = vec![0];
     for m in members {
