@@ -85,8 +85,9 @@ pub struct EventResult {
 /// the activations (linear in the tasks and their streams) and then only
 /// the responses whose inputs changed: a task's response reads the
 /// activations of the tasks above it and of its thread's tasks alone
-/// ([`Deps`]), so the figures are those of recomputing every task every
-/// round (`analysis/tests/events_worklist.rs` holds the two together).
+/// ([`Deps`]), and those only at windows up to its reach (an input whose
+/// η⁺ is the same up to there leaves it as it was), so the figures are
+/// those of recomputing every task every round (`analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
     let deps = Deps::of(spec, fp);
@@ -252,7 +253,7 @@ impl Deps {
 
 /// FIFO responses of one thread this round, by (tasks above, blocking),
 /// for members whose own work is the work the others see of them (then
-/// every input of [`fifo_response`] is the same for them, and so is its
+/// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
 /// figure).
 type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Nanos))>;
 
