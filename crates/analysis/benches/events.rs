@@ -7,7 +7,9 @@
 //!
 //! `cargo bench -p rtpipe-analysis --bench events`. The systems come from
 //! `rtpipe_model::gen::event_triggered_system`, deterministic per seed;
-//! each is described on stderr before it is measured.
+//! each is described on stderr before it is measured, and written as
+//! `NAME-1000.toml` into the directory `RTPIPE_BENCH_SPECS` names, when
+//! set (for `rtpipe analyze` of the same system, e.g. its peak memory).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use rtpipe_analysis::analyze;
@@ -72,6 +74,11 @@ fn bench(c: &mut Criterion) {
     for (name, periodic) in [("periodic", true), ("event-triggered", false)] {
         let spec = system(periodic);
         describe(&spec);
+        if let Some(dir) = std::env::var_os("RTPIPE_BENCH_SPECS") {
+            let path = std::path::Path::new(&dir).join(format!("{name}-{}.toml", spec.tasks.len()));
+            std::fs::write(&path, rtpipe_model::to_toml(&spec))
+                .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+        }
         group.throughput(Throughput::Elements(spec.tasks.len() as u64));
         let id = BenchmarkId::new(name, spec.tasks.len());
         group.bench_function(id, |b| b.iter(|| black_box(analyze(black_box(&spec)))));

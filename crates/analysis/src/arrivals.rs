@@ -111,6 +111,31 @@ impl Arrivals {
         Arrivals { streams }
     }
 
+    /// The largest window `W` such that η⁺ of `self` and of `other` agree
+    /// stream by stream at every window up to `W` (0 when they differ at
+    /// once or are not the same streams with other jitters): a figure that
+    /// read η⁺ at windows up to `W` alone is the same for both. A stream
+    /// (T, J) and (T, J') with J ≤ J' differ first where a multiple of T
+    /// falls in `[w + J, w + J')`: at `w = ⌈(1 + J)/T⌉·T − J' + 1`.
+    pub fn same_up_to(&self, other: &Arrivals) -> Nanos {
+        if self.streams.len() != other.streams.len() {
+            return 0;
+        }
+        let mut reach = Nanos::MAX;
+        for (s, o) in self.streams.iter().zip(&other.streams) {
+            if s.period != o.period {
+                return 0;
+            }
+            let (low, high) = (s.jitter.min(o.jitter), s.jitter.max(o.jitter));
+            if low == high {
+                continue;
+            }
+            let first = Stream { jitter: low, ..*s }.eta(1).saturating_mul(s.period);
+            reach = reach.min(first.saturating_sub(high).max(0));
+        }
+        reach
+    }
+
     /// Every window length `a` in `(0, limit)` at which η⁺(a + 1) steps up:
     /// `k·T − J` for a stream (T, J) and k ≥ 1, ascending and distinct.
     /// `None` when there are more than `max`.
@@ -169,5 +194,24 @@ mod tests {
         assert_eq!(Arrivals::all(&[&p]), p);
         // Output jitter.
         assert_eq!(p.delayed(4), Some(Arrivals::periodic(10, 4)));
+    }
+
+    #[test]
+    fn same_up_to_the_first_window_where_a_jitter_shows() {
+        // T 10, J 3 → 5: ⌈(w + 3)/10⌉ = ⌈(w + 5)/10⌉ up to w = 5, not at 6.
+        let (a, b) = (Arrivals::periodic(10, 3), Arrivals::periodic(10, 5));
+        assert_eq!(a.same_up_to(&b), 5);
+        assert_eq!(b.same_up_to(&a), 5);
+        for w in 0..=5 {
+            assert_eq!(a.eta(w), b.eta(w), "w = {w}");
+        }
+        assert_ne!(a.eta(6), b.eta(6));
+        assert_eq!(a.same_up_to(&a), Nanos::MAX);
+        // J 9 → 10 differ at once (w = 1: ⌈10/10⌉ = 1, ⌈11/10⌉ = 2).
+        assert_eq!(
+            Arrivals::periodic(10, 9).same_up_to(&Arrivals::periodic(10, 10)),
+            0
+        );
+        assert_eq!(a.same_up_to(&Arrivals::periodic(20, 3)), 0);
     }
 }

@@ -10,7 +10,7 @@
 //! data-triggered tasks".
 
 use crate::arrivals::Arrivals;
-use crate::thread_rta::{fifo_response, Member};
+use crate::thread_rta::{fifo_response_reach, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
 /// Most rounds of the holistic iteration before every figure that
@@ -34,6 +34,18 @@ pub trait FixedPriority {
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
     fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
+    /// [`periodic_response`](Self::periodic_response) with its reach: the
+    /// largest window at which its iteration read `hp`'s η⁺, so that the
+    /// figures hold as long as no stream's η⁺ changes up to it. `None`
+    /// (the default) when unknown: the task is then re-analysed whenever
+    /// an input changes.
+    fn periodic_response_reach(
+        &self,
+        i: usize,
+        hp: &[Load],
+    ) -> ((Option<Nanos>, Option<Nanos>), Option<Nanos>) {
+        (self.periodic_response(i, hp), None)
+    }
 }
 
 /// What the event analysis knows of a task, beside its response times.
@@ -73,8 +85,9 @@ pub struct EventResult {
 /// the activations (linear in the tasks and their streams) and then only
 /// the responses whose inputs changed: a task's response reads the
 /// activations of the tasks above it and of its thread's tasks alone
-/// ([`Deps`]), so the figures are those of recomputing every task every
-/// round (`analysis/tests/events_worklist.rs` holds the two together).
+/// ([`Deps`]), and those only at windows up to its reach (an input whose
+/// η⁺ is the same up to there leaves it as it was), so the figures are
+/// those of recomputing every task every round (`analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
     let deps = Deps::of(spec, fp);
@@ -86,7 +99,7 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     for round in 0..MAX_ROUNDS {
         if round > 0 {
             let fresh = activations(spec, &delay);
-            let dirty = deps.readers_of_changed(&arrivals, &fresh);
+            let dirty = deps.readers_of_changed(&arrivals, &fresh, &responses);
             arrivals = fresh;
             deps.respond_units(spec, fp, &arrivals, &mut responses, |u| dirty[u]);
         }
@@ -170,18 +183,46 @@ impl Deps {
         }
     }
 
-    /// Per unit, whether it reads the activations of a task whose
-    /// activations differ between `old` and `new`.
-    fn readers_of_changed(&self, old: &[Option<Arrivals>], new: &[Option<Arrivals>]) -> Vec<bool> {
+    /// Per unit, whether it reads the activations of a task whose η⁺
+    /// differs between `old` and `new` at a window up to the unit's reach
+    /// (its `responses`, computed from `old`, read η⁺ up to there alone,
+    /// so they are those `new` gives when it agrees up to there).
+    fn readers_of_changed(
+        &self,
+        old: &[Option<Arrivals>],
+        new: &[Option<Arrivals>],
+        responses: &[Response],
+    ) -> Vec<bool> {
+        let reach = self.unit_reach(responses);
         let mut dirty = vec![false; old.len() + self.members.len()];
         for (j, readers) in self.readers.iter().enumerate() {
-            if old[j] != new[j] {
-                for &u in readers {
+            if old[j] == new[j] {
+                continue;
+            }
+            let same = match (&old[j], &new[j]) {
+                (Some(a), Some(b)) => a.same_up_to(b),
+                _ => 0,
+            };
+            for &u in readers {
+                if reach[u].is_none_or(|r| r > same) {
                     dirty[u] = true;
                 }
             }
         }
         dirty
+    }
+
+    /// Per unit the largest reach of its responses (`None`: a response
+    /// without one, re-analysed on any change).
+    fn unit_reach(&self, responses: &[Response]) -> Vec<Option<Nanos>> {
+        let mut reach: Vec<Option<Nanos>> = responses.iter().map(|r| r.reach).collect();
+        for on in &self.members {
+            let unit = on
+                .iter()
+                .try_fold(0, |m: Nanos, &i| Some(m.max(responses[i].reach?)));
+            reach.push(unit);
+        }
+        reach
     }
 
     /// The responses of the units `chosen` picks, into `responses`.
@@ -212,9 +253,9 @@ impl Deps {
 
 /// FIFO responses of one thread this round, by (tasks above, blocking),
 /// for members whose own work is the work the others see of them (then
-/// every input of [`fifo_response`] is the same for them, and so is its
+/// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
 /// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, Option<Nanos>)>;
+type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Nanos))>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone, Copy)]
@@ -224,6 +265,9 @@ struct Response {
     /// From the actual release (the first one of a merged job), for the
     /// output jitter; at most `job`.
     actual: Option<Nanos>,
+    /// The largest window at which the figures read their inputs' η⁺
+    /// (`None`: unbounded, or not known).
+    reach: Option<Nanos>,
 }
 
 impl Response {
@@ -232,6 +276,7 @@ impl Response {
         budget: None,
         job: None,
         actual: None,
+        reach: None,
     };
 }
 
@@ -300,23 +345,25 @@ fn respond(
         return Response::NONE;
     }
     let above = &deps.above[i];
-    let Some(models) = above
-        .iter()
-        .map(|&j| arrivals[j].as_ref().map(|a| (fp.interference(j), a)))
-        .collect::<Option<Vec<_>>>()
-    else {
-        return Response::NONE;
-    };
+    let mut models = Vec::with_capacity(above.len());
+    for &j in above {
+        let Some(a) = arrivals[j].as_ref() else {
+            return Response::NONE;
+        };
+        models.push((fp.interference(j), a));
+    }
     if !merging(spec, i) {
-        let hp: Vec<(Nanos, Nanos, Nanos)> = models
-            .iter()
-            .flat_map(|&(c, a)| a.streams.iter().map(move |s| (c, s.period, s.jitter)))
-            .collect();
-        let (budget, job) = fp.periodic_response(i, &hp);
+        let streams = models.iter().map(|(_, a)| a.streams.len()).sum();
+        let mut hp: Vec<Load> = Vec::with_capacity(streams);
+        for &(c, a) in &models {
+            hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
+        }
+        let ((budget, job), reach) = fp.periodic_response_reach(i, &hp);
         return Response {
             budget,
             job,
             actual: job,
+            reach: reach.filter(|_| budget.is_some() && job.is_some()),
         };
     }
     let blocking = fp.blocking(i);
@@ -325,7 +372,7 @@ fn respond(
         .iter()
         .find(|(a, b, _)| shared && a == above && *b == blocking)
         .map(|&(_, _, r)| r);
-    let actual = known.unwrap_or_else(|| {
+    let (actual, reach) = known.unwrap_or_else(|| {
         let r = thread_response(spec, fp, deps, arrivals, i, &models, blocking);
         if shared {
             cache.push((above.clone(), blocking, r));
@@ -341,6 +388,7 @@ fn respond(
         budget: job,
         job,
         actual: Some(actual),
+        reach: Some(reach),
     }
 }
 
@@ -354,11 +402,11 @@ fn thread_response(
     i: usize,
     above: &[(Nanos, &Arrivals)],
     blocking: Nanos,
-) -> Option<Nanos> {
+) -> (Option<Nanos>, Nanos) {
     let t = &spec.tasks[i];
     let alone = [i];
     let members = t.thread.map_or(&alone[..], |th| &deps.members[th][..]);
-    let members: Vec<Member> = members
+    let members: Option<Vec<Member>> = members
         .iter()
         .map(|&j| {
             let work = if j == i {
@@ -371,8 +419,11 @@ fn thread_response(
                 arrivals: arrivals[j].as_ref()?,
             })
         })
-        .collect::<Option<_>>()?;
-    fifo_response(&members, above, blocking)
+        .collect::<Option<_>>();
+    match members {
+        Some(members) => fifo_response_reach(&members, above, blocking),
+        None => (None, 0),
+    }
 }
 
 /// The iteration's last round as each task's figures, with the gaps.

@@ -18,6 +18,7 @@
 
 pub mod arrivals;
 pub mod blocking;
+pub mod demand;
 pub mod disturbance;
 pub mod edf;
 pub mod event_links;

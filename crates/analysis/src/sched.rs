@@ -4,6 +4,12 @@ use crate::edf;
 use rtpipe_model::policy::{EventAnalysis, ResponseAnalysis};
 use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
 
+mod busy;
+pub use busy::{
+    level_response, level_response_reach, level_response_within, response_time,
+    response_time_jitter, OwnJobs, MAX_BUSY_JOBS,
+};
+
 /// Timing facts of one task that the latency analysis builds on.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskTiming {
@@ -309,135 +315,6 @@ fn inherited_carry_in(levels: &Levels, j: usize) -> Option<(Nanos, Nanos)> {
     Some((c, r.checked_sub(c)?))
 }
 
-/// Fixed point of R = own + Σ_{j ∈ hp} ⌈R / T_j⌉ · I_j (Joseph and Pandya 1986;
-/// Audsley et al. 1993). `None` when the higher-priority load (with own) is
-/// 100 % or more, so the iteration would not converge, or on overflow.
-pub fn response_time(own: Nanos, hp: &[(Nanos, Nanos)]) -> Option<Nanos> {
-    let hp: Vec<(Nanos, Nanos, Nanos)> = hp.iter().map(|&(c, t)| (c, t, 0)).collect();
-    busy_window(own, &hp)
-}
-
-/// The response time with release jitter of a task's first job
-/// (Audsley, Burns, Richardson, Tindell, Wellings 1993): R = J + w, w =
-/// own + Σ_{j ∈ hp} ⌈(w + J_j) / T_j⌉ · I_j, with `hp` as (I_j, T_j, J_j).
-/// Measured from the nominal release; w alone is measured from the actual
-/// one. It is the task's worst case only when that job completes before
-/// the task's next release; [`level_response`] covers every job. `None`
-/// as [`response_time`].
-pub fn response_time_jitter(
-    own: Nanos,
-    jitter: Nanos,
-    hp: &[(Nanos, Nanos, Nanos)],
-) -> Option<Nanos> {
-    busy_window(own, hp)?.checked_add(jitter)
-}
-
-/// The analysed task's side of its level-i busy period: what each of its
-/// own jobs brings, and what the period brings once.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct OwnJobs {
-    /// The work of each own job: its demand x (the job figure) or its
-    /// budget C (the budget figure).
-    pub work: Nanos,
-    /// The context switch cost `cs` (`crate::overheads`): each earlier own
-    /// job of the busy period pays two, the analysed one one.
-    pub switch: Nanos,
-    /// Paid once per busy period: B (only sections begun before it can
-    /// block, `crate::blocking`) and any disturbance (`crate::disturbance`).
-    pub blocking: Nanos,
-    /// J: the own release jitter.
-    pub jitter: Nanos,
-    /// T: the own period.
-    pub period: Nanos,
-}
-
-/// Most own jobs one level-i busy period is followed through before the
-/// response is called unbounded.
-pub const MAX_BUSY_JOBS: Nanos = 100_000;
-
-/// The worst response time of any job of a task over its level-i busy
-/// period (Lehoczky 1990, arbitrary deadlines; Tindell, Burns and Wellings
-/// 1994, with release jitter and blocking): the q-th own job (q = 0, 1, …)
-/// completes at the least fixed point of
-/// `w_q = (q+1)·x + (2q+1)·cs + B + Σ_{j ∈ hp} ⌈(w_q + J_j) / T_j⌉ · I_j`
-/// after the busy period starts, was released at the earliest at
-/// `q·T − J` (the first job at its latest, `J` after its nominal release),
-/// so `R = max_q (w_q − q·T + J)` over the jobs until one completes by the
-/// next own release, `w_q ≤ (q+1)·T − J`. `None` when the level's
-/// utilisation (own share `(x + 2cs)/T` with `hp`'s) reaches 1, so the
-/// busy period need not end, on overflow, and past [`MAX_BUSY_JOBS`] jobs.
-pub fn level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
-    level_response_within(own, hp, Nanos::MAX)
-}
-
-/// [`level_response`] when it is at most `limit`, `None` otherwise: the
-/// busy period is left as soon as a job responds later (the design's
-/// relaxation only asks whether R is within a period).
-pub fn level_response_within(
-    own: OwnJobs,
-    hp: &[(Nanos, Nanos, Nanos)],
-    limit: Nanos,
-) -> Option<Nanos> {
-    let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
-    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
-    if u + share >= 1.0 {
-        return None;
-    }
-    let (mut worst, mut w): (Nanos, Nanos) = (0, 0);
-    for q in 0..MAX_BUSY_JOBS {
-        let demand = (q + 1)
-            .checked_mul(own.work)?
-            .checked_add((2 * q + 1).checked_mul(own.switch)?)?
-            .checked_add(own.blocking)?;
-        // w_{q-1} plus the q-th job's own work is below w_q (the fixed
-        // point grows at least by the work added): a valid start.
-        w = busy_window_from(demand, hp, w.checked_add(own.work)?)?;
-        worst = worst.max(w - q.saturating_mul(own.period));
-        if worst.checked_add(own.jitter)? > limit {
-            return None;
-        }
-        if w <= (q + 1).saturating_mul(own.period) - own.jitter {
-            return worst.checked_add(own.jitter);
-        }
-    }
-    None
-}
-
-/// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
-pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
-    busy_window_from(own, hp, 0)
-}
-
-/// [`busy_window`] iterated from `start`, which must not exceed the least
-/// fixed point (the iteration then reaches it from below).
-fn busy_window_from(own: Nanos, hp: &[(Nanos, Nanos, Nanos)], start: Nanos) -> Option<Nanos> {
-    // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
-    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
-    if u >= 1.0 {
-        return None;
-    }
-    let first = own.checked_add(hp.iter().map(|&(c, _, _)| c).sum::<Nanos>())?;
-    let mut r = first.max(start);
-    for _ in 0..1_000_000 {
-        // Overflow means a value far beyond MAX_TIME: no bounded response.
-        let mut next = own;
-        for &(c, t, j) in hp {
-            next = ((r + j + t - 1) / t).checked_mul(c)?.checked_add(next)?;
-        }
-        if next > MAX_TIME {
-            return None;
-        }
-        if next == r {
-            // The fixed point holds the task's own demand and every
-            // interferer's first release.
-            assert!(r >= first);
-            return Some(r);
-        }
-        r = next;
-    }
-    None
-}
-
 /// Tolerance of the utilisation tests: sums of quotients may round above a
 /// bound they meet exactly.
 const UTIL_EPS: f64 = 1e-12;
@@ -592,6 +469,15 @@ impl crate::events::FixedPriority for Levels<'_> {
     ) -> (Option<Nanos>, Option<Nanos>) {
         rta_response(self, i, hp)
     }
+
+    fn periodic_response_reach(
+        &self,
+        i: usize,
+        hp: &[(Nanos, Nanos, Nanos)],
+    ) -> ((Option<Nanos>, Option<Nanos>), Option<Nanos>) {
+        let (figures, reach) = rta_response_reach(self, i, hp);
+        (figures, Some(reach))
+    }
 }
 
 /// A task's period, or [`MAX_TIME`] when none is fixed (callers are to rule
@@ -638,6 +524,16 @@ fn rta_response(
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
 ) -> (Option<Nanos>, Option<Nanos>) {
+    rta_response_reach(levels, i, hp).0
+}
+
+/// [`rta_response`] with the largest window either figure's iteration
+/// asked `hp`'s demand at ([`level_response_reach`]).
+fn rta_response_reach(
+    levels: &Levels,
+    i: usize,
+    hp: &[(Nanos, Nanos, Nanos)],
+) -> ((Option<Nanos>, Option<Nanos>), Nanos) {
     let spec = levels.spec;
     let t = &spec.tasks[i];
     let blocking = levels.blocking(i);
@@ -653,8 +549,17 @@ fn rta_response(
     // simulator found its later jobs above the figure): none for
     // one whose busy period holds more than one own job.
     let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
-    let r = |work: Nanos| level_response(own(work), hp).filter(|&r| !pibs || r <= period_or_max(t));
-    (r(t.budget()), r(t.demand()))
+    let r = |work: Nanos| {
+        let (r, reach) = level_response_reach(own(work), hp, Nanos::MAX);
+        (r.filter(|&r| !pibs || r <= period_or_max(t)), reach)
+    };
+    let (job, job_reach) = r(t.demand());
+    // Without a budget of its own the budget figure is the job figure.
+    if t.budget() == t.demand() {
+        return ((job, job), job_reach);
+    }
+    let (budget, budget_reach) = r(t.budget());
+    ((budget, job), budget_reach.max(job_reach))
 }
 
 /// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),

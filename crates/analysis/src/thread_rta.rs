@@ -6,6 +6,7 @@
 //! tasks".
 
 use crate::arrivals::Arrivals;
+use crate::demand::Demand;
 use rtpipe_model::{Nanos, MAX_TIME};
 
 /// Most candidate release instants one level busy period is examined at
@@ -54,6 +55,41 @@ pub type Above<'a> = [(Nanos, &'a Arrivals)];
 /// than its activations: the figure bounds each job from its first
 /// release.
 pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
+    fifo_response_reach(members, above, blocking).0
+}
+
+/// [`fifo_response`] with the largest window it looked at: the busy
+/// period, beyond which neither the members' η⁺ nor that of the tasks
+/// above is read (every candidate's fixed point is within it), so the
+/// figure depends on each η⁺ up to it alone (the event analysis
+/// re-analyses a thread only when an input's η⁺ changes there,
+/// `crate::events`). The reach is 0 when the response is unbounded.
+pub fn fifo_response_reach(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+) -> (Option<Nanos>, Nanos) {
+    let mut demand = demand_of(above);
+    // The candidates' windows start below the busy period's: a copy of
+    // the demand before its first window, whose windows grow from one
+    // candidate to the next.
+    let mut candidate_demand = demand.clone();
+    let r = fifo_within(members, above, blocking, &mut demand, &mut candidate_demand);
+    (
+        r,
+        r.map_or(0, |_| demand.reach().max(candidate_demand.reach())),
+    )
+}
+
+/// [`fifo_response`] with two demands of the tasks above before any
+/// window, one for the busy period and one for the candidates.
+fn fifo_within(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    demand: &mut Demand,
+    candidate_demand: &mut Demand,
+) -> Option<Nanos> {
     let load: f64 = members
         .iter()
         .map(|m| m.work as f64 * m.arrivals.rate())
@@ -68,9 +104,7 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
         })
     };
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let length = fixed_point(1, &steps, |w| {
-        thread(w)?.checked_add(interference(above, w)?)
-    })?;
+    let length = fixed_point(1, &steps, |w| Some(thread(w)?.saturating_add(demand.at(w))))?;
     let mut candidates = vec![0];
     for m in members {
         candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
@@ -85,27 +119,31 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
         let released = thread(a.checked_add(1)?)?;
         // f grows with a: the last fixed point is a valid start.
         finish = fixed_point(finish.max(released), &steps, |w| {
-            released.checked_add(interference(above, w)?)
+            Some(released.saturating_add(candidate_demand.at(w)))
         })?;
         worst = worst.max(finish - a);
     }
     Some(worst)
 }
 
-/// Σ_h η⁺_h(w)·C_h.
-fn interference(above: &Above, w: Nanos) -> Option<Nanos> {
-    above.iter().try_fold(0 as Nanos, |sum, &(c, a)| {
-        sum.checked_add(a.eta(w).checked_mul(c)?)
-    })
+/// Σ_h η⁺_h(w)·C_h of the tasks above, stream by stream.
+fn demand_of(above: &Above) -> Demand {
+    let mut demand = Demand::with_capacity(above.iter().map(|(_, a)| a.streams.len()).sum());
+    for &(c, a) in above {
+        for &s in &a.streams {
+            demand.push(c, s);
+        }
+    }
+    demand
 }
 
 /// The least fixed point of a nondecreasing `f` at or above `start`
-/// (which must not exceed it), or `None` past [`MAX_TIME`] or when the
-/// `steps` left run out.
+/// (which must not exceed it), or `None` past [`MAX_TIME`] (a sum that
+/// saturates is past it) or when the `steps` left run out.
 fn fixed_point(
     start: Nanos,
     steps: &std::cell::Cell<u64>,
-    f: impl Fn(Nanos) -> Option<Nanos>,
+    mut f: impl FnMut(Nanos) -> Option<Nanos>,
 ) -> Option<Nanos> {
     let mut w = start;
     loop {

@@ -1,0 +1,227 @@
+//! The incremental demand (`demand::Demand`: each stream divided only where
+//! its count grows) against the straightforward sums it replaced, and the
+//! two analyses that use it, `sched::level_response` and
+//! `thread_rta::fifo_response`, against their straightforward iterations
+//! (every stream's ⌈(w + J)/T⌉ recomputed at every step, with checked
+//! arithmetic), kept here as the reference: on random streams, windows,
+//! own jobs and thread members, the same figures, unbounded ones and
+//! overflows included. 3,000 cases each; `--nocapture` prints the tally.
+
+use proptest::prelude::*;
+use rtpipe_analysis::arrivals::{Arrivals, Stream};
+use rtpipe_analysis::demand::Demand;
+use rtpipe_analysis::sched::{level_response, OwnJobs, MAX_BUSY_JOBS};
+use rtpipe_analysis::thread_rta::{fifo_response, Above, Member, MAX_CANDIDATES, MAX_STEPS};
+use rtpipe_model::{Nanos, MAX_TIME};
+use rtpipe_testkit::check;
+use std::cell::Cell;
+
+const CASES: u32 = 3_000;
+
+/// Σ ⌈(w + J)/T⌉·C of (C, T, J), `None` on overflow (the old `sched` sum).
+fn direct(loads: &[(Nanos, Nanos, Nanos)], w: Nanos) -> Option<Nanos> {
+    loads.iter().try_fold(0 as Nanos, |sum, &(c, t, j)| {
+        ((w + j + t - 1) / t).checked_mul(c)?.checked_add(sum)
+    })
+}
+
+/// The level-i busy period, every step summing every stream afresh.
+fn straight_level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+    let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
+    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
+    if u + share >= 1.0 {
+        return None;
+    }
+    let (mut worst, mut w): (Nanos, Nanos) = (0, 0);
+    for q in 0..MAX_BUSY_JOBS {
+        let demand = (q + 1)
+            .checked_mul(own.work)?
+            .checked_add((2 * q + 1).checked_mul(own.switch)?)?
+            .checked_add(own.blocking)?;
+        let first = demand.checked_add(hp.iter().map(|&(c, _, _)| c).sum::<Nanos>())?;
+        let mut r = first.max(w.checked_add(own.work)?);
+        w = loop {
+            let next = direct(hp, r)?.checked_add(demand)?;
+            if next > MAX_TIME {
+                return None;
+            }
+            if next == r {
+                break r;
+            }
+            r = next;
+        };
+        worst = worst.max(w - q.saturating_mul(own.period));
+        if w <= (q + 1).saturating_mul(own.period) - own.jitter {
+            return worst.checked_add(own.jitter);
+        }
+    }
+    None
+}
+
+/// The FIFO response of a thread, every step summing every stream above
+/// afresh.
+fn straight_fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
+    let load: f64 = members
+        .iter()
+        .map(|m| m.work as f64 * m.arrivals.rate())
+        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
+        .sum();
+    if load >= 1.0 {
+        return None;
+    }
+    let thread = |delta: Nanos| -> Option<Nanos> {
+        members.iter().try_fold(blocking, |sum, m| {
+            sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
+        })
+    };
+    let interference = |w: Nanos| -> Option<Nanos> {
+        above.iter().try_fold(0 as Nanos, |sum, &(c, a)| {
+            sum.checked_add(a.eta(w).checked_mul(c)?)
+        })
+    };
+    let steps = Cell::new(MAX_STEPS);
+    let fixed_point = |start: Nanos, f: &dyn Fn(Nanos) -> Option<Nanos>| -> Option<Nanos> {
+        let mut w = start;
+        loop {
+            steps.set(steps.get().checked_sub(1)?);
+            let next = f(w)?;
+            if next > MAX_TIME {
+                return None;
+            }
+            if next <= w {
+                return Some(w);
+            }
+            w = next;
+        }
+    };
+    let length = fixed_point(1, &|w| thread(w)?.checked_add(interference(w)?))?;
+    let mut candidates = vec![0];
+    for m in members {
+        candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
+        if candidates.len() > MAX_CANDIDATES {
+            return None;
+        }
+    }
+    candidates.sort_unstable();
+    candidates.dedup();
+    let (mut worst, mut finish) = (0, 0);
+    for a in candidates {
+        let released = thread(a.checked_add(1)?)?;
+        finish = fixed_point(finish.max(released), &|w| {
+            released.checked_add(interference(w)?)
+        })?;
+        worst = worst.max(finish - a);
+    }
+    Some(worst)
+}
+
+/// (C, T, J) streams: works from tiny to past overflow, jitters up to a
+/// few periods.
+fn loads(max: usize) -> impl Strategy<Value = Vec<(Nanos, Nanos, Nanos)>> {
+    prop::collection::vec(
+        (
+            1..20_000 as Nanos,
+            0..40u32,
+            prop_oneof![8 => 0..400 as Nanos, 1 => 1 as Nanos..Nanos::MAX / 64],
+        )
+            .prop_map(|(t, jf, c)| (c, t, t * Nanos::from(jf) / 10)),
+        0..max,
+    )
+}
+
+#[test]
+fn the_incremental_demand_is_the_direct_sum() {
+    let strategy = (loads(16), prop::collection::vec(0..50_000 as Nanos, 1..40));
+    check(
+        "incremental demand",
+        CASES,
+        strategy,
+        |(hp, mut windows)| {
+            windows.sort_unstable();
+            let mut demand = Demand::of_loads(&hp);
+            for &w in &windows {
+                // Saturated where the checked sum overflows; 0 in an empty window.
+                let want = if w == 0 { Some(0) } else { direct(&hp, w) };
+                prop_assert_eq!(demand.at(w), want.unwrap_or(Nanos::MAX), "w = {}", w);
+            }
+            Ok(if hp.is_empty() {
+                "no stream"
+            } else {
+                "checked"
+            })
+        },
+    );
+}
+
+#[test]
+fn level_response_is_the_straightforward_iteration() {
+    let own = (
+        1..3_000 as Nanos,
+        0..40 as Nanos,
+        0..600 as Nanos,
+        0..5u32,
+        200..40_000 as Nanos,
+    );
+    check(
+        "level response",
+        CASES,
+        (own, loads(12)),
+        |((work, switch, blocking, jf, period), hp)| {
+            let own = OwnJobs {
+                work,
+                switch,
+                blocking,
+                jitter: period * Nanos::from(jf) / 10,
+                period,
+            };
+            let want = straight_level_response(own, &hp);
+            prop_assert_eq!(level_response(own, &hp), want);
+            Ok(if want.is_some() {
+                "bounded"
+            } else {
+                "unbounded"
+            })
+        },
+    );
+}
+
+/// Streams of an event model: 1–3, jitters up to a few periods.
+fn arrivals() -> impl Strategy<Value = Arrivals> {
+    prop::collection::vec((50..20_000 as Nanos, 0..40u32), 1..4).prop_map(|s| Arrivals {
+        streams: s
+            .into_iter()
+            .map(|(period, jf)| Stream {
+                period,
+                jitter: period * Nanos::from(jf) / 10,
+            })
+            .collect(),
+    })
+}
+
+#[test]
+fn fifo_response_is_the_straightforward_iteration() {
+    let members = prop::collection::vec((1..2_000 as Nanos, arrivals()), 1..4);
+    let above = prop::collection::vec((1..1_500 as Nanos, arrivals()), 0..6);
+    check(
+        "fifo response",
+        CASES,
+        (members, above, 0..500 as Nanos),
+        |(members, above, blocking)| {
+            let members: Vec<Member> = members
+                .iter()
+                .map(|(work, a)| Member {
+                    work: *work,
+                    arrivals: a,
+                })
+                .collect();
+            let above: Vec<(Nanos, &Arrivals)> = above.iter().map(|(c, a)| (*c, a)).collect();
+            let want = straight_fifo_response(&members, &above, blocking);
+            prop_assert_eq!(fifo_response(&members, &above, blocking), want);
+            Ok(if want.is_some() {
+                "bounded"
+            } else {
+                "unbounded"
+            })
+        },
+    );
+}
