@@ -23,6 +23,12 @@
 //! the vehicle) to the target; heading steps on the unwrapped heading, and
 //! every heading difference wrapped to (−180°, 180°]
 //! ([`crate::math::angle_diff_deg`]).
+//!
+//! **Smoothness**: over the same hover samples, the roll and pitch body
+//! rate above [`OSCILLATION_HZ`] (the loop ringing) and the motor
+//! commands' total variation per second (control effort); over each roll
+//! or pitch step's hold (from the criteria's settling time after the step
+//! until the stick moves again), the tracked attitude's error.
 
 mod assessor;
 mod envelope;
