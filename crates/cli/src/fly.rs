@@ -272,6 +272,13 @@ struct FlightView<'a> {
     /// Only for a mission that judges it (a disturbance-rejection criterion).
     #[serde(skip_serializing_if = "Option::is_none")]
     position_error_m: Option<RmsMax>,
+    /// Hover roll/pitch body rate RMS above `quality::OSCILLATION_HZ`, °/s.
+    oscillation_dps: f64,
+    /// Hover motor commands' total variation per second, 1/s.
+    motor_variation_per_s: f64,
+    /// Attitude error during the roll and pitch steps (absent: none flown).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    step_tracking_deg: Option<RmsMax>,
     saturation_s: f64,
     airborne_s: f64,
     landed_s: Option<f64>,
@@ -343,6 +350,9 @@ fn to_json<'a>(
             .criteria
             .position_rms_m
             .map(|_| (&q.position_error_m).into()),
+        oscillation_dps: q.oscillation_dps,
+        motor_variation_per_s: q.motor_variation_per_s,
+        step_tracking_deg: (q.step_tracking_deg.count > 0).then(|| (&q.step_tracking_deg).into()),
         saturation_s: q.saturation_s,
         airborne_s: q.airborne_s,
         landed_s: q.landed_s,

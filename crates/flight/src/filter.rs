@@ -141,6 +141,27 @@ impl Biquad {
         ))
     }
 
+    /// High-pass at `f_hz` with quality `q` (use [`BUTTERWORTH_Q`]).
+    pub fn highpass(f_hz: f64, fs_hz: f64, q: f64) -> Result<Self, ConfigError> {
+        check_cutoff("biquad.cutoff_hz", f_hz, fs_hz)?;
+        crate::error::positive("biquad.q", q)?;
+        let (c, alpha) = Self::omega_alpha(f_hz, fs_hz, q);
+        let b0 = 0.5 * (1.0 + c);
+        Ok(Self::from_rbj(
+            [b0, -(1.0 + c), b0],
+            [1.0 + alpha, -2.0 * c, 1.0 - alpha],
+        ))
+    }
+
+    /// The state of a filter whose input has been `x` for ever: its output
+    /// is then the DC gain times `x` (a high-pass starts at rest, without
+    /// the step a zero state would see).
+    pub fn settle(&mut self, x: f64) {
+        let y = (self.b0 + self.b1 + self.b2) / (1.0 + self.a1 + self.a2) * x;
+        self.s1 = y - self.b0 * x;
+        self.s2 = self.b2 * x - self.a2 * y;
+    }
+
     /// Notch at `f_hz` with quality `q` (centre / bandwidth).
     pub fn notch(f_hz: f64, fs_hz: f64, q: f64) -> Result<Self, ConfigError> {
         check_cutoff("notch.center_hz", f_hz, fs_hz)?;
@@ -340,6 +361,32 @@ mod tests {
             y = b.apply(1.0);
         }
         assert!((y - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn biquad_highpass_is_minus_3db_at_cutoff_and_settles_at_rest() {
+        for (f, fs) in [(5.0, 500.0), (20.0, 1000.0)] {
+            let mut b = Biquad::highpass(f, fs, BUTTERWORTH_Q).unwrap();
+            let g = db(gain(|x| b.apply(x), f, fs));
+            assert!((g + 3.0103).abs() < 0.02, "biquad {f}/{fs}: {g} dB");
+            // A decade below the corner a second-order filter takes 40 dB.
+            let mut b = Biquad::highpass(f, fs, BUTTERWORTH_Q).unwrap();
+            let g = db(gain(|x| b.apply(x), f / 10.0, fs));
+            assert!(
+                (g + 40.0).abs() < 0.5,
+                "biquad {f}/{fs} a decade down: {g} dB"
+            );
+        }
+        // Settled on a constant input, a high-pass outputs nothing from the
+        // first sample on; from a zero state it would start with the step.
+        let mut b = Biquad::highpass(5.0, 500.0, BUTTERWORTH_Q).unwrap();
+        b.settle(7.0);
+        for _ in 0..100 {
+            assert!(b.apply(7.0).abs() < 1e-12);
+        }
+        let mut b = Biquad::lowpass(5.0, 500.0, BUTTERWORTH_Q).unwrap();
+        b.settle(7.0);
+        assert!((b.apply(7.0) - 7.0).abs() < 1e-12);
     }
 
     #[test]

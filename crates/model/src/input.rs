@@ -95,7 +95,7 @@ impl Kind {
         name: "criterion",
         max_bytes: MAX_INPUT_BYTES,
         syntax: Syntax::Toml,
-        help: "a criterion is a small TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m",
+        help: "a criterion is a small TOML file with attitude_rms_deg, altitude_rms_m, overshoot, settling_s, position_rms_m, oscillation_dps, motor_variation_per_s, step_tracking_rms_deg",
     };
 }
 

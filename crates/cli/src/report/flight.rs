@@ -1,7 +1,7 @@
 //! How a flight went, for people.
 
 use crate::table::Table;
-use rtpipe_flight::quality::{Criteria, ErrorStats, FlightQuality};
+use rtpipe_flight::quality::{Criteria, ErrorStats, FlightQuality, OSCILLATION_HZ};
 use serde::Serialize;
 
 /// An error's RMS and maximum, as `fly --json` and `run --json` both name
@@ -88,8 +88,18 @@ pub fn quality_text(q: &FlightQuality, c: &Criteria, failures: &[String]) -> Str
                 q.position_error_m.rms, q.position_error_m.max
             ));
         }
+        out.push_str(&format!(
+            "  smoothness: oscillation {:.2}°/s RMS above {} Hz; motor command variation {:.2}/s\n",
+            q.oscillation_dps, OSCILLATION_HZ, q.motor_variation_per_s
+        ));
     } else {
         out.push_str("  hover: none to judge (the mission holds no altitude)\n");
+    }
+    if q.step_tracking_deg.count > 0 {
+        out.push_str(&format!(
+            "  step tracking: attitude error RMS {:.3}° max {:.3}° over the roll and pitch steps' holds\n",
+            q.step_tracking_deg.rms, q.step_tracking_deg.max
+        ));
     }
     let x = &q.excursions;
     out.push_str(&format!(

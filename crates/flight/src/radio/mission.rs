@@ -409,6 +409,16 @@ pub struct Criteria {
     /// Hover horizontal position error RMS, metres (judged only when set:
     /// a disturbance-rejection criterion).
     pub position_rms_m: Option<f64>,
+    /// Hover oscillation: the RMS of the roll and pitch body rate above
+    /// `quality::OSCILLATION_HZ`, °/s.
+    pub oscillation_dps: f64,
+    /// Hover control effort: the motor commands' total variation per
+    /// second, averaged over the motors, 1/s.
+    pub motor_variation_per_s: f64,
+    /// Tracking during the roll and pitch steps: the true attitude's error
+    /// RMS against the set-point over each step's hold (from `settling_s`
+    /// after the step until the stick moves again), degrees.
+    pub step_tracking_rms_deg: f64,
     /// The envelope, judged over the whole flight: the highest altitude,
     /// m (default: the mission's highest altitude target + 2 m, or 10 m
     /// for a mission without one; `quality::Envelope`).
@@ -422,6 +432,24 @@ pub struct Criteria {
     pub max_tilt_deg: Option<f64>,
 }
 
+/// The default hover oscillation limit, °/s, set from flights (no guide
+/// gives a number in these units; docs/flight.md, "Oscillation, control
+/// effort and tracking"): Table V's timing measures up to 1.5 °/s in
+/// moderate turbulence and under 0.1 °/s in calm air; a loop ringing near
+/// 5 Hz with its motor output every 44 ms, 2.2–3.9 °/s in moderate
+/// turbulence. Calm hovers stay under 0.6 °/s on every design measured, so
+/// it flags the ringing turbulence excites.
+pub const OSCILLATION_DPS: f64 = 2.0;
+/// The default hover control-effort limit, 1/s: gross chatter only (the
+/// command jumping by a tenth of its range every 2 ms trace point); the
+/// bundled examples measure up to 32/s in moderate turbulence (rotor
+/// vibration through the D term at the gyro rate) and under 5/s in calm
+/// air.
+pub const MOTOR_VARIATION_PER_S: f64 = 50.0;
+/// The default step-tracking limit, degrees: the settling criterion's
+/// ±5 % band on the bundled missions' 20° steps, as an RMS over the hold.
+pub const STEP_TRACKING_RMS_DEG: f64 = 1.0;
+
 impl Default for Criteria {
     /// No crash, hover attitude error RMS < 2°, altitude error RMS < 0.1 m,
     /// roll/pitch steps with overshoot < 20 % settling within 0.5 s.
@@ -432,6 +460,9 @@ impl Default for Criteria {
             overshoot: 0.2,
             settling_s: 0.5,
             position_rms_m: None,
+            oscillation_dps: OSCILLATION_DPS,
+            motor_variation_per_s: MOTOR_VARIATION_PER_S,
+            step_tracking_rms_deg: STEP_TRACKING_RMS_DEG,
             max_altitude_m: None,
             max_distance_m: None,
             max_tilt_deg: None,
@@ -507,6 +538,9 @@ impl Criteria {
             ("criteria.altitude_rms_m", self.altitude_rms_m),
             ("criteria.overshoot", self.overshoot),
             ("criteria.settling_s", self.settling_s),
+            ("criteria.oscillation_dps", self.oscillation_dps),
+            ("criteria.motor_variation_per_s", self.motor_variation_per_s),
+            ("criteria.step_tracking_rms_deg", self.step_tracking_rms_deg),
             (
                 "criteria.position_rms_m",
                 self.position_rms_m.unwrap_or(1.0),
@@ -543,11 +577,14 @@ impl Criteria {
             .position_rms_m
             .map_or(String::new(), |p| format!(", position RMS < {p} m"));
         format!(
-            "no crash, hover attitude RMS < {}°, altitude RMS < {} m{position}, roll/pitch steps: true overshoot < {} %, tracked settling < {} s",
+            "no crash, hover attitude RMS < {}°, altitude RMS < {} m{position}, oscillation < {}°/s, motor variation < {}/s, roll/pitch steps: true overshoot < {} %, tracked settling < {} s, hold tracking RMS < {}°",
             self.attitude_rms_deg,
             self.altitude_rms_m,
+            self.oscillation_dps,
+            self.motor_variation_per_s,
             100.0 * self.overshoot,
-            self.settling_s
+            self.settling_s,
+            self.step_tracking_rms_deg
         )
     }
 }
