@@ -301,19 +301,20 @@ pub fn sound_reaction_link_in(
 /// release (W_p of its read), or at its period's end T_p under LET, and
 /// the first c job reading at or after that is released less than T_c
 /// later (a LET c reads at its release; an implicit one at or after it).
-/// Reachability holds for an implicit p as before (`J_{k+1}` reads before
-/// p's next publish). The priority cases do not apply: a LET publish or
+/// Reachability holds for either p (`J_{k+1}` reads, so is released,
+/// before p's next publish, which the next p job makes within T_p of J_k's
+/// release plus its own publish bound: R_p, or T_p under LET, whose
+/// release is its read). The priority cases do not apply: a LET publish or
 /// read is a timer instant, not a point of the schedule.
 fn let_reaction_link(p: &LinkTask, c: &LinkTask, p_distinct: bool, p_read: bool) -> Option<Nanos> {
-    let rp = p.r?;
     let to_publish = if p_read {
         p.read_to_publish()?
     } else {
         p.publish()?
     };
     let mut l = to_publish + c.t;
-    if p_distinct && !p.let_comm {
-        l = l.min(p.t + rp);
+    if p_distinct {
+        l = l.min(p.t + p.publish()?);
     }
     Some(l)
 }

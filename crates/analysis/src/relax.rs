@@ -337,7 +337,7 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
 }
 
 /// Lower bounds on task i's (budget, job) response times and its
-/// read-to-publish bound (`W = R`) under RM over the box: the level-i busy
+/// read-to-publish bound under RM over the box: the level-i busy
 /// period of `sched::response_times` ([`level_response_within`]) with the
 /// interferers above i at every point, at their longest periods, and i's
 /// own longest period, each job with its switches (`2·cs`); the kernel
@@ -382,7 +382,18 @@ fn rta_lower_bounds(
     // Only a figure within the longest period is kept (`response_lower_bounds`).
     let r = |work: Nanos| level_response_within(own(work), &hp, hi[i]);
     let rj = r(t.demand());
-    (r(t.budget()), rj, rj)
+    // W from the start (`sched::fp_start_to_finish`): the same
+    // interferers, without the own jitter, switch and ceiling blocking.
+    let rw = rj.map(|rj| match crate::sched::fp_start_after(spec, i) {
+        Some(after) => crate::sched::busy_window(
+            t.demand()
+                .saturating_add(if after { order.least_blocking(i) } else { 0 }),
+            &hp,
+        )
+        .map_or(rj, |w| w.min(rj)),
+        None => rj,
+    });
+    (r(t.budget()), rj, rw)
 }
 
 /// The carry-in of a PIBS server `j` (`sched::inherited_carry_in`: work

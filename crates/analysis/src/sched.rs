@@ -1,8 +1,8 @@
 //! Priorities, response times and schedulability tests per CPU.
 
 use crate::edf;
-use rtpipe_model::policy::{EventAnalysis, ResponseAnalysis};
-use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
+use rtpipe_model::policy::{Budget, EventAnalysis, ResponseAnalysis};
+use rtpipe_model::{Nanos, ResourceProtocol, SchedTest, Server, Spec, Task, MAX_TIME};
 
 /// Timing facts of one task that the latency analysis builds on.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,10 +42,12 @@ pub struct TaskTiming {
     /// ([`TaskTiming::bounded_response`]).
     pub job_response_time: Option<Nanos>,
     /// W: a bound on the time from a job's read (its start) to its publish
-    /// (its completion), at most `job_response_time`: the same figure under
-    /// fixed priority (nothing of higher priority is pending at the start),
-    /// Spuri's `w_i(0)` under EDF ([`edf::start_to_finish`]), where a job's
-    /// response is mostly waiting to start. docs/analysis.md.
+    /// (its completion), at most `job_response_time`: under fixed priority
+    /// the interference of releases after the start, without the job's
+    /// own release jitter, switch in and ceiling blocking (all before the
+    /// start, `fp_start_to_finish`); under EDF from Spuri's `w_i(0)`
+    /// ([`edf::start_to_finish`]), where a job's response is mostly waiting
+    /// to start. docs/analysis.md.
     pub read_to_publish: Option<Nanos>,
     /// In a spec with threads or data-triggered tasks, what the event
     /// analysis found ([`crate::events`]); `None` in a periodic spec.
@@ -603,8 +605,8 @@ fn period_or_max(t: &Task) -> Nanos {
 
 /// Task `i`'s (budget, job) response times and its read-to-publish bound:
 /// under RM the exact RTA over its level-i busy period against the tasks
-/// that can run above it ([`level_response`]; the job figure for both of
-/// the latter); under EDF with constant-bandwidth
+/// that can run above it ([`level_response`]; the read-to-publish bound
+/// from the start, [`fp_start_to_finish`]); under EDF with constant-bandwidth
 /// servers Spuri's analysis, when its CPU is not overloaded. A background
 /// task has none: nothing guarantees it the CPU.
 fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
@@ -613,21 +615,61 @@ fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, O
     if t.server == Server::Background {
         return (None, None, None);
     }
-    let (rt, jrt) = match spec.policy().response {
+    match spec.policy().response {
         ResponseAnalysis::Rta => {
             let Some(hp) = levels.hp_load(i) else {
                 return (None, None, None);
             };
-            rta_response(levels, i, &hp)
+            let (rt, jrt) = rta_response(levels, i, &hp);
+            let w = jrt.map(|r| fp_start_to_finish(levels, i, &hp).map_or(r, |w| w.min(r)));
+            (rt, jrt, w)
         }
-        ResponseAnalysis::ServerPeriod => server_period(spec, t),
-        ResponseAnalysis::EdfRta => edf_response_times(spec, i),
+        ResponseAnalysis::ServerPeriod => {
+            let (rt, jrt) = server_period(spec, t);
+            (rt, jrt, jrt)
+        }
+        ResponseAnalysis::EdfRta => {
+            let (rt, jrt) = edf_response_times(spec, i);
+            (rt, jrt, jrt.map(|r| edf_read_to_publish(spec, i).min(r)))
+        }
+    }
+}
+
+/// W under fixed priority: a bound on the time from a job's start (its
+/// read) to its completion (its publish), against `hp` as `hp_load` gives
+/// it. When the job starts nothing above it is pending (and no kernel
+/// work: a job reads after the kernel work and its own switch), so only
+/// releases after the start interfere: the least fixed point of
+/// `w = x + B_after + Σ_{j ∈ hp} ⌈(w + J_j)/T_j⌉ · I_j` (with the kernel
+/// work as interferers), `B_after` as [`fp_start_after`] says. `None`
+/// (take R) where [`fp_start_after`] is. docs/analysis.md, "From the read
+/// to the publish under fixed priority".
+fn fp_start_to_finish(levels: &Levels, i: usize, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+    let after = if fp_start_after(levels.spec, i)? {
+        levels.blocking(i)
+    } else {
+        0
     };
-    let w = match spec.policy().response {
-        ResponseAnalysis::EdfRta => jrt.map(|r| edf_read_to_publish(spec, i).min(r)),
-        ResponseAnalysis::Rta | ResponseAnalysis::ServerPeriod => jrt,
+    busy_window(levels.spec.tasks[i].demand().checked_add(after)?, hp)
+}
+
+/// Whether task `i`'s blocking B can fall after a job's start under fixed
+/// priority: under PIP yes (a job is blocked when it reaches a section
+/// whose resource is held); under PCP and SRP no (run as the immediate
+/// ceiling, a job waits for at most one section before it starts, and
+/// never finds its resource held after). The job's own release jitter and
+/// its switch in fall before the start under every protocol. `None` for a
+/// job that may wait for its budget after it started: a budget server,
+/// unless a sporadic server whose job fits its budget and is released on
+/// time (its budget is then whole at every release).
+pub(crate) fn fp_start_after(spec: &Spec, i: usize) -> Option<bool> {
+    let t = &spec.tasks[i];
+    let whole_budget = match spec.policy().budget(t.server) {
+        None => true,
+        Some(Budget::Sporadic) => t.demand() <= t.budget() && t.jitter == 0,
+        Some(Budget::Pibs | Budget::Cbs) => false,
     };
-    (rt, jrt, w)
+    whole_budget.then_some(spec.resource_protocol == ResourceProtocol::Pip)
 }
 
 /// Task `i`'s (budget, job) response times under fixed priority against
