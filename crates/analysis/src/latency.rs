@@ -304,8 +304,11 @@ pub fn sound_reaction_link_in(
 /// Reachability holds for either p (`J_{k+1}` reads, so is released,
 /// before p's next publish, which the next p job makes within T_p of J_k's
 /// release plus its own publish bound: R_p, or T_p under LET, whose
-/// release is its read). The priority cases do not apply: a LET publish or
-/// read is a timer instant, not a point of the schedule.
+/// release is its read); a link of two LET tasks keeps the terms of
+/// `let_bound::any_phasing`, which a chain all under LET is given (and
+/// the design's relaxation bounds it by). The priority cases do not
+/// apply: a LET publish or read is a timer instant, not a point of the
+/// schedule.
 fn let_reaction_link(p: &LinkTask, c: &LinkTask, p_distinct: bool, p_read: bool) -> Option<Nanos> {
     let to_publish = if p_read {
         p.read_to_publish()?
@@ -313,7 +316,7 @@ fn let_reaction_link(p: &LinkTask, c: &LinkTask, p_distinct: bool, p_read: bool)
         p.publish()?
     };
     let mut l = to_publish + c.t;
-    if p_distinct {
+    if p_distinct && !(p.let_comm && c.let_comm) {
         l = l.min(p.t + p.publish()?);
     }
     Some(l)

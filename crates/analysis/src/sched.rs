@@ -710,20 +710,16 @@ fn edf_read_to_publish(spec: &Spec, i: usize) -> Nanos {
 /// deadline is the spec's, else the period.
 pub fn edf_read_to_publish_at(spec: &Spec, periods: &[Nanos], i: usize) -> Nanos {
     let (tasks, at) = edf_tasks(spec, periods, i);
-    let deadlines: Vec<Nanos> = edf_members(spec, i)
-        .map(|j| match spec.tasks[j].server {
-            // Releases whose only work is their handlers' (overheads):
-            // never a job that runs first.
-            Server::Background => Nanos::MAX,
-            _ => spec.tasks[j]
-                .deadline_given
-                .map_or(periods[j], |d| d.min(periods[j])),
-        })
-        .collect();
     let own = spec.tasks[i]
         .demand()
         .saturating_add(crate::overheads::own(spec, i));
-    edf::start_to_finish(&tasks, &deadlines, at, own)
+    edf::start_to_finish(&tasks, at, own)
+}
+
+/// Task `i`'s relative deadline at the period `t`: the spec's, else the
+/// period.
+pub(crate) fn deadline_at(spec: &Spec, i: usize, t: Nanos) -> Nanos {
+    spec.tasks[i].deadline_given.map_or(t, |d| d.min(t))
 }
 
 /// The tasks [`edf_tasks`] lists for task `i`'s CPU, in its order: the
@@ -779,6 +775,12 @@ fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, us
                 _ => interference(t).saturating_add(crate::overheads::per_job(spec, j)),
             },
             period: periods[j],
+            deadline: match t.server {
+                // Releases whose only work is their handlers' (overheads):
+                // never a job that runs first.
+                Server::Background => Nanos::MAX,
+                _ => deadline_at(spec, j, periods[j]),
+            },
             kernel: crate::overheads::per_release(spec, j),
         });
     }
@@ -786,9 +788,9 @@ fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, us
 }
 
 /// Task `i`'s (budget, job) response times under EDF at the spec's periods:
-/// Spuri's analysis, which takes deadlines equal to periods; where a task
-/// of the CPU has a shorter deadline, the deadline under the
-/// processor-demand test ([`server_period`]).
+/// Spuri's analysis with the tasks' relative deadlines; where a task of
+/// the CPU has one below its period, only when the processor-demand test
+/// passes there, and at most the deadline.
 fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
     let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
     edf_response_times_at(spec, &periods, i)
@@ -796,8 +798,11 @@ fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
 
 /// [`edf_response_times`] at `periods` (one per task; a deadline is the
 /// given one, else the period), for the design's relaxation at a box of
-/// one point: Spuri's bound, or the deadline where some task of the CPU
-/// has one below its period.
+/// one point: Spuri's bound; where some task of the CPU has a deadline
+/// below its period, when the processor-demand test passes (every job
+/// then completes by its deadline, so the deadlines Spuri's analysis
+/// orders by are the jobs' own: docs/analysis.md, "EDF response times"),
+/// and at most the deadline.
 pub fn edf_response_times_at(
     spec: &Spec,
     periods: &[Nanos],
@@ -805,8 +810,12 @@ pub fn edf_response_times_at(
 ) -> (Option<Nanos>, Option<Nanos>) {
     let cpu = spec.tasks[i].cpu;
     if edf_constrained_at(spec, periods, cpu) {
-        let d = spec.tasks[i].deadline_given.unwrap_or(periods[i]);
-        return server_period_at(spec, periods, cpu, d);
+        let d = deadline_at(spec, i, periods[i]);
+        let (Some(_), Some(_)) = server_period_at(spec, periods, cpu, d) else {
+            return (None, None);
+        };
+        let (b, j) = edf_response_at(spec, periods, i);
+        return (b.map(|b| b.min(d)), j.map(|j| j.min(d)));
     }
     edf_response_at(spec, periods, i)
 }
@@ -854,7 +863,10 @@ pub fn edf_response_disturbed(
     // The stack resource policy's blocking, deadlines being the periods,
     // with the switch to the blocking job (`overheads::blocking_switch`).
     let cs = crate::overheads::blocking_switch(spec, i);
-    let srp = crate::blocking::srp_steps(spec, periods, t.cpu)
+    let deadlines: Vec<Nanos> = (0..spec.tasks.len())
+        .map(|j| deadline_at(spec, j, periods[j]))
+        .collect();
+    let srp = crate::blocking::srp_steps(spec, &deadlines, t.cpu)
         .into_iter()
         .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }));
     let block: Vec<(Nanos, Nanos)> = if extra > 0 {
