@@ -268,8 +268,9 @@ pub fn sound_reaction_link_in(
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
         // (Dürr et al. 2019). J_k is released up to J_p after its nominal
-        // release, where the term starts.
-        Some(Case::Two) => l = l.min(c.t + p.j),
+        // release, where the term starts; from its read, after its actual
+        // release, no jitter remains.
+        Some(Case::Two) => l = l.min(c.t + if p_read { 0 } else { p.j }),
         // EDF on one CPU: a c job released at or after J_k's release with
         // a later deadline cannot start before J_k has published, and one
         // is released less than T_c + (D_p − D_c)⁺ after J_k's release.
