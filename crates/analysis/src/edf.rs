@@ -56,14 +56,18 @@ use rtpipe_model::{Nanos, MAX_TIME};
 /// longer period never makes the busy period hold more jobs.
 pub const MAX_BUSY_JOBS: u64 = 200_000;
 
-/// One guaranteed task of a CPU: per-job work `i` (at most) and period `t`
-/// (= relative deadline).
+/// One guaranteed task of a CPU: per-job work (at most), period and
+/// relative deadline.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EdfTask {
     /// The most one job can run (`sched::interference`).
     pub work: Nanos,
-    /// Period and relative deadline.
+    /// Period T (the least distance between two releases).
     pub period: Nanos,
+    /// Relative deadline D ≤ T (T for implicit deadlines); `Nanos::MAX`
+    /// for a task whose releases only run their handlers (no job of it
+    /// is ever picked first).
+    pub deadline: Nanos,
     /// Kernel work each release brings at top priority, whatever the
     /// deadlines (the release handler and a server's replenishment,
     /// [`crate::overheads`]; 0 without overheads).
@@ -114,12 +118,16 @@ pub fn busy_period(tasks: &[EdfTask], blocking: Nanos, max_jobs: u64) -> Option<
 /// The instants `a < l` where `w_i(a)` steps (see the module docs),
 /// ascending, without duplicates; 0 first.
 fn candidates(tasks: &[EdfTask], i: usize, l: Nanos) -> Vec<Nanos> {
-    let ti = tasks[i].period;
+    let (ti, di) = (tasks[i].period, tasks[i].deadline);
     let mut out = vec![0];
     for (j, t) in tasks.iter().enumerate() {
         // Own releases at k·T_i; another task's k-th deadline reaches the
-        // analysed one's at (k + 1)·T_j − T_i.
-        let mut a = if j == i { ti } else { t.period - ti };
+        // analysed one's at k·T_j + D_j − D_i.
+        let mut a = if j == i {
+            ti
+        } else {
+            t.deadline.saturating_sub(di)
+        };
         if a < 0 {
             a += (-a + t.period - 1) / t.period * t.period;
         }
@@ -162,17 +170,18 @@ pub fn response_time(
     at.extend(
         block
             .iter()
-            .map(|&(theta, _)| theta - me.period)
+            .map(|&(theta, _)| theta - me.deadline)
             .filter(|&a| a > 0 && a < l),
     );
     at.sort_unstable();
     at.dedup();
     for a in at {
-        let own_a = (a / me.period) * me.work + own + crate::blocking::srp_at(block, a + me.period);
+        let own_a =
+            (a / me.period) * me.work + own + crate::blocking::srp_at(block, a + me.deadline);
         // Jobs of j with a deadline at or before the analysed one's.
         let cap = |t: &EdfTask| {
-            if a + me.period >= t.period {
-                1 + (a + me.period - t.period) / t.period
+            if a + me.deadline >= t.deadline {
+                1 + (a + me.deadline - t.deadline) / t.period
             } else {
                 0
             }
@@ -252,11 +261,10 @@ fn fixed_point(
 /// case. It never exceeds Spuri's `w_i(0)`, which counts a job of every
 /// task released at the start itself, so it is never above the response
 /// time; docs/analysis.md proves it. Never below `own` (nor 1).
-pub fn start_to_finish(tasks: &[EdfTask], deadline: &[Nanos], i: usize, own: Nanos) -> Nanos {
-    assert_eq!(tasks.len(), deadline.len());
-    let di = deadline[i];
+pub fn start_to_finish(tasks: &[EdfTask], i: usize, own: Nanos) -> Nanos {
+    let di = tasks[i].deadline;
     let cap = |j: usize| {
-        let l = di - deadline[j];
+        let l = di.saturating_sub(tasks[j].deadline);
         if l > 0 {
             (l + tasks[j].period - 1) / tasks[j].period
         } else {
@@ -281,9 +289,19 @@ mod tests {
             .map(|&(work, period)| EdfTask {
                 work,
                 period,
+                deadline: period,
                 kernel: 0,
             })
             .collect()
+    }
+
+    /// [`set`] with the given relative deadlines.
+    fn due(v: &[(Nanos, Nanos)], deadlines: &[Nanos]) -> Vec<EdfTask> {
+        let mut s = set(v);
+        for (t, &d) in s.iter_mut().zip(deadlines) {
+            t.deadline = d;
+        }
+        s
     }
 
     #[test]
@@ -345,6 +363,29 @@ mod tests {
         assert_eq!(r, vec![1, 3, 10]);
     }
 
+    /// Spuri with constrained deadlines by hand, (C, T, D): (2, 5, 3),
+    /// (4, 7, 7), L = 14. τ1: A = {0, 4, 5, 10, 11} (own releases, and τ2's
+    /// deadlines k·7 + 7 − 3); a = 5: own 2·2, τ2's first job (deadline 7
+    /// ≤ 8): 8 − 5 = 3 = R_1 = D_1. τ2: A = {0, 1, 6, 7, 11}; a = 1: τ1's
+    /// jobs of deadlines 3 and 8 ≤ 8, w = 4 + 2·2 = 8, R_2 = 7. (1, 10, 4),
+    /// (2, 10, 10): L = 3; τ2 at a = 0 meets τ1's deadline 4 ≤ 10, R_2 = 3,
+    /// far below D_2 = 10 (what QPA alone gives).
+    #[test]
+    fn spuri_with_deadlines_by_hand() {
+        let s = due(&[(2, 5), (4, 7)], &[3, 7]);
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        assert_eq!(l, 14);
+        assert_eq!(candidates(&s, 0, l), vec![0, 4, 5, 10, 11]);
+        assert_eq!(candidates(&s, 1, l), vec![0, 1, 6, 7, 11]);
+        assert_eq!(response_time(&s, 0, 2, l, &[]), 3);
+        assert_eq!(response_time(&s, 1, 4, l, &[]), 7);
+        let s = due(&[(1, 10), (2, 10)], &[4, 10]);
+        let l = busy_period(&s, 0, 1000).unwrap_or(0);
+        assert_eq!(l, 3);
+        assert_eq!(response_time(&s, 0, 1, l, &[]), 1);
+        assert_eq!(response_time(&s, 1, 2, l, &[]), 3);
+    }
+
     /// The start-to-finish bound by hand. (2, 5), (4, 7): τ1 (D = 5)
     /// meets no deadline of τ2 (7 > 5) after it starts: W = 2, where its
     /// response time is 4 (it may wait behind τ2's job of deadline 7 ≤ 10
@@ -360,22 +401,21 @@ mod tests {
     #[test]
     fn start_to_finish_by_hand() {
         let s = set(&[(2, 5), (4, 7)]);
-        assert_eq!(start_to_finish(&s, &[5, 7], 0, 2), 2);
-        assert_eq!(start_to_finish(&s, &[5, 7], 1, 4), 6);
-        assert_eq!(start_to_finish(&s, &[3, 7], 1, 4), 6);
-        assert_eq!(start_to_finish(&s, &[3, 7], 0, 2), 2);
+        assert_eq!(start_to_finish(&s, 0, 2), 2);
+        assert_eq!(start_to_finish(&s, 1, 4), 6);
+        let s = due(&[(2, 5), (4, 7)], &[3, 7]);
+        assert_eq!(start_to_finish(&s, 1, 4), 6);
+        assert_eq!(start_to_finish(&s, 0, 2), 2);
         let s = set(&[(1, 4), (2, 6), (3, 13)]);
-        let w: Vec<Nanos> = (0..3)
-            .map(|i| start_to_finish(&s, &[4, 6, 13], i, s[i].work))
-            .collect();
+        let w: Vec<Nanos> = (0..3).map(|i| start_to_finish(&s, i, s[i].work)).collect();
         assert_eq!(w, vec![1, 3, 10]);
         let s = set(&[(2, 4), (3, 8)]);
-        assert_eq!(start_to_finish(&s, &[4, 8], 1, 3), 5);
+        assert_eq!(start_to_finish(&s, 1, 3), 5);
         let l = busy_period(&s, 0, 1000).unwrap_or(0);
         assert_eq!(response_time(&s, 1, 3, l, &[]), 7);
-        assert_eq!(start_to_finish(&set(&[(1, 8), (3, 8)]), &[8, 8], 1, 3), 3);
+        assert_eq!(start_to_finish(&set(&[(1, 8), (3, 8)]), 1, 3), 3);
         // No demand: analysed as 1 ns, like the response time.
-        assert_eq!(start_to_finish(&set(&[(3, 10)]), &[10], 0, 0), 1);
+        assert_eq!(start_to_finish(&set(&[(3, 10)]), 0, 0), 1);
     }
 
     /// Spuri with SRP blocking by hand (`examples/edf-srp.toml`): (1, 4),

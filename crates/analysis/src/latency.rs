@@ -268,8 +268,9 @@ pub fn sound_reaction_link_in(
         // P2, p preempts c: a c job released at or after J_k's release starts
         // after J_k's publish, and one is released less than T_c later
         // (Dürr et al. 2019). J_k is released up to J_p after its nominal
-        // release, where the term starts.
-        Some(Case::Two) => l = l.min(c.t + p.j),
+        // release, where the term starts; from its read, after its actual
+        // release, no jitter remains.
+        Some(Case::Two) => l = l.min(c.t + if p_read { 0 } else { p.j }),
         // EDF on one CPU: a c job released at or after J_k's release with
         // a later deadline cannot start before J_k has published, and one
         // is released less than T_c + (D_p − D_c)⁺ after J_k's release.
@@ -301,19 +302,23 @@ pub fn sound_reaction_link_in(
 /// release (W_p of its read), or at its period's end T_p under LET, and
 /// the first c job reading at or after that is released less than T_c
 /// later (a LET c reads at its release; an implicit one at or after it).
-/// Reachability holds for an implicit p as before (`J_{k+1}` reads before
-/// p's next publish). The priority cases do not apply: a LET publish or
-/// read is a timer instant, not a point of the schedule.
+/// Reachability holds for either p (`J_{k+1}` reads, so is released,
+/// before p's next publish, which the next p job makes within T_p of J_k's
+/// release plus its own publish bound: R_p, or T_p under LET, whose
+/// release is its read); a link of two LET tasks keeps the terms of
+/// `let_bound::any_phasing`, which a chain all under LET is given (and
+/// the design's relaxation bounds it by). The priority cases do not
+/// apply: a LET publish or read is a timer instant, not a point of the
+/// schedule.
 fn let_reaction_link(p: &LinkTask, c: &LinkTask, p_distinct: bool, p_read: bool) -> Option<Nanos> {
-    let rp = p.r?;
     let to_publish = if p_read {
         p.read_to_publish()?
     } else {
         p.publish()?
     };
     let mut l = to_publish + c.t;
-    if p_distinct && !p.let_comm {
-        l = l.min(p.t + rp);
+    if p_distinct && !(p.let_comm && c.let_comm) {
+        l = l.min(p.t + p.publish()?);
     }
     Some(l)
 }

@@ -24,7 +24,7 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::let_bound::{any_phasing, LetLatencies};
-use crate::sched::{interference, level_response_within, utilization_test, OwnJobs};
+use crate::sched::{deadline_at, interference, level_response_within, utilization_test, OwnJobs};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
@@ -337,7 +337,7 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
 }
 
 /// Lower bounds on task i's (budget, job) response times and its
-/// read-to-publish bound (`W = R`) under RM over the box: the level-i busy
+/// read-to-publish bound under RM over the box: the level-i busy
 /// period of `sched::response_times` ([`level_response_within`]) with the
 /// interferers above i at every point, at their longest periods, and i's
 /// own longest period, each job with its switches (`2·cs`); the kernel
@@ -382,7 +382,18 @@ fn rta_lower_bounds(
     // Only a figure within the longest period is kept (`response_lower_bounds`).
     let r = |work: Nanos| level_response_within(own(work), &hp, hi[i]);
     let rj = r(t.demand());
-    (r(t.budget()), rj, rj)
+    // W from the start (`sched::fp_start_to_finish`): the same
+    // interferers, without the own jitter, switch and ceiling blocking.
+    let rw = rj.map(|rj| match crate::sched::fp_start_after(spec, i) {
+        Some(after) => crate::sched::busy_window(
+            t.demand()
+                .saturating_add(if after { order.least_blocking(i) } else { 0 }),
+            &hp,
+        )
+        .map_or(rj, |w| w.min(rj)),
+        None => rj,
+    });
+    (r(t.budget()), rj, rw)
 }
 
 /// The carry-in of a PIBS server `j` (`sched::inherited_carry_in`: work
@@ -430,26 +441,23 @@ fn edf_lower_bounds(
     }
     let (b, j, w) = spuri_lower_bounds(spec, lo, hi, i, &mates);
     // Where some task of the CPU has a deadline below its period, the
-    // analysis takes i's deadline for R (`sched::edf_response_times_at`),
-    // least at i's shortest period, and W is at most R. Spuri's figures
-    // hold at the other points.
+    // analysis takes at most i's deadline for R
+    // (`sched::edf_response_times_at`), least at i's shortest period, and
+    // W is at most R.
     let below = |t: &[Nanos]| {
         let d = |j: usize| spec.tasks[j].deadline_given.is_some_and(|d| d < t[j]);
         mates.iter().any(|&j| d(j))
     };
+    if !below(hi) {
+        return (b, j, w);
+    }
     let d = deadline_at(spec, i, lo[i]);
-    let (b, j) = match (below(lo), below(hi)) {
-        (_, false) => return (b, j, w),
-        // At every point.
-        (true, _) => (Some(d), Some(d)),
-        (false, true) => (b.map(|b| b.min(d)), j.map(|j| j.min(d))),
-    };
+    let (b, j) = (b.map(|b| b.min(d)), j.map(|j| j.min(d)));
     (b, j, w.zip(j).map(|(w, j)| w.min(j)))
 }
 
 /// The part of [`edf_lower_bounds`] for a box that leaves some period of
-/// i's CPU open, at the points where every deadline is its period
-/// (Spuri's analysis applies there).
+/// i's CPU open: Spuri's analysis at a = 0, at every point of the box.
 fn spuri_lower_bounds(
     spec: &Spec,
     lo: &[Nanos],
@@ -467,14 +475,15 @@ fn spuri_lower_bounds(
         .map(|k| crate::overheads::per_release(spec, k))
         .sum();
     let own = |x: Nanos| x.saturating_add(crate::overheads::own(spec, i)).max(1) + kernel;
+    // R counts a job of every task whose deadline is at or before i's at
+    // every point; W only those whose deadline is before i's (a job of
+    // equal deadline released after the start never runs first).
+    let d = |j: usize, t: Nanos| deadline_at(spec, j, t);
     let before: Nanos = mates
         .iter()
-        .filter(|&&j| j != i && hi[j] <= lo[i])
+        .filter(|&&j| j != i && d(j, hi[j]) <= d(i, lo[i]))
         .map(|&j| interference(&spec.tasks[j]).saturating_add(switches))
         .sum();
-    // W counts only tasks whose deadline is before i's at every point (a
-    // job of equal deadline released after the start never runs first).
-    let d = |j: usize, t: Nanos| spec.tasks[j].deadline_given.map_or(t, |d| d.min(t));
     let sooner: Nanos = mates
         .iter()
         .filter(|&&j| j != i && d(j, hi[j]) < d(i, lo[i]))
@@ -731,11 +740,6 @@ fn link_task(spec: &Spec, t: Nanos, (r, w): (Option<Nanos>, Option<Nanos>), i: u
         // The design refuses threads and data-triggered tasks.
         event: None,
     }
-}
-
-/// Task i's relative deadline at period t.
-fn deadline_at(spec: &Spec, i: usize, t: Nanos) -> Nanos {
-    spec.tasks[i].deadline_given.map_or(t, |d| d.min(t))
 }
 
 /// The link's two tasks with the deadlines that make `(D_p − D_c)⁺` (the

@@ -1,8 +1,15 @@
 //! Priorities, response times and schedulability tests per CPU.
 
-use crate::edf;
-use rtpipe_model::policy::{EventAnalysis, ResponseAnalysis};
-use rtpipe_model::{Nanos, SchedTest, Server, Spec, Task, MAX_TIME};
+use rtpipe_model::policy::{Budget, EventAnalysis, ResponseAnalysis};
+use rtpipe_model::{Nanos, ResourceProtocol, SchedTest, Server, Spec, Task, MAX_TIME};
+
+mod edf_times;
+pub(crate) use edf_times::{deadline_at, edf_overhead_load};
+pub use edf_times::{
+    edf_constrained_at, edf_read_to_publish_at, edf_response_at, edf_response_disturbed,
+    edf_response_times_at,
+};
+use edf_times::{edf_read_to_publish, edf_response_times, server_period};
 
 mod busy;
 pub use busy::{
@@ -48,10 +55,12 @@ pub struct TaskTiming {
     /// ([`TaskTiming::bounded_response`]).
     pub job_response_time: Option<Nanos>,
     /// W: a bound on the time from a job's read (its start) to its publish
-    /// (its completion), at most `job_response_time`: the same figure under
-    /// fixed priority (nothing of higher priority is pending at the start),
-    /// Spuri's `w_i(0)` under EDF ([`edf::start_to_finish`]), where a job's
-    /// response is mostly waiting to start. docs/analysis.md.
+    /// (its completion), at most `job_response_time`: under fixed priority
+    /// the interference of releases after the start, without the job's
+    /// own release jitter, switch in and ceiling blocking (all before the
+    /// start, `fp_start_to_finish`); under EDF from Spuri's `w_i(0)`
+    /// ([`crate::edf::start_to_finish`]), where a job's response is mostly waiting
+    /// to start. docs/analysis.md.
     pub read_to_publish: Option<Nanos>,
     /// In a spec with threads or data-triggered tasks, what the event
     /// analysis found ([`crate::events`]); `None` in a periodic spec.
@@ -489,8 +498,8 @@ fn period_or_max(t: &Task) -> Nanos {
 
 /// Task `i`'s (budget, job) response times and its read-to-publish bound:
 /// under RM the exact RTA over its level-i busy period against the tasks
-/// that can run above it ([`level_response`]; the job figure for both of
-/// the latter); under EDF with constant-bandwidth
+/// that can run above it ([`level_response`]; the read-to-publish bound
+/// from the start, [`fp_start_to_finish`]); under EDF with constant-bandwidth
 /// servers Spuri's analysis, when its CPU is not overloaded. A background
 /// task has none: nothing guarantees it the CPU.
 fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
@@ -499,21 +508,61 @@ fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, O
     if t.server == Server::Background {
         return (None, None, None);
     }
-    let (rt, jrt) = match spec.policy().response {
+    match spec.policy().response {
         ResponseAnalysis::Rta => {
             let Some(hp) = levels.hp_load(i) else {
                 return (None, None, None);
             };
-            rta_response(levels, i, &hp)
+            let (rt, jrt) = rta_response(levels, i, &hp);
+            let w = jrt.map(|r| fp_start_to_finish(levels, i, &hp).map_or(r, |w| w.min(r)));
+            (rt, jrt, w)
         }
-        ResponseAnalysis::ServerPeriod => server_period(spec, t),
-        ResponseAnalysis::EdfRta => edf_response_times(spec, i),
+        ResponseAnalysis::ServerPeriod => {
+            let (rt, jrt) = server_period(spec, t);
+            (rt, jrt, jrt)
+        }
+        ResponseAnalysis::EdfRta => {
+            let (rt, jrt) = edf_response_times(spec, i);
+            (rt, jrt, jrt.map(|r| edf_read_to_publish(spec, i).min(r)))
+        }
+    }
+}
+
+/// W under fixed priority: a bound on the time from a job's start (its
+/// read) to its completion (its publish), against `hp` as `hp_load` gives
+/// it. When the job starts nothing above it is pending (and no kernel
+/// work: a job reads after the kernel work and its own switch), so only
+/// releases after the start interfere: the least fixed point of
+/// `w = x + B_after + Σ_{j ∈ hp} ⌈(w + J_j)/T_j⌉ · I_j` (with the kernel
+/// work as interferers), `B_after` as [`fp_start_after`] says. `None`
+/// (take R) where [`fp_start_after`] is. docs/analysis.md, "From the read
+/// to the publish under fixed priority".
+fn fp_start_to_finish(levels: &Levels, i: usize, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+    let after = if fp_start_after(levels.spec, i)? {
+        levels.blocking(i)
+    } else {
+        0
     };
-    let w = match spec.policy().response {
-        ResponseAnalysis::EdfRta => jrt.map(|r| edf_read_to_publish(spec, i).min(r)),
-        ResponseAnalysis::Rta | ResponseAnalysis::ServerPeriod => jrt,
+    busy_window(levels.spec.tasks[i].demand().checked_add(after)?, hp)
+}
+
+/// Whether task `i`'s blocking B can fall after a job's start under fixed
+/// priority: under PIP yes (a job is blocked when it reaches a section
+/// whose resource is held); under PCP and SRP no (run as the immediate
+/// ceiling, a job waits for at most one section before it starts, and
+/// never finds its resource held after). The job's own release jitter and
+/// its switch in fall before the start under every protocol. `None` for a
+/// job that may wait for its budget after it started: a budget server,
+/// unless a sporadic server whose job fits its budget and is released on
+/// time (its budget is then whole at every release).
+pub(crate) fn fp_start_after(spec: &Spec, i: usize) -> Option<bool> {
+    let t = &spec.tasks[i];
+    let whole_budget = match spec.policy().budget(t.server) {
+        None => true,
+        Some(Budget::Sporadic) => t.demand() <= t.budget() && t.jitter == 0,
+        Some(Budget::Pibs | Budget::Cbs) => false,
     };
-    (rt, jrt, w)
+    whole_budget.then_some(spec.resource_protocol == ResourceProtocol::Pip)
 }
 
 /// Task `i`'s (budget, job) response times under fixed priority against
@@ -560,217 +609,6 @@ fn rta_response_reach(
     }
     let (budget, budget_reach) = r(t.budget());
     ((budget, job), budget_reach.max(job_reach))
-}
-
-/// Task `i`'s read-to-publish bound under EDF ([`edf::start_to_finish`]),
-/// with the spec's periods and relative deadlines.
-fn edf_read_to_publish(spec: &Spec, i: usize) -> Nanos {
-    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
-    edf_read_to_publish_at(spec, &periods, i)
-}
-
-/// [`edf_read_to_publish`] at the given periods (one per task); a relative
-/// deadline is the spec's, else the period.
-pub fn edf_read_to_publish_at(spec: &Spec, periods: &[Nanos], i: usize) -> Nanos {
-    let (tasks, at) = edf_tasks(spec, periods, i);
-    let deadlines: Vec<Nanos> = edf_members(spec, i)
-        .map(|j| match spec.tasks[j].server {
-            // Releases whose only work is their handlers' (overheads):
-            // never a job that runs first.
-            Server::Background => Nanos::MAX,
-            _ => spec.tasks[j]
-                .deadline_given
-                .map_or(periods[j], |d| d.min(periods[j])),
-        })
-        .collect();
-    let own = spec.tasks[i]
-        .demand()
-        .saturating_add(crate::overheads::own(spec, i));
-    edf::start_to_finish(&tasks, &deadlines, at, own)
-}
-
-/// The tasks [`edf_tasks`] lists for task `i`'s CPU, in its order: the
-/// guaranteed ones, and background ones whose releases run handlers.
-fn edf_members(spec: &Spec, i: usize) -> impl Iterator<Item = usize> + '_ {
-    let cpu = spec.tasks[i].cpu;
-    (0..spec.tasks.len()).filter(move |&j| {
-        let t = &spec.tasks[j];
-        t.cpu == cpu
-            && (t.server != Server::Background || crate::overheads::per_release(spec, j) > 0)
-    })
-}
-
-/// EDF with constant-bandwidth servers: every server gets its budget by
-/// the end of each period when Σ U ≤ 1, but possibly at its very end; with
-/// constrained deadlines, by its deadline when the processor-demand test
-/// passes (docs/analysis.md).
-fn server_period(spec: &Spec, t: &Task) -> (Option<Nanos>, Option<Nanos>) {
-    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
-    let d = t.deadline().unwrap_or(MAX_TIME);
-    server_period_at(spec, &periods, t.cpu, d)
-}
-
-/// [`server_period`] at `periods`: the deadline `d` of a task on `cpu`
-/// when the processor-demand test passes there.
-fn server_period_at(
-    spec: &Spec,
-    periods: &[Nanos],
-    cpu: u32,
-    d: Nanos,
-) -> (Option<Nanos>, Option<Nanos>) {
-    if crate::qpa::edf_feasible_at(spec, periods, cpu) {
-        (Some(d), Some(d))
-    } else {
-        (None, None)
-    }
-}
-
-/// The guaranteed tasks of `cpu` as the EDF analysis sees them, and the
-/// place of task `i` among them (when it is one).
-fn edf_tasks(spec: &Spec, periods: &[Nanos], i: usize) -> (Vec<edf::EdfTask>, usize) {
-    let mut at = 0;
-    let mut out = Vec::new();
-    for j in edf_members(spec, i) {
-        let t = &spec.tasks[j];
-        if j == i {
-            at = out.len();
-        }
-        out.push(edf::EdfTask {
-            // A background task's releases still run their handlers.
-            work: match t.server {
-                Server::Background => 0,
-                _ => interference(t).saturating_add(crate::overheads::per_job(spec, j)),
-            },
-            period: periods[j],
-            kernel: crate::overheads::per_release(spec, j),
-        });
-    }
-    (out, at)
-}
-
-/// Task `i`'s (budget, job) response times under EDF at the spec's periods:
-/// Spuri's analysis, which takes deadlines equal to periods; where a task
-/// of the CPU has a shorter deadline, the deadline under the
-/// processor-demand test ([`server_period`]).
-fn edf_response_times(spec: &Spec, i: usize) -> (Option<Nanos>, Option<Nanos>) {
-    let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
-    edf_response_times_at(spec, &periods, i)
-}
-
-/// [`edf_response_times`] at `periods` (one per task; a deadline is the
-/// given one, else the period), for the design's relaxation at a box of
-/// one point: Spuri's bound, or the deadline where some task of the CPU
-/// has one below its period.
-pub fn edf_response_times_at(
-    spec: &Spec,
-    periods: &[Nanos],
-    i: usize,
-) -> (Option<Nanos>, Option<Nanos>) {
-    let cpu = spec.tasks[i].cpu;
-    if edf_constrained_at(spec, periods, cpu) {
-        let d = spec.tasks[i].deadline_given.unwrap_or(periods[i]);
-        return server_period_at(spec, periods, cpu, d);
-    }
-    edf_response_at(spec, periods, i)
-}
-
-/// Some guaranteed task of `cpu` has a deadline below its period at
-/// `periods`.
-pub fn edf_constrained_at(spec: &Spec, periods: &[Nanos], cpu: u32) -> bool {
-    (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu && spec.tasks[j].server != Server::Background)
-        .any(|j| spec.tasks[j].deadline_given.is_some_and(|d| d < periods[j]))
-}
-
-/// Task `i`'s (budget, job) response times under EDF (Spuri 1996, see
-/// [`edf`]) at the given periods (one per task); `None` when its CPU is
-/// overloaded, and the server period where the busy period holds more than
-/// [`edf::MAX_BUSY_JOBS`] jobs. The job figure is at most the period.
-pub fn edf_response_at(spec: &Spec, periods: &[Nanos], i: usize) -> (Option<Nanos>, Option<Nanos>) {
-    edf_response_disturbed(spec, periods, i, 0)
-}
-
-/// [`edf_response_at`] with `extra` ns of CPU time taken from the window
-/// whatever the deadlines (a disturbance the model does not have,
-/// `crate::disturbance`): blocking of `extra` at every offset, on top of
-/// the stack resource policy's, and in the busy period.
-pub fn edf_response_disturbed(
-    spec: &Spec,
-    periods: &[Nanos],
-    i: usize,
-    extra: Nanos,
-) -> (Option<Nanos>, Option<Nanos>) {
-    assert!(extra >= 0, "a disturbance is a duration: {extra}");
-    let (tasks, at) = edf_tasks(spec, periods, i);
-    // The test's utilisation (budgets), as everywhere else (`relax` too); it
-    // bounds the work's (x ≤ C), so below it a busy period exists.
-    let u: f64 = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
-        .filter(|&j| spec.tasks[j].server != Server::Background)
-        .map(|j| spec.tasks[j].budget() as f64 / periods[j] as f64)
-        .sum();
-    let overheads = !crate::overheads::costs(spec, i).is_zero();
-    if u + edf_overhead_load(spec, periods, i) > 1.0 + UTIL_EPS {
-        return (None, None);
-    }
-    let t = &spec.tasks[i];
-    // The stack resource policy's blocking, deadlines being the periods,
-    // with the switch to the blocking job (`overheads::blocking_switch`).
-    let cs = crate::overheads::blocking_switch(spec, i);
-    let srp = crate::blocking::srp_steps(spec, periods, t.cpu)
-        .into_iter()
-        .map(|(theta, b)| (theta, if b > 0 { b.saturating_add(cs) } else { 0 }));
-    let block: Vec<(Nanos, Nanos)> = if extra > 0 {
-        std::iter::once((0, extra))
-            .chain(srp.map(|(theta, b)| (theta, b.saturating_add(extra))))
-            .collect()
-    } else {
-        srp.collect()
-    };
-    let b_max = crate::blocking::srp_max(&block);
-    let Some(l) = edf::busy_period(&tasks, b_max, edf::MAX_BUSY_JOBS) else {
-        // The server period is a bound only without overheads (a release
-        // handler of a later deadline runs first) and, with blocking, when
-        // the demand test with blocking passes.
-        let ok = !overheads && (b_max == 0 || crate::qpa::edf_feasible(spec, t.cpu));
-        return if ok {
-            (Some(periods[i]), Some(periods[i]))
-        } else {
-            (None, None)
-        };
-    };
-    let own = crate::overheads::own(spec, i);
-    let job = edf::response_time(&tasks, at, t.demand().saturating_add(own), l, &block);
-    // Spuri's demand argument: with Σ I/T ≤ 1 (the busy period exists) a
-    // job of demand x ≤ I meets its deadline, so the bound is within the
-    // period. Release handlers of later deadlines break the argument, and
-    // so does blocking unless the demand test with it passes: then the
-    // bound may pass the period (it is no guarantee, `bounded_response`,
-    // and the verdict fails).
-    assert!(
-        overheads || b_max > 0 || job <= periods[i],
-        "EDF response time {job} above the period {}",
-        periods[i]
-    );
-    let budget = edf::response_time(&tasks, at, t.budget().saturating_add(own), l, &block);
-    (Some(budget), Some(job))
-}
-
-/// What the overheads add to the utilisation of task `i`'s CPU under EDF:
-/// `Σ (2·cs + K_k) / T_k` over its guaranteed tasks, `Σ K_k / T_k` over
-/// its background ones (0 without overheads).
-pub(crate) fn edf_overhead_load(spec: &Spec, periods: &[Nanos], i: usize) -> f64 {
-    let cpu = spec.tasks[i].cpu;
-    (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu)
-        .map(|j| {
-            let mut c = crate::overheads::per_release(spec, j);
-            if spec.tasks[j].server != Server::Background {
-                c = c.saturating_add(crate::overheads::per_job(spec, j));
-            }
-            c as f64 / periods[j] as f64
-        })
-        .sum()
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.

@@ -20,13 +20,15 @@
 //! - explicit, b = 1 and a = 2: R_a = 3 at every T_a, L = 6 gives T_a = 3;
 //!   a = 1 and b = 2: as rate-monotonic, T_a = 5.
 //!
-//! Under EDF with QPA (a's exec 1.5 ms): some deadline is below its
-//! period, so R = D (`sched::edf_response_times_at`), R_a = T_a, and the
-//! chain needs 2 T_a ≤ L. The demand at t = 3 is 2 + 1.5 > 3 when
-//! T_a ≤ 3, so QPA needs T_a ≥ 4 (at T_a = 4: h(4) = 3.5, h(8) = 5,
-//! h(13) = 8.5, all within). With L = 9: T_a = 4, U = 0.375 + 0.2 =
-//! 0.575; with L = 7 (T_a ≤ 3) no period passes: infeasible, though
-//! Σ U ≤ 1 alone would admit T_a = 3 (U = 0.7).
+//! Under EDF with QPA (a's exec 1.5 ms): where the processor-demand test
+//! passes, R is Spuri's with the deadlines (`sched::edf_response_times_at`):
+//! b's deadline 3 is before a's, so R_a = 1.5 + 2 = 3.5, and b meets a's
+//! job only when it is released 2 ms after a's: R_b = 2. The demand at
+//! t = 3 is 2 + 1.5 > 3 when T_a ≤ 3, so QPA needs T_a ≥ 4 (at T_a = 4:
+//! h(4) = 3.5, h(8) = 5, h(13) = 8.5, all within). With L = 9:
+//! T_a + 3.5 ≤ 9 gives T_a = 5, U = 0.3 + 0.2 = 0.5 (when R was taken as
+//! D, 2 T_a ≤ 9 gave T_a = 4, U = 0.575); with L = 7 (T_a ≤ 3) no period
+//! passes: infeasible, though Σ U ≤ 1 alone would admit T_a = 3 (U = 0.7).
 
 mod common;
 
@@ -104,8 +106,8 @@ fn explicit_priorities_by_hand() {
 #[test]
 fn qpa_by_hand() {
     let (t, r, u) = solve(&edf(9));
-    assert_eq!((t, r), (vec![4_000, 10_000], vec![4_000, 3_000]));
-    close(u, 0.575);
+    assert_eq!((t, r), (vec![5_000, 10_000], vec![3_500, 2_000]));
+    close(u, 0.5);
     let o = design(&edf(7), &opts(Method::Auto)).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(o.status, Status::Infeasible);
 }

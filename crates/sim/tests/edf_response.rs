@@ -277,3 +277,46 @@ fn the_start_pattern_reaches_the_bound() {
     println!("start pattern: W reached on all {systems} systems, below R on {below_r}");
     assert!(below_r >= 40, "W below R on only {below_r} systems");
 }
+
+/// Under EDF with constrained deadlines (QPA) the response time is
+/// Spuri's with the deadlines, not the deadline itself (docs/analysis.md,
+/// "EDF response times"): a (1 ms every 10, D = 4) and b (2 ms every 10,
+/// D = 10): R_b = 3 ms where QPA alone gives D_b = 10; no run exceeds it,
+/// and the synchronous one reaches it.
+#[test]
+fn constrained_deadlines_get_spuri_s_response_times() {
+    let src = r#"
+[system]
+name = "qpa"
+time_unit = "ms"
+scheduler = "edf"
+schedulability = "qpa"
+[channels.mem]
+bandwidth = 1
+overhead = 0
+[tasks.a]
+exec = 1
+period = 10
+deadline = 4
+server = "none"
+[tasks.b]
+exec = 2
+period = 10
+server = "none"
+"#;
+    let spec = Spec::parse("qpa.toml", src).unwrap_or_else(|e| panic!("{e}"));
+    let rep = analyze(&spec);
+    let r: Vec<Option<Nanos>> = rep.timing.iter().map(|t| t.job_response_time).collect();
+    assert_eq!(r, vec![Some(MS), Some(3 * MS)]);
+    let mut seen = vec![0; 2];
+    // Offsets in whole ms (`worst_responses`).
+    for phi in 0..10 {
+        for (k, s) in worst_responses(&spec, &[0, phi], ExecModel::Worst, phi as u64)
+            .into_iter()
+            .enumerate()
+        {
+            seen[k] = seen[k].max(s);
+        }
+    }
+    assert_eq!(seen, vec![MS, 3 * MS]);
+}

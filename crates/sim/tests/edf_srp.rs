@@ -384,3 +384,12 @@ fn srp_sections_never_exceed_the_bounds() {
         t.blocked
     );
 }
+
+/// The tightness of these systems per feature (`common::tight`;
+/// docs/analysis.md, "How tight, per feature"): minutes of work, hence
+/// ignored; `--ignored --nocapture` prints the table.
+#[test]
+#[ignore]
+fn tightness() {
+    common::tight::per_feature("edf_srp", system);
+}

@@ -259,3 +259,12 @@ fn jitter_deadlines_and_priorities_never_exceed_the_bounds() {
         "no chain reached its sound bound from the read"
     );
 }
+
+/// The tightness of these systems per feature (`common::tight`;
+/// docs/analysis.md, "How tight, per feature"): minutes of work, hence
+/// ignored; `--ignored --nocapture` prints the table.
+#[test]
+#[ignore]
+fn tightness() {
+    common::tight::per_feature("jitter_oracle", system);
+}

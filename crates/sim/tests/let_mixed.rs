@@ -11,6 +11,8 @@
 //! path is also what `--all-paths` bounds for the parsed spec: its pair
 //! bound must be the chain's.
 
+mod common;
+
 use proptest::prelude::*;
 use rtpipe_analysis::{all_paths, analyze, Anchor, Metric};
 use rtpipe_model::{Chain, Nanos, Spec};
@@ -213,4 +215,31 @@ fn the_bounds_are_reached_on_some_mixed_systems() {
     for (k, r) in t.0.iter().enumerate() {
         assert!(*r >= 0.95, "metric {k}: largest ratio {r}");
     }
+}
+
+/// A random mixed path of 2–5 tasks from `seed`, as [`spec`] builds it.
+fn seeded(seed: u64) -> Spec {
+    let mut r = rtpipe_model::gen::Rng::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x1e7);
+    let n = r.range(2, 5) as usize;
+    let tasks: Vec<Task> = (0..n)
+        .map(|_| {
+            (
+                [2, 3, 4, 5, 6, 8, 10, 12][r.range(0, 7) as usize],
+                [0.05, 0.2, 0.4, 0.6][r.range(0, 3) as usize],
+                r.range(0, 1) as u32,
+                r.chance(0.5),
+                r.chance(0.5),
+            )
+        })
+        .collect();
+    spec(&tasks)
+}
+
+/// The tightness of mixed paths (`common::tight`; docs/analysis.md, "How
+/// tight, per feature"): minutes of work, hence ignored; `--ignored
+/// --nocapture` prints the table.
+#[test]
+#[ignore]
+fn tightness() {
+    common::tight::per_feature("let_mixed", seeded);
 }

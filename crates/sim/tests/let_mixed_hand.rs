@@ -4,12 +4,15 @@
 //! R_b = 2 + ⌈4/4⌉ + ⌈4/5⌉ = 4.
 //!
 //! The sound bound of the path, link by link from releases:
-//! - reaction: a → b (LET p) T_a + T_b = 15; b → c (implicit p, LET c)
+//! - reaction: a → b (LET p) min(T_a + T_b, 2·T_a) = 10 (the head is
+//!   distinct: b's job carrying a sample reads before a's next publish,
+//!   2·T_a after the head's release); b → c (implicit p, LET c)
 //!   min(R_b + T_c, T_b + R_b) = min(8, 14) = 8 (b is distinct: its reads
 //!   are ≥ T_b − R_b + x_b = 8 apart, a publishes every 5); the tail
-//!   publishes T_c = 4 after its release: 27;
+//!   publishes T_c = 4 after its release: 22;
 //! - freshness: 2·T_a = 10, then T_b + R_b + T_c = 18: 28;
-//! - from the event: T_a + 15 + 8 + 4 = 32 and T_a + 28 = 33.
+//! - from the event (no reachability): T_a + 15 + 8 + 4 = 32 and
+//!   T_a + 28 = 33.
 //!
 //! Synchronous release, worst-case demands (hyperperiod 20): c runs
 //! [4m, 4m + 1]; a [0, 1+1], [5, 6], [10, 11], [15, 16]; b reads at 2 and
@@ -71,7 +74,7 @@ fn a_let_implicit_let_path_by_hand() {
         .into_iter()
         .find(|p| p.source == 0 && p.sink == 2)
         .unwrap_or_else(|| panic!("no pair a → c"));
-    assert_eq!(pair.reaction_sound.value, Some(27 * MS));
+    assert_eq!(pair.reaction_sound.value, Some(22 * MS));
     assert_eq!(pair.freshness_sound.value, Some(28 * MS));
     assert_eq!(pair.freshness_sound.path, vec![0, 1, 2]);
     // The same path as a chain the simulator measures (built in code: the
@@ -86,7 +89,7 @@ fn a_let_implicit_let_path_by_hand() {
             .find(|c| c.chain == 2 && c.metric == m)
             .and_then(|c| c.bound.sound(a))
     };
-    assert_eq!(bound(Metric::Reaction, Anchor::Read), Some(27 * MS));
+    assert_eq!(bound(Metric::Reaction, Anchor::Read), Some(22 * MS));
     assert_eq!(bound(Metric::Freshness, Anchor::Read), Some(28 * MS));
     assert_eq!(bound(Metric::Reaction, Anchor::Event), Some(32 * MS));
     assert_eq!(bound(Metric::Freshness, Anchor::Event), Some(33 * MS));
@@ -102,4 +105,61 @@ fn a_let_implicit_let_path_by_hand() {
     assert_eq!(c.freshness.max, Some(21 * MS));
     assert_eq!(c.event_reaction.max, Some(25 * MS));
     assert_eq!(c.event_freshness.max, Some(26 * MS));
+}
+
+/// A fast LET producer feeding a slow implicit consumer: a (LET, T = 1,
+/// x = 0.2) → b (implicit, T = 100, x = 1), rate monotonic: R_b = 1.4.
+/// A sample of a that reaches b is read by a b job released before a's
+/// next publish, 2·T_a after the head's read: reaction from the read
+/// 2 + 1.4 = 3.4 ms, not T_a + T_b + R_b = 102.4.
+#[test]
+fn a_let_producer_has_its_reachability_term() {
+    const FAST: &str = r#"
+[system]
+name = "fast"
+time_unit = "ms"
+[channels.mem]
+bandwidth = 1
+overhead = 0
+[tasks.a]
+exec = 0.2
+period = 1
+server = "none"
+output = { channel = "mem", size = 0 }
+[tasks.b]
+exec = 1
+period = 100
+server = "none"
+reads = ["a"]
+[[chain]]
+path = ["a"]
+communication = "let"
+"#;
+    let mut spec = Spec::parse("fast.toml", FAST).unwrap_or_else(|e| panic!("{e}"));
+    let whole = Chain::linked(&mut spec.tasks, vec![0, 1]);
+    spec.chains.push(whole);
+    let report = analyze(&spec);
+    assert_eq!(report.timing[1].job_response_time, Some(1_400_000));
+    let bound = |m: Metric, a: Anchor| {
+        report
+            .chains
+            .iter()
+            .find(|c| c.chain == 1 && c.metric == m)
+            .and_then(|c| c.bound.sound(a))
+    };
+    let b = bound(Metric::Reaction, Anchor::Read);
+    assert_eq!(b, Some(3_400_000));
+    let mut worst = 0;
+    for phi in (0..MS).step_by(50_000) {
+        let cfg = SimConfig {
+            phasing: Phasing::Given(vec![0, phi]),
+            exec: ExecModel::Worst,
+            jitter: rtpipe_sim::Jitter::None,
+            ..SimConfig::new(1_000 * MS)
+        };
+        let sim = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+        worst = worst.max(sim.chains[1].reaction.max.unwrap_or(0));
+    }
+    assert!(Some(worst) <= b, "{worst} > {b:?}");
+    assert!(worst * 10 >= 3_400_000 * 8, "{worst} far below the bound");
 }

@@ -268,3 +268,12 @@ fn overheads_never_exceed_the_bounds() {
     assert!(t.chains_near > 0, "no chain came near its bound");
     assert!(t.near > 0, "no task came near its bound");
 }
+
+/// The tightness of these systems per feature (`common::tight`;
+/// docs/analysis.md, "How tight, per feature"): minutes of work, hence
+/// ignored; `--ignored --nocapture` prints the table.
+#[test]
+#[ignore]
+fn tightness() {
+    common::tight::per_feature("overheads", system);
+}

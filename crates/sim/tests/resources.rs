@@ -204,3 +204,12 @@ fn critical_sections_never_exceed_the_bounds() {
         "no blocked task came near its bound"
     );
 }
+
+/// The tightness of these systems per feature (`common::tight`;
+/// docs/analysis.md, "How tight, per feature"): minutes of work, hence
+/// ignored; `--ignored --nocapture` prints the table.
+#[test]
+#[ignore]
+fn tightness() {
+    common::tight::per_feature("resources", system);
+}

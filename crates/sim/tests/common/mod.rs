@@ -3,6 +3,8 @@
 //! then a search from the closest of them).
 #![allow(dead_code)] // each test file uses its own subset
 
+pub mod tight;
+
 use rtpipe_analysis::{Anchor, Report};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
