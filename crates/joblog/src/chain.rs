@@ -80,6 +80,25 @@ pub struct ChainStats {
     pub event_freshness: Observed,
 }
 
+impl ChainStats {
+    /// Nothing measured yet; each latency's histogram counts up to `cap`
+    /// distinct values exactly (`hist::exact_cap`: a run's chains share
+    /// one budget).
+    pub fn with_exact_cap(cap: usize) -> ChainStats {
+        let observed = || Observed {
+            hist: crate::Histogram::with_exact_cap(cap),
+            ..Observed::default()
+        };
+        ChainStats {
+            reaction: observed(),
+            freshness: observed(),
+            event_reaction: observed(),
+            event_freshness: observed(),
+            ..ChainStats::default()
+        }
+    }
+}
+
 /// One head sample of one chain: its read and the tail outputs that end
 /// its latencies (`None` where the run ended first). The per-sample view
 /// of [`ChainStats`], from the same trackers.

@@ -1,34 +1,74 @@
 //! A histogram of latencies in integer ns that holds a run of any length in
-//! bounded memory: exact (one count per distinct value) while the values
-//! take at most [`EXACT_CAP`] distinct values, log-bucketed beyond that
-//! with a relative error below 2^-[`COARSE_BITS`] (< 0.8 %) on quantiles
-//! and on counts near a threshold. Count, sum (so the mean), min and max
-//! stay exact either way.
+//! bounded memory. The highest values are counted exactly (one count per
+//! distinct value, at most the histogram's exact cap of them, see
+//! [`exact_cap`]); when there are more, the lowest are moved into
+//! log-linear buckets with a relative width below 2^-[`COARSE_BITS`]
+//! (< 0.8 %), keeping the top half of the cap exact. So a p99 is exact
+//! while its rank falls among the exact values (at least up to 50 × the
+//! cap values, however many distinct), and so is a count above a bound
+//! at or above the least exact value; below, they are within the
+//! buckets' width. Count, sum (so the mean), min and max stay exact
+//! either way. The heap never passes [`Histogram::max_heap_bytes`],
+//! however many values are counted: a run's memory is bounded by the
+//! number of its chains, not by its span.
 
 use rtpipe_model::Nanos;
 use std::borrow::Cow;
 
-/// Distinct values kept exactly; beyond it the histogram turns coarse.
-pub const EXACT_CAP: usize = 1 << 16;
+/// Distinct values a run's histograms count exactly between them (2 MiB
+/// of counts), shared out by [`exact_cap`]: a run keeps four histograms
+/// per chain, and when each kept 65,536 they grew towards 2 MB each (the
+/// counts, and a merge's copy of them) over a long span, 800 MB for 100
+/// chains. A few chains keep thousands each (cleanflight's three: 10,922),
+/// so their figures stay exact over long runs.
+pub const EXACT_BUDGET: usize = 1 << 17;
+
+/// The least exact cap of a histogram, however many share the budget:
+/// 8 KiB of counts.
+pub const EXACT_CAP_MIN: usize = 1 << 9;
+
+/// The most, for a histogram alone (its default).
+pub const EXACT_CAP_MAX: usize = 1 << 16;
+
+/// Each of `histograms` histograms' exact cap: its share of
+/// [`EXACT_BUDGET`], within [`EXACT_CAP_MIN`]..=[`EXACT_CAP_MAX`].
+pub fn exact_cap(histograms: usize) -> usize {
+    (EXACT_BUDGET / histograms.max(1)).clamp(EXACT_CAP_MIN, EXACT_CAP_MAX)
+}
 
 /// Mantissa bits of a coarse bucket: a bucket `[lo, hi)` has
 /// `hi - lo <= lo / 2^COARSE_BITS`.
 pub const COARSE_BITS: u32 = 7;
 
-/// Values held unsorted before they are merged into the counts: a push
-/// is an append, and the sort and merge run once per this many (a hash
-/// table of up to [`EXACT_CAP`] entries cost a cache miss per push).
-const PENDING_CAP: usize = 1 << 14;
+/// At most this many values are held unsorted before they are merged
+/// into the counts: a push is an append, and the sort and merge run once
+/// per this many, or per half the exact cap when that is less, so a merge
+/// costs a few steps per value (a hash table of the counts cost a cache
+/// miss per push).
+const PENDING_MAX: usize = 1 << 14;
+
+/// Coarse buckets of the whole non-negative `Nanos` range: one per value
+/// below 2^(COARSE_BITS+1), then 2^COARSE_BITS per octave (a run's
+/// latencies span a few octaves, so a few hundred of them are used).
+const COARSE_BUCKETS: usize =
+    (1 << (COARSE_BITS + 1)) + (62 - COARSE_BITS as usize) * (1 << COARSE_BITS);
+
+/// Value or bucket → count, ascending, each key once.
+type Counts = Vec<(Nanos, u64)>;
 
 /// Counts of observed values (see the module docs).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Histogram {
-    /// Value (exact) or bucket's lower end (coarse) → count, ascending by
-    /// key, each key once.
-    counts: Vec<(Nanos, u64)>,
+    /// Distinct values counted exactly before the lowest are bucketed.
+    cap: usize,
+    /// Value → count, ascending by value, each value once: the highest
+    /// values, every value while `buckets` is empty.
+    exact: Vec<(Nanos, u64)>,
+    /// Bucket's lower end → count, ascending, each bucket once: every
+    /// value below the least in `exact`.
+    buckets: Vec<(Nanos, u64)>,
     /// Values pushed since the last merge, in push order.
     pending: Vec<Nanos>,
-    coarse: bool,
     count: u64,
     sum: i128,
     min: Option<Nanos>,
@@ -46,10 +86,17 @@ impl PartialEq for Histogram {
 
 impl Eq for Histogram {}
 
+/// A histogram alone: the largest exact cap.
+impl Default for Histogram {
+    fn default() -> Histogram {
+        Histogram::with_exact_cap(EXACT_CAP_MAX)
+    }
+}
+
 /// `counts` (ascending, keys distinct) with `keys` (ascending) added, one
 /// count each.
 fn merged(counts: &[(Nanos, u64)], keys: &[Nanos]) -> Vec<(Nanos, u64)> {
-    let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(counts.len() + keys.len().min(EXACT_CAP));
+    let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(counts.len() + keys.len());
     let (mut i, mut j) = (0, 0);
     while j < keys.len() {
         let v = keys[j];
@@ -69,6 +116,45 @@ fn merged(counts: &[(Nanos, u64)], keys: &[Nanos]) -> Vec<(Nanos, u64)> {
         out.push((v, n));
     }
     out.extend_from_slice(&counts[i..]);
+    out
+}
+
+/// Two count lists (each ascending, keys distinct) as one.
+fn merged_counts(a: &[(Nanos, u64)], b: &[(Nanos, u64)]) -> Vec<(Nanos, u64)> {
+    let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].0.cmp(&b[j].0) {
+            std::cmp::Ordering::Less => {
+                out.push(a[i]);
+                i += 1;
+            }
+            std::cmp::Ordering::Greater => {
+                out.push(b[j]);
+                j += 1;
+            }
+            std::cmp::Ordering::Equal => {
+                out.push((a[i].0, a[i].1 + b[j].1));
+                (i, j) = (i + 1, j + 1);
+            }
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
+}
+
+/// Exact counts (ascending) as coarse buckets: `bucket` is monotone, so
+/// the order holds and equal buckets are adjacent.
+fn coarsened(exact: &[(Nanos, u64)]) -> Vec<(Nanos, u64)> {
+    let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(exact.len().min(COARSE_BUCKETS));
+    for &(v, n) in exact {
+        let b = bucket(v);
+        match out.last_mut() {
+            Some(last) if last.0 == b => last.1 += n,
+            _ => out.push((b, n)),
+        }
+    }
     out
 }
 
@@ -110,20 +196,6 @@ fn sort_values(values: &mut [Nanos]) {
     }
 }
 
-/// Exact counts (ascending) as coarse buckets: `bucket` is monotone, so
-/// the order holds and equal buckets are adjacent.
-fn coarsened(exact: &[(Nanos, u64)]) -> Vec<(Nanos, u64)> {
-    let mut out: Vec<(Nanos, u64)> = Vec::new();
-    for &(v, n) in exact {
-        let b = bucket(v);
-        match out.last_mut() {
-            Some(last) if last.0 == b => last.1 += n,
-            _ => out.push((b, n)),
-        }
-    }
-    out
-}
-
 /// The lower end of the coarse bucket holding `v` (values below
 /// 2^(COARSE_BITS+1) have a bucket each).
 fn bucket(v: Nanos) -> Nanos {
@@ -153,40 +225,76 @@ impl Histogram {
         self.sum += i128::from(v);
         self.min = Some(self.min.map_or(v, |m| m.min(v)));
         self.max = Some(self.max.map_or(v, |m| m.max(v)));
-        if self.pending.len() >= PENDING_CAP {
-            let mut keys = std::mem::take(&mut self.pending);
-            (self.counts, self.coarse) = self.merge(&mut keys);
-            keys.clear();
-            self.pending = keys;
+        if self.pending.len() >= self.pending_cap() {
+            let mut values = std::mem::take(&mut self.pending);
+            (self.exact, self.buckets) = self.merge(&mut values);
+            values.clear();
+            self.pending = values;
         }
     }
 
-    /// The counts with `values` merged in (sorting them in place), and
-    /// whether they are coarse: they turn coarse when the distinct values
-    /// pass the cap (distinct values only grow, so when the merge happens
-    /// does not change the outcome).
-    fn merge(&self, values: &mut [Nanos]) -> (Vec<(Nanos, u64)>, bool) {
-        if self.coarse {
-            values.iter_mut().for_each(|v| *v = bucket(*v));
-        }
+    /// The exact counts and the buckets with `values` merged in (sorting
+    /// them in place). A value below the least exact one, once there are
+    /// buckets, is bucketed (the buckets hold only values below the exact
+    /// ones); past the exact cap the lowest are bucketed, down to half.
+    fn merge(&self, values: &mut [Nanos]) -> (Counts, Counts) {
         sort_values(values);
-        let counts = merged(&self.counts, values);
-        if !self.coarse && counts.len() > EXACT_CAP {
-            (coarsened(&counts), true)
+        let floor = match (self.buckets.is_empty(), self.exact.first()) {
+            (false, Some(&(least, _))) => values.partition_point(|&v| v < least),
+            _ => 0,
+        };
+        let (below, rest) = values.split_at(floor);
+        let mut exact = merged(&self.exact, rest);
+        let mut low: Vec<(Nanos, u64)> = merged(&[], below);
+        if exact.len() > self.cap {
+            let spill = exact.len() - self.cap / 2;
+            low = merged_counts(&low, &exact[..spill]);
+            exact.drain(..spill);
+        }
+        if low.is_empty() {
+            return (exact, self.buckets.clone());
+        }
+        (exact, merged_counts(&self.buckets, &coarsened(&low)))
+    }
+
+    /// The exact counts and the buckets, pending values included.
+    #[allow(clippy::type_complexity)]
+    fn settled(&self) -> (Cow<'_, [(Nanos, u64)]>, Cow<'_, [(Nanos, u64)]>) {
+        if self.pending.is_empty() {
+            (Cow::Borrowed(&self.exact), Cow::Borrowed(&self.buckets))
         } else {
-            (counts, self.coarse)
+            let (exact, buckets) = self.merge(&mut self.pending.clone());
+            (Cow::Owned(exact), Cow::Owned(buckets))
         }
     }
 
-    /// The counts, ascending, and whether they are coarse, pending values
-    /// included.
-    fn settled(&self) -> (Cow<'_, [(Nanos, u64)]>, bool) {
-        if self.pending.is_empty() {
-            (Cow::Borrowed(&self.counts), self.coarse)
-        } else {
-            let (counts, coarse) = self.merge(&mut self.pending.clone());
-            (Cow::Owned(counts), coarse)
+    /// An empty histogram that counts up to `cap` distinct values exactly
+    /// (see [`exact_cap`]).
+    pub fn with_exact_cap(cap: usize) -> Histogram {
+        assert!(cap >= 2, "an exact cap of {cap} keeps no exact top");
+        Histogram {
+            cap,
+            exact: Vec::new(),
+            buckets: Vec::new(),
+            pending: Vec::new(),
+            count: 0,
+            sum: 0,
+            min: None,
+            max: None,
         }
+    }
+
+    fn pending_cap(&self) -> usize {
+        (self.cap / 2).clamp(1, PENDING_MAX)
+    }
+
+    /// The most heap it holds between pushes, however many values it
+    /// counts: the exact counts with one merge's values, every bucket,
+    /// and the pending values (a merge briefly holds a second copy).
+    pub fn max_heap_bytes(&self) -> usize {
+        let pending = self.pending_cap();
+        (self.cap + pending + COARSE_BUCKETS) * std::mem::size_of::<(Nanos, u64)>()
+            + pending * std::mem::size_of::<Nanos>()
     }
 
     /// A histogram of `values`.
@@ -198,6 +306,13 @@ impl Histogram {
         h
     }
 
+    /// The bytes of heap it holds now (at most
+    /// [`max_heap_bytes`](Histogram::max_heap_bytes)).
+    pub fn heap_bytes(&self) -> usize {
+        (self.exact.capacity() + self.buckets.capacity()) * std::mem::size_of::<(Nanos, u64)>()
+            + self.pending.capacity() * std::mem::size_of::<Nanos>()
+    }
+
     /// How many values.
     pub fn count(&self) -> u64 {
         self.count
@@ -205,7 +320,19 @@ impl Histogram {
 
     /// Whether every value is held exactly (no bucketing happened).
     pub fn is_exact(&self) -> bool {
-        !self.settled().1
+        self.settled().1.is_empty()
+    }
+
+    /// Whether the value of nearest rank `rank` is exact: no value is
+    /// bucketed, or the rank falls among the exact values above them.
+    pub fn is_exact_at_rank(&self, rank: u64) -> bool {
+        let bucketed: u64 = self.settled().1.iter().map(|&(_, n)| n).sum();
+        rank.clamp(1, self.count.max(1)) > bucketed
+    }
+
+    /// Whether [`percentile`](Histogram::percentile)`(q)` is exact.
+    pub fn is_exact_percentile(&self, q: u64) -> bool {
+        self.is_exact_at_rank((self.count * q).div_ceil(100))
     }
 
     /// The smallest value (exact).
@@ -223,24 +350,24 @@ impl Histogram {
         (self.count > 0).then(|| self.sum as f64 / self.count as f64)
     }
 
-    /// Each distinct value (coarse: each bucket's upper end, clamped to the
-    /// observed range) with its count, in ascending order.
+    /// Each distinct value with its count, in ascending order: a bucket
+    /// as its upper end, clamped to the observed range and below the
+    /// least exact value (every value it holds is), then the exact ones.
     pub fn entries(&self) -> Vec<(Nanos, u64)> {
-        let (lo, hi) = (self.min.unwrap_or(0), self.max.unwrap_or(0));
-        let (counts, coarse) = self.settled();
-        if !coarse {
-            return counts.into_owned();
-        }
+        let (exact, buckets) = self.settled();
+        let lo = self.min.unwrap_or(0);
+        let hi = exact.first().map_or(self.max.unwrap_or(0), |&(v, _)| v - 1);
+        let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(buckets.len() + exact.len());
         // A bucket's upper end is monotone in its lower end, and the
         // clamp keeps the order (equal ends only at the range's edges).
-        let mut out: Vec<(Nanos, u64)> = Vec::with_capacity(counts.len());
-        for &(k, n) in counts.iter() {
-            let v = (bucket_end(k) - 1).clamp(lo, hi);
+        for &(k, n) in buckets.iter() {
+            let v = (bucket_end(k) - 1).clamp(lo, hi.max(lo));
             match out.last_mut() {
                 Some(last) if last.0 == v => last.1 += n,
                 _ => out.push((v, n)),
             }
         }
+        out.extend_from_slice(&exact);
         out
     }
 
@@ -263,8 +390,8 @@ impl Histogram {
         self.at_rank((self.count * q).div_ceil(100))
     }
 
-    /// How many values satisfy `f` (coarse: judged on each bucket's value
-    /// as [`entries`](Histogram::entries) gives it).
+    /// How many values satisfy `f` (a bucketed value: judged on its
+    /// bucket's value as [`entries`](Histogram::entries) gives it).
     pub fn count_where(&self, f: impl Fn(Nanos) -> bool) -> u64 {
         self.entries()
             .into_iter()
@@ -273,7 +400,8 @@ impl Histogram {
             .sum()
     }
 
-    /// Every value in ascending order (coarse: as `entries` gives them).
+    /// Every value in ascending order (bucketed ones as `entries` gives
+    /// them).
     pub fn sorted(&self) -> Vec<Nanos> {
         self.entries()
             .into_iter()
@@ -285,6 +413,10 @@ impl Histogram {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The cap of a histogram among many: bucketing starts early.
+    const CAP: usize = EXACT_CAP_MIN;
+    const TOP: usize = CAP / 2;
 
     #[test]
     fn exact_below_the_cap() {
@@ -300,14 +432,14 @@ mod tests {
     }
 
     #[test]
-    fn coarse_beyond_the_cap_within_the_stated_error() {
-        let mut h = Histogram::default();
-        let n = 3 * EXACT_CAP as i64;
+    fn coarse_beyond_the_exact_top_within_the_stated_error() {
+        let mut h = Histogram::with_exact_cap(CAP);
+        let n = 300 * TOP as i64;
         for k in 0..n {
             h.push(1_000_000 + 7 * k);
         }
-        assert!(!h.is_exact());
-        assert!(h.settled().0.len() <= EXACT_CAP);
+        assert!(!h.is_exact() && !h.is_exact_percentile(99));
+        assert!(h.settled().0.len() <= CAP);
         assert_eq!(h.count(), n as u64);
         assert_eq!(
             (h.min(), h.max()),
@@ -322,6 +454,55 @@ mod tests {
         );
         let mean = 1_000_000.0 + 7.0 * (n - 1) as f64 / 2.0;
         assert_eq!(h.mean(), Some(mean));
+    }
+
+    #[test]
+    fn the_top_stays_exact_past_the_cap() {
+        // 40 × the exact top, all distinct, in a scrambled order: the p99
+        // and the counts above a high threshold are exact, below not.
+        let n = 40 * TOP as i64;
+        let values: Vec<Nanos> = (0..n).map(|k| 5_000 + (k * 7919) % n * 3).collect();
+        let mut h = Histogram::with_exact_cap(CAP);
+        values.iter().for_each(|&v| h.push(v));
+        let mut sorted = values.clone();
+        sorted.sort_unstable();
+        assert!(!h.is_exact() && h.is_exact_percentile(99));
+        let rank = (n as usize * 99).div_ceil(100);
+        assert_eq!(h.percentile(99), Some(sorted[rank - 1]));
+        let high = sorted[n as usize - TOP / 2];
+        let above = sorted.iter().filter(|&&v| v > high).count() as u64;
+        assert_eq!(h.count_where(|v| v > high), above);
+        assert!(!h.is_exact_percentile(50));
+        let entries = h.entries();
+        assert!(entries.windows(2).all(|w| w[0].0 < w[1].0), "ascending");
+        assert_eq!(entries.iter().map(|e| e.1).sum::<u64>(), n as u64);
+    }
+
+    #[test]
+    fn the_heap_is_bounded_whatever_the_count() {
+        // Distinct values over 40 octaves: the worst a run's latencies do.
+        let mut h = Histogram::with_exact_cap(CAP);
+        let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+        let mut held = Vec::new();
+        for k in 0..4_000_000u64 {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            h.push((rng >> (24 + rng % 40)) as Nanos);
+            assert!(
+                h.heap_bytes() <= h.max_heap_bytes(),
+                "{} at {k}",
+                h.heap_bytes()
+            );
+            if (k + 1) % 1_000_000 == 0 {
+                held.push(h.heap_bytes());
+            }
+        }
+        assert!(!h.is_exact());
+        // Past the first million the buckets are all in use: flat, but
+        // for how full the exact counts are at the moment.
+        let (lo, hi) = (held.iter().min(), held.iter().max());
+        assert!(hi.zip(lo).is_some_and(|(h, l)| h - l <= l / 10), "{held:?}");
     }
 
     #[test]
@@ -353,7 +534,7 @@ mod tests {
         // Crosses the pending cap several times, repeating values.
         let mut h = Histogram::default();
         let mut want = std::collections::BTreeMap::new();
-        for k in 0..(5 * PENDING_CAP as i64) {
+        for k in 0..(5 * PENDING_MAX as i64) {
             let v = (k * 7919) % 40_000;
             h.push(v);
             *want.entry(v).or_insert(0u64) += 1;
@@ -361,6 +542,14 @@ mod tests {
         let want: Vec<(Nanos, u64)> = want.into_iter().collect();
         assert!(h.is_exact());
         assert_eq!(h.entries(), want);
+    }
+
+    #[test]
+    fn the_budget_is_shared_within_bounds() {
+        assert_eq!(exact_cap(1), EXACT_CAP_MAX);
+        assert_eq!(exact_cap(12), EXACT_BUDGET / 12);
+        assert_eq!(exact_cap(400), EXACT_CAP_MIN);
+        assert_eq!(exact_cap(0), EXACT_CAP_MAX);
     }
 
     #[test]

@@ -98,7 +98,7 @@ impl Provenance {
             .collect();
         Ok(Provenance {
             tasks,
-            chains: spec.chains.iter().map(|_| Tracker::new()).collect(),
+            chains: trackers(spec, Tracker::new),
             sink: None,
         })
     }
@@ -235,9 +235,16 @@ pub fn sample_rows(spec: &Spec, jobs: &[JobRecord]) -> Vec<Vec<SampleRow>> {
         .collect()
 }
 
+/// One tracker per chain of `spec`, their histograms sharing the exact
+/// budget (`hist::exact_cap`: four per chain), live or replayed alike.
+fn trackers(spec: &Spec, tracker: fn(usize) -> Tracker) -> Vec<Tracker> {
+    let cap = crate::hist::exact_cap(4 * spec.chains.len());
+    spec.chains.iter().map(|_| tracker(cap)).collect()
+}
+
 /// Feeds a finished job log through one tracker per chain.
-fn replay(spec: &Spec, jobs: &[JobRecord], tracker: fn() -> Tracker) -> Vec<Tracker> {
-    let mut trackers: Vec<Tracker> = spec.chains.iter().map(|_| tracker()).collect();
+fn replay(spec: &Spec, jobs: &[JobRecord], tracker: fn(usize) -> Tracker) -> Vec<Tracker> {
+    let mut trackers: Vec<Tracker> = trackers(spec, tracker);
     for (tr, ch) in trackers.iter_mut().zip(&spec.chains) {
         let Some(&head) = ch.path.first() else {
             continue;

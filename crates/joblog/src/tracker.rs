@@ -28,24 +28,25 @@ pub(crate) struct Tracker {
 }
 
 impl Tracker {
-    pub(crate) fn new() -> Tracker {
+    /// Its histograms count up to `cap` distinct values exactly.
+    pub(crate) fn new(cap: usize) -> Tracker {
         Tracker {
             stamps: VecDeque::new(),
             base: 0,
             current: None,
             // Sample 0 has no head read before it, so no event window.
             event_pending: 1,
-            stats: ChainStats::default(),
+            stats: ChainStats::with_exact_cap(cap),
             rows: None,
             head_done: 0,
         }
     }
 
     /// A tracker that also keeps one [`SampleRow`] per head sample.
-    pub(crate) fn with_rows() -> Tracker {
+    pub(crate) fn with_rows(cap: usize) -> Tracker {
         Tracker {
             rows: Some(Rows::default()),
-            ..Tracker::new()
+            ..Tracker::new(cap)
         }
     }
 

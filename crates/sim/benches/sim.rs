@@ -20,6 +20,13 @@
 //!   chains of 8, most of them data-triggered, on 1–2 CPUs and up to 40
 //!   work-queue threads, as long a run: threads, triggers and merging must
 //!   cost per event what periodic releases do.
+//! - `heap`: the reference for `scaling`'s growth: a plain
+//!   `std::collections::BinaryHeap` of the same system's n tasks, each
+//!   keyed by its next release, popped and pushed back a period later as
+//!   many times as the RM run on one CPU has events (`heap/1000t` beside
+//!   `scaling/1000t-rm`). Criterion's elements/s are then events/s and
+//!   pop-push pairs/s from one run, so their growth from 1,000 to 10,000
+//!   tasks can be set side by side: log10(t(10k)/t(1k)) per event.
 //!
 //! Each system is described on stderr (events per run, late jobs) before it
 //! is measured.
@@ -29,9 +36,11 @@ use common::{bench_events, run, span_for, MS};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rtpipe_analysis::Metric;
 use rtpipe_model::gen::{event_triggered_system, random_system, EventGenConfig, GenConfig};
-use rtpipe_model::{Scheduler, Spec};
+use rtpipe_model::{Nanos, Scheduler, Spec};
 use rtpipe_sim::search::{search, SearchConfig};
 use rtpipe_sim::{ExecModel, Phasing, SimConfig};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
@@ -204,6 +213,55 @@ fn scaling(c: &mut Criterion) {
     group.finish();
 }
 
+/// `ops` pops of the earliest release from a heap of `periods.len()`
+/// tasks, each pushed back one period later (a release heap's hold
+/// model: the heap stays n long); the last instant popped.
+fn hold(periods: &[Nanos], ops: u64) -> Nanos {
+    let mut heap: BinaryHeap<Reverse<(Nanos, usize)>> = periods
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| Reverse(((i as Nanos * 7_919) % p, i)))
+        .collect();
+    let mut last = 0;
+    for _ in 0..ops {
+        let Some(Reverse((t, i))) = heap.pop() else {
+            break;
+        };
+        last = t;
+        heap.push(Reverse((t + periods[i], i)));
+    }
+    last
+}
+
+fn heap(c: &mut Criterion) {
+    let mut group = c.benchmark_group("heap");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(5));
+    for tasks in [10, 100, 1_000, 10_000] {
+        let spec = system(tasks, 1, Scheduler::Rm);
+        let periods: Vec<Nanos> = (0..spec.tasks.len())
+            .filter_map(|i| spec.activation_period(i))
+            .collect();
+        let cfg = SimConfig {
+            horizon: span_for(&spec, 400_000.0),
+            seed: SEED,
+            phasing: Phasing::Random,
+            exec: ExecModel::Uniform,
+            log_jobs: false,
+            jitter: rtpipe_sim::Jitter::Uniform,
+        };
+        // The simulator's event count on the same system and span.
+        let ops = run(&spec, &cfg).events;
+        group.throughput(Throughput::Elements(ops));
+        group.bench_function(format!("{tasks}t"), |b| {
+            b.iter(|| black_box(hold(black_box(&periods), ops)))
+        });
+    }
+    group.finish();
+}
+
 /// An event-triggered system of `chains` chains of 8 tasks and no timer
 /// items (125 chains: 1,000 tasks).
 fn event_system(chains: usize) -> Spec {
@@ -221,5 +279,5 @@ fn event_system(chains: usize) -> Spec {
     )
 }
 
-criterion_group!(benches, events, table3, search_bench, scaling);
+criterion_group!(benches, events, table3, search_bench, scaling, heap);
 criterion_main!(benches);

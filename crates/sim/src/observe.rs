@@ -34,10 +34,12 @@ pub struct Summary {
     pub min: Nanos,
     /// In nanoseconds, not rounded.
     pub mean: f64,
-    /// Nearest-rank 99th percentile: exact while the observations take at
-    /// most [`rtpipe_joblog::hist::EXACT_CAP`] distinct values, within a
-    /// relative error of 2^-[`rtpipe_joblog::hist::COARSE_BITS`] beyond
-    /// (`exact` says which); count, min, mean and max are always exact.
+    /// Nearest-rank 99th percentile: exact while its rank falls among the
+    /// highest values the histogram counts exactly (at least half its
+    /// exact cap, [`rtpipe_joblog::hist::exact_cap`], of distinct values:
+    /// always up to 50 times the cap observations), within a relative
+    /// error of 2^-[`rtpipe_joblog::hist::COARSE_BITS`] beyond (`exact`
+    /// says which); count, min, mean and max are always exact.
     pub p99: Nanos,
     /// The largest.
     pub max: Nanos,
@@ -59,7 +61,7 @@ impl Summary {
             mean: h.mean()?,
             p99: h.percentile(99)?,
             max: h.max()?,
-            exact: h.is_exact(),
+            exact: h.is_exact_percentile(99),
         })
     }
 }

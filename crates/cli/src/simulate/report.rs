@@ -381,9 +381,9 @@ pub(crate) fn chain_table(spec: &Spec, obs: &[ChainObs], a: Anchor) -> String {
         .any(|o| o.from(a).observed.is_some_and(|s| !s.exact))
     {
         out.push_str(&format!(
-            "  ~ p99 within {:.2} % (more than {} distinct values: log-bucketed; count, min, mean, max and the counts above a bound stay exact but for values that close to it)\n",
+            "  ~ p99 within {:.2} % (below the {} highest distinct values of a chain's latency, counted exactly, values are log-bucketed; count, min, mean, max and the counts above a bound stay exact but for values that close to it)\n",
             100.0 / f64::from(1u32 << rtpipe_joblog::hist::COARSE_BITS),
-            rtpipe_joblog::hist::EXACT_CAP
+            rtpipe_joblog::hist::exact_cap(4 * spec.chains.len()) / 2
         ));
     }
     out
