@@ -12,6 +12,7 @@ pub use edf_times::{
 use edf_times::{edf_read_to_publish, edf_response_times, server_period};
 
 mod busy;
+pub(crate) use busy::busy_window;
 pub use busy::{
     level_response, level_response_reach, level_response_within, response_time,
     response_time_jitter, OwnJobs, MAX_BUSY_JOBS,

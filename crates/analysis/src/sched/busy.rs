@@ -128,7 +128,7 @@ fn busy_period_jobs(
 }
 
 /// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
-fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
+pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
     if u >= 1.0 {
