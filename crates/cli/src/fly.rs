@@ -13,10 +13,10 @@ mod sweep;
 
 pub use args::FlyArgs;
 
-use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, Answer, Hooks, Rendered};
 use crate::output;
 use crate::plot;
+use crate::report::analysis::{ReportView, TaskView};
 use crate::report::flight::{quality_text, EnvelopeView, RmsMax};
 use crate::report::samples::{self, SamplesFile};
 use crate::simulate;
@@ -134,6 +134,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 /// row sink and stop flag (a flight checks it as it goes, a sweep before
 /// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
+    a.output.no_csv("fly")?;
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
     if a.sweep {
@@ -174,7 +175,7 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
-    let out = if a.json {
+    let out = if a.output.is_json() {
         let v = to_json(spec, &report, &s, &flight, &obs, &failures, seconds);
         Rendered::Json(command::to_value(&v)?)
     } else {

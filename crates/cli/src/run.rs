@@ -1,10 +1,10 @@
 //! `rtpipe run`: the spec on real threads (rtpipe-runtime), measured like
 //! `simulate` and held against the same bounds.
 
-use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, fail, parse_time};
 use crate::output;
 use crate::plot;
+use crate::report::analysis::{ReportView, TaskView};
 use crate::report::flight::{EnvelopeView, RmsMax};
 use crate::report::samples::samples_csv;
 use crate::report::{self, time};
@@ -62,10 +62,8 @@ pub struct RunArgs {
     /// CPUs for as long as they are behind).
     #[arg(long)]
     pub force: bool,
-    /// Print one JSON object (the `simulate --json` fields that apply, plus
-    /// "run" and "fig10") instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub output: crate::command::FormatArgs,
     /// Run N background CPU hogs (SCHED_OTHER threads, on any CPU) for the
     /// whole run, as the paper loaded Linux during its measurements.
     #[arg(long, value_name = "N", default_value_t = 0)]
@@ -276,6 +274,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
+    if let Err(b) = a.output.no_csv("run") {
+        return fail(b);
+    }
     if let Some(code) = refuse_unrunnable(&spec, a) {
         return code;
     }
@@ -291,7 +292,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
         return fail(b);
     }
     let spin = Spin::calibrate();
-    if !a.json {
+    if !a.output.is_json() {
         announce(&spec, a, &cfg, setup.is_some());
     }
     let (res, flown) = match execute(&spec, a, &cfg, setup.as_ref(), spin) {
@@ -339,7 +340,7 @@ fn print_report(
     flight: Option<(&Flight, &Setup)>,
 ) -> Result<(), ExitCode> {
     let flown = flight.is_some();
-    if a.json {
+    if a.output.is_json() {
         let mut v = to_json(spec, report, res, obs, spin, verdict);
         v.flight = flight.map(|(f, s)| flight_json(f, s));
         command::print_json(&v)?;
@@ -584,7 +585,7 @@ fn to_text(
     spin: Spin,
     flight: bool,
 ) -> String {
-    let mut out = crate::analyze::system_line(spec);
+    let mut out = crate::report::analysis::system_line(spec);
     out.push_str(&ran_line(spec, res, spin, flight));
     if res.policy == Policy::Deadline {
         out.push_str(if res.partitioned {
