@@ -36,9 +36,9 @@ pub struct Row {
     pub metric: Metric,
     /// Bounds by [`Bound::ALL`] (paper, sound, Davare, Dürr) and anchor
     /// (read, event); `None`: unbounded.
-    pub bounds: [[Option<Nanos>; 2]; 4],
+    pub bounds: [[Option<Nanos>; Anchor::ALL.len()]; Bound::ALL.len()],
     /// The bounds under the known offsets (synchronous release), per anchor.
-    pub offsets: [Option<Nanos>; 2],
+    pub offsets: [Option<Nanos>; Anchor::ALL.len()],
     /// Simulated: the largest observation per anchor, the count from the
     /// read, and the observations above the bound that holds for the run
     /// (under the known offsets when the chain has them, else the sound one).
@@ -48,7 +48,7 @@ pub struct Row {
 /// What the simulation saw of one chain and metric.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observed {
-    pub max: [Option<Nanos>; 2],
+    pub max: [Option<Nanos>; Anchor::ALL.len()],
     pub count: u64,
     pub over_bound: u64,
 }

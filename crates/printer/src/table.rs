@@ -10,6 +10,9 @@ pub enum Kind {
     Int,
     /// An unsigned integer.
     UInt,
+    /// An unsigned count below 2^31 (a typed writer may store it in 32
+    /// bits).
+    Count,
     /// A floating-point number.
     Float,
     /// True or false.
@@ -88,6 +91,7 @@ impl Cell {
             (Cell::Text(_), Kind::Text)
                 | (Cell::Int(_), Kind::Int | Kind::OptInt)
                 | (Cell::UInt(_), Kind::UInt)
+                | (Cell::UInt(0..=0x7fff_ffff), Kind::Count)
                 | (Cell::Float(_) | Cell::Fixed(..), Kind::Float)
                 | (Cell::Bool(_), Kind::Bool)
                 | (Cell::Empty, Kind::OptInt | Kind::Float | Kind::Text)
