@@ -187,9 +187,11 @@ impl rtpipe_printer::Report for AnalyzeReport<'_> {
         t
     }
 
-    /// The tasks and the chains (the margins have their own CSV,
-    /// `--margins-csv`).
+    /// The tasks and the chains, then the margins when asked (the table
+    /// `--margins-csv` writes).
     fn tables(&self) -> Vec<rtpipe_printer::Table> {
-        analysis::tables(self.spec, &self.report)
+        let mut ts = analysis::tables(self.spec, &self.report);
+        ts.extend(self.margins.as_ref().map(|m| margins::table(self.spec, m)));
+        ts
     }
 }

@@ -107,3 +107,24 @@ fn commands_without_tables_refuse_csv_plainly() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("`fly` has no CSV report yet"), "{err}");
 }
+
+#[test]
+fn analyze_adds_the_margins_table_that_margins_csv_writes() {
+    let dir = scratch("formats-margins");
+    let file = dir.join("m.csv");
+    let spec = example("paper-table3.toml");
+    let file_arg = file.to_string_lossy();
+    let o = rtpipe(&[
+        "analyze",
+        &spec,
+        "--format",
+        "csv",
+        "--margins-csv",
+        &file_arg,
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let printed = csv_table(&out, "margins").join("\n") + "\n";
+    let written = std::fs::read_to_string(&file).unwrap_or_default();
+    assert!(written.starts_with("kind,subject,key,value,"), "{written}");
+    assert_eq!(printed, written);
+}

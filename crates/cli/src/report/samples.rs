@@ -297,12 +297,10 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
     )
 }
 
-/// A CSV field: the one rule every CSV rtpipe writes follows.
-pub(crate) use rtpipe_model::output::csv_field as quoted;
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rtpipe_model::output::csv_field as quoted;
 
     #[test]
     fn the_streamed_rows_are_the_printers() {
