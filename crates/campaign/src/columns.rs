@@ -1,11 +1,10 @@
-//! A row's description: its named, typed columns and its cells, in file
-//! order. The Parquet schema and writer (`parquet_out.rs`) and any CSV of
-//! the rows (`rtpipe_printer::csv`) are derived from it, so a column added
-//! here reaches every format.
+//! A row's description: its named, typed columns, in file order (its
+//! cells: `Row::cells`, in `system.rs`). The Parquet schema and writer
+//! (`parquet_out.rs`) and any CSV of the rows (`rtpipe_printer::csv`) are
+//! derived from it, so a column added here reaches every format.
 
-use crate::system::Row;
 use rtpipe_analysis::{Anchor, Bound};
-use rtpipe_printer::{Cell, Column, Kind, Table};
+use rtpipe_printer::{Column, Kind, Table};
 
 /// A column's prefix per anchor: none from the read, `event_` from the
 /// event.
@@ -55,38 +54,4 @@ pub fn table() -> Table {
         unreachable!("the campaign's columns are distinct names");
     };
     t
-}
-
-/// A count as a cell.
-fn count(n: u64) -> Cell {
-    Cell::opt_int(i64::try_from(n).ok())
-}
-
-impl Row {
-    /// The row's cells, in [`columns`]' order.
-    pub fn cells(&self) -> Vec<Cell> {
-        let mut c = vec![Cell::UInt(self.system), Cell::UInt(self.seed)];
-        c.extend([self.tasks, self.cpus, self.chains].map(|n| Cell::UInt(u64::from(n))));
-        c.extend([
-            Cell::Float(self.utilization_target),
-            Cell::Float(self.utilization),
-        ]);
-        c.push(Cell::Bool(self.schedulable));
-        c.extend([self.chain, self.chain_tasks].map(|n| Cell::UInt(u64::from(n))));
-        c.push(Cell::from(self.metric.name()));
-        for a in 0..Anchor::ALL.len() {
-            c.extend(
-                self.bounds
-                    .iter()
-                    .map(|by_anchor| Cell::opt_int(by_anchor[a])),
-            );
-        }
-        c.extend(self.offsets.map(Cell::opt_int));
-        let obs = self.observed.as_ref();
-        c.extend((0..Anchor::ALL.len()).map(|a| Cell::opt_int(obs.and_then(|o| o.max[a]))));
-        c.push(obs.map_or(Cell::Empty, |o| count(o.count)));
-        c.push(obs.map_or(Cell::Empty, |o| count(o.over_bound)));
-        c.push(Cell::Bool(obs.is_some()));
-        c
-    }
 }
