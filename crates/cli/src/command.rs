@@ -145,7 +145,7 @@ impl FormatArgs {
     }
 
     /// Refuses `--format csv` for a command whose report has no tables
-    /// yet (`fly`, `run`, `campaign`).
+    /// yet (`fly`, `campaign`).
     pub fn no_csv(&self, command: &str) -> Result<(), Diagnostic> {
         if self.chosen() != Format::Csv {
             return Ok(());

@@ -668,7 +668,7 @@ impl rtpipe_printer::Report for SimulateReport<'_> {
 
 /// A row per chain, metric and anchor: the observations' summary beside
 /// the bounds, times in the spec's unit.
-fn observed_table(spec: &Spec, obs: &[ChainObs]) -> rtpipe_printer::Table {
+pub(crate) fn observed_table(spec: &Spec, obs: &[ChainObs]) -> rtpipe_printer::Table {
     use rtpipe_printer::{Cell, Column, Kind, Table};
     let mut columns: Vec<Column> = ["chain", "metric", "from"]
         .map(|n| Column::new(n, Kind::Text))
