@@ -50,7 +50,7 @@ impl Config {
         let canonical = format!(
             "rtpipe campaign\ncolumns {}\nname {:?}\nsystems {}\nseed {}\nshard_size {}\n\
              tasks {:?}\nutilization {:?}\nchains {}\ncpus {}\nsynchronous {}\nsimulate {sim}\n",
-            crate::COLUMNS.join(","),
+            crate::columns::names().join(","),
             self.name,
             self.systems,
             self.seed,

@@ -19,6 +19,7 @@
 //!   the campaign or the shard; the stop flag is asked inside each
 //!   system's simulation too.
 
+pub mod columns;
 pub mod config;
 mod folder;
 mod parquet_out;
@@ -26,7 +27,7 @@ mod system;
 
 pub use config::Config;
 pub use folder::{survey, Survey, KEPT};
-pub use parquet_out::{COLUMNS, ROW_GROUP_ROWS};
+pub use parquet_out::ROW_GROUP_ROWS;
 pub use system::{run_system, run_system_until, system_seed, Row};
 
 use parquet_out::{ShardMeta, ShardWriter};

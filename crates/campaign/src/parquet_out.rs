@@ -12,6 +12,7 @@ use parquet::file::properties::WriterProperties;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::{SerializedColumnWriter, SerializedFileWriter};
 use parquet::schema::parser::parse_message_type;
+use rtpipe_printer::{Cell, Kind};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -39,83 +40,59 @@ impl Values {
     }
 }
 
-/// The columns, in file order (the Parquet schema and [`columns`] follow
-/// it): bounds are `{paper,sound,davare,duerr}_ns` from the read and
-/// `event_*` from the event; `offsets_*` under the known offsets;
-/// `observed_*` from the simulation.
-pub const COLUMNS: [&str; 26] = [
-    "system",
-    "seed",
-    "tasks",
-    "cpus",
-    "chains",
-    "utilization_target",
-    "utilization",
-    "schedulable",
-    "chain",
-    "chain_tasks",
-    "metric",
-    "paper_ns",
-    "sound_ns",
-    "davare_ns",
-    "duerr_ns",
-    "event_paper_ns",
-    "event_sound_ns",
-    "event_davare_ns",
-    "event_duerr_ns",
-    "offsets_ns",
-    "event_offsets_ns",
-    "observed_max_ns",
-    "event_observed_max_ns",
-    "observed_count",
-    "observed_over_bound",
-    "simulated",
-];
-
-fn columns(rows: &[Row]) -> Vec<Values> {
-    let u64s = |f: fn(&Row) -> u64| Values::U64(rows.iter().map(|r| f(r) as i64).collect());
-    let i32s = |f: fn(&Row) -> u32| Values::I32(rows.iter().map(|r| f(r) as i32).collect());
-    let ns = |f: &dyn Fn(&Row) -> Option<i64>| Values::Ns(rows.iter().map(f).collect());
-    let mut out = vec![
-        u64s(|r| r.system),
-        u64s(|r| r.seed),
-        i32s(|r| r.tasks),
-        i32s(|r| r.cpus),
-        i32s(|r| r.chains),
-        Values::F64(rows.iter().map(|r| r.utilization_target).collect()),
-        Values::F64(rows.iter().map(|r| r.utilization).collect()),
-        Values::Bool(rows.iter().map(|r| r.schedulable).collect()),
-        i32s(|r| r.chain),
-        i32s(|r| r.chain_tasks),
-        Values::Str(
-            rows.iter()
-                .map(|r| ByteArray::from(r.metric.name()))
-                .collect(),
-        ),
-    ];
-    for a in 0..2 {
-        for b in 0..4 {
-            out.push(ns(&move |r: &Row| r.bounds[b][a]));
+impl Values {
+    /// An empty list for a column of `kind`.
+    fn of_kind(kind: Kind, rows: usize) -> Values {
+        match kind {
+            Kind::UInt => Values::U64(Vec::with_capacity(rows)),
+            Kind::Count => Values::I32(Vec::with_capacity(rows)),
+            Kind::Float => Values::F64(Vec::with_capacity(rows)),
+            Kind::Bool => Values::Bool(Vec::with_capacity(rows)),
+            Kind::Text => Values::Str(Vec::with_capacity(rows)),
+            Kind::Int | Kind::OptInt => Values::Ns(Vec::with_capacity(rows)),
         }
     }
-    out.push(ns(&|r: &Row| r.offsets[0]));
-    out.push(ns(&|r: &Row| r.offsets[1]));
-    out.push(ns(&|r: &Row| r.observed.and_then(|o| o.max[0])));
-    out.push(ns(&|r: &Row| r.observed.and_then(|o| o.max[1])));
-    out.push(ns(&|r: &Row| r.observed.map(|o| o.count as i64)));
-    out.push(ns(&|r: &Row| r.observed.map(|o| o.over_bound as i64)));
-    out.push(Values::Bool(
-        rows.iter().map(|r| r.observed.is_some()).collect(),
-    ));
-    assert_eq!(out.len(), COLUMNS.len(), "one value list per column");
+
+    /// Adds a cell (its kind was checked by `Table::push`).
+    fn push(&mut self, cell: &Cell) {
+        match (self, cell) {
+            // Stored as INT64 with the unsigned annotation: the bits as
+            // they are.
+            (Values::U64(v), Cell::UInt(x)) => v.push(*x as i64),
+            (Values::I32(v), Cell::UInt(x)) => v.push(i32::try_from(*x).unwrap_or(i32::MAX)),
+            (Values::F64(v), Cell::Float(x)) => v.push(*x),
+            (Values::Bool(v), Cell::Bool(x)) => v.push(*x),
+            (Values::Str(v), Cell::Text(x)) => v.push(ByteArray::from(x.as_str())),
+            (Values::Ns(v), Cell::Int(x)) => v.push(Some(*x)),
+            (Values::Ns(v), Cell::Empty) => v.push(None),
+            (_, c) => unreachable!("a {c:?} cell in a column of another kind"),
+        }
+    }
+}
+
+/// The rows' values, a list per column of the row description
+/// ([`crate::columns`]).
+fn columns(rows: &[Row]) -> Vec<Values> {
+    let mut table = crate::columns::table();
+    for r in rows {
+        table.push(r.cells());
+    }
+    let mut out: Vec<Values> = (table.columns().iter())
+        .map(|c| Values::of_kind(c.kind, rows.len()))
+        .collect();
+    for row in table.rows() {
+        for (values, cell) in out.iter_mut().zip(row) {
+            values.push(cell);
+        }
+    }
     out
 }
 
 fn schema(cols: &[Values]) -> String {
     let fields: Vec<String> = cols
         .iter()
-        .zip(COLUMNS)
-        .map(|(v, name)| format!("  {};", v.schema_type().replace("{}", name)))
+        .zip(crate::columns::names())
+        .map(|(v, name)| format!("  {};", v.schema_type().replace("{}", &name)))
         .collect();
     format!("message rtpipe_campaign {{\n{}\n}}", fields.join("\n"))
 }
@@ -251,4 +228,80 @@ fn write_column(
         }
     };
     col.close()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::system::Observed;
+    use rtpipe_analysis::{Anchor, Bound, Metric};
+
+    fn row() -> Row {
+        Row {
+            system: 7,
+            seed: u64::MAX,
+            tasks: 5,
+            cpus: 1,
+            chains: 2,
+            utilization_target: 0.5,
+            utilization: 0.49,
+            schedulable: true,
+            chain: 1,
+            chain_tasks: 3,
+            metric: Metric::Freshness,
+            bounds: Bound::ALL.map(|b| Anchor::ALL.map(|a| Some(10 * b as i64 + a as i64))),
+            offsets: [Some(1), None],
+            observed: Some(Observed {
+                max: [Some(4), Some(5)],
+                count: 9,
+                over_bound: 0,
+            }),
+        }
+    }
+
+    /// The Parquet schema's field names, in order.
+    fn schema_names() -> Vec<String> {
+        let text = schema(&columns(&[]));
+        let Ok(t) = parse_message_type(&text) else {
+            panic!("the schema parses: {text}");
+        };
+        t.get_fields()
+            .iter()
+            .map(|f| f.name().to_string())
+            .collect()
+    }
+
+    #[test]
+    fn every_bound_and_anchor_reaches_parquet() {
+        let names = schema_names();
+        assert_eq!(names, crate::columns::names());
+        for a in ["", "event_"] {
+            for b in Bound::ALL {
+                let n = format!("{a}{}_ns", b.name());
+                assert!(names.contains(&n), "{n} missing from {names:?}");
+            }
+        }
+        // A value list per column, each as long as the rows.
+        let values = columns(&[row(), row()]);
+        assert_eq!(values.len(), names.len());
+        let Values::Ns(event_duerr) = &values[names
+            .iter()
+            .position(|n| n == "event_duerr_ns")
+            .unwrap_or(0)]
+        else {
+            panic!("bounds are optional nanoseconds");
+        };
+        assert_eq!(event_duerr, &[Some(31), Some(31)]);
+    }
+
+    #[test]
+    fn the_csv_of_the_rows_has_the_parquet_columns() {
+        let mut t = crate::columns::table();
+        t.push(row().cells());
+        let csv = rtpipe_printer::csv::table(&t);
+        let mut lines = csv.lines();
+        assert_eq!(lines.next(), Some(schema_names().join(",").as_str()));
+        let first = lines.next().unwrap_or_default();
+        assert!(first.starts_with("7,18446744073709551615,5,1,2,0.5,0.49,true,1,3,freshness,0,10,20,30,1,11,21,31,1,,4,5,9,0,true"), "{first}");
+    }
 }

@@ -5,6 +5,7 @@ use crate::config::{Config, Simulate};
 use rtpipe_analysis::{Anchor, Bound, Metric, Report};
 use rtpipe_model::gen::{event_triggered_system, waters_system, EventGenConfig, Rng, WatersConfig};
 use rtpipe_model::{Nanos, Spec};
+use rtpipe_printer::Cell;
 use rtpipe_sim::observe::{observe, ChainObs};
 use rtpipe_sim::{ExecModel, Jitter, Phasing, SimConfig};
 
@@ -36,9 +37,9 @@ pub struct Row {
     pub metric: Metric,
     /// Bounds by [`Bound::ALL`] (paper, sound, Davare, Dürr) and anchor
     /// (read, event); `None`: unbounded.
-    pub bounds: [[Option<Nanos>; 2]; 4],
+    pub bounds: [[Option<Nanos>; Anchor::ALL.len()]; Bound::ALL.len()],
     /// The bounds under the known offsets (synchronous release), per anchor.
-    pub offsets: [Option<Nanos>; 2],
+    pub offsets: [Option<Nanos>; Anchor::ALL.len()],
     /// Simulated: the largest observation per anchor, the count from the
     /// read, and the observations above the bound that holds for the run
     /// (under the known offsets when the chain has them, else the sound one).
@@ -48,7 +49,7 @@ pub struct Row {
 /// What the simulation saw of one chain and metric.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observed {
-    pub max: [Option<Nanos>; 2],
+    pub max: [Option<Nanos>; Anchor::ALL.len()],
     pub count: u64,
     pub over_bound: u64,
 }
@@ -188,5 +189,39 @@ fn observed(o: &ChainObs) -> Observed {
         max,
         count: o.read.observed.as_ref().map_or(0, |s| s.count as u64),
         over_bound: o.violations() as u64,
+    }
+}
+
+/// A count as a cell.
+fn count(n: u64) -> Cell {
+    Cell::opt_int(i64::try_from(n).ok())
+}
+
+impl Row {
+    /// The row's cells, in [`crate::columns::columns`]' order.
+    pub fn cells(&self) -> Vec<Cell> {
+        let mut c = vec![Cell::UInt(self.system), Cell::UInt(self.seed)];
+        c.extend([self.tasks, self.cpus, self.chains].map(|n| Cell::UInt(u64::from(n))));
+        c.extend([
+            Cell::Float(self.utilization_target),
+            Cell::Float(self.utilization),
+        ]);
+        c.push(Cell::Bool(self.schedulable));
+        c.extend([self.chain, self.chain_tasks].map(|n| Cell::UInt(u64::from(n))));
+        c.push(Cell::from(self.metric.name()));
+        for a in 0..Anchor::ALL.len() {
+            c.extend(
+                self.bounds
+                    .iter()
+                    .map(|by_anchor| Cell::opt_int(by_anchor[a])),
+            );
+        }
+        c.extend(self.offsets.map(Cell::opt_int));
+        let obs = self.observed.as_ref();
+        c.extend((0..Anchor::ALL.len()).map(|a| Cell::opt_int(obs.and_then(|o| o.max[a]))));
+        c.push(obs.map_or(Cell::Empty, |o| count(o.count)));
+        c.push(obs.map_or(Cell::Empty, |o| count(o.over_bound)));
+        c.push(Cell::Bool(obs.is_some()));
+        c
     }
 }

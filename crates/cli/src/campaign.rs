@@ -25,9 +25,8 @@ pub struct CampaignArgs {
     /// Worker threads [default: every core].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub jobs: Option<u32>,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub output: crate::command::FormatArgs,
     /// Only check the configuration and print the plan (systems, shards,
     /// which of them this part owns and which OUTDIR already holds): nothing
     /// is run or written.
@@ -46,6 +45,7 @@ pub fn run(a: &CampaignArgs) -> ExitCode {
 /// The campaign `a` names, stopped after the shard in progress once `stop`
 /// says so.
 pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Answer, Diagnostic> {
+    a.output.no_csv("campaign")?;
     let text = rtpipe_model::input::read_text(&a.config, &config::KIND).map_err(|e| e.located())?;
     let cfg = config::parse(&a.config.display().to_string(), &text).map_err(|e| e.located())?;
     let jobs = a.jobs.map_or_else(cores, |j| j as usize);
@@ -69,7 +69,7 @@ pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Ans
         .map_err(|e| Diagnostic::error(e.message, e.help))?;
     pb.finish_and_clear();
     let view = View::of(&cfg, a, part, total, &s);
-    let report = if a.json {
+    let report = if a.output.is_json() {
         Rendered::Json(command::to_value(&view)?)
     } else {
         Rendered::Text(view.text())
@@ -120,7 +120,7 @@ fn plan(
         "written": found.done,
         "rerun": rerun,
     });
-    let report = if a.json {
+    let report = if a.output.is_json() {
         Rendered::Json(v)
     } else {
         Rendered::Text(format!(

@@ -8,6 +8,7 @@ use clap::ValueEnum;
 use rtpipe_analysis::Mode;
 use rtpipe_model::time::number_to_nanos;
 use rtpipe_model::{parse_time_str, Diagnostic, Nanos, Spec, SpecError};
+use rtpipe_printer::{Format, Printed};
 use rtpipe_sim::ExecModel;
 use std::path::Path;
 use std::process::ExitCode;
@@ -111,6 +112,70 @@ pub(crate) fn parse_time(spec: &Spec, s: &str) -> Result<Nanos, String> {
         Err(_) => parse_time_str(t),
     };
     r.map_err(|e| e.to_string())
+}
+
+/// `--format` and `--json` (its older spelling): how a command prints its
+/// report. Flattened into every command's flags, so the choice is made
+/// once, here; the printers are `rtpipe_printer`'s.
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct FormatArgs {
+    /// How to print the report: text (tables for people), json (one
+    /// object) or csv (the report's tables; several are each headed by a
+    /// `# NAME` line and split by an empty line).
+    #[arg(long, value_parser = format_parser(), default_value = "text", conflicts_with = "json")]
+    pub format: Format,
+    /// Print one JSON object instead of tables (the same as --format json).
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl FormatArgs {
+    /// The format asked for.
+    pub fn chosen(&self) -> Format {
+        if self.json {
+            Format::Json
+        } else {
+            self.format
+        }
+    }
+
+    /// Whether the report is JSON.
+    pub fn is_json(&self) -> bool {
+        self.chosen() == Format::Json
+    }
+
+    /// Refuses `--format csv` for a command whose report has no tables
+    /// yet (`fly`, `campaign`).
+    pub fn no_csv(&self, command: &str) -> Result<(), Diagnostic> {
+        if self.chosen() != Format::Csv {
+            return Ok(());
+        }
+        Err(Diagnostic::error(
+            format!("`{command}` has no CSV report yet"),
+            "use --format text or --format json",
+        ))
+    }
+}
+
+/// `--format`'s names, listed in the help and in errors.
+fn format_parser() -> impl clap::builder::TypedValueParser<Value = Format> {
+    clap::builder::PossibleValuesParser::new(Format::ALL.map(Format::name))
+        .try_map(|s| s.parse::<Format>())
+}
+
+/// `report` printed in `format`, as a command's [`Rendered`] report.
+pub fn render<R: rtpipe_printer::Report>(
+    report: &R,
+    format: Format,
+) -> Result<Rendered, Diagnostic> {
+    match rtpipe_printer::print(report, format) {
+        Ok(Printed::Text(t)) => Ok(Rendered::Text(t)),
+        Ok(Printed::Json(v)) => Ok(Rendered::Json(v)),
+        Err(e) => Err(Diagnostic::error(
+            format!("internal: cannot encode JSON: {e}"),
+            "please report it with the spec and the command line",
+        )),
+    }
 }
 
 /// `--exec`.

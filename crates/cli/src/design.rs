@@ -3,10 +3,10 @@
 mod flights;
 mod margin;
 
-use crate::analyze::{report_text, report_view, ReportView};
 use crate::command::mode_parser;
-use crate::command::{self, Answer, Rendered};
+use crate::command::{self, Answer, FormatArgs, Rendered};
 use crate::output;
+use crate::report::analysis::{report_text, report_view, ReportView};
 use crate::report::Pairs;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_design::lp::SolverKind;
@@ -51,9 +51,8 @@ pub struct DesignArgs {
     /// The analysis the chain limits are judged by.
     #[arg(long, value_parser = mode_parser(), default_value = "sound")]
     pub mode: Mode,
-    /// Print one JSON object: the analysis of the design plus "design".
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub output: FormatArgs,
     /// Write the complete designed spec here (accepted by `analyze`).
     /// Symlinks are followed; only regular files are replaced, atomically;
     /// never the input spec unless --overwrite-spec is given.
@@ -204,11 +203,18 @@ pub fn execute(
     let written = write_design(write.as_ref(), &out, &mut notes);
     let what = flying.map(|(_, w)| w);
     let margins = match (a.margins, &out.spec) {
-        (true, Some(s)) if !stopped => crate::analyze::margins::compute(s, opts.mode, stop)?,
+        (true, Some(s)) if !stopped => crate::report::margins::compute(s, opts.mode, stop)?,
         _ => None,
     };
-    let mut report = render_design(spec, &out, a.json, opts.mode, stopped, what.as_deref())?;
-    margin::append(&mut report, &out, margins.as_ref())?;
+    let printed = DesignReport {
+        spec,
+        out: &out,
+        mode: opts.mode,
+        stopped,
+        flown: what.as_deref(),
+        margins: margins.as_ref(),
+    };
+    let report = command::render(&printed, a.output.chosen())?;
     let status = match (stopped, out.status) {
         (true, _) => crate::interrupted_status(),
         (false, Status::Optimal | Status::Feasible) => 0,
@@ -350,16 +356,21 @@ fn write_design(
     Ok(())
 }
 
-/// The answer, as text or JSON.
-fn render_design(
-    spec: &Spec,
-    out: &Outcome,
-    json_out: bool,
+/// `rtpipe design`'s report: the search's answer, the verified design's
+/// analysis, its flights and margins when asked.
+struct DesignReport<'a> {
+    spec: &'a Spec,
+    out: &'a Outcome,
     mode: Mode,
     stopped: bool,
-    flown: Option<&str>,
-) -> Result<Rendered, Diagnostic> {
-    if json_out {
+    flown: Option<&'a str>,
+    margins: Option<&'a rtpipe_analysis::margins::Margins>,
+}
+
+impl DesignReport<'_> {
+    /// The JSON value (the margins are added to the search's answer).
+    fn value(&self) -> Result<serde_json::Value, Diagnostic> {
+        let (spec, out) = (self.spec, self.out);
         let head = match (&out.spec, &out.report) {
             (Some(s), Some(r)) => Head::Report(report_view(s, r)),
             _ => Head::Bare {
@@ -369,15 +380,44 @@ fn render_design(
         };
         let v = DesignOut {
             head,
-            design: design_json(spec, out, mode, stopped),
+            design: design_json(spec, out, self.mode, self.stopped),
         };
-        Ok(Rendered::Json(command::to_value(&v)?))
-    } else {
-        let mut t = design_text(spec, out, mode, stopped);
-        if let Some(what) = flown {
+        let mut v = command::to_value(&v)?;
+        margin::append_json(&mut v, out, self.margins)?;
+        Ok(v)
+    }
+}
+
+impl Serialize for DesignReport<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let v = self.value().map_err(serde::ser::Error::custom)?;
+        v.serialize(s)
+    }
+}
+
+impl rtpipe_printer::Report for DesignReport<'_> {
+    fn text(&self) -> String {
+        let (spec, out) = (self.spec, self.out);
+        let mut t = design_text(spec, out, self.mode, self.stopped);
+        if let Some(what) = self.flown {
             t.push_str(&flights::flown_text(spec, what, &out.checked));
         }
-        Ok(Rendered::Text(t))
+        margin::append_text(&mut t, out, self.margins);
+        t
+    }
+
+    /// The designed spec's tasks and chains; without a design, the
+    /// search's status alone.
+    fn tables(&self) -> Vec<rtpipe_printer::Table> {
+        use rtpipe_printer::{Cell, Column, Kind, Table};
+        if let (Some(s), Some(r)) = (&self.out.spec, &self.out.report) {
+            return crate::report::analysis::tables(s, r);
+        }
+        let Ok(mut t) = Table::new("design", vec![Column::new("status", Kind::Text)]) else {
+            unreachable!("one column");
+        };
+        t.push(vec![Cell::from(self.out.status.name())]);
+        vec![t]
     }
 }
 

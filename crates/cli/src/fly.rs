@@ -13,10 +13,10 @@ mod sweep;
 
 pub use args::FlyArgs;
 
-use crate::analyze::{ReportView, TaskView};
 use crate::command::{self, Answer, Hooks, Rendered};
 use crate::output;
 use crate::plot;
+use crate::report::analysis::{ReportView, TaskView};
 use crate::report::flight::{quality_text, EnvelopeView, RmsMax};
 use crate::report::samples::{self, SamplesFile};
 use crate::simulate;
@@ -24,6 +24,7 @@ use rtpipe_analysis::{Anchor, Report};
 use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup, Watch};
 use rtpipe_model::{Diagnostic, Server, Spec};
+use rtpipe_printer::{Cell, Column, Kind, Table};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -134,6 +135,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 /// row sink and stop flag (a flight checks it as it goes, a sweep before
 /// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
+    a.output.no_csv("fly")?;
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
     if a.sweep {
@@ -174,7 +176,7 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
-    let out = if a.json {
+    let out = if a.output.is_json() {
         let v = to_json(spec, &report, &s, &flight, &obs, &failures, seconds);
         Rendered::Json(command::to_value(&v)?)
     } else {
@@ -368,11 +370,39 @@ fn to_json<'a>(
     }
 }
 
-/// The CSV header: every column with its unit (chain latency columns follow).
-const CSV_HEADER: &str = "time_s,sp_roll_deg,sp_pitch_deg,sp_yaw_rate_dps,sp_throttle,\
-roll_deg,pitch_deg,yaw_deg,est_roll_deg,est_pitch_deg,est_yaw_deg,\
-rate_x_dps,rate_y_dps,rate_z_dps,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,alt_target_m,\
-motor1,motor2,motor3,motor4,armed,on_ground,crashed,battery_v";
+/// The flight's columns, each with its unit (the chains' latency columns
+/// follow: [`latency_columns`]).
+const LOG_COLUMNS: [&str; 29] = [
+    "time_s",
+    "sp_roll_deg",
+    "sp_pitch_deg",
+    "sp_yaw_rate_dps",
+    "sp_throttle",
+    "roll_deg",
+    "pitch_deg",
+    "yaw_deg",
+    "est_roll_deg",
+    "est_pitch_deg",
+    "est_yaw_deg",
+    "rate_x_dps",
+    "rate_y_dps",
+    "rate_z_dps",
+    "x_m",
+    "y_m",
+    "z_m",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "alt_target_m",
+    "motor1",
+    "motor2",
+    "motor3",
+    "motor4",
+    "armed",
+    "on_ground",
+    "crashed",
+    "battery_v",
+];
 
 /// A chain's latency as a step function of time: the value of the latest
 /// observation that ended at or before each trace instant. `series` holds
@@ -392,83 +422,107 @@ impl LatencyColumn {
     }
 }
 
-/// A column name from a chain label: letters, digits and `_` only.
-fn column(label: &str, what: &str) -> String {
-    let base: String = label
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .collect();
-    format!("{base}_{what}_ms")
-}
-
-fn csv(spec: &Spec, f: &Flight) -> String {
-    let trace = &f.trace;
-    let mut out = String::with_capacity(240 * (trace.len() + 1));
-    out.push_str(CSV_HEADER);
-    let mut cols = Vec::new();
-    let rows = rtpipe_joblog::sample_rows(spec, &f.sim.jobs);
-    for (k, rows) in rows.iter().enumerate() {
-        let label = spec.chain_label(k);
-        let reaction = rows.iter().filter_map(|r| Some((r.first?, r.reaction()?)));
-        let freshness = rows.iter().filter_map(|r| Some((r.last?, r.freshness()?)));
-        for (what, series) in [
-            ("reaction", reaction.collect()),
-            ("freshness", freshness.collect()),
-        ] {
-            out.push(',');
-            out.push_str(&column(&label, what));
-            cols.push(LatencyColumn { series, next: 0 });
+/// Two columns per chain, `LABEL_reaction_ms` and `LABEL_freshness_ms`,
+/// the chain's label as it is (the CSV printer quotes it where it must).
+/// Chains that share a label are told apart by their place in the spec:
+/// `LABEL#K_reaction_ms`, K counted from 1.
+fn latency_columns(labels: &[String]) -> Vec<Column> {
+    let mut out = Vec::new();
+    for (k, label) in labels.iter().enumerate() {
+        let shared = labels.iter().filter(|l| *l == label).count() > 1;
+        let name = if shared {
+            format!("{label}#{}", k + 1)
+        } else {
+            label.clone()
+        };
+        for what in ["reaction", "freshness"] {
+            out.push(Column::new(format!("{name}_{what}_ms"), Kind::Float));
         }
-    }
-    out.push('\n');
-    for p in trace {
-        let d = f64::to_degrees;
-        let vals = [
-            p.t_ns as f64 * 1e-9,
-            d(p.sp.roll),
-            d(p.sp.pitch),
-            d(p.sp.yaw_rate),
-            p.sp.throttle,
-            d(p.euler.roll),
-            d(p.euler.pitch),
-            d(p.euler.yaw),
-            d(p.est.roll),
-            d(p.est.pitch),
-            d(p.est.yaw),
-            d(p.rate.x),
-            d(p.rate.y),
-            d(p.rate.z),
-            p.pos.x,
-            p.pos.y,
-            p.pos.z,
-            p.vel.x,
-            p.vel.y,
-            p.vel.z,
-        ];
-        for v in vals {
-            out.push_str(&format!("{v:.6},"));
-        }
-        out.push_str(&p.alt_target.map_or(String::new(), |a| format!("{a:.3}")));
-        for m in p.motors {
-            out.push_str(&format!(",{m:.5}"));
-        }
-        out.push_str(&format!(
-            ",{},{},{},{:.4}",
-            u8::from(p.armed),
-            u8::from(p.on_ground),
-            u8::from(p.crashed),
-            p.voltage
-        ));
-        let t = i64::try_from(p.t_ns).unwrap_or(i64::MAX);
-        for c in &mut cols {
-            out.push(',');
-            if let Some(v) = c.at(t) {
-                out.push_str(&format!("{:.6}", v as f64 * 1e-6));
-            }
-        }
-        out.push('\n');
     }
     out
+}
+
+/// The `--log` table: a row per trace point, the chains' latencies as
+/// they were last observed.
+fn log_table(spec: &Spec, f: &Flight) -> Result<Table, Diagnostic> {
+    let labels: Vec<String> = (0..spec.chains.len())
+        .map(|k| spec.chain_label(k))
+        .collect();
+    let flags = ["armed", "on_ground", "crashed"];
+    let columns = LOG_COLUMNS.map(|n| {
+        let kind = if flags.contains(&n) {
+            Kind::UInt
+        } else {
+            Kind::Float
+        };
+        Column::new(n, kind)
+    });
+    let columns = columns
+        .into_iter()
+        .chain(latency_columns(&labels))
+        .collect();
+    let mut table = Table::new("log", columns).map_err(|e| {
+        Diagnostic::error(
+            format!("--log: {e}"),
+            "rename one of the chains (`name = ...`) so that their labels differ",
+        )
+    })?;
+    let mut cols = Vec::new();
+    for rows in rtpipe_joblog::sample_rows(spec, &f.sim.jobs) {
+        let reaction = rows.iter().filter_map(|r| Some((r.first?, r.reaction()?)));
+        let freshness = rows.iter().filter_map(|r| Some((r.last?, r.freshness()?)));
+        cols.push(LatencyColumn {
+            series: reaction.collect(),
+            next: 0,
+        });
+        cols.push(LatencyColumn {
+            series: freshness.collect(),
+            next: 0,
+        });
+    }
+    for p in &f.trace {
+        let mut row = trace_cells(p);
+        let t = i64::try_from(p.t_ns).unwrap_or(i64::MAX);
+        row.extend(cols.iter_mut().map(|c| match c.at(t) {
+            Some(v) => Cell::Fixed(v as f64 * 1e-6, 6),
+            None => Cell::Empty,
+        }));
+        table.push(row);
+    }
+    Ok(table)
+}
+
+/// One trace point's cells, in [`LOG_COLUMNS`]' order.
+fn trace_cells(p: &rtpipe_flight::trace::TracePoint) -> Vec<Cell> {
+    let d = f64::to_degrees;
+    let vals = [
+        p.t_ns as f64 * 1e-9,
+        d(p.sp.roll),
+        d(p.sp.pitch),
+        d(p.sp.yaw_rate),
+        p.sp.throttle,
+        d(p.euler.roll),
+        d(p.euler.pitch),
+        d(p.euler.yaw),
+        d(p.est.roll),
+        d(p.est.pitch),
+        d(p.est.yaw),
+        d(p.rate.x),
+        d(p.rate.y),
+        d(p.rate.z),
+        p.pos.x,
+        p.pos.y,
+        p.pos.z,
+        p.vel.x,
+        p.vel.y,
+        p.vel.z,
+    ];
+    let mut row: Vec<Cell> = vals.iter().map(|&v| Cell::Fixed(v, 6)).collect();
+    row.push(p.alt_target.map_or(Cell::Empty, |a| Cell::Fixed(a, 3)));
+    row.extend(p.motors.iter().map(|&m| Cell::Fixed(m, 5)));
+    row.extend([p.armed, p.on_ground, p.crashed].map(|b| Cell::UInt(u64::from(b))));
+    row.push(Cell::Fixed(p.voltage, 4));
+    row
 }
 
 /// The output paths, checked before flying (they are checked again when
@@ -514,7 +568,45 @@ fn write_outputs(
         }
     }
     if let Some(path) = &a.log {
-        files.push(("--log", path.clone(), csv(spec, f)));
+        let log = log_table(spec, f)?;
+        files.push(("--log", path.clone(), rtpipe_printer::csv::table(&log)));
     }
     samples::write_with(&a.spec, &files, samples).map(|_| ())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(labels: &[&str]) -> Vec<String> {
+        let labels: Vec<String> = labels.iter().map(|l| l.to_string()).collect();
+        latency_columns(&labels)
+            .into_iter()
+            .map(|c| c.name)
+            .collect()
+    }
+
+    #[test]
+    fn chain_labels_name_their_columns_as_they_are() {
+        // Once both were `gyro_path_...`: the log had one column twice.
+        assert_eq!(
+            names(&["gyro path", "gyro-path"]),
+            [
+                "gyro path_reaction_ms",
+                "gyro path_freshness_ms",
+                "gyro-path_reaction_ms",
+                "gyro-path_freshness_ms",
+            ]
+        );
+    }
+
+    #[test]
+    fn chains_of_one_label_are_told_apart_by_their_place() {
+        let n = names(&["a>b", "c", "a>b"]);
+        assert_eq!(n[0], "a>b#1_reaction_ms");
+        assert_eq!(n[2], "c_reaction_ms");
+        assert_eq!(n[5], "a>b#3_freshness_ms");
+        let columns = latency_columns(&["x".into(), "x".into()]);
+        assert!(Table::new("log", columns).is_ok());
+    }
 }

@@ -1,7 +1,9 @@
 //! Rendering that several commands' reports share, one module per kind of
 //! report (the commands print their own reports from these parts).
 
+pub mod analysis;
 pub mod flight;
+pub mod margins;
 pub mod samples;
 
 use rtpipe_model::{Nanos, Spec};

@@ -110,7 +110,7 @@ fn plots_and_log_are_written_whole() {
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
     assert_eq!(header[0], "time_s");
-    assert!(header.contains(&"gyro_path_reaction_ms"));
+    assert!(header.contains(&"gyro path_reaction_ms"), "{header:?}");
     // One row every 2 ms over 6 s, every row as wide as the header.
     assert_eq!(lines.clone().count(), 3001);
     assert!(lines.all(|l| l.split(',').count() == header.len()));

@@ -1118,3 +1118,32 @@ fn a_deadline_run_right_after_another_is_admitted() {
         assert!(matches!(o.status.code(), Some(0 | 1)), "run {i}: {e}");
     }
 }
+
+#[test]
+fn a_run_prints_its_tables_as_csv() {
+    let _one = serial();
+    let spec = write_spec("run-csv", &small_pipeline("rm", 0, ""));
+    let o = rtpipe(&[
+        "run",
+        &spec,
+        "--duration",
+        "200ms",
+        "--policy",
+        "other",
+        "--best-effort",
+        "--format",
+        "csv",
+    ]);
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let parts: Vec<&str> = out.split("\n\n").collect();
+    let names: Vec<&str> = parts.iter().filter_map(|p| p.lines().next()).collect();
+    assert_eq!(names, ["# tasks", "# chains", "# observed"], "{out}");
+    assert!(
+        parts[2]
+            .lines()
+            .nth(2)
+            .is_some_and(|l| l.contains(",read,")),
+        "{out}"
+    );
+}

@@ -4,8 +4,7 @@
 //! them).
 
 use super::{DesignArgs, ObjectiveArg};
-use crate::analyze::margins;
-use crate::command::Rendered;
+use crate::report::margins;
 use rtpipe_analysis::margins::Margins;
 use rtpipe_design::{MarginSearch, Objective, Outcome};
 use rtpipe_model::Diagnostic;
@@ -47,30 +46,27 @@ pub fn objective(a: &DesignArgs) -> Result<Objective, Diagnostic> {
 }
 
 /// The margin search and the answer's margins, added to the report.
-pub fn append(
-    report: &mut Rendered,
+pub fn append_text(t: &mut String, out: &Outcome, found: Option<&Margins>) {
+    if let Some(m) = &out.margin {
+        t.push_str(&search_text(m));
+    }
+    if let (Some(s), Some(m)) = (out.spec.as_ref(), found) {
+        t.push_str(&margins::text(s, m));
+    }
+}
+
+/// [`append_text`]'s JSON: the margin search in `design`, the margins
+/// beside it.
+pub fn append_json(
+    v: &mut serde_json::Value,
     out: &Outcome,
     found: Option<&Margins>,
 ) -> Result<(), Diagnostic> {
-    let designed = out.spec.as_ref();
-    match report {
-        Rendered::Text(t) => {
-            if let Some(m) = &out.margin {
-                t.push_str(&search_text(m));
-            }
-            if let (Some(s), Some(m)) = (designed, found) {
-                t.push_str(&margins::text(s, m));
-            }
-        }
-        Rendered::Json(v) => {
-            if let (Some(m), Some(d)) = (&out.margin, v.get_mut("design")) {
-                d["margin_search"] = crate::command::to_value(&search_view(m))?;
-            }
-            if let (Some(s), Some(m)) = (designed, found) {
-                v["margins"] = crate::command::to_value(&margins::view(s, m))?;
-            }
-        }
-        Rendered::Nothing => {}
+    if let (Some(m), Some(d)) = (&out.margin, v.get_mut("design")) {
+        d["margin_search"] = crate::command::to_value(&search_view(m))?;
+    }
+    if let (Some(s), Some(m)) = (out.spec.as_ref(), found) {
+        v["margins"] = crate::command::to_value(&margins::view(s, m))?;
     }
     Ok(())
 }

@@ -38,9 +38,8 @@ pub struct FlyArgs {
     /// How each job's demand is drawn (see `simulate --exec`).
     #[arg(long, value_enum, default_value_t = ExecArg::Uniform)]
     pub exec: ExecArg,
-    /// Print one JSON object: "flight" and the chains as `simulate --json`.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub output: crate::command::FormatArgs,
     /// Write SVG plots into this directory (created if missing):
     /// attitude.svg, altitude.svg, motors.svg, latency.svg; with --sweep,
     /// sweep.svg.

@@ -381,7 +381,7 @@ pub fn execute(
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
     let written = write_files(spec, s, a, (&c, &free), &points, &limits, write_limits);
-    let report = if a.json {
+    let report = if a.output.is_json() {
         Rendered::Json(command::to_value(&sweep_json(
             spec, s, &c, a, &points, &limits,
         ))?)

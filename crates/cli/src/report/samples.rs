@@ -5,7 +5,7 @@
 use crate::output::{self, Output};
 use rtpipe_joblog::{RowSink, SampleRow};
 use rtpipe_model::{Diagnostic, Spec};
-use std::fmt::Write;
+use rtpipe_printer::{csv, Cell, Column, Kind, Table};
 use std::fs::File;
 use std::io::{BufWriter, Write as _};
 use std::path::PathBuf;
@@ -17,39 +17,55 @@ use std::sync::{Arc, Mutex};
 pub const HEADER: &str = "chain,sample,read_ns,event_ns,first_output_ns,last_output_ns,\
 reaction_ns,freshness_ns,event_reaction_ns,event_freshness_ns";
 
-/// The CSV text of every chain's rows (indexed like `Spec::chains`).
-pub fn samples_csv(spec: &Spec, rows: &[Vec<SampleRow>]) -> String {
-    let mut out = String::from(HEADER);
-    out.push('\n');
-    for (c, rows) in rows.iter().enumerate() {
-        let label = quoted(&spec.chain_label(c));
-        for r in rows {
-            row_line(&mut out, &label, r);
-        }
-    }
-    out
+/// The columns of [`HEADER`]: the chain's label, the sample's number, and
+/// instants and latencies that may be absent.
+pub fn columns() -> Vec<Column> {
+    HEADER
+        .split(',')
+        .enumerate()
+        .map(|(i, name)| {
+            let kind = match i {
+                0 => Kind::Text,
+                1 => Kind::UInt,
+                _ => Kind::OptInt,
+            };
+            Column::new(name, kind)
+        })
+        .collect()
 }
 
-/// One row of the CSV, with its line end.
-fn row_line(out: &mut String, label: &str, r: &SampleRow) {
-    let cells = [
-        Some(r.read),
-        r.event,
-        r.first,
-        r.last,
-        r.reaction(),
-        r.freshness(),
-        r.event_reaction(),
-        r.event_freshness(),
-    ];
-    let _ = write!(out, "{label},{}", r.sample);
-    for v in cells {
-        out.push(',');
-        if let Some(v) = v {
-            let _ = write!(out, "{v}");
+/// The CSV text of every chain's rows (indexed like `Spec::chains`), by
+/// the CSV printer.
+pub fn samples_csv(spec: &Spec, rows: &[Vec<SampleRow>]) -> String {
+    let Ok(mut t) = Table::new("samples", columns()) else {
+        unreachable!("the samples' columns are distinct names");
+    };
+    for (c, rows) in rows.iter().enumerate() {
+        let label = spec.chain_label(c);
+        for r in rows {
+            t.push(row_cells(&label, r));
         }
     }
-    out.push('\n');
+    csv::table(&t)
+}
+
+/// One row's cells, in [`HEADER`]'s order.
+fn row_cells(label: &str, r: &SampleRow) -> Vec<Cell> {
+    let mut row = vec![Cell::from(label), Cell::UInt(r.sample)];
+    row.extend(
+        [
+            Some(r.read),
+            r.event,
+            r.first,
+            r.last,
+            r.reaction(),
+            r.freshness(),
+            r.event_reaction(),
+            r.event_freshness(),
+        ]
+        .map(Cell::opt_int),
+    );
+    row
 }
 
 /// `--samples` written as the run makes the rows: each chain's rows go to
@@ -112,7 +128,7 @@ impl SamplesFile {
             }
         }
         let labels = (0..spec.chains.len())
-            .map(|c| quoted(&spec.chain_label(c)))
+            .map(|c| spec.chain_label(c))
             .collect();
         let parts = Parts {
             labels,
@@ -133,8 +149,7 @@ impl SamplesFile {
         Box::new(move |c, r| {
             let Ok(mut p) = parts.lock() else { return };
             let p = &mut *p;
-            p.line.clear();
-            row_line(&mut p.line, &p.labels[c], r);
+            p.line = csv::row_line(&row_cells(&p.labels[c], r));
             p.rows += 1;
             if let Err(e) = p.files[c].1.write_all(p.line.as_bytes()) {
                 p.error.get_or_insert(e);
@@ -282,12 +297,18 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
     )
 }
 
-/// A CSV field: the one rule every CSV rtpipe writes follows.
-pub(crate) use rtpipe_model::output::csv_field as quoted;
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rtpipe_model::output::csv_field as quoted;
+
+    #[test]
+    fn the_streamed_rows_are_the_printers() {
+        let Ok(t) = Table::new("samples", columns()) else {
+            panic!("distinct names");
+        };
+        assert_eq!(csv::header(&t).trim_end(), HEADER);
+    }
 
     #[test]
     fn fields_with_commas_or_quotes_are_quoted() {

@@ -5,8 +5,7 @@ mod files;
 mod plan;
 mod report;
 
-use crate::analyze;
-use crate::command::{self, fail, parse_time, Answer, ExecArg, Hooks, Rendered};
+use crate::command::{self, fail, parse_time, Answer, ExecArg, Hooks};
 use crate::output;
 use crate::plot;
 use crate::report::samples::{self, SamplesFile};
@@ -69,10 +68,8 @@ pub struct SimulateArgs {
     /// With --phasing search: candidates tried per local search (4 restarts).
     #[arg(long, value_name = "N", default_value_t = 50)]
     pub search_steps: u32,
-    /// Print one JSON object (the `analyze --json` report plus observations)
-    /// instead of tables.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub output: command::FormatArgs,
     /// Write a Chrome trace-event file for the Perfetto UI
     /// (https://ui.perfetto.dev): one track per task, grouped by CPU.
     #[arg(long, value_name = "FILE.json")]
@@ -193,17 +190,17 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
     let obs = observe(&report, &res);
     let mut outputs = render_outputs(spec, a, &p, &res, &obs)?;
     let written = write_all_outputs(a, &mut outputs, samples);
-    let out = if a.json {
-        let mut v = to_json(spec, &report, a, &res, &obs, seconds);
-        v.search = search_json(spec, &searches);
-        Rendered::Json(command::to_value(&v)?)
-    } else {
-        let mut t = to_text(spec, &report, a, &p, &res, &obs, seconds);
-        if !searches.is_empty() {
-            t.push_str(&search_text(spec, &searches));
-        }
-        Rendered::Text(t)
+    let printed = report::SimulateReport {
+        spec,
+        args: a,
+        plan: &p,
+        report: &report,
+        res: &res,
+        obs: &obs,
+        searches: &searches,
+        seconds,
     };
+    let out = command::render(&printed, a.output.chosen())?;
     let mut notes = outputs.notes;
     if let Some(n) = p.outputs {
         notes.extend(short_tails(spec, &res, n));

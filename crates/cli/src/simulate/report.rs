@@ -1,7 +1,7 @@
 //! The report of a simulation: text tables and JSON.
 
 use super::*;
-use crate::analyze::{ChainView, ReportView, TaskView};
+use crate::report::analysis::{ChainView, ReportView, TaskView};
 use crate::report::{time, Pairs};
 use rtpipe_sim::observe::Summary;
 use serde::Serialize;
@@ -254,7 +254,7 @@ pub(crate) fn observations_view<'a>(
             violations_from_event: Violations::of(&o.event),
         }
     };
-    analyze::report_view(spec, report).with(
+    crate::report::analysis::report_view(spec, report).with(
         |tasks| tasks,
         |chains| chains.into_iter().zip(obs).map(chain).collect(),
     )
@@ -479,7 +479,7 @@ pub(super) fn to_text(
 /// is not 0.
 pub(super) fn run_lines(spec: &Spec, a: &SimulateArgs, p: &Plan, res: &SimResult) -> String {
     let u = spec.time_unit;
-    let mut out = crate::analyze::system_line(spec);
+    let mut out = crate::report::analysis::system_line(spec);
     let span = match p.outputs {
         Some(n) => format!(", >= {n} outputs of every chain's tail"),
         None => String::new(),
@@ -615,4 +615,94 @@ fn verdict_text(spec: &Spec, report: &Report, res: &SimResult, obs: &[ChainObs])
         ));
     }
     out
+}
+
+/// `rtpipe simulate`'s report: the analysis, what the run and the
+/// adversarial searches observed, as text, JSON or tables.
+pub(super) struct SimulateReport<'a> {
+    pub spec: &'a Spec,
+    pub args: &'a SimulateArgs,
+    pub plan: &'a Plan,
+    pub report: &'a Report,
+    pub res: &'a SimResult,
+    pub obs: &'a [ChainObs],
+    pub searches: &'a [SearchResult],
+    pub seconds: f64,
+}
+
+impl Serialize for SimulateReport<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let (spec, r) = (self.spec, self.report);
+        let mut v = to_json(spec, r, self.args, self.res, self.obs, self.seconds);
+        v.search = search_json(spec, self.searches);
+        v.serialize(s)
+    }
+}
+
+impl rtpipe_printer::Report for SimulateReport<'_> {
+    fn text(&self) -> String {
+        let (spec, r) = (self.spec, self.report);
+        let mut t = to_text(
+            spec,
+            r,
+            self.args,
+            self.plan,
+            self.res,
+            self.obs,
+            self.seconds,
+        );
+        if !self.searches.is_empty() {
+            t.push_str(&search_text(spec, self.searches));
+        }
+        t
+    }
+
+    /// The analysis' tasks and chains, then what was observed of each
+    /// chain from each anchor.
+    fn tables(&self) -> Vec<rtpipe_printer::Table> {
+        let mut ts = crate::report::analysis::tables(self.spec, self.report);
+        ts.push(observed_table(self.spec, self.obs));
+        ts
+    }
+}
+
+/// A row per chain, metric and anchor: the observations' summary beside
+/// the bounds, times in the spec's unit.
+pub(crate) fn observed_table(spec: &Spec, obs: &[ChainObs]) -> rtpipe_printer::Table {
+    use rtpipe_printer::{Cell, Column, Kind, Table};
+    let mut columns: Vec<Column> = ["chain", "metric", "from"]
+        .map(|n| Column::new(n, Kind::Text))
+        .into();
+    columns.push(Column::new("count", Kind::UInt));
+    columns.extend(
+        ["min", "mean", "p99", "max", "paper", "sound"].map(|n| Column::new(n, Kind::Float)),
+    );
+    columns.push(Column::new("over_paper", Kind::UInt));
+    columns.push(Column::new("over_sound", Kind::OptInt));
+    let Ok(mut t) = Table::new("observed", columns) else {
+        unreachable!("the observed table's columns are distinct names");
+    };
+    let at = |ns: Option<Nanos>| Cell::opt_float(ns.map(|n| spec.in_unit(n)));
+    let count = |n: usize| Cell::UInt(u64::try_from(n).unwrap_or(u64::MAX));
+    for o in obs {
+        for anchor in Anchor::ALL {
+            let j = o.from(anchor);
+            let s = j.observed.as_ref();
+            t.push(vec![
+                Cell::from(spec.chain_label(o.chain)),
+                Cell::from(o.metric.name()),
+                Cell::from(anchor.name()),
+                count(s.map_or(0, |s| s.count)),
+                at(s.map(|s| s.min)),
+                Cell::opt_float(s.map(|s| s.mean / spec.time_unit.nanos() as f64)),
+                at(s.map(|s| s.p99)),
+                at(s.map(|s| s.max)),
+                at(Some(j.paper)),
+                at(j.sound),
+                count(j.over_paper),
+                Cell::opt_int(j.over_sound.and_then(|n| i64::try_from(n).ok())),
+            ]);
+        }
+    }
+    t
 }

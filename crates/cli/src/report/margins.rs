@@ -1,8 +1,7 @@
 //! `rtpipe analyze --margins`: the analysis' margins
 //! (`rtpipe_analysis::margins`) as a table, JSON and a CSV file.
 
-use crate::report::samples::quoted;
-use crate::table::Table;
+use crate::table::Table as TextTable;
 use rtpipe_analysis::margins::{
     Breach, ExecMargin, Factor, LimitSlack, Margin, Margins, PeriodRange, Scaling,
 };
@@ -10,6 +9,7 @@ use rtpipe_analysis::margins::{Control, MarginsError};
 use rtpipe_analysis::Mode;
 use rtpipe_model::Diagnostic;
 use rtpipe_model::{Nanos, Spec};
+use rtpipe_printer::{Cell, Column, Kind, Table};
 use serde::Serialize;
 
 /// The margins of `spec` under `mode`, with a progress line on stderr
@@ -165,7 +165,7 @@ fn breach_cell(spec: &Spec, b: Option<&Breach>) -> String {
 
 fn exec_table(spec: &Spec, rows: &[ExecMargin]) -> String {
     let mut t =
-        Table::new(&["task", "exec", "margin", "margin %", "limited by"]).numeric(&[1, 2, 3]);
+        TextTable::new(&["task", "exec", "margin", "margin %", "limited by"]).numeric(&[1, 2, 3]);
     for e in rows {
         t.row(vec![
             spec.tasks[e.task].name.clone(),
@@ -188,7 +188,7 @@ fn limit_table(spec: &Spec, rows: &[LimitSlack]) -> String {
         "first eaten by",
         "its margin",
     ];
-    let mut t = Table::new(&heads).numeric(&[2, 3, 4, 6]);
+    let mut t = TextTable::new(&heads).numeric(&[2, 3, 4, 6]);
     for l in rows {
         let (who, margin) = match l.critical() {
             Some((task, m)) => (spec.tasks[task].name.clone(), margin_text(spec, m)),
@@ -208,7 +208,7 @@ fn limit_table(spec: &Spec, rows: &[LimitSlack]) -> String {
 }
 
 fn scaling_table(spec: &Spec, cpus: &[Scaling], system: &Scaling) -> String {
-    let mut t = Table::new(&["tasks", "factor", "limited by"]).numeric(&[1]);
+    let mut t = TextTable::new(&["tasks", "factor", "limited by"]).numeric(&[1]);
     let label = |s: &Scaling| s.cpu.map_or("all".into(), |c| format!("cpu {c}"));
     let multi = cpus.len() > 1;
     for s in cpus.iter().filter(|_| multi).chain([system]) {
@@ -225,7 +225,7 @@ fn period_table(spec: &Spec, rows: &[PeriodRange]) -> String {
     let heads = [
         "task", "period", "least", "greatest", "below", "above", "checked",
     ];
-    let mut t = Table::new(&heads).numeric(&[1, 2, 3, 6]);
+    let mut t = TextTable::new(&heads).numeric(&[1, 2, 3, 6]);
     for p in rows {
         let (lo, hi) = match p.range {
             Some((lo, hi)) => (
@@ -415,32 +415,59 @@ struct CsvRow {
     first_eaten_by: String,
 }
 
-const CSV_HEADER: &str = "kind,subject,key,value,limit,margin,margin_percent,least,greatest,factor,status,limited_by,first_eaten_by\n";
+/// The columns of the margins' table.
+const CSV_COLUMNS: [&str; 13] = [
+    "kind",
+    "subject",
+    "key",
+    "value",
+    "limit",
+    "margin",
+    "margin_percent",
+    "least",
+    "greatest",
+    "factor",
+    "status",
+    "limited_by",
+    "first_eaten_by",
+];
 
 impl CsvRow {
-    fn line(&self) -> String {
-        let n = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
-        let cells = [
-            self.kind.to_string(),
-            quoted(&self.subject),
-            self.key.to_string(),
-            n(self.value),
-            n(self.limit),
-            n(self.margin),
-            n(self.margin_percent),
-            n(self.least),
-            n(self.greatest),
-            n(self.factor),
-            self.status.to_string(),
-            quoted(&self.limited_by),
-            quoted(&self.first_eaten_by),
+    /// The row's cells, in [`CSV_COLUMNS`]' order.
+    fn cells(self) -> Vec<Cell> {
+        let mut cells = vec![
+            Cell::from(self.kind),
+            Cell::Text(self.subject),
+            Cell::from(self.key),
         ];
-        cells.join(",") + "\n"
+        cells.extend(
+            [
+                self.value,
+                self.limit,
+                self.margin,
+                self.margin_percent,
+                self.least,
+                self.greatest,
+                self.factor,
+            ]
+            .map(Cell::opt_float),
+        );
+        cells.extend([
+            Cell::from(self.status),
+            Cell::Text(self.limited_by),
+            Cell::Text(self.first_eaten_by),
+        ]);
+        cells
     }
 }
 
-/// The `--margins-csv` file: one row per margin, times in the spec's unit.
+/// The `--margins-csv` file: the margins' table as CSV.
 pub fn csv(spec: &Spec, m: &Margins) -> String {
+    rtpipe_printer::csv::table(&table(spec, m))
+}
+
+/// The margins' table: one row per margin, times in the spec's unit.
+pub fn table(spec: &Spec, m: &Margins) -> Table {
     let b = |b: &Option<Breach>| b.as_ref().map(|b| breach_text(spec, b)).unwrap_or_default();
     let exec = m.exec.iter().map(|e| CsvRow {
         kind: "exec",
@@ -478,9 +505,20 @@ pub fn csv(spec: &Spec, m: &Margins) -> String {
     });
     let periods = m.periods.iter().map(|p| period_row(spec, p));
     let rows = exec.chain(limits).chain(scaling).chain(periods);
-    std::iter::once(CSV_HEADER.to_string())
-        .chain(rows.map(|r| r.line()))
-        .collect()
+    let kind = |name: &str| match name {
+        "value" | "limit" | "margin" | "margin_percent" | "least" | "greatest" | "factor" => {
+            Kind::Float
+        }
+        _ => Kind::Text,
+    };
+    let columns = CSV_COLUMNS.map(|n| Column::new(n, kind(n))).into();
+    let Ok(mut t) = Table::new("margins", columns) else {
+        unreachable!("the margins' columns are distinct names");
+    };
+    for r in rows {
+        t.push(r.cells());
+    }
+    t
 }
 
 fn slack_status(l: &LimitSlack) -> &'static str {

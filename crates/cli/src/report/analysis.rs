@@ -1,0 +1,798 @@
+//! The analysis report's views, which every command that reports an
+//! analysis shares (`analyze`, `design`, `simulate`, `fly`, `run`): the
+//! JSON entries of tasks, schedulability and chains, and their text.
+
+mod events;
+mod tables;
+
+pub use tables::tables;
+
+use crate::report::{time, Pairs};
+use crate::table::Table;
+use rtpipe_analysis::Bound;
+use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
+use rtpipe_model::{Nanos, Spec};
+use serde::Serialize;
+
+pub(crate) fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
+    path.iter().map(|&i| spec.tasks[i].name.clone()).collect()
+}
+
+/// The JSON report; `T` and `C` let `simulate` extend the task and chain
+/// entries with what it observed.
+#[derive(Serialize)]
+pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
+    pub system: &'a str,
+    pub time_unit: &'static str,
+    pub scheduler: &'static str,
+    /// "let" under LET communication; absent under implicit (the default).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub communication: Option<&'static str>,
+    pub tasks: Vec<T>,
+    pub schedulability: SchedView,
+    pub chains: Vec<C>,
+    pub ok: bool,
+    pub paper_ok: bool,
+}
+
+impl<'a, T, C> ReportView<'a, T, C> {
+    /// The same report with the task and chain entries replaced.
+    pub fn with<T2, C2>(
+        self,
+        tasks: impl FnOnce(Vec<T>) -> Vec<T2>,
+        chains: impl FnOnce(Vec<C>) -> Vec<C2>,
+    ) -> ReportView<'a, T2, C2> {
+        ReportView {
+            system: self.system,
+            time_unit: self.time_unit,
+            scheduler: self.scheduler,
+            communication: self.communication,
+            tasks: tasks(self.tasks),
+            schedulability: self.schedulability,
+            chains: chains(self.chains),
+            ok: self.ok,
+            paper_ok: self.paper_ok,
+        }
+    }
+}
+
+#[derive(Serialize)]
+pub struct TaskView<'a> {
+    name: &'a str,
+    server: &'static str,
+    exec: f64,
+    exec_min: f64,
+    delta_in: f64,
+    delta_out: f64,
+    demand: f64,
+    budget: f64,
+    period: f64,
+    /// D, when the spec gives a deadline (else D = T, left out).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    deadline: Option<f64>,
+    /// J, when the task has release jitter (left out when 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    jitter: Option<f64>,
+    /// B, blocking by lower-priority critical sections (left out when the
+    /// spec declares no resources).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    blocking: Option<f64>,
+    /// The task's `max_period` and whether its period keeps to it (both
+    /// left out when the spec gives none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max_period: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    period_ok: Option<bool>,
+    utilization: f64,
+    priority: Option<usize>,
+    cpu: u32,
+    response_time: Option<f64>,
+    job_response_time: Option<f64>,
+    /// Its activations, in a spec with threads or data-triggered tasks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    activation: Option<events::ActivationView<'a>>,
+}
+
+#[derive(Serialize)]
+pub struct SchedView {
+    test: &'static str,
+    utilization: f64,
+    bound: OneOrMany,
+    schedulable: bool,
+    cpus: Vec<CpuView>,
+}
+
+/// A single CPU's bound as a number, several as a list (the format
+/// predates multiprocessor specs).
+#[derive(Serialize)]
+#[serde(untagged)]
+enum OneOrMany {
+    One(f64),
+    Many(Vec<f64>),
+}
+
+#[derive(Serialize)]
+struct CpuView {
+    cpu: u32,
+    tasks: usize,
+    utilization: f64,
+    /// `None` for an unbounded response time (RTA).
+    value: Option<f64>,
+    bound: f64,
+    schedulable: bool,
+    /// The CPU's scheduling overheads, in the spec's unit (left out
+    /// without any).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    overheads: Option<OverheadsView>,
+}
+
+/// `[system] overheads` on one CPU.
+#[derive(Serialize)]
+struct OverheadsView {
+    context_switch: f64,
+    release: f64,
+    replenish: f64,
+}
+
+/// One chain and metric of the report; `known_offsets` only for a chain
+/// with known offsets.
+#[derive(Serialize)]
+pub struct ChainView<'a> {
+    name: Option<&'a str>,
+    path: Vec<String>,
+    metric: &'static str,
+    limit: Option<f64>,
+    /// The limit from the event (`max_reaction_time` / `max_data_age`),
+    /// left out when the spec gives none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    event_limit: Option<f64>,
+    #[serde(flatten)]
+    bounds: Pairs<&'static str, Option<f64>>,
+    ok: bool,
+    paper_ok: bool,
+    from_event: Pairs<&'static str, Option<f64>>,
+    cases: Vec<u8>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub known_offsets: Option<KnownView>,
+    /// The chain's own `communication`, when the spec gives it one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    communication: Option<&'static str>,
+}
+
+/// A chain's bounds of its metric under the spec's known release offsets;
+/// the hyperperiod and jobs are null when the job-level analysis did not
+/// run. `simulate` fills in the violations.
+#[derive(Serialize)]
+pub struct KnownView {
+    #[serde(flatten)]
+    read: KnownBound,
+    pub from_event: KnownBound,
+    hyperperiod: Option<f64>,
+    jobs: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub violations: Option<usize>,
+}
+
+#[derive(Serialize)]
+pub struct KnownBound {
+    sound: Option<f64>,
+    basis: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub violations: Option<usize>,
+}
+
+pub fn report_view<'a>(spec: &'a Spec, r: &Report) -> ReportView<'a> {
+    let tasks = spec
+        .tasks
+        .iter()
+        .zip(&r.timing)
+        .enumerate()
+        .map(|(i, (t, tm))| TaskView {
+            name: &t.name,
+            server: t.server.name(),
+            exec: spec.in_unit(t.exec),
+            exec_min: spec.in_unit(t.exec_min),
+            delta_in: spec.in_unit(t.delta_in),
+            delta_out: spec.in_unit(t.delta_out),
+            demand: spec.in_unit(tm.demand),
+            budget: spec.in_unit(tm.budget),
+            period: spec.in_unit(tm.period),
+            deadline: t.deadline_given.map(|d| spec.in_unit(d)),
+            jitter: (t.jitter > 0).then(|| spec.in_unit(t.jitter)),
+            blocking: (!spec.resources.is_empty()).then(|| spec.in_unit(tm.blocking)),
+            max_period: t.max_period.map(|m| spec.in_unit(m)),
+            period_ok: t.max_period.map(|m| tm.period <= m),
+            utilization: tm.budget as f64 / tm.period as f64,
+            priority: tm.priority,
+            cpu: tm.cpu,
+            response_time: time(spec, tm.response_time),
+            job_response_time: time(spec, tm.job_response_time),
+            activation: events::activation_view(spec, r, i),
+        })
+        .collect();
+    ReportView {
+        system: &spec.name,
+        time_unit: spec.time_unit.name(),
+        scheduler: spec.scheduler.name(),
+        communication: (spec.communication == rtpipe_model::Communication::Let)
+            .then_some(spec.communication.name()),
+        tasks,
+        schedulability: sched_view(spec, &r.schedulability),
+        chains: r.chains.iter().map(|c| chain_view(spec, r, c)).collect(),
+        ok: r.all_ok(),
+        paper_ok: r.all_ok_paper(),
+    }
+}
+
+fn sched_view(spec: &Spec, s: &rtpipe_analysis::Schedulability) -> SchedView {
+    let bound = match s.cpus.as_slice() {
+        [one] => OneOrMany::One(one.bound),
+        cpus => OneOrMany::Many(cpus.iter().map(|c| c.bound).collect()),
+    };
+    let cpus = s
+        .cpus
+        .iter()
+        .map(|c| CpuView {
+            cpu: c.cpu,
+            tasks: c.tasks,
+            utilization: c.utilization,
+            value: c.value.is_finite().then_some(c.value),
+            bound: c.bound,
+            schedulable: c.schedulable,
+            overheads: Some(spec.overheads.on(c.cpu))
+                .filter(|o| !o.is_zero())
+                .map(|o| OverheadsView {
+                    context_switch: spec.in_unit(o.context_switch),
+                    release: spec.in_unit(o.release),
+                    replenish: spec.in_unit(o.replenish),
+                }),
+        })
+        .collect();
+    SchedView {
+        test: s.test.name(),
+        utilization: s.cpus.iter().map(|c| c.utilization).sum::<f64>() + 0.0,
+        bound,
+        schedulable: s.schedulable,
+        cpus,
+    }
+}
+
+fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> ChainView<'a> {
+    let ch = &spec.chains[c.chain];
+    let bounds = |a: Anchor| {
+        Pairs(
+            c.bound
+                .from(a)
+                .map(|(b, v)| (b.name(), time(spec, v)))
+                .collect(),
+        )
+    };
+    ChainView {
+        name: ch.name.as_deref(),
+        path: path_names(spec, &ch.path),
+        metric: c.metric.name(),
+        limit: time(spec, c.limit),
+        event_limit: time(spec, c.event_limit),
+        bounds: bounds(Anchor::Read),
+        ok: c.ok,
+        paper_ok: c.paper_ok(),
+        from_event: bounds(Anchor::Event),
+        cases: r.cases[c.chain]
+            .iter()
+            .map(|k| match k {
+                rtpipe_analysis::Case::One => 1,
+                rtpipe_analysis::Case::Two => 2,
+            })
+            .collect(),
+        known_offsets: r
+            .offsets
+            .get(c.chain)
+            .and_then(Option::as_ref)
+            .map(|o| known_view(spec, o, c.metric)),
+        communication: ch.communication.map(|m| m.name()),
+    }
+}
+
+fn known_view(spec: &Spec, o: &ChainOffsets, metric: Metric) -> KnownView {
+    let one = |a: Anchor| {
+        let b = o.get(metric, a);
+        KnownBound {
+            sound: time(spec, b.value),
+            basis: b.label(spec),
+            violations: None,
+        }
+    };
+    let jl = o.job_level.as_ref();
+    KnownView {
+        read: one(Anchor::Read),
+        from_event: one(Anchor::Event),
+        hyperperiod: time(spec, jl.map(|j| j.hyperperiod)),
+        jobs: jl.map(|j| j.jobs),
+        violations: None,
+    }
+}
+
+fn opt(spec: &Spec, v: Option<Nanos>) -> String {
+    match v {
+        Some(n) => spec.fmt_time(n),
+        None => "unbounded".to_string(),
+    }
+}
+
+/// The first line of every report: the system, its size, unit and
+/// scheduler, and LET communication where it applies.
+pub fn system_line(spec: &Spec) -> String {
+    format!(
+        "system {}: {} tasks, {} chains; times in {}; scheduler {}{}\n",
+        spec.name,
+        spec.tasks.len(),
+        spec.chains.len(),
+        spec.time_unit,
+        spec.scheduler.name(),
+        comm_note(spec)
+    )
+}
+
+/// LET where it applies: system-wide, or on the chains that ask for it
+/// (implicit communication, the default, is not named, as always).
+fn comm_note(spec: &Spec) -> String {
+    use rtpipe_model::Communication;
+    if spec.communication == Communication::Let {
+        let implicit = own_chains(spec, Communication::Implicit);
+        if implicit.is_empty() {
+            return "; communication let (the sound bounds are LET's)".to_string();
+        }
+        return format!("; communication let, implicit on chains {implicit}");
+    }
+    let lets = own_chains(spec, Communication::Let);
+    if lets.is_empty() {
+        String::new()
+    } else {
+        format!("; communication let on chains {lets} (their sound bounds are LET's)")
+    }
+}
+
+/// The chains with their own `communication = c`, labelled and joined.
+fn own_chains(spec: &Spec, c: rtpipe_model::Communication) -> String {
+    let names: Vec<String> = (0..spec.chains.len())
+        .filter(|&k| spec.chains[k].communication == Some(c))
+        .map(|k| format!("`{}`", spec.chain_label(k)))
+        .collect();
+    names.join(", ")
+}
+
+pub fn report_text(spec: &Spec, r: &Report, mode: Mode) -> String {
+    let mut out = system_line(spec);
+    out.push('\n');
+    out.push_str(&task_table(spec, r));
+    out.push_str(&events::activations_text(spec, r));
+    out.push_str(&schedulability_text(spec, r));
+    out.push_str(&chain_table(spec, r));
+    out.push_str(&known_offsets_text(spec, r));
+    out.push_str(&max_period_text(spec, r));
+    out.push_str(&verdict_text(r, mode));
+    out
+}
+
+/// One row per task: its pipe, budget, period and response times.
+fn task_table(spec: &Spec, r: &Report) -> String {
+    // Deadline and jitter columns only where a task gives one, so specs
+    // without them print as they always did.
+    let extra = timing_keys_given(spec);
+    let mut heads = vec![
+        "task", "server", "cpu", "prio", "Δin", "exec", "Δout", "budget C", "period T",
+    ];
+    if extra {
+        heads.extend(["deadline D", "jitter J"]);
+    }
+    let blocking = !spec.resources.is_empty();
+    if blocking {
+        heads.push("blocking B");
+    }
+    heads.extend(["C/T", "R(C)", "R(job)"]);
+    let numeric: Vec<usize> = (2..heads.len()).collect();
+    let mut t = Table::new(&heads).numeric(&numeric);
+    for (task, tm) in spec.tasks.iter().zip(&r.timing) {
+        let mut row = vec![
+            task.name.clone(),
+            task.server.name().to_string(),
+            task.cpu.to_string(),
+            tm.priority
+                .map(|p| p.to_string())
+                .unwrap_or_else(|| "-".into()),
+            spec.fmt_time(task.delta_in),
+            spec.fmt_time(task.exec),
+            spec.fmt_time(task.delta_out),
+            spec.fmt_time(tm.budget),
+            spec.fmt_time(tm.period),
+        ];
+        if extra {
+            // A data-triggered task has no deadline of its own.
+            row.push(if tm.deadline == rtpipe_model::MAX_TIME {
+                "-".to_string()
+            } else {
+                spec.fmt_time(tm.deadline)
+            });
+            row.push(spec.fmt_time(tm.jitter));
+        }
+        if blocking {
+            row.push(spec.fmt_time(tm.blocking));
+        }
+        row.extend([
+            format!("{:.4}", tm.budget as f64 / tm.period as f64),
+            opt(spec, tm.response_time),
+            opt(spec, tm.job_response_time),
+        ]);
+        t.row(row);
+    }
+    t.render()
+}
+
+/// Some task gives a deadline or release jitter.
+fn timing_keys_given(spec: &Spec) -> bool {
+    spec.tasks
+        .iter()
+        .any(|t| t.deadline_given.is_some() || t.jitter > 0)
+}
+
+/// The schedulability test's verdict per CPU.
+fn schedulability_text(spec: &Spec, r: &Report) -> String {
+    let constrained = timing_keys_given(spec);
+    let mut out = String::new();
+    let s = &r.schedulability;
+    out.push_str(&format!("\nschedulability ({}):\n", s.test.name()));
+    for c in &s.cpus {
+        let verdict = if c.schedulable {
+            "schedulable"
+        } else {
+            "NOT schedulable"
+        };
+        // Critical sections under EDF: the tests carry SRP's blocking.
+        let blocked = !spec.policy().fixed_priority()
+            && spec
+                .tasks
+                .iter()
+                .any(|t| t.cpu == c.cpu && !t.sections.is_empty());
+        let o_zero = spec.overheads.on(c.cpu).is_zero();
+        let detail = match s.test {
+            rtpipe_model::SchedTest::LiuLayland => format!(
+                "U = {:.4} {} n(2^(1/n)-1) = {:.4}",
+                c.utilization,
+                if c.schedulable { "<=" } else { ">" },
+                c.bound
+            ),
+            rtpipe_model::SchedTest::Hyperbolic => format!(
+                "U = {:.4}, prod(U_i+1) = {:.4} {} 2",
+                c.utilization,
+                c.value,
+                if c.schedulable { "<=" } else { ">" }
+            ),
+            rtpipe_model::SchedTest::Rta => format!(
+                "U = {:.4}, max R/{} = {}",
+                c.utilization,
+                if constrained { "D" } else { "T" },
+                if c.value.is_finite() {
+                    format!("{:.4}", c.value)
+                } else {
+                    "unbounded".into()
+                }
+            ),
+            rtpipe_model::SchedTest::Edf if blocked && o_zero => format!(
+                "U = {:.4}, density with blocking max_k (sum_(D_i<=D_k) C_i/D_i + B_k/D_k) = {:.4} {} 1 (Baker)",
+                c.utilization,
+                c.value,
+                if c.schedulable { "<=" } else { ">" }
+            ),
+            rtpipe_model::SchedTest::Edf if !o_zero && !c.schedulable => {
+                edf_overheads_failure(spec, r, c)
+            }
+            rtpipe_model::SchedTest::Edf => format!(
+                "U = {:.4} {} 1",
+                c.utilization,
+                if c.schedulable { "<=" } else { ">" }
+            ),
+            rtpipe_model::SchedTest::Qpa => format!(
+                "U = {:.4}, processor demand h(t){} {} t (QPA)",
+                c.utilization,
+                if blocked { " + b(t)" } else { "" },
+                if c.schedulable { "<=" } else { "> some" }
+            ),
+        };
+        out.push_str(&format!(
+            "  cpu {} ({} tasks): {detail} -> {verdict}\n",
+            c.cpu, c.tasks
+        ));
+        out.push_str(&overheads_text(spec, c));
+    }
+    out
+}
+
+/// Which part of EDF's test with overheads (`sched::edf_overhead_test`)
+/// failed on CPU `c`: the utilisation with the overheads, or else the
+/// first task whose R(C) is unbounded or above its deadline.
+fn edf_overheads_failure(
+    spec: &Spec,
+    r: &Report,
+    c: &rtpipe_analysis::sched::CpuVerdict,
+) -> String {
+    let with = format!("U = {:.4}, with overheads {:.4}", c.utilization, c.value);
+    if c.value > c.bound {
+        return format!("{with} > 1");
+    }
+    let late = r.timing.iter().enumerate().find(|(i, tm)| {
+        let t = &spec.tasks[*i];
+        t.cpu == c.cpu
+            && t.server != rtpipe_model::Server::Background
+            && tm.response_time.is_none_or(|rc| rc > tm.deadline)
+    });
+    // The verdict failed and the utilisation passed: a response did not.
+    let Some((i, tm)) = late else {
+        panic!(
+            "cpu {}: EDF with overheads failed with every R(C) <= D",
+            c.cpu
+        );
+    };
+    format!(
+        "{with} <= 1, but R(C) of {} = {} > D = {}",
+        spec.tasks[i].name,
+        opt(spec, tm.response_time),
+        spec.fmt_time(tm.deadline)
+    )
+}
+
+/// A CPU's overheads under its verdict (nothing without any): what every
+/// R above charges (docs/analysis.md, "Scheduling overheads").
+fn overheads_text(spec: &Spec, c: &rtpipe_analysis::sched::CpuVerdict) -> String {
+    let o = spec.overheads.on(c.cpu);
+    if o.is_zero() {
+        return String::new();
+    }
+    let t = |ns| format!("{} {}", spec.fmt_time(ns), spec.time_unit);
+    // The verdict line above says which part failed, with its figures.
+    let edf = if spec.schedulability == rtpipe_model::SchedTest::Edf {
+        "; the test: U with them <= 1 and every R(C) <= D"
+    } else {
+        ""
+    };
+    format!(
+        "    overheads charged in R: context switch {}, release {}, replenish {}{edf}\n",
+        t(o.context_switch),
+        t(o.release),
+        t(o.replenish)
+    )
+}
+
+/// Every chain's bounds in both modes, from the read and from the event,
+/// beside the literature's, with both verdicts.
+fn chain_table(spec: &Spec, r: &Report) -> String {
+    let mut out = String::new();
+    if !spec.chains.is_empty() {
+        out.push_str(
+            "\nchains (worst case from the head's read; +event: from the event in the world; davare: Davare et al. 2007, duerr: Dürr et al. 2019; see docs/analysis.md):\n",
+        );
+        // One column per bound and anchor, from-read first (`ChainBound::from`).
+        // The from-event limit column only where a chain gives one, so
+        // specs without them print as they always did.
+        let event = r.chains.iter().any(|c| c.event_limit.is_some());
+        let mut heads: Vec<String> = ["chain", "metric", "limit"].map(String::from).to_vec();
+        if event {
+            heads.push("limit+event".into());
+        }
+        for a in Anchor::ALL {
+            let suffix = if a == Anchor::Event { "+event" } else { "" };
+            heads.extend(Bound::ALL.map(|b| format!("{}{suffix}", b.name())));
+        }
+        heads.extend(["paper verdict", "sound verdict"].map(String::from));
+        let numeric: Vec<usize> = (2..heads.len() - 2).collect();
+        let heads: Vec<&str> = heads.iter().map(String::as_str).collect();
+        let mut t = Table::new(&heads).numeric(&numeric);
+        for c in &r.chains {
+            let label = spec.chain_label(c.chain);
+            let limited = c.limit.or(c.event_limit);
+            let verdict = |ok: bool| match (ok, limited) {
+                (true, Some(_)) => "ok",
+                (true, None) => "-",
+                (false, _) => "FAIL",
+            };
+            let shown =
+                |l: Option<Nanos>| l.map(|l| spec.fmt_time(l)).unwrap_or_else(|| "-".into());
+            let mut row = vec![label, c.metric.name().to_string(), shown(c.limit)];
+            if event {
+                row.push(shown(c.event_limit));
+            }
+            for a in Anchor::ALL {
+                row.extend(c.bound.from(a).map(|(_, v)| opt(spec, v)));
+            }
+            row.extend([verdict(c.paper_ok()), verdict(c.ok)].map(String::from));
+            t.row(row);
+        }
+        out.push_str(&t.render());
+    }
+    out
+}
+
+/// Every task with a `max_period`: its period against it (nothing when no
+/// task gives one).
+fn max_period_text(spec: &Spec, r: &Report) -> String {
+    let mut out = String::new();
+    for (i, t) in spec.tasks.iter().enumerate() {
+        let Some(m) = t.max_period else { continue };
+        if out.is_empty() {
+            out.push_str(
+                "
+max_period (the slowest rate control tolerates):
+",
+            );
+        }
+        let over = r.period_excesses.iter().any(|e| e.task == i);
+        out.push_str(&format!(
+            "  {}: period {} {} max_period {}: {}\n",
+            t.name,
+            spec.fmt_time(r.timing[i].period),
+            if over { ">" } else { "≤" },
+            spec.fmt_time(m),
+            if over { "FAIL" } else { "ok" }
+        ));
+    }
+    out
+}
+
+/// The last line: what fails under `mode`, or that nothing does.
+fn verdict_text(r: &Report, mode: Mode) -> String {
+    let mut out = String::new();
+    let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
+    let name = mode.name();
+    let over = r.period_excesses.len();
+    out.push_str(&format!(
+        "\n{}{}\n",
+        match (r.schedulability.schedulable, fails) {
+            (true, 0) if over > 0 => "verdict: ".to_string(),
+            (true, 0) => format!(
+                "verdict: every limit holds ({name} analysis) and the system is schedulable"
+            ),
+            (sched, f) => format!(
+                "verdict: {}{}",
+                if sched { "" } else { "not schedulable; " },
+                if f > 0 {
+                    format!("{f} chain limit(s) fail under the {name} analysis")
+                } else {
+                    String::new()
+                }
+            ),
+        },
+        match (over, fails > 0) {
+            (0, _) => String::new(),
+            (n, true) => format!("; {n} period(s) above max_period"),
+            (n, false) => format!("{n} period(s) above max_period"),
+        }
+    ));
+    out
+}
+
+/// The bounds under the spec's known release offsets, for the chains with
+/// any (nothing when none has).
+pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
+    if r.offsets.iter().all(Option::is_none) {
+        return String::new();
+    }
+    let mut out = String::from(
+        "\nknown release offsets (job by job over the hyperperiod, see docs/analysis.md; \
+         basis: what each bound rests on):\n",
+    );
+    let mut t = Table::new(&["chain", "metric", "sound", "sound+event", "basis"]).numeric(&[2, 3]);
+    for c in &r.chains {
+        let Some(o) = r.offsets.get(c.chain).and_then(Option::as_ref) else {
+            continue;
+        };
+        let (read, event) = (
+            o.get(c.metric, Anchor::Read),
+            o.get(c.metric, Anchor::Event),
+        );
+        let (lr, le) = (read.label(spec), event.label(spec));
+        let basis = if lr == le {
+            lr
+        } else {
+            format!("{lr}; +event: {le}")
+        };
+        // No value because no sample reaches the tail is not "unbounded".
+        let value = |b: &rtpipe_analysis::OffsetBound| match b.basis {
+            rtpipe_analysis::Basis::NoSampleReaches => "-".to_string(),
+            _ => opt(spec, b.value),
+        };
+        t.row(vec![
+            spec.chain_label(c.chain),
+            c.metric.name().to_string(),
+            value(read),
+            value(event),
+            basis,
+        ]);
+    }
+    out.push_str(&t.render());
+    out
+}
+
+#[derive(Serialize)]
+struct WorstView {
+    path: Vec<String>,
+    bound: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct PairMetric {
+    paper: WorstView,
+    sound: WorstView,
+}
+
+#[derive(Serialize)]
+struct PairView<'a> {
+    source: &'a str,
+    sink: &'a str,
+    reaction: PairMetric,
+    freshness: PairMetric,
+}
+
+#[derive(Serialize)]
+pub struct PathsView<'a> {
+    pairs: Vec<PairView<'a>>,
+    skipped_cycles: Vec<Vec<String>>,
+}
+
+fn worst_view(spec: &Spec, w: &Worst) -> WorstView {
+    WorstView {
+        path: path_names(spec, &w.path),
+        bound: time(spec, w.value),
+    }
+}
+
+pub fn paths_view<'a>(spec: &'a Spec, a: &AllPaths) -> PathsView<'a> {
+    let pair = |paper, sound| PairMetric {
+        paper: worst_view(spec, paper),
+        sound: worst_view(spec, sound),
+    };
+    let pairs = a
+        .pairs
+        .iter()
+        .map(|p| PairView {
+            source: &spec.tasks[p.source].name,
+            sink: &spec.tasks[p.sink].name,
+            reaction: pair(&p.reaction_paper, &p.reaction_sound),
+            freshness: pair(&p.freshness_paper, &p.freshness_sound),
+        })
+        .collect();
+    PathsView {
+        pairs,
+        skipped_cycles: a.cycles.iter().map(|c| path_names(spec, c)).collect(),
+    }
+}
+
+pub fn paths_text(spec: &Spec, a: &AllPaths) -> String {
+    let mut out =
+        String::from("\nall source-to-sink pairs (worst path per metric, sound analysis):\n");
+    let mut t = Table::new(&[
+        "source",
+        "sink",
+        "reaction",
+        "worst path",
+        "freshness",
+        "worst path",
+    ])
+    .numeric(&[2, 4]);
+    for p in &a.pairs {
+        t.row(vec![
+            spec.tasks[p.source].name.clone(),
+            spec.tasks[p.sink].name.clone(),
+            opt(spec, p.reaction_sound.value),
+            spec.path_label(&p.reaction_sound.path),
+            opt(spec, p.freshness_sound.value),
+            spec.path_label(&p.freshness_sound.path),
+        ]);
+    }
+    out.push_str(&t.render());
+    for c in &a.cycles {
+        out.push_str(&format!(
+            "  skipped cycle (edges inside it are not on any listed path): {}\n",
+            path_names(spec, c).join(", ")
+        ));
+    }
+    out
+}
