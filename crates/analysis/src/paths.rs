@@ -182,7 +182,7 @@ fn cycles_of(comp: &[usize], succ: &[Vec<usize>]) -> Vec<Vec<usize>> {
 }
 
 /// Kahn's topological order from the tasks without predecessors.
-fn kahn(dag: &[Vec<usize>], mut deg: Vec<usize>, sources: &[usize]) -> Vec<usize> {
+pub(crate) fn kahn(dag: &[Vec<usize>], mut deg: Vec<usize>, sources: &[usize]) -> Vec<usize> {
     let mut order = Vec::with_capacity(dag.len());
     let mut queue: Vec<usize> = sources.to_vec();
     queue.reverse();
