@@ -13,8 +13,9 @@ use crate::arrivals::Arrivals;
 use crate::thread_rta::{fifo_response_reach, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
-/// Most rounds of the holistic iteration before every figure that
-/// depends on it is called unbounded.
+/// Most rounds of the holistic iteration (sweeps of one strongly connected
+/// component of units) before every figure that depends on the jitter is
+/// called unbounded.
 pub const MAX_ROUNDS: usize = 1_000;
 
 /// One stream of what runs above a task: (I, T, J), the work of each of
@@ -86,15 +87,16 @@ pub struct EventResult {
 /// activations of the tasks above its tasks and of its thread's tasks
 /// ([`Deps`]), and those depend on the output jitter of their triggers'
 /// units. The units' strongly connected components are analysed in
-/// topological order, each until its own figures stop changing (one
-/// analysis for a unit that reads nothing of its own), its inputs then
-/// final. Inside a component a round re-analyses only the units whose
-/// inputs changed at a window up to their reach (an input whose η⁺ is the
-/// same up to there leaves a response as it was). From zero jitter the
-/// figures only grow, so this reaches the least fixed point the round
-/// after round iteration of every task reaches (chaotic iteration,
-/// docs/analysis.md "Cost at 1,000 tasks"; `analysis/tests/events_worklist.rs`
-/// holds the two together).
+/// topological order, each until its own figures stop changing, its
+/// inputs then final: a unit that reads nothing of its own component is
+/// analysed once. Inside a component, sweeps in a depth-first order
+/// re-analyse a unit when an input changed since its last analysis at a
+/// window up to its reach (an input whose η⁺ is the same up to there
+/// leaves a response as it was), from the figures as they are then. From
+/// zero jitter the figures only grow, so this reaches the least fixed
+/// point that re-analysing every task round after round reaches (chaotic
+/// iteration, docs/analysis.md "Cost at 1,000 tasks";
+/// `analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
     let deps = Deps::of(spec, fp);
@@ -105,7 +107,8 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
         arrivals: deps.activations(spec, &delay),
         delay,
         responses: vec![Response::NONE; n],
-        marked: vec![false; n + spec.threads.len()],
+        dirty: vec![false; n + spec.threads.len()],
+        marked: vec![false; n],
     };
     for (c, units) in order.units.iter().enumerate() {
         if !deps.settle(spec, fp, units, |u| order.of_unit[u] == c, &mut state) {
@@ -130,7 +133,9 @@ struct State {
     arrivals: Vec<Option<Arrivals>>,
     /// Per task its response under `arrivals`, once its unit is analysed.
     responses: Vec<Response>,
-    /// Per unit a scratch mark, all clear between uses.
+    /// Per unit whether its inputs changed since its last analysis.
+    dirty: Vec<bool>,
+    /// Per task a scratch mark, all clear between uses.
     marked: Vec<bool>,
 }
 
@@ -241,6 +246,15 @@ impl Deps {
             by_comp[comp[u]].push(u);
         }
         by_comp.retain(|c| !c.is_empty());
+        // Inside a component, what a unit reads first where the cycles
+        // allow: a sweep then carries most changes to their readers.
+        let mut rank = vec![0; units + n];
+        for (k, v) in post_order(&succ).into_iter().enumerate() {
+            rank[v] = k;
+        }
+        for on in &mut by_comp {
+            on.sort_unstable_by_key(|&u| rank[u]);
+        }
         let mut of_unit = vec![usize::MAX; units];
         for (c, on) in by_comp.iter().enumerate() {
             for &u in on {
@@ -255,8 +269,11 @@ impl Deps {
 
     /// Analyses the component of `units` (`inside` tells its units) until
     /// its tasks' output jitters stop changing, at most [`MAX_ROUNDS`]
-    /// rounds (`false`: no fixed point). The units it reads from outside
-    /// it are final.
+    /// sweeps (`false`: no fixed point). The units it reads from outside it
+    /// are final. A sweep takes the units in order and re-analyses those
+    /// whose inputs changed since their last analysis, each growth carried
+    /// to its readers at once: a reader later in the order sees it in the
+    /// same sweep.
     fn settle(
         &self,
         spec: &Spec,
@@ -265,25 +282,35 @@ impl Deps {
         inside: impl Fn(usize) -> bool,
         state: &mut State,
     ) -> bool {
-        let mut dirty = units.to_vec();
+        for &u in units {
+            state.dirty[u] = true;
+        }
         for _ in 0..MAX_ROUNDS {
-            for &u in &dirty {
+            let mut analysed = 0;
+            for &u in units.iter() {
+                if !std::mem::take(&mut state.dirty[u]) {
+                    continue;
+                }
+                analysed += 1;
                 self.respond_unit(spec, fp, &state.arrivals, &mut state.responses, u);
+                let grown = self.grow(spec, u, state);
+                self.refresh(spec, &grown, &inside, state);
             }
-            let grown = self.grow(spec, units, state);
-            if grown.is_empty() {
+            if analysed == 0 {
                 return true;
             }
-            dirty = self.refresh(spec, &grown, &inside, state);
+        }
+        for &u in units {
+            state.dirty[u] = false;
         }
         false
     }
 
-    /// The output jitters of the tasks of `units` from their responses,
-    /// into `state.delay`; the tasks whose jitter changed.
-    fn grow(&self, spec: &Spec, units: &[usize], state: &mut State) -> Vec<usize> {
+    /// The output jitters of unit `u`'s tasks from their responses, into
+    /// `state.delay`; the tasks whose jitter changed.
+    fn grow(&self, spec: &Spec, u: usize, state: &mut State) -> Vec<usize> {
         let mut grown = Vec::new();
-        for i in units.iter().flat_map(|&u| self.unit_tasks(u)) {
+        for i in self.unit_tasks(u) {
             let next = (|| {
                 let grown = state.responses[i].actual? - spec.tasks[i].demand_min();
                 // Monotone: a figure never shrinks from one round to the next.
@@ -308,9 +335,8 @@ impl Deps {
         grown: &[usize],
         inside: &impl Fn(usize) -> bool,
         state: &mut State,
-    ) -> Vec<usize> {
+    ) {
         let downstream = self.downstream(grown, &mut state.marked);
-        let mut dirty = Vec::new();
         for j in downstream {
             let fresh = activation(spec, &state.delay, &state.arrivals, j);
             if fresh == state.arrivals[j] {
@@ -322,17 +348,11 @@ impl Deps {
             };
             state.arrivals[j] = fresh;
             for &u in self.readers[j].iter().filter(|&&u| inside(u)) {
-                let reach = self.reach(u, &state.responses);
-                if !state.marked[u] && reach.is_none_or(|r| r > same) {
-                    state.marked[u] = true;
-                    dirty.push(u);
+                if self.reach(u, &state.responses).is_none_or(|r| r > same) {
+                    state.dirty[u] = true;
                 }
             }
         }
-        for &u in &dirty {
-            state.marked[u] = false;
-        }
-        dirty
     }
 
     /// The tasks triggered, directly or not, by the tasks `from`, each
@@ -419,6 +439,32 @@ fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Vec<Vec
         r.dedup();
     }
     readers
+}
+
+/// Every node of the graph `succ` in a depth-first post-order: each after
+/// the nodes it points to, but along a cycle (iterative, so that large
+/// graphs cannot overflow the stack).
+fn post_order(succ: &[Vec<usize>]) -> Vec<usize> {
+    let mut seen = vec![false; succ.len()];
+    let mut out = Vec::with_capacity(succ.len());
+    for root in 0..succ.len() {
+        if std::mem::replace(&mut seen[root], true) {
+            continue;
+        }
+        let mut call = vec![(root, 0)];
+        while let Some((v, k)) = call.last_mut() {
+            if let Some(&w) = succ[*v].get(*k) {
+                *k += 1;
+                if !std::mem::replace(&mut seen[w], true) {
+                    call.push((w, 0));
+                }
+            } else {
+                out.push(*v);
+                call.pop();
+            }
+        }
+    }
+    out
 }
 
 /// Every task, each after its triggers (Kahn's order; validation makes
