@@ -232,10 +232,14 @@ impl Deps {
         let unit_of = |p: usize| spec.tasks[p].thread.map_or(p, |th| n + th);
         let mut succ: Vec<Vec<usize>> = vec![Vec::new(); units + n];
         for (j, readers) in self.readers.iter().enumerate() {
+            // A periodic task's activations depend on no unit.
+            let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                continue;
+            };
             for &u in readers {
                 succ[u].push(units + j);
             }
-            for &p in spec.tasks[j].triggers().map_or(&[][..], |(t, _)| t) {
+            for &p in triggers {
                 succ[units + j].extend([units + p, unit_of(p)]);
             }
         }
