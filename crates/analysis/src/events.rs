@@ -221,7 +221,7 @@ impl Deps {
     }
 
     /// The units' strongly connected components, in topological order
-    /// (Tarjan's, [`crate::paths::strongly_connected`]), of the graph
+    /// (Tarjan's, [`crate::graph::strongly_connected`]), of the graph
     /// where a unit points to each task whose activations it reads, and a
     /// data-triggered task to each trigger and the trigger's unit (whose
     /// response gives the trigger's output jitter): a task's activations
@@ -244,7 +244,7 @@ impl Deps {
             }
         }
         // Tarjan's numbers a component after every component it reaches.
-        let comp = crate::paths::strongly_connected(units + n, &succ);
+        let comp = crate::graph::strongly_connected(units + n, &succ);
         let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); units + n];
         for u in self.units(spec) {
             by_comp[comp[u]].push(u);
@@ -253,7 +253,7 @@ impl Deps {
         // Inside a component, what a unit reads first where the cycles
         // allow: a sweep then carries most changes to their readers.
         let mut rank = vec![0; units + n];
-        for (k, v) in post_order(&succ).into_iter().enumerate() {
+        for (k, v) in crate::graph::post_order(&succ).into_iter().enumerate() {
             rank[v] = k;
         }
         for on in &mut by_comp {
@@ -445,32 +445,6 @@ fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Vec<Vec
     readers
 }
 
-/// Every node of the graph `succ` in a depth-first post-order: each after
-/// the nodes it points to, but along a cycle (iterative, so that large
-/// graphs cannot overflow the stack).
-fn post_order(succ: &[Vec<usize>]) -> Vec<usize> {
-    let mut seen = vec![false; succ.len()];
-    let mut out = Vec::with_capacity(succ.len());
-    for root in 0..succ.len() {
-        if std::mem::replace(&mut seen[root], true) {
-            continue;
-        }
-        let mut call = vec![(root, 0)];
-        while let Some((v, k)) = call.last_mut() {
-            if let Some(&w) = succ[*v].get(*k) {
-                *k += 1;
-                if !std::mem::replace(&mut seen[w], true) {
-                    call.push((w, 0));
-                }
-            } else {
-                out.push(*v);
-                call.pop();
-            }
-        }
-    }
-    out
-}
-
 /// Every task, each after its triggers (Kahn's order; validation makes
 /// the trigger graph acyclic).
 fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
@@ -480,7 +454,7 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
         .map(|t| t.triggers().map_or(0, |(t, _)| t.len()))
         .collect();
     let sources: Vec<usize> = (0..spec.tasks.len()).filter(|&i| degree[i] == 0).collect();
-    let order = crate::paths::kahn(consumers, degree, &sources);
+    let order = crate::graph::kahn(consumers, degree, &sources);
     assert_eq!(
         order.len(),
         spec.tasks.len(),

@@ -16,7 +16,7 @@
 use proptest::prelude::*;
 use rtpipe_analysis::arrivals::Arrivals;
 use rtpipe_analysis::events::{self, EventResult, EventTiming, FixedPriority, MAX_ROUNDS};
-use rtpipe_analysis::paths::strongly_connected;
+use rtpipe_analysis::graph::strongly_connected;
 use rtpipe_analysis::sched::{interference, interferers, level_response, top_priorities, OwnJobs};
 use rtpipe_analysis::thread_rta::{fifo_response, Member};
 use rtpipe_model::gen::{event_triggered_system, EventGenConfig, Rng};
