@@ -423,24 +423,29 @@ impl Deps {
 /// unit when it is a thread-less task whose jobs merge.
 fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Vec<Vec<usize>> {
     let n = spec.tasks.len();
-    let mut readers = vec![Vec::new(); n];
-    for (i, t) in spec.tasks.iter().enumerate() {
-        let unit = t.thread.map_or(i, |th| n + th);
-        for &j in &above[i] {
-            readers[j].push(unit);
+    let mut readers: Vec<Vec<usize>> = vec![Vec::new(); n];
+    // The units in ascending order, each one's reads together: a list's
+    // last entry tells whether the unit is in it already, with no sort.
+    let mut read = |u: usize, j: usize| {
+        if readers[j].last() != Some(&u) {
+            readers[j].push(u);
         }
-        if t.thread.is_none() && merging(spec, i) {
-            readers[i].push(unit);
+    };
+    for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
+        for &j in &above[i] {
+            read(i, j);
+        }
+        if merging(spec, i) {
+            read(i, i);
         }
     }
     for (th, on) in members.iter().enumerate() {
-        for &j in on {
-            readers[j].push(n + th);
+        for &i in on {
+            for &j in &above[i] {
+                read(n + th, j);
+            }
+            read(n + th, i);
         }
-    }
-    for r in &mut readers {
-        r.sort_unstable();
-        r.dedup();
     }
     readers
 }
