@@ -13,8 +13,9 @@ use crate::arrivals::Arrivals;
 use crate::thread_rta::{fifo_response_reach, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
-/// Most rounds of the holistic iteration before every figure that
-/// depends on it is called unbounded.
+/// Most rounds of the holistic iteration (sweeps of one strongly connected
+/// component of units) before every figure that depends on the jitter is
+/// called unbounded.
 pub const MAX_ROUNDS: usize = 1_000;
 
 /// One stream of what runs above a task: (I, T, J), the work of each of
@@ -81,45 +82,69 @@ pub struct EventResult {
     pub timing: EventTiming,
 }
 
-/// Every task's figures, by the holistic iteration. Each round recomputes
-/// the activations (linear in the tasks and their streams) and then only
-/// the responses whose inputs changed: a task's response reads the
-/// activations of the tasks above it and of its thread's tasks alone
-/// ([`Deps`]), and those only at windows up to its reach (an input whose
-/// η⁺ is the same up to there leaves it as it was), so the figures are
-/// those of recomputing every task every round (`analysis/tests/events_worklist.rs` holds the two together).
+/// Every task's figures, by the holistic iteration, in the order of what
+/// waits for what: a *unit* (a thread, a thread-less task) reads the
+/// activations of the tasks above its tasks and of its thread's tasks
+/// ([`Deps`]), and those depend on the output jitter of their triggers'
+/// units. The units' strongly connected components are analysed in
+/// topological order, each until its own figures stop changing, its
+/// inputs then final: a unit that reads nothing of its own component is
+/// analysed once. Inside a component, sweeps in a depth-first order
+/// re-analyse a unit when an input changed since its last analysis at a
+/// window up to its reach (an input whose η⁺ is the same up to there
+/// leaves a response as it was), from the figures as they are then. From
+/// zero jitter the figures only grow, so this reaches the least fixed
+/// point that re-analysing every task round after round reaches (chaotic
+/// iteration, docs/analysis.md "Cost at 1,000 tasks";
+/// `analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
     let deps = Deps::of(spec, fp);
+    let order = deps.components(spec);
     // Each task's output jitter R − R_min, from zero.
-    let mut delay: Vec<Option<Nanos>> = vec![Some(0); n];
-    let mut arrivals = activations(spec, &delay);
-    let mut responses: Vec<Response> = vec![Response::NONE; n];
-    deps.respond_units(spec, fp, &arrivals, &mut responses, |_| true);
-    for round in 0..MAX_ROUNDS {
-        if round > 0 {
-            let fresh = activations(spec, &delay);
-            let dirty = deps.readers_of_changed(&arrivals, &fresh, &responses);
-            arrivals = fresh;
-            deps.respond_units(spec, fp, &arrivals, &mut responses, |u| dirty[u]);
-        }
-        let next: Vec<Option<Nanos>> = (0..n)
-            .map(|i| {
-                let grown = responses[i].actual? - spec.tasks[i].demand_min();
-                // Monotone: a figure never shrinks from one round to the next.
-                Some(grown.max(delay[i]?))
-            })
-            .collect();
-        if next == delay {
+    let delay: Vec<Option<Nanos>> = vec![Some(0); n];
+    let mut state = State {
+        arrivals: deps.activations(spec, &delay),
+        delay,
+        responses: vec![Response::NONE; n],
+        dirty: vec![false; n + spec.threads.len()],
+        marked: vec![false; n],
+    };
+    for (c, units) in order.units.iter().enumerate() {
+        if !deps.settle(spec, fp, units, |u| order.of_unit[u] == c, &mut state) {
+            // No fixed point found: nothing that depends on the jitter is
+            // bounded.
+            let arrivals = deps.activations(spec, &vec![None; n]);
+            let mut responses = state.responses;
+            for u in deps.units(spec) {
+                deps.respond_unit(spec, fp, &arrivals, &mut responses, u);
+            }
             return finish(spec, arrivals, responses);
         }
-        delay = next;
     }
-    // No fixed point found: nothing that depends on the jitter is bounded.
-    let none = vec![None; n];
-    let arrivals = activations(spec, &none);
-    deps.respond_units(spec, fp, &arrivals, &mut responses, |_| true);
-    finish(spec, arrivals, responses)
+    finish(spec, state.arrivals, state.responses)
+}
+
+/// The iteration's figures so far.
+struct State {
+    /// Per task its output jitter (`None`: unbounded).
+    delay: Vec<Option<Nanos>>,
+    /// Per task its activations under `delay`.
+    arrivals: Vec<Option<Arrivals>>,
+    /// Per task its response under `arrivals`, once its unit is analysed.
+    responses: Vec<Response>,
+    /// Per unit whether its inputs changed since its last analysis.
+    dirty: Vec<bool>,
+    /// Per task a scratch mark, all clear between uses.
+    marked: Vec<bool>,
+}
+
+/// The units' strongly connected components in the order to analyse them:
+/// every unit a component's units read from is in it or before it.
+struct Components {
+    units: Vec<Vec<usize>>,
+    /// Per unit its component's place in `units`.
+    of_unit: Vec<usize>,
 }
 
 /// What each task's response reads, built once per analysis. A *unit* is
@@ -135,6 +160,12 @@ struct Deps {
     /// Per task j the units whose responses read j's activations,
     /// ascending and distinct.
     readers: Vec<Vec<usize>>,
+    /// Per task the data-triggered tasks it triggers.
+    consumers: Vec<Vec<usize>>,
+    /// Every task, each after its triggers.
+    trigger_order: Vec<usize>,
+    /// Per task its place in `trigger_order`.
+    trigger_rank: Vec<usize>,
 }
 
 impl Deps {
@@ -157,98 +188,284 @@ impl Deps {
                 above
             })
             .collect();
-        let mut readers = vec![Vec::new(); n];
-        for (i, t) in spec.tasks.iter().enumerate() {
-            let unit = t.thread.map_or(i, |th| n + th);
-            for &j in &above[i] {
-                readers[j].push(unit);
-            }
-            if t.thread.is_none() && merging(spec, i) {
-                readers[i].push(unit);
-            }
-        }
-        for (th, on) in members.iter().enumerate() {
-            for &j in on {
-                readers[j].push(n + th);
-            }
-        }
-        for r in &mut readers {
-            r.sort_unstable();
-            r.dedup();
+        let readers = readers(spec, &above, &members);
+        let consumers = spec.triggered_by();
+        let trigger_order = trigger_order(spec, &consumers);
+        let mut trigger_rank = vec![0; n];
+        for (k, &i) in trigger_order.iter().enumerate() {
+            trigger_rank[i] = k;
         }
         Deps {
             above,
             members,
             readers,
+            consumers,
+            trigger_order,
+            trigger_rank,
         }
     }
 
-    /// Per unit, whether it reads the activations of a task whose η⁺
-    /// differs between `old` and `new` at a window up to the unit's reach
-    /// (its `responses`, computed from `old`, read η⁺ up to there alone,
-    /// so they are those `new` gives when it agrees up to there).
-    fn readers_of_changed(
-        &self,
-        old: &[Option<Arrivals>],
-        new: &[Option<Arrivals>],
-        responses: &[Response],
-    ) -> Vec<bool> {
-        let reach = self.unit_reach(responses);
-        let mut dirty = vec![false; old.len() + self.members.len()];
+    /// The units: every thread-less task and every thread.
+    fn units<'a>(&'a self, spec: &'a Spec) -> impl Iterator<Item = usize> + 'a {
+        let n = spec.tasks.len();
+        let tasks = (0..n).filter(|&i| spec.tasks[i].thread.is_none());
+        tasks.chain(n..n + self.members.len())
+    }
+
+    /// The tasks of unit `u`.
+    fn unit_tasks(&self, u: usize) -> impl Iterator<Item = usize> + '_ {
+        let n = self.above.len();
+        let own = (u < n).then_some(u);
+        let thread = u.checked_sub(n).map(|th| &self.members[th]);
+        own.into_iter().chain(thread.into_iter().flatten().copied())
+    }
+
+    /// The units' strongly connected components, in topological order
+    /// (Tarjan's, [`crate::graph::strongly_connected`]), of the graph
+    /// where a unit points to each task whose activations it reads, and a
+    /// data-triggered task to each trigger and the trigger's unit (whose
+    /// response gives the trigger's output jitter): a task's activations
+    /// depend on the units of its triggers, theirs, and so on.
+    fn components(&self, spec: &Spec) -> Components {
+        let n = spec.tasks.len();
+        let units = n + self.members.len();
+        let unit_of = |p: usize| spec.tasks[p].thread.map_or(p, |th| n + th);
+        let mut succ: Vec<Vec<usize>> = vec![Vec::new(); units + n];
         for (j, readers) in self.readers.iter().enumerate() {
-            if old[j] == new[j] {
+            // A periodic task's activations depend on no unit.
+            let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                continue;
+            };
+            for &u in readers {
+                succ[u].push(units + j);
+            }
+            for &p in triggers {
+                succ[units + j].extend([units + p, unit_of(p)]);
+            }
+        }
+        // Tarjan's numbers a component after every component it reaches.
+        let comp = crate::graph::strongly_connected(units + n, &succ);
+        let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); units + n];
+        for u in self.units(spec) {
+            by_comp[comp[u]].push(u);
+        }
+        by_comp.retain(|c| !c.is_empty());
+        // Inside a component, what a unit reads first where the cycles
+        // allow: a sweep then carries most changes to their readers.
+        let mut rank = vec![0; units + n];
+        for (k, v) in crate::graph::post_order(&succ).into_iter().enumerate() {
+            rank[v] = k;
+        }
+        for on in &mut by_comp {
+            on.sort_unstable_by_key(|&u| rank[u]);
+        }
+        let mut of_unit = vec![usize::MAX; units];
+        for (c, on) in by_comp.iter().enumerate() {
+            for &u in on {
+                of_unit[u] = c;
+            }
+        }
+        Components {
+            units: by_comp,
+            of_unit,
+        }
+    }
+
+    /// Analyses the component of `units` (`inside` tells its units) until
+    /// its tasks' output jitters stop changing, at most [`MAX_ROUNDS`]
+    /// sweeps (`false`: no fixed point). The units it reads from outside it
+    /// are final. A sweep takes the units in order and re-analyses those
+    /// whose inputs changed since their last analysis, each growth carried
+    /// to its readers at once: a reader later in the order sees it in the
+    /// same sweep.
+    fn settle(
+        &self,
+        spec: &Spec,
+        fp: &impl FixedPriority,
+        units: &[usize],
+        inside: impl Fn(usize) -> bool,
+        state: &mut State,
+    ) -> bool {
+        for &u in units {
+            state.dirty[u] = true;
+        }
+        for _ in 0..MAX_ROUNDS {
+            let mut analysed = 0;
+            for &u in units.iter() {
+                if !std::mem::take(&mut state.dirty[u]) {
+                    continue;
+                }
+                analysed += 1;
+                self.respond_unit(spec, fp, &state.arrivals, &mut state.responses, u);
+                let grown = self.grow(spec, u, state);
+                self.refresh(spec, &grown, &inside, state);
+            }
+            if analysed == 0 {
+                return true;
+            }
+        }
+        for &u in units {
+            state.dirty[u] = false;
+        }
+        false
+    }
+
+    /// The output jitters of unit `u`'s tasks from their responses, into
+    /// `state.delay`; the tasks whose jitter changed.
+    fn grow(&self, spec: &Spec, u: usize, state: &mut State) -> Vec<usize> {
+        let mut grown = Vec::new();
+        for i in self.unit_tasks(u) {
+            let next = (|| {
+                let grown = state.responses[i].actual? - spec.tasks[i].demand_min();
+                // Monotone: a figure never shrinks from one round to the next.
+                Some(grown.max(state.delay[i]?))
+            })();
+            if next != state.delay[i] {
+                state.delay[i] = next;
+                grown.push(i);
+            }
+        }
+        grown
+    }
+
+    /// Recomputes the activations of every task downstream of the tasks
+    /// whose jitter `grown`; the units `inside` the component that read one
+    /// that changed at a window up to their reach (their responses,
+    /// computed from the old activations, read η⁺ up to there alone, so
+    /// they are those the new ones give when both agree up to there).
+    fn refresh(
+        &self,
+        spec: &Spec,
+        grown: &[usize],
+        inside: &impl Fn(usize) -> bool,
+        state: &mut State,
+    ) {
+        let downstream = self.downstream(grown, &mut state.marked);
+        for j in downstream {
+            let fresh = activation(spec, &state.delay, &state.arrivals, j);
+            if fresh == state.arrivals[j] {
                 continue;
             }
-            let same = match (&old[j], &new[j]) {
+            let same = match (&state.arrivals[j], &fresh) {
                 (Some(a), Some(b)) => a.same_up_to(b),
                 _ => 0,
             };
-            for &u in readers {
-                if reach[u].is_none_or(|r| r > same) {
-                    dirty[u] = true;
+            state.arrivals[j] = fresh;
+            for &u in self.readers[j].iter().filter(|&&u| inside(u)) {
+                if self.reach(u, &state.responses).is_none_or(|r| r > same) {
+                    state.dirty[u] = true;
                 }
             }
         }
-        dirty
     }
 
-    /// Per unit the largest reach of its responses (`None`: a response
-    /// without one, re-analysed on any change).
-    fn unit_reach(&self, responses: &[Response]) -> Vec<Option<Nanos>> {
-        let mut reach: Vec<Option<Nanos>> = responses.iter().map(|r| r.reach).collect();
-        for on in &self.members {
-            let unit = on
-                .iter()
-                .try_fold(0, |m: Nanos, &i| Some(m.max(responses[i].reach?)));
-            reach.push(unit);
+    /// The tasks triggered, directly or not, by the tasks `from`, each
+    /// after its triggers (`marked`, clear, is left clear).
+    fn downstream(&self, from: &[usize], marked: &mut [bool]) -> Vec<usize> {
+        let mut out: Vec<usize> = Vec::new();
+        let mut next: Vec<usize> = from
+            .iter()
+            .flat_map(|&p| &self.consumers[p])
+            .copied()
+            .collect();
+        while let Some(j) = next.pop() {
+            if !marked[j] {
+                marked[j] = true;
+                out.push(j);
+                next.extend(&self.consumers[j]);
+            }
         }
-        reach
+        for &j in &out {
+            marked[j] = false;
+        }
+        out.sort_unstable_by_key(|&j| self.trigger_rank[j]);
+        out
     }
 
-    /// The responses of the units `chosen` picks, into `responses`.
-    fn respond_units(
+    /// The largest reach of unit `u`'s responses (`None`: a response
+    /// without one, re-analysed on any change).
+    fn reach(&self, u: usize, responses: &[Response]) -> Option<Nanos> {
+        self.unit_tasks(u)
+            .try_fold(0, |m: Nanos, i| Some(m.max(responses[i].reach?)))
+    }
+
+    /// The responses of unit `u`'s tasks, into `responses`.
+    fn respond_unit(
         &self,
         spec: &Spec,
         fp: &impl FixedPriority,
         arrivals: &[Option<Arrivals>],
         responses: &mut [Response],
-        chosen: impl Fn(usize) -> bool,
+        u: usize,
     ) {
-        let n = spec.tasks.len();
-        for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none() && chosen(i)) {
-            responses[i] = respond(spec, fp, self, arrivals, i, &mut Vec::new());
-        }
-        for (th, on) in self.members.iter().enumerate() {
-            if chosen(n + th) {
-                // The members' FIFO figures, shared between members that
-                // see the same thread (ThreadCache).
-                let mut cache = Vec::new();
-                for &i in on {
-                    responses[i] = respond(spec, fp, self, arrivals, i, &mut cache);
-                }
-            }
+        // The members' FIFO figures, shared between members that see the
+        // same thread (ThreadCache).
+        let mut cache = Vec::new();
+        for i in self.unit_tasks(u) {
+            responses[i] = respond(spec, fp, self, arrivals, i, &mut cache);
         }
     }
+
+    /// Each task's activations given each task's output jitter (`None`:
+    /// unbounded): periodic tasks their period and release jitter, a
+    /// data-triggered one its triggers' publications joined.
+    fn activations(&self, spec: &Spec, delay: &[Option<Nanos>]) -> Vec<Option<Arrivals>> {
+        let mut out = vec![None; spec.tasks.len()];
+        for &i in &self.trigger_order {
+            out[i] = activation(spec, delay, &out, i);
+        }
+        out
+    }
+}
+
+/// Per task j the units whose responses read j's activations, ascending
+/// and distinct: those of the tasks j runs above, j's thread, and j's own
+/// unit when it is a thread-less task whose jobs merge.
+fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let n = spec.tasks.len();
+    let mut readers: Vec<Vec<usize>> = vec![Vec::new(); n];
+    // The units in ascending order, each one's reads together: a list's
+    // last entry tells whether the unit is in it already, with no sort.
+    let mut read = |u: usize, j: usize| {
+        if readers[j].last() != Some(&u) {
+            readers[j].push(u);
+        }
+    };
+    for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
+        for &j in &above[i] {
+            read(i, j);
+        }
+        if merging(spec, i) {
+            read(i, i);
+        }
+    }
+    for (th, on) in members.iter().enumerate() {
+        for &i in on {
+            for &j in &above[i] {
+                read(n + th, j);
+            }
+            read(n + th, i);
+        }
+    }
+    readers
+}
+
+/// Every task, each after its triggers (Kahn's order; validation makes
+/// the trigger graph acyclic).
+fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
+    let degree: Vec<usize> = spec
+        .tasks
+        .iter()
+        .map(|t| t.triggers().map_or(0, |(t, _)| t.len()))
+        .collect();
+    let sources: Vec<usize> = (0..spec.tasks.len()).filter(|&i| degree[i] == 0).collect();
+    let order = crate::graph::kahn(consumers, degree, &sources);
+    assert_eq!(
+        order.len(),
+        spec.tasks.len(),
+        "the trigger graph has a cycle"
+    );
+    order
 }
 
 /// FIFO responses of one thread this round, by (tasks above, blocking),
@@ -280,49 +497,31 @@ impl Response {
     };
 }
 
-/// Each task's activations given each task's output jitter (`None`:
-/// unbounded): periodic tasks their period and release jitter, a
-/// data-triggered one its triggers' publications joined.
-fn activations(spec: &Spec, delay: &[Option<Nanos>]) -> Vec<Option<Arrivals>> {
-    let mut out: Vec<Option<Option<Arrivals>>> = vec![None; spec.tasks.len()];
-    for i in 0..spec.tasks.len() {
-        activation(spec, delay, &mut out, i);
-    }
-    out.into_iter().map(Option::flatten).collect()
-}
-
-/// Task `i`'s activations into `memo`, its triggers' first (validation
-/// makes the trigger graph acyclic).
+/// Task `i`'s activations, its triggers' already in `arrivals`: its
+/// period and release jitter, or its triggers' publications joined.
 fn activation(
     spec: &Spec,
     delay: &[Option<Nanos>],
-    memo: &mut [Option<Option<Arrivals>>],
+    arrivals: &[Option<Arrivals>],
     i: usize,
 ) -> Option<Arrivals> {
-    if let Some(known) = &memo[i] {
-        return known.clone();
-    }
     let t = &spec.tasks[i];
-    let model = match t.triggers() {
+    match t.triggers() {
         None => t
             .fixed_period()
             .map(|period| Arrivals::periodic(period, t.jitter)),
         Some((triggers, join)) => {
-            let outputs: Option<Vec<Arrivals>> = triggers
+            let outputs: Vec<Arrivals> = triggers
                 .iter()
-                .map(|&p| activation(spec, delay, memo, p)?.delayed(delay[p]?))
-                .collect();
-            outputs.map(|o| {
-                let refs: Vec<&Arrivals> = o.iter().collect();
-                match join {
-                    Join::Any => Arrivals::any(&refs),
-                    Join::All => Arrivals::all(&refs),
-                }
+                .map(|&p| arrivals[p].as_ref()?.delayed(delay[p]?))
+                .collect::<Option<_>>()?;
+            let refs: Vec<&Arrivals> = outputs.iter().collect();
+            Some(match join {
+                Join::Any => Arrivals::any(&refs),
+                Join::All => Arrivals::all(&refs),
             })
         }
-    };
-    memo[i] = Some(model.clone());
-    model
+    }
 }
 
 /// Task `i`'s jobs merge: it runs in a thread or is data-triggered.

@@ -23,6 +23,7 @@ pub mod disturbance;
 pub mod edf;
 pub mod event_links;
 pub mod events;
+pub mod graph;
 pub mod latency;
 pub mod let_bound;
 pub mod margins;

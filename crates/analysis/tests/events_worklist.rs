@@ -7,9 +7,16 @@
 //! found by a scan of every task. On a few hundred random event-triggered
 //! systems both give the same figures, to the last field, and so does
 //! the whole `analyze` (its fixed-priority analysis built per CPU).
+//! The reference runs every task's response in every round (Jacobi);
+//! `events::analyze` runs the units' strongly connected components in
+//! dependency order, so the two orders are held together also on
+//! systems whose threads trigger each other in cycles and on ones whose
+//! figures become unbounded.
 
+use proptest::prelude::*;
 use rtpipe_analysis::arrivals::Arrivals;
 use rtpipe_analysis::events::{self, EventResult, EventTiming, FixedPriority, MAX_ROUNDS};
+use rtpipe_analysis::graph::strongly_connected;
 use rtpipe_analysis::sched::{interference, interferers, level_response, top_priorities, OwnJobs};
 use rtpipe_analysis::thread_rta::{fifo_response, Member};
 use rtpipe_model::gen::{event_triggered_system, EventGenConfig, Rng};
@@ -221,4 +228,99 @@ fn the_worklist_iteration_gives_the_straightforward_figures() {
         bounded * 2 > SYSTEMS as usize,
         "{bounded} of {SYSTEMS} bounded"
     );
+}
+
+/// Whether some threads trigger each other in a cycle (a member of one
+/// triggers a member of the next, and so back to the first; a member that
+/// triggers one of its own thread included): their figures wait for each
+/// other and are iterated together.
+fn threads_cycle(spec: &Spec) -> bool {
+    let mut succ = vec![Vec::new(); spec.threads.len()];
+    for t in &spec.tasks {
+        if let (Some(to), Some((triggers, _))) = (t.thread, t.triggers()) {
+            for from in triggers.iter().filter_map(|&p| spec.tasks[p].thread) {
+                succ[from].push(to);
+            }
+        }
+    }
+    let comp = strongly_connected(succ.len(), &succ);
+    (0..succ.len()).any(|a| succ[a].iter().any(|&b| comp[b] == comp[a]))
+}
+
+/// A system with many data-triggered tasks in few threads, up to
+/// overloaded CPUs: thread cycles and unbounded figures are common.
+fn cyclic_config(
+    chains: usize,
+    threads: usize,
+    cpus: u32,
+    utilization: f64,
+    thread_fraction: f64,
+) -> EventGenConfig {
+    EventGenConfig {
+        min_chains: chains,
+        max_chains: chains,
+        max_threads: threads,
+        max_cpus: cpus,
+        utilization,
+        data_fraction: 0.9,
+        thread_fraction,
+        ..EventGenConfig::default()
+    }
+}
+
+/// `events::analyze`'s (budget, job) figures, against the reference's.
+fn assert_same_figures(spec: &Spec) -> Vec<(Option<Nanos>, Option<Nanos>)> {
+    let naive = Naive::new(spec);
+    let want = reference(spec, &naive);
+    let got: Vec<(Option<Nanos>, Option<Nanos>)> = events::analyze(spec, &naive)
+        .iter()
+        .map(|r| (r.budget, r.job))
+        .collect();
+    assert_eq!(got, want);
+    want
+}
+
+#[test]
+fn the_component_order_gives_the_round_figures_on_cycles_and_overloads() {
+    let (mut cyclic, mut unbounded, mut bounded) = (0, 0, 0);
+    for seed in 0..120u64 {
+        let mut rng = Rng::new(seed ^ 0x5cc);
+        let cfg = cyclic_config(
+            2 + (seed % 8) as usize,
+            1 + (seed % 3) as usize,
+            1 + (seed % 2) as u32,
+            0.3 + 0.9 * rng.unit(),
+            0.6 + 0.4 * rng.unit(),
+        );
+        let spec = event_triggered_system(seed, &cfg);
+        let figures = assert_same_figures(&spec);
+        cyclic += usize::from(threads_cycle(&spec));
+        let all = figures.iter().all(|r| r.1.is_some());
+        bounded += usize::from(all);
+        unbounded += usize::from(!all);
+    }
+    // The cases the two orders could part on are all drawn.
+    assert!(cyclic >= 10, "{cyclic} systems with a cycle of threads");
+    assert!(
+        unbounded >= 10,
+        "{unbounded} systems with an unbounded figure"
+    );
+    assert!(bounded >= 10, "{bounded} bounded systems");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(150))]
+
+    #[test]
+    fn random_systems_give_the_same_figures_in_either_order(
+        seed in any::<u64>(),
+        chains in 1usize..=10,
+        threads in 1usize..=5,
+        cpus in 1u32..=3,
+        utilization in 0.2f64..1.3,
+        thread_fraction in 0.0f64..=1.0,
+    ) {
+        let cfg = cyclic_config(chains, threads, cpus, utilization, thread_fraction);
+        assert_same_figures(&event_triggered_system(seed, &cfg));
+    }
 }
