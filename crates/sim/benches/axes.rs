@@ -13,11 +13,11 @@
 //! before it is measured.
 
 mod common;
-use common::{bench_events, span_for};
+use common::{bench_events, random_run};
 use criterion::{criterion_group, criterion_main, Criterion};
 use rtpipe_model::gen::{random_system, waters_system, GenConfig, WatersConfig};
 use rtpipe_model::{Scheduler, Spec};
-use rtpipe_sim::{ExecModel, Phasing, SimConfig};
+use rtpipe_sim::SimConfig;
 use std::time::Duration;
 
 const SEED: u64 = 2018;
@@ -107,14 +107,7 @@ fn axes(c: &mut Criterion) {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(3));
     for (axis, label, spec) in systems() {
-        let cfg = SimConfig {
-            horizon: span_for(&spec, 400_000.0),
-            seed: SEED,
-            phasing: Phasing::Random,
-            exec: ExecModel::Uniform,
-            log_jobs: false,
-            jitter: rtpipe_sim::Jitter::Uniform,
-        };
+        let cfg = random_run(&spec, SEED);
         let id = format!("{axis}/{label}");
         let n = describe(&id, &spec, &cfg);
         bench_events(&mut group, &id, &spec, &cfg, n);

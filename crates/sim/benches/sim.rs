@@ -32,7 +32,7 @@
 //! is measured.
 
 mod common;
-use common::{bench_events, run, span_for, MS};
+use common::{bench_events, random_run, run, MS};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use rtpipe_analysis::Metric;
 use rtpipe_model::gen::{event_triggered_system, random_system, EventGenConfig, GenConfig};
@@ -178,14 +178,7 @@ fn scaling(c: &mut Criterion) {
     {
         for scheduler in [Scheduler::Rm, Scheduler::Edf] {
             let spec = system(tasks, cpus, scheduler);
-            let cfg = SimConfig {
-                horizon: span_for(&spec, 400_000.0),
-                seed: SEED,
-                phasing: Phasing::Random,
-                exec: ExecModel::Uniform,
-                log_jobs: false,
-                jitter: rtpipe_sim::Jitter::Uniform,
-            };
+            let cfg = random_run(&spec, SEED);
             let sched = match scheduler {
                 Scheduler::Rm => "rm",
                 Scheduler::Edf => "edf",
@@ -199,14 +192,7 @@ fn scaling(c: &mut Criterion) {
         }
     }
     let spec = event_system(125);
-    let cfg = SimConfig {
-        horizon: span_for(&spec, 400_000.0),
-        seed: SEED,
-        phasing: Phasing::Random,
-        exec: ExecModel::Uniform,
-        log_jobs: false,
-        jitter: rtpipe_sim::Jitter::Uniform,
-    };
+    let cfg = random_run(&spec, SEED);
     let label = format!("{}t-events", spec.tasks.len());
     let n = describe(&label, &spec, &cfg);
     bench_events(&mut group, &label, &spec, &cfg, n);
@@ -244,14 +230,7 @@ fn heap(c: &mut Criterion) {
         let periods: Vec<Nanos> = (0..spec.tasks.len())
             .filter_map(|i| spec.activation_period(i))
             .collect();
-        let cfg = SimConfig {
-            horizon: span_for(&spec, 400_000.0),
-            seed: SEED,
-            phasing: Phasing::Random,
-            exec: ExecModel::Uniform,
-            log_jobs: false,
-            jitter: rtpipe_sim::Jitter::Uniform,
-        };
+        let cfg = random_run(&spec, SEED);
         // The simulator's event count on the same system and span.
         let ops = run(&spec, &cfg).events;
         group.throughput(Throughput::Elements(ops));

@@ -5,7 +5,7 @@ use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, BenchmarkId, Throughput};
 use rtpipe_joblog::SimResult;
 use rtpipe_model::{Nanos, Spec};
-use rtpipe_sim::{simulate, SimConfig};
+use rtpipe_sim::{simulate, ExecModel, Jitter, Phasing, SimConfig};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -48,6 +48,19 @@ pub fn span_for(spec: &Spec, events: f64) -> Nanos {
         .map(|p| 1.0 / p as f64)
         .sum();
     ((events / 2.0 / jobs_per_ns) as Nanos).max(MS)
+}
+
+/// About 400,000 events of `spec` from `seed`: random phasing, uniform
+/// demands and jitter, no job log (the runs the scaling benches time).
+pub fn random_run(spec: &Spec, seed: u64) -> SimConfig {
+    SimConfig {
+        horizon: span_for(spec, 400_000.0),
+        seed,
+        phasing: Phasing::Random,
+        exec: ExecModel::Uniform,
+        log_jobs: false,
+        jitter: Jitter::Uniform,
+    }
 }
 
 /// Measures `spec` under `cfg` in `group` as `label`, at `events` events
