@@ -34,7 +34,13 @@ fn what(v: &Variation) -> String {
         Variation::Scale(k) => format!("periods ×{k:.3}"),
         Variation::Rate(k) => format!("tail period ×{k:.3}"),
         Variation::Delay { line, ns } => {
-            format!("{} +{} ms", DELAY_LINES[*line].name(), *ns as f64 * 1e-6)
+            // Exact decimals of the integer delay: a float product printed
+            // grid points as 90.50966799999999.
+            let delay = Nanos::try_from(*ns).map_or_else(
+                |_| format!("{ns}e-6"),
+                |d| rtpipe_model::time::format_in(d, rtpipe_model::time::TimeUnit::Ms),
+            );
+            format!("{} +{delay} ms", DELAY_LINES[*line].name())
         }
     }
 }
