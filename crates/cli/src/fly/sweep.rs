@@ -683,3 +683,18 @@ fn text(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A delay point is labelled by its integer delay in exact decimals,
+    /// a whole one without any.
+    #[test]
+    fn delay_labels_are_exact() {
+        let at = |ns| what(&Variation::Delay { line: 0, ns });
+        assert_eq!(at(90_509_668), "gyro +90.509668 ms");
+        assert_eq!(at(2_000_000), "gyro +2 ms");
+        assert_eq!(at(25_500_000), "gyro +25.5 ms");
+    }
+}
