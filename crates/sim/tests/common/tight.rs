@@ -13,7 +13,9 @@
 //! --ignored --nocapture`.
 
 use rtpipe_analysis::{analyze, Anchor, Metric};
-use rtpipe_model::{Communication, Priorities, ResourceProtocol, SchedTest, Scheduler, Spec};
+use rtpipe_model::{
+    Communication, Nanos, Priorities, ResourceProtocol, SchedTest, Scheduler, Spec,
+};
 use rtpipe_sim::search::{search_with, SearchConfig};
 use rtpipe_testkit::env_u64;
 use std::collections::BTreeMap;
@@ -81,6 +83,19 @@ impl Spread {
     }
 }
 
+/// The worst latency the search `cfg` finds on `spec`, the system of
+/// `seed` (`None` without a sample), asserted not above its sound bound,
+/// and the samples it simulated.
+pub fn worst_found(spec: &Spec, seed: u64, cfg: &SearchConfig) -> (Option<Nanos>, u64) {
+    let mut samples = 0;
+    let r = search_with(spec, cfg, |_, res| {
+        samples += res.chains.iter().map(|s| s.samples).sum::<u64>();
+    })
+    .unwrap_or_else(|e| panic!("seed {seed}: search refused the system: {e}"));
+    assert!(!r.exceeds_sound(), "seed {seed}: {r}");
+    (r.value, samples)
+}
+
 /// One system's searched ratios, added under each of its features.
 fn system_tightness(spec: &Spec, seed: u64, restarts: u32, steps: u32, out: &mut Spread) {
     let feats = features(spec);
@@ -98,21 +113,16 @@ fn system_tightness(spec: &Spec, seed: u64, restarts: u32, steps: u32, out: &mut
             let Some(bound) = c.bound.sound(anchor) else {
                 continue;
             };
-            let cfg = SearchConfig {
+            let search = SearchConfig {
                 restarts,
                 steps,
                 seed: seed ^ 0x7167,
                 anchor,
                 ..SearchConfig::new(c.chain, metric, horizon)
             };
-            let mut samples = 0;
-            let r = search_with(spec, &cfg, |_, res| {
-                samples += res.chains.iter().map(|s| s.samples).sum::<u64>();
-            })
-            .unwrap_or_else(|e| panic!("seed {seed}: search refused the system: {e}"));
+            let (found, samples) = worst_found(spec, seed, &search);
             out.samples += samples;
-            assert!(!r.exceeds_sound(), "seed {seed}: {r}");
-            if let Some(v) = r.value {
+            if let Some(v) = found {
                 for f in &feats {
                     out.ratios.entry(f).or_default()[q].push(v as f64 / bound as f64);
                 }
