@@ -1,0 +1,102 @@
+//! Every relative link in README.md and docs/**/*.md (the book's pages,
+//! its SUMMARY.md among them) names a file that exists: mdBook builds a
+//! page with a dead link without a word, so this test is the book's link
+//! check.
+
+use std::path::{Path, PathBuf};
+
+fn markdown_files(root: &Path) -> Vec<PathBuf> {
+    let mut found = vec![root.join("README.md")];
+    let mut folders = vec![root.join("docs")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).expect("read docs/").flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                found.push(path);
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// The targets of the inline links `[text](target)` of a line, code spans
+/// and fenced code aside by the caller.
+fn link_targets(line: &str) -> Vec<&str> {
+    let mut targets = Vec::new();
+    let mut rest = line;
+    while let Some(at) = rest.find("](") {
+        let after = &rest[at + 2..];
+        let Some(end) = after.find(')') else { break };
+        targets.push(&after[..end]);
+        rest = &after[end..];
+    }
+    targets
+}
+
+/// `Some(path)` for a link to a file of the repository (not a web address
+/// nor an anchor in the same page), its `#fragment` dropped.
+fn local_path(target: &str) -> Option<&str> {
+    let target = target.split_whitespace().next()?;
+    if target.contains("://") || target.starts_with('#') || target.starts_with("mailto:") {
+        return None;
+    }
+    Some(target.split('#').next().unwrap_or(target))
+}
+
+/// The dead links of one file, each as `file:line: target`.
+fn dead_links(root: &Path, file: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(file).expect("read a markdown file");
+    let folder = file.parent().expect("a file has a folder");
+    let shown = file
+        .strip_prefix(root)
+        .unwrap_or(file)
+        .display()
+        .to_string();
+    let mut dead = Vec::new();
+    let mut in_fence = false;
+    for (number, line) in text.lines().enumerate() {
+        if line.starts_with("```") {
+            in_fence = !in_fence;
+            continue;
+        }
+        if in_fence {
+            continue;
+        }
+        for target in link_targets(line).into_iter().filter_map(local_path) {
+            if !folder.join(target).exists() {
+                dead.push(format!("{shown}:{}: {target}", number + 1));
+            }
+        }
+    }
+    dead
+}
+
+#[test]
+fn every_relative_link_in_the_docs_names_a_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let files = markdown_files(&root);
+    assert!(
+        files.iter().any(|f| f.ends_with("docs/SUMMARY.md")),
+        "the book's docs/SUMMARY.md is missing"
+    );
+    let dead: Vec<String> = files.iter().flat_map(|f| dead_links(&root, f)).collect();
+    assert!(
+        dead.is_empty(),
+        "{} dead link(s):\n{}",
+        dead.len(),
+        dead.join("\n")
+    );
+}
+
+#[test]
+fn the_link_finder_finds_links_and_skips_web_addresses() {
+    let line = "see [a](guide/a.md#x), [b](https://x.y) and [c](#here)";
+    let targets: Vec<&str> = link_targets(line)
+        .into_iter()
+        .filter_map(local_path)
+        .collect();
+    assert_eq!(targets, ["guide/a.md"]);
+}
