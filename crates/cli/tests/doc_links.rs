@@ -91,6 +91,47 @@ fn every_relative_link_in_the_docs_names_a_file() {
     );
 }
 
+/// The broken `{{#include FILE:ANCHOR}}` directives of one file (mdBook
+/// includes nothing for an anchor it cannot find, silently).
+fn broken_includes(root: &Path, file: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(file).expect("read a markdown file");
+    let folder = file.parent().expect("a file has a folder");
+    let shown = file.strip_prefix(root).unwrap_or(file).display().to_string();
+    let mut broken = Vec::new();
+    for (number, line) in text.lines().enumerate() {
+        let Some(directive) = line
+            .trim()
+            .strip_prefix("{{#include ")
+            .and_then(|d| d.strip_suffix("}}"))
+        else {
+            continue;
+        };
+        let (path, anchor) = directive.split_once(':').unwrap_or((directive, ""));
+        let place = format!("{shown}:{}: {directive}", number + 1);
+        let Ok(included) = std::fs::read_to_string(folder.join(path)) else {
+            broken.push(format!("{place}: no such file"));
+            continue;
+        };
+        let has = |mark: &str| included.lines().any(|l| l.contains(mark));
+        if !anchor.is_empty()
+            && !(has(&format!("ANCHOR: {anchor} ")) && has(&format!("ANCHOR_END: {anchor} ")))
+        {
+            broken.push(format!("{place}: no ANCHOR/ANCHOR_END pair `{anchor}`"));
+        }
+    }
+    broken
+}
+
+#[test]
+fn every_include_of_the_book_finds_its_file_and_anchor() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let broken: Vec<String> = markdown_files(&root)
+        .iter()
+        .flat_map(|f| broken_includes(&root, f))
+        .collect();
+    assert!(broken.is_empty(), "broken include(s):\n{}", broken.join("\n"));
+}
+
 #[test]
 fn the_link_finder_finds_links_and_skips_web_addresses() {
     let line = "see [a](guide/a.md#x), [b](https://x.y) and [c](#here)";
