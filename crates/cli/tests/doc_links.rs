@@ -96,7 +96,11 @@ fn every_relative_link_in_the_docs_names_a_file() {
 fn broken_includes(root: &Path, file: &Path) -> Vec<String> {
     let text = std::fs::read_to_string(file).expect("read a markdown file");
     let folder = file.parent().expect("a file has a folder");
-    let shown = file.strip_prefix(root).unwrap_or(file).display().to_string();
+    let shown = file
+        .strip_prefix(root)
+        .unwrap_or(file)
+        .display()
+        .to_string();
     let mut broken = Vec::new();
     for (number, line) in text.lines().enumerate() {
         let Some(directive) = line
@@ -113,9 +117,8 @@ fn broken_includes(root: &Path, file: &Path) -> Vec<String> {
             continue;
         };
         let has = |mark: &str| included.lines().any(|l| l.contains(mark));
-        if !anchor.is_empty()
-            && !(has(&format!("ANCHOR: {anchor} ")) && has(&format!("ANCHOR_END: {anchor} ")))
-        {
+        let anchored = has(&format!("ANCHOR: {anchor} ")) && has(&format!("ANCHOR_END: {anchor} "));
+        if !anchor.is_empty() && !anchored {
             broken.push(format!("{place}: no ANCHOR/ANCHOR_END pair `{anchor}`"));
         }
     }
@@ -129,7 +132,11 @@ fn every_include_of_the_book_finds_its_file_and_anchor() {
         .iter()
         .flat_map(|f| broken_includes(&root, f))
         .collect();
-    assert!(broken.is_empty(), "broken include(s):\n{}", broken.join("\n"));
+    assert!(
+        broken.is_empty(),
+        "broken include(s):\n{}",
+        broken.join("\n")
+    );
 }
 
 #[test]
