@@ -637,36 +637,31 @@ max_period (the slowest rate control tolerates):
     out
 }
 
-/// The last line: what fails under `mode`, or that nothing does.
+/// The last line: what fails under `mode`, or that nothing does. The
+/// failures are joined by "; ", so no combination leaves a dangling
+/// separator.
 fn verdict_text(r: &Report, mode: Mode) -> String {
-    let mut out = String::new();
     let fails = r.chains.iter().filter(|c| !c.ok_in(mode)).count();
     let name = mode.name();
     let over = r.period_excesses.len();
-    out.push_str(&format!(
-        "\n{}{}\n",
-        match (r.schedulability.schedulable, fails) {
-            (true, 0) if over > 0 => "verdict: ".to_string(),
-            (true, 0) => format!(
-                "verdict: every limit holds ({name} analysis) and the system is schedulable"
-            ),
-            (sched, f) => format!(
-                "verdict: {}{}",
-                if sched { "" } else { "not schedulable; " },
-                if f > 0 {
-                    format!("{f} chain limit(s) fail under the {name} analysis")
-                } else {
-                    String::new()
-                }
-            ),
-        },
-        match (over, fails > 0) {
-            (0, _) => String::new(),
-            (n, true) => format!("; {n} period(s) above max_period"),
-            (n, false) => format!("{n} period(s) above max_period"),
-        }
-    ));
-    out
+    let mut parts = Vec::new();
+    if !r.schedulability.schedulable {
+        parts.push("not schedulable".to_string());
+    }
+    if fails > 0 {
+        parts.push(format!(
+            "{fails} chain limit(s) fail under the {name} analysis"
+        ));
+    }
+    if over > 0 {
+        parts.push(format!("{over} period(s) above max_period"));
+    }
+    if parts.is_empty() {
+        parts.push(format!(
+            "every limit holds ({name} analysis) and the system is schedulable"
+        ));
+    }
+    format!("\nverdict: {}\n", parts.join("; "))
 }
 
 /// The bounds under the spec's known release offsets, for the chains with
