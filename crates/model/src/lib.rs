@@ -687,7 +687,7 @@ fn toml_help(msg: &str) -> Option<String> {
     if msg.contains("unknown field") {
         Some("remove the key or correct its spelling; the expected keys are listed above".into())
     } else if msg.contains("missing field") {
-        Some("add the missing key (see the spec format in the README)".into())
+        Some("add the missing key (see the spec format, docs/reference/spec.md)".into())
     } else if msg.contains("too large to fit") {
         Some("whole numbers must fit in 64 bits; times are limited to about 104 days: write a smaller value, or a time with a unit such as \"250us\"".into())
     } else if msg.contains("invalid type") {
