@@ -317,3 +317,80 @@ fn the_next_write_removes_what_sigkill_left() {
     assert_eq!(listing(&dir), vec!["s.csv".to_string()]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A deadline run beside a partitioned one is not global EDF: the other
+/// run's exclusive cpusets make each CPU a root domain of its own, and the
+/// kernel admits each thread against the one CPU it is on. Pinned to CPU 0,
+/// where the other run already holds 0.72 of the bandwidth, a second
+/// paper-table2-edf is refused (EBUSY) with that cause named, not "lower
+/// the budgets".
+#[test]
+fn a_refusal_beside_another_run_s_cpusets_names_its_root_domains() {
+    let _one = serial();
+    if let Some(why) = cpusets_unavailable() {
+        eprintln!("SKIPPED: {why}");
+        return;
+    }
+    if Command::new("taskset").arg("--version").output().is_err() {
+        eprintln!("SKIPPED: no taskset (util-linux) to pin the second run");
+        return;
+    }
+    let before = cpuset_state();
+    let dir = scratch("signal-run-beside");
+    let spec = example("paper-table2-edf.toml");
+    let args = ["run", &spec, "--policy", "deadline", "--duration", "60s"];
+    let mut first = spawn(&dir, &args);
+    let own = PathBuf::from(CPUSETS).join(format!("rtpipe-{}-cpu0", first.id()));
+    // Its six reservations made, not only its cpusets.
+    let pid = first.id();
+    if !wait_for(&mut first, || deadline_threads(pid) == 6) {
+        let _ = first.kill();
+        let (_, err) = finish(first);
+        eprintln!("SKIPPED: the first run made no cpusets:\n{err}");
+        return;
+    }
+    let second = Command::new("taskset")
+        .args(["-c", "0", env!("CARGO_BIN_EXE_rtpipe")])
+        .args(["run", &spec, "--policy", "deadline", "--duration", "1s"])
+        .current_dir(&dir)
+        .stdin(Stdio::null())
+        .output();
+    kill("TERM", first.id());
+    let (status, err) = finish(first);
+    assert_eq!(status, Some(143), "the first run: {err}");
+    let Ok(second) = second else {
+        panic!("cannot run taskset");
+    };
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    let named = format!(
+        "another rtpipe run (pid {}) holds the CPUs' exclusive cpusets, which make each CPU a root domain of its own",
+        own.to_string_lossy()
+            .rsplit("rtpipe-")
+            .next()
+            .and_then(|s| s.split('-').next())
+            .unwrap_or("?")
+    );
+    assert!(err.contains(&named), "{err}");
+    assert_eq!(cpuset_state(), before, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// How many threads of process `pid` are in SCHED_DEADLINE (policy 6, the
+/// 41st field of /proc/PID/task/TID/stat).
+fn deadline_threads(pid: u32) -> usize {
+    let Ok(dir) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return 0;
+    };
+    dir.filter_map(Result::ok)
+        .filter_map(|t| std::fs::read_to_string(t.path().join("stat")).ok())
+        .filter(|stat| {
+            // The fields after the command's closing parenthesis start at
+            // the 3rd: the policy is the 39th of them.
+            stat.rsplit_once(')')
+                .and_then(|(_, rest)| rest.split_whitespace().nth(38).map(str::to_string))
+                .as_deref()
+                == Some("6")
+        })
+        .count()
+}

@@ -101,30 +101,28 @@ pub enum Cause {
         /// How far its reservation can lag its releases: its period, ns.
         lag: Nanos,
     },
-    /// Under SCHED_DEADLINE the task's previous job woke so late after its
-    /// release that the reservation's deadline its wake-up set (wake-up +
-    /// D − lead) lies after this job's release: when this job wakes before
-    /// it, the kernel keeps that deadline with what is left of the runtime
-    /// (the CBS wake-up rule), and once that is spent throttles the job
-    /// until it, up to the previous job's start latency less the lead.
-    /// With that earlier deadline the job also runs what is left of the
-    /// runtime ahead of other tasks' jobs of earlier deadlines (out of EDF
-    /// order).
+    /// Under SCHED_DEADLINE the task's reservation may hold, at this job's
+    /// wake-up, a deadline that lies after the job's release, kept from
+    /// the task's earlier jobs: a wake-up later than the lead sets one
+    /// there, a throttled reservation is replenished with its deadline a
+    /// period on, and a wake-up keeps a deadline that lies ahead while the
+    /// leftover runtime fits the bandwidth (the CBS wake-up rule). The job
+    /// then runs that leftover, is throttled until the kept deadline (up to
+    /// `lag` after its release), and with the leftover it also runs ahead
+    /// of other tasks' jobs of earlier deadlines (out of EDF order).
     StaleDeadline {
         /// The task.
         task: usize,
         /// The job.
         job: u64,
-        /// The previous job's start latency less `lead`, ns: how long the
-        /// job itself may be throttled.
+        /// How far after the job's release the kept deadline may lie, ns
+        /// (`kept_deadlines`): how long the job itself may be throttled.
         lag: Nanos,
-        /// How long before the job's release the kept deadline lies when
-        /// the previous job woke on time: T − D plus the reservation's lead
-        /// (`config::reservation`); a previous wake-up later than that by
-        /// less leaves a deadline that has passed, which the kernel renews.
-        lead: Nanos,
-        /// What the reservation had left after the previous job (its
-        /// runtime less that job's CPU time), ns: how long it may run ahead.
+        /// How much runtime the reservation may have kept with it, ns: how
+        /// long the job may run ahead. The kernel keeps a deadline only
+        /// when the leftover is at most runtime × (deadline − now) /
+        /// relative deadline, and at most what the job before left of the
+        /// runtime when that job ran unthrottled.
         ahead: Nanos,
         /// A job of the observation's own task (delayed by `lag`), or
         /// another task's on its CPU (delaying it by `ahead`).
@@ -267,17 +265,14 @@ impl Cause {
                 task,
                 job,
                 lag,
-                lead,
                 ahead,
                 own,
             } => format!(
-                "{} job {} started {} us after its release (more than the {} us its reservation's \
-                 deadline leads the next release by): SCHED_DEADLINE may keep the deadline its wake-up set \
-                 for job {job}, {}",
+                "{} job {job}: its SCHED_DEADLINE reservation may have kept a deadline up to {} us \
+                 after its release from the task's earlier jobs (a late wake-up or a throttle put it \
+                 there; a wake-up keeps a deadline that lies ahead), {}",
                 name(task),
-                job.saturating_sub(1),
-                us(lag + lead),
-                us(lead),
+                us(lag),
                 if own {
                     format!("and throttle it up to {} us", us(lag))
                 } else {
@@ -428,14 +423,12 @@ impl<'r> Blame<'r> {
                     task,
                     job,
                     lag,
-                    lead,
                     ahead,
                     ..
                 } if ahead > 0 => Some(Cause::StaleDeadline {
                     task,
                     job,
                     lag,
-                    lead,
                     ahead,
                     own: false,
                 }),
@@ -731,11 +724,16 @@ fn lags(spec: &Spec, res: &RunResult, t: usize, jobs: &[&JobRecord]) -> Vec<(Nan
             .iter()
             .take_while(|j| j.finish - j.release > due)
             .count();
-        let last = first + late;
+        // At least the next job: the overrun may be charged at its
+        // wake-up (the kernel charges a reservation from the wake-up that
+        // preempts the CPU, so another thread's non-preemptible stretch
+        // before the switch eats its runtime) and throttle it until the
+        // deadline its wake-up set, which it then meets.
+        let last = (first + late).max((first + 1).min(jobs.len() - 1));
         let cause = Cause::ReservationOverrun {
             task: t,
             job,
-            affected: late as u64 + 1,
+            affected: (last - first) as u64 + 1,
             lag: period,
         };
         // The signal comes at the thread's next tick on the CPU: the job
@@ -746,41 +744,94 @@ fn lags(spec: &Spec, res: &RunResult, t: usize, jobs: &[&JobRecord]) -> Vec<(Nan
     if res.partitioned {
         let deadline = task.deadline().unwrap_or(period).min(period);
         let r = crate::config::reservation(task.budget(), deadline, period);
-        // The kept deadline lies this long before the next release when
-        // the job before woke on time.
-        let early = period - r.deadline;
-        out.extend(stale_deadlines(t, jobs, (r.runtime, early)));
+        out.extend(kept_deadlines(
+            t,
+            jobs,
+            &run.reservation_overruns,
+            (r, period),
+        ));
     }
     out
 }
 
-/// Task `t`'s jobs whose job before started more than `early` after its
-/// release ([`Cause::StaleDeadline`]), each over its own span. That job's
-/// wake-up, at most its start, set the reservation's deadline (wake-up +
-/// D − lead), which then lies `early` (T − D + the lead) less than that
-/// wake-up's latency before this job's release: when this job wakes before
-/// it, the kernel may keep it, up to that long (its own start latency is no
-/// measure of it: a throttle until the kept deadline is part of it).
-fn stale_deadlines(
+/// Task `t`'s jobs (`jobs`, in release order) whose reservation may hold a
+/// deadline kept from earlier jobs past their release
+/// ([`Cause::StaleDeadline`]), each over its own span, given the jobs the
+/// kernel signalled or the run saw overrunning the reservation
+/// (`overruns`) and the reservation `r` of a task of period `period`.
+///
+/// How far after job k's release the kernel's deadline may lie at its
+/// wake-up, carry(k), follows from job k−1 (s its start latency; its
+/// kernel deadline kd = s + r.deadline after its release when its wake-up
+/// renewed it, carry(k−1) when it kept one):
+/// - renewed and unthrottled: s + r.deadline − T, the wake-up's lateness
+///   less the lead (T − r.deadline);
+/// - kept: the job may have run out of the leftover and been throttled
+///   until kd, then replenished a period on: carry(k−1) − (T − r.period);
+/// - an overrun (signalled at job k−1 or, at the next tick, at job k):
+///   throttled at kd and replenished a period on: kd − (T − r.period).
+///
+/// The largest of these, if positive. A job's start latency alone
+/// undercounts it: a job that kept a deadline starts on time with its
+/// leftover and is throttled mid-job (docs/runtime.md has the trace).
+fn kept_deadlines(
     t: usize,
     jobs: &[&JobRecord],
-    (runtime, early): (Nanos, Nanos),
+    overruns: &[u64],
+    (r, period): (crate::config::Reservation, Nanos),
 ) -> Vec<(Nanos, Nanos, Cause)> {
-    jobs.windows(2)
-        .filter(|w| w[1].index == w[0].index + 1)
-        .filter_map(|w| {
-            let late = w[0].read - w[0].release;
+    let replenished = period - r.period;
+    let overran = |k: u64| overruns.contains(&k) || overruns.contains(&(k + 1));
+    let mut out = Vec::new();
+    let mut carry: Nanos = 0;
+    let mut prev: Option<&JobRecord> = None;
+    for &j in jobs {
+        let Some(p) = prev.filter(|p| j.index == p.index + 1) else {
+            // No job before it in the log: nothing known to carry.
+            carry = 0;
+            prev = Some(j);
+            continue;
+        };
+        let start = p.read - p.release;
+        let kd = (start + r.deadline).max(carry);
+        let mut next = start + r.deadline - period;
+        // Whether job k−1 may have been throttled: then what it left of
+        // the runtime is no measure of the leftover.
+        let mut paused = false;
+        if carry > 0 {
+            next = next.max(carry - replenished);
+            paused = true;
+        }
+        if overran(p.index) {
+            next = next.max(kd - replenished);
+            paused = true;
+        }
+        carry = next.max(0);
+        if carry > 0 {
             let cause = Cause::StaleDeadline {
                 task: t,
-                job: w[1].index,
-                lag: late - early,
-                lead: early,
-                ahead: (runtime - w[0].demand).max(0),
+                job: j.index,
+                lag: carry,
+                ahead: kept_runtime(r, carry, (!paused).then_some(p.demand)),
                 own: true,
             };
-            (late > early).then_some((w[1].release, w[1].finish, cause))
-        })
-        .collect()
+            out.push((j.release, j.finish, cause));
+        }
+        prev = Some(j);
+    }
+    out
+}
+
+/// The most runtime reservation `r` can keep with a deadline `carry` ns
+/// after the wake-up: the kernel renews a deadline whose leftover exceeds
+/// runtime × (deadline − now) / relative deadline (`dl_entity_overflow`;
+/// under a constrained deadline it cuts the leftover to that); and at most
+/// what the job before left when it ran unthrottled (`used`: its CPU time).
+fn kept_runtime(r: crate::config::Reservation, carry: Nanos, used: Option<Nanos>) -> Nanos {
+    let fits = i128::from(r.runtime) * i128::from(carry) / i128::from(r.deadline.max(1));
+    let fits = Nanos::try_from(fits + 1).unwrap_or(Nanos::MAX);
+    let left = used.map_or(r.runtime, |u| (r.runtime - u).max(0));
+    fits.min(left)
 }
 
 /// How far below the real-time share a CPU's use by the run still counts

@@ -111,14 +111,7 @@ fn deadline(
     if let Err(e) = reserved {
         let help = match e.raw_os_error() {
             Some(libc::EPERM) => no_privilege("SCHED_DEADLINE"),
-            Some(libc::EBUSY) => format!(
-                "admission control: the reservations already admitted plus this one \
-                 (C/T = {:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU), \
-                 still after {} ms of retrying (a run that just ended frees its bandwidth within its longest period); \
-                 lower the budgets or lengthen the periods, or stop the other SCHED_DEADLINE threads",
-                c as f64 / t as f64,
-                th.admission_wait / 1_000_000
-            ),
+            Some(libc::EBUSY) => busy_help(c as f64 / t as f64, th, partition.is_some()),
             Some(libc::EINVAL) => format!(
                 "task {name}: runtime {c} ns, deadline {} ns, period {t} ns break the kernel's rules \
                  (runtime ≥ 1024 ns, runtime ≤ deadline ≤ period, period within the sched_deadline_period sysctls)",
@@ -133,6 +126,32 @@ fn deadline(
         ));
     }
     Ok(())
+}
+
+/// What to do about a reservation of bandwidth `share` refused as busy
+/// (EBUSY) for `th`; `partitioned`: the run has its own root domain per
+/// CPU.
+fn busy_help(share: f64, th: &Placement<'_>, partitioned: bool) -> String {
+    let split = (!partitioned)
+        .then(crate::partition::split_by_another_run)
+        .flatten();
+    match split {
+        // Measured: paper-table2-edf beside a partitioned run of itself
+        // (0.72 of CPU 0): refused pinned to CPU 0, admitted on CPU 1.
+        Some(pid) => format!(
+            "admission control: another rtpipe run (pid {pid}) holds the CPUs' exclusive cpusets, which \
+             make each CPU a root domain of its own; the kernel admits this thread (C/T = {share:.3}) \
+             against the one CPU it is on, beside that run's reservations there, not against all CPUs; \
+             wait until that run ends, or pin this one (taskset -c) to CPUs that run leaves free"
+        ),
+        None => format!(
+            "admission control: the reservations already admitted plus this one \
+             (C/T = {share:.3}) exceed the deadline bandwidth (sched_rt_runtime_us/sched_rt_period_us per CPU), \
+             still after {} ms of retrying (a run that just ended frees its bandwidth within its longest period); \
+             lower the budgets or lengthen the periods, or stop the other SCHED_DEADLINE threads",
+            th.admission_wait / 1_000_000
+        ),
+    }
 }
 
 /// `reserve()` until it is not refused as busy (EBUSY) or `wait` ns have

@@ -591,6 +591,7 @@ fn start<'a, V: Copy + Send>(
                 // into slots, merged while a job waits (the model's rule).
                 let queued = first.merges_releases();
                 std::thread::Builder::new()
+                    .name(os_thread_name(spec, first))
                     .stack_size(TASK_STACK)
                     .spawn_scoped(s, move || {
                         let run = (policy, duration, grace);
@@ -615,6 +616,17 @@ fn start<'a, V: Copy + Send>(
         handles.into_iter().map(|h| h.join()).collect::<Vec<_>>()
     });
     (finished, demoted, probes)
+}
+
+/// The name the kernel shows for the OS thread of `task` (its work-queue
+/// thread's, if it has one): `ps -L`, `top -H` and a kernel trace then
+/// tell the run's threads apart (Linux keeps the first 15 bytes).
+fn os_thread_name(spec: &Spec, task: &rtpipe_model::Task) -> String {
+    let name = task
+        .thread
+        .and_then(|t| spec.threads.get(t))
+        .map_or(task.name.as_str(), |t| t.name.as_str());
+    format!("rt:{name}")
 }
 
 /// The task threads (in task order) grouped by the OS thread that runs

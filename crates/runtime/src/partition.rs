@@ -206,6 +206,21 @@ fn write_record(value: &str) -> Result<(), String> {
         })
 }
 
+/// The pid of another live rtpipe run whose exclusive cpusets split the
+/// CPUs into one root domain each, if any. A run that is not partitioned
+/// beside it is no global EDF either: the kernel admits each of its
+/// SCHED_DEADLINE threads against the bandwidth of the root domain of the
+/// CPU it sits on (`sched_dl_overflow`: one CPU's share, beside that run's
+/// reservations there), and schedules it within that domain.
+pub fn split_by_another_run() -> Option<u32> {
+    let own = std::process::id();
+    let root = mount()?;
+    live_sets(&root)
+        .into_iter()
+        .map(|(_, pid)| pid)
+        .find(|&pid| pid != own)
+}
+
 /// The cpuset hierarchy's root.
 fn mount() -> Option<PathBuf> {
     MOUNTS

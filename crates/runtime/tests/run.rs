@@ -219,3 +219,38 @@ fn offsets_shift_the_releases() {
     assert_eq!(releases, expected);
     assert!(r.sim.jobs.iter().all(|j| j.release <= j.read));
 }
+
+/// Each task's OS thread is named after its task, so a kernel trace
+/// (`sched_switch` names `comm`), `ps -L` and `top -H` tell them apart.
+#[test]
+fn each_task_thread_is_named_after_its_task() {
+    let _one = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let Ok(spec) = Spec::parse("pair.toml", SPEC) else {
+        panic!("the spec parses");
+    };
+    let names = std::sync::Mutex::new(Vec::new());
+    let bodies: Vec<Box<dyn Body<u64> + '_>> = (0..2)
+        .map(|_| {
+            let names = &names;
+            Box::new(move |_: &Job, _: &[Option<Stamped<u64>>], _: Option<u64>| {
+                // What the kernel shows, not only what std recorded.
+                let comm = std::fs::read_to_string("/proc/thread-self/comm").unwrap_or_default();
+                if let Ok(mut v) = names.lock() {
+                    v.push(comm.trim().to_string());
+                }
+                0u64
+            }) as Box<dyn Body<u64> + '_>
+        })
+        .collect();
+    let cfg = RunConfig {
+        duration: 3_000_000,
+        policy: Policy::Other,
+        load: 0,
+    };
+    let r = run(&spec, &cfg, bodies, None);
+    assert!(r.is_ok(), "{:?}", r.err());
+    let mut seen = names.into_inner().unwrap_or_else(|e| e.into_inner());
+    seen.sort();
+    seen.dedup();
+    assert_eq!(seen, vec!["rt:dst".to_string(), "rt:src".to_string()]);
+}
