@@ -143,18 +143,6 @@ impl FormatArgs {
     pub fn is_json(&self) -> bool {
         self.chosen() == Format::Json
     }
-
-    /// Refuses `--format csv` for a command whose report has no tables
-    /// yet (`fly`, `campaign`).
-    pub fn no_csv(&self, command: &str) -> Result<(), Diagnostic> {
-        if self.chosen() != Format::Csv {
-            return Ok(());
-        }
-        Err(Diagnostic::error(
-            format!("`{command}` has no CSV report yet"),
-            "use --format text or --format json",
-        ))
-    }
 }
 
 /// `--format`'s names, listed in the help and in errors.

@@ -3,8 +3,10 @@
 //! reports where the flight stops meeting its criteria, the chain limits
 //! that follow, and optionally writes them into a spec.
 
+mod report;
+
 use super::args::FlyArgs;
-use crate::command::{self, Answer, Rendered};
+use crate::command::{self, Answer};
 use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
@@ -387,14 +389,16 @@ pub fn execute(
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
     let written = write_files(spec, s, a, (&c, &free), &points, &limits, write_limits);
-    let report = if a.output.is_json() {
-        Rendered::Json(command::to_value(&sweep_json(
-            spec, s, &c, a, &points, &limits,
-        ))?)
-    } else {
-        let shown = write_limits.filter(|_| written.is_ok());
-        Rendered::Text(text(spec, s, (&c, a), &points, &limits, shown))
+    let view = report::SweepReport {
+        spec,
+        setup: s,
+        criteria: &c,
+        args: a,
+        points: &points,
+        limits: &limits,
+        written: write_limits.filter(|_| written.is_ok()),
     };
+    let report = command::render(&view, a.output.chosen())?;
     let mut notes = Vec::new();
     if let (Some(out), true) = (&a.write_limits, nothing) {
         let d = Diagnostic::error(
