@@ -296,19 +296,37 @@ fn parse<A: Args + FromArgMatches>(command: &str, argv: &[String]) -> Result<A, 
     let parsed = cmd
         .try_get_matches_from(argv)
         .and_then(|m| A::from_arg_matches(&m));
-    parsed.map_err(|e| Failure::Input(flag_error(&e)))
+    parsed.map_err(|e| Failure::Input(flag_error(&e, command)))
 }
 
-/// A parser error as a diagnostic: its first line, without clap's usage
-/// and help lines.
-fn flag_error(e: &clap::Error) -> Diagnostic {
+/// A parser error as a diagnostic for a Python caller: its first line
+/// (the values the flag takes, when the parser lists them, after it),
+/// without clap's usage and help lines; the help is clap's tip, or where
+/// to read the keywords and their values.
+fn flag_error(e: &clap::Error, command: &str) -> Diagnostic {
     let text = e.render().to_string();
     let first = text.lines().next().unwrap_or("invalid arguments");
-    let message = first.trim_start_matches("error: ").to_string();
+    let mut message = first.trim_start_matches("error: ").to_string();
+    if let Some(values) = text.lines().find_map(|l| {
+        l.trim()
+            .strip_prefix("[possible values: ")
+            .and_then(|v| v.strip_suffix(']'))
+    }) {
+        message.push_str(&format!(" (possible values: {values})"));
+    }
     let help = text
         .lines()
-        .find_map(|l| l.trim().strip_prefix("tip: "))
-        .unwrap_or("see `rtpipe COMMAND --help` for the flags and their values");
+        .find_map(|l| l.trim().strip_prefix("tip: ").map(str::to_string))
+        .unwrap_or_else(|| {
+            let at = if command == "waters" {
+                "rtpipe.waters".to_string()
+            } else if command == "campaign" {
+                "rtpipe.campaign".to_string()
+            } else {
+                format!("rtpipe.System.{command}")
+            };
+            format!("see help({at}) for the arguments and the values they take")
+        });
     Diagnostic::error(message, help)
 }
 

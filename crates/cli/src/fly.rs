@@ -130,18 +130,10 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 /// row sink and stop flag (a flight checks it as it goes, a sweep before
 /// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
+    a.validate()?;
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
     if a.sweep {
-        if let Some(flag) = [("--log", &a.log), ("--samples", &a.samples)]
-            .into_iter()
-            .find_map(|(flag, p)| p.as_ref().map(|_| flag))
-        {
-            return Err(Diagnostic::error(
-                format!("{flag} describes one flight; --sweep flies many"),
-                format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
-            ));
-        }
         return sweep::execute(spec, &s, a, hooks.stop.as_deref());
     }
     let msg = format!(

@@ -32,13 +32,14 @@ pub struct RunArgs {
     /// (the co-simulated world advanced to the true instants).
     #[arg(long)]
     pub synthetic: bool,
-    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
-    #[arg(long, default_value = "racer5")]
-    pub vehicle: String,
+    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`)
+    /// [default: racer5].
+    #[arg(long)]
+    pub vehicle: Option<String>,
     /// A flight's mission: steps, hover, paper, gusty, or a mission file (as
-    /// `fly`).
-    #[arg(long, default_value = "steps")]
-    pub mission: String,
+    /// `fly`) [default: steps].
+    #[arg(long)]
+    pub mission: Option<String>,
     /// Scheduling class of the task threads [default: fifo for scheduler =
     /// "rm", deadline for "edf", edf-fifo for "edf" with critical
     /// sections]. `other` needs --best-effort.
@@ -85,9 +86,23 @@ pub struct RunArgs {
     /// input spec).
     #[arg(long, value_name = "OUT.toml", requires = "measure_overheads")]
     pub write_spec: Option<PathBuf>,
-    /// --vehicle or --mission was given on the command line (set by main).
-    #[arg(skip)]
-    pub world_given: bool,
+}
+
+impl RunArgs {
+    /// `--vehicle`, or its default.
+    pub fn vehicle(&self) -> &str {
+        self.vehicle.as_deref().unwrap_or("racer5")
+    }
+
+    /// `--mission`, or its default.
+    pub fn mission(&self) -> &str {
+        self.mission.as_deref().unwrap_or("steps")
+    }
+
+    /// Whether a flight's world was chosen (`--vehicle`, `--mission`).
+    fn world_given(&self) -> bool {
+        self.vehicle.is_some() || self.mission.is_some()
+    }
 }
 
 /// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
@@ -250,7 +265,7 @@ fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
 /// rt-app workload if asked, since it needs no run.
 fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagnostic> {
     let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
-    if a.world_given && !flight {
+    if a.world_given() && !flight {
         return Err(Diagnostic::error(
             "--vehicle and --mission choose what a flight flies, but this run has synthetic bodies (no task names a flight body, or --synthetic)",
             "drop --vehicle/--mission, or run a spec whose tasks name flight bodies without --synthetic",
@@ -259,8 +274,8 @@ fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagn
     let setup = if flight {
         let r = rtpipe_fly::Request {
             spec_path: &a.spec,
-            vehicle: &a.vehicle,
-            mission: &a.mission,
+            vehicle: a.vehicle(),
+            mission: a.mission(),
             horizon: None,
             seed: 0,
         };

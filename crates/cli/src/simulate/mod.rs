@@ -51,9 +51,11 @@ pub struct SimulateArgs {
     /// spec's time unit.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub duration: Option<String>,
-    /// Seeds the random offsets and demands (the same seed gives the same run).
-    #[arg(long, value_name = "S", default_value_t = 0)]
-    pub seed: u64,
+    /// Seeds the random offsets and demands (the same seed gives the same
+    /// run) [default: 0]. Absent rather than defaulted, so that a seed given
+    /// where nothing is random is refused ([`SimulateArgs::validate`]).
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
     /// How each job's demand Δin + p + Δout is drawn: p = exec (worst),
     /// exec_min (best), uniform in between, or one of the two at random
     /// (extremes).
@@ -65,9 +67,10 @@ pub struct SimulateArgs {
     /// with a known `offset` in the spec keeps it in every mode.
     #[arg(long, value_enum, default_value_t = PhasingArg::Sync)]
     pub phasing: PhasingArg,
-    /// With --phasing search: candidates tried per local search (4 restarts).
-    #[arg(long, value_name = "N", default_value_t = 50)]
-    pub search_steps: u32,
+    /// With --phasing search: candidates tried per local search (4
+    /// restarts) [default: 50].
+    #[arg(long, value_name = "N")]
+    pub search_steps: Option<u32>,
     #[command(flatten)]
     pub output: command::FormatArgs,
     /// Write a Chrome trace-event file for the Perfetto UI
@@ -89,12 +92,18 @@ pub struct SimulateArgs {
     /// ("0,30ms") [default: the first 3 × the largest period].
     #[arg(long, value_name = "START,END", allow_hyphen_values = true)]
     pub window: Option<String>,
-    /// --seed was given on the command line (set by main).
-    #[arg(skip)]
-    pub seed_given: bool,
-    /// --search-steps was given on the command line (set by main).
-    #[arg(skip)]
-    pub search_steps_given: bool,
+}
+
+impl SimulateArgs {
+    /// `--seed`, or its default.
+    pub fn seed(&self) -> u64 {
+        self.seed.unwrap_or(0)
+    }
+
+    /// `--search-steps`, or its default.
+    pub fn search_steps(&self) -> u32 {
+        self.search_steps.unwrap_or(50)
+    }
 }
 
 /// `--phasing`. Each variant maps to one way of running the simulator in
@@ -142,7 +151,7 @@ fn run_simulation(
     };
     let cfg = SimConfig {
         horizon: p.horizon,
-        seed: a.seed,
+        seed: a.seed(),
         phasing,
         exec: a.exec.model(),
         // Jittered tasks: every job at its latest under the deterministic
@@ -328,7 +337,7 @@ fn exit_status(
             a.spec.display(),
             spec.fmt_time(res.horizon),
             spec.time_unit,
-            a.seed,
+            a.seed(),
             flag_name(&a.exec),
             flag_name(&a.phasing)
         ));
@@ -358,8 +367,8 @@ fn run_searches(
             for metric in [Metric::Reaction, Metric::Freshness] {
                 let mut cfg = SearchConfig::new(chain, metric, horizon);
                 cfg.anchor = anchor;
-                cfg.steps = a.search_steps;
-                cfg.seed = a.seed;
+                cfg.steps = a.search_steps();
+                cfg.seed = a.seed();
                 Hooks::check_stop(stop);
                 out.push(search(spec, &cfg)?);
             }

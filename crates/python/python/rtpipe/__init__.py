@@ -33,9 +33,11 @@ file may be and with finite numbers; anything else raises
 
 from __future__ import annotations
 
+import inspect
 import logging
 import operator
 import os
+import re
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -101,24 +103,66 @@ def waters(
     file. ``release="synchronous"`` releases every task at 0."""
     options = dict(seed=seed, tasks=tasks, utilization=utilization, chains=chains,
                    cpus=cpus, release=release)
-    return System(_rtpipe.waters(_flags(options)))
+    keywords = list(options)
+    return System(_speaking_python(keywords, lambda: _rtpipe.waters(_flags(options))))
 
 
-def _flags(options: Mapping[str, Any]) -> list:
+def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> list:
     """Keyword arguments as command-line flags: None and False leave a flag
-    out, True gives it bare, a list joins its items with commas."""
+    out, True gives a switch (one of ``switches``) bare, a list joins its
+    items with commas. A value is always joined to its flag
+    (``--seed=-1``), so that the parser reads it as that flag's value
+    whatever it looks like, and refuses it naming the flag; a switch takes
+    a bool only."""
     out = []
     for key, value in options.items():
-        if value is None or value is False:
-            continue
         flag = "--" + key.replace("_", "-")
-        if value is True:
-            out.append(flag)
-        elif isinstance(value, (list, tuple)):
-            out += [flag, ",".join(str(v) for v in value)]
-        else:
-            out += [flag, os.fspath(value) if isinstance(value, os.PathLike) else str(value)]
+        if key in switches:
+            if value is not None and not isinstance(value, (bool, np.bool_)):
+                raise TypeError(f"{key}={value!r}: give True or False")
+            if value:
+                out.append(flag)
+            continue
+        if value is None:
+            continue
+        if isinstance(value, (list, tuple)):
+            value = ",".join(str(v) for v in value)
+        elif isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        out.append(f"{flag}={value}")
     return out
+
+
+def _switches(function: Any) -> Tuple[str, ...]:
+    """The keywords of ``function`` that are switches (those whose default
+    is False)."""
+    params = inspect.signature(function).parameters.values()
+    return tuple(p.name for p in params if p.default is False and p.name != "samples")
+
+
+def _pythonic(message: str, keywords: Sequence[str]) -> str:
+    """A message of the command line's parser or checks, with each flag
+    that is one of ``keywords`` named as that keyword (``--search-steps``
+    and ``'--search-steps <N>'`` are ``search_steps``)."""
+    for key in sorted(keywords, key=len, reverse=True):
+        flag = "--" + key.replace("_", "-")
+        message = re.sub(re.escape(flag) + r"(=| )?<[^>]*>", key, message)
+        message = re.sub(re.escape(flag) + r"(?![\w-])", key, message)
+    return message
+
+
+def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
+    """``call()``, its InputError said in terms of ``keywords``."""
+    try:
+        return call()
+    except InputError as e:
+        text = _pythonic(str(e), keywords)
+        err = InputError(text)
+        for attr in ("help", "message"):
+            value = getattr(e, attr, None)
+            if isinstance(value, str):
+                setattr(err, attr, _pythonic(value, keywords))
+        raise err from None
 
 
 def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
@@ -172,10 +216,13 @@ def campaign(
     holds whole (``written``) and those it holds damaged (``rerun``)
     without running any.
     """
-    flags = [os.fspath(config), os.fspath(out)] + _flags(
-        dict(shard=_shard(shard), jobs=jobs, plan=plan)
-    )
-    return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+    options = dict(shard=_shard(shard), jobs=jobs, plan=plan)
+
+    def call() -> dict:
+        flags = [os.fspath(config), os.fspath(out)] + _flags(options, _switches(campaign))
+        return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+
+    return _speaking_python(list(inspect.signature(campaign).parameters), call)
 
 
 def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
@@ -248,7 +295,14 @@ class System:
         return repr(self._spec)
 
     def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
-        return _finish(command, _rtpipe.run(command, self._spec, _flags(options), samples))
+        method = getattr(System, command)
+        keywords = list(inspect.signature(method).parameters)[1:]
+
+        def call() -> dict:
+            flags = _flags(options, _switches(method))
+            return _finish(command, _rtpipe.run(command, self._spec, flags, samples))
+
+        return _speaking_python(keywords, call)
 
     def _run_samples(self, command: str, options: dict, samples: Any) -> dict:
         columns = _samples(samples, options)
