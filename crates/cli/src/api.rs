@@ -195,13 +195,13 @@ pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Resu
     Ok(reply(answer, None, None))
 }
 
-/// `work`'s answer; a panic in it is [`Failure::Internal`] (or
-/// [`Failure::Stopped`], the unwinding of a run that saw `stop`), and so
-/// is an answer that came after `stop` was set: it is not the whole run.
+/// `work`'s answer; a panic in it is [`Failure::Internal`], and an answer
+/// that came after `stop` was set (a long loop's [`Answer::stopped`], or
+/// one that finished meanwhile) is [`Failure::Stopped`]: it is not the
+/// whole run.
 fn guarded<T>(stop: &AtomicBool, work: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
     let answer = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)) {
         Ok(r) => r?,
-        Err(p) if p.downcast_ref::<command::Stopped>().is_some() => return Err(Failure::Stopped),
         Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
     };
     if stop.load(Ordering::Relaxed) {

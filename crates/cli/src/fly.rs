@@ -30,8 +30,8 @@ use std::sync::Arc;
 /// Runs `f` in a thread of its own while a progress bar over the simulated
 /// time (`horizon` ns, read from the atomic `f` publishes to) shows the
 /// fraction done and the time left on stderr (hidden when stderr is not a
-/// terminal). An unwinding of `f` (a stop flag's [`command::Stopped`])
-/// goes on in the caller's thread with its payload.
+/// terminal). A panic of `f` goes on in the caller's thread with its
+/// payload.
 fn with_progress_bar<T: Send>(
     msg: String,
     horizon: i64,
@@ -128,7 +128,7 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 
 /// `fly` (one flight, or `--sweep`) on a loaded spec, with `hooks`' extra
 /// row sink and stop flag (a flight checks it as it goes, a sweep before
-/// each flight, and unwinds with [`command::Stopped`]).
+/// each flight; once it is set, the answer is [`Answer::stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     a.validate()?;
     let s = setup_of(spec, a)?;
@@ -147,14 +147,17 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
     let stop = hooks.stop.as_deref();
-    let flight = with_progress_bar(msg, s.horizon, |p| {
-        let mut check = |_| Hooks::check_stop(stop);
+    let flown = with_progress_bar(msg, s.horizon, |p| {
+        let mut check = |_| !Hooks::stopped(stop);
         let watch = Watch {
             progress: Some(p),
             check: Some(&mut check),
         };
         fly_with_progress(spec, &s, a.exec.model(), watch, sink)
     })?;
+    let Some(flight) = flown else {
+        return Ok(Answer::stopped());
+    };
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(spec);
     let obs = observe(&report, &flight.sim);

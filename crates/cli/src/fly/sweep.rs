@@ -378,7 +378,9 @@ pub fn execute(
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let free = freed(spec, a.free_periods.as_deref())?;
-    let points = fly_all(spec, s, a, &c, &vars, stop);
+    let Some(points) = fly_all(spec, s, a, &c, &vars, stop) else {
+        return Ok(Answer::stopped());
+    };
     let limits = derived_limits(spec, s, &points, a.safety);
     // Nothing flew: a spec "with these limits" would carry none of them.
     let nothing = limits
@@ -423,8 +425,8 @@ pub fn execute(
 /// Flies every variation (on a worker thread) while a progress bar on
 /// stderr counts the flights done; a panic in the sweep goes on unwinding
 /// here.
-/// Every variation flown, with a progress bar; `stop` (checked before each
-/// flight) unwinds with [`crate::command::Stopped`].
+/// Every variation flown, with a progress bar; `None` when `stop` (asked
+/// before each flight) ended the sweep.
 fn fly_all(
     spec: &Spec,
     s: &Setup,
@@ -432,7 +434,7 @@ fn fly_all(
     c: &Criteria,
     vars: &[Variation],
     stop: Option<&AtomicBool>,
-) -> Vec<Point> {
+) -> Option<Vec<Point>> {
     let done = AtomicU64::new(0);
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(vars.len() as u64),
@@ -444,7 +446,7 @@ fn fly_all(
         pb.set_style(style);
     }
     pb.set_message(spec.name.clone());
-    let check = || crate::command::Hooks::check_stop(stop);
+    let stopped = || crate::command::Hooks::stopped(stop);
     let how = How {
         exec: a.exec.model(),
         criteria: c,
@@ -455,12 +457,12 @@ fn fly_all(
     };
     let points = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
-            let coarse = sweep(spec, s, &how, vars, &done, &check);
+            let coarse = sweep(spec, s, &how, vars, &done, &stopped)?;
             if a.resolution == 0.0 {
-                return coarse;
+                return Some(coarse);
             }
             pb.set_message(format!("{} (refining the edges)", spec.name));
-            refine(spec, s, &how, coarse, a.resolution, &done, &check)
+            refine(spec, s, &how, coarse, a.resolution, &done, &stopped)
         });
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));

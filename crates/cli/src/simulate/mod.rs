@@ -22,9 +22,7 @@ use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
-use rtpipe_sim::{
-    simulate_with_progress, simulate_with_rows, Jitter, Phasing, SimConfig, SimError,
-};
+use rtpipe_sim::{simulate_watched, Jitter, Phasing, SimConfig, SimError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
@@ -142,9 +140,9 @@ fn run_simulation(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
-    progress: &mut dyn FnMut(Nanos),
+    progress: &mut dyn FnMut(Nanos) -> bool,
     rows: Option<RowSink>,
-) -> Result<SimResult, SimError> {
+) -> Result<Option<SimResult>, SimError> {
     let phasing = match a.phasing {
         PhasingArg::Sync => Phasing::Sync,
         PhasingArg::Random | PhasingArg::Search => Phasing::Random,
@@ -163,17 +161,15 @@ fn run_simulation(
         },
         log_jobs: p.log_jobs,
     };
-    match rows {
-        Some(sink) => {
-            // Its rows are on disk as it goes: Ctrl-C must take them away.
-            let mut checked = |t: Nanos| {
-                samples::stop_if_interrupted(|| {});
-                progress(t);
-            };
-            simulate_with_rows(spec, &cfg, &mut checked, sink)
+    // With rows on disk as it goes, the binary's Ctrl-C must take them away.
+    let streamed = rows.is_some();
+    let mut checked = |t: Nanos| {
+        if streamed {
+            samples::stop_if_interrupted(|| {});
         }
-        None => simulate_with_progress(spec, &cfg, progress),
-    }
+        progress(t)
+    };
+    simulate_watched(spec, &cfg, &mut checked, rows)
 }
 
 pub fn run(a: &SimulateArgs) -> ExitCode {
@@ -195,7 +191,9 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
     let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
     let stop = hooks.stop.as_deref();
-    let (res, searches, seconds) = simulate_and_search(spec, a, &p, sink, stop)?;
+    let Some((res, searches, seconds)) = simulate_and_search(spec, a, &p, sink, stop)? else {
+        return Ok(Answer::stopped());
+    };
     let obs = observe(&report, &res);
     let mut outputs = render_outputs(spec, a, &p, &res, &obs)?;
     let written = write_all_outputs(a, &mut outputs, samples);
@@ -240,14 +238,15 @@ fn write_all_outputs(
 }
 
 /// The simulation, and the adversarial searches under `--phasing search`,
-/// with their progress shown; and the seconds they took.
+/// with their progress shown; and the seconds they took. `None` when `stop`
+/// ended them.
 fn simulate_and_search(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
     rows: Option<RowSink>,
     stop: Option<&AtomicBool>,
-) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
+) -> Result<Option<(SimResult, Vec<SearchResult>, f64)>, Diagnostic> {
     let started = Instant::now();
     let msg = format!(
         "simulating {} for {} {}{}",
@@ -258,8 +257,8 @@ fn simulate_and_search(
     );
     let res = with_horizon_bar(msg, p.horizon, |progress| {
         let mut checked = |t: Nanos| {
-            Hooks::check_stop(stop);
             progress(t);
+            !Hooks::stopped(stop)
         };
         run_simulation(spec, a, p, &mut checked, rows)
     })
@@ -269,6 +268,9 @@ fn simulate_and_search(
             "give every task a fixed positive period",
         )
     })?;
+    let Some(res) = res else {
+        return Ok(None);
+    };
     let searches = if a.phasing == PhasingArg::Search {
         with_spinner(format!("searching worst cases of {}", spec.name), || {
             run_searches(spec, a, p, stop)
@@ -280,9 +282,9 @@ fn simulate_and_search(
             )
         })?
     } else {
-        Vec::new()
+        Some(Vec::new())
     };
-    Ok((res, searches, started.elapsed().as_secs_f64()))
+    Ok(searches.map(|searches| (res, searches, started.elapsed().as_secs_f64())))
 }
 
 /// Which chain tails published fewer than the `n` outputs asked for.
@@ -352,7 +354,7 @@ fn run_searches(
     a: &SimulateArgs,
     p: &Plan,
     stop: Option<&AtomicBool>,
-) -> Result<Vec<SearchResult>, SimError> {
+) -> Result<Option<Vec<SearchResult>>, SimError> {
     let longest = spec
         .tasks
         .iter()
@@ -369,12 +371,14 @@ fn run_searches(
                 cfg.anchor = anchor;
                 cfg.steps = a.search_steps();
                 cfg.seed = a.seed();
-                Hooks::check_stop(stop);
+                if Hooks::stopped(stop) {
+                    return Ok(None);
+                }
                 out.push(search(spec, &cfg)?);
             }
         }
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
 #[cfg(test)]
