@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The commands the API runs.
-pub const COMMANDS: [&str; 5] = ["analyze", "simulate", "fly", "design", "campaign"];
+pub const COMMANDS: [&str; 6] = ["analyze", "simulate", "fly", "design", "run", "campaign"];
 
 /// What a command answered.
 pub struct Reply {
@@ -269,6 +269,10 @@ fn dispatch(
         "fly" => {
             let a: FlyArgs = parse(command, &argv)?;
             Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
+        }
+        "run" => {
+            let a: crate::run::RunArgs = parse(command, &argv)?;
+            Ok((crate::run::answer(spec, &a, false).map_err(input)?, None))
         }
         "design" => {
             let a: DesignArgs = parse(command, &argv)?;

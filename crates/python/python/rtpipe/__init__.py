@@ -38,6 +38,8 @@ import logging
 import operator
 import os
 import re
+import signal
+import threading
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -163,6 +165,25 @@ def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
             if isinstance(value, str):
                 setattr(err, attr, _pythonic(value, keywords))
         raise err from None
+
+
+_STOP_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+
+
+def _signal_handlers() -> list:
+    """The Python handlers of the stop signals (none off the main thread,
+    where Python cannot set them)."""
+    if threading.current_thread() is not threading.main_thread():
+        return []
+    return [(sig, signal.getsignal(sig)) for sig in _STOP_SIGNALS]
+
+
+def _restore_signal_handlers(kept: list) -> None:
+    for sig, handler in kept:
+        if handler is not None:
+            signal.signal(sig, handler)
 
 
 def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
@@ -399,6 +420,50 @@ class System:
             free_periods=free_periods,
         )
         return self._run_samples("fly", options, samples)
+
+    def run(
+        self,
+        *,
+        duration: Union[str, float, None] = None,
+        policy: Optional[str] = None,
+        best_effort: bool = False,
+        force: bool = False,
+        synthetic: bool = False,
+        vehicle: Optional[str] = None,
+        mission: Optional[str] = None,
+        load: Optional[int] = None,
+        samples: Union[str, "os.PathLike[str]", None] = None,
+        trace: Union[str, "os.PathLike[str]", None] = None,
+        plot: Union[str, "os.PathLike[str]", None] = None,
+        export_rt_app: Union[str, "os.PathLike[str]", None] = None,
+    ) -> dict:
+        """Runs the spec for real on this machine (``rtpipe run --json``):
+        one thread per task under ``policy`` ("fifo", "deadline",
+        "edf-fifo"; "other" with ``best_effort=True`` runs without real-time
+        privileges), for ``duration`` (default 2 s, a flight's mission
+        plus 5 s when the tasks name flight bodies and ``synthetic`` is
+        False). The real-time classes need root (CAP_SYS_NICE): without it
+        the kernel refuses them and this raises ``InputError`` saying so.
+        ``samples``, ``trace``, ``plot`` and ``export_rt_app`` write files
+        as the flags do. Ctrl-C (or SIGTERM, SIGHUP) ends the run early, as
+        on the command line, and raises KeyboardInterrupt once its threads
+        are stopped and its files written."""
+        options = dict(
+            duration=duration, policy=policy, best_effort=best_effort, force=force,
+            synthetic=synthetic, vehicle=vehicle, mission=mission, load=load, samples=samples,
+            trace=trace, plot=plot, export_rt_app=export_rt_app,
+        )
+        # The runtime catches the stop signals itself while its threads run
+        # (it must stop them, not be unwound past them): Python's handlers
+        # are put back after it.
+        kept = _signal_handlers()
+        try:
+            report = self._run("run", options)
+        finally:
+            _restore_signal_handlers(kept)
+        if report.get("run", {}).get("interrupted"):
+            raise KeyboardInterrupt("the run was stopped by a signal")
+        return report
 
     def design(
         self,
