@@ -7,6 +7,7 @@ use crate::report::flight::{quality_text, EnvelopeView, RmsMax};
 use crate::report::record_table;
 use crate::simulate;
 use rtpipe_analysis::{Anchor, Report};
+use rtpipe_flight::quality::FlightQuality;
 use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{Flight, Setup};
 use rtpipe_model::{Server, Spec};
@@ -71,82 +72,91 @@ impl rtpipe_printer::Report for FlightReport<'_> {
 
 /// The flight's figures as one row, named as `fly --json`'s `flight`
 /// object names them (`attitude_error_deg.rms` → `attitude_error_deg_rms`).
-fn flight_table(
-    s: &Setup,
-    q: &rtpipe_flight::quality::FlightQuality,
-    failures: &[String],
-) -> Table {
-    let f = |v: f64| Cell::Float(v);
-    let judged = s.mission.criteria.position_rms_m.is_some();
+fn flight_table(s: &Setup, q: &FlightQuality, failures: &[String]) -> Table {
+    let mut fields = vec![
+        ("vehicle", Kind::Text, Cell::from(s.preset.name.as_str())),
+        ("mission", Kind::Text, Cell::from(s.mission.name.as_str())),
+        ("world", Kind::Text, Cell::from(s.mission.world.describe())),
+        (
+            "duration_s",
+            Kind::Float,
+            Cell::Float(s.horizon as f64 * 1e-9),
+        ),
+        ("crashed", Kind::Bool, Cell::Bool(q.crashed)),
+        ("crashed_s", Kind::Float, Cell::opt_float(q.crashed_s)),
+    ];
+    fields.extend(figures(q, s.mission.criteria.position_rms_m.is_some()));
+    fields.extend([
+        ("criteria_met", Kind::Bool, Cell::Bool(failures.is_empty())),
+        ("failures", Kind::Text, Cell::from(failures.join("; "))),
+    ]);
+    record_table("flight", fields)
+}
+
+/// The quality figures of [`flight_table`]; the position error only when
+/// the mission judges it (`judged`), the step tracking only when steps
+/// were flown, as in the JSON.
+fn figures(q: &FlightQuality, judged: bool) -> Vec<(&'static str, Kind, Cell)> {
+    let f = Cell::Float;
     let steps = q.step_tracking_deg.count > 0;
-    record_table(
-        "flight",
-        vec![
-            ("vehicle", Kind::Text, Cell::from(s.preset.name.as_str())),
-            ("mission", Kind::Text, Cell::from(s.mission.name.as_str())),
-            ("world", Kind::Text, Cell::from(s.mission.world.describe())),
-            ("duration_s", Kind::Float, f(s.horizon as f64 * 1e-9)),
-            ("crashed", Kind::Bool, Cell::Bool(q.crashed)),
-            ("crashed_s", Kind::Float, Cell::opt_float(q.crashed_s)),
-            (
-                "attitude_error_deg_rms",
-                Kind::Float,
-                f(q.attitude_error_deg.rms),
-            ),
-            (
-                "attitude_error_deg_max",
-                Kind::Float,
-                f(q.attitude_error_deg.max),
-            ),
-            (
-                "altitude_error_m_rms",
-                Kind::Float,
-                f(q.altitude_error_m.rms),
-            ),
-            (
-                "altitude_error_m_max",
-                Kind::Float,
-                f(q.altitude_error_m.max),
-            ),
-            ("drift_m", Kind::Float, f(q.drift_m)),
-            (
-                "position_error_m_rms",
-                Kind::Float,
-                Cell::opt_float(judged.then_some(q.position_error_m.rms)),
-            ),
-            (
-                "position_error_m_max",
-                Kind::Float,
-                Cell::opt_float(judged.then_some(q.position_error_m.max)),
-            ),
-            ("oscillation_dps", Kind::Float, f(q.oscillation_dps)),
-            (
-                "motor_variation_per_s",
-                Kind::Float,
-                f(q.motor_variation_per_s),
-            ),
-            (
-                "step_tracking_deg_rms",
-                Kind::Float,
-                Cell::opt_float(steps.then_some(q.step_tracking_deg.rms)),
-            ),
-            (
-                "step_tracking_deg_max",
-                Kind::Float,
-                Cell::opt_float(steps.then_some(q.step_tracking_deg.max)),
-            ),
-            ("saturation_s", Kind::Float, f(q.saturation_s)),
-            ("airborne_s", Kind::Float, f(q.airborne_s)),
-            ("landed_s", Kind::Float, Cell::opt_float(q.landed_s)),
-            ("criteria_met", Kind::Bool, Cell::Bool(failures.is_empty())),
-            ("failures", Kind::Text, Cell::from(failures.join("; "))),
-        ],
-    )
+    let opt = |on: bool, v: f64| Cell::opt_float(on.then_some(v));
+    vec![
+        (
+            "attitude_error_deg_rms",
+            Kind::Float,
+            f(q.attitude_error_deg.rms),
+        ),
+        (
+            "attitude_error_deg_max",
+            Kind::Float,
+            f(q.attitude_error_deg.max),
+        ),
+        (
+            "altitude_error_m_rms",
+            Kind::Float,
+            f(q.altitude_error_m.rms),
+        ),
+        (
+            "altitude_error_m_max",
+            Kind::Float,
+            f(q.altitude_error_m.max),
+        ),
+        ("drift_m", Kind::Float, f(q.drift_m)),
+        (
+            "position_error_m_rms",
+            Kind::Float,
+            opt(judged, q.position_error_m.rms),
+        ),
+        (
+            "position_error_m_max",
+            Kind::Float,
+            opt(judged, q.position_error_m.max),
+        ),
+        ("oscillation_dps", Kind::Float, f(q.oscillation_dps)),
+        (
+            "motor_variation_per_s",
+            Kind::Float,
+            f(q.motor_variation_per_s),
+        ),
+        (
+            "step_tracking_deg_rms",
+            Kind::Float,
+            opt(steps, q.step_tracking_deg.rms),
+        ),
+        (
+            "step_tracking_deg_max",
+            Kind::Float,
+            opt(steps, q.step_tracking_deg.max),
+        ),
+        ("saturation_s", Kind::Float, f(q.saturation_s)),
+        ("airborne_s", Kind::Float, f(q.airborne_s)),
+        ("landed_s", Kind::Float, Cell::opt_float(q.landed_s)),
+    ]
 }
 
 /// A row per step: its tracked (the estimate) and true (the plant)
 /// responses, as `fly --json`'s `steps` give them.
-fn steps_table(q: &rtpipe_flight::quality::FlightQuality) -> Table {
+fn steps_table(q: &FlightQuality) -> Table {
     let mut columns = vec![Column::new("axis", Kind::Text)];
     columns.extend(
         [

@@ -50,8 +50,9 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub duration: Option<String>,
     /// Seeds the random offsets and demands (the same seed gives the same
-    /// run) [default: 0]. Absent rather than defaulted, so that a seed given
-    /// where nothing is random is refused ([`SimulateArgs::validate`]).
+    /// run) [default: 0].
+    // Absent rather than defaulted, so that a seed given where nothing is
+    // random is refused (`SimulateArgs::validate`), however it came.
     #[arg(long, value_name = "S")]
     pub seed: Option<u64>,
     /// How each job's demand Δin + p + Δout is drawn: p = exec (worst),
