@@ -186,4 +186,26 @@ mod tests {
             assert!(a.bounds[k].0 <= l.0 && l.0 < b.bounds[k].0);
         }
     }
+
+    /// A stop seen during the refinement ends it with `None` after at most
+    /// the flights begun before it: the probed points are not a refinement.
+    #[test]
+    fn a_stop_ends_the_refinement_without_an_answer() {
+        let (spec, s) = cleanflight("racer5");
+        let c = s.criteria();
+        let how = How::once(ExecModel::Uniform, &c);
+        let vars: Vec<Variation> = [1.0, 1.26, 1.587, 2.0, 2.52].map(Variation::Scale).to_vec();
+        let done = AtomicU64::new(0);
+        let coarse = sweep(&spec, &s, &how, &vars, &done, &|| false).unwrap_or_default();
+        assert!(
+            scale_edge(&coarse).first_fail.is_some(),
+            "an edge to refine"
+        );
+        let asked = AtomicU64::new(0);
+        let stopped = || asked.fetch_add(1, Ordering::Relaxed) >= 1;
+        let before = done.load(Ordering::Relaxed);
+        let fine = refine(&spec, &s, &how, coarse, 0.02, &done, &stopped);
+        assert!(fine.is_none());
+        assert!(done.load(Ordering::Relaxed) - before <= 1, "{done:?}");
+    }
 }
