@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// The commands the API runs.
-pub const COMMANDS: [&str; 5] = ["analyze", "simulate", "fly", "design", "campaign"];
+pub const COMMANDS: [&str; 6] = ["analyze", "simulate", "fly", "design", "run", "campaign"];
 
 /// What a command answered.
 pub struct Reply {
@@ -195,13 +195,13 @@ pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Resu
     Ok(reply(answer, None, None))
 }
 
-/// `work`'s answer; a panic in it is [`Failure::Internal`] (or
-/// [`Failure::Stopped`], the unwinding of a run that saw `stop`), and so
-/// is an answer that came after `stop` was set: it is not the whole run.
+/// `work`'s answer; a panic in it is [`Failure::Internal`], and an answer
+/// that came after `stop` was set (a long loop's [`Answer::stopped`], or
+/// one that finished meanwhile) is [`Failure::Stopped`]: it is not the
+/// whole run.
 fn guarded<T>(stop: &AtomicBool, work: impl FnOnce() -> Result<T, Failure>) -> Result<T, Failure> {
     let answer = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)) {
         Ok(r) => r?,
-        Err(p) if p.downcast_ref::<command::Stopped>().is_some() => return Err(Failure::Stopped),
         Err(p) => return Err(Failure::Internal(panic_message(p.as_ref()))),
     };
     if stop.load(Ordering::Relaxed) {
@@ -270,6 +270,10 @@ fn dispatch(
             let a: FlyArgs = parse(command, &argv)?;
             Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
         }
+        "run" => {
+            let a: crate::run::RunArgs = parse(command, &argv)?;
+            Ok((crate::run::answer(spec, &a, false).map_err(input)?, None))
+        }
         "design" => {
             let a: DesignArgs = parse(command, &argv)?;
             let stop = || stop.load(Ordering::Relaxed);
@@ -296,19 +300,37 @@ fn parse<A: Args + FromArgMatches>(command: &str, argv: &[String]) -> Result<A, 
     let parsed = cmd
         .try_get_matches_from(argv)
         .and_then(|m| A::from_arg_matches(&m));
-    parsed.map_err(|e| Failure::Input(flag_error(&e)))
+    parsed.map_err(|e| Failure::Input(flag_error(&e, command)))
 }
 
-/// A parser error as a diagnostic: its first line, without clap's usage
-/// and help lines.
-fn flag_error(e: &clap::Error) -> Diagnostic {
+/// A parser error as a diagnostic for a Python caller: its first line
+/// (the values the flag takes, when the parser lists them, after it),
+/// without clap's usage and help lines; the help is clap's tip, or where
+/// to read the keywords and their values.
+fn flag_error(e: &clap::Error, command: &str) -> Diagnostic {
     let text = e.render().to_string();
     let first = text.lines().next().unwrap_or("invalid arguments");
-    let message = first.trim_start_matches("error: ").to_string();
+    let mut message = first.trim_start_matches("error: ").to_string();
+    if let Some(values) = text.lines().find_map(|l| {
+        l.trim()
+            .strip_prefix("[possible values: ")
+            .and_then(|v| v.strip_suffix(']'))
+    }) {
+        message.push_str(&format!(" (possible values: {values})"));
+    }
     let help = text
         .lines()
-        .find_map(|l| l.trim().strip_prefix("tip: "))
-        .unwrap_or("see `rtpipe COMMAND --help` for the flags and their values");
+        .find_map(|l| l.trim().strip_prefix("tip: ").map(str::to_string))
+        .unwrap_or_else(|| {
+            let at = if command == "waters" {
+                "rtpipe.waters".to_string()
+            } else if command == "campaign" {
+                "rtpipe.campaign".to_string()
+            } else {
+                format!("rtpipe.System.{command}")
+            };
+            format!("see help({at}) for the arguments and the values they take")
+        });
     Diagnostic::error(message, help)
 }
 

@@ -1,9 +1,11 @@
 //! `rtpipe campaign CONFIG OUTDIR`: generate, analyse (and simulate) many
 //! task sets on every core, into sharded Parquet (`rtpipe_campaign`).
 
-use crate::command::{self, Answer, Rendered};
+use crate::command::{self, Answer};
+use crate::report::record_table;
 use rtpipe_campaign::{config, Part, Summary};
 use rtpipe_model::Diagnostic;
+use rtpipe_printer::{Cell, Column, Kind, Table};
 use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -45,7 +47,6 @@ pub fn run(a: &CampaignArgs) -> ExitCode {
 /// The campaign `a` names, stopped after the shard in progress once `stop`
 /// says so.
 pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Answer, Diagnostic> {
-    a.output.no_csv("campaign")?;
     let text = rtpipe_model::input::read_text(&a.config, &config::KIND).map_err(|e| e.located())?;
     let cfg = config::parse(&a.config.display().to_string(), &text).map_err(|e| e.located())?;
     let jobs = a.jobs.map_or_else(cores, |j| j as usize);
@@ -68,12 +69,8 @@ pub fn execute(a: &CampaignArgs, stop: &(dyn Fn() -> bool + Sync)) -> Result<Ans
     let s = rtpipe_campaign::run(&cfg, &text, &a.out, part, jobs, &tick, stop)
         .map_err(|e| Diagnostic::error(e.message, e.help))?;
     pb.finish_and_clear();
-    let view = View::of(&cfg, a, part, total, &s);
-    let report = if a.output.is_json() {
-        Rendered::Json(command::to_value(&view)?)
-    } else {
-        Rendered::Text(view.text())
-    };
+    let summary = CampaignSummary::of(&cfg, a, part, total, &s);
+    let report = command::render(&summary, a.output.chosen())?;
     let notes = if s.stopped {
         vec![format!(
             "interrupted (Ctrl-C): {} shard(s) written; run the same command again to resume",
@@ -106,36 +103,19 @@ fn plan(
 ) -> Result<Answer, Diagnostic> {
     let found = rtpipe_campaign::survey(&a.out, cfg, part)
         .map_err(|e| Diagnostic::error(e.message, e.help))?;
-    let owned = part.shard_count(total);
-    let rerun: Vec<u64> = found.rerun.keys().copied().collect();
-    let v = serde_json::json!({
-        "campaign": cfg.name,
-        "fingerprint": cfg.fingerprint(),
-        "out": a.out.display().to_string(),
-        "systems": cfg.systems,
-        "shard_size": cfg.shard_size,
-        "shards": total,
-        "part": format!("{}/{}", part.index, part.count),
-        "part_shards": owned,
-        "written": found.done,
-        "rerun": rerun,
-    });
-    let report = if a.output.is_json() {
-        Rendered::Json(v)
-    } else {
-        Rendered::Text(format!(
-            "campaign {}: {} systems in {total} shards of {}; part {}/{} owns {} ({} already in {}, {} to run again)\n",
-            cfg.name,
-            cfg.systems,
-            cfg.shard_size,
-            part.index,
-            part.count,
-            owned,
-            found.done.len(),
-            a.out.display(),
-            rerun.len()
-        ))
+    let plan = CampaignPlan {
+        campaign: cfg.name.clone(),
+        fingerprint: cfg.fingerprint(),
+        out: a.out.display().to_string(),
+        systems: cfg.systems,
+        shard_size: cfg.shard_size,
+        shards: total,
+        part: format!("{}/{}", part.index, part.count),
+        part_shards: part.shard_count(total),
+        written: found.done.iter().copied().collect(),
+        rerun: found.rerun.keys().copied().collect(),
     };
+    let report = command::render(&plan, a.output.chosen())?;
     let notes = found
         .rerun
         .iter()
@@ -157,9 +137,80 @@ fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, usize::from)
 }
 
-/// `campaign --json`.
+/// `campaign --plan`'s report: the shards of the part, which the
+/// directory holds whole and which it will run again.
 #[derive(Serialize)]
-struct View {
+struct CampaignPlan {
+    campaign: String,
+    fingerprint: String,
+    out: String,
+    systems: u64,
+    shard_size: u64,
+    shards: u64,
+    part: String,
+    part_shards: u64,
+    /// The part's shards the directory holds whole.
+    written: Vec<u64>,
+    /// The part's shards there unfinished or damaged (run again).
+    rerun: Vec<u64>,
+}
+
+impl rtpipe_printer::Report for CampaignPlan {
+    fn text(&self) -> String {
+        format!(
+            "campaign {}: {} systems in {} shards of {}; part {} owns {} ({} already in {}, {} to run again)\n",
+            self.campaign,
+            self.systems,
+            self.shards,
+            self.shard_size,
+            self.part,
+            self.part_shards,
+            self.written.len(),
+            self.out,
+            self.rerun.len()
+        )
+    }
+
+    /// The plan (one row), then a row per shard of the part that the
+    /// directory holds (`written`) or will run again (`rerun`).
+    fn tables(&self) -> Vec<Table> {
+        let plan = record_table(
+            "plan",
+            vec![
+                ("campaign", Kind::Text, Cell::from(self.campaign.as_str())),
+                (
+                    "fingerprint",
+                    Kind::Text,
+                    Cell::from(self.fingerprint.as_str()),
+                ),
+                ("out", Kind::Text, Cell::from(self.out.as_str())),
+                ("systems", Kind::UInt, Cell::UInt(self.systems)),
+                ("shard_size", Kind::UInt, Cell::UInt(self.shard_size)),
+                ("shards", Kind::UInt, Cell::UInt(self.shards)),
+                ("part", Kind::Text, Cell::from(self.part.as_str())),
+                ("part_shards", Kind::UInt, Cell::UInt(self.part_shards)),
+            ],
+        );
+        let columns = vec![
+            Column::new("shard", Kind::UInt),
+            Column::new("state", Kind::Text),
+        ];
+        let Ok(mut shards) = Table::new("shards", columns) else {
+            unreachable!("the shards table's columns are distinct names");
+        };
+        let states = [("written", &self.written), ("rerun", &self.rerun)];
+        for (state, ks) in states {
+            for k in ks {
+                shards.push(vec![Cell::UInt(*k), Cell::from(state)]);
+            }
+        }
+        vec![plan, shards]
+    }
+}
+
+/// `rtpipe campaign`'s report: what a run of the part wrote, and how fast.
+#[derive(Serialize)]
+pub struct CampaignSummary {
     campaign: String,
     out: String,
     systems: u64,
@@ -182,10 +233,16 @@ struct View {
     stopped: bool,
 }
 
-impl View {
-    fn of(cfg: &config::Config, a: &CampaignArgs, part: Part, total: u64, s: &Summary) -> View {
+impl CampaignSummary {
+    fn of(
+        cfg: &config::Config,
+        a: &CampaignArgs,
+        part: Part,
+        total: u64,
+        s: &Summary,
+    ) -> CampaignSummary {
         let rate = s.systems as f64 / s.seconds.max(1e-9);
-        View {
+        CampaignSummary {
             campaign: cfg.name.clone(),
             out: a.out.display().to_string(),
             systems: cfg.systems,
@@ -208,7 +265,9 @@ impl View {
             stopped: s.stopped,
         }
     }
+}
 
+impl rtpipe_printer::Report for CampaignSummary {
     fn text(&self) -> String {
         let mut t = format!(
             "campaign {}: {} systems in {} shards of {}; part {} owns {}\n\
@@ -242,5 +301,48 @@ impl View {
             );
         }
         t
+    }
+
+    /// The summary as one row, its columns the JSON's keys.
+    fn tables(&self) -> Vec<Table> {
+        let u = Cell::UInt;
+        let f = Cell::Float;
+        vec![record_table(
+            "campaign",
+            vec![
+                ("campaign", Kind::Text, Cell::from(self.campaign.as_str())),
+                ("out", Kind::Text, Cell::from(self.out.as_str())),
+                ("systems", Kind::UInt, u(self.systems)),
+                ("shard_size", Kind::UInt, u(self.shard_size)),
+                ("shards", Kind::UInt, u(self.shards)),
+                ("part", Kind::Text, Cell::from(self.part.as_str())),
+                ("part_shards", Kind::UInt, u(self.part_shards)),
+                ("written", Kind::UInt, u(self.written)),
+                ("rewritten", Kind::UInt, u(self.rewritten)),
+                ("skipped", Kind::UInt, u(self.skipped)),
+                ("systems_run", Kind::UInt, u(self.systems_run)),
+                ("systems_short", Kind::UInt, u(self.systems_short)),
+                (
+                    "systems_without_chains",
+                    Kind::UInt,
+                    u(self.systems_without_chains),
+                ),
+                ("chains_asked", Kind::UInt, u(u64::from(self.chains_asked))),
+                ("rows", Kind::UInt, u(self.rows)),
+                ("seconds", Kind::Float, f(self.seconds)),
+                ("jobs", Kind::UInt, u(self.jobs as u64)),
+                (
+                    "systems_per_second",
+                    Kind::Float,
+                    f(self.systems_per_second),
+                ),
+                (
+                    "systems_per_second_per_job",
+                    Kind::Float,
+                    f(self.systems_per_second_per_job),
+                ),
+                ("stopped", Kind::Bool, Cell::Bool(self.stopped)),
+            ],
+        )]
     }
 }

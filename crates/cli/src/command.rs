@@ -143,18 +143,6 @@ impl FormatArgs {
     pub fn is_json(&self) -> bool {
         self.chosen() == Format::Json
     }
-
-    /// Refuses `--format csv` for a command whose report has no tables
-    /// yet (`fly`, `campaign`).
-    pub fn no_csv(&self, command: &str) -> Result<(), Diagnostic> {
-        if self.chosen() != Format::Csv {
-            return Ok(());
-        }
-        Err(Diagnostic::error(
-            format!("`{command}` has no CSV report yet"),
-            "use --format text or --format json",
-        ))
-    }
 }
 
 /// `--format`'s names, listed in the help and in errors.
@@ -237,6 +225,16 @@ impl Answer {
         self
     }
 
+    /// The answer of a command that its stop flag ended: no report (the
+    /// work is not whole), and the status of an interrupted command.
+    pub fn stopped() -> Answer {
+        Answer {
+            report: Rendered::Nothing,
+            notes: vec!["stopped: the stop flag was set before the work ended".into()],
+            status: crate::interrupted_status(),
+        }
+    }
+
     /// Prints the report on stdout and the notes on stderr; the exit status.
     pub fn emit(self) -> ExitCode {
         match &self.report {
@@ -273,19 +271,12 @@ pub struct Hooks {
     pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
-/// The panic payload with which a run stopped by [`Hooks::stop`] unwinds
-/// (the simulator has no cancellation path of its own; the caller that set
-/// the flag catches it).
-#[derive(Debug)]
-pub struct Stopped;
-
 impl Hooks {
-    /// Unwinds with [`Stopped`] once the stop flag is set. `resume_unwind`
-    /// runs no panic hook: this is not a bug being reported.
-    pub fn check_stop(stop: Option<&std::sync::atomic::AtomicBool>) {
-        if stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) {
-            std::panic::resume_unwind(Box::new(Stopped));
-        }
+    /// Whether the stop flag is set: a long loop asks it between its steps
+    /// and, once it is, returns [`Answer::stopped`] (no unwinding: the
+    /// work ends by its own return path, dropping what it holds).
+    pub fn stopped(stop: Option<&std::sync::atomic::AtomicBool>) -> bool {
+        stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed))
     }
 }
 

@@ -164,17 +164,7 @@ pub fn execute(
     a: &DesignArgs,
     stop: &dyn Fn() -> bool,
 ) -> Result<(Answer, Option<Spec>), Diagnostic> {
-    if let (MethodArg::Boxes, Some(_)) = (a.method, a.solver) {
-        return Err(Diagnostic::error(
-            "--solver picks the MILP's LP solver, but --method boxes solves no LP",
-            "drop --solver, or use --method milp (or auto)",
-        ));
-    }
-    if let Some(t) = a.time_limit {
-        parse_time_limit(&t.to_string()).map_err(|e| {
-            Diagnostic::error(format!("--time-limit {t}: {e}"), "give it in seconds")
-        })?;
-    }
+    a.validate()?;
     // The output path is checked before the (possibly long) search.
     let write = a
         .write
@@ -228,6 +218,37 @@ pub fn execute(
     Ok((answer.after_write(written), out.spec))
 }
 
+impl DesignArgs {
+    /// The checks of the flags alone, whichever way they came (the command
+    /// line, Python's keywords): a flag that would do nothing, or a value
+    /// out of range, is an error that names the fix.
+    pub fn validate(&self) -> Result<(), Diagnostic> {
+        if let (MethodArg::Boxes, Some(_)) = (self.method, self.solver) {
+            return Err(Diagnostic::error(
+                "--solver picks the MILP's LP solver, but --method boxes solves no LP",
+                "drop --solver, or use --method milp (or auto)",
+            ));
+        }
+        if let Some(t) = self.time_limit {
+            parse_time_limit(&t.to_string()).map_err(|e| {
+                Diagnostic::error(format!("--time-limit {t}: {e}"), "give it in seconds")
+            })?;
+        }
+        let judged = !self.vehicles.is_empty()
+            || self.seed.is_some()
+            || self.flights.is_some()
+            || self.pass_rate.is_some()
+            || self.confidence.is_some();
+        if self.missions.is_empty() && judged {
+            return Err(Diagnostic::error(
+                "--vehicle, --seed, --flights, --pass-rate and --confidence choose and judge the flights of --fly, which is not given",
+                "add --fly MISSION (e.g. --fly steps), or drop them",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The acceptance check of `--fly` and what it flies, in words.
 type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
 
@@ -235,17 +256,6 @@ type FlightCheck = (Arc<dyn rtpipe_design::Acceptance>, String);
 /// `--seed` without `--fly` is an error, not a silently ignored flag.
 fn flight_check(a: &DesignArgs, spec: &Spec) -> Result<Option<FlightCheck>, Diagnostic> {
     if a.missions.is_empty() {
-        let given = !a.vehicles.is_empty()
-            || a.seed.is_some()
-            || a.flights.is_some()
-            || a.pass_rate.is_some()
-            || a.confidence.is_some();
-        if given {
-            return Err(Diagnostic::error(
-                "--vehicle, --seed, --flights, --pass-rate and --confidence choose and judge the flights of --fly, which is not given",
-                "add --fly MISSION (e.g. --fly steps), or drop them",
-            ));
-        }
         return Ok(None);
     }
     let vehicles = if a.vehicles.is_empty() {

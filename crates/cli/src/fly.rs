@@ -9,24 +9,19 @@
 //! freshness of every chain against the bounds.
 
 mod args;
+mod report;
 mod sweep;
 
 pub use args::FlyArgs;
 
-use crate::command::{self, Answer, Hooks, Rendered};
+use crate::command::{self, Answer, Hooks};
 use crate::output;
 use crate::plot;
-use crate::report::analysis::{ReportView, TaskView};
-use crate::report::flight::{quality_text, EnvelopeView, RmsMax};
 use crate::report::samples::{self, SamplesFile};
-use crate::simulate;
-use rtpipe_analysis::{Anchor, Report};
-use rtpipe_flight::trace::metrics::StepResponse;
 use rtpipe_fly::{fly_with_progress, setup, Flight, Request, Setup, Watch};
-use rtpipe_model::{Diagnostic, Server, Spec};
+use rtpipe_model::{Diagnostic, Spec};
 use rtpipe_printer::{Cell, Column, Kind, Table};
 use rtpipe_sim::observe::{observe, response_violations, ChainObs};
-use serde::Serialize;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -35,8 +30,8 @@ use std::sync::Arc;
 /// Runs `f` in a thread of its own while a progress bar over the simulated
 /// time (`horizon` ns, read from the atomic `f` publishes to) shows the
 /// fraction done and the time left on stderr (hidden when stderr is not a
-/// terminal). An unwinding of `f` (a stop flag's [`command::Stopped`])
-/// goes on in the caller's thread with its payload.
+/// terminal). A panic of `f` goes on in the caller's thread with its
+/// payload.
 fn with_progress_bar<T: Send>(
     msg: String,
     horizon: i64,
@@ -133,21 +128,12 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 
 /// `fly` (one flight, or `--sweep`) on a loaded spec, with `hooks`' extra
 /// row sink and stop flag (a flight checks it as it goes, a sweep before
-/// each flight, and unwinds with [`command::Stopped`]).
+/// each flight; once it is set, the answer is [`Answer::stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
-    a.output.no_csv("fly")?;
+    a.validate()?;
     let s = setup_of(spec, a)?;
     check_outputs(a)?;
     if a.sweep {
-        if let Some(flag) = [("--log", &a.log), ("--samples", &a.samples)]
-            .into_iter()
-            .find_map(|(flag, p)| p.as_ref().map(|_| flag))
-        {
-            return Err(Diagnostic::error(
-                format!("{flag} describes one flight; --sweep flies many"),
-                format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
-            ));
-        }
         return sweep::execute(spec, &s, a, hooks.stop.as_deref());
     }
     let msg = format!(
@@ -161,14 +147,17 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
     let stop = hooks.stop.as_deref();
-    let flight = with_progress_bar(msg, s.horizon, |p| {
-        let mut check = |_| Hooks::check_stop(stop);
+    let flown = with_progress_bar(msg, s.horizon, |p| {
+        let mut check = |_| !Hooks::stopped(stop);
         let watch = Watch {
             progress: Some(p),
             check: Some(&mut check),
         };
         fly_with_progress(spec, &s, a.exec.model(), watch, sink)
     })?;
+    let Some(flight) = flown else {
+        return Ok(Answer::stopped());
+    };
     let seconds = started.elapsed().as_secs_f64();
     let report = rtpipe_analysis::analyze(spec);
     let obs = observe(&report, &flight.sim);
@@ -176,12 +165,16 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
     let failures = flight.quality.failures(&s.criteria());
     let over_sound: usize = obs.iter().map(ChainObs::over_sound).sum();
     let late_rt = response_violations(&report, &flight.sim);
-    let out = if a.output.is_json() {
-        let v = to_json(spec, &report, &s, &flight, &obs, &failures, seconds);
-        Rendered::Json(command::to_value(&v)?)
-    } else {
-        Rendered::Text(to_text(spec, &s, &flight, &obs, &failures, seconds))
+    let view = report::FlightReport {
+        spec,
+        report: &report,
+        setup: &s,
+        flight: &flight,
+        obs: &obs,
+        failures: &failures,
+        seconds,
     };
+    let out = command::render(&view, a.output.chosen())?;
     let mut notes = Vec::new();
     if over_sound > 0 || !late_rt.is_empty() {
         notes.push(format!("error: SOUND BOUND EXCEEDED: {over_sound} sample(s) above a sound chain bound (a bug in the analysis or the simulator)"));
@@ -193,181 +186,6 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
         status,
     };
     Ok(answer.after_write(written))
-}
-
-fn to_text(
-    spec: &Spec,
-    s: &Setup,
-    f: &Flight,
-    obs: &[ChainObs],
-    failures: &[String],
-    seconds: f64,
-) -> String {
-    let flown = s.horizon as f64 * 1e-9;
-    let mut out = format!(
-        "system {}: {} tasks; vehicle {}; mission {} ({}); {:.1} s flown in {:.2} s ({:.0}× real time)\n\n",
-        spec.name,
-        spec.tasks.len(),
-        s.preset.name,
-        s.mission.name,
-        s.mission.description,
-        flown,
-        seconds,
-        flown / seconds.max(1e-9)
-    );
-    let world = s.mission.world.describe();
-    if !world.is_empty() {
-        out.push_str(&format!("world: {world}\n"));
-    }
-    out.push_str(&quality_text(&f.quality, &s.criteria(), failures));
-    out.push_str(
-        "\nchains (observed from the head's read, against the analysis' worst-case bounds):\n",
-    );
-    out.push_str(&simulate::chain_table(spec, obs, Anchor::Read));
-    out.push_str("\nfrom the event (see `simulate`), against the +event bounds:\n");
-    out.push_str(&simulate::chain_table(spec, obs, Anchor::Event));
-    let bg: Vec<&str> = spec
-        .tasks
-        .iter()
-        .zip(&f.sim.tasks)
-        .filter(|(t, _)| t.server == Server::Background)
-        .map(|(t, _)| t.name.as_str())
-        .collect();
-    if !bg.is_empty() {
-        let runs: Vec<String> = spec
-            .tasks
-            .iter()
-            .zip(&f.sim.tasks)
-            .filter(|(t, _)| t.server == Server::Background)
-            .map(|(t, r)| format!("{} {}/{}", t.name, r.completed, r.released))
-            .collect();
-        out.push_str(&format!(
-            "\nhousekeeping (background, jobs completed/released): {}\n",
-            runs.join(", ")
-        ));
-    }
-    out
-}
-
-/// `fly --json`: the observations report, then the flight's quality.
-#[derive(Serialize)]
-struct FlyView<'a> {
-    #[serde(flatten)]
-    report: ReportView<'a, TaskView<'a>, simulate::ObsChain<'a>>,
-    flight: FlightView<'a>,
-}
-
-#[derive(Serialize)]
-struct FlightView<'a> {
-    vehicle: &'a str,
-    mission: &'a str,
-    /// The disturbances flown in, in words (absent in calm air).
-    #[serde(skip_serializing_if = "String::is_empty")]
-    world: String,
-    duration_s: f64,
-    crashed: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    crashed_s: Option<f64>,
-    attitude_error_deg: RmsMax,
-    altitude_error_m: RmsMax,
-    drift_m: f64,
-    /// Only for a mission that judges it (a disturbance-rejection criterion).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    position_error_m: Option<RmsMax>,
-    /// Hover roll/pitch body rate RMS above `quality::OSCILLATION_HZ`, °/s.
-    oscillation_dps: f64,
-    /// Hover motor commands' total variation per second, 1/s.
-    motor_variation_per_s: f64,
-    /// Attitude error during the roll and pitch steps (absent: none flown).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    step_tracking_deg: Option<RmsMax>,
-    saturation_s: f64,
-    airborne_s: f64,
-    landed_s: Option<f64>,
-    envelope: EnvelopeView,
-    steps: Vec<StepView>,
-    criteria_met: bool,
-    failures: &'a [String],
-    seconds: f64,
-}
-
-#[derive(Serialize)]
-struct StepView {
-    axis: &'static str,
-    at_s: f64,
-    to_deg: f64,
-    tracked: ResponseView,
-    #[serde(rename = "true")]
-    truth: ResponseView,
-    drift_deg: f64,
-}
-
-#[derive(Serialize)]
-struct ResponseView {
-    rise_s: f64,
-    overshoot: f64,
-    settling_s: f64,
-}
-
-impl From<&StepResponse> for ResponseView {
-    fn from(x: &StepResponse) -> Self {
-        ResponseView {
-            rise_s: x.rise_s,
-            overshoot: x.overshoot,
-            settling_s: x.settling_s,
-        }
-    }
-}
-
-fn to_json<'a>(
-    spec: &'a Spec,
-    report: &Report,
-    s: &'a Setup,
-    f: &Flight,
-    obs: &[ChainObs],
-    failures: &'a [String],
-    seconds: f64,
-) -> FlyView<'a> {
-    let q = &f.quality;
-    let steps = q.steps.iter().map(|st| StepView {
-        axis: st.axis.name(),
-        at_s: st.at_s,
-        to_deg: st.to_deg,
-        tracked: (&st.tracked).into(),
-        truth: (&st.truth).into(),
-        drift_deg: st.drift_deg,
-    });
-    let flight = FlightView {
-        vehicle: &s.preset.name,
-        mission: &s.mission.name,
-        world: s.mission.world.describe(),
-        duration_s: s.horizon as f64 * 1e-9,
-        crashed: q.crashed,
-        crashed_s: q.crashed_s,
-        attitude_error_deg: (&q.attitude_error_deg).into(),
-        altitude_error_m: (&q.altitude_error_m).into(),
-        drift_m: q.drift_m,
-        position_error_m: s
-            .mission
-            .criteria
-            .position_rms_m
-            .map(|_| (&q.position_error_m).into()),
-        oscillation_dps: q.oscillation_dps,
-        motor_variation_per_s: q.motor_variation_per_s,
-        step_tracking_deg: (q.step_tracking_deg.count > 0).then(|| (&q.step_tracking_deg).into()),
-        saturation_s: q.saturation_s,
-        airborne_s: q.airborne_s,
-        landed_s: q.landed_s,
-        envelope: q.into(),
-        steps: steps.collect(),
-        criteria_met: failures.is_empty(),
-        failures,
-        seconds,
-    };
-    FlyView {
-        report: simulate::observations_view(spec, report, obs),
-        flight,
-    }
 }
 
 /// The flight's columns, each with its unit (the chains' latency columns

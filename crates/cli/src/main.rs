@@ -1,6 +1,5 @@
 //! `rtpipe`: analyse pipe systems (Cheng, West, Einstein, EMSOFT 2018).
 
-use clap::parser::ValueSource;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use rtpipe::{
     analyze, campaign, design, fly, generate, import, output, run, simulate, EXIT_BAD_INPUT,
@@ -145,7 +144,7 @@ fn register_inputs(command: &Command) {
                 output::register_input("--criterion", c);
             }
         }
-        Command::Run(a) => world(&a.vehicle, &a.mission),
+        Command::Run(a) => world(a.vehicle(), a.mission()),
         Command::Design(a) => {
             a.vehicles.iter().for_each(|v| world(v, "steps"));
             a.missions.iter().for_each(|m| world("racer5", m));
@@ -162,31 +161,16 @@ fn register_inputs(command: &Command) {
 
 fn main() -> ExitCode {
     exit_on_panic();
-    let matches = Cli::command().get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let cli = match Cli::from_arg_matches(&Cli::command().get_matches()) {
         Ok(c) => c,
         Err(e) => e.exit(),
     };
-    let given = |name: &str| {
-        matches.subcommand().is_some_and(|(_, m)| {
-            m.try_get_raw(name).is_ok_and(|v| v.is_some())
-                && m.value_source(name) == Some(ValueSource::CommandLine)
-        })
-    };
-    let (seed_given, steps_given) = (given("seed"), given("search_steps"));
     register_inputs(&cli.command);
     match cli.command {
         Command::Analyze(args) => analyze::run(&args),
-        Command::Simulate(mut args) => {
-            args.seed_given = seed_given;
-            args.search_steps_given = steps_given;
-            simulate::run(&args)
-        }
+        Command::Simulate(args) => simulate::run(&args),
         Command::Fly(args) => fly::run(&args),
-        Command::Run(mut args) => {
-            args.world_given = given("vehicle") || given("mission");
-            run::run(&args)
-        }
+        Command::Run(args) => run::run(&args),
         Command::Design(args) => design::run(&args),
         Command::Import { format } => import::run(&format),
         Command::Generate { kind } => generate::run(&kind),

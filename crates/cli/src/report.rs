@@ -22,3 +22,20 @@ impl<K: serde::Serialize, V: serde::Serialize> serde::Serialize for Pairs<K, V> 
 pub fn time(spec: &Spec, ns: Option<Nanos>) -> Option<f64> {
     ns.map(|n| spec.in_unit(n))
 }
+
+/// A table of one row, built from its fields (name, kind, value) in
+/// order: a report's figures that are one record, not a list.
+pub fn record_table(
+    name: &str,
+    fields: Vec<(&str, rtpipe_printer::Kind, rtpipe_printer::Cell)>,
+) -> rtpipe_printer::Table {
+    let columns = fields
+        .iter()
+        .map(|(n, k, _)| rtpipe_printer::Column::new(*n, *k))
+        .collect();
+    let Ok(mut t) = rtpipe_printer::Table::new(name, columns) else {
+        unreachable!("table `{name}`: a record's fields are distinct names");
+    };
+    t.push(fields.into_iter().map(|(_, _, c)| c).collect());
+    t
+}

@@ -32,13 +32,14 @@ pub struct RunArgs {
     /// (the co-simulated world advanced to the true instants).
     #[arg(long)]
     pub synthetic: bool,
-    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`).
-    #[arg(long, default_value = "racer5")]
-    pub vehicle: String,
+    /// A flight's vehicle: racer5, aero1kg, or a preset file (as `fly`)
+    /// [default: racer5].
+    #[arg(long)]
+    pub vehicle: Option<String>,
     /// A flight's mission: steps, hover, paper, gusty, or a mission file (as
-    /// `fly`).
-    #[arg(long, default_value = "steps")]
-    pub mission: String,
+    /// `fly`) [default: steps].
+    #[arg(long)]
+    pub mission: Option<String>,
     /// Scheduling class of the task threads [default: fifo for scheduler =
     /// "rm", deadline for "edf", edf-fifo for "edf" with critical
     /// sections]. `other` needs --best-effort.
@@ -85,9 +86,23 @@ pub struct RunArgs {
     /// input spec).
     #[arg(long, value_name = "OUT.toml", requires = "measure_overheads")]
     pub write_spec: Option<PathBuf>,
-    /// --vehicle or --mission was given on the command line (set by main).
-    #[arg(skip)]
-    pub world_given: bool,
+}
+
+impl RunArgs {
+    /// `--vehicle`, or its default.
+    pub fn vehicle(&self) -> &str {
+        self.vehicle.as_deref().unwrap_or("racer5")
+    }
+
+    /// `--mission`, or its default.
+    pub fn mission(&self) -> &str {
+        self.mission.as_deref().unwrap_or("steps")
+    }
+
+    /// Whether a flight's world was chosen (`--vehicle`, `--mission`).
+    fn world_given(&self) -> bool {
+        self.vehicle.is_some() || self.mission.is_some()
+    }
 }
 
 /// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
@@ -149,29 +164,41 @@ pub fn run(a: &RunArgs) -> ExitCode {
     if a.measure_overheads {
         return measure::run(&spec, a);
     }
-    let (setup, cfg) = match prepare(&spec, a) {
-        Ok(x) => x,
-        Err(b) => return fail(b),
-    };
-    let report = rtpipe_analysis::analyze(&spec);
-    if let Err(b) = admit(&spec, a, &cfg, &report) {
-        return fail(b);
+    match answer(&spec, a, !a.output.is_json()) {
+        Ok(answer) => answer.emit(),
+        Err(b) => fail(b),
     }
+}
+
+/// `run` on a loaded spec, as the binary and Python both call it: the
+/// report, the notes (the run's, a file not written, why the status is
+/// what it is) and the exit status. `announce` says on stderr what is
+/// about to run (the binary's text report).
+pub fn answer(spec: &Spec, a: &RunArgs, announce_it: bool) -> Result<Answer, Diagnostic> {
+    if let Some(d) = unrunnable(spec, a) {
+        return Err(d);
+    }
+    if a.measure_overheads {
+        return Err(Diagnostic::error(
+            "--measure-overheads measures this machine, it runs no spec",
+            "run `rtpipe run SPEC --measure-overheads` from the command line",
+        ));
+    }
+    let (setup, cfg) = prepare(spec, a)?;
+    let report = rtpipe_analysis::analyze(spec);
+    admit(spec, a, &cfg, &report)?;
     let spin = Spin::calibrate();
-    if !a.output.is_json() {
-        announce(&spec, a, &cfg, setup.is_some());
+    if announce_it {
+        announce(spec, a, &cfg, setup.is_some());
     }
-    let (res, flown) = match execute(&spec, a, &cfg, setup.as_ref(), spin) {
-        Ok(x) => x,
-        Err(b) => return fail(b),
-    };
+    let (res, flown) = execute(spec, a, &cfg, setup.as_ref(), spin)?;
     let obs = observe(&report, &res.sim);
     // A file that cannot be written (disk full) does not drop the report of
     // a run that happened: the report first, then the error (exit 2).
-    let written = files::write_outputs(&spec, a, &res, &obs);
-    let verdict = verdict::judge(&spec, &report, &res);
+    let written = files::write_outputs(spec, a, &res, &obs);
+    let verdict = verdict::judge(spec, &report, &res);
     let printed = report::RunReport {
-        spec: &spec,
+        spec,
         report: &report,
         res: &res,
         obs: &obs,
@@ -179,57 +206,59 @@ pub fn run(a: &RunArgs) -> ExitCode {
         verdict: &verdict,
         flight: flown.as_ref().zip(setup.as_ref()),
     };
-    let rendered = match command::render(&printed, a.output.chosen()) {
-        Ok(r) => r,
-        Err(b) => return fail(b),
-    };
+    let rendered = command::render(&printed, a.output.chosen())?;
     let mut notes = res.notes.clone();
     if let Err(b) = &written {
         notes.push(b.to_string().trim_end().to_string());
     }
-    let answer = Answer {
+    let status = status_after(spec, &cfg, &res, written.is_ok(), &verdict, &mut notes);
+    Ok(Answer {
         report: rendered,
         notes,
-        status: 0,
-    };
-    let code = answer.emit();
-    if code != ExitCode::SUCCESS {
-        return code;
-    }
-    exit_after(&spec, &cfg, &res, written.is_ok(), &verdict)
+        status,
+    })
 }
 
 /// The exit status once the report is out: a stop signal's (the span run
-/// covered said), a file that was not written (2), else the verdict's.
-fn exit_after(
+/// covered said), a file that was not written (2), else the verdict's;
+/// what it says for people goes to `notes`.
+fn status_after(
     spec: &Spec,
     cfg: &RunConfig,
     res: &RunResult,
     written: bool,
     verdict: &Verdict,
-) -> ExitCode {
+    notes: &mut Vec<String>,
+) -> u8 {
     if res.interrupted {
-        eprintln!(
+        notes.push(format!(
             "error: interrupted by {} after {} of {} {u} (the report above covers that span)",
             rtpipe_runtime::sys::stop_name(),
             spec.fmt_time(res.sim.horizon),
             spec.fmt_time(cfg.duration),
             u = spec.time_unit
-        );
-        return ExitCode::from(crate::interrupted_status());
+        ));
+        return crate::interrupted_status();
     }
     if !written {
-        return ExitCode::from(crate::EXIT_BAD_INPUT);
+        return crate::EXIT_BAD_INPUT;
     }
-    exit_status(verdict)
+    exit_status(verdict, notes)
+}
+
+/// Why the runtime cannot run `spec` as `a` asks (sections under
+/// SCHED_DEADLINE, `rtpipe_runtime::locks::unrunnable`), without a place.
+fn unrunnable(spec: &Spec, a: &RunArgs) -> Option<Diagnostic> {
+    let policy = policy_of(spec, a).ok()?;
+    let (msg, help) = rtpipe_runtime::locks::unrunnable(spec, policy)?;
+    Some(Diagnostic::error(msg, help))
 }
 
 /// A spec the runtime cannot run as asked (sections under
 /// SCHED_DEADLINE, `rtpipe_runtime::locks::unrunnable`): the error at its
 /// `resource_protocol` (else its first `[resources]` table), exit 2.
 fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
-    let policy = policy_of(spec, a).ok()?;
-    let (msg, help) = rtpipe_runtime::locks::unrunnable(spec, policy)?;
+    let d = unrunnable(spec, a)?;
     let source = std::fs::read_to_string(&a.spec).unwrap_or_default();
     let span = rtpipe_model::input::locate(&source, "system.resource_protocol").or_else(|| {
         let r = spec.resources.first()?;
@@ -238,7 +267,7 @@ fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
     let e = rtpipe_model::SpecError {
         file: a.spec.display().to_string(),
         source,
-        diagnostics: vec![Diagnostic::new(msg, span).help(help)],
+        diagnostics: vec![Diagnostic { span, ..d }],
     };
     eprint!("{e}");
     Some(ExitCode::from(crate::EXIT_BAD_INPUT))
@@ -250,7 +279,7 @@ fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
 /// rt-app workload if asked, since it needs no run.
 fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagnostic> {
     let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
-    if a.world_given && !flight {
+    if a.world_given() && !flight {
         return Err(Diagnostic::error(
             "--vehicle and --mission choose what a flight flies, but this run has synthetic bodies (no task names a flight body, or --synthetic)",
             "drop --vehicle/--mission, or run a spec whose tasks name flight bodies without --synthetic",
@@ -259,8 +288,8 @@ fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagn
     let setup = if flight {
         let r = rtpipe_fly::Request {
             spec_path: &a.spec,
-            vehicle: &a.vehicle,
-            mission: &a.mission,
+            vehicle: a.vehicle(),
+            mission: a.mission(),
             horizon: None,
             seed: 0,
         };
@@ -388,20 +417,20 @@ fn execute(
 /// window that adds up to its excess (a violation of the analysis, or of
 /// the model by something rtpipe cannot see), or a task the analysis bounds
 /// no response for ran a job (`--force`); exit 0 otherwise.
-fn exit_status(v: &Verdict) -> ExitCode {
+fn exit_status(v: &Verdict, notes: &mut Vec<String>) -> u8 {
     if v.unexcused > 0 {
-        eprintln!(
+        notes.push(format!(
             "error: {} observation(s) above a sound bound with no cause in their own window that explains them{} (listed above; --json has them all)",
             v.unexcused,
             v.unbounded_note()
-        );
-        return ExitCode::from(1);
+        ));
+        return 1;
     }
     if v.excused > 0 {
-        eprintln!(
+        notes.push(format!(
             "warning: {} observation(s) above a sound bound, each excused by what broke the model in its window (listed above)",
             v.excused
-        );
+        ));
     }
-    ExitCode::SUCCESS
+    0
 }

@@ -190,18 +190,32 @@ fn bad_flags_are_input_failures_with_the_parsers_message() {
     }
 }
 
+/// Every long loop asks the stop flag and returns (no unwinding): a
+/// simulation, its adversarial searches, a design search, a flight, a
+/// sweep and its refinement.
 #[test]
-fn a_set_stop_flag_stops_a_simulation_and_a_design() {
-    for (cmd, file) in [
-        ("simulate", "paper-table3.toml"),
-        ("design", "table2-design.toml"),
-        ("fly", "cleanflight.toml"),
+fn a_set_stop_flag_stops_every_long_loop() {
+    for (cmd, file, flags) in [
+        ("simulate", "paper-table3.toml", &[][..]),
+        (
+            "simulate",
+            "paper-table3.toml",
+            &["--phasing", "search", "--outputs", "10"][..],
+        ),
+        ("design", "table2-design.toml", &[][..]),
+        ("fly", "cleanflight.toml", &[][..]),
+        (
+            "fly",
+            "cleanflight.toml",
+            &["--sweep", "--scale", "1..2"][..],
+        ),
     ] {
         let path = example(file);
         let spec = load(&path);
         let stop = Arc::new(AtomicBool::new(true));
-        let r = api::run(cmd, &spec, "spec.toml", &[], None, stop);
-        assert!(matches!(r, Err(Failure::Stopped)), "{cmd}");
+        let flags: Vec<String> = flags.iter().map(|f| f.to_string()).collect();
+        let r = api::run(cmd, &spec, "spec.toml", &flags, None, stop);
+        assert!(matches!(r, Err(Failure::Stopped)), "{cmd} {flags:?}");
     }
 }
 

@@ -4,8 +4,12 @@
 mod common;
 use common::*;
 
-/// The CSV part headed `# NAME`, its lines.
+/// The CSV part headed `# NAME`, its lines (a report of one table prints
+/// it without a heading: then that table).
 fn csv_table<'a>(out: &'a str, name: &str) -> Vec<&'a str> {
+    if !out.starts_with("# ") {
+        return out.lines().collect();
+    }
     let head = format!("# {name}");
     out.split("\n\n")
         .find(|part| part.starts_with(&head))
@@ -100,13 +104,166 @@ fn design_prints_the_designed_tasks_as_csv() {
     assert!(!csv_table(&out, "chains").is_empty(), "{out}");
 }
 
-/// `fly` and `campaign` render their own reports yet: no tables to print.
+/// The CSV table `name` as (header, rows), each line split at commas
+/// (the values these tests compare hold none).
+fn csv_rows(out: &str, name: &str) -> (Vec<String>, Vec<Vec<String>>) {
+    let lines = csv_table(out, name);
+    let split = |l: &str| l.split(',').map(String::from).collect::<Vec<_>>();
+    let header = lines.first().map(|l| split(l)).unwrap_or_default();
+    (header, lines.iter().skip(1).map(|l| split(l)).collect())
+}
+
+/// Row `row`'s field of column `column`.
+fn field<'a>(t: &'a (Vec<String>, Vec<Vec<String>>), row: usize, column: &str) -> &'a str {
+    let k = t.0.iter().position(|c| c == column);
+    k.and_then(|k| t.1.get(row)?.get(k))
+        .map_or("<none>", String::as_str)
+}
+
 #[test]
-fn commands_without_tables_refuse_csv_plainly() {
-    let o = rtpipe(&["fly", &example("cleanflight.toml"), "--format", "csv"]);
-    assert_exit(&o, 2);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("`fly` has no CSV report yet"), "{err}");
+fn fly_prints_the_flight_and_its_steps_as_csv() {
+    let spec = example("cleanflight.toml");
+    let args = ["fly", &spec, "--duration", "4s", "--mission", "hover"];
+    let o = rtpipe(&[&args[..], &["--format", "csv"]].concat());
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let v = json_of(&rtpipe(&[&args[..], &["--json"]].concat()));
+    for name in ["tasks", "chains", "observed"] {
+        assert!(csv_table(&out, name).len() > 1, "{name}: {out}");
+    }
+    let flight = csv_rows(&out, "flight");
+    assert_eq!(flight.1.len(), 1, "{out}");
+    assert_eq!(flight.0.first().map(String::as_str), Some("vehicle"));
+    assert_eq!(field(&flight, 0, "mission"), "hover");
+    assert_eq!(field(&flight, 0, "crashed"), "false");
+    assert_eq!(field(&flight, 0, "criteria_met"), "true");
+    // The same figures as the JSON, to the last digit.
+    for (column, key) in [("drift_m", "drift_m"), ("airborne_s", "airborne_s")] {
+        let json = v["flight"][key].as_f64().map(|x| x.to_string());
+        assert_eq!(
+            Some(field(&flight, 0, column).to_string()),
+            json,
+            "{column}"
+        );
+    }
+    let rms = v["flight"]["attitude_error_deg"]["rms"].as_f64();
+    let csv_rms = field(&flight, 0, "attitude_error_deg_rms")
+        .parse::<f64>()
+        .ok();
+    assert_eq!(csv_rms, rms);
+    // The hover flies no steps: the table has its header and no row.
+    let steps = csv_table(&out, "steps");
+    assert_eq!(
+        steps.first().map(|h| h.starts_with("axis,at_s,")),
+        Some(true)
+    );
+    assert_eq!(
+        steps.len(),
+        1 + v["flight"]["steps"].as_array().map_or(0, Vec::len)
+    );
+}
+
+#[test]
+fn fly_sweep_prints_its_points_and_limits_as_csv() {
+    let spec = example("cleanflight.toml");
+    let args = [
+        "fly",
+        &spec,
+        "--sweep",
+        "--scale",
+        "1..2",
+        "--per-octave",
+        "1",
+        "--resolution",
+        "0",
+        "--duration",
+        "4s",
+        "--mission",
+        "hover",
+    ];
+    let o = rtpipe(&[&args[..], &["--format", "csv"]].concat());
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let v = json_of(&rtpipe(&[&args[..], &["--json"]].concat()));
+    let points = csv_rows(&out, "points");
+    let n = v["points"].as_array().map_or(0, Vec::len);
+    assert!(n > 0, "{v}");
+    assert_eq!(points.1.len(), n, "{out}");
+    for (k, p) in v["points"].as_array().into_iter().flatten().enumerate() {
+        assert_eq!(
+            field(&points, k, "varied"),
+            p["varied"].as_str().unwrap_or("?")
+        );
+        assert_eq!(field(&points, k, "flies"), p["flies"].to_string());
+    }
+    // Every point has a row per chain from the read and from the event.
+    let chains = v["limits_ms"].as_array().map_or(0, Vec::len);
+    assert_eq!(csv_rows(&out, "bounds").1.len(), n * chains * 2, "{out}");
+    let limits = csv_rows(&out, "limits");
+    assert_eq!(limits.1.len(), chains, "{out}");
+    let first = v["limits_ms"][0]["reaction"]
+        .as_f64()
+        .map(|x| x.to_string());
+    assert_eq!(Some(field(&limits, 0, "reaction_ms").to_string()), first);
+    let setup = csv_rows(&out, "sweep");
+    assert_eq!(field(&setup, 0, "system"), "cleanflight");
+    assert!(csv_table(&out, "sweep")[1].ends_with(",1,1,1"), "{out}");
+}
+
+/// The bundled campaign, shrunk to a few short systems.
+fn small_campaign(dir: &std::path::Path) -> String {
+    let text = std::fs::read_to_string(example("campaigns/waters.toml")).unwrap_or_default();
+    let text = text
+        .replace("systems = 2000", "systems = 10")
+        .replace("shard_size = 500", "shard_size = 5")
+        .replace("duration = \"2s\"", "duration = \"100ms\"");
+    let path = dir.join("c.toml");
+    assert!(std::fs::write(&path, text).is_ok());
+    path.display().to_string()
+}
+
+#[test]
+fn campaign_prints_its_summary_and_plan_as_csv() {
+    let dir = scratch("formats-campaign");
+    let config = small_campaign(&dir);
+    let out_dir = dir.join("out").display().to_string();
+    let plan = rtpipe(&["campaign", &config, &out_dir, "--plan", "--format", "csv"]);
+    assert_exit(&plan, 0);
+    let plan = String::from_utf8_lossy(&plan.stdout);
+    let p = csv_rows(&plan, "plan");
+    assert_eq!(
+        (field(&p, 0, "systems"), field(&p, 0, "shards")),
+        ("10", "2")
+    );
+    // Nothing written yet: no shard to list.
+    assert_eq!(csv_table(&plan, "shards"), ["shard,state"]);
+    let o = rtpipe(&["campaign", &config, &out_dir, "--format", "csv"]);
+    assert_exit(&o, 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let c = csv_rows(&out, "campaign");
+    assert_eq!(c.1.len(), 1, "{out}");
+    assert_eq!(
+        (field(&c, 0, "systems_run"), field(&c, 0, "written")),
+        ("10", "2")
+    );
+    assert_eq!(field(&c, 0, "stopped"), "false");
+    // Run again: the JSON and the CSV say the same of the same directory.
+    let v = json_of(&rtpipe(&["campaign", &config, &out_dir, "--json"]));
+    let again = rtpipe(&["campaign", &config, &out_dir, "--format", "csv"]);
+    let again = csv_rows(&String::from_utf8_lossy(&again.stdout), "campaign");
+    for key in ["written", "skipped", "rows", "part"] {
+        let json = match &v[key] {
+            serde_json::Value::String(s) => s.clone(),
+            other => other.to_string(),
+        };
+        assert_eq!(field(&again, 0, key), json, "{key}");
+    }
+    let plan = rtpipe(&["campaign", &config, &out_dir, "--plan", "--format", "csv"]);
+    let plan = String::from_utf8_lossy(&plan.stdout);
+    assert_eq!(
+        csv_table(&plan, "shards"),
+        ["shard,state", "0,written", "1,written"]
+    );
 }
 
 #[test]

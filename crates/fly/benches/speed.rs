@@ -171,8 +171,9 @@ fn sweeps(c: &mut Criterion<CpuTime>) {
                         &How::once(ExecModel::Uniform, &crit),
                         vars,
                         &done,
-                        &|| {},
+                        &|| false,
                     )
+                    .unwrap_or_default()
                 })
             };
             group.throughput(Throughput::Elements(vars.len() as u64));

@@ -312,7 +312,10 @@ fn idle(_: &Job, _: &[Option<Stamped<Value>>], _: Option<Value>) -> Value {
 /// Flies `spec` as `setup` says: bodies on the simulated schedule, the
 /// world co-simulated at their read and publish instants.
 pub fn fly(spec: &Spec, s: &Setup, exec: ExecModel) -> Result<Flight, Diagnostic> {
-    fly_with_progress(spec, s, exec, Watch::default(), None)
+    match fly_with_progress(spec, s, exec, Watch::default(), None)? {
+        Some(flight) => Ok(flight),
+        None => unreachable!("an unwatched flight is never abandoned"),
+    }
 }
 
 /// One body per task of a spec, in task order.
@@ -339,26 +342,28 @@ fn bodies_and_world(spec: &Spec, s: &Setup) -> Result<(Bodies, Cosim), Diagnosti
 
 /// What a caller watching a flight adds: where to publish the simulated
 /// time (ns) as it goes, and a check called with it every
-/// `rtpipe_sim::PROGRESS_EVENTS` events, which may unwind to abandon the
-/// flight (a stop flag: the flight has no other way out).
+/// `rtpipe_sim::PROGRESS_EVENTS` events, whose `false` abandons the flight
+/// (a stop flag).
 #[derive(Default)]
 pub struct Watch<'a> {
     /// Receives the world's time as it advances (a progress bar).
     pub progress: Option<Arc<AtomicU64>>,
-    /// Called with the simulated time every few thousand events.
-    pub check: Option<&'a mut dyn FnMut(i64)>,
+    /// Called with the simulated time every few thousand events; `false`
+    /// ends the flight.
+    pub check: Option<&'a mut dyn FnMut(i64) -> bool>,
 }
 
 /// [`fly`], watched as `watch` says and, with `rows`, handing every
 /// chain's sample rows on as they complete
-/// (`rtpipe_sim::simulate_with_rows`).
+/// (`rtpipe_sim::simulate_with_rows`); `None` when the watch's check
+/// abandoned it.
 pub fn fly_with_progress(
     spec: &Spec,
     s: &Setup,
     exec: ExecModel,
     watch: Watch<'_>,
     rows: Option<rtpipe_joblog::RowSink>,
-) -> Result<Flight, Diagnostic> {
+) -> Result<Option<Flight>, Diagnostic> {
     let seed = s.world.seed;
     let (mut bodies, mut world) = bodies_and_world(spec, s)?;
     if let Some(p) = watch.progress {
@@ -385,23 +390,26 @@ pub fn fly_with_progress(
         };
         &chainless
     };
-    let mut unwatched = |_| {};
+    let mut unwatched = |_| true;
     let check = watch.check.unwrap_or(&mut unwatched);
-    let sim = simulate_bodies_with_progress(spec, &cfg, &mut bodies, &mut world, check, rows)
+    let flown = simulate_bodies_with_progress(spec, &cfg, &mut bodies, &mut world, check, rows)
         .map_err(|e| {
             Diagnostic::error(
                 format!("cannot simulate: {e}"),
                 "give every task a fixed positive period",
             )
         })?;
+    let Some(sim) = flown else {
+        return Ok(None);
+    };
     world.advance(u64::try_from(s.horizon).unwrap_or(0));
     let quality = world.assessor.clone().finish();
-    Ok(Flight {
+    Ok(Some(Flight {
         sim,
         trace: std::mem::take(&mut world.trace),
         quality,
         alerts: std::mem::take(&mut world.alerts),
-    })
+    }))
 }
 
 /// The bodies and the world of a flight of `duration` ns on real threads:
@@ -493,7 +501,8 @@ mod tests {
                 }
             })),
         )
-        .unwrap_or_else(|e| panic!("{e}"));
+        .unwrap_or_else(|e| panic!("{e}"))
+        .unwrap_or_else(|| panic!("an unwatched flight ends"));
         let want = rtpipe_joblog::sample_rows(&spec, &f.sim.jobs);
         let got = got.lock().map(|g| g.clone()).unwrap_or_default();
         assert!(want.iter().all(|c| c.len() > 100), "rows per chain");
@@ -502,27 +511,19 @@ mod tests {
 
     #[test]
     fn a_watch_check_is_called_as_the_flight_goes_and_can_abandon_it() {
-        struct Abandon;
         let (spec, p) = cleanflight();
         let s = setup_of(&spec, &p, &["--mission", "hover", "--duration", "600s"]);
         let mut seen = Vec::new();
-        let flown = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let mut check = |t: i64| {
-                seen.push(t);
-                if seen.len() == 3 {
-                    std::panic::resume_unwind(Box::new(Abandon));
-                }
-            };
-            let watch = Watch {
-                progress: None,
-                check: Some(&mut check),
-            };
-            fly_with_progress(&spec, &s, ExecModel::Uniform, watch, None)
-        }));
-        let Err(payload) = flown else {
-            panic!("the flight ran to its end")
+        let mut check = |t: i64| {
+            seen.push(t);
+            seen.len() < 3
         };
-        assert!(payload.downcast_ref::<Abandon>().is_some());
+        let watch = Watch {
+            progress: None,
+            check: Some(&mut check),
+        };
+        let flown = fly_with_progress(&spec, &s, ExecModel::Uniform, watch, None);
+        assert!(matches!(flown, Ok(None)), "the flight was not abandoned");
         // Called at rising times, and abandoned at the third call, seconds
         // into the flight, not at its end.
         assert!(seen.len() == 3 && seen[0] < seen[1] && seen[1] < seen[2]);

@@ -307,8 +307,9 @@ fn trials(timing: &Spec, setup: &Setup, how: &How) -> (Option<FlightQuality>, Ve
 
 /// Flies every variation (in parallel; each point is deterministic; the
 /// points in the variations' order) and counts finished points in `done`.
-/// `check` is called before each flight and may unwind to abandon the
-/// sweep (a stop flag; the unwinding reaches the caller).
+/// `stopped` is asked before each flight: once it says so, no further
+/// flight begins and the sweep answers `None` (a stop flag: the flights
+/// flown are not the sweep).
 /// Variations that fly the same timing with the same delays (the nominal
 /// timing is in each of the default sweeps five times: ×1 scale, ×1 rate,
 /// three 0 ms delays) are flown once.
@@ -318,8 +319,8 @@ pub fn sweep(
     how: &How,
     variations: &[Variation],
     done: &AtomicU64,
-    check: &(dyn Fn() + Sync),
-) -> Vec<Point> {
+    stopped: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<Point>> {
     // (timing, delays) decide a point, all but its variation (`flown`).
     let mut distinct: Vec<(Variation, Plan)> = Vec::new();
     let slot: Vec<usize> = variations
@@ -336,14 +337,16 @@ pub fn sweep(
         .par_iter()
         .enumerate()
         .map(|(k, (v, _))| {
-            check();
+            if stopped() {
+                return None;
+            }
             let p = flown(spec, s, *v, how);
             let copies = slot.iter().filter(|&&i| i == k).count();
             done.fetch_add(copies as u64, Ordering::Relaxed);
-            p
+            Some(p)
         })
-        .collect();
-    variations
+        .collect::<Option<_>>()?;
+    let points = variations
         .iter()
         .zip(slot)
         .map(|(&v, k)| {
@@ -351,7 +354,8 @@ pub fn sweep(
             p.variation = v;
             p
         })
-        .collect()
+        .collect();
+    Some(points)
 }
 
 /// The default sweep: period scales 2^(i/3) from `lo` to `hi` (both
@@ -559,8 +563,9 @@ pub(crate) mod tests {
             &How::once(ExecModel::Uniform, &s.criteria()),
             &vars,
             &done,
-            &|| {},
-        );
+            &|| false,
+        )
+        .unwrap_or_default();
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         let e = scale_edge(&points);
         let (Some(last), Some(fail)) = (e.last_pass, e.first_fail) else {
@@ -627,8 +632,8 @@ pub(crate) mod tests {
             },
             ..one
         };
-        let single = sweep(&spec, &s, &one, &vars, &done, &|| {});
-        let many = sweep(&spec, &s, &six, &vars, &done, &|| {});
+        let single = sweep(&spec, &s, &one, &vars, &done, &|| false).unwrap_or_default();
+        let many = sweep(&spec, &s, &six, &vars, &done, &|| false).unwrap_or_default();
         for (a, b) in single.iter().zip(&many) {
             assert_eq!((a.flights, b.flights), (1, 6));
             assert!(b.passed <= 6);
@@ -701,8 +706,9 @@ mod threads {
             &How::once(ExecModel::Uniform, &c),
             &vars,
             &done,
-            &|| {},
-        );
+            &|| false,
+        )
+        .unwrap_or_default();
         assert_eq!(done.load(Ordering::Relaxed), vars.len() as u64);
         for (v, g) in vars.iter().zip(&got) {
             let alone = flown(&spec, &s, *v, &How::once(ExecModel::Uniform, &c));
@@ -711,44 +717,34 @@ mod threads {
         assert!(!got[5].schedulable, "{:?}", got[5]);
     }
 
-    /// A check that unwinds abandons the sweep: the unwinding reaches the
-    /// caller with its payload and no flight is flown after it (rayon
-    /// still calls the check of the items not yet begun).
+    /// A stop abandons the sweep: it answers `None`, and no flight begins
+    /// after the stop was seen (rayon still asks for the items not yet
+    /// begun).
     #[test]
-    fn a_check_that_unwinds_abandons_the_sweep() {
-        struct Abandon;
+    fn a_stop_abandons_the_sweep() {
         let (spec, s) = cleanflight_hover(1_000_000_000);
         let vars = default_variations(&spec, &s, 0.5, 8.0);
         assert!(vars.len() > 20, "{}", vars.len());
         let (done, checks) = (AtomicU64::new(0), AtomicU64::new(0));
-        let check = || {
-            if checks.fetch_add(1, Ordering::Relaxed) >= 2 {
-                std::panic::resume_unwind(Box::new(Abandon));
-            }
-        };
+        let stopped = || checks.fetch_add(1, Ordering::Relaxed) >= 2;
         let one = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap_or_else(|e| panic!("{e}"));
-        let swept = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            let c = s.criteria();
-            one.install(|| {
-                sweep(
-                    &spec,
-                    &s,
-                    &How::once(ExecModel::Uniform, &c),
-                    &vars,
-                    &done,
-                    &check,
-                )
-            })
-        }));
-        let Err(payload) = swept else {
-            panic!("the sweep ran to its end")
-        };
-        assert!(payload.downcast_ref::<Abandon>().is_some());
+        let c = s.criteria();
+        let swept = one.install(|| {
+            sweep(
+                &spec,
+                &s,
+                &How::once(ExecModel::Uniform, &c),
+                &vars,
+                &done,
+                &stopped,
+            )
+        });
+        assert!(swept.is_none(), "the sweep ran to its end");
         // Two flights were flown (the nominal one stands for five
-        // variations); every later check unwound at once.
+        // variations); no flight began after the stop.
         assert!(done.load(Ordering::Relaxed) <= 6, "{done:?}");
     }
 
@@ -786,8 +782,9 @@ mod threads {
                     &How::once(ExecModel::Uniform, &c),
                     &vars,
                     &done,
-                    &|| {},
+                    &|| false,
                 )
+                .unwrap_or_default()
             })
         };
         let one = on(1);

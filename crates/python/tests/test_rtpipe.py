@@ -173,7 +173,7 @@ def test_design_for_margin_within_a_utilisation_cap():
     assert search["factor"] == pytest.approx(4 / 3, rel=2e-3)
     assert r["design"]["objective"] <= 0.6
     assert r["margins"]["scaling"][-1]["factor"] >= search["factor"]
-    with pytest.raises(rtpipe.InputError, match="max-utilization"):
+    with pytest.raises(rtpipe.InputError, match="max_utilization"):
         system.design(objective="margin")
 
 

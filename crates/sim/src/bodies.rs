@@ -38,14 +38,17 @@ pub fn simulate_bodies_with_rows<V: Copy>(
     env: &mut dyn Environment<V>,
     rows: Option<rtpipe_joblog::RowSink>,
 ) -> Result<SimResult, SimError> {
-    simulate_bodies_with_progress(spec, cfg, bodies, env, &mut |_| {}, rows)
+    match simulate_bodies_with_progress(spec, cfg, bodies, env, &mut |_| true, rows)? {
+        Some(result) => Ok(result),
+        None => unreachable!("a progress that always goes on never stops the run"),
+    }
 }
 
 /// [`simulate_bodies_with_rows`], calling `progress` with the simulated
 /// time reached every [`crate::PROGRESS_EVENTS`] events, as
 /// [`crate::simulate_with_progress`] does: the one place a caller can
-/// abandon a run of task code (by unwinding from it), since the bodies and
-/// the environment cannot end it.
+/// abandon a run of task code (its answer `false` ends the run: `Ok(None)`,
+/// no result), since the bodies and the environment cannot end it.
 ///
 /// # Panics
 /// As [`simulate_bodies`].
@@ -54,9 +57,9 @@ pub fn simulate_bodies_with_progress<V: Copy>(
     cfg: &SimConfig,
     bodies: &mut [Box<dyn Body<V> + '_>],
     env: &mut dyn Environment<V>,
-    progress: &mut dyn FnMut(Nanos),
+    progress: &mut dyn FnMut(Nanos) -> bool,
     rows: Option<rtpipe_joblog::RowSink>,
-) -> Result<SimResult, SimError> {
+) -> Result<Option<SimResult>, SimError> {
     assert_eq!(
         bodies.len(),
         spec.tasks.len(),
@@ -72,7 +75,7 @@ pub fn simulate_bodies_with_progress<V: Copy>(
         pending: vec![None; n],
         inputs: Vec::with_capacity(max_reads),
     };
-    crate::run_with_progress(spec, cfg, driver, progress, rows)
+    crate::run_until(spec, cfg, driver, progress, rows)
 }
 
 /// Runs bodies at the instants the simulator reports.

@@ -106,6 +106,19 @@ pub fn simulate_until(
     run_until(spec, cfg, NoHooks, &mut |_| !stop(), None)
 }
 
+/// [`simulate_until`] with a progress of its own and, with `rows`, every
+/// chain's sample rows handed on as they complete ([`simulate_with_rows`]):
+/// `progress` gets the simulated time reached every [`PROGRESS_EVENTS`]
+/// events and ends the run by answering `false` (`Ok(None)`, no result).
+pub fn simulate_watched(
+    spec: &Spec,
+    cfg: &SimConfig,
+    progress: &mut dyn FnMut(Nanos) -> bool,
+    rows: Option<rtpipe_joblog::RowSink>,
+) -> Result<Option<SimResult>, SimError> {
+    run_until(spec, cfg, NoHooks, progress, rows)
+}
+
 /// [`simulate_with_progress`] that also hands every chain's sample rows
 /// (`rtpipe_joblog::sample_rows`' rows, the same values) to `rows` as they
 /// complete: the per-sample record of a run of any length without its job

@@ -161,3 +161,22 @@ pub fn parse_turbulence(s: &str) -> Result<Intensity, String> {
         format!("expected none, light, moderate or severe (MIL-F-8785C), found `{s}`")
     })
 }
+
+impl FlyArgs {
+    /// The checks of the flags alone, whichever way they came (the command
+    /// line, Python's keywords): a flag that would do nothing is an error
+    /// that names the fix.
+    pub fn validate(&self) -> Result<(), rtpipe_model::Diagnostic> {
+        let one_flight = [("--log", &self.log), ("--samples", &self.samples)];
+        let given = one_flight
+            .into_iter()
+            .find_map(|(flag, p)| p.as_ref().map(|_| flag));
+        match given {
+            Some(flag) if self.sweep => Err(rtpipe_model::Diagnostic::error(
+                format!("{flag} describes one flight; --sweep flies many"),
+                format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
+            )),
+            _ => Ok(()),
+        }
+    }
+}

@@ -3,8 +3,10 @@
 //! reports where the flight stops meeting its criteria, the chain limits
 //! that follow, and optionally writes them into a spec.
 
+mod report;
+
 use super::args::FlyArgs;
-use crate::command::{self, Answer, Rendered};
+use crate::command::{self, Answer};
 use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
@@ -376,7 +378,9 @@ pub fn execute(
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let free = freed(spec, a.free_periods.as_deref())?;
-    let points = fly_all(spec, s, a, &c, &vars, stop);
+    let Some(points) = fly_all(spec, s, a, &c, &vars, stop) else {
+        return Ok(Answer::stopped());
+    };
     let limits = derived_limits(spec, s, &points, a.safety);
     // Nothing flew: a spec "with these limits" would carry none of them.
     let nothing = limits
@@ -387,14 +391,16 @@ pub fn execute(
         && limits.max_period.iter().all(Option::is_none);
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
     let written = write_files(spec, s, a, (&c, &free), &points, &limits, write_limits);
-    let report = if a.output.is_json() {
-        Rendered::Json(command::to_value(&sweep_json(
-            spec, s, &c, a, &points, &limits,
-        ))?)
-    } else {
-        let shown = write_limits.filter(|_| written.is_ok());
-        Rendered::Text(text(spec, s, (&c, a), &points, &limits, shown))
+    let view = report::SweepReport {
+        spec,
+        setup: s,
+        criteria: &c,
+        args: a,
+        points: &points,
+        limits: &limits,
+        written: write_limits.filter(|_| written.is_ok()),
     };
+    let report = command::render(&view, a.output.chosen())?;
     let mut notes = Vec::new();
     if let (Some(out), true) = (&a.write_limits, nothing) {
         let d = Diagnostic::error(
@@ -419,8 +425,8 @@ pub fn execute(
 /// Flies every variation (on a worker thread) while a progress bar on
 /// stderr counts the flights done; a panic in the sweep goes on unwinding
 /// here.
-/// Every variation flown, with a progress bar; `stop` (checked before each
-/// flight) unwinds with [`crate::command::Stopped`].
+/// Every variation flown, with a progress bar; `None` when `stop` (asked
+/// before each flight) ended the sweep.
 fn fly_all(
     spec: &Spec,
     s: &Setup,
@@ -428,7 +434,7 @@ fn fly_all(
     c: &Criteria,
     vars: &[Variation],
     stop: Option<&AtomicBool>,
-) -> Vec<Point> {
+) -> Option<Vec<Point>> {
     let done = AtomicU64::new(0);
     let pb = indicatif::ProgressBar::with_draw_target(
         Some(vars.len() as u64),
@@ -440,7 +446,7 @@ fn fly_all(
         pb.set_style(style);
     }
     pb.set_message(spec.name.clone());
-    let check = || crate::command::Hooks::check_stop(stop);
+    let stopped = || crate::command::Hooks::stopped(stop);
     let how = How {
         exec: a.exec.model(),
         criteria: c,
@@ -451,12 +457,12 @@ fn fly_all(
     };
     let points = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
-            let coarse = sweep(spec, s, &how, vars, &done, &check);
+            let coarse = sweep(spec, s, &how, vars, &done, &stopped)?;
             if a.resolution == 0.0 {
-                return coarse;
+                return Some(coarse);
             }
             pb.set_message(format!("{} (refining the edges)", spec.name));
-            refine(spec, s, &how, coarse, a.resolution, &done, &check)
+            refine(spec, s, &how, coarse, a.resolution, &done, &stopped)
         });
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));

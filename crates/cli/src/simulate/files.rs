@@ -82,7 +82,7 @@ pub(super) fn render_outputs(
             "{} {} simulated, seed {}, exec {}, phasing {}",
             spec.fmt_time(res.horizon),
             spec.time_unit,
-            a.seed,
+            a.seed(),
             flag_name(&a.exec),
             flag_name(&a.phasing)
         );

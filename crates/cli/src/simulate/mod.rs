@@ -22,9 +22,7 @@ use rtpipe_joblog::SimResult;
 use rtpipe_model::{Diagnostic, Nanos, Spec, TimeUnit, MAX_TIME};
 use rtpipe_sim::observe::{horizon_for_outputs, observe, response_violations, ChainObs, Judged};
 use rtpipe_sim::search::{search, SearchConfig, SearchResult};
-use rtpipe_sim::{
-    simulate_with_progress, simulate_with_rows, Jitter, Phasing, SimConfig, SimError,
-};
+use rtpipe_sim::{simulate_watched, Jitter, Phasing, SimConfig, SimError};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
@@ -51,9 +49,12 @@ pub struct SimulateArgs {
     /// spec's time unit.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub duration: Option<String>,
-    /// Seeds the random offsets and demands (the same seed gives the same run).
-    #[arg(long, value_name = "S", default_value_t = 0)]
-    pub seed: u64,
+    /// Seeds the random offsets and demands (the same seed gives the same
+    /// run) [default: 0].
+    // Absent rather than defaulted, so that a seed given where nothing is
+    // random is refused (`SimulateArgs::validate`), however it came.
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
     /// How each job's demand Δin + p + Δout is drawn: p = exec (worst),
     /// exec_min (best), uniform in between, or one of the two at random
     /// (extremes).
@@ -65,9 +66,10 @@ pub struct SimulateArgs {
     /// with a known `offset` in the spec keeps it in every mode.
     #[arg(long, value_enum, default_value_t = PhasingArg::Sync)]
     pub phasing: PhasingArg,
-    /// With --phasing search: candidates tried per local search (4 restarts).
-    #[arg(long, value_name = "N", default_value_t = 50)]
-    pub search_steps: u32,
+    /// With --phasing search: candidates tried per local search (4
+    /// restarts) [default: 50].
+    #[arg(long, value_name = "N")]
+    pub search_steps: Option<u32>,
     #[command(flatten)]
     pub output: command::FormatArgs,
     /// Write a Chrome trace-event file for the Perfetto UI
@@ -89,12 +91,18 @@ pub struct SimulateArgs {
     /// ("0,30ms") [default: the first 3 × the largest period].
     #[arg(long, value_name = "START,END", allow_hyphen_values = true)]
     pub window: Option<String>,
-    /// --seed was given on the command line (set by main).
-    #[arg(skip)]
-    pub seed_given: bool,
-    /// --search-steps was given on the command line (set by main).
-    #[arg(skip)]
-    pub search_steps_given: bool,
+}
+
+impl SimulateArgs {
+    /// `--seed`, or its default.
+    pub fn seed(&self) -> u64 {
+        self.seed.unwrap_or(0)
+    }
+
+    /// `--search-steps`, or its default.
+    pub fn search_steps(&self) -> u32 {
+        self.search_steps.unwrap_or(50)
+    }
 }
 
 /// `--phasing`. Each variant maps to one way of running the simulator in
@@ -133,16 +141,16 @@ fn run_simulation(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
-    progress: &mut dyn FnMut(Nanos),
+    progress: &mut dyn FnMut(Nanos) -> bool,
     rows: Option<RowSink>,
-) -> Result<SimResult, SimError> {
+) -> Result<Option<SimResult>, SimError> {
     let phasing = match a.phasing {
         PhasingArg::Sync => Phasing::Sync,
         PhasingArg::Random | PhasingArg::Search => Phasing::Random,
     };
     let cfg = SimConfig {
         horizon: p.horizon,
-        seed: a.seed,
+        seed: a.seed(),
         phasing,
         exec: a.exec.model(),
         // Jittered tasks: every job at its latest under the deterministic
@@ -154,17 +162,15 @@ fn run_simulation(
         },
         log_jobs: p.log_jobs,
     };
-    match rows {
-        Some(sink) => {
-            // Its rows are on disk as it goes: Ctrl-C must take them away.
-            let mut checked = |t: Nanos| {
-                samples::stop_if_interrupted(|| {});
-                progress(t);
-            };
-            simulate_with_rows(spec, &cfg, &mut checked, sink)
+    // With rows on disk as it goes, the binary's Ctrl-C must take them away.
+    let streamed = rows.is_some();
+    let mut checked = |t: Nanos| {
+        if streamed {
+            samples::stop_if_interrupted(|| {});
         }
-        None => simulate_with_progress(spec, &cfg, progress),
-    }
+        progress(t)
+    };
+    simulate_watched(spec, &cfg, &mut checked, rows)
 }
 
 pub fn run(a: &SimulateArgs) -> ExitCode {
@@ -186,7 +192,9 @@ pub fn execute(spec: &Spec, a: &SimulateArgs, hooks: Hooks) -> Result<Answer, Di
     let samples = SamplesFile::open(a.samples.as_ref(), &a.spec, spec, &hooks)?;
     let sink = command::tee(samples.as_ref().map(SamplesFile::sink), hooks.rows);
     let stop = hooks.stop.as_deref();
-    let (res, searches, seconds) = simulate_and_search(spec, a, &p, sink, stop)?;
+    let Some((res, searches, seconds)) = simulate_and_search(spec, a, &p, sink, stop)? else {
+        return Ok(Answer::stopped());
+    };
     let obs = observe(&report, &res);
     let mut outputs = render_outputs(spec, a, &p, &res, &obs)?;
     let written = write_all_outputs(a, &mut outputs, samples);
@@ -231,14 +239,15 @@ fn write_all_outputs(
 }
 
 /// The simulation, and the adversarial searches under `--phasing search`,
-/// with their progress shown; and the seconds they took.
+/// with their progress shown; and the seconds they took. `None` when `stop`
+/// ended them.
 fn simulate_and_search(
     spec: &Spec,
     a: &SimulateArgs,
     p: &Plan,
     rows: Option<RowSink>,
     stop: Option<&AtomicBool>,
-) -> Result<(SimResult, Vec<SearchResult>, f64), Diagnostic> {
+) -> Result<Option<(SimResult, Vec<SearchResult>, f64)>, Diagnostic> {
     let started = Instant::now();
     let msg = format!(
         "simulating {} for {} {}{}",
@@ -249,8 +258,8 @@ fn simulate_and_search(
     );
     let res = with_horizon_bar(msg, p.horizon, |progress| {
         let mut checked = |t: Nanos| {
-            Hooks::check_stop(stop);
             progress(t);
+            !Hooks::stopped(stop)
         };
         run_simulation(spec, a, p, &mut checked, rows)
     })
@@ -260,6 +269,9 @@ fn simulate_and_search(
             "give every task a fixed positive period",
         )
     })?;
+    let Some(res) = res else {
+        return Ok(None);
+    };
     let searches = if a.phasing == PhasingArg::Search {
         with_spinner(format!("searching worst cases of {}", spec.name), || {
             run_searches(spec, a, p, stop)
@@ -271,9 +283,9 @@ fn simulate_and_search(
             )
         })?
     } else {
-        Vec::new()
+        Some(Vec::new())
     };
-    Ok((res, searches, started.elapsed().as_secs_f64()))
+    Ok(searches.map(|searches| (res, searches, started.elapsed().as_secs_f64())))
 }
 
 /// Which chain tails published fewer than the `n` outputs asked for.
@@ -328,7 +340,7 @@ fn exit_status(
             a.spec.display(),
             spec.fmt_time(res.horizon),
             spec.time_unit,
-            a.seed,
+            a.seed(),
             flag_name(&a.exec),
             flag_name(&a.phasing)
         ));
@@ -343,7 +355,7 @@ fn run_searches(
     a: &SimulateArgs,
     p: &Plan,
     stop: Option<&AtomicBool>,
-) -> Result<Vec<SearchResult>, SimError> {
+) -> Result<Option<Vec<SearchResult>>, SimError> {
     let longest = spec
         .tasks
         .iter()
@@ -358,14 +370,16 @@ fn run_searches(
             for metric in [Metric::Reaction, Metric::Freshness] {
                 let mut cfg = SearchConfig::new(chain, metric, horizon);
                 cfg.anchor = anchor;
-                cfg.steps = a.search_steps;
-                cfg.seed = a.seed;
-                Hooks::check_stop(stop);
+                cfg.steps = a.search_steps();
+                cfg.seed = a.seed();
+                if Hooks::stopped(stop) {
+                    return Ok(None);
+                }
                 out.push(search(spec, &cfg)?);
             }
         }
     }
-    Ok(out)
+    Ok(Some(out))
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ pub(super) fn plan(spec: &Spec, a: &SimulateArgs) -> Result<Plan, Diagnostic> {
         ));
     }
     let (horizon, outputs) = horizon_of(spec, a)?;
-    flags_have_effect(a)?;
+    a.validate()?;
     let window = match &a.window {
         None => (0, (3 * t_max).min(horizon)),
         Some(w) => window_of(spec, a, w, t_max, horizon)?,
@@ -98,27 +98,32 @@ fn horizon_of(spec: &Spec, a: &SimulateArgs) -> Result<(Nanos, Option<u64>), Dia
     })
 }
 
-/// Flags that would do nothing are errors that name the fix.
-fn flags_have_effect(a: &SimulateArgs) -> Result<(), Diagnostic> {
-    if a.search_steps_given && a.phasing != PhasingArg::Search {
-        return Err(Diagnostic::error(
-            "--search-steps sets the adversarial search, but --phasing is not search",
-            "add --phasing search, or drop --search-steps",
-        ));
+impl SimulateArgs {
+    /// The checks of the flags alone, whichever way they came (the command
+    /// line, Python's keywords): a flag that would do nothing is an error
+    /// that names the fix.
+    pub fn validate(&self) -> Result<(), Diagnostic> {
+        let a = self;
+        if a.search_steps.is_some() && a.phasing != PhasingArg::Search {
+            return Err(Diagnostic::error(
+                "--search-steps sets the adversarial search, but --phasing is not search",
+                "add --phasing search, or drop --search-steps",
+            ));
+        }
+        if a.seed.is_some()
+            && a.phasing == PhasingArg::Sync
+            && matches!(a.exec, ExecArg::Worst | ExecArg::Best)
+        {
+            return Err(Diagnostic::error(
+                format!(
+                    "--seed has no effect: nothing is random with --phasing sync and --exec {}",
+                    flag_name(&a.exec)
+                ),
+                "add --phasing random (or --exec uniform), or drop --seed",
+            ));
+        }
+        Ok(())
     }
-    if a.seed_given
-        && a.phasing == PhasingArg::Sync
-        && matches!(a.exec, ExecArg::Worst | ExecArg::Best)
-    {
-        return Err(Diagnostic::error(
-            format!(
-                "--seed has no effect: nothing is random with --phasing sync and --exec {}",
-                flag_name(&a.exec)
-            ),
-            "add --phasing random (or --exec uniform), or drop --seed",
-        ));
-    }
-    Ok(())
 }
 
 /// `--window START,END` for the Gantt chart, inside the simulated span.

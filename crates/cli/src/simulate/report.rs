@@ -194,7 +194,7 @@ pub(super) fn simulation_view<'a>(
     let offsets = spec.tasks.iter().zip(&res.offsets);
     SimulationView {
         horizon: spec.in_unit(res.horizon),
-        seed: a.seed,
+        seed: a.seed(),
         exec: flag_name(&a.exec),
         phasing: flag_name(&a.phasing),
         offsets: Pairs(
@@ -488,7 +488,7 @@ pub(super) fn run_lines(spec: &Spec, a: &SimulateArgs, p: &Plan, res: &SimResult
         "simulated {} {u}{}{span}; seed {}, exec {}, phasing {}\n",
         spec.fmt_time(res.horizon),
         human(spec, res.horizon),
-        a.seed,
+        a.seed(),
         flag_name(&a.exec),
         flag_name(&a.phasing)
     ));

@@ -49,8 +49,9 @@ fn at(like: &Variation, x: f64) -> Variation {
 /// hi − lo ≤ resolution × hi. The probed points are inserted in their
 /// sweep's order, so [`edge`] and the derived limits see them. Sweeps are
 /// refined in parallel; each refinement is sequential and deterministic.
-/// `done` counts the flights; `check` is called before each (see
-/// [`super::sweep`]).
+/// `done` counts the flights; `stopped` is asked before each (see
+/// [`super::sweep`]): once it says so, no further flight begins and the
+/// refinement answers `None`.
 pub fn refine(
     spec: &Spec,
     s: &crate::Setup,
@@ -58,8 +59,8 @@ pub fn refine(
     mut points: Vec<Point>,
     resolution: f64,
     done: &AtomicU64,
-    check: &(dyn Fn() + Sync),
-) -> Vec<Point> {
+    stopped: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<Point>> {
     assert!(
         resolution > 0.0 && resolution < 1.0,
         "a resolution in (0, 1), found {resolution}"
@@ -73,8 +74,13 @@ pub fn refine(
         .collect();
     let probed: Vec<Vec<Point>> = brackets
         .par_iter()
-        .map(|&(like, lo, hi)| bisect(spec, s, how, like, (lo, hi), resolution, done, check))
+        .map(|&(like, lo, hi)| bisect(spec, s, how, like, (lo, hi), resolution, done, stopped))
         .collect();
+    // A bisection that saw the stop ended early: its points are not the
+    // refinement.
+    if stopped() {
+        return None;
+    }
     for p in probed.into_iter().flatten() {
         let f = family(&p.variation);
         let x = value(&p.variation);
@@ -84,7 +90,7 @@ pub fn refine(
             .unwrap_or(points.len());
         points.insert(at, p);
     }
-    points
+    Some(points)
 }
 
 /// The points flown bisecting (lo, hi) of `like`'s sweep.
@@ -97,7 +103,7 @@ fn bisect(
     (lo, hi): (f64, f64),
     resolution: f64,
     done: &AtomicU64,
-    check: &(dyn Fn() + Sync),
+    stopped: &(dyn Fn() -> bool + Sync),
 ) -> Vec<Point> {
     let mut out = Vec::new();
     // The next probe: the midpoint as its sweep rounds it (a delay to the
@@ -108,7 +114,10 @@ fn bisect(
         (hi - lo > resolution * hi && x > lo && x < hi).then_some(x)
     };
     let flies = |x: f64| -> Probe<Infallible> {
-        check();
+        if stopped() {
+            // No answer: the bisection ends with the bracket it has.
+            return Ok(None);
+        }
         let p = flown(spec, s, at(&like, x), how);
         done.fetch_add(1, Ordering::Relaxed);
         let passed = p.schedulable && p.pass();
@@ -143,13 +152,14 @@ mod tests {
         };
         let vars: Vec<Variation> = [1.0, 1.26, 1.587, 2.0, 2.52].map(Variation::Scale).to_vec();
         let done = AtomicU64::new(0);
-        let coarse = sweep(&spec, &s, &how, &vars, &done, &|| {});
+        let coarse = sweep(&spec, &s, &how, &vars, &done, &|| false).unwrap_or_default();
         let ce = scale_edge(&coarse);
         let (Some(a), Some(b)) = (ce.last_pass.cloned(), ce.first_fail.cloned()) else {
             panic!("no coarse edge: {coarse:?}");
         };
         let before = done.load(Ordering::Relaxed);
-        let fine = refine(&spec, &s, &how, coarse.clone(), 0.02, &done, &|| {});
+        let fine =
+            refine(&spec, &s, &how, coarse.clone(), 0.02, &done, &|| false).unwrap_or_default();
         let probes = (done.load(Ordering::Relaxed) - before) as usize;
         assert_eq!(fine.len(), coarse.len() + probes);
         assert!(probes >= 2, "{probes}");
@@ -175,5 +185,27 @@ mod tests {
             assert_eq!(l.0, fa.bounds[k].0);
             assert!(a.bounds[k].0 <= l.0 && l.0 < b.bounds[k].0);
         }
+    }
+
+    /// A stop seen during the refinement ends it with `None` after at most
+    /// the flights begun before it: the probed points are not a refinement.
+    #[test]
+    fn a_stop_ends_the_refinement_without_an_answer() {
+        let (spec, s) = cleanflight("racer5");
+        let c = s.criteria();
+        let how = How::once(ExecModel::Uniform, &c);
+        let vars: Vec<Variation> = [1.0, 1.26, 1.587, 2.0, 2.52].map(Variation::Scale).to_vec();
+        let done = AtomicU64::new(0);
+        let coarse = sweep(&spec, &s, &how, &vars, &done, &|| false).unwrap_or_default();
+        assert!(
+            scale_edge(&coarse).first_fail.is_some(),
+            "an edge to refine"
+        );
+        let asked = AtomicU64::new(0);
+        let stopped = || asked.fetch_add(1, Ordering::Relaxed) >= 1;
+        let before = done.load(Ordering::Relaxed);
+        let fine = refine(&spec, &s, &how, coarse, 0.02, &done, &stopped);
+        assert!(fine.is_none());
+        assert!(done.load(Ordering::Relaxed) - before <= 1, "{done:?}");
     }
 }

@@ -33,9 +33,13 @@ file may be and with finite numbers; anything else raises
 
 from __future__ import annotations
 
+import inspect
 import logging
 import operator
 import os
+import re
+import signal
+import threading
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -101,24 +105,85 @@ def waters(
     file. ``release="synchronous"`` releases every task at 0."""
     options = dict(seed=seed, tasks=tasks, utilization=utilization, chains=chains,
                    cpus=cpus, release=release)
-    return System(_rtpipe.waters(_flags(options)))
+    keywords = list(options)
+    return System(_speaking_python(keywords, lambda: _rtpipe.waters(_flags(options))))
 
 
-def _flags(options: Mapping[str, Any]) -> list:
+def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> list:
     """Keyword arguments as command-line flags: None and False leave a flag
-    out, True gives it bare, a list joins its items with commas."""
+    out, True gives a switch (one of ``switches``) bare, a list joins its
+    items with commas. A value is always joined to its flag
+    (``--seed=-1``), so that the parser reads it as that flag's value
+    whatever it looks like, and refuses it naming the flag; a switch takes
+    a bool only."""
     out = []
     for key, value in options.items():
-        if value is None or value is False:
-            continue
         flag = "--" + key.replace("_", "-")
-        if value is True:
-            out.append(flag)
-        elif isinstance(value, (list, tuple)):
-            out += [flag, ",".join(str(v) for v in value)]
-        else:
-            out += [flag, os.fspath(value) if isinstance(value, os.PathLike) else str(value)]
+        if key in switches:
+            if value is not None and not isinstance(value, (bool, np.bool_)):
+                raise TypeError(f"{key}={value!r}: give True or False")
+            if value:
+                out.append(flag)
+            continue
+        if value is None:
+            continue
+        if isinstance(value, (list, tuple)):
+            value = ",".join(str(v) for v in value)
+        elif isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        out.append(f"{flag}={value}")
     return out
+
+
+def _switches(function: Any) -> Tuple[str, ...]:
+    """The keywords of ``function`` that are switches (those whose default
+    is False)."""
+    params = inspect.signature(function).parameters.values()
+    return tuple(p.name for p in params if p.default is False and p.name != "samples")
+
+
+def _pythonic(message: str, keywords: Sequence[str]) -> str:
+    """A message of the command line's parser or checks, with each flag
+    that is one of ``keywords`` named as that keyword (``--search-steps``
+    and ``'--search-steps <N>'`` are ``search_steps``)."""
+    for key in sorted(keywords, key=len, reverse=True):
+        flag = "--" + key.replace("_", "-")
+        message = re.sub(re.escape(flag) + r"(=| )?<[^>]*>", key, message)
+        message = re.sub(re.escape(flag) + r"(?![\w-])", key, message)
+    return message
+
+
+def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
+    """``call()``, its InputError said in terms of ``keywords``."""
+    try:
+        return call()
+    except InputError as e:
+        text = _pythonic(str(e), keywords)
+        err = InputError(text)
+        for attr in ("help", "message"):
+            value = getattr(e, attr, None)
+            if isinstance(value, str):
+                setattr(err, attr, _pythonic(value, keywords))
+        raise err from None
+
+
+_STOP_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+
+
+def _signal_handlers() -> list:
+    """The Python handlers of the stop signals (none off the main thread,
+    where Python cannot set them)."""
+    if threading.current_thread() is not threading.main_thread():
+        return []
+    return [(sig, signal.getsignal(sig)) for sig in _STOP_SIGNALS]
+
+
+def _restore_signal_handlers(kept: list) -> None:
+    for sig, handler in kept:
+        if handler is not None:
+            signal.signal(sig, handler)
 
 
 def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
@@ -172,10 +237,13 @@ def campaign(
     holds whole (``written``) and those it holds damaged (``rerun``)
     without running any.
     """
-    flags = [os.fspath(config), os.fspath(out)] + _flags(
-        dict(shard=_shard(shard), jobs=jobs, plan=plan)
-    )
-    return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+    options = dict(shard=_shard(shard), jobs=jobs, plan=plan)
+
+    def call() -> dict:
+        flags = [os.fspath(config), os.fspath(out)] + _flags(options, _switches(campaign))
+        return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+
+    return _speaking_python(list(inspect.signature(campaign).parameters), call)
 
 
 def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
@@ -248,7 +316,14 @@ class System:
         return repr(self._spec)
 
     def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
-        return _finish(command, _rtpipe.run(command, self._spec, _flags(options), samples))
+        method = getattr(System, command)
+        keywords = list(inspect.signature(method).parameters)[1:]
+
+        def call() -> dict:
+            flags = _flags(options, _switches(method))
+            return _finish(command, _rtpipe.run(command, self._spec, flags, samples))
+
+        return _speaking_python(keywords, call)
 
     def _run_samples(self, command: str, options: dict, samples: Any) -> dict:
         columns = _samples(samples, options)
@@ -345,6 +420,50 @@ class System:
             free_periods=free_periods,
         )
         return self._run_samples("fly", options, samples)
+
+    def run(
+        self,
+        *,
+        duration: Union[str, float, None] = None,
+        policy: Optional[str] = None,
+        best_effort: bool = False,
+        force: bool = False,
+        synthetic: bool = False,
+        vehicle: Optional[str] = None,
+        mission: Optional[str] = None,
+        load: Optional[int] = None,
+        samples: Union[str, "os.PathLike[str]", None] = None,
+        trace: Union[str, "os.PathLike[str]", None] = None,
+        plot: Union[str, "os.PathLike[str]", None] = None,
+        export_rt_app: Union[str, "os.PathLike[str]", None] = None,
+    ) -> dict:
+        """Runs the spec for real on this machine (``rtpipe run --json``):
+        one thread per task under ``policy`` ("fifo", "deadline",
+        "edf-fifo"; "other" with ``best_effort=True`` runs without real-time
+        privileges), for ``duration`` (default 2 s, a flight's mission
+        plus 5 s when the tasks name flight bodies and ``synthetic`` is
+        False). The real-time classes need root (CAP_SYS_NICE): without it
+        the kernel refuses them and this raises ``InputError`` saying so.
+        ``samples``, ``trace``, ``plot`` and ``export_rt_app`` write files
+        as the flags do. Ctrl-C (or SIGTERM, SIGHUP) ends the run early, as
+        on the command line, and raises KeyboardInterrupt once its threads
+        are stopped and its files written."""
+        options = dict(
+            duration=duration, policy=policy, best_effort=best_effort, force=force,
+            synthetic=synthetic, vehicle=vehicle, mission=mission, load=load, samples=samples,
+            trace=trace, plot=plot, export_rt_app=export_rt_app,
+        )
+        # The runtime catches the stop signals itself while its threads run
+        # (it must stop them, not be unwound past them): Python's handlers
+        # are put back after it.
+        kept = _signal_handlers()
+        try:
+            report = self._run("run", options)
+        finally:
+            _restore_signal_handlers(kept)
+        if report.get("run", {}).get("interrupted"):
+            raise KeyboardInterrupt("the run was stopped by a signal")
+        return report
 
     def design(
         self,
