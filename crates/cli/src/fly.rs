@@ -81,8 +81,36 @@ fn with_progress_bar<T: Send>(
     }
 }
 
-/// The flight `a` asks for, checked.
-fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
+/// The names of a comma-separated `--vehicle` or `--mission` list.
+fn listed(list: &str) -> Vec<&str> {
+    list.split(',').map(str::trim).collect()
+}
+
+/// Every (vehicle, mission) `a` asks for, checked: the first is the
+/// flight's (one flight takes one of each; a sweep flies every timing on
+/// each of them).
+fn setups_of(spec: &Spec, a: &FlyArgs) -> Result<Vec<Setup>, Diagnostic> {
+    let (vehicles, missions) = (listed(&a.vehicle), listed(&a.mission));
+    if !a.sweep && vehicles.len() * missions.len() > 1 {
+        return Err(Diagnostic::error(
+            format!(
+                "one flight flies one vehicle on one mission, found --vehicle {} --mission {}",
+                a.vehicle, a.mission
+            ),
+            "give one of each, or add --sweep to judge every timing on each vehicle and mission",
+        ));
+    }
+    let mut out = Vec::new();
+    for v in &vehicles {
+        for m in &missions {
+            out.push(setup_of(spec, a, v, m)?);
+        }
+    }
+    Ok(out)
+}
+
+/// The flight of `vehicle` on `mission` that `a` asks for, checked.
+fn setup_of(spec: &Spec, a: &FlyArgs, vehicle: &str, mission: &str) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
             command::parse_time(spec, d)
@@ -105,8 +133,8 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     };
     let r = Request {
         spec_path: &a.spec,
-        vehicle: &a.vehicle,
-        mission: &a.mission,
+        vehicle,
+        mission,
         horizon,
         seed: a.seed,
     };
@@ -136,7 +164,10 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 /// each flight, and unwinds with [`command::Stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     a.output.no_csv("fly")?;
-    let s = setup_of(spec, a)?;
+    let mut setups = setups_of(spec, a)?.into_iter();
+    let Some(s) = setups.next() else {
+        unreachable!("a list of vehicles and one of missions have one name each at least")
+    };
     check_outputs(a)?;
     if a.sweep {
         if let Some(flag) = [("--log", &a.log), ("--samples", &a.samples)]
@@ -148,7 +179,8 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
                 format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
             ));
         }
-        return sweep::execute(spec, &s, a, hooks.stop.as_deref());
+        let also: Vec<Setup> = setups.collect();
+        return sweep::execute(spec, (&s, &also), a, hooks.stop.as_deref());
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",

@@ -363,20 +363,26 @@ fn sweep_measure(s: &Setup, c: &Criteria) -> Option<(crate::plot::SweepMeasure, 
 }
 
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.
+/// `also`: further (vehicle, mission) setups every timing is flown on too,
+/// each judged by `--criterion` or its own criteria.
 pub fn execute(
     spec: &Spec,
-    s: &Setup,
+    (s, also): (&Setup, &[Setup]),
     a: &FlyArgs,
     stop: Option<&AtomicBool>,
 ) -> Result<Answer, Diagnostic> {
     let c = criteria(a, s)?;
+    let also = also
+        .iter()
+        .map(|o| Ok((o.clone(), criteria(a, o)?)))
+        .collect::<Result<Vec<_>, Diagnostic>>()?;
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let free = freed(spec, a.free_periods.as_deref())?;
-    let points = fly_all(spec, s, a, &c, &vars, stop);
+    let points = fly_all(spec, (s, &also), a, &c, &vars, stop);
     let limits = derived_limits(spec, s, &points, a.safety);
     // Nothing flew: a spec "with these limits" would carry none of them.
     let nothing = limits
@@ -388,12 +394,16 @@ pub fn execute(
     let write_limits = a.write_limits.as_deref().filter(|_| !nothing);
     let written = write_files(spec, s, a, (&c, &free), &points, &limits, write_limits);
     let report = if a.output.is_json() {
-        Rendered::Json(command::to_value(&sweep_json(
-            spec, s, &c, a, &points, &limits,
-        ))?)
+        let mut view = sweep_json(spec, s, &c, a, &points, &limits);
+        view.also = also.iter().map(|(o, _)| label(o)).collect();
+        Rendered::Json(command::to_value(&view)?)
     } else {
         let shown = write_limits.filter(|_| written.is_ok());
-        Rendered::Text(text(spec, s, (&c, a), &points, &limits, shown))
+        let mut out = text(spec, s, (&c, a), &points, &limits, shown);
+        if !also.is_empty() {
+            out.insert_str(out.find('\n').map_or(0, |n| n + 1), &also_text(&also));
+        }
+        Rendered::Text(out)
     };
     let mut notes = Vec::new();
     if let (Some(out), true) = (&a.write_limits, nothing) {
@@ -423,7 +433,7 @@ pub fn execute(
 /// flight) unwinds with [`crate::command::Stopped`].
 fn fly_all(
     spec: &Spec,
-    s: &Setup,
+    (s, also): (&Setup, &[(Setup, Criteria)]),
     a: &FlyArgs,
     c: &Criteria,
     vars: &[Variation],
@@ -448,6 +458,7 @@ fn fly_all(
             seeds: a.seeds,
             phases: a.phases,
         },
+        also,
     };
     let points = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
@@ -516,6 +527,10 @@ struct SweepView<'a> {
     /// The tail's `max_period` (ms): the longest period that flew in the
     /// rate sweep.
     max_period_ms: crate::report::Pairs<&'a str, f64>,
+    /// Further "vehicle/mission" setups every timing was flown on (each
+    /// point's flights count theirs too).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    also: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -564,6 +579,7 @@ fn sweep_json<'a>(
                 .filter_map(|(t, m)| Some((t.name.as_str(), (*m)? as f64 * 1e-6)))
                 .collect(),
         ),
+        also: Vec::new(),
     }
 }
 
@@ -597,6 +613,22 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety:
             ),
             None => format!("{}: no period flew\n", spec.tasks[i].name),
         });
+    }
+    out
+}
+
+/// "racer5/gusty": a setup among several.
+fn label(s: &Setup) -> String {
+    format!("{}/{}", s.preset.name, s.mission.name)
+}
+
+/// The further setups every timing was flown on, each with its criterion.
+fn also_text(also: &[(Setup, Criteria)]) -> String {
+    let mut out = String::from(
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n",
+    );
+    for (o, c) in also {
+        out.push_str(&format!("  {}: criterion: {}\n", label(o), c.describe()));
     }
     out
 }
