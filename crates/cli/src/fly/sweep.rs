@@ -399,7 +399,8 @@ pub fn execute(
         Rendered::Json(command::to_value(&view)?)
     } else {
         let shown = write_limits.filter(|_| written.is_ok());
-        let mut out = text(spec, s, (&c, a), &points, &limits, shown);
+        let setups = 1 + also.len() as u32;
+        let mut out = text(spec, (s, setups), (&c, a), &points, &limits, shown);
         if !also.is_empty() {
             out.insert_str(out.find('\n').map_or(0, |n| n + 1), &also_text(&also));
         }
@@ -634,7 +635,7 @@ fn also_text(also: &[(Setup, Criteria)]) -> String {
 }
 
 /// What was swept, on what, judged how, and how many flights per timing.
-fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
+fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs, setups: u32) -> String {
     let mut out = format!(
         "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n",
         spec.name,
@@ -643,7 +644,14 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
         s.mission.name,
         c.describe()
     );
-    if a.seeds * a.phases > 1 {
+    if setups > 1 {
+        out.push_str(&format!(
+            "each timing flown {} times ({} seeds × {} phases × {setups} vehicle/mission setups): it flies only if every flight meets its criterion\n",
+            a.seeds * a.phases * setups,
+            a.seeds,
+            a.phases
+        ));
+    } else if a.seeds * a.phases > 1 {
         out.push_str(&format!(
             "each timing flown {} times ({} seeds × {} phases): it flies only if every flight meets the criterion\n",
             a.seeds * a.phases,
@@ -656,13 +664,13 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
 
 fn text(
     spec: &Spec,
-    s: &Setup,
+    (s, setups): (&Setup, u32),
     (c, a): (&Criteria, &FlyArgs),
     points: &[Point],
     limits: &Derived,
     written: Option<&Path>,
 ) -> String {
-    let mut out = header_text(spec, s, c, a);
+    let mut out = header_text(spec, s, c, a, setups);
     out.push_str("\nperiod scale (budgets fixed; sound bounds from the read):\n");
     let scales: Vec<&Point> = points
         .iter()
