@@ -507,3 +507,26 @@ fn a_sweep_over_missions_and_vehicles_flies_every_timing_on_each() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--sweep"), "{err}");
 }
+
+/// The sweep's own turbulent mission (examples/missions/sweep-steps-breeze.toml,
+/// not a held-out one) loads, and Table V flies it on both vehicles at
+/// the sweep's first seed: the nominal timing of docs/flight.md's sweep
+/// over it.
+#[test]
+fn the_sweep_breeze_mission_loads_and_table_v_flies_it() {
+    let mission = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/missions/sweep-steps-breeze.toml"
+    );
+    for v in ["racer5", "aero1kg"] {
+        let o = rtpipe(&[
+            "fly",
+            &example("cleanflight.toml"),
+            "--vehicle",
+            v,
+            "--mission",
+            mission,
+        ]);
+        assert_exit(&o, 0);
+    }
+}
