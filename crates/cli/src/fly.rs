@@ -76,8 +76,27 @@ fn with_progress_bar<T: Send>(
     }
 }
 
-/// The flight `a` asks for, checked.
-fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
+/// The names of a comma-separated `--vehicle` or `--mission` list.
+fn listed(list: &str) -> Vec<&str> {
+    list.split(',').map(str::trim).collect()
+}
+
+/// Every (vehicle, mission) `a` asks for, checked: the first is the
+/// flight's (one flight takes one of each; a sweep flies every timing on
+/// each of them).
+fn setups_of(spec: &Spec, a: &FlyArgs) -> Result<Vec<Setup>, Diagnostic> {
+    let (vehicles, missions) = (listed(&a.vehicle), listed(&a.mission));
+    let mut out = Vec::new();
+    for v in &vehicles {
+        for m in &missions {
+            out.push(setup_of(spec, a, v, m)?);
+        }
+    }
+    Ok(out)
+}
+
+/// The flight of `vehicle` on `mission` that `a` asks for, checked.
+fn setup_of(spec: &Spec, a: &FlyArgs, vehicle: &str, mission: &str) -> Result<Setup, Diagnostic> {
     let horizon = match &a.duration {
         Some(d) => Some(
             command::parse_time(spec, d)
@@ -100,8 +119,8 @@ fn setup_of(spec: &Spec, a: &FlyArgs) -> Result<Setup, Diagnostic> {
     };
     let r = Request {
         spec_path: &a.spec,
-        vehicle: &a.vehicle,
-        mission: &a.mission,
+        vehicle,
+        mission,
         horizon,
         seed: a.seed,
     };
@@ -131,10 +150,14 @@ pub fn run(a: &FlyArgs) -> ExitCode {
 /// each flight; once it is set, the answer is [`Answer::stopped`]).
 pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnostic> {
     a.validate()?;
-    let s = setup_of(spec, a)?;
+    let mut setups = setups_of(spec, a)?.into_iter();
+    let Some(s) = setups.next() else {
+        unreachable!("a list of vehicles and one of missions have one name each at least")
+    };
     check_outputs(a)?;
     if a.sweep {
-        return sweep::execute(spec, &s, a, hooks.stop.as_deref());
+        let also: Vec<Setup> = setups.collect();
+        return sweep::execute(spec, (&s, &also), a, hooks.stop.as_deref());
     }
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",

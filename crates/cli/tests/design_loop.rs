@@ -289,3 +289,54 @@ fn free_periods_refuses_a_task_without_a_period_to_free() {
         assert!(!limits.exists(), "{} was written", limits.display());
     }
 }
+
+/// examples/cleanflight-design-flown.toml: the limits of the sweep over
+/// both vehicles on calm steps, the turbulent hover and steps in light
+/// turbulence, each period capped where the period scale flew. `design
+/// --fly` returns an answer (optimal under its cuts): a design that flew
+/// every flight, within every cap, with the motor output at most the
+/// sweep's 5.649 ms (the paper's limits let it take 44 ms).
+#[test]
+fn design_fly_on_the_swept_limits_returns_a_flown_answer() {
+    let o = rtpipe(&[
+        "design",
+        &example("cleanflight-design-flown.toml"),
+        "--fly",
+        "steps,gusty",
+        "--vehicle",
+        "racer5",
+        "--pass-rate",
+        "0.8",
+        "--confidence",
+        "0.8",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let d = &v["design"];
+    assert_eq!(d["status"], "optimal", "{d}");
+    let flights = d["flights"].as_array().cloned().unwrap_or_default();
+    let answer = flights
+        .iter()
+        .find(|f| f["periods"] == d["periods"])
+        .unwrap_or_else(|| panic!("the answer was not flown: {d}"));
+    assert_eq!(answer["flies"], true, "{answer}");
+    assert_eq!(
+        (answer["passed"].as_u64(), answer["flown"].as_u64()),
+        (Some(8), Some(8))
+    );
+    let period = |t: &str| d["periods"][t].as_f64().unwrap_or(f64::NAN);
+    for (task, cap) in [
+        ("gyro", 1114.0),
+        ("accl", 1114.0),
+        ("ahrs", 5570.0),
+        ("radio", 11140.0),
+        ("pid", 2228.0),
+        ("pwm", 5570.0),
+    ] {
+        assert!(period(task) <= cap, "{task}: {} > {cap}", period(task));
+    }
+    assert!(period("pwm") <= 5649.0);
+    // Below Table V's utilisation.
+    assert!(d["objective"].as_f64().is_some_and(|u| u < 0.68), "{d}");
+}

@@ -465,3 +465,68 @@ fn the_held_out_missions_load_and_table_v_flies_them_on_racer5() {
         assert_exit(&o, 0);
     }
 }
+
+/// `--mission A,B --vehicle V,W` with `--sweep`: every timing is flown on
+/// each of the four setups (the JSON names the three besides the first and
+/// counts their flights in every point), so the edge is the worst's; one
+/// flight takes one vehicle and one mission.
+#[test]
+fn a_sweep_over_missions_and_vehicles_flies_every_timing_on_each() {
+    let spec = example("cleanflight.toml");
+    let o = rtpipe(&[
+        "fly",
+        &spec,
+        "--sweep",
+        "--vehicle",
+        "racer5,aero1kg",
+        "--mission",
+        "hover,gusty",
+        "--scale",
+        "1..2",
+        "--per-octave",
+        "1",
+        "--resolution",
+        "0",
+        "--duration",
+        "6s",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    assert_eq!(
+        v["also"],
+        serde_json::json!(["racer5/gusty", "aero1kg/hover", "aero1kg/gusty"])
+    );
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    assert!(!points.is_empty());
+    for p in points.iter().filter(|p| p["flights"] != 0) {
+        assert_eq!(p["flights"], 4, "{p}");
+    }
+    let o = rtpipe(&["fly", &spec, "--mission", "hover,gusty"]);
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--sweep"), "{err}");
+}
+
+/// The sweep's own turbulent mission (examples/missions/sweep-steps-breeze.toml,
+/// not a held-out one) loads, and Table V flies it on both vehicles at
+/// the sweep's first seed: the nominal timing of docs/flight.md's sweep
+/// over it.
+#[test]
+fn the_sweep_breeze_mission_loads_and_table_v_flies_it() {
+    let mission = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/missions/sweep-steps-breeze.toml"
+    );
+    for v in ["racer5", "aero1kg"] {
+        let o = rtpipe(&[
+            "fly",
+            &example("cleanflight.toml"),
+            "--vehicle",
+            v,
+            "--mission",
+            mission,
+        ]);
+        assert_exit(&o, 0);
+    }
+}

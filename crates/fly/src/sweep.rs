@@ -201,16 +201,26 @@ fn plan(spec: &Spec, s: &Setup, v: Variation) -> Plan {
     (timing, delays, added)
 }
 
-fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
+/// `s` as a sweep flies it, judged by `criteria`, with `delays` on the
+/// sensing lines.
+fn prepared(s: &Setup, criteria: &Criteria, delays: [u64; 3]) -> Setup {
     let mut setup = s.clone();
     // A point keeps only the flight's quality: the bounds are the analysis's.
     setup.track_chains = false;
     setup.keep_trace = false;
     // The flight judges its envelope as it flies, by the mission's
     // criteria: the sweep's criterion replaces them.
-    setup.mission.criteria = *how.criteria;
-    let (timing, delays, added) = plan(spec, s, v);
+    setup.mission.criteria = *criteria;
     setup.world.sense_delay_ns = delays;
+    setup
+}
+
+fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
+    let (timing, delays, added) = plan(spec, s, v);
+    let cases: Vec<(Setup, &Criteria)> = std::iter::once((s, how.criteria))
+        .chain(how.also.iter().map(|(o, c)| (o, c)))
+        .map(|(o, c)| (prepared(o, c, delays), c))
+        .collect();
     let timing = match timing {
         Ok(x) => x,
         Err(why) => {
@@ -237,7 +247,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
             }
         }
     }
-    let (quality, failures, passed) = trials(&timing, &setup, how);
+    let (quality, failures, passed) = trials(&timing, &cases, how);
     Point {
         variation: v,
         bounds,
@@ -245,20 +255,25 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
         schedulable,
         quality,
         failures,
-        flights: how.trials.count(),
+        flights: how.flights(),
         passed,
     }
 }
 
 /// What every flight of a sweep shares: the execution-time model, the
-/// criterion and how many flights judge a timing.
+/// criterion, how many flights judge a timing and on what.
 pub struct How<'a> {
     /// How each job's demand is drawn.
     pub exec: ExecModel,
-    /// What a flight must meet.
+    /// What a flight of the sweep's own setup must meet.
     pub criteria: &'a Criteria,
-    /// Flights per timing.
+    /// Flights per timing and setup.
     pub trials: Trials,
+    /// Further setups (another mission or vehicle) flown at every timing
+    /// with the same seeds and phases, each judged by its own criterion: a
+    /// timing flies only when every flight of every setup meets its
+    /// criterion, so the worst of them decides each edge.
+    pub also: &'a [(Setup, Criteria)],
 }
 
 impl<'a> How<'a> {
@@ -268,41 +283,64 @@ impl<'a> How<'a> {
             exec,
             criteria,
             trials: Trials::ONE,
+            also: &[],
         }
+    }
+
+    /// Flights per timing: seeds × phases × setups.
+    pub fn flights(&self) -> u32 {
+        self.trials.count() * (1 + self.also.len() as u32)
     }
 }
 
-/// Every flight of one timing: the first flight's quality, the first
-/// failure's reasons (named by seed and phase when several flew), and how
-/// many met the criteria.
-fn trials(timing: &Spec, setup: &Setup, how: &How) -> (Option<FlightQuality>, Vec<String>, u32) {
-    let several = how.trials.count() > 1;
+/// "vehicle/mission, " naming a setup among several.
+fn case_label(s: &Setup) -> String {
+    format!("{}/{}, ", s.preset.name, s.mission.name)
+}
+
+/// Every flight of one timing over `cases` (each setup prepared with its
+/// criterion): the first flight's quality, the first failure's reasons
+/// (named by setup, seed and phase when several flew), and how many met
+/// their criteria.
+fn trials(
+    timing: &Spec,
+    cases: &[(Setup, &Criteria)],
+    how: &How,
+) -> (Option<FlightQuality>, Vec<String>, u32) {
+    let several = how.flights() > 1;
     let (mut first, mut failures, mut passed) = (None, Vec::new(), 0);
-    for j in 0..u64::from(how.trials.seeds) {
-        for k in 0..u64::from(how.trials.phases) {
-            let mut one = crate::phases::phased(timing, setup, k);
-            one.world.seed = setup.world.seed.wrapping_add(j);
-            let (quality, missed) = match fly(timing, &one, how.exec) {
-                Ok(f) => {
-                    let missed = f.quality.failures(how.criteria);
-                    (Some(f.quality), missed)
+    for (setup, criteria) in cases {
+        for j in 0..u64::from(how.trials.seeds) {
+            for k in 0..u64::from(how.trials.phases) {
+                let mut one = crate::phases::phased(timing, setup, k);
+                one.world.seed = setup.world.seed.wrapping_add(j);
+                let (quality, missed) = match fly(timing, &one, how.exec) {
+                    Ok(f) => {
+                        let missed = f.quality.failures(criteria);
+                        (Some(f.quality), missed)
+                    }
+                    Err(Diagnostic { message, .. }) => (None, vec![message]),
+                };
+                passed += u32::from(quality.is_some() && missed.is_empty());
+                if failures.is_empty() && !missed.is_empty() {
+                    let case = if cases.len() > 1 {
+                        case_label(setup)
+                    } else {
+                        String::new()
+                    };
+                    let at = format!("{case}seed {}, phase {k}: ", one.world.seed);
+                    failures = missed
+                        .into_iter()
+                        .map(|m| if several { format!("{at}{m}") } else { m })
+                        .collect();
                 }
-                Err(Diagnostic { message, .. }) => (None, vec![message]),
-            };
-            passed += u32::from(quality.is_some() && missed.is_empty());
-            if failures.is_empty() && !missed.is_empty() {
-                let at = format!("seed {}, phase {k}: ", one.world.seed);
-                failures = missed
-                    .into_iter()
-                    .map(|m| if several { format!("{at}{m}") } else { m })
-                    .collect();
-            }
-            if j == 0 && k == 0 {
-                first = quality;
+                if first.is_none() && j == 0 && k == 0 {
+                    first = Some(quality);
+                }
             }
         }
     }
-    (first, failures, passed)
+    (first.flatten(), failures, passed)
 }
 
 /// Flies every variation (in parallel; each point is deterministic; the
@@ -653,6 +691,60 @@ pub(crate) mod tests {
             let times = |x: Option<Nanos>| x.map(|x| (x as f64 * 0.9).floor() as Nanos);
             assert_eq!((times(f.0), times(f.1)), *g);
         }
+    }
+}
+
+#[cfg(test)]
+mod missions {
+    use super::*;
+
+    /// A sweep over two missions judges every timing on both: each point's
+    /// flights count both, and the edge it writes is the tighter of the two
+    /// missions' own (here the motor-output period, which turbulence's
+    /// oscillation bounds well below the calm steps' limit).
+    #[test]
+    fn a_sweep_over_two_missions_writes_the_tighter_limit() {
+        let (spec, steps) = tests::cleanflight("racer5");
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../examples/cleanflight.toml");
+        let r = crate::Request {
+            spec_path: &p,
+            vehicle: "racer5",
+            mission: "gusty",
+            horizon: None,
+            seed: 1,
+        };
+        let gusty = crate::setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let vars: Vec<Variation> = [1.0, 2.0, 4.0, 8.0, 16.0].map(Variation::Rate).into();
+        let done = AtomicU64::new(0);
+        let max_period = |s: &Setup, also: &[(Setup, Criteria)]| {
+            let c = s.criteria();
+            let how = How {
+                also,
+                ..How::once(ExecModel::Uniform, &c)
+            };
+            let points = sweep(&spec, s, &how, &vars, &done, &|| {});
+            assert!(points.iter().all(|p| p.flights == 1 + also.len() as u32));
+            let tail = tails(&spec, s)[0];
+            let limit = derived_limits(&spec, s, &points, 1.0).max_period[tail];
+            (limit.unwrap_or_else(|| panic!("no rate flew")), points)
+        };
+        let (calm, _) = max_period(&steps, &[]);
+        let (windy, _) = max_period(&gusty, &[]);
+        let both_cases = [(gusty.clone(), gusty.criteria())];
+        let (both, points) = max_period(&steps, &both_cases);
+        assert!(
+            windy < calm,
+            "turbulence bounds the motor period: {windy} < {calm}"
+        );
+        assert_eq!(both, calm.min(windy));
+        let named = points.iter().flat_map(|p| &p.failures);
+        assert!(
+            named
+                .into_iter()
+                .any(|f| f.starts_with("racer5/gusty, seed 1, phase 0: ")),
+            "{points:?}"
+        );
     }
 }
 

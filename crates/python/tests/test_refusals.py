@@ -43,6 +43,7 @@ def refused_by_binary(command, spec, flags):
         ("simulate", "paper-table3.toml", {"window": "0,10"}, ["--window", "0,10"]),
         ("fly", "cleanflight.toml", {"sweep": True, "log": "f.csv"},
          ["--sweep", "--log", "f.csv"]),
+        ("fly", "cleanflight.toml", {"mission": "steps,gusty"}, ["--mission", "steps,gusty"]),
         ("design", "cleanflight-design.toml", {"seed": 3}, ["--seed", "3"]),
         ("design", "cleanflight-design.toml", {"flights": 5, "vehicle": "racer5"},
          ["--flights", "5", "--vehicle", "racer5"]),

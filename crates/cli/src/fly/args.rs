@@ -11,11 +11,14 @@ pub struct FlyArgs {
     /// examples/cleanflight.toml.
     pub spec: PathBuf,
     /// The vehicle: a built-in preset (racer5, aero1kg) or a preset file.
+    /// With --sweep, a comma-separated list: every timing is flown on each.
     #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
     pub vehicle: String,
     /// The mission: a built-in one (steps, hover, paper, gusty) or a mission
     /// file (crates/flight/missions/*.toml show the format, `[criteria]` and
-    /// `[world]` included).
+    /// `[world]` included). With --sweep, a comma-separated list: every
+    /// timing is flown on each mission (and vehicle), each judged by its
+    /// own criterion, and flies only if every flight meets it.
     #[arg(
         long,
         value_name = "FILE|steps|hover|paper|gusty",
@@ -171,10 +174,18 @@ impl FlyArgs {
         let given = one_flight
             .into_iter()
             .find_map(|(flag, p)| p.as_ref().map(|_| flag));
+        let listed = self.vehicle.contains(',') || self.mission.contains(',');
         match given {
             Some(flag) if self.sweep => Err(rtpipe_model::Diagnostic::error(
                 format!("{flag} describes one flight; --sweep flies many"),
                 format!("drop {flag}, or drop --sweep (--plot DIR writes sweep.svg)"),
+            )),
+            _ if listed && !self.sweep => Err(rtpipe_model::Diagnostic::error(
+                format!(
+                    "one flight flies one vehicle on one mission, found --vehicle {} --mission {}",
+                    self.vehicle, self.mission
+                ),
+                "give one of each, or add --sweep to judge every timing on each vehicle and mission",
             )),
             _ => Ok(()),
         }

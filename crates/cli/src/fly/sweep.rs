@@ -365,20 +365,26 @@ fn sweep_measure(s: &Setup, c: &Criteria) -> Option<(crate::plot::SweepMeasure, 
 }
 
 /// Runs the sweep `a` asks for on `spec` as set up in `s`.
+/// `also`: further (vehicle, mission) setups every timing is flown on too,
+/// each judged by `--criterion` or its own criteria.
 pub fn execute(
     spec: &Spec,
-    s: &Setup,
+    (s, also): (&Setup, &[Setup]),
     a: &FlyArgs,
     stop: Option<&AtomicBool>,
 ) -> Result<Answer, Diagnostic> {
     let c = criteria(a, s)?;
+    let also = also
+        .iter()
+        .map(|o| Ok((o.clone(), criteria(a, o)?)))
+        .collect::<Result<Vec<_>, Diagnostic>>()?;
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
         crate::output::prepare("--write-limits", out, &a.spec, None)?;
     }
     let free = freed(spec, a.free_periods.as_deref())?;
-    let Some(points) = fly_all(spec, s, a, &c, &vars, stop) else {
+    let Some(points) = fly_all(spec, (s, &also), a, &c, &vars, stop) else {
         return Ok(Answer::stopped());
     };
     let limits = derived_limits(spec, s, &points, a.safety);
@@ -394,6 +400,7 @@ pub fn execute(
     let view = report::SweepReport {
         spec,
         setup: s,
+        also: &also,
         criteria: &c,
         args: a,
         points: &points,
@@ -429,7 +436,7 @@ pub fn execute(
 /// before each flight) ended the sweep.
 fn fly_all(
     spec: &Spec,
-    s: &Setup,
+    (s, also): (&Setup, &[(Setup, Criteria)]),
     a: &FlyArgs,
     c: &Criteria,
     vars: &[Variation],
@@ -454,6 +461,7 @@ fn fly_all(
             seeds: a.seeds,
             phases: a.phases,
         },
+        also,
     };
     let points = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
@@ -522,6 +530,10 @@ struct SweepView<'a> {
     /// The tail's `max_period` (ms): the longest period that flew in the
     /// rate sweep.
     max_period_ms: crate::report::Pairs<&'a str, f64>,
+    /// Further "vehicle/mission" setups every timing was flown on (each
+    /// point's flights count theirs too).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    also: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -570,6 +582,7 @@ fn sweep_json<'a>(
                 .filter_map(|(t, m)| Some((t.name.as_str(), (*m)? as f64 * 1e-6)))
                 .collect(),
         ),
+        also: Vec::new(),
     }
 }
 
@@ -607,8 +620,24 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety:
     out
 }
 
+/// "racer5/gusty": a setup among several.
+fn label(s: &Setup) -> String {
+    format!("{}/{}", s.preset.name, s.mission.name)
+}
+
+/// The further setups every timing was flown on, each with its criterion.
+fn also_text(also: &[(Setup, Criteria)]) -> String {
+    let mut out = String::from(
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n",
+    );
+    for (o, c) in also {
+        out.push_str(&format!("  {}: criterion: {}\n", label(o), c.describe()));
+    }
+    out
+}
+
 /// What was swept, on what, judged how, and how many flights per timing.
-fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
+fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs, setups: u32) -> String {
     let mut out = format!(
         "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n",
         spec.name,
@@ -617,7 +646,14 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
         s.mission.name,
         c.describe()
     );
-    if a.seeds * a.phases > 1 {
+    if setups > 1 {
+        out.push_str(&format!(
+            "each timing flown {} times ({} seeds × {} phases × {setups} vehicle/mission setups): it flies only if every flight meets its criterion\n",
+            a.seeds * a.phases * setups,
+            a.seeds,
+            a.phases
+        ));
+    } else if a.seeds * a.phases > 1 {
         out.push_str(&format!(
             "each timing flown {} times ({} seeds × {} phases): it flies only if every flight meets the criterion\n",
             a.seeds * a.phases,
@@ -630,13 +666,13 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs) -> String {
 
 fn text(
     spec: &Spec,
-    s: &Setup,
+    (s, setups): (&Setup, u32),
     (c, a): (&Criteria, &FlyArgs),
     points: &[Point],
     limits: &Derived,
     written: Option<&Path>,
 ) -> String {
-    let mut out = header_text(spec, s, c, a);
+    let mut out = header_text(spec, s, c, a, setups);
     out.push_str("\nperiod scale (budgets fixed; sound bounds from the read):\n");
     let scales: Vec<&Point> = points
         .iter()

@@ -149,6 +149,7 @@ mod tests {
                 seeds: 1,
                 phases: 2,
             },
+            also: &[],
         };
         let vars: Vec<Variation> = [1.0, 1.26, 1.587, 2.0, 2.52].map(Variation::Scale).to_vec();
         let done = AtomicU64::new(0);

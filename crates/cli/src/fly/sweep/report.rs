@@ -2,7 +2,7 @@
 //! text, JSON or tables. The tables are read off the JSON's view, so the
 //! two formats cannot disagree.
 
-use super::{sweep_json, text, FlyArgs, LimitMs, PairMs, SweepView};
+use super::{also_text, label, sweep_json, text, FlyArgs, LimitMs, PairMs, SweepView};
 use crate::report::record_table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{Derived, Point};
@@ -16,6 +16,9 @@ use std::path::Path;
 pub(in crate::fly) struct SweepReport<'a> {
     pub spec: &'a Spec,
     pub setup: &'a Setup,
+    /// Further (vehicle, mission) setups every timing was flown on, each
+    /// with its criterion.
+    pub also: &'a [(Setup, Criteria)],
     pub criteria: &'a Criteria,
     pub args: &'a FlyArgs,
     pub points: &'a [Point],
@@ -27,14 +30,16 @@ pub(in crate::fly) struct SweepReport<'a> {
 
 impl SweepReport<'_> {
     fn view(&self) -> SweepView<'_> {
-        sweep_json(
+        let mut view = sweep_json(
             self.spec,
             self.setup,
             self.criteria,
             self.args,
             self.points,
             self.limits,
-        )
+        );
+        view.also = self.also.iter().map(|(o, _)| label(o)).collect();
+        view
     }
 }
 
@@ -47,14 +52,19 @@ impl Serialize for SweepReport<'_> {
 impl rtpipe_printer::Report for SweepReport<'_> {
     fn text(&self) -> String {
         let how = (self.criteria, self.args);
-        text(
+        let setups = 1 + self.also.len() as u32;
+        let mut out = text(
             self.spec,
-            self.setup,
+            (self.setup, setups),
             how,
             self.points,
             self.limits,
             self.written,
-        )
+        );
+        if !self.also.is_empty() {
+            out.insert_str(out.find('\n').map_or(0, |n| n + 1), &also_text(self.also));
+        }
+        out
     }
 
     /// The sweep's setup (one row), its points, each point's bounds per
