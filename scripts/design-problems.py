@@ -26,6 +26,8 @@ the commit. Usage:
 
 import argparse
 import json
+import math
+import random
 import re
 import subprocess
 import sys
@@ -42,6 +44,8 @@ def e2eeval_system(args):
     cpus = []
     for cpu in range(args.cpus):
         seed = args.seed * 1000 + cpu
+        # gen_taskset seeds numpy but shuffles with Python's `random`.
+        random.seed(seed)
         tasks = list(gen_taskset(0.5, seed))
         chains = [list(c) for c in gen_ce_chains(tasks, chains_per_cpu, chains_per_cpu, seed + 500)]
         # The chains' tasks first (a chain that would not fit is dropped),
@@ -129,7 +133,9 @@ def free_periods(args):
     blocks = text.split("[[chain]]\n")
     assert len(blocks) - 1 == len(chains), "one reaction row per chain"
     for k, c in enumerate(chains):
-        limit = c["sound"] * args.slack
+        # Rounded up to whole µs, so that at --slack 1 the generating
+        # periods meet every limit.
+        limit = math.ceil(c["sound"] * args.slack * 1000) / 1000
         head, _, rest = blocks[k + 1].partition("\n")
         blocks[k + 1] = f"{head}\nreaction = \"{limit:.3f}ms\"\n{rest}"
     with open(args.output, "w") as f:
