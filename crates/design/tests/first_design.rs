@@ -11,7 +11,9 @@ use rtpipe_model::{PeriodSpec, Spec};
 use std::path::Path;
 
 fn load(name: &str) -> Spec {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
     Spec::load(&path).unwrap_or_else(|e| panic!("{name}: {e:?}"))
 }
 
@@ -49,7 +51,11 @@ fn assert_verified_with_certified_gap(o: &Outcome) -> f64 {
 fn at_origin(spec: &Spec, origin: &Spec) -> Spec {
     let mut s = spec.clone();
     for t in &mut s.tasks {
-        let o = origin.tasks.iter().find(|o| o.name == t.name).expect("same tasks");
+        let o = origin
+            .tasks
+            .iter()
+            .find(|o| o.name == t.name)
+            .expect("same tasks");
         t.period = PeriodSpec::Fixed(o.fixed_period().expect("fixed"));
     }
     s
@@ -68,7 +74,10 @@ fn an_e2eeval_problem_of_50_tasks_gets_a_verified_design_within_ten_boxes() {
     let u0 = rtpipe_design::utilization(&origin);
     let lb = o.lower_bound.expect("a lower bound");
     assert!(lb <= u0, "lower bound {lb} above a verified design's {u0}");
-    assert!(u < 0.6 * u0, "the design ({u}) is not much better than the origin ({u0})");
+    assert!(
+        u < 0.6 * u0,
+        "the design ({u}) is not much better than the origin ({u0})"
+    );
 }
 
 #[test]
