@@ -24,8 +24,9 @@ pub(crate) fn descent(p: &Problem, budget: &Budget) -> Option<(Spec, Report, f64
     let (mut idx, mut best) = first_design(p, budget, &values)?;
     p.say(|| "a first verified design by local search".into());
     lengthen_all(p, budget, &values, &mut idx, &mut best);
+    let mut allowance = EXCHANGE_TASK_TRIALS / p.spec.tasks.len().max(1);
     for _ in 0..EXCHANGE_PASSES {
-        if !exchange(p, budget, &values, &mut idx, &mut best) {
+        if !exchange(p, budget, &values, &mut idx, &mut best, &mut allowance) {
             break;
         }
         lengthen_all(p, budget, &values, &mut idx, &mut best);
@@ -40,6 +41,11 @@ pub(crate) fn descent(p: &Problem, budget: &Budget) -> Option<(Spec, Report, f64
 /// Passes of [`exchange`] at most: each must lower U, and a pass costs
 /// about (chain tasks)² × log(rungs) analyses.
 const EXCHANGE_PASSES: usize = 4;
+
+/// Pair moves tried at most, times the tasks: each costs an analysis or
+/// a few, which grows with the tasks, and the descent runs before any
+/// work budget (1,000 pairs at 50 tasks, 41 at 1,200).
+const EXCHANGE_TASK_TRIALS: usize = 50_000;
 
 /// Every task in turn, largest utilisation first, lengthens its period
 /// in growing jumps while the design still verifies; until none moves.
@@ -95,13 +101,15 @@ fn lengthen(
 /// this (the descent stops where every lengthening alone breaks a
 /// limit), and the optimum wants it: at a binding limit the best periods
 /// grow as √C, so a chain's light tasks should run faster than its heavy
-/// ones. Whether the pass lowered U.
+/// ones. Each pair tried spends one of `allowance`. Whether the pass
+/// lowered U.
 fn exchange(
     p: &Problem,
     budget: &Budget,
     values: &[Vec<Nanos>],
     idx: &mut Vec<usize>,
     best: &mut (Spec, Report),
+    allowance: &mut usize,
 ) -> bool {
     let mut improved = false;
     let u_of = |idx: &[usize]| -> f64 {
@@ -115,9 +123,10 @@ fn exchange(
                 if a == b || idx[a] == 0 || idx[b] + 1 >= values[b].len() {
                     continue;
                 }
-                if budget.out_of_time() {
+                if budget.out_of_time() || *allowance == 0 {
                     return improved;
                 }
+                *allowance -= 1;
                 let mut trial = idx.clone();
                 trial[a] -= 1;
                 let mut found = best.clone();
