@@ -550,6 +550,7 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
         method: rtpipe_design::method_for(spec, opts),
         solver: opts.solver,
         seconds: start.elapsed().as_secs_f64(),
+        first_design_seconds: None,
         iterations: 0,
         peak_open: 0,
         peak_open_bytes: 0,
@@ -634,6 +635,8 @@ struct DesignView<'a> {
     method: &'static str,
     solver: Option<&'static str>,
     seconds: f64,
+    /// When the box search held its first verified design.
+    first_design_seconds: Option<f64>,
     /// `None` when interrupted: the worker may still be inside a solve.
     iterations: Option<usize>,
     peak_open_boxes: Option<usize>,
@@ -674,6 +677,7 @@ fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> De
         method: o.method.name(),
         solver: (o.method == Method::Milp).then(|| o.solver.name()),
         seconds: o.seconds,
+        first_design_seconds: o.first_design_seconds,
         iterations: (!stopped).then_some(o.iterations),
         peak_open_boxes: (o.method == Method::Boxes).then_some(o.peak_open),
         peak_open_box_bytes: (o.method == Method::Boxes).then_some(o.peak_open_bytes),

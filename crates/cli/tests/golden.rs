@@ -386,6 +386,7 @@ fn mask(text: &str) -> String {
 fn mask_line(line: &str) -> String {
     for key in [
         "\"seconds\":",
+        "\"first_design_seconds\":",
         "\"events_per_second\":",
         "\"wall_seconds\":",
         "\"elapsed_s\":",

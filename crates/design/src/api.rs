@@ -243,6 +243,9 @@ pub struct Outcome {
     pub solver: SolverKind,
     /// Wall-clock time of the search.
     pub seconds: f64,
+    /// Wall-clock time to the first verified design (box search; `None`
+    /// without a design, or from the MILP, which does not time it).
+    pub first_design_seconds: Option<f64>,
     /// Master solves (MILP) or boxes examined (box search).
     pub iterations: usize,
     /// The most boxes the box search held open at once (memory).

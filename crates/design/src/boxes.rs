@@ -75,6 +75,7 @@ pub(crate) fn solve_boxes(
             o
         }
     };
+    o.first_design_seconds = o.spec.as_ref().and(found.first_at);
     o.peak_open = found.peak_open;
     o.peak_open_bytes = found.peak_bytes;
     o.checked = checked;

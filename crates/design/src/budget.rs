@@ -168,6 +168,7 @@ impl Budget {
             method: p.method,
             solver: p.opts.solver,
             seconds: self.elapsed(),
+            first_design_seconds: None,
             iterations: self.iterations,
             peak_open: 0,
             peak_open_bytes: 0,

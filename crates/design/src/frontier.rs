@@ -57,6 +57,8 @@ pub(crate) struct BoxResult {
     pub(crate) peak_bytes: usize,
     /// Every design the acceptance check judged (`Options::accept`).
     pub(crate) checked: Vec<Checked>,
+    /// Seconds from the design's start to the first verified design held.
+    pub(crate) first_at: Option<f64>,
 }
 
 /// What taking an open box does.
@@ -117,6 +119,8 @@ struct Frontier {
     stopped: bool,
     /// The bytes the open boxes take.
     open_bytes: usize,
+    /// When the first verified design was held (`Budget::elapsed`).
+    first_at: Option<f64>,
     /// The most bytes they took at once.
     peak_bytes: usize,
 }
@@ -131,6 +135,7 @@ impl Frontier {
             peak_open: 0,
             stopped: false,
             open_bytes: 0,
+            first_at: None,
             peak_bytes: 0,
         }
     }
@@ -179,6 +184,14 @@ impl Frontier {
             peak_open: self.peak_open,
             peak_bytes: self.peak_bytes,
             checked,
+            first_at: self.first_at,
+        }
+    }
+
+    /// Notes the time of the first verified design held.
+    fn note_first(&mut self, effort: &Budget) {
+        if self.first_at.is_none() && self.best.is_some() {
+            self.first_at = Some(effort.elapsed());
         }
     }
 }
@@ -231,6 +244,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 f.best = None;
             }
         }
+        f.note_first(self.effort);
         let floor = root.bound;
         if self.effort.out_of_clock() {
             // Out of time before the root was examined (the first design's
@@ -245,8 +259,10 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             return f.result(checked);
         }
         let mut flow = self.examine_all(&mut f, floor, vec![root]);
+        f.note_first(self.effort);
         while flow.is_continue() && !f.open.is_empty() {
             flow = self.round(&mut f);
+            f.note_first(self.effort);
         }
         let checked = self.gate.take().map_or(Vec::new(), |g| g.log);
         f.result(checked)
