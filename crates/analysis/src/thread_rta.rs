@@ -55,40 +55,40 @@ pub type Above<'a> = [(Nanos, &'a Arrivals)];
 /// than its activations: the figure bounds each job from its first
 /// release.
 pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
-    fifo_response_reach(members, above, blocking).0
+    fifo_response_windows(members, above, blocking).0
 }
 
-/// [`fifo_response`] with the largest window it looked at: the busy
-/// period, beyond which neither the members' η⁺ nor that of the tasks
-/// above is read (every candidate's fixed point is within it), so the
-/// figure depends on each η⁺ up to it alone (the event analysis
-/// re-analyses a thread only when an input's η⁺ changes there,
-/// `crate::events`). The reach is 0 when the response is unbounded.
-pub fn fifo_response_reach(
+/// [`fifo_response`] with every window at which it asked the demand of
+/// the tasks above, ascending and distinct (none when the response is
+/// unbounded). The last is the busy period, beyond which neither the
+/// members' η⁺ nor that of the tasks above is read (every candidate's
+/// fixed point is within it), so the figure depends on the members' η⁺
+/// up to it, and on the periods, works and η⁺ at those windows of the
+/// tasks above, alone (the event analysis re-analyses a thread only when
+/// an input's η⁺ changes there, `crate::events`).
+pub fn fifo_response_windows(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-) -> (Option<Nanos>, Nanos) {
-    let mut demand = demand_of(above);
-    // The candidates' windows start below the busy period's: a copy of
-    // the demand before its first window, whose windows grow from one
-    // candidate to the next.
-    let mut candidate_demand = demand.clone();
-    let r = fifo_within(members, above, blocking, &mut demand, &mut candidate_demand);
-    (
-        r,
-        r.map_or(0, |_| demand.reach().max(candidate_demand.reach())),
-    )
+) -> (Option<Nanos>, Vec<Nanos>) {
+    let mut asked = Vec::new();
+    match fifo_within(members, above, blocking, &mut asked) {
+        Some(r) => {
+            asked.sort_unstable();
+            asked.dedup();
+            (Some(r), asked)
+        }
+        None => (None, Vec::new()),
+    }
 }
 
-/// [`fifo_response`] with two demands of the tasks above before any
-/// window, one for the busy period and one for the candidates.
+/// [`fifo_response`], each window at which it asks the demand of the
+/// tasks above pushed to `asked`.
 fn fifo_within(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-    demand: &mut Demand,
-    candidate_demand: &mut Demand,
+    asked: &mut Vec<Nanos>,
 ) -> Option<Nanos> {
     let load: f64 = members
         .iter()
@@ -103,8 +103,23 @@ fn fifo_within(
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
         })
     };
+    // The candidates' windows start below the busy period's last one, so
+    // they ask a copy of the demand, whose windows grow from one candidate
+    // to the next. The first of them is at the first job's release,
+    // thread(1): when that is at least 1 the copy is taken at a window of
+    // 1, the busy period's first, and each stream is divided there once
+    // for both (the copy steps only where a count grows past it).
+    let mut demand = demand_of(above);
+    let first = thread(1)?;
+    if first >= 1 {
+        demand.at(1);
+    }
+    let mut candidate_demand = demand.clone();
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let length = fixed_point(1, &steps, |w| Some(thread(w)?.saturating_add(demand.at(w))))?;
+    let length = fixed_point(1, &steps, |w| {
+        asked.push(w);
+        Some(thread(w)?.saturating_add(demand.at(w)))
+    })?;
     let mut candidates = vec![0];
     for m in members {
         candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
@@ -119,6 +134,7 @@ fn fifo_within(
         let released = thread(a.checked_add(1)?)?;
         // f grows with a: the last fixed point is a valid start.
         finish = fixed_point(finish.max(released), &steps, |w| {
+            asked.push(w);
             Some(released.saturating_add(candidate_demand.at(w)))
         })?;
         worst = worst.max(finish - a);
