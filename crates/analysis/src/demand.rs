@@ -6,9 +6,9 @@
 //! Those iterations ask for it at windows that only grow, so it is kept
 //! incrementally: each stream remembers its count and the least window at
 //! which the count grows, and a window below every such step costs one
-//! comparison. A stream is divided only when its count changes, instead
-//! of every stream at every step of every iteration (docs/analysis.md,
-//! "Cost at 1,000 tasks").
+//! comparison. A stream is divided only when its count grows by more than
+//! one, instead of every stream at every step of every iteration
+//! (docs/analysis.md, "Cost at 1,000 tasks").
 
 use crate::arrivals::Stream;
 use rtpipe_model::Nanos;

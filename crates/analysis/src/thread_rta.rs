@@ -103,18 +103,8 @@ fn fifo_within(
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
         })
     };
-    // The candidates' windows start below the busy period's last one, so
-    // they ask a copy of the demand, whose windows grow from one candidate
-    // to the next. The first of them is at the first job's release,
-    // thread(1): when that is at least 1 the copy is taken at a window of
-    // 1, the busy period's first, and each stream is divided there once
-    // for both (the copy steps only where a count grows past it).
     let mut demand = demand_of(above);
     let first = thread(1)?;
-    if first >= 1 {
-        demand.at(1);
-    }
-    let mut candidate_demand = demand.clone();
     let steps = std::cell::Cell::new(MAX_STEPS);
     let length = fixed_point(1, &steps, |w| {
         asked.push(w);
@@ -127,8 +117,22 @@ fn fifo_within(
             return None;
         }
     }
+    // No member releases inside the busy period but at its start: thread(w)
+    // is thread(1) over [1, length], so the one candidate's fixed point,
+    // from thread(1) ≥ 1, is the busy period's own (`length`, the least
+    // w ≥ 1 with f(w) ≤ w), reached in at most the steps the busy period
+    // took (its iterates are at or above the busy period's, step for
+    // step): with as many left, the step limit cannot bind in it.
+    let busy_steps = MAX_STEPS - steps.get();
+    if candidates.len() == 1 && first >= 1 && busy_steps <= steps.get() {
+        return Some(length);
+    }
     candidates.sort_unstable();
     candidates.dedup();
+    // The candidates' windows start below the busy period's last one: a
+    // demand of their own, whose windows grow from one candidate to the
+    // next.
+    let mut candidate_demand = demand_of(above);
     let (mut worst, mut finish) = (0, 0);
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
@@ -249,5 +253,26 @@ mod tests {
             arrivals: &x,
         }];
         assert_eq!(fifo_response(&m, &[(500_000, &h)], 0), Some(501_000));
+    }
+
+    #[test]
+    fn one_candidate_keeps_the_step_limit() {
+        // Above: C 999,999 every 1 ms; one member of work x released once:
+        // the count above grows by one a step up to x, so the busy period
+        // takes about x steps, and so would its one candidate (a = 0). At
+        // x = 40,000 both fit in MAX_STEPS: the busy period's end, x·10⁶.
+        // At x = 70,000 the candidate would run the steps out: unbounded,
+        // as when it was iterated.
+        let (x, h) = (
+            Arrivals::periodic(4_000_000_000_000_000, 0),
+            Arrivals::periodic(1_000_000, 0),
+        );
+        let above = [(999_999, &h)];
+        let member = |work| [Member { work, arrivals: &x }];
+        const { assert!(2 * 40_000 < MAX_STEPS && 2 * 70_000 > MAX_STEPS) };
+        let fits = fifo_response_windows(&member(40_000), &above, 0);
+        assert_eq!(fits.0, Some(40_000_000_000));
+        assert_eq!(fits.1.last(), Some(&40_000_000_000));
+        assert_eq!(fifo_response(&member(70_000), &above, 0), None);
     }
 }
