@@ -90,8 +90,9 @@ pub struct EventResult {
 /// topological order, each until its own figures stop changing, its
 /// inputs then final: a unit that reads nothing of its own component is
 /// analysed once. Inside a component, sweeps in a depth-first order
-/// re-analyse a unit when an input changed since its last analysis at a
-/// window up to its reach (an input whose η⁺ is the same up to there
+/// re-analyse a unit when an input changed since its last analysis where
+/// that analysis read it (a task above at a window its demand was asked
+/// at, its own tasks up to its reach: an input whose η⁺ is the same there
 /// leaves a response as it was), from the figures as they are then. From
 /// zero jitter the figures only grow, so this reaches the least fixed
 /// point that re-analysing every task round after round reaches (chaotic
@@ -330,9 +331,9 @@ impl Deps {
 
     /// Recomputes the activations of every task downstream of the tasks
     /// whose jitter `grown`; the units `inside` the component that read one
-    /// that changed at a window up to their reach (their responses,
-    /// computed from the old activations, read η⁺ up to there alone, so
-    /// they are those the new ones give when both agree up to there).
+    /// that changed where they read it ([`Deps::sees`]: their responses,
+    /// computed from the old activations, are those the new ones give
+    /// when both agree there).
     fn refresh(
         &self,
         spec: &Spec,
