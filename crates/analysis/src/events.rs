@@ -9,7 +9,7 @@
 //! figure changes or one becomes unbounded. docs/analysis.md, "Threads and
 //! data-triggered tasks".
 
-use crate::arrivals::Arrivals;
+use crate::arrivals::{Arrivals, Stream};
 use crate::thread_rta::{fifo_response_windows, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
@@ -372,13 +372,15 @@ impl Deps {
         if reach <= change.same {
             return false;
         }
-        let (Some(old), Some(new), true) = (change.old, change.new, change.unit != u) else {
+        let (Some(moved), true) = (&change.moved, change.unit != u) else {
             return true;
         };
         self.unit_tasks(u).any(|i| {
             let windows = responses[i].windows.as_deref().unwrap_or(&[]);
             let first = windows.partition_point(|&w| w <= change.same);
-            windows[first..].iter().any(|&w| old.eta(w) != new.eta(w))
+            windows[first..]
+                .iter()
+                .any(|&w| moved.iter().any(|(s, t)| s.eta(w) != t.eta(w)))
         })
     }
 
@@ -527,32 +529,38 @@ impl Response {
     }
 }
 
-/// A task's activations changed from `old` to `new`, the same up to `same`.
-struct Change<'a> {
+/// A task's activations changed, the same up to `same`.
+struct Change {
     /// The task's unit.
     unit: usize,
-    /// Both, when bounded and with the same streams' periods.
-    old: Option<&'a Arrivals>,
-    new: Option<&'a Arrivals>,
+    /// The streams whose jitter changed, (old, new), when both are bounded
+    /// and of the same periods: where each of them keeps its η⁺, so does
+    /// their sum.
+    moved: Option<Vec<(Stream, Stream)>>,
     same: Nanos,
 }
 
-impl<'a> Change<'a> {
-    fn of(spec: &Spec, j: usize, old: &'a Option<Arrivals>, new: &'a Option<Arrivals>) -> Self {
+impl Change {
+    fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
         let unit = spec.tasks[j].thread.map_or(j, |th| spec.tasks.len() + th);
-        let (old, new) = match (old, new) {
-            (Some(a), Some(b)) if same_periods(a, b) => (Some(a), Some(b)),
-            _ => (None, None),
-        };
-        let same = match (old, new) {
-            (Some(a), Some(b)) => a.same_up_to(b),
-            _ => 0,
-        };
-        Change {
-            unit,
-            old,
-            new,
-            same,
+        match (old, new) {
+            (Some(a), Some(b)) if same_periods(a, b) => Change {
+                unit,
+                moved: Some(
+                    a.streams
+                        .iter()
+                        .zip(&b.streams)
+                        .filter(|(s, t)| s != t)
+                        .map(|(&s, &t)| (s, t))
+                        .collect(),
+                ),
+                same: a.same_up_to(b),
+            },
+            _ => Change {
+                unit,
+                moved: None,
+                same: 0,
+            },
         }
     }
 }
