@@ -6,9 +6,9 @@
 //! Those iterations ask for it at windows that only grow, so it is kept
 //! incrementally: each stream remembers its count and the least window at
 //! which the count grows, and a window below every such step costs one
-//! comparison. A stream is divided only when its count changes, instead
-//! of every stream at every step of every iteration (docs/analysis.md,
-//! "Cost at 1,000 tasks").
+//! comparison. A stream is divided only when its count grows by more than
+//! one, instead of every stream at every step of every iteration
+//! (docs/analysis.md, "Cost at 1,000 tasks").
 
 use crate::arrivals::Stream;
 use rtpipe_model::Nanos;
@@ -23,6 +23,11 @@ struct Term {
     count: Nanos,
     /// The least window at which `count` grows.
     step: Nanos,
+    /// The largest window at which η⁺ is `count + 1`,
+    /// `(count + 1)·T − J` (below `step` when η⁺ jumps by more there), or
+    /// −1 where that overflows: a window from `step` up to it moves the
+    /// count by one, with no division.
+    ceiling: Nanos,
 }
 
 /// `Σ_h η⁺_h(w)·C_h` over a fixed list of streams, asked at windows that
@@ -64,6 +69,7 @@ impl Demand {
             stream,
             count: 0,
             step: 1,
+            ceiling: ceiling(0, stream),
         });
         self.next_step = 1;
     }
@@ -75,12 +81,6 @@ impl Demand {
             demand.push(work, Stream { period, jitter });
         }
         demand
-    }
-
-    /// The largest window asked so far: the figure of an iteration that
-    /// asked no more depends on each stream's η⁺ up to it alone.
-    pub fn reach(&self) -> Nanos {
-        self.last
     }
 
     /// `Σ_h η⁺_h(w)·C_h`, saturating at `Nanos::MAX`. `w` must be at least
@@ -98,21 +98,50 @@ impl Demand {
         let mut next_step = Nanos::MAX;
         for term in &mut self.terms {
             if term.step <= w {
-                let count = term.stream.eta(w);
-                let grown = (count - term.count).saturating_mul(term.work);
-                self.total = self.total.saturating_add(grown);
-                term.count = count;
-                // η⁺(w') = ⌈(w' + J)/T⌉ passes `count` once w' + J > count·T.
-                term.step = count
-                    .saturating_mul(term.stream.period)
-                    .saturating_sub(term.stream.jitter)
-                    .saturating_add(1);
+                self.total = self.total.saturating_add(term.advance(w));
             }
             next_step = next_step.min(term.step);
         }
         self.next_step = next_step;
         self.total
     }
+}
+
+impl Term {
+    /// Brings the term to window `w`, at or past its step; the work it
+    /// grew by (saturating).
+    #[inline]
+    fn advance(&mut self, w: Nanos) -> Nanos {
+        if w <= self.ceiling {
+            // One event more (most steps of an iteration, and a first window
+            // within a period of the jitter, move a count by one).
+            self.count += 1;
+            self.step = self.ceiling.saturating_add(1);
+            self.ceiling = ceiling(self.count, self.stream);
+            return self.work;
+        }
+        let count = self.stream.eta(w);
+        let grown = (count - self.count).saturating_mul(self.work);
+        self.count = count;
+        // η⁺(w') = ⌈(w' + J)/T⌉ passes `count` once w' + J > count·T.
+        self.step = count
+            .saturating_mul(self.stream.period)
+            .saturating_sub(self.stream.jitter)
+            .saturating_add(1);
+        self.ceiling = ceiling(count, self.stream);
+        grown
+    }
+}
+
+/// `(count + 1)·T − J`, the largest window at which a stream's η⁺ is at
+/// most `count + 1`, or −1 (no window) where `(count + 1)·T` overflows:
+/// below it `w + J` cannot saturate, so η⁺ there is exactly as counted.
+fn ceiling(count: Nanos, stream: Stream) -> Nanos {
+    count
+        .checked_add(1)
+        .and_then(|c| c.checked_mul(stream.period))
+        .and_then(|top| top.checked_sub(stream.jitter))
+        .unwrap_or(-1)
 }
 
 #[cfg(test)]
@@ -149,6 +178,24 @@ mod tests {
         assert_eq!(demand.at(1), Nanos::MAX - 1);
         assert_eq!(demand.at(3), Nanos::MAX);
         assert_eq!(demand.at(4), Nanos::MAX);
+    }
+
+    #[test]
+    fn a_count_moved_by_one_and_by_more_is_the_direct_sum() {
+        // One event more, from the first window on (J < T) and from a step
+        // (w within a period of it), or several at once (J ≥ T, a jump),
+        // and streams whose figures overflow, which always divide.
+        let loads = [
+            (1, 10, 3),
+            (2, 10, 25),
+            (3, 7, 0),
+            (1, Nanos::MAX / 2, Nanos::MAX / 2),
+            (1, Nanos::MAX, 5),
+        ];
+        let mut demand = Demand::of_loads(&loads);
+        for w in (0..60).chain([61, 100, 101, 1_000, Nanos::MAX / 2, Nanos::MAX - 1]) {
+            assert_eq!(demand.at(w), direct(&loads, w), "w = {w}");
+        }
     }
 
     #[test]

@@ -9,8 +9,8 @@
 //! figure changes or one becomes unbounded. docs/analysis.md, "Threads and
 //! data-triggered tasks".
 
-use crate::arrivals::Arrivals;
-use crate::thread_rta::{fifo_response_reach, Member};
+use crate::arrivals::{Arrivals, Stream};
+use crate::thread_rta::{fifo_response_windows, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
 /// Most rounds of the holistic iteration (sweeps of one strongly connected
@@ -21,6 +21,9 @@ pub const MAX_ROUNDS: usize = 1_000;
 /// One stream of what runs above a task: (I, T, J), the work of each of
 /// its jobs, its period and its release jitter.
 pub type Load = (Nanos, Nanos, Nanos);
+
+/// A task's (budget, job) response times (`None`: unbounded).
+pub type Figures = (Option<Nanos>, Option<Nanos>);
 
 /// What the fixed-priority analysis provides (`sched` implements it, so
 /// that thread-less tasks keep their own analysis, servers included).
@@ -35,16 +38,13 @@ pub trait FixedPriority {
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
     fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
-    /// [`periodic_response`](Self::periodic_response) with its reach: the
-    /// largest window at which its iteration read `hp`'s η⁺, so that the
-    /// figures hold as long as no stream's η⁺ changes up to it. `None`
-    /// (the default) when unknown: the task is then re-analysed whenever
-    /// an input changes.
-    fn periodic_response_reach(
-        &self,
-        i: usize,
-        hp: &[Load],
-    ) -> ((Option<Nanos>, Option<Nanos>), Option<Nanos>) {
+    /// [`periodic_response`](Self::periodic_response) with the windows at
+    /// which its iteration read `hp`'s η⁺, ascending and distinct, so that
+    /// the figures hold as long as the streams keep their periods and
+    /// works and every task's η⁺ is the same at them. `None` (the default)
+    /// when unknown: the task is then re-analysed whenever an input
+    /// changes.
+    fn periodic_response_windows(&self, i: usize, hp: &[Load]) -> (Figures, Option<Vec<Nanos>>) {
         (self.periodic_response(i, hp), None)
     }
 }
@@ -90,8 +90,9 @@ pub struct EventResult {
 /// topological order, each until its own figures stop changing, its
 /// inputs then final: a unit that reads nothing of its own component is
 /// analysed once. Inside a component, sweeps in a depth-first order
-/// re-analyse a unit when an input changed since its last analysis at a
-/// window up to its reach (an input whose η⁺ is the same up to there
+/// re-analyse a unit when an input changed since its last analysis where
+/// that analysis read it (a task above at a window its demand was asked
+/// at, its own tasks up to its reach: an input whose η⁺ is the same there
 /// leaves a response as it was), from the figures as they are then. From
 /// zero jitter the figures only grow, so this reaches the least fixed
 /// point that re-analysing every task round after round reaches (chaotic
@@ -330,9 +331,9 @@ impl Deps {
 
     /// Recomputes the activations of every task downstream of the tasks
     /// whose jitter `grown`; the units `inside` the component that read one
-    /// that changed at a window up to their reach (their responses,
-    /// computed from the old activations, read η⁺ up to there alone, so
-    /// they are those the new ones give when both agree up to there).
+    /// that changed where they read it ([`Deps::sees`]: their responses,
+    /// computed from the old activations, are those the new ones give
+    /// when both agree there).
     fn refresh(
         &self,
         spec: &Spec,
@@ -346,17 +347,41 @@ impl Deps {
             if fresh == state.arrivals[j] {
                 continue;
             }
-            let same = match (&state.arrivals[j], &fresh) {
-                (Some(a), Some(b)) => a.same_up_to(b),
-                _ => 0,
-            };
-            state.arrivals[j] = fresh;
+            let old = std::mem::replace(&mut state.arrivals[j], fresh);
+            let change = Change::of(spec, j, &old, &state.arrivals[j]);
             for &u in self.readers[j].iter().filter(|&&u| inside(u)) {
-                if self.reach(u, &state.responses).is_none_or(|r| r > same) {
+                if !state.dirty[u] && self.sees(u, &change, &state.responses) {
                     state.dirty[u] = true;
                 }
             }
         }
+    }
+
+    /// Whether unit `u`'s responses, as last analysed, could read `change`:
+    /// a response without windows, one whose reach passes the first window
+    /// where the change shows, when it is of one of `u`'s own tasks (whose
+    /// η⁺ a FIFO analysis reads up to the busy period) or changes a
+    /// stream's period or number, else one with a window at which the
+    /// task's η⁺ differs (the tasks above are read through the demand
+    /// alone, at those windows: equal there, the iteration runs step for
+    /// step the same).
+    fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
+        let Some(reach) = self.reach(u, responses) else {
+            return true;
+        };
+        if reach <= change.same {
+            return false;
+        }
+        let (Some(moved), true) = (&change.moved, change.unit != u) else {
+            return true;
+        };
+        self.unit_tasks(u).any(|i| {
+            let windows = responses[i].windows.as_deref().unwrap_or(&[]);
+            let first = windows.partition_point(|&w| w <= change.same);
+            windows[first..]
+                .iter()
+                .any(|&w| moved.iter().any(|(s, t)| s.eta(w) != t.eta(w)))
+        })
     }
 
     /// The tasks triggered, directly or not, by the tasks `from`, each
@@ -383,10 +408,10 @@ impl Deps {
     }
 
     /// The largest reach of unit `u`'s responses (`None`: a response
-    /// without one, re-analysed on any change).
+    /// without windows, re-analysed on any change).
     fn reach(&self, u: usize, responses: &[Response]) -> Option<Nanos> {
         self.unit_tasks(u)
-            .try_fold(0, |m: Nanos, i| Some(m.max(responses[i].reach?)))
+            .try_fold(0, |m: Nanos, i| Some(m.max(responses[i].reach()?)))
     }
 
     /// The responses of unit `u`'s tasks, into `responses`.
@@ -472,19 +497,20 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
 /// for members whose own work is the work the others see of them (then
 /// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
 /// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Nanos))>;
+type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Vec<Nanos>))>;
 
 /// One round's response of a task.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Response {
     budget: Option<Nanos>,
     job: Option<Nanos>,
     /// From the actual release (the first one of a merged job), for the
     /// output jitter; at most `job`.
     actual: Option<Nanos>,
-    /// The largest window at which the figures read their inputs' η⁺
-    /// (`None`: unbounded, or not known).
-    reach: Option<Nanos>,
+    /// The windows at which the figures read the η⁺ of the tasks above,
+    /// ascending and distinct; the last, the reach, bounds every window at
+    /// which they read any η⁺ (`None`: unbounded, or not known).
+    windows: Option<Vec<Nanos>>,
 }
 
 impl Response {
@@ -493,8 +519,59 @@ impl Response {
         budget: None,
         job: None,
         actual: None,
-        reach: None,
+        windows: None,
     };
+
+    /// The largest window at which the figures read an η⁺ (`None`: not
+    /// known).
+    fn reach(&self) -> Option<Nanos> {
+        Some(self.windows.as_ref()?.last().copied().unwrap_or(0))
+    }
+}
+
+/// A task's activations changed, the same up to `same`.
+struct Change {
+    /// The task's unit.
+    unit: usize,
+    /// The streams whose jitter changed, (old, new), when both are bounded
+    /// and of the same periods: where each of them keeps its η⁺, so does
+    /// their sum.
+    moved: Option<Vec<(Stream, Stream)>>,
+    same: Nanos,
+}
+
+impl Change {
+    fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
+        let unit = spec.tasks[j].thread.map_or(j, |th| spec.tasks.len() + th);
+        match (old, new) {
+            (Some(a), Some(b)) if same_periods(a, b) => Change {
+                unit,
+                moved: Some(
+                    a.streams
+                        .iter()
+                        .zip(&b.streams)
+                        .filter(|(s, t)| s != t)
+                        .map(|(&s, &t)| (s, t))
+                        .collect(),
+                ),
+                same: a.same_up_to(b),
+            },
+            _ => Change {
+                unit,
+                moved: None,
+                same: 0,
+            },
+        }
+    }
+}
+
+/// `a` and `b` are the same streams with other jitters at most.
+fn same_periods(a: &Arrivals, b: &Arrivals) -> bool {
+    a.streams.len() == b.streams.len()
+        && a.streams
+            .iter()
+            .zip(&b.streams)
+            .all(|(s, t)| s.period == t.period)
 }
 
 /// Task `i`'s activations, its triggers' already in `arrivals`: its
@@ -557,12 +634,12 @@ fn respond(
         for &(c, a) in &models {
             hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
         }
-        let ((budget, job), reach) = fp.periodic_response_reach(i, &hp);
+        let ((budget, job), windows) = fp.periodic_response_windows(i, &hp);
         return Response {
             budget,
             job,
             actual: job,
-            reach: reach.filter(|_| budget.is_some() && job.is_some()),
+            windows: windows.filter(|_| budget.is_some() && job.is_some()),
         };
     }
     let blocking = fp.blocking(i);
@@ -570,11 +647,11 @@ fn respond(
     let known = cache
         .iter()
         .find(|(a, b, _)| shared && a == above && *b == blocking)
-        .map(|&(_, _, r)| r);
-    let (actual, reach) = known.unwrap_or_else(|| {
+        .map(|(_, _, r)| r.clone());
+    let (actual, windows) = known.unwrap_or_else(|| {
         let r = thread_response(spec, fp, deps, arrivals, i, &models, blocking);
         if shared {
-            cache.push((above.clone(), blocking, r));
+            cache.push((above.clone(), blocking, r.clone()));
         }
         r
     });
@@ -587,7 +664,7 @@ fn respond(
         budget: job,
         job,
         actual: Some(actual),
-        reach: Some(reach),
+        windows: Some(windows),
     }
 }
 
@@ -601,7 +678,7 @@ fn thread_response(
     i: usize,
     above: &[(Nanos, &Arrivals)],
     blocking: Nanos,
-) -> (Option<Nanos>, Nanos) {
+) -> (Option<Nanos>, Vec<Nanos>) {
     let t = &spec.tasks[i];
     let alone = [i];
     let members = t.thread.map_or(&alone[..], |th| &deps.members[th][..]);
@@ -620,8 +697,8 @@ fn thread_response(
         })
         .collect::<Option<_>>();
     match members {
-        Some(members) => fifo_response_reach(&members, above, blocking),
-        None => (None, 0),
+        Some(members) => fifo_response_windows(&members, above, blocking),
+        None => (None, Vec::new()),
     }
 }
 

@@ -14,7 +14,7 @@ use edf_times::{edf_read_to_publish, edf_response_times, server_period};
 mod busy;
 pub(crate) use busy::busy_window;
 pub use busy::{
-    level_response, level_response_reach, level_response_within, response_time,
+    level_response, level_response_windows, level_response_within, response_time,
     response_time_jitter, OwnJobs, MAX_BUSY_JOBS,
 };
 
@@ -480,13 +480,13 @@ impl crate::events::FixedPriority for Levels<'_> {
         rta_response(self, i, hp)
     }
 
-    fn periodic_response_reach(
+    fn periodic_response_windows(
         &self,
         i: usize,
         hp: &[(Nanos, Nanos, Nanos)],
-    ) -> ((Option<Nanos>, Option<Nanos>), Option<Nanos>) {
-        let (figures, reach) = rta_response_reach(self, i, hp);
-        (figures, Some(reach))
+    ) -> (crate::events::Figures, Option<Vec<Nanos>>) {
+        let (figures, windows) = rta_response_windows(self, i, hp, true);
+        (figures, Some(windows))
     }
 }
 
@@ -574,16 +574,18 @@ fn rta_response(
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
 ) -> (Option<Nanos>, Option<Nanos>) {
-    rta_response_reach(levels, i, hp).0
+    rta_response_windows(levels, i, hp, false).0
 }
 
-/// [`rta_response`] with the largest window either figure's iteration
-/// asked `hp`'s demand at ([`level_response_reach`]).
-fn rta_response_reach(
+/// [`rta_response`] with, when `record`, every window either figure's
+/// iteration asked `hp`'s demand at, ascending and distinct
+/// ([`level_response_windows`]; none otherwise).
+fn rta_response_windows(
     levels: &Levels,
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
-) -> ((Option<Nanos>, Option<Nanos>), Nanos) {
+    record: bool,
+) -> ((Option<Nanos>, Option<Nanos>), Vec<Nanos>) {
     let spec = levels.spec;
     let t = &spec.tasks[i];
     let blocking = levels.blocking(i);
@@ -600,16 +602,23 @@ fn rta_response_reach(
     // one whose busy period holds more than one own job.
     let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
     let r = |work: Nanos| {
-        let (r, reach) = level_response_reach(own(work), hp, Nanos::MAX);
-        (r.filter(|&r| !pibs || r <= period_or_max(t)), reach)
+        let (r, windows) = if record {
+            level_response_windows(own(work), hp, Nanos::MAX)
+        } else {
+            (level_response_within(own(work), hp, Nanos::MAX), Vec::new())
+        };
+        (r.filter(|&r| !pibs || r <= period_or_max(t)), windows)
     };
-    let (job, job_reach) = r(t.demand());
+    let (job, mut windows) = r(t.demand());
     // Without a budget of its own the budget figure is the job figure.
     if t.budget() == t.demand() {
-        return ((job, job), job_reach);
+        return ((job, job), windows);
     }
-    let (budget, budget_reach) = r(t.budget());
-    ((budget, job), budget_reach.max(job_reach))
+    let (budget, budget_windows) = r(t.budget());
+    windows.extend(budget_windows);
+    windows.sort_unstable();
+    windows.dedup();
+    ((budget, job), windows)
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.

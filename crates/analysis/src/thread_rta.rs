@@ -55,40 +55,40 @@ pub type Above<'a> = [(Nanos, &'a Arrivals)];
 /// than its activations: the figure bounds each job from its first
 /// release.
 pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
-    fifo_response_reach(members, above, blocking).0
+    fifo_response_windows(members, above, blocking).0
 }
 
-/// [`fifo_response`] with the largest window it looked at: the busy
-/// period, beyond which neither the members' η⁺ nor that of the tasks
-/// above is read (every candidate's fixed point is within it), so the
-/// figure depends on each η⁺ up to it alone (the event analysis
-/// re-analyses a thread only when an input's η⁺ changes there,
-/// `crate::events`). The reach is 0 when the response is unbounded.
-pub fn fifo_response_reach(
+/// [`fifo_response`] with every window at which it asked the demand of
+/// the tasks above, ascending and distinct (none when the response is
+/// unbounded). The last is the busy period, beyond which neither the
+/// members' η⁺ nor that of the tasks above is read (every candidate's
+/// fixed point is within it), so the figure depends on the members' η⁺
+/// up to it, and on the periods, works and η⁺ at those windows of the
+/// tasks above, alone (the event analysis re-analyses a thread only when
+/// an input's η⁺ changes there, `crate::events`).
+pub fn fifo_response_windows(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-) -> (Option<Nanos>, Nanos) {
-    let mut demand = demand_of(above);
-    // The candidates' windows start below the busy period's: a copy of
-    // the demand before its first window, whose windows grow from one
-    // candidate to the next.
-    let mut candidate_demand = demand.clone();
-    let r = fifo_within(members, above, blocking, &mut demand, &mut candidate_demand);
-    (
-        r,
-        r.map_or(0, |_| demand.reach().max(candidate_demand.reach())),
-    )
+) -> (Option<Nanos>, Vec<Nanos>) {
+    let mut asked = Vec::new();
+    match fifo_within(members, above, blocking, &mut asked) {
+        Some(r) => {
+            asked.sort_unstable();
+            asked.dedup();
+            (Some(r), asked)
+        }
+        None => (None, Vec::new()),
+    }
 }
 
-/// [`fifo_response`] with two demands of the tasks above before any
-/// window, one for the busy period and one for the candidates.
+/// [`fifo_response`], each window at which it asks the demand of the
+/// tasks above pushed to `asked`.
 fn fifo_within(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-    demand: &mut Demand,
-    candidate_demand: &mut Demand,
+    asked: &mut Vec<Nanos>,
 ) -> Option<Nanos> {
     let load: f64 = members
         .iter()
@@ -103,8 +103,13 @@ fn fifo_within(
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
         })
     };
+    let mut demand = demand_of(above);
+    let first = thread(1)?;
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let length = fixed_point(1, &steps, |w| Some(thread(w)?.saturating_add(demand.at(w))))?;
+    let length = fixed_point(1, &steps, |w| {
+        asked.push(w);
+        Some(thread(w)?.saturating_add(demand.at(w)))
+    })?;
     let mut candidates = vec![0];
     for m in members {
         candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
@@ -112,13 +117,28 @@ fn fifo_within(
             return None;
         }
     }
+    // No member releases inside the busy period but at its start: thread(w)
+    // is thread(1) over [1, length], so the one candidate's fixed point,
+    // from thread(1) ≥ 1, is the busy period's own (`length`, the least
+    // w ≥ 1 with f(w) ≤ w), reached in at most the steps the busy period
+    // took (its iterates are at or above the busy period's, step for
+    // step): with as many left, the step limit cannot bind in it.
+    let busy_steps = MAX_STEPS - steps.get();
+    if candidates.len() == 1 && first >= 1 && busy_steps <= steps.get() {
+        return Some(length);
+    }
     candidates.sort_unstable();
     candidates.dedup();
+    // The candidates' windows start below the busy period's last one: a
+    // demand of their own, whose windows grow from one candidate to the
+    // next.
+    let mut candidate_demand = demand_of(above);
     let (mut worst, mut finish) = (0, 0);
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
         // f grows with a: the last fixed point is a valid start.
         finish = fixed_point(finish.max(released), &steps, |w| {
+            asked.push(w);
             Some(released.saturating_add(candidate_demand.at(w)))
         })?;
         worst = worst.max(finish - a);
@@ -233,5 +253,26 @@ mod tests {
             arrivals: &x,
         }];
         assert_eq!(fifo_response(&m, &[(500_000, &h)], 0), Some(501_000));
+    }
+
+    #[test]
+    fn one_candidate_keeps_the_step_limit() {
+        // Above: C 999,999 every 1 ms; one member of work x released once:
+        // the count above grows by one a step up to x, so the busy period
+        // takes about x steps, and so would its one candidate (a = 0). At
+        // x = 40,000 both fit in MAX_STEPS: the busy period's end, x·10⁶.
+        // At x = 70,000 the candidate would run the steps out: unbounded,
+        // as when it was iterated.
+        let (x, h) = (
+            Arrivals::periodic(4_000_000_000_000_000, 0),
+            Arrivals::periodic(1_000_000, 0),
+        );
+        let above = [(999_999, &h)];
+        let member = |work| [Member { work, arrivals: &x }];
+        const { assert!(2 * 40_000 < MAX_STEPS && 2 * 70_000 > MAX_STEPS) };
+        let fits = fifo_response_windows(&member(40_000), &above, 0);
+        assert_eq!(fits.0, Some(40_000_000_000));
+        assert_eq!(fits.1.last(), Some(&40_000_000_000));
+        assert_eq!(fifo_response(&member(70_000), &above, 0), None);
     }
 }

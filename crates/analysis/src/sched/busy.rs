@@ -76,30 +76,39 @@ pub fn level_response_within(
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
 ) -> Option<Nanos> {
-    level_response_reach(own, hp, limit).0
+    let mut demand = Demand::of_loads(hp);
+    busy_period_jobs(own, hp, limit, &mut |w| demand.at(w))
 }
 
-/// [`level_response_within`] with the largest window its iteration asked
-/// `hp`'s demand at: the figure depends on `hp`'s η⁺ up to it alone (the
-/// event analysis re-analyses a task only when an input's η⁺ changes
-/// there, `crate::events`).
-pub fn level_response_reach(
+/// [`level_response_within`] with every window its iteration asked `hp`'s
+/// demand at, ascending: the figure depends on `hp`'s periods, works and
+/// η⁺ at those windows alone (the event analysis re-analyses a task only
+/// when an input's η⁺ changes at one of them, `crate::events`).
+pub fn level_response_windows(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
-) -> (Option<Nanos>, Nanos) {
+) -> (Option<Nanos>, Vec<Nanos>) {
     let mut demand = Demand::of_loads(hp);
-    let r = busy_period_jobs(own, hp, limit, &mut demand);
-    (r, demand.reach())
+    let mut asked = Vec::new();
+    let r = busy_period_jobs(own, hp, limit, &mut |w| {
+        // The windows only grow: distinct once a repeat is left out.
+        if asked.last() != Some(&w) {
+            asked.push(w);
+        }
+        demand.at(w)
+    });
+    (r, asked)
 }
 
 /// The jobs of [`level_response_within`]'s busy period, `demand` that of
-/// `hp` before any window.
+/// `hp` before any window (a [`Demand`]'s `at`, asked at growing
+/// windows).
 fn busy_period_jobs(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
-    demand: &mut Demand,
+    demand: &mut impl FnMut(Nanos) -> Nanos,
 ) -> Option<Nanos> {
     let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
@@ -134,7 +143,8 @@ pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Na
     if u >= 1.0 {
         return None;
     }
-    busy_window_from(own, hp, &mut Demand::of_loads(hp), 0)
+    let mut demand = Demand::of_loads(hp);
+    busy_window_from(own, hp, &mut |w| demand.at(w), 0)
 }
 
 /// [`busy_window`] iterated from `start`, which must not exceed the least
@@ -144,7 +154,7 @@ pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Na
 fn busy_window_from(
     own: Nanos,
     hp: &[(Nanos, Nanos, Nanos)],
-    demand: &mut Demand,
+    demand: &mut impl FnMut(Nanos) -> Nanos,
     start: Nanos,
 ) -> Option<Nanos> {
     let first = own.checked_add(hp.iter().map(|&(c, _, _)| c).sum::<Nanos>())?;
@@ -152,7 +162,7 @@ fn busy_window_from(
     for _ in 0..1_000_000 {
         // Past MAX_TIME (the demand saturates where the sum would
         // overflow): no bounded response.
-        let next = own.saturating_add(demand.at(r));
+        let next = own.saturating_add(demand(r));
         if next > MAX_TIME {
             return None;
         }
