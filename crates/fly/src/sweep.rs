@@ -723,7 +723,9 @@ mod missions {
                 also,
                 ..How::once(ExecModel::Uniform, &c)
             };
-            let points = sweep(&spec, s, &how, &vars, &done, &|| {});
+            let Some(points) = sweep(&spec, s, &how, &vars, &done, &|| false) else {
+                unreachable!("nothing stops this sweep")
+            };
             assert!(points.iter().all(|p| p.flights == 1 + also.len() as u32));
             let tail = tails(&spec, s)[0];
             let limit = derived_limits(&spec, s, &points, 1.0).max_period[tail];
