@@ -3,24 +3,10 @@
 //! page with a dead link without a word, so this test is the book's link
 //! check.
 
-use std::path::{Path, PathBuf};
+mod pages;
 
-fn markdown_files(root: &Path) -> Vec<PathBuf> {
-    let mut found = vec![root.join("README.md")];
-    let mut folders = vec![root.join("docs")];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).expect("read docs/").flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                folders.push(path);
-            } else if path.extension().is_some_and(|e| e == "md") {
-                found.push(path);
-            }
-        }
-    }
-    found.sort();
-    found
-}
+use pages::{markdown_pages as markdown_files, read_page, repository_root};
+use std::path::Path;
 
 /// The targets of the inline links `[text](target)` of a line, code spans
 /// and fenced code aside by the caller.
@@ -48,13 +34,7 @@ fn local_path(target: &str) -> Option<&str> {
 
 /// The dead links of one file, each as `file:line: target`.
 fn dead_links(root: &Path, file: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(file).expect("read a markdown file");
-    let folder = file.parent().expect("a file has a folder");
-    let shown = file
-        .strip_prefix(root)
-        .unwrap_or(file)
-        .display()
-        .to_string();
+    let (text, folder, shown) = read_page(root, file);
     let mut dead = Vec::new();
     let mut in_fence = false;
     for (number, line) in text.lines().enumerate() {
@@ -76,7 +56,7 @@ fn dead_links(root: &Path, file: &Path) -> Vec<String> {
 
 #[test]
 fn every_relative_link_in_the_docs_names_a_file() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let root = repository_root();
     let files = markdown_files(&root);
     assert!(
         files.iter().any(|f| f.ends_with("docs/SUMMARY.md")),
@@ -94,13 +74,7 @@ fn every_relative_link_in_the_docs_names_a_file() {
 /// The broken `{{#include FILE:ANCHOR}}` directives of one file (mdBook
 /// includes nothing for an anchor it cannot find, silently).
 fn broken_includes(root: &Path, file: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(file).expect("read a markdown file");
-    let folder = file.parent().expect("a file has a folder");
-    let shown = file
-        .strip_prefix(root)
-        .unwrap_or(file)
-        .display()
-        .to_string();
+    let (text, folder, shown) = read_page(root, file);
     let mut broken = Vec::new();
     for (number, line) in text.lines().enumerate() {
         let Some(directive) = line
@@ -127,7 +101,7 @@ fn broken_includes(root: &Path, file: &Path) -> Vec<String> {
 
 #[test]
 fn every_include_of_the_book_finds_its_file_and_anchor() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let root = repository_root();
     let broken: Vec<String> = markdown_files(&root)
         .iter()
         .flat_map(|f| broken_includes(&root, f))

@@ -7,8 +7,10 @@
 //! `[..]` elisions where they still match; `RTPIPE_TRANSCRIPTS=WORD` runs
 //! only the documents whose path contains WORD.
 
+mod pages;
 mod transcript;
 
+use pages::{markdown_pages as documents, read_page, repository_root};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -19,32 +21,6 @@ use transcript::{compare, parse, trim_trailing_blanks, Block};
 /// A command that runs longer is stopped and fails its step (a transcript
 /// that needs longer belongs in an ignore-reason block).
 const STEP_TIME_LIMIT: Duration = Duration::from_secs(300);
-
-/// The documents whose transcripts are checked: the README and every
-/// Markdown file under docs/.
-fn documents(root: &Path) -> Vec<PathBuf> {
-    let mut found = vec![root.join("README.md")];
-    let mut folders = vec![root.join("docs")];
-    while let Some(folder) = folders.pop() {
-        let Ok(entries) = std::fs::read_dir(&folder) else {
-            continue;
-        };
-        for entry in entries.flatten() {
-            let path = entry.path();
-            if path.is_dir() {
-                folders.push(path);
-            } else if path.extension().is_some_and(|e| e == "md") {
-                found.push(path);
-            }
-        }
-    }
-    found.sort();
-    found
-}
-
-fn repository_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 /// What checking one document found.
 #[derive(Default)]
@@ -161,15 +137,8 @@ fn check_block(dir: &Path, block: &Block, label: &str, outcome: &mut Outcome) ->
 }
 
 fn check_document(root: &Path, document: &Path) -> Outcome {
-    let shown = document.strip_prefix(root).unwrap_or(document).display();
+    let (text, _, shown) = read_page(root, document);
     let mut outcome = Outcome::default();
-    let text = match std::fs::read_to_string(document) {
-        Ok(t) => t,
-        Err(e) => {
-            outcome.failures.push(format!("{shown}: cannot read: {e}"));
-            return outcome;
-        }
-    };
     let parsed = parse(&text);
     for problem in &parsed.problems {
         outcome.failures.push(format!("{shown}:{problem}"));
