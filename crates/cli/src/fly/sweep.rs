@@ -547,7 +547,7 @@ struct LimitMs {
 
 fn sweep_json<'a>(
     spec: &'a Spec,
-    s: &'a Setup,
+    (s, also): (&'a Setup, &[(Setup, Criteria)]),
     c: &Criteria,
     a: &FlyArgs,
     points: &'a [Point],
@@ -582,7 +582,7 @@ fn sweep_json<'a>(
                 .filter_map(|(t, m)| Some((t.name.as_str(), (*m)? as f64 * 1e-6)))
                 .collect(),
         ),
-        also: Vec::new(),
+        also: also.iter().map(|(o, _)| label(o)).collect(),
     }
 }
 
@@ -637,7 +637,12 @@ fn also_text(also: &[(Setup, Criteria)]) -> String {
 }
 
 /// What was swept, on what, judged how, and how many flights per timing.
-fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs, setups: u32) -> String {
+fn header_text(
+    spec: &Spec,
+    (s, also): (&Setup, &[(Setup, Criteria)]),
+    c: &Criteria,
+    a: &FlyArgs,
+) -> String {
     let mut out = format!(
         "sweep of {} ({} tasks): vehicle {}, mission {}, criterion: {}\n",
         spec.name,
@@ -646,6 +651,10 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs, setups: u32) -
         s.mission.name,
         c.describe()
     );
+    if !also.is_empty() {
+        out.push_str(&also_text(also));
+    }
+    let setups = 1 + also.len() as u32;
     if setups > 1 {
         out.push_str(&format!(
             "each timing flown {} times ({} seeds × {} phases × {setups} vehicle/mission setups): it flies only if every flight meets its criterion\n",
@@ -666,13 +675,14 @@ fn header_text(spec: &Spec, s: &Setup, c: &Criteria, a: &FlyArgs, setups: u32) -
 
 fn text(
     spec: &Spec,
-    (s, setups): (&Setup, u32),
+    setups: (&Setup, &[(Setup, Criteria)]),
     (c, a): (&Criteria, &FlyArgs),
     points: &[Point],
     limits: &Derived,
     written: Option<&Path>,
 ) -> String {
-    let mut out = header_text(spec, s, c, a, setups);
+    let s = setups.0;
+    let mut out = header_text(spec, setups, c, a);
     out.push_str("\nperiod scale (budgets fixed; sound bounds from the read):\n");
     let scales: Vec<&Point> = points
         .iter()

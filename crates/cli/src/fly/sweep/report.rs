@@ -2,7 +2,7 @@
 //! text, JSON or tables. The tables are read off the JSON's view, so the
 //! two formats cannot disagree.
 
-use super::{also_text, label, sweep_json, text, FlyArgs, LimitMs, PairMs, SweepView};
+use super::{sweep_json, text, FlyArgs, LimitMs, PairMs, SweepView};
 use crate::report::record_table;
 use rtpipe_flight::quality::Criteria;
 use rtpipe_fly::sweep::{Derived, Point};
@@ -30,16 +30,14 @@ pub(in crate::fly) struct SweepReport<'a> {
 
 impl SweepReport<'_> {
     fn view(&self) -> SweepView<'_> {
-        let mut view = sweep_json(
+        sweep_json(
             self.spec,
-            self.setup,
+            (self.setup, self.also),
             self.criteria,
             self.args,
             self.points,
             self.limits,
-        );
-        view.also = self.also.iter().map(|(o, _)| label(o)).collect();
-        view
+        )
     }
 }
 
@@ -52,19 +50,14 @@ impl Serialize for SweepReport<'_> {
 impl rtpipe_printer::Report for SweepReport<'_> {
     fn text(&self) -> String {
         let how = (self.criteria, self.args);
-        let setups = 1 + self.also.len() as u32;
-        let mut out = text(
+        text(
             self.spec,
-            (self.setup, setups),
+            (self.setup, self.also),
             how,
             self.points,
             self.limits,
             self.written,
-        );
-        if !self.also.is_empty() {
-            out.insert_str(out.find('\n').map_or(0, |n| n + 1), &also_text(self.also));
-        }
-        out
+        )
     }
 
     /// The sweep's setup (one row), its points, each point's bounds per
