@@ -76,16 +76,11 @@ fn with_progress_bar<T: Send>(
     }
 }
 
-/// The names of a comma-separated `--vehicle` or `--mission` list.
-fn listed(list: &str) -> Vec<&str> {
-    list.split(',').map(str::trim).collect()
-}
-
 /// Every (vehicle, mission) `a` asks for, checked: the first is the
 /// flight's (one flight takes one of each; a sweep flies every timing on
 /// each of them).
 fn setups_of(spec: &Spec, a: &FlyArgs) -> Result<Vec<Setup>, Diagnostic> {
-    let (vehicles, missions) = (listed(&a.vehicle), listed(&a.mission));
+    let (vehicles, missions) = (a.vehicles(), a.missions());
     let mut out = Vec::new();
     for v in &vehicles {
         for m in &missions {

@@ -166,6 +166,16 @@ pub fn parse_turbulence(s: &str) -> Result<Intensity, String> {
 }
 
 impl FlyArgs {
+    /// The names of `--vehicle`'s comma-separated list.
+    pub fn vehicles(&self) -> Vec<&str> {
+        listed(&self.vehicle)
+    }
+
+    /// The names of `--mission`'s comma-separated list.
+    pub fn missions(&self) -> Vec<&str> {
+        listed(&self.mission)
+    }
+
     /// The checks of the flags alone, whichever way they came (the command
     /// line, Python's keywords): a flag that would do nothing is an error
     /// that names the fix.
@@ -174,7 +184,7 @@ impl FlyArgs {
         let given = one_flight
             .into_iter()
             .find_map(|(flag, p)| p.as_ref().map(|_| flag));
-        let listed = self.vehicle.contains(',') || self.mission.contains(',');
+        let listed = self.vehicles().len() * self.missions().len() > 1;
         match given {
             Some(flag) if self.sweep => Err(rtpipe_model::Diagnostic::error(
                 format!("{flag} describes one flight; --sweep flies many"),
@@ -190,4 +200,9 @@ impl FlyArgs {
             _ => Ok(()),
         }
     }
+}
+
+/// The names of a comma-separated `--vehicle` or `--mission` list.
+fn listed(list: &str) -> Vec<&str> {
+    list.split(',').map(str::trim).collect()
 }
