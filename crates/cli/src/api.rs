@@ -12,11 +12,11 @@ use rtpipe_model::{Diagnostic, Spec};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-/// The commands the API runs on a spec (the methods of Python's `System`).
+/// The commands Python reaches (paths such as `import e2eeval`).
 pub fn commands() -> Vec<&'static str> {
     registry::REACH
         .iter()
-        .filter(|(_, r)| matches!(r, Reach::Python(n) if n.starts_with("System.")))
+        .filter(|(_, r)| matches!(r, Reach::Python(_)))
         .map(|(path, _)| *path)
         .collect()
 }
