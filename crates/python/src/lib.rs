@@ -458,7 +458,7 @@ fn make(
     };
     let specs = PyList::empty(py);
     for (name, spec) in r.specs {
-        let label = format!("<{name}>");
+        let label = format!("<{}>", spec.name);
         specs.append((name, Py::new(py, Spec { spec, label })?))?;
     }
     let files = PyDict::new(py);
