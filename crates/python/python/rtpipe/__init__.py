@@ -40,7 +40,7 @@ import os
 import re
 import signal
 import threading
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -114,7 +114,9 @@ def waters(
     return System(_speaking_python(keywords, lambda: _rtpipe.waters(_flags(options))))
 
 
-def import_e2eeval(source: Union[str, "os.PathLike[str]"], *, name: Optional[str] = None) -> Dict[str, "System"]:
+def import_e2eeval(
+    source: Union[str, "os.PathLike[str]"], *, name: Optional[str] = None
+) -> Dict[str, "System"]:
     """The specs ``rtpipe import e2eeval FILE OUTDIR`` writes, without
     files: one :class:`System` per ECU (ECUs joined by a chain in one), by
     spec name. ``source`` is the path of E2EEvaluation's YAML or the YAML
@@ -142,7 +144,7 @@ def import_px4_ulog(
     exec_from: Union[str, "os.PathLike[str]", None] = None,
     exec_us: Optional[Mapping[str, int]] = None,
     px4_version: Optional[str] = None,
-) -> dict:
+) -> Dict[str, Any]:
     """What ``rtpipe import px4-ulog LOG OUTDIR`` writes and prints, without
     files: ``"system"`` (the spec.toml, a :class:`System`), ``"observed"``
     (observed.csv's text: every logged data age, for
@@ -342,7 +344,7 @@ class System:
     def __init__(self, handle: "_rtpipe.Spec"):
         self._spec = handle
 
-    def __reduce__(self) -> tuple:
+    def __reduce__(self) -> Tuple[Any, ...]:
         # The native spec pickles as its TOML: a Pool or Ray ships systems.
         return (System, (self._spec,))
 
@@ -365,7 +367,7 @@ class System:
         :class:`Chain`: ``system.chains["P1"].reaction = "120ms"``."""
         return Chains(self)
 
-    def _edit(self, keys: list, value: Any, shown: str) -> None:
+    def _edit(self, keys: List[Union[str, int]], value: Any, shown: str) -> None:
         """Sets the spec's value at ``keys`` (None removes it) once the
         spec's validation accepts the result; an error names ``shown``, and
         the system stays as it was."""

@@ -13,7 +13,13 @@ the attribute and the fix, and leaves the system as it was.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, Iterator, List, Union, overload
+from typing import TYPE_CHECKING, Any, Iterator, List, Tuple, Union, overload
+
+if TYPE_CHECKING:
+    from . import System
+
+#: A key path into the spec's tables: `["tasks", "gyro", "period"]`.
+KeyPath = List[Union[str, int]]
 
 #: The keys of a task a view reads and edits (docs/reference/spec.md).
 TASK_KEYS = (
@@ -47,10 +53,13 @@ class _Item:
     gives the spec's value (None where the spec has none); setting one edits
     the system (None removes the key)."""
 
-    _keys: tuple = ()
+    _keys: Tuple[str, ...] = ()
     __slots__ = ("_system", "_path", "_shown")
+    _system: "System"
+    _path: KeyPath
+    _shown: str
 
-    def __init__(self, system: Any, path: list, shown: str):
+    def __init__(self, system: "System", path: KeyPath, shown: str):
         object.__setattr__(self, "_system", system)
         object.__setattr__(self, "_path", path)
         object.__setattr__(self, "_shown", shown)
@@ -98,11 +107,11 @@ class Chain(_Item):
     __slots__ = ()
 
 
-class _Names(Sequence):
+class _Names(Sequence[str]):
     """The names of a system's tasks or chains, in the spec's order; by
     name, the editable item."""
 
-    def __init__(self, system: Any):
+    def __init__(self, system: "System"):
         self._system = system
 
     def _names(self) -> List[str]:
