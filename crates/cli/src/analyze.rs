@@ -195,3 +195,24 @@ impl rtpipe_printer::Report for AnalyzeReport<'_> {
         ts
     }
 }
+
+impl command::Registered for AnalyzeArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn inputs(&self) -> Vec<(&'static str, &std::path::Path)> {
+        self.observed
+            .iter()
+            .map(|o| ("--observed", o.as_path()))
+            .collect()
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        let spec = call.spec()?;
+        if let Some(d) = command::missing_periods(spec) {
+            return Err(d);
+        }
+        execute(spec, self, &call.stop_fn()).map(command::Done::from)
+    }
+}

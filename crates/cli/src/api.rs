@@ -4,19 +4,22 @@
 //! of `--json`. Nothing here prints, reads a clock or catches a signal: the
 //! caller owns the process (Python's SIGINT handler stays Python's).
 
-use crate::analyze::AnalyzeArgs;
-use crate::command::{self, Answer, Hooks, Rendered};
-use crate::design::DesignArgs;
-use crate::fly::FlyArgs;
-use crate::simulate::SimulateArgs;
-use clap::{Args, FromArgMatches};
+use crate::command::{Call, Done, Hooks, Reach, Rendered};
+use crate::registry::{self, Commands};
+use clap::{FromArgMatches, Subcommand};
 use rtpipe_joblog::SampleRow;
 use rtpipe_model::{Diagnostic, Spec};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-/// The commands the API runs.
-pub const COMMANDS: [&str; 6] = ["analyze", "simulate", "fly", "design", "run", "campaign"];
+/// The commands Python reaches (paths such as `import e2eeval`).
+pub fn commands() -> Vec<&'static str> {
+    registry::REACH
+        .iter()
+        .filter(|(_, r)| matches!(r, Reach::Python(_)))
+        .map(|(path, _)| *path)
+        .collect()
+}
 
 /// What a command answered.
 pub struct Reply {
@@ -31,6 +34,11 @@ pub struct Reply {
     pub samples: Option<Columns>,
     /// `design`'s designed spec, when there is one.
     pub designed: Option<Spec>,
+    /// The specs a command made (an import's, by name; a generated one).
+    pub specs: Vec<(String, Spec)>,
+    /// The text of the other files a command made, by file name (`import
+    /// px4-ulog`'s `observed.csv`).
+    pub files: Vec<(String, String)>,
 }
 
 /// Why a command gave no reply.
@@ -105,7 +113,7 @@ impl Columns {
     }
 }
 
-/// Runs `command` (one of [`COMMANDS`]) on `spec`, read from `label` (a
+/// Runs `command` (one of [`commands`]) on `spec`, read from `label` (a
 /// path or a name for messages), with `flags` as the command line takes
 /// them after the spec (`--json` is implied); `samples` collects up to
 /// that many of `--samples`' rows as columns (simulate and fly; at most
@@ -126,19 +134,23 @@ pub fn run(
         rows,
         stop: Some(Arc::clone(&stop)),
     };
-    let argv = std::iter::once(label.to_string())
+    let argv: Vec<String> = std::iter::once(label.to_string())
         .chain(flags.iter().cloned())
         .collect();
-    let done = guarded(&stop, || dispatch(command, spec, argv, hooks, &stop));
+    let call = Call {
+        spec: Some(spec),
+        text: None,
+        hooks,
+    };
+    let done = guarded(&stop, || dispatch(command, &argv, call));
     if let (true, Some(most)) = (full.load(Ordering::Relaxed), samples) {
         return Err(Failure::TooManySamples(too_many_samples(most)));
     }
-    let (answer, designed) = done?;
     let samples = samples.map(|_| {
         let taken = cols.lock().map(|mut g| std::mem::take(&mut *g));
         taken.unwrap_or_default().sorted()
     });
-    Ok(reply(answer, samples, designed))
+    Ok(reply(done?, samples))
 }
 
 /// A row sink that collects into `cols` up to `most` rows (no more than
@@ -175,24 +187,27 @@ fn too_many_samples(most: usize) -> Diagnostic {
     )
 }
 
-/// Runs `command` without a spec (`campaign`), with `flags` as the command
-/// line takes them (`--json` implied); `stop` ends it after the shard in
-/// progress ([`Failure::Stopped`]).
-pub fn run_plain(command: &str, flags: &[String], stop: Arc<AtomicBool>) -> Result<Reply, Failure> {
-    let mut argv = flags.to_vec();
-    argv.push("--json".into());
-    let answer = guarded(&stop, || match command {
-        "campaign" => {
-            let a: crate::campaign::CampaignArgs = parse(command, &argv)?;
-            let stopped = || stop.load(Ordering::Relaxed);
-            crate::campaign::execute(&a, &stopped).map_err(Failure::Input)
-        }
-        _ => Err(Failure::Input(Diagnostic::error(
-            format!("no command `{command}` without a spec"),
-            "use campaign",
-        ))),
-    })?;
-    Ok(reply(answer, None, None))
+/// Runs `command` without a spec (`campaign`, `import e2eeval`,
+/// `generate waters`), with `flags` as the command line takes them
+/// (`--json` implied where the command has it); `text` is the content of
+/// the file the flags name, given in its place (an import's). `stop` ends
+/// a long one early ([`Failure::Stopped`]).
+pub fn run_plain(
+    command: &str,
+    flags: &[String],
+    text: Option<&str>,
+    stop: Arc<AtomicBool>,
+) -> Result<Reply, Failure> {
+    let call = Call {
+        spec: None,
+        text,
+        hooks: Hooks {
+            rows: None,
+            stop: Some(Arc::clone(&stop)),
+        },
+    };
+    let done = guarded(&stop, || dispatch(command, flags, call))?;
+    Ok(reply(done, None))
 }
 
 /// `work`'s answer; a panic in it is [`Failure::Internal`], and an answer
@@ -215,11 +230,25 @@ fn guarded<T>(stop: &AtomicBool, work: impl FnOnce() -> Result<T, Failure>) -> R
 pub fn waters(flags: &[String]) -> Result<Spec, Failure> {
     let mut argv = flags.to_vec();
     argv.push("<python>".into());
-    let a: crate::generate::WatersArgs = parse("waters", &argv)?;
-    Ok(crate::generate::waters_spec(&a))
+    let stop = Arc::new(AtomicBool::new(false));
+    let r = run_plain("generate waters", &argv, None, stop)?;
+    r.specs
+        .into_iter()
+        .next()
+        .map(|(_, s)| s)
+        .ok_or_else(|| Failure::Internal("generate waters made no spec".into()))
 }
 
-fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Reply {
+fn reply(done: Done, samples: Option<Columns>) -> Reply {
+    let Done {
+        answer,
+        mut specs,
+        files,
+    } = done;
+    let designed = specs
+        .iter()
+        .position(|(name, _)| name == "designed")
+        .map(|i| specs.remove(i).1);
     Reply {
         json: match answer.report {
             Rendered::Json(v) => Some(v),
@@ -229,78 +258,49 @@ fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Re
         notes: answer.notes,
         samples,
         designed,
+        specs,
+        files,
     }
 }
 
-/// The command's flags parsed, then the command run.
-fn dispatch(
-    command: &str,
-    spec: &Spec,
-    mut argv: Vec<String>,
-    hooks: Hooks,
-    stop: &AtomicBool,
-) -> Result<(Answer, Option<Spec>), Failure> {
-    argv.push("--json".into());
-    let input = Failure::Input;
-    let problem = match command {
-        "design" => None,
-        "simulate" => command::unsimulable(spec),
-        _ => command::missing_periods(spec),
-    };
-    if let Some(d) = problem {
-        return Err(input(d));
+/// The command at `path` (`analyze`, `import e2eeval`) with its arguments
+/// `argv` parsed as the command line parses `rtpipe PATH ARGV...`
+/// (`--json` added where the command has it), then called.
+fn dispatch(path: &str, argv: &[String], call: Call) -> Result<Done, Failure> {
+    if registry::reach(path).is_none() {
+        let known: Vec<&str> = registry::REACH.iter().map(|(p, _)| *p).collect();
+        return Err(Failure::Input(Diagnostic::error(
+            format!("no command `{path}`"),
+            format!("use one of {}", known.join(", ")),
+        )));
     }
-    match command {
-        "analyze" => {
-            let a: AnalyzeArgs = parse(command, &argv)?;
-            let stop = || stop.load(Ordering::Relaxed);
-            Ok((
-                crate::analyze::execute(spec, &a, &stop).map_err(input)?,
-                None,
-            ))
-        }
-        "simulate" => {
-            let a: SimulateArgs = parse(command, &argv)?;
-            Ok((
-                crate::simulate::execute(spec, &a, hooks).map_err(input)?,
-                None,
-            ))
-        }
-        "fly" => {
-            let a: FlyArgs = parse(command, &argv)?;
-            Ok((crate::fly::execute(spec, &a, hooks).map_err(input)?, None))
-        }
-        "run" => {
-            let a: crate::run::RunArgs = parse(command, &argv)?;
-            Ok((crate::run::answer(spec, &a, false).map_err(input)?, None))
-        }
-        "design" => {
-            let a: DesignArgs = parse(command, &argv)?;
-            let stop = || stop.load(Ordering::Relaxed);
-            crate::design::execute(spec, &a, &stop).map_err(input)
-        }
-        _ => Err(Failure::Input(Diagnostic::error(
-            format!("no command `{command}`"),
-            format!("use one of {}", COMMANDS.join(", ")),
-        ))),
-    }
+    let parsed = parse(path, argv)?;
+    parsed.registered().call(call).map_err(Failure::Input)
 }
 
 /// `argv` (the spec's label, then the flags) parsed as the command line
-/// would parse `rtpipe COMMAND ...`.
-fn parse<A: Args + FromArgMatches>(command: &str, argv: &[String]) -> Result<A, Failure> {
-    let name = COMMANDS
-        .iter()
-        .find(|c| **c == command)
-        .copied()
-        .unwrap_or("rtpipe");
-    let cmd = A::augment_args(clap::Command::new(name))
+/// would parse `rtpipe PATH ...`, into the one registration's enum.
+fn parse(path: &str, argv: &[String]) -> Result<Commands, Failure> {
+    let cmd = Commands::augment_subcommands(clap::Command::new("rtpipe"))
         .no_binary_name(true)
-        .disable_help_flag(true);
+        .disable_help_subcommand(true);
+    let words: Vec<&str> = path.split(' ').collect();
+    let mut leaf = &cmd;
+    for w in &words {
+        leaf = leaf
+            .find_subcommand(w)
+            .ok_or_else(|| Failure::Internal(format!("no subcommand {w} of {path}")))?;
+    }
+    let json = leaf.get_arguments().any(|a| a.get_id() == "json");
+    let mut full: Vec<String> = words.iter().map(|w| w.to_string()).collect();
+    full.extend(argv.iter().cloned());
+    if json {
+        full.push("--json".into());
+    }
     let parsed = cmd
-        .try_get_matches_from(argv)
-        .and_then(|m| A::from_arg_matches(&m));
-    parsed.map_err(|e| Failure::Input(flag_error(&e, command)))
+        .try_get_matches_from(full)
+        .and_then(|m| Commands::from_arg_matches(&m));
+    parsed.map_err(|e| Failure::Input(flag_error(&e, path)))
 }
 
 /// A parser error as a diagnostic for a Python caller: its first line
@@ -322,12 +322,10 @@ fn flag_error(e: &clap::Error, command: &str) -> Diagnostic {
         .lines()
         .find_map(|l| l.trim().strip_prefix("tip: ").map(str::to_string))
         .unwrap_or_else(|| {
-            let at = if command == "waters" {
-                "rtpipe.waters".to_string()
-            } else if command == "campaign" {
-                "rtpipe.campaign".to_string()
-            } else {
-                format!("rtpipe.System.{command}")
+            let at = match registry::reach(command) {
+                Some(Reach::Python(n)) if n.starts_with("System.") => format!("rtpipe.{n}"),
+                Some(Reach::Python(n)) => n.to_string(),
+                _ => "rtpipe".to_string(),
             };
             format!("see help({at}) for the arguments and the values they take")
         });

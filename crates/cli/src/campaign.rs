@@ -346,3 +346,13 @@ impl rtpipe_printer::Report for CampaignSummary {
         )]
     }
 }
+
+impl command::Registered for CampaignArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        execute(self, &call.stop_fn()).map(command::Done::from)
+    }
+}

@@ -293,3 +293,98 @@ pub fn tee(
         (a, b) => a.or(b),
     }
 }
+
+/// What a command is handed when it is called as a function (the Python
+/// package, through `api`), rather than from the command line.
+pub struct Call<'a> {
+    /// The loaded spec, for a command that takes one.
+    pub spec: Option<&'a Spec>,
+    /// The text of the file the command reads, given in place of reading
+    /// it (Python's `import_e2eeval(yaml_text)`); the flags still name it.
+    pub text: Option<&'a str>,
+    /// A second row sink and the stop flag.
+    pub hooks: Hooks,
+}
+
+impl<'a> Call<'a> {
+    /// The spec a command on a spec needs.
+    pub fn spec(&self) -> Result<&'a Spec, Diagnostic> {
+        self.spec.ok_or_else(|| {
+            Diagnostic::error(
+                "this command runs on a spec, and none was given",
+                "load one first (rtpipe.load) and call the command as its method",
+            )
+        })
+    }
+
+    /// Whether the stop flag is set.
+    pub fn stopped(&self) -> bool {
+        Hooks::stopped(self.hooks.stop.as_deref())
+    }
+
+    /// A closure that asks the stop flag (what the long loops take).
+    pub fn stop_fn(&self) -> impl Fn() -> bool + Send + Sync + 'static {
+        let stop = self.hooks.stop.clone();
+        move || Hooks::stopped(stop.as_deref())
+    }
+}
+
+/// What a called command gives back: its answer, and what it made that
+/// the command line writes to files (specs by name, other files' text by
+/// file name), handed over instead.
+pub struct Done {
+    pub answer: Answer,
+    pub specs: Vec<(String, Spec)>,
+    pub files: Vec<(String, String)>,
+}
+
+impl From<Answer> for Done {
+    fn from(answer: Answer) -> Done {
+        Done {
+            answer,
+            specs: Vec::new(),
+            files: Vec::new(),
+        }
+    }
+}
+
+/// How the Python package reaches a command: the function or method that
+/// calls it (`System.analyze`, `rtpipe.campaign`), or why none does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reach {
+    /// `rtpipe.NAME` or `System.NAME`.
+    Python(&'static str),
+    /// Deliberately not reachable, and why.
+    Not(&'static str),
+}
+
+/// A command of the binary, as the one registration (`registry.rs`) lists
+/// it: its flags (the clap struct implementing this), how the command line
+/// runs it, the files it reads, and how a caller without a command line
+/// runs it.
+pub trait Registered {
+    /// The command line's run: load, execute, print; the exit status.
+    fn run(&self) -> ExitCode;
+
+    /// The files the command reads besides its spec, with the flag that
+    /// names each, so that no output replaces one.
+    fn inputs(&self) -> Vec<(&'static str, &Path)> {
+        Vec::new()
+    }
+
+    /// The command run on what `call` hands it, nothing printed.
+    fn call(&self, call: Call<'_>) -> Result<Done, Diagnostic>;
+}
+
+/// The files a flight's vehicle and mission name (a built-in is a name, not
+/// a file).
+pub fn world_inputs<'a>(vehicle: &'a str, mission: &'a str) -> Vec<(&'static str, &'a Path)> {
+    let mut out = Vec::new();
+    if !rtpipe_flight::preset::BUILTIN.contains(&vehicle) {
+        out.push(("--vehicle", Path::new(vehicle)));
+    }
+    if !rtpipe_flight::radio::BUILTIN_MISSIONS.contains(&mission) {
+        out.push(("--mission", Path::new(mission)));
+    }
+    out
+}

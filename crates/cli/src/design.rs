@@ -245,7 +245,17 @@ impl DesignArgs {
                 "add --fly MISSION (e.g. --fly steps), or drop them",
             ));
         }
-        Ok(())
+        flights::enough(self.flights, self.requirement())?;
+        margin::objective(self).map(|_| ())
+    }
+
+    /// The pass rate and confidence `--fly`'s flights must show.
+    fn requirement(&self) -> rtpipe_fly::confidence::Requirement {
+        let d = rtpipe_fly::confidence::Requirement::DEFAULT;
+        rtpipe_fly::confidence::Requirement {
+            rate: self.pass_rate.unwrap_or(d.rate),
+            confidence: self.confidence.unwrap_or(d.confidence),
+        }
     }
 }
 
@@ -263,16 +273,12 @@ fn flight_check(a: &DesignArgs, spec: &Spec) -> Result<Option<FlightCheck>, Diag
     } else {
         a.vehicles.clone()
     };
-    let d = rtpipe_fly::confidence::Requirement::DEFAULT;
     let r = flights::FlyRequest {
         missions: &a.missions,
         vehicles: &vehicles,
         seed: a.seed.unwrap_or(0),
         flights: a.flights,
-        need: rtpipe_fly::confidence::Requirement {
-            rate: a.pass_rate.unwrap_or(d.rate),
-            confidence: a.confidence.unwrap_or(d.confidence),
-        },
+        need: a.requirement(),
     };
     let f = flights::flights(&a.spec, spec, &r)?;
     let what = r.describe(&f);
@@ -756,6 +762,32 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
         out.push_str(&format!("note: {n}\n"));
     }
     out
+}
+
+impl command::Registered for DesignArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn inputs(&self) -> Vec<(&'static str, &Path)> {
+        let vehicles = self
+            .vehicles
+            .iter()
+            .map(|v| command::world_inputs(v, "steps"));
+        let missions = self
+            .missions
+            .iter()
+            .map(|m| command::world_inputs("racer5", m));
+        vehicles.chain(missions).flatten().collect()
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        let (answer, designed) = execute(call.spec()?, self, &call.stop_fn())?;
+        let mut done = command::Done::from(answer);
+        done.specs
+            .extend(designed.map(|s| ("designed".to_string(), s)));
+        Ok(done)
+    }
 }
 
 #[cfg(test)]

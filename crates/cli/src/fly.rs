@@ -410,6 +410,26 @@ fn write_outputs(
     samples::write_with(&a.spec, &files, samples).map(|_| ())
 }
 
+impl command::Registered for FlyArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn inputs(&self) -> Vec<(&'static str, &std::path::Path)> {
+        let mut out = command::world_inputs(&self.vehicle, &self.mission);
+        out.extend(self.criterion.iter().map(|c| ("--criterion", c.as_path())));
+        out
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        let spec = call.spec()?;
+        if let Some(d) = command::missing_periods(spec) {
+            return Err(d);
+        }
+        execute(spec, self, call.hooks).map(command::Done::from)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

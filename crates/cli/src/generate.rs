@@ -79,6 +79,35 @@ fn parse_utilization(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `rtpipe generate`'s arguments: the kind of system, with its own.
+#[derive(clap::Args)]
+pub struct GenerateArgs {
+    #[command(subcommand)]
+    pub kind: GenerateCommand,
+}
+
+impl crate::command::Registered for GenerateArgs {
+    fn run(&self) -> ExitCode {
+        run(&self.kind)
+    }
+
+    /// The generated spec handed back (as `generated`), no file written.
+    fn call(&self, _: crate::command::Call<'_>) -> Result<crate::command::Done, Diagnostic> {
+        let GenerateCommand::Waters(a) = &self.kind;
+        let spec = waters_spec(a);
+        let answer = crate::command::Answer {
+            report: crate::command::Rendered::Nothing,
+            notes: Vec::new(),
+            status: 0,
+        };
+        Ok(crate::command::Done {
+            answer,
+            specs: vec![("generated".to_string(), spec)],
+            files: Vec::new(),
+        })
+    }
+}
+
 /// Runs `rtpipe generate`.
 pub fn run(cmd: &GenerateCommand) -> ExitCode {
     match cmd {

@@ -9,6 +9,7 @@
 
 mod px4_ulog;
 
+use crate::command::{Answer, Call, Done, Rendered};
 use crate::output;
 use crate::table::Table;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
@@ -113,14 +114,49 @@ pub enum ExecStat {
     Mean,
 }
 
-/// The file an import reads, which no output may replace.
-pub fn register_inputs(cmd: &ImportCommand) {
-    match cmd {
-        ImportCommand::E2eeval { file, .. } => output::register_input("FILE", file),
-        ImportCommand::Px4Ulog { log, exec_from, .. } => {
-            output::register_input("LOG", log);
-            if let Some(other) = exec_from {
-                output::register_input("--exec-from", other);
+/// `rtpipe import`'s arguments: the format, with its own.
+#[derive(clap::Args)]
+pub struct ImportArgs {
+    #[command(subcommand)]
+    pub format: ImportCommand,
+}
+
+impl crate::command::Registered for ImportArgs {
+    fn run(&self) -> ExitCode {
+        run(&self.format)
+    }
+
+    fn inputs(&self) -> Vec<(&'static str, &Path)> {
+        match &self.format {
+            ImportCommand::E2eeval { file, .. } => vec![("FILE", file.as_path())],
+            ImportCommand::Px4Ulog { log, exec_from, .. } => {
+                let other = exec_from.iter().map(|o| ("--exec-from", o.as_path()));
+                std::iter::once(("LOG", log.as_path()))
+                    .chain(other)
+                    .collect()
+            }
+        }
+    }
+
+    /// The imported specs handed back, nothing written (OUTDIR unused).
+    fn call(&self, call: Call<'_>) -> Result<Done, Diagnostic> {
+        match &self.format {
+            ImportCommand::E2eeval { file, .. } => e2eeval_done(file, call.text),
+            ImportCommand::Px4Ulog {
+                log,
+                exec,
+                exec_from,
+                exec_us,
+                px4_version,
+                ..
+            } => {
+                let exec = px4_ulog::ExecArgs {
+                    stat: *exec,
+                    from: exec_from.as_deref(),
+                    us: exec_us,
+                    px4_version: *px4_version,
+                };
+                px4_ulog::done(log, &exec)
             }
         }
     }
@@ -161,6 +197,62 @@ struct Planned<'a> {
     spec: &'a ImportedSpec,
 }
 
+/// `file` (or `text`, its content given in its place) imported, its
+/// problem placed at `file:line:column`.
+fn read_e2eeval(file: &Path, text: Option<&str>) -> Result<Import, Diagnostic> {
+    check_file_name(file)?;
+    let read = match text {
+        Some(t) => e2eeval::import(file, t),
+        None => e2eeval::load(file),
+    };
+    read.map_err(|e| e.diagnostic.clone().within(place(file, &e)))
+}
+
+/// `FILE:line:column` of an import's problem (`FILE` when it has no place).
+fn place(file: &Path, e: &e2eeval::ImportError) -> String {
+    let at = e.at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
+    format!("{}{at}", file.display())
+}
+
+/// A called `import e2eeval`: the specs by name, a summary and the notes.
+fn e2eeval_done(file: &Path, text: Option<&str>) -> Result<Done, Diagnostic> {
+    let imported = read_e2eeval(file, text)?;
+    let mut specs = Vec::new();
+    for s in &imported.specs {
+        let spec = Spec::parse(&s.name, &s.text).map_err(|e| {
+            Diagnostic::error(
+                format!(
+                    "internal error: the spec imported for ECU {} does not parse: {e}",
+                    s.ecus[0]
+                ),
+                "please report it with the file",
+            )
+        })?;
+        specs.push((s.name.clone(), spec));
+    }
+    let summary = serde_json::json!({
+        "tasks": imported.tasks,
+        "ecus": imported.ecus,
+        "chains": imported.chains,
+        "specs": imported.specs.iter().map(|s| serde_json::json!({
+            "name": s.name, "ecus": s.ecus, "tasks": s.tasks, "chains": s.chains,
+        })).collect::<Vec<_>>(),
+    });
+    let notes = imported.notes.iter();
+    let answer = Answer {
+        report: Rendered::Json(summary),
+        notes: notes
+            .map(|n| format!("{}: {}", n.level, n.message))
+            .collect(),
+        status: 0,
+    };
+    Ok(Done {
+        answer,
+        specs,
+        files: Vec::new(),
+    })
+}
+
 fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
     if let Err(d) = check_file_name(file) {
         eprint!("{d}");
@@ -168,8 +260,7 @@ fn import_e2eeval(file: &Path, outdir: &Path) -> Result<(), ExitCode> {
     }
     let shown = file.display().to_string();
     let imported = e2eeval::load(file).map_err(|e| {
-        let at = e.at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default();
-        eprint!("{shown}{at}: {}", e.diagnostic);
+        eprint!("{}: {}", place(file, &e), e.diagnostic);
         ExitCode::from(EXIT_BAD_INPUT)
     })?;
     let plans: Vec<Planned> = imported

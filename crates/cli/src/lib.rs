@@ -12,6 +12,7 @@ pub mod generate;
 pub mod import;
 pub mod output;
 pub mod plot;
+pub mod registry;
 pub mod report;
 pub mod run;
 pub mod simulate;

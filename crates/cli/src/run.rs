@@ -103,6 +103,66 @@ impl RunArgs {
     fn world_given(&self) -> bool {
         self.vehicle.is_some() || self.mission.is_some()
     }
+
+    /// The checks of the flags alone, whichever way they came (the command
+    /// line, Python's keywords): a flag that would do nothing, or a value
+    /// out of range, is an error that names the fix. What needs the spec
+    /// too (a flight's world on a spec without flight bodies, a bare
+    /// number's unit) is checked where the spec is.
+    pub fn validate(&self) -> Result<(), Diagnostic> {
+        let other = self.policy == Some(PolicyArg::Other);
+        if other && !self.best_effort {
+            return Err(Diagnostic::error(
+                "--policy other runs without real-time guarantees",
+                "add --best-effort to accept that (every figure is then marked not real-time)",
+            ));
+        }
+        if !other && self.best_effort {
+            return Err(Diagnostic::error(
+                "--best-effort only applies to --policy other",
+                "drop --best-effort, or add --policy other",
+            ));
+        }
+        if self.load > MAX_LOAD {
+            return Err(Diagnostic::error(
+                format!("--load {} is more than {MAX_LOAD} hogs", self.load),
+                "one or two hogs per CPU load a machine fully, e.g. --load 2",
+            ));
+        }
+        if self.synthetic && self.world_given() {
+            return Err(no_world_to_fly());
+        }
+        match &self.duration {
+            Some(d) => duration_alone(d).map(|_| ()),
+            None => Ok(()),
+        }
+    }
+}
+
+/// `--vehicle` or `--mission` on a run without a flight.
+fn no_world_to_fly() -> Diagnostic {
+    Diagnostic::error(
+        "--vehicle and --mission choose what a flight flies, but this run has synthetic bodies (no task names a flight body, or --synthetic)",
+        "drop --vehicle/--mission, or run a spec whose tasks name flight bodies without --synthetic",
+    )
+}
+
+/// `--duration D` read without the spec: a positive number (in the spec's
+/// unit, which only scales it) or a positive time with its unit; the
+/// nanoseconds of the latter.
+fn duration_alone(d: &str) -> Result<Option<Nanos>, Diagnostic> {
+    let bad = |why: String| Diagnostic::error(why, "e.g. --duration 2s");
+    let not_positive = || bad(format!("--duration {d} is not positive"));
+    match d.trim().parse::<f64>() {
+        Ok(x) if x.is_nan() => Err(bad(format!("--duration {d}: not a number"))),
+        Ok(x) if x <= 0.0 => Err(not_positive()),
+        Ok(_) => Ok(None),
+        Err(_) => match rtpipe_model::parse_time_str(d.trim()) {
+            Ok(n) if n > 0 => Ok(Some(n)),
+            Ok(_) => Err(not_positive()),
+            Err(e) => Err(bad(format!("--duration {d}: {e}"))),
+        },
+    }
 }
 
 /// More hogs than this is a typo, not a load (each locks a 4 MB buffer).
@@ -135,18 +195,9 @@ fn policy_of(spec: &Spec, a: &RunArgs) -> Result<Policy, Diagnostic> {
         }
         (None, LinuxClass::Deadline) => Policy::Deadline,
     };
-    if p == Policy::Other && !a.best_effort {
-        return Err(Diagnostic::error(
-            "--policy other runs without real-time guarantees",
-            "add --best-effort to accept that (every figure is then marked not real-time)",
-        ));
-    }
-    if p != Policy::Other && a.best_effort {
-        return Err(Diagnostic::error(
-            "--best-effort only applies to --policy other",
-            "drop --best-effort, or add --policy other",
-        ));
-    }
+    // `validate` refused --policy other without --best-effort, and the
+    // reverse; the spec's default is never `other`.
+    debug_assert_eq!(p == Policy::Other, a.best_effort);
     Ok(p)
 }
 
@@ -158,6 +209,9 @@ pub fn run(a: &RunArgs) -> ExitCode {
         Ok(s) => s,
         Err(code) => return code,
     };
+    if let Err(d) = a.validate() {
+        return fail(d);
+    }
     if let Some(code) = refuse_unrunnable(&spec, a) {
         return code;
     }
@@ -175,6 +229,7 @@ pub fn run(a: &RunArgs) -> ExitCode {
 /// what it is) and the exit status. `announce` says on stderr what is
 /// about to run (the binary's text report).
 pub fn answer(spec: &Spec, a: &RunArgs, announce_it: bool) -> Result<Answer, Diagnostic> {
+    a.validate()?;
     if let Some(d) = unrunnable(spec, a) {
         return Err(d);
     }
@@ -280,10 +335,7 @@ fn refuse_unrunnable(spec: &Spec, a: &RunArgs) -> Option<ExitCode> {
 fn prepare(spec: &Spec, a: &RunArgs) -> Result<(Option<Setup>, RunConfig), Diagnostic> {
     let flight = !a.synthetic && spec.tasks.iter().any(|t| t.body.is_some());
     if a.world_given() && !flight {
-        return Err(Diagnostic::error(
-            "--vehicle and --mission choose what a flight flies, but this run has synthetic bodies (no task names a flight body, or --synthetic)",
-            "drop --vehicle/--mission, or run a spec whose tasks name flight bodies without --synthetic",
-        ));
+        return Err(no_world_to_fly());
     }
     let setup = if flight {
         let r = rtpipe_fly::Request {
@@ -350,20 +402,23 @@ fn admit(spec: &Spec, a: &RunArgs, cfg: &RunConfig, report: &Report) -> Result<(
 
 /// `--duration`, by default a flight's mission (plus its margin) or 2 s.
 fn duration_of(spec: &Spec, a: &RunArgs, setup: Option<&Setup>) -> Result<Nanos, Diagnostic> {
-    match (&a.duration, setup) {
-        (None, Some(s)) => Ok(s.horizon),
-        (None, None) => Ok(2_000_000_000),
-        (Some(d), _) => match parse_time(spec, d) {
-            Ok(d) if d > 0 => Ok(d),
-            Ok(_) => Err(Diagnostic::error(
-                format!("--duration {d} is not positive"),
-                "e.g. --duration 2s",
-            )),
-            Err(e) => Err(Diagnostic::error(
-                format!("--duration {d}: {e}"),
-                "e.g. --duration 2s",
-            )),
-        },
+    let Some(d) = &a.duration else {
+        return Ok(setup.map_or(2_000_000_000, |s| s.horizon));
+    };
+    if let Some(n) = duration_alone(d)? {
+        return Ok(n);
+    }
+    // A bare number, in the spec's unit (`validate` saw it positive).
+    match parse_time(spec, d) {
+        Ok(n) if n > 0 => Ok(n),
+        Ok(_) => Err(Diagnostic::error(
+            format!("--duration {d} is not positive"),
+            "e.g. --duration 2s",
+        )),
+        Err(e) => Err(Diagnostic::error(
+            format!("--duration {d}: {e}"),
+            "e.g. --duration 2s",
+        )),
     }
 }
 
@@ -433,4 +488,22 @@ fn exit_status(v: &Verdict, notes: &mut Vec<String>) -> u8 {
         ));
     }
     0
+}
+
+impl command::Registered for RunArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn inputs(&self) -> Vec<(&'static str, &std::path::Path)> {
+        command::world_inputs(self.vehicle(), self.mission())
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        let spec = call.spec()?;
+        if let Some(d) = command::missing_periods(spec) {
+            return Err(d);
+        }
+        answer(spec, self, false).map(command::Done::from)
+    }
 }

@@ -282,3 +282,57 @@ fn a_samples_file_streams_through_the_api_and_a_stopped_run_leaves_none() {
     assert!(left.is_empty(), "{left:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn run_refuses_its_flags_alone_before_anything_runs() {
+    let path = example("paper-table3.toml");
+    for (flags, said) in [
+        (
+            &["--policy", "other"][..],
+            "--policy other runs without real-time guarantees",
+        ),
+        (
+            &["--best-effort"][..],
+            "--best-effort only applies to --policy other",
+        ),
+        (&["--load", "65"][..], "--load 65 is more than 64 hogs"),
+        (&["--duration", "0s"][..], "--duration 0s is not positive"),
+        (
+            &["--synthetic", "--mission", "hover"][..],
+            "--vehicle and --mission choose",
+        ),
+    ] {
+        match call("run", &path, flags, false) {
+            Err(Failure::Input(d)) => assert!(d.message.starts_with(said), "{flags:?}: {d}"),
+            Err(f) => panic!("{flags:?}: {f:?}"),
+            Ok(r) => panic!("{flags:?} ran: {:?}", r.notes),
+        }
+    }
+}
+
+#[test]
+fn import_and_generate_hand_over_their_specs_without_writing() {
+    let stop = || Arc::new(AtomicBool::new(false));
+    let yaml = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/e2eeval-inter.yaml");
+    let outdir = scratch("import-unwritten").join("out");
+    let flags = [yaml.display().to_string(), outdir.display().to_string()];
+    let r = api::run_plain("import e2eeval", &flags, None, stop()).expect("imported");
+    let names: Vec<&str> = r.specs.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["e2eeval-inter-ecu0+1", "e2eeval-inter-ecu2"]);
+    assert!(!outdir.exists(), "nothing is written");
+    let text = std::fs::read_to_string(&yaml).expect("the fixture");
+    let again = api::run_plain("import e2eeval", &flags, Some(&text), stop()).expect("from text");
+    let tomls = |r: &Reply| -> Vec<String> {
+        r.specs
+            .iter()
+            .map(|(_, s)| rtpipe_model::to_toml(s))
+            .collect()
+    };
+    assert_eq!(tomls(&again), tomls(&r));
+    let waters = api::waters(&["--seed=2".to_string()]).expect("generated");
+    assert_eq!(waters.name, "waters-2");
+    match api::run_plain("import e2eeval", &["--bogus".into()], None, stop()) {
+        Err(Failure::Input(d)) => assert!(d.message.contains("--bogus"), "{d}"),
+        other => panic!("{:?}", other.map(|r| r.status)),
+    }
+}

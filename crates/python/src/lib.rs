@@ -85,6 +85,66 @@ impl Spec {
         rtpipe_model::to_toml(&self.spec)
     }
 
+    /// The value at `keys` (a key path into the spec's tables, as
+    /// [`Spec::to_toml`] writes them: `["tasks", "gyro", "period"]`,
+    /// `["chain", 0, "reaction"]`), or None where the spec has none.
+    fn get(&self, py: Python<'_>, keys: Vec<Key>) -> PyResult<Py<PyAny>> {
+        let table = self.table()?;
+        let mut at = &toml::Value::Table(table);
+        for k in &keys {
+            let next = match (at, k) {
+                (toml::Value::Table(t), Key::Name(n)) => t.get(n),
+                (toml::Value::Array(a), Key::Index(i)) => a.get(*i),
+                _ => None,
+            };
+            match next {
+                Some(v) => at = v,
+                None => return Ok(py.None()),
+            }
+        }
+        let json = serde_json::to_value(at).map_err(|e| InternalError::new_err(e.to_string()))?;
+        json_to_py(py, &json)
+    }
+
+    /// A copy of the spec with the value at `keys` set to `value` (None
+    /// removes the key), checked by the spec's one validation; `at` names
+    /// the edit in errors (the Python attribute, `system.tasks["gyro"].period`),
+    /// since the TOML the check reads is not a file the caller has.
+    fn edit(
+        &self,
+        py: Python<'_>,
+        keys: Vec<Key>,
+        value: &Bound<'_, PyAny>,
+        at: &str,
+    ) -> PyResult<Spec> {
+        let new = if value.is_none() {
+            None
+        } else {
+            let json = to_json(value, at, &mut Vec::new())?;
+            let v = toml::Value::try_from(&json)
+                .map_err(|e| InputError::new_err(format!("{at}: {e}")))?;
+            Some(v)
+        };
+        let mut table = toml::Value::Table(self.table()?);
+        set(&mut table, &keys, new, at)?;
+        let text =
+            toml::to_string(&table).map_err(|e| InputError::new_err(format!("{at}: {e}")))?;
+        match rtpipe_model::Spec::parse(&self.label, &text) {
+            Ok(spec) => Ok(Spec {
+                spec,
+                label: self.label.clone(),
+            }),
+            Err(e) => Err(edit_error(py, &e, at, value)),
+        }
+    }
+
+    /// Pickling: the spec as its TOML and its label, loaded again by
+    /// `load_text` (so a `multiprocessing.Pool` or Ray can ship it).
+    fn __reduce__(&self, py: Python<'_>) -> PyResult<(Py<PyAny>, (String, String))> {
+        let load = py.import("rtpipe._rtpipe")?.getattr("load_text")?.unbind();
+        Ok((load, (self.to_toml(), self.label.clone())))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "<rtpipe spec {:?} from {:?}: {} tasks, {} chains>",
@@ -94,6 +154,98 @@ impl Spec {
             self.spec.chains.len()
         )
     }
+}
+
+impl Spec {
+    /// The spec's tables, as `to_toml` writes them.
+    fn table(&self) -> PyResult<toml::Table> {
+        toml::from_str(&rtpipe_model::to_toml(&self.spec)).map_err(|e| {
+            InternalError::new_err(format!(
+                "internal error (a bug in rtpipe): the spec's own TOML does not read back: {e}"
+            ))
+        })
+    }
+}
+
+/// One step of a key path: a table's key or an array's index.
+#[derive(FromPyObject)]
+enum Key {
+    Name(String),
+    Index(usize),
+}
+
+impl std::fmt::Display for Key {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Key::Name(n) => write!(f, "{n}"),
+            Key::Index(i) => write!(f, "{i}"),
+        }
+    }
+}
+
+/// Sets (or, with None, removes) the value at `keys` under `root`; every
+/// table or array on the way must exist (an edit changes a task or a
+/// chain, it does not make one).
+fn set(root: &mut toml::Value, keys: &[Key], value: Option<toml::Value>, at: &str) -> PyResult<()> {
+    let Some((last, path)) = keys.split_last() else {
+        return Err(InputError::new_err(format!("{at}: an empty key path")));
+    };
+    let mut here = root;
+    for (n, k) in path.iter().enumerate() {
+        let next = match (here, k) {
+            (toml::Value::Table(t), Key::Name(name)) => t.get_mut(name),
+            (toml::Value::Array(a), Key::Index(i)) => a.get_mut(*i),
+            _ => None,
+        };
+        let Some(next) = next else {
+            let gone: Vec<String> = keys[..=n].iter().map(Key::to_string).collect();
+            return Err(InputError::new_err(format!(
+                "{at}: the spec has no {}; an edit changes what the spec has",
+                gone.join(".")
+            )));
+        };
+        here = next;
+    }
+    let (toml::Value::Table(t), Key::Name(name)) = (here, last) else {
+        return Err(InputError::new_err(format!("{at}: not a key of a table")));
+    };
+    match value {
+        Some(v) => {
+            t.insert(name.clone(), v);
+        }
+        None => {
+            t.remove(name);
+        }
+    }
+    Ok(())
+}
+
+/// A rejected edit as [`InputError`]: the edit (`at = value`) and each of
+/// the validation's problems with its fix; no line of the TOML the check
+/// read, which the caller never saw.
+fn edit_error(py: Python<'_>, e: &ModelError, at: &str, value: &Bound<'_, PyAny>) -> PyErr {
+    let shown = value
+        .repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| "the value".into());
+    let first = e.diagnostics.first();
+    let message = match first {
+        Some(d) => format!("{at} = {shown}: {}", d.message),
+        None => format!("{at} = {shown}: the spec does not validate"),
+    };
+    let mut text = format!("error: {message}");
+    for d in e.diagnostics.iter().skip(1) {
+        text.push_str(&format!("\nerror: {}", d.message));
+    }
+    let help = first.and_then(|d| d.help.clone());
+    if let Some(h) = &help {
+        text.push_str(&format!("\n  = help: {h}"));
+    }
+    text.push_str("\n  (the edit was not made: the system is as it was)");
+    let err = InputError::new_err(text);
+    let _ = err.value(py).setattr("help", help);
+    let _ = err.value(py).setattr("message", message);
+    err
 }
 
 /// Reads a spec file.
@@ -279,8 +431,55 @@ fn run(
 #[pyfunction]
 fn run_plain(py: Python<'_>, command: &str, flags: Vec<String>) -> PyResult<Py<PyAny>> {
     let command = command.to_string();
-    let reply = in_worker(py, move |stop| api::run_plain(&command, &flags, stop))?;
+    let reply = in_worker(py, move |stop| api::run_plain(&command, &flags, None, stop))?;
     answer(py, reply)
+}
+
+/// Runs a command that makes specs (`import e2eeval`, `import
+/// px4-ulog`, `generate waters`) with command-line `flags` (`text`: the
+/// content of the file they name, read in its place); returns (report,
+/// notes, [(name, Spec)], {file name: text}). Nothing is written.
+#[pyfunction]
+#[pyo3(signature = (command, flags, text=None))]
+fn make(
+    py: Python<'_>,
+    command: &str,
+    flags: Vec<String>,
+    text: Option<String>,
+) -> PyResult<Py<PyAny>> {
+    let command = command.to_string();
+    let reply = in_worker(py, move |stop| {
+        api::run_plain(&command, &flags, text.as_deref(), stop)
+    })?;
+    let r = reply.map_err(|f| raise(py, f))?;
+    let report = match &r.json {
+        Some(v) => json_to_py(py, v)?,
+        None => py.None(),
+    };
+    let specs = PyList::empty(py);
+    for (name, spec) in r.specs {
+        let label = format!("<{}>", spec.name);
+        specs.append((name, Py::new(py, Spec { spec, label })?))?;
+    }
+    let files = PyDict::new(py);
+    for (name, text) in r.files {
+        files.set_item(name, text)?;
+    }
+    let notes = PyList::new(py, &r.notes)?;
+    let t = (report, notes, specs, files).into_pyobject(py)?;
+    Ok(t.into_any().unbind())
+}
+
+/// How Python reaches each command of the binary: (command path, the
+/// function or method that calls it or None, why not or None).
+fn reach() -> Vec<(String, Option<String>, Option<String>)> {
+    rtpipe::registry::REACH
+        .iter()
+        .map(|(path, r)| match r {
+            rtpipe::command::Reach::Python(n) => (path.to_string(), Some(n.to_string()), None),
+            rtpipe::command::Reach::Not(why) => (path.to_string(), None, Some(why.to_string())),
+        })
+        .collect()
 }
 
 /// `work` on a worker thread while this thread waits with the GIL
@@ -482,11 +681,13 @@ fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(run_plain, m)?)?;
     m.add_function(wrap_pyfunction!(waters, m)?)?;
+    m.add_function(wrap_pyfunction!(make, m)?)?;
+    m.add("REACH", reach())?;
     m.add("RtpipeError", py.get_type::<RtpipeError>())?;
     m.add("SpecError", py.get_type::<SpecError>())?;
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
-    m.add("COMMANDS", api::COMMANDS.to_vec())?;
+    m.add("COMMANDS", api::commands())?;
     m.add("MAX_SAMPLE_ROWS", api::MAX_SAMPLE_ROWS)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -50,20 +50,29 @@ pub struct FlyRequest<'a> {
 
 /// The flights per setup: the flights asked (or the fewest that can meet
 /// the requirement) spread evenly over the setups, rounded up.
-fn per_setup(r: &FlyRequest, setups: u32) -> Result<u32, Diagnostic> {
-    let least = r.need.least_flights();
-    let total = r.flights.unwrap_or(least);
+fn per_setup(r: &FlyRequest, setups: u32) -> u32 {
+    let total = r.flights.unwrap_or_else(|| r.need.least_flights());
+    // `DesignArgs::validate` refused fewer than can show the pass rate.
+    debug_assert!(enough(r.flights, r.need).is_ok());
+    total.div_ceil(setups.max(1))
+}
+
+/// `--flights` (the fewest that can show `need` when not given) can show
+/// the pass rate `need` asks for: even all passing, fewer cannot.
+pub fn enough(flights: Option<u32>, need: Requirement) -> Result<(), Diagnostic> {
+    let least = need.least_flights();
+    let total = flights.unwrap_or(least);
     if total < least {
         return Err(Diagnostic::error(
             format!(
                 "--flights {total} cannot show a pass rate of {} at {} % confidence: even all {total} passing gives a lower bound below it; the fewest that can is {least}",
-                r.need.rate,
-                r.need.confidence * 100.0
+                need.rate,
+                need.confidence * 100.0
             ),
             format!("give --flights {least} or more, or lower --pass-rate or --confidence"),
         ));
     }
-    Ok(total.div_ceil(setups.max(1)))
+    Ok(())
 }
 
 /// The flights of `r` for designs of `spec` (read from `path`); an error
@@ -86,7 +95,7 @@ pub fn flights(path: &Path, spec: &Spec, r: &FlyRequest) -> Result<Flights, Diag
             setups.push((format!("{}/{}", s.preset.name, s.mission.name), s));
         }
     }
-    let per_setup = per_setup(r, setups.len() as u32)?;
+    let per_setup = per_setup(r, setups.len() as u32);
     Ok(Flights {
         setups,
         per_setup,

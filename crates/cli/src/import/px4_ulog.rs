@@ -4,10 +4,11 @@
 //! nothing written, and both files are written atomically, all or none.
 
 use super::{write_files, ExecStat};
+use crate::command::{Answer, Done, Rendered};
 use crate::table::Table;
 use crate::{EXIT_BAD_INPUT, EXIT_INTERNAL};
 use rtpipe_model::import::px4_ulog::{self, ExecFrom, Import, Options};
-use rtpipe_model::Spec;
+use rtpipe_model::{Diagnostic, Spec};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -19,22 +20,18 @@ pub(super) struct ExecArgs<'a> {
     pub(super) px4_version: Option<(u32, u32)>,
 }
 
-/// Imports `log` into `outdir/spec.toml` and `outdir/observed.csv`.
-pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), ExitCode> {
+/// Reads `log` (and `--exec-from`'s log) and builds the import; a problem
+/// names the log it is in.
+fn read(log: &Path, exec: &ExecArgs) -> Result<Import, Diagnostic> {
     let shown = log.display().to_string().escape_debug().to_string();
-    let bad = |d: rtpipe_model::Diagnostic| {
-        eprint!("{}", d.within(&shown));
-        ExitCode::from(EXIT_BAD_INPUT)
-    };
-    let read = px4_ulog::load(log).map_err(bad)?;
+    let read = px4_ulog::load(log).map_err(|d| d.within(&shown))?;
     let other_shown = exec
         .from
         .map(|p| p.display().to_string().escape_debug().to_string());
     let other = match (exec.from, &other_shown) {
-        (Some(p), Some(name)) => Some(px4_ulog::load(p).map_err(|d| {
-            eprint!("{}", d.within(format!("--exec-from {name}")));
-            ExitCode::from(EXIT_BAD_INPUT)
-        })?),
+        (Some(p), Some(name)) => {
+            Some(px4_ulog::load(p).map_err(|d| d.within(format!("--exec-from {name}")))?)
+        }
         _ => None,
     };
     let opts = Options {
@@ -46,7 +43,16 @@ pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), E
         exec_us: exec.us,
         px4_version: exec.px4_version,
     };
-    let imported = px4_ulog::import(&read, &spec_name(log), &opts).map_err(bad)?;
+    px4_ulog::import(&read, &spec_name(log), &opts).map_err(|d| d.within(&shown))
+}
+
+/// Imports `log` into `outdir/spec.toml` and `outdir/observed.csv`.
+pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), ExitCode> {
+    let shown = log.display().to_string().escape_debug().to_string();
+    let imported = read(log, exec).map_err(|d| {
+        eprint!("{d}");
+        ExitCode::from(EXIT_BAD_INPUT)
+    })?;
     let spec_path = outdir.join("spec.toml");
     if let Err(e) = Spec::parse(&spec_path.display().to_string(), &imported.spec) {
         eprint!("{e}");
@@ -60,6 +66,46 @@ pub(super) fn import(log: &Path, outdir: &Path, exec: &ExecArgs) -> Result<(), E
     write_files(&files, outdir)?;
     print_summary(&shown, outdir, &imported);
     Ok(())
+}
+
+/// A called `import px4-ulog`: the spec (`spec`), `observed.csv`'s text,
+/// and what the summary prints as JSON (board, data ages, assumptions).
+pub(super) fn done(log: &Path, exec: &ExecArgs) -> Result<Done, Diagnostic> {
+    let f = read(log, exec)?;
+    let spec = Spec::parse(&spec_name(log), &f.spec).map_err(|e| {
+        Diagnostic::error(
+            format!(
+                "internal error: the spec imported from {} does not parse: {e}",
+                log.display()
+            ),
+            "please report it with the log",
+        )
+    })?;
+    let ages: Vec<serde_json::Value> = f
+        .ages
+        .iter()
+        .map(|a| {
+            serde_json::json!({
+                "chain": a.chain, "topic": a.topic, "messages": a.count,
+                "min_ns": a.min_ns, "max_ns": a.max_ns,
+            })
+        })
+        .collect();
+    let summary = serde_json::json!({
+        "board": f.board,
+        "lockstep": f.lockstep,
+        "ages": ages,
+        "assumptions": f.assumptions,
+    });
+    Ok(Done {
+        answer: Answer {
+            report: Rendered::Json(summary),
+            notes: Vec::new(),
+            status: 0,
+        },
+        specs: vec![("spec".to_string(), spec)],
+        files: vec![("observed.csv".to_string(), f.observed)],
+    })
 }
 
 /// The spec's name: `px4-` and the log's file stem, in characters a name

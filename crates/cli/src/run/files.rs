@@ -2,7 +2,7 @@
 //! rt-app workload written before it, `--trace`, `--plot` and `--samples`
 //! after it (all or none).
 
-use super::{RunArgs, MAX_LOAD};
+use super::RunArgs;
 use crate::output;
 use crate::plot;
 use crate::report::samples::samples_csv;
@@ -15,12 +15,6 @@ use std::path::Path;
 /// Checks the configuration and the output paths before anything runs, so
 /// that a bad path is reported before a long run, not after.
 pub(super) fn check_outputs(spec: &Spec, a: &RunArgs, cfg: &RunConfig) -> Result<(), Diagnostic> {
-    if a.load > MAX_LOAD {
-        return Err(Diagnostic::error(
-            format!("--load {} is more than {MAX_LOAD} hogs", a.load),
-            "one or two hogs per CPU load a machine fully, e.g. --load 2",
-        ));
-    }
     if let Err(e) = rtpipe_runtime::check(spec, cfg) {
         return Err(e.diagnostic.within(a.spec.display()));
     }

@@ -382,6 +382,20 @@ fn run_searches(
     Ok(Some(out))
 }
 
+impl command::Registered for SimulateArgs {
+    fn run(&self) -> ExitCode {
+        run(self)
+    }
+
+    fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
+        let spec = call.spec()?;
+        if let Some(d) = command::unsimulable(spec) {
+            return Err(d);
+        }
+        execute(spec, self, call.hooks).map(command::Done::from)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -40,18 +40,23 @@ import os
 import re
 import signal
 import threading
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _rtpipe
 from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
+from ._spec import Chain, Chains, Task, Tasks
 
 __all__ = [
     "load",
     "waters",
+    "import_e2eeval",
+    "import_px4_ulog",
     "campaign",
     "System",
+    "Task",
+    "Chain",
     "RtpipeError",
     "SpecError",
     "InputError",
@@ -107,6 +112,57 @@ def waters(
                    cpus=cpus, release=release)
     keywords = list(options)
     return System(_speaking_python(keywords, lambda: _rtpipe.waters(_flags(options))))
+
+
+def import_e2eeval(
+    source: Union[str, "os.PathLike[str]"], *, name: Optional[str] = None
+) -> Dict[str, "System"]:
+    """The specs ``rtpipe import e2eeval FILE OUTDIR`` writes, without
+    files: one :class:`System` per ECU (ECUs joined by a chain in one), by
+    spec name. ``source`` is the path of E2EEvaluation's YAML or the YAML
+    text itself (a ``str`` holding a newline), whose spec names come from
+    ``name`` (default ``e2eeval.yaml``) as they come from a file's name.
+    What the import notes (a task it had to change) is logged."""
+    if isinstance(source, str) and "\n" in source:
+        file, text = name or "e2eeval.yaml", source
+    elif isinstance(source, (str, os.PathLike)):
+        file, text = os.fspath(source), None
+    else:
+        raise TypeError(
+            f"import_e2eeval() takes a path or YAML text, not {type(source).__name__}"
+        )
+    _, notes, specs, _ = _rtpipe.make("import e2eeval", [file, "<python>"], text)
+    for note in notes:
+        log.warning(note)
+    return {spec_name: System(handle) for spec_name, handle in specs}
+
+
+def import_px4_ulog(
+    log_file: Union[str, "os.PathLike[str]"],
+    *,
+    exec: Optional[str] = None,
+    exec_from: Union[str, "os.PathLike[str]", None] = None,
+    exec_us: Optional[Mapping[str, int]] = None,
+    px4_version: Optional[str] = None,
+) -> Dict[str, Any]:
+    """What ``rtpipe import px4-ulog LOG OUTDIR`` writes and prints, without
+    files: ``"system"`` (the spec.toml, a :class:`System`), ``"observed"``
+    (observed.csv's text: every logged data age, for
+    :meth:`System.analyze`'s ``observed`` once written to a file),
+    ``"board"``, ``"lockstep"``, ``"ages"`` (per chain and topic: messages,
+    min_ns, max_ns) and ``"assumptions"``. ``exec`` ("max" or "mean"),
+    ``exec_from`` (another log), ``exec_us`` (``{module: microseconds}``)
+    and ``px4_version`` ("1.6") are the flags."""
+    options = dict(exec=exec, exec_from=exec_from, px4_version=px4_version)
+    flags = [os.fspath(log_file), "<python>"] + _flags(options)
+    if exec_us is not None:
+        if not isinstance(exec_us, Mapping):
+            raise TypeError(f"exec_us={exec_us!r}: give a dict {{module: microseconds}}")
+        flags += [f"--exec-us={module}={us}" for module, us in exec_us.items()]
+    keywords = ["exec", "exec_from", "exec_us", "px4_version"]
+    made = _speaking_python(keywords, lambda: _rtpipe.make("import px4-ulog", flags))
+    report, _, specs, files = made
+    return dict(system=System(specs[0][1]), observed=files["observed.csv"], **report)
 
 
 def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> list:
@@ -288,20 +344,34 @@ class System:
     def __init__(self, handle: "_rtpipe.Spec"):
         self._spec = handle
 
+    def __reduce__(self) -> Tuple[Any, ...]:
+        # The native spec pickles as its TOML: a Pool or Ray ships systems.
+        return (System, (self._spec,))
+
     @property
     def name(self) -> str:
         return self._spec.name
 
     @property
-    def tasks(self) -> list:
-        """The task names, in the spec's order."""
-        return self._spec.tasks
+    def tasks(self) -> Tasks:
+        """The task names, in the spec's order (a list's equality, length,
+        iteration and positions); ``tasks["gyro"]`` is that :class:`Task`,
+        whose keys are attributes: ``system.tasks["gyro"].period = "2ms"``
+        edits the system."""
+        return Tasks(self)
 
     @property
-    def chains(self) -> list:
+    def chains(self) -> Chains:
         """The chain labels, in the spec's order (the ``chain`` column of
-        ``samples`` indexes this list)."""
-        return self._spec.chains
+        ``samples`` indexes this list); ``chains[label]`` is that
+        :class:`Chain`: ``system.chains["P1"].reaction = "120ms"``."""
+        return Chains(self)
+
+    def _edit(self, keys: List[Union[str, int]], value: Any, shown: str) -> None:
+        """Sets the spec's value at ``keys`` (None removes it) once the
+        spec's validation accepts the result; an error names ``shown``, and
+        the system stays as it was."""
+        self._spec = self._spec.edit(keys, value, shown)
 
     @property
     def free_tasks(self) -> list:
