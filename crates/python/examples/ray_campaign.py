@@ -82,7 +82,9 @@ def run(config: Path, out: Path, workers: int | None = None, address: str | None
         # A wheel in py_modules is uploaded once and pip-installed on each
         # node that runs a shard; without it the nodes' own rtpipe is used.
         runtime_env = {"py_modules": [str(wheel)]} if wheel else None
-        ray.init(address=address, num_cpus=workers, include_dashboard=False,
+        # Without an address, a cluster of its own ("local"): Ray would
+        # otherwise join the machine's latest `ray start` cluster, anyone's.
+        ray.init(address=address or "local", num_cpus=workers, include_dashboard=False,
                  log_to_driver=False, runtime_env=runtime_env)
     # Timed from here: the cluster's start is not the campaign's work.
     started = time.monotonic()

@@ -6,8 +6,10 @@ Ray's runtime environment, does too."""
 
 import importlib.util
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -107,9 +109,16 @@ def wheel():
     return found[-1] if found else None
 
 
-def test_ray_on_a_two_node_cluster_ships_the_wheel(tmp_path):
+def test_ray_on_a_two_node_cluster_ships_the_wheel(tmp_path, monkeypatch):
     pytest.importorskip("ray")
     from ray.cluster_utils import Cluster
+
+    # The cluster's files, its address among them, in a directory of its
+    # own: Ray's default (/tmp/ray) is the machine's, where any
+    # `ray.init()` without an address would join this cluster. Short, for
+    # the sockets' path limit.
+    ray_tmp = Path(tempfile.mkdtemp(prefix="rt-", dir="/tmp"))
+    monkeypatch.setenv("RAY_TMPDIR", str(ray_tmp))
 
     whl = wheel()
     if whl is None:
@@ -132,3 +141,4 @@ def test_ray_on_a_two_node_cluster_ships_the_wheel(tmp_path):
     finally:
         ray.shutdown()
         cluster.shutdown()
+        shutil.rmtree(ray_tmp, ignore_errors=True)
