@@ -299,6 +299,18 @@ fn run_batch(w: &Work, systems: Range<u64>) -> Vec<Option<Vec<Row>>> {
     })
 }
 
+/// The text of `dir`'s `_campaign.toml` (checked as this campaign's by
+/// [`survey`]), `None` when another part run at the same time has
+/// replaced it since.
+fn legacy_text(dir: &Path) -> Result<Option<String>, Error> {
+    let legacy = dir.join(LEGACY_KEPT);
+    match std::fs::read_to_string(&legacy) {
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(Error::io("read", &legacy, &e)),
+    }
+}
+
 /// The error that ends a shard's write when the stop flag is set: the
 /// temporary is removed and nothing is renamed.
 fn stopped() -> std::io::Error {
@@ -315,8 +327,7 @@ fn prepare_dir(dir: &Path, cfg: &Config, config_text: &str, part: Part) -> Resul
     let kept = dir.join(KEPT);
     if !found.kept {
         let text = if found.legacy {
-            let legacy = dir.join(LEGACY_KEPT);
-            std::fs::read_to_string(&legacy).map_err(|e| Error::io("read", &legacy, &e))?
+            legacy_text(dir)?.unwrap_or_else(|| config_text.to_string())
         } else {
             config_text.to_string()
         };
@@ -326,8 +337,33 @@ fn prepare_dir(dir: &Path, cfg: &Config, config_text: &str, part: Part) -> Resul
         .map_err(|e| Error::io("write", &kept, &e))?;
     }
     if found.legacy {
+        // Gone already is fine: another part of the same campaign, run at
+        // the same time, replaced it first.
         let legacy = dir.join(LEGACY_KEPT);
-        std::fs::remove_file(&legacy).map_err(|e| Error::io("remove", &legacy, &e))?;
+        match std::fs::remove_file(&legacy) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io("remove", &legacy, &e));
+            }
+            _ => {}
+        }
     }
     Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two parts of one campaign started together on an older folder both
+    /// replace its `_campaign.toml`: the one that comes second finds it
+    /// gone, which is no error.
+    #[test]
+    fn a_legacy_file_gone_since_the_survey_is_no_error() {
+        let dir = std::env::temp_dir().join(format!("rtpipe-legacy-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a folder");
+        assert_eq!(legacy_text(&dir).ok(), Some(None));
+        std::fs::write(dir.join(LEGACY_KEPT), "# kept\n").expect("write");
+        assert_eq!(legacy_text(&dir).ok(), Some(Some("# kept\n".to_string())));
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
