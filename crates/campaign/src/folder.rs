@@ -41,9 +41,9 @@ pub struct Survey {
 /// Reads `dir` (which need not exist) for `cfg`'s shards of `part`.
 /// Refuses a directory that belongs to another campaign (its
 /// `_campaign.parquet` or `_campaign.toml`, or a shard's footer, names
-/// another fingerprint) and a
-/// shard name that is not a regular file (a directory, a link, a pipe):
-/// rtpipe neither trusts nor replaces what it did not write.
+/// another fingerprint) and a shard name that is not a regular file (a
+/// directory, a link, a pipe): rtpipe neither trusts nor replaces what it
+/// did not write.
 pub fn survey(dir: &Path, cfg: &Config, part: Part) -> Result<Survey, Error> {
     let mut s = Survey::default();
     match std::fs::metadata(dir) {
