@@ -1,23 +1,35 @@
 //! A campaign's directory: whose it is (the fingerprint of its
-//! `_campaign.toml` and of its shards' footers) and which shards of a part
-//! it already holds whole. Only a complete shard of this campaign counts
-//! as done; another campaign's file is never trusted, replaced or counted.
+//! `_campaign.parquet` and of its shards' footers) and which shards of a
+//! part it already holds whole. Only a complete shard of this campaign
+//! counts as done; another campaign's file is never trusted, replaced or
+//! counted.
 
-use crate::parquet_out::{read_footer, ShardMeta};
+use crate::parquet_out::{read_footer, read_kept, ShardMeta};
 use crate::{config, shard_count, shard_systems, Config, Error, Part};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// The file that keeps a directory's configuration. `_` and `.` files are
-/// not data to Parquet readers (pyarrow, polars, Spark).
-pub const KEPT: &str = "_campaign.toml";
+/// The file that keeps a directory's configuration: Parquet with the
+/// shards' columns and no rows, the configuration in its footer. pyarrow
+/// and pandas skip `_` and `.` names; polars reads every file of a folder
+/// and refuses one that mixes file types, so the folder holds Parquet
+/// only and this file adds no row.
+pub const KEPT: &str = "_campaign.parquet";
+
+/// Where directories written before `_campaign.parquet` kept their
+/// configuration, as TOML. Still read; a run of the same campaign
+/// replaces it by [`KEPT`] (the text kept as it was).
+pub const LEGACY_KEPT: &str = "_campaign.toml";
 
 /// What a directory holds of a campaign, for the shards of one part.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Survey {
-    /// `_campaign.toml` is there, and it is this campaign's (else a run
-    /// writes it).
+    /// `_campaign.parquet` is there, and it is this campaign's (else a
+    /// run writes it).
     pub kept: bool,
+    /// An older run's `_campaign.toml` is there, and it is this
+    /// campaign's: a run replaces it by `_campaign.parquet`.
+    pub legacy: bool,
     /// The part's shards the directory holds whole: the files to skip.
     pub done: BTreeSet<u64>,
     /// The part's shards whose file is there but is not a complete shard
@@ -28,9 +40,10 @@ pub struct Survey {
 
 /// Reads `dir` (which need not exist) for `cfg`'s shards of `part`.
 /// Refuses a directory that belongs to another campaign (its
-/// `_campaign.toml`, or a shard's footer, names another fingerprint) and a
-/// shard name that is not a regular file (a directory, a link, a pipe):
-/// rtpipe neither trusts nor replaces what it did not write.
+/// `_campaign.parquet` or `_campaign.toml`, or a shard's footer, names
+/// another fingerprint) and a shard name that is not a regular file (a
+/// directory, a link, a pipe): rtpipe neither trusts nor replaces what it
+/// did not write.
 pub fn survey(dir: &Path, cfg: &Config, part: Part) -> Result<Survey, Error> {
     let mut s = Survey::default();
     match std::fs::metadata(dir) {
@@ -45,7 +58,8 @@ pub fn survey(dir: &Path, cfg: &Config, part: Part) -> Result<Survey, Error> {
         Ok(_) => {}
     }
     let fingerprint = cfg.fingerprint();
-    s.kept = kept_is_this(dir, &fingerprint)?;
+    s.kept = kept_is_this(dir, KEPT, &fingerprint)?;
+    s.legacy = kept_is_this(dir, LEGACY_KEPT, &fingerprint)?;
     let entries = std::fs::read_dir(dir).map_err(|e| Error::io("read", dir, &e))?;
     for entry in entries {
         let entry = entry.map_err(|e| Error::io("read", dir, &e))?;
@@ -76,26 +90,32 @@ fn shard_index(name: &str) -> Option<Option<u64>> {
     Some(middle.parse().ok())
 }
 
-/// Whether the directory's `_campaign.toml` is there and this campaign's;
-/// an error when it is another campaign's, or not a campaign file at all.
-fn kept_is_this(dir: &Path, fingerprint: &str) -> Result<bool, Error> {
-    let kept = dir.join(KEPT);
+/// Whether the directory's `name` ([`KEPT`] or [`LEGACY_KEPT`]) is there
+/// and this campaign's; an error when it is another campaign's, or not a
+/// campaign configuration at all.
+fn kept_is_this(dir: &Path, name: &str, fingerprint: &str) -> Result<bool, Error> {
+    let kept = dir.join(name);
     match std::fs::symlink_metadata(&kept) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
         Err(e) => return Err(Error::io("read", &kept, &e)),
         Ok(m) if !m.is_file() => return Err(not_a_file(&kept, &m)),
         Ok(_) => {}
     }
-    let theirs = rtpipe_model::input::read_text(&kept, &config::KIND)
-        .and_then(|text| config::parse(&kept.display().to_string(), &text))
-        .map_err(|e| Error {
-            message: format!(
-                "{} holds {KEPT}, which is not a campaign configuration: {}",
-                dir.display(),
-                e
-            ),
-            help: "write to another OUTDIR; rtpipe does not replace a file it did not write".into(),
-        })?;
+    let not_a_configuration = |why: String| Error {
+        message: format!(
+            "{} holds {name}, which is not a campaign configuration: {why}",
+            dir.display()
+        ),
+        help: "write to another OUTDIR; rtpipe does not replace a file it did not write".into(),
+    };
+    let text = if name == KEPT {
+        read_kept(&kept).map_err(not_a_configuration)?
+    } else {
+        rtpipe_model::input::read_text(&kept, &config::KIND)
+            .map_err(|e| not_a_configuration(e.to_string()))?
+    };
+    let theirs = config::parse(&kept.display().to_string(), &text)
+        .map_err(|e| not_a_configuration(e.to_string()))?;
     if theirs.fingerprint() != fingerprint {
         return Err(Error {
             message: format!(

@@ -12,8 +12,10 @@
 //!   renamed: `rtpipe_model::output`) or not at all; a run skips the shards
 //!   already written, and only those: a shard counts when its footer names
 //!   this campaign's [`Config::fingerprint`], its index and its systems
-//!   ([`survey`]). The directory keeps the configuration (`_campaign.toml`)
-//!   and refuses another campaign's.
+//!   ([`survey`]). The directory keeps the configuration
+//!   (`_campaign.parquet`: no rows, the text in its footer, so the folder
+//!   is Parquet only and every reader takes it as it is) and refuses
+//!   another campaign's.
 //! - **Bounded.** Shards are planned by index, never listed, and written a
 //!   row group at a time ([`ROW_GROUP_ROWS`]), so memory does not grow with
 //!   the campaign or the shard; the stop flag is asked inside each
@@ -26,7 +28,7 @@ mod parquet_out;
 mod system;
 
 pub use config::Config;
-pub use folder::{survey, Survey, KEPT};
+pub use folder::{survey, Survey, KEPT, LEGACY_KEPT};
 pub use parquet_out::ROW_GROUP_ROWS;
 pub use system::{run_system, run_system_until, system_seed, Row};
 
@@ -252,7 +254,7 @@ fn run_shard(w: &Work, k: u64) -> Result<Option<Tally>, Error> {
         systems: systems.clone(),
     };
     let written = output::write_atomically(&path, "shard", |file| {
-        let mut out = ShardWriter::new(file, &meta)?;
+        let mut out = ShardWriter::new(file, meta.key_values())?;
         let mut pending: Vec<Row> = Vec::new();
         let mut tally = Tally::default();
         let batch = 4 * w.jobs as u64;
@@ -297,6 +299,18 @@ fn run_batch(w: &Work, systems: Range<u64>) -> Vec<Option<Vec<Row>>> {
     })
 }
 
+/// The text of `dir`'s `_campaign.toml` (checked as this campaign's by
+/// [`survey`]), `None` when another part run at the same time has
+/// replaced it since.
+fn legacy_text(dir: &Path) -> Result<Option<String>, Error> {
+    let legacy = dir.join(LEGACY_KEPT);
+    match std::fs::read_to_string(&legacy) {
+        Ok(text) => Ok(Some(text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(Error::io("read", &legacy, &e)),
+    }
+}
+
 /// The error that ends a shard's write when the stop flag is set: the
 /// temporary is removed and nothing is renamed.
 fn stopped() -> std::io::Error {
@@ -304,16 +318,52 @@ fn stopped() -> std::io::Error {
 }
 
 /// Checks `dir` ([`survey`]: another campaign's directory is refused),
-/// creates it and writes its `_campaign.toml` when it has none.
+/// creates it and writes its `_campaign.parquet` when it has none; an
+/// older run's `_campaign.toml` of this campaign goes once the Parquet
+/// file holds its text (a folder of Parquet only, for every reader).
 fn prepare_dir(dir: &Path, cfg: &Config, config_text: &str, part: Part) -> Result<Survey, Error> {
     let found = survey(dir, cfg, part)?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io("create", dir, &e))?;
+    let kept = dir.join(KEPT);
     if !found.kept {
-        let kept = dir.join(KEPT);
+        let text = if found.legacy {
+            legacy_text(dir)?.unwrap_or_else(|| config_text.to_string())
+        } else {
+            config_text.to_string()
+        };
         output::write_atomically(&kept, "config", |f| {
-            std::io::Write::write_all(f, config_text.as_bytes())
+            parquet_out::write_kept(f, &cfg.fingerprint(), &text)
         })
         .map_err(|e| Error::io("write", &kept, &e))?;
     }
+    if found.legacy {
+        // Gone already is fine: another part of the same campaign, run at
+        // the same time, replaced it first.
+        let legacy = dir.join(LEGACY_KEPT);
+        match std::fs::remove_file(&legacy) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io("remove", &legacy, &e));
+            }
+            _ => {}
+        }
+    }
     Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two parts of one campaign started together on an older folder both
+    /// replace its `_campaign.toml`: the one that comes second finds it
+    /// gone, which is no error.
+    #[test]
+    fn a_legacy_file_gone_since_the_survey_is_no_error() {
+        let dir = std::env::temp_dir().join(format!("rtpipe-legacy-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a folder");
+        assert_eq!(legacy_text(&dir).ok(), Some(None));
+        std::fs::write(dir.join(LEGACY_KEPT), "# kept\n").expect("write");
+        assert_eq!(legacy_text(&dir).ok(), Some(Some("# kept\n".to_string())));
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }

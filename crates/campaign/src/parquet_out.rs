@@ -2,7 +2,11 @@
 //! time into a temporary beside its target and renamed into place
 //! (`rtpipe_model::output`), with the campaign's fingerprint, the shard's
 //! index and its systems in the footer; and the footer read back, to tell
-//! a complete shard of this campaign from anything else.
+//! a complete shard of this campaign from anything else. The directory's
+//! configuration file is Parquet too (`_campaign.parquet`, no rows, the
+//! shards' columns, the configuration in its footer): a folder of Parquet
+//! files only is what every reader takes as it is (polars refuses a
+//! directory that mixes file types).
 
 use crate::system::Row;
 use parquet::basic::Compression;
@@ -108,6 +112,9 @@ pub const ROW_GROUP_ROWS: usize = 16_384;
 pub(crate) const KEY_CAMPAIGN: &str = "rtpipe.campaign";
 pub(crate) const KEY_SHARD: &str = "rtpipe.shard";
 pub(crate) const KEY_SYSTEMS: &str = "rtpipe.systems";
+/// The key of `_campaign.parquet`'s footer that holds the configuration's
+/// text as it was given (comments included).
+pub(crate) const KEY_CONFIG: &str = "rtpipe.config";
 
 /// What a shard's footer says it is.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -118,7 +125,7 @@ pub(crate) struct ShardMeta {
 }
 
 impl ShardMeta {
-    fn key_values(&self) -> Vec<KeyValue> {
+    pub fn key_values(&self) -> Vec<KeyValue> {
         let (a, b) = (self.systems.start, self.systems.end);
         vec![
             KeyValue::new(KEY_CAMPAIGN.into(), self.campaign.clone()),
@@ -152,13 +159,15 @@ pub(crate) struct ShardWriter<'f> {
 }
 
 impl<'f> ShardWriter<'f> {
-    pub fn new(file: &'f mut std::fs::File, meta: &ShardMeta) -> std::io::Result<Self> {
+    /// A file whose footer holds `key_values` (a shard's [`ShardMeta`],
+    /// or the configuration of [`write_kept`]).
+    pub fn new(file: &'f mut std::fs::File, key_values: Vec<KeyValue>) -> std::io::Result<Self> {
         let schema = Arc::new(parse_message_type(&schema(&columns(&[]))).map_err(io)?);
         let props = Arc::new(
             WriterProperties::builder()
                 .set_compression(Compression::SNAPPY)
                 .set_created_by("rtpipe campaign".into())
-                .set_key_value_metadata(Some(meta.key_values()))
+                .set_key_value_metadata(Some(key_values))
                 .build(),
         );
         let buffered = std::io::BufWriter::new(file);
@@ -208,6 +217,36 @@ pub(crate) fn read_footer(path: &Path) -> Result<(ShardMeta, u64), String> {
     let rows =
         u64::try_from(meta.num_rows()).map_err(|_| "has a negative row count".to_string())?;
     Ok((shard, rows))
+}
+
+/// Writes a directory's `_campaign.parquet` into `file`: the shards'
+/// columns and no rows, so readers that take every Parquet file of a
+/// folder (polars) read it as nothing and those that skip `_` names
+/// (pyarrow, pandas) never open it; the footer holds the fingerprint and
+/// the configuration's text.
+pub(crate) fn write_kept(
+    file: &mut std::fs::File,
+    fingerprint: &str,
+    config_text: &str,
+) -> std::io::Result<()> {
+    let key_values = vec![
+        KeyValue::new(KEY_CAMPAIGN.into(), fingerprint.to_string()),
+        KeyValue::new(KEY_CONFIG.into(), config_text.to_string()),
+    ];
+    ShardWriter::new(file, key_values)?.finish()
+}
+
+/// The configuration text in the footer of the regular file `path` (a
+/// `_campaign.parquet`), or why it is not one rtpipe wrote.
+pub(crate) fn read_kept(path: &Path) -> Result<String, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot be opened: {e}"))?;
+    let reader =
+        SerializedFileReader::new(file).map_err(|e| format!("has no Parquet footer ({e})"))?;
+    let meta = reader.metadata().file_metadata();
+    (meta.key_value_metadata().into_iter().flatten())
+        .find(|p| p.key == KEY_CONFIG)
+        .and_then(|p| p.value.clone())
+        .ok_or_else(|| format!("is Parquet without a campaign configuration (`{KEY_CONFIG}`)"))
 }
 
 fn write_column(

@@ -119,7 +119,7 @@ fn another_campaigns_directory_or_shard_is_refused() {
     // A comment changes nothing: the same campaign.
     let commented = format!("# the same campaign\n{CONFIG}");
     assert_eq!(go_with(&commented, &d).map(|s| s.skipped).ok(), Some(3));
-    // Without its _campaign.toml, the shards' footers still say whose they are.
+    // Without its _campaign.parquet, the shards' footers still say whose they are.
     std::fs::remove_file(d.join(KEPT)).expect("remove");
     let shard = bytes(&shard_path(&d, 0));
     let e = go_with(&other, &d).expect_err("another campaign's shards");
@@ -130,7 +130,7 @@ fn another_campaigns_directory_or_shard_is_refused() {
     );
     assert_eq!(bytes(&shard_path(&d, 0)), shard, "not replaced");
     assert!(!d.join(KEPT).exists(), "nothing written");
-    // A _campaign.toml that is no campaign.
+    // A _campaign.parquet that is no campaign's.
     std::fs::write(d.join(KEPT), "hello").expect("write");
     let e = go_with(CONFIG, &d).expect_err("not a campaign file");
     assert!(

@@ -12,9 +12,13 @@ function of the configuration alone.
     python ray_campaign.py CONFIG OUTDIR                 # a local cluster, every core
     python ray_campaign.py CONFIG OUTDIR --workers 4     # a local cluster of 4 workers
     python ray_campaign.py CONFIG OUTDIR --address auto  # an existing cluster (`ray start`)
+    python ray_campaign.py CONFIG OUTDIR --address auto --wheel rtpipe-*.whl
 
-Every node needs the rtpipe wheel installed (``pip install rtpipe-*.whl``,
-or a Ray runtime environment that installs it).
+Every node needs rtpipe: installed beforehand (``pip install
+rtpipe-*.whl``), or, with ``--wheel``, shipped by Ray: the driver uploads
+the wheel to the cluster and each node installs it into the job's runtime
+environment (``runtime_env={"py_modules": [wheel]}``) before its first
+shard. docs/guide/clusters.md has the recipe for a multi-node cluster.
 """
 
 from __future__ import annotations
@@ -60,24 +64,28 @@ def write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def run(config: Path, out: Path, workers: int | None = None, address: str | None = None) -> dict:
+def run(config: Path, out: Path, workers: int | None = None, address: str | None = None,
+        wheel: Path | None = None) -> dict:
     """Runs every shard `out` lacks on the cluster; returns what was done.
     A directory of another campaign is refused (``rtpipe.InputError``)
     before anything is written, as ``rtpipe campaign`` refuses it; a shard
     file that is not a complete shard of this campaign is run again."""
-    # The plan checks `out` as a run does: its `_campaign.toml` and every
-    # shard's footer must be this campaign's, else it raises.
+    # The plan checks `out` as a run does: its `_campaign.parquet` and
+    # every shard's footer must be this campaign's, else it raises.
     plan = rtpipe.campaign(config, out, plan=True)
     done = set(plan["written"])
     missing = [k for k in range(plan["shards"]) if k not in done]
-    out.mkdir(parents=True, exist_ok=True)
-    kept = out / "_campaign.toml"
-    if not kept.exists():
-        # Checked by the plan: absent, or this campaign's (kept as it is).
-        write_atomically(kept, config.read_bytes())
+    # A part that owns no shard (index = shards) runs nothing: rtpipe
+    # creates `out` and writes its `_campaign.parquet`, as any run does.
+    rtpipe.campaign(config, out, shard=(plan["shards"], plan["shards"] + 1), jobs=1)
     if not ray.is_initialized():
-        ray.init(address=address, num_cpus=workers, include_dashboard=False,
-                 log_to_driver=False)
+        # A wheel in py_modules is uploaded once and pip-installed on each
+        # node that runs a shard; without it the nodes' own rtpipe is used.
+        runtime_env = {"py_modules": [str(wheel)]} if wheel else None
+        # Without an address, a cluster of its own ("local"): Ray would
+        # otherwise join the machine's latest `ray start` cluster, anyone's.
+        ray.init(address=address or "local", num_cpus=workers, include_dashboard=False,
+                 log_to_driver=False, runtime_env=runtime_env)
     # Timed from here: the cluster's start is not the campaign's work.
     started = time.monotonic()
     text = config.read_text()
@@ -106,8 +114,9 @@ def main(argv: list[str]) -> int:
     p.add_argument("out", type=Path)
     p.add_argument("--workers", type=int, help="CPUs of a local cluster [every core]")
     p.add_argument("--address", help="an existing cluster's address (e.g. auto)")
+    p.add_argument("--wheel", type=Path, help="an rtpipe wheel for Ray to install on every node")
     a = p.parse_args(argv)
-    r = run(a.config, a.out, a.workers, a.address)
+    r = run(a.config, a.out, a.workers, a.address, a.wheel)
     print(f"{r['written']} shard(s) written ({r['skipped']} already there), "
           f"{r['systems']} systems in {r['seconds']:.2f} s on {r['workers']} worker(s): "
           f"{r['systems'] / max(r['seconds'], 1e-9):.0f} systems/s")

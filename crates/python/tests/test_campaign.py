@@ -47,7 +47,7 @@ def test_the_shards_read_back_with_pyarrow(tmp_path):
     pq = pytest.importorskip("pyarrow.parquet")
     config = small_config(tmp_path, systems=40)
     rtpipe.campaign(config, tmp_path / "out")
-    t = pq.read_table(tmp_path / "out")  # `_campaign.toml` is not data
+    t = pq.read_table(tmp_path / "out")  # `_campaign.parquet` is not data
     assert set(t.column("system").to_pylist()) <= set(range(40))
     assert t.schema.field("seed").type == "uint64"
     rows = t.to_pylist()
@@ -90,7 +90,7 @@ def test_ray_refuses_another_campaigns_directory(tmp_path):
     pytest.importorskip("ray")
     config = small_config(tmp_path)
     rtpipe.campaign(config, tmp_path / "out")
-    kept = (tmp_path / "out" / "_campaign.toml").read_bytes()
+    kept = (tmp_path / "out" / "_campaign.parquet").read_bytes()
     shards = shard_bytes(tmp_path / "out")
     other = tmp_path / "other.toml"
     other.write_text(config.read_text().replace("seed = 0", "seed = 1"))
@@ -98,7 +98,7 @@ def test_ray_refuses_another_campaigns_directory(tmp_path):
         rtpipe.campaign(other, tmp_path / "out", plan=True)
     with pytest.raises(rtpipe.InputError, match="another campaign"):
         load_recipe().run(other, tmp_path / "out", workers=1)
-    assert (tmp_path / "out" / "_campaign.toml").read_bytes() == kept
+    assert (tmp_path / "out" / "_campaign.parquet").read_bytes() == kept
     assert shard_bytes(tmp_path / "out") == shards
 
 
