@@ -366,7 +366,17 @@ fn run_writes_a_trace_a_plot_and_an_rt_app_file_and_matches_simulate_json() {
     assert_eq!(t["otherData"]["source"], "run");
     let events = t["traceEvents"].as_array().cloned().unwrap_or_default();
     let spans = events.iter().filter(|e| e["cat"] == "span").count();
-    assert_eq!(spans, 250 + 100 + 50, "one span per job");
+    // One span per job that completed. How many completed in the run's
+    // 500 ms is up to the machine's load (best-effort threads), so the count
+    // is the run's own, not the 250 + 100 + 50 releases.
+    let completed: u64 = v["tasks"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|t| t["observed"]["completed"].as_u64().unwrap_or(0))
+        .sum();
+    assert!(completed > 0, "no job completed: {}", v["tasks"]);
+    assert_eq!(spans as u64, completed, "one span per job");
     assert!(events.iter().any(|e| e["ph"] == "s" && e["cat"] == "data"));
     let svg = std::fs::read_to_string(&plot).unwrap_or_default();
     assert!(
