@@ -384,7 +384,7 @@ fn golden_case_is_within_davare_and_duerr() {
 
 /// Two tasks on one CPU, rate monotonic: sense (C 1, T 10) preempts act
 /// (C 2, T 20), so R_sense = 1, R_act = 3. Limits from the read and from the
-/// event (`max_reaction_time`, `max_data_age`), and act's `max_period`.
+/// event (`max_reaction_time`, `freshness_from_event`), and act's `max_period`.
 const EVENT_LIMITS: &str = r#"
 [system]
 name = "event-limits"
@@ -410,7 +410,7 @@ path = ["sense", "act"]
 reaction = 40
 freshness = 60
 max_reaction_time = MRT
-max_data_age = 50
+freshness_from_event = 50
 "#;
 
 fn event_limits(mrt: &str, max_period: &str) -> Report {

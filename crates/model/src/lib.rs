@@ -352,9 +352,9 @@ pub struct Chain {
     /// Limit on the reaction time from the event (`max_reaction_time`: the
     /// maximum reaction time of Dürr et al. 2019 and Günzel et al.).
     pub max_reaction_time: Option<Nanos>,
-    /// Limit on the freshness time from the event (`max_data_age`: the
+    /// Limit on the freshness time from the event (`freshness_from_event`: the
     /// maximum data age of the same literature).
-    pub max_data_age: Option<Nanos>,
+    pub freshness_from_event: Option<Nanos>,
     /// Its own communication semantics (`communication` in `[[chain]]`);
     /// `None`: the system's. Every task on the chain reads and publishes
     /// that way ([`Spec::communications`]).
@@ -377,7 +377,7 @@ impl Chain {
             reaction: None,
             freshness: None,
             max_reaction_time: None,
-            max_data_age: None,
+            freshness_from_event: None,
             communication: None,
         }
     }

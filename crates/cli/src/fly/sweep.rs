@@ -115,7 +115,7 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: &[bool]) -> Spec {
         ch.reaction = l.0.or(ch.reaction);
         ch.freshness = l.1.or(ch.freshness);
         ch.max_reaction_time = e.0.or(ch.max_reaction_time);
-        ch.max_data_age = e.1.or(ch.max_data_age);
+        ch.freshness_from_event = e.1.or(ch.freshness_from_event);
     }
     let tails = tails(spec, s);
     for (i, t) in out.tasks.iter_mut().enumerate() {
@@ -542,7 +542,7 @@ struct LimitMs {
     #[serde(flatten)]
     limit: PairMs,
     max_reaction_time: Option<f64>,
-    max_data_age: Option<f64>,
+    freshness_from_event: Option<f64>,
 }
 
 fn sweep_json<'a>(
@@ -563,7 +563,7 @@ fn sweep_json<'a>(
             chain: spec.chain_label(k),
             limit: l.into(),
             max_reaction_time: reaction,
-            max_data_age: freshness,
+            freshness_from_event: freshness,
         }
     });
     let max_period = spec.tasks.iter().zip(&limits.max_period);
