@@ -85,7 +85,7 @@ fn limits_text(spec: &Spec, d: &Derived) -> String {
         "reaction",
         "freshness",
         "max reaction time",
-        "max data age",
+        "freshness from event",
         "spec's reaction",
         "spec's freshness",
     ])
@@ -189,7 +189,7 @@ struct PointView<'a> {
     value: f64,
     bounds_ms: Vec<PairMs>,
     /// From the event: `reaction` is the maximum reaction time,
-    /// `freshness` the maximum data age.
+    /// `freshness` freshness from the event.
     event_bounds_ms: Vec<PairMs>,
     schedulable: bool,
     /// The timing is schedulable and its flight met the criterion: a
@@ -721,7 +721,7 @@ fn text(
         }
     }
     out.push_str(&rate_text(spec, s, points, limits, a.safety));
-    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and max data age from the event)");
+    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and freshness from the event)");
     if a.safety < 1.0 {
         out.push_str(&format!(
             ", each × {} (the safety factor; the tail's max_period too)",

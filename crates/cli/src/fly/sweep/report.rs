@@ -140,7 +140,7 @@ fn points_table(v: &SweepView) -> Table {
 
 /// A row per point, chain and anchor: the sound bounds of the timing
 /// flown, ms (from the read: reaction and freshness; from the event:
-/// maximum reaction time and maximum data age).
+/// maximum reaction time and freshness from the event).
 fn bounds_table(v: &SweepView, labels: &[String]) -> Table {
     let mut columns = vec![Column::new("point", Kind::UInt)];
     columns.extend(["chain", "from"].map(|n| Column::new(n, Kind::Text)));
