@@ -468,3 +468,28 @@ fn max_period_fails_the_verdict_in_every_mode() {
     assert!(r.chains.iter().all(|c| c.ok));
     assert!(!r.ok_in(Mode::Sound) && !r.ok_in(Mode::Paper));
 }
+
+/// The literature's names sit on exactly the pairs that are their
+/// quantities: the maximum reaction time and the maximum data age (equal,
+/// Günzel et al. 2023) on reaction from the event, the maximum reduced data
+/// age on freshness from the read; freshness from the event and reaction
+/// from the read have none.
+#[test]
+fn the_literature_s_names_map_onto_one_pair_each() {
+    let of = |m: Metric, a: Anchor| Literature::of(m, a).collect::<Vec<_>>();
+    assert_eq!(
+        of(Metric::Reaction, Anchor::Event),
+        [Literature::MaxReactionTime, Literature::MaxDataAge]
+    );
+    assert_eq!(
+        of(Metric::Freshness, Anchor::Read),
+        [Literature::MaxReducedDataAge]
+    );
+    assert!(of(Metric::Freshness, Anchor::Event).is_empty());
+    assert!(of(Metric::Reaction, Anchor::Read).is_empty());
+    let names: Vec<&str> = Literature::ALL.iter().map(|l| l.name()).collect();
+    assert_eq!(
+        names,
+        ["max_reaction_time", "max_data_age", "max_reduced_data_age"]
+    );
+}
