@@ -17,8 +17,9 @@ release, one CPU, each system simulated with every job at its WCET) with:
   D19(MRDA));
 - Kloda et al. (2018): rtpipe's bound under the known offsets (every task
   released at 0), which is Kloda's bound where BCET = WCET (K18; on
-  E2EEvaluation's own task sets, tests/e2eeval_real.rs) and at most it
-  otherwise (it uses the best cases too);
+  E2EEvaluation's own task sets, tests/e2eeval_real.rs); the campaign's
+  task sets have best cases below their worst, which rtpipe's bound uses
+  and Kloda's does not;
 - Günzel et al. (2023, local): the exact figures of the schedule with
   every job at its WCET, measured by the simulator (G23(L-MRT),
   G23(L-MRDA) where BCET = WCET);
