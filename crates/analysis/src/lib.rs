@@ -47,7 +47,8 @@ use rtpipe_model::{Nanos, Spec};
 pub enum Metric {
     /// Input to the first corresponding output.
     Reaction,
-    /// Input to the last corresponding output (data age).
+    /// Input to the last corresponding output (from the read: the
+    /// literature's reduced data age, [`Literature::MaxReducedDataAge`]).
     Freshness,
 }
 
@@ -62,13 +63,13 @@ impl Metric {
 
     /// The chain's limit on this metric measured from `anchor`, if it has
     /// one: from the read `reaction` / `freshness`, from the event
-    /// `max_reaction_time` / `max_data_age` (the literature's names).
+    /// `max_reaction_time` / `freshness_from_event`.
     pub fn limit(self, chain: &rtpipe_model::Chain, anchor: Anchor) -> Option<Nanos> {
         match (self, anchor) {
             (Metric::Reaction, Anchor::Read) => chain.reaction,
             (Metric::Freshness, Anchor::Read) => chain.freshness,
             (Metric::Reaction, Anchor::Event) => chain.max_reaction_time,
-            (Metric::Freshness, Anchor::Event) => chain.max_data_age,
+            (Metric::Freshness, Anchor::Event) => chain.freshness_from_event,
         }
     }
 
@@ -78,8 +79,69 @@ impl Metric {
             (Metric::Reaction, Anchor::Read) => "reaction",
             (Metric::Freshness, Anchor::Read) => "freshness",
             (Metric::Reaction, Anchor::Event) => "max_reaction_time",
-            (Metric::Freshness, Anchor::Event) => "max_data_age",
+            (Metric::Freshness, Anchor::Event) => "freshness_from_event",
         }
+    }
+}
+
+/// A quantity of the cause-effect-chain literature that one of rtpipe's
+/// (metric, anchor) pairs is exactly, so that reports can give it under the
+/// literature's name (docs/analysis.md, "What each reported number is").
+/// rtpipe's other figures (reaction from the read, freshness from the
+/// event) carry no literature name: none of the literature's is the same
+/// quantity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Literature {
+    /// Maximum reaction time (Dürr et al. 2019, Günzel et al. 2023): from
+    /// an event to the first tail output that reflects it.
+    MaxReactionTime,
+    /// Maximum data age (Günzel et al. 2023): from a sample's head read to
+    /// the tail's next output after the last one that carries it.
+    MaxDataAge,
+    /// Maximum reduced data age (Dürr et al. 2019's "data age", Günzel et
+    /// al. 2023's MRDA, Becker et al. 2017's): from a sample's head read
+    /// to the last tail output that carries it.
+    MaxReducedDataAge,
+}
+
+impl Literature {
+    /// Every quantity, in the order reports list them.
+    pub const ALL: [Literature; 3] = [
+        Literature::MaxReactionTime,
+        Literature::MaxDataAge,
+        Literature::MaxReducedDataAge,
+    ];
+
+    /// The name used in output and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Literature::MaxReactionTime => "max_reaction_time",
+            Literature::MaxDataAge => "max_data_age",
+            Literature::MaxReducedDataAge => "max_reduced_data_age",
+        }
+    }
+
+    /// The (metric, anchor) whose figures are this quantity's: the one
+    /// place the literature's names are mapped onto rtpipe's.
+    pub fn quantity(self) -> (Metric, Anchor) {
+        match self {
+            Literature::MaxReactionTime => (Metric::Reaction, Anchor::Event),
+            // Günzel et al. (ECRTS 2023) prove that the maximum data age
+            // equals the maximum reaction time on every schedule whose
+            // tasks read and publish in job order, as every rtpipe task
+            // does; so every bound on one bounds the other, and no formula
+            // of its own is needed.
+            Literature::MaxDataAge => (Metric::Reaction, Anchor::Event),
+            Literature::MaxReducedDataAge => (Metric::Freshness, Anchor::Read),
+        }
+    }
+
+    /// The quantities that `metric` from `anchor` is, in [`Literature::ALL`]
+    /// order (none for the pairs without a literature name).
+    pub fn of(metric: Metric, anchor: Anchor) -> impl Iterator<Item = Literature> {
+        Literature::ALL
+            .into_iter()
+            .filter(move |l| l.quantity() == (metric, anchor))
     }
 }
 

@@ -384,7 +384,7 @@ fn golden_case_is_within_davare_and_duerr() {
 
 /// Two tasks on one CPU, rate monotonic: sense (C 1, T 10) preempts act
 /// (C 2, T 20), so R_sense = 1, R_act = 3. Limits from the read and from the
-/// event (`max_reaction_time`, `max_data_age`), and act's `max_period`.
+/// event (`max_reaction_time`, `freshness_from_event`), and act's `max_period`.
 const EVENT_LIMITS: &str = r#"
 [system]
 name = "event-limits"
@@ -410,7 +410,7 @@ path = ["sense", "act"]
 reaction = 40
 freshness = 60
 max_reaction_time = MRT
-max_data_age = 50
+freshness_from_event = 50
 "#;
 
 fn event_limits(mrt: &str, max_period: &str) -> Report {
@@ -467,4 +467,29 @@ fn max_period_fails_the_verdict_in_every_mode() {
     );
     assert!(r.chains.iter().all(|c| c.ok));
     assert!(!r.ok_in(Mode::Sound) && !r.ok_in(Mode::Paper));
+}
+
+/// The literature's names sit on exactly the pairs that are their
+/// quantities: the maximum reaction time and the maximum data age (equal,
+/// Günzel et al. 2023) on reaction from the event, the maximum reduced data
+/// age on freshness from the read; freshness from the event and reaction
+/// from the read have none.
+#[test]
+fn the_literature_s_names_map_onto_one_pair_each() {
+    let of = |m: Metric, a: Anchor| Literature::of(m, a).collect::<Vec<_>>();
+    assert_eq!(
+        of(Metric::Reaction, Anchor::Event),
+        [Literature::MaxReactionTime, Literature::MaxDataAge]
+    );
+    assert_eq!(
+        of(Metric::Freshness, Anchor::Read),
+        [Literature::MaxReducedDataAge]
+    );
+    assert!(of(Metric::Freshness, Anchor::Event).is_empty());
+    assert!(of(Metric::Reaction, Anchor::Read).is_empty());
+    let names: Vec<&str> = Literature::ALL.iter().map(|l| l.name()).collect();
+    assert_eq!(
+        names,
+        ["max_reaction_time", "max_data_age", "max_reduced_data_age"]
+    );
 }

@@ -81,7 +81,7 @@ fn work_queues_chain_bounds_by_hand() {
     assert_eq!(bounds(&r, 0, Bound::Paper), us([3015, 3015, 4015, 4015]));
     assert_eq!(bounds(&r, 0, Bound::Davare), [None; 4]);
     assert_eq!(bounds(&r, 1, Bound::Duerr), [None; 4]);
-    // max_data_age 1.5 ms holds (1473); the paper's 4015 does not.
+    // freshness_from_event 1.5 ms holds (1473); the paper's 4015 does not.
     assert!(r.ok_in(rtpipe_analysis::Mode::Sound));
     assert!(!r.ok_in(rtpipe_analysis::Mode::Paper));
 }

@@ -255,7 +255,7 @@ fn limited(mut s: Spec, mode: Mode, scale: f64) -> Spec {
             }
             Metric::Freshness => {
                 ch.freshness = limit(Anchor::Read);
-                ch.max_data_age = limit(Anchor::Event);
+                ch.freshness_from_event = limit(Anchor::Event);
             }
         }
     }

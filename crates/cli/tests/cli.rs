@@ -371,7 +371,7 @@ const EVENT_LIMITS: &str = "[system]\nname = \"small\"\ntime_unit = \"ms\"\n\
 [channels.mem]\nbandwidth = 1\n\
 [tasks.sense]\nexec = 1\nperiod = 10\noutput = { channel = \"mem\", size = 0 }\n\
 [tasks.act]\nexec = 2\nperiod = 20\nreads = [\"sense\"]\noutput = { channel = \"mem\", size = 0 }\nMAXP\n\
-[[chain]]\npath = [\"sense\", \"act\"]\nreaction = 40\nmax_reaction_time = MRT\nmax_data_age = 50\n";
+[[chain]]\npath = [\"sense\", \"act\"]\nreaction = 40\nmax_reaction_time = MRT\nfreshness_from_event = 50\n";
 
 #[test]
 fn analyze_shows_and_judges_limits_from_the_event_and_max_period() {

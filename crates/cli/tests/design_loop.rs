@@ -39,7 +39,7 @@ fn loop_closes_on(vehicle: &str) {
     let written = std::fs::read_to_string(&limits).unwrap_or_default();
     for key in [
         "max_reaction_time",
-        "max_data_age",
+        "freshness_from_event",
         "max_period",
         "period = { max",
     ] {

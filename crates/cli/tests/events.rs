@@ -11,7 +11,7 @@ use serde_json::json;
 fn work_queues_text_lists_activations_and_every_bound() {
     let spec = example("work-queues.toml");
     let o = rtpipe(&["analyze", &spec]);
-    // Its max_data_age holds in sound mode.
+    // Its freshness_from_event holds in sound mode.
     assert_exit(&o, 0);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(

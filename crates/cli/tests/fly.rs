@@ -413,7 +413,12 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
     let plain_limits = plain["limits_ms"].as_array().cloned().unwrap_or_default();
     let limits = v["limits_ms"].as_array().cloned().unwrap_or_default();
     for (a, b) in plain_limits.iter().zip(&limits) {
-        for key in ["reaction", "freshness", "max_reaction_time", "max_data_age"] {
+        for key in [
+            "reaction",
+            "freshness",
+            "max_reaction_time",
+            "freshness_from_event",
+        ] {
             if let (Some(x), Some(y)) = (a[key].as_f64(), b[key].as_f64()) {
                 assert!(y <= 0.9 * x + 1e-6, "{key}: {y} > 0.9 × {x}");
             }

@@ -59,7 +59,21 @@ fn analyze_prints_its_tasks_and_chains_as_csv() {
     assert_eq!(
         chains[0],
         "chain,metric,limit,event_limit,paper,sound,davare,duerr,\
-         paper_from_event,sound_from_event,davare_from_event,duerr_from_event,paper_ok,ok"
+         paper_from_event,sound_from_event,davare_from_event,duerr_from_event,paper_ok,ok,\
+         literature,literature_from_event"
+    );
+    // The literature's names of each row's figures: reaction from the event
+    // is the maximum reaction time and the maximum data age, freshness from
+    // the read the maximum reduced data age.
+    assert!(
+        chains[1].ends_with(",,max_reaction_time;max_data_age"),
+        "{}",
+        chains[1]
+    );
+    assert!(
+        chains[2].ends_with(",max_reduced_data_age,"),
+        "{}",
+        chains[2]
     );
     let m = json["chains"].as_array().map_or(0, Vec::len);
     assert_eq!(chains.len(), 1 + m, "{out}");

@@ -198,7 +198,7 @@ fn horizon(spec: &Spec) -> Nanos {
             .max(c.reaction.unwrap_or(0))
             .max(c.freshness.unwrap_or(0))
             .max(c.max_reaction_time.unwrap_or(0))
-            .max(c.max_data_age.unwrap_or(0));
+            .max(c.freshness_from_event.unwrap_or(0));
     }
     for t in &spec.tasks {
         if let Some(p) = t.fixed_period() {

@@ -235,7 +235,7 @@ pub(crate) fn min_limit(
             (Metric::Reaction, Anchor::Read) => &mut ch.reaction,
             (Metric::Freshness, Anchor::Read) => &mut ch.freshness,
             (Metric::Reaction, Anchor::Event) => &mut ch.max_reaction_time,
-            (Metric::Freshness, Anchor::Event) => &mut ch.max_data_age,
+            (Metric::Freshness, Anchor::Event) => &mut ch.freshness_from_event,
         } = Some(l);
         let sub = p.with_limit(&s, l);
         let mut sub_learnt = learnt.for_sub();

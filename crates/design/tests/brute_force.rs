@@ -311,7 +311,7 @@ fn cases(default: usize) -> usize {
 }
 
 /// Instance `seed` with its limits moved to the event for some chains and
-/// metrics (`max_reaction_time`, `max_data_age`): the from-read limit plus
+/// metrics (`max_reaction_time`, `freshness_from_event`): the from-read limit plus
 /// the head's shortest period, times 1–1.5; the from-read limit is kept for
 /// about half of them; for half the seeds one task gets a `max_period`.
 fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
@@ -322,7 +322,7 @@ fn with_event_limits(mut spec: Spec, seed: u64) -> Spec {
         let ch = &mut spec.chains[k];
         for (read, event) in [
             (&mut ch.reaction, &mut ch.max_reaction_time),
-            (&mut ch.freshness, &mut ch.max_data_age),
+            (&mut ch.freshness, &mut ch.freshness_from_event),
         ] {
             let Some(l) = *read else { continue };
             if r.chance(0.3) {
@@ -434,7 +434,7 @@ fn doubled(ch: &mut rtpipe_model::Chain) {
         &mut ch.reaction,
         &mut ch.freshness,
         &mut ch.max_reaction_time,
-        &mut ch.max_data_age,
+        &mut ch.freshness_from_event,
     ] {
         *x = x.map(|v| 2 * v);
     }

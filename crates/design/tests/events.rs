@@ -193,7 +193,7 @@ fn problem(seed: u64, grid: Grid, scale: f64) -> Option<Spec> {
     for c in &report.chains {
         let bound = c.bound.sound(Anchor::Event)?;
         let limit = (bound as f64 * scale) as Nanos;
-        spec.chains[c.chain].max_data_age = Some(limit.max(1));
+        spec.chains[c.chain].freshness_from_event = Some(limit.max(1));
     }
     for t in spec.tasks.iter_mut() {
         if let Some(p) = t.fixed_period() {

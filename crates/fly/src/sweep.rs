@@ -63,7 +63,8 @@ pub struct Point {
     /// Per declared chain: the sound reaction and freshness bounds (from the
     /// read) of the timing flown, a pure delay included.
     pub bounds: Vec<ChainPair>,
-    /// The same from the event: maximum reaction time and maximum data age.
+    /// The same from the event: maximum reaction time and freshness from
+    /// the event.
     pub event: Vec<ChainPair>,
     /// The timing passes the spec's schedulability test.
     pub schedulable: bool,
@@ -477,7 +478,7 @@ pub fn scale_edge(points: &[Point]) -> Edge<'_> {
 pub struct Derived {
     /// Per declared chain, (reaction, freshness) from the read.
     pub read: Vec<ChainPair>,
-    /// Per declared chain, (maximum reaction time, maximum data age): the
+    /// Per declared chain, (maximum reaction time, freshness from the event): the
     /// same from the event.
     pub event: Vec<ChainPair>,
     /// Per task, the longest period that flew in the rate sweep: the

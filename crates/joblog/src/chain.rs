@@ -148,7 +148,8 @@ impl SampleRow {
         Some(self.event_first? - self.event?)
     }
 
-    /// Freshness from the event (maximum data age): last output − the
+    /// Freshness from the event (rtpipe's own; not the literature's maximum
+    /// data age, which runs to the next output): last output − the
     /// previous head read.
     pub fn event_freshness(&self) -> Option<Nanos> {
         Some(self.last? - self.event?)

@@ -252,7 +252,7 @@ fn random_chains(rng: &mut Rng, cfg: &GenConfig, tasks: &[Task], n_sources: usiz
             reaction: None,
             freshness: None,
             max_reaction_time: None,
-            max_data_age: None,
+            freshness_from_event: None,
             communication: None,
         });
     }
@@ -497,7 +497,7 @@ pub fn design_origin(seed: u64, cfg: &DesignGenConfig) -> Spec {
             reaction: None,
             freshness: None,
             max_reaction_time: None,
-            max_data_age: None,
+            freshness_from_event: None,
             communication: None,
         });
     }

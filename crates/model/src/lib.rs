@@ -350,11 +350,13 @@ pub struct Chain {
     /// Limit on the freshness time.
     pub freshness: Option<Nanos>,
     /// Limit on the reaction time from the event (`max_reaction_time`: the
-    /// maximum reaction time of Dürr et al. 2019 and Günzel et al.).
+    /// maximum reaction time of Dürr et al. 2019 and Günzel et al., which
+    /// Günzel et al. 2023 prove equal to the maximum data age).
     pub max_reaction_time: Option<Nanos>,
-    /// Limit on the freshness time from the event (`max_data_age`: the
-    /// maximum data age of the same literature).
-    pub max_data_age: Option<Nanos>,
+    /// Limit on the freshness time from the event (`freshness_from_event`:
+    /// from just after the head read before a sample's to its last output;
+    /// no quantity of the literature; the key was `max_data_age`).
+    pub freshness_from_event: Option<Nanos>,
     /// Its own communication semantics (`communication` in `[[chain]]`);
     /// `None`: the system's. Every task on the chain reads and publishes
     /// that way ([`Spec::communications`]).
@@ -377,7 +379,7 @@ impl Chain {
             reaction: None,
             freshness: None,
             max_reaction_time: None,
-            max_data_age: None,
+            freshness_from_event: None,
             communication: None,
         }
     }

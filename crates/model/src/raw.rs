@@ -129,6 +129,9 @@ pub struct RawChain {
     pub reaction: Option<S<toml::Value>>,
     pub freshness: Option<S<toml::Value>>,
     pub max_reaction_time: Option<S<toml::Value>>,
+    pub freshness_from_event: Option<S<toml::Value>>,
+    /// The former name of `freshness_from_event`, refused with the new
+    /// name: it never limited the literature's maximum data age.
     pub max_data_age: Option<S<toml::Value>>,
     pub name: Option<S<String>>,
     pub communication: Option<S<String>>,

@@ -435,17 +435,34 @@ fn offsets_must_be_below_the_period() {
 fn from_event_limits_and_max_period_parse_and_round_trip() {
     let src = MINI.replace(
         "reaction = 10\n",
-        "reaction = 10\nmax_reaction_time = 25\nmax_data_age = \"30ms\"\n",
+        "reaction = 10\nmax_reaction_time = 25\nfreshness_from_event = \"30ms\"\n",
     ) + "";
     let src = src.replace("period = 5\n", "period = 5\nmax_period = 8\n");
     let s = Spec::parse("x.toml", &src).expect("valid");
     assert_eq!(s.chains[0].max_reaction_time, Some(25_000_000));
-    assert_eq!(s.chains[0].max_data_age, Some(30_000_000));
+    assert_eq!(s.chains[0].freshness_from_event, Some(30_000_000));
     assert_eq!(s.tasks[1].max_period, Some(8_000_000));
     assert_eq!(s.tasks[0].max_period, None);
     let back = Spec::parse("y.toml", &crate::write::to_toml(&s)).expect("written spec parses");
     assert_eq!(back.chains, s.chains);
     assert_eq!(back.tasks[1].max_period, s.tasks[1].max_period);
+}
+
+/// The former key of freshness from the event is refused where it stands,
+/// with the new name and the key that limits the literature's maximum data
+/// age.
+#[test]
+fn the_former_max_data_age_key_is_refused_with_its_new_name() {
+    let e = err(&MINI.replace("reaction = 10\n", "reaction = 10\nmax_data_age = 30\n")).to_string();
+    assert!(
+        e.contains("x.toml:25:16: error: `max_data_age` is now `freshness_from_event`"),
+        "{e}"
+    );
+    assert!(e.contains("not the literature's maximum data age"), "{e}");
+    assert!(
+        e.contains("rename the key to `freshness_from_event`; to limit the literature's maximum data age, use `max_reaction_time`"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -462,11 +479,11 @@ fn bad_from_event_limits_and_max_period_are_located() {
     );
     let e = err(&MINI.replace(
         "reaction = 10\n",
-        "reaction = 10\nmax_data_age = \"-2ms\"\n",
+        "reaction = 10\nfreshness_from_event = \"-2ms\"\n",
     ))
     .to_string();
     assert!(
-        e.contains("x.toml:25:16: error: max_data_age must be positive"),
+        e.contains("x.toml:25:24: error: freshness_from_event must be positive"),
         "{e}"
     );
     let e = err(&MINI.replace("period = 5\n", "period = 5\nmax_period = \"fast\"\n")).to_string();

@@ -661,10 +661,13 @@ impl Builder {
             .max_reaction_time
             .as_ref()
             .and_then(|v| self.positive_time(v, "max_reaction_time"));
-        let max_data_age = c
-            .max_data_age
+        let freshness_from_event = c
+            .freshness_from_event
             .as_ref()
-            .and_then(|v| self.positive_time(v, "max_data_age"));
+            .and_then(|v| self.positive_time(v, "freshness_from_event"));
+        if let Some(v) = &c.max_data_age {
+            self.renamed_max_data_age(v);
+        }
         let communication = self.chain_communication(c);
         ok.then(|| Chain {
             name: c.name.as_ref().map(|n| n.get_ref().clone()),
@@ -672,9 +675,24 @@ impl Builder {
             reaction,
             freshness,
             max_reaction_time,
-            max_data_age,
+            freshness_from_event,
             communication,
         })
+    }
+
+    /// `max_data_age` limited freshness from the event, which is not the
+    /// literature's maximum data age (that runs to the tail's next output
+    /// and equals the maximum reaction time): refused, so that no spec
+    /// keeps a limit under a name that says another quantity.
+    fn renamed_max_data_age(&mut self, v: &S<toml::Value>) {
+        self.err(
+            "`max_data_age` is now `freshness_from_event`: it limits freshness from the event \
+             (to a sample's last output), not the literature's maximum data age (to the next \
+             output, equal to the maximum reaction time)",
+            span(v),
+            "rename the key to `freshness_from_event`; to limit the literature's maximum data \
+             age, use `max_reaction_time`",
+        );
     }
 
     /// A chain's path follows edges (each task reads the one before) and

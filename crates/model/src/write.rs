@@ -264,8 +264,8 @@ fn chain(o: &mut String, spec: &Spec, c: &Chain) {
     if let Some(l) = c.max_reaction_time {
         let _ = writeln!(o, "max_reaction_time = {}", time(spec, l));
     }
-    if let Some(l) = c.max_data_age {
-        let _ = writeln!(o, "max_data_age = {}", time(spec, l));
+    if let Some(l) = c.freshness_from_event {
+        let _ = writeln!(o, "freshness_from_event = {}", time(spec, l));
     }
     if let Some(m) = c.communication {
         let _ = writeln!(o, "communication = \"{}\"", m.name());

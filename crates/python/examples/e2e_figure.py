@@ -3,15 +3,30 @@
 TU Dortmund's E2EEvaluation framework (Günzel, Chen, Ueter, von der
 Brüggen, Dürr, Chen: "Timing Analysis of Asynchronized Distributed
 Cause-Effect Chains", RTAS 2021) compares end-to-end analyses of
-cause-effect chains on WATERS 2015 task sets as the *reduction of each
-analysis' bound relative to Davare et al.* (DAC 2007), ``1 - bound /
-Davare``, in box plots, for the maximum reaction time and the maximum data
-age of local chains. This script runs the same comparison on an rtpipe
-campaign (WATERS task sets, synchronous release, one CPU) with, beside the
-peers' analyses as rtpipe implements them (Dürr et al. CASES 2019), rtpipe's
-sound bound (arbitrary phasing) and its bound under the known offsets
-(every task released at 0, the setting of Kloda et al. 2018 and Becker et
-al. 2017). All bounds are from the event, as the literature's are.
+cause-effect chains on WATERS 2015 task sets in box plots of each
+analysis' reduction relative to Davare et al. (DAC 2007): ``(D07 - bound)
+/ D07`` (its ``AnalysisMethod.normalize``), where D07 is Davare's one
+bound, the same baseline in both panels. The panels are the maximum
+reaction time (which Günzel et al. 2023 prove equal to the maximum data
+age) and the maximum reduced data age (from a sample's read to its last
+output; docs/analysis.md, "What each reported number is"). This script runs
+the comparison on an rtpipe campaign (WATERS task sets, synchronous
+release, one CPU, each system simulated with every job at its WCET) with:
+
+- Dürr et al. (CASES 2019): their Theorems 5.4 and 5.10 (D19(MRT),
+  D19(MRDA));
+- Kloda et al. (2018): rtpipe's bound under the known offsets (every task
+  released at 0), which is Kloda's bound where BCET = WCET (K18; on
+  E2EEvaluation's own task sets, tests/e2eeval_real.rs); the campaign's
+  task sets have best cases below their worst, which rtpipe's bound uses
+  and Kloda's does not;
+- Günzel et al. (2023, local): the exact figures of the schedule with
+  every job at its WCET, measured by the simulator (G23(L-MRT),
+  G23(L-MRDA) where BCET = WCET);
+- rtpipe's sound bound (any phasing).
+
+Becker et al. (2017), which E2EEvaluation draws in the data-age panel, is
+not drawn: rtpipe does not implement their analysis.
 
     python e2e_figure.py CONFIG OUTDIR FIGURE.svg
 
@@ -30,13 +45,34 @@ import pyarrow.parquet as pq
 
 import rtpipe
 
-# (label, column): the baseline is Davare's.
-ANALYSES = [
-    ("Dürr et al. (CASES'19)", "event_duerr_ns"),
-    ("rtpipe sound", "event_sound_ns"),
-    ("rtpipe, known offsets", "event_offsets_ns"),
+# The baseline: Davare's bound, reaction from the event (D07).
+BASELINE = ("reaction", "event_davare_ns")
+
+# Per panel: (metric, title, [(label, column)]). Reaction from the event is
+# the maximum reaction time (= the maximum data age); freshness from the
+# read is the maximum reduced data age.
+PANELS = [
+    (
+        "reaction",
+        "maximum reaction time (= maximum data age)",
+        [
+            ("Dürr et al. '19", "event_duerr_ns"),
+            ("Kloda et al. '18\n(rtpipe, known offsets)", "event_offsets_ns"),
+            ("Günzel et al. '23\n(WCET schedule)", "event_observed_max_ns"),
+            ("rtpipe sound", "event_sound_ns"),
+        ],
+    ),
+    (
+        "freshness",
+        "maximum reduced data age",
+        [
+            ("Dürr et al. '19", "duerr_ns"),
+            ("rtpipe, known offsets", "offsets_ns"),
+            ("Günzel et al. '23\n(WCET schedule)", "observed_max_ns"),
+            ("rtpipe sound", "sound_ns"),
+        ],
+    ),
 ]
-METRICS = [("reaction", "maximum reaction time"), ("freshness", "maximum data age")]
 
 
 def run(config: Path, out: Path):
@@ -45,48 +81,64 @@ def run(config: Path, out: Path):
     return pq.read_table(out)
 
 
+def column(t, name: str):
+    return t[name].to_numpy(zero_copy_only=False).astype(float)
+
+
+def metric_rows(table, metric: str):
+    """The rows of `metric` of the schedulable systems, ordered by
+    (system, chain) so that both metrics' rows line up."""
+    t = table.filter(pc.equal(table["metric"], metric))
+    t = t.filter(t["schedulable"])
+    return t.sort_by([("system", "ascending"), ("chain", "ascending")])
+
+
 def reductions(table) -> dict:
-    """{metric: {analysis: array of 1 - bound/Davare}} over the chains
-    every analysis bounds (schedulable systems)."""
+    """{metric: {analysis: array of (D07 - bound) / D07}} over the chains
+    every analysis bounds, as E2EEvaluation normalises."""
+    base = metric_rows(table, BASELINE[0])
+    davare = column(base, BASELINE[1])
+    keys = (column(base, "system"), column(base, "chain"))
     out = {}
-    for metric, _ in METRICS:
-        t = table.filter(pc.equal(table["metric"], metric))
-        t = t.filter(t["schedulable"])
-        davare = t["event_davare_ns"].to_numpy(zero_copy_only=False).astype(float)
-        cols = {label: t[c].to_numpy(zero_copy_only=False).astype(float) for label, c in ANALYSES}
+    for metric, _, analyses in PANELS:
+        t = metric_rows(table, metric)
+        assert (column(t, "system") == keys[0]).all() and (column(t, "chain") == keys[1]).all()
+        cols = {label: column(t, c) for label, c in analyses}
         keep = np.isfinite(davare) & (davare > 0)
         for v in cols.values():
             keep &= np.isfinite(v)
-        out[metric] = {label: 1.0 - v[keep] / davare[keep] for label, v in cols.items()}
+        out[metric] = {label: (davare[keep] - v[keep]) / davare[keep] for label, v in cols.items()}
     return out
 
 
 def summary(red: dict) -> str:
     """Median and quartiles of each reduction, as a table."""
     lines = ["| metric | analysis | chains | median | 25 % | 75 % |", "|---|---|---|---|---|---|"]
-    for metric, name in METRICS:
+    for metric, name, _ in PANELS:
         for label, v in red[metric].items():
             q1, med, q3 = np.percentile(v, [25, 50, 75])
+            label = label.replace("\n", " ")
             lines.append(f"| {name} | {label} | {len(v)} | {med:.3f} | {q1:.3f} | {q3:.3f} |")
     return "\n".join(lines)
 
 
 def plot(red: dict, path: str) -> None:
-    """Box plots as E2EEvaluation draws them: one panel per metric."""
+    """Box plots as E2EEvaluation draws them: one panel per metric, the
+    y-axis from 0 to 1."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, (metric, name) in zip(axes, METRICS):
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, (metric, name, _) in zip(axes, PANELS):
         labels = list(red[metric])
         ax.boxplot([red[metric][l] for l in labels], whis=(1, 99), showfliers=False)
-        ax.set_xticks(range(1, len(labels) + 1), labels, rotation=15, fontsize=8)
+        ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=7)
         ax.set_title(name)
-        ax.axhline(0, color="grey", lw=0.5)
+        ax.set_ylim(-0.05, 1.0)
         ax.grid(axis="y", alpha=0.3)
-    axes[0].set_ylabel("reduction relative to Davare et al.")
+    axes[0].set_ylabel("reduction relative to Davare et al. (D07)")
     fig.tight_layout()
     fig.savefig(path)
 

@@ -44,8 +44,8 @@
 //! sample, so the last output is known). Only samples that reach the tail
 //! count.
 //!
-//! From the event (the cause-effect-chain literature's quantities, what the
-//! analysis' `from_event` bounds bound): for each head read but the first, an
+//! From the event (what the analysis' `from_event` bounds bound; reaction
+//! is the literature's maximum reaction time): for each head read but the first, an
 //! event just after the previous head read. Its reaction ends at the first
 //! tail output carrying a sample read at or after the event, which need not
 //! be the event's own sample (it may be overwritten before it is used); its

@@ -39,7 +39,7 @@ pub(crate) fn spec(scheduler: Scheduler, mut tasks: Vec<Task>, chains: &[&[usize
             reaction: None,
             freshness: None,
             max_reaction_time: None,
-            max_data_age: None,
+            freshness_from_event: None,
             communication: None,
         })
         .collect();
@@ -350,7 +350,7 @@ fn bad_inputs_are_errors() {
         reaction: None,
         freshness: None,
         max_reaction_time: None,
-        max_data_age: None,
+        freshness_from_event: None,
         communication: None,
     }];
     assert_eq!(simulate(&s, &cfg), Err(SimError::BadChain(0)));

@@ -91,7 +91,7 @@ pub struct FlyArgs {
     pub criterion: Option<PathBuf>,
     /// With --sweep: write the spec with every derived limit here: each
     /// chain's reaction and freshness (from the read), max_reaction_time and
-    /// max_data_age (from the event), and the motor-output task's max_period
+    /// freshness_from_event (from the event), and the motor-output task's max_period
     /// (from the rate sweep).
     #[arg(long, value_name = "OUT.toml", requires = "sweep")]
     pub write_limits: Option<PathBuf>,

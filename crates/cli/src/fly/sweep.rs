@@ -85,7 +85,7 @@ fn limits_text(spec: &Spec, d: &Derived) -> String {
         "reaction",
         "freshness",
         "max reaction time",
-        "max data age",
+        "freshness from event",
         "spec's reaction",
         "spec's freshness",
     ])
@@ -115,7 +115,7 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: &[bool]) -> Spec {
         ch.reaction = l.0.or(ch.reaction);
         ch.freshness = l.1.or(ch.freshness);
         ch.max_reaction_time = e.0.or(ch.max_reaction_time);
-        ch.max_data_age = e.1.or(ch.max_data_age);
+        ch.freshness_from_event = e.1.or(ch.freshness_from_event);
     }
     let tails = tails(spec, s);
     for (i, t) in out.tasks.iter_mut().enumerate() {
@@ -189,7 +189,7 @@ struct PointView<'a> {
     value: f64,
     bounds_ms: Vec<PairMs>,
     /// From the event: `reaction` is the maximum reaction time,
-    /// `freshness` the maximum data age.
+    /// `freshness` freshness from the event.
     event_bounds_ms: Vec<PairMs>,
     schedulable: bool,
     /// The timing is schedulable and its flight met the criterion: a
@@ -542,7 +542,7 @@ struct LimitMs {
     #[serde(flatten)]
     limit: PairMs,
     max_reaction_time: Option<f64>,
-    max_data_age: Option<f64>,
+    freshness_from_event: Option<f64>,
 }
 
 fn sweep_json<'a>(
@@ -563,7 +563,7 @@ fn sweep_json<'a>(
             chain: spec.chain_label(k),
             limit: l.into(),
             max_reaction_time: reaction,
-            max_data_age: freshness,
+            freshness_from_event: freshness,
         }
     });
     let max_period = spec.tasks.iter().zip(&limits.max_period);
@@ -721,7 +721,7 @@ fn text(
         }
     }
     out.push_str(&rate_text(spec, s, points, limits, a.safety));
-    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and max data age from the event)");
+    out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and freshness from the event)");
     if a.safety < 1.0 {
         out.push_str(&format!(
             ", each × {} (the safety factor; the tail's max_period too)",

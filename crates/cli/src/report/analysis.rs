@@ -10,7 +10,7 @@ pub use tables::tables;
 use crate::report::{time, Pairs};
 use crate::table::Table;
 use rtpipe_analysis::Bound;
-use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
+use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Literature, Metric, Mode, Report, Worst};
 use rtpipe_model::{Nanos, Spec};
 use serde::Serialize;
 
@@ -142,7 +142,7 @@ pub struct ChainView<'a> {
     path: Vec<String>,
     metric: &'static str,
     limit: Option<f64>,
-    /// The limit from the event (`max_reaction_time` / `max_data_age`),
+    /// The limit from the event (`max_reaction_time` / `freshness_from_event`),
     /// left out when the spec gives none.
     #[serde(skip_serializing_if = "Option::is_none")]
     event_limit: Option<f64>,
@@ -151,6 +151,9 @@ pub struct ChainView<'a> {
     ok: bool,
     paper_ok: bool,
     from_event: Pairs<&'static str, Option<f64>>,
+    /// The literature's quantities this metric is (`Literature::of`), each
+    /// with the bounds of its anchor: the same figures under their names.
+    literature: Pairs<&'static str, Pairs<&'static str, Option<f64>>>,
     cases: Vec<u8>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
@@ -277,6 +280,13 @@ fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) 
         ok: c.ok,
         paper_ok: c.paper_ok(),
         from_event: bounds(Anchor::Event),
+        literature: Pairs(
+            Anchor::ALL
+                .into_iter()
+                .flat_map(|a| Literature::of(c.metric, a).map(move |l| (l, a)))
+                .map(|(l, a)| (l.name(), bounds(a)))
+                .collect(),
+        ),
         cases: r.cases[c.chain]
             .iter()
             .map(|k| match k {
@@ -607,8 +617,27 @@ fn chain_table(spec: &Spec, r: &Report) -> String {
             t.row(row);
         }
         out.push_str(&t.render());
+        out.push_str(&literature_line());
     }
     out
+}
+
+/// Which columns carry the literature's quantities, from the one map
+/// (`Literature::quantity`): the line under the chain table.
+fn literature_line() -> String {
+    let named: Vec<String> = Literature::ALL
+        .iter()
+        .map(|l| {
+            let (metric, anchor) = l.quantity();
+            let suffix = if anchor == Anchor::Event {
+                "+event"
+            } else {
+                ""
+            };
+            format!("{} = {}{suffix}", l.name(), metric.name())
+        })
+        .collect();
+    format!("  the literature's quantities: {}\n", named.join(", "))
 }
 
 /// Every task with a `max_period`: its period against it (nothing when no

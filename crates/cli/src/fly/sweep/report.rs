@@ -140,7 +140,7 @@ fn points_table(v: &SweepView) -> Table {
 
 /// A row per point, chain and anchor: the sound bounds of the timing
 /// flown, ms (from the read: reaction and freshness; from the event:
-/// maximum reaction time and maximum data age).
+/// maximum reaction time and freshness from the event).
 fn bounds_table(v: &SweepView, labels: &[String]) -> Table {
     let mut columns = vec![Column::new("point", Kind::UInt)];
     columns.extend(["chain", "from"].map(|n| Column::new(n, Kind::Text)));
@@ -172,7 +172,7 @@ fn limits_table(limits: &[LimitMs]) -> Table {
             "reaction_ms",
             "freshness_ms",
             "max_reaction_time_ms",
-            "max_data_age_ms",
+            "freshness_from_event_ms",
         ]
         .map(|n| Column::new(n, Kind::Float)),
     );
@@ -189,7 +189,7 @@ fn limits_table(limits: &[LimitMs]) -> Table {
             Cell::opt_float(*reaction),
             Cell::opt_float(*freshness),
             Cell::opt_float(l.max_reaction_time),
-            Cell::opt_float(l.max_data_age),
+            Cell::opt_float(l.freshness_from_event),
         ]);
     }
     t

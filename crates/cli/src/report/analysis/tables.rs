@@ -2,7 +2,7 @@
 //! row per chain and metric, times in the spec's unit, an empty cell for
 //! no value (unbounded, not given).
 
-use rtpipe_analysis::{Anchor, Bound, Report};
+use rtpipe_analysis::{Anchor, Bound, Literature, Report};
 use rtpipe_model::{Nanos, Spec};
 use rtpipe_printer::{Cell, Column, Kind, Table};
 
@@ -64,7 +64,8 @@ fn task_table(spec: &Spec, r: &Report) -> Table {
 }
 
 /// The chain table's columns: one per bound and anchor (`paper`, ...,
-/// `paper_from_event`, ...), from [`Bound::ALL`] × [`Anchor::ALL`].
+/// `paper_from_event`, ...), from [`Bound::ALL`] × [`Anchor::ALL`], and
+/// the literature's names of the row's figures from each anchor.
 fn chain_columns() -> Vec<Column> {
     let mut columns: Vec<Column> = ["chain", "metric"]
         .map(|n| Column::new(n, Kind::Text))
@@ -80,7 +81,18 @@ fn chain_columns() -> Vec<Column> {
             .extend(Bound::ALL.map(|b| Column::new(format!("{}{suffix}", b.name()), Kind::Float)));
     }
     columns.extend(["paper_ok", "ok"].map(|n| Column::new(n, Kind::Bool)));
+    // Last, so the earlier columns keep their places.
+    columns.extend(["literature", "literature_from_event"].map(|n| Column::new(n, Kind::Text)));
     columns
+}
+
+/// The literature's quantities that `metric` from `anchor` is
+/// (`Literature::of`), `;`-separated; empty for none.
+fn literature(metric: rtpipe_analysis::Metric, anchor: Anchor) -> Cell {
+    let names: Vec<&str> = Literature::of(metric, anchor)
+        .map(Literature::name)
+        .collect();
+    Cell::from(names.join(";").as_str())
 }
 
 fn chain_table(spec: &Spec, r: &Report) -> Table {
@@ -98,6 +110,7 @@ fn chain_table(spec: &Spec, r: &Report) -> Table {
             row.extend(c.bound.from(a).map(|(_, v)| time(spec, v)));
         }
         row.extend([Cell::Bool(c.paper_ok()), Cell::Bool(c.ok)]);
+        row.extend(Anchor::ALL.map(|a| literature(c.metric, a)));
         t.push(row);
     }
     t
