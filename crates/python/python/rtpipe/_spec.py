@@ -45,7 +45,14 @@ TASK_KEYS = (
 
 #: The keys of a chain a view reads and edits: its limits, its semantics
 #: and its path.
-CHAIN_KEYS = ("reaction", "freshness", "communication", "path")
+CHAIN_KEYS = (
+    "reaction",
+    "freshness",
+    "max_reaction_time",
+    "freshness_from_event",
+    "communication",
+    "path",
+)
 
 
 class _Item:
@@ -100,8 +107,9 @@ class Task(_Item):
 
 class Chain(_Item):
     """A chain of a system (``system.chains["P1"]``, or by its label):
-    its limits ``reaction`` and ``freshness``, ``communication`` and
-    ``path`` as attributes."""
+    its limits ``reaction``, ``freshness`` (from the head's read),
+    ``max_reaction_time`` and ``freshness_from_event`` (from the event),
+    ``communication`` and ``path`` as attributes."""
 
     _keys = CHAIN_KEYS
     __slots__ = ()
