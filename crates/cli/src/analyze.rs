@@ -146,7 +146,7 @@ impl AnalyzeReport<'_> {
 
 /// `analyze --json`: the report, then every source-to-sink pair, the
 /// margins and the measurements when asked.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct AnalyzeView<'a> {
     #[serde(flatten)]
     report: ReportView<'a>,
@@ -194,4 +194,10 @@ impl rtpipe_printer::Report for AnalyzeReport<'_> {
         ts.extend(self.margins.as_ref().map(|m| margins::table(self.spec, m)));
         ts
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(AnalyzeView<'static>)
 }

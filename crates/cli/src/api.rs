@@ -22,6 +22,8 @@ pub const COMMANDS: [&str; 6] = ["analyze", "simulate", "fly", "design", "run", 
 pub struct Reply {
     /// The `--json` report (absent when the command failed: see `notes`).
     pub json: Option<serde_json::Value>,
+    /// The report's tables (what `--format csv` prints), with the JSON.
+    pub tables: Vec<rtpipe_printer::Table>,
     /// The command line's exit status (0 ok, 1 a verdict failed, 2 bad
     /// input, 3 internal error, 130 stopped).
     pub status: u8,
@@ -38,6 +40,9 @@ pub struct Reply {
 pub enum Failure {
     /// A flag or a value is wrong: what and how to fix it.
     Input(Diagnostic),
+    /// A run on this machine could not start (`run`: the kernel refused a
+    /// class or a reservation, a CPU is missing): what and how to fix it.
+    Run(Diagnostic),
     /// The stop flag was set.
     Stopped,
     /// The sample rows asked for would not fit [`MAX_SAMPLE_ROWS`]: what
@@ -220,11 +225,13 @@ pub fn waters(flags: &[String]) -> Result<Spec, Failure> {
 }
 
 fn reply(answer: Answer, samples: Option<Columns>, designed: Option<Spec>) -> Reply {
+    let (json, tables) = match answer.report {
+        Rendered::Json(v, tables) => (Some(v), tables),
+        Rendered::Text(_) | Rendered::Nothing => (None, Vec::new()),
+    };
     Reply {
-        json: match answer.report {
-            Rendered::Json(v) => Some(v),
-            Rendered::Text(_) | Rendered::Nothing => None,
-        },
+        json,
+        tables,
         status: answer.status,
         notes: answer.notes,
         samples,
@@ -272,7 +279,8 @@ fn dispatch(
         }
         "run" => {
             let a: crate::run::RunArgs = parse(command, &argv)?;
-            Ok((crate::run::answer(spec, &a, false).map_err(input)?, None))
+            let answer = crate::run::answer(spec, &a, false).map_err(Failure::Run)?;
+            Ok((answer, None))
         }
         "design" => {
             let a: DesignArgs = parse(command, &argv)?;
@@ -284,6 +292,30 @@ fn dispatch(
             format!("use one of {}", COMMANDS.join(", ")),
         ))),
     }
+}
+
+/// Every flag of `command` (one of [`COMMANDS`], or `waters`) and its
+/// help as `rtpipe COMMAND --help` prints it (the long form): what the
+/// Python methods' docstrings say of each keyword. Empty for another
+/// name.
+pub fn flag_help(command: &str) -> Vec<(String, String)> {
+    let cmd = clap::Command::new("rtpipe");
+    let cmd = match command {
+        "analyze" => AnalyzeArgs::augment_args(cmd),
+        "simulate" => SimulateArgs::augment_args(cmd),
+        "fly" => FlyArgs::augment_args(cmd),
+        "design" => DesignArgs::augment_args(cmd),
+        "run" => crate::run::RunArgs::augment_args(cmd),
+        "campaign" => crate::campaign::CampaignArgs::augment_args(cmd),
+        "waters" => crate::generate::WatersArgs::augment_args(cmd),
+        _ => return Vec::new(),
+    };
+    cmd.get_arguments()
+        .filter_map(|a| {
+            let help = a.get_long_help().or_else(|| a.get_help())?.to_string();
+            Some((a.get_long()?.to_string(), help))
+        })
+        .collect()
 }
 
 /// `argv` (the spec's label, then the flags) parsed as the command line

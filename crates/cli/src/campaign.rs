@@ -139,7 +139,7 @@ fn cores() -> usize {
 
 /// `campaign --plan`'s report: the shards of the part, which the
 /// directory holds whole and which it will run again.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct CampaignPlan {
     campaign: String,
     fingerprint: String,
@@ -209,7 +209,7 @@ impl rtpipe_printer::Report for CampaignPlan {
 }
 
 /// `rtpipe campaign`'s report: what a run of the part wrote, and how fast.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct CampaignSummary {
     campaign: String,
     out: String,
@@ -345,4 +345,15 @@ impl rtpipe_printer::Report for CampaignSummary {
             ],
         )]
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(CampaignSummary)
+}
+
+/// The JSON Schema of `campaign --plan --json`'s report.
+pub fn plan_json_schema() -> schemars::Schema {
+    schemars::schema_for!(CampaignPlan)
 }

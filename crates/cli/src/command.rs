@@ -158,7 +158,8 @@ pub fn render<R: rtpipe_printer::Report>(
 ) -> Result<Rendered, Diagnostic> {
     match rtpipe_printer::print(report, format) {
         Ok(Printed::Text(t)) => Ok(Rendered::Text(t)),
-        Ok(Printed::Json(v)) => Ok(Rendered::Json(v)),
+        // The tables go with the JSON: the Python package hands both back.
+        Ok(Printed::Json(v)) => Ok(Rendered::Json(v, report.tables())),
         Err(e) => Err(Diagnostic::error(
             format!("internal: cannot encode JSON: {e}"),
             "please report it with the spec and the command line",
@@ -206,7 +207,9 @@ pub struct Answer {
 /// A command's report, as `--json` asks.
 pub enum Rendered {
     Text(String),
-    Json(serde_json::Value),
+    /// The JSON value, and the tables `--format csv` prints of the same
+    /// report.
+    Json(serde_json::Value, Vec<rtpipe_printer::Table>),
     /// No report: the command failed (its notes say why).
     Nothing,
 }
@@ -240,7 +243,7 @@ impl Answer {
         match &self.report {
             Rendered::Text(t) => print!("{t}"),
             Rendered::Nothing => {}
-            Rendered::Json(v) => {
+            Rendered::Json(v, _) => {
                 if let Err(code) = print_json(v) {
                     return code;
                 }

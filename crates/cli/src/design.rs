@@ -388,13 +388,16 @@ impl DesignReport<'_> {
                 time_unit: spec.time_unit.name(),
             },
         };
+        let margins = match (out.spec.as_ref(), self.margins) {
+            (Some(s), Some(m)) => Some(crate::report::margins::view(s, m)),
+            _ => None,
+        };
         let v = DesignOut {
             head,
             design: design_json(spec, out, self.mode, self.stopped),
+            margins,
         };
-        let mut v = command::to_value(&v)?;
-        margin::append_json(&mut v, out, self.margins)?;
-        Ok(v)
+        command::to_value(&v)
     }
 }
 
@@ -608,14 +611,18 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
 
 /// `design --json`: the verified design's analysis report (or just the
 /// system when there is none), then the search's answer.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DesignOut<'a> {
     #[serde(flatten)]
     head: Head<'a>,
     design: DesignView<'a>,
+    /// `--margins`: the designed spec's timing margins (as `analyze
+    /// --margins` reports them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margins: Option<crate::report::margins::MarginsView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 enum Head<'a> {
     Report(ReportView<'a>),
@@ -625,7 +632,7 @@ enum Head<'a> {
     },
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DesignView<'a> {
     mode: &'static str,
     status: &'static str,
@@ -649,9 +656,12 @@ struct DesignView<'a> {
     /// `--fly`: every design flown, in order.
     #[serde(skip_serializing_if = "Option::is_none")]
     flights: Option<Vec<flights::FlownView>>,
+    /// `--objective margin`: the factor found and every factor tried.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margin_search: Option<margin::SearchView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ConflictView<'a> {
     constraint: &'a str,
     fix: Option<&'a str>,
@@ -686,6 +696,7 @@ fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> De
         notes: &o.notes,
         interrupted: stopped,
         flights: (!o.checked.is_empty()).then(|| flights::flown_json(spec, &o.checked)),
+        margin_search: margin::search_json(o),
     }
 }
 
@@ -756,6 +767,12 @@ fn design_text(spec: &Spec, o: &Outcome, mode: Mode, stopped: bool) -> String {
         out.push_str(&format!("note: {n}\n"));
     }
     out
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(DesignOut<'static>)
 }
 
 #[cfg(test)]

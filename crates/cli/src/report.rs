@@ -5,6 +5,7 @@ pub mod analysis;
 pub mod flight;
 pub mod margins;
 pub mod samples;
+pub mod schema;
 
 use rtpipe_model::{Nanos, Spec};
 
@@ -15,6 +16,20 @@ pub struct Pairs<K, V>(pub Vec<(K, V)>);
 impl<K: serde::Serialize, V: serde::Serialize> serde::Serialize for Pairs<K, V> {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+/// An object whose keys are data (task names, bound names), each value a `V`.
+impl<K, V: schemars::JsonSchema> schemars::JsonSchema for Pairs<K, V> {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        format!("Pairs_{}", V::schema_name()).into()
+    }
+
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "type": "object",
+            "additionalProperties": generator.subschema_for::<V>(),
+        })
     }
 }
 

@@ -434,3 +434,9 @@ fn exit_status(v: &Verdict, notes: &mut Vec<String>) -> u8 {
     }
     0
 }
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(report::RunView<'static>)
+}

@@ -246,14 +246,14 @@ fn to_text(
 }
 
 /// `fly --json`: the observations report, then the flight's quality.
-#[derive(Serialize)]
-struct FlyView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct FlyView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, TaskView<'a>, simulate::ObsChain<'a>>,
     flight: FlightView<'a>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct FlightView<'a> {
     vehicle: &'a str,
     mission: &'a str,
@@ -287,7 +287,7 @@ struct FlightView<'a> {
     seconds: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct StepView {
     axis: &'static str,
     at_s: f64,
@@ -298,7 +298,7 @@ struct StepView {
     drift_deg: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ResponseView {
     rise_s: f64,
     overshoot: f64,

@@ -183,7 +183,7 @@ fn freed(spec: &Spec, names: Option<&[String]>) -> Result<Vec<bool>, Diagnostic>
     Ok(free)
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PointView<'a> {
     varied: &'static str,
     value: f64,
@@ -211,7 +211,7 @@ struct PointView<'a> {
 }
 
 /// A chain's reaction and freshness, in ms (null: none).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairMs {
     reaction: Option<f64>,
     freshness: Option<f64>,
@@ -514,8 +514,8 @@ fn write_files(
 
 /// The sweep as one JSON object: the setup, every point, the derived
 /// limits (ms).
-#[derive(Serialize)]
-struct SweepView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct SweepView<'a> {
     system: &'a str,
     vehicle: &'a str,
     mission: &'a str,
@@ -536,7 +536,7 @@ struct SweepView<'a> {
     also: Vec<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct LimitMs {
     chain: String,
     #[serde(flatten)]
@@ -734,6 +734,11 @@ fn text(
         out.push_str(&format!("wrote {} with these limits\n", w.display()));
     }
     out
+}
+
+/// The JSON Schema of `fly --sweep --json`'s report.
+pub(super) fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(SweepView<'static>)
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ mod tables;
 
 pub use tables::tables;
 
-use crate::report::{time, Pairs};
+use crate::report::time;
 use crate::table::Table;
 use rtpipe_analysis::Bound;
 use rtpipe_analysis::{AllPaths, Anchor, ChainOffsets, Metric, Mode, Report, Worst};
@@ -20,7 +20,8 @@ pub(crate) fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
 
 /// The JSON report; `T` and `C` let `simulate` extend the task and chain
 /// entries with what it observed.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "AnalysisView")]
 pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
     pub system: &'a str,
     pub time_unit: &'static str,
@@ -56,7 +57,7 @@ impl<'a, T, C> ReportView<'a, T, C> {
     }
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct TaskView<'a> {
     name: &'a str,
     server: &'static str,
@@ -93,7 +94,7 @@ pub struct TaskView<'a> {
     activation: Option<events::ActivationView<'a>>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct SchedView {
     test: &'static str,
     utilization: f64,
@@ -104,14 +105,14 @@ pub struct SchedView {
 
 /// A single CPU's bound as a number, several as a list (the format
 /// predates multiprocessor specs).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 enum OneOrMany {
     One(f64),
     Many(Vec<f64>),
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct CpuView {
     cpu: u32,
     tasks: usize,
@@ -127,7 +128,7 @@ struct CpuView {
 }
 
 /// `[system] overheads` on one CPU.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct OverheadsView {
     context_switch: f64,
     release: f64,
@@ -136,7 +137,7 @@ struct OverheadsView {
 
 /// One chain and metric of the report; `known_offsets` only for a chain
 /// with known offsets.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct ChainView<'a> {
     name: Option<&'a str>,
     path: Vec<String>,
@@ -146,11 +147,15 @@ pub struct ChainView<'a> {
     /// left out when the spec gives none.
     #[serde(skip_serializing_if = "Option::is_none")]
     event_limit: Option<f64>,
+    /// The bounds of the chain's metric from the head's read, in the
+    /// spec's time unit.
     #[serde(flatten)]
-    bounds: Pairs<&'static str, Option<f64>>,
+    bounds: BoundValues,
     ok: bool,
     paper_ok: bool,
-    from_event: Pairs<&'static str, Option<f64>>,
+    /// The same bounds from the external event (a sample read up to one
+    /// head period after it), in the spec's time unit.
+    from_event: BoundValues,
     cases: Vec<u8>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
@@ -159,10 +164,51 @@ pub struct ChainView<'a> {
     communication: Option<&'static str>,
 }
 
+/// One chain's bound of each method ([`rtpipe_analysis::Bound::ALL`]),
+/// keyed by the method's name; null where a task on the chain has no
+/// bounded response time.
+pub struct BoundValues(Vec<(&'static str, Option<f64>)>);
+
+impl Serialize for BoundValues {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+impl schemars::JsonSchema for BoundValues {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "BoundValues".into()
+    }
+
+    /// One property per method, named as the reports name it.
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut properties = serde_json::Map::new();
+        for b in rtpipe_analysis::Bound::ALL {
+            let about = bound_about(b);
+            let field = serde_json::json!({"type": ["number", "null"], "description": about});
+            properties.insert(b.name().to_string(), field);
+        }
+        let names: Vec<&str> = rtpipe_analysis::Bound::ALL.map(|b| b.name()).to_vec();
+        schemars::json_schema!({"type": "object", "properties": properties, "required": names})
+    }
+}
+
+/// What each bound is, for the reports' schema (docs/analysis.md has the
+/// formulas).
+fn bound_about(b: rtpipe_analysis::Bound) -> &'static str {
+    use rtpipe_analysis::Bound;
+    match b {
+        Bound::Paper => "The paper's bound (Cheng, West, Einstein, EMSOFT 2018), in the spec's unit; null when unbounded.",
+        Bound::Sound => "rtpipe's sound, interference-aware bound, in the spec's unit; null when unbounded.",
+        Bound::Davare => "Davare et al.'s bound (DAC 2007), in the spec's unit; null when unbounded.",
+        Bound::Duerr => "Duerr et al.'s bound (CASES 2019), in the spec's unit; null when unbounded.",
+    }
+}
+
 /// A chain's bounds of its metric under the spec's known release offsets;
 /// the hyperperiod and jobs are null when the job-level analysis did not
 /// run. `simulate` fills in the violations.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct KnownView {
     #[serde(flatten)]
     read: KnownBound,
@@ -173,7 +219,7 @@ pub struct KnownView {
     pub violations: Option<usize>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct KnownBound {
     sound: Option<f64>,
     basis: String,
@@ -260,7 +306,7 @@ fn sched_view(spec: &Spec, s: &rtpipe_analysis::Schedulability) -> SchedView {
 fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> ChainView<'a> {
     let ch = &spec.chains[c.chain];
     let bounds = |a: Anchor| {
-        Pairs(
+        BoundValues(
             c.bound
                 .from(a)
                 .map(|(b, v)| (b.name(), time(spec, v)))
@@ -706,19 +752,19 @@ pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
     out
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct WorstView {
     path: Vec<String>,
     bound: Option<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairMetric {
     paper: WorstView,
     sound: WorstView,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairView<'a> {
     source: &'a str,
     sink: &'a str,
@@ -726,7 +772,7 @@ struct PairView<'a> {
     freshness: PairMetric,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct PathsView<'a> {
     pairs: Vec<PairView<'a>>,
     skipped_cycles: Vec<Vec<String>>,

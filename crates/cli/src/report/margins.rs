@@ -248,7 +248,7 @@ fn period_table(spec: &Spec, rows: &[PeriodRange]) -> String {
 }
 
 /// `--json`'s `margins`.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct MarginsView {
     mode: &'static str,
     holds: bool,
@@ -262,7 +262,7 @@ pub struct MarginsView {
     periods: Vec<PeriodView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ExecView {
     task: String,
     exec: f64,
@@ -273,7 +273,7 @@ struct ExecView {
     limited_by: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct LimitView {
     chain: String,
     metric: &'static str,
@@ -288,7 +288,7 @@ struct LimitView {
     exec_margins: crate::report::Pairs<String, Option<f64>>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ScalingView {
     /// null: every CPU together.
     cpu: Option<u32>,
@@ -297,7 +297,7 @@ struct ScalingView {
     limited_by: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PeriodView {
     task: String,
     period: f64,

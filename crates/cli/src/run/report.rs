@@ -76,7 +76,8 @@ impl rtpipe_printer::Report for RunReport<'_> {
 
 /// The `flight` entry of the JSON: the vehicle, the mission and how the
 /// flight went, its figures named as `fly --json` names them.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "RunFlightView")]
 struct FlightView<'a> {
     vehicle: &'a str,
     mission: &'a str,
@@ -203,8 +204,8 @@ fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
 
 /// `run --json`: the observations report with each task's measurements,
 /// the Fig. 10 figures, the run, and the flight when bodies flew.
-#[derive(Serialize)]
-struct RunView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct RunView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, Extended<TaskView<'a>, TaskMeasured>, ObsChain<'a>>,
     fig10: Vec<Fig10View>,
@@ -213,7 +214,10 @@ struct RunView<'a> {
     flight: Option<FlightView<'a>>,
 }
 
-#[derive(Serialize)]
+/// What the run measured of a task's thread (counts of jobs; times in
+/// the spec's unit).
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "Measured")]
 struct TaskMeasured {
     released: u64,
     completed: u64,
@@ -232,7 +236,7 @@ struct TaskMeasured {
     utilization: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct RunInfo<'a> {
     duration: f64,
     policy: &'static str,
@@ -257,7 +261,7 @@ struct RunInfo<'a> {
 }
 
 /// The EDF dispatcher's counts (`rtpipe_runtime::edf::Stats`).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DispatchView {
     dispatches: u64,
     priority_changes: u64,
@@ -281,7 +285,7 @@ impl From<rtpipe_runtime::edf::Stats> for DispatchView {
 }
 
 /// One resource's sections in a run.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct HeldView<'a> {
     resource: &'a str,
     holds: usize,
@@ -434,7 +438,7 @@ fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
 }
 
 /// `fig10`: one entry per chain, in the spec's unit.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[allow(non_snake_case)] // the paper's names for the figures
 struct Fig10View {
     chain: String,

@@ -382,6 +382,12 @@ fn run_searches(
     Ok(Some(out))
 }
 
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(report::SimulateView<'static>)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

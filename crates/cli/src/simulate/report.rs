@@ -6,7 +6,7 @@ use crate::report::{time, Pairs};
 use rtpipe_sim::observe::Summary;
 use serde::Serialize;
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SearchView {
     chain: String,
     metric: &'static str,
@@ -23,7 +23,7 @@ pub(super) struct SearchView {
     known_offsets: Option<SearchKnown>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct SearchKnown {
     sound: Option<f64>,
     basis: String,
@@ -105,7 +105,7 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
 
 /// `simulate --json`: the observations report, the run, and the adversarial
 /// search when one ran.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SimulateView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, Extended<TaskView<'a>, TaskObserved>, ObsChain<'a>>,
@@ -115,14 +115,18 @@ pub(super) struct SimulateView<'a> {
 }
 
 /// A report entry with one more key at its end.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "{B}{X}")]
 pub(crate) struct Extended<B, X> {
     #[serde(flatten)]
     pub base: B,
     pub observed: X,
 }
 
-#[derive(Serialize)]
+/// What the simulation observed of a task (counts of jobs; times in the
+/// spec's unit).
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "Simulated")]
 pub(super) struct TaskObserved {
     released: u64,
     /// Releases merged into a queued job (threads and data-triggered
@@ -136,7 +140,7 @@ pub(super) struct TaskObserved {
     utilization: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SimulationView<'a> {
     horizon: f64,
     seed: u64,
@@ -209,7 +213,7 @@ pub(super) fn simulation_view<'a>(
 
 /// A chain entry of the report with its observations from the read and
 /// from the event.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(crate) struct ObsChain<'a> {
     #[serde(flatten)]
     base: ChainView<'a>,
@@ -219,7 +223,7 @@ pub(crate) struct ObsChain<'a> {
     violations_from_event: Violations,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct Violations {
     paper: usize,
     sound: Option<usize>,
@@ -263,7 +267,7 @@ pub(crate) fn observations_view<'a>(
 /// {count, min, mean, p99, max, variation} in the spec's unit; variation =
 /// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV); all
 /// but the count null without observations.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(crate) struct ObservedView {
     count: usize,
     min: Option<f64>,

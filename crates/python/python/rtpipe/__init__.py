@@ -3,21 +3,32 @@ the ``rtpipe`` command line, on the same crates.
 
 >>> import rtpipe
 >>> system = rtpipe.load("examples/paper-table3.toml")
->>> report = system.analyze()              # the dict of `rtpipe analyze --json`
+>>> report = system.analyze()              # an rtpipe.reports.AnalysisReport
+>>> report.chains[0].sound                 # a chain's sound bound, in the spec's unit
+>>> report.to_pandas("chains")             # the chains table as a DataFrame
 >>> run = system.simulate(outputs=1000, samples=True)
->>> run["samples"]["reaction_ns"]          # one numpy value per head sample
+>>> run.samples["reaction_ns"]             # one numpy value per head sample
 
-Every method returns a plain dict: exactly what the command's ``--json``
-prints (the same keys, order and values), plus ``samples`` (numpy
-columns) when asked for, and ``spec`` (a :class:`System`) from
-:meth:`System.design`. Keyword arguments are the command's flags with
+Every method returns a typed report (:mod:`rtpipe.reports`, generated
+from the Rust report structs): a ``dict`` holding exactly what the
+command's ``--json`` prints (the same keys, order and values; ``report["ok"]``
+and ``report.to_dict()`` give them as before), plus ``exit_status``,
+``samples`` (numpy columns) when asked for, and ``spec`` (a :class:`System`)
+from :meth:`System.design`; each field is also a documented property, and
+the report's tables (what ``--format csv`` prints) are under
+``report.tables`` with ``to_pandas``, ``to_polars`` and ``to_arrow``.
+Keyword arguments are the command's flags with
 underscores (``search_steps=3`` is ``--search-steps 3``), and one left at
 None takes the command line's default (``rtpipe COMMAND --help`` lists
-them); the values are checked by the command line's own parser. Errors raise :class:`SpecError`
-(with each problem's place) or :class:`InputError` (with ``help``). A run
-whose verdict fails (a limit missed, a flight that crashed) still returns
-its dict (``ok``, ``criteria_met`` say so), and the command line's exit
-status is under ``"exit_status"``.
+them); the values are checked by the command line's own parser. Errors raise
+:class:`SpecError` (with the first problem's ``file``, ``line``,
+``column``, ``key`` and ``fix``, and every problem under ``diagnostics``),
+:class:`InputError` (the argument at fault and ``help``), :class:`RunError`
+(a run on this machine that could not start) or :class:`InternalError`
+(a bug), all :class:`RtpipeError`. A run whose verdict fails (a limit
+missed, a flight that crashed) still returns its report (``ok``,
+``criteria_met`` say so), and the command line's exit status is its
+``exit_status``.
 
 Long calls release the GIL (other Python threads run meanwhile) and
 Ctrl-C stops them with KeyboardInterrupt: the work itself stops (a
@@ -40,12 +51,23 @@ import os
 import re
 import signal
 import threading
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Type, TypeVar, Union
 
 import numpy as np
 
-from . import _rtpipe
-from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
+from . import _rtpipe, reports
+from ._record import Report, Table, table_from_raw
+from ._rtpipe import InputError, InternalError, RtpipeError, RunError, SpecError
+from .reports import (
+    AnalysisReport,
+    CampaignPlan,
+    CampaignSummary,
+    DesignReport,
+    FlightReport,
+    RunReport,
+    SimulationReport,
+    SweepReport,
+)
 
 __all__ = [
     "load",
@@ -55,7 +77,18 @@ __all__ = [
     "RtpipeError",
     "SpecError",
     "InputError",
+    "RunError",
     "InternalError",
+    "Table",
+    "reports",
+    "AnalysisReport",
+    "SimulationReport",
+    "FlightReport",
+    "SweepReport",
+    "DesignReport",
+    "RunReport",
+    "CampaignSummary",
+    "CampaignPlan",
     "MAX_SAMPLE_ROWS",
     "__version__",
 ]
@@ -159,12 +192,20 @@ def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
         return call()
     except InputError as e:
         text = _pythonic(str(e), keywords)
-        err = InputError(text)
+        err = type(e)(text)
         for attr in ("help", "message"):
             value = getattr(e, attr, None)
-            if isinstance(value, str):
-                setattr(err, attr, _pythonic(value, keywords))
+            setattr(err, attr, _pythonic(value, keywords) if isinstance(value, str) else value)
+        err.argument = _argument_at_fault(text, keywords)
         raise err from None
+
+
+def _argument_at_fault(message: str, keywords: Sequence[str]) -> Optional[str]:
+    """The keyword argument a message names first (``'seed'``), or None
+    when it names none (a file's content, the machine)."""
+    found = [(m.start(), k) for k in keywords
+             for m in [re.search(r"(?<![\w-])" + re.escape(k) + r"(?![\w-])", message)] if m]
+    return min(found)[1] if found else None
 
 
 _STOP_SIGNALS = tuple(
@@ -202,9 +243,12 @@ def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
     return cols
 
 
-def _finish(command: str, result: tuple) -> dict:
-    """A native reply as the dict a method returns."""
-    report, status, notes, cols, designed = result
+R = TypeVar("R", bound=Report)
+
+
+def _finish(command: str, result: tuple, kind: Type[R]) -> R:
+    """A native reply as the typed report a method returns."""
+    report, status, notes, cols, designed, tables = result
     for note in notes:
         (log.error if note.startswith("error") else log.info)(note)
     if report is None:
@@ -213,10 +257,10 @@ def _finish(command: str, result: tuple) -> dict:
         raise (InputError if status == 2 else InternalError)(text)
     report["exit_status"] = status
     if cols is not None:
-        report["samples"] = _columns(cols)
+        report["samples"] = Table("samples", _columns(cols))
     if command == "design":
         report["spec"] = System(designed) if designed is not None else None
-    return report
+    return kind(report, {name: table_from_raw(name, raw) for name, raw in tables.items()})
 
 
 def campaign(
@@ -226,7 +270,7 @@ def campaign(
     shard: Union[str, Tuple[int, int], None] = None,
     jobs: Optional[int] = None,
     plan: bool = False,
-) -> dict:
+) -> Union[CampaignSummary, CampaignPlan]:
     """Runs a campaign (``rtpipe campaign CONFIG OUTDIR --json``): its
     systems generated, analysed and simulated on ``jobs`` threads (every
     core by default) into Parquet shards in ``out``; shards already there
@@ -239,9 +283,12 @@ def campaign(
     """
     options = dict(shard=_shard(shard), jobs=jobs, plan=plan)
 
-    def call() -> dict:
+    def call() -> Union[CampaignSummary, CampaignPlan]:
         flags = [os.fspath(config), os.fspath(out)] + _flags(options, _switches(campaign))
-        return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+        result = _rtpipe.run_plain("campaign", flags)
+        if plan:
+            return _finish("campaign", result, CampaignPlan)
+        return _finish("campaign", result, CampaignSummary)
 
     return _speaking_python(list(inspect.signature(campaign).parameters), call)
 
@@ -315,19 +362,21 @@ class System:
     def __repr__(self) -> str:
         return repr(self._spec)
 
-    def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
+    def _run(
+        self, command: str, options: Mapping[str, Any], kind: Type[R], samples: bool = False
+    ) -> R:
         method = getattr(System, command)
         keywords = list(inspect.signature(method).parameters)[1:]
 
-        def call() -> dict:
+        def call() -> R:
             flags = _flags(options, _switches(method))
-            return _finish(command, _rtpipe.run(command, self._spec, flags, samples))
+            return _finish(command, _rtpipe.run(command, self._spec, flags, samples), kind)
 
         return _speaking_python(keywords, call)
 
-    def _run_samples(self, command: str, options: dict, samples: Any) -> dict:
+    def _run_samples(self, command: str, options: dict, samples: Any, kind: Type[R]) -> R:
         columns = _samples(samples, options)
-        return self._run(command, options, columns)
+        return self._run(command, options, kind, columns)
 
     def analyze(
         self,
@@ -337,7 +386,7 @@ class System:
         margins: bool = False,
         margins_csv: Union[str, "os.PathLike[str]", None] = None,
         observed: Union[str, "os.PathLike[str]", None] = None,
-    ) -> dict:
+    ) -> AnalysisReport:
         """Schedulability and the worst-case bounds of every chain
         (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
         ``ok``. ``margins=True`` adds ``"margins"`` (``--margins``): how much
@@ -354,7 +403,7 @@ class System:
             margins_csv=margins_csv,
             observed=observed,
         )
-        return self._run("analyze", options)
+        return self._run("analyze", options, AnalysisReport)
 
     def simulate(
         self,
@@ -370,7 +419,7 @@ class System:
         plot: Optional[str] = None,
         gantt: Optional[str] = None,
         window: Optional[str] = None,
-    ) -> dict:
+    ) -> SimulationReport:
         """The simulator against the bounds (``rtpipe simulate --json``).
 
         ``samples=True`` adds ``"samples"``: one numpy column per field of
@@ -388,7 +437,7 @@ class System:
             outputs=outputs, duration=duration, seed=seed, exec=exec, phasing=phasing,
             search_steps=search_steps, trace=trace, plot=plot, gantt=gantt, window=window,
         )
-        return self._run_samples("simulate", options, samples)
+        return self._run_samples("simulate", options, samples, SimulationReport)
 
     def fly(
         self,
@@ -408,7 +457,7 @@ class System:
         criterion: Optional[str] = None,
         write_limits: Optional[str] = None,
         free_periods: bool = False,
-    ) -> dict:
+    ) -> Union[FlightReport, SweepReport]:
         """A software-in-the-loop flight on the simulated schedule
         (``rtpipe fly --json``), or with ``sweep=True`` the timing sweep
         that derives the limits the flight depends on. ``samples`` as in
@@ -419,7 +468,9 @@ class System:
             per_octave=per_octave, criterion=criterion, write_limits=write_limits,
             free_periods=free_periods,
         )
-        return self._run_samples("fly", options, samples)
+        if sweep:
+            return self._run_samples("fly", options, samples, SweepReport)
+        return self._run_samples("fly", options, samples, FlightReport)
 
     def run(
         self,
@@ -436,7 +487,7 @@ class System:
         trace: Union[str, "os.PathLike[str]", None] = None,
         plot: Union[str, "os.PathLike[str]", None] = None,
         export_rt_app: Union[str, "os.PathLike[str]", None] = None,
-    ) -> dict:
+    ) -> RunReport:
         """Runs the spec for real on this machine (``rtpipe run --json``):
         one thread per task under ``policy`` ("fifo", "deadline",
         "edf-fifo"; "other" with ``best_effort=True`` runs without real-time
@@ -458,10 +509,10 @@ class System:
         # are put back after it.
         kept = _signal_handlers()
         try:
-            report = self._run("run", options)
+            report = self._run("run", options, RunReport)
         finally:
             _restore_signal_handlers(kept)
-        if report.get("run", {}).get("interrupted"):
+        if report.run.interrupted:
             raise KeyboardInterrupt("the run was stopped by a signal")
         return report
 
@@ -483,7 +534,7 @@ class System:
         objective: Optional[str] = None,
         max_utilization: Optional[float] = None,
         margins: bool = False,
-    ) -> dict:
+    ) -> DesignReport:
         """Periods that meet every limit at least utilisation
         (``rtpipe design --json``), plus ``"spec"``: the designed
         :class:`System`, or None when there is no verified design.
@@ -501,4 +552,4 @@ class System:
             confidence=confidence, write=write, overwrite_spec=overwrite_spec,
             objective=objective, max_utilization=max_utilization, margins=margins,
         )
-        return self._run("design", options)
+        return self._run("design", options, DesignReport)
