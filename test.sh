@@ -18,7 +18,7 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
   }
 fi
-"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20" "pyarrow>=12" "ray>=2.9" "matplotlib>=3.5"
+"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20" "pyarrow>=12" "ray>=2.9" "matplotlib>=3.5" "pandas>=1.5" "polars>=0.20" "mypy>=1.5"
 rm -rf "$target/wheels"
 "$venv/bin/maturin" build --release -q -m crates/python/Cargo.toml -o "$target/wheels"
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels/rtpipe-*.whl

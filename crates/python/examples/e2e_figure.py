@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any, Dict
 
 import numpy as np
 import pyarrow.compute as pc
@@ -39,16 +40,20 @@ ANALYSES = [
 METRICS = [("reaction", "maximum reaction time"), ("freshness", "maximum data age")]
 
 
-def run(config: Path, out: Path):
+# {metric: {analysis: array of 1 - bound/Davare}}
+Reductions = Dict[str, Dict[str, Any]]
+
+
+def run(config: Path, out: Path) -> Any:
     """The campaign's table (its shards run if `out` lacks them)."""
     rtpipe.campaign(config, out)
     return pq.read_table(out)
 
 
-def reductions(table) -> dict:
+def reductions(table: Any) -> Reductions:
     """{metric: {analysis: array of 1 - bound/Davare}} over the chains
     every analysis bounds (schedulable systems)."""
-    out = {}
+    out: Reductions = {}
     for metric, _ in METRICS:
         t = table.filter(pc.equal(table["metric"], metric))
         t = t.filter(t["schedulable"])
@@ -61,7 +66,7 @@ def reductions(table) -> dict:
     return out
 
 
-def summary(red: dict) -> str:
+def summary(red: Reductions) -> str:
     """Median and quartiles of each reduction, as a table."""
     lines = ["| metric | analysis | chains | median | 25 % | 75 % |", "|---|---|---|---|---|---|"]
     for metric, name in METRICS:
@@ -71,7 +76,7 @@ def summary(red: dict) -> str:
     return "\n".join(lines)
 
 
-def plot(red: dict, path: str) -> None:
+def plot(red: Reductions, path: str) -> None:
     """Box plots as E2EEvaluation draws them: one panel per metric."""
     import matplotlib
 

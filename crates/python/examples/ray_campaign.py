@@ -25,14 +25,15 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import ray
 
 import rtpipe
 
 
-@ray.remote(num_cpus=1)
-def run_shard(config_text: str, k: int, shards: int) -> dict:
+@ray.remote(num_cpus=1)  # type: ignore[untyped-decorator,unused-ignore]
+def run_shard(config_text: str, k: int, shards: int) -> dict[str, Any]:
     """Shard k of the campaign, on whichever node Ray picks: its file's
     bytes, by name."""
     with tempfile.TemporaryDirectory(prefix="rtpipe-shard-") as tmp:
@@ -60,7 +61,9 @@ def write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def run(config: Path, out: Path, workers: int | None = None, address: str | None = None) -> dict:
+def run(
+    config: Path, out: Path, workers: int | None = None, address: str | None = None
+) -> dict[str, Any]:
     """Runs every shard `out` lacks on the cluster; returns what was done.
     A directory of another campaign is refused (``rtpipe.InputError``)
     before anything is written, as ``rtpipe campaign`` refuses it; a shard

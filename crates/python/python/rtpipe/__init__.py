@@ -102,6 +102,8 @@ MAX_SAMPLE_ROWS: int = _rtpipe.MAX_SAMPLE_ROWS
 
 log = logging.getLogger("rtpipe")
 
+T = TypeVar("T")
+
 Source = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
 
@@ -142,7 +144,7 @@ def waters(
     return System(_speaking_python(keywords, lambda: _rtpipe.waters(_flags(options))))
 
 
-def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> list:
+def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> List[str]:
     """Keyword arguments as command-line flags: None and False leave a flag
     out, True gives a switch (one of ``switches``) bare, a list joins its
     items with commas. A value is always joined to its flag
@@ -186,7 +188,7 @@ def _pythonic(message: str, keywords: Sequence[str]) -> str:
     return message
 
 
-def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
+def _speaking_python(keywords: Sequence[str], call: Callable[[], T]) -> T:
     """``call()``, its InputError said in terms of ``keywords``."""
     try:
         return call()
@@ -213,7 +215,7 @@ _STOP_SIGNALS = tuple(
 )
 
 
-def _signal_handlers() -> list:
+def _signal_handlers() -> List[Tuple[int, Any]]:
     """The Python handlers of the stop signals (none off the main thread,
     where Python cannot set them)."""
     if threading.current_thread() is not threading.main_thread():
@@ -221,7 +223,7 @@ def _signal_handlers() -> list:
     return [(sig, signal.getsignal(sig)) for sig in _STOP_SIGNALS]
 
 
-def _restore_signal_handlers(kept: list) -> None:
+def _restore_signal_handlers(kept: List[Tuple[int, Any]]) -> None:
     for sig, handler in kept:
         if handler is not None:
             signal.signal(sig, handler)
@@ -246,7 +248,8 @@ def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
 R = TypeVar("R", bound=Report)
 
 
-def _finish(command: str, result: tuple, kind: Type[R]) -> R:
+
+def _finish(command: str, result: Tuple[Any, ...], kind: Type[R]) -> R:
     """A native reply as the typed report a method returns."""
     report, status, notes, cols, designed, tables = result
     for note in notes:
@@ -314,7 +317,9 @@ def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
     )
 
 
-def _samples(samples: Union[bool, str, "os.PathLike[str]", None], options: dict) -> bool:
+def _samples(
+    samples: Union[bool, str, "os.PathLike[str]", None], options: Dict[str, Any]
+) -> bool:
     """``samples``: True returns the rows as columns (held in memory, at most
     :data:`MAX_SAMPLE_ROWS`); a path streams them to that CSV file instead
     (``--samples``, any number of rows), added to ``options``."""
@@ -340,18 +345,18 @@ class System:
         return self._spec.name
 
     @property
-    def tasks(self) -> list:
+    def tasks(self) -> List[str]:
         """The task names, in the spec's order."""
         return self._spec.tasks
 
     @property
-    def chains(self) -> list:
+    def chains(self) -> List[str]:
         """The chain labels, in the spec's order (the ``chain`` column of
         ``samples`` indexes this list)."""
         return self._spec.chains
 
     @property
-    def free_tasks(self) -> list:
+    def free_tasks(self) -> List[str]:
         """Tasks without a fixed period: what :meth:`design` chooses."""
         return self._spec.free_tasks()
 
@@ -374,7 +379,9 @@ class System:
 
         return _speaking_python(keywords, call)
 
-    def _run_samples(self, command: str, options: dict, samples: Any, kind: Type[R]) -> R:
+    def _run_samples(
+        self, command: str, options: Dict[str, Any], samples: Any, kind: Type[R]
+    ) -> R:
         columns = _samples(samples, options)
         return self._run(command, options, kind, columns)
 
@@ -553,3 +560,49 @@ class System:
             objective=objective, max_utilization=max_utilization, margins=margins,
         )
         return self._run("design", options, DesignReport)
+
+
+# What a keyword means where it is not the command line's flag as it is:
+# Python's own arguments, and flags whose value Python takes differently.
+_PYTHON_ARGUMENTS: Dict[str, str] = {
+    "samples": (
+        "True returns the sample rows as numpy columns (``report.samples``, at "
+        "most MAX_SAMPLE_ROWS of them, else MemoryError); a path streams any "
+        "number of rows to that CSV file instead, as the command line's flag does."
+    ),
+    "config": "The campaign's config file (TOML).",
+    "out": "The directory its Parquet shards go to (made if missing).",
+    "shard": "Only the shards ``k % n == i``: a 2-tuple ``(i, n)`` or the string ``\"i/n\"``.",
+    "fly": "A mission (or a list of them) to fly every candidate design on (``--fly``).",
+    "vehicle": "A vehicle (or a list of them) to fly (``--vehicle``).",
+}
+
+
+def _document(function: Callable[..., Any], command: str) -> None:
+    """Ends ``function``'s docstring with an ``Arguments:`` section: each
+    keyword, what the command line's help says of its flag (flags named
+    as keywords), or what :data:`_PYTHON_ARGUMENTS` says of a keyword
+    Python takes its own way. The help is the clap definitions', so the
+    two cannot drift apart."""
+    import textwrap
+
+    keywords = [k for k in inspect.signature(function).parameters if k != "self"]
+    helps = dict(_rtpipe.flag_help(command))
+    lines = ["", "Arguments:"]
+    for key in keywords:
+        flag = key.replace("_", "-")
+        text = _PYTHON_ARGUMENTS.get(key) if command != "waters" else None
+        text = text or helps.get(flag) or _PYTHON_ARGUMENTS.get(key)
+        if text is None:
+            raise AssertionError(f"{function.__qualname__}({key}=...) has no help to show")
+        said = _pythonic(" ".join(text.split()), keywords)
+        wrapped = textwrap.wrap(f"{key}: {said}", width=76, subsequent_indent="    ")
+        lines.extend("    " + w for w in wrapped)
+    function.__doc__ = (inspect.getdoc(function) or "") + "\n" + "\n".join(lines) + "\n"
+
+
+for _command in ("analyze", "simulate", "fly", "run", "design"):
+    _document(getattr(System, _command), _command)
+_document(campaign, "campaign")
+_document(waters, "waters")
+del _command

@@ -45,7 +45,7 @@ class Record(Dict[str, Any]):
     def to_dict(self) -> Dict[str, Any]:
         """The plain dict (the nested objects plain too): what the method
         returned before results were typed, and what ``--json`` prints."""
-        return _plain(self)
+        return cast(Dict[str, Any], _plain(self))
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({dict.__repr__(self)})"
