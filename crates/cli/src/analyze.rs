@@ -150,10 +150,15 @@ impl AnalyzeReport<'_> {
 struct AnalyzeView<'a> {
     #[serde(flatten)]
     report: ReportView<'a>,
+    /// With `all_paths=True`: every source-to-sink pair's worst bounds.
     #[serde(skip_serializing_if = "Option::is_none")]
     all_paths: Option<PathsView<'a>>,
+    /// With `margins=True`: how much each exec may grow, each limit's slack,
+    /// the critical scaling factors and each period's range.
     #[serde(skip_serializing_if = "Option::is_none")]
     margins: Option<margins::MarginsView>,
+    /// With `observed=FILE`: the measured latencies of that file against the
+    /// bounds.
     #[serde(skip_serializing_if = "Option::is_none")]
     observed: Option<observed::ObservedView<'a>>,
 }

@@ -615,6 +615,8 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
 struct DesignOut<'a> {
     #[serde(flatten)]
     head: Head<'a>,
+    /// The search's answer: its status, the periods chosen and what the search
+    /// did.
     design: DesignView<'a>,
     /// `--margins`: the designed spec's timing margins (as `analyze
     /// --margins` reports them).
@@ -634,13 +636,24 @@ enum Head<'a> {
 
 #[derive(Serialize, schemars::JsonSchema)]
 struct DesignView<'a> {
+    /// The analysis mode the design keeps the limits under (`sound` or
+    /// `paper`).
     mode: &'static str,
+    /// `optimal`, `feasible` (verified, not proven least), `infeasible` or
+    /// `unknown`.
     status: &'static str,
+    /// The designed system's total utilisation (or the margin objective's
+    /// value); null without a design.
     objective: Option<f64>,
+    /// A proven lower bound on the objective; null when none.
     lower_bound: Option<f64>,
+    /// (objective − lower_bound) / objective; null when either is.
     gap: Option<f64>,
+    /// The search method (`boxes` or `milp`).
     method: &'static str,
+    /// The MILP solver, with `method="milp"`.
     solver: Option<&'static str>,
+    /// Wall-clock seconds the search took.
     seconds: f64,
     /// When the box search held its first verified design.
     first_design_seconds: Option<f64>,
@@ -649,9 +662,14 @@ struct DesignView<'a> {
     peak_open_boxes: Option<usize>,
     /// Their bytes, counted from their sizes (the search stops at 1 GiB).
     peak_open_box_bytes: Option<usize>,
+    /// Each task's period in the design, in the spec's time unit; null for a
+    /// task without one.
     periods: Pairs<&'a str, Option<f64>>,
+    /// Without a design: the constraints that conflict, and how to fix each.
     conflicts: Vec<ConflictView<'a>>,
+    /// Notes of the search, in words.
     notes: &'a [String],
+    /// Whether Ctrl-C (or the stop flag) ended the search early.
     interrupted: bool,
     /// `--fly`: every design flown, in order.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -663,7 +681,9 @@ struct DesignView<'a> {
 
 #[derive(Serialize, schemars::JsonSchema)]
 struct ConflictView<'a> {
+    /// The constraint, in words.
     constraint: &'a str,
+    /// How to relax it, when known.
     fix: Option<&'a str>,
 }
 

@@ -23,16 +23,25 @@ pub(crate) fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
 #[derive(Serialize, schemars::JsonSchema)]
 #[schemars(rename = "AnalysisView")]
 pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
+    /// The system's name (`[system] name`).
     pub system: &'a str,
+    /// The unit of every time in the report (`ns`, `us`, `ms` or `s`).
     pub time_unit: &'static str,
+    /// The scheduler analysed: `rm` (fixed priorities) or `edf`.
     pub scheduler: &'static str,
     /// "let" under LET communication; absent under implicit (the default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub communication: Option<&'static str>,
+    /// One entry per task, in the spec's order.
     pub tasks: Vec<T>,
+    /// The schedulability test and its verdict, per CPU.
     pub schedulability: SchedView,
+    /// One entry per chain and metric (reaction, then freshness).
     pub chains: Vec<C>,
+    /// Whether every task is schedulable and every chain keeps its limits under
+    /// the sound bounds.
     pub ok: bool,
+    /// The same verdict under the paper's bounds.
     pub paper_ok: bool,
 }
 
@@ -59,14 +68,23 @@ impl<'a, T, C> ReportView<'a, T, C> {
 
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct TaskView<'a> {
+    /// The task's name.
     name: &'a str,
+    /// The server the task runs in (`main` for none).
     server: &'static str,
+    /// p, its worst-case execution time, in the spec's time unit.
     exec: f64,
+    /// Its best-case execution time, in the spec's time unit.
     exec_min: f64,
+    /// Δin, the time to read its input channel, in the spec's time unit.
     delta_in: f64,
+    /// Δout, the time to write its output channel, in the spec's time unit.
     delta_out: f64,
+    /// Δin + p + Δout, its worst-case demand per job, in the spec's time unit.
     demand: f64,
+    /// Its server budget, in the spec's time unit.
     budget: f64,
+    /// T, its period, in the spec's time unit.
     period: f64,
     /// D, when the spec gives a deadline (else D = T, left out).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -84,10 +102,17 @@ pub struct TaskView<'a> {
     max_period: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     period_ok: Option<bool>,
+    /// Its CPU utilisation, budget / period.
     utilization: f64,
+    /// Its fixed priority on its CPU, 1 the highest; null under EDF.
     priority: Option<usize>,
+    /// The CPU it runs on.
     cpu: u32,
+    /// R(C), the time within which its server delivers its whole budget, in
+    /// the spec's time unit (the `rta` verdict uses it); null when unbounded.
     response_time: Option<f64>,
+    /// R(x), the time within which a job of demand x finishes, in the spec's
+    /// time unit (the latency bounds use it); null when unbounded.
     job_response_time: Option<f64>,
     /// Its activations, in a spec with threads or data-triggered tasks.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -96,10 +121,15 @@ pub struct TaskView<'a> {
 
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct SchedView {
+    /// The schedulability test applied (e.g. `rta`).
     test: &'static str,
+    /// The total utilisation of all CPUs.
     utilization: f64,
+    /// The test's bound: a number for one CPU, a list with one per CPU.
     bound: OneOrMany,
+    /// Whether every CPU passes the test.
     schedulable: bool,
+    /// The test's figures per CPU.
     cpus: Vec<CpuView>,
 }
 
@@ -114,12 +144,17 @@ enum OneOrMany {
 
 #[derive(Serialize, schemars::JsonSchema)]
 struct CpuView {
+    /// The CPU's index.
     cpu: u32,
+    /// The number of tasks on it.
     tasks: usize,
+    /// The CPU's utilisation.
     utilization: f64,
     /// `None` for an unbounded response time (RTA).
     value: Option<f64>,
+    /// The test's bound on this CPU.
     bound: f64,
+    /// Whether this CPU passes the test.
     schedulable: bool,
     /// The CPU's scheduling overheads, in the spec's unit (left out
     /// without any).
@@ -130,8 +165,11 @@ struct CpuView {
 /// `[system] overheads` on one CPU.
 #[derive(Serialize, schemars::JsonSchema)]
 struct OverheadsView {
+    /// The cost of a context switch, in the spec's time unit.
     context_switch: f64,
+    /// The cost of a job release, in the spec's time unit.
     release: f64,
+    /// The cost of a server budget replenishment, in the spec's time unit.
     replenish: f64,
 }
 
@@ -139,9 +177,14 @@ struct OverheadsView {
 /// with known offsets.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct ChainView<'a> {
+    /// The chain's name (null for an unnamed chain).
     name: Option<&'a str>,
+    /// Its tasks, from the head (sensor) to the tail (actuator).
     path: Vec<String>,
+    /// `reaction` (reaction time) or `freshness` (data age).
     metric: &'static str,
+    /// The spec's limit on this metric from the read, in the spec's time unit;
+    /// null when none.
     limit: Option<f64>,
     /// The limit from the event (`max_reaction_time` / `max_data_age`),
     /// left out when the spec gives none.
@@ -151,12 +194,18 @@ pub struct ChainView<'a> {
     /// spec's time unit.
     #[serde(flatten)]
     bounds: BoundValues,
+    /// Whether the sound bound keeps the limits (true without limits when
+    /// bounded).
     ok: bool,
+    /// Whether the paper's bound keeps the limits.
     paper_ok: bool,
     /// The same bounds from the external event (a sample read up to one
     /// head period after it), in the spec's time unit.
     from_event: BoundValues,
+    /// The paper's case (1 to 4) of each link of the chain, in order.
     cases: Vec<u8>,
+    /// The bounds under the spec's known release offsets (only for a chain
+    /// whose tasks all have offsets).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
     /// The chain's own `communication`, when the spec gives it one.
@@ -212,17 +261,26 @@ fn bound_about(b: rtpipe_analysis::Bound) -> &'static str {
 pub struct KnownView {
     #[serde(flatten)]
     read: KnownBound,
+    /// The same bound from the external event.
     pub from_event: KnownBound,
+    /// The hyperperiod the job-level analysis covered, in the spec's time unit;
+    /// null when it did not run.
     hyperperiod: Option<f64>,
+    /// The jobs the job-level analysis covered; null when it did not run.
     jobs: Option<u64>,
+    /// With `simulate`: samples above the known-offset bound (from the read).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violations: Option<usize>,
 }
 
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct KnownBound {
+    /// The sound bound under the known offsets, in the spec's time unit; null
+    /// when unbounded.
     sound: Option<f64>,
+    /// How it was derived (the job-level analysis, or the offset-free bound).
     basis: String,
+    /// With `simulate`: samples above this bound.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violations: Option<usize>,
 }

@@ -8,7 +8,9 @@ use serde::Serialize;
 /// them (`attitude_error_deg.rms`): one name for one figure.
 #[derive(Serialize, schemars::JsonSchema)]
 pub struct RmsMax {
+    /// The root mean square.
     pub rms: f64,
+    /// The largest.
     pub max: f64,
 }
 

@@ -87,17 +87,17 @@ class AnalysisReport(Report):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> str:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("str", self["scheduler"])
 
     @property
@@ -107,42 +107,48 @@ class AnalysisReport(Report):
 
     @property
     def tasks(self) -> List[Task]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return each(Task, self["tasks"])
 
     @property
     def schedulability(self) -> Sched:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return Sched(self["schedulability"])
 
     @property
     def chains(self) -> List[Chain]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return each(Chain, self["chains"])
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("bool", self["paper_ok"])
 
     @property
     def all_paths(self) -> Optional[Paths]:
-        """The report's ``all_paths``."""
+        """With `all_paths=True`: every source-to-sink pair's worst bounds."""
         return maybe(Paths, self.get("all_paths"))
 
     @property
     def margins(self) -> Optional[Margins]:
-        """The report's ``margins``."""
+        """With `margins=True`: how much each exec may grow, each limit's slack,
+        the critical scaling factors and each period's range.
+        """
         return maybe(Margins, self.get("margins"))
 
     @property
     def observed(self) -> Optional[MeasuredFile]:
-        """The report's ``observed``."""
+        """With `observed=FILE`: the measured latencies of that file against the
+        bounds.
+        """
         return maybe(MeasuredFile, self.get("observed"))
 
 
@@ -155,17 +161,17 @@ class SimulationReport(Report):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> str:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("str", self["scheduler"])
 
     @property
@@ -175,37 +181,41 @@ class SimulationReport(Report):
 
     @property
     def tasks(self) -> List[TaskSimulated]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return each(TaskSimulated, self["tasks"])
 
     @property
     def schedulability(self) -> Sched:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return Sched(self["schedulability"])
 
     @property
     def chains(self) -> List[ObsChain]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return each(ObsChain, self["chains"])
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("bool", self["paper_ok"])
 
     @property
     def simulation(self) -> Simulation:
-        """The report's ``simulation``."""
+        """The run's settings and figures."""
         return Simulation(self["simulation"])
 
     @property
     def search(self) -> List[Search]:
-        """The report's ``search``."""
+        """With `phasing="search"`: the adversarial search's worst case per chain,
+        metric and anchor.
+        """
         return each(Search, self["search"])
 
 
@@ -217,17 +227,17 @@ class FlightReport(Report):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> str:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("str", self["scheduler"])
 
     @property
@@ -237,32 +247,34 @@ class FlightReport(Report):
 
     @property
     def tasks(self) -> List[Task]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return each(Task, self["tasks"])
 
     @property
     def schedulability(self) -> Sched:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return Sched(self["schedulability"])
 
     @property
     def chains(self) -> List[ObsChain]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return each(ObsChain, self["chains"])
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("bool", self["paper_ok"])
 
     @property
     def flight(self) -> Flight:
-        """The report's ``flight``."""
+        """How the flight went: the vehicle, the mission and its quality figures."""
         return Flight(self["flight"])
 
 
@@ -342,17 +354,17 @@ class DesignReport(DesignBase):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> Optional[str]:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("Optional[str]", self.get("scheduler"))
 
     @property
@@ -362,32 +374,36 @@ class DesignReport(DesignBase):
 
     @property
     def tasks(self) -> Optional[List[Task]]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return maybe(lambda v: each(Task, v), self.get("tasks"))
 
     @property
     def schedulability(self) -> Optional[Sched]:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return maybe(Sched, self.get("schedulability"))
 
     @property
     def chains(self) -> Optional[List[Chain]]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return maybe(lambda v: each(Chain, v), self.get("chains"))
 
     @property
     def ok(self) -> Optional[bool]:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("Optional[bool]", self.get("ok"))
 
     @property
     def paper_ok(self) -> Optional[bool]:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("Optional[bool]", self.get("paper_ok"))
 
     @property
     def design(self) -> Design:
-        """The report's ``design``."""
+        """The search's answer: its status, the periods chosen and what the search
+        did.
+        """
         return Design(self["design"])
 
     @property
@@ -407,17 +423,17 @@ class RunReport(Report):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> str:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("str", self["scheduler"])
 
     @property
@@ -427,27 +443,29 @@ class RunReport(Report):
 
     @property
     def tasks(self) -> List[TaskMeasured]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return each(TaskMeasured, self["tasks"])
 
     @property
     def schedulability(self) -> Sched:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return Sched(self["schedulability"])
 
     @property
     def chains(self) -> List[ObsChain]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return each(ObsChain, self["chains"])
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("bool", self["paper_ok"])
 
     @property
@@ -474,102 +492,104 @@ class CampaignSummary(Report):
 
     @property
     def campaign(self) -> str:
-        """The report's ``campaign``."""
+        """The campaign's name."""
         return cast("str", self["campaign"])
 
     @property
     def out(self) -> str:
-        """The report's ``out``."""
+        """The output directory."""
         return cast("str", self["out"])
 
     @property
     def systems(self) -> int:
-        """The report's ``systems``."""
+        """Systems in the whole campaign."""
         return cast("int", self["systems"])
 
     @property
     def shard_size(self) -> int:
-        """The report's ``shard_size``."""
+        """Systems per shard."""
         return cast("int", self["shard_size"])
 
     @property
     def shards(self) -> int:
-        """The report's ``shards``."""
+        """Shards in the whole campaign."""
         return cast("int", self["shards"])
 
     @property
     def part(self) -> str:
-        """The report's ``part``."""
+        """The part run, `i/n` (`0/1` for all)."""
         return cast("str", self["part"])
 
     @property
     def part_shards(self) -> int:
-        """The report's ``part_shards``."""
+        """Shards in the part."""
         return cast("int", self["part_shards"])
 
     @property
     def written(self) -> int:
-        """The report's ``written``."""
+        """Shards written by this run."""
         return cast("int", self["written"])
 
     @property
     def rewritten(self) -> int:
-        """The report's ``rewritten``."""
+        """Damaged or unfinished shards written again."""
         return cast("int", self["rewritten"])
 
     @property
     def skipped(self) -> int:
-        """The report's ``skipped``."""
+        """Shards the directory already held whole."""
         return cast("int", self["skipped"])
 
     @property
     def systems_run(self) -> int:
-        """The report's ``systems_run``."""
+        """Systems this run analysed and simulated."""
         return cast("int", self["systems_run"])
 
     @property
     def systems_short(self) -> int:
-        """The report's ``systems_short``."""
+        """Systems that got fewer chains than asked (the generator found too
+        few).
+        """
         return cast("int", self["systems_short"])
 
     @property
     def systems_without_chains(self) -> int:
-        """The report's ``systems_without_chains``."""
+        """Systems generated without any chain."""
         return cast("int", self["systems_without_chains"])
 
     @property
     def chains_asked(self) -> int:
-        """The report's ``chains_asked``."""
+        """Chains asked per system."""
         return cast("int", self["chains_asked"])
 
     @property
     def rows(self) -> int:
-        """The report's ``rows``."""
+        """Rows written (one per chain and metric)."""
         return cast("int", self["rows"])
 
     @property
     def seconds(self) -> float:
-        """The report's ``seconds``."""
+        """Wall-clock seconds the run took."""
         return cast("float", self["seconds"])
 
     @property
     def jobs(self) -> int:
-        """The report's ``jobs``."""
+        """Worker threads used."""
         return cast("int", self["jobs"])
 
     @property
     def systems_per_second(self) -> float:
-        """The report's ``systems_per_second``."""
+        """Systems run per wall-clock second."""
         return cast("float", self["systems_per_second"])
 
     @property
     def systems_per_second_per_job(self) -> float:
-        """The report's ``systems_per_second_per_job``."""
+        """systems_per_second / jobs."""
         return cast("float", self["systems_per_second_per_job"])
 
     @property
     def stopped(self) -> bool:
-        """The report's ``stopped``."""
+        """Whether Ctrl-C (or the stop flag) ended the run early."""
         return cast("bool", self["stopped"])
 
 
@@ -636,47 +656,47 @@ class Task(Record):
 
     @property
     def name(self) -> str:
-        """The report's ``name``."""
+        """The task's name."""
         return cast("str", self["name"])
 
     @property
     def server(self) -> str:
-        """The report's ``server``."""
+        """The server the task runs in (`main` for none)."""
         return cast("str", self["server"])
 
     @property
     def exec(self) -> float:
-        """The report's ``exec``."""
+        """p, its worst-case execution time, in the spec's time unit."""
         return cast("float", self["exec"])
 
     @property
     def exec_min(self) -> float:
-        """The report's ``exec_min``."""
+        """Its best-case execution time, in the spec's time unit."""
         return cast("float", self["exec_min"])
 
     @property
     def delta_in(self) -> float:
-        """The report's ``delta_in``."""
+        """Δin, the time to read its input channel, in the spec's time unit."""
         return cast("float", self["delta_in"])
 
     @property
     def delta_out(self) -> float:
-        """The report's ``delta_out``."""
+        """Δout, the time to write its output channel, in the spec's time unit."""
         return cast("float", self["delta_out"])
 
     @property
     def demand(self) -> float:
-        """The report's ``demand``."""
+        """Δin + p + Δout, its worst-case demand per job, in the spec's time unit."""
         return cast("float", self["demand"])
 
     @property
     def budget(self) -> float:
-        """The report's ``budget``."""
+        """Its server budget, in the spec's time unit."""
         return cast("float", self["budget"])
 
     @property
     def period(self) -> float:
-        """The report's ``period``."""
+        """T, its period, in the spec's time unit."""
         return cast("float", self["period"])
 
     @property
@@ -710,27 +730,31 @@ class Task(Record):
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """Its CPU utilisation, budget / period."""
         return cast("float", self["utilization"])
 
     @property
     def priority(self) -> Optional[int]:
-        """The report's ``priority``."""
+        """Its fixed priority on its CPU, 1 the highest; null under EDF."""
         return cast("Optional[int]", self.get("priority"))
 
     @property
     def cpu(self) -> int:
-        """The report's ``cpu``."""
+        """The CPU it runs on."""
         return cast("int", self["cpu"])
 
     @property
     def response_time(self) -> Optional[float]:
-        """The report's ``response_time``."""
+        """R(C), the time within which its server delivers its whole budget, in
+        the spec's time unit (the `rta` verdict uses it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("response_time"))
 
     @property
     def job_response_time(self) -> Optional[float]:
-        """The report's ``job_response_time``."""
+        """R(x), the time within which a job of demand x finishes, in the spec's
+        time unit (the latency bounds use it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("job_response_time"))
 
     @property
@@ -778,27 +802,27 @@ class Sched(Record):
 
     @property
     def test(self) -> str:
-        """The report's ``test``."""
+        """The schedulability test applied (e.g. `rta`)."""
         return cast("str", self["test"])
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """The total utilisation of all CPUs."""
         return cast("float", self["utilization"])
 
     @property
     def bound(self) -> Union[float, List[float]]:
-        """The report's ``bound``."""
+        """The test's bound: a number for one CPU, a list with one per CPU."""
         return cast("Union[float, List[float]]", self["bound"])
 
     @property
     def schedulable(self) -> bool:
-        """The report's ``schedulable``."""
+        """Whether every CPU passes the test."""
         return cast("bool", self["schedulable"])
 
     @property
     def cpus(self) -> List[Cpu]:
-        """The report's ``cpus``."""
+        """The test's figures per CPU."""
         return each(Cpu, self["cpus"])
 
 
@@ -807,17 +831,17 @@ class Cpu(Record):
 
     @property
     def cpu(self) -> int:
-        """The report's ``cpu``."""
+        """The CPU's index."""
         return cast("int", self["cpu"])
 
     @property
     def tasks(self) -> int:
-        """The report's ``tasks``."""
+        """The number of tasks on it."""
         return cast("int", self["tasks"])
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """The CPU's utilisation."""
         return cast("float", self["utilization"])
 
     @property
@@ -827,12 +851,12 @@ class Cpu(Record):
 
     @property
     def bound(self) -> float:
-        """The report's ``bound``."""
+        """The test's bound on this CPU."""
         return cast("float", self["bound"])
 
     @property
     def schedulable(self) -> bool:
-        """The report's ``schedulable``."""
+        """Whether this CPU passes the test."""
         return cast("bool", self["schedulable"])
 
     @property
@@ -848,17 +872,17 @@ class Overheads(Record):
 
     @property
     def context_switch(self) -> float:
-        """The report's ``context_switch``."""
+        """The cost of a context switch, in the spec's time unit."""
         return cast("float", self["context_switch"])
 
     @property
     def release(self) -> float:
-        """The report's ``release``."""
+        """The cost of a job release, in the spec's time unit."""
         return cast("float", self["release"])
 
     @property
     def replenish(self) -> float:
-        """The report's ``replenish``."""
+        """The cost of a server budget replenishment, in the spec's time unit."""
         return cast("float", self["replenish"])
 
 
@@ -869,22 +893,24 @@ class Chain(Record):
 
     @property
     def name(self) -> Optional[str]:
-        """The report's ``name``."""
+        """The chain's name (null for an unnamed chain)."""
         return cast("Optional[str]", self.get("name"))
 
     @property
     def path(self) -> List[str]:
-        """The report's ``path``."""
+        """Its tasks, from the head (sensor) to the tail (actuator)."""
         return cast("List[str]", self["path"])
 
     @property
     def metric(self) -> str:
-        """The report's ``metric``."""
+        """`reaction` (reaction time) or `freshness` (data age)."""
         return cast("str", self["metric"])
 
     @property
     def limit(self) -> Optional[float]:
-        """The report's ``limit``."""
+        """The spec's limit on this metric from the read, in the spec's time unit;
+        null when none.
+        """
         return cast("Optional[float]", self.get("limit"))
 
     @property
@@ -916,12 +942,14 @@ class Chain(Record):
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether the sound bound keeps the limits (true without limits when
+        bounded).
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """Whether the paper's bound keeps the limits."""
         return cast("bool", self["paper_ok"])
 
     @property
@@ -933,12 +961,14 @@ class Chain(Record):
 
     @property
     def cases(self) -> List[int]:
-        """The report's ``cases``."""
+        """The paper's case (1 to 4) of each link of the chain, in order."""
         return cast("List[int]", self["cases"])
 
     @property
     def known_offsets(self) -> Optional[Known]:
-        """The report's ``known_offsets``."""
+        """The bounds under the spec's known release offsets (only for a chain
+        whose tasks all have offsets).
+        """
         return maybe(Known, self.get("known_offsets"))
 
     @property
@@ -979,32 +1009,36 @@ class Known(Record):
 
     @property
     def sound(self) -> Optional[float]:
-        """The report's ``sound``."""
+        """The sound bound under the known offsets, in the spec's time unit; null
+        when unbounded.
+        """
         return cast("Optional[float]", self.get("sound"))
 
     @property
     def basis(self) -> str:
-        """The report's ``basis``."""
+        """How it was derived (the job-level analysis, or the offset-free bound)."""
         return cast("str", self["basis"])
 
     @property
     def violations(self) -> Optional[int]:
-        """The report's ``violations``."""
+        """With `simulate`: samples above the known-offset bound (from the read)."""
         return cast("Optional[int]", self.get("violations"))
 
     @property
     def from_event(self) -> KnownBound:
-        """The report's ``from_event``."""
+        """The same bound from the external event."""
         return KnownBound(self["from_event"])
 
     @property
     def hyperperiod(self) -> Optional[float]:
-        """The report's ``hyperperiod``."""
+        """The hyperperiod the job-level analysis covered, in the spec's time unit;
+        null when it did not run.
+        """
         return cast("Optional[float]", self.get("hyperperiod"))
 
     @property
     def jobs(self) -> Optional[int]:
-        """The report's ``jobs``."""
+        """The jobs the job-level analysis covered; null when it did not run."""
         return cast("Optional[int]", self.get("jobs"))
 
 
@@ -1013,17 +1047,19 @@ class KnownBound(Record):
 
     @property
     def sound(self) -> Optional[float]:
-        """The report's ``sound``."""
+        """The sound bound under the known offsets, in the spec's time unit; null
+        when unbounded.
+        """
         return cast("Optional[float]", self.get("sound"))
 
     @property
     def basis(self) -> str:
-        """The report's ``basis``."""
+        """How it was derived (the job-level analysis, or the offset-free bound)."""
         return cast("str", self["basis"])
 
     @property
     def violations(self) -> Optional[int]:
-        """The report's ``violations``."""
+        """With `simulate`: samples above this bound."""
         return cast("Optional[int]", self.get("violations"))
 
 
@@ -1414,47 +1450,47 @@ class TaskSimulated(Record):
 
     @property
     def name(self) -> str:
-        """The report's ``name``."""
+        """The task's name."""
         return cast("str", self["name"])
 
     @property
     def server(self) -> str:
-        """The report's ``server``."""
+        """The server the task runs in (`main` for none)."""
         return cast("str", self["server"])
 
     @property
     def exec(self) -> float:
-        """The report's ``exec``."""
+        """p, its worst-case execution time, in the spec's time unit."""
         return cast("float", self["exec"])
 
     @property
     def exec_min(self) -> float:
-        """The report's ``exec_min``."""
+        """Its best-case execution time, in the spec's time unit."""
         return cast("float", self["exec_min"])
 
     @property
     def delta_in(self) -> float:
-        """The report's ``delta_in``."""
+        """Δin, the time to read its input channel, in the spec's time unit."""
         return cast("float", self["delta_in"])
 
     @property
     def delta_out(self) -> float:
-        """The report's ``delta_out``."""
+        """Δout, the time to write its output channel, in the spec's time unit."""
         return cast("float", self["delta_out"])
 
     @property
     def demand(self) -> float:
-        """The report's ``demand``."""
+        """Δin + p + Δout, its worst-case demand per job, in the spec's time unit."""
         return cast("float", self["demand"])
 
     @property
     def budget(self) -> float:
-        """The report's ``budget``."""
+        """Its server budget, in the spec's time unit."""
         return cast("float", self["budget"])
 
     @property
     def period(self) -> float:
-        """The report's ``period``."""
+        """T, its period, in the spec's time unit."""
         return cast("float", self["period"])
 
     @property
@@ -1488,27 +1524,31 @@ class TaskSimulated(Record):
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """Its CPU utilisation, budget / period."""
         return cast("float", self["utilization"])
 
     @property
     def priority(self) -> Optional[int]:
-        """The report's ``priority``."""
+        """Its fixed priority on its CPU, 1 the highest; null under EDF."""
         return cast("Optional[int]", self.get("priority"))
 
     @property
     def cpu(self) -> int:
-        """The report's ``cpu``."""
+        """The CPU it runs on."""
         return cast("int", self["cpu"])
 
     @property
     def response_time(self) -> Optional[float]:
-        """The report's ``response_time``."""
+        """R(C), the time within which its server delivers its whole budget, in
+        the spec's time unit (the `rta` verdict uses it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("response_time"))
 
     @property
     def job_response_time(self) -> Optional[float]:
-        """The report's ``job_response_time``."""
+        """R(x), the time within which a job of demand x finishes, in the spec's
+        time unit (the latency bounds use it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("job_response_time"))
 
     @property
@@ -1529,7 +1569,7 @@ class Simulated(Record):
 
     @property
     def released(self) -> int:
-        """The report's ``released``."""
+        """Jobs released."""
         return cast("int", self["released"])
 
     @property
@@ -1541,27 +1581,29 @@ class Simulated(Record):
 
     @property
     def completed(self) -> int:
-        """The report's ``completed``."""
+        """Jobs completed."""
         return cast("int", self["completed"])
 
     @property
     def max_response(self) -> Optional[float]:
-        """The report's ``max_response``."""
+        """The largest response time observed, in the spec's time unit; null
+        without a completed job.
+        """
         return cast("Optional[float]", self.get("max_response"))
 
     @property
     def late(self) -> int:
-        """The report's ``late``."""
+        """Jobs that finished after their period (or deadline)."""
         return cast("int", self["late"])
 
     @property
     def exhaustions(self) -> int:
-        """The report's ``exhaustions``."""
+        """Times its server's budget ran out."""
         return cast("int", self["exhaustions"])
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """The share of the CPU it used over the run."""
         return cast("float", self["utilization"])
 
 
@@ -1572,22 +1614,24 @@ class ObsChain(Record):
 
     @property
     def name(self) -> Optional[str]:
-        """The report's ``name``."""
+        """The chain's name (null for an unnamed chain)."""
         return cast("Optional[str]", self.get("name"))
 
     @property
     def path(self) -> List[str]:
-        """The report's ``path``."""
+        """Its tasks, from the head (sensor) to the tail (actuator)."""
         return cast("List[str]", self["path"])
 
     @property
     def metric(self) -> str:
-        """The report's ``metric``."""
+        """`reaction` (reaction time) or `freshness` (data age)."""
         return cast("str", self["metric"])
 
     @property
     def limit(self) -> Optional[float]:
-        """The report's ``limit``."""
+        """The spec's limit on this metric from the read, in the spec's time unit;
+        null when none.
+        """
         return cast("Optional[float]", self.get("limit"))
 
     @property
@@ -1619,12 +1663,14 @@ class ObsChain(Record):
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether the sound bound keeps the limits (true without limits when
+        bounded).
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """Whether the paper's bound keeps the limits."""
         return cast("bool", self["paper_ok"])
 
     @property
@@ -1636,12 +1682,14 @@ class ObsChain(Record):
 
     @property
     def cases(self) -> List[int]:
-        """The report's ``cases``."""
+        """The paper's case (1 to 4) of each link of the chain, in order."""
         return cast("List[int]", self["cases"])
 
     @property
     def known_offsets(self) -> Optional[Known]:
-        """The report's ``known_offsets``."""
+        """The bounds under the spec's known release offsets (only for a chain
+        whose tasks all have offsets).
+        """
         return maybe(Known, self.get("known_offsets"))
 
     @property
@@ -1651,22 +1699,22 @@ class ObsChain(Record):
 
     @property
     def observed(self) -> Observed:
-        """The report's ``observed``."""
+        """The latencies observed from the read (the head's sample)."""
         return Observed(self["observed"])
 
     @property
     def violations(self) -> Violations:
-        """The report's ``violations``."""
+        """Samples above the bounds, from the read."""
         return Violations(self["violations"])
 
     @property
     def observed_from_event(self) -> Observed:
-        """The report's ``observed_from_event``."""
+        """The latencies observed from the external event."""
         return Observed(self["observed_from_event"])
 
     @property
     def violations_from_event(self) -> Violations:
-        """The report's ``violations_from_event``."""
+        """Samples above the bounds, from the event."""
         return Violations(self["violations_from_event"])
 
 
@@ -1678,32 +1726,32 @@ class Observed(Record):
 
     @property
     def count(self) -> int:
-        """The report's ``count``."""
+        """The samples observed."""
         return cast("int", self["count"])
 
     @property
     def min(self) -> Optional[float]:
-        """The report's ``min``."""
+        """The smallest, in the spec's time unit."""
         return cast("Optional[float]", self.get("min"))
 
     @property
     def mean(self) -> Optional[float]:
-        """The report's ``mean``."""
+        """The mean, in the spec's time unit."""
         return cast("Optional[float]", self.get("mean"))
 
     @property
     def p99(self) -> Optional[float]:
-        """The report's ``p99``."""
+        """The 99th percentile, in the spec's time unit."""
         return cast("Optional[float]", self.get("p99"))
 
     @property
     def max(self) -> Optional[float]:
-        """The report's ``max``."""
+        """The largest, in the spec's time unit."""
         return cast("Optional[float]", self.get("max"))
 
     @property
     def variation(self) -> Optional[float]:
-        """The report's ``variation``."""
+        """max − min, in the spec's time unit (the paper's MaxRV and MaxFV)."""
         return cast("Optional[float]", self.get("variation"))
 
 
@@ -1712,12 +1760,12 @@ class Violations(Record):
 
     @property
     def paper(self) -> int:
-        """The report's ``paper``."""
+        """Samples above the paper's bound."""
         return cast("int", self["paper"])
 
     @property
     def sound(self) -> Optional[int]:
-        """The report's ``sound``."""
+        """Samples above the sound bound; null when the bound is unbounded."""
         return cast("Optional[int]", self.get("sound"))
 
 
@@ -1726,37 +1774,37 @@ class Simulation(Record):
 
     @property
     def horizon(self) -> float:
-        """The report's ``horizon``."""
+        """The simulated time, in the spec's time unit."""
         return cast("float", self["horizon"])
 
     @property
     def seed(self) -> int:
-        """The report's ``seed``."""
+        """The seed of the random offsets and demands."""
         return cast("int", self["seed"])
 
     @property
     def exec(self) -> str:
-        """The report's ``exec``."""
+        """How demands were drawn (`worst`, `uniform`, `best`, `extremes`)."""
         return cast("str", self["exec"])
 
     @property
     def phasing(self) -> str:
-        """The report's ``phasing``."""
+        """How release offsets were chosen (`sync`, `random`, `search`)."""
         return cast("str", self["phasing"])
 
     @property
     def offsets(self) -> Dict[str, float]:
-        """The report's ``offsets``."""
+        """Each task's release offset, in the spec's time unit."""
         return cast("Dict[str, float]", self["offsets"])
 
     @property
     def events(self) -> int:
-        """The report's ``events``."""
+        """Scheduler events simulated."""
         return cast("int", self["events"])
 
     @property
     def seconds(self) -> float:
-        """The report's ``seconds``."""
+        """Wall-clock seconds the simulation took."""
         return cast("float", self["seconds"])
 
 
@@ -1765,57 +1813,61 @@ class Search(Record):
 
     @property
     def chain(self) -> str:
-        """The report's ``chain``."""
+        """The chain's label."""
         return cast("str", self["chain"])
 
     @property
     def metric(self) -> str:
-        """The report's ``metric``."""
+        """`reaction` or `freshness`."""
         return cast("str", self["metric"])
 
     @property
     def from_(self) -> str:
-        """The report's ``from``."""
+        """`read` or `event`: where the latency starts."""
         return cast("str", self["from"])
 
     @property
     def found(self) -> Optional[float]:
-        """The report's ``found``."""
+        """The worst latency the search found, in the spec's time unit (a lower
+        bound on the true worst case).
+        """
         return cast("Optional[float]", self.get("found"))
 
     @property
     def paper(self) -> Optional[float]:
-        """The report's ``paper``."""
+        """The paper's bound, in the spec's time unit."""
         return cast("Optional[float]", self.get("paper"))
 
     @property
     def sound(self) -> Optional[float]:
-        """The report's ``sound``."""
+        """The sound bound, in the spec's time unit."""
         return cast("Optional[float]", self.get("sound"))
 
     @property
     def tightness(self) -> Optional[float]:
-        """The report's ``tightness``."""
+        """found / sound: how close the bound is to a latency that happens."""
         return cast("Optional[float]", self.get("tightness"))
 
     @property
     def simulations(self) -> int:
-        """The report's ``simulations``."""
+        """Simulations the search ran."""
         return cast("int", self["simulations"])
 
     @property
     def offsets(self) -> List[float]:
-        """The report's ``offsets``."""
+        """The release offsets of the worst case found, in the spec's time unit,
+        per task.
+        """
         return cast("List[float]", self["offsets"])
 
     @property
     def exec(self) -> str:
-        """The report's ``exec``."""
+        """The demands of the worst case found."""
         return cast("str", self["exec"])
 
     @property
     def seed(self) -> int:
-        """The report's ``seed``."""
+        """The seed that reproduces it."""
         return cast("int", self["seed"])
 
     @property
@@ -1848,12 +1900,12 @@ class Flight(Record):
 
     @property
     def vehicle(self) -> str:
-        """The report's ``vehicle``."""
+        """The vehicle flown."""
         return cast("str", self["vehicle"])
 
     @property
     def mission(self) -> str:
-        """The report's ``mission``."""
+        """The mission flown."""
         return cast("str", self["mission"])
 
     @property
@@ -1863,32 +1915,32 @@ class Flight(Record):
 
     @property
     def duration_s(self) -> float:
-        """The report's ``duration_s``."""
+        """The flight's length, s."""
         return cast("float", self["duration_s"])
 
     @property
     def crashed(self) -> bool:
-        """The report's ``crashed``."""
+        """Whether the vehicle crashed."""
         return cast("bool", self["crashed"])
 
     @property
     def crashed_s(self) -> Optional[float]:
-        """The report's ``crashed_s``."""
+        """When it crashed, s (absent: it did not)."""
         return cast("Optional[float]", self.get("crashed_s"))
 
     @property
     def attitude_error_deg(self) -> RmsMax:
-        """The report's ``attitude_error_deg``."""
+        """Attitude error against the setpoint, RMS and max, degrees."""
         return RmsMax(self["attitude_error_deg"])
 
     @property
     def altitude_error_m(self) -> RmsMax:
-        """The report's ``altitude_error_m``."""
+        """Altitude error against the setpoint, RMS and max, m."""
         return RmsMax(self["altitude_error_m"])
 
     @property
     def drift_m(self) -> float:
-        """The report's ``drift_m``."""
+        """Horizontal drift from the start while hovering, m."""
         return cast("float", self["drift_m"])
 
     @property
@@ -1913,42 +1965,42 @@ class Flight(Record):
 
     @property
     def saturation_s(self) -> float:
-        """The report's ``saturation_s``."""
+        """Time with a motor command saturated, s."""
         return cast("float", self["saturation_s"])
 
     @property
     def airborne_s(self) -> float:
-        """The report's ``airborne_s``."""
+        """Time in the air, s."""
         return cast("float", self["airborne_s"])
 
     @property
     def landed_s(self) -> Optional[float]:
-        """The report's ``landed_s``."""
+        """When it landed, s; null when it did not."""
         return cast("Optional[float]", self.get("landed_s"))
 
     @property
     def envelope(self) -> Envelope:
-        """The report's ``envelope``."""
+        """The envelope the flight was judged against, and its excursions."""
         return Envelope(self["envelope"])
 
     @property
     def steps(self) -> List[Step]:
-        """The report's ``steps``."""
+        """The attitude steps of the mission and how they were tracked."""
         return each(Step, self["steps"])
 
     @property
     def criteria_met(self) -> bool:
-        """The report's ``criteria_met``."""
+        """Whether the flight met every criterion of its mission."""
         return cast("bool", self["criteria_met"])
 
     @property
     def failures(self) -> List[str]:
-        """The report's ``failures``."""
+        """The criteria it did not meet, in words."""
         return cast("List[str]", self["failures"])
 
     @property
     def seconds(self) -> float:
-        """The report's ``seconds``."""
+        """Wall-clock seconds the flight took."""
         return cast("float", self["seconds"])
 
 
@@ -1959,12 +2011,12 @@ class RmsMax(Record):
 
     @property
     def rms(self) -> float:
-        """The report's ``rms``."""
+        """The root mean square."""
         return cast("float", self["rms"])
 
     @property
     def max(self) -> float:
-        """The report's ``max``."""
+        """The largest."""
         return cast("float", self["max"])
 
 
@@ -2195,17 +2247,17 @@ class Analysis(Record):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name (`[system] name`)."""
         return cast("str", self["system"])
 
     @property
     def time_unit(self) -> str:
-        """The report's ``time_unit``."""
+        """The unit of every time in the report (`ns`, `us`, `ms` or `s`)."""
         return cast("str", self["time_unit"])
 
     @property
     def scheduler(self) -> str:
-        """The report's ``scheduler``."""
+        """The scheduler analysed: `rm` (fixed priorities) or `edf`."""
         return cast("str", self["scheduler"])
 
     @property
@@ -2215,27 +2267,29 @@ class Analysis(Record):
 
     @property
     def tasks(self) -> List[Task]:
-        """The report's ``tasks``."""
+        """One entry per task, in the spec's order."""
         return each(Task, self["tasks"])
 
     @property
     def schedulability(self) -> Sched:
-        """The report's ``schedulability``."""
+        """The schedulability test and its verdict, per CPU."""
         return Sched(self["schedulability"])
 
     @property
     def chains(self) -> List[Chain]:
-        """The report's ``chains``."""
+        """One entry per chain and metric (reaction, then freshness)."""
         return each(Chain, self["chains"])
 
     @property
     def ok(self) -> bool:
-        """The report's ``ok``."""
+        """Whether every task is schedulable and every chain keeps its limits under
+        the sound bounds.
+        """
         return cast("bool", self["ok"])
 
     @property
     def paper_ok(self) -> bool:
-        """The report's ``paper_ok``."""
+        """The same verdict under the paper's bounds."""
         return cast("bool", self["paper_ok"])
 
 
@@ -2244,42 +2298,48 @@ class Design(Record):
 
     @property
     def mode(self) -> str:
-        """The report's ``mode``."""
+        """The analysis mode the design keeps the limits under (`sound` or
+        `paper`).
+        """
         return cast("str", self["mode"])
 
     @property
     def status(self) -> str:
-        """The report's ``status``."""
+        """`optimal`, `feasible` (verified, not proven least), `infeasible` or
+        `unknown`.
+        """
         return cast("str", self["status"])
 
     @property
     def objective(self) -> Optional[float]:
-        """The report's ``objective``."""
+        """The designed system's total utilisation (or the margin objective's
+        value); null without a design.
+        """
         return cast("Optional[float]", self.get("objective"))
 
     @property
     def lower_bound(self) -> Optional[float]:
-        """The report's ``lower_bound``."""
+        """A proven lower bound on the objective; null when none."""
         return cast("Optional[float]", self.get("lower_bound"))
 
     @property
     def gap(self) -> Optional[float]:
-        """The report's ``gap``."""
+        """(objective − lower_bound) / objective; null when either is."""
         return cast("Optional[float]", self.get("gap"))
 
     @property
     def method(self) -> str:
-        """The report's ``method``."""
+        """The search method (`boxes` or `milp`)."""
         return cast("str", self["method"])
 
     @property
     def solver(self) -> Optional[str]:
-        """The report's ``solver``."""
+        """The MILP solver, with `method="milp"`."""
         return cast("Optional[str]", self.get("solver"))
 
     @property
     def seconds(self) -> float:
-        """The report's ``seconds``."""
+        """Wall-clock seconds the search took."""
         return cast("float", self["seconds"])
 
     @property
@@ -2304,22 +2364,24 @@ class Design(Record):
 
     @property
     def periods(self) -> Dict[str, Optional[float]]:
-        """The report's ``periods``."""
+        """Each task's period in the design, in the spec's time unit; null for a
+        task without one.
+        """
         return cast("Dict[str, Optional[float]]", self["periods"])
 
     @property
     def conflicts(self) -> List[Conflict]:
-        """The report's ``conflicts``."""
+        """Without a design: the constraints that conflict, and how to fix each."""
         return each(Conflict, self["conflicts"])
 
     @property
     def notes(self) -> List[str]:
-        """The report's ``notes``."""
+        """Notes of the search, in words."""
         return cast("List[str]", self["notes"])
 
     @property
     def interrupted(self) -> bool:
-        """The report's ``interrupted``."""
+        """Whether Ctrl-C (or the stop flag) ended the search early."""
         return cast("bool", self["interrupted"])
 
     @property
@@ -2338,12 +2400,12 @@ class Conflict(Record):
 
     @property
     def constraint(self) -> str:
-        """The report's ``constraint``."""
+        """The constraint, in words."""
         return cast("str", self["constraint"])
 
     @property
     def fix(self) -> Optional[str]:
-        """The report's ``fix``."""
+        """How to relax it, when known."""
         return cast("Optional[str]", self.get("fix"))
 
 
@@ -2454,47 +2516,47 @@ class TaskMeasured(Record):
 
     @property
     def name(self) -> str:
-        """The report's ``name``."""
+        """The task's name."""
         return cast("str", self["name"])
 
     @property
     def server(self) -> str:
-        """The report's ``server``."""
+        """The server the task runs in (`main` for none)."""
         return cast("str", self["server"])
 
     @property
     def exec(self) -> float:
-        """The report's ``exec``."""
+        """p, its worst-case execution time, in the spec's time unit."""
         return cast("float", self["exec"])
 
     @property
     def exec_min(self) -> float:
-        """The report's ``exec_min``."""
+        """Its best-case execution time, in the spec's time unit."""
         return cast("float", self["exec_min"])
 
     @property
     def delta_in(self) -> float:
-        """The report's ``delta_in``."""
+        """Δin, the time to read its input channel, in the spec's time unit."""
         return cast("float", self["delta_in"])
 
     @property
     def delta_out(self) -> float:
-        """The report's ``delta_out``."""
+        """Δout, the time to write its output channel, in the spec's time unit."""
         return cast("float", self["delta_out"])
 
     @property
     def demand(self) -> float:
-        """The report's ``demand``."""
+        """Δin + p + Δout, its worst-case demand per job, in the spec's time unit."""
         return cast("float", self["demand"])
 
     @property
     def budget(self) -> float:
-        """The report's ``budget``."""
+        """Its server budget, in the spec's time unit."""
         return cast("float", self["budget"])
 
     @property
     def period(self) -> float:
-        """The report's ``period``."""
+        """T, its period, in the spec's time unit."""
         return cast("float", self["period"])
 
     @property
@@ -2528,27 +2590,31 @@ class TaskMeasured(Record):
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """Its CPU utilisation, budget / period."""
         return cast("float", self["utilization"])
 
     @property
     def priority(self) -> Optional[int]:
-        """The report's ``priority``."""
+        """Its fixed priority on its CPU, 1 the highest; null under EDF."""
         return cast("Optional[int]", self.get("priority"))
 
     @property
     def cpu(self) -> int:
-        """The report's ``cpu``."""
+        """The CPU it runs on."""
         return cast("int", self["cpu"])
 
     @property
     def response_time(self) -> Optional[float]:
-        """The report's ``response_time``."""
+        """R(C), the time within which its server delivers its whole budget, in
+        the spec's time unit (the `rta` verdict uses it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("response_time"))
 
     @property
     def job_response_time(self) -> Optional[float]:
-        """The report's ``job_response_time``."""
+        """R(x), the time within which a job of demand x finishes, in the spec's
+        time unit (the latency bounds use it); null when unbounded.
+        """
         return cast("Optional[float]", self.get("job_response_time"))
 
     @property
