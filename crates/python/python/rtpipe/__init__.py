@@ -501,7 +501,8 @@ class System:
         privileges), for ``duration`` (default 2 s, a flight's mission
         plus 5 s when the tasks name flight bodies and ``synthetic`` is
         False). The real-time classes need root (CAP_SYS_NICE): without it
-        the kernel refuses them and this raises ``InputError`` saying so.
+        the kernel refuses them and this raises ``RunError`` (an
+        ``InputError``) saying so.
         ``samples``, ``trace``, ``plot`` and ``export_rt_app`` write files
         as the flags do. Ctrl-C (or SIGTERM, SIGHUP) ends the run early, as
         on the command line, and raises KeyboardInterrupt once its threads
