@@ -14,6 +14,7 @@ pub mod output;
 pub mod plot;
 pub mod report;
 pub mod run;
+pub mod schema;
 pub mod simulate;
 pub mod table;
 

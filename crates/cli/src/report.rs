@@ -5,7 +5,6 @@ pub mod analysis;
 pub mod flight;
 pub mod margins;
 pub mod samples;
-pub mod schema;
 
 use rtpipe_model::{Nanos, Spec};
 

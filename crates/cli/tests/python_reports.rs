@@ -1,6 +1,6 @@
 //! crates/python/python/rtpipe/reports.py, the Python package's typed
 //! results, is rendered from the JSON Schema of the reports' view structs
-//! (`rtpipe::report::schema`): one class per object, one property per
+//! (`rtpipe::schema`): one class per object, one property per
 //! field, the Rust doc comments their docstrings. This test renders it and
 //! fails when the file differs, so the classes cannot drift from the JSON.
 //!
@@ -318,7 +318,7 @@ fn render_class(c: &Class, defs: &Map<String, Value>) -> String {
 fn classes() -> (Vec<Class>, Map<String, Value>) {
     let mut defs = Map::new();
     let mut roots = Vec::new();
-    for r in rtpipe::report::schema::all() {
+    for r in rtpipe::schema::all() {
         let v = r.schema.as_value().clone();
         for (name, def) in v
             .get("$defs")
