@@ -87,19 +87,20 @@ def run(
     pending = [run_shard.remote(text, k, plan["shards"]) for k in missing]
     systems = 0
     while pending:
-        done, pending = ray.wait(pending, num_returns=1)
-        result = ray.get(done[0])
+        ready, pending = ray.wait(pending, num_returns=1)
+        result: dict[str, Any] = ray.get(ready[0])
         for name, data in result["files"].items():
             write_atomically(out / name, data)
         systems += result["systems"]
     seconds = time.monotonic() - started
+    cpus = ray.cluster_resources()  # type: ignore[no-untyped-call,unused-ignore]
     return {
         "shards": plan["shards"],
         "written": len(missing),
         "skipped": plan["shards"] - len(missing),
         "systems": systems,
         "seconds": seconds,
-        "workers": int(ray.cluster_resources().get("CPU", 0)),
+        "workers": int(cpus.get("CPU", 0)),
     }
 
 
