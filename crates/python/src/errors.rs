@@ -76,20 +76,3 @@ pub fn describe_spec_error(py: Python<'_>, err: &PyErr, e: &ModelError) -> PyRes
     value.setattr("diagnostics", items)?;
     Ok(())
 }
-
-#[cfg(test)]
-mod tests {
-    use super::key_at;
-
-    #[test]
-    fn the_key_at_a_place_is_its_table_and_its_key() {
-        let src = "[system]\nname = \"x\"\n[tasks.gyro]\nperiod = -3\n";
-        let at = src.find("-3").unwrap_or(0);
-        assert_eq!(key_at(src, at).as_deref(), Some("tasks.gyro.period"));
-        assert_eq!(
-            key_at(src, src.find("gyro").unwrap_or(0)).as_deref(),
-            Some("tasks.gyro")
-        );
-        assert_eq!(key_at("a = 1\n", 4).as_deref(), Some("a"));
-    }
-}

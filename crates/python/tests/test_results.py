@@ -71,6 +71,28 @@ def test_each_command_returns_its_class_and_every_field_is_a_property(table3):
     assert isinstance(design.spec, rtpipe.System)
 
 
+def test_a_run_returns_its_report_typed():
+    # The best-effort class runs anywhere, root or not.
+    r = rtpipe.load(EXAMPLES / "paper-table3.toml").run(
+        duration="300ms", policy="other", best_effort=True
+    )
+    assert type(r) is reports.RunReport and r.run.policy == r["run"]["policy"]
+    every_field_is_a_documented_property(r)
+
+
+def test_a_campaign_returns_its_summary_or_its_plan(tmp_path):
+    from test_campaign import small_config
+
+    config = small_config(tmp_path, systems=20, shard_size=10)
+    plan = rtpipe.campaign(config, tmp_path / "out", plan=True)
+    assert type(plan) is reports.CampaignPlan and plan.shards == 2
+    every_field_is_a_documented_property(plan)
+    summary = rtpipe.campaign(config, tmp_path / "out", jobs=1)
+    assert type(summary) is reports.CampaignSummary and summary.written == 2
+    every_field_is_a_documented_property(summary)
+    assert list(summary.tables) and all(t.rows for t in summary.tables.values())
+
+
 def test_attributes_read_the_report_and_the_dict_stays_the_json(table3):
     r = table3.analyze()
     chain = r.chains[0]
