@@ -198,6 +198,12 @@ def test_an_input_error_names_the_argument_at_fault(table3):
     assert e.value.argument == "mode"
 
 
+def test_every_declared_attribute_reads_on_every_error():
+    with pytest.raises(rtpipe.InputError) as e:
+        rtpipe.load({"system": {"name": "x"}, "tasks": {"a": {"period": float("nan")}}})
+    assert e.value.argument is None and "NaN" in str(e.value)
+
+
 def test_the_exception_hierarchy():
     assert issubclass(rtpipe.SpecError, rtpipe.RtpipeError)
     assert issubclass(rtpipe.InputError, rtpipe.RtpipeError)

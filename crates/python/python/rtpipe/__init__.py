@@ -102,6 +102,16 @@ MAX_SAMPLE_ROWS: int = _rtpipe.MAX_SAMPLE_ROWS
 
 log = logging.getLogger("rtpipe")
 
+# Every attribute the stubs declare reads on every instance, None where a
+# raise did not set it (an InputError about a dict spec names no keyword).
+for _error, _attributes in (
+    (InputError, ("argument", "help", "message")),
+    (SpecError, ("file", "line", "column", "key", "message", "fix")),
+):
+    for _attribute in _attributes:
+        setattr(_error, _attribute, None)
+del _error, _attributes, _attribute
+
 T = TypeVar("T")
 
 Source = Union[str, "os.PathLike[str]", Mapping[str, Any]]
