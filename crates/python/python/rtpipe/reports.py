@@ -287,22 +287,22 @@ class SweepReport(Report):
 
     @property
     def system(self) -> str:
-        """The report's ``system``."""
+        """The system's name."""
         return cast("str", self["system"])
 
     @property
     def vehicle(self) -> str:
-        """The report's ``vehicle``."""
+        """The vehicle flown."""
         return cast("str", self["vehicle"])
 
     @property
     def mission(self) -> str:
-        """The report's ``mission``."""
+        """The mission flown."""
         return cast("str", self["mission"])
 
     @property
     def criterion(self) -> str:
-        """The report's ``criterion``."""
+        """The criterion a flight must meet for its timing to fly."""
         return cast("str", self["criterion"])
 
     @property
@@ -312,7 +312,7 @@ class SweepReport(Report):
 
     @property
     def phases(self) -> int:
-        """The report's ``phases``."""
+        """Phase draws per seed."""
         return cast("int", self["phases"])
 
     @property
@@ -322,12 +322,12 @@ class SweepReport(Report):
 
     @property
     def points(self) -> List[Point]:
-        """The report's ``points``."""
+        """Every timing flown, in sweep order."""
         return each(Point, self["points"])
 
     @property
     def limits_ms(self) -> List[LimitMs]:
-        """The report's ``limits_ms``."""
+        """The limits derived per chain, ms."""
         return each(LimitMs, self["limits_ms"])
 
     @property
@@ -470,17 +470,17 @@ class RunReport(Report):
 
     @property
     def fig10(self) -> List[Fig10]:
-        """The report's ``fig10``."""
+        """The paper's Fig. 10 figures per chain."""
         return each(Fig10, self["fig10"])
 
     @property
     def run(self) -> RunInfo:
-        """The report's ``run``."""
+        """The run's settings and figures."""
         return RunInfo(self["run"])
 
     @property
     def flight(self) -> Optional[RunFlight]:
-        """The report's ``flight``."""
+        """When the tasks flew bodies: how the flight went."""
         return maybe(RunFlight, self.get("flight"))
 
 
@@ -2119,17 +2119,17 @@ class Point(Record):
 
     @property
     def varied(self) -> str:
-        """The report's ``varied``."""
+        """What the sweep varied at this point (e.g. `scale`)."""
         return cast("str", self["varied"])
 
     @property
     def value(self) -> float:
-        """The report's ``value``."""
+        """Its value."""
         return cast("float", self["value"])
 
     @property
     def bounds_ms(self) -> List[PairMs]:
-        """The report's ``bounds_ms``."""
+        """Each chain's sound bounds from the read at this timing, ms."""
         return each(PairMs, self["bounds_ms"])
 
     @property
@@ -2141,7 +2141,7 @@ class Point(Record):
 
     @property
     def schedulable(self) -> bool:
-        """The report's ``schedulable``."""
+        """Whether the timing passes the schedulability test."""
         return cast("bool", self["schedulable"])
 
     @property
@@ -2168,32 +2168,32 @@ class Point(Record):
 
     @property
     def passed(self) -> int:
-        """The report's ``passed``."""
+        """Flights that met the criterion."""
         return cast("int", self["passed"])
 
     @property
     def failures(self) -> List[str]:
-        """The report's ``failures``."""
+        """The criteria the flights missed, in words."""
         return cast("List[str]", self["failures"])
 
     @property
     def attitude_error_rms_deg(self) -> Optional[float]:
-        """The report's ``attitude_error_rms_deg``."""
+        """Attitude error RMS over the flights, degrees."""
         return cast("Optional[float]", self.get("attitude_error_rms_deg"))
 
     @property
     def altitude_error_rms_m(self) -> Optional[float]:
-        """The report's ``altitude_error_rms_m``."""
+        """Altitude error RMS over the flights, m."""
         return cast("Optional[float]", self.get("altitude_error_rms_m"))
 
     @property
     def position_error_rms_m(self) -> Optional[float]:
-        """The report's ``position_error_rms_m``."""
+        """Position error RMS over the flights, m (missions that judge it)."""
         return cast("Optional[float]", self.get("position_error_rms_m"))
 
     @property
     def crashed(self) -> Optional[bool]:
-        """The report's ``crashed``."""
+        """Whether a flight crashed."""
         return cast("Optional[bool]", self.get("crashed"))
 
 
@@ -2202,12 +2202,12 @@ class PairMs(Record):
 
     @property
     def reaction(self) -> Optional[float]:
-        """The report's ``reaction``."""
+        """The maximum reaction time, ms; null when unbounded."""
         return cast("Optional[float]", self.get("reaction"))
 
     @property
     def freshness(self) -> Optional[float]:
-        """The report's ``freshness``."""
+        """The maximum data age, ms; null when unbounded."""
         return cast("Optional[float]", self.get("freshness"))
 
 
@@ -2216,27 +2216,31 @@ class LimitMs(Record):
 
     @property
     def chain(self) -> str:
-        """The report's ``chain``."""
+        """The chain's label."""
         return cast("str", self["chain"])
 
     @property
     def reaction(self) -> Optional[float]:
-        """The report's ``reaction``."""
+        """The maximum reaction time, ms; null when unbounded."""
         return cast("Optional[float]", self.get("reaction"))
 
     @property
     def freshness(self) -> Optional[float]:
-        """The report's ``freshness``."""
+        """The maximum data age, ms; null when unbounded."""
         return cast("Optional[float]", self.get("freshness"))
 
     @property
     def max_reaction_time(self) -> Optional[float]:
-        """The report's ``max_reaction_time``."""
+        """The derived `max_reaction_time` to write into the spec, ms; null when
+        none flew.
+        """
         return cast("Optional[float]", self.get("max_reaction_time"))
 
     @property
     def max_data_age(self) -> Optional[float]:
-        """The report's ``max_data_age``."""
+        """The derived `max_data_age` to write into the spec, ms; null when none
+        flew.
+        """
         return cast("Optional[float]", self.get("max_data_age"))
 
 
@@ -2635,42 +2639,44 @@ class Measured(Record):
 
     @property
     def released(self) -> int:
-        """The report's ``released``."""
+        """Jobs released."""
         return cast("int", self["released"])
 
     @property
     def completed(self) -> int:
-        """The report's ``completed``."""
+        """Jobs completed."""
         return cast("int", self["completed"])
 
     @property
     def max_response(self) -> Optional[float]:
-        """The report's ``max_response``."""
+        """The largest response time measured, in the spec's time unit."""
         return cast("Optional[float]", self.get("max_response"))
 
     @property
     def mean_response(self) -> Optional[float]:
-        """The report's ``mean_response``."""
+        """The mean response time, in the spec's time unit."""
         return cast("Optional[float]", self.get("mean_response"))
 
     @property
     def p99_response(self) -> Optional[float]:
-        """The report's ``p99_response``."""
+        """The 99th percentile response time, in the spec's time unit."""
         return cast("Optional[float]", self.get("p99_response"))
 
     @property
     def late(self) -> int:
-        """The report's ``late``."""
+        """Completed jobs that finished after their deadline, counted from the
+        nominal release.
+        """
         return cast("int", self["late"])
 
     @property
     def missed_periods(self) -> int:
-        """The report's ``missed_periods``."""
+        """Jobs that published after their deadline (release + D)."""
         return cast("int", self["missed_periods"])
 
     @property
     def overruns(self) -> int:
-        """The report's ``overruns``."""
+        """Jobs whose CPU time (read to publish) exceeded the task's budget."""
         return cast("int", self["overruns"])
 
     @property
@@ -2682,22 +2688,24 @@ class Measured(Record):
 
     @property
     def max_demand(self) -> float:
-        """The report's ``max_demand``."""
+        """The largest demand a job measured, in the spec's time unit."""
         return cast("float", self["max_demand"])
 
     @property
     def max_start(self) -> float:
-        """The report's ``max_start``."""
+        """The largest delay from release to read, in the spec's time unit (for
+        a CPU's highest-priority task, the kernel's wake-up latency).
+        """
         return cast("float", self["max_start"])
 
     @property
     def priority(self) -> Optional[int]:
-        """The report's ``priority``."""
+        """The thread's SCHED_FIFO priority (`fifo` only; else null)."""
         return cast("Optional[int]", self.get("priority"))
 
     @property
     def utilization(self) -> float:
-        """The report's ``utilization``."""
+        """The share of its CPU the thread used."""
         return cast("float", self["utilization"])
 
 
@@ -2706,47 +2714,47 @@ class Fig10(Record):
 
     @property
     def chain(self) -> str:
-        """The report's ``chain``."""
+        """The chain's label."""
         return cast("str", self["chain"])
 
     @property
     def AVGR(self) -> Optional[float]:
-        """The report's ``AVGR``."""
+        """The mean reaction time, in the spec's time unit."""
         return cast("Optional[float]", self.get("AVGR"))
 
     @property
     def WCR(self) -> Optional[float]:
-        """The report's ``WCR``."""
+        """The largest reaction time, in the spec's time unit."""
         return cast("Optional[float]", self.get("WCR"))
 
     @property
     def MaxRV(self) -> Optional[float]:
-        """The report's ``MaxRV``."""
+        """Reaction-time variation (max − min), in the spec's time unit."""
         return cast("Optional[float]", self.get("MaxRV"))
 
     @property
     def sound_reaction(self) -> Optional[float]:
-        """The report's ``sound_reaction``."""
+        """The sound reaction bound, in the spec's time unit."""
         return cast("Optional[float]", self.get("sound_reaction"))
 
     @property
     def AVGF(self) -> Optional[float]:
-        """The report's ``AVGF``."""
+        """The mean freshness (data age), in the spec's time unit."""
         return cast("Optional[float]", self.get("AVGF"))
 
     @property
     def WCF(self) -> Optional[float]:
-        """The report's ``WCF``."""
+        """The largest freshness, in the spec's time unit."""
         return cast("Optional[float]", self.get("WCF"))
 
     @property
     def MaxFV(self) -> Optional[float]:
-        """The report's ``MaxFV``."""
+        """Freshness variation (max − min), in the spec's time unit."""
         return cast("Optional[float]", self.get("MaxFV"))
 
     @property
     def sound_freshness(self) -> Optional[float]:
-        """The report's ``sound_freshness``."""
+        """The sound freshness bound, in the spec's time unit."""
         return cast("Optional[float]", self.get("sound_freshness"))
 
 
@@ -2755,37 +2763,41 @@ class RunInfo(Record):
 
     @property
     def duration(self) -> float:
-        """The report's ``duration``."""
+        """The run's length, in the spec's time unit."""
         return cast("float", self["duration"])
 
     @property
     def policy(self) -> str:
-        """The report's ``policy``."""
+        """The scheduling policy (`fifo`, `deadline`, `edf-fifo`, `other`)."""
         return cast("str", self["policy"])
 
     @property
     def load(self) -> int:
-        """The report's ``load``."""
+        """Background CPU hogs (SCHED_OTHER) that ran for the whole run."""
         return cast("int", self["load"])
 
     @property
     def epoch_monotonic_ns(self) -> int:
-        """The report's ``epoch_monotonic_ns``."""
+        """CLOCK_MONOTONIC at the run's time 0, ns."""
         return cast("int", self["epoch_monotonic_ns"])
 
     @property
     def real_time(self) -> bool:
-        """The report's ``real_time``."""
+        """Whether the tasks ran under a real-time class (false: best effort, no
+        guarantee).
+        """
         return cast("bool", self["real_time"])
 
     @property
     def interrupted(self) -> bool:
-        """The report's ``interrupted``."""
+        """Whether a signal stopped the run early."""
         return cast("bool", self["interrupted"])
 
     @property
     def steal(self) -> Optional[float]:
-        """The report's ``steal``."""
+        """Steal time of all CPUs during the run (a hypervisor ran someone
+        else), in the spec's time unit; null when /proc/stat lacks it.
+        """
         return cast("Optional[float]", self.get("steal"))
 
     @property
@@ -2797,7 +2809,7 @@ class RunInfo(Record):
 
     @property
     def spin_iterations_per_us(self) -> float:
-        """The report's ``spin_iterations_per_us``."""
+        """The calibrated busy loop's iterations per µs."""
         return cast("float", self["spin_iterations_per_us"])
 
     @property
@@ -2809,12 +2821,12 @@ class RunInfo(Record):
 
     @property
     def sound_bound_violations(self) -> Verdict:
-        """The report's ``sound_bound_violations``."""
+        """Observations above a sound bound, and their causes."""
         return Verdict(self["sound_bound_violations"])
 
     @property
     def notes(self) -> List[str]:
-        """The report's ``notes``."""
+        """Notes of the run, in words."""
         return cast("List[str]", self["notes"])
 
     @property
