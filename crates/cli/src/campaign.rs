@@ -141,13 +141,22 @@ fn cores() -> usize {
 /// directory holds whole and which it will run again.
 #[derive(Serialize, schemars::JsonSchema)]
 struct CampaignPlan {
+    /// The campaign's name.
     campaign: String,
+    /// The campaign's identity: a hash of every value that decides its
+    /// rows, written in every shard's footer.
     fingerprint: String,
+    /// The output directory.
     out: String,
+    /// Systems in the whole campaign.
     systems: u64,
+    /// Systems per shard.
     shard_size: u64,
+    /// Shards in the whole campaign.
     shards: u64,
+    /// The part planned, `i/n` (`0/1` for all).
     part: String,
+    /// Shards in the part.
     part_shards: u64,
     /// The part's shards the directory holds whole.
     written: Vec<u64>,

@@ -602,42 +602,44 @@ class CampaignPlan(Report):
 
     @property
     def campaign(self) -> str:
-        """The report's ``campaign``."""
+        """The campaign's name."""
         return cast("str", self["campaign"])
 
     @property
     def fingerprint(self) -> str:
-        """The report's ``fingerprint``."""
+        """The campaign's identity: a hash of every value that decides its
+        rows, written in every shard's footer.
+        """
         return cast("str", self["fingerprint"])
 
     @property
     def out(self) -> str:
-        """The report's ``out``."""
+        """The output directory."""
         return cast("str", self["out"])
 
     @property
     def systems(self) -> int:
-        """The report's ``systems``."""
+        """Systems in the whole campaign."""
         return cast("int", self["systems"])
 
     @property
     def shard_size(self) -> int:
-        """The report's ``shard_size``."""
+        """Systems per shard."""
         return cast("int", self["shard_size"])
 
     @property
     def shards(self) -> int:
-        """The report's ``shards``."""
+        """Shards in the whole campaign."""
         return cast("int", self["shards"])
 
     @property
     def part(self) -> str:
-        """The report's ``part``."""
+        """The part planned, `i/n` (`0/1` for all)."""
         return cast("str", self["part"])
 
     @property
     def part_shards(self) -> int:
-        """The report's ``part_shards``."""
+        """Shards in the part."""
         return cast("int", self["part_shards"])
 
     @property
@@ -1134,12 +1136,12 @@ class Margins(Record):
 
     @property
     def mode(self) -> str:
-        """The report's ``mode``."""
+        """The mode every verdict follows (`sound` or `paper`)."""
         return cast("str", self["mode"])
 
     @property
     def holds(self) -> bool:
-        """The report's ``holds``."""
+        """The verdict on the spec as it is."""
         return cast("bool", self["holds"])
 
     @property
@@ -1151,27 +1153,31 @@ class Margins(Record):
 
     @property
     def evaluations(self) -> int:
-        """The report's ``evaluations``."""
+        """How many variants of the spec were analysed."""
         return cast("int", self["evaluations"])
 
     @property
     def exec(self) -> List[Exec]:
-        """The report's ``exec``."""
+        """One per task, in task order: how much its exec may grow."""
         return each(Exec, self["exec"])
 
     @property
     def limits(self) -> List[Limit]:
-        """The report's ``limits``."""
+        """One per chain limit: its slack and how each exec eats it."""
         return each(Limit, self["limits"])
 
     @property
     def scaling(self) -> List[Scaling]:
-        """The report's ``scaling``."""
+        """The critical scaling factors: one per CPU with tasks, then the whole
+        system.
+        """
         return each(Scaling, self["scaling"])
 
     @property
     def periods(self) -> List[Period]:
-        """The report's ``periods``."""
+        """One per task with a fixed period and a guarantee: the periods that keep
+        the verdict.
+        """
         return each(Period, self["periods"])
 
 
@@ -1180,12 +1186,12 @@ class Exec(Record):
 
     @property
     def task(self) -> str:
-        """The report's ``task``."""
+        """The task's name."""
         return cast("str", self["task"])
 
     @property
     def exec(self) -> float:
-        """The report's ``exec``."""
+        """Its exec in the spec, in the spec's time unit."""
         return cast("float", self["exec"])
 
     @property
@@ -1195,17 +1201,19 @@ class Exec(Record):
 
     @property
     def margin_percent(self) -> Optional[float]:
-        """The report's ``margin_percent``."""
+        """The margin as a percentage of the exec."""
         return cast("Optional[float]", self.get("margin_percent"))
 
     @property
     def status(self) -> str:
-        """The report's ``status``."""
+        """`holds` (the exec may grow by `margin`), `shrink` (it must shrink),
+        `unlimited` or `unreachable`.
+        """
         return cast("str", self["status"])
 
     @property
     def limited_by(self) -> Optional[str]:
-        """The report's ``limited_by``."""
+        """What fails one nanosecond beyond the margin (null when unlimited)."""
         return cast("Optional[str]", self.get("limited_by"))
 
 
@@ -1214,42 +1222,44 @@ class Limit(Record):
 
     @property
     def chain(self) -> str:
-        """The report's ``chain``."""
+        """The chain's label."""
         return cast("str", self["chain"])
 
     @property
     def metric(self) -> str:
-        """The report's ``metric``."""
+        """`reaction` or `freshness`."""
         return cast("str", self["metric"])
 
     @property
     def from_(self) -> str:
-        """The report's ``from``."""
+        """`read` or `event`: where the limit is measured from."""
         return cast("str", self["from"])
 
     @property
     def key(self) -> str:
-        """The report's ``key``."""
+        """The spec key of the limit."""
         return cast("str", self["key"])
 
     @property
     def limit(self) -> float:
-        """The report's ``limit``."""
+        """The limit, in the spec's time unit."""
         return cast("float", self["limit"])
 
     @property
     def bound(self) -> Optional[float]:
-        """The report's ``bound``."""
+        """The mode's bound, in the spec's time unit; null when unbounded."""
         return cast("Optional[float]", self.get("bound"))
 
     @property
     def slack(self) -> Optional[float]:
-        """The report's ``slack``."""
+        """limit − bound, in the spec's time unit (negative: exceeded); null when
+        unbounded.
+        """
         return cast("Optional[float]", self.get("slack"))
 
     @property
     def first_eaten_by(self) -> Optional[str]:
-        """The report's ``first_eaten_by``."""
+        """The task whose exec the bound is most sensitive to."""
         return cast("Optional[str]", self.get("first_eaten_by"))
 
     @property
@@ -1270,17 +1280,21 @@ class Scaling(Record):
 
     @property
     def factor(self) -> Optional[float]:
-        """The report's ``factor``."""
+        """The largest factor on every exec (of the CPU) that keeps the verdict;
+        null when unlimited or unreachable.
+        """
         return cast("Optional[float]", self.get("factor"))
 
     @property
     def status(self) -> str:
-        """The report's ``status``."""
+        """`holds` (factor ≥ 1), `shrink` (every exec must shrink), `unlimited`
+        or `unreachable`.
+        """
         return cast("str", self["status"])
 
     @property
     def limited_by(self) -> Optional[str]:
-        """The report's ``limited_by``."""
+        """What fails just beyond the factor."""
         return cast("Optional[str]", self.get("limited_by"))
 
 
@@ -1289,17 +1303,19 @@ class Period(Record):
 
     @property
     def task(self) -> str:
-        """The report's ``task``."""
+        """The task's name."""
         return cast("str", self["task"])
 
     @property
     def period(self) -> float:
-        """The report's ``period``."""
+        """Its period in the spec, in the spec's time unit."""
         return cast("float", self["period"])
 
     @property
     def least(self) -> Optional[float]:
-        """The report's ``least``."""
+        """The least period found that keeps the verdict, in the spec's time unit;
+        null when none was found.
+        """
         return cast("Optional[float]", self.get("least"))
 
     @property
@@ -1309,22 +1325,24 @@ class Period(Record):
 
     @property
     def found(self) -> bool:
-        """The report's ``found``."""
+        """Whether a period that keeps the verdict was found."""
         return cast("bool", self["found"])
 
     @property
     def below(self) -> Optional[str]:
-        """The report's ``below``."""
+        """What fails one nanosecond below the range."""
         return cast("Optional[str]", self.get("below"))
 
     @property
     def above(self) -> Optional[str]:
-        """The report's ``above``."""
+        """What fails one nanosecond above it."""
         return cast("Optional[str]", self.get("above"))
 
     @property
     def checked(self) -> int:
-        """The report's ``checked``."""
+        """Periods inside the range checked besides its ends (the verdict is not
+        monotone in a period).
+        """
         return cast("int", self["checked"])
 
 
