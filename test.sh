@@ -22,7 +22,7 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 # Absolute paths, whether CARGO_TARGET_DIR is relative or not.
 target_abs=$(cd "$target" && pwd)
-"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20" "pyarrow>=12" "ray>=2.9" "matplotlib>=3.5" "polars>=1" "pandas>=2"
+"$venv/bin/pip" install -q --disable-pip-version-check "maturin>=1.5,<2" "pytest>=7" "numpy>=1.20" "pyarrow>=12" "ray>=2.9" "matplotlib>=3.5" "polars>=1" "pandas>=2" "mypy>=1.5"
 rm -rf "$target/wheels"
 if [ "${RTPIPE_PORTABLE_WHEEL:-0}" = 1 ]; then
   # The manylinux2014 wheel (glibc 2.17+), linked by zig: a second

@@ -146,14 +146,19 @@ impl AnalyzeReport<'_> {
 
 /// `analyze --json`: the report, then every source-to-sink pair, the
 /// margins and the measurements when asked.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct AnalyzeView<'a> {
     #[serde(flatten)]
     report: ReportView<'a>,
+    /// With `all_paths=True`: every source-to-sink pair's worst bounds.
     #[serde(skip_serializing_if = "Option::is_none")]
     all_paths: Option<PathsView<'a>>,
+    /// With `margins=True`: how much each exec may grow, each limit's slack,
+    /// the critical scaling factors and each period's range.
     #[serde(skip_serializing_if = "Option::is_none")]
     margins: Option<margins::MarginsView>,
+    /// With `observed=FILE`: the measured latencies of that file against the
+    /// bounds.
     #[serde(skip_serializing_if = "Option::is_none")]
     observed: Option<observed::ObservedView<'a>>,
 }
@@ -215,4 +220,10 @@ impl command::Registered for AnalyzeArgs {
         }
         execute(spec, self, &call.stop_fn()).map(command::Done::from)
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(AnalyzeView<'static>)
 }

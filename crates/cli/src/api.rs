@@ -4,7 +4,7 @@
 //! of `--json`. Nothing here prints, reads a clock or catches a signal: the
 //! caller owns the process (Python's SIGINT handler stays Python's).
 
-use crate::command::{Call, Done, Hooks, Reach, Rendered};
+use crate::command::{Call, Done, Hooks, Reach, Refusal, Rendered};
 use crate::registry::{self, Commands};
 use clap::{FromArgMatches, Subcommand};
 use rtpipe_joblog::SampleRow;
@@ -25,6 +25,8 @@ pub fn commands() -> Vec<&'static str> {
 pub struct Reply {
     /// The `--json` report (absent when the command failed: see `notes`).
     pub json: Option<serde_json::Value>,
+    /// The report's tables (what `--format csv` prints), with the JSON.
+    pub tables: Vec<rtpipe_printer::Table>,
     /// The command line's exit status (0 ok, 1 a verdict failed, 2 bad
     /// input, 3 internal error, 130 stopped).
     pub status: u8,
@@ -46,6 +48,9 @@ pub struct Reply {
 pub enum Failure {
     /// A flag or a value is wrong: what and how to fix it.
     Input(Diagnostic),
+    /// A run on this machine could not start (`run`: the kernel refused a
+    /// class or a reservation, a CPU is missing): what and how to fix it.
+    Run(Diagnostic),
     /// The stop flag was set.
     Stopped,
     /// The sample rows asked for would not fit [`MAX_SAMPLE_ROWS`]: what
@@ -249,11 +254,13 @@ fn reply(done: Done, samples: Option<Columns>) -> Reply {
         .iter()
         .position(|(name, _)| name == "designed")
         .map(|i| specs.remove(i).1);
+    let (json, tables) = match answer.report {
+        Rendered::Json(v, tables) => (Some(v), tables),
+        Rendered::Text(_) | Rendered::Nothing => (None, Vec::new()),
+    };
     Reply {
-        json: match answer.report {
-            Rendered::Json(v) => Some(v),
-            Rendered::Text(_) | Rendered::Nothing => None,
-        },
+        json,
+        tables,
         status: answer.status,
         notes: answer.notes,
         samples,
@@ -275,7 +282,38 @@ fn dispatch(path: &str, argv: &[String], call: Call) -> Result<Done, Failure> {
         )));
     }
     let parsed = parse(path, argv)?;
-    parsed.registered().call(call).map_err(Failure::Input)
+    let command = parsed.registered();
+    command.call(call).map_err(|d| match command.refusal() {
+        Refusal::Input => Failure::Input(d),
+        Refusal::Run => Failure::Run(d),
+    })
+}
+
+/// Every flag of `command` (a path of [`commands`], such as `analyze` or
+/// `generate waters`; `waters` is `generate waters`) and its help as
+/// `rtpipe COMMAND --help` prints it (the long form), from the one
+/// registration: what the Python functions' docstrings say of each
+/// keyword. Empty for another name.
+pub fn flag_help(command: &str) -> Vec<(String, String)> {
+    let path = if command == "waters" {
+        "generate waters"
+    } else {
+        command
+    };
+    let root = Commands::augment_subcommands(clap::Command::new("rtpipe"));
+    let mut leaf = &root;
+    for word in path.split(' ') {
+        match leaf.find_subcommand(word) {
+            Some(c) => leaf = c,
+            None => return Vec::new(),
+        }
+    }
+    leaf.get_arguments()
+        .filter_map(|a| {
+            let help = a.get_long_help().or_else(|| a.get_help())?.to_string();
+            Some((a.get_long()?.to_string(), help))
+        })
+        .collect()
 }
 
 /// `argv` (the spec's label, then the flags) parsed as the command line

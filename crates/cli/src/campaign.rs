@@ -139,15 +139,24 @@ fn cores() -> usize {
 
 /// `campaign --plan`'s report: the shards of the part, which the
 /// directory holds whole and which it will run again.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct CampaignPlan {
+    /// The campaign's name.
     campaign: String,
+    /// The campaign's identity: a hash of every value that decides its
+    /// rows, written in every shard's footer.
     fingerprint: String,
+    /// The output directory.
     out: String,
+    /// Systems in the whole campaign.
     systems: u64,
+    /// Systems per shard.
     shard_size: u64,
+    /// Shards in the whole campaign.
     shards: u64,
+    /// The part planned, `i/n` (`0/1` for all).
     part: String,
+    /// Shards in the part.
     part_shards: u64,
     /// The part's shards the directory holds whole.
     written: Vec<u64>,
@@ -209,27 +218,48 @@ impl rtpipe_printer::Report for CampaignPlan {
 }
 
 /// `rtpipe campaign`'s report: what a run of the part wrote, and how fast.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct CampaignSummary {
+    /// The campaign's name.
     campaign: String,
+    /// The output directory.
     out: String,
+    /// Systems in the whole campaign.
     systems: u64,
+    /// Systems per shard.
     shard_size: u64,
+    /// Shards in the whole campaign.
     shards: u64,
+    /// The part run, `i/n` (`0/1` for all).
     part: String,
+    /// Shards in the part.
     part_shards: u64,
+    /// Shards written by this run.
     written: u64,
+    /// Damaged or unfinished shards written again.
     rewritten: u64,
+    /// Shards the directory already held whole.
     skipped: u64,
+    /// Systems this run analysed and simulated.
     systems_run: u64,
+    /// Systems that got fewer chains than asked (the generator found too
+    /// few).
     systems_short: u64,
+    /// Systems generated without any chain.
     systems_without_chains: u64,
+    /// Chains asked per system.
     chains_asked: u32,
+    /// Rows written (one per chain and metric).
     rows: u64,
+    /// Wall-clock seconds the run took.
     seconds: f64,
+    /// Worker threads used.
     jobs: usize,
+    /// Systems run per wall-clock second.
     systems_per_second: f64,
+    /// systems_per_second / jobs.
     systems_per_second_per_job: f64,
+    /// Whether Ctrl-C (or the stop flag) ended the run early.
     stopped: bool,
 }
 
@@ -355,4 +385,15 @@ impl command::Registered for CampaignArgs {
     fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
         execute(self, &call.stop_fn()).map(command::Done::from)
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(CampaignSummary)
+}
+
+/// The JSON Schema of `campaign --plan --json`'s report.
+pub fn plan_json_schema() -> schemars::Schema {
+    schemars::schema_for!(CampaignPlan)
 }

@@ -158,7 +158,8 @@ pub fn render<R: rtpipe_printer::Report>(
 ) -> Result<Rendered, Diagnostic> {
     match rtpipe_printer::print(report, format) {
         Ok(Printed::Text(t)) => Ok(Rendered::Text(t)),
-        Ok(Printed::Json(v)) => Ok(Rendered::Json(v)),
+        // The tables go with the JSON: the Python package hands both back.
+        Ok(Printed::Json(v)) => Ok(Rendered::Json(v, report.tables())),
         Err(e) => Err(Diagnostic::error(
             format!("internal: cannot encode JSON: {e}"),
             "please report it with the spec and the command line",
@@ -206,7 +207,9 @@ pub struct Answer {
 /// A command's report, as `--json` asks.
 pub enum Rendered {
     Text(String),
-    Json(serde_json::Value),
+    /// The JSON value, and the tables `--format csv` prints of the same
+    /// report.
+    Json(serde_json::Value, Vec<rtpipe_printer::Table>),
     /// No report: the command failed (its notes say why).
     Nothing,
 }
@@ -240,7 +243,7 @@ impl Answer {
         match &self.report {
             Rendered::Text(t) => print!("{t}"),
             Rendered::Nothing => {}
-            Rendered::Json(v) => {
+            Rendered::Json(v, _) => {
                 if let Err(code) = print_json(v) {
                     return code;
                 }
@@ -374,6 +377,22 @@ pub trait Registered {
 
     /// The command run on what `call` hands it, nothing printed.
     fn call(&self, call: Call<'_>) -> Result<Done, Diagnostic>;
+
+    /// Whose fault a refusal of [`Registered::call`] is, for a caller that
+    /// tells them apart (Python's `InputError` and `RunError`).
+    fn refusal(&self) -> Refusal {
+        Refusal::Input
+    }
+}
+
+/// Whose fault a command's refusal is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// A flag, a value or the spec is wrong.
+    Input,
+    /// The machine refused a run (`run`: a scheduling class or a
+    /// reservation, a missing CPU).
+    Run,
 }
 
 /// The files a flight's vehicle and mission name (a built-in is a name, not

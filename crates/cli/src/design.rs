@@ -394,13 +394,16 @@ impl DesignReport<'_> {
                 time_unit: spec.time_unit.name(),
             },
         };
+        let margins = match (out.spec.as_ref(), self.margins) {
+            (Some(s), Some(m)) => Some(crate::report::margins::view(s, m)),
+            _ => None,
+        };
         let v = DesignOut {
             head,
             design: design_json(spec, out, self.mode, self.stopped),
+            margins,
         };
-        let mut v = command::to_value(&v)?;
-        margin::append_json(&mut v, out, self.margins)?;
-        Ok(v)
+        command::to_value(&v)
     }
 }
 
@@ -614,14 +617,20 @@ fn interrupted(spec: &Spec, opts: &Options, best: Option<Incumbent>, start: Inst
 
 /// `design --json`: the verified design's analysis report (or just the
 /// system when there is none), then the search's answer.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DesignOut<'a> {
     #[serde(flatten)]
     head: Head<'a>,
+    /// The search's answer: its status, the periods chosen and what the search
+    /// did.
     design: DesignView<'a>,
+    /// `--margins`: the designed spec's timing margins (as `analyze
+    /// --margins` reports them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margins: Option<crate::report::margins::MarginsView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 enum Head<'a> {
     Report(ReportView<'a>),
@@ -631,15 +640,26 @@ enum Head<'a> {
     },
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DesignView<'a> {
+    /// The analysis mode the design keeps the limits under (`sound` or
+    /// `paper`).
     mode: &'static str,
+    /// `optimal`, `feasible` (verified, not proven least), `infeasible` or
+    /// `unknown`.
     status: &'static str,
+    /// The designed system's total utilisation (or the margin objective's
+    /// value); null without a design.
     objective: Option<f64>,
+    /// A proven lower bound on the objective; null when none.
     lower_bound: Option<f64>,
+    /// (objective − lower_bound) / objective; null when either is.
     gap: Option<f64>,
+    /// The search method (`boxes` or `milp`).
     method: &'static str,
+    /// The MILP solver, with `method="milp"`.
     solver: Option<&'static str>,
+    /// Wall-clock seconds the search took.
     seconds: f64,
     /// When the box search held its first verified design.
     first_design_seconds: Option<f64>,
@@ -648,18 +668,28 @@ struct DesignView<'a> {
     peak_open_boxes: Option<usize>,
     /// Their bytes, counted from their sizes (the search stops at 1 GiB).
     peak_open_box_bytes: Option<usize>,
+    /// Each task's period in the design, in the spec's time unit; null for a
+    /// task without one.
     periods: Pairs<&'a str, Option<f64>>,
+    /// Without a design: the constraints that conflict, and how to fix each.
     conflicts: Vec<ConflictView<'a>>,
+    /// Notes of the search, in words.
     notes: &'a [String],
+    /// Whether Ctrl-C (or the stop flag) ended the search early.
     interrupted: bool,
     /// `--fly`: every design flown, in order.
     #[serde(skip_serializing_if = "Option::is_none")]
     flights: Option<Vec<flights::FlownView>>,
+    /// `--objective margin`: the factor found and every factor tried.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    margin_search: Option<margin::SearchView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ConflictView<'a> {
+    /// The constraint, in words.
     constraint: &'a str,
+    /// How to relax it, when known.
     fix: Option<&'a str>,
 }
 
@@ -692,6 +722,7 @@ fn design_json<'a>(spec: &Spec, o: &'a Outcome, mode: Mode, stopped: bool) -> De
         notes: &o.notes,
         interrupted: stopped,
         flights: (!o.checked.is_empty()).then(|| flights::flown_json(spec, &o.checked)),
+        margin_search: margin::search_json(o),
     }
 }
 
@@ -788,6 +819,12 @@ impl command::Registered for DesignArgs {
             .extend(designed.map(|s| ("designed".to_string(), s)));
         Ok(done)
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(DesignOut<'static>)
 }
 
 #[cfg(test)]

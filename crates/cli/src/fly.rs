@@ -430,6 +430,17 @@ impl command::Registered for FlyArgs {
     }
 }
 
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(report::FlyView<'static>)
+}
+
+/// The JSON Schema of `fly --sweep --json`'s report.
+pub fn sweep_json_schema() -> schemars::Schema {
+    sweep::json_schema()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

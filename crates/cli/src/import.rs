@@ -240,7 +240,7 @@ fn e2eeval_done(file: &Path, text: Option<&str>) -> Result<Done, Diagnostic> {
     });
     let notes = imported.notes.iter();
     let answer = Answer {
-        report: Rendered::Json(summary),
+        report: Rendered::Json(summary, Vec::new()),
         notes: notes
             .map(|n| format!("{}: {}", n.level, n.message))
             .collect(),

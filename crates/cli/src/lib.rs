@@ -15,6 +15,7 @@ pub mod plot;
 pub mod registry;
 pub mod report;
 pub mod run;
+pub mod schema;
 pub mod simulate;
 pub mod table;
 

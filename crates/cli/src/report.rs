@@ -18,6 +18,20 @@ impl<K: serde::Serialize, V: serde::Serialize> serde::Serialize for Pairs<K, V> 
     }
 }
 
+/// An object whose keys are data (task names, bound names), each value a `V`.
+impl<K, V: schemars::JsonSchema> schemars::JsonSchema for Pairs<K, V> {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        format!("Pairs_{}", V::schema_name()).into()
+    }
+
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "type": "object",
+            "additionalProperties": generator.subschema_for::<V>(),
+        })
+    }
+}
+
 /// A time in the spec's unit; `None` (JSON null) for none.
 pub fn time(spec: &Spec, ns: Option<Nanos>) -> Option<f64> {
     ns.map(|n| spec.in_unit(n))

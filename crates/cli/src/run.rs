@@ -499,6 +499,13 @@ impl command::Registered for RunArgs {
         command::world_inputs(self.vehicle(), self.mission())
     }
 
+    /// A refusal after the flags parsed is the machine's (`RunError` in
+    /// Python): the kernel refused a class or a reservation, a CPU is
+    /// missing.
+    fn refusal(&self) -> command::Refusal {
+        command::Refusal::Run
+    }
+
     fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
         let spec = call.spec()?;
         if let Some(d) = command::missing_periods(spec) {
@@ -506,4 +513,10 @@ impl command::Registered for RunArgs {
         }
         answer(spec, self, false).map(command::Done::from)
     }
+}
+
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(report::RunView<'static>)
 }

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any, Dict
 
 import numpy as np
 import pyarrow.compute as pc
@@ -75,17 +76,21 @@ PANELS = [
 ]
 
 
-def run(config: Path, out: Path):
+# {metric: {analysis: array of 1 - bound/Davare}}
+Reductions = Dict[str, Dict[str, Any]]
+
+
+def run(config: Path, out: Path) -> Any:
     """The campaign's table (its shards run if `out` lacks them)."""
     rtpipe.campaign(config, out)
     return pq.read_table(out)
 
 
-def column(t, name: str):
+def column(t: Any, name: str) -> Any:
     return t[name].to_numpy(zero_copy_only=False).astype(float)
 
 
-def metric_rows(table, metric: str):
+def metric_rows(table: Any, metric: str) -> Any:
     """The rows of `metric` of the schedulable systems, ordered by
     (system, chain) so that both metrics' rows line up."""
     t = table.filter(pc.equal(table["metric"], metric))
@@ -93,13 +98,13 @@ def metric_rows(table, metric: str):
     return t.sort_by([("system", "ascending"), ("chain", "ascending")])
 
 
-def reductions(table) -> dict:
+def reductions(table: Any) -> Reductions:
     """{metric: {analysis: array of (D07 - bound) / D07}} over the chains
     every analysis bounds, as E2EEvaluation normalises."""
     base = metric_rows(table, BASELINE[0])
     davare = column(base, BASELINE[1])
     keys = (column(base, "system"), column(base, "chain"))
-    out = {}
+    out: Reductions = {}
     for metric, _, analyses in PANELS:
         t = metric_rows(table, metric)
         assert (column(t, "system") == keys[0]).all() and (column(t, "chain") == keys[1]).all()
@@ -111,7 +116,7 @@ def reductions(table) -> dict:
     return out
 
 
-def summary(red: dict) -> str:
+def summary(red: Reductions) -> str:
     """Median and quartiles of each reduction, as a table."""
     lines = ["| metric | analysis | chains | median | 25 % | 75 % |", "|---|---|---|---|---|---|"]
     for metric, name, _ in PANELS:
@@ -122,7 +127,7 @@ def summary(red: dict) -> str:
     return "\n".join(lines)
 
 
-def plot(red: dict, path: str) -> None:
+def plot(red: Reductions, path: str) -> None:
     """Box plots as E2EEvaluation draws them: one panel per metric, the
     y-axis from 0 to 1."""
     import matplotlib

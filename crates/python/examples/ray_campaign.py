@@ -29,14 +29,15 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import ray
 
 import rtpipe
 
 
-@ray.remote(num_cpus=1)
-def run_shard(config_text: str, k: int, shards: int) -> dict:
+@ray.remote(num_cpus=1)  # type: ignore[untyped-decorator,unused-ignore]
+def run_shard(config_text: str, k: int, shards: int) -> dict[str, Any]:
     """Shard k of the campaign, on whichever node Ray picks: its file's
     bytes, by name."""
     with tempfile.TemporaryDirectory(prefix="rtpipe-shard-") as tmp:
@@ -64,8 +65,13 @@ def write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
-def run(config: Path, out: Path, workers: int | None = None, address: str | None = None,
-        wheel: Path | None = None) -> dict:
+def run(
+    config: Path,
+    out: Path,
+    workers: int | None = None,
+    address: str | None = None,
+    wheel: Path | None = None,
+) -> dict[str, Any]:
     """Runs every shard `out` lacks on the cluster; returns what was done.
     A directory of another campaign is refused (``rtpipe.InputError``)
     before anything is written, as ``rtpipe campaign`` refuses it; a shard
@@ -92,19 +98,20 @@ def run(config: Path, out: Path, workers: int | None = None, address: str | None
     pending = [run_shard.remote(text, k, plan["shards"]) for k in missing]
     systems = 0
     while pending:
-        done, pending = ray.wait(pending, num_returns=1)
-        result = ray.get(done[0])
+        ready, pending = ray.wait(pending, num_returns=1)
+        result: dict[str, Any] = ray.get(ready[0])
         for name, data in result["files"].items():
             write_atomically(out / name, data)
         systems += result["systems"]
     seconds = time.monotonic() - started
+    cpus = ray.cluster_resources()  # type: ignore[no-untyped-call,unused-ignore]
     return {
         "shards": plan["shards"],
         "written": len(missing),
         "skipped": plan["shards"] - len(missing),
         "systems": systems,
         "seconds": seconds,
-        "workers": int(ray.cluster_resources().get("CPU", 0)),
+        "workers": int(cpus.get("CPU", 0)),
     }
 
 

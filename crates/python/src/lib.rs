@@ -5,6 +5,9 @@
 //! free (the GIL released) and Ctrl-C is honoured; the answer comes back as
 //! the `--json` value turned into Python objects.
 
+mod errors;
+mod tables;
+
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -32,6 +35,12 @@ create_exception!(
     InputError,
     RtpipeError,
     "An argument or a file it names is wrong: `help` says how to fix it."
+);
+create_exception!(
+    _rtpipe,
+    RunError,
+    InputError,
+    "A run on this machine could not start (the kernel refused a real-time class or a reservation, a CPU or cpuset is missing): `help` says how to fix it."
 );
 create_exception!(
     _rtpipe,
@@ -248,6 +257,12 @@ fn edit_error(py: Python<'_>, e: &ModelError, at: &str, value: &Bound<'_, PyAny>
     err
 }
 
+/// `(flag, help)` of every flag of `command`, as its `--help` says.
+#[pyfunction]
+fn flag_help(command: &str) -> Vec<(String, String)> {
+    api::flag_help(command)
+}
+
 /// Reads a spec file.
 #[pyfunction]
 fn load_path(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Spec> {
@@ -406,7 +421,7 @@ fn finite(f: f64, at: &str) -> PyResult<serde_json::Value> {
 /// `samples` returns the sample rows as columns, at most `max_samples`
 /// of them (`MAX_SAMPLE_ROWS` by default, the most it takes; a run with
 /// more raises MemoryError). Returns (report, exit status, notes, sample
-/// columns or None, designed spec or None).
+/// columns or None, designed spec or None, tables).
 #[pyfunction]
 #[pyo3(signature = (command, spec, flags, samples=false, max_samples=None))]
 fn run(
@@ -532,6 +547,13 @@ fn answer(py: Python<'_>, reply: Result<Reply, Failure>) -> PyResult<Py<PyAny>> 
 fn raise(py: Python<'_>, f: Failure) -> PyErr {
     match f {
         Failure::Input(d) => input_error(py, &d),
+        Failure::Run(d) => {
+            let e = input_error(py, &d);
+            let run = RunError::new_err(e.value(py).to_string());
+            let _ = run.value(py).setattr("help", d.help.clone());
+            let _ = run.value(py).setattr("message", d.message.clone());
+            run
+        }
         Failure::Stopped => pyo3::exceptions::PyKeyboardInterrupt::new_err("stopped"),
         // MemoryError, as Python says it; raised before memory runs out.
         Failure::TooManySamples(d) => {
@@ -544,7 +566,8 @@ fn raise(py: Python<'_>, f: Failure) -> PyErr {
     }
 }
 
-/// (report, status, notes, columns, designed spec) as a Python tuple.
+/// (report, status, notes, columns, designed spec, tables) as a Python
+/// tuple.
 fn reply_to_py(py: Python<'_>, r: Reply) -> PyResult<Py<PyAny>> {
     let report = match &r.json {
         Some(v) => json_to_py(py, v)?,
@@ -567,7 +590,8 @@ fn reply_to_py(py: Python<'_>, r: Reply) -> PyResult<Py<PyAny>> {
     };
     let notes = PyList::new(py, &r.notes)?.into_any().unbind();
     let status = r.status.into_pyobject(py)?.into_any().unbind();
-    let t = pyo3::types::PyTuple::new(py, [report, status, notes, cols, designed])?;
+    let tables = tables::tables_to_py(py, &r.tables)?.into_any().unbind();
+    let t = pyo3::types::PyTuple::new(py, [report, status, notes, cols, designed, tables])?;
     Ok(t.into_any().unbind())
 }
 
@@ -646,28 +670,13 @@ fn input_error(py: Python<'_>, d: &Diagnostic) -> PyErr {
     e
 }
 
-/// A spec's errors as [`SpecError`]: the whole report as its message, and
-/// `file` and `diagnostics` (message, help, line, column) as attributes.
+/// A spec's errors as [`SpecError`]: the whole report as its message, the
+/// first problem's place and fix, and every problem under `diagnostics`.
 fn spec_error(py: Python<'_>, e: &ModelError) -> PyErr {
     let err = SpecError::new_err(e.to_string().trim_end().to_string());
-    let items = e.diagnostics.iter().map(|d| {
-        let (line, column) = match &d.span {
-            Some(s) => {
-                let (l, c) = e.line_col(s.start);
-                (Some(l), Some(c))
-            }
-            None => (None, None),
-        };
-        let item = PyDict::new(py);
-        let _ = item.set_item("message", &d.message);
-        let _ = item.set_item("help", &d.help);
-        let _ = item.set_item("line", line);
-        let _ = item.set_item("column", column);
-        item
-    });
-    let list: Vec<_> = items.collect();
-    let _ = err.value(py).setattr("file", &e.file);
-    let _ = err.value(py).setattr("diagnostics", list);
+    // Setting plain attributes on a fresh exception cannot fail short of
+    // memory, when the exception itself is the best answer left.
+    let _ = errors::describe_spec_error(py, &err, e);
     err
 }
 
@@ -683,9 +692,11 @@ fn _rtpipe(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(waters, m)?)?;
     m.add_function(wrap_pyfunction!(make, m)?)?;
     m.add("REACH", reach())?;
+    m.add_function(wrap_pyfunction!(flag_help, m)?)?;
     m.add("RtpipeError", py.get_type::<RtpipeError>())?;
     m.add("SpecError", py.get_type::<SpecError>())?;
     m.add("InputError", py.get_type::<InputError>())?;
+    m.add("RunError", py.get_type::<RunError>())?;
     m.add("InternalError", py.get_type::<InternalError>())?;
     m.add("COMMANDS", api::commands())?;
     m.add("MAX_SAMPLE_ROWS", api::MAX_SAMPLE_ROWS)?;

@@ -208,7 +208,7 @@ fn fly_round(f: &Flights, spec: &Spec, round: &[(usize, u32)]) -> Vec<Vec<String
 }
 
 /// One flown design, for `--json`.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct FlownView {
     utilization: f64,
     /// Periods of the free tasks, in the spec's unit.

@@ -55,20 +55,10 @@ pub fn append_text(t: &mut String, out: &Outcome, found: Option<&Margins>) {
     }
 }
 
-/// [`append_text`]'s JSON: the margin search in `design`, the margins
-/// beside it.
-pub fn append_json(
-    v: &mut serde_json::Value,
-    out: &Outcome,
-    found: Option<&Margins>,
-) -> Result<(), Diagnostic> {
-    if let (Some(m), Some(d)) = (&out.margin, v.get_mut("design")) {
-        d["margin_search"] = crate::command::to_value(&search_view(m))?;
-    }
-    if let (Some(s), Some(m)) = (out.spec.as_ref(), found) {
-        v["margins"] = crate::command::to_value(&margins::view(s, m))?;
-    }
-    Ok(())
+/// [`append_text`]'s JSON: `design --json`'s `margin_search`, when the
+/// objective was the margin.
+pub fn search_json(out: &Outcome) -> Option<SearchView> {
+    out.margin.as_ref().map(search_view)
 }
 
 /// The margin search in words: the factor found and every factor tried.
@@ -104,8 +94,9 @@ fn search_text(m: &MarginSearch) -> String {
 }
 
 /// `design --json`'s `margin_search`.
-#[derive(Serialize)]
-struct SearchView {
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "MarginSearch")]
+pub struct SearchView {
     max_utilization: f64,
     factor: Option<f64>,
     critical_scaling_factor: Option<f64>,
@@ -113,7 +104,8 @@ struct SearchView {
     steps: Vec<StepView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "MarginStep")]
 struct StepView {
     factor: f64,
     status: &'static str,

@@ -246,26 +246,35 @@ fn to_text(
 }
 
 /// `fly --json`: the observations report, then the flight's quality.
-#[derive(Serialize)]
-struct FlyView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct FlyView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, TaskView<'a>, simulate::ObsChain<'a>>,
+    /// How the flight went: the vehicle, the mission and its quality figures.
     flight: FlightView<'a>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct FlightView<'a> {
+    /// The vehicle flown.
     vehicle: &'a str,
+    /// The mission flown.
     mission: &'a str,
     /// The disturbances flown in, in words (absent in calm air).
     #[serde(skip_serializing_if = "String::is_empty")]
     world: String,
+    /// The flight's length, s.
     duration_s: f64,
+    /// Whether the vehicle crashed.
     crashed: bool,
+    /// When it crashed, s (absent: it did not).
     #[serde(skip_serializing_if = "Option::is_none")]
     crashed_s: Option<f64>,
+    /// Attitude error against the setpoint, RMS and max, degrees.
     attitude_error_deg: RmsMax,
+    /// Altitude error against the setpoint, RMS and max, m.
     altitude_error_m: RmsMax,
+    /// Horizontal drift from the start while hovering, m.
     drift_m: f64,
     /// Only for a mission that judges it (a disturbance-rejection criterion).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -277,17 +286,25 @@ struct FlightView<'a> {
     /// Attitude error during the roll and pitch steps (absent: none flown).
     #[serde(skip_serializing_if = "Option::is_none")]
     step_tracking_deg: Option<RmsMax>,
+    /// Time with a motor command saturated, s.
     saturation_s: f64,
+    /// Time in the air, s.
     airborne_s: f64,
+    /// When it landed, s; null when it did not.
     landed_s: Option<f64>,
+    /// The envelope the flight was judged against, and its excursions.
     envelope: EnvelopeView,
+    /// The attitude steps of the mission and how they were tracked.
     steps: Vec<StepView>,
+    /// Whether the flight met every criterion of its mission.
     criteria_met: bool,
+    /// The criteria it did not meet, in words.
     failures: &'a [String],
+    /// Wall-clock seconds the flight took.
     seconds: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct StepView {
     axis: &'static str,
     at_s: f64,
@@ -298,7 +315,7 @@ struct StepView {
     drift_deg: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ResponseView {
     rise_s: f64,
     overshoot: f64,

@@ -183,14 +183,18 @@ fn freed(spec: &Spec, names: Option<&[String]>) -> Result<Vec<bool>, Diagnostic>
     Ok(free)
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PointView<'a> {
+    /// What the sweep varied at this point (e.g. `scale`).
     varied: &'static str,
+    /// Its value.
     value: f64,
+    /// Each chain's sound bounds from the read at this timing, ms.
     bounds_ms: Vec<PairMs>,
     /// From the event: `reaction` is the maximum reaction time,
     /// `freshness` freshness from the event.
     event_bounds_ms: Vec<PairMs>,
+    /// Whether the timing passes the schedulability test.
     schedulable: bool,
     /// The timing is schedulable and its flight met the criterion: a
     /// point the limits may rest on.
@@ -202,18 +206,26 @@ struct PointView<'a> {
     /// Flights flown at this timing (seeds × phases), and how many met the
     /// criterion: it flies only when all did.
     flights: u32,
+    /// Flights that met the criterion.
     passed: u32,
+    /// The criteria the flights missed, in words.
     failures: &'a [String],
+    /// Attitude error RMS over the flights, degrees.
     attitude_error_rms_deg: Option<f64>,
+    /// Altitude error RMS over the flights, m.
     altitude_error_rms_m: Option<f64>,
+    /// Position error RMS over the flights, m (missions that judge it).
     position_error_rms_m: Option<f64>,
+    /// Whether a flight crashed.
     crashed: Option<bool>,
 }
 
 /// A chain's reaction and freshness, in ms (null: none).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairMs {
+    /// The maximum reaction time, ms; null when unbounded.
     reaction: Option<f64>,
+    /// The maximum data age, ms; null when unbounded.
     freshness: Option<f64>,
 }
 
@@ -514,18 +526,25 @@ fn write_files(
 
 /// The sweep as one JSON object: the setup, every point, the derived
 /// limits (ms).
-#[derive(Serialize)]
-struct SweepView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct SweepView<'a> {
+    /// The system's name.
     system: &'a str,
+    /// The vehicle flown.
     vehicle: &'a str,
+    /// The mission flown.
     mission: &'a str,
+    /// The criterion a flight must meet for its timing to fly.
     criterion: String,
     /// Flights per timing: seeds × phase draws.
     seeds: u32,
+    /// Phase draws per seed.
     phases: u32,
     /// Every derived limit is the bound at the last timing that flew × this.
     safety: f64,
+    /// Every timing flown, in sweep order.
     points: Vec<PointView<'a>>,
+    /// The limits derived per chain, ms.
     limits_ms: Vec<LimitMs>,
     /// The tail's `max_period` (ms): the longest period that flew in the
     /// rate sweep.
@@ -536,12 +555,17 @@ struct SweepView<'a> {
     also: Vec<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct LimitMs {
+    /// The chain's label.
     chain: String,
     #[serde(flatten)]
     limit: PairMs,
+    /// The derived `max_reaction_time` to write into the spec, ms; null when
+    /// none flew.
     max_reaction_time: Option<f64>,
+    /// The derived `freshness_from_event` limit to write into the spec, ms;
+    /// null when none flew.
     freshness_from_event: Option<f64>,
 }
 
@@ -734,6 +758,11 @@ fn text(
         out.push_str(&format!("wrote {} with these limits\n", w.display()));
     }
     out
+}
+
+/// The JSON Schema of `fly --sweep --json`'s report.
+pub(super) fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(SweepView<'static>)
 }
 
 #[cfg(test)]

@@ -99,7 +99,7 @@ pub(super) fn done(log: &Path, exec: &ExecArgs) -> Result<Done, Diagnostic> {
     });
     Ok(Done {
         answer: Answer {
-            report: Rendered::Json(summary),
+            report: Rendered::Json(summary, Vec::new()),
             notes: Vec::new(),
             status: 0,
         },

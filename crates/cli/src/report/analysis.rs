@@ -20,18 +20,28 @@ pub(crate) fn path_names(spec: &Spec, path: &[usize]) -> Vec<String> {
 
 /// The JSON report; `T` and `C` let `simulate` extend the task and chain
 /// entries with what it observed.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "AnalysisView")]
 pub struct ReportView<'a, T = TaskView<'a>, C = ChainView<'a>> {
+    /// The system's name (`[system] name`).
     pub system: &'a str,
+    /// The unit of every time in the report (`ns`, `us`, `ms` or `s`).
     pub time_unit: &'static str,
+    /// The scheduler analysed: `rm` (fixed priorities) or `edf`.
     pub scheduler: &'static str,
     /// "let" under LET communication; absent under implicit (the default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub communication: Option<&'static str>,
+    /// One entry per task, in the spec's order.
     pub tasks: Vec<T>,
+    /// The schedulability test and its verdict, per CPU.
     pub schedulability: SchedView,
+    /// One entry per chain and metric (reaction, then freshness).
     pub chains: Vec<C>,
+    /// Whether every task is schedulable and every chain keeps its limits under
+    /// the sound bounds.
     pub ok: bool,
+    /// The same verdict under the paper's bounds.
     pub paper_ok: bool,
 }
 
@@ -56,16 +66,25 @@ impl<'a, T, C> ReportView<'a, T, C> {
     }
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct TaskView<'a> {
+    /// The task's name.
     name: &'a str,
+    /// The server the task runs in (`main` for none).
     server: &'static str,
+    /// p, its worst-case execution time, in the spec's time unit.
     exec: f64,
+    /// Its best-case execution time, in the spec's time unit.
     exec_min: f64,
+    /// Δin, the time to read its input channel, in the spec's time unit.
     delta_in: f64,
+    /// Δout, the time to write its output channel, in the spec's time unit.
     delta_out: f64,
+    /// Δin + p + Δout, its worst-case demand per job, in the spec's time unit.
     demand: f64,
+    /// Its server budget, in the spec's time unit.
     budget: f64,
+    /// T, its period, in the spec's time unit.
     period: f64,
     /// D, when the spec gives a deadline (else D = T, left out).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -83,42 +102,59 @@ pub struct TaskView<'a> {
     max_period: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     period_ok: Option<bool>,
+    /// Its CPU utilisation, budget / period.
     utilization: f64,
+    /// Its fixed priority on its CPU, 1 the highest; null under EDF.
     priority: Option<usize>,
+    /// The CPU it runs on.
     cpu: u32,
+    /// R(C), the time within which its server delivers its whole budget, in
+    /// the spec's time unit (the `rta` verdict uses it); null when unbounded.
     response_time: Option<f64>,
+    /// R(x), the time within which a job of demand x finishes, in the spec's
+    /// time unit (the latency bounds use it); null when unbounded.
     job_response_time: Option<f64>,
     /// Its activations, in a spec with threads or data-triggered tasks.
     #[serde(skip_serializing_if = "Option::is_none")]
     activation: Option<events::ActivationView<'a>>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct SchedView {
+    /// The schedulability test applied (e.g. `rta`).
     test: &'static str,
+    /// The total utilisation of all CPUs.
     utilization: f64,
+    /// The test's bound: a number for one CPU, a list with one per CPU.
     bound: OneOrMany,
+    /// Whether every CPU passes the test.
     schedulable: bool,
+    /// The test's figures per CPU.
     cpus: Vec<CpuView>,
 }
 
 /// A single CPU's bound as a number, several as a list (the format
 /// predates multiprocessor specs).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 enum OneOrMany {
     One(f64),
     Many(Vec<f64>),
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct CpuView {
+    /// The CPU's index.
     cpu: u32,
+    /// The number of tasks on it.
     tasks: usize,
+    /// The CPU's utilisation.
     utilization: f64,
     /// `None` for an unbounded response time (RTA).
     value: Option<f64>,
+    /// The test's bound on this CPU.
     bound: f64,
+    /// Whether this CPU passes the test.
     schedulable: bool,
     /// The CPU's scheduling overheads, in the spec's unit (left out
     /// without any).
@@ -127,34 +163,52 @@ struct CpuView {
 }
 
 /// `[system] overheads` on one CPU.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct OverheadsView {
+    /// The cost of a context switch, in the spec's time unit.
     context_switch: f64,
+    /// The cost of a job release, in the spec's time unit.
     release: f64,
+    /// The cost of a server budget replenishment, in the spec's time unit.
     replenish: f64,
 }
 
 /// One chain and metric of the report; `known_offsets` only for a chain
 /// with known offsets.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct ChainView<'a> {
+    /// The chain's name (null for an unnamed chain).
     name: Option<&'a str>,
+    /// Its tasks, from the head (sensor) to the tail (actuator).
     path: Vec<String>,
+    /// `reaction` (reaction time) or `freshness` (data age).
     metric: &'static str,
+    /// The spec's limit on this metric from the read, in the spec's time unit;
+    /// null when none.
     limit: Option<f64>,
     /// The limit from the event (`max_reaction_time` / `freshness_from_event`),
     /// left out when the spec gives none.
     #[serde(skip_serializing_if = "Option::is_none")]
     event_limit: Option<f64>,
+    /// The bounds of the chain's metric from the head's read, in the
+    /// spec's time unit.
     #[serde(flatten)]
-    bounds: Pairs<&'static str, Option<f64>>,
+    bounds: BoundValues,
+    /// Whether the sound bound keeps the limits (true without limits when
+    /// bounded).
     ok: bool,
+    /// Whether the paper's bound keeps the limits.
     paper_ok: bool,
-    from_event: Pairs<&'static str, Option<f64>>,
+    /// The same bounds from the external event (a sample read up to one
+    /// head period after it), in the spec's time unit.
+    from_event: BoundValues,
     /// The literature's quantities this metric is (`Literature::of`), each
     /// with the bounds of its anchor: the same figures under their names.
-    literature: Pairs<&'static str, Pairs<&'static str, Option<f64>>>,
+    literature: Pairs<&'static str, BoundValues>,
+    /// The paper's case (1 to 4) of each link of the chain, in order.
     cases: Vec<u8>,
+    /// The bounds under the spec's known release offsets (only for a chain
+    /// whose tasks all have offsets).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub known_offsets: Option<KnownView>,
     /// The chain's own `communication`, when the spec gives it one.
@@ -162,24 +216,74 @@ pub struct ChainView<'a> {
     communication: Option<&'static str>,
 }
 
+/// One chain's bound of each method ([`rtpipe_analysis::Bound::ALL`]),
+/// keyed by the method's name; null where a task on the chain has no
+/// bounded response time.
+pub struct BoundValues(Vec<(&'static str, Option<f64>)>);
+
+impl Serialize for BoundValues {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
+}
+
+impl schemars::JsonSchema for BoundValues {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "BoundValues".into()
+    }
+
+    /// One property per method, named as the reports name it.
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut properties = serde_json::Map::new();
+        for b in rtpipe_analysis::Bound::ALL {
+            let about = bound_about(b);
+            let field = serde_json::json!({"type": ["number", "null"], "description": about});
+            properties.insert(b.name().to_string(), field);
+        }
+        let names: Vec<&str> = rtpipe_analysis::Bound::ALL.map(|b| b.name()).to_vec();
+        schemars::json_schema!({"type": "object", "properties": properties, "required": names})
+    }
+}
+
+/// What each bound is, for the reports' schema (docs/analysis.md has the
+/// formulas).
+fn bound_about(b: rtpipe_analysis::Bound) -> &'static str {
+    use rtpipe_analysis::Bound;
+    match b {
+        Bound::Paper => "The paper's bound (Cheng, West, Einstein, EMSOFT 2018), in the spec's unit; null when unbounded.",
+        Bound::Sound => "rtpipe's sound, interference-aware bound, in the spec's unit; null when unbounded.",
+        Bound::Davare => "Davare et al.'s bound (DAC 2007), in the spec's unit; null when unbounded.",
+        Bound::Duerr => "Duerr et al.'s bound (CASES 2019), in the spec's unit; null when unbounded.",
+    }
+}
+
 /// A chain's bounds of its metric under the spec's known release offsets;
 /// the hyperperiod and jobs are null when the job-level analysis did not
 /// run. `simulate` fills in the violations.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct KnownView {
     #[serde(flatten)]
     read: KnownBound,
+    /// The same bound from the external event.
     pub from_event: KnownBound,
+    /// The hyperperiod the job-level analysis covered, in the spec's time unit;
+    /// null when it did not run.
     hyperperiod: Option<f64>,
+    /// The jobs the job-level analysis covered; null when it did not run.
     jobs: Option<u64>,
+    /// With `simulate`: samples above the known-offset bound (from the read).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violations: Option<usize>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct KnownBound {
+    /// The sound bound under the known offsets, in the spec's time unit; null
+    /// when unbounded.
     sound: Option<f64>,
+    /// How it was derived (the job-level analysis, or the offset-free bound).
     basis: String,
+    /// With `simulate`: samples above this bound.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violations: Option<usize>,
 }
@@ -263,7 +367,7 @@ fn sched_view(spec: &Spec, s: &rtpipe_analysis::Schedulability) -> SchedView {
 fn chain_view<'a>(spec: &'a Spec, r: &Report, c: &rtpipe_analysis::ChainResult) -> ChainView<'a> {
     let ch = &spec.chains[c.chain];
     let bounds = |a: Anchor| {
-        Pairs(
+        BoundValues(
             c.bound
                 .from(a)
                 .map(|(b, v)| (b.name(), time(spec, v)))
@@ -735,19 +839,19 @@ pub fn known_offsets_text(spec: &Spec, r: &Report) -> String {
     out
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct WorstView {
     path: Vec<String>,
     bound: Option<f64>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairMetric {
     paper: WorstView,
     sound: WorstView,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PairView<'a> {
     source: &'a str,
     sink: &'a str,
@@ -755,7 +859,7 @@ struct PairView<'a> {
     freshness: PairMetric,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct PathsView<'a> {
     pairs: Vec<PairView<'a>>,
     skipped_cycles: Vec<Vec<String>>,

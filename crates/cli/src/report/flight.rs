@@ -6,9 +6,11 @@ use serde::Serialize;
 
 /// An error's RMS and maximum, as `fly --json` and `run --json` both name
 /// them (`attitude_error_deg.rms`): one name for one figure.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct RmsMax {
+    /// The root mean square.
     pub rms: f64,
+    /// The largest.
     pub max: f64,
 }
 
@@ -23,7 +25,7 @@ impl From<&ErrorStats> for RmsMax {
 
 /// The envelope a flight was judged against over its whole length and how
 /// far it went, as `fly --json` and `run --json` both give it.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct EnvelopeView {
     pub max_altitude_m: f64,
     pub max_distance_m: f64,

@@ -248,65 +248,103 @@ fn period_table(spec: &Spec, rows: &[PeriodRange]) -> String {
 }
 
 /// `--json`'s `margins`.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct MarginsView {
+    /// The mode every verdict follows (`sound` or `paper`).
     mode: &'static str,
+    /// The verdict on the spec as it is.
     holds: bool,
     /// The exec margins and factors are the exact largest values (sound
     /// mode), not only verified edges (paper mode).
     exact: bool,
+    /// How many variants of the spec were analysed.
     evaluations: u64,
+    /// One per task, in task order: how much its exec may grow.
     exec: Vec<ExecView>,
+    /// One per chain limit: its slack and how each exec eats it.
     limits: Vec<LimitView>,
+    /// The critical scaling factors: one per CPU with tasks, then the whole
+    /// system.
     scaling: Vec<ScalingView>,
+    /// One per task with a fixed period and a guarantee: the periods that keep
+    /// the verdict.
     periods: Vec<PeriodView>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ExecView {
+    /// The task's name.
     task: String,
+    /// Its exec in the spec, in the spec's time unit.
     exec: f64,
     /// null when unlimited or unreachable (`status` says which).
     margin: Option<f64>,
+    /// The margin as a percentage of the exec.
     margin_percent: Option<f64>,
+    /// `holds` (the exec may grow by `margin`), `shrink` (it must shrink),
+    /// `unlimited` or `unreachable`.
     status: &'static str,
+    /// What fails one nanosecond beyond the margin (null when unlimited).
     limited_by: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct LimitView {
+    /// The chain's label.
     chain: String,
+    /// `reaction` or `freshness`.
     metric: &'static str,
+    /// `read` or `event`: where the limit is measured from.
     from: &'static str,
+    /// The spec key of the limit.
     key: &'static str,
+    /// The limit, in the spec's time unit.
     limit: f64,
+    /// The mode's bound, in the spec's time unit; null when unbounded.
     bound: Option<f64>,
+    /// limit − bound, in the spec's time unit (negative: exceeded); null when
+    /// unbounded.
     slack: Option<f64>,
+    /// The task whose exec the bound is most sensitive to.
     first_eaten_by: Option<String>,
     /// Per task: the growth of its exec this limit alone allows (null:
     /// unlimited or unreachable).
     exec_margins: crate::report::Pairs<String, Option<f64>>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct ScalingView {
     /// null: every CPU together.
     cpu: Option<u32>,
+    /// The largest factor on every exec (of the CPU) that keeps the verdict;
+    /// null when unlimited or unreachable.
     factor: Option<f64>,
+    /// `holds` (factor ≥ 1), `shrink` (every exec must shrink), `unlimited`
+    /// or `unreachable`.
     status: &'static str,
+    /// What fails just beyond the factor.
     limited_by: Option<String>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct PeriodView {
+    /// The task's name.
     task: String,
+    /// Its period in the spec, in the spec's time unit.
     period: f64,
+    /// The least period found that keeps the verdict, in the spec's time unit;
+    /// null when none was found.
     least: Option<f64>,
     /// null: unlimited (or no range).
     greatest: Option<f64>,
+    /// Whether a period that keeps the verdict was found.
     found: bool,
+    /// What fails one nanosecond below the range.
     below: Option<String>,
+    /// What fails one nanosecond above it.
     above: Option<String>,
+    /// Periods inside the range checked besides its ends (the verdict is not
+    /// monotone in a period).
     checked: usize,
 }
 

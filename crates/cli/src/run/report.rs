@@ -76,7 +76,8 @@ impl rtpipe_printer::Report for RunReport<'_> {
 
 /// The `flight` entry of the JSON: the vehicle, the mission and how the
 /// flight went, its figures named as `fly --json` names them.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "RunFlightView")]
 struct FlightView<'a> {
     vehicle: &'a str,
     mission: &'a str,
@@ -203,52 +204,84 @@ fn ran_line(spec: &Spec, res: &RunResult, spin: Spin, flight: bool) -> String {
 
 /// `run --json`: the observations report with each task's measurements,
 /// the Fig. 10 figures, the run, and the flight when bodies flew.
-#[derive(Serialize)]
-struct RunView<'a> {
+#[derive(Serialize, schemars::JsonSchema)]
+pub(super) struct RunView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, Extended<TaskView<'a>, TaskMeasured>, ObsChain<'a>>,
+    /// The paper's Fig. 10 figures per chain.
     fig10: Vec<Fig10View>,
+    /// The run's settings and figures.
     run: RunInfo<'a>,
+    /// When the tasks flew bodies: how the flight went.
     #[serde(skip_serializing_if = "Option::is_none")]
     flight: Option<FlightView<'a>>,
 }
 
-#[derive(Serialize)]
+/// What the run measured of a task's thread (counts of jobs; times in
+/// the spec's unit).
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "Measured")]
 struct TaskMeasured {
+    /// Jobs released.
     released: u64,
+    /// Jobs completed.
     completed: u64,
+    /// The largest response time measured, in the spec's time unit.
     max_response: Option<f64>,
+    /// The mean response time, in the spec's time unit.
     mean_response: Option<f64>,
+    /// The 99th percentile response time, in the spec's time unit.
     p99_response: Option<f64>,
+    /// Completed jobs that finished after their deadline, counted from the
+    /// nominal release.
     late: u64,
+    /// Jobs that published after their deadline (release + D).
     missed_periods: u64,
+    /// Jobs whose CPU time (read to publish) exceeded the task's budget.
     overruns: u64,
     /// Releases merged into a job still queued (a task in a work-queue
     /// thread or data-triggered); 0 for any other.
     merged: u64,
+    /// The largest demand a job measured, in the spec's time unit.
     max_demand: f64,
+    /// The largest delay from release to read, in the spec's time unit (for
+    /// a CPU's highest-priority task, the kernel's wake-up latency).
     max_start: f64,
+    /// The thread's SCHED_FIFO priority (`fifo` only; else null).
     priority: Option<i32>,
+    /// The share of its CPU the thread used.
     utilization: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct RunInfo<'a> {
+    /// The run's length, in the spec's time unit.
     duration: f64,
+    /// The scheduling policy (`fifo`, `deadline`, `edf-fifo`, `other`).
     policy: &'static str,
+    /// Background CPU hogs (SCHED_OTHER) that ran for the whole run.
     load: usize,
+    /// CLOCK_MONOTONIC at the run's time 0, ns.
     epoch_monotonic_ns: Nanos,
+    /// Whether the tasks ran under a real-time class (false: best effort, no
+    /// guarantee).
     real_time: bool,
+    /// Whether a signal stopped the run early.
     interrupted: bool,
+    /// Steal time of all CPUs during the run (a hypervisor ran someone
+    /// else), in the spec's time unit; null when /proc/stat lacks it.
     steal: Option<f64>,
     /// Other processes' real-time threads that may run on the run's CPUs
     /// and used CPU time during it, in words (most CPU time first).
     foreign_rt_threads: Vec<String>,
+    /// The calibrated busy loop's iterations per µs.
     spin_iterations_per_us: f64,
     /// EDF only: `partitioned` (SCHED_DEADLINE with a root domain per CPU,
     /// or the EDF dispatcher's pinned threads) or `global` EDF.
     edf: Option<&'static str>,
+    /// Observations above a sound bound, and their causes.
     sound_bound_violations: &'a Verdict,
+    /// Notes of the run, in words.
     notes: &'a [String],
     /// Per resource: its sections as the threads held them.
     critical_sections: Vec<HeldView<'a>>,
@@ -257,7 +290,7 @@ struct RunInfo<'a> {
 }
 
 /// The EDF dispatcher's counts (`rtpipe_runtime::edf::Stats`).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct DispatchView {
     dispatches: u64,
     priority_changes: u64,
@@ -281,7 +314,7 @@ impl From<rtpipe_runtime::edf::Stats> for DispatchView {
 }
 
 /// One resource's sections in a run.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct HeldView<'a> {
     resource: &'a str,
     holds: usize,
@@ -434,17 +467,26 @@ fn fig10_table(spec: &Spec, obs: &[ChainObs]) -> String {
 }
 
 /// `fig10`: one entry per chain, in the spec's unit.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 #[allow(non_snake_case)] // the paper's names for the figures
 struct Fig10View {
+    /// The chain's label.
     chain: String,
+    /// The mean reaction time, in the spec's time unit.
     AVGR: Option<f64>,
+    /// The largest reaction time, in the spec's time unit.
     WCR: Option<f64>,
+    /// Reaction-time variation (max − min), in the spec's time unit.
     MaxRV: Option<f64>,
+    /// The sound reaction bound, in the spec's time unit.
     sound_reaction: Option<f64>,
+    /// The mean freshness (data age), in the spec's time unit.
     AVGF: Option<f64>,
+    /// The largest freshness, in the spec's time unit.
     WCF: Option<f64>,
+    /// Freshness variation (max − min), in the spec's time unit.
     MaxFV: Option<f64>,
+    /// The sound freshness bound, in the spec's time unit.
     sound_freshness: Option<f64>,
 }
 

@@ -13,7 +13,7 @@ use rtpipe_runtime::RunResult;
 use serde::Serialize;
 
 /// One observation above its sound bound.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub(super) struct Violation {
     /// The chain's label, or the task's name.
     pub(super) what: String,
@@ -33,7 +33,7 @@ pub(super) struct Violation {
 }
 
 /// Every observation above a sound bound.
-#[derive(Debug, Default, Serialize)]
+#[derive(Debug, Default, Serialize, schemars::JsonSchema)]
 pub(super) struct Verdict {
     pub(super) excused: usize,
     pub(super) unexcused: usize,

@@ -396,6 +396,12 @@ impl command::Registered for SimulateArgs {
     }
 }
 
+/// The JSON Schema of `--json`'s report (its fields and their doc
+/// comments: the source of the Python package's typed results).
+pub fn json_schema() -> schemars::Schema {
+    schemars::schema_for!(report::SimulateView<'static>)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,24 +6,37 @@ use crate::report::{time, Pairs};
 use rtpipe_sim::observe::Summary;
 use serde::Serialize;
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SearchView {
+    /// The chain's label.
     chain: String,
+    /// `reaction` or `freshness`.
     metric: &'static str,
+    /// `read` or `event`: where the latency starts.
     from: &'static str,
+    /// The worst latency the search found, in the spec's time unit (a lower
+    /// bound on the true worst case).
     found: Option<f64>,
+    /// The paper's bound, in the spec's time unit.
     paper: Option<f64>,
+    /// The sound bound, in the spec's time unit.
     sound: Option<f64>,
+    /// found / sound: how close the bound is to a latency that happens.
     tightness: Option<f64>,
+    /// Simulations the search ran.
     simulations: u64,
+    /// The release offsets of the worst case found, in the spec's time unit,
+    /// per task.
     offsets: Vec<f64>,
+    /// The demands of the worst case found.
     exec: String,
+    /// The seed that reproduces it.
     seed: u64,
     #[serde(skip_serializing_if = "Option::is_none")]
     known_offsets: Option<SearchKnown>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct SearchKnown {
     sound: Option<f64>,
     basis: String,
@@ -105,45 +118,66 @@ pub(super) fn search_text(spec: &Spec, rs: &[SearchResult]) -> String {
 
 /// `simulate --json`: the observations report, the run, and the adversarial
 /// search when one ran.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SimulateView<'a> {
     #[serde(flatten)]
     report: ReportView<'a, Extended<TaskView<'a>, TaskObserved>, ObsChain<'a>>,
+    /// The run's settings and figures.
     simulation: SimulationView<'a>,
+    /// With `phasing="search"`: the adversarial search's worst case per chain,
+    /// metric and anchor.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub search: Vec<SearchView>,
 }
 
 /// A report entry with one more key at its end.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "{B}{X}")]
 pub(crate) struct Extended<B, X> {
     #[serde(flatten)]
     pub base: B,
     pub observed: X,
 }
 
-#[derive(Serialize)]
+/// What the simulation observed of a task (counts of jobs; times in the
+/// spec's unit).
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "Simulated")]
 pub(super) struct TaskObserved {
+    /// Jobs released.
     released: u64,
     /// Releases merged into a queued job (threads and data-triggered
     /// tasks only: absent, not 0, for the others).
     #[serde(skip_serializing_if = "Option::is_none")]
     merged: Option<u64>,
+    /// Jobs completed.
     completed: u64,
+    /// The largest response time observed, in the spec's time unit; null
+    /// without a completed job.
     max_response: Option<f64>,
+    /// Jobs that finished after their period (or deadline).
     late: u64,
+    /// Times its server's budget ran out.
     exhaustions: u64,
+    /// The share of the CPU it used over the run.
     utilization: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(super) struct SimulationView<'a> {
+    /// The simulated time, in the spec's time unit.
     horizon: f64,
+    /// The seed of the random offsets and demands.
     seed: u64,
+    /// How demands were drawn (`worst`, `uniform`, `best`, `extremes`).
     exec: String,
+    /// How release offsets were chosen (`sync`, `random`, `search`).
     phasing: String,
+    /// Each task's release offset, in the spec's time unit.
     offsets: Pairs<&'a str, f64>,
+    /// Scheduler events simulated.
     events: u64,
+    /// Wall-clock seconds the simulation took.
     seconds: f64,
 }
 
@@ -209,19 +243,25 @@ pub(super) fn simulation_view<'a>(
 
 /// A chain entry of the report with its observations from the read and
 /// from the event.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(crate) struct ObsChain<'a> {
     #[serde(flatten)]
     base: ChainView<'a>,
+    /// The latencies observed from the read (the head's sample).
     observed: ObservedView,
+    /// Samples above the bounds, from the read.
     violations: Violations,
+    /// The latencies observed from the external event.
     observed_from_event: ObservedView,
+    /// Samples above the bounds, from the event.
     violations_from_event: Violations,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 struct Violations {
+    /// Samples above the paper's bound.
     paper: usize,
+    /// Samples above the sound bound; null when the bound is unbounded.
     sound: Option<usize>,
 }
 
@@ -263,13 +303,19 @@ pub(crate) fn observations_view<'a>(
 /// {count, min, mean, p99, max, variation} in the spec's unit; variation =
 /// max − min, the spread the paper's Fig. 10 reports (MaxRV, MaxFV); all
 /// but the count null without observations.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub(crate) struct ObservedView {
+    /// The samples observed.
     count: usize,
+    /// The smallest, in the spec's time unit.
     min: Option<f64>,
+    /// The mean, in the spec's time unit.
     mean: Option<f64>,
+    /// The 99th percentile, in the spec's time unit.
     p99: Option<f64>,
+    /// The largest, in the spec's time unit.
     max: Option<f64>,
+    /// max − min, in the spec's time unit (the paper's MaxRV and MaxFV).
     variation: Option<f64>,
 }
 

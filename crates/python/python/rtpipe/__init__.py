@@ -3,21 +3,32 @@ the ``rtpipe`` command line, on the same crates.
 
 >>> import rtpipe
 >>> system = rtpipe.load("examples/paper-table3.toml")
->>> report = system.analyze()              # the dict of `rtpipe analyze --json`
+>>> report = system.analyze()              # an rtpipe.reports.AnalysisReport
+>>> report.chains[0].sound                 # a chain's sound bound, in the spec's unit
+>>> report.to_pandas("chains")             # the chains table as a DataFrame
 >>> run = system.simulate(outputs=1000, samples=True)
->>> run["samples"]["reaction_ns"]          # one numpy value per head sample
+>>> run.samples["reaction_ns"]             # one numpy value per head sample
 
-Every method returns a plain dict: exactly what the command's ``--json``
-prints (the same keys, order and values), plus ``samples`` (numpy
-columns) when asked for, and ``spec`` (a :class:`System`) from
-:meth:`System.design`. Keyword arguments are the command's flags with
+Every method returns a typed report (:mod:`rtpipe.reports`, generated
+from the Rust report structs): a ``dict`` holding exactly what the
+command's ``--json`` prints (the same keys, order and values; ``report["ok"]``
+and ``report.to_dict()`` give them as before), plus ``exit_status``,
+``samples`` (numpy columns) when asked for, and ``spec`` (a :class:`System`)
+from :meth:`System.design`; each field is also a documented property, and
+the report's tables (what ``--format csv`` prints) are under
+``report.tables`` with ``to_pandas``, ``to_polars`` and ``to_arrow``.
+Keyword arguments are the command's flags with
 underscores (``search_steps=3`` is ``--search-steps 3``), and one left at
 None takes the command line's default (``rtpipe COMMAND --help`` lists
-them); the values are checked by the command line's own parser. Errors raise :class:`SpecError`
-(with each problem's place) or :class:`InputError` (with ``help``). A run
-whose verdict fails (a limit missed, a flight that crashed) still returns
-its dict (``ok``, ``criteria_met`` say so), and the command line's exit
-status is under ``"exit_status"``.
+them); the values are checked by the command line's own parser. Errors raise
+:class:`SpecError` (with the first problem's ``file``, ``line``,
+``column``, ``key`` and ``fix``, and every problem under ``diagnostics``),
+:class:`InputError` (the argument at fault and ``help``), :class:`RunError`
+(a run on this machine that could not start) or :class:`InternalError`
+(a bug), all :class:`RtpipeError`. A run whose verdict fails (a limit
+missed, a flight that crashed) still returns its report (``ok``,
+``criteria_met`` say so), and the command line's exit status is its
+``exit_status``.
 
 Long calls release the GIL (other Python threads run meanwhile) and
 Ctrl-C stops them with KeyboardInterrupt: the work itself stops (a
@@ -40,12 +51,23 @@ import os
 import re
 import signal
 import threading
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Type, TypeVar, Union
 
 import numpy as np
 
-from . import _rtpipe
-from ._rtpipe import InputError, InternalError, RtpipeError, SpecError
+from . import _rtpipe, reports
+from ._record import Report, Table, table_from_raw
+from ._rtpipe import InputError, InternalError, RtpipeError, RunError, SpecError
+from .reports import (
+    AnalysisReport,
+    CampaignPlan,
+    CampaignSummary,
+    DesignReport,
+    FlightReport,
+    RunReport,
+    SimulationReport,
+    SweepReport,
+)
 from ._spec import Chain, Chains, Task, Tasks
 
 __all__ = [
@@ -60,7 +82,18 @@ __all__ = [
     "RtpipeError",
     "SpecError",
     "InputError",
+    "RunError",
     "InternalError",
+    "Table",
+    "reports",
+    "AnalysisReport",
+    "SimulationReport",
+    "FlightReport",
+    "SweepReport",
+    "DesignReport",
+    "RunReport",
+    "CampaignSummary",
+    "CampaignPlan",
     "MAX_SAMPLE_ROWS",
     "__version__",
 ]
@@ -73,6 +106,18 @@ __version__: str = _rtpipe.__version__
 MAX_SAMPLE_ROWS: int = _rtpipe.MAX_SAMPLE_ROWS
 
 log = logging.getLogger("rtpipe")
+
+# Every attribute the stubs declare reads on every instance, None where a
+# raise did not set it (an InputError about a dict spec names no keyword).
+for _error, _attributes in (
+    (InputError, ("argument", "help", "message")),
+    (SpecError, ("file", "line", "column", "key", "message", "fix")),
+):
+    for _attribute in _attributes:
+        setattr(_error, _attribute, None)
+del _error, _attributes, _attribute
+
+T = TypeVar("T")
 
 Source = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
@@ -165,7 +210,7 @@ def import_px4_ulog(
     return dict(system=System(specs[0][1]), observed=files["observed.csv"], **report)
 
 
-def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> list:
+def _flags(options: Mapping[str, Any], switches: Sequence[str] = ()) -> List[str]:
     """Keyword arguments as command-line flags: None and False leave a flag
     out, True gives a switch (one of ``switches``) bare, a list joins its
     items with commas. A value is always joined to its flag
@@ -209,18 +254,26 @@ def _pythonic(message: str, keywords: Sequence[str]) -> str:
     return message
 
 
-def _speaking_python(keywords: Sequence[str], call: Any) -> Any:
+def _speaking_python(keywords: Sequence[str], call: Callable[[], T]) -> T:
     """``call()``, its InputError said in terms of ``keywords``."""
     try:
         return call()
     except InputError as e:
         text = _pythonic(str(e), keywords)
-        err = InputError(text)
+        err = type(e)(text)
         for attr in ("help", "message"):
             value = getattr(e, attr, None)
-            if isinstance(value, str):
-                setattr(err, attr, _pythonic(value, keywords))
+            setattr(err, attr, _pythonic(value, keywords) if isinstance(value, str) else value)
+        err.argument = _argument_at_fault(text, keywords)
         raise err from None
+
+
+def _argument_at_fault(message: str, keywords: Sequence[str]) -> Optional[str]:
+    """The keyword argument a message names first (``'seed'``), or None
+    when it names none (a file's content, the machine)."""
+    found = [(m.start(), k) for k in keywords
+             for m in [re.search(r"(?<![\w-])" + re.escape(k) + r"(?![\w-])", message)] if m]
+    return min(found)[1] if found else None
 
 
 _STOP_SIGNALS = tuple(
@@ -228,7 +281,7 @@ _STOP_SIGNALS = tuple(
 )
 
 
-def _signal_handlers() -> list:
+def _signal_handlers() -> List[Tuple[int, Any]]:
     """The Python handlers of the stop signals (none off the main thread,
     where Python cannot set them)."""
     if threading.current_thread() is not threading.main_thread():
@@ -236,7 +289,7 @@ def _signal_handlers() -> list:
     return [(sig, signal.getsignal(sig)) for sig in _STOP_SIGNALS]
 
 
-def _restore_signal_handlers(kept: list) -> None:
+def _restore_signal_handlers(kept: List[Tuple[int, Any]]) -> None:
     for sig, handler in kept:
         if handler is not None:
             signal.signal(sig, handler)
@@ -258,9 +311,13 @@ def _columns(raw: Mapping[str, Any]) -> Dict[str, np.ndarray]:
     return cols
 
 
-def _finish(command: str, result: tuple) -> dict:
-    """A native reply as the dict a method returns."""
-    report, status, notes, cols, designed = result
+R = TypeVar("R", bound=Report)
+
+
+
+def _finish(command: str, result: Tuple[Any, ...], kind: Type[R]) -> R:
+    """A native reply as the typed report a method returns."""
+    report, status, notes, cols, designed, tables = result
     for note in notes:
         (log.error if note.startswith("error") else log.info)(note)
     if report is None:
@@ -269,10 +326,10 @@ def _finish(command: str, result: tuple) -> dict:
         raise (InputError if status == 2 else InternalError)(text)
     report["exit_status"] = status
     if cols is not None:
-        report["samples"] = _columns(cols)
+        report["samples"] = Table("samples", _columns(cols))
     if command == "design":
         report["spec"] = System(designed) if designed is not None else None
-    return report
+    return kind(report, {name: table_from_raw(name, raw) for name, raw in tables.items()})
 
 
 def campaign(
@@ -282,7 +339,7 @@ def campaign(
     shard: Union[str, Tuple[int, int], None] = None,
     jobs: Optional[int] = None,
     plan: bool = False,
-) -> dict:
+) -> Union[CampaignSummary, CampaignPlan]:
     """Runs a campaign (``rtpipe campaign CONFIG OUTDIR --json``): its
     systems generated, analysed and simulated on ``jobs`` threads (every
     core by default) into Parquet shards in ``out``; shards already there
@@ -295,9 +352,12 @@ def campaign(
     """
     options = dict(shard=_shard(shard), jobs=jobs, plan=plan)
 
-    def call() -> dict:
+    def call() -> Union[CampaignSummary, CampaignPlan]:
         flags = [os.fspath(config), os.fspath(out)] + _flags(options, _switches(campaign))
-        return _finish("campaign", _rtpipe.run_plain("campaign", flags))
+        result = _rtpipe.run_plain("campaign", flags)
+        if plan:
+            return _finish("campaign", result, CampaignPlan)
+        return _finish("campaign", result, CampaignSummary)
 
     return _speaking_python(list(inspect.signature(campaign).parameters), call)
 
@@ -323,7 +383,9 @@ def _shard(shard: Union[str, Tuple[int, int], None]) -> Optional[str]:
     )
 
 
-def _samples(samples: Union[bool, str, "os.PathLike[str]", None], options: dict) -> bool:
+def _samples(
+    samples: Union[bool, str, "os.PathLike[str]", None], options: Dict[str, Any]
+) -> bool:
     """``samples``: True returns the rows as columns (held in memory, at most
     :data:`MAX_SAMPLE_ROWS`); a path streams them to that CSV file instead
     (``--samples``, any number of rows), added to ``options``."""
@@ -374,7 +436,7 @@ class System:
         self._spec = self._spec.edit(keys, value, shown)
 
     @property
-    def free_tasks(self) -> list:
+    def free_tasks(self) -> List[str]:
         """Tasks without a fixed period: what :meth:`design` chooses."""
         return self._spec.free_tasks()
 
@@ -385,19 +447,23 @@ class System:
     def __repr__(self) -> str:
         return repr(self._spec)
 
-    def _run(self, command: str, options: Mapping[str, Any], samples: bool = False) -> dict:
+    def _run(
+        self, command: str, options: Mapping[str, Any], kind: Type[R], samples: bool = False
+    ) -> R:
         method = getattr(System, command)
         keywords = list(inspect.signature(method).parameters)[1:]
 
-        def call() -> dict:
+        def call() -> R:
             flags = _flags(options, _switches(method))
-            return _finish(command, _rtpipe.run(command, self._spec, flags, samples))
+            return _finish(command, _rtpipe.run(command, self._spec, flags, samples), kind)
 
         return _speaking_python(keywords, call)
 
-    def _run_samples(self, command: str, options: dict, samples: Any) -> dict:
+    def _run_samples(
+        self, command: str, options: Dict[str, Any], samples: Any, kind: Type[R]
+    ) -> R:
         columns = _samples(samples, options)
-        return self._run(command, options, columns)
+        return self._run(command, options, kind, columns)
 
     def analyze(
         self,
@@ -407,7 +473,7 @@ class System:
         margins: bool = False,
         margins_csv: Union[str, "os.PathLike[str]", None] = None,
         observed: Union[str, "os.PathLike[str]", None] = None,
-    ) -> dict:
+    ) -> AnalysisReport:
         """Schedulability and the worst-case bounds of every chain
         (``rtpipe analyze --json``); ``mode`` ("sound" or "paper") decides
         ``ok``. ``margins=True`` adds ``"margins"`` (``--margins``): how much
@@ -424,7 +490,7 @@ class System:
             margins_csv=margins_csv,
             observed=observed,
         )
-        return self._run("analyze", options)
+        return self._run("analyze", options, AnalysisReport)
 
     def simulate(
         self,
@@ -440,7 +506,7 @@ class System:
         plot: Optional[str] = None,
         gantt: Optional[str] = None,
         window: Optional[str] = None,
-    ) -> dict:
+    ) -> SimulationReport:
         """The simulator against the bounds (``rtpipe simulate --json``).
 
         ``samples=True`` adds ``"samples"``: one numpy column per field of
@@ -458,7 +524,7 @@ class System:
             outputs=outputs, duration=duration, seed=seed, exec=exec, phasing=phasing,
             search_steps=search_steps, trace=trace, plot=plot, gantt=gantt, window=window,
         )
-        return self._run_samples("simulate", options, samples)
+        return self._run_samples("simulate", options, samples, SimulationReport)
 
     def fly(
         self,
@@ -478,7 +544,7 @@ class System:
         criterion: Optional[str] = None,
         write_limits: Optional[str] = None,
         free_periods: bool = False,
-    ) -> dict:
+    ) -> Union[FlightReport, SweepReport]:
         """A software-in-the-loop flight on the simulated schedule
         (``rtpipe fly --json``), or with ``sweep=True`` the timing sweep
         that derives the limits the flight depends on. ``samples`` as in
@@ -489,7 +555,9 @@ class System:
             per_octave=per_octave, criterion=criterion, write_limits=write_limits,
             free_periods=free_periods,
         )
-        return self._run_samples("fly", options, samples)
+        if sweep:
+            return self._run_samples("fly", options, samples, SweepReport)
+        return self._run_samples("fly", options, samples, FlightReport)
 
     def run(
         self,
@@ -506,14 +574,15 @@ class System:
         trace: Union[str, "os.PathLike[str]", None] = None,
         plot: Union[str, "os.PathLike[str]", None] = None,
         export_rt_app: Union[str, "os.PathLike[str]", None] = None,
-    ) -> dict:
+    ) -> RunReport:
         """Runs the spec for real on this machine (``rtpipe run --json``):
         one thread per task under ``policy`` ("fifo", "deadline",
         "edf-fifo"; "other" with ``best_effort=True`` runs without real-time
         privileges), for ``duration`` (default 2 s, a flight's mission
         plus 5 s when the tasks name flight bodies and ``synthetic`` is
         False). The real-time classes need root (CAP_SYS_NICE): without it
-        the kernel refuses them and this raises ``InputError`` saying so.
+        the kernel refuses them and this raises ``RunError`` (an
+        ``InputError``) saying so.
         ``samples``, ``trace``, ``plot`` and ``export_rt_app`` write files
         as the flags do. Ctrl-C (or SIGTERM, SIGHUP) ends the run early, as
         on the command line, and raises KeyboardInterrupt once its threads
@@ -528,10 +597,10 @@ class System:
         # are put back after it.
         kept = _signal_handlers()
         try:
-            report = self._run("run", options)
+            report = self._run("run", options, RunReport)
         finally:
             _restore_signal_handlers(kept)
-        if report.get("run", {}).get("interrupted"):
+        if report.run.interrupted:
             raise KeyboardInterrupt("the run was stopped by a signal")
         return report
 
@@ -553,7 +622,7 @@ class System:
         objective: Optional[str] = None,
         max_utilization: Optional[float] = None,
         margins: bool = False,
-    ) -> dict:
+    ) -> DesignReport:
         """Periods that meet every limit at least utilisation
         (``rtpipe design --json``), plus ``"spec"``: the designed
         :class:`System`, or None when there is no verified design.
@@ -571,4 +640,50 @@ class System:
             confidence=confidence, write=write, overwrite_spec=overwrite_spec,
             objective=objective, max_utilization=max_utilization, margins=margins,
         )
-        return self._run("design", options)
+        return self._run("design", options, DesignReport)
+
+
+# What a keyword means where it is not the command line's flag as it is:
+# Python's own arguments, and flags whose value Python takes differently.
+_PYTHON_ARGUMENTS: Dict[str, str] = {
+    "samples": (
+        "True returns the sample rows as numpy columns (``report.samples``, at "
+        "most MAX_SAMPLE_ROWS of them, else MemoryError); a path streams any "
+        "number of rows to that CSV file instead, as the command line's flag does."
+    ),
+    "config": "The campaign's config file (TOML).",
+    "out": "The directory its Parquet shards go to (made if missing).",
+    "shard": "Only the shards ``k % n == i``: a 2-tuple ``(i, n)`` or the string ``\"i/n\"``.",
+    "fly": "A mission (or a list of them) to fly every candidate design on (``--fly``).",
+    "vehicle": "A vehicle (or a list of them) to fly (``--vehicle``).",
+}
+
+
+def _document(function: Callable[..., Any], command: str) -> None:
+    """Ends ``function``'s docstring with an ``Arguments:`` section: each
+    keyword, what the command line's help says of its flag (flags named
+    as keywords), or what :data:`_PYTHON_ARGUMENTS` says of a keyword
+    Python takes its own way. The help is the clap definitions', so the
+    two cannot drift apart."""
+    import textwrap
+
+    keywords = [k for k in inspect.signature(function).parameters if k != "self"]
+    helps = dict(_rtpipe.flag_help(command))
+    lines = ["", "Arguments:"]
+    for key in keywords:
+        flag = key.replace("_", "-")
+        text = _PYTHON_ARGUMENTS.get(key) if command != "waters" else None
+        text = text or helps.get(flag) or _PYTHON_ARGUMENTS.get(key)
+        if text is None:
+            raise AssertionError(f"{function.__qualname__}({key}=...) has no help to show")
+        said = _pythonic(" ".join(text.split()), keywords)
+        wrapped = textwrap.wrap(f"{key}: {said}", width=76, subsequent_indent="    ")
+        lines.extend("    " + w for w in wrapped)
+    function.__doc__ = (inspect.getdoc(function) or "") + "\n" + "\n".join(lines) + "\n"
+
+
+for _command in ("analyze", "simulate", "fly", "run", "design"):
+    _document(getattr(System, _command), _command)
+_document(campaign, "campaign")
+_document(waters, "waters")
+del _command

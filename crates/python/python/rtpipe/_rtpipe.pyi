@@ -13,12 +13,23 @@ class RtpipeError(Exception): ...
 
 class SpecError(RtpipeError):
     file: str
-    # Each problem: {"message": str, "help": str | None, "line": int | None, "column": int | None}
+    # The first problem's place, message and fix (None where unknown).
+    line: Optional[int]
+    column: Optional[int]
+    key: Optional[str]
+    message: Optional[str]
+    fix: Optional[str]
+    # Each problem: {"message": str, "help": str | None, "line": int | None,
+    # "column": int | None, "key": str | None}
     diagnostics: List[Dict[str, Any]]
 
 class InputError(RtpipeError):
     message: str
     help: Optional[str]
+    # The keyword argument at fault, when the message names one.
+    argument: Optional[str]
+
+class RunError(InputError): ...
 
 class InternalError(RtpipeError): ...
 
@@ -45,16 +56,24 @@ def dict_to_toml(value: Dict[str, Any]) -> str: ...
 # (one byte per row, 1 where the cell is empty) for the optional columns.
 RawColumns = Dict[str, Union[bytes, Tuple[bytes, bytes]]]
 
+# A report's tables: name -> (column names, {column: (dtype, data, mask)}),
+# data a little-endian buffer (a list of str for dtype "str"), mask one byte
+# per row (1 where the cell is empty) or None.
+RawTables = Dict[str, Tuple[List[str], Dict[str, Tuple[str, Any, Optional[bytes]]]]]
+
 def run(
     command: str,
     spec: Spec,
     flags: List[str],
     samples: bool = False,
     max_samples: Optional[int] = None,
-) -> Tuple[Optional[Dict[str, Any]], int, List[str], Optional[RawColumns], Optional[Spec]]: ...
+) -> Tuple[
+    Optional[Dict[str, Any]], int, List[str], Optional[RawColumns], Optional[Spec], RawTables
+]: ...
 def run_plain(
     command: str, flags: List[str]
-) -> Tuple[Optional[Dict[str, Any]], int, List[str], None, None]: ...
+) -> Tuple[Optional[Dict[str, Any]], int, List[str], None, None, RawTables]: ...
+def flag_help(command: str) -> List[Tuple[str, str]]: ...
 def waters(flags: List[str]) -> Spec: ...
 def make(
     command: str, flags: List[str], text: Optional[str] = None

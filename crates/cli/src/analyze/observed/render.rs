@@ -9,7 +9,8 @@ use rtpipe_model::{Nanos, Spec};
 use serde::Serialize;
 
 /// `analyze --json`'s `"observed"`.
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "MeasuredFileView")]
 pub struct ObservedView<'a> {
     file: &'a str,
     format: &'static str,
@@ -26,7 +27,8 @@ pub struct ObservedView<'a> {
     ok: bool,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
+#[schemars(rename = "MeasuredEntryView")]
 struct EntryView {
     chain: String,
     metric: &'static str,

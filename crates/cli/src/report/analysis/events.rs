@@ -7,7 +7,7 @@ use rtpipe_model::{Nanos, Spec};
 use serde::Serialize;
 
 /// A task's activations in the JSON report (left out in a periodic spec).
-#[derive(Serialize)]
+#[derive(Serialize, schemars::JsonSchema)]
 pub struct ActivationView<'a> {
     /// Its thread, when it runs in one.
     #[serde(skip_serializing_if = "Option::is_none")]
