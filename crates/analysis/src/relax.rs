@@ -844,9 +844,7 @@ fn chain_forms(
         };
         return Some((e.clone(), e));
     }
-    // From the read a stage may be reached at its read, the tail's R then
-    // W and a link's term from its producer's read (`reaction_stages`): the
-    // least of each bounds the stages' terms from below.
+    // Stage reads (`reaction_stages`): below, the tail's W and reads' terms.
     let mut e = Affine {
         base: if reach { r.w[tail]? } else { r.r[tail]? } as f64,
         slopes: own(tail),
@@ -874,11 +872,7 @@ fn chain_forms(
                     .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
             );
             let fresh = if last { l.freshness_last } else { l.freshness };
-            let react = if reach {
-                l.reaction_from_read
-            } else {
-                l.reaction
-            };
+            let react = [l.reaction, l.reaction_from_read][usize::from(reach)];
             Some((react?, fresh?))
         };
         let (lp, hp, lc, hc) = (order.lo[pi], order.hi[pi], order.lo[ci], order.hi[ci]);
