@@ -277,22 +277,43 @@ pub fn sound_reaction_link_in(
         None if edf_together(p, c) => l = l.min(c.t + (p.d - c.d).max(0)),
         None => {}
     }
-    if p_distinct {
-        // Reachability: J_{k+1} reads, so is released, before p's next
-        // publish, which the next p job makes within T_p + R_p of J_k's
-        // release (at or before its read).
-        l = l.min(p.t + rp);
-        if order == Some(Case::Two) {
-            // p preempts c: J_{k+1} starts before p's next release, at most
-            // T_p + J_p after J_k's nominal one.
-            l = l.min(p.t + p.j);
-        }
-        if order.is_none() && edf_together(p, c) {
-            // EDF on one CPU: J_{k+1} reads before p's next release, or
-            // while p's next job is pending, so with a deadline no later
-            // than that job's: released by T_p + (D_p − D_c)⁺.
-            l = l.min(p.t + (p.d - c.d).max(0));
-        }
+    if let Some(read) = reaction_to_read_in(order, p, c, p_distinct) {
+        // J_{k+1} is released at or before its read.
+        l = l.min(read);
+    }
+    if p_distinct && order.is_none() && edf_together(p, c) {
+        // EDF on one CPU: J_{k+1} reads before p's next release, or while
+        // p's next job is pending, so with a deadline no later than that
+        // job's: released by T_p + (D_p − D_c)⁺ (a release bound only).
+        l = l.min(p.t + (p.d - c.d).max(0));
+    }
+    Some(l)
+}
+
+/// Sound mode, reaction link p → c to `J_{k+1}`'s read rather than its
+/// release (the reachability options of [`sound_reaction_link_in`], which
+/// bound the read): from the release of `J_k`, or its read, to the read of
+/// `J_{k+1}`, the first c job reading at or after `J_k`'s publish; `None`
+/// where they do not hold (docs/analysis.md, "From a stage's read"). The
+/// next link may then start at that read, and the tail add `W` for `R`.
+pub fn reaction_to_read_in(
+    order: Option<Case>,
+    p: &LinkTask,
+    c: &LinkTask,
+    p_distinct: bool,
+) -> Option<Nanos> {
+    let merging_or_let = event_sides(p, c).is_some() || p.let_comm || c.let_comm;
+    if !p_distinct || merging_or_let {
+        return None;
+    }
+    let (rp, _) = (p.r?, c.r?);
+    // Reachability: J_{k+1} reads before p's next publish, which the next
+    // p job makes within T_p + R_p of J_k's release (at or before its read).
+    let mut l = p.t + rp;
+    if order == Some(Case::Two) {
+        // p preempts c: J_{k+1} starts before p's next release, at most
+        // T_p + J_p after J_k's nominal one.
+        l = l.min(p.t + p.j);
     }
     Some(l)
 }
@@ -405,6 +426,10 @@ pub fn sound_freshness_last_in(order: Option<Case>, p: &LinkTask, c: &LinkTask) 
 pub struct SoundLink {
     /// [`sound_reaction_link_in`].
     pub reaction: Option<Nanos>,
+    /// [`sound_reaction_link_in`] from p's read (`p_read`).
+    pub reaction_from_read: Option<Nanos>,
+    /// [`reaction_to_read_in`].
+    pub to_read: Option<Nanos>,
     /// [`sound_freshness_link_in`].
     pub freshness: Option<Nanos>,
     /// [`sound_freshness_last_in`].
@@ -423,6 +448,12 @@ impl SoundLink {
     ) -> SoundLink {
         SoundLink {
             reaction: sound_reaction_link_in(order, p, c, p_distinct, p_read),
+            // Through merging jobs only the head's term starts at a read.
+            reaction_from_read: match event_sides(p, c) {
+                Some(_) => None,
+                None => sound_reaction_link_in(order, p, c, p_distinct, true),
+            },
+            to_read: reaction_to_read_in(order, p, c, p_distinct),
             freshness: sound_freshness_link_in(order, p, c),
             freshness_last: sound_freshness_last_in(order, p, c),
         }
@@ -437,11 +468,15 @@ impl SoundLink {
         };
         let none = SoundLink {
             reaction: None,
+            reaction_from_read: None,
+            to_read: None,
             freshness: None,
             freshness_last: None,
         };
         links.into_iter().fold(none, |acc, l| SoundLink {
             reaction: min(acc.reaction, l.reaction),
+            reaction_from_read: min(acc.reaction_from_read, l.reaction_from_read),
+            to_read: min(acc.to_read, l.to_read),
             freshness: min(acc.freshness, l.freshness),
             freshness_last: min(acc.freshness_last, l.freshness_last),
         })
@@ -449,29 +484,25 @@ impl SoundLink {
 }
 
 /// A chain's sound (reaction, freshness) from the head's read, composed from
-/// its links' terms and the tail's response time: reaction ≤ Σ reaction
-/// terms + R_n, freshness ≤ Σ freshness terms of all links but the last +
-/// the last link's `freshness_last` (`W_1` for a chain of one task, from
-/// its read to its publish: `one`), and reaction ≤ freshness (a sample's
-/// first output is never after its last). The sums start at the head's
-/// release, at or before its read, but for the head link's reaction term
-/// when it starts at the read (`SoundLink::new_in`'s `p_read`). With
-/// `one = R_1` and no term from the read, the bounds start at the head's
-/// release (what the bounds from the event add `T_1` to).
+/// its links' terms and the tail's publish bounds (`tail`: from its
+/// release, `R_n`, and from its read, `W_n`): reaction ≤ the reaction terms
+/// stage by stage ([`reaction_stages`]), freshness ≤ Σ freshness terms of
+/// all links but the last + the last link's `freshness_last` (`W_1` for a
+/// chain of one task, from its read to its publish: `one`), and reaction ≤
+/// freshness (a sample's first output is never after its last). The sums
+/// start at the head's release, at or before its read, but for the head
+/// link's reaction term when it starts at the read (`SoundLink::new_in`'s
+/// `p_read`). With `one = R_1` and no term from the read, the bounds start
+/// at the head's release (what the bounds from the event add `T_1` to).
 pub fn compose_sound(
-    tail_r: Option<Nanos>,
+    tail: (Option<Nanos>, Option<Nanos>),
     one: Option<Nanos>,
     links: &[SoundLink],
 ) -> (Option<Nanos>, Option<Nanos>) {
     if links.is_empty() {
         return (one, one);
     }
-    let react = links
-        .iter()
-        .map(|l| l.reaction)
-        .sum::<Option<Nanos>>()
-        .zip(tail_r)
-        .map(|(a, b)| a + b);
+    let react = reaction_stages(tail, links);
     let fresh = match links.split_last() {
         None => one,
         Some((last, rest)) => rest
@@ -488,6 +519,32 @@ pub fn compose_sound(
     // Every term is a time: both sums run forward from the head's job.
     assert!(react.is_none_or(|e| e >= 0) && fresh.is_none_or(|f| f >= 0));
     (react, fresh)
+}
+
+/// The reaction bound of a chain, stage by stage (docs/analysis.md, "From
+/// a stage's read"): for each stage's job, a bound on the time to its
+/// release and one to its read. A link's term runs from its producer's
+/// release (`reaction`) or read (`reaction_from_read`) to its consumer's
+/// release, or to its consumer's read where reachability bounds that
+/// (`to_read`, which bounds the release too); the tail publishes within
+/// `R_n` of its release and `W_n` of its read. `None` where no option is
+/// bounded. With no `to_read` anywhere this is Σ reaction terms + R_n.
+fn reaction_stages(tail: (Option<Nanos>, Option<Nanos>), links: &[SoundLink]) -> Option<Nanos> {
+    let add = |a: Option<Nanos>, b: Option<Nanos>| a.zip(b).map(|(a, b)| a + b);
+    let min = |a: Option<Nanos>, b: Option<Nanos>| match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    };
+    // The head: its own read is where the bound starts (the head link's
+    // `reaction` already runs from it).
+    let (mut release, mut read) = (Some(0), None);
+    for l in links {
+        let to_read = add(release, l.to_read);
+        let to_release = min(add(release, l.reaction), add(read, l.reaction_from_read));
+        // A job is released at or before its read.
+        (release, read) = (min(to_release, to_read), to_read);
+    }
+    min(add(release, tail.0), add(read, tail.1))
 }
 
 /// Sound mode: does "each sample is carried by at most one job" pass from p to c?
@@ -769,12 +826,13 @@ pub fn analyze_chain(spec: &Spec, timing: &[TaskTiming], path: &[usize]) -> Chai
     // The tail's publish: R_n, or T_n under LET (so are the head's terms:
     // a chain all under LET gets `let_bound::any_phasing`'s figures).
     let tail_r = lt[lt.len() - 1].publish();
-    let (sound_reaction, sound_freshness) = compose_sound(tail_r, head.read_to_publish(), &links);
+    let tail = (tail_r, lt[lt.len() - 1].read_to_publish());
+    let (sound_reaction, sound_freshness) = compose_sound(tail, head.read_to_publish(), &links);
     // From the event the freshness runs from the head's release: a chain of
     // one task by R_1, not W_1 (the freshness terms never start at a read).
     let sound_event = (
         sound_event_reaction(sched, &lt),
-        from_event(head, compose_sound(tail_r, head.publish(), &links).1),
+        from_event(head, compose_sound(tail, head.publish(), &links).1),
     );
     let (davare_reaction, davare_freshness) = davare(&lt);
     let (duerr_reaction, duerr_freshness) = duerr(sched, &lt);

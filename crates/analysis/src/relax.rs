@@ -771,7 +771,7 @@ fn chain_bounds(
         return (l.map(|l| l.reaction_read), l.map(|l| l.freshness_read));
     }
     compose_sound(
-        r.r[path[path.len() - 1]],
+        r.of(path[path.len() - 1]),
         r.w[path[0]],
         &low_links(spec, order, r, path, true),
     )
@@ -844,8 +844,9 @@ fn chain_forms(
         };
         return Some((e.clone(), e));
     }
+    // Stage reads (`reaction_stages`): below, the tail's W and reads' terms.
     let mut e = Affine {
-        base: r.r[tail]? as f64,
+        base: if reach { r.w[tail]? } else { r.r[tail]? } as f64,
         slopes: own(tail),
     };
     let mut f = Affine::default();
@@ -871,7 +872,8 @@ fn chain_forms(
                     .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
             );
             let fresh = if last { l.freshness_last } else { l.freshness };
-            Some((l.reaction?, fresh?))
+            let react = [l.reaction, l.reaction_from_read][usize::from(reach)];
+            Some((react?, fresh?))
         };
         let (lp, hp, lc, hc) = (order.lo[pi], order.hi[pi], order.lo[ci], order.hi[ci]);
         let corners = [at(lp, lc)?, at(hp, lc)?, at(lp, hc)?, at(hp, hc)?];

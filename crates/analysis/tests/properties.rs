@@ -633,13 +633,23 @@ fn brute_force(
         for path in paths {
             let a = analyze_chain(spec, timing, &path);
             let e = sound_reaction_unclamped(spec, timing, &path);
-            // analyze_chain's reaction is the unclamped sum clamped to the
-            // path's own freshness.
+            // analyze_chain's reaction is at most the unclamped sum clamped
+            // to the path's own freshness: it also follows each stage's
+            // read where that is bounded (docs/analysis.md, "From a
+            // stage's read"), which the all-paths DP, one number per link,
+            // does not.
             let clamped = match (e, a.freshness.sound(Anchor::Read)) {
                 (Some(e), Some(f)) => Some(e.min(f)),
                 (e, _) => e,
             };
-            prop_assert_eq!(a.reaction.sound(Anchor::Read), clamped, "path {:?}", path);
+            let declared = a.reaction.sound(Anchor::Read);
+            prop_assert!(
+                clamped.is_none_or(|c| declared.is_some_and(|d| d <= c)),
+                "path {:?}: {:?} above {:?}",
+                path,
+                declared,
+                clamped
+            );
             let v = Maxima {
                 paper_reaction: a.reaction.paper(Anchor::Read),
                 paper_freshness: a.freshness.paper(Anchor::Read),

@@ -18,7 +18,14 @@
 //!   pins them to the analysed job response times (the heuristic phase's
 //!   `SoundModel::fixed`) and checks, with the periods fixed: least E and
 //!   least F, the reaction and freshness sums, give the analysis' sound
-//!   freshness (F) and reaction (min(E, F)) exactly.
+//!   freshness (F) and reaction (min(E, F)) exactly. The reaction sum E
+//!   is the release-anchored one: where a stage's read is bounded and its
+//!   `W` is below its `R` (jitter, ceiling blocking, switches), the
+//!   analysis follows the read and is smaller (docs/analysis.md, "From a
+//!   stage's read"), which the model's one term per link cannot express
+//!   linearly without a second chain of stage variables; the model then
+//!   overestimates, which keeps every design it accepts valid. These
+//!   problems have `W = R`, so the two agree.
 //!
 //! The least values come from the master itself: its LP with the periods
 //! fixed and the chain sum as the objective.

@@ -48,6 +48,14 @@ pub enum Jitter {
     Latest,
     /// Always 0 (the nominal releases).
     None,
+    /// J and 0 in turn, by the parity of the job's period (`⌊nominal /
+    /// T⌋`): a late job is followed T − J later by an on-time one, the
+    /// closest two releases may come, as the response-time analysis with
+    /// jitter counts them (Audsley et al. 1993). With offsets the search
+    /// moves, every window can start at such a pair, which per-job draws
+    /// ([`Jitter::Extremes`]) give a job in four, and for several tasks at
+    /// once rarely.
+    Squeezed,
 }
 
 /// How to run a simulation.

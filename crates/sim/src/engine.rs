@@ -291,6 +291,12 @@ fn jitter_draw(ts: &mut TaskSim) -> Nanos {
         }
         Jitter::Latest => ts.jitter,
         Jitter::None => 0,
+        // Even periods late, odd ones on time (the next nominal release is
+        // already set when this is drawn).
+        Jitter::Squeezed => match ts.next_nominal.div_euclid(ts.period) % 2 {
+            0 => ts.jitter,
+            _ => 0,
+        },
     }
 }
 

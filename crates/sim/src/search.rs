@@ -49,13 +49,13 @@ pub const EXEC_MODELS: [ExecModel; 4] = [
 ];
 
 /// The release-jitter models a candidate may use (only drawn from when a
-/// task has jitter): the nominal releases, the latest, a random extreme
-/// per job, uniform.
-pub const JITTER_MODELS: [Jitter; 4] = [
+/// task has jitter).
+pub const JITTER_MODELS: [Jitter; 5] = [
     Jitter::None,
     Jitter::Latest,
     Jitter::Extremes,
     Jitter::Uniform,
+    Jitter::Squeezed,
 ];
 
 /// One point of the search space: everything a run depends on besides the
@@ -490,11 +490,12 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
         let seed = self.rng.next_u64();
         // Jitter draws only where a task has some, so that jitter-free
         // specs search exactly as before: the nominal releases first, the
-        // latest ones next, then any model.
+        // latest ones next, then late and on time in turn, then any model.
         let jitter = match k {
             _ if !self.jittered => Jitter::Uniform,
             0 => Jitter::None,
             1 => Jitter::Latest,
+            2 => Jitter::Squeezed,
             _ => self.random_jitter(),
         };
         let cand = Candidate {
@@ -593,7 +594,12 @@ impl<'a, F: FnMut(&SimConfig, &SimResult)> Searcher<'a, F> {
             let above = self.prio[j].is_some_and(|pj| pj < pc);
             let free = self.fixed[j].is_none();
             if above && free && self.spec.tasks[j].cpu == self.spec.tasks[c].cpu {
-                let d = 1 + self.small_delta(j).max(0);
+                // Half the time J_j earlier, for a late job (all under
+                // `Latest`, one in two under `Squeezed`) to come just then.
+                let late = matches!(cand.jitter, Jitter::Latest | Jitter::Squeezed);
+                let early = late && self.rng.chance(0.5);
+                let d =
+                    1 + self.small_delta(j).max(0) - self.spec.tasks[j].jitter * i64::from(early);
                 cand.offsets[j] = (x + d).rem_euclid(self.periods[j]);
             }
         }

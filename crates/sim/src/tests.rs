@@ -702,3 +702,26 @@ fn jittered_jobs_release_within_their_window() {
         assert_eq!(r.tasks[0].max_response, Some(late + 1_000), "{jitter:?}");
     }
 }
+
+/// `Jitter::Squeezed`: jobs of even periods come J late, odd ones on time,
+/// so a late job's successor comes T − J after it.
+#[test]
+fn squeezed_jitter_alternates_late_and_on_time() {
+    let mut s = spec(Scheduler::Rm, vec![task(10_000, 1_000, &[], 0)], &[&[0]]);
+    s.tasks[0].jitter = 3_000;
+    let cfg = SimConfig {
+        horizon: 200_000,
+        seed: 9,
+        phasing: Phasing::Given(vec![2_000]),
+        exec: ExecModel::Worst,
+        jitter: Jitter::Squeezed,
+        log_jobs: true,
+    };
+    let r = simulate(&s, &cfg).unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.jobs.len() >= 19);
+    for (k, j) in r.jobs.iter().enumerate() {
+        assert_eq!(j.release, 2_000 + k as Nanos * 10_000);
+        let late = if k % 2 == 0 { 3_000 } else { 0 };
+        assert_eq!(j.read - j.release, late, "job {k}");
+    }
+}
