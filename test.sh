@@ -8,11 +8,26 @@
 # of the build host's (docs/guide/python.md, "The portable wheel").
 set -euo pipefail
 cd "$(dirname "$0")"
+target="${CARGO_TARGET_DIR:-target}"
+case "$target" in /*) ;; *) target="$PWD/$target" ;; esac
+# The tests' temporary files in a directory of their own, so that what a
+# run leaves behind is seen (and not mixed with other runs' in /tmp): a
+# passing test removes its scratch directory, a failing one keeps it
+# (docs/contributing.md).
+export TMPDIR="$target/test-tmp"
+rm -rf "$TMPDIR"
+mkdir -p "$TMPDIR"
 rust_status=0
 cargo test --workspace --release --no-fail-fast || rust_status=$?
+left=$(find "$TMPDIR" -mindepth 1 -maxdepth 1 -name 'rtpipe-*' | sort)
+if [ -n "$left" ]; then
+  echo "the tests left these in $TMPDIR:" >&2
+  echo "$left" >&2
+  # A failing test keeps its directory on purpose; a passing run leaves none.
+  if [ "$rust_status" -eq 0 ]; then rust_status=1; fi
+fi
 
 echo "== Python package: wheel (maturin), install, pytest"
-target="${CARGO_TARGET_DIR:-target}"
 venv="$target/pyenv"
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv" 2>/dev/null || {
@@ -39,7 +54,8 @@ wheel=$(ls "$target_abs"/wheels/rtpipe-*.whl)
 "$venv/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$wheel"
 python_status=0
 RTPIPE_BIN="$target_abs/release/rtpipe" RTPIPE_WHEEL="$wheel" \
-  "$venv/bin/python" -m pytest -q -p no:cacheprovider crates/python/tests || python_status=$?
+  "$venv/bin/python" -m pytest -q -p no:cacheprovider -o tmp_path_retention_policy=failed \
+  crates/python/tests || python_status=$?
 if [ "$rust_status" -ne 0 ] || [ "$python_status" -ne 0 ]; then
   echo "FAILED: cargo test exit $rust_status (its failing tests are listed above), pytest exit $python_status" >&2
   exit 1

@@ -254,7 +254,7 @@ fn run_shard(w: &Work, k: u64) -> Result<Option<Tally>, Error> {
         systems: systems.clone(),
     };
     let written = output::write_atomically(&path, "shard", |file| {
-        let mut out = ShardWriter::new(file, meta.key_values())?;
+        let mut out = ShardWriter::new(file, &meta.key_values())?;
         let mut pending: Vec<Row> = Vec::new();
         let mut tally = Tally::default();
         let batch = 4 * w.jobs as u64;

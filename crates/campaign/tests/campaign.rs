@@ -3,7 +3,8 @@
 //! their key.
 
 use rtpipe_campaign::{config, run, run_system, shard_path, Part};
-use std::path::{Path, PathBuf};
+use rtpipe_testkit::Scratch;
+use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 const CONFIG: &str = r#"
@@ -24,10 +25,10 @@ release = "synchronous"
 duration = "300ms"
 "#;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rtpipe-campaign-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// A campaign's output directory, not yet made, in a scratch directory
+/// that goes with the guard.
+fn dir(name: &str) -> Scratch {
+    Scratch::new(&format!("campaign-{name}")).within("out")
 }
 
 fn files(d: &Path) -> Vec<(String, Vec<u8>)> {
@@ -75,9 +76,6 @@ fn the_same_files_whatever_the_threads_and_the_shards() {
         files(&split),
         "three parts write what one run writes"
     );
-    for d in [one, two, split] {
-        let _ = std::fs::remove_dir_all(d);
-    }
 }
 
 #[test]
@@ -123,9 +121,6 @@ fn a_stopped_run_resumes_and_leaves_no_partial_file() {
     go(&whole, Part::ALL, 2);
     assert_eq!(files(&d), files(&whole), "resumed = uninterrupted");
     assert!(shard_path(&d, 3).exists());
-    for x in [d, whole] {
-        let _ = std::fs::remove_dir_all(x);
-    }
 }
 
 #[test]
@@ -137,7 +132,6 @@ fn another_config_is_refused_in_the_same_directory() {
     let r = run(&cfg, &other, &d, Part::ALL, 1, &|| {}, &|| false);
     let e = r.expect_err("refused");
     assert!(e.message.contains("another campaign"), "{}", e.message);
-    let _ = std::fs::remove_dir_all(d);
 }
 
 #[test]

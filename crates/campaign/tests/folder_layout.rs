@@ -5,9 +5,9 @@
 //! same campaign replaces that file; another campaign's is refused and
 //! left as it is.
 
-use parquet::file::reader::{FileReader, SerializedFileReader};
 use rtpipe_campaign::{config, run, shard_path, survey, Part, Summary, KEPT, LEGACY_KEPT};
-use std::path::{Path, PathBuf};
+use rtpipe_testkit::Scratch;
+use std::path::Path;
 
 const CONFIG: &str = r#"
 # kept as written, comments included
@@ -24,10 +24,10 @@ utilization = [0.4, 0.8]
 chains = 2
 "#;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rtpipe-layout-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// A campaign folder not yet made, in a scratch directory removed after
+/// the test.
+fn dir(name: &str) -> Scratch {
+    Scratch::new(&format!("layout-{name}")).within("out")
 }
 
 fn go_with(text: &str, d: &Path) -> Result<Summary, rtpipe_campaign::Error> {
@@ -57,17 +57,9 @@ fn names(d: &Path) -> Vec<String> {
 type KeyValues = Vec<(String, Option<String>)>;
 
 /// A Parquet file's row count, column paths and footer key-value pairs.
-fn parquet(path: &Path) -> (i64, Vec<String>, KeyValues) {
-    let file = std::fs::File::open(path).expect("the file");
-    let reader = SerializedFileReader::new(file).expect("a Parquet file");
-    let meta = reader.metadata().file_metadata();
-    let columns = (meta.schema_descr().columns().iter())
-        .map(|c| c.path().string())
-        .collect();
-    let kv = (meta.key_value_metadata().into_iter().flatten())
-        .map(|p| (p.key.clone(), p.value.clone()))
-        .collect();
-    (meta.num_rows(), columns, kv)
+fn parquet(path: &Path) -> (u64, Vec<String>, KeyValues) {
+    let footer = rtpipe_parquet::read_footer(path).expect("a Parquet file");
+    (footer.rows, footer.columns, footer.key_values)
 }
 
 #[test]

@@ -4,6 +4,7 @@
 
 use rtpipe::api::{self, Columns, Failure, Reply};
 use rtpipe_model::Spec;
+use rtpipe_testkit::Scratch;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -136,8 +137,7 @@ fn csv_columns(path: &Path, labels: &[String]) -> Columns {
 
 #[test]
 fn samples_are_the_csv_columns() {
-    let dir = std::env::temp_dir().join(format!("rtpipe-api-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a temp dir");
+    let dir = Scratch::new("api-samples");
     for (cmd, file, flags) in [
         ("simulate", "paper-table3.toml", vec!["--outputs", "40"]),
         ("fly", "cleanflight.toml", vec!["--duration", "3s"]),
@@ -156,7 +156,6 @@ fn samples_are_the_csv_columns() {
         assert!(got.read_ns.len() > 10, "{cmd}: {} rows", got.read_ns.len());
         assert_eq!(got, csv_columns(&csv, &labels), "{cmd} {file}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -219,14 +218,6 @@ fn a_set_stop_flag_stops_every_long_loop() {
     }
 }
 
-/// A fresh directory of its own under the system's temporary one.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rtpipe-api-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("a temp dir");
-    dir
-}
-
 #[test]
 fn more_sample_rows_than_held_stop_the_run_with_a_failure_naming_the_file_option() {
     let path = example("cleanflight.toml");
@@ -254,7 +245,7 @@ fn more_sample_rows_than_held_stop_the_run_with_a_failure_naming_the_file_option
 
 #[test]
 fn a_samples_file_streams_through_the_api_and_a_stopped_run_leaves_none() {
-    let dir = scratch("file");
+    let dir = Scratch::new("api-file");
     let path = example("cleanflight.toml");
     let csv = dir.join("rows.csv");
     let flags = [
@@ -314,7 +305,7 @@ fn run_refuses_its_flags_alone_before_anything_runs() {
 fn import_and_generate_hand_over_their_specs_without_writing() {
     let stop = || Arc::new(AtomicBool::new(false));
     let yaml = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/e2eeval-inter.yaml");
-    let outdir = scratch("import-unwritten").join("out");
+    let outdir = Scratch::new("import-unwritten").within("out");
     let flags = [yaml.display().to_string(), outdir.display().to_string()];
     let r = api::run_plain("import e2eeval", &flags, None, stop()).expect("imported");
     let names: Vec<&str> = r.specs.iter().map(|(n, _)| n.as_str()).collect();

@@ -6,6 +6,7 @@
 mod common;
 
 use common::{assert_exit, json_of, rtpipe, scratch};
+use rtpipe_testkit::Scratch;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -44,8 +45,8 @@ fn results(name: &str) -> Vec<std::collections::HashMap<String, f64>> {
 }
 
 /// Imports `yaml` and returns the one spec written and the import's stdout.
-fn import_one(tag: &str, yaml: &str) -> (PathBuf, String) {
-    let out = scratch(tag).join("out");
+fn import_one(tag: &str, yaml: &str) -> (Scratch, String) {
+    let out = scratch(tag).within("out");
     let o = rtpipe(&[
         "import",
         "e2eeval",
@@ -55,10 +56,8 @@ fn import_one(tag: &str, yaml: &str) -> (PathBuf, String) {
     assert_exit(&o, 0);
     let specs = common::listing(&out);
     assert_eq!(specs.len(), 1, "{specs:?}");
-    (
-        out.join(&specs[0]),
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-    )
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    (out.within(&format!("out/{}", specs[0])), stdout)
 }
 
 /// The chains of `metric`, in the file's order.

@@ -312,8 +312,9 @@ fn the_binary_survives_mutated_specs_and_random_flags() {
             Err(e) => panic!("{n}: {e}"),
         })
         .collect();
-    let root = std::env::temp_dir().join(format!("rtpipe-cli-fuzz-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&root);
+    // Kept for inspection when a case fails (the guard's rule), removed
+    // otherwise.
+    let root = rtpipe_testkit::Scratch::new("cli-fuzz");
     let mut failures = Vec::new();
     let mut codes = std::collections::BTreeMap::new();
     for seed in first..first + cases {
@@ -323,9 +324,6 @@ fn the_binary_survives_mutated_specs_and_random_flags() {
         }
     }
     eprintln!("exit statuses (status: runs): {codes:?}");
-    if failures.is_empty() {
-        let _ = std::fs::remove_dir_all(&root);
-    }
     assert!(
         failures.is_empty(),
         "{} of {cases} runs failed:\n{}",

@@ -5,7 +5,8 @@ mod common;
 
 use common::{assert_exit, json_of, listing, rtpipe, scratch};
 use rtpipe_model::Spec;
-use std::path::{Path, PathBuf};
+use rtpipe_testkit::Scratch;
+use std::path::Path;
 
 fn data(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -32,15 +33,14 @@ fn load(p: &Path) -> Spec {
 }
 
 /// Imports `yaml` (a path) into a fresh directory `out` under a scratch dir.
-fn import(tag: &str, yaml: &str) -> (std::process::Output, PathBuf) {
-    let dir = scratch(tag);
-    let out = dir.join("out");
+fn import(tag: &str, yaml: &str) -> (std::process::Output, Scratch) {
+    let out = scratch(tag).within("out");
     let o = rtpipe(&["import", "e2eeval", yaml, &out.to_string_lossy()]);
     (o, out)
 }
 
 /// Writes `text` as `name` in a scratch dir and imports it.
-fn import_text(tag: &str, name: &str, text: &str) -> (std::process::Output, PathBuf) {
+fn import_text(tag: &str, name: &str, text: &str) -> (std::process::Output, Scratch) {
     let dir = scratch(tag);
     let yaml = dir.join(name);
     if let Err(e) = std::fs::write(&yaml, text) {
@@ -53,7 +53,7 @@ fn import_text(tag: &str, name: &str, text: &str) -> (std::process::Output, Path
         &yaml.to_string_lossy(),
         &out.to_string_lossy(),
     ]);
-    (o, out)
+    (o, dir.within("out"))
 }
 
 /// One `!Task` line as PyYAML writes it (keys sorted, flow style).

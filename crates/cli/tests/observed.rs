@@ -274,7 +274,7 @@ fn a_long_log_closes_old_samples_and_reports_late_publications() {
         s.push_str(&format!("rate loop,a,{},{t},100000\n", t + 100_000));
     }
     s.push_str("rate loop,a,300000,0,300000\n");
-    let file = scratch("observed-long").join("long.csv");
+    let file = scratch("observed-long").within("long.csv");
     let _ = std::fs::write(&file, s);
     let (o, observed) = analyze_observed(&spec, &file);
     assert_exit(&o, 0);
@@ -294,7 +294,7 @@ fn a_long_log_closes_old_samples_and_reports_late_publications() {
 #[test]
 fn no_output_replaces_the_measurements_file() {
     let spec = example("work-queues.toml");
-    let file = scratch("observed-overwrite").join("ages.csv");
+    let file = scratch("observed-overwrite").within("ages.csv");
     let text = log(&[("rate loop", 1_100_000, 1_000_000)]);
     let _ = std::fs::write(&file, &text);
     let f = file.to_string_lossy();

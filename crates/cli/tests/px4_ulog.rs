@@ -6,6 +6,7 @@ mod common;
 
 use common::{assert_exit, json_of, listing, rtpipe, scratch};
 use rtpipe_model::Spec;
+use rtpipe_testkit::Scratch;
 use std::path::{Path, PathBuf};
 
 fn log(name: &str) -> String {
@@ -16,8 +17,8 @@ fn log(name: &str) -> String {
         .into_owned()
 }
 
-fn import(tag: &str, log: &str, extra: &[&str]) -> (std::process::Output, PathBuf) {
-    let out = scratch(tag).join("out");
+fn import(tag: &str, log: &str, extra: &[&str]) -> (std::process::Output, Scratch) {
+    let out = scratch(tag).within("out");
     let mut args = vec!["import", "px4-ulog", log];
     let shown = out.to_string_lossy().into_owned();
     args.push(&shown);
@@ -329,7 +330,7 @@ fn pyulog_logs_from_a_folder() {
 /// mean`; a log before work queues with `--exec max` (the Cube's average
 /// runs are too short for those boards: docs/px4.md), and with
 /// attitude_estimator_q's time when it is refused for want of it.
-fn import_pyulog(tag: &str, path: &Path, cube: &str) -> (std::process::Output, PathBuf) {
+fn import_pyulog(tag: &str, path: &Path, cube: &str) -> (std::process::Output, Scratch) {
     let shown = path.to_string_lossy();
     let mut extra = vec!["--exec-from", cube, "--exec", "mean"];
     let (o, out) = import(tag, &shown, &extra);

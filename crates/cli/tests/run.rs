@@ -5,16 +5,36 @@
 mod common;
 
 use common::{assert_exit, example, json_of, rtpipe, scratch, small_pipeline};
+use rtpipe_testkit::Scratch;
 use serde_json::Value;
 use std::process::Output;
 
-fn write_spec(tag: &str, text: &str) -> String {
+/// A spec file written for a test: its path as text (what a command line
+/// takes, hence `Deref<Target = str>`), its scratch directory removed
+/// with it.
+struct SpecFile {
+    path: String,
+    _dir: Scratch,
+}
+
+impl std::ops::Deref for SpecFile {
+    type Target = str;
+    fn deref(&self) -> &str {
+        &self.path
+    }
+}
+
+/// `text` as `spec.toml` in a scratch directory.
+fn write_spec(tag: &str, text: &str) -> SpecFile {
     let dir = scratch(tag);
     let p = dir.join("spec.toml");
     if let Err(e) = std::fs::write(&p, text) {
         panic!("cannot write {}: {e}", p.display());
     }
-    p.to_string_lossy().into_owned()
+    SpecFile {
+        path: p.to_string_lossy().into_owned(),
+        _dir: dir,
+    }
 }
 
 /// Real-time runs one at a time: they would disturb each other's timing.
@@ -281,7 +301,7 @@ fn a_trace_that_cannot_be_written_keeps_the_report_and_exits_2() {
     // ignored, so the write fails with EFBIG instead of killing).
     let _one = serial();
     let spec = write_spec("run-trace-full", &small_pipeline("rm", 0, ""));
-    let trace = std::path::Path::new(&spec).with_file_name("t.json");
+    let trace = std::path::Path::new(&*spec).with_file_name("t.json");
     let o = std::process::Command::new("sh")
         .args(["-c", "trap '' XFSZ; ulimit -f 2; exec \"$0\" \"$@\""])
         .arg(env!("CARGO_BIN_EXE_rtpipe"))

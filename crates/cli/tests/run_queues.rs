@@ -81,7 +81,7 @@ fn edf_policies_and_the_rt_app_export_are_refused_at_their_flag() {
             "{e}"
         );
     }
-    let out = scratch("run-queues-rt-app").join("rt-app.json");
+    let out = scratch("run-queues-rt-app").within("rt-app.json");
     let o = rtpipe(&["run", &spec, "--export-rt-app", &out.to_string_lossy()]);
     assert_exit(&o, 2);
     let e = stderr(&o);
@@ -97,7 +97,7 @@ fn edf_policies_and_the_rt_app_export_are_refused_at_their_flag() {
 /// measuring, nothing written.
 #[test]
 fn measured_overheads_are_not_written_into_an_event_triggered_spec() {
-    let out = scratch("run-queues-overheads").join("out.toml");
+    let out = scratch("run-queues-overheads").within("out.toml");
     let o = rtpipe(&[
         "run",
         &example("work-queues.toml"),

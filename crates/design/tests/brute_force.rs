@@ -220,9 +220,11 @@ fn harmonic_instance(seed: u64, mode: Mode) -> Option<Spec> {
     harmonic_ok(&only_fixed).then_some(spec)
 }
 
-/// Writes a reproducer and returns its path.
+/// Writes a reproducer into the temporary directory and returns its path
+/// (only a failing run writes one, and it is kept for the bug report).
 fn save_bug(spec: &Spec, seed: u64, mode: Mode) -> String {
-    let path = format!("/tmp/design-bug-{}-{seed}.toml", mode.name());
+    let name = format!("design-bug-{}-{seed}.toml", mode.name());
+    let path = std::env::temp_dir().join(name).display().to_string();
     let text = format!(
         "# design brute-force mismatch: seed {seed}, mode {}\n{}",
         mode.name(),

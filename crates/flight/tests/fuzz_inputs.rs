@@ -8,14 +8,15 @@ use rtpipe_flight::preset::{Preset, AERO1KG_TOML, RACER5_TOML};
 use rtpipe_flight::quality::Criteria;
 use rtpipe_flight::radio::{Mission, GUSTY_TOML, HOVER_TOML, PAPER_TOML, STEPS_TOML};
 use rtpipe_model::SpecError;
-use std::path::{Path, PathBuf};
+use rtpipe_testkit::Scratch;
+use std::path::Path;
 
 const CRITERION: &str = "attitude_rms_deg = 2.0\naltitude_rms_m = 0.1\novershoot = 0.2\nsettling_s = 0.5\nposition_rms_m = 0.3\n";
 
-fn file(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rtpipe-flight-fuzz-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&d);
-    d.join(format!("{tag}.toml"))
+/// `TAG.toml` (not yet written) in a scratch directory that goes with
+/// the guard.
+fn file(tag: &str) -> Scratch {
+    Scratch::new(&format!("flight-fuzz-{tag}")).within(&format!("{tag}.toml"))
 }
 
 /// Reads `bytes` as each kind of file: a refusal names the file and holds a

@@ -609,12 +609,8 @@ pub fn csv_field(s: &str) -> String {
 mod tests {
     use super::*;
 
-    fn scratch(tag: &str) -> PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("rtpipe-model-output-{tag}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&d);
-        let _ = fs::create_dir_all(&d);
-        d
+    fn scratch(tag: &str) -> rtpipe_testkit::Scratch {
+        rtpipe_testkit::Scratch::new(&format!("model-output-{tag}"))
     }
 
     #[test]

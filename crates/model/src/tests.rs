@@ -339,8 +339,7 @@ fn harmonic_fixed_periods_are_checked_with_a_place() {
 
 #[test]
 fn load_caps_the_size() {
-    let dir = std::env::temp_dir().join(format!("rtpipe-model-cap-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
+    let dir = rtpipe_testkit::Scratch::new("model-cap");
     let big = dir.join("big.toml");
     let f = std::fs::File::create(&big).and_then(|f| {
         f.set_len(MAX_SPEC_BYTES + 1)?;
@@ -355,7 +354,7 @@ fn load_caps_the_size() {
         e.contains("big.toml: error: the spec is larger than 16 MiB"),
         "{e}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(dir);
     #[cfg(unix)]
     {
         let t = std::time::Instant::now();

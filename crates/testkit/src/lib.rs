@@ -2,11 +2,13 @@
 //!
 //! The scaffolding the workspace's tests share, so that each test says only
 //! what it checks: the bundled examples, specs from text, the property-test
-//! runner that tallies how cases ended, and the model's random systems.
+//! runner that tallies how cases ended, the model's random systems, and
+//! scratch directories that remove themselves ([`Scratch`]).
 //!
 //! A dev-dependency only: no library depends on it for its normal build.
-//! The model's own unit tests cannot use it (they would see a second copy of
-//! the model's types); its integration tests can.
+//! The model's own unit tests cannot use its specs (they would see a second
+//! copy of the model's types), only what holds no model type ([`Scratch`]);
+//! its integration tests can use all of it.
 #![deny(missing_docs)]
 
 use proptest::strategy::Strategy;
@@ -17,6 +19,9 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 pub mod alloc;
+pub mod scratch;
+
+pub use scratch::Scratch;
 
 /// Random systems, deterministic per seed (the model's generator).
 pub use rtpipe_model::gen;

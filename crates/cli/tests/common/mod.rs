@@ -2,7 +2,6 @@
 #![allow(dead_code)] // each test file uses its own subset
 
 use serde_json::Value;
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 /// The path of a bundled example.
@@ -35,14 +34,10 @@ pub fn json_of(o: &Output) -> Value {
     }
 }
 
-/// A fresh, empty scratch directory per test.
-pub fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rtpipe-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    if let Err(e) = std::fs::create_dir_all(&dir) {
-        panic!("cannot create {}: {e}", dir.display());
-    }
-    dir
+/// A fresh, empty scratch directory per test (`tag` unique in the test
+/// binary), removed when the guard is dropped unless the test fails.
+pub fn scratch(tag: &str) -> rtpipe_testkit::Scratch {
+    rtpipe_testkit::Scratch::new(tag)
 }
 
 /// The exit status is `code`; the test shows stderr otherwise.

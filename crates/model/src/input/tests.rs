@@ -1,9 +1,8 @@
 use super::*;
 
-fn scratch(tag: &str, bytes: &[u8]) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("rtpipe-input-{tag}-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&d);
-    let p = d.join("f.toml");
+/// `bytes` as `f.toml` in a scratch directory that goes with the guard.
+fn scratch(tag: &str, bytes: &[u8]) -> rtpipe_testkit::Scratch {
+    let p = rtpipe_testkit::Scratch::new(&format!("input-{tag}")).within("f.toml");
     let _ = std::fs::write(&p, bytes);
     p
 }
@@ -141,8 +140,8 @@ fn lines_are_read_one_at_a_time_by_the_same_rules() {
         error(&long[1..]).is_ok(),
         "a line of the cap's length is read"
     );
-    let dir = scratch("lines-dir", b"").with_file_name("");
-    let e = error_at(&dir, &kind);
+    let file = scratch("lines-dir", b"");
+    let e = error_at(&file.with_file_name(""), &kind);
     assert!(e.contains("it is a directory, not a regular file"), "{e}");
 }
 
