@@ -3,7 +3,7 @@
 //! problem, one multiplier per limit. `budget` is C_i per task (0 for
 //! background tasks), `lo` / `hi` the box's shortest and longest periods.
 
-use rtpipe_analysis::relax::Affine;
+use rtpipe_analysis::relax::{Affine, MinSum, Piece};
 use rtpipe_model::Nanos;
 
 /// Coordinate-ascent sweeps over the multipliers of the joint bound.
@@ -11,8 +11,8 @@ const JOINT_SWEEPS: usize = 3;
 
 /// One limit in the joint bound: Σ s_i T_i ≤ room.
 pub(crate) struct Row {
-    slopes: Vec<(usize, f64)>,
-    room: f64,
+    pub(crate) slopes: Vec<(usize, f64)>,
+    pub(crate) room: f64,
 }
 
 impl Row {
@@ -128,4 +128,102 @@ pub(crate) fn least_under(
 ) -> Option<f64> {
     (form.base <= limit)
         .then(|| joint_bound(budget, &[Row::new(&[form], limit, lo, lo.len())], lo, hi))
+}
+
+/// Piece choices enumerated per limit at most; beyond, the limit is left
+/// out of [`split_bound`] (a weaker, still valid bound).
+const MAX_CHOICES: usize = 1 << 12;
+
+/// A lower bound on Σ C/T over the box from limits written as sums of
+/// least-of-pieces terms (`relax::MinSum`, each limit met by one of its
+/// sums): every task's budget is shared equally among the limits it is in,
+/// and each limit's share is minimised exactly (for every choice of one
+/// piece per term, the sum is an affine form and [`least_under`] is the
+/// least of the separable convex problem). For every T meeting the limits,
+/// Σ C/T = Σ_limits Σ shares/T + the rest ≥ Σ_limits least + Σ C/hi over
+/// the tasks in no limit. `None`: some limit holds nowhere in the box.
+pub(crate) fn split_bound(
+    budget: &[f64],
+    limits: &[(f64, Vec<MinSum>)],
+    lo: &[Nanos],
+    hi: &[Nanos],
+) -> Option<f64> {
+    let n = lo.len();
+    let members: Vec<Vec<bool>> = limits.iter().map(|(_, sums)| tasks_of(sums, n)).collect();
+    let mut count = vec![0u32; n];
+    for m in &members {
+        count
+            .iter_mut()
+            .zip(m)
+            .for_each(|(c, &x)| *c += u32::from(x));
+    }
+    let mut total: f64 = (0..n)
+        .filter(|&i| count[i] == 0)
+        .map(|i| budget[i] / hi[i] as f64)
+        .sum();
+    for ((limit, sums), m) in limits.iter().zip(&members) {
+        let share: Vec<f64> = (0..n)
+            .map(|i| {
+                if m[i] {
+                    budget[i] / f64::from(count[i])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let least = sums
+            .iter()
+            .map(|s| least_of_sum(&share, s, *limit, lo, hi))
+            .fold(f64::INFINITY, f64::min);
+        if least == f64::INFINITY {
+            return None;
+        }
+        total += least;
+    }
+    Some(total)
+}
+
+/// The tasks whose periods appear in any of `sums`.
+fn tasks_of(sums: &[MinSum], n: usize) -> Vec<bool> {
+    let mut m = vec![false; n];
+    for s in sums {
+        let pieces = std::iter::once(&s.fixed).chain(s.terms.iter().flatten());
+        pieces
+            .flat_map(|p| &p.slopes)
+            .for_each(|&(i, _)| m[i] = true);
+    }
+    m
+}
+
+/// The least of Σ share/T over the box where `sum ≤ limit`: the least over
+/// the choices of one piece per term (+∞ where none holds; with too many
+/// choices, Σ share/hi, the limit left out).
+fn least_of_sum(share: &[f64], sum: &MinSum, limit: f64, lo: &[Nanos], hi: &[Nanos]) -> f64 {
+    let choices = sum
+        .terms
+        .iter()
+        .try_fold(1usize, |acc, t| acc.checked_mul(t.len()))
+        .filter(|&c| c <= MAX_CHOICES);
+    let Some(choices) = choices else {
+        return (0..lo.len()).map(|i| share[i] / hi[i] as f64).sum();
+    };
+    let at_lo = |p: &Piece| p.at(lo);
+    let mut best = f64::INFINITY;
+    for mut code in 0..choices {
+        let mut form = Affine {
+            base: at_lo(&sum.fixed),
+            slopes: sum.fixed.slopes.clone(),
+        };
+        for term in &sum.terms {
+            let piece = &term[code % term.len()];
+            code /= term.len();
+            form.base += at_lo(piece);
+            form.slopes
+                .extend(piece.slopes.iter().filter(|s| s.1 > 0.0));
+        }
+        if let Some(b) = least_under(share, &form, limit, lo, hi) {
+            best = best.min(b);
+        }
+    }
+    best
 }
