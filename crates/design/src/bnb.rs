@@ -541,7 +541,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
             }
         }
         let jb = joint_bound(&self.budget, &joint, lo, hi);
-        let split = split_bound(&self.budget, &self.limit_sums(r, (lo, hi), above), lo, hi)?;
+        let (split, _) = split_bound(&self.budget, &self.limit_sums(r, (lo, hi), above), lo, hi)?;
         Some(bound.max(jb).max(split))
     }
 
@@ -763,6 +763,49 @@ impl<'r, 'a> Examiner<'r, 'a> {
             }
             let b = self.branch(&node, &report)?;
             node = self.children(&node, b).0;
+        }
+        None
+    }
+
+    /// A verified design from the relaxation's least point of `node`
+    /// (repair and round): each period of a limited task at the shortest
+    /// its limits' least asks (`split_bound`'s guide), the others at their
+    /// longest; those periods scaled down (by 0.85, up to 30 times) until
+    /// the design verifies, then lengthened by `polish`. `None` without a
+    /// guide, a verified design or one better than `best`.
+    pub(crate) fn guided(
+        &self,
+        node: &Node,
+        best: Option<f64>,
+        budget: &Budget,
+    ) -> Option<(Spec, Report, f64)> {
+        if self.events || self.p.spec.harmonic {
+            return None;
+        }
+        let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
+        let r = relax(self.p.spec, &lo, &hi, &node.above, true);
+        let sums = self.limit_sums(&r, (&lo, &hi), &node.above);
+        let (_, guide) = split_bound(&self.budget, &sums, &lo, &hi)?;
+        let mut scale = 1.0;
+        for _ in 0..30 {
+            if budget.out_of_time() {
+                return None;
+            }
+            let k: Vec<u32> = (0..lo.len())
+                .map(|i| match guide[i] {
+                    None => node.hi[i],
+                    Some(t) => self.axes[i]
+                        .last_at_most((t * scale) as Nanos)
+                        .unwrap_or(0)
+                        .clamp(node.lo[i], node.hi[i]),
+                })
+                .collect();
+            if self.verify(&k).2 {
+                let (spec, report, ok) = self.verify(&self.polish(k, budget));
+                let u = utilization(&spec);
+                return (ok && best.is_none_or(|b| u < b)).then_some((spec, report, u));
+            }
+            scale *= 0.85;
         }
         None
     }
