@@ -786,6 +786,9 @@ impl<'r, 'a> Examiner<'r, 'a> {
         let r = relax(self.p.spec, &lo, &hi, &node.above, true);
         let sums = self.limit_sums(&r, (&lo, &hi), &node.above);
         let (_, guide) = split_bound(&self.budget, &sums, &lo, &hi)?;
+        if guide.iter().all(Option::is_none) {
+            return None;
+        }
         let mut scale = 1.0;
         for _ in 0..30 {
             if budget.out_of_time() {

@@ -207,7 +207,7 @@ pub(crate) fn split_bound(
             minimisers.push(t);
         }
         if total > best.0 {
-            best = (total, guide(&members, &minimisers));
+            best = (total, guide(&members, &minimisers, n));
         }
         if !shared || round + 1 == SHARE_ROUNDS {
             break;
@@ -219,8 +219,7 @@ pub(crate) fn split_bound(
 
 /// Per task, the shortest of its limits' minimising periods (`None` for
 /// a task in no limit).
-fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>]) -> Vec<Option<f64>> {
-    let n = members.first().map_or(0, Vec::len);
+fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option<f64>> {
     (0..n)
         .map(|i| {
             members
