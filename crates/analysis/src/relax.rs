@@ -28,6 +28,9 @@ use crate::sched::{deadline_at, interference, level_response_within, utilization
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
+mod pieces;
+pub use pieces::{paper_pieces, sound_pieces, MinSum, Piece};
+
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Relaxed {

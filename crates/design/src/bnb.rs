@@ -22,9 +22,9 @@ use crate::api::utilization;
 use crate::axis::{Axis, Node};
 use crate::budget::Budget;
 use crate::harmonic;
-use crate::joint::{joint_bound, least_under, Row};
+use crate::joint::{joint_bound, least_under, split_bound, Row};
 use crate::problem::{Group, Problem};
-use rtpipe_analysis::relax::{relax, Affine, Relaxed};
+use rtpipe_analysis::relax::{paper_pieces, relax, sound_pieces, Affine, MinSum, Relaxed};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::policy::RankKey;
 use rtpipe_model::{Nanos, Server, Spec};
@@ -267,6 +267,53 @@ impl<'r, 'a> Examiner<'r, 'a> {
         Some(out)
     }
 
+    /// Each limit of the active groups with the least-of-pieces sums one
+    /// of which must meet it (`relax::sound_pieces`, `paper_pieces`), for
+    /// [`split_bound`]; a chain without pieces is left out (fewer limits,
+    /// a lower bound still).
+    fn limit_sums(
+        &self,
+        r: &Relaxed,
+        (lo, hi): (&[Nanos], &[Nanos]),
+        above: &[(usize, usize)],
+    ) -> Vec<(f64, Vec<MinSum>)> {
+        let spec = self.p.spec;
+        let mut out = Vec::new();
+        for g in self.groups {
+            let Group::Limit(k, m) = *g else { continue };
+            let sums = match self.mode() {
+                Mode::Sound => sound_pieces(spec, (lo, hi), above, r, k),
+                Mode::Paper => {
+                    paper_pieces(spec, (lo, hi), above, k).map(|(e, f)| (e.clone(), f, e))
+                }
+            };
+            let Some((e, f, event_e)) = sums else {
+                continue;
+            };
+            let head = spec.chains[k].path[0];
+            for a in Anchor::ALL {
+                let Some(limit) = m.limit(&spec.chains[k], a) else {
+                    continue;
+                };
+                let read = match (m, self.mode()) {
+                    (Metric::Reaction, Mode::Sound) => vec![e.clone(), f.clone()],
+                    (Metric::Reaction, Mode::Paper) => vec![e.clone()],
+                    (Metric::Freshness, _) => vec![f.clone()],
+                };
+                let sums = match (a, m, self.mode()) {
+                    (Anchor::Read, _, _) => read,
+                    // The sound reaction from the event: its own sum.
+                    (Anchor::Event, Metric::Reaction, Mode::Sound) => vec![event_e.clone()],
+                    (Anchor::Event, _, _) => {
+                        read.into_iter().map(|s| s.plus_period(head)).collect()
+                    }
+                };
+                out.push((limit as f64, sums));
+            }
+        }
+        out
+    }
+
     /// The analysis of one point, and whether it meets the active groups
     /// (and, in sound mode, bounds every chain).
     pub(crate) fn verify(&self, k: &[u32]) -> (Spec, Report, bool) {
@@ -321,7 +368,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
             if !self.may_hold(&r, &lo) {
                 return false;
             }
-            let Some(bound) = self.form_bound(&r, &lo, &hi) else {
+            let Some(bound) = self.form_bound(&r, (&lo, &hi), &node.above) else {
                 return false;
             };
             node.bound = bound;
@@ -470,7 +517,12 @@ impl<'r, 'a> Examiner<'r, 'a> {
     /// The box's bound: Σ C/hi, raised by each chain limit whose affine
     /// forms (`Relaxed::forms`) keep the periods of its tasks from all
     /// being longest. `None` when some limit cannot hold in the box.
-    fn form_bound(&self, r: &Relaxed, lo: &[Nanos], hi: &[Nanos]) -> Option<f64> {
+    fn form_bound(
+        &self,
+        r: &Relaxed,
+        (lo, hi): (&[Nanos], &[Nanos]),
+        above: &[(usize, usize)],
+    ) -> Option<f64> {
         let plain = self.utilization_at(hi);
         let mut bound = plain;
         let mut joint = Vec::new();
@@ -488,7 +540,9 @@ impl<'r, 'a> Examiner<'r, 'a> {
                 joint.push(Row::new(&refs, limit, lo, lo.len()));
             }
         }
-        Some(bound.max(joint_bound(&self.budget, &joint, lo, hi)))
+        let jb = joint_bound(&self.budget, &joint, lo, hi);
+        let (split, _) = split_bound(&self.budget, &self.limit_sums(r, (lo, hi), above), lo, hi)?;
+        Some(bound.max(jb).max(split))
     }
 
     /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
@@ -709,6 +763,52 @@ impl<'r, 'a> Examiner<'r, 'a> {
             }
             let b = self.branch(&node, &report)?;
             node = self.children(&node, b).0;
+        }
+        None
+    }
+
+    /// A verified design from the relaxation's least point of `node`
+    /// (repair and round): each period of a limited task at the shortest
+    /// its limits' least asks (`split_bound`'s guide), the others at their
+    /// longest; those periods scaled down (by 0.85, up to 30 times) until
+    /// the design verifies, then lengthened by `polish`. `None` without a
+    /// guide, a verified design or one better than `best`.
+    pub(crate) fn guided(
+        &self,
+        node: &Node,
+        best: Option<f64>,
+        budget: &Budget,
+    ) -> Option<(Spec, Report, f64)> {
+        if self.events || self.p.spec.harmonic {
+            return None;
+        }
+        let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
+        let r = relax(self.p.spec, &lo, &hi, &node.above, true);
+        let sums = self.limit_sums(&r, (&lo, &hi), &node.above);
+        let (_, guide) = split_bound(&self.budget, &sums, &lo, &hi)?;
+        if guide.iter().all(Option::is_none) {
+            return None;
+        }
+        let mut scale = 1.0;
+        for _ in 0..30 {
+            if budget.out_of_time() {
+                return None;
+            }
+            let k: Vec<u32> = (0..lo.len())
+                .map(|i| match guide[i] {
+                    None => node.hi[i],
+                    Some(t) => self.axes[i]
+                        .last_at_most((t * scale) as Nanos)
+                        .unwrap_or(0)
+                        .clamp(node.lo[i], node.hi[i]),
+                })
+                .collect();
+            if self.verify(&k).2 {
+                let (spec, report, ok) = self.verify(&self.polish(k, budget));
+                let u = utilization(&spec);
+                return (ok && best.is_none_or(|b| u < b)).then_some((spec, report, u));
+            }
+            scale *= 0.85;
         }
         None
     }

@@ -337,6 +337,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }
+            // And from the relaxation's least point of the box.
+            if let Some(found) = self.ex.guided(&node, f.incumbent(), self.effort) {
+                publish(self.ex.p, &found.0, found.2, node.bound);
+                f.best = Some(found);
+            }
         }
         ControlFlow::Continue(Some(self.ex.children(&node, how)))
     }

@@ -3,7 +3,7 @@
 //! problem, one multiplier per limit. `budget` is C_i per task (0 for
 //! background tasks), `lo` / `hi` the box's shortest and longest periods.
 
-use rtpipe_analysis::relax::Affine;
+use rtpipe_analysis::relax::{Affine, MinSum, Piece};
 use rtpipe_model::Nanos;
 
 /// Coordinate-ascent sweeps over the multipliers of the joint bound.
@@ -11,8 +11,8 @@ const JOINT_SWEEPS: usize = 3;
 
 /// One limit in the joint bound: Σ s_i T_i ≤ room.
 pub(crate) struct Row {
-    slopes: Vec<(usize, f64)>,
-    room: f64,
+    pub(crate) slopes: Vec<(usize, f64)>,
+    pub(crate) room: f64,
 }
 
 impl Row {
@@ -52,6 +52,11 @@ impl Row {
 /// the box. A reaction limit (E or F below it) enters as the form below
 /// both, the least base and slopes.
 pub(crate) fn joint_bound(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> f64 {
+    joint_solution(budget, rows, lo, hi).0
+}
+
+/// [`joint_bound`] with the periods that minimise its Lagrangian.
+fn joint_solution(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nanos]) -> (f64, Vec<f64>) {
     let n = lo.len();
     let mut lambda = vec![0.0f64; rows.len()];
     // The minimising T_i at weight w_i.
@@ -103,18 +108,15 @@ pub(crate) fn joint_bound(budget: &[f64], rows: &[Row], lo: &[Nanos], hi: &[Nano
     }
     // Valid for any λ ≥ 0: the weights afresh from the multipliers found.
     weights(&lambda, &mut w);
-    let primal: f64 = (0..n)
-        .map(|i| {
-            let t = t_at(i, w[i]);
-            budget[i] / t + w[i] * t
-        })
-        .sum();
-    primal
+    let t: Vec<f64> = (0..n).map(|i| t_at(i, w[i])).collect();
+    let primal: f64 = (0..n).map(|i| budget[i] / t[i] + w[i] * t[i]).sum();
+    let bound = primal
         - rows
             .iter()
             .zip(&lambda)
             .map(|(r, l)| l * r.room)
-            .sum::<f64>()
+            .sum::<f64>();
+    (bound, t)
 }
 
 /// A lower bound on Σ C/T over the box where `form ≤ limit` (`None`:
@@ -126,6 +128,182 @@ pub(crate) fn least_under(
     lo: &[Nanos],
     hi: &[Nanos],
 ) -> Option<f64> {
-    (form.base <= limit)
-        .then(|| joint_bound(budget, &[Row::new(&[form], limit, lo, lo.len())], lo, hi))
+    least_at(budget, form, limit, lo, hi).map(|x| x.0)
+}
+
+/// [`least_under`] with the periods that minimise its Lagrangian.
+fn least_at(
+    budget: &[f64],
+    form: &Affine,
+    limit: f64,
+    lo: &[Nanos],
+    hi: &[Nanos],
+) -> Option<(f64, Vec<f64>)> {
+    let row = Row::new(&[form], limit, lo, lo.len());
+    (form.base <= limit).then(|| joint_solution(budget, &[row], lo, hi))
+}
+
+/// Piece choices enumerated per limit at most; beyond, the limit is left
+/// out of [`split_bound`] (a weaker, still valid bound).
+const MAX_CHOICES: usize = 1 << 12;
+
+/// A lower bound on Σ C/T over the box from limits written as sums of
+/// least-of-pieces terms (`relax::MinSum`, each limit met by one of its
+/// sums): every task's budget is shared among the limits it is in, and
+/// each limit's share is minimised exactly (for every choice of one piece
+/// per term, the sum is an affine form and [`least_under`] is the least of
+/// the separable convex problem). For every T meeting the limits and any
+/// shares summing to the budgets, Σ C/T = Σ_limits Σ shares/T + the rest
+/// ≥ Σ_limits least + Σ C/hi over the tasks in no limit. The shares start
+/// equal and move, [`SHARE_ROUNDS`] times, towards the limits whose least
+/// wants the task's period shortest (the bound is concave in the shares,
+/// 1/T_i its slope); the best round is the bound. `None`: some limit holds
+/// nowhere in the box. With the bound, the best round's guide: per task
+/// in some limit, the shortest period a limit's least asks of it.
+pub(crate) fn split_bound(
+    budget: &[f64],
+    limits: &[(f64, Vec<MinSum>)],
+    lo: &[Nanos],
+    hi: &[Nanos],
+) -> Option<(f64, Vec<Option<f64>>)> {
+    let n = lo.len();
+    let members: Vec<Vec<bool>> = limits.iter().map(|(_, sums)| tasks_of(sums, n)).collect();
+    let mut count = vec![0u32; n];
+    for m in &members {
+        count
+            .iter_mut()
+            .zip(m)
+            .for_each(|(c, &x)| *c += u32::from(x));
+    }
+    let rest: f64 = (0..n)
+        .filter(|&i| count[i] == 0)
+        .map(|i| budget[i] / hi[i] as f64)
+        .sum();
+    let mut shares: Vec<Vec<f64>> = members
+        .iter()
+        .map(|m| {
+            (0..n)
+                .map(|i| {
+                    if m[i] {
+                        budget[i] / f64::from(count[i])
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let shared = count.iter().any(|&c| c > 1);
+    let mut best = (f64::NEG_INFINITY, Vec::new());
+    for round in 0..SHARE_ROUNDS {
+        let mut total = rest;
+        let mut minimisers = Vec::with_capacity(limits.len());
+        for ((limit, sums), share) in limits.iter().zip(&shares) {
+            let (least, t) = sums
+                .iter()
+                .filter_map(|s| least_of_sum(share, s, *limit, lo, hi))
+                .min_by(|a, b| a.0.total_cmp(&b.0))?;
+            total += least;
+            minimisers.push(t);
+        }
+        if total > best.0 {
+            best = (total, guide(&members, &minimisers, n));
+        }
+        if !shared || round + 1 == SHARE_ROUNDS {
+            break;
+        }
+        reshare(&mut shares, &minimisers, &count, budget);
+    }
+    Some(best)
+}
+
+/// Per task, the shortest of its limits' minimising periods (`None` for
+/// a task in no limit).
+fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option<f64>> {
+    (0..n)
+        .map(|i| {
+            members
+                .iter()
+                .zip(minimisers)
+                .filter(|(m, _)| m[i])
+                .map(|(_, t)| t[i])
+                .reduce(f64::min)
+        })
+        .collect()
+}
+
+/// Rounds of moving the shares in [`split_bound`].
+const SHARE_ROUNDS: usize = 4;
+
+/// Each shared task's budget anew among its limits, each share scaled by
+/// 1/T_i at that limit's minimiser (a multiplicative ascent step).
+fn reshare(shares: &mut [Vec<f64>], minimisers: &[Vec<f64>], count: &[u32], budget: &[f64]) {
+    for i in (0..count.len()).filter(|&i| count[i] > 1) {
+        let scaled: Vec<f64> = shares
+            .iter()
+            .zip(minimisers)
+            .map(|(s, t)| s[i] / t[i])
+            .collect();
+        let sum: f64 = scaled.iter().sum();
+        if sum > 0.0 {
+            for (s, x) in shares.iter_mut().zip(&scaled) {
+                s[i] = budget[i] * x / sum;
+            }
+        }
+    }
+}
+
+/// The tasks whose periods appear in any of `sums`.
+fn tasks_of(sums: &[MinSum], n: usize) -> Vec<bool> {
+    let mut m = vec![false; n];
+    for s in sums {
+        let pieces = std::iter::once(&s.fixed).chain(s.terms.iter().flatten());
+        pieces
+            .flat_map(|p| &p.slopes)
+            .for_each(|&(i, _)| m[i] = true);
+    }
+    m
+}
+
+/// The least of Σ share/T over the box where `sum ≤ limit`, over the
+/// choices of one piece per term, with its minimising periods (`None`
+/// where no choice holds; with too many choices, Σ share/hi, the limit
+/// left out).
+fn least_of_sum(
+    share: &[f64],
+    sum: &MinSum,
+    limit: f64,
+    lo: &[Nanos],
+    hi: &[Nanos],
+) -> Option<(f64, Vec<f64>)> {
+    let choices = sum
+        .terms
+        .iter()
+        .try_fold(1usize, |acc, t| acc.checked_mul(t.len()))
+        .filter(|&c| c <= MAX_CHOICES);
+    let Some(choices) = choices else {
+        let t: Vec<f64> = hi.iter().map(|&h| h as f64).collect();
+        return Some(((0..lo.len()).map(|i| share[i] / t[i]).sum(), t));
+    };
+    let at_lo = |p: &Piece| p.at(lo);
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for mut code in 0..choices {
+        let mut form = Affine {
+            base: at_lo(&sum.fixed),
+            slopes: sum.fixed.slopes.clone(),
+        };
+        for term in &sum.terms {
+            let piece = &term[code % term.len()];
+            code /= term.len();
+            form.base += at_lo(piece);
+            form.slopes
+                .extend(piece.slopes.iter().filter(|s| s.1 > 0.0));
+        }
+        if let Some(b) = least_at(share, &form, limit, lo, hi) {
+            if best.as_ref().is_none_or(|x| b.0 < x.0) {
+                best = Some(b);
+            }
+        }
+    }
+    best
 }

@@ -333,3 +333,5 @@ fn contention_costs(spec: &Spec) -> Option<(&'static str, String)> {
 mod tests;
 #[cfg(test)]
 mod tests_encoding;
+#[cfg(test)]
+mod tests_split;

@@ -1,0 +1,328 @@
+//! A chain's figures over a box as sums of link terms, each the least of
+//! affine pieces in its two periods, for a bound that keeps the choice
+//! between the pieces (`relax`'s affine forms replace each least by one
+//! plane below it, which over a wide box is nearly flat).
+//!
+//! With response times held at their lower bounds over the box, a sound
+//! link term is the least of options `T_p + a` and `T_c + b`
+//! (`latency::sound_reaction_link_in` and the freshness terms: each option
+//! is a sum of one period and response times less a fixed demand), so it
+//! *is* `min(T_p + a, T_c + b)`, `a` and `b` the least constants (+∞ where
+//! no option of that kind exists). A paper term is the least over the
+//! cases the box leaves open of one affine function each (Eqs. 2–5, 12;
+//! Eq. 1's L is affine in T for a fixed demand and budget). Both are read
+//! off the terms themselves and checked at the box's four corners of
+//! `(T_p, T_c)`; a chain where that check fails (an option outside this
+//! shape: LET, server periods as response times) gets no pieces.
+
+use super::{all_let, distinct_passes, least_deadlines, link_task, paper_link, Order, Times};
+use crate::latency::SoundLink;
+use rtpipe_model::policy::ResponseAnalysis;
+use rtpipe_model::{Communication, Nanos, Spec};
+
+/// A period beyond every box, at which an option in that period never is
+/// the least.
+const FAR: Nanos = 1 << 50;
+
+/// `base + Σ slope·T` over absolute periods T (ns).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Piece {
+    /// The value at T = 0.
+    pub base: f64,
+    /// (task, slope ≥ 0).
+    pub slopes: Vec<(usize, f64)>,
+}
+
+impl Piece {
+    /// Its value at periods `t`.
+    pub fn at(&self, t: &[Nanos]) -> f64 {
+        self.base
+            + self
+                .slopes
+                .iter()
+                .map(|&(i, s)| s * t[i] as f64)
+                .sum::<f64>()
+    }
+}
+
+/// A lower bound on a chain figure over the box: `fixed(T) + Σ_k min over
+/// terms[k] of piece(T)`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MinSum {
+    /// The part with one piece.
+    pub fixed: Piece,
+    /// The link terms, each at least the least of its pieces.
+    pub terms: Vec<Vec<Piece>>,
+}
+
+impl MinSum {
+    /// Its value at periods `t`.
+    pub fn at(&self, t: &[Nanos]) -> f64 {
+        self.fixed.at(t)
+            + self
+                .terms
+                .iter()
+                .map(|ps| ps.iter().map(|p| p.at(t)).fold(f64::INFINITY, f64::min))
+                .sum::<f64>()
+    }
+
+    /// The same sum from the event: `T_head` more.
+    pub fn plus_period(mut self, head: usize) -> MinSum {
+        self.fixed.slopes.push((head, 1.0));
+        self
+    }
+}
+
+/// The sound chain figures of chain `k` as least-of-pieces sums over the
+/// box (`relaxed` = `relax(spec, lo, hi, imposed, _)`): the reaction sum E
+/// and the freshness sum F from the read (the sound reaction is the
+/// smaller, the freshness F) and E without reachability from the release
+/// (plus `T_head`, the reaction from the event). `None`: no such shape
+/// (see the module documentation) or the chain is unbounded in the box.
+pub fn sound_pieces(
+    spec: &Spec,
+    (lo, hi): (&[Nanos], &[Nanos]),
+    imposed: &[(usize, usize)],
+    relaxed: &super::Relaxed,
+    k: usize,
+) -> Option<(MinSum, MinSum, MinSum)> {
+    let path = &spec.chains.get(k)?.path;
+    let shaped = spec.policy().response != ResponseAnalysis::ServerPeriod
+        && path
+            .iter()
+            .all(|&i| spec.task_communication(i) != Communication::Let)
+        && path.len() > 1;
+    if !shaped || all_let(spec, path) {
+        return None;
+    }
+    let order = Order::new(spec, lo, hi, imposed);
+    let times = Times {
+        r: relaxed.job_response.clone(),
+        w: relaxed.read_to_publish.clone(),
+    };
+    let (e, f) = sound_sums(spec, &order, &times, path, true)?;
+    let (ev, _) = sound_sums(spec, &order, &times, path, false)?;
+    Some((e, f, ev.plus_period(path[0])))
+}
+
+/// E and F of `path` (`reach`: from the read, with reachability).
+fn sound_sums(
+    spec: &Spec,
+    order: &Order,
+    r: &Times,
+    path: &[usize],
+    reach: bool,
+) -> Option<(MinSum, MinSum)> {
+    let tail = path[path.len() - 1];
+    let mut e = MinSum {
+        fixed: Piece {
+            base: r.r[tail]? as f64,
+            slopes: Vec::new(),
+        },
+        terms: Vec::new(),
+    };
+    let mut f = MinSum::default();
+    let mut distinct = reach;
+    for (k, w) in path.windows(2).enumerate() {
+        let (pi, ci) = (w[0], w[1]);
+        let last = k + 2 == path.len();
+        let orders = order.link_orders(pi, ci);
+        let head = reach && k == 0;
+        let at = |tp: Nanos, tc: Nanos| {
+            let mut p = link_task(spec, tp, r.of(pi), pi);
+            let mut c = link_task(spec, tc, r.of(ci), ci);
+            least_deadlines(order, spec, pi, ci, &mut p, &mut c);
+            let l = SoundLink::least(
+                orders
+                    .iter()
+                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
+            );
+            let fresh = if last { l.freshness_last } else { l.freshness };
+            Some((l.reaction?, fresh?))
+        };
+        let corners = corners(order, pi, ci);
+        e.terms.push(two_pieces(
+            |a, b| at(a, b).map(|x| x.0),
+            (pi, ci),
+            order,
+            &corners,
+        )?);
+        f.terms.push(two_pieces(
+            |a, b| at(a, b).map(|x| x.1),
+            (pi, ci),
+            order,
+            &corners,
+        )?);
+        let c_late = link_task(spec, order.hi[ci], r.of(ci), ci);
+        distinct = distinct_passes(
+            &link_task(spec, order.lo[pi], r.of(pi), pi),
+            &c_late,
+            distinct,
+        );
+    }
+    Some((e, f))
+}
+
+/// The four corners (T_p, T_c) of a link's rectangle.
+fn corners(order: &Order, p: usize, c: usize) -> [(Nanos, Nanos); 4] {
+    let (lp, hp, lc, hc) = (order.lo[p], order.hi[p], order.lo[c], order.hi[c]);
+    [(lp, lc), (hp, lc), (lp, hc), (hp, hc)]
+}
+
+/// A term `min(T_p + a, T_c + b)` read off `term` (far periods isolate
+/// each kind of option), checked at the corners.
+fn two_pieces(
+    term: impl Fn(Nanos, Nanos) -> Option<Nanos>,
+    (p, c): (usize, usize),
+    order: &Order,
+    corners: &[(Nanos, Nanos); 4],
+) -> Option<Vec<Piece>> {
+    let mut pieces = Vec::new();
+    let a = term(order.lo[p], FAR)? - order.lo[p];
+    if a < FAR / 2 {
+        pieces.push(Piece {
+            base: a as f64,
+            slopes: vec![(p, 1.0)],
+        });
+    }
+    let b = term(FAR, order.lo[c])? - order.lo[c];
+    if b < FAR / 2 {
+        pieces.push(Piece {
+            base: b as f64,
+            slopes: vec![(c, 1.0)],
+        });
+    }
+    checked(pieces, &term, (p, c), corners)
+}
+
+/// `pieces` when their least equals `term` at every corner.
+fn checked(
+    pieces: Vec<Piece>,
+    term: &impl Fn(Nanos, Nanos) -> Option<Nanos>,
+    (p, c): (usize, usize),
+    corners: &[(Nanos, Nanos); 4],
+) -> Option<Vec<Piece>> {
+    if pieces.is_empty() || pieces.iter().any(|x| x.slopes.iter().any(|s| s.1 < 0.0)) {
+        return None;
+    }
+    let n = p.max(c) + 1;
+    for &(tp, tc) in corners {
+        let mut t = vec![0; n];
+        (t[p], t[c]) = (tp, tc);
+        let least = pieces
+            .iter()
+            .map(|x| x.at(&t))
+            .fold(f64::INFINITY, f64::min);
+        if (least - term(tp, tc)? as f64).abs() > 0.5 {
+            return None;
+        }
+    }
+    Some(pieces)
+}
+
+/// The paper-mode figures of chain `k` (reaction, freshness) as
+/// least-of-pieces sums over the box: the head's L and one term per link,
+/// a piece per case the box leaves open. `None` where the paper's terms
+/// are not monotone (`paper_monotone`) or a check fails.
+pub fn paper_pieces(
+    spec: &Spec,
+    (lo, hi): (&[Nanos], &[Nanos]),
+    imposed: &[(usize, usize)],
+    k: usize,
+) -> Option<(MinSum, MinSum)> {
+    let path = &spec.chains.get(k)?.path;
+    if !super::paper_monotone(spec) || path.len() < 2 {
+        return None;
+    }
+    let order = Order::new(spec, lo, hi, imposed);
+    let h = path[0];
+    let l_at = |t: Nanos| link_task(spec, t, (None, None), h).l;
+    let head = line(l_at, h, (lo[h], hi[h]))?;
+    let (mut e, mut f) = (
+        MinSum {
+            fixed: head.clone(),
+            terms: Vec::new(),
+        },
+        MinSum {
+            fixed: head,
+            terms: Vec::new(),
+        },
+    );
+    for w in path.windows(2) {
+        let (p, c) = (w[0], w[1]);
+        let corners = corners(&order, p, c);
+        let cases = order.paper_cases(p, c);
+        let mut pe = Vec::new();
+        let mut pf = Vec::new();
+        for case in cases {
+            let tasks = |tp, tc| {
+                (
+                    link_task(spec, tp, (None, None), p),
+                    link_task(spec, tc, (None, None), c),
+                )
+            };
+            let re = |tp, tc| {
+                let (a, b) = tasks(tp, tc);
+                Some(crate::latency::paper_reaction_link_in(case, &a, &b))
+            };
+            let fr = |tp, tc| {
+                let (a, b) = tasks(tp, tc);
+                Some(crate::latency::paper_freshness_link_in(case, &a, &b))
+            };
+            let span = ((lo[p], hi[p]), (lo[c], hi[c]));
+            pe.push(plane(re, (p, c), span)?);
+            pf.push(plane(fr, (p, c), span)?);
+        }
+        let least_e = |tp, tc| Some(paper_link(spec, &order, p, c, tp, tc).0);
+        let least_f = |tp, tc| Some(paper_link(spec, &order, p, c, tp, tc).1);
+        e.terms.push(checked(pe, &least_e, (p, c), &corners)?);
+        f.terms.push(checked(pf, &least_f, (p, c), &corners)?);
+    }
+    Some((e, f))
+}
+
+/// The affine function of (T_p, T_c) through `term`'s values at three
+/// corners of the rectangle `span` (affine by the paper's equations),
+/// checked at the fourth; `p ≠ c`.
+fn plane(
+    term: impl Fn(Nanos, Nanos) -> Option<Nanos>,
+    (p, c): (usize, usize),
+    ((lp, hp), (lc, hc)): ((Nanos, Nanos), (Nanos, Nanos)),
+) -> Option<Piece> {
+    let v0 = term(lp, lc)? as f64;
+    let sp = if hp > lp {
+        (term(hp, lc)? as f64 - v0) / (hp - lp) as f64
+    } else {
+        0.0
+    };
+    let sc = if hc > lc {
+        (term(lp, hc)? as f64 - v0) / (hc - lc) as f64
+    } else {
+        0.0
+    };
+    let piece = Piece {
+        base: v0 - sp * lp as f64 - sc * lc as f64,
+        slopes: vec![(p, sp), (c, sc)],
+    };
+    // The fourth corner: the term is affine, or no piece.
+    let mut t = vec![0; p.max(c) + 1];
+    (t[p], t[c]) = (hp, hc);
+    ((piece.at(&t) - term(hp, hc)? as f64).abs() <= 0.5).then_some(piece)
+}
+
+/// The head's L (Eq. 1) as an affine function of its period: exact where
+/// its value at the middle of `[l, h]` is on the line through the ends.
+fn line(term: impl Fn(Nanos) -> Nanos, i: usize, (l, h): (Nanos, Nanos)) -> Option<Piece> {
+    let v0 = term(l) as f64;
+    let s = if h > l {
+        (term(h) as f64 - v0) / (h - l) as f64
+    } else {
+        0.0
+    };
+    let mid = l + (h - l) / 2;
+    let on_line = (term(mid) as f64 - v0 - s * (mid - l) as f64).abs() <= 0.5;
+    (s >= 0.0 && on_line).then(|| Piece {
+        base: v0 - s * l as f64,
+        slopes: vec![(i, s)],
+    })
+}

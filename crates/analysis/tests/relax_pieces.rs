@@ -1,0 +1,184 @@
+//! `relax::sound_pieces` and `paper_pieces` against the analysis: over any
+//! box, at every point inside (with the imposed orders), each chain's
+//! least-of-pieces sums are below the analysis' figures (the property the
+//! design's split bound rests on), also over boxes as wide as a design's
+//! domains (an eighth to four times the generated periods).
+
+use rtpipe_analysis::relax::{paper_monotone, paper_pieces, relax, sound_pieces, MinSum};
+use rtpipe_analysis::{analyze, Anchor, Metric, Report};
+use rtpipe_model::gen::{random_system, GenConfig, Rng};
+use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
+
+const SYSTEMS: u64 = 1200;
+
+fn system(seed: u64) -> Spec {
+    let mut rng = Rng::new(seed ^ 0x9135);
+    let cfg = GenConfig {
+        tasks: rng.range(2, 9) as usize,
+        cpus: rng.range(1, 2) as u32,
+        utilization: 0.3 + 0.6 * rng.unit(),
+        scheduler: if rng.chance(0.2) {
+            Scheduler::Edf
+        } else {
+            Scheduler::Rm
+        },
+        chains: 3,
+        mixed_servers: rng.chance(0.5),
+        ..GenConfig::default()
+    };
+    let mut spec = random_system(seed, &cfg);
+    if spec.scheduler == Scheduler::Rm && rng.chance(0.5) {
+        spec.schedulability = SchedTest::Rta;
+    }
+    spec
+}
+
+fn at(spec: &Spec, t: &[Nanos]) -> Spec {
+    let mut s = spec.clone();
+    for (task, &p) in s.tasks.iter_mut().zip(t) {
+        task.period = PeriodSpec::Fixed(p);
+    }
+    s
+}
+
+/// The analysis' figure of chain k (`None`: unbounded).
+fn figure(report: &Report, k: usize, m: Metric, sound: bool, a: Anchor) -> Option<Nanos> {
+    let c = report
+        .chains
+        .iter()
+        .find(|c| c.chain == k && c.metric == m)?;
+    if sound {
+        c.bound.sound(a)
+    } else {
+        Some(c.bound.paper(a))
+    }
+}
+
+fn below(what: &str, lower: f64, exact: Option<Nanos>) {
+    if let Some(x) = exact {
+        assert!(lower <= x as f64 + 1e-6, "{what}: {lower} above {x}");
+    }
+}
+
+/// Every chain's pieces at `t` against the analysis there; how many
+/// chains had pieces.
+fn pieces_below(
+    spec: &Spec,
+    (lo, hi): (&[Nanos], &[Nanos]),
+    imposed: &[(usize, usize)],
+    t: &[Nanos],
+    what: &str,
+) -> usize {
+    let r = relax(spec, lo, hi, imposed, false);
+    let report = analyze(&at(spec, t));
+    let mut with = 0;
+    for k in 0..spec.chains.len() {
+        let fig = |m, sound, a| figure(&report, k, m, sound, a);
+        let w = |s: &str| format!("{what}: chain {k} {s}");
+        if let Some((e, f, ev)) = sound_pieces(spec, (lo, hi), imposed, &r, k) {
+            with += 1;
+            let least = |s: &MinSum| s.at(t);
+            below(
+                &w("sound reaction"),
+                least(&e).min(least(&f)),
+                fig(Metric::Reaction, true, Anchor::Read),
+            );
+            below(
+                &w("sound freshness"),
+                least(&f),
+                fig(Metric::Freshness, true, Anchor::Read),
+            );
+            below(
+                &w("sound event reaction"),
+                least(&ev),
+                fig(Metric::Reaction, true, Anchor::Event),
+            );
+        }
+        if let Some((e, f)) = paper_pieces(spec, (lo, hi), imposed, k) {
+            with += 1;
+            assert!(paper_monotone(spec));
+            below(
+                &w("paper reaction"),
+                e.at(t),
+                fig(Metric::Reaction, false, Anchor::Read),
+            );
+            below(
+                &w("paper freshness"),
+                f.at(t),
+                fig(Metric::Freshness, false, Anchor::Read),
+            );
+        }
+    }
+    with
+}
+
+/// The rank orders of the tasks at `t` (a above b), each kept by chance.
+fn orders_at(spec: &Spec, t: &[Nanos], rng: &mut Rng) -> Vec<(usize, usize)> {
+    let report = analyze(&at(spec, t));
+    let mut imposed = Vec::new();
+    for a in 0..t.len() {
+        for b in 0..t.len() {
+            let (pa, pb) = (report.timing[a].priority, report.timing[b].priority);
+            let same = spec.tasks[a].cpu == spec.tasks[b].cpu;
+            if let (Some(x), Some(y), true) = (pa, pb, same) {
+                if x < y && rng.chance(0.5) {
+                    imposed.push((a, b));
+                }
+            }
+        }
+    }
+    imposed
+}
+
+#[test]
+fn pieces_bound_every_point_of_a_box_from_below() {
+    let mut with = 0;
+    for seed in 0..SYSTEMS {
+        let spec = system(seed);
+        let t: Vec<Nanos> = spec
+            .tasks
+            .iter()
+            .map(|x| x.fixed_period().expect("fixed"))
+            .collect();
+        let mut rng = Rng::new(seed);
+        // Narrow boxes (half to twice), and as wide as a design's domains.
+        let (down, up) = if seed % 2 == 0 { (2, 2) } else { (8, 4) };
+        // A design's domains keep T ≥ C (and T ≥ D).
+        let lo: Vec<Nanos> = t
+            .iter()
+            .zip(&spec.tasks)
+            .map(|(&p, x)| {
+                (p / down)
+                    .max(x.budget())
+                    .max(x.deadline_given.unwrap_or(1))
+                    .max(1)
+            })
+            .collect();
+        let hi: Vec<Nanos> = t.iter().map(|&p| p * up).collect();
+        let probe = |rng: &mut Rng| -> Vec<Nanos> {
+            (0..t.len())
+                .map(|i| lo[i] + (rng.unit() * (hi[i] - lo[i]) as f64) as Nanos)
+                .collect()
+        };
+        for k in 0..6 {
+            let point = match k {
+                0 => lo.clone(),
+                1 => hi.clone(),
+                _ => probe(&mut rng),
+            };
+            let what = format!("seed {seed} probe {k}");
+            with += pieces_below(&spec, (&lo, &hi), &[], &point, &what);
+        }
+        if spec.scheduler == Scheduler::Rm {
+            let point = probe(&mut rng);
+            let imposed = orders_at(&spec, &point, &mut rng);
+            let what = format!("seed {seed} imposed {imposed:?}");
+            with += pieces_below(&spec, (&lo, &hi), &imposed, &point, &what);
+        }
+    }
+    // Not vacuous: most chains get pieces.
+    assert!(
+        with > SYSTEMS as usize * 6,
+        "only {with} chains with pieces"
+    );
+}
