@@ -917,7 +917,7 @@ class Chain(Record):
 
     @property
     def event_limit(self) -> Optional[float]:
-        """The limit from the event (`max_reaction_time` / `max_data_age`),
+        """The limit from the event (`max_reaction_time` / `freshness_from_event`),
         left out when the spec gives none.
         """
         return cast("Optional[float]", self.get("event_limit"))
@@ -960,6 +960,13 @@ class Chain(Record):
         head period after it), in the spec's time unit.
         """
         return BoundValues(self["from_event"])
+
+    @property
+    def literature(self) -> Dict[str, BoundValues]:
+        """The literature's quantities this metric is (`Literature::of`), each
+        with the bounds of its anchor: the same figures under their names.
+        """
+        return values(BoundValues, self["literature"])
 
     @property
     def cases(self) -> List[int]:
@@ -1654,7 +1661,7 @@ class ObsChain(Record):
 
     @property
     def event_limit(self) -> Optional[float]:
-        """The limit from the event (`max_reaction_time` / `max_data_age`),
+        """The limit from the event (`max_reaction_time` / `freshness_from_event`),
         left out when the spec gives none.
         """
         return cast("Optional[float]", self.get("event_limit"))
@@ -1697,6 +1704,13 @@ class ObsChain(Record):
         head period after it), in the spec's time unit.
         """
         return BoundValues(self["from_event"])
+
+    @property
+    def literature(self) -> Dict[str, BoundValues]:
+        """The literature's quantities this metric is (`Literature::of`), each
+        with the bounds of its anchor: the same figures under their names.
+        """
+        return values(BoundValues, self["literature"])
 
     @property
     def cases(self) -> List[int]:
@@ -2153,7 +2167,7 @@ class Point(Record):
     @property
     def event_bounds_ms(self) -> List[PairMs]:
         """From the event: `reaction` is the maximum reaction time,
-        `freshness` the maximum data age.
+        `freshness` freshness from the event.
         """
         return each(PairMs, self["event_bounds_ms"])
 
@@ -2255,11 +2269,11 @@ class LimitMs(Record):
         return cast("Optional[float]", self.get("max_reaction_time"))
 
     @property
-    def max_data_age(self) -> Optional[float]:
-        """The derived `max_data_age` to write into the spec, ms; null when none
-        flew.
+    def freshness_from_event(self) -> Optional[float]:
+        """The derived `freshness_from_event` limit to write into the spec, ms;
+        null when none flew.
         """
-        return cast("Optional[float]", self.get("max_data_age"))
+        return cast("Optional[float]", self.get("freshness_from_event"))
 
 
 class Analysis(Record):
