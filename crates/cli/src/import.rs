@@ -150,15 +150,25 @@ impl crate::command::Registered for ImportArgs {
                 px4_version,
                 ..
             } => {
-                let exec = px4_ulog::ExecArgs {
-                    stat: *exec,
-                    from: exec_from.as_deref(),
-                    us: exec_us,
-                    px4_version: *px4_version,
-                };
+                let exec = exec_args(*exec, exec_from, exec_us, *px4_version);
                 px4_ulog::done(log, &exec)
             }
         }
+    }
+}
+
+/// `import px4-ulog`'s execution-time flags, as its reader takes them.
+fn exec_args<'a>(
+    stat: ExecStat,
+    from: &'a Option<PathBuf>,
+    us: &'a [(String, u64)],
+    px4_version: Option<(u32, u32)>,
+) -> px4_ulog::ExecArgs<'a> {
+    px4_ulog::ExecArgs {
+        stat,
+        from: from.as_deref(),
+        us,
+        px4_version,
     }
 }
 
@@ -177,12 +187,7 @@ pub fn run(cmd: &ImportCommand) -> ExitCode {
             exec_us,
             px4_version,
         } => {
-            let exec = px4_ulog::ExecArgs {
-                stat: *exec,
-                from: exec_from.as_deref(),
-                us: exec_us,
-                px4_version: *px4_version,
-            };
+            let exec = exec_args(*exec, exec_from, exec_us, *px4_version);
             match px4_ulog::import(log, outdir, &exec) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(code) => code,
