@@ -752,6 +752,24 @@ fn the_rt_app_export_with_critical_sections_runs_under_rt_app() {
 /// spin for 30 ms. Every observation that the stall pushes far above its
 /// sound bound lies in the stall's window and is excused by a cause found
 /// there (the tasks' waits and start latencies); none goes unexcused.
+/// Waits until process `pid` has a thread named `rt:TASK` (a run's task
+/// threads), at most 60 s.
+fn wait_for_task_threads(pid: u32) {
+    let named = |e: std::fs::DirEntry| {
+        std::fs::read_to_string(e.path().join("comm")).is_ok_and(|c| c.starts_with("rt:"))
+    };
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while std::time::Instant::now() < deadline {
+        if let Ok(threads) = std::fs::read_dir(format!("/proc/{pid}/task")) {
+            if threads.flatten().any(named) {
+                return;
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    panic!("the run (pid {pid}) started no task thread in 60 s");
+}
+
 #[test]
 fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
     use rtpipe_runtime::sys;
@@ -770,8 +788,11 @@ fn a_fifo_hog_on_the_tasks_cpu_excuses_exactly_the_samples_it_delays() {
     let Ok(child) = child else {
         panic!("cannot start rtpipe");
     };
-    // The run's epoch comes a few ms after the start; hog 400–430 ms in.
-    std::thread::sleep(std::time::Duration::from_millis(400));
+    // Hog 300–330 ms after the run's task threads exist (its epoch comes
+    // a few ms after they start): how long the run takes to get there is
+    // up to the machine's load.
+    wait_for_task_threads(child.id());
+    std::thread::sleep(std::time::Duration::from_millis(300));
     let (h0, h1) = std::thread::spawn(|| {
         let ok = sys::pin_to(0).and_then(|()| sys::set_fifo(99));
         assert!(ok.is_ok(), "cannot become a FIFO hog: {ok:?}");
