@@ -283,6 +283,7 @@ fn dispatch(path: &str, argv: &[String], call: Call) -> Result<Done, Failure> {
     }
     let parsed = parse(path, argv)?;
     let command = parsed.registered();
+    command.check(&call).map_err(Failure::Input)?;
     command.call(call).map_err(|d| match command.refusal() {
         Refusal::Input => Failure::Input(d),
         Refusal::Run => Failure::Run(d),

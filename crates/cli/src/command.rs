@@ -378,8 +378,16 @@ pub trait Registered {
     /// The command run on what `call` hands it, nothing printed.
     fn call(&self, call: Call<'_>) -> Result<Done, Diagnostic>;
 
-    /// Whose fault a refusal of [`Registered::call`] is, for a caller that
-    /// tells them apart (Python's `InputError` and `RunError`).
+    /// What is refused before the command starts, on its flags and its
+    /// spec alone: always the caller's input ([`Refusal::Input`]), whatever
+    /// [`Registered::refusal`] says of the command's later refusals.
+    fn check(&self, _call: &Call<'_>) -> Result<(), Diagnostic> {
+        Ok(())
+    }
+
+    /// Whose fault a refusal of [`Registered::call`] is, once
+    /// [`Registered::check`] passed, for a caller that tells them apart
+    /// (Python's `InputError` and `RunError`).
     fn refusal(&self) -> Refusal {
         Refusal::Input
     }

@@ -499,7 +499,17 @@ impl command::Registered for RunArgs {
         command::world_inputs(self.vehicle(), self.mission())
     }
 
-    /// A refusal after the flags parsed is the machine's (`RunError` in
+    /// The flags' own checks and a spec without periods: the caller's
+    /// input, refused before anything runs.
+    fn check(&self, call: &command::Call<'_>) -> Result<(), Diagnostic> {
+        self.validate()?;
+        match command::missing_periods(call.spec()?) {
+            Some(d) => Err(d),
+            None => Ok(()),
+        }
+    }
+
+    /// A refusal once the checks passed is the machine's (`RunError` in
     /// Python): the kernel refused a class or a reservation, a CPU is
     /// missing.
     fn refusal(&self) -> command::Refusal {
@@ -507,11 +517,7 @@ impl command::Registered for RunArgs {
     }
 
     fn call(&self, call: command::Call<'_>) -> Result<command::Done, Diagnostic> {
-        let spec = call.spec()?;
-        if let Some(d) = command::missing_periods(spec) {
-            return Err(d);
-        }
-        answer(spec, self, false).map(command::Done::from)
+        answer(call.spec()?, self, false).map(command::Done::from)
     }
 }
 
