@@ -35,4 +35,4 @@ def test_the_notebook_draws_both_figures(tmp_path, monkeypatch, capsys):
     # E2EEvaluation's comparison: the sound bound never above Davare's.
     for metric in ("reaction", "freshness"):
         assert (ns["reductions"][metric]["rtpipe sound"] >= -1e-12).all()
-    assert "| maximum data age | rtpipe sound |" in out
+    assert "| maximum reduced data age | rtpipe sound |" in out
