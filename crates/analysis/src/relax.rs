@@ -28,7 +28,9 @@ use crate::sched::{deadline_at, interference, level_response_within, utilization
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
+mod link;
 mod pieces;
+use link::least_link;
 pub use pieces::{paper_pieces, sound_pieces, MinSum, Piece};
 
 /// Lower bounds over a box of periods.
@@ -866,14 +868,8 @@ fn chain_forms(
         };
         let head = reach && k == 0;
         let at = |tp: Nanos, tc: Nanos| {
-            let mut p = link_task(spec, tp, resp(pi, tp), pi);
-            let mut c = link_task(spec, tc, resp(ci, tc), ci);
-            least_deadlines(order, spec, pi, ci, &mut p, &mut c);
-            let l = SoundLink::least(
-                orders
-                    .iter()
-                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
-            );
+            let (p, c) = ((pi, tp, resp(pi, tp)), (ci, tc, resp(ci, tc)));
+            let l = least_link(spec, order, &orders, p, c, (distinct, head));
             let fresh = if last { l.freshness_last } else { l.freshness };
             let react = [l.reaction, l.reaction_from_read][usize::from(reach)];
             Some((react?, fresh?))

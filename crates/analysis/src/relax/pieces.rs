@@ -15,8 +15,7 @@
 //! `(T_p, T_c)`; a chain where that check fails (an option outside this
 //! shape: LET, server periods as response times) gets no pieces.
 
-use super::{all_let, distinct_passes, least_deadlines, link_task, paper_link, Order, Times};
-use crate::latency::SoundLink;
+use super::{all_let, distinct_passes, link_task, paper_link, Order, Times};
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Communication, Nanos, Spec};
 
@@ -129,14 +128,8 @@ fn sound_sums(
         let orders = order.link_orders(pi, ci);
         let head = reach && k == 0;
         let at = |tp: Nanos, tc: Nanos| {
-            let mut p = link_task(spec, tp, r.of(pi), pi);
-            let mut c = link_task(spec, tc, r.of(ci), ci);
-            least_deadlines(order, spec, pi, ci, &mut p, &mut c);
-            let l = SoundLink::least(
-                orders
-                    .iter()
-                    .map(|&o| SoundLink::new_in(o, &p, &c, distinct, head)),
-            );
+            let (p, c) = ((pi, tp, r.of(pi)), (ci, tc, r.of(ci)));
+            let l = super::least_link(spec, order, &orders, p, c, (distinct, head));
             let fresh = if last { l.freshness_last } else { l.freshness };
             Some((l.reaction?, fresh?))
         };
