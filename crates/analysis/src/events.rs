@@ -89,7 +89,7 @@ pub struct EventResult {
 /// units. The units' strongly connected components are analysed in
 /// topological order, each until its own figures stop changing, its
 /// inputs then final: a unit that reads nothing of its own component is
-/// analysed once. Inside a component, sweeps in a depth-first order
+/// analysed once. Inside a component, sweeps in the order of the units' periods
 /// re-analyse a unit when an input changed since its last analysis where
 /// that analysis read it (a task above at a window its demand was asked
 /// at, its own tasks up to its reach: an input whose η⁺ is the same there
@@ -252,13 +252,26 @@ impl Deps {
         }
         by_comp.retain(|c| !c.is_empty());
         // Inside a component, what a unit reads first where the cycles
-        // allow: a sweep then carries most changes to their readers.
-        let mut rank = vec![0; units + n];
-        for (k, v) in crate::graph::post_order(&succ).into_iter().enumerate() {
-            rank[v] = k;
-        }
+        // allow, so that a sweep carries most changes to their readers: a
+        // task reads the tasks above it on its CPU, of shorter or equal
+        // periods under rate-monotonic priorities, and the triggers
+        // upstream of those, so the units in ascending order of their
+        // activations' period, then of their place in the trigger order.
+        // (A depth-first post-order of the graph analysed each unit of the
+        // 1,000-task bench's one big component 3 times on average, this
+        // order 2.0, docs/analysis.md "Cost at 1,000 tasks".)
+        let key = |u: usize| {
+            let period = self
+                .unit_tasks(u)
+                .filter_map(|i| spec.activation_period(i))
+                .min();
+            let rank = self.unit_tasks(u).map(|i| self.trigger_rank[i]).min();
+            (period, rank, u)
+        };
         for on in &mut by_comp {
-            on.sort_unstable_by_key(|&u| rank[u]);
+            if on.len() > 1 {
+                on.sort_by_cached_key(|&u| key(u));
+            }
         }
         let mut of_unit = vec![usize::MAX; units];
         for (c, on) in by_comp.iter().enumerate() {

@@ -1,6 +1,6 @@
 //! Directed graphs as successor lists: strongly connected components
-//! (Tarjan's), a topological order (Kahn's) and a depth-first post-order,
-//! for the path enumeration (`paths`) and the event analysis' order of
+//! (Tarjan's) and a topological order (Kahn's), for the path enumeration
+//! (`paths`) and the event analysis' order of
 //! what waits for what (`events`).
 
 /// Tarjan's SCC algorithm, iterative so that 10,000-task graphs cannot
@@ -74,30 +74,4 @@ pub(crate) fn kahn(dag: &[Vec<usize>], mut deg: Vec<usize>, sources: &[usize]) -
         }
     }
     order
-}
-
-/// Every node of the graph `succ` in a depth-first post-order: each after
-/// the nodes it points to, but along a cycle (iterative, so that large
-/// graphs cannot overflow the stack).
-pub(crate) fn post_order(succ: &[Vec<usize>]) -> Vec<usize> {
-    let mut seen = vec![false; succ.len()];
-    let mut out = Vec::with_capacity(succ.len());
-    for root in 0..succ.len() {
-        if std::mem::replace(&mut seen[root], true) {
-            continue;
-        }
-        let mut call = vec![(root, 0)];
-        while let Some((v, k)) = call.last_mut() {
-            if let Some(&w) = succ[*v].get(*k) {
-                *k += 1;
-                if !std::mem::replace(&mut seen[w], true) {
-                    call.push((w, 0));
-                }
-            } else {
-                out.push(*v);
-                call.pop();
-            }
-        }
-    }
-    out
 }
