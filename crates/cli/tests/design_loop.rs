@@ -20,6 +20,78 @@ fn assert_only_oscillation_fails(o: &std::process::Output) {
     assert!(only_oscillation, "{out}");
 }
 
+/// The last period scale the sweep's JSON report says flew (schedulable
+/// and passing, before the first that failed).
+fn last_passing_scale(sweep: &serde_json::Value) -> Option<f64> {
+    let points = sweep["points"].as_array()?;
+    let mut last = None;
+    for p in points
+        .iter()
+        .filter(|p| p["varied"] == "scale" && p["schedulable"] == true)
+    {
+        if p["flies"] != true {
+            break;
+        }
+        last = p["value"].as_f64();
+    }
+    last
+}
+
+/// Each freed period's upper end in a written spec, µs, by task.
+fn freed_maxima(written: &str) -> Vec<(String, f64)> {
+    let mut task = String::new();
+    let mut out = Vec::new();
+    for line in written.lines() {
+        if let Some(name) = line.strip_prefix("[tasks.") {
+            task = name.trim_end_matches(']').to_string();
+        }
+        let max = line
+            .strip_prefix("period = { max = \"")
+            .and_then(|rest| rest.strip_suffix("us\" }"))
+            .and_then(|us| us.parse::<f64>().ok());
+        if let Some(us) = max {
+            out.push((task.clone(), us));
+        }
+    }
+    out
+}
+
+/// `--write-limits --free-periods` frees each period no further than the
+/// scale sweep flew it: Table V's period × the last passing scale (the
+/// chains' limits alone would let the gyro run at tens of ms).
+fn freed_periods_stay_where_the_scale_sweep_flew(sweep: &serde_json::Value, written: &str) {
+    let k = last_passing_scale(sweep).unwrap_or_else(|| panic!("no scale flew: {sweep}"));
+    let table_v = [
+        ("gyro", 1000.0),
+        ("accl", 1000.0),
+        ("ahrs", 5000.0),
+        ("radio", 10000.0),
+        ("pid", 2000.0),
+        ("pwm", 5000.0),
+    ];
+    let maxima = freed_maxima(written);
+    assert_eq!(maxima.len(), table_v.len(), "{written}");
+    for (task, max) in &maxima {
+        let p = table_v
+            .iter()
+            .find(|(t, _)| t == task)
+            .map_or(f64::NAN, |x| x.1);
+        assert!(
+            *max <= (p * k).round(),
+            "{task}: {max} us > {p} us × {k}\n{written}"
+        );
+    }
+    // The gyro's chains allow far more: the sweep's edge is what caps it.
+    let gyro = maxima
+        .iter()
+        .find(|(t, _)| t == "gyro")
+        .map_or(0.0, |x| x.1);
+    assert!(
+        (gyro - 1000.0 * k).abs() <= 1.0,
+        "gyro {gyro} us, scale {k}\n{written}"
+    );
+}
+
 /// sweep → design → fly, on one vehicle: three commands, no hand edit.
 fn loop_closes_on(vehicle: &str) {
     let dir = scratch(&format!("loop-{vehicle}"));
@@ -34,9 +106,11 @@ fn loop_closes_on(vehicle: &str) {
         "--write-limits",
         &s(&limits),
         "--free-periods",
+        "--json",
     ]);
     assert_exit(&o, 0);
     let written = std::fs::read_to_string(&limits).unwrap_or_default();
+    freed_periods_stay_where_the_scale_sweep_flew(&json_of(&o), &written);
     for key in [
         "max_reaction_time",
         "freshness_from_event",
@@ -258,8 +332,9 @@ fn sweep_design_fly_closes_on_the_px4_rate_loop() {
     assert!(out.contains("optimal after"), "{out}");
     let o = rtpipe(&["fly", &s(&design), "--mission", "steps"]);
     assert_exit(&o, 0);
-    // Swept on the calm `steps`, the design (attitude loop every 14.2 ms)
-    // rings in `gusty`'s turbulence: 3.4 °/s above 5 Hz, over 2 °/s.
+    // Swept on the calm `steps`, the design (attitude loop every 14.2 ms,
+    // the cap the period scale's edge × 1.485 gives it) rings in `gusty`'s
+    // turbulence: 3.4 °/s above 5 Hz, over 2 °/s.
     let o = rtpipe(&["fly", &s(&design), "--mission", "gusty"]);
     assert_only_oscillation_fails(&o);
 }

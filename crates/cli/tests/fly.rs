@@ -453,20 +453,10 @@ fn the_held_out_missions_load_and_table_v_flies_them_on_racer5() {
             "--seed",
             "10",
         ]);
-        if m == "steps-turbulent" {
-            // Seed 10's roll step settles in 0.85 s in the light
-            // turbulence since racer5's position hold was re-derived (it
-            // tilts the vehicle more when the stick moves); the held-out
-            // table (docs/flight.md) counts it. It flies, and misses that
-            // step's settling alone.
-            let out = String::from_utf8_lossy(&o.stdout);
-            let verdict = out.lines().find(|l| l.contains("criteria NOT met"));
-            let only_settling = verdict.is_some_and(|l| {
-                l.matches("overshoot").count() == 1 && l.contains("NOT met: roll step at 6.0 s")
-            });
-            assert!(only_settling && !out.contains("CRASHED"), "{out}");
-            continue;
-        }
+        // Seed 10's turbulent roll step missed the plain ±1° band late in
+        // its hold (0.85 s) by the turbulence's own wander, which its
+        // hover shows too: judged on the band widened by it, it settles in
+        // 0.21 s (docs/flight.md, "Settling in a disturbed world").
         assert_exit(&o, 0);
     }
 }

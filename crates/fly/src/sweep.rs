@@ -484,6 +484,12 @@ pub struct Derived {
     /// Per task, the longest period that flew in the rate sweep: the
     /// tail's `max_period` (`None` for every other task).
     pub max_period: Vec<Option<Nanos>>,
+    /// Per task, its fixed period × the period-scale sweep's last passing
+    /// scale: the longest period of it the scale sweep flew and passed
+    /// (`None` for a task the sweep does not scale, or when no scale
+    /// passed). A design that frees the task's period may not go beyond
+    /// it: longer periods were never flown.
+    pub scaled_period: Vec<Option<Nanos>>,
 }
 
 /// Everything the sweep derives (see [`Derived`]). A chain's limits are
@@ -533,7 +539,36 @@ pub fn derived_limits(spec: &Spec, s: &Setup, points: &[Point], safety: f64) -> 
         read,
         event,
         max_period,
+        scaled_period: scaled_periods(spec, points, times),
     }
+}
+
+/// Per task, its fixed period × the last passing period scale, × the
+/// safety (`times`), down to the design grid; `None` for a background
+/// task, a task without a fixed period, or when no scale passed.
+fn scaled_periods(
+    spec: &Spec,
+    points: &[Point],
+    times: impl Fn(Nanos) -> Nanos,
+) -> Vec<Option<Nanos>> {
+    let k = match scale_edge(points).last_pass {
+        Some(Point {
+            variation: Variation::Scale(k),
+            ..
+        }) => Some(*k),
+        _ => None,
+    };
+    spec.tasks
+        .iter()
+        .map(|t| {
+            let p = t
+                .fixed_period()
+                .filter(|_| t.server != Server::Background)?;
+            // Rounded as `scaled` rounds the flown period, then down.
+            let q = times((p as f64 * k?).round() as Nanos);
+            Some(q - q % spec.resolution.max(1))
+        })
+        .collect()
 }
 
 /// Per chain, the limits one anchor's bounds (`of`) give.

@@ -97,7 +97,8 @@ pub struct FlyArgs {
     pub write_limits: Option<PathBuf>,
     /// With --write-limits: free the period of every guaranteed periodic
     /// task on a chain (a range up to the largest from-event limit of its
-    /// chains), so that `rtpipe design` can choose them; other tasks keep
+    /// chains, and no further than its period × the last period scale
+    /// that flew), so that `rtpipe design` can choose them; other tasks keep
     /// their fixed periods, data-triggered ones their triggers. With
     /// `--free-periods=A,B` only tasks A and B (each such a task).
     #[arg(

@@ -108,7 +108,9 @@ fn limits_text(spec: &Spec, d: &Derived) -> String {
 /// The spec with every derived limit (see `--write-limits`); the periods
 /// of the tasks in `free` ([`freed`]) become ranges up to the largest
 /// from-event limit of their chains (so that no fixed period elsewhere, a
-/// housekeeping task's say, sets their ceiling).
+/// housekeeping task's say, sets their ceiling), and no further than the
+/// longest period of the task the scale sweep flew and passed
+/// ([`Derived::scaled_period`]): a longer one was never flown.
 fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: &[bool]) -> Spec {
     let mut out = spec.clone();
     for ((ch, l), e) in out.chains.iter_mut().zip(&d.read).zip(&d.event) {
@@ -128,7 +130,8 @@ fn with_limits(spec: &Spec, s: &Setup, d: &Derived, free: &[bool]) -> Spec {
             .zip(&d.event)
             .filter(|(c, _)| c.path.contains(&i))
             .filter_map(|(_, e)| e.0.max(e.1))
-            .max();
+            .max()
+            .map(|m| d.scaled_period[i].map_or(m, |flown| m.min(flown)));
         if let (true, Some(max)) = (free[i], cap) {
             let max = max - max % spec.resolution.max(1);
             t.period = rtpipe_model::PeriodSpec::Range {

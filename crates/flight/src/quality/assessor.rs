@@ -3,7 +3,7 @@
 use super::envelope::{Envelope, Excursions};
 use super::smoothness::Smoothness;
 use super::steps::{step_end, step_holds, steps, stick_changes};
-use super::{secs, Axis, ErrorStats, FlightQuality, CLIMB_S};
+use super::{secs, Axis, ErrorStats, FlightQuality, HoverTracking, CLIMB_S};
 use crate::radio::Mission;
 use crate::trace::TracePoint;
 
@@ -71,6 +71,11 @@ pub struct Assessor {
     crashed_s: Option<f64>,
     end_s: f64,
     attitude: Running,
+    /// The tracked roll and pitch error in the hover.
+    tracking: [Running; 2],
+    /// The mission flies in turbulence: the hover's tracked error widens
+    /// the steps' settling band (in calm air it is the loop's own).
+    turbulent: bool,
     altitude: Running,
     position: Running,
     smoothness: Smoothness,
@@ -121,6 +126,8 @@ impl Assessor {
             crashed_s: None,
             end_s: 0.0,
             attitude: Running::default(),
+            tracking: [Running::default(); 2],
+            turbulent: mission.world.turbulence != crate::wind::Intensity::None,
             altitude: Running::default(),
             position: Running::default(),
             smoothness: Smoothness::default(),
@@ -255,6 +262,8 @@ impl Assessor {
             return;
         }
         self.attitude.push(attitude_error_deg(p));
+        self.tracking[0].push((p.est.roll - p.sp.roll).to_degrees());
+        self.tracking[1].push((p.est.pitch - p.sp.pitch).to_degrees());
         self.smoothness.push(secs(p), p, HOVER_GAP_S);
         self.altitude
             .push(p.pos.z - p.alt_target.unwrap_or(p.pos.z));
@@ -270,6 +279,15 @@ impl Assessor {
             _ => 0.0,
         };
         let crashed = self.crashed_s.is_some();
+        let hover_tracking = HoverTracking {
+            roll_deg: self.tracking[0].stats().rms,
+            pitch_deg: self.tracking[1].stats().rms,
+        };
+        let floor = if self.turbulent {
+            hover_tracking
+        } else {
+            HoverTracking::default()
+        };
         FlightQuality {
             crashed,
             crashed_s: self.crashed_s,
@@ -281,7 +299,8 @@ impl Assessor {
             oscillation_dps: self.smoothness.oscillation_dps(),
             motor_variation_per_s: self.smoothness.motor_variation_per_s(),
             step_tracking_deg: self.step_tracking.stats(),
-            steps: steps(&self.kept, &self.changes),
+            hover_tracking_deg: hover_tracking,
+            steps: steps(&self.kept, &self.changes, floor),
             saturation_s: dt * self.saturated as f64,
             airborne_s: dt * self.airborne as f64,
             landed_s: if crashed { None } else { self.resting_since },

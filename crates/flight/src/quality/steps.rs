@@ -77,31 +77,55 @@ pub(super) fn step_holds(changes: &[(f64, Axis, f64)], settle_s: f64) -> Vec<(f6
         .collect()
 }
 
-pub(super) fn steps(trace: &[TracePoint], changes: &[(f64, Axis, f64)]) -> Vec<Step> {
+/// A step's settling band as a fraction of the step: [`STEP_BAND`] of the
+/// step from `start` to `to`, widened by `floor_deg`, the tracked error the
+/// same loop showed holding its hover in the same world (see
+/// [`super::HoverTracking`]). A step of no size keeps the plain fraction.
+pub fn settling_band(start: f64, to: f64, floor_deg: f64) -> f64 {
+    let span = (to - start).abs();
+    if span > 0.0 {
+        STEP_BAND + floor_deg / span
+    } else {
+        STEP_BAND
+    }
+}
+
+/// The settling band of a step, as a fraction of the step: ±5 %.
+pub const STEP_BAND: f64 = 0.05;
+
+pub(super) fn steps(
+    trace: &[TracePoint],
+    changes: &[(f64, Axis, f64)],
+    floor: super::HoverTracking,
+) -> Vec<Step> {
     let mut out = Vec::new();
     for (k, t, axis, to) in away_from_level(changes) {
         let end = step_end(changes, k);
         let judge = |est: bool| {
             let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
             if axis == Axis::Yaw {
-                return heading_response(trace, signal, t, end, to, 0.05);
+                return (heading_response(trace, signal, t, end, to, STEP_BAND), 0.0);
             }
             // From where the response starts, not from level: a gust may
             // have tilted the vehicle when the stick moved.
             let start = trace.iter().find(|p| secs(p) >= t).map_or(0.0, &signal);
-            step_response(trace, signal, t, end, start, to, 0.05)
+            let band = settling_band(start, to, floor.of(axis));
+            let response = step_response(trace, signal, t, end, start, to, band);
+            (response, band * (to - start).abs())
         };
         let at_end = trace
             .iter()
             .take_while(|p| secs(p) < end)
             .last()
             .map_or(f64::NAN, |p| angle(axis, &p.euler));
+        let tracked = judge(true);
         out.push(Step {
             axis,
             at_s: t,
             to_deg: to,
-            tracked: judge(true),
-            truth: judge(false),
+            tracked: tracked.0,
+            truth: judge(false).0,
+            band_deg: tracked.1,
             drift_deg: crate::math::angle_diff_deg(at_end, to),
         });
     }
