@@ -18,6 +18,7 @@ pub use busy::{
     level_response, level_response_windows, level_response_within, response_time,
     response_time_jitter, OwnJobs, MAX_BUSY_JOBS,
 };
+pub(crate) use slack::may_run_in_slack;
 
 /// Timing facts of one task that the latency analysis builds on.
 #[derive(Debug, Clone, PartialEq)]
@@ -60,7 +61,9 @@ pub struct TaskTiming {
     /// (its completion), at most `job_response_time`: under fixed priority
     /// the interference of releases after the start, without the job's
     /// own release jitter, switch in and ceiling blocking (all before the
-    /// start, `fp_start_to_finish`); under EDF from Spuri's `w_i(0)`
+    /// start, `fp_start_to_finish`; for a sporadic server that may wait
+    /// for its budget after its start, the busy window of its CPU from the
+    /// start, `slack`); under EDF from Spuri's `w_i(0)`
     /// ([`crate::edf::start_to_finish`]), where a job's response is mostly waiting
     /// to start. docs/analysis.md.
     pub read_to_publish: Option<Nanos>,
@@ -457,7 +460,7 @@ fn narrow_slack_read_to_publish(levels: &Levels, responses: &mut [Responses]) {
         return;
     }
     for i in 0..responses.len() {
-        if responses[i].2.is_none() || !slack::may_run_in_slack(levels, i) {
+        if responses[i].2.is_none() || !may_run_in_slack(levels.spec, i) {
             continue;
         }
         if let Some(w) = slack::slack_start_to_finish(levels, i, responses) {

@@ -247,6 +247,11 @@ fn a_sporadic_server_waits_for_its_budget_in_slack() {
     assert_eq!(rep.timing[1].job_response_time, Some(10 * MS));
     assert_eq!(rep.timing[1].read_to_publish, Some(4 * MS));
     assert_eq!(bound(&rep, Metric::Reaction, Anchor::Read), Some(4 * MS));
+    // The design's relaxation at this point bounds W from below by the
+    // job's own demand (it has no other task's response time at hand).
+    let periods: Vec<Nanos> = spec.tasks.iter().filter_map(|t| t.fixed_period()).collect();
+    let relaxed = rtpipe_analysis::relax::relax(&spec, &periods, &periods, &[], true);
+    assert_eq!(relaxed.read_to_publish[1], Some(2 * MS));
     let cfg = rtpipe_sim::search::SearchConfig {
         restarts: 6,
         steps: 200,

@@ -17,13 +17,12 @@
 
 use super::{inherited_carry_in, interference, outranks, period_or_max, Levels, Responses};
 use rtpipe_model::policy::Budget;
-use rtpipe_model::{Nanos, Server};
+use rtpipe_model::{Nanos, Server, Spec};
 
 /// Task `i` is a sporadic server that may run in slack (out of budget)
 /// with a job pending: a Main VCPU under a sporadic-server policy whose
 /// budget need not be whole at a release ([`super::fp_start_after`]).
-pub(super) fn may_run_in_slack(levels: &Levels, i: usize) -> bool {
-    let spec = levels.spec;
+pub(crate) fn may_run_in_slack(spec: &Spec, i: usize) -> bool {
     spec.policy().budget(spec.tasks[i].server) == Some(Budget::Sporadic)
         && super::fp_start_after(spec, i).is_none()
 }
@@ -40,8 +39,9 @@ pub(super) fn may_run_in_slack(levels: &Levels, i: usize) -> bool {
 /// any other task (below i, or a sporadic server that may itself run in
 /// slack beyond its budget) may have jobs pending at the start, each of
 /// which completes within `R_j` of its nominal release, so the jobs that
-/// run in the window are released in `(s − R_j, s + w)`: `c_j = x_j`, `Q_j
-/// = R_j` (the carry-in of Bertogna and Cirinei 2007, with demands). The
+/// run in the window are released in `(s − R_j, s + w)`: `c_j = max(x_j,
+/// I_j)`, `Q_j = R_j` (the carry-in of Bertogna and Cirinei 2007, with
+/// whole demands, and never below `hp_load`'s term). The
 /// job's own blocking is work of a lower task in that window, already
 /// counted. `None` when the argument does not apply: kernel overheads
 /// (switches at budget exhaustions no job's count holds), a background
@@ -66,7 +66,7 @@ pub(super) fn slack_start_to_finish(
             return None;
         }
         let above = outranks(j, levels.top[j], i, levels.prio[i]);
-        load.push(if above && !may_run_in_slack(levels, j) {
+        load.push(if above && !may_run_in_slack(spec, j) {
             if levels.prio[j] > levels.prio[i] {
                 let (work, jitter) = inherited_carry_in(levels, j)?;
                 (work, period_or_max(o), jitter)
@@ -74,8 +74,12 @@ pub(super) fn slack_start_to_finish(
                 (interference(o), period_or_max(o), o.jitter)
             }
         } else {
+            // At least the term the task above brings without slack, so
+            // that the window never falls below the one of a job that
+            // cannot wait for its budget (release jitter only adds).
             let (budget_r, job_r, _) = responses[j];
-            (o.demand(), period_or_max(o), budget_r?.max(job_r?))
+            let work = o.demand().max(interference(o));
+            (work, period_or_max(o), budget_r?.max(job_r?))
         });
     }
     super::busy_window(spec.tasks[i].demand(), &load)
