@@ -396,6 +396,9 @@ fn rta_lower_bounds(
             &hp,
         )
         .map_or(rj, |w| w.min(rj)),
+        // A sporadic server that waits in slack: the analysis narrows R to
+        // a busy window from the read (`sched::slack`), at least its demand.
+        None if crate::sched::may_run_in_slack(spec, i) => t.demand().min(rj),
         None => rj,
     });
     (r(t.budget()), rj, rw)

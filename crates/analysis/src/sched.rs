@@ -13,10 +13,12 @@ use edf_times::{edf_read_to_publish, edf_response_times, server_period};
 
 mod busy;
 pub(crate) use busy::busy_window;
+mod slack;
 pub use busy::{
     level_response, level_response_windows, level_response_within, response_time,
     response_time_jitter, OwnJobs, MAX_BUSY_JOBS,
 };
+pub(crate) use slack::may_run_in_slack;
 
 /// Timing facts of one task that the latency analysis builds on.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,7 +61,9 @@ pub struct TaskTiming {
     /// (its completion), at most `job_response_time`: under fixed priority
     /// the interference of releases after the start, without the job's
     /// own release jitter, switch in and ceiling blocking (all before the
-    /// start, `fp_start_to_finish`); under EDF from Spuri's `w_i(0)`
+    /// start, `fp_start_to_finish`; for a sporadic server that may wait
+    /// for its budget after its start, the busy window of its CPU from the
+    /// start, `slack`); under EDF from Spuri's `w_i(0)`
     /// ([`crate::edf::start_to_finish`]), where a job's response is mostly waiting
     /// to start. docs/analysis.md.
     pub read_to_publish: Option<Nanos>,
@@ -429,9 +433,10 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
 fn all_responses(levels: &Levels) -> (Vec<Responses>, Vec<Option<crate::events::EventTiming>>) {
     let spec = levels.spec;
     if !spec.event_triggered() {
-        let responses = (0..spec.tasks.len())
+        let mut responses: Vec<Responses> = (0..spec.tasks.len())
             .map(|i| response_times(levels, i))
             .collect();
+        narrow_slack_read_to_publish(levels, &mut responses);
         return (responses, vec![None; spec.tasks.len()]);
     }
     match spec.policy().events {
@@ -445,6 +450,24 @@ fn all_responses(levels: &Levels) -> (Vec<Responses>, Vec<Option<crate::events::
 
 /// A task's (budget, job, read-to-publish) response times.
 type Responses = (Option<Nanos>, Option<Nanos>, Option<Nanos>);
+
+/// Under fixed priority, the W of each sporadic server that may wait for
+/// its budget after its start (`fp_start_to_finish` gave `R`), narrowed to
+/// the busy window of its CPU from the start ([`slack::slack_start_to_finish`]),
+/// which needs every other task's response time, hence a second pass.
+fn narrow_slack_read_to_publish(levels: &Levels, responses: &mut [Responses]) {
+    if levels.spec.policy().response != ResponseAnalysis::Rta {
+        return;
+    }
+    for i in 0..responses.len() {
+        if responses[i].2.is_none() || !may_run_in_slack(levels.spec, i) {
+            continue;
+        }
+        if let Some(w) = slack::slack_start_to_finish(levels, i, responses) {
+            responses[i].2 = responses[i].2.map(|r| r.min(w));
+        }
+    }
+}
 
 /// The figures of a spec with threads or data-triggered tasks
 /// ([`crate::events`]), with this module's fixed-priority analysis for

@@ -204,3 +204,142 @@ fn a_stage_reached_at_its_read_pays_w_not_r() {
     assert!(found * 10 >= 18_500 * US * 9, "{r}");
     eprintln!("{r}");
 }
+
+/// h (1 ms every 5 ms) above s, a Main VCPU (2 ms every 10 ms, released
+/// up to 7 ms late) above l (1 ms every 20 ms), one CPU, rate-monotonic.
+/// A job of s released on time just after a late one finds its budget
+/// still out (it comes back 7 ms after the late release) and may wait for
+/// it after its read, so `R_s` = 7 + 3 = 10 ms was its `W` too. It waits
+/// in slack, where it runs whenever nothing else is ready: from its read
+/// to its publish the CPU runs s, h or l, and the work that can run
+/// there is 2 ms of its own, one h job (none is pending at the read) and
+/// one l job: `W_s` = 4 ms (docs/analysis.md, "From the read to the
+/// publish of a sporadic server").
+const SLACK: &str = r#"
+[system]
+name = "slack"
+time_unit = "ms"
+[channels.mem]
+bandwidth = 1
+overhead = 0
+[tasks.h]
+exec = 1
+period = 5
+server = "none"
+[tasks.s]
+exec = 2
+exec_min = 2
+period = 10
+jitter = 7
+server = "main"
+[tasks.l]
+exec = 1
+period = 20
+server = "none"
+[[chain]]
+path = ["s"]
+"#;
+
+#[test]
+fn a_sporadic_server_waits_for_its_budget_in_slack() {
+    let spec = Spec::parse("slack.toml", SLACK).unwrap_or_else(|e| panic!("{e}"));
+    let rep = analyze(&spec);
+    assert_eq!(rep.timing[1].job_response_time, Some(10 * MS));
+    assert_eq!(rep.timing[1].read_to_publish, Some(4 * MS));
+    assert_eq!(bound(&rep, Metric::Reaction, Anchor::Read), Some(4 * MS));
+    // The design's relaxation at this point bounds W from below by the
+    // job's own demand (it has no other task's response time at hand).
+    let periods: Vec<Nanos> = spec.tasks.iter().filter_map(|t| t.fixed_period()).collect();
+    let relaxed = rtpipe_analysis::relax::relax(&spec, &periods, &periods, &[], true);
+    assert_eq!(relaxed.read_to_publish[1], Some(2 * MS));
+    let cfg = rtpipe_sim::search::SearchConfig {
+        restarts: 6,
+        steps: 200,
+        anchor: Anchor::Read,
+        ..rtpipe_sim::search::SearchConfig::new(0, Metric::Reaction, 1_000 * MS)
+    };
+    let r = rtpipe_sim::search::search(&spec, &cfg).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!r.exceeds_sound(), "{r}");
+    eprintln!("{r}");
+}
+
+/// A random fixed-priority system with servers of every kind, budgets
+/// below demands and release jitter on about half its tasks.
+fn served_system(seed: u64) -> Spec {
+    use rtpipe_model::gen::{random_system, GenConfig, Rng};
+    let mut r = Rng::new(seed ^ 0x51AC);
+    let gen = GenConfig {
+        tasks: r.range(2, 8) as usize,
+        cpus: r.range(1, 2) as u32,
+        utilization: 0.3 + 0.6 * r.unit(),
+        mixed_servers: true,
+        ..GenConfig::default()
+    };
+    let mut spec = random_system(seed, &gen);
+    spec.schedulability = rtpipe_model::SchedTest::Rta;
+    for t in spec.tasks.iter_mut() {
+        let Some(p) = t.fixed_period() else { continue };
+        if r.chance(0.5) {
+            t.jitter = r.range(0, (p / 3) as u64) as Nanos;
+        }
+    }
+    let text = rtpipe_model::to_toml(&spec);
+    Spec::parse("served.toml", &text).unwrap_or_else(|e| panic!("seed {seed}: {e}\n{text}"))
+}
+
+/// No job of a sporadic server that may wait for its budget after its
+/// read (`W` below `R` only by the slack argument) publishes later than
+/// `W` after its read, on random systems under every jitter model, random
+/// phasings and demands (`RTPIPE_SLACK_SYSTEMS`, default 400).
+#[test]
+fn sporadic_servers_publish_within_w_of_their_read() {
+    let n = rtpipe_testkit::env_u64("RTPIPE_SLACK_SYSTEMS", 400);
+    let (mut checked, mut narrowed, mut reached) = (0u64, 0u64, 0u64);
+    for seed in 0..n {
+        let spec = served_system(seed);
+        let rep = analyze(&spec);
+        let w: Vec<Option<Nanos>> = rep.timing.iter().map(|t| t.read_to_publish).collect();
+        // The Main VCPUs whose W the slack argument narrowed.
+        let slack: Vec<bool> = spec
+            .tasks
+            .iter()
+            .zip(&rep.timing)
+            .map(|(t, tm)| {
+                t.server == rtpipe_model::Server::Main
+                    && (t.jitter > 0 || t.demand() > t.budget())
+                    && tm.read_to_publish < tm.job_response_time
+            })
+            .collect();
+        narrowed += slack.iter().filter(|&&s| s).count() as u64;
+        let mut worst = vec![0; spec.tasks.len()];
+        for (k, jitter) in [Jitter::Squeezed, Jitter::Extremes, Jitter::Uniform]
+            .into_iter()
+            .enumerate()
+        {
+            let cfg = SimConfig {
+                seed: seed * 7 + k as u64,
+                phasing: Phasing::Random,
+                exec: [ExecModel::Worst, ExecModel::Extremes, ExecModel::Uniform][k],
+                jitter,
+                log_jobs: true,
+                ..SimConfig::new(3_000 * MS)
+            };
+            let res = simulate(&spec, &cfg).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+            for j in res.jobs {
+                worst[j.task] = worst[j.task].max(j.finish - j.read);
+            }
+        }
+        for (i, seen) in worst.into_iter().enumerate() {
+            let Some(w) = w[i] else { continue };
+            checked += 1;
+            reached += u64::from(seen == w && slack[i]);
+            assert!(
+                seen <= w,
+                "seed {seed}: task `{}` published {seen} ns after its read, W = {w}",
+                spec.tasks[i].name
+            );
+        }
+    }
+    eprintln!("{n} systems: {checked} tasks checked, {narrowed} Main VCPUs with a slack W below R, {reached} of them at W");
+    assert!(checked > 0 && narrowed > 0);
+}
