@@ -206,6 +206,8 @@ struct BoxSearch<'r, 'a> {
     first_only: bool,
     /// The check beyond the analysis a design must pass, if any.
     gate: Option<Gate>,
+    /// The next pair of chain tasks to trade periods (`Examiner::trade`).
+    trades: usize,
 }
 
 impl<'r, 'a> BoxSearch<'r, 'a> {
@@ -215,6 +217,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             effort,
             first_only: false,
             gate: p.opts.accept.clone().map(Gate::new),
+            trades: 0,
         }
     }
 
@@ -339,6 +342,15 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
             // And from the relaxation's least point of the box.
             if let Some(found) = self.ex.guided(&node, f.incumbent(), self.effort) {
+                publish(self.ex.p, &found.0, found.2, node.bound);
+                f.best = Some(found);
+            }
+            // And by trading periods along a chain from the incumbent.
+            let traded = match (&f.best, self.first_only) {
+                (Some(best), false) => self.ex.trade(best, &mut self.trades, self.effort),
+                _ => None,
+            };
+            if let Some(found) = traded {
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }

@@ -56,6 +56,7 @@ mod rta;
 mod runner;
 mod solve;
 mod sound;
+mod trade;
 
 pub use api::{
     utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Judgement,
@@ -335,3 +336,5 @@ mod tests;
 mod tests_encoding;
 #[cfg(test)]
 mod tests_split;
+#[cfg(test)]
+mod tests_trade;
