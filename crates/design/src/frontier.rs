@@ -16,6 +16,7 @@ use crate::bnb::{beaten, Branching, Examiner, Fate};
 use crate::budget::Budget;
 use crate::gate::{Gate, Verdict};
 use crate::problem::{Group, Problem};
+use crate::trade::Trades;
 use rayon::prelude::*;
 use rtpipe_analysis::Report;
 use rtpipe_model::Spec;
@@ -206,8 +207,8 @@ struct BoxSearch<'r, 'a> {
     first_only: bool,
     /// The check beyond the analysis a design must pass, if any.
     gate: Option<Gate>,
-    /// The next pair of chain tasks to trade periods (`Examiner::trade`).
-    trades: usize,
+    /// Where trading periods along the chains stands (`Examiner::trade`).
+    trades: Trades,
 }
 
 impl<'r, 'a> BoxSearch<'r, 'a> {
@@ -217,7 +218,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             effort,
             first_only: false,
             gate: p.opts.accept.clone().map(Gate::new),
-            trades: 0,
+            trades: Trades::default(),
         }
     }
 

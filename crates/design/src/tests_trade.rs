@@ -11,6 +11,7 @@ use crate::domain::domains;
 use crate::heuristic::descent;
 use crate::problem::Problem;
 use crate::tests_split::{brute_force, problem};
+use crate::trade::Trades;
 use crate::{Method, Mode};
 use rtpipe_model::Spec;
 use std::path::Path;
@@ -50,8 +51,8 @@ fn trade_until_stuck(ex: &Examiner, start: &[u32], opts: &Options) -> Vec<f64> {
     assert!(ok, "the start verifies");
     let u = utilization(&spec);
     let mut best = (spec, report, u);
-    let (mut cursor, mut found) = (0, Vec::new());
-    while let Some(next) = ex.trade(&best, &mut cursor, &budget) {
+    let (mut state, mut found) = (Trades::default(), Vec::new());
+    while let Some(next) = ex.trade(&best, &mut state, &budget) {
         let (_, _, ok) = ex.verify(&ex.indices(&next.0));
         assert!(ok, "a traded design that does not verify");
         assert!(next.2 < best.2, "a trade that does not lower U");

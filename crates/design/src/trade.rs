@@ -28,36 +28,51 @@ const STEP_DOWN: f64 = 0.8;
 /// Steps down at most before a trial gives up.
 const MAX_STEPS: usize = 24;
 
+/// Where the trades stand: the next pair to try, and how many pairs in a
+/// row found nothing from the incumbent of U `at`. Once every pair has
+/// failed from one incumbent, trading waits for another (a dive's or a
+/// guided design), instead of repeating analyses that cannot succeed.
+#[derive(Debug, Default)]
+pub(crate) struct Trades {
+    cursor: usize,
+    fruitless: usize,
+    at: f64,
+}
+
 impl Examiner<'_, '_> {
     /// Up to [`TRADES_PER_CALL`] trades from the incumbent `best`, the
-    /// `cursor`-th pair (of [`Examiner::trade_pairs`], cyclically) first;
-    /// advances `cursor`. A verified design better than `best`, if found.
+    /// next pair of [`Examiner::trade_pairs`] (cyclically) first. A
+    /// verified design better than `best`, if found.
     pub(crate) fn trade(
         &self,
         best: &(Spec, Report, f64),
-        cursor: &mut usize,
+        state: &mut Trades,
         budget: &Budget,
     ) -> Option<(Spec, Report, f64)> {
         if self.p.spec.harmonic || self.p.spec.event_triggered() {
             return None;
         }
+        if best.2 != state.at {
+            (state.at, state.fruitless) = (best.2, 0);
+        }
         let mut k = self.indices(&best.0);
-        if !self.verify(&k).2 {
+        let pairs = self.trade_pairs(&k);
+        if state.fruitless >= pairs.len() || !self.verify(&k).2 {
             return None;
         }
-        let pairs = self.trade_pairs(&k);
         let mut u = self.bound(&k);
         let mut better = false;
         for _ in 0..TRADES_PER_CALL.min(pairs.len()) {
             if budget.out_of_time() {
                 break;
             }
-            let (a, b) = pairs[*cursor % pairs.len()];
-            *cursor += 1;
+            let (a, b) = pairs[state.cursor % pairs.len()];
+            state.cursor += 1;
+            state.fruitless += 1;
             if let Some(t) = self.trade_one(&k, (a, b), budget) {
                 let v = self.bound(&t);
                 if v < u * (1.0 - 1e-9) {
-                    (k, u, better) = (t, v, true);
+                    (k, u, better, state.fruitless) = (t, v, true, 0);
                 }
             }
         }
