@@ -840,7 +840,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
     /// The longest period index for task i found by bisection over the
     /// values it may move to (under `harmonic`, those harmonic with every
     /// other period of `k`) with the design still verified; `k` verifies.
-    fn lengthen(&self, k: &mut [u32], i: usize) -> u32 {
+    pub(crate) fn lengthen(&self, k: &mut [u32], i: usize) -> u32 {
         let from = k[i];
         let ups = self
             .p

@@ -16,6 +16,7 @@ use crate::bnb::{beaten, Branching, Examiner, Fate};
 use crate::budget::Budget;
 use crate::gate::{Gate, Verdict};
 use crate::problem::{Group, Problem};
+use crate::trade::Trades;
 use rayon::prelude::*;
 use rtpipe_analysis::Report;
 use rtpipe_model::Spec;
@@ -206,6 +207,8 @@ struct BoxSearch<'r, 'a> {
     first_only: bool,
     /// The check beyond the analysis a design must pass, if any.
     gate: Option<Gate>,
+    /// Where trading periods along the chains stands (`Examiner::trade`).
+    trades: Trades,
 }
 
 impl<'r, 'a> BoxSearch<'r, 'a> {
@@ -215,6 +218,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             effort,
             first_only: false,
             gate: p.opts.accept.clone().map(Gate::new),
+            trades: Trades::default(),
         }
     }
 
@@ -339,6 +343,15 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             }
             // And from the relaxation's least point of the box.
             if let Some(found) = self.ex.guided(&node, f.incumbent(), self.effort) {
+                publish(self.ex.p, &found.0, found.2, node.bound);
+                f.best = Some(found);
+            }
+            // And by trading periods along a chain from the incumbent.
+            let traded = match (&f.best, self.first_only) {
+                (Some(best), false) => self.ex.trade(best, &mut self.trades, self.effort),
+                _ => None,
+            };
+            if let Some(found) = traded {
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }

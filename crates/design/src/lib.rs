@@ -13,8 +13,9 @@
 //! response-time levels, tangent points) and the budget (`budget`: work,
 //! time, iterations). The box search: `boxes` (the whole design) runs
 //! `frontier` (the search's loop, open boxes best bound first, halves
-//! examined in parallel) over `bnb` (the examination of one box), which
-//! uses `axis` (boxes of period values) and `joint` (bounds from the chain
+//! examined in parallel) over `bnb` (the examination of one box) and
+//! `trade` (better incumbents by trading periods along a chain), which
+//! use `axis` (boxes of period values) and `joint` (bounds from the chain
 //! limits). The MILP: `runner` (the loop of master
 //! solves and cuts) runs `solve` (one master solve) on `master` (the master
 //! problem assembled from `model`, its variables and switches, and the
@@ -28,8 +29,8 @@
 
 // Layers, bottom up; a module uses only modules of lower layers:
 // lp < api, linear < domain < problem < budget, events, model < paper, rta,
-// sound < learnt < master < solve < heuristic, axis, joint < bnb < frontier
-// < explain < boxes, runner < robust < lib.rs (`design`).
+// sound < learnt < master < solve < heuristic, axis, joint < bnb < trade
+// < frontier < explain < boxes, runner < robust < lib.rs (`design`).
 mod api;
 mod axis;
 mod bnb;
@@ -56,6 +57,7 @@ mod rta;
 mod runner;
 mod solve;
 mod sound;
+mod trade;
 
 pub use api::{
     utilization, Acceptance, Checked, Conflict, DesignError, ErrorKind, Incumbent, Judgement,
@@ -335,3 +337,5 @@ mod tests;
 mod tests_encoding;
 #[cfg(test)]
 mod tests_split;
+#[cfg(test)]
+mod tests_trade;

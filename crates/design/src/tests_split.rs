@@ -25,7 +25,7 @@ fn paper_bounds(spec: &Spec) -> Vec<ChainBounds> {
 
 /// Problem `seed`: 3–5 tasks, one or two CPUs, 1–3 chains, at most 256
 /// choices of periods in all; limits from the generating design's bounds.
-fn problem(seed: u64, mode: Mode) -> Spec {
+pub(crate) fn problem(seed: u64, mode: Mode) -> Spec {
     let mut r = Rng::new(seed ^ 0x5b11_7b0d);
     let tasks = r.range(3, 5) as usize;
     let cfg = DesignGenConfig {
@@ -52,7 +52,7 @@ fn problem(seed: u64, mode: Mode) -> Spec {
 }
 
 /// The least U of a verified point of the whole domain, by enumeration.
-fn brute_force(ex: &Examiner, n: usize) -> Option<f64> {
+pub(crate) fn brute_force(ex: &Examiner, n: usize) -> Option<f64> {
     let mut k = vec![0u32; n];
     let mut best: Option<f64> = None;
     loop {

@@ -134,12 +134,11 @@ fn sound_sums(
             Some((l.reaction?, fresh?))
         };
         let corners = corners(order, pi, ci);
-        e.terms.push(two_pieces(
-            |a, b| at(a, b).map(|x| x.0),
-            (pi, ci),
-            order,
-            &corners,
-        )?);
+        let mut reaction = two_pieces(|a, b| at(a, b).map(|x| x.0), (pi, ci), order, &corners)?;
+        if k > 0 && reach {
+            share_with_previous(&mut reaction, pi, path[k - 1]);
+        }
+        e.terms.push(reaction);
         f.terms.push(two_pieces(
             |a, b| at(a, b).map(|x| x.1),
             (pi, ci),
@@ -154,6 +153,23 @@ fn sound_sums(
         );
     }
     Some((e, f))
+}
+
+/// A reaction term's `T_p + a` piece (a reachability row) shares its
+/// slope with the producer's own producer `prev`: the rows need `p`
+/// distinct (`latency::distinct_passes`), whose reads are then further
+/// apart than `prev`'s publishes, `T_p − R_p + x_p > T_prev + R_prev −
+/// x_min(prev)`, so `T_p > T_prev` (R ≥ x ≥ x_min), and where the piece
+/// applies `T_p ≥ (T_p + T_prev) / 2`. Where `p` is not distinct the
+/// analysis has no such row and the term is at least its `T_c` piece.
+/// Without it a wide box lets the bound shorten a chain's middle stage
+/// alone, where the analysis would need its producers shorter too.
+fn share_with_previous(pieces: &mut [Piece], p: usize, prev: usize) {
+    for piece in pieces {
+        if prev != p && piece.slopes == [(p, 1.0)] {
+            piece.slopes = vec![(p, 0.5), (prev, 0.5)];
+        }
+    }
 }
 
 /// The four corners (T_p, T_c) of a link's rectangle.

@@ -1,0 +1,120 @@
+//! Trading periods along a chain (`Examiner::trade`) from a verified
+//! design: every answer verifies, is better than the design it starts
+//! from and never below the brute-force optimum; and it lowers U on
+//! small generated problems from their worst verified design and on
+//! E2EEvaluation's 50-task problem from the local search's design.
+
+use crate::api::{utilization, Options};
+use crate::bnb::Examiner;
+use crate::budget::Budget;
+use crate::domain::domains;
+use crate::heuristic::descent;
+use crate::problem::Problem;
+use crate::tests_split::{brute_force, problem};
+use crate::trade::Trades;
+use crate::{Method, Mode};
+use rtpipe_model::Spec;
+use std::path::Path;
+
+/// The verified point of the whole domain with the largest U, by
+/// enumeration (the worst start for a trade).
+fn worst_verified(ex: &Examiner, n: usize) -> Option<Vec<u32>> {
+    let mut k = vec![0u32; n];
+    let mut worst: Option<(f64, Vec<u32>)> = None;
+    loop {
+        let (spec, _, ok) = ex.verify(&k);
+        let u = utilization(&spec);
+        if ok && worst.as_ref().is_none_or(|w| u > w.0) {
+            worst = Some((u, k.clone()));
+        }
+        // The next assignment, odometer-wise.
+        let mut i = 0;
+        loop {
+            if i == n {
+                return worst.map(|w| w.1);
+            }
+            k[i] += 1;
+            if k[i] < ex.axes[i].len() {
+                break;
+            }
+            k[i] = 0;
+            i += 1;
+        }
+    }
+}
+
+/// Trades from `start` until one call finds nothing better; the U of each
+/// answer, in order.
+fn trade_until_stuck(ex: &Examiner, start: &[u32], opts: &Options) -> Vec<f64> {
+    let budget = Budget::new(opts, std::time::Instant::now());
+    let (spec, report, ok) = ex.verify(start);
+    assert!(ok, "the start verifies");
+    let u = utilization(&spec);
+    let mut best = (spec, report, u);
+    let (mut state, mut found) = (Trades::default(), Vec::new());
+    while let Some(next) = ex.trade(&best, &mut state, &budget) {
+        let (_, _, ok) = ex.verify(&ex.indices(&next.0));
+        assert!(ok, "a traded design that does not verify");
+        assert!(next.2 < best.2, "a trade that does not lower U");
+        found.push(next.2);
+        best = next;
+    }
+    found
+}
+
+#[test]
+fn trades_verify_and_never_go_below_the_optimum() {
+    let mut improved = 0;
+    for seed in 0..300u64 {
+        let mode = if seed % 2 == 0 {
+            Mode::Sound
+        } else {
+            Mode::Paper
+        };
+        let spec = problem(seed, mode);
+        let opts = Options {
+            mode,
+            ..Options::default()
+        };
+        let Ok(d) = domains(&spec) else { continue };
+        let p = Problem::new(&spec, &opts, d, Method::Boxes);
+        let groups = p.all_groups();
+        let ex = Examiner::new(&p, &groups);
+        let n = ex.axes.len();
+        let Some(start) = worst_verified(&ex, n) else {
+            continue;
+        };
+        let best = brute_force(&ex, n).expect("a verified point");
+        let found = trade_until_stuck(&ex, &start, &opts);
+        if let Some(&u) = found.last() {
+            assert!(
+                u >= best * (1.0 - 1e-9),
+                "seed {seed} {mode:?}: traded {u} below the optimum {best}"
+            );
+            improved += 1;
+        }
+    }
+    assert!(improved >= 30, "trades improved only {improved} designs");
+}
+
+#[test]
+fn trades_improve_the_local_search_design_of_a_waters_task_set() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/e2eeval-50-1.toml");
+    let spec = Spec::load(&path).expect("the fixture loads");
+    let opts = Options {
+        mode: Mode::Sound,
+        ..Options::default()
+    };
+    let d = domains(&spec).expect("the fixture's domains");
+    let p = Problem::new(&spec, &opts, d, Method::Boxes);
+    let groups = p.all_groups();
+    let ex = Examiner::new(&p, &groups);
+    let budget = Budget::new(&opts, std::time::Instant::now());
+    let (spec, _, u) = descent(&p, &budget).expect("the local search's design");
+    let found = trade_until_stuck(&ex, &ex.indices(&spec), &opts);
+    let traded = found.last().copied().unwrap_or(u);
+    assert!(
+        traded < u * 0.99,
+        "trades lowered U only from {u} to {traded}"
+    );
+}
