@@ -13,7 +13,7 @@ use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
 mod events;
 mod setup;
-use setup::{link_servers, offsets_of, periods_of, task_sims, Sides};
+use setup::{link_servers, mark_sides, offsets_of, periods_of, release_heap, task_sims, Sides};
 
 /// What the simulator tells the code that runs task bodies: a job reads, a
 /// job publishes. Called in simulated-time order, at the instants of the
@@ -406,35 +406,8 @@ impl<H: Hooks> Sim<H> {
         cpu_ids.dedup();
         let ovh = crate::overheads::Overheads::new(spec, &cpu_ids);
         let event_model = events::Events::new(spec);
-        // LET tasks (per chain, `Spec::communications`): their reads at
-        // releases and publishes at period ends feed the provenance, not
-        // the schedule's instants (`let_comm.rs`).
-        let communications = spec.communications();
-        for (i, ts) in tasks.iter_mut().enumerate() {
-            let served = !ts.servers.is_empty();
-            ts.sides = Sides::of(
-                i,
-                communications[i],
-                served,
-                &prov,
-                &locks,
-                &ovh,
-                &event_model,
-            );
-        }
-        // The release heap keeps task indices in 32 bits (a spec of 2^32
-        // tasks would not fit in memory to begin with).
-        assert!(
-            u32::try_from(tasks.len()).is_ok(),
-            "{} tasks: more than the release heap indexes",
-            tasks.len()
-        );
-        let releases = ReleaseHeap::new(
-            tasks
-                .iter()
-                .enumerate()
-                .map(|(i, ts)| (ts.next_release, i as u32)),
-        );
+        mark_sides(spec, &mut tasks, &prov, &locks, &ovh, &event_model);
+        let releases = release_heap(&tasks);
         let n_cpus = cpu_tasks.len();
         if locks.any()
             && !spec

@@ -172,6 +172,42 @@ pub(super) fn link_servers(tasks: &mut [TaskSim]) {
     }
 }
 
+/// Each task's [`Sides`], from the side tables and the servers linked.
+pub(super) fn mark_sides(
+    spec: &Spec,
+    tasks: &mut [TaskSim],
+    prov: &Provenance,
+    locks: &Locks,
+    ovh: &crate::overheads::Overheads,
+    event_model: &events::Events,
+) {
+    // LET tasks (per chain, `Spec::communications`): their reads at
+    // releases and publishes at period ends feed the provenance, not the
+    // schedule's instants (`let_comm.rs`).
+    let communications = spec.communications();
+    for (i, ts) in tasks.iter_mut().enumerate() {
+        let served = !ts.servers.is_empty();
+        ts.sides = Sides::of(i, communications[i], served, prov, locks, ovh, event_model);
+    }
+}
+
+/// Every task's next release in the release heap.
+pub(super) fn release_heap(tasks: &[TaskSim]) -> ReleaseHeap {
+    // The heap keeps task indices in 32 bits (a spec of 2^32 tasks would
+    // not fit in memory to begin with).
+    assert!(
+        u32::try_from(tasks.len()).is_ok(),
+        "{} tasks: more than the release heap indexes",
+        tasks.len()
+    );
+    ReleaseHeap::new(
+        tasks
+            .iter()
+            .enumerate()
+            .map(|(i, ts)| (ts.next_release, i as u32)),
+    )
+}
+
 /// Which of the per-task side tables (threads, triggers, chains, release
 /// overheads, critical sections, LET) an event of a task must visit: all
 /// false for a plain periodic task. Kept in the task's own state, which
