@@ -39,7 +39,7 @@ impl<H: Hooks> Sim<H> {
         if work == 0 {
             return;
         }
-        let cpu = self.tasks[i].cpu;
+        let cpu = self.tasks[i].cpu as usize;
         self.sync(cpu, t);
         self.ovh.add_kernel(cpu, work);
         self.mark(cpu);
@@ -116,7 +116,8 @@ impl<H: Hooks> Sim<H> {
                     next = t + cap;
                 }
             }
-            if let Some(b) = self.locks.until_boundary(i, job) {
+            let boundary = ts.sides.sections.then(|| self.locks.until_boundary(i, job));
+            if let Some(b) = boundary.flatten() {
                 next = next.min(t + b);
             }
             Some(next)
@@ -156,7 +157,9 @@ impl<H: Hooks> Sim<H> {
             }
             self.refresh(i, t + dt);
         }
-        self.unlock_passed(i, t + dt);
+        if self.tasks[i].sides.sections {
+            self.unlock_passed(i, t + dt);
+        }
         self.record_segment(cpu, i, index, t, dt, slack);
     }
 }

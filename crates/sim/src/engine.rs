@@ -1,6 +1,7 @@
 //! The event loop: releases, the servers' budgets, each CPU's choice of
 //! job, reads and publishes at the instants the model says.
 
+use crate::release_heap::ReleaseHeap;
 use crate::rng::Rng;
 use crate::server::{Cbs, Pibs, Sporadic};
 use crate::*;
@@ -12,7 +13,7 @@ use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
 mod events;
 mod setup;
-use setup::{link_servers, offsets_of, periods_of, task_sims};
+use setup::{link_servers, mark_sides, offsets_of, periods_of, release_heap, task_sims, Sides};
 
 /// What the simulator tells the code that runs task bodies: a job reads, a
 /// job publishes. Called in simulated-time order, at the instants of the
@@ -70,23 +71,38 @@ pub(crate) fn run_until<H: Hooks>(
     if let Some(sink) = rows {
         sim.prov.stream_rows(sink);
     }
-    let mut t = 0;
-    loop {
-        sim.instant(t);
-        if sim.events % PROGRESS_EVENTS == 0 && !progress(t) {
-            return Ok(None);
-        }
-        match sim.next_event(t) {
-            Some(next) if next <= cfg.horizon => t = next,
-            _ => break,
-        }
-    }
+    let Some(t) = event_loop(&mut sim, cfg.horizon, progress) else {
+        return Ok(None);
+    };
     sim.sync_all(t);
     if let Some(seg) = &mut sim.segments {
         // The order the every-CPU scans recorded them in.
         seg.sort_by_key(|s| (s.start, s.cpu));
     }
     Ok(Some(sim.finish()))
+}
+
+/// Every instant up to the horizon; the last instant reached, or `None`
+/// when `progress` ended the run. Never inlined, so that a profiler can
+/// count the event loop alone (`callgrind --toggle-collect`, in
+/// docs/guide/simulate.md), without the set-up and the report.
+#[inline(never)]
+fn event_loop<H: Hooks>(
+    sim: &mut Sim<H>,
+    horizon: Nanos,
+    progress: &mut dyn FnMut(Nanos) -> bool,
+) -> Option<Nanos> {
+    let mut t = 0;
+    loop {
+        sim.instant(t);
+        if sim.events.is_multiple_of(PROGRESS_EVENTS) && !progress(t) {
+            return None;
+        }
+        match sim.next_event(t) {
+            Some(next) if next <= horizon => t = next,
+            _ => return Some(t),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -110,11 +126,11 @@ pub(crate) enum Budget {
     /// `server = "none"` or background: no enforcement.
     Unlimited,
     /// Main VCPU under RM.
-    Sporadic(Sporadic),
+    Sporadic(Box<Sporadic>),
     /// I/O VCPU under RM.
-    Pibs(Pibs),
+    Pibs(Box<Pibs>),
     /// Any server under EDF (SCHED_DEADLINE).
-    Cbs(Cbs),
+    Cbs(Box<Cbs>),
 }
 
 impl Budget {
@@ -182,47 +198,64 @@ pub(crate) struct LetJob {
     pub(crate) period: Nanos,
 }
 
+/// A task's simulation state, laid out for the event loop: what an event
+/// of a plain periodic task reads or writes fills the first four cache
+/// lines (`tests::task_state_fits_four_cache_lines`), in the order a
+/// release, a pick and a completion use it, and the rest (what only
+/// servers, jitter or inheritance need) comes after. In a system of
+/// thousands of tasks each line a task's event touches is a cache miss
+/// (docs/guide/simulate.md).
+#[repr(C, align(64))]
 pub(crate) struct TaskSim {
-    pub(crate) budget: Budget,
-    /// Sporadic servers out of budget may run in slack; others wait.
-    pub(crate) slack_when_empty: bool,
-    pub(crate) period: Nanos,
-    /// D: a job finishing later than this after its nominal release is late.
-    pub(crate) deadline: Nanos,
-    /// J: each job is released in [nominal, nominal + J].
-    pub(crate) jitter: Nanos,
-    /// Where in that window (drawn from `rng` when J > 0).
-    pub(crate) jitter_model: Jitter,
+    // Line 1: a release.
+    pub(crate) next_release: Nanos,
     /// The nominal release of the next job (`next_release` is its actual
     /// one, up to J later).
     pub(crate) next_nominal: Nanos,
-    /// 0 for guaranteed tasks, 1 for background ones.
-    pub(crate) class: u8,
-    /// RM rank (1 = highest); unused under EDF.
-    pub(crate) rank: i64,
-    /// PIBS: the Main VCPU this I/O VCPU serves; while it has a job pending,
-    /// this one runs at its rank (priority inheritance).
-    pub(crate) serves: Option<usize>,
+    pub(crate) period: Nanos,
+    /// J: each job is released in [nominal, nominal + J].
+    pub(crate) jitter: Nanos,
     pub(crate) demand_min: Nanos,
     pub(crate) demand: Nanos,
     pub(crate) rng: Rng,
-    pub(crate) next_release: Nanos,
     pub(crate) next_index: u64,
+    // Line 2: its jobs and its standing among its CPU's contenders.
     /// Released, unfinished jobs; only the front one may have started.
     pub(crate) queue: VecDeque<Job>,
-    /// A release merges into a queued, unstarted job (`events.rs`).
-    pub(crate) merges: bool,
-    pub(crate) stats: TaskStats,
-    /// Dense CPU index.
-    pub(crate) cpu: usize,
-    /// The I/O VCPUs that serve this task (their priority follows whether
-    /// it has a job pending).
-    pub(crate) servers: Vec<usize>,
     /// (class, key) in the CPU's contenders as last refreshed; `None` when
     /// the task cannot run (no job, or waiting for budget).
     pub(crate) entry: Option<(u8, Nanos)>,
+    /// PIBS: the Main VCPU this I/O VCPU serves; while it has a job pending,
+    /// this one runs at its rank (priority inheritance).
+    pub(crate) serves: Option<u32>,
+    // Line 3: what a release and a completion count.
+    pub(crate) stats: TaskStats,
+    // Line 4: its priority, its server and where its events go.
+    /// The budget server (its state boxed: 16 bytes here, whatever the
+    /// server).
+    pub(crate) budget: Budget,
+    /// RM rank (1 = highest); unused under EDF.
+    pub(crate) rank: i64,
+    /// D: a job finishing later than this after its nominal release is late.
+    pub(crate) deadline: Nanos,
     /// A job pending and no capacity: when the server gets some back.
     pub(crate) timer: Option<Nanos>,
+    /// Dense CPU index (32 bits, so that line 4 holds what it must).
+    pub(crate) cpu: u32,
+    /// Which per-task side tables its events must visit.
+    pub(crate) sides: Sides,
+    /// 0 for guaranteed tasks, 1 for background ones.
+    pub(crate) class: u8,
+    /// A release merges into a queued, unstarted job (`events.rs`).
+    pub(crate) merges: bool,
+    // Then what only some tasks' events read.
+    /// Sporadic servers out of budget may run in slack; others wait.
+    pub(crate) slack_when_empty: bool,
+    /// Where in the jitter window (drawn from `rng` when J > 0).
+    pub(crate) jitter_model: Jitter,
+    /// The I/O VCPUs that serve this task (their priority follows whether
+    /// it has a job pending; `Sides::served`).
+    pub(crate) servers: Vec<usize>,
 }
 
 /// The demand of the next job of `ts`, as `exec` says (from its stream).
@@ -321,7 +354,7 @@ pub(crate) struct Sim<H> {
     pub(crate) events: u64,
     pub(crate) horizon: Nanos,
     /// Every task's next release, earliest first (one entry per task).
-    pub(crate) releases: BinaryHeap<Reverse<(Nanos, usize)>>,
+    pub(crate) releases: ReleaseHeap,
     /// Throttled CBS servers by the end of their throttling (every
     /// throttled server has an entry; stale ones are harmless).
     pub(crate) throttled: BinaryHeap<Reverse<(Nanos, usize)>>,
@@ -342,10 +375,6 @@ pub(crate) struct Sim<H> {
     pub(crate) is_dirty: Vec<bool>,
     /// Scratch lists of an instant: the CPUs due, the CPUs picked for.
     pub(crate) scratch: (Vec<usize>, Vec<usize>),
-    /// Per task, LET communication (`let_comm.rs`): its reads at releases
-    /// and publishes at period ends feed the provenance, not the
-    /// schedule's instants (per chain: `Spec::communications`).
-    pub(crate) let_comm: Vec<bool>,
     /// Under LET, per task: the job that read at its release and publishes
     /// at the end of its period.
     pub(crate) let_open: Vec<Option<LetJob>>,
@@ -371,16 +400,15 @@ impl<H: Hooks> Sim<H> {
         let (mut tasks, cpu_tasks) = task_sims(spec, &periods, &offsets, cfg.jitter, &mut master);
         let prov = Provenance::new(spec).map_err(|BadChain(c)| SimError::BadChain(c))?;
         link_servers(&mut tasks);
-        let releases = tasks
-            .iter()
-            .enumerate()
-            .map(|(i, ts)| Reverse((ts.next_release, i)))
-            .collect();
-        let n_cpus = cpu_tasks.len();
         let locks = Locks::new(spec);
         let mut cpu_ids: Vec<u32> = spec.tasks.iter().map(|t| t.cpu).collect();
         cpu_ids.sort_unstable();
         cpu_ids.dedup();
+        let ovh = crate::overheads::Overheads::new(spec, &cpu_ids);
+        let event_model = events::Events::new(spec);
+        mark_sides(spec, &mut tasks, &prov, &locks, &ovh, &event_model);
+        let releases = release_heap(&tasks);
+        let n_cpus = cpu_tasks.len();
         if locks.any()
             && !spec
                 .policy()
@@ -415,15 +443,10 @@ impl<H: Hooks> Sim<H> {
             dirty: Vec::new(),
             is_dirty: vec![false; n_cpus],
             scratch: (Vec::new(), Vec::new()),
-            let_comm: spec
-                .communications()
-                .into_iter()
-                .map(|c| c == Communication::Let)
-                .collect(),
             let_open: vec![None; spec.tasks.len()],
             locks,
-            ovh: crate::overheads::Overheads::new(spec, &cpu_ids),
-            event_model: events::Events::new(spec),
+            ovh,
+            event_model,
         })
     }
 
@@ -556,19 +579,19 @@ impl<H: Hooks> Sim<H> {
         let exec = self.exec;
         loop {
             let i = {
-                let Some(mut top) = self.releases.peek_mut() else {
+                let Some((due, i)) = self.releases.peek() else {
                     return;
                 };
-                let Reverse((due, i)) = *top;
                 if due > t {
                     return;
                 }
+                let i = i as usize;
                 let ts = &mut self.tasks[i];
                 debug_assert_eq!(due, ts.next_release, "stale release entry of task {i}");
                 let was_idle = ts.queue.is_empty();
                 let before = ts.next_index;
                 release_jobs(ts, exec, t);
-                if self.let_comm[i] {
+                if ts.sides.let_comm {
                     let new = (ts.next_index - before) as usize;
                     let skip = ts.queue.len() - new;
                     released.extend(ts.queue.iter().skip(skip).map(|j| LetJob {
@@ -579,18 +602,20 @@ impl<H: Hooks> Sim<H> {
                         period: ts.period,
                     }));
                 }
-                *top = Reverse((ts.next_release, i));
-                (i, ts.next_index - before, was_idle)
+                self.releases.replace_top((ts.next_release, i as u32));
+                (i, ts.next_index - before, was_idle, ts.sides)
             };
-            let (i, new, was_idle) = i;
-            if self.event_model.thread_of[i].is_some() {
+            let (i, new, was_idle, sides) = i;
+            if sides.thread {
                 let skip = self.tasks[i].queue.len() - new as usize;
                 for k in skip..self.tasks[i].queue.len() {
                     let job = self.tasks[i].queue[k];
                     self.thread_queued(i, &job, t);
                 }
             }
-            self.release_overheads(i, new, t);
+            if sides.release_work {
+                self.release_overheads(i, new, t);
+            }
             if !was_idle {
                 // Queued behind the front job: nothing the pick sees changed.
                 continue;
@@ -625,10 +650,10 @@ impl<H: Hooks> Sim<H> {
             return (None, None);
         };
         // Only a thread's head contends for the CPU (`events.rs`).
-        if !self.event_model.may_contend(i) {
+        if ts.sides.thread && !self.event_model.may_contend(i) {
             return (None, None);
         }
-        if self.locks.waiting[i].is_some() {
+        if ts.sides.sections && self.locks.waiting[i].is_some() {
             return (None, None);
         }
         let has_budget = ts.budget.capacity(t) > 0;
@@ -647,15 +672,18 @@ impl<H: Hooks> Sim<H> {
             (Budget::Cbs(c), _) => c.deadline,
             (_, true) => job.release + ts.deadline,
             // Keys 2·rank leave 2·rank − 1 to a resource holder (`locks.rs`).
-            (_, false) => self.locks.key(
-                i,
-                2 * match ts.serves {
+            (_, false) => {
+                let base = 2 * match ts.serves.map(|m| &self.tasks[m as usize]) {
                     // PIBS inheritance: the better (smaller) rank of the server
                     // and the Main VCPU it serves while that one has a job.
-                    Some(m) if !self.tasks[m].queue.is_empty() => ts.rank.min(self.tasks[m].rank),
+                    Some(main) if !main.queue.is_empty() => ts.rank.min(main.rank),
                     _ => ts.rank,
-                },
-            ),
+                };
+                match ts.sides.sections {
+                    true => self.locks.key(i, base),
+                    false => base,
+                }
+            }
         };
         (Some((class, key)), timer)
     }
@@ -670,7 +698,7 @@ impl<H: Hooks> Sim<H> {
         let (entry, timer) = self.standing(i, t);
         let ts = &mut self.tasks[i];
         if ts.entry != entry {
-            let set = &mut self.contenders[ts.cpu];
+            let set = &mut self.contenders[ts.cpu as usize];
             if let Some((class, key)) = ts.entry {
                 let was_there = set.remove(&(class, key, i));
                 debug_assert!(was_there, "task {i} missing from its contenders");
@@ -679,9 +707,9 @@ impl<H: Hooks> Sim<H> {
                 set.insert((class, key, i));
             }
             ts.entry = entry;
-            if !self.is_dirty[ts.cpu] {
-                self.is_dirty[ts.cpu] = true;
-                self.dirty.push(ts.cpu);
+            if !self.is_dirty[ts.cpu as usize] {
+                self.is_dirty[ts.cpu as usize] = true;
+                self.dirty.push(ts.cpu as usize);
             }
         }
         if ts.timer != timer {
@@ -695,6 +723,9 @@ impl<H: Hooks> Sim<H> {
     /// Task m's queue became empty or non-empty: the I/O VCPUs serving it
     /// inherit its priority or lose it.
     pub(crate) fn refresh_servers(&mut self, m: usize, t: Nanos) {
+        if !self.tasks[m].sides.served {
+            return;
+        }
         for k in 0..self.tasks[m].servers.len() {
             let s = self.tasks[m].servers[k];
             self.refresh(s, t);
@@ -714,7 +745,7 @@ impl<H: Hooks> Sim<H> {
             assert_eq!(ts.timer, timer, "task {i}: stale refill timer at {t}");
             assert!(entry.is_none() || !ts.queue.is_empty());
             if let Some((class, key)) = entry {
-                contenders[ts.cpu].insert((class, key, i));
+                contenders[ts.cpu as usize].insert((class, key, i));
             }
             if let Some(at) = timer {
                 assert!(timers.contains(&(at, i)), "task {i}: refill timer lost");
@@ -732,11 +763,12 @@ impl<H: Hooks> Sim<H> {
         assert!(self
             .releases
             .iter()
-            .all(|&Reverse((at, i))| at == self.tasks[i].next_release));
+            .all(|(at, i)| at == self.tasks[i as usize].next_release));
     }
 
     /// The front job of task i first gets the CPU: copy the producers' values.
     pub(crate) fn read(&mut self, i: usize, t: Nanos) {
+        let sides = self.tasks[i].sides;
         let Some(job) = self.tasks[i].queue.front_mut() else {
             unreachable!("task {i} reads without a pending job");
         };
@@ -747,18 +779,23 @@ impl<H: Hooks> Sim<H> {
             release: job.release,
             read: t,
         };
-        self.thread_started(i);
-        if self.let_comm[i] {
+        if sides.thread {
+            self.thread_started(i);
+        }
+        if sides.let_comm {
             // Under LET the job read at its release (`let_comm.rs`).
             return;
         }
-        self.prov.read(i, t);
+        if sides.chains {
+            self.prov.read(i, t);
+        }
         self.hooks.read(&job);
     }
 
     /// The front job of task i completes at t: publish.
     pub(crate) fn complete(&mut self, i: usize, t: Nanos) {
         let ts = &mut self.tasks[i];
+        let sides = ts.sides;
         let Some(job) = ts.queue.pop_front() else {
             return;
         };
@@ -766,7 +803,7 @@ impl<H: Hooks> Sim<H> {
             job.read.is_some_and(|r| job.release <= r && r <= t),
             "task {i} publishes at {t} a job that did not read after its release"
         );
-        if !self.let_comm[i] {
+        if !sides.let_comm {
             self.hooks.publish(i, t);
         }
         let response = t - job.release;
@@ -778,12 +815,16 @@ impl<H: Hooks> Sim<H> {
         if ts.queue.is_empty() {
             ts.budget.block(t);
         }
-        self.thread_done(i, &job, t);
-        if self.let_comm[i] {
+        if sides.thread {
+            self.thread_done(i, &job, t);
+        }
+        if sides.let_comm {
             // LET publishes at the end of the period (`let_comm.rs`).
             return;
         }
-        self.prov.publish(i, t);
+        if sides.chains {
+            self.prov.publish(i, t);
+        }
         if let Some(log) = &mut self.log {
             log.push(JobRecord {
                 task: i,
@@ -796,13 +837,15 @@ impl<H: Hooks> Sim<H> {
                 trigger: job.trigger,
             });
         }
-        self.publish_triggers(i, job.index, t);
+        if sides.triggers {
+            self.publish_triggers(i, job.index, t);
+        }
     }
 
     /// The next instant something happens after t: a release, a completion,
     /// a budget running out, or a budget coming back to a waiting server.
     pub(crate) fn next_event(&mut self, t: Nanos) -> Option<Nanos> {
-        let release = self.releases.peek().map(|&Reverse((at, _))| at);
+        let release = self.releases.peek().map(|(at, _)| at);
         // Drop the refill timers that no longer hold.
         let refill = loop {
             match self.timers.peek() {

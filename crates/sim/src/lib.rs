@@ -62,6 +62,7 @@ mod let_comm;
 mod locks;
 pub mod observe;
 mod overheads;
+mod release_heap;
 mod rng;
 pub mod search;
 pub mod server;

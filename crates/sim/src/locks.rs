@@ -111,6 +111,11 @@ impl Locks {
         self.srp && self.active
     }
 
+    /// Task i has a critical section.
+    pub(crate) fn has_sections(&self, i: usize) -> bool {
+        !self.sections[i].is_empty()
+    }
+
     /// Some task has a critical section.
     pub(crate) fn any(&self) -> bool {
         self.active
@@ -202,7 +207,7 @@ impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
         };
         // The system ceiling: the best ceiling of a resource held on cpu.
         let ceiling = (0..self.locks.holder.len())
-            .filter(|&r| self.locks.holder[r].is_some_and(|h| self.tasks[h].cpu == cpu))
+            .filter(|&r| self.locks.holder[r].is_some_and(|h| self.tasks[h].cpu as usize == cpu))
             .map(|r| self.locks.srp_ceiling[r])
             .min();
         if srp_may_start(started(first), self.locks.level[first], ceiling) {
@@ -269,7 +274,7 @@ impl<H: crate::engine::Hooks> crate::engine::Sim<H> {
         self.refresh(i, t);
         if self.locks.srp() {
             // The system ceiling dropped: a blocked job may start.
-            self.mark(self.tasks[i].cpu);
+            self.mark(self.tasks[i].cpu as usize);
         }
     }
 }

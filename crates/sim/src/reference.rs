@@ -103,7 +103,7 @@ impl<H: Hooks> Sim<H> {
                 let key = match (&ts.budget, self.edf) {
                     (Budget::Cbs(c), _) => c.deadline,
                     (_, true) => job.release + ts.period,
-                    (_, false) => match ts.serves {
+                    (_, false) => match ts.serves.map(|m| m as usize) {
                         Some(m) if !self.tasks[m].queue.is_empty() => {
                             ts.rank.min(self.tasks[m].rank)
                         }

@@ -725,3 +725,20 @@ fn squeezed_jitter_alternates_late_and_on_time() {
         assert_eq!(j.read - j.release, late, "job {k}");
     }
 }
+
+/// The hot state of a task is four cache lines (`TaskSim`'s layout): an
+/// event of a plain periodic task touches no more.
+#[test]
+fn task_state_fits_four_cache_lines() {
+    use crate::engine::TaskSim;
+    use std::mem::{align_of, offset_of};
+    assert_eq!(align_of::<TaskSim>(), 64);
+    let hot_end = offset_of!(TaskSim, merges) + 1;
+    assert!(
+        hot_end <= 4 * 64,
+        "hot state ends at {hot_end} (stats at {}, budget at {}, sides at {})",
+        offset_of!(TaskSim, stats),
+        offset_of!(TaskSim, budget),
+        offset_of!(TaskSim, sides),
+    );
+}

@@ -111,6 +111,11 @@ impl Events {
         }
     }
 
+    /// Task p's publications release some data-triggered task.
+    pub(crate) fn triggers_any(&self, p: usize) -> bool {
+        !self.consumers[p].is_empty()
+    }
+
     /// May task `i` contend for its CPU: it is on no thread, or its
     /// thread's head?
     pub(crate) fn may_contend(&self, i: usize) -> bool {

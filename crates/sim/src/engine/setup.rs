@@ -107,9 +107,13 @@ pub(super) fn task_sims(
         let (c, p) = (t.budget(), periods[i]);
         let budget = match spec.policy().budget(t.server) {
             None => Budget::Unlimited,
-            Some(Kind::Cbs) => Budget::Cbs(Cbs::with_deadline(c, p, t.deadline().unwrap_or(p))),
-            Some(Kind::Sporadic) => Budget::Sporadic(Sporadic::new(c, p, 0)),
-            Some(Kind::Pibs) => Budget::Pibs(Pibs::new(c, p)),
+            Some(Kind::Cbs) => Budget::Cbs(Box::new(Cbs::with_deadline(
+                c,
+                p,
+                t.deadline().unwrap_or(p),
+            ))),
+            Some(Kind::Sporadic) => Budget::Sporadic(Box::new(Sporadic::new(c, p, 0))),
+            Some(Kind::Pibs) => Budget::Pibs(Box::new(Pibs::new(c, p))),
         };
         tasks.push(TaskSim {
             slack_when_empty: matches!(budget, Budget::Sporadic(_)),
@@ -125,7 +129,12 @@ pub(super) fn task_sims(
             },
             class: u8::from(t.server == Server::Background),
             rank: ranks[i].map_or(i as i64, |r| r as i64),
-            serves: spec.policy().inherits_from(t.serves),
+            // An index beyond 32 bits is left to `standing`, which panics
+            // on any index out of range.
+            serves: spec
+                .policy()
+                .inherits_from(t.serves)
+                .map(|m| u32::try_from(m).unwrap_or(u32::MAX)),
             demand_min: t.demand_min(),
             demand: t.demand(),
             rng: Rng::new(master.next_u64()),
@@ -134,10 +143,12 @@ pub(super) fn task_sims(
             queue: VecDeque::new(),
             merges: t.merges_releases(),
             stats: TaskStats::default(),
-            cpu,
+            // A dense index into the spec's distinct u32 CPU ids: it fits.
+            cpu: cpu as u32,
             servers: Vec::new(),
             entry: None,
             timer: None,
+            sides: Sides::default(),
         });
         if let (Some(ts), false) = (tasks.last_mut(), t.is_triggered()) {
             // The first job is jittered too.
@@ -151,12 +162,97 @@ pub(super) fn task_sims(
 pub(super) fn link_servers(tasks: &mut [TaskSim]) {
     let n = tasks.len();
     for i in 0..n {
-        if let Some(m) = tasks[i].serves {
+        if let Some(m) = tasks[i].serves.map(|m| m as usize) {
             // An index out of range is left to `standing`, which
             // panics on it as the scan did.
             if let Some(ms) = tasks.get_mut(m) {
                 ms.servers.push(i);
             }
+        }
+    }
+}
+
+/// Each task's [`Sides`], from the side tables and the servers linked.
+pub(super) fn mark_sides(
+    spec: &Spec,
+    tasks: &mut [TaskSim],
+    prov: &Provenance,
+    locks: &Locks,
+    ovh: &crate::overheads::Overheads,
+    event_model: &events::Events,
+) {
+    // LET tasks (per chain, `Spec::communications`): their reads at
+    // releases and publishes at period ends feed the provenance, not the
+    // schedule's instants (`let_comm.rs`).
+    let communications = spec.communications();
+    for (i, ts) in tasks.iter_mut().enumerate() {
+        let served = !ts.servers.is_empty();
+        ts.sides = Sides::of(i, communications[i], served, prov, locks, ovh, event_model);
+    }
+}
+
+/// Every task's next release in the release heap.
+pub(super) fn release_heap(tasks: &[TaskSim]) -> ReleaseHeap {
+    // The heap keeps task indices in 32 bits (a spec of 2^32 tasks would
+    // not fit in memory to begin with).
+    assert!(
+        u32::try_from(tasks.len()).is_ok(),
+        "{} tasks: more than the release heap indexes",
+        tasks.len()
+    );
+    ReleaseHeap::new(
+        tasks
+            .iter()
+            .enumerate()
+            .map(|(i, ts)| (ts.next_release, i as u32)),
+    )
+}
+
+/// Which of the per-task side tables (threads, triggers, chains, release
+/// overheads, critical sections, LET) an event of a task must visit: all
+/// false for a plain periodic task. Kept in the task's own state, which
+/// its every event reads anyway, so that the event of a plain task does
+/// not touch a cache line of each table only to find nothing there; in a
+/// system of thousands of tasks those lines are cache misses, and they
+/// were most of an event's (docs/guide/simulate.md).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Sides {
+    /// LET communication (`let_comm.rs`, `Spec::communications`).
+    pub(crate) let_comm: bool,
+    /// Runs on a work-queue thread (`events.rs`).
+    pub(crate) thread: bool,
+    /// Its publications release data-triggered tasks (`events.rs`).
+    pub(crate) triggers: bool,
+    /// On a chain: its reads and publishes carry samples (`Provenance`).
+    pub(crate) chains: bool,
+    /// A release costs kernel work (`overheads.rs`).
+    pub(crate) release_work: bool,
+    /// It has critical sections (`locks.rs`): only such a task holds or
+    /// waits for a resource.
+    pub(crate) sections: bool,
+    /// I/O VCPUs serve it (`TaskSim::servers`).
+    pub(crate) served: bool,
+}
+
+impl Sides {
+    /// Task i's, from the side tables and its communication semantics.
+    pub(super) fn of(
+        i: usize,
+        communication: Communication,
+        served: bool,
+        prov: &Provenance,
+        locks: &Locks,
+        ovh: &crate::overheads::Overheads,
+        event_model: &events::Events,
+    ) -> Sides {
+        Sides {
+            let_comm: communication == Communication::Let,
+            thread: event_model.thread_of[i].is_some(),
+            triggers: event_model.triggers_any(i),
+            chains: !prov.slots(i).is_empty(),
+            release_work: ovh.release_work(i, 1) != 0,
+            sections: locks.has_sections(i),
+            served,
         }
     }
 }
