@@ -240,7 +240,6 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use rtpipe_model::output::csv_field as quoted;
 
     #[test]
