@@ -39,6 +39,7 @@ pub mod hist;
 mod log;
 mod provenance;
 mod rows;
+pub mod samples;
 pub mod trace;
 mod tracker;
 

@@ -30,6 +30,7 @@ use crate::{Diagnostic, SpecError};
 use std::io::Read;
 use std::path::Path;
 
+pub mod cells;
 mod lines;
 pub use lines::{Lines, MAX_LINE_BYTES};
 

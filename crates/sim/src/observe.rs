@@ -3,6 +3,8 @@
 //! each bound; per task, response times above the analysed ones. The CLI's
 //! `simulate` and `fly` report these; the oracle tests check them.
 
+pub mod file;
+
 use rtpipe_analysis::{Anchor, Metric, OffsetBound, Report};
 use rtpipe_joblog::{ChainStats, Histogram, Observed, SimResult};
 use rtpipe_model::{Nanos, Spec, MAX_TIME};

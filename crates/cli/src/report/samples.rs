@@ -3,70 +3,14 @@
 //! latencies, for pandas, polars or a spreadsheet.
 
 use crate::output::{self, Output};
-use rtpipe_joblog::{RowSink, SampleRow};
+use rtpipe_joblog::{samples, RowSink};
+// The rows' CSV is the job log's (built optimised: it runs per sample).
+pub use rtpipe_joblog::samples::{samples_csv, HEADER};
 use rtpipe_model::{Diagnostic, Spec};
-use rtpipe_printer::{csv, Cell, Column, Kind, Table};
 use std::fs::File;
 use std::io::{BufWriter, Write as _};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-
-/// The header: instants and latencies in integer nanoseconds; an empty
-/// cell where the run ended before the instant (a sample that never
-/// reached the tail has no reaction).
-pub const HEADER: &str = "chain,sample,read_ns,event_ns,first_output_ns,last_output_ns,\
-reaction_ns,freshness_ns,event_reaction_ns,event_freshness_ns";
-
-/// The columns of [`HEADER`]: the chain's label, the sample's number, and
-/// instants and latencies that may be absent.
-pub fn columns() -> Vec<Column> {
-    HEADER
-        .split(',')
-        .enumerate()
-        .map(|(i, name)| {
-            let kind = match i {
-                0 => Kind::Text,
-                1 => Kind::UInt,
-                _ => Kind::OptInt,
-            };
-            Column::new(name, kind)
-        })
-        .collect()
-}
-
-/// The CSV text of every chain's rows (indexed like `Spec::chains`), by
-/// the CSV printer.
-pub fn samples_csv(spec: &Spec, rows: &[Vec<SampleRow>]) -> String {
-    let Ok(mut t) = Table::new("samples", columns()) else {
-        unreachable!("the samples' columns are distinct names");
-    };
-    for (c, rows) in rows.iter().enumerate() {
-        let label = spec.chain_label(c);
-        for r in rows {
-            t.push(row_cells(&label, r));
-        }
-    }
-    csv::table(&t)
-}
-
-/// One row's cells, in [`HEADER`]'s order.
-fn row_cells(label: &str, r: &SampleRow) -> Vec<Cell> {
-    let mut row = vec![Cell::from(label), Cell::UInt(r.sample)];
-    row.extend(
-        [
-            Some(r.read),
-            r.event,
-            r.first,
-            r.last,
-            r.reaction(),
-            r.freshness(),
-            r.event_reaction(),
-            r.event_freshness(),
-        ]
-        .map(Cell::opt_int),
-    );
-    row
-}
 
 /// `--samples` written as the run makes the rows: each chain's rows go to
 /// a temporary file beside the target as they complete, and
@@ -84,7 +28,6 @@ struct Parts {
     files: Vec<(PathBuf, BufWriter<File>)>,
     rows: u64,
     error: Option<std::io::Error>,
-    line: String,
 }
 
 impl SamplesFile {
@@ -135,7 +78,6 @@ impl SamplesFile {
             files,
             rows: 0,
             error: None,
-            line: String::new(),
         };
         Ok(SamplesFile {
             out,
@@ -149,9 +91,8 @@ impl SamplesFile {
         Box::new(move |c, r| {
             let Ok(mut p) = parts.lock() else { return };
             let p = &mut *p;
-            p.line = csv::row_line(&row_cells(&p.labels[c], r));
             p.rows += 1;
-            if let Err(e) = p.files[c].1.write_all(p.line.as_bytes()) {
+            if let Err(e) = samples::write_row(&mut p.files[c].1, &p.labels[c], r) {
                 p.error.get_or_insert(e);
             }
         })
@@ -299,16 +240,7 @@ fn cannot(out: &Output, e: &std::io::Error) -> Diagnostic {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use rtpipe_model::output::csv_field as quoted;
-
-    #[test]
-    fn the_streamed_rows_are_the_printers() {
-        let Ok(t) = Table::new("samples", columns()) else {
-            panic!("distinct names");
-        };
-        assert_eq!(csv::header(&t).trim_end(), HEADER);
-    }
 
     #[test]
     fn fields_with_commas_or_quotes_are_quoted() {

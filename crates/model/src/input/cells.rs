@@ -1,20 +1,27 @@
-//! One CSV row of a measurements file: its cells (quoted as RFC 4180 and
-//! as `report::samples` writes them), each with its column for messages,
-//! and the cells read as counts, instants and latencies.
+//! One CSV row of a measurements file (`rtpipe analyze --observed`): its
+//! cells (quoted as RFC 4180 and as `simulate --samples` writes them), each
+//! with its column for messages, and the cells read as counts, instants and
+//! latencies. Here, below the analysis, so that the per-row work is built
+//! optimised while the cli (glue) is built cheaply (docs/architecture.md,
+//! "Building").
 
-use rtpipe_model::Nanos;
+use crate::Nanos;
 use std::borrow::Cow;
 
 /// What is wrong with a row, where (a 1-based column in characters) and
 /// how to fix it; the reader adds the file and line.
 #[derive(Debug)]
 pub struct Bad {
+    /// The 1-based column, in characters, where the fault starts.
     pub col: usize,
+    /// What is wrong.
     pub message: String,
+    /// How to fix it.
     pub help: String,
 }
 
 impl Bad {
+    /// The fault at `col`.
     pub fn at(col: usize, message: impl Into<String>, help: impl Into<String>) -> Bad {
         Bad {
             col,
