@@ -439,9 +439,10 @@ fn edf_lower_bounds(
         .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
         .collect();
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        let (b, j) = crate::sched::edf_response_times_at(spec, lo, i);
+        let cpu = crate::sched::EdfCpu::new(spec, lo, &tasks_on(spec, t.cpu));
+        let (b, j) = crate::sched::edf_response_times_at(&cpu, i);
         // As `sched::analyze` takes it.
-        let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
+        let w = j.map(|j| crate::sched::edf_read_to_publish_at(&cpu, i).min(j));
         return (b, j, w);
     }
     let (b, j, w) = spuri_lower_bounds(spec, lo, hi, i, &mates);
@@ -666,6 +667,13 @@ fn cpu_utilizations(spec: &Spec, t: &[Nanos], cpu: u32) -> Vec<f64> {
         .collect()
 }
 
+/// The tasks of `cpu` (background ones included), in declaration order.
+fn tasks_on(spec: &Spec, cpu: u32) -> Vec<usize> {
+    (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu)
+        .collect()
+}
+
 /// The CPU's test may pass in the box: utilisation tests at the longest
 /// periods (the least utilisation), RTA with the response-time bounds.
 fn cpu_may_pass(
@@ -687,7 +695,7 @@ fn cpu_may_pass(
         // critical sections (whose blocking moves either way with the
         // deadlines) only Σ U ≤ 1 at the longest periods is kept.
         SchedTest::Qpa if fixed_or_unblocked(spec, lo, hi, cpu) => {
-            crate::qpa::edf_feasible_at(spec, hi, cpu)
+            crate::qpa::edf_feasible_at(spec, hi, &tasks_on(spec, cpu))
         }
         SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
         // With overheads (`sched::edf_overhead_test`): the utilisation with
@@ -697,11 +705,11 @@ fn cpu_may_pass(
             let mates: Vec<usize> = (0..spec.tasks.len())
                 .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
                 .collect();
-            let Some(&first) = mates.first() else {
+            if mates.is_empty() {
                 return true;
-            };
-            let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>()
-                + crate::sched::edf_overhead_load(spec, hi, first);
+            }
+            let load = crate::sched::edf_overhead_load(spec, &tasks_on(spec, cpu), |j| hi[j]);
+            let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() + load;
             u <= 1.0 + 1e-12 && mates.iter().all(|&i| budget_r[i].is_some())
         }
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,
