@@ -37,6 +37,15 @@
 
 use rtpipe_model::{Nanos, ResourceProtocol, Server, Spec};
 
+/// The tasks of `cpu` (background ones included), in declaration order,
+/// by a scan of the system: for callers that ask about one CPU without the
+/// index of tasks by CPU (the design's relaxation, one box at a time).
+pub(crate) fn tasks_on(spec: &Spec, cpu: u32) -> Vec<usize> {
+    (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu)
+        .collect()
+}
+
 /// Each resource's ceiling: the highest rank (smallest number) of a task
 /// that uses it; `None` for a resource no ranked task uses.
 pub fn ceilings(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {
@@ -88,9 +97,7 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
     if spec.resources.is_empty() {
         return 0;
     }
-    let on: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
-        .collect();
+    let on = tasks_on(spec, spec.tasks[i].cpu);
     let srp = if spec.policy().fixed_priority() {
         Vec::new()
     } else {
@@ -227,10 +234,7 @@ pub fn srp_steps(
 /// found by a scan of the system (the analysis takes them from its index,
 /// [`srp_spec_steps_among`]).
 pub fn srp_spec_steps(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos)> {
-    let on: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu)
-        .collect();
-    srp_spec_steps_among(spec, &on)
+    srp_spec_steps_among(spec, &tasks_on(spec, cpu))
 }
 
 /// [`srp_spec_steps`] given the tasks of the CPU (`on`).

@@ -48,9 +48,7 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
     }
     let policy = spec.policy();
     if !policy.fixed_priority() {
-        let on: Vec<usize> = (0..spec.tasks.len())
-            .filter(|&j| spec.tasks[j].cpu == t.cpu)
-            .collect();
+        let on = crate::sched::tasks_on(spec, t.cpu);
         let cpu = crate::sched::EdfCpu::new(spec, &crate::qpa::spec_periods(spec), &on);
         if !cpu.constrained() {
             return edf_inflation(&cpu, task, b);

@@ -227,9 +227,7 @@ pub(crate) fn spec_period(t: &rtpipe_model::Task) -> Nanos {
 /// The CPU's tasks are found by a scan of the system; the analysis and
 /// the design's relaxation pass them ([`edf_feasible_among`]).
 pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
-    let on: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu)
-        .collect();
+    let on = crate::blocking::tasks_on(spec, cpu);
     edf_feasible_among(spec, &on, |j| spec_period(&spec.tasks[j]))
 }
 

@@ -24,7 +24,9 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::let_bound::{any_phasing, LetLatencies};
-use crate::sched::{deadline_at, interference, level_response_within, utilization_test, OwnJobs};
+use crate::sched::{
+    deadline_at, interference, level_response_within, tasks_on, utilization_test, OwnJobs,
+};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
@@ -664,13 +666,6 @@ fn cpu_utilizations(spec: &Spec, t: &[Nanos], cpu: u32) -> Vec<f64> {
         .enumerate()
         .filter(|(_, x)| x.cpu == cpu && x.server != Server::Background)
         .map(|(i, x)| x.budget() as f64 / t[i] as f64)
-        .collect()
-}
-
-/// The tasks of `cpu` (background ones included), in declaration order.
-fn tasks_on(spec: &Spec, cpu: u32) -> Vec<usize> {
-    (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu)
         .collect()
 }
 

@@ -4,6 +4,7 @@ use rtpipe_model::policy::{Budget, EventAnalysis, ResponseAnalysis};
 use rtpipe_model::{Nanos, ResourceProtocol, SchedTest, Server, Spec, Task, MAX_TIME};
 
 mod edf_times;
+pub(crate) use crate::blocking::tasks_on;
 use edf_times::server_period;
 pub(crate) use edf_times::{deadline_at, edf_overhead_load};
 pub use edf_times::{
