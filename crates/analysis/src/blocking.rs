@@ -37,6 +37,15 @@
 
 use rtpipe_model::{Nanos, ResourceProtocol, Server, Spec};
 
+/// The tasks of `cpu` (background ones included), in declaration order,
+/// by a scan of the system: for callers that ask about one CPU without the
+/// index of tasks by CPU (the design's relaxation, one box at a time).
+pub(crate) fn tasks_on(spec: &Spec, cpu: u32) -> Vec<usize> {
+    (0..spec.tasks.len())
+        .filter(|&j| spec.tasks[j].cpu == cpu)
+        .collect()
+}
+
 /// Each resource's ceiling: the highest rank (smallest number) of a task
 /// that uses it; `None` for a resource no ranked task uses.
 pub fn ceilings(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {
@@ -88,20 +97,24 @@ pub fn blocking(spec: &Spec, prio: &[Option<usize>], i: usize) -> Nanos {
     if spec.resources.is_empty() {
         return 0;
     }
-    let on: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == spec.tasks[i].cpu)
-        .collect();
-    blocking_with(spec, prio, &ceilings(spec, prio), &on, i)
+    let on = tasks_on(spec, spec.tasks[i].cpu);
+    let srp = if spec.policy().fixed_priority() {
+        Vec::new()
+    } else {
+        srp_spec_steps_among(spec, &on)
+    };
+    blocking_with(spec, prio, &ceilings(spec, prio), (&on, &srp), i)
 }
 
-/// [`blocking`] given the [`ceilings`] and the tasks of i's CPU (`on`),
-/// both computed once for every task: the analysis' path, linear in the
-/// tasks of one CPU rather than of the system.
+/// [`blocking`] given the [`ceilings`], the tasks of i's CPU (`on`) and,
+/// under EDF, the CPU's b(t) ([`srp_spec_steps_among`]; ignored under
+/// fixed priority), all computed once for every task: the analysis' path,
+/// linear in the tasks of one CPU rather than of the system.
 pub fn blocking_with(
     spec: &Spec,
     prio: &[Option<usize>],
     ceil: &[Option<usize>],
-    on: &[usize],
+    (on, srp): (&[usize], &[(Nanos, Nanos)]),
     i: usize,
 ) -> Nanos {
     // Without resources no task has a section (validation): no blocking.
@@ -114,7 +127,7 @@ pub fn blocking_with(
             return 0;
         }
         let d = t.deadline().unwrap_or(rtpipe_model::MAX_TIME);
-        return srp_at(&srp_spec_steps(spec, t.cpu), d);
+        return srp_at(srp, d);
     }
     let Some(own) = prio[i] else {
         return 0;
@@ -172,40 +185,41 @@ fn blocking_among(
     }
 }
 
-/// Baruah's b(t) on `cpu` under EDF with the stack resource policy, as
+/// Baruah's b(t) on one CPU under EDF with the stack resource policy, as
 /// steps `(θ, b(θ))` at every distinct relative deadline θ of the CPU's
-/// guaranteed tasks, ascending ([`srp_at`] reads it), from `deadline[j]`,
-/// each task's relative deadline. Empty when no task of the CPU has a
-/// section.
-pub fn srp_steps(spec: &Spec, deadline: &[Nanos], cpu: u32) -> Vec<(Nanos, Nanos)> {
-    assert_eq!(deadline.len(), spec.tasks.len());
-    // Asked for every task and every box of the design: nothing to build
+/// guaranteed tasks, ascending ([`srp_at`] reads it), from `deadline(j)`,
+/// each task's relative deadline. `on`: the tasks of the CPU (from the
+/// index of tasks by CPU, `rtpipe_model::TasksByCpu`, so that nothing
+/// scans the system). Empty when no task of the CPU has a section.
+pub fn srp_steps(
+    spec: &Spec,
+    on: &[usize],
+    deadline: impl Fn(usize) -> Nanos,
+) -> Vec<(Nanos, Nanos)> {
+    // Asked for every CPU and every box of the design: nothing to build
     // (or allocate) on a CPU without sections, nor scan without resources.
-    if spec.resources.is_empty()
-        || !spec
-            .tasks
-            .iter()
-            .any(|t| t.cpu == cpu && !t.sections.is_empty())
-    {
+    if spec.resources.is_empty() || on.iter().all(|&j| spec.tasks[j].sections.is_empty()) {
         return Vec::new();
     }
-    let on: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == cpu && spec.tasks[j].server != Server::Background)
+    let on: Vec<(usize, Nanos)> = on
+        .iter()
+        .filter(|&&j| spec.tasks[j].server != Server::Background)
+        .map(|&j| (j, deadline(j)))
         .collect();
-    let mut thetas: Vec<Nanos> = on.iter().map(|&j| deadline[j]).collect();
+    let mut thetas: Vec<Nanos> = on.iter().map(|&(_, d)| d).collect();
     thetas.sort_unstable();
     thetas.dedup();
     let used_by_some = |r: usize, t: Nanos| {
         on.iter()
-            .any(|&k| deadline[k] <= t && spec.tasks[k].sections.iter().any(|s| s.resource == r))
+            .any(|&(k, d)| d <= t && spec.tasks[k].sections.iter().any(|s| s.resource == r))
     };
     thetas
         .into_iter()
         .map(|t| {
             let b = on
                 .iter()
-                .filter(|&&j| deadline[j] > t)
-                .flat_map(|&j| spec.tasks[j].sections.iter())
+                .filter(|&&(_, d)| d > t)
+                .flat_map(|&(j, _)| spec.tasks[j].sections.iter())
                 .filter(|s| used_by_some(s.resource, t))
                 .map(|s| s.length)
                 .max()
@@ -215,15 +229,19 @@ pub fn srp_steps(spec: &Spec, deadline: &[Nanos], cpu: u32) -> Vec<(Nanos, Nanos
         .collect()
 }
 
-/// [`srp_steps`] with the spec's relative deadlines (D, else T; a task
-/// without a fixed period counts as never released).
+/// [`srp_steps`] on `cpu` with the spec's relative deadlines (D, else T;
+/// a task without a fixed period counts as never released), its tasks
+/// found by a scan of the system (the analysis takes them from its index,
+/// [`srp_spec_steps_among`]).
 pub fn srp_spec_steps(spec: &Spec, cpu: u32) -> Vec<(Nanos, Nanos)> {
-    let d: Vec<Nanos> = spec
-        .tasks
-        .iter()
-        .map(|t| t.deadline().unwrap_or(rtpipe_model::MAX_TIME))
-        .collect();
-    srp_steps(spec, &d, cpu)
+    srp_spec_steps_among(spec, &tasks_on(spec, cpu))
+}
+
+/// [`srp_spec_steps`] given the tasks of the CPU (`on`).
+pub fn srp_spec_steps_among(spec: &Spec, on: &[usize]) -> Vec<(Nanos, Nanos)> {
+    srp_steps(spec, on, |j| {
+        spec.tasks[j].deadline().unwrap_or(rtpipe_model::MAX_TIME)
+    })
 }
 
 /// b(t) from [`srp_steps`]: the value of the last step at or below t (0

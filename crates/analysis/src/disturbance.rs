@@ -47,12 +47,12 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
         return Nanos::MAX;
     }
     let policy = spec.policy();
-    if !policy.fixed_priority()
-        && !crate::sched::edf_constrained_at(spec, &crate::qpa::spec_periods(spec), t.cpu)
-    {
-        return edf_inflation(spec, task, b);
-    }
     if !policy.fixed_priority() {
+        let on = crate::sched::tasks_on(spec, t.cpu);
+        let cpu = crate::sched::EdfCpu::new(spec, &crate::qpa::spec_periods(spec), &on);
+        if !cpu.constrained() {
+            return edf_inflation(&cpu, task, b);
+        }
         let u: f64 = (0..spec.tasks.len())
             .filter(|&j| j != task)
             .map(|j| &spec.tasks[j])
@@ -99,11 +99,10 @@ pub fn inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
 /// edf_response_disturbed`). A disturbance can push a job past a release
 /// of an earlier deadline, which then runs first: the response grows by
 /// more than `b` in steps, as the fixed-priority busy period does.
-fn edf_inflation(spec: &Spec, task: usize, b: Nanos) -> Nanos {
-    let periods = crate::qpa::spec_periods(spec);
+fn edf_inflation(cpu: &crate::sched::EdfCpu, task: usize, b: Nanos) -> Nanos {
     match (
-        crate::sched::edf_response_disturbed(spec, &periods, task, 0).1,
-        crate::sched::edf_response_disturbed(spec, &periods, task, b).1,
+        crate::sched::edf_response_disturbed(cpu, task, 0).1,
+        crate::sched::edf_response_disturbed(cpu, task, b).1,
     ) {
         (Some(r), Some(rb)) => rb.saturating_sub(r),
         _ => Nanos::MAX,

@@ -196,17 +196,12 @@ pub fn qpa_srp(tasks: &[Demand], steps: &[(Nanos, Nanos)]) -> Qpa {
     }
 }
 
-/// The (C, T, D) of the guaranteed tasks `ids`.
-fn demands(spec: &Spec, ids: &[usize]) -> Vec<Demand> {
-    demands_at(spec, &spec_periods(spec), ids)
-}
-
-/// The (C, T, D) of the guaranteed tasks `ids` at `periods` (one per task):
-/// D the given deadline, else the period.
-fn demands_at(spec: &Spec, periods: &[Nanos], ids: &[usize]) -> Vec<Demand> {
+/// The (C, T, D) of the guaranteed tasks `ids` at `period(j)`: D the
+/// given deadline, else the period.
+fn demands_at(spec: &Spec, period: impl Fn(usize) -> Nanos, ids: &[usize]) -> Vec<Demand> {
     ids.iter()
         .map(|&i| {
-            let p = periods[i];
+            let p = period(i);
             (
                 spec.tasks[i].budget(),
                 p,
@@ -218,54 +213,60 @@ fn demands_at(spec: &Spec, periods: &[Nanos], ids: &[usize]) -> Vec<Demand> {
 
 /// The spec's periods ([`MAX_TIME`] where none is fixed).
 pub(crate) fn spec_periods(spec: &Spec) -> Vec<Nanos> {
-    let p = |t: &rtpipe_model::Task| t.fixed_period().unwrap_or(MAX_TIME);
-    spec.tasks.iter().map(p).collect()
+    spec.tasks.iter().map(spec_period).collect()
 }
 
-/// The guaranteed tasks of `cpu`.
-fn guaranteed(spec: &Spec, cpu: u32) -> Vec<usize> {
-    (0..spec.tasks.len())
-        .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
-        .collect()
+/// A task's period in the spec ([`MAX_TIME`] where none is fixed).
+pub(crate) fn spec_period(t: &rtpipe_model::Task) -> Nanos {
+    t.fixed_period().unwrap_or(MAX_TIME)
 }
 
 /// EDF meets every deadline on `cpu`: Σ U ≤ 1 when every deadline is the
 /// period and nothing blocks (exactly as before deadlines existed), QPA
 /// otherwise, with the stack resource policy's blocking ([`qpa_srp`]).
+/// The CPU's tasks are found by a scan of the system; the analysis and
+/// the design's relaxation pass them ([`edf_feasible_among`]).
 pub fn edf_feasible(spec: &Spec, cpu: u32) -> bool {
-    edf_feasible_at(spec, &spec_periods(spec), cpu)
+    let on = crate::blocking::tasks_on(spec, cpu);
+    edf_feasible_among(spec, &on, |j| spec_period(&spec.tasks[j]))
 }
 
-/// [`edf_feasible`] at `periods` (one per task; deadlines the given ones,
-/// else the periods), for the design's relaxation at a box of one point.
-pub fn edf_feasible_at(spec: &Spec, periods: &[Nanos], cpu: u32) -> bool {
-    let ids = guaranteed(spec, cpu);
-    let deadlines: Vec<Nanos> = (0..spec.tasks.len())
-        .map(|i| spec.tasks[i].deadline_given.unwrap_or(periods[i]))
+/// [`edf_feasible`] at `periods` (one per task of the system; deadlines
+/// the given ones, else the periods), for the design's relaxation at a box
+/// of one point, given the tasks of the CPU (`on`).
+pub fn edf_feasible_at(spec: &Spec, periods: &[Nanos], on: &[usize]) -> bool {
+    edf_feasible_among(spec, on, |j| periods[j])
+}
+
+/// [`edf_feasible`] on the CPU of the tasks `on` (all of them, background
+/// ones included), at `period(j)` for each of them.
+pub fn edf_feasible_among(spec: &Spec, on: &[usize], period: impl Fn(usize) -> Nanos) -> bool {
+    let ids: Vec<usize> = on
+        .iter()
+        .copied()
+        .filter(|&i| spec.tasks[i].server != Server::Background)
         .collect();
-    let steps = crate::blocking::srp_steps(spec, &deadlines, cpu);
-    if ids.iter().all(|&i| deadlines[i] == periods[i]) {
+    let deadline = |i: usize| spec.tasks[i].deadline_given.unwrap_or(period(i));
+    let steps = crate::blocking::srp_steps(spec, on, deadline);
+    if ids.iter().all(|&i| deadline(i) == period(i)) {
         // Σ C/T over the same tasks in the same order as `sched` sums it,
         // so the verdict is the one the utilisation test gives.
         let u: f64 = ids
             .iter()
-            .map(|&i| spec.tasks[i].budget() as f64 / periods[i] as f64)
+            .map(|&i| spec.tasks[i].budget() as f64 / period(i) as f64)
             .sum();
         if steps.is_empty() {
             return u <= 1.0 + 1e-12;
         }
     }
-    qpa_srp(&demands_at(spec, periods, &ids), &steps).schedulable
+    qpa_srp(&demands_at(spec, &period, &ids), &steps).schedulable
 }
 
-/// The QPA test on the tasks `ids` of one CPU: (Σ U, its bound 1, QPA's
-/// verdict).
-pub fn qpa_verdict(spec: &Spec, ids: &[usize]) -> (f64, f64, bool) {
-    let ds = demands(spec, ids);
+/// The QPA test on the guaranteed tasks `ids` of one CPU, whose b(t) is
+/// `steps` ([`crate::blocking::srp_spec_steps_among`]): (Σ U, its bound
+/// 1, QPA's verdict).
+pub fn qpa_verdict(spec: &Spec, ids: &[usize], steps: &[(Nanos, Nanos)]) -> (f64, f64, bool) {
+    let ds = demands_at(spec, |j| spec_period(&spec.tasks[j]), ids);
     let u: f64 = ds.iter().map(|&(c, p, _)| c as f64 / p as f64).sum();
-    let steps = ids
-        .first()
-        .map(|&i| crate::blocking::srp_spec_steps(spec, spec.tasks[i].cpu))
-        .unwrap_or_default();
-    (u, 1.0, qpa_srp(&ds, &steps).schedulable)
+    (u, 1.0, qpa_srp(&ds, steps).schedulable)
 }

@@ -24,7 +24,9 @@ use crate::latency::{
     LinkTask, SoundLink,
 };
 use crate::let_bound::{any_phasing, LetLatencies};
-use crate::sched::{deadline_at, interference, level_response_within, utilization_test, OwnJobs};
+use crate::sched::{
+    deadline_at, interference, level_response_within, tasks_on, utilization_test, OwnJobs,
+};
 use rtpipe_model::policy::{rank_key, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
@@ -442,9 +444,10 @@ fn edf_lower_bounds(
         .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
         .collect();
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        let (b, j) = crate::sched::edf_response_times_at(spec, lo, i);
+        let cpu = crate::sched::EdfCpu::new(spec, lo, &tasks_on(spec, t.cpu));
+        let (b, j) = crate::sched::edf_response_times_at(&cpu, i);
         // As `sched::analyze` takes it.
-        let w = j.map(|j| crate::sched::edf_read_to_publish_at(spec, lo, i).min(j));
+        let w = j.map(|j| crate::sched::edf_read_to_publish_at(&cpu, i).min(j));
         return (b, j, w);
     }
     let (b, j, w) = spuri_lower_bounds(spec, lo, hi, i, &mates);
@@ -690,7 +693,7 @@ fn cpu_may_pass(
         // critical sections (whose blocking moves either way with the
         // deadlines) only Σ U ≤ 1 at the longest periods is kept.
         SchedTest::Qpa if fixed_or_unblocked(spec, lo, hi, cpu) => {
-            crate::qpa::edf_feasible_at(spec, hi, cpu)
+            crate::qpa::edf_feasible_at(spec, hi, &tasks_on(spec, cpu))
         }
         SchedTest::Qpa => utilization_test(SchedTest::Edf, &cpu_utilizations(spec, hi, cpu)).2,
         // With overheads (`sched::edf_overhead_test`): the utilisation with
@@ -700,11 +703,11 @@ fn cpu_may_pass(
             let mates: Vec<usize> = (0..spec.tasks.len())
                 .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
                 .collect();
-            let Some(&first) = mates.first() else {
+            if mates.is_empty() {
                 return true;
-            };
-            let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>()
-                + crate::sched::edf_overhead_load(spec, hi, first);
+            }
+            let load = crate::sched::edf_overhead_load(spec, &tasks_on(spec, cpu), |j| hi[j]);
+            let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() + load;
             u <= 1.0 + 1e-12 && mates.iter().all(|&i| budget_r[i].is_some())
         }
         test => utilization_test(test, &cpu_utilizations(spec, hi, cpu)).2,

@@ -4,12 +4,12 @@ use rtpipe_model::policy::{Budget, EventAnalysis, ResponseAnalysis};
 use rtpipe_model::{Nanos, ResourceProtocol, SchedTest, Server, Spec, Task, MAX_TIME};
 
 mod edf_times;
+pub(crate) use crate::blocking::tasks_on;
+use edf_times::server_period;
 pub(crate) use edf_times::{deadline_at, edf_overhead_load};
 pub use edf_times::{
-    edf_constrained_at, edf_read_to_publish_at, edf_response_at, edf_response_disturbed,
-    edf_response_times_at,
+    edf_read_to_publish_at, edf_response_at, edf_response_disturbed, edf_response_times_at, EdfCpu,
 };
-use edf_times::{edf_read_to_publish, edf_response_times, server_period};
 
 mod busy;
 pub(crate) use busy::busy_window;
@@ -212,6 +212,13 @@ pub(crate) struct Levels<'a> {
     /// Per CPU of `by_cpu`, [`crate::overheads::kernel_load`] (empty
     /// without overheads).
     kernel: Vec<Vec<(Nanos, Nanos, Nanos)>>,
+    /// Under EDF, per CPU of `by_cpu`, its tasks at the spec's periods
+    /// (empty under fixed priority).
+    edf: Vec<EdfCpu<'a>>,
+    /// Under EDF, per CPU of `by_cpu`, Baruah's b(t) at the spec's
+    /// deadlines ([`crate::blocking::srp_spec_steps_among`]; empty under
+    /// fixed priority and without resources).
+    srp: Vec<Vec<(Nanos, Nanos)>>,
 }
 
 impl<'a> Levels<'a> {
@@ -243,6 +250,24 @@ impl<'a> Levels<'a> {
                     .collect()
             })
             .collect();
+        let edf_on = !spec.policy().fixed_priority();
+        let edf = if edf_on {
+            let periods: Vec<Nanos> = spec.tasks.iter().map(period_or_max).collect();
+            by_cpu
+                .iter()
+                .map(|(_, on)| EdfCpu::new(spec, &periods, on))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let srp = if edf_on && !spec.resources.is_empty() {
+            by_cpu
+                .iter()
+                .map(|(_, on)| crate::blocking::srp_spec_steps_among(spec, on))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Levels {
             spec,
             prio,
@@ -251,7 +276,31 @@ impl<'a> Levels<'a> {
             by_cpu,
             guaranteed,
             kernel,
+            edf,
+            srp,
         }
+    }
+
+    /// Under EDF, task `i`'s CPU at the spec's periods.
+    fn edf_cpu(&self, i: usize) -> &EdfCpu<'a> {
+        let k = self.cpu_index(self.spec.tasks[i].cpu);
+        &self.edf[k]
+    }
+
+    /// The place of `cpu` in `by_cpu`: a CPU some task runs on.
+    fn cpu_index(&self, cpu: u32) -> usize {
+        self.by_cpu
+            .position(cpu)
+            .unwrap_or_else(|| panic!("CPU {cpu} has no task"))
+    }
+
+    /// Under EDF, `cpu`'s b(t) at the spec's deadlines (none without
+    /// resources or under fixed priority).
+    fn srp_steps(&self, cpu: u32) -> &[(Nanos, Nanos)] {
+        if self.srp.is_empty() {
+            return &[];
+        }
+        &self.srp[self.cpu_index(cpu)]
     }
 
     /// The guaranteed tasks that can run above task `i` ([`interferers`]).
@@ -275,7 +324,8 @@ impl<'a> Levels<'a> {
 
     /// [`crate::blocking::blocking`] of task `i`.
     fn blocking(&self, i: usize) -> Nanos {
-        crate::blocking::blocking_with(self.spec, self.prio, &self.ceilings, self.cpu_of(i), i)
+        let on = (self.cpu_of(i), self.srp_steps(self.spec.tasks[i].cpu));
+        crate::blocking::blocking_with(self.spec, self.prio, &self.ceilings, on, i)
     }
 
     /// [`hp_load`] of task `i`.
@@ -415,7 +465,7 @@ pub fn analyze(spec: &Spec) -> (Vec<TaskTiming>, Schedulability) {
     let verdicts: Vec<CpuVerdict> = levels
         .by_cpu
         .iter()
-        .map(|(cpu, on)| cpu_verdict(spec, &timings, cpu, on))
+        .map(|(cpu, on)| cpu_verdict(spec, &timings, (cpu, on), levels.srp_steps(cpu)))
         .collect();
     let schedulable = verdicts.iter().all(|v| v.schedulable);
     (
@@ -542,12 +592,13 @@ fn response_times(levels: &Levels, i: usize) -> (Option<Nanos>, Option<Nanos>, O
             (rt, jrt, w)
         }
         ResponseAnalysis::ServerPeriod => {
-            let (rt, jrt) = server_period(spec, t);
+            let (rt, jrt) = server_period(levels.edf_cpu(i), i);
             (rt, jrt, jrt)
         }
         ResponseAnalysis::EdfRta => {
-            let (rt, jrt) = edf_response_times(spec, i);
-            (rt, jrt, jrt.map(|r| edf_read_to_publish(spec, i).min(r)))
+            let cpu = levels.edf_cpu(i);
+            let (rt, jrt) = edf_response_times_at(cpu, i);
+            (rt, jrt, jrt.map(|r| edf_read_to_publish_at(cpu, i).min(r)))
         }
     }
 }
@@ -645,8 +696,14 @@ fn rta_response_windows(
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.
-/// `on`: the tasks of `cpu`.
-fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32, on: &[usize]) -> CpuVerdict {
+/// `on`: the tasks of `cpu`; `srp`: its b(t) under EDF
+/// ([`crate::blocking::srp_spec_steps_among`]).
+fn cpu_verdict(
+    spec: &Spec,
+    timings: &[TaskTiming],
+    (cpu, on): (u32, &[usize]),
+    srp: &[(Nanos, Nanos)],
+) -> CpuVerdict {
     let ids: Vec<usize> = on
         .iter()
         .copied()
@@ -660,13 +717,11 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32, on: &[usize]) -> C
     let u: f64 = us.iter().sum::<f64>() + 0.0;
     let (value, bound, ok) = match spec.schedulability {
         SchedTest::Rta => rta_test(&ids, timings),
-        SchedTest::Qpa => crate::qpa::qpa_verdict(spec, &ids),
+        SchedTest::Qpa => crate::qpa::qpa_verdict(spec, &ids, srp),
         SchedTest::Edf if !spec.overheads.on(cpu).is_zero() => {
-            edf_overhead_test(spec, &ids, timings, u)
+            edf_overhead_test(spec, (on, &ids), timings, u)
         }
-        SchedTest::Edf if !crate::blocking::srp_spec_steps(spec, cpu).is_empty() => {
-            srp_density_test(spec, &ids, timings, cpu)
-        }
+        SchedTest::Edf if !srp.is_empty() => srp_density_test(&ids, timings, srp),
         test => utilization_test(test, &us),
     };
     CpuVerdict {
@@ -680,19 +735,18 @@ fn cpu_verdict(spec: &Spec, timings: &[TaskTiming], cpu: u32, on: &[usize]) -> C
 }
 
 /// Baker's density condition for EDF with the stack resource policy
-/// (Baker 1991), on the tasks `ids` of `cpu`: for every task k in the
+/// (Baker 1991), on the tasks `ids` of a CPU whose b(t) is `steps`: for
+/// every task k in the
 /// order of relative deadlines, `Σ_{D_i ≤ D_k} C_i/D_i + b(D_k)/D_k ≤ 1`
 /// with b Baruah's blocking ([`crate::blocking::srp_at`]; for the last of
 /// equal deadlines it is Baker's B_k, the others' sums are smaller). It
 /// implies the demand test h(t) + b(t) ≤ t (docs/analysis.md). Returns
 /// (the largest left-hand side, its bound 1, it holds).
 fn srp_density_test(
-    spec: &Spec,
     ids: &[usize],
     timings: &[TaskTiming],
-    cpu: u32,
+    steps: &[(Nanos, Nanos)],
 ) -> (f64, f64, bool) {
-    let steps = crate::blocking::srp_spec_steps(spec, cpu);
     let mut worst: f64 = 0.0;
     for &k in ids {
         let dk = timings[k].deadline;
@@ -701,7 +755,7 @@ fn srp_density_test(
             .filter(|&&i| timings[i].deadline <= dk)
             .map(|&i| timings[i].budget as f64 / timings[i].deadline as f64)
             .sum();
-        let b = crate::blocking::srp_at(&steps, dk) as f64 / dk as f64;
+        let b = crate::blocking::srp_at(steps, dk) as f64 / dk as f64;
         worst = worst.max(sum + b);
     }
     (worst, 1.0, worst <= 1.0 + UTIL_EPS)
@@ -711,18 +765,18 @@ fn srp_density_test(
 /// stay within 1, and, since release handlers of later deadlines break the
 /// processor-demand argument behind `Σ U ≤ 1`, every budget's response
 /// time (Spuri's, with the overheads) must be within its deadline: (that
-/// Σ U, its bound 1, both hold).
+/// Σ U, its bound 1, both hold). `on`: the CPU's tasks, `ids` its
+/// guaranteed ones.
 fn edf_overhead_test(
     spec: &Spec,
-    ids: &[usize],
+    (on, ids): (&[usize], &[usize]),
     timings: &[TaskTiming],
     u: f64,
 ) -> (f64, f64, bool) {
-    let Some(&first) = ids.first() else {
+    if ids.is_empty() {
         return (u, 1.0, true);
-    };
-    let periods: Vec<Nanos> = timings.iter().map(|t| t.period).collect();
-    let value = u + edf_overhead_load(spec, &periods, first);
+    }
+    let value = u + edf_overhead_load(spec, on, |j| timings[j].period);
     let (_, _, responses) = rta_test(ids, timings);
     (value, 1.0, value <= 1.0 + UTIL_EPS && responses)
 }
