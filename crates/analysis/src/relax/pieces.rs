@@ -15,7 +15,8 @@
 //! `(T_p, T_c)`; a chain where that check fails (an option outside this
 //! shape: LET, server periods as response times) gets no pieces.
 
-use super::{all_let, distinct_passes, link_task, paper_link, Order, Times};
+use super::paper::paper_link;
+use super::{all_let, distinct_passes, link_task, Order, Times};
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Communication, Nanos, Spec};
 
