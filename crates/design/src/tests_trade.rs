@@ -10,7 +10,7 @@ use crate::budget::Budget;
 use crate::domain::domains;
 use crate::heuristic::descent;
 use crate::problem::Problem;
-use crate::tests_split::{brute_force, problem};
+use crate::tests_split::{brute_force, small_problems};
 use crate::trade::Trades;
 use crate::{Method, Mode};
 use rtpipe_model::Spec;
@@ -65,27 +65,13 @@ fn trade_until_stuck(ex: &Examiner, start: &[u32], opts: &Options) -> Vec<f64> {
 #[test]
 fn trades_verify_and_never_go_below_the_optimum() {
     let mut improved = 0;
-    for seed in 0..300u64 {
-        let mode = if seed % 2 == 0 {
-            Mode::Sound
-        } else {
-            Mode::Paper
+    small_problems(300, |seed, ex, n, opts| {
+        let mode = opts.mode;
+        let Some(start) = worst_verified(ex, n) else {
+            return;
         };
-        let spec = problem(seed, mode);
-        let opts = Options {
-            mode,
-            ..Options::default()
-        };
-        let Ok(d) = domains(&spec) else { continue };
-        let p = Problem::new(&spec, &opts, d, Method::Boxes);
-        let groups = p.all_groups();
-        let ex = Examiner::new(&p, &groups);
-        let n = ex.axes.len();
-        let Some(start) = worst_verified(&ex, n) else {
-            continue;
-        };
-        let best = brute_force(&ex, n).expect("a verified point");
-        let found = trade_until_stuck(&ex, &start, &opts);
+        let best = brute_force(ex, n).expect("a verified point");
+        let found = trade_until_stuck(ex, &start, opts);
         if let Some(&u) = found.last() {
             assert!(
                 u >= best * (1.0 - 1e-9),
@@ -93,7 +79,7 @@ fn trades_verify_and_never_go_below_the_optimum() {
             );
             improved += 1;
         }
-    }
+    });
     assert!(improved >= 30, "trades improved only {improved} designs");
 }
 
