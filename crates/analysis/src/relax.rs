@@ -438,12 +438,10 @@ fn edf_lower_bounds(
     hi: &[Nanos],
     i: usize,
 ) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
-    let t = &spec.tasks[i];
-    let mates: Vec<usize> = (0..spec.tasks.len())
-        .filter(|&j| spec.tasks[j].cpu == t.cpu && spec.tasks[j].server != Server::Background)
-        .collect();
+    let on = tasks_on(spec, spec.tasks[i].cpu);
+    let mates = guaranteed(spec, &on);
     if mates.iter().all(|&j| lo[j] == hi[j]) {
-        let cpu = crate::sched::EdfCpu::new(spec, lo, &tasks_on(spec, t.cpu));
+        let cpu = crate::sched::EdfCpu::new(spec, lo, &on);
         let (b, j) = crate::sched::edf_response_times_at(&cpu, i);
         // As `sched::analyze` takes it.
         let w = j.map(|j| crate::sched::edf_read_to_publish_at(&cpu, i).min(j));
@@ -464,6 +462,14 @@ fn edf_lower_bounds(
     let d = deadline_at(spec, i, lo[i]);
     let (b, j) = (b.map(|b| b.min(d)), j.map(|j| j.min(d)));
     (b, j, w.zip(j).map(|(w, j)| w.min(j)))
+}
+
+/// The guaranteed (not background) tasks among `on`, in its order.
+fn guaranteed(spec: &Spec, on: &[usize]) -> Vec<usize> {
+    on.iter()
+        .copied()
+        .filter(|&j| spec.tasks[j].server != Server::Background)
+        .collect()
 }
 
 /// The part of [`edf_lower_bounds`] for a box that leaves some period of
@@ -699,13 +705,12 @@ fn cpu_may_pass(
         // what the overheads add, least at the longest periods, and every
         // budget within its deadline.
         SchedTest::Edf if !spec.overheads.on(cpu).is_zero() => {
-            let mates: Vec<usize> = (0..spec.tasks.len())
-                .filter(|&i| spec.tasks[i].cpu == cpu && spec.tasks[i].server != Server::Background)
-                .collect();
+            let on = tasks_on(spec, cpu);
+            let mates = guaranteed(spec, &on);
             if mates.is_empty() {
                 return true;
             }
-            let load = crate::sched::edf_overhead_load(spec, &tasks_on(spec, cpu), |j| hi[j]);
+            let load = crate::sched::edf_overhead_load(spec, &on, |j| hi[j]);
             let u: f64 = cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() + load;
             u <= 1.0 + 1e-12 && mates.iter().all(|&i| budget_r[i].is_some())
         }
