@@ -1,11 +1,71 @@
 //! Directed graphs as successor lists: strongly connected components
 //! (Tarjan's) and a topological order (Kahn's), for the path enumeration
 //! (`paths`) and the event analysis' order of
-//! what waits for what (`events`).
+//! what waits for what (`events`), which keeps its lists flat ([`Lists`]).
+
+/// Per node a list of nodes, in two flat arrays (compressed sparse rows):
+/// node `v`'s list is `to[start[v]..start[v + 1]]`, with no vector per
+/// node (the event analysis' unit graph and readers of 1,000 tasks spent
+/// about 7 M instructions growing a vector per node one entry at a time).
+#[derive(Debug, Clone)]
+pub struct Lists {
+    start: Vec<usize>,
+    to: Vec<usize>,
+}
+
+impl Lists {
+    /// The lists of `n` nodes from their entries `(node, entry)`, each
+    /// node's in the order of `pairs` (a counting sort, stable).
+    pub fn from_pairs(n: usize, pairs: &[(usize, usize)]) -> Lists {
+        let mut start = vec![0; n + 1];
+        for &(v, _) in pairs {
+            start[v + 1] += 1;
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut next = start[..n].to_vec();
+        let mut to = vec![0; pairs.len()];
+        for &(v, w) in pairs {
+            to[next[v]] = w;
+            next[v] += 1;
+        }
+        Lists { start, to }
+    }
+
+    /// Node `v`'s list.
+    pub fn of(&self, v: usize) -> &[usize] {
+        &self.to[self.start[v]..self.start[v + 1]]
+    }
+}
+
+/// Successor lists as [`strongly_connected`] reads them.
+pub trait Successors {
+    /// The successors of node `v`.
+    fn of(&self, v: usize) -> &[usize];
+}
+
+impl Successors for [Vec<usize>] {
+    fn of(&self, v: usize) -> &[usize] {
+        &self[v]
+    }
+}
+
+impl Successors for Vec<Vec<usize>> {
+    fn of(&self, v: usize) -> &[usize] {
+        &self[v]
+    }
+}
+
+impl Successors for Lists {
+    fn of(&self, v: usize) -> &[usize] {
+        Lists::of(self, v)
+    }
+}
 
 /// Tarjan's SCC algorithm, iterative so that 10,000-task graphs cannot
 /// overflow the stack.
-pub fn strongly_connected(n: usize, succ: &[Vec<usize>]) -> Vec<usize> {
+pub fn strongly_connected(n: usize, succ: &(impl Successors + ?Sized)) -> Vec<usize> {
     let mut index = vec![usize::MAX; n];
     let mut low = vec![0; n];
     let mut on_stack = vec![false; n];
@@ -13,19 +73,20 @@ pub fn strongly_connected(n: usize, succ: &[Vec<usize>]) -> Vec<usize> {
     let mut stack = Vec::new();
     let mut next = 0;
     let mut ncomp = 0;
+    // The depth-first search's own stack, one for every root.
+    let mut call: Vec<(usize, usize)> = Vec::new();
     for root in 0..n {
         if index[root] != usize::MAX {
             continue;
         }
-        let mut call: Vec<(usize, usize)> = vec![(root, 0)];
+        call.push((root, 0));
         index[root] = next;
         low[root] = next;
         next += 1;
         stack.push(root);
         on_stack[root] = true;
         while let Some(&mut (v, ref mut k)) = call.last_mut() {
-            if *k < succ[v].len() {
-                let w = succ[v][*k];
+            if let Some(&w) = succ.of(v).get(*k) {
                 *k += 1;
                 if index[w] == usize::MAX {
                     index[w] = next;
