@@ -467,12 +467,14 @@ impl Deps {
 fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Lists {
     let n = spec.tasks.len();
     let mut pairs = Vec::new();
+    // Looked up once per task, not once per entry of a list above.
+    let triggered: Vec<bool> = spec.tasks.iter().map(|t| t.is_triggered()).collect();
     // The units in ascending order, each one's reads together: the last
     // unit that read j tells whether this one is in j's list already,
     // with no sort.
     let mut last = vec![usize::MAX; n];
     let mut read = |u: usize, j: usize| {
-        if last[j] != u && spec.tasks[j].is_triggered() {
+        if triggered[j] && last[j] != u {
             last[j] = u;
             pairs.push((j, u));
         }
