@@ -235,18 +235,21 @@ impl Deps {
         let n = spec.tasks.len();
         let units = n + self.members.len();
         let unit_of = |p: usize| spec.tasks[p].thread.map_or(p, |th| n + th);
-        let mut edges = Vec::new();
-        for j in 0..n {
-            // A periodic task's activations depend on no unit.
-            let Some((triggers, _)) = spec.tasks[j].triggers() else {
-                continue;
-            };
-            edges.extend(self.readers.of(j).iter().map(|&u| (u, units + j)));
-            for &p in triggers {
-                edges.extend([(units + j, units + p), (units + j, unit_of(p))]);
+        let succ = Lists::build(units + n, |edge| {
+            for j in 0..n {
+                // A periodic task's activations depend on no unit.
+                let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                    continue;
+                };
+                for &u in self.readers.of(j) {
+                    edge.add(u, units + j);
+                }
+                for &p in triggers {
+                    edge.add(units + j, units + p);
+                    edge.add(units + j, unit_of(p));
+                }
             }
-        }
-        let succ = Lists::from_pairs(units + n, &edges);
+        });
         // Tarjan's numbers a component after every component it reaches.
         let comp = crate::graph::strongly_connected(units + n, &succ);
         let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); units + n];
@@ -466,34 +469,34 @@ impl Deps {
 /// left empty (more than half the entries on the 1,000-task bench).
 fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Lists {
     let n = spec.tasks.len();
-    let mut pairs = Vec::new();
     // Looked up once per task, not once per entry of a list above.
     let triggered: Vec<bool> = spec.tasks.iter().map(|t| t.is_triggered()).collect();
-    // The units in ascending order, each one's reads together: the last
-    // unit that read j tells whether this one is in j's list already,
-    // with no sort.
-    let mut last = vec![usize::MAX; n];
-    let mut read = |u: usize, j: usize| {
-        if triggered[j] && last[j] != u {
-            last[j] = u;
-            pairs.push((j, u));
-        }
-    };
-    for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
-        for &j in &above[i] {
-            read(i, j);
-        }
-        read(i, i);
-    }
-    for (th, on) in members.iter().enumerate() {
-        for &i in on {
-            for &j in &above[i] {
-                read(n + th, j);
+    Lists::build(n, |entry| {
+        // The units in ascending order, each one's reads together: the
+        // last unit that read j tells whether this one is in j's list
+        // already, with no sort.
+        let mut last = vec![usize::MAX; n];
+        let mut read = |u: usize, j: usize| {
+            if triggered[j] && last[j] != u {
+                last[j] = u;
+                entry.add(j, u);
             }
-            read(n + th, i);
+        };
+        for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
+            for &j in &above[i] {
+                read(i, j);
+            }
+            read(i, i);
         }
-    }
-    Lists::from_pairs(n, &pairs)
+        for (th, on) in members.iter().enumerate() {
+            for &i in on {
+                for &j in &above[i] {
+                    read(n + th, j);
+                }
+                read(n + th, i);
+            }
+        }
+    })
 }
 
 /// Every task, each after its triggers (Kahn's order; validation makes

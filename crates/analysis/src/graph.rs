@@ -14,28 +14,65 @@ pub struct Lists {
 }
 
 impl Lists {
-    /// The lists of `n` nodes from their entries `(node, entry)`, each
-    /// node's in the order of `pairs` (a counting sort, stable).
-    pub fn from_pairs(n: usize, pairs: &[(usize, usize)]) -> Lists {
-        let mut start = vec![0; n + 1];
-        for &(v, _) in pairs {
-            start[v + 1] += 1;
-        }
+    /// The lists of `n` nodes whose entries `entries` hands, as `(node,
+    /// entry)`, to [`Entries::add`], each node's in the order handed.
+    /// `entries` runs twice, to count and then to place them (no list of
+    /// pairs: the pairs took more memory than the lists), and must hand
+    /// the same entries both times.
+    pub fn build(n: usize, entries: impl Fn(&mut Entries)) -> Lists {
+        let mut count = Entries {
+            start: vec![0; n + 1],
+            to: Vec::new(),
+            placing: false,
+        };
+        entries(&mut count);
+        let mut start = count.start;
         for v in 0..n {
             start[v + 1] += start[v];
         }
-        let mut next = start[..n].to_vec();
-        let mut to = vec![0; pairs.len()];
-        for &(v, w) in pairs {
-            to[next[v]] = w;
-            next[v] += 1;
+        let mut place = Entries {
+            to: vec![0; start[n]],
+            // Per node where its next entry goes.
+            start: start.clone(),
+            placing: true,
+        };
+        entries(&mut place);
+        assert!(
+            (0..n).all(|v| place.start[v] == start[v + 1]),
+            "the entries of a list changed between the two passes"
+        );
+        Lists {
+            start,
+            to: place.to,
         }
-        Lists { start, to }
     }
 
     /// Node `v`'s list.
     pub fn of(&self, v: usize) -> &[usize] {
         &self.to[self.start[v]..self.start[v + 1]]
+    }
+}
+
+/// The entries of [`Lists::build`] as they are handed: counted in its
+/// first pass, placed in its second.
+pub struct Entries {
+    /// Counting: per node one past the index, its count. Placing: per
+    /// node where its next entry goes.
+    start: Vec<usize>,
+    to: Vec<usize>,
+    placing: bool,
+}
+
+impl Entries {
+    /// Entry `w` of node `v`'s list, after the ones handed before.
+    #[inline]
+    pub fn add(&mut self, v: usize, w: usize) {
+        if self.placing {
+            self.to[self.start[v]] = w;
+            self.start[v] += 1;
+        } else {
+            self.start[v + 1] += 1;
+        }
     }
 }
 
