@@ -173,3 +173,56 @@ pub(crate) fn kahn(dag: &[Vec<usize>], mut deg: Vec<usize>, sources: &[usize]) -
     }
     order
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Entries in a scrambled order, some nodes with none, one repeated.
+    fn entries(n: usize) -> Vec<(usize, usize)> {
+        (0..5 * n)
+            .map(|k| ((k * 7 + 3) % n, (k * 13 + 5) % n))
+            .filter(|&(v, _)| v % 4 != 1)
+            .chain([(0, 0), (0, 0)])
+            .collect()
+    }
+
+    #[test]
+    fn flat_lists_hold_each_nodes_entries_in_the_order_handed() {
+        for n in [1, 2, 9, 40] {
+            let pairs = entries(n);
+            let mut nested = vec![Vec::new(); n];
+            for &(v, w) in &pairs {
+                nested[v].push(w);
+            }
+            let flat = Lists::build(n, |e| {
+                for &(v, w) in &pairs {
+                    e.add(v, w);
+                }
+            });
+            for (v, list) in nested.iter().enumerate() {
+                assert_eq!(flat.of(v), &list[..], "n = {n}, node {v}");
+            }
+            // The same graph, the same components.
+            assert_eq!(
+                strongly_connected(n, &flat),
+                strongly_connected(n, &nested),
+                "n = {n}"
+            );
+        }
+        assert!(Lists::build(3, |_| {}).of(2).is_empty());
+    }
+
+    #[test]
+    #[should_panic(expected = "changed between the two passes")]
+    fn entries_that_change_between_the_passes_are_a_bug() {
+        let pass = std::cell::Cell::new(0);
+        Lists::build(2, |e| {
+            pass.set(pass.get() + 1);
+            e.add(0, 1);
+            if pass.get() == 1 {
+                e.add(1, 0);
+            }
+        });
+    }
+}
