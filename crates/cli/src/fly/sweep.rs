@@ -657,7 +657,7 @@ fn sweep_json<'a>(
         seeds: a.seeds,
         phases: a.phases,
         safety: a.safety,
-        rule: rule_text(a),
+        rule: rule_text(a, "its criterion"),
         pass_rate: requirement(a).map(|r| r.rate),
         confidence: requirement(a).map(|r| r.confidence),
         points: points.iter().map(point_json).collect(),
@@ -711,10 +711,12 @@ fn label(s: &Setup) -> String {
 }
 
 /// The further setups every timing was flown on, each with its criterion.
-fn also_text(also: &[(Setup, Criteria)]) -> String {
-    let mut out = String::from(
-        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion:\n",
-    );
+fn also_text(also: &[(Setup, Criteria)], by_rate: bool) -> String {
+    let mut out = String::from(if by_rate {
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; its flights count in the pass rate below:\n"
+    } else {
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n"
+    });
     for (o, c) in also {
         out.push_str(&format!("  {}: criterion: {}\n", label(o), c.describe()));
     }
@@ -737,7 +739,7 @@ fn header_text(
         c.describe()
     );
     if !also.is_empty() {
-        out.push_str(&also_text(also));
+        out.push_str(&also_text(also, a.pass_rate.is_some()));
     }
     let setups = 1 + also.len() as u32;
     if setups > 1 {
@@ -746,7 +748,7 @@ fn header_text(
             a.seeds * a.phases * setups,
             a.seeds,
             a.phases,
-            rule_text(a)
+            rule_text(a, "its criterion")
         ));
     } else if a.seeds * a.phases > 1 || a.pass_rate.is_some() {
         out.push_str(&format!(
@@ -754,7 +756,7 @@ fn header_text(
             a.seeds * a.phases,
             a.seeds,
             a.phases,
-            rule_text(a)
+            rule_text(a, "the criterion")
         ));
     }
     out
@@ -770,12 +772,13 @@ fn requirement(a: &FlyArgs) -> Option<Requirement> {
     })
 }
 
-/// When a timing flies, in words.
-fn rule_text(a: &FlyArgs) -> String {
+/// When a timing flies, in words (`criterion`: "the criterion", or "its
+/// criterion" when each setup has its own).
+fn rule_text(a: &FlyArgs, criterion: &str) -> String {
     match requirement(a) {
-        None => "only if every flight meets its criterion".into(),
+        None => format!("only if every flight meets {criterion}"),
         Some(r) => format!(
-            "when, of the flights the spec's own timing (periods ×1.000) meets its criterion on, the share it meets it on too has a lower bound (Wilson) ≥ {} at {} % confidence",
+            "when, of the flights the spec's own timing (periods ×1.000) meets {criterion} on, the share it meets it on too has a lower bound (Wilson) ≥ {} at {} % confidence",
             r.rate,
             r.confidence * 100.0
         ),
