@@ -14,7 +14,9 @@
 //! A chain's derived limits are the largest sound bounds (reaction and
 //! freshness, from the read and from the event) at which the vehicle still
 //! met the criteria in every point up to it: the last passing point before
-//! the first failing one. The rate sweep gives the tail's `max_period`: a
+//! the first failing one, a point passing by the sweep's [`Rule`] (every
+//! flight meets its criterion, or a pass rate judged against the spec's
+//! own timing's flights). The rate sweep gives the tail's `max_period`: a
 //! sample that never reaches a slow tail is counted by no from-read bound.
 
 mod refine;
@@ -289,9 +291,9 @@ pub struct How<'a> {
     /// Flights per timing and setup.
     pub trials: Trials,
     /// Further setups (another mission or vehicle) flown at every timing
-    /// with the same seeds and phases, each judged by its own criterion: a
-    /// timing flies only when every flight of every setup meets its
-    /// criterion, so the worst of them decides each edge.
+    /// with the same seeds and phases, each judged by its own criterion;
+    /// their flights count with the setup's under the `rule` (all-pass:
+    /// the worst of them decides each edge).
     pub also: &'a [(Setup, Criteria)],
     /// When a timing's flights make it fly.
     pub rule: Rule<'a>,
