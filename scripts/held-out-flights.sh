@@ -73,6 +73,12 @@ design sg-pwm-0.9 pwm=11892
 scaled sgb-scale-0.9 "0.9 * 1.114"
 design sgb-pwm-0.9 pwm=5084
 
+# 0.9 x the PWM limit of the same sweep over ten seeds judged by pass rate
+# (--seeds 10 --pass-rate 0.9: of the 58 flights Table V's timing passes,
+# a lower bound >= 0.9 at 95 % confidence; the period scale's limit stays
+# 1.211, flown by sg-scale-0.9): the PWM period alone at 0.9 x 13.622 ms.
+design pr-pwm-0.9 pwm=12260
+
 # design --fly's answer on examples/cleanflight-design-flown.toml (those
 # plain-band limits, each period capped at Table V's x 1.114; --fly
 # steps,gusty --vehicle racer5,aero1kg; returned under the plain band).
@@ -85,7 +91,7 @@ design flown-fly-b gyro=1114 accl=1114 ahrs=5386 radio=10000 pid=2012 pwm=5488
 printf "%-12s %-8s" design vehicle
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 flown-fly flown-fly-b}; do
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 flown-fly flown-fly-b}; do
   for v in racer5 aero1kg; do
     printf "%-12s %-8s" "$d" "$v"
     for m in $MISSIONS; do

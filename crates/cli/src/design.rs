@@ -1,6 +1,6 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-mod flights;
+pub(crate) mod flights;
 mod margin;
 
 use crate::command::mode_parser;

@@ -438,6 +438,38 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
     assert_exit(&rtpipe(&["fly", spec.as_str(), "--seeds", "2"]), 2);
 }
 
+/// `--pass-rate`: a count of flights that cannot reach the rate even all
+/// passing is refused before any flight, naming the fewest that can; a
+/// rate or confidence outside (0, 1), or `--confidence` alone, is refused.
+#[test]
+fn a_pass_rate_the_flights_cannot_show_is_refused() {
+    let spec = example("cleanflight.toml");
+    let sweep = ["fly", spec.as_str(), "--sweep"];
+    let o = rtpipe(&[&sweep[..], &["--seeds", "10", "--pass-rate", "0.95"]].concat());
+    assert_exit(&o, 2);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("needs at least 73 flights a timing") && err.contains("fly 10"),
+        "{err}"
+    );
+    for bad in [
+        &["--pass-rate", "1"][..],
+        &["--pass-rate", "-0.5"],
+        &[
+            "--seeds",
+            "80",
+            "--pass-rate",
+            "0.95",
+            "--confidence",
+            "1.5",
+        ],
+        &["--confidence", "0.9"],
+    ] {
+        assert_exit(&rtpipe(&[&sweep[..], bad].concat()), 2);
+    }
+    assert_exit(&rtpipe(&["fly", spec.as_str(), "--pass-rate", "0.9"]), 2);
+}
+
 /// The held-out missions of docs/flight.md load, and Table V flies each
 /// on racer5 at seed 10 (scripts/held-out-flights.sh flies them all).
 #[test]

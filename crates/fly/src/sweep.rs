@@ -14,11 +14,15 @@
 //! A chain's derived limits are the largest sound bounds (reaction and
 //! freshness, from the read and from the event) at which the vehicle still
 //! met the criteria in every point up to it: the last passing point before
-//! the first failing one. The rate sweep gives the tail's `max_period`: a
+//! the first failing one, a point passing by the sweep's [`Rule`] (every
+//! flight meets its criterion, or a pass rate judged against the spec's
+//! own timing's flights). The rate sweep gives the tail's `max_period`: a
 //! sample that never reaches a slow tail is counted by no from-read bound.
 
 mod refine;
+mod rule;
 pub use refine::refine;
+pub use rule::{AgainstReference, Rule};
 
 use crate::{fly, Setup};
 use rayon::prelude::*;
@@ -79,6 +83,14 @@ pub struct Point {
     pub flights: u32,
     /// Of them, those that met the criteria.
     pub passed: u32,
+    /// Each flight met its criterion, in the sweep's flight order
+    /// (setups, seeds, phases); empty when the timing could not be flown.
+    pub outcomes: Vec<bool>,
+    /// Under the pass-rate rule, the flights counted against the
+    /// reference's.
+    pub against_reference: Option<AgainstReference>,
+    /// The timing flies by the sweep's [`Rule`].
+    pub flies: bool,
 }
 
 /// How many flights judge one timing: `seeds` seeds of the noise and
@@ -106,9 +118,10 @@ impl Trials {
 }
 
 impl Point {
-    /// Every flight at this timing met the criteria.
+    /// The timing flies by the sweep's [`Rule`] (by default: every flight
+    /// at it met the criteria).
     pub fn pass(&self) -> bool {
-        self.quality.is_some() && self.failures.is_empty() && self.passed == self.flights
+        self.flies
     }
 }
 
@@ -234,6 +247,9 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
                 failures: vec![why],
                 flights: 0,
                 passed: 0,
+                against_reference: how.rule.against_reference(&[]),
+                outcomes: Vec::new(),
+                flies: false,
             }
         }
     };
@@ -248,7 +264,7 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
             }
         }
     }
-    let (quality, failures, passed) = trials(&timing, &cases, how);
+    let (quality, failures, outcomes) = trials(&timing, &cases, how);
     Point {
         variation: v,
         bounds,
@@ -257,12 +273,16 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
         quality,
         failures,
         flights: how.flights(),
-        passed,
+        passed: outcomes.iter().filter(|&&o| o).count() as u32,
+        flies: how.rule.flies(&outcomes),
+        against_reference: how.rule.against_reference(&outcomes),
+        outcomes,
     }
 }
 
 /// What every flight of a sweep shares: the execution-time model, the
-/// criterion, how many flights judge a timing and on what.
+/// criterion, how many flights judge a timing, on what, and by what rule.
+#[derive(Clone, Copy)]
 pub struct How<'a> {
     /// How each job's demand is drawn.
     pub exec: ExecModel,
@@ -271,10 +291,12 @@ pub struct How<'a> {
     /// Flights per timing and setup.
     pub trials: Trials,
     /// Further setups (another mission or vehicle) flown at every timing
-    /// with the same seeds and phases, each judged by its own criterion: a
-    /// timing flies only when every flight of every setup meets its
-    /// criterion, so the worst of them decides each edge.
+    /// with the same seeds and phases, each judged by its own criterion;
+    /// their flights count with the setup's under the `rule` (all-pass:
+    /// the worst of them decides each edge).
     pub also: &'a [(Setup, Criteria)],
+    /// When a timing's flights make it fly.
+    pub rule: Rule<'a>,
 }
 
 impl<'a> How<'a> {
@@ -285,6 +307,7 @@ impl<'a> How<'a> {
             criteria,
             trials: Trials::ONE,
             also: &[],
+            rule: Rule::AllPass,
         }
     }
 
@@ -300,16 +323,16 @@ fn case_label(s: &Setup) -> String {
 }
 
 /// Every flight of one timing over `cases` (each setup prepared with its
-/// criterion): the first flight's quality, the first failure's reasons
-/// (named by setup, seed and phase when several flew), and how many met
-/// their criteria.
+/// criterion): the first flight's quality, the reasons of the first
+/// failure the rule counts against the timing (named by setup, seed and
+/// phase when several flew), and whether each flight met its criteria.
 fn trials(
     timing: &Spec,
     cases: &[(Setup, &Criteria)],
     how: &How,
-) -> (Option<FlightQuality>, Vec<String>, u32) {
+) -> (Option<FlightQuality>, Vec<String>, Vec<bool>) {
     let several = how.flights() > 1;
-    let (mut first, mut failures, mut passed) = (None, Vec::new(), 0);
+    let (mut first, mut failures, mut outcomes) = (None, Vec::new(), Vec::new());
     for (setup, criteria) in cases {
         for j in 0..u64::from(how.trials.seeds) {
             for k in 0..u64::from(how.trials.phases) {
@@ -322,8 +345,9 @@ fn trials(
                     }
                     Err(Diagnostic { message, .. }) => (None, vec![message]),
                 };
-                passed += u32::from(quality.is_some() && missed.is_empty());
-                if failures.is_empty() && !missed.is_empty() {
+                let named = how.rule.names_failure(outcomes.len());
+                outcomes.push(quality.is_some() && missed.is_empty());
+                if failures.is_empty() && !missed.is_empty() && named {
                     let case = if cases.len() > 1 {
                         case_label(setup)
                     } else {
@@ -341,7 +365,18 @@ fn trials(
             }
         }
     }
-    (first.flatten(), failures, passed)
+    (first.flatten(), failures, outcomes)
+}
+
+/// Each flight's outcome at the spec's own timing (every period × 1, no
+/// added delay), in the sweep's flight order: the reference the pass-rate
+/// rule judges every timing against.
+pub fn reference(spec: &Spec, s: &Setup, how: &How) -> Vec<bool> {
+    let how = How {
+        rule: Rule::AllPass,
+        ..*how
+    };
+    flown(spec, s, Variation::Scale(1.0), &how).outcomes
 }
 
 /// Flies every variation (in parallel; each point is deterministic; the

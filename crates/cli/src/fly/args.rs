@@ -63,7 +63,7 @@ pub struct FlyArgs {
     pub per_octave: u32,
     /// With --sweep: seeds of the noise and execution times flown at every
     /// timing (--seed, --seed + 1, …); a timing flies only if every flight
-    /// meets the criterion.
+    /// meets the criterion (or by --pass-rate).
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100), requires = "sweep")]
     pub seeds: u32,
     /// With --sweep: phase draws flown per seed: the first is the nominal
@@ -73,6 +73,18 @@ pub struct FlyArgs {
     /// motor-output period.
     #[arg(long, value_name = "M", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100), requires = "sweep")]
     pub phases: u32,
+    /// With --sweep: judge a timing by pass rate instead of all-pass: of
+    /// the flights the spec's own timing (every period × 1) meets its
+    /// criterion on, the share this timing meets it on too must have a
+    /// lower confidence bound (Wilson) ≥ R, in (0, 1). Flights the spec's
+    /// own timing fails (the weather's, not the timing's) count neither
+    /// way [default: every flight must pass].
+    #[arg(long, value_name = "R", value_parser = crate::design::flights::parse_fraction, allow_hyphen_values = true, requires = "sweep")]
+    pub pass_rate: Option<f64>,
+    /// With --pass-rate: the confidence of that bound, in (0, 1) [default:
+    /// 0.95].
+    #[arg(long, value_name = "C", value_parser = crate::design::flights::parse_fraction, allow_hyphen_values = true, requires = "pass_rate")]
+    pub confidence: Option<f64>,
     /// With --sweep: after the grid, bisect each sweep's edge (between its
     /// last passing and first failing point, flown with the same seeds ×
     /// phases) until the two are within this fraction of each other, so a

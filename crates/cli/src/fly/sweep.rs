@@ -10,9 +10,10 @@ use crate::command::{self, Answer};
 use crate::output;
 use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
+use rtpipe_fly::confidence::Requirement;
 use rtpipe_fly::sweep::{
     derived_limits, edge, refine, scale_edge, sweep, tails, variations, ChainPair, Derived, How,
-    Point, Trials, Variation, DELAY_LINES,
+    Point, Rule, Trials, Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -48,14 +49,19 @@ fn what(v: &Variation) -> String {
 }
 
 fn verdict(p: &Point) -> String {
-    let count = if p.flights > 1 {
-        format!(" ({}/{} flights)", p.passed, p.flights)
-    } else {
-        String::new()
+    let count = match (p.flights, p.against_reference) {
+        (_, Some(a)) => format!(
+            " ({}/{} flights; {}/{} of the reference's passes, lower bound {:.3})",
+            p.passed, p.flights, a.passed, a.counted, a.lower_bound
+        ),
+        (2.., None) => format!(" ({}/{} flights)", p.passed, p.flights),
+        _ => String::new(),
     };
     match (p.schedulable, p.pass()) {
         (false, _) => "unschedulable".into(),
         (true, true) => format!("flies{count}"),
+        // Under the pass-rate rule a timing may fail on its count alone.
+        (true, false) if p.failures.is_empty() => format!("FAILS{count}"),
         (true, false) => format!("FAILS{count}: {}", p.failures.join("; ")),
     }
 }
@@ -206,11 +212,16 @@ struct PointView<'a> {
     /// test says (an unschedulable timing may still fly in simulation when
     /// its worst case does not happen).
     flight_met_criterion: bool,
-    /// Flights flown at this timing (seeds × phases), and how many met the
-    /// criterion: it flies only when all did.
+    /// Flights flown at this timing (seeds × phases × setups): it flies
+    /// when all met the criterion, or by the pass-rate rule (`rule`).
     flights: u32,
     /// Flights that met the criterion.
     passed: u32,
+    /// With --pass-rate: of the flights the reference timing passed, how
+    /// many passed here too, and the Wilson lower bound of that share (the
+    /// timing flies when it reaches the rate).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    against_reference: Option<AgainstReferenceView>,
     /// The criteria the flights missed, in words.
     failures: &'a [String],
     /// Attitude error RMS over the flights, degrees.
@@ -221,6 +232,17 @@ struct PointView<'a> {
     position_error_rms_m: Option<f64>,
     /// Whether a flight crashed.
     crashed: Option<bool>,
+}
+
+/// A timing's flights counted against the reference timing's.
+#[derive(Serialize, schemars::JsonSchema)]
+struct AgainstReferenceView {
+    /// Flights the reference timing passed that passed here too.
+    passed: u32,
+    /// Flights the reference timing passed.
+    counted: u32,
+    /// The lower end of the Wilson interval of passed / counted.
+    lower_bound: f64,
 }
 
 /// A chain's reaction and freshness, in ms (null: none).
@@ -261,6 +283,11 @@ fn point_json(p: &Point) -> PointView<'_> {
         flight_met_criterion: p.pass(),
         flights: p.flights,
         passed: p.passed,
+        against_reference: p.against_reference.map(|a| AgainstReferenceView {
+            passed: a.passed,
+            counted: a.counted,
+            lower_bound: a.lower_bound,
+        }),
         failures: &p.failures,
         attitude_error_rms_deg: hover.map(|q| q.attitude_error_deg.rms),
         altitude_error_rms_m: hover.map(|q| q.altitude_error_m.rms),
@@ -393,6 +420,7 @@ pub fn execute(
         .iter()
         .map(|o| Ok((o.clone(), criteria(a, o)?)))
         .collect::<Result<Vec<_>, Diagnostic>>()?;
+    enough_flights(a, 1 + also.len() as u32)?;
     let (lo, hi) = a.scale.unwrap_or((0.5, 8.0));
     let vars = variations(spec, s, lo, hi, a.per_octave);
     if let Some(out) = &a.write_limits {
@@ -477,9 +505,27 @@ fn fly_all(
             phases: a.phases,
         },
         also,
+        rule: Rule::AllPass,
     };
     let points = std::thread::scope(|scope| {
         let worker = scope.spawn(|| {
+            // The pass-rate rule judges every timing against the flights of
+            // the spec's own.
+            let reference = match requirement(a) {
+                Some(_) if stopped() => return None,
+                Some(_) => rtpipe_fly::sweep::reference(spec, s, &how),
+                None => Vec::new(),
+            };
+            let how = match requirement(a) {
+                Some(need) => How {
+                    rule: Rule::PassRate {
+                        need,
+                        reference: &reference,
+                    },
+                    ..how
+                },
+                None => how,
+            };
             let coarse = sweep(spec, s, &how, vars, &done, &stopped)?;
             if a.resolution == 0.0 {
                 return Some(coarse);
@@ -545,6 +591,15 @@ pub(super) struct SweepView<'a> {
     phases: u32,
     /// Every derived limit is the bound at the last timing that flew × this.
     safety: f64,
+    /// When a timing flies, in words: every flight passes, or the pass-rate
+    /// rule with its rate and confidence.
+    rule: String,
+    /// With --pass-rate: the rate the lower bound must reach.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pass_rate: Option<f64>,
+    /// With --pass-rate: the confidence of the bound.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    confidence: Option<f64>,
     /// Every timing flown, in sweep order.
     points: Vec<PointView<'a>>,
     /// The limits derived per chain, ms.
@@ -602,6 +657,9 @@ fn sweep_json<'a>(
         seeds: a.seeds,
         phases: a.phases,
         safety: a.safety,
+        rule: rule_text(a, "its criterion"),
+        pass_rate: requirement(a).map(|r| r.rate),
+        confidence: requirement(a).map(|r| r.confidence),
         points: points.iter().map(point_json).collect(),
         limits_ms: chain_limits.collect(),
         max_period_ms: crate::report::Pairs(
@@ -653,10 +711,12 @@ fn label(s: &Setup) -> String {
 }
 
 /// The further setups every timing was flown on, each with its criterion.
-fn also_text(also: &[(Setup, Criteria)]) -> String {
-    let mut out = String::from(
-        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n",
-    );
+fn also_text(also: &[(Setup, Criteria)], by_rate: bool) -> String {
+    let mut out = String::from(if by_rate {
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; its flights count in the pass rate below:\n"
+    } else {
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n"
+    });
     for (o, c) in also {
         out.push_str(&format!("  {}: criterion: {}\n", label(o), c.describe()));
     }
@@ -679,25 +739,72 @@ fn header_text(
         c.describe()
     );
     if !also.is_empty() {
-        out.push_str(&also_text(also));
+        out.push_str(&also_text(also, a.pass_rate.is_some()));
     }
     let setups = 1 + also.len() as u32;
     if setups > 1 {
         out.push_str(&format!(
-            "each timing flown {} times ({} seeds × {} phases × {setups} vehicle/mission setups): it flies only if every flight meets its criterion\n",
+            "each timing flown {} times ({} seeds × {} phases × {setups} vehicle/mission setups): it flies {}\n",
             a.seeds * a.phases * setups,
             a.seeds,
-            a.phases
+            a.phases,
+            rule_text(a, "its criterion")
         ));
-    } else if a.seeds * a.phases > 1 {
+    } else if a.seeds * a.phases > 1 || a.pass_rate.is_some() {
         out.push_str(&format!(
-            "each timing flown {} times ({} seeds × {} phases): it flies only if every flight meets the criterion\n",
+            "each timing flown {} times ({} seeds × {} phases): it flies {}\n",
             a.seeds * a.phases,
             a.seeds,
-            a.phases
+            a.phases,
+            rule_text(a, "the criterion")
         ));
     }
     out
+}
+
+/// The pass rate and confidence `--pass-rate` asks of a timing's flights
+/// (`None`: every flight must pass).
+fn requirement(a: &FlyArgs) -> Option<Requirement> {
+    let rate = a.pass_rate?;
+    Some(Requirement {
+        rate,
+        confidence: a.confidence.unwrap_or(Requirement::DEFAULT.confidence),
+    })
+}
+
+/// When a timing flies, in words (`criterion`: "the criterion", or "its
+/// criterion" when each setup has its own).
+fn rule_text(a: &FlyArgs, criterion: &str) -> String {
+    match requirement(a) {
+        None => format!("only if every flight meets {criterion}"),
+        Some(r) => format!(
+            "when, of the flights the spec's own timing (periods ×1.000) meets {criterion} on, the share it meets it on too has a lower bound (Wilson) ≥ {} at {} % confidence",
+            r.rate,
+            r.confidence * 100.0
+        ),
+    }
+}
+
+/// `--pass-rate`'s flights: enough that all of them passing can reach the
+/// rate, else an error naming the fewest that can.
+fn enough_flights(a: &FlyArgs, setups: u32) -> Result<(), Diagnostic> {
+    let Some(need) = requirement(a) else {
+        return Ok(());
+    };
+    let (flights, least) = (a.seeds * a.phases * setups, need.least_flights());
+    if flights >= least {
+        return Ok(());
+    }
+    Err(Diagnostic::error(
+        format!(
+            "--pass-rate {} at {} % confidence needs at least {least} flights a timing (all passing), but --seeds {} × --phases {} × {setups} vehicle/mission setups fly {flights}",
+            need.rate,
+            need.confidence * 100.0,
+            a.seeds,
+            a.phases
+        ),
+        "raise --seeds or --phases, or lower --pass-rate or --confidence",
+    ))
 }
 
 fn text(

@@ -143,13 +143,11 @@ mod tests {
         let (spec, s) = cleanflight("racer5");
         let c = s.criteria();
         let how = How {
-            exec: ExecModel::Uniform,
-            criteria: &c,
             trials: Trials {
                 seeds: 1,
                 phases: 2,
             },
-            also: &[],
+            ..How::once(ExecModel::Uniform, &c)
         };
         let vars: Vec<Variation> = [1.0, 1.26, 1.587, 2.0, 2.52].map(Variation::Scale).to_vec();
         let done = AtomicU64::new(0);
