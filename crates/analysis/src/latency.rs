@@ -195,25 +195,31 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 }
 
 /// Sound mode: may the priority-based arguments be used for this link? Only
-/// when both tasks share a CPU scheduled by fixed priority, and neither is
-/// a server with release jitter: a jittered job may find its server's
-/// budget not yet replenished and wait (a sporadic server runs it in slack
-/// meanwhile), below tasks it otherwise preempts, so "a above b" no longer
-/// holds at every instant (docs/analysis.md). Such links use the windows
-/// alone, anchored on nominal releases with R = J + w; plain jittered tasks
-/// keep the priority arguments, with J where an anchor moves.
+/// when both tasks share a CPU scheduled by fixed priority and the task
+/// above is not a server with release jitter: a jittered job may find its
+/// server's budget not yet replenished and wait (a sporadic server runs it
+/// in slack meanwhile, a PIBS server not at all), below tasks it otherwise
+/// preempts, so "a above b" no longer holds at every instant. The task
+/// below may wait so: waiting only keeps it from running, and both
+/// arguments ask of it only that it not run while the task above has a job
+/// pending (P1: c above p has no job pending at p's publish, since it would
+/// run before p, in p's class or in slack; P2: a c job cannot start while
+/// p's job is pending), docs/analysis.md "Reaction". Links without an
+/// order use the windows alone, anchored on nominal releases with R = J +
+/// w; plain jittered tasks keep the priority arguments, with J where an
+/// anchor moves.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     let waits = |t: &LinkTask| t.j > 0 && t.budgeted;
     // Jobs that merge, or share a rank in a thread, break both cases.
     let merging = p.merging() || c.merging();
-    if !sched.policy().fixed_priority() || p.cpu != c.cpu || waits(p) || waits(c) || merging {
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu || merging {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
-    // highest (inherited) one.
+    // highest (inherited) one, and a never waits for its budget.
     match (p.prio, p.top, c.prio, c.top) {
-        (Some(_), Some(pt), Some(cp), Some(_)) if cp < pt => Some(Case::One),
-        (Some(pp), Some(_), Some(_), Some(ct)) if pp < ct => Some(Case::Two),
+        (Some(_), Some(pt), Some(cp), Some(_)) if cp < pt && !waits(c) => Some(Case::One),
+        (Some(pp), Some(_), Some(_), Some(ct)) if pp < ct && !waits(p) => Some(Case::Two),
         _ => None,
     }
 }
