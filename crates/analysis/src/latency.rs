@@ -916,6 +916,32 @@ mod tests {
         }
     }
 
+    /// A server with release jitter (it may wait for its budget, in slack)
+    /// breaks the priority order only as the task above: P1 and P2 ask of
+    /// the task below only that it not run (docs/analysis.md, "Priorities,
+    /// constrained deadlines and release jitter").
+    #[test]
+    fn a_jittered_server_breaks_the_order_only_above() {
+        let sched = Scheduler::Rm;
+        let (hi, lo) = (lt(MS, 10 * MS, 0, 2 * MS, 1), lt(MS, 20 * MS, 0, 4 * MS, 2));
+        let jittered = |t: LinkTask| LinkTask { j: MS, ..t };
+        assert_eq!(fp_order(sched, &hi, &lo), Some(Case::Two));
+        assert_eq!(fp_order(sched, &lo, &hi), Some(Case::One));
+        // Below: P2 (it is the consumer) and P1 (the producer) stand.
+        assert_eq!(fp_order(sched, &hi, &jittered(lo)), Some(Case::Two));
+        assert_eq!(fp_order(sched, &jittered(lo), &hi), Some(Case::One));
+        // Above: neither.
+        assert_eq!(fp_order(sched, &jittered(hi), &lo), None);
+        assert_eq!(fp_order(sched, &lo, &jittered(hi)), None);
+        // A plain task with jitter has no budget to wait for.
+        let plain = LinkTask {
+            budgeted: false,
+            ..jittered(hi)
+        };
+        assert_eq!(fp_order(sched, &plain, &lo), Some(Case::Two));
+        assert_eq!(fp_order(sched, &lo, &plain), Some(Case::One));
+    }
+
     #[test]
     fn eq6_cases() {
         // Producer T = 15, C = 1; consumer T = 10, C = 1.15; Δ = 0.25 (ms, ×1e6 ns).
