@@ -195,25 +195,31 @@ pub fn paper_freshness_link_in(case: Case, p: &LinkTask, c: &LinkTask) -> Nanos 
 }
 
 /// Sound mode: may the priority-based arguments be used for this link? Only
-/// when both tasks share a CPU scheduled by fixed priority, and neither is
-/// a server with release jitter: a jittered job may find its server's
-/// budget not yet replenished and wait (a sporadic server runs it in slack
-/// meanwhile), below tasks it otherwise preempts, so "a above b" no longer
-/// holds at every instant (docs/analysis.md). Such links use the windows
-/// alone, anchored on nominal releases with R = J + w; plain jittered tasks
-/// keep the priority arguments, with J where an anchor moves.
+/// when both tasks share a CPU scheduled by fixed priority and the task
+/// above is not a server with release jitter: a jittered job may find its
+/// server's budget not yet replenished and wait (a sporadic server runs it
+/// in slack meanwhile, a PIBS server not at all), below tasks it otherwise
+/// preempts, so "a above b" no longer holds at every instant. The task
+/// below may wait so: waiting only keeps it from running, and both
+/// arguments ask of it only that it not run while the task above has a job
+/// pending (P1: c above p has no job pending at p's publish, since it would
+/// run before p, in p's class or in slack; P2: a c job cannot start while
+/// p's job is pending), docs/analysis.md "Reaction". Links without an
+/// order use the windows alone, anchored on nominal releases with R = J +
+/// w; plain jittered tasks keep the priority arguments, with J where an
+/// anchor moves.
 pub fn fp_order(sched: Scheduler, p: &LinkTask, c: &LinkTask) -> Option<Case> {
     let waits = |t: &LinkTask| t.j > 0 && t.budgeted;
     // Jobs that merge, or share a rank in a thread, break both cases.
     let merging = p.merging() || c.merging();
-    if !sched.policy().fixed_priority() || p.cpu != c.cpu || waits(p) || waits(c) || merging {
+    if !sched.policy().fixed_priority() || p.cpu != c.cpu || merging {
         return None;
     }
     // "a above b" must hold at every instant: a's lowest priority above b's
-    // highest (inherited) one.
+    // highest (inherited) one, and a never waits for its budget.
     match (p.prio, p.top, c.prio, c.top) {
-        (Some(_), Some(pt), Some(cp), Some(_)) if cp < pt => Some(Case::One),
-        (Some(pp), Some(_), Some(_), Some(ct)) if pp < ct => Some(Case::Two),
+        (Some(_), Some(pt), Some(cp), Some(_)) if cp < pt && !waits(c) => Some(Case::One),
+        (Some(pp), Some(_), Some(_), Some(ct)) if pp < ct && !waits(p) => Some(Case::Two),
         _ => None,
     }
 }
@@ -908,6 +914,32 @@ mod tests {
             let_comm: false,
             event: None,
         }
+    }
+
+    /// A server with release jitter (it may wait for its budget, in slack)
+    /// breaks the priority order only as the task above: P1 and P2 ask of
+    /// the task below only that it not run (docs/analysis.md, "Priorities,
+    /// constrained deadlines and release jitter").
+    #[test]
+    fn a_jittered_server_breaks_the_order_only_above() {
+        let sched = Scheduler::Rm;
+        let (hi, lo) = (lt(MS, 10 * MS, 0, 2 * MS, 1), lt(MS, 20 * MS, 0, 4 * MS, 2));
+        let jittered = |t: LinkTask| LinkTask { j: MS, ..t };
+        assert_eq!(fp_order(sched, &hi, &lo), Some(Case::Two));
+        assert_eq!(fp_order(sched, &lo, &hi), Some(Case::One));
+        // Below: P2 (it is the consumer) and P1 (the producer) stand.
+        assert_eq!(fp_order(sched, &hi, &jittered(lo)), Some(Case::Two));
+        assert_eq!(fp_order(sched, &jittered(lo), &hi), Some(Case::One));
+        // Above: neither.
+        assert_eq!(fp_order(sched, &jittered(hi), &lo), None);
+        assert_eq!(fp_order(sched, &lo, &jittered(hi)), None);
+        // A plain task with jitter has no budget to wait for.
+        let plain = LinkTask {
+            budgeted: false,
+            ..jittered(hi)
+        };
+        assert_eq!(fp_order(sched, &plain, &lo), Some(Case::Two));
+        assert_eq!(fp_order(sched, &lo, &plain), Some(Case::One));
     }
 
     #[test]

@@ -446,8 +446,8 @@ impl Link {
             // is in [r + x_min(p), r + R_p]; and one released after
             // r + R_p − x_min(c) was not released before f.
             //
-            // With release jitter (plain tasks only, `fp_order`) r is the
-            // nominal release and R counts from it: a c job is actually
+            // With release jitter (of p, or of a plain c: `fp_order`) r is
+            // the nominal release and R counts from it: a c job is actually
             // released up to J_c after its nominal release, so it may see
             // the value from J_c earlier.
             Some(crate::Case::One) => (rp - (xc - 1).max(0), xp - jc),
