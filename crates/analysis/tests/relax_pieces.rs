@@ -4,7 +4,7 @@
 //! design's split bound rests on), also over boxes as wide as a design's
 //! domains (an eighth to four times the generated periods). The sound
 //! reaction sums' reachability pieces in a chain's middle share their
-//! slope with the producer's producer; that they do is counted, so the
+//! slope with every stage before them; that they do is counted, so the
 //! check covers them.
 
 use rtpipe_analysis::relax::{paper_monotone, paper_pieces, relax, sound_pieces, MinSum};
@@ -63,34 +63,37 @@ fn below(what: &str, lower: f64, exact: Option<Nanos>) {
     }
 }
 
-/// A sound reaction term's pieces in two periods (a reachability piece
-/// that shares its slope), in `e`.
-fn shared_pieces(e: &MinSum) -> usize {
+/// A sound reaction term's pieces in at least `periods` periods (a
+/// reachability piece that shares its slope with the stages before it),
+/// in `e`.
+fn shared_pieces(e: &MinSum, periods: usize) -> usize {
     e.terms
         .iter()
         .flatten()
-        .filter(|p| p.slopes.len() == 2)
+        .filter(|p| p.slopes.len() >= periods)
         .count()
 }
 
 /// Every chain's pieces at `t` against the analysis there; how many
-/// chains had pieces, and how many sound reaction pieces share a slope.
+/// chains had pieces, how many sound reaction pieces share a slope, and
+/// how many share it with two stages or more.
 fn pieces_below(
     spec: &Spec,
     (lo, hi): (&[Nanos], &[Nanos]),
     imposed: &[(usize, usize)],
     t: &[Nanos],
     what: &str,
-) -> (usize, usize) {
+) -> (usize, usize, usize) {
     let r = relax(spec, lo, hi, imposed, false);
     let report = analyze(&at(spec, t));
-    let (mut with, mut shared) = (0, 0);
+    let (mut with, mut shared, mut long) = (0, 0, 0);
     for k in 0..spec.chains.len() {
         let fig = |m, sound, a| figure(&report, k, m, sound, a);
         let w = |s: &str| format!("{what}: chain {k} {s}");
         if let Some((e, f, ev)) = sound_pieces(spec, (lo, hi), imposed, &r, k) {
             with += 1;
-            shared += shared_pieces(&e);
+            shared += shared_pieces(&e, 2);
+            long += shared_pieces(&e, 3);
             let least = |s: &MinSum| s.at(t);
             below(
                 &w("sound reaction"),
@@ -123,7 +126,7 @@ fn pieces_below(
             );
         }
     }
-    (with, shared)
+    (with, shared, long)
 }
 
 /// The rank orders of the tasks at `t` (a above b), each kept by chance.
@@ -146,10 +149,11 @@ fn orders_at(spec: &Spec, t: &[Nanos], rng: &mut Rng) -> Vec<(usize, usize)> {
 
 #[test]
 fn pieces_bound_every_point_of_a_box_from_below() {
-    let (mut with, mut shared) = (0, 0);
-    let mut count = |(w, s): (usize, usize)| {
+    let (mut with, mut shared, mut long) = (0, 0, 0);
+    let mut count = |(w, s, l): (usize, usize, usize)| {
         with += w;
         shared += s;
+        long += l;
     };
     for seed in 0..SYSTEMS {
         let spec = system(seed);
@@ -195,9 +199,13 @@ fn pieces_bound_every_point_of_a_box_from_below() {
         }
     }
     // Not vacuous: most chains get pieces, and many middle links a
-    // shared reachability piece.
-    println!("{with} chains with pieces, {shared} shared pieces");
+    // shared reachability piece, some of them with two stages or more.
+    println!("{with} chains with pieces, {shared} shared pieces, {long} with two stages or more");
     assert!(shared > SYSTEMS as usize, "only {shared} shared pieces");
+    assert!(
+        long > SYSTEMS as usize / 4,
+        "only {long} pieces shared with two stages"
+    );
     assert!(
         with > SYSTEMS as usize * 6,
         "only {with} chains with pieces"

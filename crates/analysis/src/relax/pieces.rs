@@ -114,9 +114,20 @@ fn sound_sums(
     reach: bool,
 ) -> Option<(MinSum, MinSum)> {
     let tail = path[path.len() - 1];
+    // From the read the analysis takes each stage from its release or its
+    // read (`latency::reaction_stages`), the tail's from its read with W:
+    // at least the sum of each link's smaller term and the smaller of R
+    // and W at the tail (each stage's release and read bounds are at least
+    // that sum up to it).
+    let least = |a: Option<Nanos>, b: Option<Nanos>| a.zip(b).map(|(a, b)| a.min(b)).or(a);
+    let tail_term = if reach {
+        least(r.r[tail], r.w[tail])
+    } else {
+        r.r[tail]
+    };
     let mut e = MinSum {
         fixed: Piece {
-            base: r.r[tail]? as f64,
+            base: tail_term? as f64,
             slopes: Vec::new(),
         },
         terms: Vec::new(),
@@ -132,12 +143,17 @@ fn sound_sums(
             let (p, c) = ((pi, tp, r.of(pi)), (ci, tc, r.of(ci)));
             let l = super::least_link(spec, order, &orders, p, c, (distinct, head));
             let fresh = if last { l.freshness_last } else { l.freshness };
-            Some((l.reaction?, fresh?))
+            // The head link's reaction already runs from its read.
+            let react = match reach && k > 0 {
+                true => least(l.reaction, l.reaction_from_read),
+                false => l.reaction,
+            };
+            Some((react?, fresh?))
         };
         let corners = corners(order, pi, ci);
         let mut reaction = two_pieces(|a, b| at(a, b).map(|x| x.0), (pi, ci), order, &corners)?;
         if k > 0 && reach {
-            share_with_previous(&mut reaction, pi, path[k - 1]);
+            share_with_producers(&mut reaction, &path[..=k]);
         }
         e.terms.push(reaction);
         f.terms.push(two_pieces(
@@ -157,18 +173,35 @@ fn sound_sums(
 }
 
 /// A reaction term's `T_p + a` piece (a reachability row) shares its
-/// slope with the producer's own producer `prev`: the rows need `p`
-/// distinct (`latency::distinct_passes`), whose reads are then further
-/// apart than `prev`'s publishes, `T_p − R_p + x_p > T_prev + R_prev −
-/// x_min(prev)`, so `T_p > T_prev` (R ≥ x ≥ x_min), and where the piece
-/// applies `T_p ≥ (T_p + T_prev) / 2`. Where `p` is not distinct the
-/// analysis has no such row and the term is at least its `T_c` piece.
-/// Without it a wide box lets the bound shorten a chain's middle stage
-/// alone, where the analysis would need its producers shorter too.
-fn share_with_previous(pieces: &mut [Piece], p: usize, prev: usize) {
+/// slope with every stage before `p` on the chain (`stages`, head first,
+/// ending at `p`): the rows need `p` distinct, which needs every stage
+/// before it distinct (`latency::distinct_passes` is passed along the
+/// chain), and each of those stages' reads further apart than its
+/// producer's publishes, `T_q − R_q + x_q > T_prev + R_prev − x_min(prev)`,
+/// so `T_q > T_prev` (R ≥ x ≥ x_min): the periods grow along the chain up
+/// to `p`, and where the piece applies `T_p` is at least their mean. Where
+/// `p` is not distinct the analysis has no such row and the term is at
+/// least its `T_c` piece. Without it a wide box lets the bound shorten a
+/// chain's middle stage alone, where the analysis would need all its
+/// producers shorter too. A path that visits a task twice keeps the plain
+/// row (its periods cannot grow strictly along it, but the mean would
+/// count that task twice).
+fn share_with_producers(pieces: &mut [Piece], stages: &[usize]) {
+    let Some((&p, before)) = stages.split_last() else {
+        return;
+    };
+    if before.is_empty()
+        || stages
+            .iter()
+            .enumerate()
+            .any(|(k, s)| stages[..k].contains(s))
+    {
+        return;
+    }
+    let share = 1.0 / stages.len() as f64;
     for piece in pieces {
-        if prev != p && piece.slopes == [(p, 1.0)] {
-            piece.slopes = vec![(p, 0.5), (prev, 0.5)];
+        if piece.slopes == [(p, 1.0)] {
+            piece.slopes = stages.iter().map(|&s| (s, share)).collect();
         }
     }
 }
