@@ -21,7 +21,7 @@ pub struct FlyArgs {
     /// own criterion, and flies only if every flight meets it.
     #[arg(
         long,
-        value_name = "FILE|steps|hover|paper|gusty",
+        value_name = "FILE|steps|hover|paper|gusty|breeze",
         default_value = "steps"
     )]
     pub mission: String,
