@@ -80,18 +80,25 @@ design sgb-pwm-0.9 pwm=5084
 design pr-pwm-0.9 pwm=12260
 
 # design --fly's answer on examples/cleanflight-design-flown.toml (those
-# plain-band limits, each period capped at Table V's x 1.114; --fly
-# steps,gusty --vehicle racer5,aero1kg; returned under the plain band).
+# plain-band limits, each period capped at Table V's x 1.114): --fly
+# steps,gusty --vehicle racer5,aero1kg answers it, and so does bare --fly
+# (steps, gusty and breeze) with a step's overshoot judged, in turbulence,
+# against 20 % plus the hover's tracked error over the step's span.
 design flown-fly gyro=1114 accl=1114 ahrs=5116 radio=10000 pid=2012 pwm=5488
 # The same with the breeze mission among the acceptance flights at a pass
 # rate of 0.8 (--fly steps,gusty,examples/missions/sweep-steps-breeze.toml
 # --flights 60 --pass-rate 0.8).
 design flown-fly-b gyro=1114 accl=1114 ahrs=5386 radio=10000 pid=2012 pwm=5488
+# design --fly's default acceptance (bare --fly: steps, gusty and the built-in
+# breeze, steps in light turbulence, on racer5 and aero1kg; the default
+# pass-rate bound, 0.95 at 95 % confidence, 78 flights a design) while the
+# overshoot was judged against the plain 20 % in turbulence too.
+design flown-fly-d gyro=1114 accl=1114 ahrs=5386 radio=9024 pid=2012 pwm=5488
 
 printf "%-12s %-8s" design vehicle
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 flown-fly flown-fly-b}; do
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
   for v in racer5 aero1kg; do
     printf "%-12s %-8s" "$d" "$v"
     for m in $MISSIONS; do

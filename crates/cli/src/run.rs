@@ -36,8 +36,8 @@ pub struct RunArgs {
     /// [default: racer5].
     #[arg(long)]
     pub vehicle: Option<String>,
-    /// A flight's mission: steps, hover, paper, gusty, or a mission file (as
-    /// `fly`) [default: steps].
+    /// A flight's mission: steps, hover, paper, gusty, breeze, or a mission
+    /// file (as `fly`) [default: steps].
     #[arg(long)]
     pub mission: Option<String>,
     /// Scheduling class of the task threads [default: fifo for scheduler =

@@ -10,7 +10,7 @@ mod mission;
 pub use autopilot::{Autopilot, AutopilotConfig, VehicleState};
 pub use failsafe::{Failsafe, FailsafeAction, FailsafeConfig, FailsafePhase};
 pub use mission::{
-    parse_time, Criteria, CriteriaOverride, Mission, MissionStep, PilotIntent, World,
+    parse_time, Criteria, CriteriaOverride, Mission, MissionStep, PilotIntent, World, BREEZE_TOML,
     BUILTIN_MISSIONS, GUSTY_TOML, HOVER_TOML, MAX_AT_S, MAX_MISSION_STEPS, PAPER_TOML, STEPS_TOML,
 };
 

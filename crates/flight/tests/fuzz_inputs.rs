@@ -6,7 +6,7 @@
 use proptest::prelude::*;
 use rtpipe_flight::preset::{Preset, AERO1KG_TOML, RACER5_TOML};
 use rtpipe_flight::quality::Criteria;
-use rtpipe_flight::radio::{Mission, GUSTY_TOML, HOVER_TOML, PAPER_TOML, STEPS_TOML};
+use rtpipe_flight::radio::{Mission, BREEZE_TOML, GUSTY_TOML, HOVER_TOML, PAPER_TOML, STEPS_TOML};
 use rtpipe_model::SpecError;
 use rtpipe_testkit::Scratch;
 use std::path::Path;
@@ -76,8 +76,9 @@ fn mutated(texts: &'static [&'static str]) -> impl Strategy<Value = Vec<u8>> {
         })
 }
 
-const VALID: [&str; 7] = [
+const VALID: [&str; 8] = [
     HOVER_TOML,
+    BREEZE_TOML,
     STEPS_TOML,
     PAPER_TOML,
     GUSTY_TOML,

@@ -108,7 +108,7 @@ pub fn from_file(flag: &str, e: &rtpipe_model::SpecError, help: &str) -> Diagnos
 }
 
 fn mission(m: &str) -> Result<Mission, Diagnostic> {
-    let help = "name a built-in mission (hover, steps, paper, gusty) or a mission file";
+    let help = "name a built-in mission (hover, steps, paper, gusty, breeze) or a mission file";
     if BUILTIN_MISSIONS.contains(&m) {
         return Mission::builtin(m)
             .map_err(|e| Diagnostic::error(format!("--mission {m}: {e}"), help));

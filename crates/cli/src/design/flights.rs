@@ -12,6 +12,12 @@ use rtpipe_sim::ExecModel;
 use serde::Serialize;
 use std::path::Path;
 
+/// The missions `--fly` alone flies: the calm steps, the turbulent hover
+/// and steps in light turbulence (`breeze`). Without the last, an answer
+/// was judged on no step in turbulence and missed held-out turbulent steps
+/// Table V's periods passed (docs/flight.md, "Held-out missions").
+pub const DEFAULT_MISSIONS: [&str; 3] = ["steps", "gusty", "breeze"];
+
 /// The flights a design must pass: per (vehicle, mission) setup, flights
 /// 0, 1, … each with the next seed of the noise and execution times and
 /// the next phase draw (`rtpipe_fly::phases`; draw 0 the nominal phase),

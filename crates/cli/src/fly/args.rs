@@ -14,14 +14,14 @@ pub struct FlyArgs {
     /// With --sweep, a comma-separated list: every timing is flown on each.
     #[arg(long, value_name = "PRESET|FILE", default_value = "racer5")]
     pub vehicle: String,
-    /// The mission: a built-in one (steps, hover, paper, gusty) or a mission
-    /// file (crates/flight/missions/*.toml show the format, `[criteria]` and
-    /// `[world]` included). With --sweep, a comma-separated list: every
+    /// The mission: a built-in one (steps, hover, paper, gusty, breeze) or
+    /// a mission file (crates/flight/missions/*.toml show the format,
+    /// `[criteria]` and `[world]` included). With --sweep, a comma-separated list: every
     /// timing is flown on each mission (and vehicle), each judged by its
     /// own criterion, and flies only if every flight meets it.
     #[arg(
         long,
-        value_name = "FILE|steps|hover|paper|gusty",
+        value_name = "FILE|steps|hover|paper|gusty|breeze",
         default_value = "steps"
     )]
     pub mission: String,

@@ -313,6 +313,10 @@ struct StepView {
     #[serde(rename = "true")]
     truth: ResponseView,
     drift_deg: f64,
+    /// The true overshoot the step was judged against, a fraction: the
+    /// criterion's, plus in turbulence the hover's tracked error over the
+    /// step's span.
+    overshoot_limit: f64,
 }
 
 #[derive(Serialize, schemars::JsonSchema)]
@@ -349,6 +353,7 @@ fn to_json<'a>(
         tracked: (&st.tracked).into(),
         truth: (&st.truth).into(),
         drift_deg: st.drift_deg,
+        overshoot_limit: st.overshoot_limit(&s.mission.criteria),
     });
     let flight = FlightView {
         vehicle: &s.preset.name,

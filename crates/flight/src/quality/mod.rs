@@ -26,6 +26,8 @@
 //! 5 % of the step, plus, in a mission flown in turbulence, the hover's
 //! tracked error on its axis ([`HoverTracking`]): there the loop strays
 //! from its set-point by that much holding still, whatever a step did.
+//! The true overshoot's limit is widened by the same error over the
+//! step's span ([`weather_allowance`], [`Step::overshoot_limit`]).
 //!
 //! **Smoothness**: over the same hover samples, the roll and pitch body
 //! rate above [`OSCILLATION_HZ`] (the loop ringing) and the motor
@@ -43,7 +45,7 @@ pub use crate::radio::Criteria;
 pub use assessor::Assessor;
 pub use envelope::{Envelope, Excursion, Excursions, LANDING_TIME_S};
 pub use smoothness::OSCILLATION_HZ;
-pub use steps::{settling_band, STEP_BAND};
+pub use steps::{settling_band, weather_allowance, STEP_BAND};
 
 use crate::radio::Mission;
 use crate::trace::metrics::StepResponse;
@@ -106,13 +108,28 @@ pub struct Step {
     /// error on its axis ([`FlightQuality::hover_tracking_deg`]); 0 for a
     /// heading step (judged on the plain 5 %, which no criterion asks of).
     pub band_deg: f64,
+    /// What the weather adds to the overshoot limit, a fraction of the
+    /// step: in turbulence the hover's tracked error on the step's axis
+    /// over the true response's span ([`weather_allowance`]); 0 in calm
+    /// air and for a heading step.
+    pub overshoot_allowance: f64,
+}
+
+impl Step {
+    /// The overshoot the true response may reach before it fails `c`: the
+    /// criterion's fraction plus [`Step::overshoot_allowance`] (the gust
+    /// adds to the true attitude as much as the loop wanders holding its
+    /// hover; docs/flight.md, "Settling in a disturbed world").
+    pub fn overshoot_limit(&self, c: &Criteria) -> f64 {
+        c.overshoot + self.overshoot_allowance
+    }
 }
 
 /// The tracked roll and pitch error RMS over the hover samples (the AHRS
 /// estimate against the set-point in use), degrees: how closely the loop
 /// holds its own set-point when asked to hold still, in the world the
 /// mission flies. In a mission flown in turbulence a step's settling band
-/// is widened by it ([`settling_band`]): there the loop wanders about its
+/// and overshoot limit are widened by it ([`weather_allowance`]): there the loop wanders about its
 /// set-point by this much whatever the step did, and a band narrower than
 /// that judges the weather, not the response (docs/flight.md, "Settling in
 /// a disturbed world"). In calm air the wander is the loop's own, and the

@@ -77,17 +77,28 @@ pub(super) fn step_holds(changes: &[(f64, Axis, f64)], settle_s: f64) -> Vec<(f6
         .collect()
 }
 
-/// A step's settling band as a fraction of the step: [`STEP_BAND`] of the
-/// step from `start` to `to`, widened by `floor_deg`, the tracked error the
-/// same loop showed holding its hover in the same world (see
-/// [`super::HoverTracking`]). A step of no size keeps the plain fraction.
-pub fn settling_band(start: f64, to: f64, floor_deg: f64) -> f64 {
+/// What the weather adds to a step's limits, as a fraction of the step
+/// from `start` to `to`: `floor_deg`, the tracked error the same loop
+/// showed holding its hover in the same world (see
+/// [`super::HoverTracking`]), over the step's span. A criterion narrower
+/// than what the loop holds still judges the weather, not the step; both
+/// the settling band ([`settling_band`]) and the overshoot limit
+/// ([`super::Step::overshoot_limit`]) are widened by it. A step of no size
+/// gets none.
+pub fn weather_allowance(start: f64, to: f64, floor_deg: f64) -> f64 {
     let span = (to - start).abs();
     if span > 0.0 {
-        STEP_BAND + floor_deg / span
+        floor_deg / span
     } else {
-        STEP_BAND
+        0.0
     }
+}
+
+/// A step's settling band as a fraction of the step: [`STEP_BAND`] of the
+/// step from `start` to `to`, widened by the [`weather_allowance`] of
+/// `floor_deg`.
+pub fn settling_band(start: f64, to: f64, floor_deg: f64) -> f64 {
+    STEP_BAND + weather_allowance(start, to, floor_deg)
 }
 
 /// The settling band of a step, as a fraction of the step: ±5 %.
@@ -101,31 +112,39 @@ pub(super) fn steps(
     let mut out = Vec::new();
     for (k, t, axis, to) in away_from_level(changes) {
         let end = step_end(changes, k);
+        // Each response with the weather's allowance over its own span.
         let judge = |est: bool| {
             let signal = move |p: &TracePoint| angle(axis, if est { &p.est } else { &p.euler });
             if axis == Axis::Yaw {
-                return (heading_response(trace, signal, t, end, to, STEP_BAND), 0.0);
+                return (
+                    heading_response(trace, signal, t, end, to, STEP_BAND),
+                    0.0,
+                    0.0,
+                );
             }
             // From where the response starts, not from level: a gust may
             // have tilted the vehicle when the stick moved.
             let start = trace.iter().find(|p| secs(p) >= t).map_or(0.0, &signal);
+            let allowance = weather_allowance(start, to, floor.of(axis));
             let band = settling_band(start, to, floor.of(axis));
             let response = step_response(trace, signal, t, end, start, to, band);
-            (response, band * (to - start).abs())
+            (response, allowance, band * (to - start).abs())
         };
         let at_end = trace
             .iter()
             .take_while(|p| secs(p) < end)
             .last()
             .map_or(f64::NAN, |p| angle(axis, &p.euler));
-        let tracked = judge(true);
+        let (tracked, _, band_deg) = judge(true);
+        let (truth, overshoot_allowance, _) = judge(false);
         out.push(Step {
             axis,
             at_s: t,
             to_deg: to,
-            tracked: tracked.0,
-            truth: judge(false).0,
-            band_deg: tracked.1,
+            tracked,
+            truth,
+            band_deg,
+            overshoot_allowance,
             drift_deg: crate::math::angle_diff_deg(at_end, to),
         });
     }

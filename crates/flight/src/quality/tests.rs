@@ -407,3 +407,83 @@ fn a_step_settles_into_its_band_widened_by_the_hovers_own_tracking_error() {
     assert!(calm.tracked.settling_s > 0.99, "{calm:?}");
     assert_eq!(settling_band(0.0, 0.0, 1.0), STEP_BAND);
 }
+
+/// A roll step to 20° at 6 s whose true (and tracked) response rings with
+/// a peak `overshoot` (a second-order response, ωn = 40 rad/s: settled in
+/// well under the 0.5 s criterion), after a hover from 4 s whose roll
+/// wanders ±`hover_shake_deg` about its level set-point (a square wave of
+/// 0.1 s, so that RMS exactly); in light turbulence unless `calm`.
+fn ringing_roll_step(overshoot: f64, hover_shake_deg: f64, calm: bool) -> FlightQuality {
+    let world = if calm {
+        ""
+    } else {
+        "[world]\nturbulence = \"light\"\n"
+    };
+    let src = format!("{}{world}", STEP_AT_6S.replace("STICK", "roll_deg = 20"));
+    let m = Mission::from_toml_str(&src).unwrap_or_else(|e| panic!("{e}"));
+    // ζ from the peak overshoot e^(−ζπ/√(1−ζ²)).
+    let l = -overshoot.ln();
+    let zeta = l / (std::f64::consts::PI.powi(2) + l * l).sqrt();
+    let (wn, root) = (40.0, (1.0 - zeta * zeta).sqrt());
+    let trace: Vec<TracePoint> = (0..4000)
+        .map(|k| {
+            let t = k as f64 * 0.002;
+            if t < 6.0 {
+                let up = ((t / 0.05) as u64).is_multiple_of(2);
+                return point(
+                    t,
+                    if up {
+                        hover_shake_deg
+                    } else {
+                        -hover_shake_deg
+                    },
+                    0.0,
+                );
+            }
+            let (decay, wt) = ((-zeta * wn * (t - 6.0)).exp(), wn * root * (t - 6.0));
+            let roll = 20.0 * (1.0 - decay * (wt.cos() + zeta / root * wt.sin()));
+            point(t, roll, 20.0)
+        })
+        .collect();
+    assess(&trace, &m)
+}
+
+#[test]
+fn a_steps_overshoot_is_judged_with_the_hovers_own_tracking_error_in_turbulence() {
+    let c = Criteria::default();
+    let step_fails = |q: &FlightQuality| fails_with(q, "roll step at 6.0 s");
+    // 21 % after a hover that wanders 1.2° RMS in turbulence: the gust
+    // moves the true attitude that much whatever the step did, so the
+    // limit is 20 % + 1.2°/20° = 26 %; the old rule (20 %) failed it.
+    let q = ringing_roll_step(0.21, 1.2, false);
+    let roll = q.steps[0];
+    assert!((roll.truth.overshoot - 0.21).abs() < 0.002, "{roll:?}");
+    assert!((roll.overshoot_allowance - 0.06).abs() < 1e-9, "{roll:?}");
+    assert!((roll.overshoot_limit(&c) - 0.26).abs() < 1e-9, "{roll:?}");
+    assert!(roll.truth.overshoot >= c.overshoot, "the old rule fails it");
+    assert!(!step_fails(&q), "{:?}", q.failures(&c));
+    // The same step and wander in calm air: the wander is the loop's own,
+    // the limit the plain 20 %.
+    let calm = ringing_roll_step(0.21, 1.2, true);
+    assert_eq!(calm.steps[0].overshoot_allowance, 0.0);
+    assert!(
+        fails_with(&calm, "roll step at 6.0 s: overshoot 21.0 %, settling"),
+        "{:?}",
+        calm.failures(&c)
+    );
+    assert!(fails_with(&calm, "(limits 20 %, 0.5 s)"));
+    // A hover held exactly in turbulence widens nothing.
+    assert!(step_fails(&ringing_roll_step(0.21, 0.0, false)));
+    // A grossly larger overshoot still fails in turbulence, and the verdict
+    // says which limit applied.
+    let gross = ringing_roll_step(0.40, 1.2, false);
+    assert!(
+        fails_with(
+            &gross,
+            "overshoot 40.0 %, settling 0.184 s (limits 26.0 % = 20 % + 6.0 % hover tracking, 0.5 s)"
+        ),
+        "{:?}",
+        gross.failures(&c)
+    );
+    assert_eq!(weather_allowance(3.0, 3.0, 1.0), 0.0);
+}

@@ -1,6 +1,6 @@
 //! The verdict: what fails a mission's criteria, in words.
 
-use super::{Axis, Criteria, FlightQuality, OSCILLATION_HZ};
+use super::{Axis, Criteria, FlightQuality, Step, OSCILLATION_HZ};
 
 impl FlightQuality {
     /// What fails `c`, in words; empty when the flight meets it.
@@ -55,14 +55,15 @@ impl FlightQuality {
             .filter(|s| s.axis != Axis::Yaw && self.judged(s))
         {
             let (over, settle) = (s.truth.overshoot, s.tracked.settling_s);
-            if over >= c.overshoot || settle >= c.settling_s {
+            let over_limit = s.overshoot_limit(c);
+            if over >= over_limit || settle >= c.settling_s {
                 out.push(format!(
-                    "{} step at {:.1} s: overshoot {:.1} %, settling {:.3} s (limits {:.0} %, {} s)",
+                    "{} step at {:.1} s: overshoot {:.1} %, settling {:.3} s (limits {}, {} s)",
                     s.axis.name(),
                     s.at_s,
                     100.0 * over,
                     settle,
-                    100.0 * c.overshoot,
+                    overshoot_limit_words(c, s),
                     c.settling_s
                 ));
             }
@@ -95,5 +96,21 @@ impl FlightQuality {
             ));
         }
         out
+    }
+}
+
+/// The overshoot limit a step was judged on, in words: the criterion's
+/// plain percentage in calm air; in turbulence, that plus the hover's
+/// tracked error over the step's span, and the sum.
+fn overshoot_limit_words(c: &Criteria, s: &Step) -> String {
+    if s.overshoot_allowance > 0.0 {
+        format!(
+            "{:.1} % = {:.0} % + {:.1} % hover tracking",
+            100.0 * s.overshoot_limit(c),
+            100.0 * c.overshoot,
+            100.0 * s.overshoot_allowance
+        )
+    } else {
+        format!("{:.0} %", 100.0 * c.overshoot)
     }
 }

@@ -291,8 +291,14 @@ pub const STEPS_TOML: &str = include_str!("../../missions/steps.toml");
 pub const PAPER_TOML: &str = include_str!("../../missions/paper.toml");
 /// Built-in `gusty` mission source: a hover in moderate turbulence.
 pub const GUSTY_TOML: &str = include_str!("../../missions/gusty.toml");
+/// Built-in `breeze` mission source: roll and pitch steps in light
+/// turbulence with the IMU's errors on. Its one home is the example file
+/// the sweep flies (`examples/missions/sweep-steps-breeze.toml`); built in
+/// so that `design --fly`'s default acceptance judges steps in turbulence
+/// wherever it runs.
+pub const BREEZE_TOML: &str = include_str!("../../../../examples/missions/sweep-steps-breeze.toml");
 /// Names of the built-in missions.
-pub const BUILTIN_MISSIONS: [&str; 4] = ["hover", "steps", "paper", "gusty"];
+pub const BUILTIN_MISSIONS: [&str; 5] = ["hover", "steps", "paper", "gusty", "breeze"];
 
 impl Mission {
     /// Parse a mission; errors name the offending field.
@@ -352,16 +358,18 @@ impl Mission {
         })
     }
 
-    /// A built-in mission by name (`hover`, `steps`, `paper`, `gusty`).
+    /// A built-in mission by name (`hover`, `steps`, `paper`, `gusty`,
+    /// `breeze`).
     pub fn builtin(name: &str) -> Result<Self, ConfigError> {
         match name {
             "hover" => Self::from_toml_str(HOVER_TOML),
             "steps" => Self::from_toml_str(STEPS_TOML),
             "paper" => Self::from_toml_str(PAPER_TOML),
             "gusty" => Self::from_toml_str(GUSTY_TOML),
+            "breeze" => Self::from_toml_str(BREEZE_TOML),
             _ => Err(ConfigError::new(
                 "mission",
-                format!("unknown built-in mission {name:?} (hover, steps, paper, gusty)"),
+                format!("unknown built-in mission {name:?} (hover, steps, paper, gusty, breeze)"),
             )),
         }
     }
@@ -610,6 +618,13 @@ mod tests {
         let s = Mission::builtin("steps").unwrap();
         assert!(s.steps.iter().any(|x| x.roll_deg == Some(20.0)));
         assert!(Mission::builtin("loop").is_err());
+        for name in BUILTIN_MISSIONS {
+            assert!(Mission::builtin(name).is_ok(), "{name}");
+        }
+        // The breeze: steps in turbulence, with the IMU's errors.
+        let b = Mission::builtin("breeze").unwrap();
+        assert!(b.steps.iter().any(|x| x.pitch_deg == Some(20.0)));
+        assert!(b.world.dryden().is_ok_and(|d| d.is_some()) && b.world.sensor_errors);
     }
 
     #[test]

@@ -2126,6 +2126,14 @@ class Step(Record):
         """The report's ``drift_deg``."""
         return cast("float", self["drift_deg"])
 
+    @property
+    def overshoot_limit(self) -> float:
+        """The true overshoot the step was judged against, a fraction: the
+        criterion's, plus in turbulence the hover's tracked error over the
+        step's span.
+        """
+        return cast("float", self["overshoot_limit"])
+
 
 class Response(Record):
     """A ``Response`` entry of a report."""
