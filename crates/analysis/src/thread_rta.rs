@@ -103,7 +103,7 @@ fn fifo_within(
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
         })
     };
-    let mut demand = demand_of(above);
+    let mut demand = Demand::of_arrivals(above);
     let first = thread(1)?;
     let steps = std::cell::Cell::new(MAX_STEPS);
     let length = fixed_point(1, &steps, |w| {
@@ -132,7 +132,7 @@ fn fifo_within(
     // The candidates' windows start below the busy period's last one: a
     // demand of their own, whose windows grow from one candidate to the
     // next.
-    let mut candidate_demand = demand_of(above);
+    let mut candidate_demand = Demand::of_arrivals(above);
     let (mut worst, mut finish) = (0, 0);
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
@@ -144,17 +144,6 @@ fn fifo_within(
         worst = worst.max(finish - a);
     }
     Some(worst)
-}
-
-/// Σ_h η⁺_h(w)·C_h of the tasks above, stream by stream.
-fn demand_of(above: &Above) -> Demand {
-    let mut demand = Demand::with_capacity(above.iter().map(|(_, a)| a.streams.len()).sum());
-    for &(c, a) in above {
-        for &s in &a.streams {
-            demand.push(c, s);
-        }
-    }
-    demand
 }
 
 /// The least fixed point of a nondecreasing `f` at or above `start`
