@@ -157,6 +157,10 @@ struct Deps {
     /// Per task the tasks that can run above it, its thread's own left
     /// out (none for a background task, which has no response).
     above: Vec<Vec<usize>>,
+    /// Per task what one of its jobs takes from the tasks below it
+    /// ([`FixedPriority::interference`], asked once per task rather than
+    /// once per task above, per analysis).
+    interference: Vec<Nanos>,
     /// Per thread its tasks, in declaration order.
     members: Vec<Vec<usize>>,
     /// Per data-triggered task j the units whose responses read j's
@@ -193,6 +197,7 @@ impl Deps {
                 above
             })
             .collect();
+        let interference = (0..n).map(|j| fp.interference(j)).collect();
         let readers = readers(spec, &above, &members);
         let consumers = spec.triggered_by();
         let trigger_order = trigger_order(spec, &consumers);
@@ -202,6 +207,7 @@ impl Deps {
         }
         Deps {
             above,
+            interference,
             members,
             readers,
             consumers,
@@ -650,7 +656,7 @@ fn respond(
         let Some(a) = arrivals[j].as_ref() else {
             return Response::NONE;
         };
-        models.push((fp.interference(j), a));
+        models.push((deps.interference[j], a));
     }
     if !merging(spec, i) {
         let streams = models.iter().map(|(_, a)| a.streams.len()).sum();
@@ -667,13 +673,13 @@ fn respond(
         };
     }
     let blocking = fp.blocking(i);
-    let shared = t.demand() == fp.interference(i);
+    let shared = t.demand() == deps.interference[i];
     let known = cache
         .iter()
         .find(|(a, b, _)| shared && a == above && *b == blocking)
         .map(|(_, _, r)| r.clone());
     let (actual, windows) = known.unwrap_or_else(|| {
-        let r = thread_response(spec, fp, deps, arrivals, i, &models, blocking);
+        let r = thread_response(spec, deps, arrivals, i, &models, blocking);
         if shared {
             cache.push((above.clone(), blocking, r.clone()));
         }
@@ -696,7 +702,6 @@ fn respond(
 /// own for a thread-less data-triggered task), from their first release.
 fn thread_response(
     spec: &Spec,
-    fp: &impl FixedPriority,
     deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
@@ -712,7 +717,7 @@ fn thread_response(
             let work = if j == i {
                 t.demand()
             } else {
-                fp.interference(j)
+                deps.interference[j]
             };
             Some(Member {
                 work,
