@@ -648,14 +648,25 @@ pub(crate) mod tests {
 
     /// examples/cleanflight.toml flying `steps` on `vehicle`, seed 1.
     pub(crate) fn cleanflight(vehicle: &str) -> (Spec, Setup) {
+        cleanflight_flying(vehicle, "steps", None, 1)
+    }
+
+    /// examples/cleanflight.toml flying `mission` on `vehicle` (for
+    /// `horizon` ns where given) with `seed`.
+    pub(crate) fn cleanflight_flying(
+        vehicle: &str,
+        mission: &str,
+        horizon: Option<rtpipe_model::Nanos>,
+        seed: u64,
+    ) -> (Spec, Setup) {
         let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
         let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
         let r = Request {
             spec_path: &p,
             vehicle,
-            mission: "steps",
-            horizon: None,
-            seed: 1,
+            mission,
+            horizon,
+            seed,
         };
         let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
         (spec, s)
@@ -776,16 +787,7 @@ mod missions {
     #[test]
     fn a_sweep_over_two_missions_writes_the_tighter_limit() {
         let (spec, steps) = tests::cleanflight("racer5");
-        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/cleanflight.toml");
-        let r = crate::Request {
-            spec_path: &p,
-            vehicle: "racer5",
-            mission: "gusty",
-            horizon: None,
-            seed: 1,
-        };
-        let gusty = crate::setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let (_, gusty) = tests::cleanflight_flying("racer5", "gusty", None, 1);
         let vars: Vec<Variation> = [1.0, 2.0, 4.0, 8.0, 16.0].map(Variation::Rate).into();
         let done = AtomicU64::new(0);
         let max_period = |s: &Setup, also: &[(Setup, Criteria)]| {
@@ -830,17 +832,7 @@ mod threads {
     /// examples/cleanflight.toml and racer5 hovering for `horizon` ns
     /// (seed 2): the sweeps' flight.
     fn cleanflight_hover(horizon: rtpipe_model::Nanos) -> (Spec, crate::Setup) {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cleanflight.toml");
-        let spec = Spec::load(&p).unwrap_or_else(|e| panic!("{e}"));
-        let r = Request {
-            spec_path: &p,
-            vehicle: "racer5",
-            mission: "hover",
-            horizon: Some(horizon),
-            seed: 2,
-        };
-        let s = setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
-        (spec, s)
+        tests::cleanflight_flying("racer5", "hover", Some(horizon), 2)
     }
 
     /// The nominal timing, in the sweep as ×1 scale, ×1 rate and 0 ms

@@ -346,19 +346,25 @@ fn a_step_that_sags_in_its_hold_fails_the_tracking_criterion() {
     assert!(!fails_with(&assess(&trace, &m), "step tracking"));
 }
 
-/// A roll step to 20° at 6 s after a hover from 4 s, in light turbulence
-/// (`calm`: without it), the tracked roll shaken about its set-point by
-/// ±`shake_deg` (a square wave of 0.1 s; in the hover too when
-/// `hover_shakes`), the response itself an exact first order; returns the
-/// roll step.
-fn shaken_roll_step(shake_deg: f64, hover_shakes: bool, calm: bool) -> Step {
+/// The mission of a roll step to 20° at 6 s after a hover from 4 s, in
+/// light turbulence unless `calm`.
+fn roll_step_mission(calm: bool) -> Mission {
     let world = if calm {
         ""
     } else {
         "[world]\nturbulence = \"light\"\n"
     };
     let src = format!("{}{world}", STEP_AT_6S.replace("STICK", "roll_deg = 20"));
-    let m = Mission::from_toml_str(&src).unwrap_or_else(|e| panic!("{e}"));
+    Mission::from_toml_str(&src).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A roll step to 20° at 6 s after a hover from 4 s, in light turbulence
+/// (`calm`: without it), the tracked roll shaken about its set-point by
+/// ±`shake_deg` (a square wave of 0.1 s; in the hover too when
+/// `hover_shakes`), the response itself an exact first order; returns the
+/// roll step.
+fn shaken_roll_step(shake_deg: f64, hover_shakes: bool, calm: bool) -> Step {
+    let m = roll_step_mission(calm);
     let trace: Vec<TracePoint> = first_order(6.0, 7.0, 0.0, 20.0)
         .into_iter()
         .map(|(t, roll)| {
@@ -414,13 +420,7 @@ fn a_step_settles_into_its_band_widened_by_the_hovers_own_tracking_error() {
 /// wanders ±`hover_shake_deg` about its level set-point (a square wave of
 /// 0.1 s, so that RMS exactly); in light turbulence unless `calm`.
 fn ringing_roll_step(overshoot: f64, hover_shake_deg: f64, calm: bool) -> FlightQuality {
-    let world = if calm {
-        ""
-    } else {
-        "[world]\nturbulence = \"light\"\n"
-    };
-    let src = format!("{}{world}", STEP_AT_6S.replace("STICK", "roll_deg = 20"));
-    let m = Mission::from_toml_str(&src).unwrap_or_else(|e| panic!("{e}"));
+    let m = roll_step_mission(calm);
     // ζ from the peak overshoot e^(−ζπ/√(1−ζ²)).
     let l = -overshoot.ln();
     let zeta = l / (std::f64::consts::PI.powi(2) + l * l).sqrt();

@@ -140,7 +140,9 @@ mod tests {
 #[cfg(test)]
 mod flights {
     use super::*;
-    use crate::sweep::{derived_limits, reference, sweep, tests::cleanflight, How, Variation};
+    use crate::sweep::{
+        derived_limits, reference, sweep, tests::cleanflight_flying, How, Variation,
+    };
     use std::sync::atomic::AtomicU64;
 
     /// racer5's `gusty` hover over seeds 0–9: seed 5 misses its position
@@ -151,17 +153,7 @@ mod flights {
     /// reference passed.
     #[test]
     fn a_weather_failure_does_not_block_the_limit_but_a_timing_failure_does() {
-        let (spec, _) = cleanflight("racer5");
-        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../examples/cleanflight.toml");
-        let r = crate::Request {
-            spec_path: &p,
-            vehicle: "racer5",
-            mission: "gusty",
-            horizon: None,
-            seed: 0,
-        };
-        let gusty = crate::setup(&spec, &r).unwrap_or_else(|e| panic!("{e}"));
+        let (spec, gusty) = cleanflight_flying("racer5", "gusty", None, 0);
         let c = gusty.criteria();
         let all_pass = How {
             trials: crate::sweep::Trials {
