@@ -232,12 +232,8 @@ fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option
         .collect()
 }
 
-/// Rounds of moving the shares in [`split_bound`]. The ascent is slow and
-/// not monotone (a round's total may fall; the best is kept): on
-/// waters-50-1's root box (docs/design.md, "The gap's anatomy") the best
-/// total is 0.3271 after 4 rounds, 0.3312 after 8, 0.3350 after 16 and
-/// 0.3360 after 32, and stays there after 64 and 256.
-const SHARE_ROUNDS: usize = 32;
+/// Rounds of moving the shares in [`split_bound`].
+const SHARE_ROUNDS: usize = 4;
 
 /// Each shared task's budget anew among its limits, each share scaled by
 /// 1/T_i at that limit's minimiser (a multiplicative ascent step).
