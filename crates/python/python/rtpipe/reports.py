@@ -59,6 +59,7 @@ __all__ = [
     "Response",
     "Point",
     "PairMs",
+    "AgainstReference",
     "LimitMs",
     "Analysis",
     "Design",
@@ -319,6 +320,23 @@ class SweepReport(Report):
     def safety(self) -> float:
         """Every derived limit is the bound at the last timing that flew × this."""
         return cast("float", self["safety"])
+
+    @property
+    def rule(self) -> str:
+        """When a timing flies, in words: every flight passes, or the pass-rate
+        rule with its rate and confidence.
+        """
+        return cast("str", self["rule"])
+
+    @property
+    def pass_rate(self) -> Optional[float]:
+        """With --pass-rate: the rate the lower bound must reach."""
+        return cast("Optional[float]", self.get("pass_rate"))
+
+    @property
+    def confidence(self) -> Optional[float]:
+        """With --pass-rate: the confidence of the bound."""
+        return cast("Optional[float]", self.get("confidence"))
 
     @property
     def points(self) -> List[Point]:
@@ -2201,8 +2219,8 @@ class Point(Record):
 
     @property
     def flights(self) -> int:
-        """Flights flown at this timing (seeds × phases), and how many met the
-        criterion: it flies only when all did.
+        """Flights flown at this timing (seeds × phases × setups): it flies
+        when all met the criterion, or by the pass-rate rule (`rule`).
         """
         return cast("int", self["flights"])
 
@@ -2210,6 +2228,23 @@ class Point(Record):
     def passed(self) -> int:
         """Flights that met the criterion."""
         return cast("int", self["passed"])
+
+    @property
+    def against_reference(self) -> Optional[AgainstReference]:
+        """With --pass-rate: of the flights the reference timing passed, how
+        many passed here too, and the Wilson lower bound of that share (the
+        timing flies when it reaches the rate).
+        """
+        return maybe(AgainstReference, self.get("against_reference"))
+
+    @property
+    def outcomes(self) -> List[bool]:
+        """Each flight met its criterion (true) or not, in the sweep's flight
+        order: the setups as listed (the first, then `also`'s), within each
+        the seeds, within each seed the phase draws; empty when the timing
+        could not be flown.
+        """
+        return cast("List[bool]", self["outcomes"])
 
     @property
     def failures(self) -> List[str]:
@@ -2249,6 +2284,25 @@ class PairMs(Record):
     def freshness(self) -> Optional[float]:
         """The maximum data age, ms; null when unbounded."""
         return cast("Optional[float]", self.get("freshness"))
+
+
+class AgainstReference(Record):
+    """A timing's flights counted against the reference timing's."""
+
+    @property
+    def passed(self) -> int:
+        """Flights the reference timing passed that passed here too."""
+        return cast("int", self["passed"])
+
+    @property
+    def counted(self) -> int:
+        """Flights the reference timing passed."""
+        return cast("int", self["counted"])
+
+    @property
+    def lower_bound(self) -> float:
+        """The lower end of the Wilson interval of passed / counted."""
+        return cast("float", self["lower_bound"])
 
 
 class LimitMs(Record):
