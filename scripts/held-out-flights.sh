@@ -135,7 +135,7 @@ if [ "$PHASES" -gt 1 ]; then ROWS="nominal $PHASES"; fi
 printf "%-12s %-8s %-8s" design vehicle phases
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
   for v in ${VEHICLES:-racer5 aero1kg}; do
     for row in $ROWS; do
       printf "%-12s %-8s %-8s" "$d" "$v" "$row"
