@@ -3,8 +3,13 @@
 # below flown on racer5 and aero1kg over seeds 10-29 on three missions no
 # design or sweep saw (examples/missions/). Prints one row per design and
 # vehicle: flights that met their criteria / flown, per mission.
-# Usage: [DESIGNS="table-v ..."] scripts/held-out-flights.sh [first_seed] [last_seed]
-# (DESIGNS: the designs below to fly, by name; default all of them)
+# Usage: [DESIGNS="table-v ..."] [PHASES=M] scripts/held-out-flights.sh [first_seed] [last_seed]
+# (DESIGNS: the designs below to fly, by name; default all of them.
+# PHASES: with M > 1, each design and vehicle gets a second row flown at M
+# phase draws per seed (`fly --phase K`, the sweep's draws: every task's
+# first release and the steps within the motor period), draw
+# 1000 + M * seed + j for j < M: a draw of its own per flight, none of the
+# draws 1..M-1 a sweep's --phases M flies; default 1, the nominal row alone.)
 # Re-run after any change to the flight model; it builds nothing, so build
 # first: cargo build --release -p rtpipe.
 set -euo pipefail
@@ -12,7 +17,8 @@ cd "$(dirname "$0")/.."
 B=${RTPIPE:-${CARGO_TARGET_DIR:-target}/release/rtpipe}
 FIRST=${1:-10}
 LAST=${2:-29}
-MISSIONS="steps-turbulent aggressive-steps gusty-120s"
+MISSIONS=${MISSIONS:-steps-turbulent aggressive-steps gusty-120s}
+PHASES=${PHASES:-1}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
@@ -78,6 +84,19 @@ design sgb-pwm-0.9 pwm=5084
 # a lower bound >= 0.9 at 95 % confidence; the period scale's limit stays
 # 1.211, flown by sg-scale-0.9): the PWM period alone at 0.9 x 13.622 ms.
 design pr-pwm-0.9 pwm=12260
+# The PWM period alone at 0.5-0.8 x that limit, down towards Table V's 5 ms:
+# a limit holds only if every shorter period holds too.
+pwm_of() {
+  local name=$1 limit_us=$2 k=$3
+  design "$name" pwm=$(python3 -c "print(round($limit_us * $k))")
+}
+for k in 0.5 0.6 0.7 0.8; do pwm_of "pr-pwm-$k" 13622 "$k"; done
+
+# 0.9 x the limits of the same sweep over ten seeds and four phase draws
+# (--seeds 10 --phases 4 --pass-rate 0.9, 240 flights a timing): every
+# period x 0.9 x 1.13, and the PWM period alone at 0.9 x 12.436 ms.
+scaled p4-scale-0.9 "0.9 * 1.13"
+pwm_of p4-pwm-0.9 12436 0.9
 
 # design --fly's answer on examples/cleanflight-design-flown.toml (those
 # plain-band limits, each period capped at Table V's x 1.114): --fly
@@ -95,22 +114,35 @@ design flown-fly-b gyro=1114 accl=1114 ahrs=5386 radio=10000 pid=2012 pwm=5488
 # overshoot was judged against the plain 20 % in turbulence too.
 design flown-fly-d gyro=1114 accl=1114 ahrs=5386 radio=9024 pid=2012 pwm=5488
 
-printf "%-12s %-8s" design vehicle
+# Flights of design $1 on vehicle $2 and mission $3 over the seeds at
+# phase draws "$4" (per seed: "nominal", or M draws of its own): passed/flown.
+flights() {
+  local d=$1 v=$2 m=$3 phases=$4 pass=0 n=0 draws
+  for s in $(seq "$FIRST" "$LAST"); do
+    if [ "$phases" = nominal ]; then draws=0; else draws=$(seq $((1000 + PHASES * s)) $((1000 + PHASES * s + PHASES - 1))); fi
+    for k in $draws; do
+      n=$((n + 1))
+      if "$B" fly "$TMP/$d.toml" --vehicle "$v" --mission "examples/missions/$m.toml" --seed "$s" --phase "$k" > /dev/null 2>&1; then
+        pass=$((pass + 1))
+      fi
+    done
+  done
+  echo "$pass/$n"
+}
+
+ROWS=nominal
+if [ "$PHASES" -gt 1 ]; then ROWS="nominal $PHASES"; fi
+printf "%-12s %-8s %-8s" design vehicle phases
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
-  for v in racer5 aero1kg; do
-    printf "%-12s %-8s" "$d" "$v"
-    for m in $MISSIONS; do
-      pass=0; n=0
-      for s in $(seq "$FIRST" "$LAST"); do
-        n=$((n + 1))
-        if "$B" fly "$TMP/$d.toml" --vehicle "$v" --mission "examples/missions/$m.toml" --seed "$s" > /dev/null 2>&1; then
-          pass=$((pass + 1))
-        fi
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
+  for v in ${VEHICLES:-racer5 aero1kg}; do
+    for row in $ROWS; do
+      printf "%-12s %-8s %-8s" "$d" "$v" "$row"
+      for m in $MISSIONS; do
+        printf " %17s" "$(flights "$d" "$v" "$m" "$row")"
       done
-      printf " %17s" "$pass/$n"
+      echo
     done
-    echo
   done
 done

@@ -154,6 +154,8 @@ pub fn execute(spec: &Spec, a: &FlyArgs, hooks: Hooks) -> Result<Answer, Diagnos
         let also: Vec<Setup> = setups.collect();
         return sweep::execute(spec, (&s, &also), a, hooks.stop.as_deref());
     }
+    // The phase draw of the sweep's and `design --fly`'s flights, one home.
+    let s = rtpipe_fly::phases::phased(spec, &s, a.phase);
     let msg = format!(
         "flying {} ({}, mission {}) for {:.1} s",
         spec.name,

@@ -557,3 +557,39 @@ fn the_sweep_breeze_mission_loads_and_table_v_flies_it() {
         assert_exit(&o, 0);
     }
 }
+
+/// `--phase K` flies the sweep's phase draw K: draw 0 is the nominal
+/// flight, any other shifts the steps within the 5 ms motor period (and
+/// lengthens the flight by as much); a sweep draws its own phases.
+#[test]
+fn a_flight_at_a_phase_draw_shifts_its_steps_within_the_motor_period() {
+    let duration = |phase: &str| {
+        let o = rtpipe(&[
+            "fly",
+            &example("cleanflight.toml"),
+            "--phase",
+            phase,
+            "--json",
+        ]);
+        json_of(&o)["flight"]["duration_s"].as_f64()
+    };
+    let nominal = duration("0").unwrap_or(f64::NAN);
+    assert_eq!(
+        Some(nominal),
+        duration("0"),
+        "the same draw, the same flight"
+    );
+    let shifted = duration("2").unwrap_or(f64::NAN);
+    assert!(
+        shifted > nominal && shifted < nominal + 0.005,
+        "{nominal} s, then {shifted} s"
+    );
+    let o = rtpipe(&[
+        "fly",
+        &example("cleanflight.toml"),
+        "--phase",
+        "2",
+        "--sweep",
+    ]);
+    assert_exit(&o, 2);
+}

@@ -38,6 +38,13 @@ pub struct FlyArgs {
     /// the same flight, bit for bit).
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
+    /// One flight at phase draw K, as `--sweep --phases` and `design --fly`
+    /// fly it: 0 is the nominal phase (every task released at 0, the
+    /// mission's steps where it puts them); each other K places every
+    /// periodic task's first release within its period and shifts the stick
+    /// steps within the motor-output period, the same draw for every seed.
+    #[arg(long, value_name = "K", default_value_t = 0, conflicts_with = "sweep")]
+    pub phase: u64,
     /// How each job's demand is drawn (see `simulate --exec`).
     #[arg(long, value_enum, default_value_t = ExecArg::Uniform)]
     pub exec: ExecArg,

@@ -222,6 +222,11 @@ struct PointView<'a> {
     /// timing flies when it reaches the rate).
     #[serde(skip_serializing_if = "Option::is_none")]
     against_reference: Option<AgainstReferenceView>,
+    /// Each flight met its criterion (true) or not, in the sweep's flight
+    /// order: the setups as listed (the first, then `also`'s), within each
+    /// the seeds, within each seed the phase draws; empty when the timing
+    /// could not be flown.
+    outcomes: &'a [bool],
     /// The criteria the flights missed, in words.
     failures: &'a [String],
     /// Attitude error RMS over the flights, degrees.
@@ -288,6 +293,7 @@ fn point_json(p: &Point) -> PointView<'_> {
             counted: a.counted,
             lower_bound: a.lower_bound,
         }),
+        outcomes: &p.outcomes,
         failures: &p.failures,
         attitude_error_rms_deg: hover.map(|q| q.attitude_error_deg.rms),
         altitude_error_rms_m: hover.map(|q| q.altitude_error_m.rms),

@@ -2238,6 +2238,15 @@ class Point(Record):
         return maybe(AgainstReference, self.get("against_reference"))
 
     @property
+    def outcomes(self) -> List[bool]:
+        """Each flight met its criterion (true) or not, in the sweep's flight
+        order: the setups as listed (the first, then `also`'s), within each
+        the seeds, within each seed the phase draws; empty when the timing
+        could not be flown.
+        """
+        return cast("List[bool]", self["outcomes"])
+
+    @property
     def failures(self) -> List[str]:
         """The criteria the flights missed, in words."""
         return cast("List[str]", self["failures"])
