@@ -46,6 +46,16 @@ pub(crate) fn tasks_on(spec: &Spec, cpu: u32) -> Vec<usize> {
         .collect()
 }
 
+/// The guaranteed tasks among `on` (every one but a background task, which
+/// has no timing guarantee), in its order: the tasks a CPU's verdict and
+/// its bounds are about.
+pub(crate) fn guaranteed(spec: &Spec, on: &[usize]) -> Vec<usize> {
+    on.iter()
+        .copied()
+        .filter(|&j| spec.tasks[j].server != Server::Background)
+        .collect()
+}
+
 /// Each resource's ceiling: the highest rank (smallest number) of a task
 /// that uses it; `None` for a resource no ranked task uses.
 pub fn ceilings(spec: &Spec, prio: &[Option<usize>]) -> Vec<Option<usize>> {

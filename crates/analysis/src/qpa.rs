@@ -10,7 +10,7 @@
 //! h(t) < t, and stops at the first t with h(t) > t (not schedulable) or
 //! h(t) ≤ min D_i (schedulable). docs/analysis.md states the bounds on L.
 
-use rtpipe_model::{Nanos, Server, Spec, MAX_TIME};
+use rtpipe_model::{Nanos, Spec, MAX_TIME};
 
 /// One task as the demand test sees it: (C, T, D).
 pub type Demand = (Nanos, Nanos, Nanos);
@@ -241,11 +241,7 @@ pub fn edf_feasible_at(spec: &Spec, periods: &[Nanos], on: &[usize]) -> bool {
 /// [`edf_feasible`] on the CPU of the tasks `on` (all of them, background
 /// ones included), at `period(j)` for each of them.
 pub fn edf_feasible_among(spec: &Spec, on: &[usize], period: impl Fn(usize) -> Nanos) -> bool {
-    let ids: Vec<usize> = on
-        .iter()
-        .copied()
-        .filter(|&i| spec.tasks[i].server != Server::Background)
-        .collect();
+    let ids = crate::blocking::guaranteed(spec, on);
     let deadline = |i: usize| spec.tasks[i].deadline_given.unwrap_or(period(i));
     let steps = crate::blocking::srp_steps(spec, on, deadline);
     if ids.iter().all(|&i| deadline(i) == period(i)) {

@@ -19,6 +19,7 @@
 //! test checks it), and shrinking a box never lowers a figure.
 //! docs/design.md gives the argument.
 
+use crate::blocking::guaranteed;
 use crate::latency::{compose_sound, distinct_passes, Case, LinkTask, SoundLink};
 use crate::let_bound::{any_phasing, LetLatencies};
 use crate::sched::{
@@ -462,14 +463,6 @@ fn edf_lower_bounds(
     let d = deadline_at(spec, i, lo[i]);
     let (b, j) = (b.map(|b| b.min(d)), j.map(|j| j.min(d)));
     (b, j, w.zip(j).map(|(w, j)| w.min(j)))
-}
-
-/// The guaranteed (not background) tasks among `on`, in its order.
-fn guaranteed(spec: &Spec, on: &[usize]) -> Vec<usize> {
-    on.iter()
-        .copied()
-        .filter(|&j| spec.tasks[j].server != Server::Background)
-        .collect()
 }
 
 /// The part of [`edf_lower_bounds`] for a box that leaves some period of

@@ -704,11 +704,7 @@ fn cpu_verdict(
     (cpu, on): (u32, &[usize]),
     srp: &[(Nanos, Nanos)],
 ) -> CpuVerdict {
-    let ids: Vec<usize> = on
-        .iter()
-        .copied()
-        .filter(|&i| spec.tasks[i].server != Server::Background)
-        .collect();
+    let ids = crate::blocking::guaranteed(spec, on);
     let us: Vec<f64> = ids
         .iter()
         .map(|&i| timings[i].budget as f64 / timings[i].period as f64)

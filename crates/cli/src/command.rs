@@ -194,6 +194,15 @@ pub fn mode_parser() -> impl clap::builder::TypedValueParser<Value = Mode> {
         .try_map(|s| s.parse::<Mode>())
 }
 
+/// `--pass-rate`, `--confidence` (of `design --fly` and `fly --sweep`): a
+/// fraction strictly between 0 and 1.
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x < 1.0 => Ok(x),
+        _ => Err("must be a number strictly between 0 and 1 (e.g. 0.95)".into()),
+    }
+}
+
 /// What a command answers: its report (text for people, JSON for
 /// scripts), the lines it has for stderr (notes, warnings, why it
 /// failed), and its exit status. The binary prints it ([`Answer::emit`]);

@@ -1,6 +1,6 @@
 //! `rtpipe design`: choose periods that meet every limit at least utilisation.
 
-pub(crate) mod flights;
+mod flights;
 mod margin;
 
 use crate::command::mode_parser;
@@ -106,11 +106,11 @@ pub struct DesignArgs {
     pub seed: Option<u64>,
     /// With --fly: the pass rate whose lower confidence bound (Wilson) a
     /// design's flights must reach, in (0, 1) [default: 0.95].
-    #[arg(long, value_name = "R", value_parser = flights::parse_fraction, allow_hyphen_values = true)]
+    #[arg(long, value_name = "R", value_parser = crate::command::parse_fraction, allow_hyphen_values = true)]
     pub pass_rate: Option<f64>,
     /// With --fly: the confidence of that bound, in (0, 1) [default: 0.95;
     /// with the default rate, 73 flights all passing].
-    #[arg(long, value_name = "C", value_parser = flights::parse_fraction, allow_hyphen_values = true)]
+    #[arg(long, value_name = "C", value_parser = crate::command::parse_fraction, allow_hyphen_values = true)]
     pub confidence: Option<f64>,
     /// With --fly: flights per design [default: the fewest that can reach
     /// the bound, spread over the vehicles and missions]; more flights let

@@ -108,12 +108,15 @@ pub fn from_file(flag: &str, e: &rtpipe_model::SpecError, help: &str) -> Diagnos
 }
 
 fn mission(m: &str) -> Result<Mission, Diagnostic> {
-    let help = "name a built-in mission (hover, steps, paper, gusty, breeze) or a mission file";
+    let help = format!(
+        "name a built-in mission ({}) or a mission file",
+        BUILTIN_MISSIONS.join(", ")
+    );
     if BUILTIN_MISSIONS.contains(&m) {
         return Mission::builtin(m)
             .map_err(|e| Diagnostic::error(format!("--mission {m}: {e}"), help));
     }
-    Mission::from_file(Path::new(m)).map_err(|e| from_file("--mission", &e, help))
+    Mission::from_file(Path::new(m)).map_err(|e| from_file("--mission", &e, &help))
 }
 
 /// The role of every task from its `body`; the pipeline must be complete.

@@ -299,11 +299,3 @@ pub fn flown_text(spec: &Spec, what: &str, checked: &[Checked]) -> String {
     }
     out
 }
-
-/// `--pass-rate`, `--confidence`: a fraction strictly between 0 and 1.
-pub fn parse_fraction(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(x) if x > 0.0 && x < 1.0 => Ok(x),
-        _ => Err("must be a number strictly between 0 and 1 (e.g. 0.95)".into()),
-    }
-}

@@ -86,11 +86,11 @@ pub struct FlyArgs {
     /// lower confidence bound (Wilson) ≥ R, in (0, 1). Flights the spec's
     /// own timing fails (the weather's, not the timing's) count neither
     /// way [default: every flight must pass].
-    #[arg(long, value_name = "R", value_parser = crate::design::flights::parse_fraction, allow_hyphen_values = true, requires = "sweep")]
+    #[arg(long, value_name = "R", value_parser = crate::command::parse_fraction, allow_hyphen_values = true, requires = "sweep")]
     pub pass_rate: Option<f64>,
     /// With --pass-rate: the confidence of that bound, in (0, 1) [default:
     /// 0.95].
-    #[arg(long, value_name = "C", value_parser = crate::design::flights::parse_fraction, allow_hyphen_values = true, requires = "pass_rate")]
+    #[arg(long, value_name = "C", value_parser = crate::command::parse_fraction, allow_hyphen_values = true, requires = "pass_rate")]
     pub confidence: Option<f64>,
     /// With --sweep: after the grid, bisect each sweep's edge (between its
     /// last passing and first failing point, flown with the same seeds ×

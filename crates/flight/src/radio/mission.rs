@@ -369,7 +369,10 @@ impl Mission {
             "breeze" => Self::from_toml_str(BREEZE_TOML),
             _ => Err(ConfigError::new(
                 "mission",
-                format!("unknown built-in mission {name:?} (hover, steps, paper, gusty, breeze)"),
+                format!(
+                    "unknown built-in mission {name:?} ({})",
+                    BUILTIN_MISSIONS.join(", ")
+                ),
             )),
         }
     }
