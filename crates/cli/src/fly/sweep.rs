@@ -977,6 +977,56 @@ pub(super) fn json_schema() -> schemars::Schema {
 mod tests {
     use super::*;
 
+    /// Under --pass-rate, a setup whose reference passed fewer flights
+    /// than the rate needs (34 of 40 < 35 at 0.9) is named in a note; one
+    /// that passed enough is not; without --pass-rate nothing is said.
+    #[test]
+    fn a_setup_with_too_few_counted_flights_is_named() {
+        use clap::Parser;
+        use rtpipe_fly::sweep::AgainstReference;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            fly: FlyArgs,
+        }
+        let args = |extra: &[&str]| {
+            let base = ["rtpipe", "spec.toml", "--sweep", "--seeds", "40"];
+            Cli::try_parse_from(base.iter().chain(extra))
+                .map(|c| c.fly)
+                .unwrap_or_else(|e| panic!("{e}"))
+        };
+        let counted = |counted| AgainstReference {
+            passed: counted,
+            counted,
+            lower_bound: 0.0,
+        };
+        let reference = Point {
+            variation: Variation::Scale(1.0),
+            bounds: Vec::new(),
+            event: Vec::new(),
+            schedulable: true,
+            quality: None,
+            failures: Vec::new(),
+            outcomes: vec![true; 80],
+            against_reference: Some(vec![counted(40), counted(34)]),
+            flies: false,
+            stage: Stage::Grid,
+        };
+        let labels = ["racer5/steps".to_string(), "racer5/gusty".to_string()];
+        let notes = too_few_counted(
+            &args(&["--pass-rate", "0.9"]),
+            &labels,
+            std::slice::from_ref(&reference),
+        );
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with("racer5/gusty: ")
+                && notes[0].contains("34 of its 40 flights, fewer than the 35"),
+            "{notes:?}"
+        );
+        assert!(too_few_counted(&args(&[]), &labels, &[reference]).is_empty());
+    }
+
     /// A delay point is labelled by its integer delay in exact decimals,
     /// a whole one without any.
     #[test]
