@@ -776,7 +776,7 @@ fn setups(s: &Setup, also: &[(Setup, Criteria)]) -> Vec<String> {
 /// The further setups every timing was flown on, each with its criterion.
 fn also_text(also: &[(Setup, Criteria)], by_rate: bool) -> String {
     let mut out = String::from(if by_rate {
-        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; its flights count in the pass rate below:\n"
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; each must reach the pass rate below on its own flights:\n"
     } else {
         "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n"
     });

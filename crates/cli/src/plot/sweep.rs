@@ -319,6 +319,22 @@ mod tests {
         assert!(svg.contains("<circle") && !svg.contains("crashed"));
     }
 
+    /// A check point below a limit is drawn smaller, and the legend says
+    /// so; a sweep without check points says nothing of them.
+    #[test]
+    fn check_points_are_named_in_the_legend() {
+        let mut check = dot(DotOutcome::Measured(0.2));
+        check.check = true;
+        let plain = [dot(DotOutcome::Measured(0.2))];
+        let note = |dots: &[SweepDot]| {
+            panel_legend(dots, None, Some(&settling()))
+                .iter()
+                .any(|(label, _)| label == "small: a check point")
+        };
+        assert!(note(&[check]));
+        assert!(!note(&plain));
+    }
+
     /// A point some of whose flights failed says how many passed; one
     /// whose flights all passed or all failed is not annotated.
     #[test]
