@@ -98,6 +98,21 @@ for k in 0.5 0.6 0.7 0.8; do pwm_of "pr-pwm-$k" 13622 "$k"; done
 scaled p4-scale-0.9 "0.9 * 1.13"
 pwm_of p4-pwm-0.9 12436 0.9
 
+# 0.9 x the limits of the three-seed all-pass sweep of sg-* with the check
+# below each limit (--seeds 3 --check-step 0.02: every period scale and
+# motor period from x 1 up to each edge at steps of x 1.02): the scale's
+# limit stays 1.211 (sg-scale-0.9), the PWM's comes down to 12.189 ms (a
+# check at 12.43 ms fails aero1kg's breeze): the PWM alone at 0.9 x it.
+pwm_of ck3-pwm-0.9 12189 0.9
+
+# 0.9 x the limits of the sweep over ten seeds and four phase draws judged
+# per vehicle/mission setup, with the check (--seeds 10 --phases 4
+# --pass-rate 0.9 --check-step 0.02): every period x 0.9 x 1.0824 (a check
+# at x 1.1041 fails racer5's gusty), and the PWM period alone at 0.9 x
+# 8.367 ms (a check at 8.53 ms fails aero1kg's breeze).
+scaled p4c-scale-0.9 "0.9 * 1.0824"
+pwm_of p4c-pwm-0.9 8367 0.9
+
 # design --fly's answer on examples/cleanflight-design-flown.toml (those
 # plain-band limits, each period capped at Table V's x 1.114): --fly
 # steps,gusty --vehicle racer5,aero1kg answers it, and so does bare --fly
@@ -135,7 +150,7 @@ if [ "$PHASES" -gt 1 ]; then ROWS="nominal $PHASES"; fi
 printf "%-12s %-8s %-8s" design vehicle phases
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 ck3-pwm-0.9 p4c-scale-0.9 p4c-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
   for v in ${VEHICLES:-racer5 aero1kg}; do
     for row in $ROWS; do
       printf "%-12s %-8s %-8s" "$d" "$v" "$row"

@@ -438,6 +438,59 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
     assert_exit(&rtpipe(&["fly", spec.as_str(), "--seeds", "2"]), 2);
 }
 
+/// `--check-step S`: below each period edge (scale and motor period) every
+/// value 1 × (1 + S)^i is flown as a check point (`stage: "check"`), and
+/// the written limits rest on points every one of which below them flew;
+/// a bad step is refused.
+#[test]
+fn a_check_flies_every_step_below_the_period_limits() {
+    let spec = example("cleanflight.toml");
+    let o = rtpipe(&[
+        "fly",
+        &spec,
+        "--sweep",
+        "--scale",
+        "1..2",
+        "--per-octave",
+        "1",
+        "--check-step",
+        "0.1",
+        "--json",
+    ]);
+    assert_exit(&o, 0);
+    let v = json_of(&o);
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    for varied in ["scale", "tail rate"] {
+        let mine: Vec<&serde_json::Value> =
+            points.iter().filter(|p| p["varied"] == varied).collect();
+        let values: Vec<f64> = mine.iter().filter_map(|p| p["value"].as_f64()).collect();
+        assert!(values.windows(2).all(|w| w[0] < w[1]), "{values:?}");
+        let checks: Vec<f64> = mine
+            .iter()
+            .filter(|p| p["stage"] == "check")
+            .filter_map(|p| p["value"].as_f64())
+            .collect();
+        assert!(!checks.is_empty(), "{varied}: no check point");
+        for x in &checks {
+            let i = x.ln() / 1.1f64.ln();
+            assert!((i - i.round()).abs() < 1e-6, "{varied}: {x} is not 1.1^i");
+        }
+        // The edge: the last point that flies before the first that does
+        // not; every check below it flew.
+        let first_fail = mine
+            .iter()
+            .position(|p| p["schedulable"] == true && p["flies"] == false);
+        let below = &mine[..first_fail.unwrap_or(mine.len())];
+        assert!(below
+            .iter()
+            .all(|p| p["schedulable"] == false || p["flies"] == true));
+    }
+    for bad in ["0.6", "-0.1", "x"] {
+        let o = rtpipe(&["fly", &spec, "--sweep", "--check-step", bad]);
+        assert_exit(&o, 2);
+    }
+}
+
 /// `--pass-rate`: a count of flights that cannot reach the rate even all
 /// passing is refused before any flight, naming the fewest that can; a
 /// rate or confidence outside (0, 1), or `--confidence` alone, is refused.

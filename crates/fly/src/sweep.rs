@@ -19,10 +19,12 @@
 //! own timing's flights). The rate sweep gives the tail's `max_period`: a
 //! sample that never reaches a slow tail is counted by no from-read bound.
 
+mod check;
 mod refine;
 mod rule;
+pub use check::check_below;
 pub use refine::refine;
-pub use rule::{AgainstReference, Rule};
+pub use rule::{deciding, AgainstReference, Rule};
 
 use crate::{fly, Setup};
 use rayon::prelude::*;
@@ -79,18 +81,40 @@ pub struct Point {
     /// (named by its seed and phase when several were flown); empty when
     /// every flight meets them.
     pub failures: Vec<String>,
-    /// Flights flown at this timing (seeds × phases).
-    pub flights: u32,
-    /// Of them, those that met the criteria.
-    pub passed: u32,
     /// Each flight met its criterion, in the sweep's flight order
     /// (setups, seeds, phases); empty when the timing could not be flown.
+    /// The one record of the flights: [`Point::flights`] and
+    /// [`Point::passed`] count it.
     pub outcomes: Vec<bool>,
-    /// Under the pass-rate rule, the flights counted against the
-    /// reference's.
-    pub against_reference: Option<AgainstReference>,
+    /// Under the pass-rate rule, each setup's flights counted against the
+    /// reference's, in the sweep's setup order.
+    pub against_reference: Option<Vec<AgainstReference>>,
     /// The timing flies by the sweep's [`Rule`].
     pub flies: bool,
+    /// Which pass of the sweep flew it.
+    pub stage: Stage,
+}
+
+/// Which pass of a sweep flew a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// The grid (2^(i/n) of the period scale and tail period, the delays).
+    Grid,
+    /// Bisecting an edge ([`refine`]).
+    Refinement,
+    /// Checking the values below a written limit ([`check_below`]).
+    Check,
+}
+
+impl Stage {
+    /// Its name in the reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Grid => "grid",
+            Stage::Refinement => "refinement",
+            Stage::Check => "check",
+        }
+    }
 }
 
 /// How many flights judge one timing: `seeds` seeds of the noise and
@@ -122,6 +146,17 @@ impl Point {
     /// at it met the criteria).
     pub fn pass(&self) -> bool {
         self.flies
+    }
+
+    /// Flights flown at this timing (seeds × phases × setups; 0 when it
+    /// could not be flown).
+    pub fn flights(&self) -> u32 {
+        self.outcomes.len() as u32
+    }
+
+    /// Of them, those that met their criterion.
+    pub fn passed(&self) -> u32 {
+        self.outcomes.iter().filter(|&&o| o).count() as u32
     }
 }
 
@@ -245,11 +280,10 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
                 schedulable: false,
                 quality: None,
                 failures: vec![why],
-                flights: 0,
-                passed: 0,
                 against_reference: how.rule.against_reference(&[]),
                 outcomes: Vec::new(),
                 flies: false,
+                stage: Stage::Grid,
             }
         }
     };
@@ -272,11 +306,10 @@ fn flown(spec: &Spec, s: &Setup, v: Variation, how: &How) -> Point {
         schedulable,
         quality,
         failures,
-        flights: how.flights(),
-        passed: outcomes.iter().filter(|&&o| o).count() as u32,
         flies: how.rule.flies(&outcomes),
         against_reference: how.rule.against_reference(&outcomes),
         outcomes,
+        stage: Stage::Grid,
     }
 }
 
@@ -755,10 +788,10 @@ pub(crate) mod tests {
         let single = sweep(&spec, &s, &one, &vars, &done, &|| false).unwrap_or_default();
         let many = sweep(&spec, &s, &six, &vars, &done, &|| false).unwrap_or_default();
         for (a, b) in single.iter().zip(&many) {
-            assert_eq!((a.flights, b.flights), (1, 6));
-            assert!(b.passed <= 6);
+            assert_eq!((a.flights(), b.flights()), (1, 6));
+            assert!(b.passed() <= 6);
             assert_eq!(a.quality, b.quality, "the first flight is the nominal one");
-            assert_eq!(b.pass(), b.passed == 6 && b.quality.is_some());
+            assert_eq!(b.pass(), b.passed() == 6 && b.quality.is_some());
             if !a.pass() {
                 assert!(!b.pass());
             }
@@ -799,7 +832,7 @@ mod missions {
             let Some(points) = sweep(&spec, s, &how, &vars, &done, &|| false) else {
                 unreachable!("nothing stops this sweep")
             };
-            assert!(points.iter().all(|p| p.flights == 1 + also.len() as u32));
+            assert!(points.iter().all(|p| p.flights() == 1 + also.len() as u32));
             let tail = tails(&spec, s)[0];
             let limit = derived_limits(&spec, s, &points, 1.0).max_period[tail];
             (limit.unwrap_or_else(|| panic!("no rate flew")), points)

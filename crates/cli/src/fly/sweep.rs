@@ -12,8 +12,8 @@ use crate::table::Table;
 use rtpipe_flight::quality::{Axis, Criteria, FlightQuality};
 use rtpipe_fly::confidence::Requirement;
 use rtpipe_fly::sweep::{
-    derived_limits, edge, refine, scale_edge, sweep, tails, variations, ChainPair, Derived, How,
-    Point, Rule, Trials, Variation, DELAY_LINES,
+    check_below, deciding, derived_limits, edge, refine, scale_edge, sweep, tails, variations,
+    ChainPair, Derived, How, Point, Rule, Stage, Trials, Variation, DELAY_LINES,
 };
 use rtpipe_fly::Setup;
 use rtpipe_model::{Diagnostic, Nanos, Spec};
@@ -32,6 +32,14 @@ fn ms(ns: Option<Nanos>) -> String {
     ns.map_or("-".into(), |v| format!("{:.3}", v as f64 * 1e-6))
 }
 
+/// A point's timing, and "(check)" after a check point's.
+fn timing(p: &Point) -> String {
+    match p.stage {
+        Stage::Check => format!("{} (check)", what(&p.variation)),
+        Stage::Grid | Stage::Refinement => what(&p.variation),
+    }
+}
+
 fn what(v: &Variation) -> String {
     match v {
         Variation::Scale(k) => format!("periods ×{k:.3}"),
@@ -48,13 +56,25 @@ fn what(v: &Variation) -> String {
     }
 }
 
-fn verdict(p: &Point) -> String {
-    let count = match (p.flights, p.against_reference) {
-        (_, Some(a)) => format!(
-            " ({}/{} flights; {}/{} of the reference's passes, lower bound {:.3})",
-            p.passed, p.flights, a.passed, a.counted, a.lower_bound
+/// Whether a point flies, with its flights passed / flown and, under the
+/// pass-rate rule, the counts of the setup that decides it (the lowest
+/// bound; named among several `setups`).
+fn verdict(p: &Point, setups: &[String]) -> String {
+    let per_setup = p.against_reference.as_deref().and_then(deciding);
+    let count = match (p.flights(), per_setup) {
+        (_, Some((k, a))) => format!(
+            " ({}/{} flights; {}{}/{} of the reference's passes, lower bound {:.3})",
+            p.passed(),
+            p.flights(),
+            match setups {
+                [_, _, ..] => format!("lowest of the setups, {}: ", setups[k]),
+                _ => String::new(),
+            },
+            a.passed,
+            a.counted,
+            a.lower_bound
         ),
-        (2.., None) => format!(" ({}/{} flights)", p.passed, p.flights),
+        (2.., None) => format!(" ({}/{} flights)", p.passed(), p.flights()),
         _ => String::new(),
     };
     match (p.schedulable, p.pass()) {
@@ -66,7 +86,7 @@ fn verdict(p: &Point) -> String {
     }
 }
 
-fn points_table(spec: &Spec, points: &[&Point]) -> String {
+fn points_table(spec: &Spec, points: &[&Point], setups: &[String]) -> String {
     let mut head = vec!["timing".to_string()];
     for k in 0..spec.chains.len() {
         head.push(format!("{} R/F ms", spec.chain_label(k)));
@@ -75,11 +95,11 @@ fn points_table(spec: &Spec, points: &[&Point]) -> String {
     let refs: Vec<&str> = head.iter().map(String::as_str).collect();
     let mut t = Table::new(&refs);
     for p in points {
-        let mut row = vec![what(&p.variation)];
+        let mut row = vec![timing(p)];
         for b in &p.bounds {
             row.push(format!("{} / {}", ms(b.0), ms(b.1)));
         }
-        row.push(verdict(p));
+        row.push(verdict(p, setups));
         t.row(row);
     }
     t.render()
@@ -198,6 +218,9 @@ struct PointView<'a> {
     varied: &'static str,
     /// Its value.
     value: f64,
+    /// Which pass of the sweep flew it: `grid`, `refinement` (bisecting
+    /// an edge) or `check` (below a written limit, --check-step).
+    stage: &'static str,
     /// Each chain's sound bounds from the read at this timing, ms.
     bounds_ms: Vec<PairMs>,
     /// From the event: `reaction` is the maximum reaction time,
@@ -217,11 +240,12 @@ struct PointView<'a> {
     flights: u32,
     /// Flights that met the criterion.
     passed: u32,
-    /// With --pass-rate: of the flights the reference timing passed, how
-    /// many passed here too, and the Wilson lower bound of that share (the
-    /// timing flies when it reaches the rate).
+    /// With --pass-rate, per vehicle/mission setup (in the sweep's
+    /// order): of its flights the reference timing passed, how many passed
+    /// here too, and the Wilson lower bound of that share (the timing
+    /// flies when every setup's reaches the rate).
     #[serde(skip_serializing_if = "Option::is_none")]
-    against_reference: Option<AgainstReferenceView>,
+    against_reference: Option<Vec<AgainstReferenceView>>,
     /// Each flight met its criterion (true) or not, in the sweep's flight
     /// order: the setups as listed (the first, then `also`'s), within each
     /// the seeds, within each seed the phase draws; empty when the timing
@@ -239,9 +263,11 @@ struct PointView<'a> {
     crashed: Option<bool>,
 }
 
-/// A timing's flights counted against the reference timing's.
+/// A setup's flights at a timing counted against the reference timing's.
 #[derive(Serialize, schemars::JsonSchema)]
 struct AgainstReferenceView {
+    /// The setup, "vehicle/mission".
+    setup: String,
     /// Flights the reference timing passed that passed here too.
     passed: u32,
     /// Flights the reference timing passed.
@@ -269,7 +295,7 @@ impl From<&ChainPair> for PairMs {
     }
 }
 
-fn point_json(p: &Point) -> PointView<'_> {
+fn point_json<'a>(p: &'a Point, setups: &[String]) -> PointView<'a> {
     let (varied, value) = match p.variation {
         Variation::Scale(k) => ("scale", k),
         Variation::Rate(k) => ("tail rate", k),
@@ -281,17 +307,25 @@ fn point_json(p: &Point) -> PointView<'_> {
     PointView {
         varied,
         value,
+        stage: p.stage.name(),
         bounds_ms: p.bounds.iter().map(PairMs::from).collect(),
         event_bounds_ms: p.event.iter().map(PairMs::from).collect(),
         schedulable: p.schedulable,
         flies: p.schedulable && p.pass(),
         flight_met_criterion: p.pass(),
-        flights: p.flights,
-        passed: p.passed,
-        against_reference: p.against_reference.map(|a| AgainstReferenceView {
-            passed: a.passed,
-            counted: a.counted,
-            lower_bound: a.lower_bound,
+        flights: p.flights(),
+        passed: p.passed(),
+        against_reference: p.against_reference.as_ref().map(|per_setup| {
+            per_setup
+                .iter()
+                .zip(setups)
+                .map(|(a, setup)| AgainstReferenceView {
+                    setup: setup.clone(),
+                    passed: a.passed,
+                    counted: a.counted,
+                    lower_bound: a.lower_bound,
+                })
+                .collect()
         }),
         outcomes: &p.outcomes,
         failures: &p.failures,
@@ -343,8 +377,9 @@ fn chart(spec: &Spec, s: &Setup, c: &Criteria, points: &[Point]) -> Result<Strin
                         outcome: outcome(p),
                         flies: p.pass(),
                         delay: matches!(p.variation, Variation::Delay { .. }),
-                        passed: p.passed,
-                        flown: p.flights,
+                        passed: p.passed(),
+                        flown: p.flights(),
+                        check: p.stage == Stage::Check,
                     })
                 })
                 .collect();
@@ -457,7 +492,7 @@ pub fn execute(
         written: write_limits.filter(|_| written.is_ok()),
     };
     let report = command::render(&view, a.output.chosen())?;
-    let mut notes = Vec::new();
+    let mut notes = too_few_counted(a, &setups(s, &also), &points);
     if let (Some(out), true) = (&a.write_limits, nothing) {
         let d = Diagnostic::error(
             format!(
@@ -527,17 +562,22 @@ fn fly_all(
                     rule: Rule::PassRate {
                         need,
                         reference: &reference,
+                        setups: 1 + also.len(),
                     },
                     ..how
                 },
                 None => how,
             };
-            let coarse = sweep(spec, s, &how, vars, &done, &stopped)?;
-            if a.resolution == 0.0 {
-                return Some(coarse);
+            let mut points = sweep(spec, s, &how, vars, &done, &stopped)?;
+            if a.resolution > 0.0 {
+                pb.set_message(format!("{} (refining the edges)", spec.name));
+                points = refine(spec, s, &how, points, a.resolution, &done, &stopped)?;
             }
-            pb.set_message(format!("{} (refining the edges)", spec.name));
-            refine(spec, s, &how, coarse, a.resolution, &done, &stopped)
+            if a.check_step > 0.0 {
+                pb.set_message(format!("{} (checking below the limits)", spec.name));
+                points = check_below(spec, s, &how, points, a.check_step, &done, &stopped)?;
+            }
+            Some(points)
         });
         while !worker.is_finished() {
             pb.set_position(done.load(Ordering::Relaxed));
@@ -666,7 +706,10 @@ fn sweep_json<'a>(
         rule: rule_text(a, "its criterion"),
         pass_rate: requirement(a).map(|r| r.rate),
         confidence: requirement(a).map(|r| r.confidence),
-        points: points.iter().map(point_json).collect(),
+        points: points
+            .iter()
+            .map(|p| point_json(p, &setups(s, also)))
+            .collect(),
         limits_ms: chain_limits.collect(),
         max_period_ms: crate::report::Pairs(
             max_period
@@ -678,7 +721,13 @@ fn sweep_json<'a>(
 }
 
 /// The rate sweep's table and the tail's derived `max_period`.
-fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety: f64) -> String {
+fn rate_text(
+    spec: &Spec,
+    (s, also): (&Setup, &[(Setup, Criteria)]),
+    points: &[Point],
+    limits: &Derived,
+    safety: f64,
+) -> String {
     let pts: Vec<&Point> = points
         .iter()
         .filter(|p| matches!(p.variation, Variation::Rate(_)))
@@ -692,7 +741,7 @@ fn rate_text(spec: &Spec, s: &Setup, points: &[Point], limits: &Derived, safety:
         "\nactuation rate ({} period alone; sound bounds from the read):\n",
         names.join(", ")
     );
-    out.push_str(&points_table(spec, &pts));
+    out.push_str(&points_table(spec, &pts, &setups(s, also)));
     for &i in &tails {
         out.push_str(&match limits.max_period[i] {
             Some(p) => format!(
@@ -716,10 +765,18 @@ fn label(s: &Setup) -> String {
     format!("{}/{}", s.preset.name, s.mission.name)
 }
 
+/// Every setup's label, in the sweep's order (the first, then `also`'s).
+fn setups(s: &Setup, also: &[(Setup, Criteria)]) -> Vec<String> {
+    std::iter::once(s)
+        .chain(also.iter().map(|(o, _)| o))
+        .map(label)
+        .collect()
+}
+
 /// The further setups every timing was flown on, each with its criterion.
 fn also_text(also: &[(Setup, Criteria)], by_rate: bool) -> String {
     let mut out = String::from(if by_rate {
-        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; its flights count in the pass rate below:\n"
+        "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; each must reach the pass rate below on its own flights:\n"
     } else {
         "every timing is also flown (same seeds and phases) on each of these, judged by its criterion; it flies only if every flight of every one meets it:\n"
     });
@@ -784,26 +841,32 @@ fn rule_text(a: &FlyArgs, criterion: &str) -> String {
     match requirement(a) {
         None => format!("only if every flight meets {criterion}"),
         Some(r) => format!(
-            "when, of the flights the spec's own timing (periods ×1.000) meets {criterion} on, the share it meets it on too has a lower bound (Wilson) ≥ {} at {} % confidence",
+            "when, in each vehicle/mission setup, of the flights the spec's own timing (periods ×1.000) meets {criterion} on, the share it meets it on too has a lower bound (Wilson) ≥ {} at {} % confidence",
             r.rate,
             r.confidence * 100.0
         ),
     }
 }
 
-/// `--pass-rate`'s flights: enough that all of them passing can reach the
-/// rate, else an error naming the fewest that can.
+/// `--pass-rate`'s flights: enough in each vehicle/mission setup (the rule
+/// judges each setup on its own flights) that all of them passing can
+/// reach the rate, else an error naming the fewest that can.
 fn enough_flights(a: &FlyArgs, setups: u32) -> Result<(), Diagnostic> {
     let Some(need) = requirement(a) else {
         return Ok(());
     };
-    let (flights, least) = (a.seeds * a.phases * setups, need.least_flights());
+    let (flights, least) = (a.seeds * a.phases, need.least_flights());
     if flights >= least {
         return Ok(());
     }
+    let each = if setups > 1 {
+        format!(" in each of the {setups} vehicle/mission setups")
+    } else {
+        String::new()
+    };
     Err(Diagnostic::error(
         format!(
-            "--pass-rate {} at {} % confidence needs at least {least} flights a timing (all passing), but --seeds {} × --phases {} × {setups} vehicle/mission setups fly {flights}",
+            "--pass-rate {} at {} % confidence needs at least {least} flights a timing{each} (all passing), but --seeds {} × --phases {} fly {flights}",
             need.rate,
             need.confidence * 100.0,
             a.seeds,
@@ -813,22 +876,51 @@ fn enough_flights(a: &FlyArgs, setups: u32) -> Result<(), Diagnostic> {
     ))
 }
 
+/// Under --pass-rate, a note for each setup whose reference (the spec's own
+/// timing) passed too few flights for any timing to reach the rate there:
+/// no timing flies, and the note says why.
+fn too_few_counted(a: &FlyArgs, labels: &[String], points: &[Point]) -> Vec<String> {
+    let (Some(need), Some(reference)) = (
+        requirement(a),
+        points.iter().find(|p| p.variation == Variation::Scale(1.0)),
+    ) else {
+        return Vec::new();
+    };
+    let least = need.least_flights();
+    let per_setup = reference.against_reference.as_deref().unwrap_or_default();
+    per_setup
+        .iter()
+        .zip(labels)
+        .filter(|(r, _)| r.counted < least)
+        .map(|(r, label)| {
+            format!(
+                "{label}: the spec's own timing met its criterion on {} of its {} flights, fewer than the {least} a setup needs for --pass-rate {} at {} % confidence, so no timing flies there: fly more --seeds or --phases, or fix what fails at the spec's own timing",
+                r.counted,
+                a.seeds * a.phases,
+                need.rate,
+                need.confidence * 100.0
+            )
+        })
+        .collect()
+}
+
 fn text(
     spec: &Spec,
-    setups: (&Setup, &[(Setup, Criteria)]),
+    setups_all: (&Setup, &[(Setup, Criteria)]),
     (c, a): (&Criteria, &FlyArgs),
     points: &[Point],
     limits: &Derived,
     written: Option<&Path>,
 ) -> String {
-    let s = setups.0;
-    let mut out = header_text(spec, setups, c, a);
+    let s = setups_all.0;
+    let mut out = header_text(spec, setups_all, c, a);
     out.push_str("\nperiod scale (budgets fixed; sound bounds from the read):\n");
     let scales: Vec<&Point> = points
         .iter()
         .filter(|p| matches!(p.variation, Variation::Scale(_)))
         .collect();
-    out.push_str(&points_table(spec, &scales));
+    let labels = setups(s, setups_all.1);
+    out.push_str(&points_table(spec, &scales, &labels));
     let e = scale_edge(points);
     out.push_str(&match (e.last_pass, e.first_fail) {
         (Some(p), Some(f)) => format!(
@@ -851,7 +943,7 @@ fn text(
             continue;
         }
         out.push_str(&format!("\npure delay on the {} samples:\n", role.name()));
-        out.push_str(&points_table(spec, &pts));
+        out.push_str(&points_table(spec, &pts, &labels));
         let d = edge(
             points,
             |v| matches!(v, Variation::Delay { line: l, .. } if *l == line),
@@ -860,7 +952,7 @@ fn text(
             out.push_str(&format!("no failure up to {}\n", what(&p.variation)));
         }
     }
-    out.push_str(&rate_text(spec, s, points, limits, a.safety));
+    out.push_str(&rate_text(spec, setups_all, points, limits, a.safety));
     out.push_str("\nderived chain limits (ms; the smaller of the period-scale and the delay sweep; reaction and freshness from the head's read, max reaction time and freshness from the event)");
     if a.safety < 1.0 {
         out.push_str(&format!(
@@ -884,6 +976,56 @@ pub(super) fn json_schema() -> schemars::Schema {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Under --pass-rate, a setup whose reference passed fewer flights
+    /// than the rate needs (34 of 40 < 35 at 0.9) is named in a note; one
+    /// that passed enough is not; without --pass-rate nothing is said.
+    #[test]
+    fn a_setup_with_too_few_counted_flights_is_named() {
+        use clap::Parser;
+        use rtpipe_fly::sweep::AgainstReference;
+        #[derive(Parser)]
+        struct Cli {
+            #[command(flatten)]
+            fly: FlyArgs,
+        }
+        let args = |extra: &[&str]| {
+            let base = ["rtpipe", "spec.toml", "--sweep", "--seeds", "40"];
+            Cli::try_parse_from(base.iter().chain(extra))
+                .map(|c| c.fly)
+                .unwrap_or_else(|e| panic!("{e}"))
+        };
+        let counted = |counted| AgainstReference {
+            passed: counted,
+            counted,
+            lower_bound: 0.0,
+        };
+        let reference = Point {
+            variation: Variation::Scale(1.0),
+            bounds: Vec::new(),
+            event: Vec::new(),
+            schedulable: true,
+            quality: None,
+            failures: Vec::new(),
+            outcomes: vec![true; 80],
+            against_reference: Some(vec![counted(40), counted(34)]),
+            flies: false,
+            stage: Stage::Grid,
+        };
+        let labels = ["racer5/steps".to_string(), "racer5/gusty".to_string()];
+        let notes = too_few_counted(
+            &args(&["--pass-rate", "0.9"]),
+            &labels,
+            std::slice::from_ref(&reference),
+        );
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(
+            notes[0].starts_with("racer5/gusty: ")
+                && notes[0].contains("34 of its 40 flights, fewer than the 35"),
+            "{notes:?}"
+        );
+        assert!(too_few_counted(&args(&[]), &labels, &[reference]).is_empty());
+    }
 
     /// A delay point is labelled by its integer delay in exact decimals,
     /// a whole one without any.

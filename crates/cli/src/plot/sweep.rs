@@ -20,6 +20,8 @@ pub struct SweepDot {
     pub delay: bool,
     pub passed: u32,
     pub flown: u32,
+    /// A check point below a written limit (`--check-step`): drawn smaller.
+    pub check: bool,
 }
 
 /// What a sweep point's flight gave: the measure to plot, or why there is
@@ -108,6 +110,9 @@ fn panel_legend(
             };
             out.push((format!("{label} (filled: flies)"), mark));
         }
+    }
+    if measure.is_some() && dots.iter().any(|d| d.check) {
+        out.push(("small: a check point".to_string(), Mark::Note));
     }
     if dots
         .iter()
@@ -217,7 +222,7 @@ where
                 } else {
                     color.stroke_width(2)
                 };
-                Circle::new((x_of(d), v.min(top)), 5, style)
+                Circle::new((x_of(d), v.min(top)), if d.check { 3 } else { 5 }, style)
             }))
             .map_err(err)?;
     }
@@ -285,6 +290,7 @@ mod tests {
             delay: false,
             passed: 0,
             flown: 1,
+            check: false,
         }
     }
 
@@ -311,6 +317,22 @@ mod tests {
         assert!(!svg.contains("<circle"));
         let svg = sweep_chart(&[row(DotOutcome::Measured(0.3))], Some(&m)).unwrap_or_default();
         assert!(svg.contains("<circle") && !svg.contains("crashed"));
+    }
+
+    /// A check point below a limit is drawn smaller, and the legend says
+    /// so; a sweep without check points says nothing of them.
+    #[test]
+    fn check_points_are_named_in_the_legend() {
+        let mut check = dot(DotOutcome::Measured(0.2));
+        check.check = true;
+        let plain = [dot(DotOutcome::Measured(0.2))];
+        let note = |dots: &[SweepDot]| {
+            panel_legend(dots, None, Some(&settling()))
+                .iter()
+                .any(|(label, _)| label == "small: a check point")
+        };
+        assert!(note(&[check]));
+        assert!(!note(&plain));
     }
 
     /// A point some of whose flights failed says how many passed; one

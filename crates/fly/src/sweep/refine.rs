@@ -5,7 +5,7 @@
 //! the largest value below which every probed point passed, not a grid
 //! point whose neighbour just above was never flown.
 
-use super::{edge, flown, How, Point, Variation, DELAY_LINES};
+use super::{edge, flown, How, Point, Stage, Variation, DELAY_LINES};
 use rayon::prelude::*;
 use rtpipe_model::bracket::{self, Probe};
 use rtpipe_model::Spec;
@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The one-dimensional sweeps a variation belongs to: the period scale,
 /// each delay line, the actuation rate.
-fn family(v: &Variation) -> usize {
+pub(super) fn family(v: &Variation) -> usize {
     match v {
         Variation::Scale(_) => 0,
         Variation::Delay { line, .. } => 1 + line,
@@ -23,7 +23,7 @@ fn family(v: &Variation) -> usize {
 }
 
 /// A variation's value along its sweep.
-fn value(v: &Variation) -> f64 {
+pub(super) fn value(v: &Variation) -> f64 {
     match *v {
         Variation::Scale(k) | Variation::Rate(k) => k,
         Variation::Delay { ns, .. } => ns as f64,
@@ -31,7 +31,7 @@ fn value(v: &Variation) -> f64 {
 }
 
 /// The variation of `like`'s sweep at `x`.
-fn at(like: &Variation, x: f64) -> Variation {
+pub(super) fn at(like: &Variation, x: f64) -> Variation {
     match *like {
         Variation::Scale(_) => Variation::Scale(x),
         Variation::Rate(_) => Variation::Rate(x),
@@ -82,15 +82,22 @@ pub fn refine(
         return None;
     }
     for p in probed.into_iter().flatten() {
-        let f = family(&p.variation);
-        let x = value(&p.variation);
-        let at = points
-            .iter()
-            .position(|q| family(&q.variation) == f && value(&q.variation) > x)
-            .unwrap_or(points.len());
-        points.insert(at, p);
+        insert_in_order(&mut points, p);
     }
     Some(points)
+}
+
+/// Puts `p` before the first point of its sweep with a greater value (at
+/// the end when there is none), so each sweep's points stay in increasing
+/// order for [`edge`] and the derived limits.
+pub(super) fn insert_in_order(points: &mut Vec<Point>, p: Point) {
+    let f = family(&p.variation);
+    let x = value(&p.variation);
+    let at = points
+        .iter()
+        .position(|q| family(&q.variation) == f && value(&q.variation) > x)
+        .unwrap_or(points.len());
+    points.insert(at, p);
 }
 
 /// The points flown bisecting (lo, hi) of `like`'s sweep.
@@ -118,7 +125,10 @@ fn bisect(
             // No answer: the bisection ends with the bracket it has.
             return Ok(None);
         }
-        let p = flown(spec, s, at(&like, x), how);
+        let p = Point {
+            stage: Stage::Refinement,
+            ..flown(spec, s, at(&like, x), how)
+        };
         done.fetch_add(1, Ordering::Relaxed);
         let passed = p.schedulable && p.pass();
         out.push(p);
@@ -177,7 +187,7 @@ mod tests {
             .iter()
             .filter(|p| value(&p.variation) <= x && p.schedulable)
         {
-            assert!(p.pass() && p.passed == 2 && p.flights == 2, "{p:?}");
+            assert!(p.pass() && p.passed() == 2 && p.flights() == 2, "{p:?}");
         }
         let lim = derived_limits(&spec, &s, &fine, 1.0).read;
         for (k, l) in lim.iter().enumerate() {

@@ -2186,6 +2186,13 @@ class Point(Record):
         return cast("float", self["value"])
 
     @property
+    def stage(self) -> str:
+        """Which pass of the sweep flew it: `grid`, `refinement` (bisecting
+        an edge) or `check` (below a written limit, --check-step).
+        """
+        return cast("str", self["stage"])
+
+    @property
     def bounds_ms(self) -> List[PairMs]:
         """Each chain's sound bounds from the read at this timing, ms."""
         return each(PairMs, self["bounds_ms"])
@@ -2230,12 +2237,13 @@ class Point(Record):
         return cast("int", self["passed"])
 
     @property
-    def against_reference(self) -> Optional[AgainstReference]:
-        """With --pass-rate: of the flights the reference timing passed, how
-        many passed here too, and the Wilson lower bound of that share (the
-        timing flies when it reaches the rate).
+    def against_reference(self) -> Optional[List[AgainstReference]]:
+        """With --pass-rate, per vehicle/mission setup (in the sweep's
+        order): of its flights the reference timing passed, how many passed
+        here too, and the Wilson lower bound of that share (the timing
+        flies when every setup's reaches the rate).
         """
-        return maybe(AgainstReference, self.get("against_reference"))
+        return cast("Optional[List[AgainstReference]]", self.get("against_reference"))
 
     @property
     def outcomes(self) -> List[bool]:
@@ -2287,7 +2295,12 @@ class PairMs(Record):
 
 
 class AgainstReference(Record):
-    """A timing's flights counted against the reference timing's."""
+    """A setup's flights at a timing counted against the reference timing's."""
+
+    @property
+    def setup(self) -> str:
+        """The setup, "vehicle/mission"."""
+        return cast("str", self["setup"])
 
     @property
     def passed(self) -> int:

@@ -99,6 +99,7 @@ fn points_table(v: &SweepView) -> Table {
         Column::new("point", Kind::UInt),
         Column::new("varied", Kind::Text),
         Column::new("value", Kind::Float),
+        Column::new("stage", Kind::Text),
     ];
     columns.extend(
         ["schedulable", "flies", "flight_met_criterion"].map(|n| Column::new(n, Kind::Bool)),
@@ -123,6 +124,7 @@ fn points_table(v: &SweepView) -> Table {
             Cell::UInt(k as u64),
             Cell::from(p.varied),
             Cell::Float(p.value),
+            Cell::from(p.stage),
             Cell::Bool(p.schedulable),
             Cell::Bool(p.flies),
             Cell::Bool(p.flight_met_criterion),
