@@ -39,12 +39,13 @@ pub trait FixedPriority {
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
     fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
-    /// [`periodic_response`](Self::periodic_response) with the windows at
-    /// which its iteration read `hp`'s η⁺, ascending and distinct, so that
+    /// [`periodic_response`](Self::periodic_response) with the fixed
+    /// points its iterations stopped at, ascending and distinct, so that
     /// the figures hold as long as the streams keep their periods and
-    /// works and every task's η⁺ is the same at them. `None` (the default)
-    /// when unknown: the task is then re-analysed whenever an input
-    /// changes.
+    /// works and every task's η⁺, which only grows, is the same at them
+    /// (the last, the largest window the iterations read `hp` at). `None`
+    /// (the default) when unknown: the task is then re-analysed whenever
+    /// an input changes.
     fn periodic_response_windows(&self, i: usize, hp: &[Load]) -> (Figures, Option<Vec<Nanos>>) {
         (self.periodic_response(i, hp), None)
     }
@@ -92,9 +93,10 @@ pub struct EventResult {
 /// inputs then final: a unit that reads nothing of its own component is
 /// analysed once. Inside a component, sweeps in the order of the units' periods
 /// re-analyse a unit when an input changed since its last analysis where
-/// that analysis read it (a task above at a window its demand was asked
-/// at, its own tasks up to its reach: an input whose η⁺ is the same there
-/// leaves a response as it was), from the figures as they are then. From
+/// that analysis depends on it (a task above at a fixed point its
+/// iterations stopped at, its own tasks up to its reach: an input whose
+/// η⁺ only grew but is the same there leaves a response as it was), from
+/// the figures as they are then. From
 /// zero jitter the figures only grow, so this reaches the least fixed
 /// point that re-analysing every task round after round reaches (chaotic
 /// iteration, docs/analysis.md "Cost at 1,000 tasks";
@@ -386,10 +388,12 @@ impl Deps {
     /// a response without windows, one whose reach passes the first window
     /// where the change shows, when it is of one of `u`'s own tasks (whose
     /// η⁺ a FIFO analysis reads up to the busy period) or changes a
-    /// stream's period or number, else one with a window at which the
+    /// stream's period or number, else one with a fixed point at which the
     /// task's η⁺ differs (the tasks above are read through the demand
-    /// alone, at those windows: equal there, the iteration runs step for
-    /// step the same).
+    /// alone, and their η⁺ only grows: equal at every fixed point the
+    /// iterations stopped at, each iteration stops at the same one, in at
+    /// most as many steps, `thread_rta::fifo_response_windows` and
+    /// `sched::busy::level_response_windows`).
     fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
         let Some(reach) = self.reach(u, responses) else {
             return true;
@@ -537,9 +541,9 @@ struct Response {
     /// From the actual release (the first one of a merged job), for the
     /// output jitter; at most `job`.
     actual: Option<Nanos>,
-    /// The windows at which the figures read the η⁺ of the tasks above,
-    /// ascending and distinct; the last, the reach, bounds every window at
-    /// which they read any η⁺ (`None`: unbounded, or not known).
+    /// The fixed points at which the figures' iterations stopped, ascending
+    /// and distinct; the last, the reach, bounds every window at which they
+    /// read any η⁺ (`None`: unbounded, or not known).
     windows: Option<Vec<Nanos>>,
 }
 

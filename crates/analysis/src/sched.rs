@@ -651,8 +651,8 @@ fn rta_response(
     rta_response_windows(levels, i, hp, false).0
 }
 
-/// [`rta_response`] with, when `record`, every window either figure's
-/// iteration asked `hp`'s demand at, ascending and distinct
+/// [`rta_response`] with, when `record`, the fixed points either figure's
+/// iteration stopped at, ascending and distinct
 /// ([`level_response_windows`]; none otherwise).
 fn rta_response_windows(
     levels: &Levels,

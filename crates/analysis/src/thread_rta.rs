@@ -58,37 +58,44 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
     fifo_response_windows(members, above, blocking).0
 }
 
-/// [`fifo_response`] with every window at which it asked the demand of
-/// the tasks above, ascending and distinct (none when the response is
-/// unbounded). The last is the busy period, beyond which neither the
-/// members' η⁺ nor that of the tasks above is read (every candidate's
-/// fixed point is within it), so the figure depends on the members' η⁺
-/// up to it, and on the periods, works and η⁺ at those windows of the
-/// tasks above, alone (the event analysis re-analyses a thread only when
-/// an input's η⁺ changes there, `crate::events`).
+/// [`fifo_response`] with the fixed points its iterations stopped at (the
+/// busy period's and each candidate's), ascending and distinct (none when
+/// the response is unbounded). The last is the busy period, beyond which
+/// neither the members' η⁺ nor that of the tasks above is read (every
+/// candidate's fixed point is within it). With the members' η⁺ the same
+/// up to it, tasks above whose η⁺ only grew (the periods and works kept)
+/// but is the same at every one of those fixed points leave the figure as
+/// it was: each iteration starts where it started (the start reads the
+/// members and the last fixed point alone), its iterates are at or above
+/// the old ones step for step and never pass the old fixed point `p`
+/// (`w ≤ p` gives `f(w) ≤ f(p)`, and `f(p)` is as it was), so it stops at
+/// `p` in at most as many steps, and [`MAX_STEPS`] cannot bind where it
+/// did not (the event analysis re-analyses a thread only when an input's
+/// η⁺ changes there, `crate::events`; docs/analysis.md "Cost at 1,000
+/// tasks", the eighth round).
 pub fn fifo_response_windows(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
 ) -> (Option<Nanos>, Vec<Nanos>) {
-    let mut asked = Vec::new();
-    match fifo_within(members, above, blocking, &mut asked) {
+    let mut stops = Vec::new();
+    match fifo_within(members, above, blocking, &mut stops) {
         Some(r) => {
-            asked.sort_unstable();
-            asked.dedup();
-            (Some(r), asked)
+            stops.sort_unstable();
+            stops.dedup();
+            (Some(r), stops)
         }
         None => (None, Vec::new()),
     }
 }
 
-/// [`fifo_response`], each window at which it asks the demand of the
-/// tasks above pushed to `asked`.
+/// [`fifo_response`], each fixed point its iterations stop at pushed to
+/// `stops`.
 fn fifo_within(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-    asked: &mut Vec<Nanos>,
+    stops: &mut Vec<Nanos>,
 ) -> Option<Nanos> {
     let load: f64 = members
         .iter()
@@ -106,10 +113,8 @@ fn fifo_within(
     let mut demand = Demand::of_arrivals(above);
     let first = thread(1)?;
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let length = fixed_point(1, &steps, |w| {
-        asked.push(w);
-        Some(thread(w)?.saturating_add(demand.at(w)))
-    })?;
+    let length = fixed_point(1, &steps, |w| Some(thread(w)?.saturating_add(demand.at(w))))?;
+    stops.push(length);
     let mut candidates = vec![0];
     for m in members {
         candidates.extend(m.arrivals.steps_below(length, MAX_CANDIDATES)?);
@@ -138,9 +143,9 @@ fn fifo_within(
         let released = thread(a.checked_add(1)?)?;
         // f grows with a: the last fixed point is a valid start.
         finish = fixed_point(finish.max(released), &steps, |w| {
-            asked.push(w);
             Some(released.saturating_add(candidate_demand.at(w)))
         })?;
+        stops.push(finish);
         worst = worst.max(finish - a);
     }
     Some(worst)

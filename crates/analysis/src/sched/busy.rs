@@ -77,38 +77,45 @@ pub fn level_response_within(
     limit: Nanos,
 ) -> Option<Nanos> {
     let mut demand = Demand::of_loads(hp);
-    busy_period_jobs(own, hp, limit, &mut |w| demand.at(w))
+    busy_period_jobs(own, hp, limit, &mut |w| demand.at(w), &mut |_| {})
 }
 
-/// [`level_response_within`] with every window its iteration asked `hp`'s
-/// demand at, ascending: the figure depends on `hp`'s periods, works and
-/// η⁺ at those windows alone (the event analysis re-analyses a task only
-/// when an input's η⁺ changes at one of them, `crate::events`).
+/// [`level_response_within`] with the fixed points `w_q` its jobs' iterations
+/// stopped at, ascending and distinct. Against `hp` streams whose η⁺ only
+/// grew (the periods and works kept) but is the same at every one of them,
+/// the figure is as it was: each job's iteration starts where it started
+/// (from the last job's fixed point and the own work), its iterates are
+/// at or above the old ones step for step and never pass the old fixed
+/// point (the demand there is as it was), so it stops there in at most as
+/// many steps, and the same jobs are followed (the event analysis
+/// re-analyses a task only when an input's η⁺ changes at one of them,
+/// `crate::events`; docs/analysis.md "Cost at 1,000 tasks", the eighth
+/// round).
 pub fn level_response_windows(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
 ) -> (Option<Nanos>, Vec<Nanos>) {
     let mut demand = Demand::of_loads(hp);
-    let mut asked = Vec::new();
-    let r = busy_period_jobs(own, hp, limit, &mut |w| {
-        // The windows only grow: distinct once a repeat is left out.
-        if asked.last() != Some(&w) {
-            asked.push(w);
+    let mut stops = Vec::new();
+    let r = busy_period_jobs(own, hp, limit, &mut |w| demand.at(w), &mut |w| {
+        // The fixed points only grow: distinct once a repeat is left out.
+        if stops.last() != Some(&w) {
+            stops.push(w);
         }
-        demand.at(w)
     });
-    (r, asked)
+    (r, stops)
 }
 
 /// The jobs of [`level_response_within`]'s busy period, `demand` that of
 /// `hp` before any window (a [`Demand`]'s `at`, asked at growing
-/// windows).
+/// windows), each job's fixed point handed to `stop`.
 fn busy_period_jobs(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
     demand: &mut impl FnMut(Nanos) -> Nanos,
+    stop: &mut impl FnMut(Nanos),
 ) -> Option<Nanos> {
     let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
@@ -125,6 +132,7 @@ fn busy_period_jobs(
         // w_{q-1} plus the q-th job's own work is below w_q (the fixed
         // point grows at least by the work added): a valid start.
         w = busy_window_from(own_demand, hp, demand, w.checked_add(own.work)?)?;
+        stop(w);
         worst = worst.max(w - q.saturating_mul(own.period));
         if worst.checked_add(own.jitter)? > limit {
             return None;
