@@ -11,7 +11,7 @@
 
 use crate::arrivals::{Arrivals, Stream};
 use crate::graph::Lists;
-use crate::thread_rta::{fifo_response_windows, Member};
+use crate::thread_rta::{fifo_response_from, FifoStops, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
 /// Most rounds of the holistic iteration (sweeps of one strongly connected
@@ -456,7 +456,7 @@ impl Deps {
         // same thread (ThreadCache).
         let mut cache = Vec::new();
         for i in self.unit_tasks(u) {
-            responses[i] = respond(spec, fp, self, arrivals, i, &mut cache);
+            responses[i] = respond(spec, fp, self, arrivals, i, &responses[i], &mut cache);
         }
     }
 
@@ -531,7 +531,7 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
 /// for members whose own work is the work the others see of them (then
 /// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
 /// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Vec<Nanos>))>;
+type ThreadCache = Vec<(Vec<usize>, Nanos, Option<FifoStops>)>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone)]
@@ -545,6 +545,9 @@ struct Response {
     /// and distinct; the last, the reach, bounds every window at which they
     /// read any η⁺ (`None`: unbounded, or not known).
     windows: Option<Vec<Nanos>>,
+    /// A FIFO analysis' stops, the next one's warm start
+    /// ([`fifo_response_from`]; `None`: none, or not a FIFO analysis).
+    fifo: Option<FifoStops>,
 }
 
 impl Response {
@@ -554,6 +557,7 @@ impl Response {
         job: None,
         actual: None,
         windows: None,
+        fifo: None,
     };
 
     /// The largest window at which the figures read an η⁺ (`None`: not
@@ -641,13 +645,15 @@ pub fn merging(spec: &Spec, i: usize) -> bool {
     t.thread.is_some() || t.is_triggered()
 }
 
-/// Task `i`'s response times this round.
+/// Task `i`'s response times this round, `old` its last (its FIFO
+/// analysis' warm start: every activation has only grown since).
 fn respond(
     spec: &Spec,
     fp: &impl FixedPriority,
     deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
+    old: &Response,
     cache: &mut ThreadCache,
 ) -> Response {
     let t = &spec.tasks[i];
@@ -674,6 +680,7 @@ fn respond(
             job,
             actual: job,
             windows: windows.filter(|_| budget.is_some() && job.is_some()),
+            fifo: None,
         };
     }
     let blocking = fp.blocking(i);
@@ -682,28 +689,32 @@ fn respond(
         .iter()
         .find(|(a, b, _)| shared && a == above && *b == blocking)
         .map(|(_, _, r)| r.clone());
-    let (actual, windows) = known.unwrap_or_else(|| {
-        let r = thread_response(spec, deps, arrivals, i, &models, blocking);
+    let stops = known.unwrap_or_else(|| {
+        let warm = old.fifo.as_ref();
+        let r = thread_response(spec, deps, arrivals, i, &models, blocking, warm);
         if shared {
             cache.push((above.clone(), blocking, r.clone()));
         }
         r
     });
-    let Some(actual) = actual else {
+    let Some(stops) = stops else {
         return Response::NONE;
     };
+    let actual = stops.response();
     // A periodic task's figure counts from its nominal release.
     let job = actual.checked_add(t.jitter);
     Response {
         budget: job,
         job,
         actual: Some(actual),
-        windows: Some(windows),
+        windows: Some(stops.windows()),
+        fifo: Some(stops),
     }
 }
 
 /// The FIFO response of task `i`'s jobs in its thread (a thread of its
-/// own for a thread-less data-triggered task), from their first release.
+/// own for a thread-less data-triggered task), from their first release,
+/// started from `warm` ([`fifo_response_from`]).
 fn thread_response(
     spec: &Spec,
     deps: &Deps,
@@ -711,7 +722,8 @@ fn thread_response(
     i: usize,
     above: &[(Nanos, &Arrivals)],
     blocking: Nanos,
-) -> (Option<Nanos>, Vec<Nanos>) {
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
     let t = &spec.tasks[i];
     let alone = [i];
     let members = t.thread.map_or(&alone[..], |th| &deps.members[th][..]);
@@ -729,10 +741,7 @@ fn thread_response(
             })
         })
         .collect::<Option<_>>();
-    match members {
-        Some(members) => fifo_response_windows(&members, above, blocking),
-        None => (None, Vec::new()),
-    }
+    fifo_response_from(&members?, above, blocking, warm)
 }
 
 /// The iteration's last round as each task's figures, with the gaps.
