@@ -40,14 +40,44 @@ pub trait FixedPriority {
     /// from its nominal release, under `hp` as (I, T, J).
     fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
     /// [`periodic_response`](Self::periodic_response) with the fixed
-    /// points its iterations stopped at, ascending and distinct, so that
-    /// the figures hold as long as the streams keep their periods and
-    /// works and every task's η⁺, which only grows, is the same at them
-    /// (the last, the largest window the iterations read `hp` at). `None`
-    /// (the default) when unknown: the task is then re-analysed whenever
-    /// an input changes.
-    fn periodic_response_windows(&self, i: usize, hp: &[Load]) -> (Figures, Option<Vec<Nanos>>) {
+    /// points its iterations stopped at, so that the figures hold as long
+    /// as the streams keep their periods and works and every task's η⁺,
+    /// which only grows, is the same at them (the last, the largest window
+    /// the iterations read `hp` at), each iteration started from `warm`'s
+    /// (the task's last stops; the figures must be those from the bottom).
+    /// `None` (the default) when unknown: the task is then re-analysed
+    /// whenever an input changes, from the bottom.
+    fn periodic_response_windows(
+        &self,
+        i: usize,
+        hp: &[Load],
+        warm: Option<&FpStops>,
+    ) -> (Figures, Option<FpStops>) {
+        let _ = warm;
         (self.periodic_response(i, hp), None)
+    }
+}
+
+/// Where a fixed-priority analysis' iterations stopped: each job's fixed
+/// point `w_q` of the job figure's level-i busy period, and of the budget
+/// figure's (empty when the budget figure is the job figure),
+/// `sched::level_response_from`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FpStops {
+    /// The job figure's `w_q`, in order.
+    pub job: Vec<Nanos>,
+    /// The budget figure's `w_q`, in order.
+    pub budget: Vec<Nanos>,
+}
+
+impl FpStops {
+    /// Every stop, ascending and distinct.
+    fn windows(&self) -> Vec<Nanos> {
+        let mut windows = self.job.clone();
+        windows.extend(&self.budget);
+        windows.sort_unstable();
+        windows.dedup();
+        windows
     }
 }
 
@@ -548,6 +578,9 @@ struct Response {
     /// A FIFO analysis' stops, the next one's warm start
     /// ([`fifo_response_from`]; `None`: none, or not a FIFO analysis).
     fifo: Option<FifoStops>,
+    /// A fixed-priority analysis' stops, the next one's warm start
+    /// ([`FixedPriority::periodic_response_windows`]).
+    fp: Option<FpStops>,
 }
 
 impl Response {
@@ -558,6 +591,7 @@ impl Response {
         actual: None,
         windows: None,
         fifo: None,
+        fp: None,
     };
 
     /// The largest window at which the figures read an η⁺ (`None`: not
@@ -645,8 +679,8 @@ pub fn merging(spec: &Spec, i: usize) -> bool {
     t.thread.is_some() || t.is_triggered()
 }
 
-/// Task `i`'s response times this round, `old` its last (its FIFO
-/// analysis' warm start: every activation has only grown since).
+/// Task `i`'s response times this round, `old` its last (its analysis'
+/// warm start: every activation has only grown since).
 fn respond(
     spec: &Spec,
     fp: &impl FixedPriority,
@@ -674,13 +708,15 @@ fn respond(
         for &(c, a) in &models {
             hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
         }
-        let ((budget, job), windows) = fp.periodic_response_windows(i, &hp);
+        let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
+        let stops = stops.filter(|_| budget.is_some() && job.is_some());
         return Response {
             budget,
             job,
             actual: job,
-            windows: windows.filter(|_| budget.is_some() && job.is_some()),
+            windows: stops.as_ref().map(FpStops::windows),
             fifo: None,
+            fp: stops,
         };
     }
     let blocking = fp.blocking(i);
@@ -709,6 +745,7 @@ fn respond(
         actual: Some(actual),
         windows: Some(stops.windows()),
         fifo: Some(stops),
+        fp: None,
     }
 }
 

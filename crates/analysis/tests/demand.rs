@@ -5,14 +5,14 @@
 //! (every stream's ⌈(w + J)/T⌉ recomputed at every step, with checked
 //! arithmetic), kept here as the reference: on random streams, windows,
 //! own jobs and thread members, the same figures, unbounded ones and
-//! overflows included; and the FIFO analysis started warm from its last
-//! stops against the same analysis from the bottom, after the activations
+//! overflows included; and both analyses started warm from their last
+//! stops against the same analyses from the bottom, after the activations
 //! grew. 3,000 cases each; `--nocapture` prints the tally.
 
 use proptest::prelude::*;
 use rtpipe_analysis::arrivals::{Arrivals, Stream};
 use rtpipe_analysis::demand::Demand;
-use rtpipe_analysis::sched::{level_response, OwnJobs, MAX_BUSY_JOBS};
+use rtpipe_analysis::sched::{level_response, level_response_from, OwnJobs, MAX_BUSY_JOBS};
 use rtpipe_analysis::thread_rta::{
     fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES, MAX_STEPS,
 };
@@ -292,6 +292,51 @@ fn a_warm_fifo_response_is_the_one_from_the_bottom() {
             let warm = fifo_response_from(&new_members, &new_above, blocking, old.as_ref());
             prop_assert_eq!(&warm, &cold);
             Ok(match (old, cold) {
+                (Some(o), Some(c)) if o != c => "warm, moved",
+                (Some(_), Some(_)) => "warm, the same",
+                (Some(_), None) => "warm, unbounded now",
+                (None, _) => "cold",
+            })
+        },
+    );
+}
+
+#[test]
+fn a_warm_level_response_is_the_one_from_the_bottom() {
+    let own = (
+        1..3_000 as Nanos,
+        0..40 as Nanos,
+        0..600 as Nanos,
+        0..5u32,
+        200..40_000 as Nanos,
+    );
+    let extra = prop::collection::vec(
+        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
+        1..8,
+    );
+    check(
+        "warm level response",
+        CASES,
+        (own, loads(12), extra),
+        |((work, switch, blocking, jf, period), hp, extra)| {
+            let own = OwnJobs {
+                work,
+                switch,
+                blocking,
+                jitter: period * Nanos::from(jf) / 10,
+                period,
+            };
+            let grown: Vec<(Nanos, Nanos, Nanos)> = hp
+                .iter()
+                .enumerate()
+                .map(|(k, &(c, t, j))| (c, t, j + extra[k % extra.len()]))
+                .collect();
+            let (old, stops) = level_response_from(own, &hp, Nanos::MAX, &[]);
+            let cold = level_response_from(own, &grown, Nanos::MAX, &[]);
+            let warm = level_response_from(own, &grown, Nanos::MAX, &stops);
+            prop_assert_eq!(cold.0, level_response(own, &grown));
+            prop_assert_eq!(&warm, &cold);
+            Ok(match (old, cold.0) {
                 (Some(o), Some(c)) if o != c => "warm, moved",
                 (Some(_), Some(_)) => "warm, the same",
                 (Some(_), None) => "warm, unbounded now",
