@@ -423,7 +423,7 @@ impl Deps {
     /// alone, and their η⁺ only grows: equal at every fixed point the
     /// iterations stopped at, each iteration stops at the same one, in at
     /// most as many steps, `thread_rta::fifo_response_windows` and
-    /// `sched::busy::level_response_windows`).
+    /// `sched::busy::level_response_from`).
     fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
         let Some(reach) = self.reach(u, responses) else {
             return true;
