@@ -127,13 +127,15 @@ impl FifoStops {
 /// at or below the new one, and the old `finish(a')` of the largest old
 /// candidate `a' ≤ a` one at or below the new `finish(a)` (`finish` grows
 /// with `a`). From such a start a nondecreasing `f`'s iteration reaches
-/// the least fixed point. The step limit is the start's: a start from the
-/// bottom takes at most `2 + (p − start)/c` steps to a fixed point `p`
-/// (after its first step, each step that does not stop grows `w` by a
-/// count of some term, at least `c`, the least positive work among the
-/// members and the tasks above), so at most `2·(K + 1) + 2·L/c` in all
-/// for `K` candidates (the busy period's iterates lie in `[1, L]`, the
-/// candidates' in disjoint stretches of it). Where that bound is within
+/// the least fixed point. The step limit counts the steps from the
+/// bottom: such an iteration takes at most 2 steps to a fixed point plus
+/// the counts the terms of positive work gain on the way (after its first
+/// step, each step that does not stop grows `w` because some term's count
+/// grew), so at most `2·(K + 1) + 2·N(L)` in all for `K` candidates,
+/// `N(L)` the counts of the members and the tasks above at the busy
+/// period `L` (the busy period's iterates lie in `[1, L]`, the
+/// candidates' in disjoint stretches of it), and `N(L) ≤ L/c` for `c` the
+/// least positive work. Where that bound is within
 /// [`MAX_STEPS`] the start from the bottom could not have run out either,
 /// and the warm figure is its figure; otherwise, or when the warm start
 /// finds none, the response is iterated again from the bottom.
@@ -143,9 +145,22 @@ pub fn fifo_response_from(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
-    if let Some(warm) = warm {
+    // The bound only grows with the busy period, which only grows: past
+    // the limit at the old stops, it is past it at the new ones.
+    let least_work = || {
+        let works = members.iter().map(|m| m.work);
+        works
+            .chain(above.iter().map(|&(c, _)| c))
+            .filter(|&c| c > 0)
+            .min()
+    };
+    let bound = |stops: &FifoStops, least: Option<Nanos>| {
+        cold_steps_bound(members, above, stops, least) <= MAX_STEPS
+    };
+    let least = warm.and(least_work());
+    if let Some(warm) = warm.filter(|w| bound(w, least)) {
         let stops = fifo_within(members, above, blocking, Some(warm));
-        if let Some(stops) = stops.filter(|s| cold_steps_bound(members, above, s) <= MAX_STEPS) {
+        if let Some(stops) = stops.filter(|s| bound(s, least)) {
             return Some(stops);
         }
     }
@@ -153,17 +168,31 @@ pub fn fifo_response_from(
 }
 
 /// At most how many steps the iterations of a response whose stops are
-/// `stops` take from the bottom ([`fifo_response_from`]).
-fn cold_steps_bound(members: &[Member], above: &Above, stops: &FifoStops) -> u64 {
-    let least_work = members
-        .iter()
-        .map(|m| m.work)
-        .chain(above.iter().map(|&(c, _)| c))
-        .filter(|&c| c > 0)
-        .min();
-    let climbs = least_work.map_or(0, |c| stops.busy / c);
+/// `stops` take from the bottom ([`fifo_response_from`]):
+/// `2·(K + 1) + 2·N(L)`, or the cheap form `2·(K + 1) + 2·L/c`, tried
+/// first (`N(L) ≤ L/c`: at the fixed point the work the terms bring is at
+/// most `L`).
+/// `least_work` is `c`, the least positive work among the members and the
+/// tasks above (`None`: none).
+fn cold_steps_bound(
+    members: &[Member],
+    above: &Above,
+    stops: &FifoStops,
+    least_work: Option<Nanos>,
+) -> u64 {
     let fixed_points = stops.finishes.len() as u64 + 1;
-    (2 * fixed_points).saturating_add(2u64.saturating_mul(climbs.unsigned_abs()))
+    let terms = || {
+        let members = members.iter().map(|m| (m.work, m.arrivals));
+        members.chain(above.iter().copied()).filter(|&(c, _)| c > 0)
+    };
+    let climbs = least_work.map_or(0, |c| stops.busy / c);
+    let cheap = (2 * fixed_points).saturating_add(2u64.saturating_mul(climbs.unsigned_abs()));
+    if cheap <= MAX_STEPS {
+        return cheap;
+    }
+    terms().fold(2 * fixed_points, |sum, (_, a)| {
+        sum.saturating_add(2u64.saturating_mul(a.eta(stops.busy).unsigned_abs()))
+    })
 }
 
 /// [`fifo_response`]'s stops, each iteration started from `warm`'s where

@@ -106,10 +106,11 @@ pub fn level_response_within(
 /// of its `f` (below `w_{q−1} + x` its `f` is above the window), which only
 /// grew, so the old `w_q` is at or below the new one and the iteration
 /// from it reaches the new one. From the bottom, a job's iteration takes
-/// at most `2 + (w_q − start)/c` steps (after its first step, each step
-/// that does not stop grows the window by a count of some stream, at
-/// least `c`, the least positive work in `hp`): where `2 + w/c` for the
-/// largest stop `w` is within [`MAX_WINDOW_STEPS`], no job's iteration
+/// at most 2 steps plus the counts `hp`'s terms of positive work gain on
+/// the way (after its first step, each step that does not stop grows the
+/// window because some stream's count grew): `2 + N(w)`, `N(w)` their
+/// counts at the largest stop `w`, at most `w/c` for `c` the least
+/// positive work in `hp`. Where that is within [`MAX_WINDOW_STEPS`], no job's iteration
 /// from the bottom could have run out, and the warm figure is its figure;
 /// otherwise, or when the warm start finds none, the jobs are iterated
 /// again from the bottom.
@@ -119,9 +120,15 @@ pub fn level_response_from(
     limit: Nanos,
     warm: &[Nanos],
 ) -> (Option<Nanos>, Vec<Nanos>) {
-    if !warm.is_empty() {
+    if warm.is_empty() {
+        return level_response_stops(own, hp, limit, &[]);
+    }
+    let least = hp.iter().map(|&(c, _, _)| c).filter(|&c| c > 0).min();
+    // The bound only grows with the stops, which only grow: past the limit
+    // at the old stops, it is past it at the new ones.
+    if cold_steps_bound(hp, warm, least) <= MAX_WINDOW_STEPS {
         let (r, stops) = level_response_stops(own, hp, limit, warm);
-        if r.is_some() && cold_steps_bound(hp, &stops) <= MAX_WINDOW_STEPS {
+        if r.is_some() && cold_steps_bound(hp, &stops, least) <= MAX_WINDOW_STEPS {
             return (r, stops);
         }
     }
@@ -130,11 +137,25 @@ pub fn level_response_from(
 
 /// At most how many steps one job's iteration from the bottom takes when
 /// the largest of the jobs' fixed points is the last of `stops`
-/// ([`level_response_from`]).
-fn cold_steps_bound(hp: &[(Nanos, Nanos, Nanos)], stops: &[Nanos]) -> u64 {
-    let least_work = hp.iter().map(|&(c, _, _)| c).filter(|&c| c > 0).min();
+/// ([`level_response_from`]): `2 + N(w)`, or the cheap form `2 + w/c`,
+/// tried first (`N(w) ≤ w/c`: at the fixed point the work `hp` brings is
+/// at most `w`).
+/// `least_work` is `c`, the least positive work in `hp` (`None`: none).
+fn cold_steps_bound(
+    hp: &[(Nanos, Nanos, Nanos)],
+    stops: &[Nanos],
+    least_work: Option<Nanos>,
+) -> u64 {
     let top = stops.last().copied().unwrap_or(0);
-    2u64.saturating_add(least_work.map_or(0, |c| (top / c).unsigned_abs()))
+    let cheap = 2u64.saturating_add(least_work.map_or(0, |c| (top / c).unsigned_abs()));
+    if cheap <= MAX_WINDOW_STEPS {
+        return cheap;
+    }
+    let positive = hp.iter().filter(|&&(c, _, _)| c > 0);
+    positive.fold(2, |sum: u64, &(_, period, jitter)| {
+        let count = crate::arrivals::Stream { period, jitter }.eta(top);
+        sum.saturating_add(count.unsigned_abs())
+    })
 }
 
 /// [`level_response_within`] with each job's fixed point, each job's
