@@ -11,7 +11,7 @@
 
 use crate::arrivals::{Arrivals, Stream};
 use crate::graph::Lists;
-use crate::thread_rta::{fifo_response_windows, Member};
+use crate::thread_rta::{fifo_response_from, FifoStops, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
 /// Most rounds of the holistic iteration (sweeps of one strongly connected
@@ -39,14 +39,45 @@ pub trait FixedPriority {
     /// (budget, job) response times of a thread-less periodic task `i`,
     /// from its nominal release, under `hp` as (I, T, J).
     fn periodic_response(&self, i: usize, hp: &[Load]) -> (Option<Nanos>, Option<Nanos>);
-    /// [`periodic_response`](Self::periodic_response) with the windows at
-    /// which its iteration read `hp`'s η⁺, ascending and distinct, so that
-    /// the figures hold as long as the streams keep their periods and
-    /// works and every task's η⁺ is the same at them. `None` (the default)
-    /// when unknown: the task is then re-analysed whenever an input
-    /// changes.
-    fn periodic_response_windows(&self, i: usize, hp: &[Load]) -> (Figures, Option<Vec<Nanos>>) {
+    /// [`periodic_response`](Self::periodic_response) with the fixed
+    /// points its iterations stopped at, so that the figures hold as long
+    /// as the streams keep their periods and works and every task's η⁺,
+    /// which only grows, is the same at them (the last, the largest window
+    /// the iterations read `hp` at), each iteration started from `warm`'s
+    /// (the task's last stops; the figures must be those from the bottom).
+    /// `None` (the default) when unknown: the task is then re-analysed
+    /// whenever an input changes, from the bottom.
+    fn periodic_response_windows(
+        &self,
+        i: usize,
+        hp: &[Load],
+        warm: Option<&FpStops>,
+    ) -> (Figures, Option<FpStops>) {
+        let _ = warm;
         (self.periodic_response(i, hp), None)
+    }
+}
+
+/// Where a fixed-priority analysis' iterations stopped: each job's fixed
+/// point `w_q` of the job figure's level-i busy period, and of the budget
+/// figure's (empty when the budget figure is the job figure),
+/// `sched::level_response_from`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct FpStops {
+    /// The job figure's `w_q`, in order.
+    pub job: Vec<Nanos>,
+    /// The budget figure's `w_q`, in order.
+    pub budget: Vec<Nanos>,
+}
+
+impl FpStops {
+    /// Every stop, ascending and distinct.
+    fn windows(&self) -> Vec<Nanos> {
+        let mut windows = self.job.clone();
+        windows.extend(&self.budget);
+        windows.sort_unstable();
+        windows.dedup();
+        windows
     }
 }
 
@@ -92,9 +123,10 @@ pub struct EventResult {
 /// inputs then final: a unit that reads nothing of its own component is
 /// analysed once. Inside a component, sweeps in the order of the units' periods
 /// re-analyse a unit when an input changed since its last analysis where
-/// that analysis read it (a task above at a window its demand was asked
-/// at, its own tasks up to its reach: an input whose η⁺ is the same there
-/// leaves a response as it was), from the figures as they are then. From
+/// that analysis depends on it (a task above at a fixed point its
+/// iterations stopped at, its own tasks up to its reach: an input whose
+/// η⁺ only grew but is the same there leaves a response as it was), from
+/// the figures as they are then. From
 /// zero jitter the figures only grow, so this reaches the least fixed
 /// point that re-analysing every task round after round reaches (chaotic
 /// iteration, docs/analysis.md "Cost at 1,000 tasks";
@@ -386,10 +418,12 @@ impl Deps {
     /// a response without windows, one whose reach passes the first window
     /// where the change shows, when it is of one of `u`'s own tasks (whose
     /// η⁺ a FIFO analysis reads up to the busy period) or changes a
-    /// stream's period or number, else one with a window at which the
+    /// stream's period or number, else one with a fixed point at which the
     /// task's η⁺ differs (the tasks above are read through the demand
-    /// alone, at those windows: equal there, the iteration runs step for
-    /// step the same).
+    /// alone, and their η⁺ only grows: equal at every fixed point the
+    /// iterations stopped at, each iteration stops at the same one, in at
+    /// most as many steps, `thread_rta::fifo_response_windows` and
+    /// `sched::busy::level_response_from`).
     fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
         let Some(reach) = self.reach(u, responses) else {
             return true;
@@ -452,7 +486,7 @@ impl Deps {
         // same thread (ThreadCache).
         let mut cache = Vec::new();
         for i in self.unit_tasks(u) {
-            responses[i] = respond(spec, fp, self, arrivals, i, &mut cache);
+            responses[i] = respond(spec, fp, self, arrivals, i, &responses[i], &mut cache);
         }
     }
 
@@ -527,7 +561,7 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
 /// for members whose own work is the work the others see of them (then
 /// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
 /// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, (Option<Nanos>, Vec<Nanos>))>;
+type ThreadCache = Vec<(Vec<usize>, Nanos, Option<FifoStops>)>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone)]
@@ -537,10 +571,16 @@ struct Response {
     /// From the actual release (the first one of a merged job), for the
     /// output jitter; at most `job`.
     actual: Option<Nanos>,
-    /// The windows at which the figures read the η⁺ of the tasks above,
-    /// ascending and distinct; the last, the reach, bounds every window at
-    /// which they read any η⁺ (`None`: unbounded, or not known).
+    /// The fixed points at which the figures' iterations stopped, ascending
+    /// and distinct; the last, the reach, bounds every window at which they
+    /// read any η⁺ (`None`: unbounded, or not known).
     windows: Option<Vec<Nanos>>,
+    /// A FIFO analysis' stops, the next one's warm start
+    /// ([`fifo_response_from`]; `None`: none, or not a FIFO analysis).
+    fifo: Option<FifoStops>,
+    /// A fixed-priority analysis' stops, the next one's warm start
+    /// ([`FixedPriority::periodic_response_windows`]).
+    fp: Option<FpStops>,
 }
 
 impl Response {
@@ -550,6 +590,8 @@ impl Response {
         job: None,
         actual: None,
         windows: None,
+        fifo: None,
+        fp: None,
     };
 
     /// The largest window at which the figures read an η⁺ (`None`: not
@@ -637,13 +679,15 @@ pub fn merging(spec: &Spec, i: usize) -> bool {
     t.thread.is_some() || t.is_triggered()
 }
 
-/// Task `i`'s response times this round.
+/// Task `i`'s response times this round, `old` its last (its analysis'
+/// warm start: every activation has only grown since).
 fn respond(
     spec: &Spec,
     fp: &impl FixedPriority,
     deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
+    old: &Response,
     cache: &mut ThreadCache,
 ) -> Response {
     let t = &spec.tasks[i];
@@ -664,12 +708,15 @@ fn respond(
         for &(c, a) in &models {
             hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
         }
-        let ((budget, job), windows) = fp.periodic_response_windows(i, &hp);
+        let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
+        let stops = stops.filter(|_| budget.is_some() && job.is_some());
         return Response {
             budget,
             job,
             actual: job,
-            windows: windows.filter(|_| budget.is_some() && job.is_some()),
+            windows: stops.as_ref().map(FpStops::windows),
+            fifo: None,
+            fp: stops,
         };
     }
     let blocking = fp.blocking(i);
@@ -678,28 +725,33 @@ fn respond(
         .iter()
         .find(|(a, b, _)| shared && a == above && *b == blocking)
         .map(|(_, _, r)| r.clone());
-    let (actual, windows) = known.unwrap_or_else(|| {
-        let r = thread_response(spec, deps, arrivals, i, &models, blocking);
+    let stops = known.unwrap_or_else(|| {
+        let warm = old.fifo.as_ref();
+        let r = thread_response(spec, deps, arrivals, i, &models, blocking, warm);
         if shared {
             cache.push((above.clone(), blocking, r.clone()));
         }
         r
     });
-    let Some(actual) = actual else {
+    let Some(stops) = stops else {
         return Response::NONE;
     };
+    let actual = stops.response();
     // A periodic task's figure counts from its nominal release.
     let job = actual.checked_add(t.jitter);
     Response {
         budget: job,
         job,
         actual: Some(actual),
-        windows: Some(windows),
+        windows: Some(stops.windows()),
+        fifo: Some(stops),
+        fp: None,
     }
 }
 
 /// The FIFO response of task `i`'s jobs in its thread (a thread of its
-/// own for a thread-less data-triggered task), from their first release.
+/// own for a thread-less data-triggered task), from their first release,
+/// started from `warm` ([`fifo_response_from`]).
 fn thread_response(
     spec: &Spec,
     deps: &Deps,
@@ -707,7 +759,8 @@ fn thread_response(
     i: usize,
     above: &[(Nanos, &Arrivals)],
     blocking: Nanos,
-) -> (Option<Nanos>, Vec<Nanos>) {
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
     let t = &spec.tasks[i];
     let alone = [i];
     let members = t.thread.map_or(&alone[..], |th| &deps.members[th][..]);
@@ -725,10 +778,7 @@ fn thread_response(
             })
         })
         .collect::<Option<_>>();
-    match members {
-        Some(members) => fifo_response_windows(&members, above, blocking),
-        None => (None, Vec::new()),
-    }
+    fifo_response_from(&members?, above, blocking, warm)
 }
 
 /// The iteration's last round as each task's figures, with the gaps.

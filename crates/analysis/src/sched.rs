@@ -15,8 +15,8 @@ mod busy;
 pub(crate) use busy::busy_window;
 mod slack;
 pub use busy::{
-    level_response, level_response_windows, level_response_within, response_time,
-    response_time_jitter, OwnJobs, MAX_BUSY_JOBS,
+    level_response, level_response_from, level_response_within, response_time,
+    response_time_jitter, OwnJobs, MAX_BUSY_JOBS, MAX_WINDOW_STEPS,
 };
 pub(crate) use slack::may_run_in_slack;
 
@@ -557,9 +557,10 @@ impl crate::events::FixedPriority for Levels<'_> {
         &self,
         i: usize,
         hp: &[(Nanos, Nanos, Nanos)],
-    ) -> (crate::events::Figures, Option<Vec<Nanos>>) {
-        let (figures, windows) = rta_response_windows(self, i, hp, true);
-        (figures, Some(windows))
+        warm: Option<&crate::events::FpStops>,
+    ) -> (crate::events::Figures, Option<crate::events::FpStops>) {
+        let (figures, stops) = rta_response_windows(self, i, hp, true, warm);
+        (figures, Some(stops))
     }
 }
 
@@ -648,18 +649,19 @@ fn rta_response(
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
 ) -> (Option<Nanos>, Option<Nanos>) {
-    rta_response_windows(levels, i, hp, false).0
+    rta_response_windows(levels, i, hp, false, None).0
 }
 
-/// [`rta_response`] with, when `record`, every window either figure's
-/// iteration asked `hp`'s demand at, ascending and distinct
-/// ([`level_response_windows`]; none otherwise).
+/// [`rta_response`] with, when `record`, the fixed points each figure's
+/// jobs stopped at ([`level_response_from`], each started from `warm`'s
+/// where given; none otherwise).
 fn rta_response_windows(
     levels: &Levels,
     i: usize,
     hp: &[(Nanos, Nanos, Nanos)],
     record: bool,
-) -> ((Option<Nanos>, Option<Nanos>), Vec<Nanos>) {
+    warm: Option<&crate::events::FpStops>,
+) -> ((Option<Nanos>, Option<Nanos>), crate::events::FpStops) {
     let spec = levels.spec;
     let t = &spec.tasks[i];
     let blocking = levels.blocking(i);
@@ -675,24 +677,29 @@ fn rta_response_windows(
     // simulator found its later jobs above the figure): none for
     // one whose busy period holds more than one own job.
     let pibs = spec.policy().budget(t.server) == Some(rtpipe_model::policy::Budget::Pibs);
-    let r = |work: Nanos| {
-        let (r, windows) = if record {
-            level_response_windows(own(work), hp, Nanos::MAX)
+    let r = |work: Nanos, warm: &[Nanos]| {
+        let (r, stops) = if record {
+            level_response_from(own(work), hp, Nanos::MAX, warm)
         } else {
             (level_response_within(own(work), hp, Nanos::MAX), Vec::new())
         };
-        (r.filter(|&r| !pibs || r <= period_or_max(t)), windows)
+        (r.filter(|&r| !pibs || r <= period_or_max(t)), stops)
     };
-    let (job, mut windows) = r(t.demand());
+    let (job, job_stops) = r(t.demand(), warm.map_or(&[], |w| &w.job));
     // Without a budget of its own the budget figure is the job figure.
     if t.budget() == t.demand() {
-        return ((job, job), windows);
+        let stops = crate::events::FpStops {
+            job: job_stops,
+            budget: Vec::new(),
+        };
+        return ((job, job), stops);
     }
-    let (budget, budget_windows) = r(t.budget());
-    windows.extend(budget_windows);
-    windows.sort_unstable();
-    windows.dedup();
-    ((budget, job), windows)
+    let (budget, budget_stops) = r(t.budget(), warm.map_or(&[], |w| &w.budget));
+    let stops = crate::events::FpStops {
+        job: job_stops,
+        budget: budget_stops,
+    };
+    ((budget, job), stops)
 }
 
 /// The verdict of the spec's test on one CPU, over its guaranteed tasks.

@@ -58,38 +58,151 @@ pub fn fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Opti
     fifo_response_windows(members, above, blocking).0
 }
 
-/// [`fifo_response`] with every window at which it asked the demand of
-/// the tasks above, ascending and distinct (none when the response is
-/// unbounded). The last is the busy period, beyond which neither the
-/// members' η⁺ nor that of the tasks above is read (every candidate's
-/// fixed point is within it), so the figure depends on the members' η⁺
-/// up to it, and on the periods, works and η⁺ at those windows of the
-/// tasks above, alone (the event analysis re-analyses a thread only when
-/// an input's η⁺ changes there, `crate::events`).
+/// [`fifo_response`] with the fixed points its iterations stopped at (the
+/// busy period's and each candidate's), ascending and distinct (none when
+/// the response is unbounded). The last is the busy period, beyond which
+/// neither the members' η⁺ nor that of the tasks above is read (every
+/// candidate's fixed point is within it). With the members' η⁺ the same
+/// up to it, tasks above whose η⁺ only grew (the periods and works kept)
+/// but is the same at every one of those fixed points leave the figure as
+/// it was: each iteration's least fixed point is at or above the old one
+/// (every input only grew) and the old one is still a fixed point (`f`
+/// there is as it was), so it is the same, and the cold iteration reaches
+/// it in at most as many steps (its iterates are at or above the old ones
+/// step for step and never pass it), so [`MAX_STEPS`] cannot bind where
+/// it did not (the event analysis re-analyses a thread only when an
+/// input's η⁺ changes there, `crate::events`; docs/analysis.md "Cost at
+/// 1,000 tasks", the eighth round).
 pub fn fifo_response_windows(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
 ) -> (Option<Nanos>, Vec<Nanos>) {
-    let mut asked = Vec::new();
-    match fifo_within(members, above, blocking, &mut asked) {
-        Some(r) => {
-            asked.sort_unstable();
-            asked.dedup();
-            (Some(r), asked)
-        }
+    match fifo_response_from(members, above, blocking, None) {
+        Some(stops) => (Some(stops.response()), stops.windows()),
         None => (None, Vec::new()),
     }
 }
 
-/// [`fifo_response`], each window at which it asks the demand of the
-/// tasks above pushed to `asked`.
+/// Where a bounded [`fifo_response`]'s iterations stopped: its busy period
+/// and each candidate's release offset with its completion.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FifoStops {
+    /// L: the level busy period.
+    busy: Nanos,
+    /// Per candidate `a`, ascending, `(a, finish(a))`: the least fixed
+    /// point of `w = thread(a + 1) + Σ_{h ∈ above} η⁺_h(w)·C_h`.
+    finishes: Vec<(Nanos, Nanos)>,
+}
+
+impl FifoStops {
+    /// The response: the largest `finish(a) − a`.
+    pub fn response(&self) -> Nanos {
+        self.finishes
+            .iter()
+            .map(|&(a, finish)| finish - a)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The fixed points, ascending and distinct; the last is the busy
+    /// period ([`fifo_response_windows`]).
+    pub fn windows(&self) -> Vec<Nanos> {
+        let mut windows: Vec<Nanos> = self.finishes.iter().map(|&(_, f)| f).collect();
+        windows.push(self.busy);
+        windows.sort_unstable();
+        windows.dedup();
+        windows
+    }
+}
+
+/// [`fifo_response`]'s stops (`None`: unbounded), its iterations started
+/// from `warm`, the stops of the same thread and tasks above under
+/// activations that have only grown since (each η⁺ at least as large at
+/// every window; the event analysis' jitters only grow). The figure is the
+/// one a start from the bottom gives, step limit included.
+///
+/// Why. Every input only grew, so every `f` is at least what it was and its
+/// least fixed point at least the old one: the old busy period is a start
+/// at or below the new one, and the old `finish(a')` of the largest old
+/// candidate `a' ≤ a` one at or below the new `finish(a)` (`finish` grows
+/// with `a`). From such a start a nondecreasing `f`'s iteration reaches
+/// the least fixed point. The step limit counts the steps from the
+/// bottom: such an iteration takes at most 2 steps to a fixed point plus
+/// the counts the terms of positive work gain on the way (after its first
+/// step, each step that does not stop grows `w` because some term's count
+/// grew), so at most `2·(K + 1) + 2·N(L)` in all for `K` candidates,
+/// `N(L)` the counts of the members and the tasks above at the busy
+/// period `L` (the busy period's iterates lie in `[1, L]`, the
+/// candidates' in disjoint stretches of it), and `N(L) ≤ L/c` for `c` the
+/// least positive work. Where that bound is within
+/// [`MAX_STEPS`] the start from the bottom could not have run out either,
+/// and the warm figure is its figure; otherwise, or when the warm start
+/// finds none, the response is iterated again from the bottom.
+pub fn fifo_response_from(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
+    // The bound only grows with the busy period, which only grows: past
+    // the limit at the old stops, it is past it at the new ones.
+    let least_work = || {
+        let works = members.iter().map(|m| m.work);
+        works
+            .chain(above.iter().map(|&(c, _)| c))
+            .filter(|&c| c > 0)
+            .min()
+    };
+    let bound = |stops: &FifoStops, least: Option<Nanos>| {
+        cold_steps_bound(members, above, stops, least) <= MAX_STEPS
+    };
+    let least = warm.and(least_work());
+    if let Some(warm) = warm.filter(|w| bound(w, least)) {
+        let stops = fifo_within(members, above, blocking, Some(warm));
+        if let Some(stops) = stops.filter(|s| bound(s, least)) {
+            return Some(stops);
+        }
+    }
+    fifo_within(members, above, blocking, None)
+}
+
+/// At most how many steps the iterations of a response whose stops are
+/// `stops` take from the bottom ([`fifo_response_from`]):
+/// `2·(K + 1) + 2·N(L)`, or the cheap form `2·(K + 1) + 2·L/c`, tried
+/// first (`N(L) ≤ L/c`: at the fixed point the work the terms bring is at
+/// most `L`).
+/// `least_work` is `c`, the least positive work among the members and the
+/// tasks above (`None`: none).
+fn cold_steps_bound(
+    members: &[Member],
+    above: &Above,
+    stops: &FifoStops,
+    least_work: Option<Nanos>,
+) -> u64 {
+    let fixed_points = stops.finishes.len() as u64 + 1;
+    let terms = || {
+        let members = members.iter().map(|m| (m.work, m.arrivals));
+        members.chain(above.iter().copied()).filter(|&(c, _)| c > 0)
+    };
+    let climbs = least_work.map_or(0, |c| stops.busy / c);
+    let cheap = (2 * fixed_points).saturating_add(2u64.saturating_mul(climbs.unsigned_abs()));
+    if cheap <= MAX_STEPS {
+        return cheap;
+    }
+    terms().fold(2 * fixed_points, |sum, (_, a)| {
+        sum.saturating_add(2u64.saturating_mul(a.eta(stops.busy).unsigned_abs()))
+    })
+}
+
+/// [`fifo_response`]'s stops, each iteration started from `warm`'s where
+/// given ([`fifo_response_from`]) and from the bottom otherwise.
 fn fifo_within(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
-    asked: &mut Vec<Nanos>,
-) -> Option<Nanos> {
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
     let load: f64 = members
         .iter()
         .map(|m| m.work as f64 * m.arrivals.rate())
@@ -106,8 +219,8 @@ fn fifo_within(
     let mut demand = Demand::of_arrivals(above);
     let first = thread(1)?;
     let steps = std::cell::Cell::new(MAX_STEPS);
-    let length = fixed_point(1, &steps, |w| {
-        asked.push(w);
+    let start = warm.map_or(1, |w| w.busy.max(1));
+    let length = fixed_point(start, &steps, |w| {
         Some(thread(w)?.saturating_add(demand.at(w)))
     })?;
     let mut candidates = vec![0];
@@ -125,7 +238,10 @@ fn fifo_within(
     // step): with as many left, the step limit cannot bind in it.
     let busy_steps = MAX_STEPS - steps.get();
     if candidates.len() == 1 && first >= 1 && busy_steps <= steps.get() {
-        return Some(length);
+        return Some(FifoStops {
+            busy: length,
+            finishes: vec![(0, length)],
+        });
     }
     candidates.sort_unstable();
     candidates.dedup();
@@ -133,17 +249,24 @@ fn fifo_within(
     // demand of their own, whose windows grow from one candidate to the
     // next.
     let mut candidate_demand = Demand::of_arrivals(above);
-    let (mut worst, mut finish) = (0, 0);
+    let old = warm.map_or(&[][..], |w| &w.finishes[..]);
+    let mut finishes = Vec::with_capacity(candidates.len());
+    let mut finish = 0;
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
-        // f grows with a: the last fixed point is a valid start.
-        finish = fixed_point(finish.max(released), &steps, |w| {
-            asked.push(w);
+        // f grows with a: the last fixed point is a valid start, and so is
+        // the old one of the largest old candidate up to a.
+        let known = old.partition_point(|&(b, _)| b <= a);
+        let warm_start = known.checked_sub(1).map_or(0, |k| old[k].1);
+        finish = fixed_point(finish.max(released).max(warm_start), &steps, |w| {
             Some(released.saturating_add(candidate_demand.at(w)))
         })?;
-        worst = worst.max(finish - a);
+        finishes.push((a, finish));
     }
-    Some(worst)
+    Some(FifoStops {
+        busy: length,
+        finishes,
+    })
 }
 
 /// The least fixed point of a nondecreasing `f` at or above `start`
@@ -263,5 +386,35 @@ mod tests {
         assert_eq!(fits.0, Some(40_000_000_000));
         assert_eq!(fits.1.last(), Some(&40_000_000_000));
         assert_eq!(fifo_response(&member(70_000), &above, 0), None);
+    }
+
+    #[test]
+    fn a_warm_start_keeps_the_step_limit() {
+        // As above: at x = 70,000 the iteration from the bottom runs out of
+        // steps, while one started just below the busy period (7·10¹⁰)
+        // finds it at once. The bound on the steps from the bottom
+        // (2·(1 + 1) + 2·7·10¹⁰/999,999, past MAX_STEPS) sends the warm
+        // start back to the bottom: unbounded, as from the bottom. At
+        // x = 40,000 the bound fits and the warm start's figure stands.
+        let (x, h) = (
+            Arrivals::periodic(4_000_000_000_000_000, 0),
+            Arrivals::periodic(1_000_000, 0),
+        );
+        let above = [(999_999, &h)];
+        let member = |work| [Member { work, arrivals: &x }];
+        let near = |busy| FifoStops {
+            busy,
+            finishes: vec![(0, busy)],
+        };
+        let far = near(70_000_000_000 - 1_000_000);
+        let found = fifo_within(&member(70_000), &above, 0, Some(&far));
+        assert_eq!(found.map(|s| s.response()), Some(70_000_000_000));
+        assert_eq!(
+            fifo_response_from(&member(70_000), &above, 0, Some(&far)),
+            None
+        );
+        let fits = near(40_000_000_000 - 1_000_000);
+        let warm = fifo_response_from(&member(40_000), &above, 0, Some(&fits));
+        assert_eq!(warm.map(|s| s.response()), Some(40_000_000_000));
     }
 }

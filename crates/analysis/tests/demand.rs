@@ -5,13 +5,17 @@
 //! (every stream's ⌈(w + J)/T⌉ recomputed at every step, with checked
 //! arithmetic), kept here as the reference: on random streams, windows,
 //! own jobs and thread members, the same figures, unbounded ones and
-//! overflows included. 3,000 cases each; `--nocapture` prints the tally.
+//! overflows included; and both analyses started warm from their last
+//! stops against the same analyses from the bottom, after the activations
+//! grew. 3,000 cases each; `--nocapture` prints the tally.
 
 use proptest::prelude::*;
 use rtpipe_analysis::arrivals::{Arrivals, Stream};
 use rtpipe_analysis::demand::Demand;
-use rtpipe_analysis::sched::{level_response, OwnJobs, MAX_BUSY_JOBS};
-use rtpipe_analysis::thread_rta::{fifo_response, Above, Member, MAX_CANDIDATES, MAX_STEPS};
+use rtpipe_analysis::sched::{level_response, level_response_from, OwnJobs, MAX_BUSY_JOBS};
+use rtpipe_analysis::thread_rta::{
+    fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES, MAX_STEPS,
+};
 use rtpipe_model::{Nanos, MAX_TIME};
 use rtpipe_testkit::check;
 use std::cell::Cell;
@@ -221,6 +225,122 @@ fn fifo_response_is_the_straightforward_iteration() {
                 "bounded"
             } else {
                 "unbounded"
+            })
+        },
+    );
+}
+
+/// A thread's members as `thread_rta` takes them.
+fn view(members: &[(Nanos, Arrivals)]) -> Vec<Member<'_>> {
+    members
+        .iter()
+        .map(|(work, a)| Member {
+            work: *work,
+            arrivals: a,
+        })
+        .collect()
+}
+
+/// Tasks above as `thread_rta` takes them.
+fn pairs(above: &[(Nanos, Arrivals)]) -> Vec<(Nanos, &Arrivals)> {
+    above.iter().map(|(c, a)| (*c, a)).collect()
+}
+
+/// `a` with each stream's jitter grown by the next of `extra` (cycled).
+fn grown(a: &Arrivals, extra: &[Nanos], k: &mut usize) -> Arrivals {
+    Arrivals {
+        streams: a
+            .streams
+            .iter()
+            .map(|s| {
+                *k += 1;
+                Stream {
+                    period: s.period,
+                    jitter: s.jitter + extra[*k % extra.len()],
+                }
+            })
+            .collect(),
+    }
+}
+
+#[test]
+fn a_warm_fifo_response_is_the_one_from_the_bottom() {
+    // The event analysis re-analyses a thread from its last stops after
+    // its inputs' jitters grew: the figure and the stops must be those of
+    // an analysis from the bottom.
+    let members = prop::collection::vec((1..2_000 as Nanos, arrivals()), 1..4);
+    let above = prop::collection::vec((1..1_500 as Nanos, arrivals()), 0..6);
+    let extra = prop::collection::vec(
+        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
+        1..8,
+    );
+    check(
+        "warm fifo response",
+        CASES,
+        (members, above, 0..500 as Nanos, extra),
+        |(members, above, blocking, extra)| {
+            let mut k = 0;
+            let mut grow = |m: &[(Nanos, Arrivals)]| -> Vec<(Nanos, Arrivals)> {
+                m.iter()
+                    .map(|(c, a)| (*c, grown(a, &extra, &mut k)))
+                    .collect()
+            };
+            let (grown_members, grown_above) = (grow(&members), grow(&above));
+            let old = fifo_response_from(&view(&members), &pairs(&above), blocking, None);
+            let (new_members, new_above) = (view(&grown_members), pairs(&grown_above));
+            let cold = fifo_response_from(&new_members, &new_above, blocking, None);
+            let warm = fifo_response_from(&new_members, &new_above, blocking, old.as_ref());
+            prop_assert_eq!(&warm, &cold);
+            Ok(match (old, cold) {
+                (Some(o), Some(c)) if o != c => "warm, moved",
+                (Some(_), Some(_)) => "warm, the same",
+                (Some(_), None) => "warm, unbounded now",
+                (None, _) => "cold",
+            })
+        },
+    );
+}
+
+#[test]
+fn a_warm_level_response_is_the_one_from_the_bottom() {
+    let own = (
+        1..3_000 as Nanos,
+        0..40 as Nanos,
+        0..600 as Nanos,
+        0..5u32,
+        200..40_000 as Nanos,
+    );
+    let extra = prop::collection::vec(
+        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
+        1..8,
+    );
+    check(
+        "warm level response",
+        CASES,
+        (own, loads(12), extra),
+        |((work, switch, blocking, jf, period), hp, extra)| {
+            let own = OwnJobs {
+                work,
+                switch,
+                blocking,
+                jitter: period * Nanos::from(jf) / 10,
+                period,
+            };
+            let grown: Vec<(Nanos, Nanos, Nanos)> = hp
+                .iter()
+                .enumerate()
+                .map(|(k, &(c, t, j))| (c, t, j + extra[k % extra.len()]))
+                .collect();
+            let (old, stops) = level_response_from(own, &hp, Nanos::MAX, &[]);
+            let cold = level_response_from(own, &grown, Nanos::MAX, &[]);
+            let warm = level_response_from(own, &grown, Nanos::MAX, &stops);
+            prop_assert_eq!(cold.0, level_response(own, &grown));
+            prop_assert_eq!(&warm, &cold);
+            Ok(match (old, cold.0) {
+                (Some(o), Some(c)) if o != c => "warm, moved",
+                (Some(_), Some(_)) => "warm, the same",
+                (Some(_), None) => "warm, unbounded now",
+                (None, _) => "cold",
             })
         },
     );

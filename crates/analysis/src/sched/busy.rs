@@ -53,6 +53,10 @@ pub struct OwnJobs {
 /// response is called unbounded.
 pub const MAX_BUSY_JOBS: Nanos = 100_000;
 
+/// Most steps of one job's fixed-point iteration before the response is
+/// called unbounded.
+pub const MAX_WINDOW_STEPS: u64 = 1_000_000;
+
 /// The worst response time of any job of a task over its level-i busy
 /// period (Lehoczky 1990, arbitrary deadlines; Tindell, Burns and Wellings
 /// 1994, with release jitter and blocking): the q-th own job (q = 0, 1, …)
@@ -77,38 +81,111 @@ pub fn level_response_within(
     limit: Nanos,
 ) -> Option<Nanos> {
     let mut demand = Demand::of_loads(hp);
-    busy_period_jobs(own, hp, limit, &mut |w| demand.at(w))
+    busy_period_jobs(own, hp, limit, &[], &mut |w| demand.at(w), &mut |_| {})
 }
 
-/// [`level_response_within`] with every window its iteration asked `hp`'s
-/// demand at, ascending: the figure depends on `hp`'s periods, works and
-/// η⁺ at those windows alone (the event analysis re-analyses a task only
-/// when an input's η⁺ changes at one of them, `crate::events`).
-pub fn level_response_windows(
+/// [`level_response_within`] with the fixed point `w_q` each job's
+/// iteration stopped at, in order (one per job), each iteration started
+/// from `warm`'s `w_q` where it has one, the stops of the same task and
+/// own jobs against `hp` streams whose η⁺ has only grown since (the event
+/// analysis' jitters only grow; empty: from the bottom). The figure is the
+/// one the iteration from the bottom gives, step limit included.
+///
+/// Why the stops tell when a figure holds. Against `hp` streams whose η⁺
+/// only grew (the periods and works kept) but is the same at every stop,
+/// the figure is as it was: each job's least fixed point is at or above
+/// the old one (its `f` only grew) and the old one is still a fixed point
+/// (`f` there is as it was), so each job stops where it did, the same jobs
+/// are followed, and the iteration from the bottom reaches each stop in at
+/// most as many steps as before (its iterates are at or above the old
+/// ones step for step and never pass it). The event analysis re-analyses
+/// a task only when an input's η⁺ changes at a stop (`crate::events`;
+/// docs/analysis.md "Cost at 1,000 tasks", the eighth round).
+///
+/// Why a warm start gives the same figure. `w_q` is the least fixed point
+/// of its `f` (below `w_{q−1} + x` its `f` is above the window), which only
+/// grew, so the old `w_q` is at or below the new one and the iteration
+/// from it reaches the new one. From the bottom, a job's iteration takes
+/// at most 2 steps plus the counts `hp`'s terms of positive work gain on
+/// the way (after its first step, each step that does not stop grows the
+/// window because some stream's count grew): `2 + N(w)`, `N(w)` their
+/// counts at the largest stop `w`, at most `w/c` for `c` the least
+/// positive work in `hp`. Where that is within [`MAX_WINDOW_STEPS`], no job's iteration
+/// from the bottom could have run out, and the warm figure is its figure;
+/// otherwise, or when the warm start finds none, the jobs are iterated
+/// again from the bottom.
+pub fn level_response_from(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
+    warm: &[Nanos],
+) -> (Option<Nanos>, Vec<Nanos>) {
+    if warm.is_empty() {
+        return level_response_stops(own, hp, limit, &[]);
+    }
+    let least = hp.iter().map(|&(c, _, _)| c).filter(|&c| c > 0).min();
+    // The bound only grows with the stops, which only grow: past the limit
+    // at the old stops, it is past it at the new ones.
+    if cold_steps_bound(hp, warm, least) <= MAX_WINDOW_STEPS {
+        let (r, stops) = level_response_stops(own, hp, limit, warm);
+        if r.is_some() && cold_steps_bound(hp, &stops, least) <= MAX_WINDOW_STEPS {
+            return (r, stops);
+        }
+    }
+    level_response_stops(own, hp, limit, &[])
+}
+
+/// At most how many steps one job's iteration from the bottom takes when
+/// the largest of the jobs' fixed points is the last of `stops`
+/// ([`level_response_from`]): `2 + N(w)`, or the cheap form `2 + w/c`,
+/// tried first (`N(w) ≤ w/c`: at the fixed point the work `hp` brings is
+/// at most `w`).
+/// `least_work` is `c`, the least positive work in `hp` (`None`: none).
+fn cold_steps_bound(
+    hp: &[(Nanos, Nanos, Nanos)],
+    stops: &[Nanos],
+    least_work: Option<Nanos>,
+) -> u64 {
+    let top = stops.last().copied().unwrap_or(0);
+    let cheap = 2u64.saturating_add(least_work.map_or(0, |c| (top / c).unsigned_abs()));
+    if cheap <= MAX_WINDOW_STEPS {
+        return cheap;
+    }
+    let positive = hp.iter().filter(|&&(c, _, _)| c > 0);
+    positive.fold(2, |sum: u64, &(_, period, jitter)| {
+        let count = crate::arrivals::Stream { period, jitter }.eta(top);
+        sum.saturating_add(count.unsigned_abs())
+    })
+}
+
+/// [`level_response_within`] with each job's fixed point, each job's
+/// iteration started from `warm`'s where it has one.
+fn level_response_stops(
+    own: OwnJobs,
+    hp: &[(Nanos, Nanos, Nanos)],
+    limit: Nanos,
+    warm: &[Nanos],
 ) -> (Option<Nanos>, Vec<Nanos>) {
     let mut demand = Demand::of_loads(hp);
-    let mut asked = Vec::new();
-    let r = busy_period_jobs(own, hp, limit, &mut |w| {
-        // The windows only grow: distinct once a repeat is left out.
-        if asked.last() != Some(&w) {
-            asked.push(w);
-        }
-        demand.at(w)
+    let mut stops = Vec::with_capacity(warm.len().max(1));
+    let r = busy_period_jobs(own, hp, limit, warm, &mut |w| demand.at(w), &mut |w| {
+        stops.push(w)
     });
-    (r, asked)
+    (r, stops)
 }
 
 /// The jobs of [`level_response_within`]'s busy period, `demand` that of
 /// `hp` before any window (a [`Demand`]'s `at`, asked at growing
-/// windows).
+/// windows), each job's fixed point handed to `stop`, the q-th job's
+/// iteration started from `warm[q]` where there is one (at most its
+/// fixed point, [`level_response_from`]).
 fn busy_period_jobs(
     own: OwnJobs,
     hp: &[(Nanos, Nanos, Nanos)],
     limit: Nanos,
+    warm: &[Nanos],
     demand: &mut impl FnMut(Nanos) -> Nanos,
+    stop: &mut impl FnMut(Nanos),
 ) -> Option<Nanos> {
     let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
     let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
@@ -124,7 +201,10 @@ fn busy_period_jobs(
             .checked_add(own.blocking)?;
         // w_{q-1} plus the q-th job's own work is below w_q (the fixed
         // point grows at least by the work added): a valid start.
-        w = busy_window_from(own_demand, hp, demand, w.checked_add(own.work)?)?;
+        let start = w.checked_add(own.work)?;
+        let start = warm.get(q as usize).map_or(start, |&old| start.max(old));
+        w = busy_window_from(own_demand, hp, demand, start)?;
+        stop(w);
         worst = worst.max(w - q.saturating_mul(own.period));
         if worst.checked_add(own.jitter)? > limit {
             return None;
@@ -159,7 +239,7 @@ fn busy_window_from(
 ) -> Option<Nanos> {
     let first = own.checked_add(hp.iter().map(|&(c, _, _)| c).sum::<Nanos>())?;
     let mut r = first.max(start);
-    for _ in 0..1_000_000 {
+    for _ in 0..MAX_WINDOW_STEPS {
         // Past MAX_TIME (the demand saturates where the sum would
         // overflow): no bounded response.
         let next = own.saturating_add(demand(r));
@@ -175,4 +255,42 @@ fn busy_window_from(
         r = next;
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_warm_start_keeps_the_step_limit() {
+        // Above: C 999,999 every 1 ms (load 1 − 10⁻⁶); one own job of x:
+        // w = x + ⌈w/10⁶⌉·999,999 climbs by about one count a step, to
+        // about x·10⁶ in about x steps. At x = 1,100,000 the iteration from
+        // the bottom runs out of MAX_WINDOW_STEPS; one from 10¹² finds the
+        // fixed point at once, but the bound on the steps from the bottom
+        // (2 + w/999,999, past MAX_WINDOW_STEPS) sends it back to the
+        // bottom: unbounded, as from the bottom. At x = 900,000 it fits.
+        let hp = [(999_999, 1_000_000, 0)];
+        let own = |work| OwnJobs {
+            work,
+            switch: 0,
+            blocking: 0,
+            jitter: 0,
+            period: 4_000_000_000_000_000,
+        };
+        const { assert!(900_000 < MAX_WINDOW_STEPS && 1_100_000 > MAX_WINDOW_STEPS) };
+        let warm = [1_000_000_000_000];
+        let found = level_response_stops(own(1_100_000), &hp, Nanos::MAX, &warm);
+        assert!(found.0.is_some());
+        assert_eq!(level_response(own(1_100_000), &hp), None);
+        let far = level_response_from(own(1_100_000), &hp, Nanos::MAX, &warm);
+        assert_eq!(far.0, None);
+        let fits = level_response(own(900_000), &hp);
+        assert!(fits.is_some());
+        let warm = [800_000_000_000];
+        assert_eq!(
+            level_response_from(own(900_000), &hp, Nanos::MAX, &warm).0,
+            fits
+        );
+    }
 }
