@@ -321,8 +321,8 @@ fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option
 }
 
 /// Rounds of moving the shares in [`split_bound`], per box (from its
-/// parent's shares, so a box at depth d has had 4(d + 1)).
-const SHARE_ROUNDS: usize = 4;
+/// parent's shares, so a box at depth d has had 8(d + 1)).
+const SHARE_ROUNDS: usize = 8;
 
 /// Each shared task's budget anew among its limits, each share scaled by
 /// 1/T_i at that limit's minimiser (a multiplicative ascent step; 1/T_i is
