@@ -2,6 +2,7 @@
 //! axis) and a box of them (a node of the search).
 
 use crate::domain::Dom;
+use crate::joint::Shares;
 use rtpipe_model::Nanos;
 use std::cmp::Ordering as CmpOrdering;
 
@@ -88,6 +89,9 @@ pub(crate) struct Node {
     /// RM rank orders imposed by branching: (a, b) = a above b.
     pub(crate) above: Vec<(usize, usize)>,
     pub(crate) bound: f64,
+    /// The budget shares its split bound ended with, where its sub-boxes'
+    /// ascent starts.
+    pub(crate) shares: Shares,
 }
 
 impl Node {
@@ -99,7 +103,8 @@ impl Node {
             + self.lo.capacity() * 4
             + self.hi.capacity() * 4
             + self.above.capacity() * std::mem::size_of::<(usize, usize)>()
-            + 3 * HEADER
+            + self.shares.bytes()
+            + 4 * HEADER
     }
 }
 

@@ -22,9 +22,9 @@ use crate::api::utilization;
 use crate::axis::{Axis, Node};
 use crate::budget::Budget;
 use crate::harmonic;
-use crate::joint::{joint_bound, least_under, split_bound, Row};
+use crate::joint::{joint_bound, least_under, split_bound, Row, Shares, SplitLimit};
 use crate::problem::{Group, Problem};
-use rtpipe_analysis::relax::{paper_pieces, relax, sound_pieces, Affine, MinSum, Relaxed};
+use rtpipe_analysis::relax::{paper_pieces, relax, sound_pieces, Affine, Relaxed};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::policy::RankKey;
 use rtpipe_model::{Nanos, Server, Spec};
@@ -276,10 +276,10 @@ impl<'r, 'a> Examiner<'r, 'a> {
         r: &Relaxed,
         (lo, hi): (&[Nanos], &[Nanos]),
         above: &[(usize, usize)],
-    ) -> Vec<(f64, Vec<MinSum>)> {
+    ) -> Vec<SplitLimit> {
         let spec = self.p.spec;
         let mut out = Vec::new();
-        for g in self.groups {
+        for (index, g) in self.groups.iter().enumerate() {
             let Group::Limit(k, m) = *g else { continue };
             let sums = match self.mode() {
                 Mode::Sound => sound_pieces(spec, (lo, hi), above, r, k),
@@ -291,7 +291,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
                 continue;
             };
             let head = spec.chains[k].path[0];
-            for a in Anchor::ALL {
+            for (anchor, a) in Anchor::ALL.into_iter().enumerate() {
                 let Some(limit) = m.limit(&spec.chains[k], a) else {
                     continue;
                 };
@@ -308,7 +308,11 @@ impl<'r, 'a> Examiner<'r, 'a> {
                         read.into_iter().map(|s| s.plus_period(head)).collect()
                     }
                 };
-                out.push((limit as f64, sums));
+                out.push(SplitLimit {
+                    key: (index * Anchor::ALL.len() + anchor) as u32,
+                    limit: limit as f64,
+                    sums,
+                });
             }
         }
         out
@@ -368,10 +372,12 @@ impl<'r, 'a> Examiner<'r, 'a> {
             if !self.may_hold(&r, &lo) {
                 return false;
             }
-            let Some(bound) = self.form_bound(&r, (&lo, &hi), &node.above) else {
+            let Some((bound, shares)) = self.form_bound(&r, (&lo, &hi), node) else {
                 return false;
             };
-            node.bound = bound;
+            // A sub-box of the box whose bound it carries: both hold.
+            node.bound = node.bound.max(bound);
+            node.shares = shares;
             if beaten(bound, best) {
                 return false;
             }
@@ -521,8 +527,8 @@ impl<'r, 'a> Examiner<'r, 'a> {
         &self,
         r: &Relaxed,
         (lo, hi): (&[Nanos], &[Nanos]),
-        above: &[(usize, usize)],
-    ) -> Option<f64> {
+        node: &Node,
+    ) -> Option<(f64, Shares)> {
         let plain = self.utilization_at(hi);
         let mut bound = plain;
         let mut joint = Vec::new();
@@ -541,8 +547,9 @@ impl<'r, 'a> Examiner<'r, 'a> {
             }
         }
         let jb = joint_bound(&self.budget, &joint, lo, hi);
-        let (split, _) = split_bound(&self.budget, &self.limit_sums(r, (lo, hi), above), lo, hi)?;
-        Some(bound.max(jb).max(split))
+        let sums = self.limit_sums(r, (lo, hi), &node.above);
+        let split = split_bound(&self.budget, &sums, lo, hi, &node.shares)?;
+        Some((bound.max(jb).max(split.bound), split.shares))
     }
 
     /// Periods so short that the bound cannot beat `u`: C_i/T_i must stay
@@ -769,10 +776,11 @@ impl<'r, 'a> Examiner<'r, 'a> {
 
     /// A verified design from the relaxation's least point of `node`
     /// (repair and round): each period of a limited task at the shortest
-    /// its limits' least asks (`split_bound`'s guide), the others at their
-    /// longest; those periods scaled down (by 0.85, up to 30 times) until
-    /// the design verifies, then lengthened by `polish`. `None` without a
-    /// guide, a verified design or one better than `best`.
+    /// its limits' least asks (`split_bound`'s guide, from the shares the
+    /// box carries), the others at their longest; those periods scaled
+    /// down (by 0.85, up to 30 times) until the design verifies, then
+    /// lengthened by `polish`. `None` without a guide, a verified design
+    /// or one better than `best`.
     pub(crate) fn guided(
         &self,
         node: &Node,
@@ -785,7 +793,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
         let (lo, hi) = (self.periods(&node.lo), self.periods(&node.hi));
         let r = relax(self.p.spec, &lo, &hi, &node.above, true);
         let sums = self.limit_sums(&r, (&lo, &hi), &node.above);
-        let (_, guide) = split_bound(&self.budget, &sums, &lo, &hi)?;
+        let guide = split_bound(&self.budget, &sums, &lo, &hi, &node.shares)?.guide;
         if guide.iter().all(Option::is_none) {
             return None;
         }

@@ -238,6 +238,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             lo: vec![0; n],
             hi: self.ex.axes.iter().map(|a| a.len() - 1).collect(),
             above: Vec::new(),
+            shares: Default::default(),
             bound: 0.0,
         };
         root.bound = self.ex.bound(&root.hi);

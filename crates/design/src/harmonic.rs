@@ -124,6 +124,7 @@ mod tests {
             lo: vec![0, 0],
             hi: vec![0, 6],
             above: Vec::new(),
+            shares: Default::default(),
             bound: 0.0,
         };
         assert!(propagate(&axes, &mut node));
@@ -134,6 +135,7 @@ mod tests {
             lo: vec![0, 0],
             hi: vec![0, 2],
             above: Vec::new(),
+            shares: Default::default(),
             bound: 0.0,
         };
         assert!(!propagate(&axes, &mut node));

@@ -5,6 +5,7 @@
 
 use rtpipe_analysis::relax::{Affine, MinSum, Piece};
 use rtpipe_model::Nanos;
+use std::sync::Arc;
 
 /// Coordinate-ascent sweeps over the multipliers of the joint bound.
 const JOINT_SWEEPS: usize = 3;
@@ -147,6 +148,40 @@ fn least_at(
 /// out of [`split_bound`] (a weaker, still valid bound).
 const MAX_CHOICES: usize = 1 << 12;
 
+/// One limit of [`split_bound`]: `key` names it across boxes (the same
+/// limit of the same chain has the same key in every box), so that a box's
+/// budget shares can start from its parent's; one of `sums` must meet
+/// `limit`.
+pub(crate) struct SplitLimit {
+    pub(crate) key: u32,
+    pub(crate) limit: f64,
+    pub(crate) sums: Vec<MinSum>,
+}
+
+/// The budget shares a box's split bound ended with, carried to its
+/// sub-boxes (each a subset of it, so any shares are valid there too):
+/// per limit key and shared task, the fraction of the task's budget dealt
+/// to that limit (f32: any fractions are normalised to the budgets where
+/// they are used). Shared by both halves of a split (`Arc`).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Shares(Arc<[(u32, u32, f32)]>);
+
+impl Shares {
+    /// Its heap memory, for the open boxes' count.
+    pub(crate) fn bytes(&self) -> usize {
+        self.0.len() * std::mem::size_of::<(u32, u32, f32)>()
+    }
+}
+
+/// What [`split_bound`] finds: the bound, the best round's guide (per task
+/// in some limit, the shortest period a limit's least asks of it) and its
+/// shares.
+pub(crate) struct Split {
+    pub(crate) bound: f64,
+    pub(crate) guide: Vec<Option<f64>>,
+    pub(crate) shares: Shares,
+}
+
 /// A lower bound on Σ C/T over the box from limits written as sums of
 /// least-of-pieces terms (`relax::MinSum`, each limit met by one of its
 /// sums): every task's budget is shared among the limits it is in, and
@@ -155,19 +190,20 @@ const MAX_CHOICES: usize = 1 << 12;
 /// the separable convex problem). For every T meeting the limits and any
 /// shares summing to the budgets, Σ C/T = Σ_limits Σ shares/T + the rest
 /// ≥ Σ_limits least + Σ C/hi over the tasks in no limit. The shares start
-/// equal and move, [`SHARE_ROUNDS`] times, towards the limits whose least
-/// wants the task's period shortest (the bound is concave in the shares,
-/// 1/T_i its slope); the best round is the bound. `None`: some limit holds
-/// nowhere in the box. With the bound, the best round's guide: per task
-/// in some limit, the shortest period a limit's least asks of it.
+/// from `start` (a parent box's; equal where it has none) and move,
+/// [`SHARE_ROUNDS`] times, towards the limits whose least wants the task's
+/// period shortest (the bound is concave in the shares, 1/T_i its slope);
+/// the best round is the bound, and its shares are what a sub-box starts
+/// from (a warm start: the ascent goes on down the search tree). `None`: some limit holds nowhere in the box.
 pub(crate) fn split_bound(
     budget: &[f64],
-    limits: &[(f64, Vec<MinSum>)],
+    limits: &[SplitLimit],
     lo: &[Nanos],
     hi: &[Nanos],
-) -> Option<(f64, Vec<Option<f64>>)> {
+    start: &Shares,
+) -> Option<Split> {
     let n = lo.len();
-    let members: Vec<Vec<bool>> = limits.iter().map(|(_, sums)| tasks_of(sums, n)).collect();
+    let members: Vec<Vec<bool>> = limits.iter().map(|l| tasks_of(&l.sums, n)).collect();
     let mut count = vec![0u32; n];
     for m in &members {
         count
@@ -179,42 +215,94 @@ pub(crate) fn split_bound(
         .filter(|&i| count[i] == 0)
         .map(|i| budget[i] / hi[i] as f64)
         .sum();
-    let mut shares: Vec<Vec<f64>> = members
-        .iter()
-        .map(|m| {
-            (0..n)
-                .map(|i| {
-                    if m[i] {
-                        budget[i] / f64::from(count[i])
-                    } else {
-                        0.0
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let mut shares = initial_shares(budget, limits, &members, &count, start);
     let shared = count.iter().any(|&c| c > 1);
-    let mut best = (f64::NEG_INFINITY, Vec::new());
-    for round in 0..SHARE_ROUNDS {
+    let mut best: Option<Split> = None;
+    let rounds = if shared { SHARE_ROUNDS } else { 1 };
+    for round in 0..rounds {
         let mut total = rest;
         let mut minimisers = Vec::with_capacity(limits.len());
-        for ((limit, sums), share) in limits.iter().zip(&shares) {
-            let (least, t) = sums
+        for (l, share) in limits.iter().zip(&shares) {
+            let (least, t) = l
+                .sums
                 .iter()
-                .filter_map(|s| least_of_sum(share, s, *limit, lo, hi))
+                .filter_map(|s| least_of_sum(share, s, l.limit, lo, hi))
                 .min_by(|a, b| a.0.total_cmp(&b.0))?;
             total += least;
             minimisers.push(t);
         }
-        if total > best.0 {
-            best = (total, guide(&members, &minimisers, n));
+        if best.as_ref().is_none_or(|b| total > b.bound) {
+            best = Some(Split {
+                bound: total,
+                guide: guide(&members, &minimisers, n),
+                shares: kept_shares(limits, &shares, &count, budget),
+            });
         }
-        if !shared || round + 1 == SHARE_ROUNDS {
-            break;
+        if round + 1 < rounds {
+            reshare(&mut shares, &minimisers, &count, budget);
         }
-        reshare(&mut shares, &minimisers, &count, budget);
     }
-    Some(best)
+    best
+}
+
+/// The shares each limit starts with: a parent's fractions where it has
+/// them for that limit and task, else an equal part, normalised so that
+/// every task's shares sum to its budget.
+fn initial_shares(
+    budget: &[f64],
+    limits: &[SplitLimit],
+    members: &[Vec<bool>],
+    count: &[u32],
+    start: &Shares,
+) -> Vec<Vec<f64>> {
+    let n = budget.len();
+    let mut weights: Vec<Vec<f64>> = members
+        .iter()
+        .map(|m| {
+            (0..n)
+                .map(|i| if m[i] { 1.0 / f64::from(count[i]) } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    for &(key, task, fraction) in start.0.iter() {
+        let i = task as usize;
+        let Some(c) = limits.iter().position(|l| l.key == key) else {
+            continue;
+        };
+        if i < n && members[c][i] && fraction.is_finite() && fraction > 0.0 {
+            weights[c][i] = f64::from(fraction);
+        }
+    }
+    for i in 0..n {
+        let sum: f64 = weights.iter().map(|w| w[i]).sum();
+        for w in weights.iter_mut() {
+            w[i] = if sum > 0.0 {
+                budget[i] * w[i] / sum
+            } else {
+                0.0
+            };
+        }
+    }
+    weights
+}
+
+/// The shares of the shared tasks as fractions of their budgets, keyed by
+/// limit, for a sub-box's start.
+fn kept_shares(
+    limits: &[SplitLimit],
+    shares: &[Vec<f64>],
+    count: &[u32],
+    budget: &[f64],
+) -> Shares {
+    let mut fractions = Vec::new();
+    for (l, share) in limits.iter().zip(shares) {
+        for i in (0..count.len()).filter(|&i| count[i] > 1 && budget[i] > 0.0) {
+            if share[i] > 0.0 {
+                fractions.push((l.key, i as u32, (share[i] / budget[i]) as f32));
+            }
+        }
+    }
+    Shares(fractions.into())
 }
 
 /// Per task, the shortest of its limits' minimising periods (`None` for
@@ -232,11 +320,13 @@ fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option
         .collect()
 }
 
-/// Rounds of moving the shares in [`split_bound`].
-const SHARE_ROUNDS: usize = 4;
+/// Rounds of moving the shares in [`split_bound`], per box (from its
+/// parent's shares, so a box at depth d has had 8(d + 1)).
+const SHARE_ROUNDS: usize = 8;
 
 /// Each shared task's budget anew among its limits, each share scaled by
-/// 1/T_i at that limit's minimiser (a multiplicative ascent step).
+/// 1/T_i at that limit's minimiser (a multiplicative ascent step; 1/T_i is
+/// the bound's slope in the share).
 fn reshare(shares: &mut [Vec<f64>], minimisers: &[Vec<f64>], count: &[u32], budget: &[f64]) {
     for i in (0..count.len()).filter(|&i| count[i] > 1) {
         let scaled: Vec<f64> = shares

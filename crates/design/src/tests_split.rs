@@ -118,6 +118,7 @@ fn the_root_bound_is_below_the_brute_force_optimum() {
             lo: vec![0; n],
             hi,
             above: Vec::new(),
+            shares: Default::default(),
             bound: plain,
         };
         let best = brute_force(ex, n);
@@ -161,6 +162,7 @@ fn split_boxes_bound_their_own_optimum() {
             bound: ex.bound(&hi),
             hi,
             above: Vec::new(),
+            shares: Default::default(),
         };
         let mut open = vec![(root, 0)];
         while let Some((node, depth)) = open.pop() {
