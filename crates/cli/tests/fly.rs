@@ -126,6 +126,12 @@ fn the_sweep_finds_the_edge_and_writes_the_limits() {
         "--sweep",
         "--scale",
         "1..2.6",
+        // The grid and the refinement alone: the check below the limit
+        // (on by default) flies a ladder whose points need not be
+        // monotone (×1.811 fails, ×1.897 flies); its own test is
+        // `a_check_flies_every_step_below_the_period_limits`.
+        "--check-step",
+        "0",
         "--json",
         "--write-limits",
         &out.to_string_lossy(),
@@ -489,6 +495,42 @@ fn a_check_flies_every_step_below_the_period_limits() {
         let o = rtpipe(&["fly", &spec, "--sweep", "--check-step", bad]);
         assert_exit(&o, 2);
     }
+}
+
+/// The check is on by default (S = 0.02: it is what backs a written
+/// limit), and `--check-step 0` turns it off.
+#[test]
+fn the_check_is_on_by_default_and_0_turns_it_off() {
+    let spec = example("cleanflight.toml");
+    let checks = |extra: &[&str]| {
+        let mut args = vec![
+            "fly",
+            spec.as_str(),
+            "--sweep",
+            "--scale",
+            "1..2",
+            "--per-octave",
+            "1",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let o = rtpipe(&args);
+        assert_exit(&o, 0);
+        let v = json_of(&o);
+        let points = v["points"].as_array().cloned().unwrap_or_default();
+        points
+            .iter()
+            .filter(|p| p["stage"] == "check")
+            .filter_map(|p| p["value"].as_f64())
+            .collect::<Vec<f64>>()
+    };
+    let default = checks(&[]);
+    assert!(!default.is_empty(), "no check point by default");
+    for x in &default {
+        let i = x.ln() / 1.02f64.ln();
+        assert!((i - i.round()).abs() < 1e-6, "{x} is not 1.02^i");
+    }
+    assert_eq!(checks(&["--check-step", "0"]), Vec::<f64>::new());
 }
 
 /// `--pass-rate`: a count of flights that cannot reach the rate even all

@@ -4,6 +4,7 @@ and Ctrl-C honoured."""
 
 import csv
 import json
+import math
 import os
 import signal
 import subprocess
@@ -278,3 +279,21 @@ def test_waters_is_the_generated_file(tmp_path):
     assert generated.analyze() == from_file.analyze()
     with pytest.raises(rtpipe.InputError, match="utilization"):
         rtpipe.waters(utilization=3)
+
+
+def test_a_sweep_checks_below_its_limits_by_default_and_check_step_0_turns_it_off():
+    """``fly(sweep=True)`` has the command line's default, ``check_step``
+    0.02: check points on a ladder of 1.02^i; ``check_step=0`` none."""
+    system = rtpipe.load(EXAMPLES / "cleanflight.toml")
+    short = dict(sweep=True, scale="1..2", per_octave=1, mission="hover", duration="4s")
+
+    def checks(**kwargs):
+        report = system.fly(**short, **kwargs)
+        return [p["value"] for p in report["points"] if p["stage"] == "check"]
+
+    default = checks()
+    assert default, "no check point by default"
+    for x in default:
+        i = math.log(x) / math.log(1.02)
+        assert abs(i - round(i)) < 1e-6, f"{x} is not 1.02^i"
+    assert checks(check_step=0) == []

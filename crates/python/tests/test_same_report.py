@@ -48,6 +48,15 @@ def binary(*args):
          {"sweep": True, "scale": "1..2", "per_octave": 1, "mission": "hover", "duration": "4s"},
          ["--sweep", "--scale", "1..2", "--per-octave", "1", "--mission", "hover",
           "--duration", "4s"]),
+        # How a timing is flown, judged and checked below its limit.
+        ("fly", "cleanflight.toml",
+         {"sweep": True, "scale": "1..2", "per_octave": 1, "mission": "hover", "duration": "4s",
+          "seeds": 2, "phases": 2, "pass_rate": 0.5, "confidence": 0.6, "resolution": 0.1,
+          "check_step": 0.1, "safety": 0.9},
+         ["--sweep", "--scale", "1..2", "--per-octave", "1", "--mission", "hover",
+          "--duration", "4s", "--seeds", "2", "--phases", "2", "--pass-rate", "0.5",
+          "--confidence", "0.6", "--resolution", "0.1", "--check-step", "0.1",
+          "--safety", "0.9"]),
         ("design", "table2-design.toml", {"mode": "paper"}, ["--mode", "paper"]),
     ],
 )

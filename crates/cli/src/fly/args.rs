@@ -106,8 +106,10 @@ pub struct FlyArgs {
     /// point at steps of × (1 + S), with the same seeds × phases and rule,
     /// so a written limit is one below which every such step flew (a
     /// failing step brings it below that step); about ln(edge)/ln(1 + S)
-    /// timings a sweep (49 up to × 2.64 at 0.02); 0 checks nothing.
-    #[arg(long, value_name = "S", default_value_t = 0.0, value_parser = parse_check_step, requires = "sweep")]
+    /// timings a sweep (49 up to × 2.64 at 0.02); on by default, as it is
+    /// what backs a written limit; 0 turns it off (the grid and the
+    /// refinement alone).
+    #[arg(long, value_name = "S", default_value_t = 0.02, value_parser = parse_check_step, requires = "sweep")]
     pub check_step: f64,
     /// With --sweep: every derived limit × this factor in (0, 1] (the
     /// margin a written limit keeps from the last timing that flew).

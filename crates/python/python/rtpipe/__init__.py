@@ -541,18 +541,31 @@ class System:
         sweep: bool = False,
         scale: Optional[str] = None,
         per_octave: Optional[int] = None,
+        seeds: Optional[int] = None,
+        phases: Optional[int] = None,
+        pass_rate: Optional[float] = None,
+        confidence: Optional[float] = None,
+        resolution: Optional[float] = None,
+        check_step: Optional[float] = None,
+        safety: Optional[float] = None,
         criterion: Optional[str] = None,
         write_limits: Optional[str] = None,
         free_periods: bool = False,
     ) -> Union[FlightReport, SweepReport]:
         """A software-in-the-loop flight on the simulated schedule
         (``rtpipe fly --json``), or with ``sweep=True`` the timing sweep
-        that derives the limits the flight depends on. ``samples`` as in
+        that derives the limits the flight depends on: ``seeds`` ×
+        ``phases`` flights a timing, judged all-pass or by ``pass_rate``
+        (at ``confidence``), each edge refined to ``resolution`` and
+        checked below on a ladder of ``check_step`` (0.02 by default; 0
+        turns the check off), the limits × ``safety``. ``samples`` as in
         :meth:`simulate`."""
         options = dict(
             vehicle=vehicle, mission=mission, turbulence=turbulence, duration=duration,
             seed=seed, exec=exec, plot=plot, log=log, sweep=sweep, scale=scale,
-            per_octave=per_octave, criterion=criterion, write_limits=write_limits,
+            per_octave=per_octave, seeds=seeds, phases=phases, pass_rate=pass_rate,
+            confidence=confidence, resolution=resolution, check_step=check_step,
+            safety=safety, criterion=criterion, write_limits=write_limits,
             free_periods=free_periods,
         )
         if sweep:
