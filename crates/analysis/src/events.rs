@@ -399,11 +399,27 @@ impl Deps {
         state: &mut State,
     ) {
         let downstream = self.downstream(grown, &mut state.marked);
+        // `marked`: the tasks whose output (jitter or activations) changed
+        // so far. A task none of whose triggers is marked keeps its
+        // activations, which are a function of its triggers' alone, and is
+        // not recomputed (each task comes after its triggers).
+        for &p in grown {
+            state.marked[p] = true;
+        }
+        let mut changed = Vec::new();
         for j in downstream {
+            let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                continue;
+            };
+            if !triggers.iter().any(|&p| state.marked[p]) {
+                continue;
+            }
             let fresh = activation(spec, &state.delay, &state.arrivals, j);
             if fresh == state.arrivals[j] {
                 continue;
             }
+            state.marked[j] = true;
+            changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
             for &u in self.readers.of(j).iter().filter(|&&u| inside(u)) {
@@ -411,6 +427,9 @@ impl Deps {
                     state.dirty[u] = true;
                 }
             }
+        }
+        for &j in grown.iter().chain(&changed) {
+            state.marked[j] = false;
         }
     }
 

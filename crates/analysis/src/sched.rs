@@ -317,9 +317,16 @@ impl<'a> Levels<'a> {
         self.by_cpu.on(self.spec.tasks[i].cpu)
     }
 
-    /// [`interferers`] of task `i`.
+    /// [`interferers`] of task `i`, in the CPU's declaration order. Room
+    /// for every task of the CPU is taken at once: collected from the
+    /// filter, the list grew by doubling, and on the 1,000-task bench its
+    /// reallocations and copies were most of the set-up's tasks above
+    /// (docs/analysis.md "Cost at 1,000 tasks", ninth round).
     fn interferers(&self, i: usize) -> Vec<usize> {
-        self.above(i).map(|x| x.task).collect()
+        let k = self.by_cpu.position(self.spec.tasks[i].cpu);
+        let mut out = Vec::with_capacity(k.map_or(0, |k| self.guaranteed[k].len()));
+        out.extend(self.above(i).map(|x| x.task));
+        out
     }
 
     /// [`crate::blocking::blocking`] of task `i`.
