@@ -129,6 +129,16 @@ design flown-fly-b gyro=1114 accl=1114 ahrs=5386 radio=10000 pid=2012 pwm=5488
 # overshoot was judged against the plain 20 % in turbulence too.
 design flown-fly-d gyro=1114 accl=1114 ahrs=5386 radio=9024 pid=2012 pwm=5488
 
+# The sweep -> design loop's answer (docs/flight.md, "The loop: sweep ->
+# design -> fly"): `fly --sweep --resolution 0 --write-limits limits.toml
+# --free-periods` on racer5's steps, then `design limits.toml`: every
+# period at the scale's last passing point, Table V x 1.587.
+design loop gyro=1587 accl=1587 ahrs=7937 radio=15874 pid=3174 pwm=7937
+# design --objective margin --max-utilization 0.7 on
+# examples/cleanflight-design-flown.toml: every exec x 1.782 keeps every
+# limit (U = 0.6669; docs/flight.md, "The margins of Table V, ...").
+design margin-0.7 gyro=1114 accl=1114 ahrs=2114 radio=2971 pid=2114 pwm=5570
+
 # Flights of design $1 on vehicle $2 and mission $3 over the seeds at
 # phase draws "$4" (per seed: "nominal", or M draws of its own): passed/flown.
 flights() {
@@ -150,7 +160,7 @@ if [ "$PHASES" -gt 1 ]; then ROWS="nominal $PHASES"; fi
 printf "%-12s %-8s %-8s" design vehicle phases
 for m in $MISSIONS; do printf " %17s" "$m"; done
 echo
-for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 ck3-pwm-0.9 p4c-scale-0.9 p4c-pwm-0.9 flown-fly flown-fly-b flown-fly-d}; do
+for d in ${DESIGNS:-table-v old-fly scale-0.9 pwm-0.9 a-scale-0.9 a-pwm-0.9 sg-scale-0.9 sg-pwm-0.9 sgb-scale-0.9 sgb-pwm-0.9 pr-pwm-0.9 pr-pwm-0.8 pr-pwm-0.7 pr-pwm-0.6 pr-pwm-0.5 p4-scale-0.9 p4-pwm-0.9 ck3-pwm-0.9 p4c-scale-0.9 p4c-pwm-0.9 flown-fly flown-fly-b flown-fly-d loop margin-0.7}; do
   for v in ${VEHICLES:-racer5 aero1kg}; do
     for row in $ROWS; do
       printf "%-12s %-8s %-8s" "$d" "$v" "$row"
