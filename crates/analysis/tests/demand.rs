@@ -157,15 +157,21 @@ fn the_incremental_demand_is_the_direct_sum() {
     );
 }
 
-#[test]
-fn level_response_is_the_straightforward_iteration() {
-    let own = (
+/// A task's own jobs for a level-i busy period: (work, switch, blocking,
+/// jitter in tenths of the period, period).
+fn own_jobs() -> impl Strategy<Value = (Nanos, Nanos, Nanos, u32, Nanos)> {
+    (
         1..3_000 as Nanos,
         0..40 as Nanos,
         0..600 as Nanos,
         0..5u32,
         200..40_000 as Nanos,
-    );
+    )
+}
+
+#[test]
+fn level_response_is_the_straightforward_iteration() {
+    let own = own_jobs();
     check(
         "level response",
         CASES,
@@ -263,6 +269,15 @@ fn grown(a: &Arrivals, extra: &[Nanos], k: &mut usize) -> Arrivals {
     }
 }
 
+/// How much each stream's jitter grows between two analyses (none for
+/// some), drawn per stream in turn.
+fn jitter_growth() -> impl Strategy<Value = Vec<Nanos>> {
+    prop::collection::vec(
+        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
+        1..8,
+    )
+}
+
 #[test]
 fn a_warm_fifo_response_is_the_one_from_the_bottom() {
     // The event analysis re-analyses a thread from its last stops after
@@ -270,10 +285,7 @@ fn a_warm_fifo_response_is_the_one_from_the_bottom() {
     // an analysis from the bottom.
     let members = prop::collection::vec((1..2_000 as Nanos, arrivals()), 1..4);
     let above = prop::collection::vec((1..1_500 as Nanos, arrivals()), 0..6);
-    let extra = prop::collection::vec(
-        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
-        1..8,
-    );
+    let extra = jitter_growth();
     check(
         "warm fifo response",
         CASES,
@@ -303,17 +315,8 @@ fn a_warm_fifo_response_is_the_one_from_the_bottom() {
 
 #[test]
 fn a_warm_level_response_is_the_one_from_the_bottom() {
-    let own = (
-        1..3_000 as Nanos,
-        0..40 as Nanos,
-        0..600 as Nanos,
-        0..5u32,
-        200..40_000 as Nanos,
-    );
-    let extra = prop::collection::vec(
-        prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
-        1..8,
-    );
+    let own = own_jobs();
+    let extra = jitter_growth();
     check(
         "warm level response",
         CASES,

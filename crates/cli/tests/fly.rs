@@ -368,29 +368,32 @@ fn a_sweep_of_a_mission_without_steps_plots_what_it_measures() {
     assert!(!svg.contains("settling"), "{svg}");
 }
 
+/// The JSON of a small sweep of Table V (period scales × 1 and × 2, one
+/// point an octave) with `extra` flags; it must exit 0.
+fn small_sweep(extra: &[&str]) -> serde_json::Value {
+    let spec = example("cleanflight.toml");
+    let mut args = vec![
+        "fly",
+        spec.as_str(),
+        "--sweep",
+        "--scale",
+        "1..2",
+        "--per-octave",
+        "1",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    let o = rtpipe(&args);
+    assert_exit(&o, 0);
+    json_of(&o)
+}
+
 /// `--seeds` and `--phases`: every timing flown seeds × phases times, a
 /// timing flies only when all did, and `--safety` scales every limit down.
 #[test]
 fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
-    let spec = example("cleanflight.toml");
-    let sweep = |extra: &[&str]| {
-        let mut args = vec![
-            "fly",
-            spec.as_str(),
-            "--sweep",
-            "--scale",
-            "1..2",
-            "--per-octave",
-            "1",
-            "--json",
-        ];
-        args.extend_from_slice(extra);
-        let o = rtpipe(&args);
-        assert_exit(&o, 0);
-        json_of(&o)
-    };
-    let plain = sweep(&[]);
-    let v = sweep(&["--seeds", "2", "--phases", "2", "--safety", "0.9"]);
+    let plain = small_sweep(&[]);
+    let v = small_sweep(&["--seeds", "2", "--phases", "2", "--safety", "0.9"]);
     assert_eq!(
         (v["seeds"].as_u64(), v["phases"].as_u64()),
         (Some(2), Some(2))
@@ -430,6 +433,7 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
             }
         }
     }
+    let spec = example("cleanflight.toml");
     for bad in [
         ["--safety", "0"],
         ["--safety", "1.5"],
@@ -450,21 +454,7 @@ fn a_sweep_over_seeds_and_phases_counts_every_flight_and_keeps_a_margin() {
 /// a bad step is refused.
 #[test]
 fn a_check_flies_every_step_below_the_period_limits() {
-    let spec = example("cleanflight.toml");
-    let o = rtpipe(&[
-        "fly",
-        &spec,
-        "--sweep",
-        "--scale",
-        "1..2",
-        "--per-octave",
-        "1",
-        "--check-step",
-        "0.1",
-        "--json",
-    ]);
-    assert_exit(&o, 0);
-    let v = json_of(&o);
+    let v = small_sweep(&["--check-step", "0.1"]);
     let points = v["points"].as_array().cloned().unwrap_or_default();
     for varied in ["scale", "tail rate"] {
         let mine: Vec<&serde_json::Value> =
@@ -491,6 +481,7 @@ fn a_check_flies_every_step_below_the_period_limits() {
             .iter()
             .all(|p| p["schedulable"] == false || p["flies"] == true));
     }
+    let spec = example("cleanflight.toml");
     for bad in ["0.6", "-0.1", "x"] {
         let o = rtpipe(&["fly", &spec, "--sweep", "--check-step", bad]);
         assert_exit(&o, 2);
@@ -501,22 +492,8 @@ fn a_check_flies_every_step_below_the_period_limits() {
 /// limit), and `--check-step 0` turns it off.
 #[test]
 fn the_check_is_on_by_default_and_0_turns_it_off() {
-    let spec = example("cleanflight.toml");
     let checks = |extra: &[&str]| {
-        let mut args = vec![
-            "fly",
-            spec.as_str(),
-            "--sweep",
-            "--scale",
-            "1..2",
-            "--per-octave",
-            "1",
-            "--json",
-        ];
-        args.extend_from_slice(extra);
-        let o = rtpipe(&args);
-        assert_exit(&o, 0);
-        let v = json_of(&o);
+        let v = small_sweep(extra);
         let points = v["points"].as_array().cloned().unwrap_or_default();
         points
             .iter()
