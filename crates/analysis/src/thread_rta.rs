@@ -195,6 +195,16 @@ fn cold_steps_bound(
     })
 }
 
+/// The long-run load of the thread's members and the tasks above it: at 1
+/// or more no busy period ends.
+fn load(members: &[Member], above: &Above) -> f64 {
+    members
+        .iter()
+        .map(|m| m.work as f64 * m.arrivals.rate())
+        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
+        .sum()
+}
+
 /// [`fifo_response`]'s stops, each iteration started from `warm`'s where
 /// given ([`fifo_response_from`]) and from the bottom otherwise.
 fn fifo_within(
@@ -203,12 +213,7 @@ fn fifo_within(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
-    let load: f64 = members
-        .iter()
-        .map(|m| m.work as f64 * m.arrivals.rate())
-        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
-        .sum();
-    if load >= 1.0 {
+    if load(members, above) >= 1.0 {
         return None;
     }
     let thread = |delta: Nanos| -> Option<Nanos> {

@@ -513,11 +513,24 @@ pub fn execute(
     Ok(answer.after_write(written))
 }
 
+/// The sweep's progress bar on stderr, `timings` long, named by the spec.
+fn progress_bar(name: &str, timings: usize) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::with_draw_target(
+        Some(timings as u64),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "sweeping {msg} [{bar:30}] {pos}/{len} timings, {elapsed_precise} elapsed, ETA {eta}",
+    ) {
+        pb.set_style(style);
+    }
+    pb.set_message(name.to_string());
+    pb
+}
+
 /// Flies every variation (on a worker thread) while a progress bar on
 /// stderr counts the flights done; a panic in the sweep goes on unwinding
-/// here.
-/// Every variation flown, with a progress bar; `None` when `stop` (asked
-/// before each flight) ended the sweep.
+/// here. `None` when `stop` (asked before each flight) ended the sweep.
 fn fly_all(
     spec: &Spec,
     (s, also): (&Setup, &[(Setup, Criteria)]),
@@ -527,16 +540,7 @@ fn fly_all(
     stop: Option<&AtomicBool>,
 ) -> Option<Vec<Point>> {
     let done = AtomicU64::new(0);
-    let pb = indicatif::ProgressBar::with_draw_target(
-        Some(vars.len() as u64),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "sweeping {msg} [{bar:30}] {pos}/{len} timings, {elapsed_precise} elapsed, ETA {eta}",
-    ) {
-        pb.set_style(style);
-    }
-    pb.set_message(spec.name.clone());
+    let pb = progress_bar(&spec.name, vars.len());
     let stopped = || crate::command::Hooks::stopped(stop);
     let how = How {
         exec: a.exec.model(),
