@@ -157,9 +157,9 @@ fn the_incremental_demand_is_the_direct_sum() {
     );
 }
 
-/// A task's own jobs for a level-i busy period: (work, switch, blocking,
-/// jitter in tenths of the period, period).
-fn own_jobs() -> impl Strategy<Value = (Nanos, Nanos, Nanos, u32, Nanos)> {
+/// A task's own jobs for a level-i busy period, its release jitter up to
+/// four tenths of its period.
+fn own_jobs() -> impl Strategy<Value = OwnJobs> {
     (
         1..3_000 as Nanos,
         0..40 as Nanos,
@@ -167,32 +167,27 @@ fn own_jobs() -> impl Strategy<Value = (Nanos, Nanos, Nanos, u32, Nanos)> {
         0..5u32,
         200..40_000 as Nanos,
     )
+        .prop_map(|(work, switch, blocking, jf, period)| OwnJobs {
+            work,
+            switch,
+            blocking,
+            jitter: period * Nanos::from(jf) / 10,
+            period,
+        })
 }
 
 #[test]
 fn level_response_is_the_straightforward_iteration() {
     let own = own_jobs();
-    check(
-        "level response",
-        CASES,
-        (own, loads(12)),
-        |((work, switch, blocking, jf, period), hp)| {
-            let own = OwnJobs {
-                work,
-                switch,
-                blocking,
-                jitter: period * Nanos::from(jf) / 10,
-                period,
-            };
-            let want = straight_level_response(own, &hp);
-            prop_assert_eq!(level_response(own, &hp), want);
-            Ok(if want.is_some() {
-                "bounded"
-            } else {
-                "unbounded"
-            })
-        },
-    );
+    check("level response", CASES, (own, loads(12)), |(own, hp)| {
+        let want = straight_level_response(own, &hp);
+        prop_assert_eq!(level_response(own, &hp), want);
+        Ok(if want.is_some() {
+            "bounded"
+        } else {
+            "unbounded"
+        })
+    });
 }
 
 /// Streams of an event model: 1–3, jitters up to a few periods.
@@ -321,14 +316,7 @@ fn a_warm_level_response_is_the_one_from_the_bottom() {
         "warm level response",
         CASES,
         (own, loads(12), extra),
-        |((work, switch, blocking, jf, period), hp, extra)| {
-            let own = OwnJobs {
-                work,
-                switch,
-                blocking,
-                jitter: period * Nanos::from(jf) / 10,
-                period,
-            };
+        |(own, hp, extra)| {
             let grown: Vec<(Nanos, Nanos, Nanos)> = hp
                 .iter()
                 .enumerate()
