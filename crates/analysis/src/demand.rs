@@ -33,7 +33,10 @@ struct Term {
 /// `Σ_h η⁺_h(w)·C_h` over a fixed list of streams, asked at windows that
 /// never shrink.
 #[derive(Debug, Clone)]
-pub struct Demand {
+pub struct Demand<'a> {
+    /// The streams as handed over and how many they are, until the first
+    /// window that counts any event (at least 1) makes `terms` of them.
+    streams: Option<(Streams<'a>, usize)>,
     terms: Vec<Term>,
     /// Σ count·C at the last window, saturating at `Nanos::MAX` (every
     /// caller calls a figure past `MAX_TIME` unbounded, as it does an
@@ -45,36 +48,37 @@ pub struct Demand {
     last: Nanos,
 }
 
-impl Demand {
+/// The streams of a [`Demand`] before its first window.
+#[derive(Debug, Clone, Copy)]
+enum Streams<'a> {
+    /// Per task above, the work of each of its jobs and its activations.
+    Arrivals(&'a [(Nanos, &'a Arrivals)]),
+    /// (C, T, J) triples.
+    Loads(&'a [(Nanos, Nanos, Nanos)]),
+}
+
+impl<'a> Demand<'a> {
     /// The demand of the tasks above as `thread_rta` hands them: per task
     /// the work of each of its jobs and its activations, each stream a
-    /// term. Built in one allocation, a stretch of terms per task (a demand
-    /// is built for every fixed-priority or FIFO analysis, from about 225
-    /// streams on the 1,000-task bench).
-    pub fn of_arrivals(above: &[(Nanos, &Arrivals)]) -> Demand {
-        let mut terms = Vec::with_capacity(above.iter().map(|(_, a)| a.streams.len()).sum());
-        for &(work, arrivals) in above {
-            terms.extend(arrivals.streams.iter().map(|&s| Term::fresh(work, s)));
-        }
-        Demand::of_terms(terms)
+    /// term, a stretch of terms per task.
+    pub fn of_arrivals(above: &'a [(Nanos, &'a Arrivals)]) -> Demand<'a> {
+        let streams = above.iter().map(|(_, a)| a.streams.len()).sum();
+        Demand::of_streams(Streams::Arrivals(above), streams)
     }
 
     /// The demand of (C, T, J) triples, as `sched` hands them.
-    pub fn of_loads(loads: &[(Nanos, Nanos, Nanos)]) -> Demand {
-        Demand::of_terms(
-            loads
-                .iter()
-                .map(|&(work, period, jitter)| Term::fresh(work, Stream { period, jitter }))
-                .collect(),
-        )
+    pub fn of_loads(loads: &'a [(Nanos, Nanos, Nanos)]) -> Demand<'a> {
+        Demand::of_streams(Streams::Loads(loads), loads.len())
     }
 
-    /// The demand of fresh terms, before any window.
-    fn of_terms(terms: Vec<Term>) -> Demand {
+    /// The demand of `count` streams, before any window: every stream's
+    /// count is 0 at a window of 0 and at least 1 from a window of 1 on
+    /// (J ≥ 0), so it steps at 1.
+    fn of_streams(streams: Streams<'a>, count: usize) -> Demand<'a> {
         Demand {
-            // Every term steps at 1 (see `Term::fresh`).
-            next_step: if terms.is_empty() { Nanos::MAX } else { 1 },
-            terms,
+            next_step: if count == 0 { Nanos::MAX } else { 1 },
+            streams: Some((streams, count)),
+            terms: Vec::new(),
             total: 0,
             last: 0,
         }
@@ -92,6 +96,10 @@ impl Demand {
         if w < self.next_step {
             return self.total;
         }
+        if let Some((streams, count)) = self.streams.take() {
+            self.first(streams, count, w);
+            return self.total;
+        }
         let mut next_step = Nanos::MAX;
         for term in &mut self.terms {
             if term.step <= w {
@@ -102,11 +110,46 @@ impl Demand {
         self.next_step = next_step;
         self.total
     }
+
+    /// The terms of `streams` at their first window `w` (at least 1, so
+    /// every term steps there), each made and brought to `w` in one pass:
+    /// a demand is made for every fixed-priority or FIFO analysis, from
+    /// about 225 streams on the 1,000-task bench, and its first window
+    /// moves every term (docs/analysis.md, "Cost at 1,000 tasks", the
+    /// tenth round).
+    fn first(&mut self, streams: Streams, count: usize, w: Nanos) {
+        let (mut total, mut next_step) = (0 as Nanos, Nanos::MAX);
+        let mut bring = |work, stream| {
+            let mut term = Term::fresh(work, stream);
+            total = total.saturating_add(term.advance(w));
+            next_step = next_step.min(term.step);
+            term
+        };
+        self.terms.reserve_exact(count);
+        match streams {
+            Streams::Arrivals(above) => {
+                for &(work, arrivals) in above {
+                    for &stream in &arrivals.streams {
+                        self.terms.push(bring(work, stream));
+                    }
+                }
+            }
+            Streams::Loads(loads) => {
+                let terms = loads
+                    .iter()
+                    .map(|&(work, period, jitter)| bring(work, Stream { period, jitter }));
+                self.terms.extend(terms);
+            }
+        }
+        self.total = total;
+        self.next_step = next_step;
+    }
 }
 
 impl Term {
     /// A stream's term before any window: its count is 0 at a window of 0
     /// and at least 1 from a window of 1 on (J ≥ 0), so it steps at 1.
+    #[inline]
     fn fresh(work: Nanos, stream: Stream) -> Term {
         Term {
             work,

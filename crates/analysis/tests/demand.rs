@@ -7,7 +7,9 @@
 //! own jobs and thread members, the same figures, unbounded ones and
 //! overflows included; and both analyses started warm from their last
 //! stops against the same analyses from the bottom, after the activations
-//! grew. 3,000 cases each; `--nocapture` prints the tally.
+//! grew; and the demand of tasks above, as `thread_rta` hands it, against
+//! the direct sum of their streams. 3,000 cases each; `--nocapture` prints
+//! the tally.
 
 use proptest::prelude::*;
 use rtpipe_analysis::arrivals::{Arrivals, Stream};
@@ -226,6 +228,42 @@ fn fifo_response_is_the_straightforward_iteration() {
                 "bounded"
             } else {
                 "unbounded"
+            })
+        },
+    );
+}
+
+/// The demand of tasks above as `thread_rta` hands them (a stretch of
+/// terms per task, made at the first window that counts an event) is the
+/// direct sum of their streams, at any first window and after it.
+#[test]
+fn the_demand_of_arrivals_is_the_direct_sum() {
+    let works = prop_oneof![8 => 0..400 as Nanos, 1 => 1 as Nanos..Nanos::MAX / 64];
+    let above = prop::collection::vec((works, arrivals()), 0..8);
+    // Some first windows empty (0), counting no event: the terms are made
+    // at the next one.
+    let window = prop_oneof![1 => Just(0 as Nanos), 9 => 0..60_000 as Nanos];
+    let windows = prop::collection::vec(window, 1..30);
+    check(
+        "demand of arrivals",
+        CASES,
+        (above, windows),
+        |(above, mut windows)| {
+            windows.sort_unstable();
+            let loads: Vec<(Nanos, Nanos, Nanos)> = above
+                .iter()
+                .flat_map(|(c, a)| a.streams.iter().map(|s| (*c, s.period, s.jitter)))
+                .collect();
+            let pairs = pairs(&above);
+            let mut demand = Demand::of_arrivals(&pairs);
+            for &w in &windows {
+                let want = if w == 0 { Some(0) } else { direct(&loads, w) };
+                prop_assert_eq!(demand.at(w), want.unwrap_or(Nanos::MAX), "w = {}", w);
+            }
+            Ok(match (above.is_empty(), windows[0]) {
+                (true, _) => "no task above",
+                (false, 0) => "first window empty",
+                _ => "first window counts",
             })
         },
     );

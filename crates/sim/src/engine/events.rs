@@ -224,9 +224,14 @@ impl<H: Hooks> Sim<H> {
         ts.queue.push_back(job);
         ts.stats.released += 1;
         ts.next_index += 1;
-        self.thread_queued(c, &job, t);
-        if was_idle {
+        if ts.sides.thread {
+            // Its thread refreshes it when it becomes the head; while it is
+            // not, it stands where an idle task stands (nowhere).
+            self.thread_queued(c, &job, t);
+        } else if was_idle {
             self.refresh(c, t);
+        }
+        if was_idle {
             self.refresh_servers(c, t);
         }
     }
