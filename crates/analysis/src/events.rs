@@ -30,8 +30,20 @@ pub type Figures = (Option<Nanos>, Option<Nanos>);
 /// that thread-less tasks keep their own analysis, servers included).
 pub trait FixedPriority {
     /// The tasks that can run above task `i` on its CPU (its thread's
-    /// own tasks among them, which the caller leaves out).
+    /// own tasks among them, which the caller leaves out), in any order:
+    /// nothing the analysis computes from them depends on it.
     fn above(&self, i: usize) -> Vec<usize>;
+    /// The tasks above each of the `n` tasks as prefixes of lists the
+    /// tasks share ([`Ranked`]), so that the set-up reads who reads whom
+    /// from the lists, not from every task's tasks above. The default:
+    /// each task's [`above`](Self::above) a list of its own, whole.
+    fn ranked(&self, n: usize) -> Ranked {
+        let lists: Vec<Vec<usize>> = (0..n).map(|i| self.above(i)).collect();
+        Ranked {
+            prefix: (0..n).map(|i| (i, lists[i].len())).collect(),
+            lists,
+        }
+    }
     /// What one job of task `j` takes from the tasks below it.
     fn interference(&self, j: usize) -> Nanos;
     /// B of task `i`: once per busy period.
@@ -56,6 +68,19 @@ pub trait FixedPriority {
         let _ = warm;
         (self.periodic_response(i, hp), None)
     }
+}
+
+/// The tasks above each task as a prefix of a list tasks share: under
+/// fixed priority a CPU's guaranteed tasks by their highest rank, the
+/// tasks above a task those ranked at or above its own (`sched`'s
+/// `Levels`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ranked {
+    /// The lists.
+    pub lists: Vec<Vec<usize>>,
+    /// Per task its list and the length of its prefix: the tasks that can
+    /// run above it are the prefix's, itself left out where it is one.
+    pub prefix: Vec<(usize, usize)>,
 }
 
 /// Where a fixed-priority analysis' iterations stopped: each job's fixed
@@ -195,10 +220,8 @@ struct Deps {
     interference: Vec<Nanos>,
     /// Per thread its tasks, in declaration order.
     members: Vec<Vec<usize>>,
-    /// Per data-triggered task j the units whose responses read j's
-    /// activations, ascending and distinct (none for a periodic task,
-    /// whose activations never change).
-    readers: Lists,
+    /// Who reads whom, from the ranked lists ([`Readers`]).
+    readers: Readers,
     /// Per task the data-triggered tasks it triggers.
     consumers: Vec<Vec<usize>>,
     /// Every task, each after its triggers.
@@ -216,21 +239,19 @@ impl Deps {
                 members[th].push(i);
             }
         }
+        let readers = Readers::of(spec, fp.ranked(n));
         let above: Vec<Vec<usize>> = (0..n)
             .map(|i| {
                 let t = &spec.tasks[i];
-                if t.server == Server::Background {
-                    return Vec::new();
-                }
-                let mut above = fp.above(i);
-                if t.thread.is_some() {
-                    above.retain(|&j| spec.tasks[j].thread != t.thread);
-                }
+                let prefix = &readers.flat[readers.prefix[i].clone()];
+                let mut above = Vec::with_capacity(prefix.len());
+                let own =
+                    |j: usize| j == i || (t.thread.is_some() && spec.tasks[j].thread == t.thread);
+                above.extend(prefix.iter().copied().filter(|&j| !own(j)));
                 above
             })
             .collect();
         let interference = (0..n).map(|j| fp.interference(j)).collect();
-        let readers = readers(spec, &above, &members);
         let consumers = spec.triggered_by();
         let trigger_order = trigger_order(spec, &consumers);
         let mut trigger_rank = vec![0; n];
@@ -272,25 +293,11 @@ impl Deps {
     fn components(&self, spec: &Spec) -> Components {
         let n = spec.tasks.len();
         let units = n + self.members.len();
-        let unit_of = |p: usize| spec.tasks[p].thread.map_or(p, |th| n + th);
-        let succ = Lists::build(units + n, |edge| {
-            for j in 0..n {
-                // A periodic task's activations depend on no unit.
-                let Some((triggers, _)) = spec.tasks[j].triggers() else {
-                    continue;
-                };
-                for &u in self.readers.of(j) {
-                    edge.add(u, units + j);
-                }
-                for &p in triggers {
-                    edge.add(units + j, units + p);
-                    edge.add(units + j, unit_of(p));
-                }
-            }
-        });
+        let nodes = units + n + self.readers.flat.len();
+        let succ = Lists::build(nodes, |edge| self.reads(spec, edge));
         // Tarjan's numbers a component after every component it reaches.
-        let comp = crate::graph::strongly_connected(units + n, &succ);
-        let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); units + n];
+        let comp = crate::graph::strongly_connected(nodes, &succ);
+        let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); nodes];
         for u in self.units(spec) {
             by_comp[comp[u]].push(u);
         }
@@ -326,6 +333,50 @@ impl Deps {
         Components {
             units: by_comp,
             of_unit,
+        }
+    }
+
+    /// The edges of [`Deps::components`]' graph. Its nodes: the units,
+    /// then the tasks (`units + j`: j's activations), then the entries of
+    /// the ranked lists (`units + n + g`: the entry `g` of
+    /// [`Readers::flat`] and every entry before it in its list). A unit
+    /// points to its own tasks and to the last entry of each of its tasks'
+    /// prefixes, an entry to its task and to the entry before it, and a
+    /// data-triggered task to each trigger and the trigger's unit (whose
+    /// response gives the trigger's output jitter). So a unit reaches
+    /// through the entries exactly the tasks of its tasks' prefixes: the
+    /// tasks above them, and they themselves and their thread's tasks,
+    /// which it reads anyway; a periodic task points nowhere (its
+    /// activations depend on no unit). One entry per task above per task,
+    /// as the graph had before (docs/analysis.md "Cost at 1,000 tasks",
+    /// tenth round), became one per entry of the lists.
+    fn reads(&self, spec: &Spec, edge: &mut crate::graph::Entries) {
+        let n = spec.tasks.len();
+        let units = n + self.members.len();
+        let entry = |g: usize| units + n + g;
+        for u in self.units(spec) {
+            for i in self.unit_tasks(u) {
+                edge.add(u, units + i);
+                let prefix = self.readers.prefix[i].clone();
+                if !prefix.is_empty() {
+                    edge.add(u, entry(prefix.end - 1));
+                }
+            }
+        }
+        for (g, &j) in self.readers.flat.iter().enumerate() {
+            edge.add(entry(g), units + j);
+            if g > self.readers.list_start[g] {
+                edge.add(entry(g), entry(g - 1));
+            }
+        }
+        for j in 0..n {
+            let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                continue;
+            };
+            for &p in triggers {
+                edge.add(units + j, units + p);
+                edge.add(units + j, unit_of(spec, p));
+            }
         }
     }
 
@@ -422,7 +473,7 @@ impl Deps {
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
-            for &u in self.readers.of(j).iter().filter(|&&u| inside(u)) {
+            for u in self.readers.reading(spec, j).filter(|&u| inside(u)) {
                 if !state.dirty[u] && self.sees(u, &change, &state.responses) {
                     state.dirty[u] = true;
                 }
@@ -521,41 +572,103 @@ impl Deps {
     }
 }
 
-/// Per data-triggered task j the units whose responses read j's
-/// activations, ascending and distinct: those of the tasks j runs above,
-/// j's thread, and j's own unit when it is thread-less. A periodic task's
-/// activations never change, so no unit waits for them and its list is
-/// left empty (more than half the entries on the 1,000-task bench).
-fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Lists {
-    let n = spec.tasks.len();
-    // Looked up once per task, not once per entry of a list above.
-    let triggered: Vec<bool> = spec.tasks.iter().map(|t| t.is_triggered()).collect();
-    Lists::build(n, |entry| {
-        // The units in ascending order, each one's reads together: the
-        // last unit that read j tells whether this one is in j's list
-        // already, with no sort.
-        let mut last = vec![usize::MAX; n];
-        let mut read = |u: usize, j: usize| {
-            if triggered[j] && last[j] != u {
-                last[j] = u;
-                entry.add(j, u);
-            }
-        };
-        for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
-            for &j in &above[i] {
-                read(i, j);
-            }
-            read(i, i);
+/// The unit of task `i`: its thread (numbered after the tasks), or itself.
+fn unit_of(spec: &Spec, i: usize) -> usize {
+    spec.tasks[i].thread.map_or(i, |th| spec.tasks.len() + th)
+}
+
+/// Who reads whom: the units whose responses read a task's activations
+/// are its own and those of the tasks it runs above, whose prefixes
+/// ([`Ranked`]) hold it. On a CPU's list ranked by priority those are the
+/// tasks whose prefix passes its entry: no unit's list of reads is kept,
+/// nor scanned (docs/analysis.md "Cost at 1,000 tasks", tenth round).
+struct Readers {
+    /// The ranked lists, one after the other.
+    flat: Vec<usize>,
+    /// Per entry of `flat`, where its list starts.
+    list_start: Vec<usize>,
+    /// Per task the entries of `flat` above it (and maybe itself and its
+    /// thread's tasks, which its unit reads anyway; none for a background
+    /// task, which has no response).
+    prefix: Vec<std::ops::Range<usize>>,
+    /// Per task the entries of `flat` that are it.
+    occurs: Lists,
+    /// Per list (by where it starts) the units whose tasks' prefixes lie
+    /// in it, as (the farthest end of their prefixes, unit), by that end
+    /// descending, each unit once.
+    reach: Vec<Vec<(usize, usize)>>,
+}
+
+impl Readers {
+    fn of(spec: &Spec, ranked: Ranked) -> Readers {
+        let n = spec.tasks.len();
+        assert_eq!(ranked.prefix.len(), n, "a prefix per task");
+        let mut starts = Vec::with_capacity(ranked.lists.len());
+        let mut flat = Vec::new();
+        let mut list_start = Vec::new();
+        for list in &ranked.lists {
+            starts.push(flat.len());
+            list_start.resize(flat.len() + list.len(), flat.len());
+            flat.extend_from_slice(list);
         }
-        for (th, on) in members.iter().enumerate() {
-            for &i in on {
-                for &j in &above[i] {
-                    read(n + th, j);
-                }
-                read(n + th, i);
+        let prefix: Vec<std::ops::Range<usize>> = (0..n)
+            .map(|i| {
+                let (l, len) = ranked.prefix[i];
+                assert!(
+                    len <= ranked.lists[l].len(),
+                    "task {i}'s prefix passes its list"
+                );
+                let len = if spec.tasks[i].server == Server::Background {
+                    0
+                } else {
+                    len
+                };
+                starts[l]..starts[l] + len
+            })
+            .collect();
+        let occurs = Lists::build(n, |entry| {
+            for (g, &j) in flat.iter().enumerate() {
+                entry.add(j, g);
+            }
+        });
+        // Per list the (end, unit) of every task with a prefix there, the
+        // farthest first, a unit kept at its farthest only.
+        let mut reach: Vec<Vec<(usize, usize)>> = vec![Vec::new(); flat.len() + 1];
+        let mut by_end: Vec<(usize, usize, usize)> = (0..n)
+            .filter(|&i| !prefix[i].is_empty())
+            .map(|i| (prefix[i].start, prefix[i].end, unit_of(spec, i)))
+            .collect();
+        by_end.sort_unstable_by(|a, b| (a.0, b.1).cmp(&(b.0, a.1)));
+        let mut last = vec![usize::MAX; n + spec.threads.len()];
+        // A prefix starts where its list does.
+        for (list, end, u) in by_end {
+            if last[u] != list {
+                last[u] = list;
+                reach[list].push((end, u));
             }
         }
-    })
+        Readers {
+            flat,
+            list_start,
+            prefix,
+            occurs,
+            reach,
+        }
+    }
+
+    /// The units whose responses read task `j`'s activations: its own,
+    /// then those whose tasks' prefixes hold it (a unit may come twice
+    /// where j stands in more than one list).
+    fn reading<'a>(&'a self, spec: &Spec, j: usize) -> impl Iterator<Item = usize> + 'a {
+        let own = unit_of(spec, j);
+        let others = self.occurs.of(j).iter().flat_map(move |&g| {
+            let list = &self.reach[self.list_start[g]];
+            list.iter()
+                .take_while(move |&&(end, _)| end > g)
+                .map(|&(_, u)| u)
+        });
+        std::iter::once(own).chain(others.filter(move |&u| u != own))
+    }
 }
 
 /// Every task, each after its triggers (Kahn's order; validation makes
@@ -633,7 +746,7 @@ struct Change {
 
 impl Change {
     fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
-        let unit = spec.tasks[j].thread.map_or(j, |th| spec.tasks.len() + th);
+        let unit = unit_of(spec, j);
         match (old, new) {
             (Some(a), Some(b)) if same_periods(a, b) => Change {
                 unit,
