@@ -168,6 +168,7 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
         responses: vec![Response::NONE; n],
         dirty: vec![false; n + spec.threads.len()],
         marked: vec![false; n],
+        reach: vec![None; n + spec.threads.len()],
     };
     for (c, units) in order.units.iter().enumerate() {
         if !deps.settle(spec, fp, units, |u| order.of_unit[u] == c, &mut state) {
@@ -196,6 +197,10 @@ struct State {
     dirty: Vec<bool>,
     /// Per task a scratch mark, all clear between uses.
     marked: Vec<bool>,
+    /// Per unit the reach of its responses as last analysed
+    /// ([`Deps::reach`], kept rather than gathered at every
+    /// [`Deps::sees`]).
+    reach: Vec<Option<Nanos>>,
 }
 
 /// The units' strongly connected components in the order to analyse them:
@@ -406,6 +411,7 @@ impl Deps {
                 }
                 analysed += 1;
                 self.respond_unit(spec, fp, &state.arrivals, &mut state.responses, u);
+                state.reach[u] = self.reach(u, &state.responses);
                 let grown = self.grow(spec, u, state);
                 self.refresh(spec, &grown, &inside, state);
             }
@@ -474,7 +480,7 @@ impl Deps {
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
             for u in self.readers.reading(spec, j).filter(|&u| inside(u)) {
-                if !state.dirty[u] && self.sees(u, &change, &state.responses) {
+                if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
                 }
             }
@@ -494,8 +500,9 @@ impl Deps {
     /// iterations stopped at, each iteration stops at the same one, in at
     /// most as many steps, `thread_rta::fifo_response_windows` and
     /// `sched::busy::level_response_from`).
-    fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
-        let Some(reach) = self.reach(u, responses) else {
+    fn sees(&self, u: usize, change: &Change, state: &State) -> bool {
+        let responses = &state.responses;
+        let Some(reach) = state.reach[u] else {
             return true;
         };
         if reach <= change.same {
@@ -791,16 +798,22 @@ fn activation(
         None => t
             .fixed_period()
             .map(|period| Arrivals::periodic(period, t.jitter)),
-        Some((triggers, join)) => {
+        Some((triggers, Join::Any)) => {
+            // Every trigger's publications: its activations delayed by its
+            // output jitter (`None` while one is unbounded).
+            let inputs = triggers
+                .iter()
+                .map(|&p| Some((arrivals[p].as_ref()?, delay[p]?)));
+            let inputs: Option<Vec<(&Arrivals, Nanos)>> = inputs.collect();
+            Arrivals::any_delayed(inputs?.into_iter())
+        }
+        Some((triggers, Join::All)) => {
             let outputs: Vec<Arrivals> = triggers
                 .iter()
                 .map(|&p| arrivals[p].as_ref()?.delayed(delay[p]?))
                 .collect::<Option<_>>()?;
             let refs: Vec<&Arrivals> = outputs.iter().collect();
-            Some(match join {
-                Join::Any => Arrivals::any(&refs),
-                Join::All => Arrivals::all(&refs),
-            })
+            Some(Arrivals::all(&refs))
         }
     }
 }
