@@ -291,10 +291,11 @@ impl Deps {
 
     /// The units' strongly connected components, in topological order
     /// (Tarjan's, [`crate::graph::strongly_connected`]), of the graph
-    /// where a unit points to each task whose activations it reads, and a
-    /// data-triggered task to each trigger and the trigger's unit (whose
-    /// response gives the trigger's output jitter): a task's activations
-    /// depend on the units of its triggers, theirs, and so on.
+    /// where a unit reaches each task whose activations it reads, and a
+    /// data-triggered task points to each trigger and the trigger's unit
+    /// (whose response gives the trigger's output jitter): a task's
+    /// activations depend on the units of its triggers, theirs, and so on
+    /// ([`Deps::reads`]).
     fn components(&self, spec: &Spec) -> Components {
         let n = spec.tasks.len();
         let units = n + self.members.len();
