@@ -223,8 +223,11 @@ pub(crate) struct Levels<'a> {
     /// ascending: the tasks above a task are a prefix
     /// ([`Levels::interferers`]). Built at the first ask (the event
     /// analysis'; the periodic path reads `guaranteed`).
-    ranked: std::cell::OnceCell<Vec<Vec<(Option<usize>, usize)>>>,
+    ranked: std::cell::OnceCell<Vec<RankedCpu>>,
 }
+
+/// A CPU's guaranteed tasks as (highest rank, task), ascending.
+type RankedCpu = Vec<(Option<usize>, usize)>;
 
 impl<'a> Levels<'a> {
     pub(crate) fn new(spec: &'a Spec, prio: &'a [Option<usize>], top: &'a [Option<usize>]) -> Self {
@@ -353,7 +356,7 @@ impl<'a> Levels<'a> {
 
     /// Per CPU of `by_cpu`, its guaranteed tasks as (highest rank, task),
     /// ascending.
-    fn rank_sorted(&self) -> Vec<Vec<(Option<usize>, usize)>> {
+    fn rank_sorted(&self) -> Vec<RankedCpu> {
         let sorted = |on: &Vec<Interferer>| {
             let mut ranked: Vec<(Option<usize>, usize)> =
                 on.iter().map(|x| (x.top, x.task)).collect();
