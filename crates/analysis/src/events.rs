@@ -216,9 +216,6 @@ struct Components {
 /// tasks above them and read each other's activations), numbered after
 /// the tasks, or a thread-less task, numbered as the task.
 struct Deps {
-    /// Per task the tasks that can run above it, its thread's own left
-    /// out (none for a background task, which has no response).
-    above: Vec<Vec<usize>>,
     /// Per task what one of its jobs takes from the tasks below it
     /// ([`FixedPriority::interference`], asked once per task rather than
     /// once per task above, per analysis).
@@ -245,17 +242,6 @@ impl Deps {
             }
         }
         let readers = Readers::of(spec, fp.ranked(n));
-        let above: Vec<Vec<usize>> = (0..n)
-            .map(|i| {
-                let t = &spec.tasks[i];
-                let prefix = &readers.flat[readers.prefix[i].clone()];
-                let mut above = Vec::with_capacity(prefix.len());
-                let own =
-                    |j: usize| j == i || (t.thread.is_some() && spec.tasks[j].thread == t.thread);
-                above.extend(prefix.iter().copied().filter(|&j| !own(j)));
-                above
-            })
-            .collect();
         let interference = (0..n).map(|j| fp.interference(j)).collect();
         let consumers = spec.triggered_by();
         let trigger_order = trigger_order(spec, &consumers);
@@ -264,7 +250,6 @@ impl Deps {
             trigger_rank[i] = k;
         }
         Deps {
-            above,
             interference,
             members,
             readers,
@@ -281,9 +266,37 @@ impl Deps {
         tasks.chain(n..n + self.members.len())
     }
 
+    /// The tasks that can run above task `i`, its thread's own left out
+    /// (none for a background task, which has no response): its prefix of
+    /// its CPU's ranked list, read in place rather than copied per task
+    /// (docs/analysis.md "Cost at 1,000 tasks", tenth round).
+    fn above<'a>(&'a self, spec: &Spec, i: usize) -> impl Iterator<Item = usize> + 'a {
+        let own = unit_of(spec, i);
+        let prefix = self.readers.prefix[i].clone();
+        let units = &self.readers.unit_at[prefix.clone()];
+        self.readers.flat[prefix]
+            .iter()
+            .zip(units)
+            .filter(move |&(_, &u)| u != own)
+            .map(|(&j, _)| j)
+    }
+
+    /// Whether tasks `k` and `i` of one unit have the same tasks above
+    /// ([`Deps::above`]): two prefixes of one list differ only in the
+    /// entries past the shorter, which are the unit's own or not.
+    fn same_above(&self, spec: &Spec, k: usize, i: usize) -> bool {
+        let (a, b) = (&self.readers.prefix[k], &self.readers.prefix[i]);
+        let own = unit_of(spec, i);
+        if a.start != b.start || unit_of(spec, k) != own {
+            return self.above(spec, k).eq(self.above(spec, i));
+        }
+        let between = a.end.min(b.end)..a.end.max(b.end);
+        self.readers.unit_at[between].iter().all(|&u| u == own)
+    }
+
     /// The tasks of unit `u`.
     fn unit_tasks(&self, u: usize) -> impl Iterator<Item = usize> + '_ {
-        let n = self.above.len();
+        let n = self.interference.len();
         let own = (u < n).then_some(u);
         let thread = u.checked_sub(n).map(|th| &self.members[th]);
         own.into_iter().chain(thread.into_iter().flatten().copied())
@@ -595,6 +608,9 @@ struct Readers {
     flat: Vec<usize>,
     /// Per entry of `flat`, where its list starts.
     list_start: Vec<usize>,
+    /// Per entry of `flat`, its task's unit (what [`Deps::above`] leaves
+    /// out of a task's prefix: the task and its thread's own).
+    unit_at: Vec<usize>,
     /// Per task the entries of `flat` above it (and maybe itself and its
     /// thread's tasks, which its unit reads anyway; none for a background
     /// task, which has no response).
@@ -634,6 +650,7 @@ impl Readers {
                 starts[l]..starts[l] + len
             })
             .collect();
+        let unit_at = flat.iter().map(|&j| unit_of(spec, j)).collect();
         let occurs = Lists::build(n, |entry| {
             for (g, &j) in flat.iter().enumerate() {
                 entry.add(j, g);
@@ -658,6 +675,7 @@ impl Readers {
         Readers {
             flat,
             list_start,
+            unit_at,
             prefix,
             occurs,
             reach,
@@ -697,11 +715,12 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
     order
 }
 
-/// FIFO responses of one thread this round, by (tasks above, blocking),
-/// for members whose own work is the work the others see of them (then
-/// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
-/// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, Option<FifoStops>)>;
+/// FIFO responses of one thread this round, by (a member whose tasks
+/// above are the same, blocking), for members whose own work is the work
+/// the others see of them (then every input of
+/// [`crate::thread_rta::fifo_response`] is the same for them, and so is
+/// its figure).
+type ThreadCache = Vec<(usize, Nanos, Option<FifoStops>)>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone)]
@@ -840,9 +859,8 @@ fn respond(
     if t.server == Server::Background {
         return Response::NONE;
     }
-    let above = &deps.above[i];
-    let mut models = Vec::with_capacity(above.len());
-    for &j in above {
+    let mut models = Vec::with_capacity(deps.readers.prefix[i].len());
+    for j in deps.above(spec, i) {
         let Some(a) = arrivals[j].as_ref() else {
             return Response::NONE;
         };
@@ -869,13 +887,13 @@ fn respond(
     let shared = t.demand() == deps.interference[i];
     let known = cache
         .iter()
-        .find(|(a, b, _)| shared && a == above && *b == blocking)
+        .find(|&&(k, b, _)| shared && b == blocking && deps.same_above(spec, k, i))
         .map(|(_, _, r)| r.clone());
     let stops = known.unwrap_or_else(|| {
         let warm = old.fifo.as_ref();
         let r = thread_response(spec, deps, arrivals, i, &models, blocking, warm);
         if shared {
-            cache.push((above.clone(), blocking, r.clone()));
+            cache.push((i, blocking, r.clone()));
         }
         r
     });
