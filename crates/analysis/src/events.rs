@@ -168,6 +168,7 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
         responses: vec![Response::NONE; n],
         dirty: vec![false; n + spec.threads.len()],
         marked: vec![false; n],
+        lists: SweepLists::default(),
         reach: vec![None; n + spec.threads.len()],
     };
     for (c, units) in order.units.iter().enumerate() {
@@ -197,10 +198,27 @@ struct State {
     dirty: Vec<bool>,
     /// Per task a scratch mark, all clear between uses.
     marked: Vec<bool>,
+    /// The sweeps' lists, kept between uses rather than allocated at each.
+    lists: SweepLists,
     /// Per unit the reach of its responses as last analysed
     /// ([`Deps::reach`], kept rather than gathered at every
     /// [`Deps::sees`]).
     reach: Vec<Option<Nanos>>,
+}
+
+/// The lists a unit's analysis hands on to its readers, each empty between
+/// uses: kept from one analysis to the next, so that a sweep allocates
+/// only where one outgrows what it had.
+#[derive(Default)]
+struct SweepLists {
+    /// The unit's tasks whose output jitter grew ([`Deps::grow`]).
+    grown: Vec<usize>,
+    /// The tasks downstream of those ([`Deps::downstream`]).
+    downstream: Vec<usize>,
+    /// [`Deps::downstream`]'s tasks still to visit.
+    next: Vec<usize>,
+    /// The downstream tasks whose activations changed ([`Deps::refresh`]).
+    changed: Vec<usize>,
 }
 
 /// The units' strongly connected components in the order to analyse them:
@@ -426,8 +444,11 @@ impl Deps {
                 analysed += 1;
                 self.respond_unit(spec, fp, &state.arrivals, &mut state.responses, u);
                 state.reach[u] = self.reach(u, &state.responses);
-                let grown = self.grow(spec, u, state);
-                self.refresh(spec, &grown, &inside, state);
+                let mut lists = std::mem::take(&mut state.lists);
+                self.grow(spec, u, state, &mut lists.grown);
+                self.refresh(spec, &inside, state, &mut lists);
+                lists.grown.clear();
+                state.lists = lists;
             }
             if analysed == 0 {
                 return true;
@@ -440,9 +461,8 @@ impl Deps {
     }
 
     /// The output jitters of unit `u`'s tasks from their responses, into
-    /// `state.delay`; the tasks whose jitter changed.
-    fn grow(&self, spec: &Spec, u: usize, state: &mut State) -> Vec<usize> {
-        let mut grown = Vec::new();
+    /// `state.delay`; the tasks whose jitter changed, into `grown` (empty).
+    fn grow(&self, spec: &Spec, u: usize, state: &mut State, grown: &mut Vec<usize>) {
         for i in self.unit_tasks(u) {
             let next = (|| {
                 let grown = state.responses[i].actual? - spec.tasks[i].demand_min();
@@ -454,31 +474,36 @@ impl Deps {
                 grown.push(i);
             }
         }
-        grown
     }
 
     /// Recomputes the activations of every task downstream of the tasks
-    /// whose jitter `grown`; the units `inside` the component that read one
-    /// that changed where they read it ([`Deps::sees`]: their responses,
-    /// computed from the old activations, are those the new ones give
-    /// when both agree there).
+    /// whose jitter grew (`lists.grown`); the units `inside` the component
+    /// that read one that changed where they read it ([`Deps::sees`]:
+    /// their responses, computed from the old activations, are those the
+    /// new ones give when both agree there). `lists` but `grown` are left
+    /// empty.
     fn refresh(
         &self,
         spec: &Spec,
-        grown: &[usize],
         inside: &impl Fn(usize) -> bool,
         state: &mut State,
+        lists: &mut SweepLists,
     ) {
-        let downstream = self.downstream(grown, &mut state.marked);
+        let SweepLists {
+            grown,
+            downstream,
+            next,
+            changed,
+        } = lists;
+        self.downstream(grown, &mut state.marked, next, downstream);
         // `marked`: the tasks whose output (jitter or activations) changed
         // so far. A task none of whose triggers is marked keeps its
         // activations, which are a function of its triggers' alone, and is
         // not recomputed (each task comes after its triggers).
-        for &p in grown {
+        for &p in grown.iter() {
             state.marked[p] = true;
         }
-        let mut changed = Vec::new();
-        for j in downstream {
+        for &j in downstream.iter() {
             let Some((triggers, _)) = spec.tasks[j].triggers() else {
                 continue;
             };
@@ -499,9 +524,11 @@ impl Deps {
                 }
             }
         }
-        for &j in grown.iter().chain(&changed) {
+        for &j in grown.iter().chain(changed.iter()) {
             state.marked[j] = false;
         }
+        downstream.clear();
+        changed.clear();
     }
 
     /// Whether unit `u`'s responses, as last analysed, could read `change`:
@@ -535,14 +562,16 @@ impl Deps {
     }
 
     /// The tasks triggered, directly or not, by the tasks `from`, each
-    /// after its triggers (`marked`, clear, is left clear).
-    fn downstream(&self, from: &[usize], marked: &mut [bool]) -> Vec<usize> {
-        let mut out: Vec<usize> = Vec::new();
-        let mut next: Vec<usize> = from
-            .iter()
-            .flat_map(|&p| &self.consumers[p])
-            .copied()
-            .collect();
+    /// after its triggers, into `out` (empty; `marked`, clear, and `next`,
+    /// empty, are left so).
+    fn downstream(
+        &self,
+        from: &[usize],
+        marked: &mut [bool],
+        next: &mut Vec<usize>,
+        out: &mut Vec<usize>,
+    ) {
+        next.extend(from.iter().flat_map(|&p| &self.consumers[p]));
         while let Some(j) = next.pop() {
             if !marked[j] {
                 marked[j] = true;
@@ -550,11 +579,10 @@ impl Deps {
                 next.extend(&self.consumers[j]);
             }
         }
-        for &j in &out {
+        for &j in out.iter() {
             marked[j] = false;
         }
         out.sort_unstable_by_key(|&j| self.trigger_rank[j]);
-        out
     }
 
     /// The largest reach of unit `u`'s responses (`None`: a response
