@@ -158,8 +158,9 @@ pub struct EventResult {
 /// `analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
-    let deps = Deps::of(spec, fp);
+    let mut deps = Deps::of(spec, fp);
     let order = deps.components(spec);
+    deps.readers.group(&order.of_unit);
     // Each task's output jitter R − R_min, from zero.
     let delay: Vec<Option<Nanos>> = vec![Some(0); n];
     let mut state = State {
@@ -171,8 +172,8 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
         lists: SweepLists::default(),
         reach: vec![None; n + spec.threads.len()],
     };
-    for (c, units) in order.units.iter().enumerate() {
-        if !deps.settle(spec, fp, units, |u| order.of_unit[u] == c, &mut state) {
+    for c in 0..order.units.len() {
+        if !deps.settle(spec, fp, &order, c, &mut state) {
             // No fixed point found: nothing that depends on the jitter is
             // bounded.
             let arrivals = deps.activations(spec, &vec![None; n]);
@@ -417,7 +418,7 @@ impl Deps {
         }
     }
 
-    /// Analyses the component of `units` (`inside` tells its units) until
+    /// Analyses component `c` of `order` until
     /// its tasks' output jitters stop changing, at most [`MAX_ROUNDS`]
     /// sweeps (`false`: no fixed point). The units it reads from outside it
     /// are final. A sweep takes the units in order and re-analyses those
@@ -428,10 +429,11 @@ impl Deps {
         &self,
         spec: &Spec,
         fp: &impl FixedPriority,
-        units: &[usize],
-        inside: impl Fn(usize) -> bool,
+        order: &Components,
+        c: usize,
         state: &mut State,
     ) -> bool {
+        let units = &order.units[c][..];
         for &u in units {
             state.dirty[u] = true;
         }
@@ -446,7 +448,7 @@ impl Deps {
                 state.reach[u] = self.reach(u, &state.responses);
                 let mut lists = std::mem::take(&mut state.lists);
                 self.grow(spec, u, state, &mut lists.grown);
-                self.refresh(spec, &inside, state, &mut lists);
+                self.refresh(spec, (&order.of_unit, c), state, &mut lists);
                 lists.grown.clear();
                 state.lists = lists;
             }
@@ -477,7 +479,8 @@ impl Deps {
     }
 
     /// Recomputes the activations of every task downstream of the tasks
-    /// whose jitter grew (`lists.grown`); the units `inside` the component
+    /// whose jitter grew (`lists.grown`); the units of component `inside.1`
+    /// (`inside.0` gives each unit's)
     /// that read one that changed where they read it ([`Deps::sees`]:
     /// their responses, computed from the old activations, are those the
     /// new ones give when both agree there). `lists` but `grown` are left
@@ -485,7 +488,7 @@ impl Deps {
     fn refresh(
         &self,
         spec: &Spec,
-        inside: &impl Fn(usize) -> bool,
+        inside: (&[usize], usize),
         state: &mut State,
         lists: &mut SweepLists,
     ) {
@@ -518,7 +521,7 @@ impl Deps {
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
-            for u in self.readers.reading(spec, j).filter(|&u| inside(u)) {
+            for u in self.readers.reading(spec, j, inside) {
                 if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
                 }
@@ -646,8 +649,9 @@ struct Readers {
     /// Per task the entries of `flat` that are it.
     occurs: Lists,
     /// Per list (by where it starts) the units whose tasks' prefixes lie
-    /// in it, as (the farthest end of their prefixes, unit), by that end
-    /// descending, each unit once.
+    /// in it, as (the farthest end of their prefixes, unit), each unit
+    /// once, by that end descending, then ([`Readers::group`]) by
+    /// component and by that end descending in each.
     reach: Vec<Vec<(usize, usize)>>,
 }
 
@@ -710,18 +714,40 @@ impl Readers {
         }
     }
 
-    /// The units whose responses read task `j`'s activations: its own,
-    /// then those whose tasks' prefixes hold it (a unit may come twice
-    /// where j stands in more than one list).
-    fn reading<'a>(&'a self, spec: &Spec, j: usize) -> impl Iterator<Item = usize> + 'a {
+    /// Sorts each list's readers by their component (`of_unit`, per
+    /// unit), keeping them by their prefixes' end descending in each, so
+    /// that [`Readers::reading`] walks one component's alone.
+    fn group(&mut self, of_unit: &[usize]) {
+        for list in &mut self.reach {
+            list.sort_unstable_by_key(|&(end, u)| (of_unit[u], std::cmp::Reverse(end)));
+        }
+    }
+
+    /// The units of component `inside.1` (`inside.0` gives each unit's)
+    /// whose responses read task `j`'s activations: its own, then those
+    /// whose tasks' prefixes hold it (a unit may come twice where j stands
+    /// in more than one list). Each list's readers of that component are
+    /// a run of it, sorted by their prefixes' end ([`Readers::group`]).
+    fn reading<'a>(
+        &'a self,
+        spec: &Spec,
+        j: usize,
+        inside: (&'a [usize], usize),
+    ) -> impl Iterator<Item = usize> + 'a {
+        let (of_unit, c) = inside;
         let own = unit_of(spec, j);
         let others = self.occurs.of(j).iter().flat_map(move |&g| {
             let list = &self.reach[self.list_start[g]];
-            list.iter()
-                .take_while(move |&&(end, _)| end > g)
+            let from = list.partition_point(|&(_, u)| of_unit[u] < c);
+            list[from..]
+                .iter()
+                .take_while(move |&&(end, u)| of_unit[u] == c && end > g)
                 .map(|&(_, u)| u)
         });
-        std::iter::once(own).chain(others.filter(move |&u| u != own))
+        let own_inside = (of_unit[own] == c).then_some(own);
+        own_inside
+            .into_iter()
+            .chain(others.filter(move |&u| u != own))
     }
 }
 
