@@ -26,6 +26,14 @@ pub const ONCE: Stream = Stream {
 };
 
 impl Stream {
+    /// The same events, each up to `extra` later ([`Arrivals::delayed`]'s
+    /// rule for one stream; `None` when the jitter passes [`MAX_TIME`]).
+    pub fn delayed(self, extra: Nanos) -> Option<Stream> {
+        assert!(extra >= 0, "a delay is a duration: {extra}");
+        let jitter = self.jitter.checked_add(extra).filter(|&j| j <= MAX_TIME)?;
+        Some(Stream { jitter, ..self })
+    }
+
     /// η⁺(Δ) of this stream; saturates instead of overflowing.
     pub fn eta(self, delta: Nanos) -> Nanos {
         if delta <= 0 {
@@ -76,13 +84,26 @@ impl Arrivals {
     /// [`MAX_TIME`].
     pub fn delayed(&self, extra: Nanos) -> Option<Arrivals> {
         assert!(extra >= 0, "a delay is a duration: {extra}");
-        let streams = self.streams.iter().map(|s| {
-            let jitter = s.jitter.checked_add(extra).filter(|&j| j <= MAX_TIME)?;
-            Some(Stream { jitter, ..*s })
-        });
+        let streams = self.streams.iter().map(|s| s.delayed(extra));
         Some(Arrivals {
             streams: streams.collect::<Option<_>>()?,
         })
+    }
+
+    /// [`Arrivals::any`] of the inputs each [`delayed`](Self::delayed) by
+    /// its extra (`None` where one is), in one list, with no copy of each
+    /// delayed input on the way.
+    pub fn any_delayed<'a>(
+        inputs: impl Iterator<Item = (&'a Arrivals, Nanos)> + Clone,
+    ) -> Option<Arrivals> {
+        let len = inputs.clone().map(|(a, _)| a.streams.len()).sum();
+        let mut streams = Vec::with_capacity(len);
+        for (a, extra) in inputs {
+            for &s in &a.streams {
+                streams.push(s.delayed(extra)?);
+            }
+        }
+        Some(Arrivals { streams })
     }
 
     /// An OR junction: every input's event is an event (the sum).

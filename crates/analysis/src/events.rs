@@ -30,8 +30,20 @@ pub type Figures = (Option<Nanos>, Option<Nanos>);
 /// that thread-less tasks keep their own analysis, servers included).
 pub trait FixedPriority {
     /// The tasks that can run above task `i` on its CPU (its thread's
-    /// own tasks among them, which the caller leaves out).
+    /// own tasks among them, which the caller leaves out), in any order:
+    /// nothing the analysis computes from them depends on it.
     fn above(&self, i: usize) -> Vec<usize>;
+    /// The tasks above each of the `n` tasks as prefixes of lists the
+    /// tasks share ([`Ranked`]), so that the set-up reads who reads whom
+    /// from the lists, not from every task's tasks above. The default:
+    /// each task's [`above`](Self::above) a list of its own, whole.
+    fn ranked(&self, n: usize) -> Ranked {
+        let lists: Vec<Vec<usize>> = (0..n).map(|i| self.above(i)).collect();
+        Ranked {
+            prefix: (0..n).map(|i| (i, lists[i].len())).collect(),
+            lists,
+        }
+    }
     /// What one job of task `j` takes from the tasks below it.
     fn interference(&self, j: usize) -> Nanos;
     /// B of task `i`: once per busy period.
@@ -56,6 +68,19 @@ pub trait FixedPriority {
         let _ = warm;
         (self.periodic_response(i, hp), None)
     }
+}
+
+/// The tasks above each task as a prefix of a list tasks share: under
+/// fixed priority a CPU's guaranteed tasks by their highest rank, the
+/// tasks above a task those ranked at or above its own (`sched`'s
+/// `Levels`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ranked {
+    /// The lists.
+    pub lists: Vec<Vec<usize>>,
+    /// Per task its list and the length of its prefix: the tasks that can
+    /// run above it are the prefix's, itself left out where it is one.
+    pub prefix: Vec<(usize, usize)>,
 }
 
 /// Where a fixed-priority analysis' iterations stopped: each job's fixed
@@ -133,8 +158,9 @@ pub struct EventResult {
 /// `analysis/tests/events_worklist.rs` holds the two together).
 pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
     let n = spec.tasks.len();
-    let deps = Deps::of(spec, fp);
+    let mut deps = Deps::of(spec, fp);
     let order = deps.components(spec);
+    deps.readers.group(&order.of_unit);
     // Each task's output jitter R − R_min, from zero.
     let delay: Vec<Option<Nanos>> = vec![Some(0); n];
     let mut state = State {
@@ -143,9 +169,11 @@ pub fn analyze(spec: &Spec, fp: &impl FixedPriority) -> Vec<EventResult> {
         responses: vec![Response::NONE; n],
         dirty: vec![false; n + spec.threads.len()],
         marked: vec![false; n],
+        lists: SweepLists::default(),
+        reach: vec![None; n + spec.threads.len()],
     };
-    for (c, units) in order.units.iter().enumerate() {
-        if !deps.settle(spec, fp, units, |u| order.of_unit[u] == c, &mut state) {
+    for c in 0..order.units.len() {
+        if !deps.settle(spec, fp, &order, c, &mut state) {
             // No fixed point found: nothing that depends on the jitter is
             // bounded.
             let arrivals = deps.activations(spec, &vec![None; n]);
@@ -171,6 +199,27 @@ struct State {
     dirty: Vec<bool>,
     /// Per task a scratch mark, all clear between uses.
     marked: Vec<bool>,
+    /// The sweeps' lists, kept between uses rather than allocated at each.
+    lists: SweepLists,
+    /// Per unit the reach of its responses as last analysed
+    /// ([`Deps::reach`], kept rather than gathered at every
+    /// [`Deps::sees`]).
+    reach: Vec<Option<Nanos>>,
+}
+
+/// The lists a unit's analysis hands on to its readers, each empty between
+/// uses: kept from one analysis to the next, so that a sweep allocates
+/// only where one outgrows what it had.
+#[derive(Default)]
+struct SweepLists {
+    /// The unit's tasks whose output jitter grew ([`Deps::grow`]).
+    grown: Vec<usize>,
+    /// The tasks downstream of those ([`Deps::downstream`]).
+    downstream: Vec<usize>,
+    /// [`Deps::downstream`]'s tasks still to visit.
+    next: Vec<usize>,
+    /// The downstream tasks whose activations changed ([`Deps::refresh`]).
+    changed: Vec<usize>,
 }
 
 /// The units' strongly connected components in the order to analyse them:
@@ -186,19 +235,14 @@ struct Components {
 /// tasks above them and read each other's activations), numbered after
 /// the tasks, or a thread-less task, numbered as the task.
 struct Deps {
-    /// Per task the tasks that can run above it, its thread's own left
-    /// out (none for a background task, which has no response).
-    above: Vec<Vec<usize>>,
     /// Per task what one of its jobs takes from the tasks below it
     /// ([`FixedPriority::interference`], asked once per task rather than
     /// once per task above, per analysis).
     interference: Vec<Nanos>,
     /// Per thread its tasks, in declaration order.
     members: Vec<Vec<usize>>,
-    /// Per data-triggered task j the units whose responses read j's
-    /// activations, ascending and distinct (none for a periodic task,
-    /// whose activations never change).
-    readers: Lists,
+    /// Who reads whom, from the ranked lists ([`Readers`]).
+    readers: Readers,
     /// Per task the data-triggered tasks it triggers.
     consumers: Vec<Vec<usize>>,
     /// Every task, each after its triggers.
@@ -216,21 +260,8 @@ impl Deps {
                 members[th].push(i);
             }
         }
-        let above: Vec<Vec<usize>> = (0..n)
-            .map(|i| {
-                let t = &spec.tasks[i];
-                if t.server == Server::Background {
-                    return Vec::new();
-                }
-                let mut above = fp.above(i);
-                if t.thread.is_some() {
-                    above.retain(|&j| spec.tasks[j].thread != t.thread);
-                }
-                above
-            })
-            .collect();
+        let readers = Readers::of(spec, fp.ranked(n));
         let interference = (0..n).map(|j| fp.interference(j)).collect();
-        let readers = readers(spec, &above, &members);
         let consumers = spec.triggered_by();
         let trigger_order = trigger_order(spec, &consumers);
         let mut trigger_rank = vec![0; n];
@@ -238,7 +269,6 @@ impl Deps {
             trigger_rank[i] = k;
         }
         Deps {
-            above,
             interference,
             members,
             readers,
@@ -255,9 +285,37 @@ impl Deps {
         tasks.chain(n..n + self.members.len())
     }
 
+    /// The tasks that can run above task `i`, its thread's own left out
+    /// (none for a background task, which has no response): its prefix of
+    /// its CPU's ranked list, read in place rather than copied per task
+    /// (docs/analysis.md "Cost at 1,000 tasks", tenth round).
+    fn above<'a>(&'a self, spec: &Spec, i: usize) -> impl Iterator<Item = usize> + 'a {
+        let own = unit_of(spec, i);
+        let prefix = self.readers.prefix[i].clone();
+        let units = &self.readers.unit_at[prefix.clone()];
+        self.readers.flat[prefix]
+            .iter()
+            .zip(units)
+            .filter(move |&(_, &u)| u != own)
+            .map(|(&j, _)| j)
+    }
+
+    /// Whether tasks `k` and `i` of one unit have the same tasks above
+    /// ([`Deps::above`]): two prefixes of one list differ only in the
+    /// entries past the shorter, which are the unit's own or not.
+    fn same_above(&self, spec: &Spec, k: usize, i: usize) -> bool {
+        let (a, b) = (&self.readers.prefix[k], &self.readers.prefix[i]);
+        let own = unit_of(spec, i);
+        if a.start != b.start || unit_of(spec, k) != own {
+            return self.above(spec, k).eq(self.above(spec, i));
+        }
+        let between = a.end.min(b.end)..a.end.max(b.end);
+        self.readers.unit_at[between].iter().all(|&u| u == own)
+    }
+
     /// The tasks of unit `u`.
     fn unit_tasks(&self, u: usize) -> impl Iterator<Item = usize> + '_ {
-        let n = self.above.len();
+        let n = self.interference.len();
         let own = (u < n).then_some(u);
         let thread = u.checked_sub(n).map(|th| &self.members[th]);
         own.into_iter().chain(thread.into_iter().flatten().copied())
@@ -265,32 +323,19 @@ impl Deps {
 
     /// The units' strongly connected components, in topological order
     /// (Tarjan's, [`crate::graph::strongly_connected`]), of the graph
-    /// where a unit points to each task whose activations it reads, and a
-    /// data-triggered task to each trigger and the trigger's unit (whose
-    /// response gives the trigger's output jitter): a task's activations
-    /// depend on the units of its triggers, theirs, and so on.
+    /// where a unit reaches each task whose activations it reads, and a
+    /// data-triggered task points to each trigger and the trigger's unit
+    /// (whose response gives the trigger's output jitter): a task's
+    /// activations depend on the units of its triggers, theirs, and so on
+    /// ([`Deps::reads`]).
     fn components(&self, spec: &Spec) -> Components {
         let n = spec.tasks.len();
         let units = n + self.members.len();
-        let unit_of = |p: usize| spec.tasks[p].thread.map_or(p, |th| n + th);
-        let succ = Lists::build(units + n, |edge| {
-            for j in 0..n {
-                // A periodic task's activations depend on no unit.
-                let Some((triggers, _)) = spec.tasks[j].triggers() else {
-                    continue;
-                };
-                for &u in self.readers.of(j) {
-                    edge.add(u, units + j);
-                }
-                for &p in triggers {
-                    edge.add(units + j, units + p);
-                    edge.add(units + j, unit_of(p));
-                }
-            }
-        });
+        let nodes = units + n + self.readers.flat.len();
+        let succ = Lists::build(nodes, |edge| self.reads(spec, edge));
         // Tarjan's numbers a component after every component it reaches.
-        let comp = crate::graph::strongly_connected(units + n, &succ);
-        let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); units + n];
+        let comp = crate::graph::strongly_connected(nodes, &succ);
+        let mut by_comp: Vec<Vec<usize>> = vec![Vec::new(); nodes];
         for u in self.units(spec) {
             by_comp[comp[u]].push(u);
         }
@@ -329,7 +374,51 @@ impl Deps {
         }
     }
 
-    /// Analyses the component of `units` (`inside` tells its units) until
+    /// The edges of [`Deps::components`]' graph. Its nodes: the units,
+    /// then the tasks (`units + j`: j's activations), then the entries of
+    /// the ranked lists (`units + n + g`: the entry `g` of
+    /// [`Readers::flat`] and every entry before it in its list). A unit
+    /// points to its own tasks and to the last entry of each of its tasks'
+    /// prefixes, an entry to its task and to the entry before it, and a
+    /// data-triggered task to each trigger and the trigger's unit (whose
+    /// response gives the trigger's output jitter). So a unit reaches
+    /// through the entries exactly the tasks of its tasks' prefixes: the
+    /// tasks above them, and they themselves and their thread's tasks,
+    /// which it reads anyway; a periodic task points nowhere (its
+    /// activations depend on no unit). One entry per task above per task,
+    /// as the graph had before (docs/analysis.md "Cost at 1,000 tasks",
+    /// tenth round), became one per entry of the lists.
+    fn reads(&self, spec: &Spec, edge: &mut crate::graph::Entries) {
+        let n = spec.tasks.len();
+        let units = n + self.members.len();
+        let entry = |g: usize| units + n + g;
+        for u in self.units(spec) {
+            for i in self.unit_tasks(u) {
+                edge.add(u, units + i);
+                let prefix = self.readers.prefix[i].clone();
+                if !prefix.is_empty() {
+                    edge.add(u, entry(prefix.end - 1));
+                }
+            }
+        }
+        for (g, &j) in self.readers.flat.iter().enumerate() {
+            edge.add(entry(g), units + j);
+            if g > self.readers.list_start[g] {
+                edge.add(entry(g), entry(g - 1));
+            }
+        }
+        for j in 0..n {
+            let Some((triggers, _)) = spec.tasks[j].triggers() else {
+                continue;
+            };
+            for &p in triggers {
+                edge.add(units + j, units + p);
+                edge.add(units + j, unit_of(spec, p));
+            }
+        }
+    }
+
+    /// Analyses component `c` of `order` until
     /// its tasks' output jitters stop changing, at most [`MAX_ROUNDS`]
     /// sweeps (`false`: no fixed point). The units it reads from outside it
     /// are final. A sweep takes the units in order and re-analyses those
@@ -340,10 +429,11 @@ impl Deps {
         &self,
         spec: &Spec,
         fp: &impl FixedPriority,
-        units: &[usize],
-        inside: impl Fn(usize) -> bool,
+        order: &Components,
+        c: usize,
         state: &mut State,
     ) -> bool {
+        let units = &order.units[c][..];
         for &u in units {
             state.dirty[u] = true;
         }
@@ -355,8 +445,12 @@ impl Deps {
                 }
                 analysed += 1;
                 self.respond_unit(spec, fp, &state.arrivals, &mut state.responses, u);
-                let grown = self.grow(spec, u, state);
-                self.refresh(spec, &grown, &inside, state);
+                state.reach[u] = self.reach(u, &state.responses);
+                let mut lists = std::mem::take(&mut state.lists);
+                self.grow(spec, u, state, &mut lists.grown);
+                self.refresh(spec, (&order.of_unit, c), state, &mut lists);
+                lists.grown.clear();
+                state.lists = lists;
             }
             if analysed == 0 {
                 return true;
@@ -369,9 +463,8 @@ impl Deps {
     }
 
     /// The output jitters of unit `u`'s tasks from their responses, into
-    /// `state.delay`; the tasks whose jitter changed.
-    fn grow(&self, spec: &Spec, u: usize, state: &mut State) -> Vec<usize> {
-        let mut grown = Vec::new();
+    /// `state.delay`; the tasks whose jitter changed, into `grown` (empty).
+    fn grow(&self, spec: &Spec, u: usize, state: &mut State, grown: &mut Vec<usize>) {
         for i in self.unit_tasks(u) {
             let next = (|| {
                 let grown = state.responses[i].actual? - spec.tasks[i].demand_min();
@@ -383,31 +476,37 @@ impl Deps {
                 grown.push(i);
             }
         }
-        grown
     }
 
     /// Recomputes the activations of every task downstream of the tasks
-    /// whose jitter `grown`; the units `inside` the component that read one
-    /// that changed where they read it ([`Deps::sees`]: their responses,
-    /// computed from the old activations, are those the new ones give
-    /// when both agree there).
+    /// whose jitter grew (`lists.grown`); the units of component `inside.1`
+    /// (`inside.0` gives each unit's)
+    /// that read one that changed where they read it ([`Deps::sees`]:
+    /// their responses, computed from the old activations, are those the
+    /// new ones give when both agree there). `lists` but `grown` are left
+    /// empty.
     fn refresh(
         &self,
         spec: &Spec,
-        grown: &[usize],
-        inside: &impl Fn(usize) -> bool,
+        inside: (&[usize], usize),
         state: &mut State,
+        lists: &mut SweepLists,
     ) {
-        let downstream = self.downstream(grown, &mut state.marked);
+        let SweepLists {
+            grown,
+            downstream,
+            next,
+            changed,
+        } = lists;
+        self.downstream(grown, &mut state.marked, next, downstream);
         // `marked`: the tasks whose output (jitter or activations) changed
         // so far. A task none of whose triggers is marked keeps its
         // activations, which are a function of its triggers' alone, and is
         // not recomputed (each task comes after its triggers).
-        for &p in grown {
+        for &p in grown.iter() {
             state.marked[p] = true;
         }
-        let mut changed = Vec::new();
-        for j in downstream {
+        for &j in downstream.iter() {
             let Some((triggers, _)) = spec.tasks[j].triggers() else {
                 continue;
             };
@@ -422,15 +521,17 @@ impl Deps {
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
-            for &u in self.readers.of(j).iter().filter(|&&u| inside(u)) {
-                if !state.dirty[u] && self.sees(u, &change, &state.responses) {
+            for u in self.readers.reading(spec, j, inside) {
+                if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
                 }
             }
         }
-        for &j in grown.iter().chain(&changed) {
+        for &j in grown.iter().chain(changed.iter()) {
             state.marked[j] = false;
         }
+        downstream.clear();
+        changed.clear();
     }
 
     /// Whether unit `u`'s responses, as last analysed, could read `change`:
@@ -443,8 +544,9 @@ impl Deps {
     /// iterations stopped at, each iteration stops at the same one, in at
     /// most as many steps, `thread_rta::fifo_response_windows` and
     /// `sched::busy::level_response_from`).
-    fn sees(&self, u: usize, change: &Change, responses: &[Response]) -> bool {
-        let Some(reach) = self.reach(u, responses) else {
+    fn sees(&self, u: usize, change: &Change, state: &State) -> bool {
+        let responses = &state.responses;
+        let Some(reach) = state.reach[u] else {
             return true;
         };
         if reach <= change.same {
@@ -463,14 +565,16 @@ impl Deps {
     }
 
     /// The tasks triggered, directly or not, by the tasks `from`, each
-    /// after its triggers (`marked`, clear, is left clear).
-    fn downstream(&self, from: &[usize], marked: &mut [bool]) -> Vec<usize> {
-        let mut out: Vec<usize> = Vec::new();
-        let mut next: Vec<usize> = from
-            .iter()
-            .flat_map(|&p| &self.consumers[p])
-            .copied()
-            .collect();
+    /// after its triggers, into `out` (empty; `marked`, clear, and `next`,
+    /// empty, are left so).
+    fn downstream(
+        &self,
+        from: &[usize],
+        marked: &mut [bool],
+        next: &mut Vec<usize>,
+        out: &mut Vec<usize>,
+    ) {
+        next.extend(from.iter().flat_map(|&p| &self.consumers[p]));
         while let Some(j) = next.pop() {
             if !marked[j] {
                 marked[j] = true;
@@ -478,11 +582,10 @@ impl Deps {
                 next.extend(&self.consumers[j]);
             }
         }
-        for &j in &out {
+        for &j in out.iter() {
             marked[j] = false;
         }
         out.sort_unstable_by_key(|&j| self.trigger_rank[j]);
-        out
     }
 
     /// The largest reach of unit `u`'s responses (`None`: a response
@@ -521,41 +624,131 @@ impl Deps {
     }
 }
 
-/// Per data-triggered task j the units whose responses read j's
-/// activations, ascending and distinct: those of the tasks j runs above,
-/// j's thread, and j's own unit when it is thread-less. A periodic task's
-/// activations never change, so no unit waits for them and its list is
-/// left empty (more than half the entries on the 1,000-task bench).
-fn readers(spec: &Spec, above: &[Vec<usize>], members: &[Vec<usize>]) -> Lists {
-    let n = spec.tasks.len();
-    // Looked up once per task, not once per entry of a list above.
-    let triggered: Vec<bool> = spec.tasks.iter().map(|t| t.is_triggered()).collect();
-    Lists::build(n, |entry| {
-        // The units in ascending order, each one's reads together: the
-        // last unit that read j tells whether this one is in j's list
-        // already, with no sort.
-        let mut last = vec![usize::MAX; n];
-        let mut read = |u: usize, j: usize| {
-            if triggered[j] && last[j] != u {
-                last[j] = u;
-                entry.add(j, u);
-            }
-        };
-        for i in (0..n).filter(|&i| spec.tasks[i].thread.is_none()) {
-            for &j in &above[i] {
-                read(i, j);
-            }
-            read(i, i);
+/// The unit of task `i`: its thread (numbered after the tasks), or itself.
+fn unit_of(spec: &Spec, i: usize) -> usize {
+    spec.tasks[i].thread.map_or(i, |th| spec.tasks.len() + th)
+}
+
+/// Who reads whom: the units whose responses read a task's activations
+/// are its own and those of the tasks it runs above, whose prefixes
+/// ([`Ranked`]) hold it. On a CPU's list ranked by priority those are the
+/// tasks whose prefix passes its entry: no unit's list of reads is kept,
+/// nor scanned (docs/analysis.md "Cost at 1,000 tasks", tenth round).
+struct Readers {
+    /// The ranked lists, one after the other.
+    flat: Vec<usize>,
+    /// Per entry of `flat`, where its list starts.
+    list_start: Vec<usize>,
+    /// Per entry of `flat`, its task's unit (what [`Deps::above`] leaves
+    /// out of a task's prefix: the task and its thread's own).
+    unit_at: Vec<usize>,
+    /// Per task the entries of `flat` above it (and maybe itself and its
+    /// thread's tasks, which its unit reads anyway; none for a background
+    /// task, which has no response).
+    prefix: Vec<std::ops::Range<usize>>,
+    /// Per task the entries of `flat` that are it.
+    occurs: Lists,
+    /// Per list (by where it starts) the units whose tasks' prefixes lie
+    /// in it, as (the farthest end of their prefixes, unit), each unit
+    /// once, by that end descending, then ([`Readers::group`]) by
+    /// component and by that end descending in each.
+    reach: Vec<Vec<(usize, usize)>>,
+}
+
+impl Readers {
+    fn of(spec: &Spec, ranked: Ranked) -> Readers {
+        let n = spec.tasks.len();
+        assert_eq!(ranked.prefix.len(), n, "a prefix per task");
+        let mut starts = Vec::with_capacity(ranked.lists.len());
+        let mut flat = Vec::new();
+        let mut list_start = Vec::new();
+        for list in &ranked.lists {
+            starts.push(flat.len());
+            list_start.resize(flat.len() + list.len(), flat.len());
+            flat.extend_from_slice(list);
         }
-        for (th, on) in members.iter().enumerate() {
-            for &i in on {
-                for &j in &above[i] {
-                    read(n + th, j);
-                }
-                read(n + th, i);
+        let prefix: Vec<std::ops::Range<usize>> = (0..n)
+            .map(|i| {
+                let (l, len) = ranked.prefix[i];
+                assert!(
+                    len <= ranked.lists[l].len(),
+                    "task {i}'s prefix passes its list"
+                );
+                let len = if spec.tasks[i].server == Server::Background {
+                    0
+                } else {
+                    len
+                };
+                starts[l]..starts[l] + len
+            })
+            .collect();
+        let unit_at = flat.iter().map(|&j| unit_of(spec, j)).collect();
+        let occurs = Lists::build(n, |entry| {
+            for (g, &j) in flat.iter().enumerate() {
+                entry.add(j, g);
+            }
+        });
+        // Per list the (end, unit) of every task with a prefix there, the
+        // farthest first, a unit kept at its farthest only.
+        let mut reach: Vec<Vec<(usize, usize)>> = vec![Vec::new(); flat.len() + 1];
+        let mut by_end: Vec<(usize, usize, usize)> = (0..n)
+            .filter(|&i| !prefix[i].is_empty())
+            .map(|i| (prefix[i].start, prefix[i].end, unit_of(spec, i)))
+            .collect();
+        by_end.sort_unstable_by(|a, b| (a.0, b.1).cmp(&(b.0, a.1)));
+        let mut last = vec![usize::MAX; n + spec.threads.len()];
+        // A prefix starts where its list does.
+        for (list, end, u) in by_end {
+            if last[u] != list {
+                last[u] = list;
+                reach[list].push((end, u));
             }
         }
-    })
+        Readers {
+            flat,
+            list_start,
+            unit_at,
+            prefix,
+            occurs,
+            reach,
+        }
+    }
+
+    /// Sorts each list's readers by their component (`of_unit`, per
+    /// unit), keeping them by their prefixes' end descending in each, so
+    /// that [`Readers::reading`] walks one component's alone.
+    fn group(&mut self, of_unit: &[usize]) {
+        for list in &mut self.reach {
+            list.sort_unstable_by_key(|&(end, u)| (of_unit[u], std::cmp::Reverse(end)));
+        }
+    }
+
+    /// The units of component `inside.1` (`inside.0` gives each unit's)
+    /// whose responses read task `j`'s activations: its own, then those
+    /// whose tasks' prefixes hold it (a unit may come twice where j stands
+    /// in more than one list). Each list's readers of that component are
+    /// a run of it, sorted by their prefixes' end ([`Readers::group`]).
+    fn reading<'a>(
+        &'a self,
+        spec: &Spec,
+        j: usize,
+        inside: (&'a [usize], usize),
+    ) -> impl Iterator<Item = usize> + 'a {
+        let (of_unit, c) = inside;
+        let own = unit_of(spec, j);
+        let others = self.occurs.of(j).iter().flat_map(move |&g| {
+            let list = &self.reach[self.list_start[g]];
+            let from = list.partition_point(|&(_, u)| of_unit[u] < c);
+            list[from..]
+                .iter()
+                .take_while(move |&&(end, u)| of_unit[u] == c && end > g)
+                .map(|&(_, u)| u)
+        });
+        let own_inside = (of_unit[own] == c).then_some(own);
+        own_inside
+            .into_iter()
+            .chain(others.filter(move |&u| u != own))
+    }
 }
 
 /// Every task, each after its triggers (Kahn's order; validation makes
@@ -576,11 +769,12 @@ fn trigger_order(spec: &Spec, consumers: &[Vec<usize>]) -> Vec<usize> {
     order
 }
 
-/// FIFO responses of one thread this round, by (tasks above, blocking),
-/// for members whose own work is the work the others see of them (then
-/// every input of [`crate::thread_rta::fifo_response`] is the same for them, and so is its
-/// figure).
-type ThreadCache = Vec<(Vec<usize>, Nanos, Option<FifoStops>)>;
+/// FIFO responses of one thread this round, by (a member whose tasks
+/// above are the same, blocking), for members whose own work is the work
+/// the others see of them (then every input of
+/// [`crate::thread_rta::fifo_response`] is the same for them, and so is
+/// its figure).
+type ThreadCache = Vec<(usize, Nanos, Option<FifoStops>)>;
 
 /// One round's response of a task.
 #[derive(Debug, Clone)]
@@ -633,7 +827,7 @@ struct Change {
 
 impl Change {
     fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
-        let unit = spec.tasks[j].thread.map_or(j, |th| spec.tasks.len() + th);
+        let unit = unit_of(spec, j);
         match (old, new) {
             (Some(a), Some(b)) if same_periods(a, b) => Change {
                 unit,
@@ -678,16 +872,22 @@ fn activation(
         None => t
             .fixed_period()
             .map(|period| Arrivals::periodic(period, t.jitter)),
-        Some((triggers, join)) => {
+        Some((triggers, Join::Any)) => {
+            // Every trigger's publications: its activations delayed by its
+            // output jitter (`None` while one is unbounded).
+            let inputs = triggers
+                .iter()
+                .map(|&p| Some((arrivals[p].as_ref()?, delay[p]?)));
+            let inputs: Option<Vec<(&Arrivals, Nanos)>> = inputs.collect();
+            Arrivals::any_delayed(inputs?.into_iter())
+        }
+        Some((triggers, Join::All)) => {
             let outputs: Vec<Arrivals> = triggers
                 .iter()
                 .map(|&p| arrivals[p].as_ref()?.delayed(delay[p]?))
                 .collect::<Option<_>>()?;
             let refs: Vec<&Arrivals> = outputs.iter().collect();
-            Some(match join {
-                Join::Any => Arrivals::any(&refs),
-                Join::All => Arrivals::all(&refs),
-            })
+            Some(Arrivals::all(&refs))
         }
     }
 }
@@ -713,9 +913,8 @@ fn respond(
     if t.server == Server::Background {
         return Response::NONE;
     }
-    let above = &deps.above[i];
-    let mut models = Vec::with_capacity(above.len());
-    for &j in above {
+    let mut models = Vec::with_capacity(deps.readers.prefix[i].len());
+    for j in deps.above(spec, i) {
         let Some(a) = arrivals[j].as_ref() else {
             return Response::NONE;
         };
@@ -742,13 +941,13 @@ fn respond(
     let shared = t.demand() == deps.interference[i];
     let known = cache
         .iter()
-        .find(|(a, b, _)| shared && a == above && *b == blocking)
+        .find(|&&(k, b, _)| shared && b == blocking && deps.same_above(spec, k, i))
         .map(|(_, _, r)| r.clone());
     let stops = known.unwrap_or_else(|| {
         let warm = old.fifo.as_ref();
         let r = thread_response(spec, deps, arrivals, i, &models, blocking, warm);
         if shared {
-            cache.push((above.clone(), blocking, r.clone()));
+            cache.push((i, blocking, r.clone()));
         }
         r
     });

@@ -26,6 +26,7 @@ pub mod events;
 pub mod graph;
 pub mod latency;
 pub mod let_bound;
+pub mod load;
 pub mod margins;
 pub mod offsets;
 pub mod overheads;

@@ -219,7 +219,15 @@ pub(crate) struct Levels<'a> {
     /// deadlines ([`crate::blocking::srp_spec_steps_among`]; empty under
     /// fixed priority and without resources).
     srp: Vec<Vec<(Nanos, Nanos)>>,
+    /// Per CPU of `by_cpu`, its guaranteed tasks as (highest rank, task),
+    /// ascending: the tasks above a task are a prefix
+    /// ([`Levels::interferers`]). Built at the first ask (the event
+    /// analysis'; the periodic path reads `guaranteed`).
+    ranked: std::cell::OnceCell<Vec<RankedCpu>>,
 }
+
+/// A CPU's guaranteed tasks as (highest rank, task), ascending.
+type RankedCpu = Vec<(Option<usize>, usize)>;
 
 impl<'a> Levels<'a> {
     pub(crate) fn new(spec: &'a Spec, prio: &'a [Option<usize>], top: &'a [Option<usize>]) -> Self {
@@ -278,6 +286,7 @@ impl<'a> Levels<'a> {
             kernel,
             edf,
             srp,
+            ranked: std::cell::OnceCell::new(),
         }
     }
 
@@ -317,16 +326,44 @@ impl<'a> Levels<'a> {
         self.by_cpu.on(self.spec.tasks[i].cpu)
     }
 
-    /// [`interferers`] of task `i`, in the CPU's declaration order. Room
-    /// for every task of the CPU is taken at once: collected from the
-    /// filter, the list grew by doubling, and on the 1,000-task bench its
-    /// reallocations and copies were most of the set-up's tasks above
-    /// (docs/analysis.md "Cost at 1,000 tasks", ninth round).
+    /// [`interferers`] of task `i`, in the order of their highest rank
+    /// (then of declaration): the prefix of the CPU's `ranked` tasks that
+    /// [`outranks`] `i`, `i` itself left out, with no filter over the rest
+    /// (docs/analysis.md "Cost at 1,000 tasks", tenth round). Every user of
+    /// the list is indifferent to its order: the demand is a saturating
+    /// sum, and the load guard is exact ([`crate::load::full`]).
     fn interferers(&self, i: usize) -> Vec<usize> {
-        let k = self.by_cpu.position(self.spec.tasks[i].cpu);
-        let mut out = Vec::with_capacity(k.map_or(0, |k| self.guaranteed[k].len()));
-        out.extend(self.above(i).map(|x| x.task));
+        let (on, len) = self.ranked_prefix(i);
+        let mut out = Vec::with_capacity(len);
+        out.extend(on[..len].iter().map(|&(_, j)| j).filter(|&j| j != i));
         out
+    }
+
+    /// Task `i`'s CPU's `ranked` tasks and how many of them lead: those
+    /// that [`outranks`] `i`, and `i` itself among them when it is
+    /// guaranteed.
+    fn ranked_prefix(&self, i: usize) -> (&[(Option<usize>, usize)], usize) {
+        let ranked = self.ranked.get_or_init(|| self.rank_sorted());
+        let k = self.by_cpu.position(self.spec.tasks[i].cpu);
+        let on = k.map_or(&[][..], |k| &ranked[k][..]);
+        let prio_i = self.prio[i];
+        // `outranks` holds of a prefix: its rank test is `top_j ≤ prio_i`,
+        // and `i` itself, whose highest rank is at or above its own, sits
+        // inside it.
+        let len = on.partition_point(|&(top, j)| j == i || outranks(j, top, i, prio_i));
+        (on, len)
+    }
+
+    /// Per CPU of `by_cpu`, its guaranteed tasks as (highest rank, task),
+    /// ascending.
+    fn rank_sorted(&self) -> Vec<RankedCpu> {
+        let sorted = |on: &Vec<Interferer>| {
+            let mut ranked: Vec<(Option<usize>, usize)> =
+                on.iter().map(|x| (x.top, x.task)).collect();
+            ranked.sort_unstable();
+            ranked
+        };
+        self.guaranteed.iter().map(sorted).collect()
     }
 
     /// [`crate::blocking::blocking`] of task `i`.
@@ -546,6 +583,23 @@ impl crate::events::FixedPriority for Levels<'_> {
 
     fn interference(&self, j: usize) -> Nanos {
         interference(&self.spec.tasks[j])
+    }
+
+    /// Per CPU its guaranteed tasks by their highest rank; a task's
+    /// prefix those [`Levels::ranked_prefix`] says lead.
+    fn ranked(&self, n: usize) -> crate::events::Ranked {
+        let prefix = (0..n)
+            .map(|i| {
+                let k = self.cpu_index(self.spec.tasks[i].cpu);
+                (k, self.ranked_prefix(i).1)
+            })
+            .collect();
+        let ranked = self.ranked.get_or_init(|| self.rank_sorted());
+        let lists = ranked
+            .iter()
+            .map(|on| on.iter().map(|&(_, j)| j).collect())
+            .collect();
+        crate::events::Ranked { lists, prefix }
     }
 
     fn blocking(&self, i: usize) -> Nanos {

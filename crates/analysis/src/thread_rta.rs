@@ -195,14 +195,16 @@ fn cold_steps_bound(
     })
 }
 
-/// The long-run load of the thread's members and the tasks above it: at 1
-/// or more no busy period ends.
-fn load(members: &[Member], above: &Above) -> f64 {
-    members
-        .iter()
-        .map(|m| m.work as f64 * m.arrivals.rate())
-        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
-        .sum()
+/// The long-run load of the thread's members and the tasks above it, one
+/// (work, period) per stream, for [`crate::load::full`]: at 1 or more no
+/// busy period ends.
+pub fn loads<'a>(
+    members: &'a [Member],
+    above: &'a Above,
+) -> impl Iterator<Item = (Nanos, Nanos)> + Clone + 'a {
+    let members = members.iter().map(|m| (m.work, m.arrivals));
+    let streams = members.chain(above.iter().copied());
+    streams.flat_map(|(c, a)| a.streams.iter().map(move |s| (c, s.period)))
 }
 
 /// [`fifo_response`]'s stops, each iteration started from `warm`'s where
@@ -213,7 +215,7 @@ fn fifo_within(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
-    if load(members, above) >= 1.0 {
+    if crate::load::full(loads(members, above)) {
         return None;
     }
     let thread = |delta: Nanos| -> Option<Nanos> {

@@ -14,9 +14,10 @@
 use proptest::prelude::*;
 use rtpipe_analysis::arrivals::{Arrivals, Stream};
 use rtpipe_analysis::demand::Demand;
+use rtpipe_analysis::load::full;
 use rtpipe_analysis::sched::{level_response, level_response_from, OwnJobs, MAX_BUSY_JOBS};
 use rtpipe_analysis::thread_rta::{
-    fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES, MAX_STEPS,
+    self, fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES, MAX_STEPS,
 };
 use rtpipe_model::{Nanos, MAX_TIME};
 use rtpipe_testkit::check;
@@ -33,9 +34,13 @@ fn direct(loads: &[(Nanos, Nanos, Nanos)], w: Nanos) -> Option<Nanos> {
 
 /// The level-i busy period, every step summing every stream afresh.
 fn straight_level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
-    let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
-    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
-    if u + share >= 1.0 {
+    // The guard itself is `load::full`'s, the one home of the rule.
+    let own_load = (
+        own.work.checked_add(own.switch.checked_mul(2)?)?,
+        own.period,
+    );
+    let loads = hp.iter().map(|&(c, t, _)| (c, t));
+    if full(loads.chain(std::iter::once(own_load))) {
         return None;
     }
     let (mut worst, mut w): (Nanos, Nanos) = (0, 0);
@@ -67,12 +72,7 @@ fn straight_level_response(own: OwnJobs, hp: &[(Nanos, Nanos, Nanos)]) -> Option
 /// The FIFO response of a thread, every step summing every stream above
 /// afresh.
 fn straight_fifo_response(members: &[Member], above: &Above, blocking: Nanos) -> Option<Nanos> {
-    let load: f64 = members
-        .iter()
-        .map(|m| m.work as f64 * m.arrivals.rate())
-        .chain(above.iter().map(|&(c, a)| c as f64 * a.rate()))
-        .sum();
-    if load >= 1.0 {
+    if full(thread_rta::loads(members, above)) {
         return None;
     }
     let thread = |delta: Nanos| -> Option<Nanos> {

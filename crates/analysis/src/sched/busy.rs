@@ -187,9 +187,12 @@ fn busy_period_jobs(
     demand: &mut impl FnMut(Nanos) -> Nanos,
     stop: &mut impl FnMut(Nanos),
 ) -> Option<Nanos> {
-    let share = own.work.checked_add(own.switch.checked_mul(2)?)? as f64 / own.period as f64;
-    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
-    if u + share >= 1.0 {
+    let own_load = (
+        own.work.checked_add(own.switch.checked_mul(2)?)?,
+        own.period,
+    );
+    let loads = hp.iter().map(|&(c, t, _)| (c, t));
+    if crate::load::full(loads.chain(std::iter::once(own_load))) {
         return None;
     }
     // One demand for the whole busy period: its windows only grow.
@@ -218,9 +221,8 @@ fn busy_period_jobs(
 
 /// The fixed point w of w = own + Σ ⌈(w + J_j) / T_j⌉ · I_j.
 pub(crate) fn busy_window(own: Nanos, hp: &[(Nanos, Nanos, Nanos)]) -> Option<Nanos> {
-    let u: f64 = hp.iter().map(|&(c, t, _)| c as f64 / t as f64).sum();
     // Divergence guard: Σ I_j/T_j ≥ 1 means no finite fixed point.
-    if u >= 1.0 {
+    if crate::load::full(hp.iter().map(|&(c, t, _)| (c, t))) {
         return None;
     }
     let mut demand = Demand::of_loads(hp);
