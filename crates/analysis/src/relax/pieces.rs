@@ -8,7 +8,10 @@
 //! (`latency::sound_reaction_link_in` and the freshness terms: each option
 //! is a sum of one period and response times less a fixed demand), so it
 //! *is* `min(T_p + a, T_c + b)`, `a` and `b` the least constants (+∞ where
-//! no option of that kind exists). A paper term is the least over the
+//! no option of that kind exists); where ranks follow the periods and the
+//! box leaves the link's order open, the constants are tied to the side
+//! of `T_p = T_c` each order needs ([`tied_pieces`], docs/design.md, "The
+//! relaxation on wide boxes, term by term"). A paper term is the least over the
 //! cases the box leaves open of one affine function each (Eqs. 2–5, 12;
 //! Eq. 1's L is affine in T for a fixed demand and budget). Both are read
 //! off the terms themselves and checked at the box's four corners of
