@@ -25,7 +25,7 @@ use crate::let_bound::{any_phasing, LetLatencies};
 use crate::sched::{
     deadline_at, interference, level_response_within, tasks_on, utilization_test, OwnJobs,
 };
-use rtpipe_model::policy::{rank_key, ResponseAnalysis};
+use rtpipe_model::policy::{rank_key, RankKey, ResponseAnalysis};
 use rtpipe_model::{Communication, Nanos, SchedTest, Server, Spec};
 
 mod link;
@@ -274,11 +274,58 @@ impl<'a> Order<'a> {
         if self.maybe_preempts(p, c) {
             v.push(Some(Case::Two));
         }
-        // Some point may have neither (an inherited rank ties them).
-        if !(self.surely_preempts(c, p) || self.surely_preempts(p, c)) {
+        // Some point may have neither (an inherited rank ties them, or a
+        // task waits for its budget).
+        let decided = self.surely_preempts(c, p) || self.surely_preempts(p, c);
+        if !(decided || self.always_ordered(p, c)) {
             v.push(None);
         }
         v
+    }
+
+    /// At every point one of the two preempts the other (`latency::fp_order`
+    /// gives a case): ranked on one CPU, neither serves a task nor locks a
+    /// resource (so each runs at its own rank, and ranks are distinct), nor
+    /// waits for a budget with release jitter.
+    fn always_ordered(&self, a: usize, b: usize) -> bool {
+        let plain = |i: usize| {
+            let t = &self.spec.tasks[i];
+            let waits = t.jitter > 0 && self.spec.policy().budget(t.server).is_some();
+            self.ranked(i) && t.serves.is_none() && t.sections.is_empty() && !waits
+        };
+        plain(a) && plain(b) && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
+    }
+
+    /// Both tasks are ranked on one CPU by their periods (`RankKey::Period`),
+    /// so that an order of the two holds only where the periods allow it:
+    /// `a` above `b` needs `T_a ≤ T_b`.
+    fn ranked_by_period(&self, a: usize, b: usize) -> bool {
+        let by_period =
+            |i: usize| rank_key(self.spec.priorities, &self.spec.tasks[i]) == RankKey::Period;
+        self.ranked(a)
+            && self.ranked(b)
+            && self.spec.tasks[a].cpu == self.spec.tasks[b].cpu
+            && by_period(a)
+            && by_period(b)
+    }
+
+    /// What `a` adds at least to `b`'s job response time and to its
+    /// read-to-publish bound at the points of the box where `a` is above
+    /// `b`, beyond `rta_lower_bounds`' figures: one job's interference
+    /// (each fixed point with one more interferer is at least the old one
+    /// plus its work, and so is the least of two of them, W ≤ R); to W
+    /// only where W is that busy window (`sched::fp_start_after`), else 0.
+    /// `None` where those figures may already hold `a`: `a` surely
+    /// interferes with `b`, serves a task, or has critical sections (which
+    /// `least_blocking` may count for `b` while the order is open), or the
+    /// response is not RTA's.
+    fn added_above(&self, a: usize, b: usize) -> Option<(Nanos, Nanos)> {
+        let task = &self.spec.tasks[a];
+        let rta = self.spec.policy().response == ResponseAnalysis::Rta;
+        let plain = task.serves.is_none() && task.sections.is_empty();
+        let work = interference(task);
+        let to_w = crate::sched::fp_start_after(self.spec, b).map_or(0, |_| work);
+        (rta && plain && self.ranked(a) && !self.surely_interferes(a, b)).then_some((work, to_w))
     }
 
     fn surely_preempts(&self, a: usize, b: usize) -> bool {

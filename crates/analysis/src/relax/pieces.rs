@@ -8,7 +8,10 @@
 //! (`latency::sound_reaction_link_in` and the freshness terms: each option
 //! is a sum of one period and response times less a fixed demand), so it
 //! *is* `min(T_p + a, T_c + b)`, `a` and `b` the least constants (+∞ where
-//! no option of that kind exists). A paper term is the least over the
+//! no option of that kind exists); where ranks follow the periods and the
+//! box leaves the link's order open, the constants are tied to the side
+//! of `T_p = T_c` each order needs ([`tied_pieces`], docs/design.md, "The
+//! relaxation on wide boxes, term by term"). A paper term is the least over the
 //! cases the box leaves open of one affine function each (Eqs. 2–5, 12;
 //! Eq. 1's L is affine in T for a fixed demand and budget). Both are read
 //! off the terms themselves and checked at the box's four corners of
@@ -17,6 +20,7 @@
 
 use super::paper::paper_link;
 use super::{all_let, distinct_passes, link_task, Order, Times};
+use crate::latency::Case;
 use rtpipe_model::policy::ResponseAnalysis;
 use rtpipe_model::{Communication, Nanos, Spec};
 
@@ -138,10 +142,21 @@ fn sound_sums(
         let (pi, ci) = (w[0], w[1]);
         let last = k + 2 == path.len();
         let orders = order.link_orders(pi, ci);
+        let order_set = orders.clone();
         let head = reach && k == 0;
-        let at = |tp: Nanos, tc: Nanos| {
-            let (p, c) = ((pi, tp, r.of(pi)), (ci, tc, r.of(ci)));
-            let l = super::least_link(spec, order, &orders, p, c, (distinct, head));
+        let tied = order.ranked_by_period(pi, ci);
+        let raise = tied.then(|| order.added_above(ci, pi)).flatten();
+        // The link's (reaction, freshness) terms over some of its orders;
+        // Case One alone, tied to its side of the periods (c above p),
+        // with c's interference in R_p (`Order::added_above`).
+        let at = |orders: &[Option<Case>], tp: Nanos, tc: Nanos| {
+            let one_side = orders == [Some(Case::One)] && orders != order_set.as_slice();
+            let rp = match (one_side, raise) {
+                (true, Some((x, w))) => (r.r[pi].map(|v| v + x), r.w[pi].map(|v| v + w)),
+                _ => r.of(pi),
+            };
+            let (p, c) = ((pi, tp, rp), (ci, tc, r.of(ci)));
+            let l = super::least_link(spec, order, orders, p, c, (distinct, head));
             let fresh = if last { l.freshness_last } else { l.freshness };
             // The head link's reaction already runs from its read.
             let react = match reach && k > 0 {
@@ -150,18 +165,19 @@ fn sound_sums(
             };
             Some((react?, fresh?))
         };
-        let corners = corners(order, pi, ci);
-        let mut reaction = two_pieces(|a, b| at(a, b).map(|x| x.0), (pi, ci), order, &corners)?;
-        if k > 0 && reach {
-            share_with_producers(&mut reaction, &path[..=k]);
-        }
+        let link = Link {
+            tasks: (pi, ci),
+            corners: corners(order, pi, ci),
+            orders: &orders,
+            tied,
+        };
+        // Sharing the reachability piece's slope holds with the pieces of
+        // a reachability row only (`tied_pieces`).
+        let stages = (k > 0 && reach).then(|| &path[..=k]);
+        let reaction = link.pieces(|o, a, b| at(o, a, b).map(|x| x.0), order, stages)?;
         e.terms.push(reaction);
-        f.terms.push(two_pieces(
-            |a, b| at(a, b).map(|x| x.1),
-            (pi, ci),
-            order,
-            &corners,
-        )?);
+        f.terms
+            .push(link.pieces(|o, a, b| at(o, a, b).map(|x| x.1), order, None)?);
         let c_late = link_task(spec, order.hi[ci], r.of(ci), ci);
         distinct = distinct_passes(
             &link_task(spec, order.lo[pi], r.of(pi), pi),
@@ -204,6 +220,153 @@ fn share_with_producers(pieces: &mut [Piece], stages: &[usize]) {
             piece.slopes = stages.iter().map(|&s| (s, share)).collect();
         }
     }
+}
+
+/// One link of a chain in the box: its producer and consumer, the corners
+/// of their periods' rectangle, the orders the box leaves open, and
+/// whether the periods decide them (`Order::ranked_by_period`).
+struct Link<'o> {
+    tasks: (usize, usize),
+    corners: [(Nanos, Nanos); 4],
+    orders: &'o [Option<Case>],
+    tied: bool,
+}
+
+impl Link<'_> {
+    /// The pieces of a link term (`term(orders, T_p, T_c)`: the least over
+    /// `orders`): the least over the open orders read off as two pieces
+    /// (`two_pieces`), with the reachability piece's slope shared along
+    /// `stages` (`share_with_producers`); where both Case One and Case Two
+    /// are open and ranks follow the periods, the pieces tied to the order
+    /// the periods imply ([`tied_pieces`]) when they are higher at the
+    /// rectangle's corners.
+    fn pieces(
+        &self,
+        term: impl Fn(&[Option<Case>], Nanos, Nanos) -> Option<Nanos>,
+        order: &Order,
+        stages: Option<&[usize]>,
+    ) -> Option<Vec<Piece>> {
+        let share = |mut pieces: Vec<Piece>| {
+            if let Some(stages) = stages {
+                share_with_producers(&mut pieces, stages);
+            }
+            pieces
+        };
+        let least = |a: Nanos, b: Nanos| term(self.orders, a, b);
+        let plain = share(two_pieces(least, self.tasks, order, &self.corners)?);
+        let open = |case| self.orders.contains(&Some(case));
+        if !(self.tied && open(Case::One) && open(Case::Two)) {
+            return Some(plain);
+        }
+        let mut ends = [Ends::NONE; 3];
+        for (slot, case) in [None, Some(Case::One), Some(Case::Two)]
+            .into_iter()
+            .enumerate()
+        {
+            if self.orders.contains(&case) {
+                let one = |a: Nanos, b: Nanos| term(&[case], a, b);
+                // An order whose term has not this shape: the plain least.
+                let Some(pieces) = two_pieces(one, self.tasks, order, &self.corners) else {
+                    return Some(plain);
+                };
+                ends[slot] = Ends::of(&pieces, self.tasks);
+            }
+        }
+        let tied = tied_pieces(ends, self.tasks, stages.is_some());
+        let value = |pieces: &[Piece]| corner_sum(pieces, self.tasks, &self.corners, order.lo);
+        let best = tied
+            .into_iter()
+            .map(|(pieces, shares)| if shares { share(pieces) } else { pieces })
+            .fold(plain, |a, b| if value(&b) > value(&a) { b } else { a });
+        Some(best)
+    }
+}
+
+/// A link term `min(T_p + a, T_c + b)` by its constants (+∞: no piece of
+/// that kind).
+#[derive(Clone, Copy)]
+struct Ends {
+    a: f64,
+    b: f64,
+}
+
+impl Ends {
+    const NONE: Ends = Ends {
+        a: f64::INFINITY,
+        b: f64::INFINITY,
+    };
+
+    /// The constants of `two_pieces`' pieces.
+    fn of(pieces: &[Piece], (p, c): (usize, usize)) -> Ends {
+        let mut ends = Ends::NONE;
+        for piece in pieces {
+            if piece.slopes == [(p, 1.0)] {
+                ends.a = piece.base;
+            } else if piece.slopes == [(c, 1.0)] {
+                ends.b = piece.base;
+            }
+        }
+        ends
+    }
+}
+
+/// Pieces of a link term whose order the box leaves open, tied to the
+/// order the periods imply (ranks by period, RM): Case One (c preempts p)
+/// only where `T_c ≤ T_p`, Case Two only where `T_p ≤ T_c`, the order
+/// `None` (neither preempts) anywhere. With each order's term
+/// `min(T_p + a_k, T_c + b_k)` (`ends`: None, One, Two), a pair of pieces
+/// `min(T_p + A, T_c + B)` is below the term at every point when `A ≤ a_0`,
+/// `B ≤ b_0` and, on One's side (`T_c ≤ T_p`), `B ≤ b_1` and (`A ≤ a_1` or
+/// `B ≤ a_1`), on Two's side, `A ≤ a_2` and (`B ≤ b_2` or `A ≤ b_2`): four
+/// choices, the first the plain least over the orders. Where the pieces'
+/// `T_p` slope is shared along the chain (`shared`, a reachability row,
+/// `share_with_producers`), a point where `p` is not distinct has only
+/// each order's `T_c` options, so `B ≤ b_2` must hold too: the first and
+/// the third choice. Returns each choice with whether it may share.
+fn tied_pieces(ends: [Ends; 3], (p, c): (usize, usize), shared: bool) -> Vec<(Vec<Piece>, bool)> {
+    let [none, one, two] = ends;
+    let choices = [
+        (one.a.min(two.a), one.b.min(two.b), true),
+        (one.a.min(two.a).min(two.b), one.b, false),
+        (two.a, one.a.min(one.b).min(two.b), true),
+        (two.a.min(two.b), one.a.min(one.b), false),
+    ];
+    let piece = |base: f64, i: usize| {
+        (base < f64::INFINITY).then(|| Piece {
+            base,
+            slopes: vec![(i, 1.0)],
+        })
+    };
+    choices
+        .into_iter()
+        .filter(|&(_, _, may_share)| may_share || !shared)
+        .map(|(a, b, may_share)| {
+            let pieces = [piece(a.min(none.a), p), piece(b.min(none.b), c)];
+            (pieces.into_iter().flatten().collect(), may_share && shared)
+        })
+        .filter(|(pieces, _): &(Vec<Piece>, bool)| !pieces.is_empty())
+        .collect()
+}
+
+/// The least of `pieces` summed over a link's corners, every other period
+/// at its shortest (`lo`): which of two valid piece sets to keep.
+fn corner_sum(
+    pieces: &[Piece],
+    (p, c): (usize, usize),
+    corners: &[(Nanos, Nanos); 4],
+    lo: &[Nanos],
+) -> f64 {
+    let mut t = lo.to_vec();
+    corners
+        .iter()
+        .map(|&(tp, tc)| {
+            (t[p], t[c]) = (tp, tc);
+            pieces
+                .iter()
+                .map(|x| x.at(&t))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .sum()
 }
 
 /// The four corners (T_p, T_c) of a link's rectangle.
