@@ -284,14 +284,15 @@ fn tied_pieces_bound_both_sides_of_an_open_order() {
             // inside the box (a floor, C or D, differs between the two).
             let (low, high) = (lo[p].max(lo[c]), hi[p].min(hi[c]));
             let span = |rng: &mut Rng| low + (rng.unit() * (high - low) as f64) as Nanos;
-            for k in 0..4 {
+            for k in 0..6 {
                 let mut point = t.clone();
                 let (x, y) = (span(&mut rng), span(&mut rng));
-                // Both sides: c's period below p's, then above.
-                (point[p], point[c]) = if k % 2 == 0 {
-                    (x.max(y), x.min(y))
-                } else {
-                    (x.min(y), x.max(y))
+                // Both sides: c's period below p's, then above, then the
+                // two equal (the order then falls to the tie-break).
+                (point[p], point[c]) = match k % 3 {
+                    0 => (x.max(y), x.min(y)),
+                    1 => (x.min(y), x.max(y)),
+                    _ => (x, x),
                 };
                 let what = format!("seed {seed} link {p}->{c} probe {k}");
                 let (with, _, _) = pieces_below(&spec, (&lo, &hi), &[], &point, (&what, true));
