@@ -117,25 +117,8 @@ fn sound_sums(
     path: &[usize],
     reach: bool,
 ) -> Option<(MinSum, MinSum)> {
-    let tail = path[path.len() - 1];
-    // From the read the analysis takes each stage from its release or its
-    // read (`latency::reaction_stages`), the tail's from its read with W:
-    // at least the sum of each link's smaller term and the smaller of R
-    // and W at the tail (each stage's release and read bounds are at least
-    // that sum up to it).
     let least = |a: Option<Nanos>, b: Option<Nanos>| a.zip(b).map(|(a, b)| a.min(b)).or(a);
-    let tail_term = if reach {
-        least(r.r[tail], r.w[tail])
-    } else {
-        r.r[tail]
-    };
-    let mut e = MinSum {
-        fixed: Piece {
-            base: tail_term? as f64,
-            slopes: Vec::new(),
-        },
-        terms: Vec::new(),
-    };
+    let mut e = tail_sum(r, path[path.len() - 1], reach)?;
     let mut f = MinSum::default();
     let mut distinct = reach;
     for (k, w) in path.windows(2).enumerate() {
@@ -186,6 +169,25 @@ fn sound_sums(
         );
     }
     Some((e, f))
+}
+
+/// E's fixed part: the tail's term. From the read the analysis takes each
+/// stage from its release or its read (`latency::reaction_stages`), the
+/// tail's from its read with W: at least the sum of each link's smaller
+/// term and the smaller of R and W at the tail (each stage's release and
+/// read bounds are at least that sum up to it).
+fn tail_sum(r: &Times, tail: usize, reach: bool) -> Option<MinSum> {
+    let tail_term = match (reach, r.r[tail], r.w[tail]) {
+        (true, Some(rt), Some(wt)) => Some(rt.min(wt)),
+        (_, rt, _) => rt,
+    };
+    Some(MinSum {
+        fixed: Piece {
+            base: tail_term? as f64,
+            slopes: Vec::new(),
+        },
+        terms: Vec::new(),
+    })
 }
 
 /// A reaction term's `T_p + a` piece (a reachability row) shares its
