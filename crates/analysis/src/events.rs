@@ -524,11 +524,11 @@ impl Deps {
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
-            for u in self.readers.reading(spec, j, inside) {
+            self.readers.reading(spec, j, inside, |u| {
                 if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
                 }
-            }
+            });
         }
         for &j in grown.iter().chain(changed.iter()) {
             state.marked[j] = false;
