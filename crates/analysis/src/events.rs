@@ -524,11 +524,11 @@ impl Deps {
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
             let change = Change::of(spec, j, &old, &state.arrivals[j]);
-            for u in self.readers.reading(spec, j, inside) {
+            self.readers.reading(spec, j, inside, |u| {
                 if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
                 }
-            }
+            });
         }
         for &j in grown.iter().chain(changed.iter()) {
             state.marked[j] = false;
@@ -771,17 +771,16 @@ fn respond(
     if t.server == Server::Background {
         return Response::NONE;
     }
-    let mut models = Vec::with_capacity(deps.readers.prefix[i].len());
-    for j in deps.above(spec, i) {
-        let Some(a) = arrivals[j].as_ref() else {
-            return Response::NONE;
-        };
-        models.push((deps.interference[j], a));
-    }
+    let tasks_above = deps.readers.prefix[i].len();
     if !merging(spec, i) {
-        let streams = models.iter().map(|(_, a)| a.streams.len()).sum();
-        let mut hp: Vec<Load> = Vec::with_capacity(streams);
-        for &(c, a) in &models {
+        // Each stream above as (C, T, J), in one pass over the tasks above
+        // (room for two streams a task; more grows the list).
+        let mut hp: Vec<Load> = Vec::with_capacity(2 * tasks_above);
+        for j in deps.above(spec, i) {
+            let Some(a) = arrivals[j].as_ref() else {
+                return Response::NONE;
+            };
+            let c = deps.interference[j];
             hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
         }
         let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
@@ -794,6 +793,13 @@ fn respond(
             fifo: None,
             fp: stops,
         };
+    }
+    let mut models = Vec::with_capacity(tasks_above);
+    for j in deps.above(spec, i) {
+        let Some(a) = arrivals[j].as_ref() else {
+            return Response::NONE;
+        };
+        models.push((deps.interference[j], a));
     }
     let blocking = fp.blocking(i);
     let shared = t.demand() == deps.interference[i];

@@ -105,31 +105,37 @@ impl Readers {
         }
     }
 
-    /// The units of component `inside.1` (`inside.0` gives each unit's)
-    /// whose responses read task `j`'s activations: its own, then those
-    /// whose tasks' prefixes hold it (a unit may come twice where j stands
-    /// in more than one list). Each list's readers of that component are
-    /// a run of it, sorted by their prefixes' end ([`Readers::group`]).
-    pub(super) fn reading<'a>(
-        &'a self,
+    /// Hands `visit` the units of component `inside.1` (`inside.0` gives
+    /// each unit's) whose responses read task `j`'s activations: its own,
+    /// then those whose tasks' prefixes hold it (a unit may come twice
+    /// where j stands in more than one list). Each list's readers of that
+    /// component are a run of it, sorted by their prefixes' end
+    /// ([`Readers::group`]), so those whose prefix passes j's entry are a
+    /// stretch of it found by two binary searches, walked as a plain slice
+    /// (a refresh walks it for each changed task: docs/analysis.md "Cost at
+    /// 1,000 tasks", the eleventh round).
+    pub(super) fn reading(
+        &self,
         spec: &Spec,
         j: usize,
-        inside: (&'a [usize], usize),
-    ) -> impl Iterator<Item = usize> + 'a {
+        inside: (&[usize], usize),
+        mut visit: impl FnMut(usize),
+    ) {
         let (of_unit, c) = inside;
         let own = unit_of(spec, j);
-        let others = self.occurs.of(j).iter().flat_map(move |&g| {
+        if of_unit[own] == c {
+            visit(own);
+        }
+        for &g in self.occurs.of(j) {
             let list = &self.reach[self.list_start[g]];
-            let from = list.partition_point(|&(_, u)| of_unit[u] < c);
-            list[from..]
-                .iter()
-                .take_while(move |&&(end, u)| of_unit[u] == c && end > g)
-                .map(|&(_, u)| u)
-        });
-        let own_inside = (of_unit[own] == c).then_some(own);
-        own_inside
-            .into_iter()
-            .chain(others.filter(move |&u| u != own))
+            let run = &list[list.partition_point(|&(_, u)| of_unit[u] < c)..];
+            let passing = run.partition_point(|&(end, u)| of_unit[u] == c && end > g);
+            for &(_, u) in &run[..passing] {
+                if u != own {
+                    visit(u);
+                }
+            }
+        }
     }
 }
 
