@@ -33,7 +33,7 @@ mod paper;
 mod pieces;
 use link::least_link;
 use paper::{paper_bounds, paper_forms};
-pub use pieces::{paper_pieces, sound_pieces, MinSum, Piece};
+pub use pieces::{paper_pieces, sound_pieces, MinSum, Piece, SoundSums};
 
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]
@@ -344,32 +344,13 @@ impl<'a> Order<'a> {
 /// box (see the module documentation); `None` when above the longest
 /// period.
 fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos>>) {
-    let (n, lo, hi) = (spec.tasks.len(), order.lo, order.hi);
-    let util_ok = |cpu: u32| cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() <= 1.0 + 1e-12;
+    let n = spec.tasks.len();
     let mut job_response = vec![None; n];
     let mut read_to_publish = vec![None; n];
     let mut budget_response = vec![None; n];
-    for (i, t) in spec.tasks.iter().enumerate() {
-        if t.server == Server::Background {
-            continue;
-        }
-        let (rb, rj, rw) = match spec.policy().response {
-            ResponseAnalysis::Rta => rta_lower_bounds(spec, order, i),
-            // Servers get their budget by the end of each period, or by
-            // the deadline when one is given (`sched`).
-            ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => {
-                let d = t.deadline_given.map_or(lo[i], |d| d.min(lo[i]));
-                (Some(d), Some(d), Some(d))
-            }
-            ResponseAnalysis::ServerPeriod => (None, None, None),
-            ResponseAnalysis::EdfRta if util_ok(t.cpu) => edf_lower_bounds(spec, lo, hi, i),
-            ResponseAnalysis::EdfRta => (None, None, None),
-        };
-        // The RTA test asks R ≤ D (D = T unless given).
-        let d = t.deadline_given.map_or(hi[i], |d| d.min(hi[i]));
-        budget_response[i] = rb.filter(|&r| r <= d);
-        job_response[i] = rj.filter(|&r| r <= hi[i]);
-        read_to_publish[i] = rw.filter(|_| job_response[i].is_some());
+    for i in 0..n {
+        (budget_response[i], job_response[i], read_to_publish[i]) =
+            task_lower_bounds(spec, order, i);
     }
     // Responses the overheads' accounting leaves without a bound at every
     // point of the box (`overheads::unaccounted`).
@@ -388,6 +369,38 @@ fn response_lower_bounds(spec: &Spec, order: &Order) -> (Times, Vec<Option<Nanos
         w: read_to_publish,
     };
     (times, budget_response)
+}
+
+/// Task i's lower bounds over the box (budget-level response time, job
+/// response time, read-to-publish bound), each `None` when above its
+/// limit (D for the budget's, the longest period for the job's)
+/// everywhere in the box; background tasks have none.
+fn task_lower_bounds(
+    spec: &Spec,
+    order: &Order,
+    i: usize,
+) -> (Option<Nanos>, Option<Nanos>, Option<Nanos>) {
+    let (lo, hi, t) = (order.lo, order.hi, &spec.tasks[i]);
+    if t.server == Server::Background {
+        return (None, None, None);
+    }
+    let util_ok = |cpu: u32| cpu_utilizations(spec, hi, cpu).iter().sum::<f64>() <= 1.0 + 1e-12;
+    let (rb, rj, rw) = match spec.policy().response {
+        ResponseAnalysis::Rta => rta_lower_bounds(spec, order, i),
+        // Servers get their budget by the end of each period, or by
+        // the deadline when one is given (`sched`).
+        ResponseAnalysis::ServerPeriod if util_ok(t.cpu) => {
+            let d = t.deadline_given.map_or(lo[i], |d| d.min(lo[i]));
+            (Some(d), Some(d), Some(d))
+        }
+        ResponseAnalysis::ServerPeriod => (None, None, None),
+        ResponseAnalysis::EdfRta if util_ok(t.cpu) => edf_lower_bounds(spec, lo, hi, i),
+        ResponseAnalysis::EdfRta => (None, None, None),
+    };
+    // The RTA test asks R ≤ D (D = T unless given).
+    let d = t.deadline_given.map_or(hi[i], |d| d.min(hi[i]));
+    let job = rj.filter(|&r| r <= hi[i]);
+    (rb.filter(|&r| r <= d), job, rw.filter(|_| job.is_some()))
 }
 
 /// Lower bounds on task i's (budget, job) response times and its

@@ -5,7 +5,10 @@
 //! domains (an eighth to four times the generated periods). The sound
 //! reaction sums' reachability pieces in a chain's middle share their
 //! slope with every stage before them; that they do is counted, so the
-//! check covers them.
+//! check covers them. The sound sums come one set per part of the box
+//! (`sound_pieces`' partition by the orders the periods decide); each
+//! point is checked against the part that holds it, and the chains in
+//! parts are counted too.
 
 use rtpipe_analysis::relax::{paper_monotone, paper_pieces, relax, sound_pieces, MinSum};
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
@@ -74,17 +77,37 @@ fn shared_pieces(e: &MinSum, periods: usize) -> usize {
         .count()
 }
 
+/// What [`pieces_below`] checked: chains with pieces, sound reaction
+/// pieces that share a slope, those that share it with two stages or
+/// more, and chains whose box was split into parts
+/// (`relax::sound_pieces`' partition by the orders the periods decide).
+#[derive(Default)]
+struct Checked {
+    with: usize,
+    shared: usize,
+    long: usize,
+    split: usize,
+}
+
+impl std::ops::AddAssign for Checked {
+    fn add_assign(&mut self, o: Checked) {
+        self.with += o.with;
+        self.shared += o.shared;
+        self.long += o.long;
+        self.split += o.split;
+    }
+}
+
 /// Every chain's pieces at `t` against the analysis there (the paper
-/// mode's too with `paper`); how many chains had pieces, how many sound
-/// reaction pieces share a slope, and how many share it with two stages
-/// or more.
+/// mode's too with `paper`): in sound mode those of the part of the box
+/// that holds `t`.
 fn pieces_below(
     spec: &Spec,
     (lo, hi): (&[Nanos], &[Nanos]),
     imposed: &[(usize, usize)],
     t: &[Nanos],
     (what, paper): (&str, bool),
-) -> (usize, usize, usize) {
+) -> Checked {
     // Pieces bound the analysis only inside their box: outside it a link's
     // case may be one the box rules out (a probe below a task's lower end
     // once put paper mode's pieces above the analysis, docs/design.md,
@@ -96,28 +119,36 @@ fn pieces_below(
     assert!(inside, "{what}: probe {t:?} outside the box {lo:?}..{hi:?}");
     let r = relax(spec, lo, hi, imposed, false);
     let report = analyze(&at(spec, t));
-    let (mut with, mut shared, mut long) = (0, 0, 0);
+    let (mut with, mut shared, mut long, mut split) = (0, 0, 0, 0);
     for k in 0..spec.chains.len() {
         let fig = |m, sound, a| figure(&report, k, m, sound, a);
         let w = |s: &str| format!("{what}: chain {k} {s}");
-        if let Some((e, f, ev)) = sound_pieces(spec, (lo, hi), imposed, &r, k) {
+        if let Some(parts) = sound_pieces(spec, (lo, hi), imposed, &r, k) {
+            // The parts partition the box: exactly one holds at each point.
+            let mut holding = parts.iter().filter(|(e, _, _)| e.holds_at(t));
+            let (e, f, ev) = holding.next().expect("a part at every point");
+            assert!(holding.next().is_none(), "{what}: parts overlap at {t:?}");
+            assert!(parts
+                .iter()
+                .all(|(e, f, ev)| e.within == f.within && f.within == ev.within));
             with += 1;
-            shared += shared_pieces(&e, 2);
-            long += shared_pieces(&e, 3);
+            split += usize::from(parts.len() > 1);
+            shared += shared_pieces(e, 2);
+            long += shared_pieces(e, 3);
             let least = |s: &MinSum| s.at(t);
             below(
                 &w("sound reaction"),
-                least(&e).min(least(&f)),
+                least(e).min(least(f)),
                 fig(Metric::Reaction, true, Anchor::Read),
             );
             below(
                 &w("sound freshness"),
-                least(&f),
+                least(f),
                 fig(Metric::Freshness, true, Anchor::Read),
             );
             below(
                 &w("sound event reaction"),
-                least(&ev),
+                least(ev),
                 fig(Metric::Reaction, true, Anchor::Event),
             );
         }
@@ -137,7 +168,12 @@ fn pieces_below(
             );
         }
     }
-    (with, shared, long)
+    Checked {
+        with,
+        shared,
+        long,
+        split,
+    }
 }
 
 /// The rank orders of the tasks at `t` (a above b), each kept by chance.
@@ -160,12 +196,8 @@ fn orders_at(spec: &Spec, t: &[Nanos], rng: &mut Rng) -> Vec<(usize, usize)> {
 
 #[test]
 fn pieces_bound_every_point_of_a_box_from_below() {
-    let (mut with, mut shared, mut long) = (0, 0, 0);
-    let mut count = |(w, s, l): (usize, usize, usize)| {
-        with += w;
-        shared += s;
-        long += l;
-    };
+    let mut checked = Checked::default();
+    let mut count = |c: Checked| checked += c;
     for seed in 0..SYSTEMS {
         let spec = system(seed);
         let t: Vec<Nanos> = spec
@@ -217,7 +249,16 @@ fn pieces_bound_every_point_of_a_box_from_below() {
     }
     // Not vacuous: most chains get pieces, and many middle links a
     // shared reachability piece, some of them with two stages or more.
-    println!("{with} chains with pieces, {shared} shared pieces, {long} with two stages or more");
+    let Checked {
+        with,
+        shared,
+        long,
+        split,
+    } = checked;
+    println!(
+        "{with} chains with pieces, {shared} shared pieces, {long} with two stages or more, \
+         {split} in parts"
+    );
     assert!(shared > SYSTEMS as usize, "only {shared} shared pieces");
     assert!(
         long > SYSTEMS as usize / 4,
@@ -227,6 +268,7 @@ fn pieces_bound_every_point_of_a_box_from_below() {
         with > SYSTEMS as usize * 6,
         "only {with} chains with pieces"
     );
+    assert!(split > SYSTEMS as usize, "only {split} chains in parts");
 }
 
 /// Boxes where one link's two tasks share a CPU and every other period is
@@ -295,10 +337,80 @@ fn tied_pieces_bound_both_sides_of_an_open_order() {
                     _ => (x, x),
                 };
                 let what = format!("seed {seed} link {p}->{c} probe {k}");
-                let (with, _, _) = pieces_below(&spec, (&lo, &hi), &[], &point, (&what, true));
-                probes += with;
+                probes += pieces_below(&spec, (&lo, &hi), &[], &point, (&what, true)).with;
             }
         }
     }
     assert!(probes > SYSTEMS as usize, "only {probes} probes");
+}
+
+/// Boxes where a chain task `a`'s period is open above the longest period
+/// of another task `b` on its CPU, every other period fixed: the box is
+/// split where `b` starts to be above `a` at every point
+/// (`relax::sound_pieces`' parts), and each part's pieces, which count
+/// `b`'s interference in `a`'s response times above the split, are below
+/// the analysis on both sides of it (on two tasks on one CPU they are
+/// exact there).
+#[test]
+fn parts_bound_both_sides_of_a_decided_order() {
+    let (mut probes, mut split) = (0, 0);
+    for seed in 0..2 * SYSTEMS {
+        let spec = match seed % 2 {
+            0 => system(seed),
+            _ => random_system(
+                seed,
+                &GenConfig {
+                    tasks: 2,
+                    cpus: 1,
+                    chains: 1,
+                    ..GenConfig::default()
+                },
+            ),
+        };
+        if spec.scheduler != Scheduler::Rm {
+            continue;
+        }
+        let t: Vec<Nanos> = spec
+            .tasks
+            .iter()
+            .map(|x| x.fixed_period().expect("fixed"))
+            .collect();
+        let mut rng = Rng::new(seed ^ 0x5b17);
+        let floor = |i: usize| {
+            let x = &spec.tasks[i];
+            x.budget().max(x.deadline_given.unwrap_or(1)).max(1)
+        };
+        let chain_tasks: Vec<usize> = spec.chains.iter().flat_map(|c| c.path.clone()).collect();
+        for &a in &chain_tasks {
+            let mates = (0..t.len()).filter(|&b| b != a && spec.tasks[b].cpu == spec.tasks[a].cpu);
+            for b in mates.collect::<Vec<_>>() {
+                // b's range inside the lower part of a's, so that a's
+                // period is open across it and above it.
+                let top = t[a].max(t[b]);
+                let (mut lo, mut hi) = (t.clone(), t.clone());
+                lo[a] = (t[a].min(t[b]) / 2).max(floor(a));
+                hi[a] = top * 2;
+                lo[b] = (t[b] / 2).max(floor(b));
+                hi[b] = top.max(lo[b]);
+                for k in 0..4 {
+                    let mut point = t.clone();
+                    let span = |rng: &mut Rng, l: Nanos, h: Nanos| {
+                        l + (rng.unit() * (h - l) as f64) as Nanos
+                    };
+                    point[b] = span(&mut rng, lo[b], hi[b]);
+                    // Above b's longest period (b above a), then anywhere.
+                    point[a] = match k % 2 {
+                        0 => span(&mut rng, (hi[b] + 1).min(hi[a]), hi[a]),
+                        _ => span(&mut rng, lo[a], hi[a]),
+                    };
+                    let what = format!("seed {seed} task {a} over {b} probe {k}");
+                    let c = pieces_below(&spec, (&lo, &hi), &[], &point, (&what, false));
+                    probes += c.with;
+                    split += c.split;
+                }
+            }
+        }
+    }
+    println!("{probes} chain checks, {split} of them in parts");
+    assert!(split > SYSTEMS as usize, "only {split} chains in parts");
 }

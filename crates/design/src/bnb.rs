@@ -24,7 +24,9 @@ use crate::budget::Budget;
 use crate::harmonic;
 use crate::joint::{joint_bound, least_under, split_bound, Row, Shares, SplitLimit};
 use crate::problem::{Group, Problem};
-use rtpipe_analysis::relax::{paper_pieces, relax, sound_pieces, Affine, Relaxed};
+use rtpipe_analysis::relax::{
+    paper_pieces, relax, sound_pieces, Affine, MinSum, Relaxed, SoundSums,
+};
 use rtpipe_analysis::{Anchor, Metric, Mode, Report};
 use rtpipe_model::policy::RankKey;
 use rtpipe_model::{Nanos, Server, Spec};
@@ -284,11 +286,16 @@ impl<'r, 'a> Examiner<'r, 'a> {
             let sums = match self.mode() {
                 Mode::Sound => sound_pieces(spec, (lo, hi), above, r, k),
                 Mode::Paper => {
-                    paper_pieces(spec, (lo, hi), above, k).map(|(e, f)| (e.clone(), f, e))
+                    paper_pieces(spec, (lo, hi), above, k).map(|(e, f)| vec![(e.clone(), f, e)])
                 }
             };
-            let Some((e, f, event_e)) = sums else {
+            let Some(parts) = sums else {
                 continue;
+            };
+            // Every part of the box (`sound_pieces`' partition) offers its
+            // own sums, each holding in its part only.
+            let each = |pick: &dyn Fn(&SoundSums) -> Vec<MinSum>| -> Vec<MinSum> {
+                parts.iter().flat_map(pick).collect()
             };
             let head = spec.chains[k].path[0];
             for (anchor, a) in Anchor::ALL.into_iter().enumerate() {
@@ -296,14 +303,14 @@ impl<'r, 'a> Examiner<'r, 'a> {
                     continue;
                 };
                 let read = match (m, self.mode()) {
-                    (Metric::Reaction, Mode::Sound) => vec![e.clone(), f.clone()],
-                    (Metric::Reaction, Mode::Paper) => vec![e.clone()],
-                    (Metric::Freshness, _) => vec![f.clone()],
+                    (Metric::Reaction, Mode::Sound) => each(&|p| vec![p.0.clone(), p.1.clone()]),
+                    (Metric::Reaction, Mode::Paper) => each(&|p| vec![p.0.clone()]),
+                    (Metric::Freshness, _) => each(&|p| vec![p.1.clone()]),
                 };
                 let sums = match (a, m, self.mode()) {
                     (Anchor::Read, _, _) => read,
                     // The sound reaction from the event: its own sum.
-                    (Anchor::Event, Metric::Reaction, Mode::Sound) => vec![event_e.clone()],
+                    (Anchor::Event, Metric::Reaction, Mode::Sound) => each(&|p| vec![p.2.clone()]),
                     (Anchor::Event, _, _) => {
                         read.into_iter().map(|s| s.plus_period(head)).collect()
                     }

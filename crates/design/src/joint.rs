@@ -355,10 +355,10 @@ fn tasks_of(sums: &[MinSum], n: usize) -> Vec<bool> {
     m
 }
 
-/// The least of Σ share/T over the box where `sum ≤ limit`, over the
-/// choices of one piece per term, with its minimising periods (`None`
-/// where no choice holds; with too many choices, Σ share/hi, the limit
-/// left out).
+/// The least of Σ share/T over the part of the box where `sum` holds
+/// (`MinSum::within`) and `sum ≤ limit`, over the choices of one piece
+/// per term, with its minimising periods (`None` where no choice holds;
+/// with too many choices, Σ share/hi, the limit left out).
 fn least_of_sum(
     share: &[f64],
     sum: &MinSum,
@@ -366,6 +366,8 @@ fn least_of_sum(
     lo: &[Nanos],
     hi: &[Nanos],
 ) -> Option<(f64, Vec<f64>)> {
+    let (lo, hi) = sum.narrowed(lo, hi)?;
+    let (lo, hi) = (lo.as_slice(), hi.as_slice());
     let choices = sum
         .terms
         .iter()

@@ -107,13 +107,27 @@ pub(crate) fn small_problems(count: u64, mut each: impl FnMut(u64, &Examiner, us
     }
 }
 
+/// Whether some chain's sound pieces over the box `lo..=hi` (axis
+/// indices) come in parts (`relax::sound_pieces`' partition by the orders
+/// the periods decide).
+fn in_parts(ex: &Examiner, lo: &[u32], hi: &[u32]) -> bool {
+    let spec = ex.p.spec;
+    let (lo, hi) = (ex.periods(lo), ex.periods(hi));
+    let r = rtpipe_analysis::relax::relax(spec, &lo, &hi, &[], false);
+    (0..spec.chains.len()).any(|k| {
+        rtpipe_analysis::relax::sound_pieces(spec, (&lo, &hi), &[], &r, k)
+            .is_some_and(|parts| parts.len() > 1)
+    })
+}
+
 #[test]
 fn the_root_bound_is_below_the_brute_force_optimum() {
-    let mut lifted = 0;
+    let (mut lifted, mut parts) = (0, 0);
     small_problems(600, |seed, ex, n, opts| {
         let mode = opts.mode;
         let hi: Vec<u32> = ex.axes.iter().map(|a| a.len() - 1).collect();
         let plain = ex.bound(&hi);
+        parts += usize::from(mode == Mode::Sound && in_parts(ex, &vec![0; n], &hi));
         let root = Node {
             lo: vec![0; n],
             hi,
@@ -144,7 +158,9 @@ fn the_root_bound_is_below_the_brute_force_optimum() {
         );
         lifted += usize::from(bound > plain * (1.0 + 1e-6));
     });
+    println!("{lifted} root bounds lifted, {parts} roots in parts");
     assert!(lifted >= 30, "the chains lifted only {lifted} root bounds");
+    assert!(parts >= 30, "only {parts} roots in parts");
 }
 
 /// Below the root, where the pieces' shared slopes and the relaxation's
@@ -154,7 +170,7 @@ fn the_root_bound_is_below_the_brute_force_optimum() {
 /// of the box).
 #[test]
 fn split_boxes_bound_their_own_optimum() {
-    let mut boxes = 0;
+    let (mut boxes, mut parts) = (0, 0);
     small_problems(600, |seed, ex, n, opts| {
         let hi: Vec<u32> = ex.axes.iter().map(|a| a.len() - 1).collect();
         let root = Node {
@@ -172,6 +188,7 @@ fn split_boxes_bound_their_own_optimum() {
             );
             let best = brute_force_in(ex, &node.lo, &node.hi);
             boxes += usize::from(depth > 0);
+            parts += usize::from(opts.mode == Mode::Sound && in_parts(ex, &node.lo, &node.hi));
             let (node, branching) = match ex.examine(node, None) {
                 Fate::Pruned => {
                     assert_eq!(best, None, "{what}: pruned a box with a verified point");
@@ -195,6 +212,7 @@ fn split_boxes_bound_their_own_optimum() {
             }
         }
     });
-    println!("{boxes} boxes below the root");
+    println!("{boxes} boxes below the root, {parts} boxes in parts");
     assert!(boxes >= 700, "only {boxes} boxes below the root");
+    assert!(parts >= 100, "only {parts} boxes in parts");
 }

@@ -17,6 +17,16 @@
 //! off the terms themselves and checked at the box's four corners of
 //! `(T_p, T_c)`; a chain where that check fails (an option outside this
 //! shape: LET, server periods as response times) gets no pieces.
+//!
+//! Response times are held at their least over the box, which counts a
+//! task whose order against the chain's task the box leaves open as if
+//! it were below. Where ranks follow the periods, the box is cut for the
+//! chain at a chain task's period past another task's longest one
+//! ([`regions`]): in the part above the cut that task is above at every
+//! point and the part's response times count it; each part's sums hold in
+//! that part only (`MinSum::within`), and the design's split bound takes
+//! the least over the parts (docs/design.md, "Response times tied to the
+//! periods").
 
 use super::paper::paper_link;
 use super::{all_let, distinct_passes, link_task, Order, Times};
@@ -49,17 +59,37 @@ impl Piece {
     }
 }
 
-/// A lower bound on a chain figure over the box: `fixed(T) + Σ_k min over
-/// terms[k] of piece(T)`.
+/// A lower bound on a chain figure over the box, or over the part of it
+/// that `within` leaves: `fixed(T) + Σ_k min over terms[k] of piece(T)`.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct MinSum {
     /// The part with one piece.
     pub fixed: Piece,
     /// The link terms, each at least the least of its pieces.
     pub terms: Vec<Vec<Piece>>,
+    /// Where it holds: each (task, lo, hi) narrows that task's period to
+    /// `lo..=hi`; empty: the whole box.
+    pub within: Vec<(usize, Nanos, Nanos)>,
 }
 
 impl MinSum {
+    /// Whether periods `t` lie where it holds.
+    pub fn holds_at(&self, t: &[Nanos]) -> bool {
+        self.within.iter().all(|&(i, l, h)| l <= t[i] && t[i] <= h)
+    }
+
+    /// The box `lo..=hi` narrowed to where it holds; `None`: nowhere.
+    pub fn narrowed(&self, lo: &[Nanos], hi: &[Nanos]) -> Option<(Vec<Nanos>, Vec<Nanos>)> {
+        let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
+        for &(i, l, h) in &self.within {
+            (lo[i], hi[i]) = (lo[i].max(l), hi[i].min(h));
+            if lo[i] > hi[i] {
+                return None;
+            }
+        }
+        Some((lo, hi))
+    }
+
     /// Its value at periods `t`.
     pub fn at(&self, t: &[Nanos]) -> f64 {
         self.fixed.at(t)
@@ -77,19 +107,25 @@ impl MinSum {
     }
 }
 
+/// A chain's sound sums over one part of a box: the reaction sum E and
+/// the freshness sum F from the read (the sound reaction is the smaller,
+/// the freshness F) and E without reachability from the release plus
+/// `T_head` (the reaction from the event).
+pub type SoundSums = (MinSum, MinSum, MinSum);
+
 /// The sound chain figures of chain `k` as least-of-pieces sums over the
-/// box (`relaxed` = `relax(spec, lo, hi, imposed, _)`): the reaction sum E
-/// and the freshness sum F from the read (the sound reaction is the
-/// smaller, the freshness F) and E without reachability from the release
-/// (plus `T_head`, the reaction from the event). `None`: no such shape
-/// (see the module documentation) or the chain is unbounded in the box.
+/// box (`relaxed` = `relax(spec, lo, hi, imposed, _)`), one [`SoundSums`]
+/// per part of a partition of the box: where the periods decide that a
+/// task interferes with one of the chain's, the part's response times
+/// count it ([`regions`]). `None`: no such shape (see the module
+/// documentation) or the chain is unbounded in the box.
 pub fn sound_pieces(
     spec: &Spec,
     (lo, hi): (&[Nanos], &[Nanos]),
     imposed: &[(usize, usize)],
     relaxed: &super::Relaxed,
     k: usize,
-) -> Option<(MinSum, MinSum, MinSum)> {
+) -> Option<Vec<SoundSums>> {
     let path = &spec.chains.get(k)?.path;
     let shaped = spec.policy().response != ResponseAnalysis::ServerPeriod
         && path
@@ -104,9 +140,111 @@ pub fn sound_pieces(
         r: relaxed.job_response.clone(),
         w: relaxed.read_to_publish.clone(),
     };
-    let (e, f) = sound_sums(spec, &order, &times, path, true)?;
-    let (ev, _) = sound_sums(spec, &order, &times, path, false)?;
+    let whole = chain_sums(spec, &order, &times, path)?;
+    let parts = regions(&order, path);
+    if parts.len() < 2 {
+        return Some(vec![whole]);
+    }
+    let part_sums = |within: Vec<(usize, Nanos, Nanos)>| {
+        let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
+        for &(i, l, h) in &within {
+            (lo[i], hi[i]) = (l, h);
+        }
+        let sub = Order::new(spec, &lo, &hi, imposed);
+        let mut times = Times {
+            r: times.r.clone(),
+            w: times.w.clone(),
+        };
+        for &i in path {
+            (_, times.r[i], times.w[i]) = super::task_lower_bounds(spec, &sub, i);
+        }
+        // A part where the sums have no shape keeps the box's (they hold
+        // in every part of it).
+        let sums = chain_sums(spec, &sub, &times, path).unwrap_or_else(|| whole.clone());
+        let limit = |mut s: MinSum| {
+            s.within = within.clone();
+            s
+        };
+        (limit(sums.0), limit(sums.1), limit(sums.2))
+    };
+    Some(parts.into_iter().map(part_sums).collect())
+}
+
+/// [`SoundSums`] of `path` over the box of `order`.
+fn chain_sums(spec: &Spec, order: &Order, times: &Times, path: &[usize]) -> Option<SoundSums> {
+    let (e, f) = sound_sums(spec, order, times, path, true)?;
+    let (ev, _) = sound_sums(spec, order, times, path, false)?;
     Some((e, f, ev.plus_period(path[0])))
+}
+
+/// Parts of a box for a chain at most: each costs the split bound its
+/// sums.
+const MAX_REGIONS: usize = 8;
+
+/// A partition of the box by the periods of `path`'s tasks, each part
+/// given by the ranges it narrows (`MinSum::within`): a chain task `a`'s
+/// period is split at `hi_b + 1` for a task `b` ranked by period with it
+/// whose order against `a` the box leaves open, so that in the upper part
+/// `b` is above `a` at every point (`T_b ≤ hi_b < T_a`) and the part's
+/// response times of `a` count it. Splits with the most interference
+/// above them first, one per chain task, while the parts are at most
+/// [`MAX_REGIONS`]; one part (the whole box) where there is none.
+fn regions(order: &Order, path: &[usize]) -> Vec<Vec<(usize, Nanos, Nanos)>> {
+    let mut splits: Vec<(Nanos, usize, Nanos)> = Vec::new();
+    for (k, &a) in path.iter().enumerate() {
+        if path[..k].contains(&a) {
+            continue;
+        }
+        if let Some((gain, s)) = best_split(order, a) {
+            splits.push((gain, a, s));
+        }
+    }
+    splits.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
+    let mut parts: Vec<Vec<(usize, Nanos, Nanos)>> = vec![Vec::new()];
+    for (_, a, s) in splits {
+        if parts.len() * 2 > MAX_REGIONS {
+            break;
+        }
+        let (lo, hi) = (order.lo[a], order.hi[a]);
+        parts = parts
+            .into_iter()
+            .flat_map(|p| {
+                let with = |l: Nanos, h: Nanos| {
+                    let mut q = p.clone();
+                    q.push((a, l, h));
+                    q
+                };
+                [with(lo, s - 1), with(s, hi)]
+            })
+            .collect();
+    }
+    parts
+}
+
+/// Where to split task `a`'s period (`regions`): the point `s` in
+/// `lo_a < s ≤ hi_a` after the longest period `hi_b` of the tasks whose
+/// order against `a` it decides, with the interference those tasks add
+/// above it (`Order::added_above`, summed); the most interference
+/// weighted by the share of `a`'s range above the point. `None`: no task
+/// to decide.
+fn best_split(order: &Order, a: usize) -> Option<(Nanos, Nanos)> {
+    let (lo, hi) = (order.lo[a], order.hi[a]);
+    let mut points: Vec<(Nanos, Nanos)> = (0..order.lo.len())
+        .filter(|&b| b != a && order.ranked_by_period(a, b) && order.maybe_above(b, a))
+        .filter(|&b| lo <= order.hi[b] && order.hi[b] < hi)
+        .filter_map(|b| Some((order.hi[b] + 1, order.added_above(b, a)?.0)))
+        .collect();
+    points.sort_unstable();
+    let mut above: Nanos = 0;
+    let mut best: Option<(f64, Nanos, Nanos)> = None;
+    for (s, work) in points {
+        above += work;
+        let value = above as f64 * (hi - s + 1) as f64 / (hi - lo + 1) as f64;
+        if best.is_none_or(|b| value > b.0) {
+            best = Some((value, above, s));
+        }
+    }
+    best.map(|(_, gain, s)| (gain, s))
 }
 
 /// E and F of `path` (`reach`: from the read, with reachability).
@@ -186,7 +324,7 @@ fn tail_sum(r: &Times, tail: usize, reach: bool) -> Option<MinSum> {
             base: tail_term? as f64,
             slopes: Vec::new(),
         },
-        terms: Vec::new(),
+        ..MinSum::default()
     })
 }
 
@@ -449,11 +587,11 @@ pub fn paper_pieces(
     let (mut e, mut f) = (
         MinSum {
             fixed: head.clone(),
-            terms: Vec::new(),
+            ..MinSum::default()
         },
         MinSum {
             fixed: head,
-            terms: Vec::new(),
+            ..MinSum::default()
         },
     );
     for w in path.windows(2) {
