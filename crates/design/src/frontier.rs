@@ -32,6 +32,11 @@ pub const MAX_OPEN_BYTES: usize = 1 << 30;
 /// A dive for a better verified design every this many boxes split.
 const DIVE_EVERY: u64 = 32;
 
+/// Calls of [`Examiner::trade`] at each dive: the trades and kicks walk
+/// towards better designs while the bound, on wide boxes, hardly moves
+/// (docs/design.md, "Kicks: the design side of the gap").
+const TRADE_CALLS: usize = 8;
+
 /// Boxes taken from the frontier per round: the halves of those split are
 /// examined together, in parallel. A constant, not the number of cores, so
 /// that the search is the same on every machine; small, since the boxes of
@@ -339,22 +344,28 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         // best-first order alone reaches the answer with fewer checks.
         if f.splits % DIVE_EVERY == 1 && self.gate.is_none() {
             if let Some(found) = self.ex.dive(&node, incumbent, self.effort) {
+                self.debug("dive", found.2);
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }
             // And from the relaxation's least point of the box.
             if let Some(found) = self.ex.guided(&node, f.incumbent(), self.effort) {
+                self.debug("guided", found.2);
                 publish(self.ex.p, &found.0, found.2, node.bound);
                 f.best = Some(found);
             }
-            // And by trading periods along a chain from the incumbent.
-            let traded = match (&f.best, self.first_only) {
-                (Some(best), false) => self.ex.trade(best, &mut self.trades, self.effort),
-                _ => None,
-            };
-            if let Some(found) = traded {
-                publish(self.ex.p, &found.0, found.2, node.bound);
-                f.best = Some(found);
+            // And by trading periods along a chain from the incumbent,
+            // or from a kick of it once every trade there has failed.
+            for _ in 0..TRADE_CALLS {
+                let traded = match (&f.best, self.first_only) {
+                    (Some(best), false) => self.ex.trade(best, &mut self.trades, self.effort),
+                    _ => None,
+                };
+                if let Some(found) = traded {
+                    self.debug("trade", found.2);
+                    publish(self.ex.p, &found.0, found.2, node.bound);
+                    f.best = Some(found);
+                }
             }
         }
         ControlFlow::Continue(Some(self.ex.children(&node, how)))
@@ -448,6 +459,17 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             })
             .collect();
         self.examine_all(f, node.bound, parts)
+    }
+
+    /// With `RTPIPE_DESIGN_DEBUG` set, which step found a better design
+    /// (`how`), its U and when (for measuring how designs are found).
+    fn debug(&self, how: &str, u: f64) {
+        if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+            eprintln!(
+                "incumbent by {how}: U {u:.6} ({:.2} s)",
+                self.effort.elapsed()
+            );
+        }
     }
 
     fn progress(&self, f: &Frontier, bound: f64, best: Option<f64>) {

@@ -44,6 +44,7 @@ mod gate;
 mod harmonic;
 mod heuristic;
 mod joint;
+mod kick;
 mod learnt;
 mod linear;
 /// The solver layer: a small MILP handed to good_lp (microlp, HiGHS).

@@ -28,21 +28,54 @@ const STEP_DOWN: f64 = 0.8;
 /// Steps down at most before a trial gives up.
 const MAX_STEPS: usize = 24;
 
-/// Where the trades stand: the next pair to try, and how many pairs in a
-/// row found nothing from the incumbent of U `at`. Once every pair has
-/// failed from one incumbent, trading waits for another (a dive's or a
-/// guided design), instead of repeating analyses that cannot succeed.
+/// Kicks in a row from one incumbent at most, each followed by the
+/// trades from it, before the trades wait for another incumbent (a
+/// dive's or a guided design): a search bounded by work must not repeat
+/// analyses that find nothing forever.
+const KICKS_PER_INCUMBENT: usize = 256;
+
+/// Where the trades stand: the point they walk from (the incumbent of U
+/// `at`, or a kick from it), the next pair to try, and how many pairs in
+/// a row found nothing from that point. Once every pair has failed, the
+/// incumbent is kicked ([`Examiner::kick`]) and the trades walk from
+/// there; after [`KICKS_PER_INCUMBENT`] kicks that bring nothing better,
+/// trading waits for another incumbent.
 #[derive(Debug, Default)]
 pub(crate) struct Trades {
     cursor: usize,
     fruitless: usize,
     at: f64,
+    /// A kicked point and its U, where the trades walk instead of from
+    /// the incumbent (`None`: from the incumbent).
+    walker: Option<(Vec<u32>, f64)>,
+    /// Kicks drawn so far (the next kick's number).
+    kicks: u64,
+    /// Kicks since the incumbent last changed.
+    idle_kicks: usize,
+}
+
+impl Trades {
+    /// Every pair has failed from the incumbent and from each of its
+    /// kicks: nothing is left to try until another incumbent.
+    pub(crate) fn is_spent(&self) -> bool {
+        self.walker.is_none()
+            && self.fruitless == usize::MAX
+            && self.idle_kicks >= KICKS_PER_INCUMBENT
+    }
+
+    /// Kicks drawn so far.
+    #[cfg(test)]
+    pub(crate) fn kicks(&self) -> u64 {
+        self.kicks
+    }
 }
 
 impl Examiner<'_, '_> {
-    /// Up to [`TRADES_PER_CALL`] trades from the incumbent `best`, the
-    /// next pair of [`Examiner::trade_pairs`] (cyclically) first. A
-    /// verified design better than `best`, if found.
+    /// Up to [`TRADES_PER_CALL`] trades from the walking point (the
+    /// incumbent `best` or a kick from it), the next pair of
+    /// [`Examiner::trade_pairs`] (cyclically) first; or, when every pair
+    /// has failed there, a kick. A verified design better than `best`,
+    /// if found.
     pub(crate) fn trade(
         &self,
         best: &(Spec, Report, f64),
@@ -53,36 +86,73 @@ impl Examiner<'_, '_> {
             return None;
         }
         if best.2 != state.at {
-            (state.at, state.fruitless) = (best.2, 0);
+            (state.at, state.fruitless, state.idle_kicks) = (best.2, 0, 0);
+            state.walker = None;
         }
-        let mut k = self.indices(&best.0);
-        let pairs = self.trade_pairs(&k);
-        if state.fruitless >= pairs.len() || !self.verify(&k).2 {
+        if state.is_spent() {
             return None;
         }
-        let mut u = self.bound(&k);
-        let mut better = false;
-        for _ in 0..TRADES_PER_CALL.min(pairs.len()) {
-            if budget.out_of_time() {
-                break;
-            }
-            let (a, b) = pairs[state.cursor % pairs.len()];
-            state.cursor += 1;
-            state.fruitless += 1;
-            if let Some(t) = self.trade_one(&k, (a, b), budget) {
-                let v = self.bound(&t);
-                if v < u * (1.0 - 1e-9) {
-                    (k, u, better, state.fruitless) = (t, v, true, 0);
+        let from = self.indices(&best.0);
+        let (mut k, mut u) = match &state.walker {
+            Some((k, u)) => (k.clone(), *u),
+            None if self.verify(&from).2 => (from.clone(), self.bound(&from)),
+            None => return None,
+        };
+        let pairs = self.trade_pairs(&k);
+        if state.fruitless >= pairs.len() {
+            (k, u) = self.kicked(&from, state, budget)?;
+        } else {
+            for _ in 0..TRADES_PER_CALL.min(pairs.len()) {
+                if budget.out_of_time() {
+                    break;
+                }
+                let (a, b) = pairs[state.cursor % pairs.len()];
+                state.cursor += 1;
+                state.fruitless += 1;
+                if let Some(t) = self.trade_one(&k, (a, b), budget) {
+                    let v = self.bound(&t);
+                    if v < u * (1.0 - 1e-9) {
+                        (k, u, state.fruitless) = (t, v, 0);
+                    }
                 }
             }
+            if state.walker.is_some() {
+                state.walker = Some((k.clone(), u));
+            }
         }
-        if !better {
+        if u >= best.2 * (1.0 - 1e-9) {
             return None;
         }
         let (spec, report, ok) = self.verify(&k);
         assert!(ok, "a traded design no longer verifies");
         let u = utilization(&spec);
         (u < best.2).then_some((spec, report, u))
+    }
+
+    /// The next kick from the incumbent `from`, made the walking point
+    /// (with its U); `None` once the incumbent has had its kicks. A kick
+    /// whose repair fails leaves the walker at the incumbent, so the next
+    /// call kicks again.
+    fn kicked(&self, from: &[u32], state: &mut Trades, budget: &Budget) -> Option<(Vec<u32>, f64)> {
+        if state.idle_kicks >= KICKS_PER_INCUMBENT {
+            (state.walker, state.fruitless) = (None, usize::MAX);
+            return None;
+        }
+        state.idle_kicks += 1;
+        state.kicks += 1;
+        let k = self.kick(from, state.kicks, budget);
+        state.walker = k.map(|k| {
+            let u = self.bound(&k);
+            (k, u)
+        });
+        // Every pair has failed from the incumbent: without a walker the
+        // next call kicks again.
+        state.fruitless = if state.walker.is_some() {
+            0
+        } else {
+            usize::MAX
+        };
+        state.walker.clone()
     }
 
     /// Every ordered pair (a, b) of distinct tasks on a common chain where
@@ -148,7 +218,7 @@ impl Examiner<'_, '_> {
             }
         }
         t[b] = ok;
-        for i in self.chain_mates(a, b) {
+        for i in self.chain_mates_of(&[a, b]) {
             if budget.out_of_time() {
                 break;
             }
@@ -157,14 +227,14 @@ impl Examiner<'_, '_> {
         Some(t)
     }
 
-    /// The tasks on a chain with `a` or with `b`, in index order.
-    fn chain_mates(&self, a: usize, b: usize) -> Vec<usize> {
+    /// The tasks on a chain with any of `tasks`, in index order.
+    pub(crate) fn chain_mates_of(&self, tasks: &[usize]) -> Vec<usize> {
         let mut mates: Vec<usize> = self
             .p
             .spec
             .chains
             .iter()
-            .filter(|c| c.path.contains(&a) || c.path.contains(&b))
+            .filter(|c| c.path.iter().any(|i| tasks.contains(i)))
             .flat_map(|c| c.path.iter().copied())
             .collect();
         mates.sort_unstable();
