@@ -771,29 +771,10 @@ fn respond(
     if t.server == Server::Background {
         return Response::NONE;
     }
-    let tasks_above = deps.readers.prefix[i].len();
     if !merging(spec, i) {
-        // Each stream above as (C, T, J), in one pass over the tasks above
-        // (room for two streams a task; more grows the list).
-        let mut hp: Vec<Load> = Vec::with_capacity(2 * tasks_above);
-        for j in deps.above(spec, i) {
-            let Some(a) = arrivals[j].as_ref() else {
-                return Response::NONE;
-            };
-            let c = deps.interference[j];
-            hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
-        }
-        let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
-        let stops = stops.filter(|_| budget.is_some() && job.is_some());
-        return Response {
-            budget,
-            job,
-            actual: job,
-            windows: stops.as_ref().map(FpStops::windows),
-            fifo: None,
-            fp: stops,
-        };
+        return fixed_priority_respond(spec, fp, deps, arrivals, i, old);
     }
+    let tasks_above = deps.readers.prefix[i].len();
     let mut models = Vec::with_capacity(tasks_above);
     for j in deps.above(spec, i) {
         let Some(a) = arrivals[j].as_ref() else {
@@ -828,6 +809,38 @@ fn respond(
         windows: Some(stops.windows()),
         fifo: Some(stops),
         fp: None,
+    }
+}
+
+/// The response times of task `i`, which no job merges into (periodic and
+/// thread-less), under fixed priority from its streams above.
+fn fixed_priority_respond(
+    spec: &Spec,
+    fp: &impl FixedPriority,
+    deps: &Deps,
+    arrivals: &[Option<Arrivals>],
+    i: usize,
+    old: &Response,
+) -> Response {
+    // Each stream above as (C, T, J), in one pass over the tasks above
+    // (room for two streams a task; more grows the list).
+    let mut hp: Vec<Load> = Vec::with_capacity(2 * deps.readers.prefix[i].len());
+    for j in deps.above(spec, i) {
+        let Some(a) = arrivals[j].as_ref() else {
+            return Response::NONE;
+        };
+        let c = deps.interference[j];
+        hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
+    }
+    let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
+    let stops = stops.filter(|_| budget.is_some() && job.is_some());
+    Response {
+        budget,
+        job,
+        actual: job,
+        windows: stops.as_ref().map(FpStops::windows),
+        fifo: None,
+        fp: stops,
     }
 }
 
