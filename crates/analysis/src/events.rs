@@ -772,15 +772,14 @@ fn respond(
         return Response::NONE;
     }
     if !merging(spec, i) {
-        return fixed_priority_respond(spec, fp, deps, arrivals, i, old);
-    }
-    let tasks_above = deps.readers.prefix[i].len();
-    let mut models = Vec::with_capacity(tasks_above);
-    for j in deps.above(spec, i) {
-        let Some(a) = arrivals[j].as_ref() else {
+        let Some(hp) = streams_above(spec, deps, arrivals, i) else {
             return Response::NONE;
         };
-        models.push((deps.interference[j], a));
+        return fixed_priority_respond(fp, i, &hp, old);
+    }
+    let mut models = Vec::with_capacity(deps.readers.prefix[i].len());
+    if for_each_above(spec, deps, arrivals, i, |c, a| models.push((c, a))).is_none() {
+        return Response::NONE;
     }
     let blocking = fp.blocking(i);
     let shared = t.demand() == deps.interference[i];
@@ -812,27 +811,47 @@ fn respond(
     }
 }
 
-/// The response times of task `i`, which no job merges into (periodic and
-/// thread-less), under fixed priority from its streams above.
-fn fixed_priority_respond(
+/// Hands `visit` each task above task `i` as its interference and its
+/// activations; `None` (having stopped) at the first without activations,
+/// where nothing bounds what it brings.
+fn for_each_above<'a>(
     spec: &Spec,
-    fp: &impl FixedPriority,
+    deps: &Deps,
+    arrivals: &'a [Option<Arrivals>],
+    i: usize,
+    mut visit: impl FnMut(Nanos, &'a Arrivals),
+) -> Option<()> {
+    for j in deps.above(spec, i) {
+        visit(deps.interference[j], arrivals[j].as_ref()?);
+    }
+    Some(())
+}
+
+/// Each stream above task `i` as (C, T, J), in one pass over the tasks
+/// above; `None` when one has no activations.
+fn streams_above(
+    spec: &Spec,
     deps: &Deps,
     arrivals: &[Option<Arrivals>],
     i: usize,
+) -> Option<Vec<Load>> {
+    // Room for two streams a task; more grows the list.
+    let mut hp: Vec<Load> = Vec::with_capacity(2 * deps.readers.prefix[i].len());
+    let each =
+        |c: Nanos, a: &Arrivals| hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
+    for_each_above(spec, deps, arrivals, i, each)?;
+    Some(hp)
+}
+
+/// The response times of task `i`, which no job merges into (periodic and
+/// thread-less), under fixed priority from its streams above `hp`.
+fn fixed_priority_respond(
+    fp: &impl FixedPriority,
+    i: usize,
+    hp: &[Load],
     old: &Response,
 ) -> Response {
-    // Each stream above as (C, T, J), in one pass over the tasks above
-    // (room for two streams a task; more grows the list).
-    let mut hp: Vec<Load> = Vec::with_capacity(2 * deps.readers.prefix[i].len());
-    for j in deps.above(spec, i) {
-        let Some(a) = arrivals[j].as_ref() else {
-            return Response::NONE;
-        };
-        let c = deps.interference[j];
-        hp.extend(a.streams.iter().map(|s| (c, s.period, s.jitter)));
-    }
-    let ((budget, job), stops) = fp.periodic_response_windows(i, &hp, old.fp.as_ref());
+    let ((budget, job), stops) = fp.periodic_response_windows(i, hp, old.fp.as_ref());
     let stops = stops.filter(|_| budget.is_some() && job.is_some());
     Response {
         budget,

@@ -39,6 +39,31 @@ fn system(seed: u64) -> Spec {
     spec
 }
 
+/// For an even seed [`system`], for an odd one two tasks on one CPU and
+/// one chain, with its periods; `None` unless ranked rate-monotonic (the
+/// order the tied pieces and the parts follow).
+fn rm_system_or_pair(seed: u64) -> Option<(Spec, Vec<Nanos>)> {
+    let pair = GenConfig {
+        tasks: 2,
+        cpus: 1,
+        chains: 1,
+        ..GenConfig::default()
+    };
+    let spec = match seed % 2 {
+        0 => system(seed),
+        _ => random_system(seed, &pair),
+    };
+    if spec.scheduler != Scheduler::Rm {
+        return None;
+    }
+    let t = spec
+        .tasks
+        .iter()
+        .map(|x| x.fixed_period().expect("fixed"))
+        .collect();
+    Some((spec, t))
+}
+
 fn at(spec: &Spec, t: &[Nanos]) -> Spec {
     let mut s = spec.clone();
     for (task, &p) in s.tasks.iter_mut().zip(t) {
@@ -283,26 +308,9 @@ fn tied_pieces_bound_both_sides_of_an_open_order() {
         // Half of them two tasks on one CPU and one chain, where the tied
         // pieces are exact on Case One's side (the tail's R and the
         // producer's R and W are then C plus the other's interference).
-        let spec = match seed % 2 {
-            0 => system(seed),
-            _ => random_system(
-                seed,
-                &GenConfig {
-                    tasks: 2,
-                    cpus: 1,
-                    chains: 1,
-                    ..GenConfig::default()
-                },
-            ),
-        };
-        if spec.scheduler != Scheduler::Rm {
+        let Some((spec, t)) = rm_system_or_pair(seed) else {
             continue;
-        }
-        let t: Vec<Nanos> = spec
-            .tasks
-            .iter()
-            .map(|x| x.fixed_period().expect("fixed"))
-            .collect();
+        };
         let mut rng = Rng::new(seed ^ 0x71ed);
         let links: Vec<(usize, usize)> = spec
             .chains
@@ -355,26 +363,9 @@ fn tied_pieces_bound_both_sides_of_an_open_order() {
 fn parts_bound_both_sides_of_a_decided_order() {
     let (mut probes, mut split) = (0, 0);
     for seed in 0..2 * SYSTEMS {
-        let spec = match seed % 2 {
-            0 => system(seed),
-            _ => random_system(
-                seed,
-                &GenConfig {
-                    tasks: 2,
-                    cpus: 1,
-                    chains: 1,
-                    ..GenConfig::default()
-                },
-            ),
-        };
-        if spec.scheduler != Scheduler::Rm {
+        let Some((spec, t)) = rm_system_or_pair(seed) else {
             continue;
-        }
-        let t: Vec<Nanos> = spec
-            .tasks
-            .iter()
-            .map(|x| x.fixed_period().expect("fixed"))
-            .collect();
+        };
         let mut rng = Rng::new(seed ^ 0x5b17);
         let floor = |i: usize| {
             let x = &spec.tasks[i];
