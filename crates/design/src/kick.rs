@@ -13,6 +13,7 @@
 
 use crate::bnb::Examiner;
 use crate::budget::Budget;
+use rtpipe_model::gen::splitmix_at;
 use rtpipe_model::Nanos;
 
 /// The factors a kicked group's periods are multiplied by.
@@ -25,14 +26,6 @@ const REPAIR_STEP: f64 = 0.85;
 /// Repair steps at most before the kick gives up.
 const REPAIR_STEPS: i32 = 20;
 
-/// SplitMix64: the `n`-th number of a fixed stream (a kick's draws).
-fn mix(n: u64) -> u64 {
-    let mut z = n.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 impl Examiner<'_, '_> {
     /// Kick number `n` from the verified point `from`: a verified point
     /// (its indices), or `None` when the repair found none.
@@ -44,7 +37,7 @@ impl Examiner<'_, '_> {
         if chains.is_empty() {
             return None;
         }
-        let draw = |j: u64| mix(n.wrapping_mul(4).wrapping_add(j)) as usize;
+        let draw = |j: u64| splitmix_at(n.wrapping_mul(4).wrapping_add(j)) as usize;
         let path = chains[draw(0) % chains.len()];
         let start = draw(1) % path.len();
         let len = 1 + draw(2) % (path.len() - start);

@@ -31,15 +31,12 @@ pub struct Rng(u64);
 impl Rng {
     /// A generator seeded with `seed`.
     pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x9E37_79B9_7F4A_7C15)
+        Rng(seed ^ GOLDEN_GAMMA)
     }
     /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0 = self.0.wrapping_add(GOLDEN_GAMMA);
+        splitmix_output(self.0)
     }
     /// Uniform in [0, 1).
     pub fn unit(&mut self) -> f64 {
@@ -53,6 +50,24 @@ impl Rng {
     pub fn chance(&mut self, p: f64) -> bool {
         self.unit() < p
     }
+}
+
+/// SplitMix64's increment: the state after `n` draws from state 0 is
+/// `n · GOLDEN_GAMMA`.
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// SplitMix64's output function of a state.
+fn splitmix_output(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The `n`-th number (from 0) of the SplitMix64 stream whose state starts
+/// at 0, drawn directly: a counter's draws with no generator to carry
+/// (the design search's kicks).
+pub fn splitmix_at(n: u64) -> u64 {
+    splitmix_output(n.wrapping_add(1).wrapping_mul(GOLDEN_GAMMA))
 }
 
 /// WATERS 2015 periods in ms and their shares in percent.
@@ -604,6 +619,17 @@ pub fn benchmark_config(tasks: usize) -> DesignGenConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_direct_draw_is_the_stream_from_state_zero() {
+        // The stream of seed GOLDEN_GAMMA starts at state 0.
+        let mut rng = Rng::new(GOLDEN_GAMMA);
+        for n in 0..1000 {
+            assert_eq!(splitmix_at(n), rng.next_u64(), "draw {n}");
+        }
+        // SplitMix64's published first output from state 0.
+        assert_eq!(splitmix_at(0), 0xE220_A839_7B1D_CDAF);
+    }
 
     #[test]
     fn deterministic_and_valid() {
