@@ -464,7 +464,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
     /// With `RTPIPE_DESIGN_DEBUG` set, which step found a better design
     /// (`how`), its U and when (for measuring how designs are found).
     fn debug(&self, how: &str, u: f64) {
-        if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+        if crate::problem::debug() {
             eprintln!(
                 "incumbent by {how}: U {u:.6} ({:.2} s)",
                 self.effort.elapsed()

@@ -402,7 +402,7 @@ pub(crate) fn heuristic(
             fixed: Some(fixed.clone()),
         };
         let solved = solve_master(p, learnt, budget, groups, Some(&model));
-        if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+        if crate::problem::debug() {
             if let Solved::Periods {
                 periods,
                 objective: obj,

@@ -6,6 +6,12 @@ use crate::domain::{grid_units, Dom, Domains};
 use rtpipe_analysis::{Anchor, ChainResult, Metric, Report};
 use rtpipe_model::{Nanos, PeriodSpec, Spec};
 
+/// Whether `RTPIPE_DESIGN_DEBUG` asks for the searches' story on stderr
+/// (the master solves, the MILP's iterations, how incumbents were found).
+pub(crate) fn debug() -> bool {
+    std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some()
+}
+
 /// What one design search is asked: read by every part of it, changed by
 /// none (the conflict search's limit moves get a problem of their own).
 pub(crate) struct Problem<'a> {

@@ -67,7 +67,7 @@ impl Milp<'_, '_> {
                     optimal,
                     responses,
                 } => {
-                    if std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some() {
+                    if crate::problem::debug() {
                         eprintln!(
                             "iteration {}: objective {objective:.6} optimal {optimal} periods {:?} ({:.2} s)",
                             self.budget.iterations,

@@ -8,7 +8,7 @@ use crate::learnt::Learnt;
 use crate::lp::{self, Limits, LpError, LpSolution, Numerical, SolverKind};
 use crate::master::build_within;
 use crate::model::Master;
-use crate::problem::{Group, Problem};
+use crate::problem::{debug, Group, Problem};
 use crate::sound::SoundModel;
 use rtpipe_model::Nanos;
 
@@ -33,11 +33,6 @@ pub(crate) enum Solved {
         responses: Vec<Option<f64>>,
     },
     Error(DesignError),
-}
-
-/// Whether `RTPIPE_DESIGN_DEBUG` asks for the master's story on stderr.
-fn debug() -> bool {
-    std::env::var_os("RTPIPE_DESIGN_DEBUG").is_some()
 }
 
 /// Builds and solves the master of `p` over `groups` with what the search
