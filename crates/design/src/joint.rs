@@ -366,8 +366,14 @@ fn least_of_sum(
     lo: &[Nanos],
     hi: &[Nanos],
 ) -> Option<(f64, Vec<f64>)> {
-    let (lo, hi) = sum.narrowed(lo, hi)?;
-    let (lo, hi) = (lo.as_slice(), hi.as_slice());
+    // Most sums hold in the whole box: no copy of it for those.
+    let narrowed;
+    let (lo, hi) = if sum.within.is_empty() {
+        (lo, hi)
+    } else {
+        narrowed = sum.narrowed(lo, hi)?;
+        (narrowed.0.as_slice(), narrowed.1.as_slice())
+    };
     let choices = sum
         .terms
         .iter()

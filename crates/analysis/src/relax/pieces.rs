@@ -80,14 +80,7 @@ impl MinSum {
 
     /// The box `lo..=hi` narrowed to where it holds; `None`: nowhere.
     pub fn narrowed(&self, lo: &[Nanos], hi: &[Nanos]) -> Option<(Vec<Nanos>, Vec<Nanos>)> {
-        let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
-        for &(i, l, h) in &self.within {
-            (lo[i], hi[i]) = (lo[i].max(l), hi[i].min(h));
-            if lo[i] > hi[i] {
-                return None;
-            }
-        }
-        Some((lo, hi))
+        narrow(lo, hi, &self.within)
     }
 
     /// Its value at periods `t`.
@@ -146,10 +139,7 @@ pub fn sound_pieces(
         return Some(vec![whole]);
     }
     let part_sums = |within: Vec<(usize, Nanos, Nanos)>| {
-        let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
-        for &(i, l, h) in &within {
-            (lo[i], hi[i]) = (l, h);
-        }
+        let (lo, hi) = narrow(lo, hi, &within).expect("a part of the box is not empty");
         let sub = Order::new(spec, &lo, &hi, imposed);
         let mut times = Times {
             r: times.r.clone(),
@@ -168,6 +158,23 @@ pub fn sound_pieces(
         (limit(sums.0), limit(sums.1), limit(sums.2))
     };
     Some(parts.into_iter().map(part_sums).collect())
+}
+
+/// The box `lo..=hi` with each (task, l, h) of `within` narrowing that
+/// task's period to `l..=h`; `None` where that leaves it empty.
+fn narrow(
+    lo: &[Nanos],
+    hi: &[Nanos],
+    within: &[(usize, Nanos, Nanos)],
+) -> Option<(Vec<Nanos>, Vec<Nanos>)> {
+    let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
+    for &(i, l, h) in within {
+        (lo[i], hi[i]) = (lo[i].max(l), hi[i].min(h));
+        if lo[i] > hi[i] {
+            return None;
+        }
+    }
+    Some((lo, hi))
 }
 
 /// [`SoundSums`] of `path` over the box of `order`.
