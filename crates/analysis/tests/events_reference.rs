@@ -16,15 +16,13 @@ use rtpipe_model::{Join, Nanos, Spec};
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap, VecDeque};
 
-/// A tiny xorshift generator: the reference owns its randomness.
-struct Rng(u64);
+/// The reference's own stream of draws (the workspace's seeded generator,
+/// which no analysis code reads).
+struct Rng(rtpipe_model::gen::Rng);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
+        self.0.next_u64()
     }
 
     /// Uniform in [lo, hi].
@@ -103,7 +101,7 @@ impl<'a> Sim<'a> {
                 places[i].push((k, s));
             }
         }
-        let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        let mut rng = Rng(rtpipe_model::gen::Rng::new(seed));
         let worst_case = rng.next().is_multiple_of(3);
         let mut sim = Sim {
             spec,

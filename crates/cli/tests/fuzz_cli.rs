@@ -24,16 +24,13 @@ const EXAMPLES: [&str; 7] = [
     "cleanflight-design.toml",
 ];
 
-/// splitmix64: small, seedable, no dependency.
-struct Rng(u64);
+/// The draws of a seed: the workspace's SplitMix64 stream
+/// (`rtpipe_model::gen::Rng`) with the picks this test makes.
+struct Rng(rtpipe_model::gen::Rng);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     fn below(&mut self, n: usize) -> usize {
         (self.next() % n.max(1) as u64) as usize
@@ -241,7 +238,7 @@ fn command(r: &mut Rng) -> (Vec<String>, Vec<String>) {
 }
 
 fn run_case(seed: u64, root: &Path, texts: &[String]) -> Result<i32, String> {
-    let mut r = Rng(seed);
+    let mut r = Rng(rtpipe_model::gen::Rng::new(seed));
     let base = &texts[r.below(texts.len())];
     let spec = if r.chance(60) {
         mutate(base, &mut r)

@@ -162,13 +162,8 @@ fn the_default_sub_step_tracks_a_64_times_finer_one() {
             airborne(p, 50.0);
         }
         let hover = coarse.hover_cmd();
-        let mut x = 0x9E37_79B9_7F4A_7C15u64;
-        let mut rnd = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = rtpipe_model::gen::Rng::new(1);
+        let mut rnd = || rng.unit();
         let (mut rate_err, mut sf_err, mut pos_err) = (0.0f64, 0.0f64, 0.0f64);
         for k in 0..400u64 {
             let cmd = std::array::from_fn(|_| (hover + 0.3 * (rnd() - 0.5)).clamp(0.0, 1.0));

@@ -482,13 +482,11 @@ mod tests {
     fn the_heap_is_bounded_whatever_the_count() {
         // Distinct values over 40 octaves: the worst a run's latencies do.
         let mut h = Histogram::with_exact_cap(CAP);
-        let mut rng = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = rtpipe_model::gen::Rng::new(1);
         let mut held = Vec::new();
         for k in 0..4_000_000u64 {
-            rng ^= rng << 13;
-            rng ^= rng >> 7;
-            rng ^= rng << 17;
-            h.push((rng >> (24 + rng % 40)) as Nanos);
+            let x = rng.next_u64();
+            h.push((x >> (24 + x % 40)) as Nanos);
             assert!(
                 h.heap_bytes() <= h.max_heap_bytes(),
                 "{} at {k}",

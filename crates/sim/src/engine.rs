@@ -2,8 +2,8 @@
 //! job, reads and publishes at the instants the model says.
 
 use crate::release_heap::ReleaseHeap;
-use crate::rng::Rng;
 use crate::server::{Cbs, Pibs, Sporadic};
+use crate::Rng;
 use crate::*;
 use rtpipe_joblog::{BadChain, JobRecord, Provenance, Segment, SimResult, TaskStats};
 use rtpipe_model::policy::{ranks, Budget as Kind, Preemption};

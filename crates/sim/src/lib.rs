@@ -63,14 +63,16 @@ mod locks;
 pub mod observe;
 mod overheads;
 mod release_heap;
-mod rng;
 pub mod search;
 pub mod server;
 
 pub use config::*;
 pub(crate) use engine::*;
 pub(crate) use locks::Locks;
-pub use rng::Rng;
+/// The simulator's random numbers (execution times, random phasing, the
+/// adversarial search): the workspace's one seeded generator, whose
+/// sequence is pinned (`rtpipe_model::gen::Rng`).
+pub use rtpipe_model::gen::Rng;
 
 pub use bodies::{simulate_bodies, simulate_bodies_with_progress, simulate_bodies_with_rows};
 use rtpipe_joblog::SimResult;

@@ -128,7 +128,7 @@ impl ReleaseHeap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
+    use crate::Rng;
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
 

@@ -33,7 +33,7 @@
 //! above 1 is a soundness bug of the analysis (or of the simulator).
 
 use crate::observe::ChainStatsExt;
-use crate::rng::Rng;
+use crate::Rng;
 use crate::{simulate, ExecModel, Jitter, Phasing, SimConfig, SimError};
 use rtpipe_analysis::{analyze, Anchor, Metric, OffsetBound};
 use rtpipe_joblog::{SimResult, Witness};

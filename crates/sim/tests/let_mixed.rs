@@ -181,13 +181,8 @@ proptest! {
 #[test]
 fn the_bounds_are_reached_on_some_mixed_systems() {
     let mut t = Tight::default();
-    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        x
-    };
+    let mut rng = rtpipe_model::gen::Rng::new(1);
+    let mut next = || rng.next_u64();
     let pick = |v: u64, s: &[Nanos]| s[(v % s.len() as u64) as usize];
     for case in 0..2_000u64 {
         let n = 2 + (next() % 4) as usize;

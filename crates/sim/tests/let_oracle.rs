@@ -14,15 +14,12 @@ use rtpipe_sim::{simulate, ExecModel, Phasing, SimConfig};
 
 const MS: Nanos = 1_000_000;
 
-/// A tiny deterministic generator (xorshift), seeded per case.
-struct Gen(u64);
+/// Seeded draws per case (the workspace's generator) and the picks this test makes.
+struct Gen(rtpipe_model::gen::Rng);
 
 impl Gen {
     fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
+        self.0.next_u64()
     }
     fn pick<T: Copy>(&mut self, v: &[T]) -> T {
         v[(self.next() % v.len() as u64) as usize]
@@ -100,7 +97,7 @@ fn simulator_measures_exactly_the_let_figures() {
     let cases = 4_000;
     let (mut hit_any, mut worst_ratio, mut reached) = (0, 0.0f64, 0);
     for case in 0..cases {
-        let mut g = Gen(0x9E37_79B9_7F4A_7C15 ^ (case as u64 + 1));
+        let mut g = Gen(rtpipe_model::gen::Rng::new(case as u64 + 1));
         let synchronous = case % 2 == 0;
         let (spec, periods) = system(&mut g, synchronous);
         let offsets: Vec<Nanos> = if synchronous {
