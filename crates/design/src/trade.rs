@@ -13,13 +13,14 @@
 use crate::api::utilization;
 use crate::bnb::Examiner;
 use crate::budget::Budget;
+use rayon::prelude::*;
 use rtpipe_analysis::Report;
 use rtpipe_model::{Nanos, Spec};
 
-/// Pairs tried per call: each costs a few dozen analyses (the other
-/// task's period by steps and bisection, then the chains' tasks
-/// lengthened), and the calls come at the dives' cadence, so the pairs
-/// are dealt out over the calls.
+/// Pairs tried per call, all from one point and in parallel: each costs a
+/// few dozen analyses (the other task's period by steps and bisection,
+/// then the chains' tasks lengthened), and the calls come at the dives'
+/// cadence, so the pairs are dealt out over the calls.
 const TRADES_PER_CALL: usize = 8;
 
 /// A trial's period falls by this factor per step until it verifies.
@@ -102,19 +103,9 @@ impl Examiner<'_, '_> {
         if state.fruitless >= pairs.len() {
             (k, u) = self.kicked(&from, state, budget)?;
         } else {
-            for _ in 0..TRADES_PER_CALL.min(pairs.len()) {
-                if budget.out_of_time() {
-                    break;
-                }
-                let (a, b) = pairs[state.cursor % pairs.len()];
-                state.cursor += 1;
-                state.fruitless += 1;
-                if let Some(t) = self.trade_one(&k, (a, b), budget) {
-                    let v = self.bound(&t);
-                    if v < u * (1.0 - 1e-9) {
-                        (k, u, state.fruitless) = (t, v, 0);
-                    }
-                }
+            match self.trade_batch(&k, u, &pairs, state, budget) {
+                Some((t, v)) => (k, u, state.fruitless) = (t, v, 0),
+                None => state.fruitless += TRADES_PER_CALL.min(pairs.len()),
             }
             if state.walker.is_some() {
                 state.walker = Some((k.clone(), u));
@@ -127,6 +118,37 @@ impl Examiner<'_, '_> {
         assert!(ok, "a traded design no longer verifies");
         let u = utilization(&spec);
         (u < best.2).then_some((spec, report, u))
+    }
+
+    /// The next [`TRADES_PER_CALL`] pairs (cyclically from the cursor),
+    /// each traded from `k` (of U `u`) in parallel: the best trade below
+    /// `u` (the first in the pairs' order among equals, so the answer is
+    /// the same on any number of threads), if any.
+    fn trade_batch(
+        &self,
+        k: &[u32],
+        u: f64,
+        pairs: &[(usize, usize)],
+        state: &mut Trades,
+        budget: &Budget,
+    ) -> Option<(Vec<u32>, f64)> {
+        let batch: Vec<(usize, usize)> = (0..TRADES_PER_CALL.min(pairs.len()))
+            .map(|j| pairs[(state.cursor + j) % pairs.len()])
+            .collect();
+        state.cursor += batch.len();
+        let traded: Vec<Option<(Vec<u32>, f64)>> = batch
+            .into_par_iter()
+            .map(|pair| {
+                let t = self.trade_one(k, pair, budget)?;
+                let v = self.bound(&t);
+                Some((t, v))
+            })
+            .collect();
+        traded
+            .into_iter()
+            .flatten()
+            .filter(|(_, v)| *v < u * (1.0 - 1e-9))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
     }
 
     /// The next kick from the incumbent `from`, made the walking point
