@@ -33,7 +33,7 @@ mod paper;
 mod pieces;
 use link::least_link;
 use paper::{paper_bounds, paper_forms};
-pub use pieces::{paper_pieces, sound_pieces, MinSum, Piece, SoundSums};
+pub use pieces::{most_ranges, paper_pieces, sound_pieces, MinSum, Piece, SoundSums};
 
 /// Lower bounds over a box of periods.
 #[derive(Debug, Clone, PartialEq)]

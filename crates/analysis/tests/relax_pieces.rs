@@ -10,7 +10,9 @@
 //! point is checked against the part that holds it, and the chains in
 //! parts are counted too.
 
-use rtpipe_analysis::relax::{paper_monotone, paper_pieces, relax, sound_pieces, MinSum};
+use rtpipe_analysis::relax::{
+    most_ranges, paper_monotone, paper_pieces, relax, sound_pieces, MinSum,
+};
 use rtpipe_analysis::{analyze, Anchor, Metric, Report};
 use rtpipe_model::gen::{random_system, GenConfig, Rng};
 use rtpipe_model::{Nanos, PeriodSpec, SchedTest, Scheduler, Spec};
@@ -104,14 +106,16 @@ fn shared_pieces(e: &MinSum, periods: usize) -> usize {
 
 /// What [`pieces_below`] checked: chains with pieces, sound reaction
 /// pieces that share a slope, those that share it with two stages or
-/// more, and chains whose box was split into parts
-/// (`relax::sound_pieces`' partition by the orders the periods decide).
+/// more, chains whose box was split into parts
+/// (`relax::sound_pieces`' partition by the orders the periods decide),
+/// and those where one task's period was cut twice or more (a staircase).
 #[derive(Default)]
 struct Checked {
     with: usize,
     shared: usize,
     long: usize,
     split: usize,
+    stairs: usize,
 }
 
 impl std::ops::AddAssign for Checked {
@@ -120,6 +124,7 @@ impl std::ops::AddAssign for Checked {
         self.shared += o.shared;
         self.long += o.long;
         self.split += o.split;
+        self.stairs += o.stairs;
     }
 }
 
@@ -144,7 +149,7 @@ fn pieces_below(
     assert!(inside, "{what}: probe {t:?} outside the box {lo:?}..{hi:?}");
     let r = relax(spec, lo, hi, imposed, false);
     let report = analyze(&at(spec, t));
-    let (mut with, mut shared, mut long, mut split) = (0, 0, 0, 0);
+    let (mut with, mut shared, mut long, mut split, mut stairs) = (0, 0, 0, 0, 0);
     for k in 0..spec.chains.len() {
         let fig = |m, sound, a| figure(&report, k, m, sound, a);
         let w = |s: &str| format!("{what}: chain {k} {s}");
@@ -158,6 +163,7 @@ fn pieces_below(
                 .all(|(e, f, ev)| e.within == f.within && f.within == ev.within));
             with += 1;
             split += usize::from(parts.len() > 1);
+            stairs += usize::from(most_ranges(&parts) > 2);
             shared += shared_pieces(e, 2);
             long += shared_pieces(e, 3);
             let least = |s: &MinSum| s.at(t);
@@ -198,6 +204,7 @@ fn pieces_below(
         shared,
         long,
         split,
+        stairs,
     }
 }
 
@@ -279,6 +286,7 @@ fn pieces_bound_every_point_of_a_box_from_below() {
         shared,
         long,
         split,
+        ..
     } = checked;
     println!(
         "{with} chains with pieces, {shared} shared pieces, {long} with two stages or more, \
@@ -404,4 +412,73 @@ fn parts_bound_both_sides_of_a_decided_order() {
     }
     println!("{probes} chain checks, {split} of them in parts");
     assert!(split > SYSTEMS as usize, "only {split} chains in parts");
+}
+
+/// Boxes where a chain task `a`'s period is open across the longest
+/// periods of every other task on its CPU (each open below its own
+/// period), every other period fixed: `a`'s range is cut at several of
+/// them (`R_a` is a staircase in `T_a`, `relax::sound_pieces`' parts), and
+/// each part's pieces are below the analysis, probed just above each
+/// step, just below it and anywhere.
+#[test]
+fn parts_bound_every_step_of_a_staircase() {
+    let (mut probes, mut stairs) = (0, 0);
+    for seed in 0..SYSTEMS {
+        let spec = system(seed);
+        if spec.scheduler != Scheduler::Rm {
+            continue;
+        }
+        let t: Vec<Nanos> = spec
+            .tasks
+            .iter()
+            .map(|x| x.fixed_period().expect("fixed"))
+            .collect();
+        let mut rng = Rng::new(seed ^ 0x57a1);
+        let floor = |i: usize| {
+            let x = &spec.tasks[i];
+            x.budget().max(x.deadline_given.unwrap_or(1)).max(1)
+        };
+        let chain_tasks: Vec<usize> = spec.chains.iter().flat_map(|c| c.path.clone()).collect();
+        for &a in &chain_tasks {
+            let mates: Vec<usize> = (0..t.len())
+                .filter(|&b| b != a && spec.tasks[b].cpu == spec.tasks[a].cpu)
+                .collect();
+            if mates.len() < 2 {
+                continue;
+            }
+            let (mut lo, mut hi) = (t.clone(), t.clone());
+            let least = mates.iter().map(|&b| t[b]).min().unwrap_or(t[a]);
+            let top = mates.iter().map(|&b| t[b]).max().unwrap_or(t[a]).max(t[a]);
+            lo[a] = (t[a].min(least) / 2).max(floor(a));
+            hi[a] = top * 2;
+            for &b in &mates {
+                lo[b] = (t[b] / 2).max(floor(b)).min(t[b]);
+            }
+            let span =
+                |rng: &mut Rng, l: Nanos, h: Nanos| l + (rng.unit() * (h - l) as f64) as Nanos;
+            let steps: Vec<Nanos> = mates.iter().map(|&b| hi[b] + 1).collect();
+            for k in 0..3 * steps.len() + 2 {
+                let mut point = t.clone();
+                for &b in &mates {
+                    point[b] = span(&mut rng, lo[b], hi[b]);
+                }
+                let step = steps[k % steps.len()];
+                point[a] = match k / steps.len() {
+                    0 => step,
+                    1 => step - 1,
+                    _ => span(&mut rng, lo[a], hi[a]),
+                }
+                .clamp(lo[a], hi[a]);
+                let what = format!("seed {seed} task {a} probe {k}");
+                let c = pieces_below(&spec, (&lo, &hi), &[], &point, (&what, false));
+                probes += c.with;
+                stairs += c.stairs;
+            }
+        }
+    }
+    println!("{probes} chain checks, {stairs} of them in a staircase");
+    assert!(
+        stairs > SYSTEMS as usize,
+        "only {stairs} chains in a staircase"
+    );
 }

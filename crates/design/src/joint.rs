@@ -191,7 +191,7 @@ pub(crate) struct Split {
 /// shares summing to the budgets, Σ C/T = Σ_limits Σ shares/T + the rest
 /// ≥ Σ_limits least + Σ C/hi over the tasks in no limit. The shares start
 /// from `start` (a parent box's; equal where it has none) and move,
-/// [`SHARE_ROUNDS`] times, towards the limits whose least wants the task's
+/// [`SHARE_ROUNDS`] times (`root_rounds` without a parent's), towards the limits whose least wants the task's
 /// period shortest (the bound is concave in the shares, 1/T_i its slope);
 /// the best round is the bound, and its shares are what a sub-box starts
 /// from (a warm start: the ascent goes on down the search tree). `None`: some limit holds nowhere in the box.
@@ -200,7 +200,7 @@ pub(crate) fn split_bound(
     limits: &[SplitLimit],
     lo: &[Nanos],
     hi: &[Nanos],
-    start: &Shares,
+    (start, root_rounds): (&Shares, usize),
 ) -> Option<Split> {
     let n = lo.len();
     let members: Vec<Vec<bool>> = limits.iter().map(|l| tasks_of(&l.sums, n)).collect();
@@ -218,7 +218,13 @@ pub(crate) fn split_bound(
     let mut shares = initial_shares(budget, limits, &members, &count, start);
     let shared = count.iter().any(|&c| c > 1);
     let mut best: Option<Split> = None;
-    let rounds = if shared { SHARE_ROUNDS } else { 1 };
+    // The root's shares (no parent's to start from) are where every box
+    // below starts: the ascent may run longer there.
+    let rounds = match (shared, start.0.is_empty()) {
+        (false, _) => 1,
+        (true, true) => root_rounds,
+        (true, false) => SHARE_ROUNDS,
+    };
     for round in 0..rounds {
         let mut total = rest;
         let mut minimisers = Vec::with_capacity(limits.len());
@@ -321,8 +327,14 @@ fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option
 }
 
 /// Rounds of moving the shares in [`split_bound`], per box (from its
-/// parent's shares, so a box at depth d has had 8(d + 1)).
-const SHARE_ROUNDS: usize = 8;
+/// parent's shares, so a box at depth d has had 64 + 8d).
+pub(crate) const SHARE_ROUNDS: usize = 8;
+
+/// Rounds of moving the shares at a box with no parent's shares (the
+/// root): docs/design.md, "The lower bound, round seven" (the bounds
+/// stopped rising past 32 rounds; 32 at every box cost the search four
+/// fifths of its boxes).
+pub(crate) const ROOT_SHARE_ROUNDS: usize = 64;
 
 /// Each shared task's budget anew among its limits, each share scaled by
 /// 1/T_i at that limit's minimiser (a multiplicative ascent step; 1/T_i is

@@ -107,27 +107,34 @@ pub(crate) fn small_problems(count: u64, mut each: impl FnMut(u64, &Examiner, us
     }
 }
 
-/// Whether some chain's sound pieces over the box `lo..=hi` (axis
-/// indices) come in parts (`relax::sound_pieces`' partition by the orders
-/// the periods decide).
-fn in_parts(ex: &Examiner, lo: &[u32], hi: &[u32]) -> bool {
+/// Over the box `lo..=hi` (axis indices), whether some chain's sound
+/// pieces come in parts (`relax::sound_pieces`' partition by the orders
+/// the periods decide), and whether some task's period is cut twice or
+/// more there (a staircase).
+fn in_parts(ex: &Examiner, lo: &[u32], hi: &[u32]) -> (bool, bool) {
     let spec = ex.p.spec;
     let (lo, hi) = (ex.periods(lo), ex.periods(hi));
     let r = rtpipe_analysis::relax::relax(spec, &lo, &hi, &[], false);
-    (0..spec.chains.len()).any(|k| {
-        rtpipe_analysis::relax::sound_pieces(spec, (&lo, &hi), &[], &r, k)
-            .is_some_and(|parts| parts.len() > 1)
-    })
+    let ranges = (0..spec.chains.len())
+        .filter_map(|k| rtpipe_analysis::relax::sound_pieces(spec, (&lo, &hi), &[], &r, k))
+        .map(|parts| rtpipe_analysis::relax::most_ranges(&parts))
+        .max()
+        .unwrap_or(1);
+    (ranges > 1, ranges > 2)
 }
 
 #[test]
 fn the_root_bound_is_below_the_brute_force_optimum() {
-    let (mut lifted, mut parts) = (0, 0);
+    let (mut lifted, mut parts, mut stairs) = (0, 0, 0);
     small_problems(600, |seed, ex, n, opts| {
         let mode = opts.mode;
         let hi: Vec<u32> = ex.axes.iter().map(|a| a.len() - 1).collect();
         let plain = ex.bound(&hi);
-        parts += usize::from(mode == Mode::Sound && in_parts(ex, &vec![0; n], &hi));
+        if mode == Mode::Sound {
+            let (split, staircase) = in_parts(ex, &vec![0; n], &hi);
+            parts += usize::from(split);
+            stairs += usize::from(staircase);
+        }
         let root = Node {
             lo: vec![0; n],
             hi,
@@ -158,9 +165,10 @@ fn the_root_bound_is_below_the_brute_force_optimum() {
         );
         lifted += usize::from(bound > plain * (1.0 + 1e-6));
     });
-    println!("{lifted} root bounds lifted, {parts} roots in parts");
+    println!("{lifted} root bounds lifted, {parts} roots in parts, {stairs} in a staircase");
     assert!(lifted >= 30, "the chains lifted only {lifted} root bounds");
     assert!(parts >= 30, "only {parts} roots in parts");
+    assert!(stairs >= 20, "only {stairs} roots in a staircase");
 }
 
 /// Below the root, where the pieces' shared slopes and the relaxation's
@@ -170,7 +178,7 @@ fn the_root_bound_is_below_the_brute_force_optimum() {
 /// of the box).
 #[test]
 fn split_boxes_bound_their_own_optimum() {
-    let (mut boxes, mut parts) = (0, 0);
+    let (mut boxes, mut parts, mut stairs) = (0, 0, 0);
     small_problems(600, |seed, ex, n, opts| {
         let hi: Vec<u32> = ex.axes.iter().map(|a| a.len() - 1).collect();
         let root = Node {
@@ -188,7 +196,11 @@ fn split_boxes_bound_their_own_optimum() {
             );
             let best = brute_force_in(ex, &node.lo, &node.hi);
             boxes += usize::from(depth > 0);
-            parts += usize::from(opts.mode == Mode::Sound && in_parts(ex, &node.lo, &node.hi));
+            if opts.mode == Mode::Sound {
+                let (split, staircase) = in_parts(ex, &node.lo, &node.hi);
+                parts += usize::from(split);
+                stairs += usize::from(staircase);
+            }
             let (node, branching) = match ex.examine(node, None) {
                 Fate::Pruned => {
                     assert_eq!(best, None, "{what}: pruned a box with a verified point");
@@ -212,7 +224,8 @@ fn split_boxes_bound_their_own_optimum() {
             }
         }
     });
-    println!("{boxes} boxes below the root, {parts} boxes in parts");
+    println!("{boxes} boxes below the root, {parts} boxes in parts, {stairs} in a staircase");
     assert!(boxes >= 700, "only {boxes} boxes below the root");
     assert!(parts >= 100, "only {parts} boxes in parts");
+    assert!(stairs >= 30, "only {stairs} boxes in a staircase");
 }

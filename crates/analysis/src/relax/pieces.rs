@@ -160,6 +160,18 @@ pub fn sound_pieces(
     Some(parts.into_iter().map(part_sums).collect())
 }
 
+/// The most ranges one task's period takes across `parts` (one
+/// [`sound_pieces`] answer): 1 uncut, 2 cut once, 3 or more a staircase
+/// (`regions`); what the pieces' tests count.
+pub fn most_ranges(parts: &[SoundSums]) -> usize {
+    let mut ranges: Vec<(usize, Nanos, Nanos)> =
+        parts.iter().flat_map(|p| p.0.within.clone()).collect();
+    ranges.sort_unstable();
+    ranges.dedup();
+    let per_task = |i: usize| ranges.iter().filter(|r| r.0 == i).count();
+    ranges.iter().map(|r| per_task(r.0)).max().unwrap_or(1)
+}
+
 /// The box `lo..=hi` with each (task, l, h) of `within` narrowing that
 /// task's period to `l..=h`; `None` where that leaves it empty.
 fn narrow(
@@ -185,57 +197,90 @@ fn chain_sums(spec: &Spec, order: &Order, times: &Times, path: &[usize]) -> Opti
 }
 
 /// Parts of a box for a chain at most: each costs the split bound its
-/// sums.
-const MAX_REGIONS: usize = 8;
+/// sums (docs/design.md, "The lower bound, round seven": with 8 or 16
+/// parts the staircase left waters-50-1's bound below one cut per task's,
+/// with 32 above it).
+const MAX_REGIONS: usize = 32;
+
+/// A part of a box: the (task, lo, hi) ranges it narrows.
+type Within = Vec<(usize, Nanos, Nanos)>;
 
 /// A partition of the box by the periods of `path`'s tasks, each part
 /// given by the ranges it narrows (`MinSum::within`): a chain task `a`'s
-/// period is split at `hi_b + 1` for a task `b` ranked by period with it
-/// whose order against `a` the box leaves open, so that in the upper part
-/// `b` is above `a` at every point (`T_b ≤ hi_b < T_a`) and the part's
-/// response times of `a` count it. Splits with the most interference
-/// above them first, one per chain task, while the parts are at most
-/// [`MAX_REGIONS`]; one part (the whole box) where there is none.
-fn regions(order: &Order, path: &[usize]) -> Vec<Vec<(usize, Nanos, Nanos)>> {
-    let mut splits: Vec<(Nanos, usize, Nanos)> = Vec::new();
-    for (k, &a) in path.iter().enumerate() {
-        if path[..k].contains(&a) {
-            continue;
-        }
-        if let Some((gain, s)) = best_split(order, a) {
-            splits.push((gain, a, s));
+/// period is cut at `hi_b + 1` for a task `b` ranked by period with it
+/// whose order against `a` the box leaves open, so that above the cut `b`
+/// is above `a` at every point (`T_b ≤ hi_b < T_a`) and the parts' response
+/// times of `a` count it. `R_a` is a staircase in `T_a` (each `hi_b + 1`
+/// adds b's job), so a task may be cut several times: each chain task's
+/// range becomes a row of intervals, the cut with the most interference
+/// above it within its interval first ([`best_split`]), while the product
+/// of the rows' lengths (the parts) is at most [`MAX_REGIONS`]; the parts
+/// are that product. One part (the whole box) where there is no cut.
+fn regions(order: &Order, path: &[usize]) -> Vec<Within> {
+    let mut tasks: Vec<usize> = Vec::new();
+    for &a in path {
+        if !tasks.contains(&a) {
+            tasks.push(a);
         }
     }
-    splits.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
-    let mut parts: Vec<Vec<(usize, Nanos, Nanos)>> = vec![Vec::new()];
-    for (_, a, s) in splits {
-        if parts.len() * 2 > MAX_REGIONS {
-            break;
-        }
-        let (lo, hi) = (order.lo[a], order.hi[a]);
+    let mut rows: Vec<Vec<(Nanos, Nanos)>> = tasks
+        .iter()
+        .map(|&a| vec![(order.lo[a], order.hi[a])])
+        .collect();
+    while let Some((k, j, s)) = next_cut(order, &tasks, &rows) {
+        let (l, h) = rows[k][j];
+        rows[k].splice(j..=j, [(l, s - 1), (s, h)]);
+    }
+    let mut parts: Vec<Within> = vec![Vec::new()];
+    for (&a, row) in tasks.iter().zip(&rows).filter(|(_, row)| row.len() > 1) {
         parts = parts
             .into_iter()
             .flat_map(|p| {
-                let with = |l: Nanos, h: Nanos| {
+                row.iter().map(move |&(l, h)| {
                     let mut q = p.clone();
                     q.push((a, l, h));
                     q
-                };
-                [with(lo, s - 1), with(s, hi)]
+                })
             })
             .collect();
     }
     parts
 }
 
-/// Where to split task `a`'s period (`regions`): the point `s` in
-/// `lo_a < s ≤ hi_a` after the longest period `hi_b` of the tasks whose
-/// order against `a` it decides, with the interference those tasks add
-/// above it (`Order::added_above`, summed); the most interference
-/// weighted by the share of `a`'s range above the point. `None`: no task
-/// to decide.
-fn best_split(order: &Order, a: usize) -> Option<(Nanos, Nanos)> {
-    let (lo, hi) = (order.lo[a], order.hi[a]);
+/// The next cut of [`regions`]: (chain task's row, interval, point), the
+/// one with the most interference above it whose row may still grow
+/// within [`MAX_REGIONS`] parts (ties: the earlier task, the earlier
+/// interval); `None`: none.
+fn next_cut(
+    order: &Order,
+    tasks: &[usize],
+    rows: &[Vec<(Nanos, Nanos)>],
+) -> Option<(usize, usize, Nanos)> {
+    let parts: usize = rows.iter().map(Vec::len).product();
+    let mut best: Option<(Nanos, usize, usize, Nanos)> = None;
+    for (k, (&a, row)) in tasks.iter().zip(rows).enumerate() {
+        if parts / row.len() * (row.len() + 1) > MAX_REGIONS {
+            continue;
+        }
+        for (j, &range) in row.iter().enumerate() {
+            if let Some((gain, s)) = best_split(order, a, range) {
+                if best.is_none_or(|b| gain > b.0) {
+                    best = Some((gain, k, j, s));
+                }
+            }
+        }
+    }
+    best.map(|(_, k, j, s)| (k, j, s))
+}
+
+/// Where to cut task `a`'s period within its interval `lo..=hi` of the
+/// box (`regions`): the point `s` in `lo < s ≤ hi` after the longest
+/// period `hi_b` of the tasks whose order against `a` it decides there,
+/// with the interference those tasks add above it (`Order::added_above`,
+/// summed; tasks with `hi_b < lo` are above in the whole interval
+/// already); the most interference weighted by the share of the interval
+/// above the point. `None`: no task to decide.
+fn best_split(order: &Order, a: usize, (lo, hi): (Nanos, Nanos)) -> Option<(Nanos, Nanos)> {
     let mut points: Vec<(Nanos, Nanos)> = (0..order.lo.len())
         .filter(|&b| b != a && order.ranked_by_period(a, b) && order.maybe_above(b, a))
         .filter(|&b| lo <= order.hi[b] && order.hi[b] < hi)
