@@ -677,8 +677,8 @@ struct Change {
     /// The task's unit.
     unit: usize,
     /// The streams whose jitter changed, (old, new), when both are bounded
-    /// and of the same periods: where each of them keeps its η⁺, so does
-    /// their sum.
+    /// (then of the same periods): where each of them keeps its η⁺, so
+    /// does their sum.
     moved: Option<Vec<(Stream, Stream)>>,
     same: Nanos,
 }
@@ -687,23 +687,35 @@ impl Change {
     fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
         let unit = unit_of(spec, j);
         match (old, new) {
-            (Some(a), Some(b)) if same_periods(a, b) => Change {
-                unit,
-                moved: Some(
-                    a.streams
-                        .iter()
-                        .zip(&b.streams)
-                        .filter(|(s, t)| s != t)
-                        .map(|(&s, &t)| (s, t))
-                        .collect(),
-                ),
-                same: a.same_up_to(b),
-            },
+            (Some(a), Some(b)) => {
+                // A task's streams and their periods are the spec's (its
+                // sources', through `any` and the slowest trigger of an
+                // `all`); only their jitters grow. The warm analyses lean on
+                // it: they skip the load guard, which reads works and
+                // periods alone (`thread_rta::fifo_response_from`,
+                // `sched::level_response_from`).
+                assert!(
+                    same_periods(a, b),
+                    "task {j}'s activations changed their periods"
+                );
+                Change::moved(unit, a, b)
+            }
             _ => Change {
                 unit,
                 moved: None,
                 same: 0,
             },
+        }
+    }
+
+    /// The change of a task of `unit` from `a` to `b`, the same streams
+    /// with grown jitters.
+    fn moved(unit: usize, a: &Arrivals, b: &Arrivals) -> Self {
+        let moved = a.streams.iter().zip(&b.streams).filter(|(s, t)| s != t);
+        Change {
+            unit,
+            moved: Some(moved.map(|(&s, &t)| (s, t)).collect()),
+            same: a.same_up_to(b),
         }
     }
 }
