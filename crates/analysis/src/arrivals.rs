@@ -91,14 +91,19 @@ impl Arrivals {
     }
 
     /// [`Arrivals::any`] of the inputs each [`delayed`](Self::delayed) by
-    /// its extra (`None` where one is), in one list, with no copy of each
-    /// delayed input on the way.
+    /// its extra (`None` where one is, or where an input is `None`: a
+    /// trigger unbounded), in one list, with no copy of each delayed input
+    /// and no list of the inputs on the way.
     pub fn any_delayed<'a>(
-        inputs: impl Iterator<Item = (&'a Arrivals, Nanos)> + Clone,
+        inputs: impl Iterator<Item = Option<(&'a Arrivals, Nanos)>> + Clone,
     ) -> Option<Arrivals> {
-        let len = inputs.clone().map(|(a, _)| a.streams.len()).sum();
+        let len = inputs
+            .clone()
+            .map(|input| input.map_or(0, |(a, _)| a.streams.len()))
+            .sum();
         let mut streams = Vec::with_capacity(len);
-        for (a, extra) in inputs {
+        for input in inputs {
+            let (a, extra) = input?;
             for &s in &a.streams {
                 streams.push(s.delayed(extra)?);
             }
@@ -215,6 +220,33 @@ mod tests {
         assert_eq!(Arrivals::all(&[&p]), p);
         // Output jitter.
         assert_eq!(p.delayed(4), Some(Arrivals::periodic(10, 4)));
+    }
+
+    #[test]
+    fn any_delayed_is_any_of_the_delayed_inputs_and_none_where_one_is() {
+        let (a, b) = (
+            Arrivals::periodic(10, 3),
+            Arrivals::any(&[&Arrivals::periodic(7, 0), &Arrivals::periodic(20, 5)]),
+        );
+        let delayed = [a.delayed(4).unwrap(), b.delayed(9).unwrap()];
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, 4)), Some((&b, 9))].into_iter()),
+            Some(Arrivals::any(&[&delayed[0], &delayed[1]]))
+        );
+        // An unbounded input, first or last: no figure, as when a delay
+        // passes MAX_TIME.
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, 4)), None].into_iter()),
+            None
+        );
+        assert_eq!(
+            Arrivals::any_delayed([None, Some((&b, 9))].into_iter()),
+            None
+        );
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, MAX_TIME))].into_iter()),
+            None
+        );
     }
 
     #[test]

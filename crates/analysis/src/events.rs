@@ -748,8 +748,7 @@ fn activation(
             let inputs = triggers
                 .iter()
                 .map(|&p| Some((arrivals[p].as_ref()?, delay[p]?)));
-            let inputs: Option<Vec<(&Arrivals, Nanos)>> = inputs.collect();
-            Arrivals::any_delayed(inputs?.into_iter())
+            Arrivals::any_delayed(inputs)
         }
         Some((triggers, Join::All)) => {
             let outputs: Vec<Arrivals> = triggers
