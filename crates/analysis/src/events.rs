@@ -742,21 +742,16 @@ fn activation(
         None => t
             .fixed_period()
             .map(|period| Arrivals::periodic(period, t.jitter)),
-        Some((triggers, Join::Any)) => {
+        Some((triggers, join)) => {
             // Every trigger's publications: its activations delayed by its
             // output jitter (`None` while one is unbounded).
             let inputs = triggers
                 .iter()
                 .map(|&p| Some((arrivals[p].as_ref()?, delay[p]?)));
-            Arrivals::any_delayed(inputs)
-        }
-        Some((triggers, Join::All)) => {
-            let outputs: Vec<Arrivals> = triggers
-                .iter()
-                .map(|&p| arrivals[p].as_ref()?.delayed(delay[p]?))
-                .collect::<Option<_>>()?;
-            let refs: Vec<&Arrivals> = outputs.iter().collect();
-            Some(Arrivals::all(&refs))
+            match join {
+                Join::Any => Arrivals::any_delayed(inputs),
+                Join::All => Arrivals::all_delayed(inputs),
+            }
         }
     }
 }
