@@ -25,6 +25,23 @@ pub const ONCE: Stream = Stream {
     jitter: 0,
 };
 
+/// The input of least rate ([`Arrivals::rate`]), the first of those
+/// equally slow (`None`: no input), with what goes with it.
+fn slowest<'a, T>(inputs: impl Iterator<Item = (&'a Arrivals, T)>) -> Option<(&'a Arrivals, T)> {
+    inputs.min_by(|(a, _), (b, _)| a.rate().total_cmp(&b.rate()))
+}
+
+/// [`Arrivals::all`]'s join of `count` inputs whose slowest is `slowest`:
+/// one input is the input itself, more are one event and the slowest's.
+fn join_all(slowest: Arrivals, count: usize) -> Arrivals {
+    if count == 1 {
+        return slowest;
+    }
+    let mut streams = vec![ONCE];
+    streams.extend(slowest.streams);
+    Arrivals { streams }
+}
+
 impl Stream {
     /// The same events, each up to `extra` later ([`Arrivals::delayed`]'s
     /// rule for one stream; `None` when the jitter passes [`MAX_TIME`]).
@@ -91,14 +108,19 @@ impl Arrivals {
     }
 
     /// [`Arrivals::any`] of the inputs each [`delayed`](Self::delayed) by
-    /// its extra (`None` where one is), in one list, with no copy of each
-    /// delayed input on the way.
+    /// its extra (`None` where one is, or where an input is `None`: a
+    /// trigger unbounded), in one list, with no copy of each delayed input
+    /// and no list of the inputs on the way.
     pub fn any_delayed<'a>(
-        inputs: impl Iterator<Item = (&'a Arrivals, Nanos)> + Clone,
+        inputs: impl Iterator<Item = Option<(&'a Arrivals, Nanos)>> + Clone,
     ) -> Option<Arrivals> {
-        let len = inputs.clone().map(|(a, _)| a.streams.len()).sum();
+        let len = inputs
+            .clone()
+            .map(|input| input.map_or(0, |(a, _)| a.streams.len()))
+            .sum();
         let mut streams = Vec::with_capacity(len);
-        for (a, extra) in inputs {
+        for input in inputs {
+            let (a, extra) = input?;
             for &s in &a.streams {
                 streams.push(s.delayed(extra)?);
             }
@@ -119,17 +141,29 @@ impl Arrivals {
     /// input k; the slowest input (least rate) is taken. One input is
     /// the input itself.
     pub fn all(inputs: &[&Arrivals]) -> Arrivals {
-        assert!(!inputs.is_empty(), "a join has inputs");
-        if let [one] = inputs {
-            return (*one).clone();
+        let slowest = slowest(inputs.iter().map(|&a| (a, ())));
+        let (slowest, ()) = slowest.expect("a join has inputs");
+        join_all(slowest.clone(), inputs.len())
+    }
+
+    /// [`Arrivals::all`] of the inputs each [`delayed`](Self::delayed) by
+    /// its extra (`None` where one is, or where an input is `None`: a
+    /// trigger unbounded), with only the slowest input delayed: a delay
+    /// keeps the periods, and so the rates that pick the slowest, and the
+    /// others are only asked whether their delay is in range.
+    pub fn all_delayed<'a>(
+        inputs: impl Iterator<Item = Option<(&'a Arrivals, Nanos)>> + Clone,
+    ) -> Option<Arrivals> {
+        let mut count = 0;
+        for input in inputs.clone() {
+            let (a, extra) = input?;
+            for &s in &a.streams {
+                s.delayed(extra)?;
+            }
+            count += 1;
         }
-        let slowest = inputs
-            .iter()
-            .min_by(|a, b| a.rate().total_cmp(&b.rate()))
-            .map_or_else(Vec::new, |a| a.streams.clone());
-        let mut streams = vec![ONCE];
-        streams.extend(slowest);
-        Arrivals { streams }
+        let (slowest, extra) = slowest(inputs.flatten()).expect("a join has inputs");
+        Some(join_all(slowest.delayed(extra)?, count))
     }
 
     /// The largest window `W` such that η⁺ of `self` and of `other` agree
@@ -215,6 +249,66 @@ mod tests {
         assert_eq!(Arrivals::all(&[&p]), p);
         // Output jitter.
         assert_eq!(p.delayed(4), Some(Arrivals::periodic(10, 4)));
+    }
+
+    #[test]
+    fn any_delayed_is_any_of_the_delayed_inputs_and_none_where_one_is() {
+        let (a, b) = (
+            Arrivals::periodic(10, 3),
+            Arrivals::any(&[&Arrivals::periodic(7, 0), &Arrivals::periodic(20, 5)]),
+        );
+        let delayed = [a.delayed(4).unwrap(), b.delayed(9).unwrap()];
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, 4)), Some((&b, 9))].into_iter()),
+            Some(Arrivals::any(&[&delayed[0], &delayed[1]]))
+        );
+        // An unbounded input, first or last: no figure, as when a delay
+        // passes MAX_TIME.
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, 4)), None].into_iter()),
+            None
+        );
+        assert_eq!(
+            Arrivals::any_delayed([None, Some((&b, 9))].into_iter()),
+            None
+        );
+        assert_eq!(
+            Arrivals::any_delayed([Some((&a, MAX_TIME))].into_iter()),
+            None
+        );
+    }
+
+    #[test]
+    fn all_delayed_is_all_of_the_delayed_inputs_and_none_where_one_is() {
+        let (p, q) = (Arrivals::periodic(10, 3), Arrivals::periodic(25, 5));
+        // Two inputs as slow: the first is taken.
+        let r = Arrivals::any(&[&Arrivals::periodic(50, 0), &Arrivals::periodic(50, 7)]);
+        let cases: [&[(&Arrivals, Nanos)]; 4] = [
+            &[(&p, 4)],
+            &[(&p, 4), (&q, 9)],
+            &[(&q, 9), (&p, 4), (&r, 2)],
+            &[(&r, 1), (&q, 0), (&r, 6)],
+        ];
+        for inputs in cases {
+            let delayed: Vec<Arrivals> =
+                inputs.iter().map(|&(a, x)| a.delayed(x).unwrap()).collect();
+            let refs: Vec<&Arrivals> = delayed.iter().collect();
+            assert_eq!(
+                Arrivals::all_delayed(inputs.iter().map(|&i| Some(i))),
+                Some(Arrivals::all(&refs)),
+                "{inputs:?}"
+            );
+        }
+        // An unbounded input, or a delay out of range on an input that is
+        // not the slowest: no figure.
+        assert_eq!(
+            Arrivals::all_delayed([Some((&q, 1)), None].into_iter()),
+            None
+        );
+        assert_eq!(
+            Arrivals::all_delayed([Some((&q, 1)), Some((&p, MAX_TIME))].into_iter()),
+            None
+        );
     }
 
     #[test]

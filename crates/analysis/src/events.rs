@@ -223,6 +223,8 @@ struct SweepLists {
     next: Vec<usize>,
     /// The downstream tasks whose activations changed ([`Deps::refresh`]).
     changed: Vec<usize>,
+    /// The streams of one change ([`Change::moved`]).
+    moved: Vec<(Stream, Stream)>,
 }
 
 /// The units' strongly connected components in the order to analyse them:
@@ -500,6 +502,7 @@ impl Deps {
             downstream,
             next,
             changed,
+            moved,
         } = lists;
         self.downstream(grown, &mut state.marked, next, downstream);
         // `marked`: the tasks whose output (jitter or activations) changed
@@ -523,7 +526,7 @@ impl Deps {
             state.marked[j] = true;
             changed.push(j);
             let old = std::mem::replace(&mut state.arrivals[j], fresh);
-            let change = Change::of(spec, j, &old, &state.arrivals[j]);
+            let change = Change::of(spec, j, &old, &state.arrivals[j], moved);
             self.readers.reading(spec, j, inside, |u| {
                 if !state.dirty[u] && self.sees(u, &change, state) {
                     state.dirty[u] = true;
@@ -673,37 +676,65 @@ impl Response {
 }
 
 /// A task's activations changed, the same up to `same`.
-struct Change {
+struct Change<'a> {
     /// The task's unit.
     unit: usize,
     /// The streams whose jitter changed, (old, new), when both are bounded
-    /// and of the same periods: where each of them keeps its η⁺, so does
-    /// their sum.
-    moved: Option<Vec<(Stream, Stream)>>,
+    /// (then of the same periods): where each of them keeps its η⁺, so
+    /// does their sum.
+    moved: Option<&'a [(Stream, Stream)]>,
     same: Nanos,
 }
 
-impl Change {
-    fn of(spec: &Spec, j: usize, old: &Option<Arrivals>, new: &Option<Arrivals>) -> Self {
+impl<'a> Change<'a> {
+    /// The change of task `j` from `old` to `new`, its moved streams in
+    /// `moved` (kept from one change to the next rather than allocated at
+    /// each).
+    fn of(
+        spec: &Spec,
+        j: usize,
+        old: &Option<Arrivals>,
+        new: &Option<Arrivals>,
+        moved: &'a mut Vec<(Stream, Stream)>,
+    ) -> Self {
         let unit = unit_of(spec, j);
         match (old, new) {
-            (Some(a), Some(b)) if same_periods(a, b) => Change {
-                unit,
-                moved: Some(
-                    a.streams
-                        .iter()
-                        .zip(&b.streams)
-                        .filter(|(s, t)| s != t)
-                        .map(|(&s, &t)| (s, t))
-                        .collect(),
-                ),
-                same: a.same_up_to(b),
-            },
+            (Some(a), Some(b)) => {
+                // A task's streams and their periods are the spec's (its
+                // sources', through `any` and the slowest trigger of an
+                // `all`); only their jitters grow. The warm analyses lean on
+                // it: they skip the load guard, which reads works and
+                // periods alone (`thread_rta::fifo_response_from`,
+                // `sched::level_response_from`).
+                assert!(
+                    same_periods(a, b),
+                    "task {j}'s activations changed their periods"
+                );
+                Change::moved(unit, a, b, moved)
+            }
             _ => Change {
                 unit,
                 moved: None,
                 same: 0,
             },
+        }
+    }
+
+    /// The change of a task of `unit` from `a` to `b`, the same streams
+    /// with grown jitters, those that moved into `moved`.
+    fn moved(
+        unit: usize,
+        a: &Arrivals,
+        b: &Arrivals,
+        moved: &'a mut Vec<(Stream, Stream)>,
+    ) -> Self {
+        moved.clear();
+        let pairs = a.streams.iter().zip(&b.streams).filter(|(s, t)| s != t);
+        moved.extend(pairs.map(|(&s, &t)| (s, t)));
+        Change {
+            unit,
+            moved: Some(moved),
+            same: a.same_up_to(b),
         }
     }
 }
@@ -730,22 +761,16 @@ fn activation(
         None => t
             .fixed_period()
             .map(|period| Arrivals::periodic(period, t.jitter)),
-        Some((triggers, Join::Any)) => {
+        Some((triggers, join)) => {
             // Every trigger's publications: its activations delayed by its
             // output jitter (`None` while one is unbounded).
             let inputs = triggers
                 .iter()
                 .map(|&p| Some((arrivals[p].as_ref()?, delay[p]?)));
-            let inputs: Option<Vec<(&Arrivals, Nanos)>> = inputs.collect();
-            Arrivals::any_delayed(inputs?.into_iter())
-        }
-        Some((triggers, Join::All)) => {
-            let outputs: Vec<Arrivals> = triggers
-                .iter()
-                .map(|&p| arrivals[p].as_ref()?.delayed(delay[p]?))
-                .collect::<Option<_>>()?;
-            let refs: Vec<&Arrivals> = outputs.iter().collect();
-            Some(Arrivals::all(&refs))
+            match join {
+                Join::Any => Arrivals::any_delayed(inputs),
+                Join::All => Arrivals::all_delayed(inputs),
+            }
         }
     }
 }
@@ -980,4 +1005,24 @@ fn waits(
             (p, wait)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_change_lists_its_own_moved_streams_in_the_kept_list() {
+        let (fast, slow) = (Arrivals::periodic(10, 0), Arrivals::periodic(30, 2));
+        let a = Arrivals::any(&[&fast, &slow]);
+        let b = Arrivals::any(&[&Arrivals::periodic(10, 4), &slow]);
+        let c = Arrivals::any(&[&fast, &Arrivals::periodic(30, 9)]);
+        let mut moved = Vec::new();
+        let first = Change::moved(0, &a, &b, &mut moved);
+        assert_eq!(first.moved, Some(&[(a.streams[0], b.streams[0])][..]));
+        // The list kept from the first change holds the second's alone.
+        let second = Change::moved(0, &a, &c, &mut moved);
+        assert_eq!(second.moved, Some(&[(a.streams[1], c.streams[1])][..]));
+        assert_eq!(second.same, a.same_up_to(&c));
+    }
 }

@@ -118,9 +118,12 @@ impl FifoStops {
 
 /// [`fifo_response`]'s stops (`None`: unbounded), its iterations started
 /// from `warm`, the stops of the same thread and tasks above under
-/// activations that have only grown since (each η⁺ at least as large at
-/// every window; the event analysis' jitters only grow). The figure is the
-/// one a start from the bottom gives, step limit included.
+/// activations that have only grown since (the same works and streams'
+/// periods, each η⁺ at least as large at every window; the event
+/// analysis' jitters only grow). The figure is the one a start from the
+/// bottom gives, step limit included; the load guard, which reads the
+/// works and periods alone and passed where the warm stops were found, is
+/// not asked again.
 ///
 /// Why. Every input only grew, so every `f` is at least what it was and its
 /// least fixed point at least the old one: the old busy period is a start
@@ -145,26 +148,27 @@ pub fn fifo_response_from(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
+    let least = least_work(members, above);
     // The bound only grows with the busy period, which only grows: past
     // the limit at the old stops, it is past it at the new ones.
-    let least_work = || {
-        let works = members.iter().map(|m| m.work);
-        works
-            .chain(above.iter().map(|&(c, _)| c))
-            .filter(|&c| c > 0)
-            .min()
-    };
-    let bound = |stops: &FifoStops, least: Option<Nanos>| {
-        cold_steps_bound(members, above, stops, least) <= MAX_STEPS
-    };
-    let least = warm.and(least_work());
-    if let Some(warm) = warm.filter(|w| bound(w, least)) {
-        let stops = fifo_within(members, above, blocking, Some(warm));
-        if let Some(stops) = stops.filter(|s| bound(s, least)) {
+    let bound = |stops: &FifoStops| cold_steps_bound(members, above, stops, least) <= MAX_STEPS;
+    if let Some(warm) = warm.filter(|w| bound(w)) {
+        let stops = fifo_within(members, above, blocking, Some(warm), least);
+        if let Some(stops) = stops.filter(bound) {
             return Some(stops);
         }
     }
-    fifo_within(members, above, blocking, None)
+    fifo_within(members, above, blocking, None, least)
+}
+
+/// The least positive work among the members and the tasks above (`None`:
+/// none), `c` of [`cold_steps_bound`].
+fn least_work(members: &[Member], above: &Above) -> Option<Nanos> {
+    let works = members.iter().map(|m| m.work);
+    works
+        .chain(above.iter().map(|&(c, _)| c))
+        .filter(|&c| c > 0)
+        .min()
 }
 
 /// At most how many steps the iterations of a response whose stops are
@@ -208,8 +212,35 @@ pub fn loads<'a>(
 }
 
 /// [`fifo_response`]'s stops, each iteration started from `warm`'s where
-/// given ([`fifo_response_from`]) and from the bottom otherwise.
+/// given ([`fifo_response_from`]) and from the bottom otherwise: the
+/// candidates in order ([`candidates_in_order`]) where their figure is
+/// provably the busy period's ([`fifo_by_busy_period`]), else the busy
+/// period first. `least`: [`least_work`].
 fn fifo_within(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    warm: Option<&FifoStops>,
+    least: Option<Nanos>,
+) -> Option<FifoStops> {
+    // A warm start is a bounded analysis' stops under the same works and
+    // periods (only the jitters grew): the load was below 1 then, so it is
+    // now, and the guard is not asked again.
+    if warm.is_none() && crate::load::full(loads(members, above)) {
+        return None;
+    }
+    let in_order = candidates_in_order(members, above, blocking, warm);
+    if let Some(stops) = in_order.filter(|s| busy_first_within_limits(members, above, s, least)) {
+        return Some(stops);
+    }
+    busy_period_first(members, above, blocking, warm)
+}
+
+/// The busy period first, then each candidate: the stops of
+/// [`fifo_response`] by its definition, from `warm`'s where given, with
+/// its limits. What [`candidates_in_order`] is held against
+/// (`tests/demand.rs`).
+pub fn fifo_by_busy_period(
     members: &[Member],
     above: &Above,
     blocking: Nanos,
@@ -218,6 +249,118 @@ fn fifo_within(
     if crate::load::full(loads(members, above)) {
         return None;
     }
+    busy_period_first(members, above, blocking, warm)
+}
+
+/// Whether the busy period first ([`busy_period_first`]), from the
+/// bottom, finds `stops` within its limits: its steps are at most
+/// [`cold_steps_bound`], and its candidates (0 and every member's steps
+/// below the busy period `L`, counted member by member before merging)
+/// at most `1 + Σ_m η⁺_m(L)` (a stream (T, J) steps at `k·T − J` in
+/// `(0, L)` at most `η⁺(L) − 1` times).
+fn busy_first_within_limits(
+    members: &[Member],
+    above: &Above,
+    stops: &FifoStops,
+    least: Option<Nanos>,
+) -> bool {
+    let candidates = members
+        .iter()
+        .try_fold(1 as Nanos, |n, m| n.checked_add(m.arrivals.eta(stops.busy)));
+    let fits = candidates.is_some_and(|n| n <= MAX_CANDIDATES as Nanos);
+    fits && cold_steps_bound(members, above, stops, least) <= MAX_STEPS
+}
+
+/// The candidates in order, with no busy period iterated first (`None`:
+/// not found, so the caller iterates the busy period; never a verdict of
+/// its own). Candidate `a_0 = 0`, then each next step `a_{j+1}` of a
+/// member's η⁺(a + 1), each `finish(a_j)` iterated from the last as
+/// before, one demand for all (their windows only grow), until a job ends
+/// by the next step: `finish(a_k) ≤ a_{k+1}`. Then `finish(a_k)` is the
+/// busy period `L` and `a_0 … a_k` are its candidates, so the stops are
+/// [`busy_period_first`]'s. Why: the members' η⁺(w) is η⁺(a_k + 1) for
+/// `w` in `[a_k + 1, a_{k+1}]`, so `finish(a_k)`, which is past `a_k`,
+/// is a fixed point of the busy period's `f(w) = thread(w) + Σ η⁺_h(w)·C_h`.
+/// And no fixed point `p ≥ 1` of `f` lies below it: with `a_j` the last
+/// candidate below `p` (`j ≤ k`), `thread(p) = thread(a_j + 1)`, so `p`
+/// is a fixed point of candidate `a_j`'s iteration, whose least is
+/// `finish(a_j) ≤ p ≤ a_{j+1}`: the search would have stopped at `j`, or
+/// `j = k` and `finish(a_k) ≤ p`. The busy period from 1 (`f(1) ≥ 1`:
+/// `thread(1) ≥ 1` is asked) is `f`'s least fixed point from 1, so `L`;
+/// `a_k < L ≤ a_{k+1}`, so the candidates are those below `L`; and each
+/// candidate's iteration is the same. Where the busy period comes out a
+/// single candidate (a one-member unit whose job ends before its next
+/// activation can arrive: 554 of the bench's 629, the tenth round), this
+/// is one iteration, from `thread(1)`, where the busy period first took
+/// one from 1 and then nothing; with several, one demand and no busy
+/// period. docs/analysis.md "Cost at 1,000 tasks", the twelfth round.
+fn candidates_in_order(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
+    let thread = |delta: Nanos| -> Option<Nanos> {
+        members.iter().try_fold(blocking, |sum, m| {
+            sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
+        })
+    };
+    if thread(1)? < 1 {
+        return None;
+    }
+    let mut demand = Demand::of_arrivals(above);
+    let steps = std::cell::Cell::new(MAX_STEPS);
+    let old = warm.map_or(&[][..], |w| &w.finishes[..]);
+    let mut finishes = Vec::new();
+    let (mut a, mut finish): (Nanos, Nanos) = (0, 0);
+    loop {
+        let released = thread(a.checked_add(1)?)?;
+        // As in the busy period first: the last fixed point and the old
+        // one of the largest old candidate up to a are valid starts.
+        let known = old.partition_point(|&(b, _)| b <= a);
+        let warm_start = known.checked_sub(1).map_or(0, |k| old[k].1);
+        finish = fixed_point(finish.max(released).max(warm_start), &steps, |w| {
+            Some(released.saturating_add(demand.at(w)))
+        })?;
+        finishes.push((a, finish));
+        let next = next_step(members, a);
+        if finish <= next {
+            return Some(FifoStops {
+                busy: finish,
+                finishes,
+            });
+        }
+        if finishes.len() >= MAX_CANDIDATES {
+            return None;
+        }
+        a = next;
+    }
+}
+
+/// The least `a' > a` at which some member's η⁺(a' + 1) steps up (`k·T −
+/// J` for a stream (T, J)), or `Nanos::MAX` where none is within range.
+fn next_step(members: &[Member], a: Nanos) -> Nanos {
+    let streams = members.iter().flat_map(|m| &m.arrivals.streams);
+    let next = |s: &crate::arrivals::Stream| {
+        let k = a.checked_add(s.jitter)? / s.period + 1;
+        k.checked_mul(s.period).map(|top| top - s.jitter)
+    };
+    streams
+        .map(|s| next(s).unwrap_or(Nanos::MAX))
+        .min()
+        .unwrap_or(Nanos::MAX)
+}
+
+/// [`fifo_response`]'s stops by its definition: the busy period from 1
+/// (or `warm`'s), then each candidate from the last candidate's fixed
+/// point (or the old one's), with the step and candidate limits. The load
+/// guard is the caller's.
+fn busy_period_first(
+    members: &[Member],
+    above: &Above,
+    blocking: Nanos,
+    warm: Option<&FifoStops>,
+) -> Option<FifoStops> {
     let thread = |delta: Nanos| -> Option<Nanos> {
         members.iter().try_fold(blocking, |sum, m| {
             sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
@@ -310,6 +453,34 @@ mod tests {
             arrivals: &a,
         }];
         assert_eq!(fifo_response(&m, &[], 0), Some(3));
+    }
+
+    #[test]
+    fn a_full_load_is_unbounded_cold_and_the_warm_start_keeps_the_guard() {
+        // One member, C = T = 10: its iteration alone finds w = 10 = f(10),
+        // but at a load of 1 no busy period need end: the guard calls it
+        // unbounded. A warm start skips the guard only for stops found
+        // under the same works and periods (the guard passed there): at
+        // C = 9 the warm figure, after the jitter grew, is the cold one.
+        let x = Arrivals::periodic(10, 0);
+        let full = [Member {
+            work: 10,
+            arrivals: &x,
+        }];
+        assert_eq!(fifo_response(&full, &[], 0), None);
+        let below = [Member {
+            work: 9,
+            arrivals: &x,
+        }];
+        let stops = fifo_response_from(&below, &[], 0, None);
+        assert_eq!(stops.as_ref().map(FifoStops::response), Some(9));
+        let grown = Arrivals::periodic(10, 4);
+        let grown = [Member {
+            work: 9,
+            arrivals: &grown,
+        }];
+        let cold = fifo_response_from(&grown, &[], 0, None);
+        assert_eq!(fifo_response_from(&grown, &[], 0, stops.as_ref()), cold);
     }
 
     #[test]
@@ -414,7 +585,8 @@ mod tests {
             finishes: vec![(0, busy)],
         };
         let far = near(70_000_000_000 - 1_000_000);
-        let found = fifo_within(&member(70_000), &above, 0, Some(&far));
+        let least = least_work(&member(70_000), &above);
+        let found = fifo_within(&member(70_000), &above, 0, Some(&far), least);
         assert_eq!(found.map(|s| s.response()), Some(70_000_000_000));
         assert_eq!(
             fifo_response_from(&member(70_000), &above, 0, Some(&far)),

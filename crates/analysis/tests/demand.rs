@@ -17,7 +17,8 @@ use rtpipe_analysis::demand::Demand;
 use rtpipe_analysis::load::full;
 use rtpipe_analysis::sched::{level_response, level_response_from, OwnJobs, MAX_BUSY_JOBS};
 use rtpipe_analysis::thread_rta::{
-    self, fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES, MAX_STEPS,
+    self, fifo_by_busy_period, fifo_response, fifo_response_from, Above, Member, MAX_CANDIDATES,
+    MAX_STEPS,
 };
 use rtpipe_model::{Nanos, MAX_TIME};
 use rtpipe_testkit::check;
@@ -341,6 +342,48 @@ fn a_warm_fifo_response_is_the_one_from_the_bottom() {
                 (Some(_), Some(_)) => "warm, the same",
                 (Some(_), None) => "warm, unbounded now",
                 (None, _) => "cold",
+            })
+        },
+    );
+}
+
+#[test]
+fn the_candidates_in_order_stop_where_the_busy_period_first_does() {
+    // `fifo_response_from` takes the candidates in order, with no busy
+    // period iterated first, and stops at the first job that ends by the
+    // next step of a member's η⁺: its stops (the busy period and every
+    // candidate's finish), cold and warm after the jitters grew, must be
+    // those of the busy period first, by the definition. One member (a
+    // thread-less data-triggered task) in half the cases, loads up to
+    // overloaded.
+    let member = || (1..400 as Nanos, arrivals());
+    let members = prop_oneof![
+        1 => prop::collection::vec(member(), 1..2),
+        1 => prop::collection::vec(member(), 2..4),
+    ];
+    let above = prop::collection::vec((1..300 as Nanos, arrivals()), 0..6);
+    check(
+        "candidates in order",
+        CASES,
+        (members, above, 0..500 as Nanos, jitter_growth()),
+        |(members, above, blocking, extra)| {
+            let (m, a) = (view(&members), pairs(&above));
+            let cold = fifo_response_from(&m, &a, blocking, None);
+            prop_assert_eq!(&cold, &fifo_by_busy_period(&m, &a, blocking, None));
+            let mut k = 0;
+            let mut grow = |m: &[(Nanos, Arrivals)]| -> Vec<(Nanos, Arrivals)> {
+                m.iter()
+                    .map(|(c, a)| (*c, grown(a, &extra, &mut k)))
+                    .collect()
+            };
+            let (grown_members, grown_above) = (grow(&members), grow(&above));
+            let (gm, ga) = (view(&grown_members), pairs(&grown_above));
+            let warm = fifo_response_from(&gm, &ga, blocking, cold.as_ref());
+            prop_assert_eq!(&warm, &fifo_by_busy_period(&gm, &ga, blocking, None));
+            Ok(match cold.map(|s| s.windows().len()) {
+                None => "unbounded",
+                Some(1) => "one candidate",
+                Some(_) => "several candidates",
             })
         },
     );

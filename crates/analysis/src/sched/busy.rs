@@ -86,10 +86,13 @@ pub fn level_response_within(
 
 /// [`level_response_within`] with the fixed point `w_q` each job's
 /// iteration stopped at, in order (one per job), each iteration started
-/// from `warm`'s `w_q` where it has one, the stops of the same task and
-/// own jobs against `hp` streams whose η⁺ has only grown since (the event
-/// analysis' jitters only grow; empty: from the bottom). The figure is the
-/// one the iteration from the bottom gives, step limit included.
+/// from `warm`'s `w_q` where it has one, the stops of a bounded figure of
+/// the same task and own jobs against `hp` streams of the same works and
+/// periods whose η⁺ has only grown since (the event analysis' jitters only
+/// grow; empty: from the bottom). The figure is the one the iteration from
+/// the bottom gives, step limit included; the load guard, which reads the
+/// works and periods alone and passed where the warm stops were found, is
+/// not asked again.
 ///
 /// Why the stops tell when a figure holds. Against `hp` streams whose η⁺
 /// only grew (the periods and works kept) but is the same at every stop,
@@ -192,7 +195,9 @@ fn busy_period_jobs(
         own.period,
     );
     let loads = hp.iter().map(|&(c, t, _)| (c, t));
-    if crate::load::full(loads.chain(std::iter::once(own_load))) {
+    // Warm stops are a bounded analysis' under the same works and periods
+    // (only the jitters grew): the load was below 1 then, so it is now.
+    if warm.is_empty() && crate::load::full(loads.chain(std::iter::once(own_load))) {
         return None;
     }
     // One demand for the whole busy period: its windows only grow.
@@ -262,6 +267,31 @@ fn busy_window_from(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_full_load_is_unbounded_cold_and_the_warm_start_keeps_the_guard() {
+        // C = T = 10 alone: w = 10 is a fixed point, but at a load of 1 the
+        // busy period need not end: unbounded. Warm stops come from a
+        // bounded figure under the same works and periods, where the guard
+        // passed: at C = 8 (a stream above, C 1 every 100) the warm figure
+        // after its jitter grew is the cold one.
+        let own = |work| OwnJobs {
+            work,
+            switch: 0,
+            blocking: 0,
+            jitter: 0,
+            period: 10,
+        };
+        assert_eq!(level_response(own(10), &[]), None);
+        let (hp, grown) = ([(1, 100, 0)], [(1, 100, 95)]);
+        let (r, stops) = level_response_from(own(8), &hp, Nanos::MAX, &[]);
+        assert_eq!(r, Some(9));
+        let cold = level_response_from(own(8), &grown, Nanos::MAX, &[]);
+        assert_eq!(
+            level_response_from(own(8), &grown, Nanos::MAX, &stops),
+            cold
+        );
+    }
 
     #[test]
     fn a_warm_start_keeps_the_step_limit() {
