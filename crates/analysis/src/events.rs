@@ -14,7 +14,9 @@ use crate::graph::Lists;
 use crate::thread_rta::{fifo_response_from, FifoStops, Member};
 use rtpipe_model::{Join, Nanos, Server, Spec};
 
+mod change;
 mod readers;
+use change::Change;
 use readers::{trigger_order, unit_of, Readers};
 
 /// Most rounds of the holistic iteration (sweeps of one strongly connected
@@ -673,79 +675,6 @@ impl Response {
     fn reach(&self) -> Option<Nanos> {
         Some(self.windows.as_ref()?.last().copied().unwrap_or(0))
     }
-}
-
-/// A task's activations changed, the same up to `same`.
-struct Change<'a> {
-    /// The task's unit.
-    unit: usize,
-    /// The streams whose jitter changed, (old, new), when both are bounded
-    /// (then of the same periods): where each of them keeps its η⁺, so
-    /// does their sum.
-    moved: Option<&'a [(Stream, Stream)]>,
-    same: Nanos,
-}
-
-impl<'a> Change<'a> {
-    /// The change of task `j` from `old` to `new`, its moved streams in
-    /// `moved` (kept from one change to the next rather than allocated at
-    /// each).
-    fn of(
-        spec: &Spec,
-        j: usize,
-        old: &Option<Arrivals>,
-        new: &Option<Arrivals>,
-        moved: &'a mut Vec<(Stream, Stream)>,
-    ) -> Self {
-        let unit = unit_of(spec, j);
-        match (old, new) {
-            (Some(a), Some(b)) => {
-                // A task's streams and their periods are the spec's (its
-                // sources', through `any` and the slowest trigger of an
-                // `all`); only their jitters grow. The warm analyses lean on
-                // it: they skip the load guard, which reads works and
-                // periods alone (`thread_rta::fifo_response_from`,
-                // `sched::level_response_from`).
-                assert!(
-                    same_periods(a, b),
-                    "task {j}'s activations changed their periods"
-                );
-                Change::moved(unit, a, b, moved)
-            }
-            _ => Change {
-                unit,
-                moved: None,
-                same: 0,
-            },
-        }
-    }
-
-    /// The change of a task of `unit` from `a` to `b`, the same streams
-    /// with grown jitters, those that moved into `moved`.
-    fn moved(
-        unit: usize,
-        a: &Arrivals,
-        b: &Arrivals,
-        moved: &'a mut Vec<(Stream, Stream)>,
-    ) -> Self {
-        moved.clear();
-        let pairs = a.streams.iter().zip(&b.streams).filter(|(s, t)| s != t);
-        moved.extend(pairs.map(|(&s, &t)| (s, t)));
-        Change {
-            unit,
-            moved: Some(moved),
-            same: a.same_up_to(b),
-        }
-    }
-}
-
-/// `a` and `b` are the same streams with other jitters at most.
-fn same_periods(a: &Arrivals, b: &Arrivals) -> bool {
-    a.streams.len() == b.streams.len()
-        && a.streams
-            .iter()
-            .zip(&b.streams)
-            .all(|(s, t)| s.period == t.period)
 }
 
 /// Task `i`'s activations, its triggers' already in `arrivals`: its
