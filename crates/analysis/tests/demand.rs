@@ -305,6 +305,26 @@ fn grown(a: &Arrivals, extra: &[Nanos], k: &mut usize) -> Arrivals {
 
 /// How much each stream's jitter grows between two analyses (none for
 /// some), drawn per stream in turn.
+/// Tasks as (work, activations).
+type Works = Vec<(Nanos, Arrivals)>;
+
+/// `members` and `above` with their jitters grown by `extra`'s draws in
+/// turn (one count across both, so the two lists draw different growths).
+fn grown_both(
+    members: &[(Nanos, Arrivals)],
+    above: &[(Nanos, Arrivals)],
+    extra: &[Nanos],
+) -> (Works, Works) {
+    let mut k = 0;
+    let mut grow = |m: &[(Nanos, Arrivals)]| -> Works {
+        m.iter()
+            .map(|(c, a)| (*c, grown(a, extra, &mut k)))
+            .collect()
+    };
+    let grown_members = grow(members);
+    (grown_members, grow(above))
+}
+
 fn jitter_growth() -> impl Strategy<Value = Vec<Nanos>> {
     prop::collection::vec(
         prop_oneof![2 => Just(0 as Nanos), 3 => 0..3_000 as Nanos],
@@ -325,13 +345,7 @@ fn a_warm_fifo_response_is_the_one_from_the_bottom() {
         CASES,
         (members, above, 0..500 as Nanos, extra),
         |(members, above, blocking, extra)| {
-            let mut k = 0;
-            let mut grow = |m: &[(Nanos, Arrivals)]| -> Vec<(Nanos, Arrivals)> {
-                m.iter()
-                    .map(|(c, a)| (*c, grown(a, &extra, &mut k)))
-                    .collect()
-            };
-            let (grown_members, grown_above) = (grow(&members), grow(&above));
+            let (grown_members, grown_above) = grown_both(&members, &above, &extra);
             let old = fifo_response_from(&view(&members), &pairs(&above), blocking, None);
             let (new_members, new_above) = (view(&grown_members), pairs(&grown_above));
             let cold = fifo_response_from(&new_members, &new_above, blocking, None);
@@ -370,13 +384,7 @@ fn the_candidates_in_order_stop_where_the_busy_period_first_does() {
             let (m, a) = (view(&members), pairs(&above));
             let cold = fifo_response_from(&m, &a, blocking, None);
             prop_assert_eq!(&cold, &fifo_by_busy_period(&m, &a, blocking, None));
-            let mut k = 0;
-            let mut grow = |m: &[(Nanos, Arrivals)]| -> Vec<(Nanos, Arrivals)> {
-                m.iter()
-                    .map(|(c, a)| (*c, grown(a, &extra, &mut k)))
-                    .collect()
-            };
-            let (grown_members, grown_above) = (grow(&members), grow(&above));
+            let (grown_members, grown_above) = grown_both(&members, &above, &extra);
             let (gm, ga) = (view(&grown_members), pairs(&grown_above));
             let warm = fifo_response_from(&gm, &ga, blocking, cold.as_ref());
             prop_assert_eq!(&warm, &fifo_by_busy_period(&gm, &ga, blocking, None));
