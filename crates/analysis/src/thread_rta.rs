@@ -445,14 +445,15 @@ fn fixed_point(
 mod tests {
     use super::*;
 
+    /// A thread of one member.
+    fn alone(work: Nanos, arrivals: &Arrivals) -> [Member<'_>; 1] {
+        [Member { work, arrivals }]
+    }
+
     #[test]
     fn one_task_alone_is_its_demand() {
         let a = Arrivals::periodic(10, 0);
-        let m = [Member {
-            work: 3,
-            arrivals: &a,
-        }];
-        assert_eq!(fifo_response(&m, &[], 0), Some(3));
+        assert_eq!(fifo_response(&alone(3, &a), &[], 0), Some(3));
     }
 
     #[test]
@@ -463,22 +464,11 @@ mod tests {
         // under the same works and periods (the guard passed there): at
         // C = 9 the warm figure, after the jitter grew, is the cold one.
         let x = Arrivals::periodic(10, 0);
-        let full = [Member {
-            work: 10,
-            arrivals: &x,
-        }];
-        assert_eq!(fifo_response(&full, &[], 0), None);
-        let below = [Member {
-            work: 9,
-            arrivals: &x,
-        }];
-        let stops = fifo_response_from(&below, &[], 0, None);
+        assert_eq!(fifo_response(&alone(10, &x), &[], 0), None);
+        let stops = fifo_response_from(&alone(9, &x), &[], 0, None);
         assert_eq!(stops.as_ref().map(FifoStops::response), Some(9));
-        let grown = Arrivals::periodic(10, 4);
-        let grown = [Member {
-            work: 9,
-            arrivals: &grown,
-        }];
+        let jittered = Arrivals::periodic(10, 4);
+        let grown = alone(9, &jittered);
         let cold = fifo_response_from(&grown, &[], 0, None);
         assert_eq!(fifo_response_from(&grown, &[], 0, stops.as_ref()), cold);
     }
