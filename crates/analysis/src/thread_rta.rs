@@ -300,11 +300,7 @@ fn candidates_in_order(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
-    let thread = |delta: Nanos| -> Option<Nanos> {
-        members.iter().try_fold(blocking, |sum, m| {
-            sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
-        })
-    };
+    let thread = |delta: Nanos| members_work(members, blocking, delta);
     if thread(1)? < 1 {
         return None;
     }
@@ -315,13 +311,7 @@ fn candidates_in_order(
     let (mut a, mut finish): (Nanos, Nanos) = (0, 0);
     loop {
         let released = thread(a.checked_add(1)?)?;
-        // As in the busy period first: the last fixed point and the old
-        // one of the largest old candidate up to a are valid starts.
-        let known = old.partition_point(|&(b, _)| b <= a);
-        let warm_start = known.checked_sub(1).map_or(0, |k| old[k].1);
-        finish = fixed_point(finish.max(released).max(warm_start), &steps, |w| {
-            Some(released.saturating_add(demand.at(w)))
-        })?;
+        finish = candidate_finish((a, released), finish, old, &mut demand, &steps)?;
         finishes.push((a, finish));
         let next = next_step(members, a);
         if finish <= next {
@@ -335,6 +325,15 @@ fn candidates_in_order(
         }
         a = next;
     }
+}
+
+/// The thread's own work released in a window of length `delta` from the
+/// busy period's start: `blocking` plus each member's η⁺(δ)·C (`None`:
+/// past `Nanos`).
+fn members_work(members: &[Member], blocking: Nanos, delta: Nanos) -> Option<Nanos> {
+    members.iter().try_fold(blocking, |sum, m| {
+        sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
+    })
 }
 
 /// The least `a' > a` at which some member's η⁺(a' + 1) steps up (`k·T −
@@ -361,11 +360,7 @@ fn busy_period_first(
     blocking: Nanos,
     warm: Option<&FifoStops>,
 ) -> Option<FifoStops> {
-    let thread = |delta: Nanos| -> Option<Nanos> {
-        members.iter().try_fold(blocking, |sum, m| {
-            sum.checked_add(m.arrivals.eta(delta).checked_mul(m.work)?)
-        })
-    };
+    let thread = |delta: Nanos| members_work(members, blocking, delta);
     let mut demand = Demand::of_arrivals(above);
     let first = thread(1)?;
     let steps = std::cell::Cell::new(MAX_STEPS);
@@ -404,18 +399,31 @@ fn busy_period_first(
     let mut finish = 0;
     for a in candidates {
         let released = thread(a.checked_add(1)?)?;
-        // f grows with a: the last fixed point is a valid start, and so is
-        // the old one of the largest old candidate up to a.
-        let known = old.partition_point(|&(b, _)| b <= a);
-        let warm_start = known.checked_sub(1).map_or(0, |k| old[k].1);
-        finish = fixed_point(finish.max(released).max(warm_start), &steps, |w| {
-            Some(released.saturating_add(candidate_demand.at(w)))
-        })?;
+        finish = candidate_finish((a, released), finish, old, &mut candidate_demand, &steps)?;
         finishes.push((a, finish));
     }
     Some(FifoStops {
         busy: length,
         finishes,
+    })
+}
+
+/// The finish of the job released at candidate `a` (the thread's work
+/// `released` up to it): the least fixed point of `released + demand(w)`.
+/// Its iteration grows with `a`, so the last candidate's finish `last` is
+/// a valid start, and so is the old finish (`old`, a warm start's) of the
+/// largest old candidate up to `a`.
+fn candidate_finish(
+    (a, released): (Nanos, Nanos),
+    last: Nanos,
+    old: &[(Nanos, Nanos)],
+    demand: &mut Demand,
+    steps: &std::cell::Cell<u64>,
+) -> Option<Nanos> {
+    let known = old.partition_point(|&(b, _)| b <= a);
+    let warm_start = known.checked_sub(1).map_or(0, |k| old[k].1);
+    fixed_point(last.max(released).max(warm_start), steps, |w| {
+        Some(released.saturating_add(demand.at(w)))
     })
 }
 
