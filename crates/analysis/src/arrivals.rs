@@ -51,6 +51,16 @@ impl Stream {
         Some(Stream { jitter, ..self })
     }
 
+    /// The least window length `a' > a` at which η⁺(a' + 1) steps up,
+    /// `k·T − J` for the least such k (`None`: past `Nanos`). From `a = 0`
+    /// and then from each answer, every step in order.
+    pub fn step_after(self, a: Nanos) -> Option<Nanos> {
+        let k = a.checked_add(self.jitter)? / self.period + 1;
+        let step = k.checked_mul(self.period)? - self.jitter;
+        assert!(step > a, "a step lies after {a}: {step}");
+        Some(step)
+    }
+
     /// η⁺(Δ) of this stream; saturates instead of overflowing.
     pub fn eta(self, delta: Nanos) -> Nanos {
         if delta <= 0 {
@@ -197,19 +207,13 @@ impl Arrivals {
     pub fn steps_below(&self, limit: Nanos, max: usize) -> Option<Vec<Nanos>> {
         let mut out = Vec::new();
         for s in &self.streams {
-            let mut k: Nanos = (s.jitter / s.period) + 1;
-            loop {
-                let a = k.saturating_mul(s.period) - s.jitter;
-                if a >= limit {
-                    break;
+            let mut a = 0;
+            while let Some(step) = s.step_after(a).filter(|&step| step < limit) {
+                out.push(step);
+                if out.len() > max {
+                    return None;
                 }
-                if a > 0 {
-                    out.push(a);
-                    if out.len() > max {
-                        return None;
-                    }
-                }
-                k += 1;
+                a = step;
             }
         }
         out.sort_unstable();

@@ -336,16 +336,13 @@ fn members_work(members: &[Member], blocking: Nanos, delta: Nanos) -> Option<Nan
     })
 }
 
-/// The least `a' > a` at which some member's η⁺(a' + 1) steps up (`k·T −
-/// J` for a stream (T, J)), or `Nanos::MAX` where none is within range.
+/// The least `a' > a` at which some member's η⁺(a' + 1) steps up
+/// ([`Stream::step_after`](crate::arrivals::Stream::step_after)), or
+/// `Nanos::MAX` where none is within range.
 fn next_step(members: &[Member], a: Nanos) -> Nanos {
     let streams = members.iter().flat_map(|m| &m.arrivals.streams);
-    let next = |s: &crate::arrivals::Stream| {
-        let k = a.checked_add(s.jitter)? / s.period + 1;
-        k.checked_mul(s.period).map(|top| top - s.jitter)
-    };
     streams
-        .map(|s| next(s).unwrap_or(Nanos::MAX))
+        .map(|s| s.step_after(a).unwrap_or(Nanos::MAX))
         .min()
         .unwrap_or(Nanos::MAX)
 }
