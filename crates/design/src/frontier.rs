@@ -343,17 +343,11 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
         // With a gate every dive's design would be checked (flown): the
         // best-first order alone reaches the answer with fewer checks.
         if f.splits % DIVE_EVERY == 1 && self.gate.is_none() {
-            if let Some(found) = self.ex.dive(&node, incumbent, self.effort) {
-                self.debug("dive", found.2);
-                publish(self.ex.p, &found.0, found.2, node.bound);
-                f.best = Some(found);
-            }
+            let dived = self.ex.dive(&node, incumbent, self.effort);
+            self.adopt(f, "dive", dived, node.bound);
             // And from the relaxation's least point of the box.
-            if let Some(found) = self.ex.guided(&node, f.incumbent(), self.effort) {
-                self.debug("guided", found.2);
-                publish(self.ex.p, &found.0, found.2, node.bound);
-                f.best = Some(found);
-            }
+            let guided = self.ex.guided(&node, f.incumbent(), self.effort);
+            self.adopt(f, "guided", guided, node.bound);
             // And by trading periods along a chain from the incumbent,
             // or from a kick of it once every trade there has failed.
             for _ in 0..TRADE_CALLS {
@@ -361,11 +355,7 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
                     (Some(best), false) => self.ex.trade(best, &mut self.trades, self.effort),
                     _ => None,
                 };
-                if let Some(found) = traded {
-                    self.debug("trade", found.2);
-                    publish(self.ex.p, &found.0, found.2, node.bound);
-                    f.best = Some(found);
-                }
+                self.adopt(f, "trade", traded, node.bound);
             }
         }
         ControlFlow::Continue(Some(self.ex.children(&node, how)))
@@ -459,6 +449,17 @@ impl<'r, 'a> BoxSearch<'r, 'a> {
             })
             .collect();
         self.examine_all(f, node.bound, parts)
+    }
+
+    /// A better verified design found by `how` (a dive, a guided design,
+    /// a trade), if any, made the incumbent and published with the lower
+    /// bound `bound`.
+    fn adopt(&self, f: &mut Frontier, how: &str, found: Option<(Spec, Report, f64)>, bound: f64) {
+        if let Some(found) = found {
+            self.debug(how, found.2);
+            publish(self.ex.p, &found.0, found.2, bound);
+            f.best = Some(found);
+        }
     }
 
     /// With `RTPIPE_DESIGN_DEBUG` set, which step found a better design
