@@ -854,8 +854,7 @@ impl<'r, 'a> Examiner<'r, 'a> {
                     return k;
                 }
                 let from = k[i];
-                k[i] = self.lengthen(&mut k.clone(), i);
-                moved |= k[i] != from;
+                moved |= self.lengthen(&mut k, i) != from;
             }
             if !moved {
                 break;
@@ -866,7 +865,8 @@ impl<'r, 'a> Examiner<'r, 'a> {
 
     /// The longest period index for task i found by bisection over the
     /// values it may move to (under `harmonic`, those harmonic with every
-    /// other period of `k`) with the design still verified; `k` verifies.
+    /// other period of `k`) with the design still verified, left in
+    /// `k[i]`; `k` verifies, and so does it after.
     pub(crate) fn lengthen(&self, k: &mut [u32], i: usize) -> u32 {
         let from = k[i];
         let ups = self
@@ -893,7 +893,8 @@ impl<'r, 'a> Examiner<'r, 'a> {
                 b = m;
             }
         }
-        at(a)
+        k[i] = at(a);
+        k[i]
     }
 
     /// The axis index of every period of `spec` (on the grid).

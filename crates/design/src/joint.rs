@@ -191,10 +191,12 @@ pub(crate) struct Split {
 /// shares summing to the budgets, Σ C/T = Σ_limits Σ shares/T + the rest
 /// ≥ Σ_limits least + Σ C/hi over the tasks in no limit. The shares start
 /// from `start` (a parent box's; equal where it has none) and move,
-/// [`SHARE_ROUNDS`] times (`root_rounds` without a parent's), towards the limits whose least wants the task's
-/// period shortest (the bound is concave in the shares, 1/T_i its slope);
-/// the best round is the bound, and its shares are what a sub-box starts
-/// from (a warm start: the ascent goes on down the search tree). `None`: some limit holds nowhere in the box.
+/// [`SHARE_ROUNDS`] times (`root_rounds` without a parent's), towards
+/// the limits whose least wants the task's period shortest (the bound is
+/// concave in the shares, 1/T_i its slope); the best round is the bound,
+/// and its shares are what a sub-box starts from (a warm start: the ascent
+/// goes on down the search tree). `None`: some limit holds nowhere in the
+/// box.
 pub(crate) fn split_bound(
     budget: &[f64],
     limits: &[SplitLimit],
@@ -327,7 +329,9 @@ fn guide(members: &[Vec<bool>], minimisers: &[Vec<f64>], n: usize) -> Vec<Option
 }
 
 /// Rounds of moving the shares in [`split_bound`], per box (from its
-/// parent's shares, so a box at depth d has had 64 + 8d).
+/// parent's shares, so a box at depth d has had 64 + 8d in sound mode,
+/// which runs [`ROOT_SHARE_ROUNDS`] at the root, and 8(d + 1) in paper
+/// mode).
 pub(crate) const SHARE_ROUNDS: usize = 8;
 
 /// Rounds of moving the shares at a box with no parent's shares (the

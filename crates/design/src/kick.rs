@@ -61,12 +61,7 @@ impl Examiner<'_, '_> {
                 t[i] = self.at_about(i, self.axes[i].value(from[i]) as f64 * scale);
             }
         }
-        for i in self.chain_mates_of(group) {
-            if budget.out_of_time() {
-                break;
-            }
-            t[i] = self.lengthen(&mut t.clone(), i);
-        }
+        self.lengthen_chain_mates(&mut t, group, budget);
         Some(t)
     }
 

@@ -240,13 +240,20 @@ impl Examiner<'_, '_> {
             }
         }
         t[b] = ok;
-        for i in self.chain_mates_of(&[a, b]) {
+        self.lengthen_chain_mates(&mut t, &[a, b], budget);
+        Some(t)
+    }
+
+    /// Each task on a chain with any of `tasks`, in index order,
+    /// lengthened in `t` ([`Examiner::lengthen`]; `t` verifies, and so
+    /// does it after) while `budget` has time.
+    pub(crate) fn lengthen_chain_mates(&self, t: &mut [u32], tasks: &[usize], budget: &Budget) {
+        for i in self.chain_mates_of(tasks) {
             if budget.out_of_time() {
                 break;
             }
-            t[i] = self.lengthen(&mut t.clone(), i);
+            self.lengthen(t, i);
         }
-        Some(t)
     }
 
     /// The tasks on a chain with any of `tasks`, in index order.
